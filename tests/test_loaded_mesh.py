@@ -124,3 +124,26 @@ def test_bad_input():
         loaded_static_mesh(k, np.zeros((1, 2)), np.array([-1e-6]), 1.0)
     with pytest.raises(LoadedMeshInputError, match="k_N_per_m"):
         loaded_static_mesh(np.zeros((1, 1, 2)), np.zeros((1, 2)), np.zeros(1), 1.0)
+
+
+def test_even_slices_effective_error_and_unloaded_pair_rule():
+    # 4 slices, C_b = 10 um: E = 5.625, 0.625, 0.625, 5.625 um (hand, see test_meshing_errors);
+    # the pair first touches at e + min E = e + 0.625 um -> effective error.
+    E = np.array([5.625, 0.625, 0.625, 5.625]) * UM
+    kn = np.full(4, 5e7)
+    k = np.stack([kn, kn])[:, :, None]                 # two identical pairs
+    e = np.array([[1 * UM], [500 * UM]])               # pair 2 far away: carries no load
+    F = 200.0
+    r = loaded_static_mesh(k, e, E, F)
+    np.testing.assert_allclose(r.e_effective_m[:, 0], [1.625 * UM, 500.625 * UM], rtol=1e-14)
+    # hand: F = 200 N < 2 slices * 5e7 * 5 um = 500 N -> only the 2 centre slices carry:
+    # x = 1.625 um + 200/(1e8) = 3.625 um; pair 1 secant = 200 N / 2 um = 1e8 N/m
+    np.testing.assert_allclose(r.static_te_m[0], 3.625 * UM, rtol=1e-12)
+    np.testing.assert_allclose(r.k_secant_N_per_m[0, 0], 1e8, rtol=1e-10)
+    assert r.pair_load_N[1, 0] == 0.0
+    # unloaded pair 2 gets the secant at the deflection of pair 1 -> identical pair, same stiffness
+    np.testing.assert_allclose(r.k_secant_N_per_m[1, 0], 1e8, rtol=1e-10)
+    # at zero load: tangent at first touch = the 2 centre slices = 1e8 N/m for both pairs
+    r0 = loaded_static_mesh(k, e, E, 0.0)
+    np.testing.assert_allclose(r0.k_secant_N_per_m[:, 0], [1e8, 1e8], rtol=1e-14)
+    np.testing.assert_allclose(r0.static_te_m[0], 1.625 * UM, rtol=1e-14)
