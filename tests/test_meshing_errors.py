@@ -173,3 +173,16 @@ def test_lead_crowning_bad_input():
         lead_crowning_m(1e-6, 0.02, 0)
     with pytest.raises(MeshingErrorInputError, match="face_width_m"):
         lead_crowning_m(1e-6, 0.0, 3)
+
+
+def test_evaluation_ranges_seed003_table1_geometry():
+    # seed 003 Table 1: z = 50/50, m = 3 mm, 20 deg, outer diameter 156 mm, centre distance 150 mm.
+    # hand: rb = 75 cos 20 = 70.4769 mm; N1N2 = 150 sin 20 = 51.3030 mm;
+    # tip roll length sqrt(78^2 - 70.4769^2) = 33.4215 mm; s_A = 51.3030 - 33.4215 = 17.8815 mm
+    from gearfmu.geometry import pair_geometry
+    from gearfmu.meshing_errors import evaluation_ranges
+    g = GearSpec(teeth=50, module_m=3e-3, pressure_angle_rad=math.radians(20), face_width_m=20e-3)
+    r = evaluation_ranges(pair_geometry(GearPairSpec(pinion=g, gear=g)))
+    assert abs(r.n1n2_m - 51.3030e-3) < 1e-7
+    assert abs(r.s_o_pinion_m - 17.8815e-3) < 1e-7 and abs(r.s_f_pinion_m - 33.4215e-3) < 1e-7
+    assert abs(r.s_o_gear_m - 17.8815e-3) < 1e-7 and abs(r.s_f_gear_m - 33.4215e-3) < 1e-7
