@@ -92,16 +92,20 @@ class OperatingPoint:
     speed_rad_s: float
     torque_range_Nm: Optional[Tuple[float, float]] = None
     speed_range_rad_s: Optional[Tuple[float, float]] = None
+    torque_points: int = 1
 
     @property
     def speed_rpm(self) -> float:
         """Nominal pinion speed in rev/min."""
         return self.speed_rad_s / _RPM_TO_RAD_S
 
-    def torque_axis_Nm(self, points: int) -> Tuple[float, ...]:
+    def torque_axis_Nm(self, points: Optional[int] = None) -> Tuple[float, ...]:
         """Torque axis of the tables (N*m): the nominal torque alone when
         ``points == 1`` or no range is given, else ``points`` equally spaced
-        values over ``torque_range_Nm`` (both ends included)."""
+        values over ``torque_range_Nm`` (both ends included).  ``points``
+        None = ``torque_points`` (the scene's ``tables.torque_points``)."""
+        if points is None:
+            points = self.torque_points
         if points <= 1 or self.torque_range_Nm is None:
             return (float(self.torque_Nm),)
         lo, hi = self.torque_range_Nm
@@ -948,7 +952,8 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                             foundation=mesh_d["foundation"],
                             shared_foundation_correction=mesh_d["shared_foundation_correction"])
     operating = OperatingPoint(torque_Nm=op["torque_Nm"], speed_rad_s=op["speed_rpm"],
-                               torque_range_Nm=op["torque_range_Nm"], speed_range_rad_s=op["speed_range_rpm"])
+                               torque_range_Nm=op["torque_range_Nm"], speed_range_rad_s=op["speed_range_rpm"],
+                               torque_points=tab["torque_points"])
     tables = TableOptions(points_per_mesh=tab["points_per_mesh"], torque_points=tab["torque_points"],
                           slots=tab["slots"])
     solver = SolverOptions(integrator=sol["integrator"], max_step_s=sol["max_step_s"],

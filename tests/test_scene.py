@@ -377,7 +377,9 @@ def test_contact_models_and_lubricant_rules():
 def test_operating_ranges_and_torque_axis():
     text = DEFAULT_TEXT.replace("speed_rpm = 2000.0", "speed_rpm = 2000.0\ntorque_range_Nm = [500.0, 2500.0]")
     s = load_scene(text.replace("torque_points = 1", "torque_points = 5"))
-    assert s.torque_axis_Nm == (500.0, 1000.0, 1500.0, 2000.0, 2500.0)
+    assert s.torque_axis_Nm == (500.0, 1000.0, 1500.0, 2000.0, 2500.0)  # hand: 500 + 500 i
+    assert s.operating.torque_axis_Nm() == s.torque_axis_Nm
+    assert s.operating.torque_axis_Nm(3) == (500.0, 1500.0, 2500.0)
     assert load_scene(text).torque_axis_Nm == (2000.0,)
     e = problems_of(DEFAULT_TEXT.replace("torque_points = 1", "torque_points = 5"))
     assert e.problems[0][0] == "tables.torque_points"
