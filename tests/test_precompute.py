@@ -155,3 +155,22 @@ def test_progress_prints(capsys):
     precompute_tables(PAIR0, OPTS, points_per_mesh=8, nominal_torque_Nm=T_NOM, progress=True)
     err = capsys.readouterr().err
     assert "gearfmu tables" in err
+
+
+def test_gear_only_pitch_deviation_period_and_offset():
+    # 30/47 teeth; gear tooth 5 has a single pitch deviation of 6 um (pitch ending at tooth 5).
+    # Rule: only gear teeth differ -> lcm(P = 2, z2 = 47) = 94 mesh periods.
+    # Hand (ISO 1328 cumulative, closed): tooth 5 sits f_pt - f_pt/47 = 6*(46/47) um later than
+    # tooth 4, so pair error(mesh 5) - pair error(mesh 4) = 5.87234 um at every contact position.
+    gear = GearSpec(teeth=47, module_m=3e-3, pressure_angle_rad=math.radians(20), face_width_m=20e-3,
+                    deviations=GearDeviations(per_tooth=((5, ToothDeviation(pitch_m=6 * UM)),)))
+    pin = GearSpec(teeth=30, module_m=3e-3, pressure_angle_rad=math.radians(20), face_width_m=20e-3)
+    pair = GearPairSpec(pinion=pin, gear=gear)
+    t = precompute_tables(pair, OPTS, points_per_mesh=PPM, nominal_torque_Nm=100.0)
+    assert t.slots == 2 and t.n_phi == 94 * PPM
+    assert abs(t.phi_period_rad - 94 * 2 * math.pi / 30) < 1e-12
+    j = np.arange(int(t.contact_ratio * PPM))
+    d = t.e_m[0, 1, 5 * PPM + j] - t.e_m[0, 0, 4 * PPM + j]  # mesh 5 in slot 1, mesh 4 in slot 0
+    np.testing.assert_allclose(d, 6 * UM * 46 / 47, rtol=1e-12)
+    # mesh 52 uses gear tooth 52 mod 47 = 5 again: same error as mesh 5
+    np.testing.assert_array_equal(t.e_m[0, 0, 52 * PPM + j], t.e_m[0, 1, 5 * PPM + j])
