@@ -52,14 +52,17 @@ def _sha256(path):
     return h.hexdigest()
 
 
-def _load_resources(res):
-    """Read and verify every resource; return (config, tables meta, arrays)."""
+def _read_config(res):
     cfg_path = os.path.join(res, RUNTIME_FILE)
     try:
         with open(cfg_path, "rb") as f:
-            cfg = json.loads(f.read().decode("utf-8"))
+            return json.loads(f.read().decode("utf-8"))
     except (OSError, ValueError) as exc:
         raise GearFmuResourceError(f"resources/{RUNTIME_FILE}: cannot read ({exc})") from None
+
+
+def _load_resources(res, cfg):
+    """Verify every resource against its SHA-256; return (tables meta, arrays)."""
     for fname, digest in cfg["sha256"].items():
         p = os.path.join(res, fname)
         if not os.path.isfile(p):
@@ -79,7 +82,7 @@ def _load_resources(res):
         if hashlib.sha256(raw).hexdigest() != ent["sha256"]:
             raise GearFmuResourceError(f"resources/tables.bin: checksum mismatch in array {name!r}; refusing to run")
         arrays[name] = np.ascontiguousarray(np.frombuffer(raw, dtype="<f8").reshape(ent["shape"]), dtype=np.float64)
-    return cfg, meta, arrays
+    return meta, arrays
 
 
 def _bind(lib):
@@ -148,17 +151,18 @@ class GearFmuSlave(Fmi2Slave):
         res = self.resources
         if res is None:
             raise GearFmuResourceError("resources: the host gave no resource location")
+        cfg = _read_config(res)
+        try:  # first, so that even a refused instantiation cannot crash the host at exit
+            self._wrapper_fix = _pin_wrapper_state(res, cfg)
+        except Exception as exc:  # noqa: BLE001 - a workaround must never stop the FMU
+            self._wrapper_fix = f"failed: {exc!r}"
         try:
-            cfg, meta, arr = _load_resources(res)
+            meta, arr = _load_resources(res, cfg)
         except GearFmuResourceError as exc:
             self.log(str(exc), Fmi2Status.fatal)
             raise
         self.modelName = cfg["model_identifier"]
         self._cfg = cfg
-        try:
-            self._wrapper_fix = _pin_wrapper_state(res, cfg)
-        except Exception as exc:  # noqa: BLE001 - a workaround must never stop the FMU
-            self._wrapper_fix = f"failed: {exc!r}"
         self._lib = _bind(ctypes.CDLL(os.path.join(res, cfg["kernel_file"])))
         lib = self._lib
         if lib.gk_abi_version() != cfg["kernel_abi_version"]:
