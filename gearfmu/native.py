@@ -1,0 +1,802 @@
+"""Native (numba) solver of the multi-pair gear dynamic model (SI units).
+
+Implements docs/model.md to the letter -- the contract shared with the FMU's C
+kernel (gearfmu/kernel/gearkernel.c): the same table lookup, per-pair force
+law, RK4 arithmetic order and initial-state bisection, so that the two
+independent implementations agree to round-off on the same tables, inputs and
+steps.  No fastmath (it would reorder the arithmetic).
+
+Model: seed 003 eq (1)-(6) (two-inertia torsional pair, P tooth-pair slots,
+per-pair stiffness k_j, damping c, meshing error e_j and half backlash b_j),
+indexed by the pinion angle; state y = [theta1 (rad), omega1 (rad/s),
+x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
+
+Public API
+----------
+* :func:`simulate` -- the FMU model, outputs named as the FMU outputs.
+* :func:`simulate_sdof` -- time-indexed SDOF form (seed 003 eq 3-6) at a
+  prescribed constant pinion speed.
+* :func:`dimensionless` -- seed 003 eq 7-9 rescaling of a result.
+* :func:`choose_max_step_s` -- default internal step.
+* :class:`SimResult` -- result arrays, ``to_csv``, ``wall_s``.
+
+Details and choices: docs/native.md.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Union
+
+import numpy as np
+from numba import njit
+
+from .tables import MeshTables
+
+__all__ = [
+    "NativeInputError",
+    "SimResult",
+    "DimensionlessResult",
+    "DAMPING_MODELS",
+    "simulate",
+    "simulate_sdof",
+    "dimensionless",
+    "choose_max_step_s",
+    "equilibrium_dte_m",
+    "substeps",
+]
+
+#: damping-model names -> kernel code (docs/model.md "Per-pair force")
+DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
+
+InputLike = Union[float, np.ndarray, Callable[[float], float]]
+
+
+class NativeInputError(ValueError):
+    """Bad argument to the native solver; the message names the argument."""
+
+
+# ---------------------------------------------------------------- kernels
+@njit(cache=False, error_model="numpy", inline="always")
+def _phi_index(theta1, phi_period, n_phi, dphi):
+    """docs/model.md 'Table lookup': (i0, i1, w) at pinion angle theta1 (rad)."""
+    phim = theta1 - phi_period * np.floor(theta1 / phi_period)
+    s = phim / dphi
+    i0 = int(np.floor(s))
+    if i0 >= n_phi:
+        i0 = n_phi - 1
+    if i0 < 0:
+        i0 = 0
+    w = s - i0
+    i1 = i0 + 1
+    if i1 == n_phi:
+        i1 = 0
+    return i0, i1, w
+
+
+@njit(cache=False, error_model="numpy")
+def _torque_index(t1, torque):
+    """Bracketing torque row it and weight wt for Tq = clamp(T1, torque[0], torque[-1]).
+
+    it is the largest index in [0, NT-2] with torque[it] <= Tq,
+    wt = (Tq - torque[it])/(torque[it+1] - torque[it]).  NT == 1: (0, 0.0).
+    """
+    nt = torque.shape[0]
+    if nt == 1:
+        return 0, 0.0
+    tq = t1
+    if tq < torque[0]:
+        tq = torque[0]
+    if tq > torque[nt - 1]:
+        tq = torque[nt - 1]
+    it = 0
+    while it < nt - 2 and torque[it + 1] <= tq:
+        it += 1
+    wt = (tq - torque[it]) / (torque[it + 1] - torque[it])
+    return it, wt
+
+
+@njit(cache=False, error_model="numpy")
+def _rows(k, e, it):
+    """Views of the torque rows it and it+1 (it again when NT == 1)."""
+    if k.shape[0] > 1:
+        return k[it], e[it], k[it + 1], e[it + 1], True
+    return k[it], e[it], k[it], e[it], False
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
+    """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j.
+
+    k0, e0 are the (P, n_phi) rows of torque index it, k1, e1 those of it+1
+    (used only when rows2, i.e. NT > 1): phi interpolation per torque row,
+    then linear interpolation between the two rows with weight wt."""
+    ka = k0[j, i0]
+    kb = k0[j, i1]
+    kv = ka + w * (kb - ka)
+    ea = e0[j, i0]
+    eb = e0[j, i1]
+    ev = ea + w * (eb - ea)
+    es = (eb - ea) / dphi
+    if rows2:
+        ka2 = k1[j, i0]
+        kb2 = k1[j, i1]
+        kv2 = ka2 + w * (kb2 - ka2)
+        ea2 = e1[j, i0]
+        eb2 = e1[j, i1]
+        ev2 = ea2 + w * (eb2 - ea2)
+        es2 = (eb2 - ea2) / dphi
+        kv = kv + wt * (kv2 - kv)
+        ev = ev + wt * (ev2 - ev)
+        es = es + wt * (es2 - es)
+    ba = b[j, i0]
+    bb = b[j, i1]
+    bv = ba + w * (bb - ba)
+    return kv, ev, es, bv
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
+    """Force of one pair (N) and its contact state (1 drive, -1 back, 0 separated)."""
+    de = es * omega1
+    d = x - ev
+    if d > bv:
+        fc = kv * (d - bv)
+        state = 1
+    elif d < -bv:
+        fc = kv * (d + bv)
+        state = -1
+    else:
+        fc = 0.0
+        state = 0
+    fd = c * (v - de)
+    if model == 0:  # elastobacklash
+        if state == 1:
+            f = fc + min(fc, fd)
+            if f < 0.0:
+                f = 0.0
+        elif state == -1:
+            f = fc + max(fc, fd)
+            if f > 0.0:
+                f = 0.0
+        else:
+            f = 0.0
+    else:  # seed003
+        if kv > 0.0:
+            f = fc + fd
+        else:
+            f = 0.0
+    return f, state
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _mesh_force(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
+    """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1."""
+    n_phi = k0.shape[1]
+    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+    f = 0.0
+    for j in range(k0.shape[0]):
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, c, model)
+        f += fj
+    return f
+
+
+@njit(cache=False, error_model="numpy")
+def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+                 pair_out, row):
+    """Write pair forces of one output row; return (mesh_force, mesh_stiffness)."""
+    n_phi = k0.shape[1]
+    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+    ftot = 0.0
+    ks = 0.0
+    for j in range(k0.shape[0]):
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, c, model)
+        pair_out[row, j] = fj
+        ftot += fj
+        if st != 0:
+            ks += kv
+    return ftot, ks
+
+
+@njit(cache=False, error_model="numpy")
+def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
+    """docs/model.md 'Initial state': x (m) of the quasi-static equilibrium at theta1
+    under F_m = T1/Rb1, by exactly 200 bisections.  Returns nan if no slot has k > 0."""
+    it, wt = _torque_index(t1, torque)
+    k0, e0, k1, e1, rows2 = _rows(k, e, it)
+    n_phi = k.shape[2]
+    p = k.shape[1]
+    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+    fm = t1 / rb1
+    kk = np.empty(p)
+    ee = np.empty(p)
+    bb = np.empty(p)
+    s = 0.0
+    lo_e = np.inf
+    hi_e = -np.inf
+    for j in range(p):
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        kk[j] = kv
+        ee[j] = ev
+        bb[j] = bv
+        if kv > 0.0:
+            s += kv
+            if ev - bv < lo_e:
+                lo_e = ev - bv
+            if ev + bv > hi_e:
+                hi_e = ev + bv
+    if not s > 0.0:
+        return np.nan
+    lo = lo_e - abs(fm) / s - 1e-12
+    hi = hi_e + abs(fm) / s + 1e-12
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        g = 0.0
+        for j in range(p):
+            if kk[j] > 0.0:
+                d = mid - ee[j]
+                if d > bb[j]:
+                    g += kk[j] * (d - bb[j])
+                elif d < -bb[j]:
+                    g += kk[j] * (d + bb[j])
+        g = g - fm
+        if g < 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=False, error_model="numpy")
+def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, wt, b,
+              phi_period, dphi, c, model):
+    """One classical RK4 step of the two-inertia model (docs/model.md).
+
+    Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed
+    as h/2.0); the increments are accumulated left to right,
+    acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc."""
+    h2 = h / 2.0
+    ka = 0.0
+    kb = 0.0
+    kc = 0.0
+    kd = 0.0
+    sa = 0.0
+    sb = 0.0
+    sc = 0.0
+    sd = 0.0
+    for stage in range(4):
+        if stage == 0:
+            ya = th
+            yb = om
+            yc = x
+            yd = v
+        elif stage == 3:
+            ya = th + h * ka
+            yb = om + h * kb
+            yc = x + h * kc
+            yd = v + h * kd
+        else:
+            ya = th + h2 * ka
+            yb = om + h2 * kb
+            yc = x + h2 * kc
+            yd = v + h2 * kd
+        f = _mesh_force(ya, yb, yc, yd, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model)
+        ka = yb
+        kb = (t1 - rb1 * f) / i1
+        kc = yd
+        kd = rb1 * (t1 - rb1 * f) / i1 - rb2 * (rb2 * f - t2) / i2
+        if stage == 0:
+            sa = ka
+            sb = kb
+            sc = kc
+            sd = kd
+        elif stage == 3:
+            sa = sa + ka
+            sb = sb + kb
+            sc = sc + kc
+            sd = sd + kd
+        else:
+            sa = sa + 2.0 * ka
+            sb = sb + 2.0 * kb
+            sc = sc + 2.0 * kc
+            sd = sd + 2.0 * kd
+    h6 = h / 6.0
+    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
+
+
+@njit(cache=False, error_model="numpy")
+def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torque,
+              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
+    """Loop over communication steps (rows 1..n of the outputs; row 0 by caller)."""
+    n_steps = out_state.shape[0] - 1
+    for s in range(n_steps):
+        t1 = t1s[s]
+        t2 = t2s[s]
+        it, wt = _torque_index(t1, torque)
+        k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        for _ in range(n_sub):
+            th, om, x, v = _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, wt, b,
+                                     phi_period, dphi, c, model)
+        out_state[s + 1, 0] = th
+        out_state[s + 1, 1] = om
+        out_state[s + 1, 2] = x
+        out_state[s + 1, 3] = v
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+                                out_pair, s + 1)
+        out_force[s + 1] = ftot
+        out_stiff[s + 1] = ks
+        if not (math.isfinite(th) and math.isfinite(om) and math.isfinite(x) and math.isfinite(v)):
+            return s + 1
+    return n_steps
+
+
+@njit(cache=False, error_model="numpy")
+def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
+    """One RK4 step of the time-indexed SDOF (theta1 = th0 + om*t prescribed),
+    same stage and accumulation order as :func:`_rk4_step`; stage times t,
+    t + h/2, t + h/2, t + h."""
+    h2 = h / 2.0
+    kc = 0.0
+    kd = 0.0
+    sc = 0.0
+    sd = 0.0
+    for stage in range(4):
+        if stage == 0:
+            ts = t
+            yc = x
+            yd = v
+        elif stage == 3:
+            ts = t + h
+            yc = x + h * kc
+            yd = v + h * kd
+        else:
+            ts = t + h2
+            yc = x + h2 * kc
+            yd = v + h2 * kd
+        f = _mesh_force(th0 + om * ts, om, yc, yd, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model)
+        kc = yd
+        kd = (fm - f) / me
+        if stage == 0:
+            sc = kc
+            sd = kd
+        elif stage == 3:
+            sc = sc + kc
+            sd = sd + kd
+        else:
+            sc = sc + 2.0 * kc
+            sd = sd + 2.0 * kd
+    h6 = h / 6.0
+    return x + h6 * sc, v + h6 * sd
+
+
+@njit(cache=False, error_model="numpy")
+def _run_sdof(th0, om, x, v, t1s, H, n_sub, h, rb1, me, k, e, b, torque,
+              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
+    n_steps = out_state.shape[0] - 1
+    for s in range(n_steps):
+        t1 = t1s[s]
+        fm = t1 / rb1
+        it, wt = _torque_index(t1, torque)
+        k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        t0 = s * H
+        for i in range(n_sub):
+            x, v = _rk4_step_sdof(t0 + i * h, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b,
+                                  phi_period, dphi, c, model)
+        th = th0 + om * ((s + 1) * H)
+        out_state[s + 1, 0] = th
+        out_state[s + 1, 1] = om
+        out_state[s + 1, 2] = x
+        out_state[s + 1, 3] = v
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+                                out_pair, s + 1)
+        out_force[s + 1] = ftot
+        out_stiff[s + 1] = ks
+        if not (math.isfinite(x) and math.isfinite(v)):
+            return s + 1
+    return n_steps
+
+
+@njit(cache=False, error_model="numpy")
+def _row0(th, om, x, v, t1, k, e, b, torque, phi_period, dphi, c, model,
+          out_state, out_pair, out_force, out_stiff):
+    it, wt = _torque_index(t1, torque)
+    k0, e0, k1, e1, rows2 = _rows(k, e, it)
+    out_state[0, 0] = th
+    out_state[0, 1] = om
+    out_state[0, 2] = x
+    out_state[0, 3] = v
+    ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model, out_pair, 0)
+    out_force[0] = ftot
+    out_stiff[0] = ks
+
+
+# ------------------------------------------------------------ python layer
+@dataclass
+class SimResult:
+    """Result of :func:`simulate` / :func:`simulate_sdof` (SI units).
+
+    Row 0 is the initial state (outputs at t = 0 with the initial inputs), then
+    one row per communication step.  Arrays carry the FMU output names
+    (docs/model.md "Outputs"): pinion_speed, gear_speed (rad/s), pinion_angle,
+    gear_angle (rad), dte (m), mesh_force (N), pair_force (n_out, P) in N,
+    load_sharing (n_out, P) dimensionless, mesh_stiffness (N/m).  Also the
+    inputs used per row (pinion_torque, gear_torque in N*m), the relative
+    velocity ``dte_rate`` (m/s), the internal step ``step_s`` and substeps per
+    communication step, and ``wall_s`` (wall time of the compiled loop, s).
+    """
+
+    time_s: np.ndarray
+    pinion_speed: np.ndarray
+    gear_speed: np.ndarray
+    pinion_angle: np.ndarray
+    gear_angle: np.ndarray
+    dte: np.ndarray
+    dte_rate: np.ndarray
+    mesh_force: np.ndarray
+    pair_force: np.ndarray
+    load_sharing: np.ndarray
+    mesh_stiffness: np.ndarray
+    pinion_torque: np.ndarray
+    gear_torque: np.ndarray
+    step_s: float
+    substeps: int
+    damping_Ns_per_m: float
+    damping_model: str
+    wall_s: float
+    info: dict = field(default_factory=dict)
+
+    OUTPUT_UNITS = {
+        "pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad",
+        "gear_angle": "rad", "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m",
+    }
+
+    @property
+    def slots(self) -> int:
+        return int(self.pair_force.shape[1])
+
+    def columns(self) -> dict:
+        """Ordered {name: (unit, 1-D array)} with FMU names; pair_force[i], i = 1..P."""
+        cols = {"time": ("s", self.time_s)}
+        for n in ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "dte", "mesh_force"):
+            cols[n] = (self.OUTPUT_UNITS[n], getattr(self, n))
+        for i in range(self.slots):
+            cols[f"pair_force[{i + 1}]"] = ("N", self.pair_force[:, i])
+        for i in range(self.slots):
+            cols[f"load_sharing[{i + 1}]"] = ("1", self.load_sharing[:, i])
+        cols["mesh_stiffness"] = ("N/m", self.mesh_stiffness)
+        cols["pinion_torque"] = ("N*m", self.pinion_torque)
+        cols["gear_torque"] = ("N*m", self.gear_torque)
+        return cols
+
+    def to_csv(self, path) -> None:
+        """Write a CSV: a '# units:' comment line, a row of FMU variable names, data
+        with 17 significant digits (round-trips float64)."""
+        cols = self.columns()
+        data = np.column_stack([a for _, a in cols.values()])
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
+            fh.write(",".join(cols) + "\n")
+            np.savetxt(fh, data, delimiter=",", fmt="%.17g")
+
+
+@dataclass
+class DimensionlessResult:
+    """Seed 003 eq 7-9 quantities: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n,
+    zeta, and the dimensionless load F_m/(k_m l) (all dimensionless)."""
+
+    tau: np.ndarray
+    q: np.ndarray
+    q_rate: np.ndarray
+    Omega_h: float
+    omega_n_rad_s: float
+    zeta: float
+    load: float
+    length_scale_m: float
+
+
+def _check_tables(tables) -> MeshTables:
+    if not isinstance(tables, MeshTables):
+        raise NativeInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
+    return tables.validate()
+
+
+def _finite(name, value, *, positive=False, nonneg=False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise NativeInputError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise NativeInputError(f"{name}: must be finite, got {value!r}")
+    if positive and v <= 0:
+        raise NativeInputError(f"{name}: must be > 0, got {value!r}")
+    if nonneg and v < 0:
+        raise NativeInputError(f"{name}: must be >= 0, got {value!r}")
+    return v
+
+
+def _n_steps(stop_time_s, comm_step_s) -> int:
+    n = stop_time_s / comm_step_s
+    nr = int(round(n))
+    if nr < 1 or abs(n - nr) > 1e-6 * max(1.0, n):
+        raise NativeInputError(
+            f"stop_time_s: {stop_time_s!r} is not a whole number of communication steps "
+            f"comm_step_s={comm_step_s!r} ({n:.9g})")
+    return nr
+
+
+def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float) -> np.ndarray:
+    """Input sampled at t_k = k*comm_step_s, k = 0..n_steps (the value held over step k)."""
+    if callable(value):
+        arr = np.array([float(value(k * comm_step_s)) for k in range(n_steps + 1)])
+    else:
+        a = np.asarray(value, dtype=float)
+        if a.ndim == 0:
+            arr = np.full(n_steps + 1, float(a))
+        elif a.ndim == 1 and a.shape[0] in (n_steps, n_steps + 1):
+            arr = np.empty(n_steps + 1)
+            arr[: a.shape[0]] = a
+            if a.shape[0] == n_steps:
+                arr[n_steps] = a[-1]
+        else:
+            raise NativeInputError(
+                f"{name}: expected a number, a callable of time, or an array of {n_steps} "
+                f"or {n_steps + 1} values (one per communication step), got shape {a.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise NativeInputError(f"{name}: contains NaN or infinite values")
+    return np.ascontiguousarray(arr)
+
+
+def substeps(comm_step_s: float, max_step_s: float) -> int:
+    """n = max(1, ceil(H/h_max*(1 - 1e-12))) (docs/model.md 'Integration')."""
+    return max(1, int(math.ceil(comm_step_s / max_step_s * (1.0 - 1e-12))))
+
+
+def _arrays(tables: MeshTables):
+    k = np.ascontiguousarray(tables.k_N_per_m, dtype=np.float64)
+    e = np.ascontiguousarray(tables.e_m, dtype=np.float64)
+    b = np.ascontiguousarray(tables.backlash_half_m, dtype=np.float64)
+    tq = np.ascontiguousarray(tables.torque_Nm, dtype=np.float64)
+    phi_period = float(tables.phi_period_rad)
+    dphi = phi_period / tables.n_phi
+    return k, e, b, tq, phi_period, dphi
+
+
+def _damping(tables: MeshTables, damping_ratio) -> float:
+    """c = 2*zeta*sqrt(k_mean*m_e), m_e = I1*I2/(I1*Rb2^2 + I2*Rb1^2) (docs/model.md)."""
+    i1, i2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
+    r1, r2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+    me = i1 * i2 / (i1 * (r2 * r2) + i2 * (r1 * r1))
+    return 2.0 * damping_ratio * math.sqrt(float(tables.k_mean_N_per_m) * me), me
+
+
+def equilibrium_dte_m(tables: MeshTables, pinion_torque_Nm: float, pinion_angle_rad: float = 0.0) -> float:
+    """Quasi-static equilibrium x (m) at the pinion angle under F_m = T1/Rb1, by the
+    200-step bisection of docs/model.md 'Initial state'."""
+    t = _check_tables(tables)
+    k, e, b, tq, phi_period, dphi = _arrays(t)
+    x = _equilibrium(_finite("pinion_angle_rad", pinion_angle_rad),
+                     _finite("pinion_torque_Nm", pinion_torque_Nm),
+                     float(t.base_radius_pinion_m), k, e, b, tq, phi_period, dphi)
+    if not math.isfinite(x):
+        raise NativeInputError(
+            f"pinion_angle_rad: no tooth pair in the contact zone (all k = 0) at {pinion_angle_rad!r}; "
+            "give dte_start_m")
+    return float(x)
+
+
+def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_period: int = 64) -> float:
+    """Default maximum internal step (s).
+
+    h_max = min(2*pi/omega_n, mesh period at max speed) / points_per_period with
+    omega_n = sqrt(k_mean/m_e) (seed 003 eq 7) and the mesh period in time
+    mesh_period_rad/|max_speed_rad_s|.  RK4's global error then scales as
+    (omega_n h)^4: with 64 points per period the phase error of a free
+    oscillation is about (2 pi/64)^5/120 = 8e-8 per step (docs/native.md).
+    """
+    t = _check_tables(tables)
+    ppp = int(points_per_period)
+    if ppp != points_per_period or ppp < 1:
+        raise NativeInputError(f"points_per_period: must be a positive integer, got {points_per_period!r}")
+    w = abs(_finite("max_speed_rad_s", max_speed_rad_s))
+    wn = math.sqrt(t.k_mean_N_per_m / t.equivalent_mass_kg)
+    period = 2.0 * math.pi / wn
+    if w > 0.0:
+        period = min(period, t.mesh_period_rad / w)
+    return period / ppp
+
+
+_COMPILED = False
+
+
+def _warmup() -> None:
+    """Compile the kernels on a tiny problem so wall_s excludes JIT time."""
+    global _COMPILED
+    if _COMPILED:
+        return
+    k = np.ones((2, 1, 4)) * 1e8
+    e = np.zeros((2, 1, 4))
+    b = np.zeros((1, 4))
+    tq = np.array([0.0, 1.0])
+    for model in (0, 1):
+        st = np.zeros((2, 4))
+        pf = np.zeros((2, 1))
+        fo = np.zeros(2)
+        ks = np.zeros(2)
+        x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 1.0, 0.25)
+        _row0(0.0, 1.0, x0, 0.0, 1.0, k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks)
+        _run_2dof(0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0,
+                  k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks)
+        _run_sdof(0.0, 1.0, x0, 0.0, np.ones(2), 1e-6, 1, 1e-6, 0.1, 1.0, k, e, b, tq,
+                  1.0, 0.25, 1.0, model, st, pf, fo, ks)
+    _COMPILED = True
+
+
+def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model):
+    t = _check_tables(tables)
+    stop = _finite("stop_time_s", stop_time_s, positive=True)
+    H = _finite("comm_step_s", comm_step_s, positive=True)
+    hmax = _finite("max_step_s", max_step_s, positive=True)
+    zeta = _finite("damping_ratio", damping_ratio, nonneg=True)
+    if damping_model not in DAMPING_MODELS:
+        raise NativeInputError(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
+    n_steps = _n_steps(stop, H)
+    n_sub = substeps(H, hmax)
+    h = H / n_sub
+    c, me = _damping(t, zeta)
+    return t, stop, H, n_steps, n_sub, h, c, me, DAMPING_MODELS[damping_model]
+
+
+def _initial_x(t, k, e, b, tq, phi_period, dphi, theta1, t1, dte_start_m):
+    if dte_start_m is not None:
+        return _finite("dte_start_m", dte_start_m)
+    x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, phi_period, dphi)
+    if not math.isfinite(x0):
+        raise NativeInputError(
+            f"pinion_angle_start_rad: no tooth pair in the contact zone (all k = 0) at {theta1!r}; "
+            "give dte_start_m")
+    return x0
+
+
+def _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, done, info):
+    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
+    th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ls = np.where(force[:, None] != 0.0, pair / np.where(force[:, None] != 0.0, force[:, None], 1.0), 0.0)
+    info = dict(info, completed_steps=int(done))
+    if done < state.shape[0] - 1:
+        info["diverged_at_step"] = int(done)
+    return SimResult(
+        time_s=time_s, pinion_speed=om.copy(), gear_speed=(om * rb1 - v) / rb2,
+        pinion_angle=th.copy(), gear_angle=(th * rb1 - x) / rb2, dte=x.copy(), dte_rate=v.copy(),
+        mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
+        pinion_torque=t1s, gear_torque=t2s, step_s=h, substeps=n_sub, damping_Ns_per_m=c,
+        damping_model=damping_model, wall_s=wall, info=info)
+
+
+def simulate(
+    tables: MeshTables,
+    *,
+    stop_time_s: float,
+    comm_step_s: float,
+    max_step_s: Optional[float] = None,
+    pinion_torque_Nm: InputLike,
+    gear_torque_Nm: Optional[InputLike] = None,
+    pinion_speed_start_rad_s: float,
+    damping_ratio: float,
+    damping_model: str = "elastobacklash",
+    pinion_angle_start_rad: float = 0.0,
+    dte_start_m: Optional[float] = None,
+) -> SimResult:
+    """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
+
+    Inputs (N*m) are a float, an array with one value per communication step
+    (n or n+1 values; value k is held over [t_k, t_k+H)), or a callable of
+    time t_k (s).  ``gear_torque_Nm`` None means the balancing load
+    T2 = T1*Rb2/Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2).  ``max_step_s`` None
+    means :func:`choose_max_step_s` at 1.5 x the start speed (at least 1 rad/s).
+    If the state turns non-finite the run stops there; the remaining rows are
+    NaN and ``info['diverged_at_step']`` says where.
+    """
+    t = _check_tables(tables)
+    w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
+    if max_step_s is None:
+        max_step_s = choose_max_step_s(t, max(1.5 * abs(w0), 1.0))
+    t, stop, H, n_steps, n_sub, h, c, me, model = _common(
+        t, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model)
+    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
+    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
+    if gear_torque_Nm is None:
+        t2s = t1s * rb2 / rb1
+    else:
+        t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
+    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
+    k, e, b, tq, phi_period, dphi = _arrays(t)
+    x0 = _initial_x(t, k, e, b, tq, phi_period, dphi, th0, t1s[0], dte_start_m)
+    state = np.full((n_steps + 1, 4), np.nan)
+    pair = np.full((n_steps + 1, t.slots), np.nan)
+    force = np.full(n_steps + 1, np.nan)
+    stiff = np.full(n_steps + 1, np.nan)
+    _warmup()
+    _row0(th0, w0, x0, 0.0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    t_start = _time.perf_counter()
+    done = _run_2dof(th0, w0, x0, 0.0, t1s, t2s, n_sub, h, rb1, rb2,
+                     float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
+                     k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    wall = _time.perf_counter() - t_start
+    time_s = np.arange(n_steps + 1) * H
+    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
+                   done, {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me})
+
+
+def simulate_sdof(
+    tables: MeshTables,
+    *,
+    omega1_rad_s: float,
+    stop_time_s: float,
+    comm_step_s: float,
+    max_step_s: Optional[float] = None,
+    pinion_torque_Nm: InputLike,
+    damping_ratio: float,
+    damping_model: str = "elastobacklash",
+    pinion_angle_start_rad: float = 0.0,
+    dte_start_m: Optional[float] = None,
+) -> SimResult:
+    """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
+
+    The pinion turns at the prescribed constant speed: theta1 = theta1_0 +
+    omega1*t; states [x (m), v (m/s)]; m_e dv/dt + F = F_m with F_m = T1/Rb1 and
+    F the same per-pair force sum as :func:`simulate` (de_j = slope*omega1).
+    Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
+    t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
+    """
+    t = _check_tables(tables)
+    om = _finite("omega1_rad_s", omega1_rad_s)
+    if max_step_s is None:
+        max_step_s = choose_max_step_s(t, max(abs(om), 1.0))
+    t, stop, H, n_steps, n_sub, h, c, me, model = _common(
+        t, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model)
+    rb1 = float(t.base_radius_pinion_m)
+    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
+    t2s = t1s * float(t.base_radius_gear_m) / rb1
+    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
+    k, e, b, tq, phi_period, dphi = _arrays(t)
+    x0 = _initial_x(t, k, e, b, tq, phi_period, dphi, th0, t1s[0], dte_start_m)
+    state = np.full((n_steps + 1, 4), np.nan)
+    pair = np.full((n_steps + 1, t.slots), np.nan)
+    force = np.full(n_steps + 1, np.nan)
+    stiff = np.full(n_steps + 1, np.nan)
+    _warmup()
+    _row0(th0, om, x0, 0.0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    t_start = _time.perf_counter()
+    done = _run_sdof(th0, om, x0, 0.0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
+                     phi_period, dphi, c, model, state, pair, force, stiff)
+    wall = _time.perf_counter() - t_start
+    time_s = np.arange(n_steps + 1) * H
+    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
+                   done, {"form": "time-indexed SDOF (seed 003 eq 3-6)", "equivalent_mass_kg": me,
+                          "omega1_rad_s": om})
+
+
+def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:
+    """Seed 003 eq 7-9: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n.
+
+    omega_n = sqrt(k_m/m_e) (rad/s) with k_m = tables.k_mean_N_per_m; the mesh
+    frequency omega_mesh = 2*pi*omega1/mesh_period_rad (rad/s) uses the mean
+    pinion speed of the result; q_rate = dq/dtau = v/(l omega_n); zeta is the
+    per-pair damping ratio c/(2 m_e omega_n) (seed 003 eq 8, zeta bar); load =
+    F_m/(k_m l) with F_m = T1/Rb1 of the first row.
+    """
+    t = _check_tables(tables)
+    l = _finite("length_scale_m", length_scale_m, positive=True)
+    me = t.equivalent_mass_kg
+    wn = math.sqrt(t.k_mean_N_per_m / me)
+    om = float(np.mean(result.pinion_speed))
+    return DimensionlessResult(
+        tau=wn * result.time_s, q=result.dte / l, q_rate=result.dte_rate / (l * wn),
+        Omega_h=2.0 * math.pi * om / t.mesh_period_rad / wn, omega_n_rad_s=wn,
+        zeta=result.damping_Ns_per_m / (2.0 * me * wn),
+        load=float(result.pinion_torque[0]) / t.base_radius_pinion_m / (t.k_mean_N_per_m * l),
+        length_scale_m=l)
