@@ -29,7 +29,7 @@ import tomllib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Iterable, List, Mapping, Optional, Sequence, Union
 
 SPEC_FORMAT = "gearfmu-variables"
 SPEC_VERSIONS = (1,)

@@ -7,14 +7,10 @@ F = T1/Rb1 = T2/Rb2, speed constant); "the same FMU run alone" for the
 isolation tests; exit codes of fresh processes for host crashes.
 """
 import json
-import math
-import os
 import subprocess
 import sys
 import textwrap
-import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path
 
 import fmpy
 import fmpy.validation
