@@ -565,10 +565,12 @@ def _arrays(tables: MeshTables):
 
 
 def _damping(tables: MeshTables, damping_ratio) -> float:
-    """c = 2*zeta*sqrt(k_mean*m_e), m_e = I1*I2/(I1*Rb2^2 + I2*Rb1^2) (docs/model.md)."""
+    """c = 2*zeta*sqrt(k_mean*m_e), m_e = I1*I2/(I1*Rb2^2 + I2*Rb1^2) (docs/model.md,
+    seed 003 below eq 2), evaluated as I1*I2/(I1*Rb2*Rb2 + I2*Rb1*Rb1) left to right."""
     i1, i2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
     r1, r2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
-    me = i1 * i2 / (i1 * (r2 * r2) + i2 * (r1 * r1))
+    # left to right, I1*Rb2*Rb2 = (I1*Rb2)*Rb2: the order of the C kernel (bitwise agreement)
+    me = i1 * i2 / (i1 * r2 * r2 + i2 * r1 * r1)
     return 2.0 * damping_ratio * math.sqrt(float(tables.k_mean_N_per_m) * me), me
 
 
