@@ -33,7 +33,19 @@ from typing import Iterable, List, Mapping, Optional, Sequence, Union
 
 SPEC_FORMAT = "gearfmu-variables"
 SPEC_VERSIONS = (1,)
-DEFAULT_SPEC_PATH = Path(__file__).resolve().parent.parent / "modeldescription" / "variables.toml"
+def _default_spec_path() -> Path:
+    """The spec in the source tree (``<repo>/modeldescription``) or, in an
+    installed package, the same file that pyproject.toml maps into
+    ``gearfmu/modeldescription``."""
+    here = Path(__file__).resolve().parent
+    for cand in (here.parent / "modeldescription" / "variables.toml",
+                 here / "modeldescription" / "variables.toml"):
+        if cand.is_file():
+            return cand
+    return here.parent / "modeldescription" / "variables.toml"
+
+
+DEFAULT_SPEC_PATH = _default_spec_path()
 
 CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local")
 VARIABILITIES = ("constant", "fixed", "tunable", "discrete", "continuous")

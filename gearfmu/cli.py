@@ -1,0 +1,236 @@
+"""The ``gearfmu`` command line.
+
+    gearfmu build    [SCENE] -o OUT.fmu        scene -> tables -> FMU
+    gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
+    gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
+    gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
+
+SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
+command exits with status 2 and a one-line message naming the problem on
+bad input (an invalid scene, a missing file, a bad option value).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+
+class CliError(Exception):
+    pass
+
+
+def _scene(path):
+    from .pipeline import load
+
+    if path is not None and not Path(path).exists():
+        raise CliError(f"SCENE: file not found: {path}")
+    return load(path)
+
+
+def _positive(name):
+    def conv(text):
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name}: not a number: {text!r}")
+        if not (v > 0 and v < float("inf")):
+            raise argparse.ArgumentTypeError(f"{name}: must be a positive finite number, got {text}")
+        return v
+    return conv
+
+
+def cmd_build(args) -> int:
+    from .pipeline import build
+
+    scene = _scene(args.scene)
+    out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
+    res = build(scene, out, progress=not args.quiet)
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
+          f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    return 0
+
+
+def cmd_tables(args) -> int:
+    from .pipeline import compute_tables
+    from .plots import plot_tables
+
+    scene = _scene(args.scene)
+    t0 = time.perf_counter()
+    tables = compute_tables(scene, progress=not args.quiet)
+    wall = time.perf_counter() - t0
+    out = Path(args.output or f"build/{scene.fmu.model_name}.gtab")
+    tables.save(out)
+    png = plot_tables(tables, out.with_suffix(".png"))
+    csv = out.with_suffix(".csv")
+    _tables_csv(tables, csv)
+    print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
+          f"{wall:.2f} s); plot {png}; csv {csv}")
+    print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
+    return 0
+
+
+def _tables_csv(tables, path, torque_index: int = 0):
+    import numpy as np
+
+    cols = [np.degrees(tables.phi_rad)]
+    head = ["pinion_angle_deg"]
+    for j in range(tables.slots):
+        cols.append(tables.k_N_per_m[torque_index, j])
+        head.append(f"k_slot{j + 1}_N_per_m")
+    for j in range(tables.slots):
+        cols.append(tables.e_m[torque_index, j])
+        head.append(f"e_slot{j + 1}_m")
+    cols.append(tables.k_total_N_per_m()[torque_index])
+    head.append("k_total_N_per_m")
+    if tables.static_te_m is not None:
+        cols.append(tables.static_te_m[torque_index])
+        head.append("static_te_m")
+    np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(head), comments="")
+
+
+def cmd_simulate(args) -> int:
+    import numpy as np
+
+    from .compare import native_columns, output_names, run_fmu
+    from .pipeline import compute_tables, simulate_native
+    from .plots import plot_simulation
+
+    scene = _scene(args.scene)
+    stop = args.stop_time or scene.fmu.stop_time_s
+    step = args.output_interval or scene.fmu.output_interval_s
+    out = Path(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.backend == "native":
+        tables = compute_tables(scene, progress=not args.quiet)
+        res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
+                              damping_ratio=args.damping_ratio)
+        time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
+    else:
+        if not args.fmu:
+            raise CliError("--fmu: required with --backend fmu")
+        if not Path(args.fmu).exists():
+            raise CliError(f"--fmu: file not found: {args.fmu}")
+        from fmpy import read_model_description
+
+        md = read_model_description(args.fmu)
+        slots = sum(1 for v in md.modelVariables if v.name.startswith("pair_force["))
+        sv = {} if args.damping_ratio is None else {"damping_ratio": args.damping_ratio}
+        run = run_fmu(args.fmu, stop_time_s=stop, comm_step_s=step, start_values=sv,
+                      names=output_names(slots))
+        time_s, cols, wall = run.time_s, run.columns, run.wall_s
+    names = output_names(slots)
+    units = {"pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad", "gear_angle": "rad",
+             "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m"}
+    head = ["time [s]"] + [f"{n} [{units.get(n, 'N' if n.startswith('pair_force') else '1')}]" for n in names]
+    np.savetxt(out, np.column_stack([time_s] + [cols[n] for n in names]), delimiter=",",
+               header=",".join(head), comments="")
+
+    class _R:  # the plot wants attributes
+        pass
+
+    r = _R()
+    r.time_s, r.dte, r.mesh_force = time_s, cols["dte"], cols["mesh_force"]
+    r.pair_force = np.column_stack([cols[f"pair_force[{i + 1}]"] for i in range(slots)])
+    r.load_sharing = np.column_stack([cols[f"load_sharing[{i + 1}]"] for i in range(slots)])
+    png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
+    print(f"simulated {stop} s with {args.backend} in {wall:.3f} s -> {out}, {png}")
+    return 0
+
+
+def cmd_validate(args) -> int:
+    from .compare import validate_fmu_against_native
+    from .pipeline import build, compute_tables, gear_torque_for, max_step_for
+
+    scene = _scene(args.scene)
+    if args.fmu:
+        if not Path(args.fmu).exists():
+            raise CliError(f"--fmu: file not found: {args.fmu}")
+        fmu_path = Path(args.fmu)
+        tables = compute_tables(scene, progress=False)
+    else:
+        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False)
+        fmu_path, tables = res.fmu_path, res.tables
+    stop = args.stop_time or scene.fmu.stop_time_s
+    step = args.output_interval or scene.fmu.output_interval_s
+    t1 = scene.operating.torque_Nm
+    native_kwargs = dict(
+        max_step_s=max_step_for(scene, tables), pinion_torque_Nm=t1,
+        gear_torque_Nm=gear_torque_for(tables, t1), pinion_speed_start_rad_s=scene.operating.speed_rad_s,
+        damping_ratio=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model)
+    rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
+                                      comm_step_s=step)
+    rep["scene"] = scene.name
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print_report(rep)
+    return 0 if not rep["fmpy_problems"] else 1
+
+
+def print_report(rep: dict) -> None:
+    print(f"FMU {rep['fmu']} (scene {rep.get('scene', '?')})")
+    probs = rep["fmpy_problems"]
+    print(f"fmpy validation problems: {len(probs)}" + "".join(f"\n  - {p}" for p in probs))
+    print(f"{rep['samples']} samples, communication step {rep['comm_step_s']:.3g} s, "
+          f"internal step <= {rep['max_step_s']:.3g} s, stop time {rep['stop_time_s']:.3g} s")
+    print(f"{'output':<18}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
+    for name, v in rep["outputs"].items():
+        print(f"{name:<18}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}{v['range']:>14.4g}"
+              f"{v['rel_max_diff']:>12.2e}")
+    print(f"wall time: native {rep['native_wall_s']:.4f} s, FMU (fmpy) {rep['fmu_wall_s']:.4f} s")
+
+
+def make_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gearfmu", description=__doc__.split("\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    b = sub.add_parser("build", help="build an FMU from a scene")
+    b.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
+    b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
+    b.add_argument("-q", "--quiet", action="store_true")
+    b.set_defaults(func=cmd_build)
+
+    t = sub.add_parser("tables", help="compute, save (.gtab, .csv) and plot (.png) the tooth-pair tables")
+    t.add_argument("scene", nargs="?")
+    t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
+    t.add_argument("-q", "--quiet", action="store_true")
+    t.set_defaults(func=cmd_tables)
+
+    s = sub.add_parser("simulate", help="simulate with the native solver or an FMU; CSV and PNG out")
+    s.add_argument("scene", nargs="?")
+    s.add_argument("--backend", choices=("native", "fmu"), default="native")
+    s.add_argument("--fmu", help="FMU to run with --backend fmu")
+    s.add_argument("--stop-time", type=_positive("--stop-time"), help="s")
+    s.add_argument("--output-interval", type=_positive("--output-interval"), help="communication step, s")
+    s.add_argument("--damping-ratio", type=_positive("--damping-ratio"), help="1")
+    s.add_argument("-o", "--output", help="CSV path")
+    s.add_argument("-q", "--quiet", action="store_true")
+    s.set_defaults(func=cmd_simulate)
+
+    v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
+    v.add_argument("scene", nargs="?")
+    v.add_argument("--fmu", help="an FMU built from SCENE (default: build one)")
+    v.add_argument("--stop-time", type=_positive("--stop-time"))
+    v.add_argument("--output-interval", type=_positive("--output-interval"))
+    v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    v.set_defaults(func=cmd_validate)
+    return p
+
+
+def main(argv=None) -> int:
+    args = make_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except CliError as exc:
+        print(f"gearfmu: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # SceneError, GeometryError, TableError are ValueErrors naming the field
+        print(f"gearfmu: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

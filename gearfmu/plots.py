@@ -1,0 +1,86 @@
+"""PNG plots of tables and simulation results (matplotlib, no screen needed)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def plot_tables(tables, path, *, torque_index: int = 0, max_meshes: int = 6) -> Path:
+    """TVMS per slot and in total, per-slot meshing error, comprehensive error
+    and loaded static transmission error against pinion angle (deg), over the
+    first ``max_meshes`` mesh periods of the table."""
+    path = Path(path)
+    n_show = min(tables.n_phi, int(round(max_meshes * tables.mesh_period_rad / tables.dphi_rad)))
+    phi_deg = np.degrees(tables.phi_rad[:n_show])
+    k = tables.k_N_per_m[torque_index][:, :n_show]
+    e = tables.e_m[torque_index][:, :n_show]
+    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    for j in range(tables.slots):
+        axes[0].plot(phi_deg, k[j] / 1e9, lw=1, label=f"slot {j + 1}")
+    axes[0].plot(phi_deg, k.sum(axis=0) / 1e9, "k", lw=1.6, label="total (TVMS)")
+    axes[0].set_ylabel("stiffness [N/um] = [1e9 N/m]")
+    axes[0].legend(fontsize=8, ncol=3)
+    axes[0].set_title(f"{tables.provenance.get('scene_name', '')} at "
+                      f"T1 = {tables.torque_Nm[torque_index]:.0f} N*m")
+    for j in range(tables.slots):
+        in_zone = k[j] > 0
+        axes[1].plot(phi_deg, np.where(in_zone, e[j] * 1e6, np.nan), lw=1, label=f"slot {j + 1}")
+    if tables.e_comprehensive_m is not None:
+        axes[1].plot(phi_deg, tables.e_comprehensive_m[torque_index][:n_show] * 1e6, "k--", lw=1.2,
+                     label="comprehensive")
+    axes[1].set_ylabel("meshing error [um]")
+    axes[1].legend(fontsize=8, ncol=3)
+    if tables.static_te_m is not None:
+        axes[2].plot(phi_deg, tables.static_te_m[torque_index][:n_show] * 1e6, "k")
+    axes[2].set_ylabel("loaded static TE [um]")
+    axes[2].set_xlabel("pinion angle [deg]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_simulation(result, path, *, title: str = "", last_meshes: int | None = None,
+                    mesh_period_s: float | None = None) -> Path:
+    """DTE, total mesh force, per-pair force and load sharing against time.
+
+    ``result`` needs ``time_s``, ``dte``, ``mesh_force``, ``pair_force`` (n, P)
+    and ``load_sharing`` (n, P) (a native SimResult or an FMU run in the same
+    shape)."""
+    path = Path(path)
+    t = np.asarray(result.time_s)
+    sel = slice(None)
+    if last_meshes and mesh_period_s:
+        sel = t >= t[-1] - last_meshes * mesh_period_s
+    fig, axes = plt.subplots(4, 1, figsize=(9, 10), sharex=True)
+    axes[0].plot(t[sel] * 1e3, np.asarray(result.dte)[sel] * 1e6, "k", lw=1)
+    axes[0].set_ylabel("DTE [um]")
+    axes[1].plot(t[sel] * 1e3, np.asarray(result.mesh_force)[sel] / 1e3, "k", lw=1)
+    axes[1].set_ylabel("mesh force [kN]")
+    pf = np.asarray(result.pair_force)
+    ls = np.asarray(result.load_sharing)
+    for j in range(pf.shape[1]):
+        axes[2].plot(t[sel] * 1e3, pf[sel, j] / 1e3, lw=1, label=f"pair slot {j + 1}")
+        axes[3].plot(t[sel] * 1e3, ls[sel, j], lw=1, label=f"pair slot {j + 1}")
+    axes[2].set_ylabel("pair force [kN]")
+    axes[3].set_ylabel("load sharing [1]")
+    axes[3].set_xlabel("time [ms]")
+    axes[2].legend(fontsize=8, ncol=3)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    if title:
+        axes[0].set_title(title)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
