@@ -691,6 +691,7 @@ def simulate(
     damping_model: str = "elastobacklash",
     pinion_angle_start_rad: float = 0.0,
     dte_start_m: Optional[float] = None,
+    dte_rate_start_m_s: float = 0.0,
 ) -> SimResult:
     """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
 
@@ -699,6 +700,9 @@ def simulate(
     time t_k (s).  ``gear_torque_Nm`` None means the balancing load
     T2 = T1*Rb2/Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2).  ``max_step_s`` None
     means :func:`choose_max_step_s` at 1.5 x the start speed (at least 1 rad/s).
+    ``dte_start_m`` / ``dte_rate_start_m_s`` (m, m/s) start from a given state
+    instead of the quasi-static equilibrium at rest relative motion, e.g. the
+    last state of a previous run (continuation in a speed sweep).
     If the state turns non-finite the run stops there; the remaining rows are
     NaN and ``info['diverged_at_step']`` says where.
     """
@@ -722,9 +726,10 @@ def simulate(
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
     _warmup()
-    _row0(th0, w0, x0, 0.0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
+    _row0(th0, w0, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
     t_start = _time.perf_counter()
-    done = _run_2dof(th0, w0, x0, 0.0, t1s, t2s, n_sub, h, rb1, rb2,
+    done = _run_2dof(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
                      float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
                      k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
     wall = _time.perf_counter() - t_start
@@ -745,6 +750,7 @@ def simulate_sdof(
     damping_model: str = "elastobacklash",
     pinion_angle_start_rad: float = 0.0,
     dte_start_m: Optional[float] = None,
+    dte_rate_start_m_s: float = 0.0,
 ) -> SimResult:
     """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
 
@@ -771,9 +777,10 @@ def simulate_sdof(
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
     _warmup()
-    _row0(th0, om, x0, 0.0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
+    _row0(th0, om, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
     t_start = _time.perf_counter()
-    done = _run_sdof(th0, om, x0, 0.0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
+    done = _run_sdof(th0, om, x0, v0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
                      phi_period, dphi, c, model, state, pair, force, stiff)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n_steps + 1) * H
