@@ -121,7 +121,7 @@ static gk_ph phi_cell(const gk_model *m, double theta1)
     double s = phim / m->dphi_rad;
     double fs = floor(s);
     if (fs >= (double)N) c.i0 = N - 1;
-    else if (fs < 0.0) c.i0 = 0;
+    else if (!(fs >= 0.0)) c.i0 = 0; /* also NaN (a non-finite substep): never index out of bounds */
     else c.i0 = (int)fs;
     c.w = s - c.i0;
     c.i1 = c.i0 + 1;
