@@ -44,7 +44,7 @@ from .gearpair import (GearDeviations, GearPairSpec, GearSpec, Material,
 
 __all__ = [
     "SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions",
-    "FmuOptions", "Lubricant", "load_scene", "default_scene_path",
+    "FmuOptions", "Lubricant", "ThermalOptions", "load_scene", "default_scene_path",
     "dumps_toml", "walther_kinematic_viscosity_cSt", "SCHEMA", "CONTACT_MODELS",
     "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
 ]
@@ -54,7 +54,7 @@ CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
 #: contact models that need a [lubricant] section
 LUBRICATED_CONTACT_MODELS = ("smooth_ehl", "rough_ehl", "fractal_mixed")
 DAMPING_MODELS = ("elastobacklash", "seed003")
-INTEGRATORS = ("rk4",)
+INTEGRATORS = ("rk4", "rk4_kink")
 RUNTIMES = ("pythonfmu", "standalone")
 
 _RPM_TO_RAD_S = 2.0 * math.pi / 60.0
@@ -190,6 +190,30 @@ class Lubricant:
 
 
 @dataclass(frozen=True)
+class ThermalOptions:
+    """The ``[thermal]`` section (seed 004; docs/thermal.md), degC.
+
+    ``pinion_temperature_C`` / ``gear_temperature_C``: uniform bulk temperature
+    (None = the standard temperature); ``*_profile_gamma`` / ``*_profile_C``:
+    a bulk temperature along the line of action over seed 004's normalised
+    coordinate Gamma_K (overrides the uniform value when given);
+    ``temperature_axis_C``: temperatures of the tables' temperature axis
+    (empty = no axis); ``flank_law``: free flank deformation law of
+    :func:`gearfmu.thermal.free_flank_deformation_m`.
+    """
+
+    standard_temperature_C: float = 30.0
+    pinion_temperature_C: Optional[float] = None
+    gear_temperature_C: Optional[float] = None
+    pinion_profile_gamma: Tuple[float, ...] = ()
+    pinion_profile_C: Tuple[float, ...] = ()
+    gear_profile_gamma: Tuple[float, ...] = ()
+    gear_profile_C: Tuple[float, ...] = ()
+    temperature_axis_C: Tuple[float, ...] = ()
+    flank_law: str = "radial_tangential"
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene, in SI.
 
@@ -208,6 +232,7 @@ class Scene:
     fmu: FmuOptions
     lubricant: Optional[Lubricant] = None
     source_path: Optional[str] = None
+    thermal: Optional[ThermalOptions] = None
 
     @property
     def sha256(self) -> str:
@@ -404,12 +429,31 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _f("density_kg_m3", "kg/m^3", _REQUIRED, "density at ambient pressure", 0.0, 3000.0, lo_open=True),
         _f("temperature_C", "degC", _REQUIRED, "oil (inlet / bulk) temperature", -60.0, 300.0),
     ),
+    "thermal": (
+        _f("standard_temperature_C", "degC", 30.0, "standard temperature t0 of the gear geometry "
+           "(seed 004: 30)", -200.0, 500.0),
+        _f("pinion_temperature_C", "degC", None, "uniform pinion bulk temperature (none = standard)",
+           -200.0, 500.0),
+        _f("gear_temperature_C", "degC", None, "uniform gear bulk temperature (none = standard)", -200.0, 500.0),
+        _f("pinion_profile_gamma", "1", (), "pinion bulk temperature profile: seed 004 normalised LOA "
+           "coordinates Gamma_K, ascending", -1.0, 10.0, kind="float_list"),
+        _f("pinion_profile_C", "degC", (), "pinion bulk temperatures at pinion_profile_gamma", -200.0, 500.0,
+           kind="float_list"),
+        _f("gear_profile_gamma", "1", (), "gear bulk temperature profile: Gamma_K, ascending", -1.0, 10.0,
+           kind="float_list"),
+        _f("gear_profile_C", "degC", (), "gear bulk temperatures at gear_profile_gamma", -200.0, 500.0,
+           kind="float_list"),
+        _f("temperature_axis_C", "degC", (), "tables' temperature axis (uniform bulk temperature of both "
+           "gears), ascending; empty = none", -200.0, 500.0, kind="float_list"),
+        _e("flank_law", ("radial_tangential", "homogeneous"), "radial_tangential",
+           "free thermal deformation of a flank (docs/thermal.md)"),
+    ),
 }
 
 #: sub-tables that may appear inside a table (besides its keys)
 _SUBTABLES = {
     "": ("scene", "gears", "material", "deviations", "mesh", "operating", "tables", "solver", "fmu",
-         "lubricant"),
+         "lubricant", "thermal"),
     "gears": ("pinion", "gear"),
     "deviations": ("pinion", "gear"),
     "deviations.pinion": ("tooth",),
@@ -828,6 +872,30 @@ def _lubricant(r: _Reader, data: Any) -> Optional[Lubricant]:
                      kinematic_viscosity_40C_m2_s=nu40, kinematic_viscosity_100C_m2_s=nu100)
 
 
+def _thermal(r: _Reader, data: Any) -> Optional[ThermalOptions]:
+    """Read ``[thermal]`` (None when absent); cross-checks profile lengths and order."""
+    raw = _sub(data, "thermal")
+    if raw is None:
+        return None
+    n0 = len(r.problems)
+    th = r.table(raw, "thermal")
+    if len(r.problems) > n0:
+        return None
+    for role in ("pinion", "gear"):
+        g, t = th[f"{role}_profile_gamma"], th[f"{role}_profile_C"]
+        if len(g) != len(t):
+            r.add(f"thermal.{role}_profile_C", f"needs one temperature per {role}_profile_gamma point "
+                                               f"({len(g)}), got {len(t)}")
+        elif any(b <= a for a, b in zip(g, g[1:])):
+            r.add(f"thermal.{role}_profile_gamma", f"must be strictly ascending, got {list(g)!r}")
+    ax = th["temperature_axis_C"]
+    if any(b <= a for a, b in zip(ax, ax[1:])):
+        r.add("thermal.temperature_axis_C", f"must be strictly ascending, got {list(ax)!r}")
+    if len(r.problems) > n0:
+        return None
+    return ThermalOptions(**th)
+
+
 #: GearPairSpec / GearSpec field names -> scene key names (for GeometryError)
 _FIELD_TO_KEY = {
     "teeth": "teeth", "module_m": "module_mm", "pressure_angle_rad": "pressure_angle_deg",
@@ -917,6 +985,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
     sol = r.table(_sub(data, "solver"), "solver")
     fmu = r.table(_sub(data, "fmu"), "fmu")
     lub = _lubricant(r, data)
+    thermal = _thermal(r, data)
 
     # ---------------- cross-key checks (only on values that passed their own checks)
     for k, rk in (("torque_Nm", "torque_range_Nm"), ("speed_rpm", "speed_range_rpm")):
@@ -963,7 +1032,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                        output_interval_s=fmu["output_interval_s"])
     return Scene(name=name, description=sc["description"], text=text, pair=pair, mesh=mesh,
                  operating=operating, tables=tables, solver=solver, fmu=fmu_o, lubricant=lub,
-                 source_path=source_path)
+                 source_path=source_path, thermal=thermal)
 
 
 # ============================================================== public entry points
