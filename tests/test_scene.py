@@ -85,7 +85,7 @@ def test_default_scene_is_seed000_table1():
     assert p.deviations.per_tooth == ()
     assert g.deviations.is_zero
     assert s.fmu.damping_ratio == 0.05
-    assert 0.04 <= s.fmu.stop_time_s <= 0.06 and s.fmu.output_interval_s == pytest.approx(1e-4)
+    assert 0.04 <= s.fmu.stop_time_s <= 0.06 and s.fmu.output_interval_s == pytest.approx(2e-5)
     # the shipped example is the same scene
     assert load_scene(ROOT / "examples/scenes/seed000_table1.toml").pair == s.pair
 
@@ -298,7 +298,7 @@ def test_several_problems_are_all_listed():
             .replace("pressure_angle_deg = 20.0", "pressure_angle_deg = 40.0")
             .replace("slices = 44", "slics = 44")
             .replace("damping_ratio = 0.05", "damping_ratio = -0.1")
-            .replace("output_interval_s = 1e-4", "output_interval_s = 1.0"))
+            .replace("output_interval_s = 2e-5", "output_interval_s = 1.0"))
     e = problems_of(text)
     paths = {p for p, _ in e.problems}
     assert paths == {"gears.pinion.teeth", "gears.pressure_angle_deg", "mesh.slics", "fmu.damping_ratio",
