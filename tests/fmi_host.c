@@ -1,0 +1,167 @@
+/*
+ * fmi_host.c -- a minimal FMI 2.0 Co-Simulation master in plain C, used by
+ * tests/test_standalone.py to run the standalone gearfmu FMU with no Python in
+ * the process (Modelica Association, FMI 2.0 standard, section 4.2: the
+ * calling sequence instantiate -> setupExperiment -> enter/exit
+ * initialization -> doStep... -> terminate -> freeInstance).
+ *
+ * usage: fmi_host <unzipped FMU dir> <modelIdentifier> <guid> <stop_time_s> <step_s>
+ *                 <output vrs, comma separated> [--state-check] [vr=value ...]
+ *
+ * Prints "time,<vr>,<vr>..." then one CSV row per communication point
+ * (%.17g).  With --state-check it also saves the FMU state at the middle
+ * of the run, serializes and de-serializes it, runs to the end, restores it,
+ * runs the second half again and prints "state-check ok" if both halves agree
+ * bit for bit.  Exit code 0 only if every FMI call returned fmi2OK.
+ */
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...)
+{
+    va_list ap;
+    (void)env;
+    fprintf(stderr, "[%s %d %s] ", name ? name : "?", (int)status, category ? category : "?");
+    va_start(ap, message);
+    vfprintf(stderr, message, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+#define LOAD(T, name)                                                         \
+    T name = (T)dlsym(lib, #name);                                            \
+    if (name == NULL) {                                                       \
+        fprintf(stderr, "missing symbol %s\n", #name);                        \
+        return 2;                                                             \
+    }
+
+#define CHECK(call)                                                           \
+    do {                                                                      \
+        fmi2Status st_ = (call);                                              \
+        if (st_ != fmi2OK) {                                                  \
+            fprintf(stderr, "%s returned %d\n", #call, (int)st_);             \
+            return 3;                                                         \
+        }                                                                     \
+    } while (0)
+
+int main(int argc, char **argv)
+{
+    char path[4096], uri[4200];
+    void *lib;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c;
+    fmi2ValueReference outs[256];
+    int nout = 0, i, k, nsteps, state_check = 0, argi;
+    double stop, step, *rows;
+    char *p;
+
+    if (argc < 7) {
+        fprintf(stderr, "usage: %s dir id guid stop step vrs [--state-check] [vr=value ...]\n", argv[0]);
+        return 1;
+    }
+    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", argv[1], argv[2]);
+    snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
+    stop = atof(argv[4]);
+    step = atof(argv[5]);
+    for (p = argv[6]; *p != '\0' && nout < 256;) {
+        outs[nout++] = (fmi2ValueReference)strtoul(p, &p, 10);
+        if (*p == ',') p++;
+    }
+    lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (lib == NULL) {
+        fprintf(stderr, "dlopen: %s\n", dlerror());
+        return 2;
+    }
+    {
+        LOAD(fmi2InstantiateTYPE *, fmi2Instantiate)
+        LOAD(fmi2FreeInstanceTYPE *, fmi2FreeInstance)
+        LOAD(fmi2SetupExperimentTYPE *, fmi2SetupExperiment)
+        LOAD(fmi2EnterInitializationModeTYPE *, fmi2EnterInitializationMode)
+        LOAD(fmi2ExitInitializationModeTYPE *, fmi2ExitInitializationMode)
+        LOAD(fmi2TerminateTYPE *, fmi2Terminate)
+        LOAD(fmi2SetRealTYPE *, fmi2SetReal)
+        LOAD(fmi2GetRealTYPE *, fmi2GetReal)
+        LOAD(fmi2DoStepTYPE *, fmi2DoStep)
+        LOAD(fmi2GetFMUstateTYPE *, fmi2GetFMUstate)
+        LOAD(fmi2SetFMUstateTYPE *, fmi2SetFMUstate)
+        LOAD(fmi2FreeFMUstateTYPE *, fmi2FreeFMUstate)
+        LOAD(fmi2SerializedFMUstateSizeTYPE *, fmi2SerializedFMUstateSize)
+        LOAD(fmi2SerializeFMUstateTYPE *, fmi2SerializeFMUstate)
+        LOAD(fmi2DeSerializeFMUstateTYPE *, fmi2DeSerializeFMUstate)
+
+        c = fmi2Instantiate("host", fmi2CoSimulation, argv[3], uri, &cb, fmi2False, fmi2False);
+        if (c == NULL) {
+            fprintf(stderr, "fmi2Instantiate failed\n");
+            return 4;
+        }
+        CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, stop));
+        CHECK(fmi2EnterInitializationMode(c));
+        for (argi = 7; argi < argc; ++argi) {
+            if (strcmp(argv[argi], "--state-check") == 0) {
+                state_check = 1;
+            } else {
+                fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[argi], &p, 10);
+                fmi2Real v;
+                if (*p != '=') return 1;
+                v = atof(p + 1);
+                CHECK(fmi2SetReal(c, &vr, 1, &v));
+            }
+        }
+        CHECK(fmi2ExitInitializationMode(c));
+        nsteps = (int)(stop / step + 0.5);
+        rows = (double *)calloc((size_t)(nsteps + 1) * (size_t)nout, sizeof(double));
+        if (rows == NULL) return 5;
+        CHECK(fmi2GetReal(c, outs, (size_t)nout, rows));
+        {
+            fmi2FMUstate saved = NULL, restored = NULL;
+            int mid = nsteps / 2;
+            for (k = 1; k <= nsteps; ++k) {
+                if (state_check && k - 1 == mid) CHECK(fmi2GetFMUstate(c, &saved));
+                CHECK(fmi2DoStep(c, (k - 1) * step, step, fmi2True));
+                CHECK(fmi2GetReal(c, outs, (size_t)nout, rows + (size_t)k * nout));
+            }
+            if (state_check) {
+                size_t size = 0;
+                fmi2Byte *bytes;
+                double *again = (double *)calloc((size_t)nout, sizeof(double));
+                CHECK(fmi2SerializedFMUstateSize(c, saved, &size));
+                bytes = (fmi2Byte *)malloc(size);
+                CHECK(fmi2SerializeFMUstate(c, saved, bytes, size));
+                CHECK(fmi2FreeFMUstate(c, &saved));
+                CHECK(fmi2DeSerializeFMUstate(c, bytes, size, &restored));
+                free(bytes);
+                CHECK(fmi2SetFMUstate(c, restored));
+                for (k = mid + 1; k <= nsteps; ++k) {
+                    CHECK(fmi2DoStep(c, (k - 1) * step, step, fmi2True));
+                    CHECK(fmi2GetReal(c, outs, (size_t)nout, again));
+                    if (memcmp(again, rows + (size_t)k * nout, sizeof(double) * (size_t)nout) != 0) {
+                        fprintf(stderr, "state-check: step %d differs after restoring the state\n", k);
+                        return 6;
+                    }
+                }
+                CHECK(fmi2FreeFMUstate(c, &restored));
+                free(again);
+            }
+        }
+        CHECK(fmi2Terminate(c));
+        fmi2FreeInstance(c);
+    }
+    printf("time");
+    for (i = 0; i < nout; ++i) printf(",%u", outs[i]);
+    printf("\n");
+    for (k = 0; k <= nsteps; ++k) {
+        printf("%.17g", k * step);
+        for (i = 0; i < nout; ++i) printf(",%.17g", rows[(size_t)k * nout + i]);
+        printf("\n");
+    }
+    if (state_check) printf("state-check ok\n");
+    free(rows);
+    dlclose(lib);
+    return 0;
+}
