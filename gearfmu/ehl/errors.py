@@ -1,0 +1,38 @@
+"""Exceptions raised by :mod:`gearfmu.ehl` (all are ValueError subclasses)."""
+from __future__ import annotations
+
+
+class EHLError(ValueError):
+    """Base class of the EHL solver's errors."""
+
+
+class EHLInputError(EHLError):
+    """An input is out of range; the message names the field and the reason."""
+
+
+class EHLConvergenceError(EHLError):
+    """The multigrid iteration stalled.
+
+    ``residual_name`` is the residual that stalled ("pressure_change",
+    "load_balance" or "reynolds_residual") and ``value`` its last value.
+    """
+
+    def __init__(self, message: str, residual_name: str = "", value: float = float("nan"),
+                 history=None):
+        super().__init__(message)
+        self.residual_name = residual_name
+        self.value = value
+        self.history = history
+
+
+class FilmCollapseError(EHLError):
+    """The film thickness reached zero (h <= 0) somewhere: the full-film model
+    of seed 000 does not hold there.  ``x_m`` is the position, ``film_parameter``
+    lambda = h_min / sigma (composite RMS roughness); ``h_min_m`` the film."""
+
+    def __init__(self, message: str, x_m: float = float("nan"),
+                 film_parameter: float = float("nan"), h_min_m: float = float("nan")):
+        super().__init__(message)
+        self.x_m = x_m
+        self.film_parameter = film_parameter
+        self.h_min_m = h_min_m

@@ -1,0 +1,363 @@
+"""Steady line-contact EHL solver, seed 000 eq 2-7 and Algorithm 1.
+
+Public entry point: :func:`solve_line_contact`.  See :mod:`.multigrid` for the
+equations and the numerical method, and docs/ehl.md for the choices made.
+
+Definitions (SI; Moes 1992 / Venner & Lubrecht 2000 conventions):
+
+* ``R_m``: reduced radius of curvature, 1/R = 1/R1 + 1/R2.
+* ``E_Pa``: reduced modulus E' = 2 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2)
+  (the E' of Moes and Venner-Lubrecht and the E of seed 000 eq 4).
+* ``w_N_per_m``: load per unit length of contact.
+* ``u_m_s``: entrainment (mean) speed u_m = (u1 + u2)/2 (seed 000 eq 2's u_s).
+* Moes' parameters: W = w/(E'R), U = eta0 u_m/(E'R), G = alpha E',
+  M = W (2U)^(-1/2), L = G (2U)^(1/4), H_Moes = (h/R)(2U)^(-1/2).
+* Hertz: b = R sqrt(8W/pi), p_h = E' sqrt(W/(2 pi)); Venner-Lubrecht
+  H = h R / b^2 = pi H_Moes / (8 M), lambda-bar = 3 pi^2/(8 M^2),
+  alpha-bar = alpha p_h = L sqrt(M/(2 pi)).
+
+Roughness: the steady equations are solved with the composite roughness
+frozen in place (d(rho h)/dt = 0 in seed 000 eq 2, i.e. a quasi-static
+snapshot of the rough film); the composite roughness is the sum of the
+profiles of both surfaces and enters seed 000 eq 3 with a positive sign (a
+positive height *opens* the gap).  Where the film collapses (h <= 0 at any
+node) the full-film model of seed 000 does not apply and
+:class:`~gearfmu.ehl.errors.FilmCollapseError` is raised with the position
+and the film parameter lambda = h_min / sigma (no asperity load sharing).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+from .fits import moes_central_film
+from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
+from .multigrid import EHLParams, MultigridSolver
+
+#: Reference dimensional case used when only Moes' M and L are given
+#: (Venner & Lubrecht 2000's standard mineral oil on steel): E' = 2.2e11 Pa,
+#: R = 0.02 m, eta0 = 0.04 Pa s, alpha = 2.2e-8 1/Pa, rho0 = 870 kg/m^3.
+#: With L = 0 the lubricant is isoviscous (alpha = 0) and U = 1e-11.
+REFERENCE_CASE = dict(E_Pa=2.2e11, R_m=0.02, eta0_Pas=0.04, alpha_Pa_inv=2.2e-8,
+                      rho0_kg_m3=870.0, U_isoviscous=1e-11)
+
+Roughness = Union[None, Callable[[np.ndarray], np.ndarray],
+                  tuple, Sequence]
+
+
+@dataclass
+class LineContactResult:
+    """Result of :func:`solve_line_contact` (SI unless the name says otherwise)."""
+
+    x_m: np.ndarray            #: grid, m (x = b X, origin at the Hertz centre)
+    X: np.ndarray              #: grid, dimensionless x/b
+    p_Pa: np.ndarray           #: pressure, Pa
+    P: np.ndarray              #: pressure / p_h
+    h_m: np.ndarray            #: film thickness, m
+    H: np.ndarray              #: film thickness in Venner-Lubrecht scaling h R / b^2
+    h_central_m: float         #: film thickness at x = 0, m
+    h_min_m: float             #: minimum film thickness, m
+    x_min_m: float             #: position of the minimum film, m
+    H_central_moes: float      #: (h_central/R)(2U)^(-1/2)
+    H_min_moes: float          #: (h_min/R)(2U)^(-1/2)
+    M: float                   #: Moes load parameter
+    L: float                   #: Moes material parameter
+    b_m: float                 #: Hertz half width, m
+    ph_Pa: float               #: Hertz maximum pressure, Pa
+    load_N_per_m: float        #: integral of p dx, N/m
+    iterations: int            #: number of W-cycles on the finest grid
+    residuals: Dict[str, List[float]]  #: per-cycle histories
+    converged: bool
+    inputs: Dict[str, float]   #: dimensional inputs actually used (SI)
+    roughness_m: np.ndarray    #: composite roughness on the grid, m
+    wall_time_s: float = 0.0
+    grid_levels: int = 0       #: number of multigrid levels used
+
+    @property
+    def h_central(self) -> float:
+        """Alias of ``h_central_m`` (m)."""
+        return self.h_central_m
+
+    @property
+    def h_min(self) -> float:
+        """Alias of ``h_min_m`` (m)."""
+        return self.h_min_m
+
+
+#: Relaxation settings tried in turn (see docs/ehl.md): the first converges
+#: for isoviscous and moderate piezoviscous cases; the others for strongly
+#: piezoviscous cases (sharp pressure spike), found by numerical experiment.
+RELAXATION_SETTINGS = (
+    dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
+    dict(switch=0.3, nu1=2, nu2=2, omega_gs=0.8, omega_j=0.6),
+    dict(switch=1.0, nu1=2, nu2=2, omega_gs=0.8, omega_j=0.6),
+    dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
+)
+
+
+def _iterate(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
+             min_cycles, tol_pressure, tol_load, tol_residual):
+    """W-cycles from a Hertzian (or FMG) start until convergence or stall."""
+    solver = MultigridSolver(prm, n_levels, n_coarse, rough_fn, **opts)
+    if fmg_cycles > 0:
+        solver.fmg_start(H0_guess=Hc_guess - 0.597, cycles_per_level=fmg_cycles)
+    else:
+        solver.hertz_start(Hc_guess)
+    top = solver.levels[-1]
+    hist = {"pressure_change": [], "load_balance": [], "reynolds_residual": []}
+    converged = False
+    it = 0
+    for it in range(1, max_cycles + 1):
+        P_old = top.P.copy()
+        solver.solve_cycle(n_levels - 1)
+        sP = float(np.sum(np.abs(top.P)))
+        dP = float(np.sum(np.abs(top.P - P_old))) / max(sP, 1e-300)
+        dW = abs(top.load() - 0.5 * math.pi) / (0.5 * math.pi)
+        res = solver.scaled_residual(top)
+        hist["pressure_change"].append(dP)
+        hist["load_balance"].append(dW)
+        hist["reynolds_residual"].append(res)
+        if not (math.isfinite(dP) and math.isfinite(dW) and math.isfinite(res)):
+            break
+        if it >= min_cycles and dP < tol_pressure and dW < tol_load and res < tol_residual:
+            converged = True
+            break
+        # stall: neither the change nor the residual fell by 3x in 12 cycles
+        if it >= 24:
+            r_old = min(hist["reynolds_residual"][:-12])
+            p_old = min(hist["pressure_change"][:-12])
+            if (min(hist["reynolds_residual"][-12:]) > r_old / 3.0
+                    and min(hist["pressure_change"][-12:]) > p_old / 3.0):
+                break
+    return solver, hist, converged, it
+
+
+def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None):
+    """Grid sizes (n_nodes, n_coarse, n_levels) for a film of about ``Hc_VL``
+    (Venner-Lubrecht units) on a domain ``length`` half-widths long.
+
+    The coarsest grid must resolve the film (dX^2 <= Hc, found by experiment:
+    coarser grids make the FAS correction diverge at high M); the default
+    finest grid has dX^2 <= Hc/480, which gave a 1 % discretisation error
+    of the central film at M = 100, L = 10 (see docs/ehl.md).
+    Defaults are clipped to 256..16384 intervals.
+    """
+    def pow2_at_least(x):
+        return 1 << max(0, int(math.ceil(math.log2(max(x, 1.0)))))
+    if n_coarse is None:
+        n_coarse = min(max(32, pow2_at_least(length / math.sqrt(Hc_VL))), 1024)
+    if n_nodes is None:
+        n_int = min(max(256, pow2_at_least(length * math.sqrt(480.0 / Hc_VL))), 16384)
+        n_int = max(n_int, n_coarse)
+        n_nodes = n_int + 1
+    n_nodes = int(n_nodes)
+    n_coarse = int(n_coarse)
+    k = n_nodes - 1
+    if n_coarse < 8 or k < n_coarse or k % n_coarse != 0:
+        raise EHLInputError(f"n_nodes={n_nodes!r}: need n_nodes - 1 = n_coarse * 2^k with "
+                            f"n_coarse={n_coarse!r} >= 8")
+    q = k // n_coarse
+    n_levels = 1
+    while q > 1 and q % 2 == 0:
+        q //= 2
+        n_levels += 1
+    if q != 1:
+        raise EHLInputError(f"n_nodes={n_nodes!r}: n_nodes - 1 must be n_coarse={n_coarse} "
+                            "times a power of 2")
+    return n_nodes, n_coarse, n_levels
+
+
+def _finite_positive(name, v, allow_zero=False):
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        raise EHLInputError(f"{name} must be a number, got {v!r}") from None
+    if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
+        raise EHLInputError(f"{name} must be finite and {'>=' if allow_zero else '>'} 0, got {v!r}")
+    return v
+
+
+def _roughness_function(roughness) -> Optional[Callable[[np.ndarray], np.ndarray]]:
+    """Normalise the roughness argument into one function of x (m) -> height (m)."""
+    if roughness is None:
+        return None
+    if callable(roughness):
+        return roughness
+    if isinstance(roughness, tuple) and len(roughness) == 2 and not callable(roughness[0]) \
+            and np.ndim(roughness[0]) == 1:
+        xr = np.asarray(roughness[0], float)
+        zr = np.asarray(roughness[1], float)
+        if xr.shape != zr.shape or xr.size < 2:
+            raise EHLInputError("roughness_m: (x_m, z_m) arrays must have the same length >= 2")
+        if not (np.all(np.isfinite(xr)) and np.all(np.isfinite(zr))):
+            raise EHLInputError("roughness_m: profile contains NaN or infinite values")
+        if np.any(np.diff(xr) <= 0):
+            raise EHLInputError("roughness_m: x_m must be strictly increasing")
+        return lambda x: np.interp(x, xr, zr)
+    parts = [_roughness_function(r) for r in roughness]
+    return lambda x: sum(f(x) for f in parts)
+
+
+def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float = None,
+                       u_m_s: float = None, eta0_Pas: float = None,
+                       alpha_Pa_inv: float = None, rho0_kg_m3: float = 870.0, *,
+                       M: float = None, L: float = None,
+                       roughness_m: Roughness = None,
+                       compressible: bool = True, viscosity: str = "roelands",
+                       n_nodes: Optional[int] = None, n_coarse: Optional[int] = None,
+                       x_in: float = -4.5, x_out: float = 1.5,
+                       tol_pressure: float = 1e-7, tol_load: float = 1e-7,
+                       tol_residual: float = 1e-6,
+                       max_cycles: int = 60, min_cycles: int = 2,
+                       fmg_cycles: int = 0, **multigrid_options) -> LineContactResult:
+    """Solve the steady isothermal line-contact EHL problem (seed 000 eq 2-7).
+
+    Either the dimensional inputs ``R_m`` (m), ``E_Pa`` (reduced modulus E',
+    Pa), ``w_N_per_m`` (N/m), ``u_m_s`` (mean entrainment speed, m/s),
+    ``eta0_Pas`` (Pa s), ``alpha_Pa_inv`` (1/Pa), ``rho0_kg_m3`` (kg/m^3, only
+    scales the density; the film does not depend on it) -- or Moes' ``M``
+    and ``L`` (then the reference case :data:`REFERENCE_CASE` supplies the
+    dimensional values).  ``roughness_m``: composite roughness (m) added to
+    the gap (seed 000 eq 3): a function of x (m), an ``(x_m, z_m)`` pair of
+    arrays, or a list of either (summed, e.g. one per surface).
+    ``compressible`` switches Dowson-Higginson density on (default).
+    Grid: ``n_nodes`` = n_coarse * 2^k + 1 nodes on [x_in, x_out] in units of
+    the Hertz half-width b (default: chosen from the film, see
+    :func:`choose_grid`).  Convergence: relative pressure change per W-cycle
+    below ``tol_pressure``, relative load error below ``tol_load`` and the
+    scaled Reynolds residual (mean |r_i / (dL_i/dP_i)| over pressurised
+    nodes, in units of p_h) below ``tol_residual``; otherwise
+    :class:`EHLConvergenceError` names the stalled residual.
+    ``viscosity``: "roelands" (seed 000 eq 5, default) or "barus"
+    (exp(alpha p), the law behind Moes' fit; used by the validation tests).  Film collapse (h <= 0): :class:`FilmCollapseError`.
+    """
+    t_start = time.perf_counter()
+    dimensional = [R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv]
+    if M is not None or L is not None:
+        if M is None or L is None:
+            raise EHLInputError("M and L must be given together")
+        if any(v is not None for v in dimensional):
+            raise EHLInputError("give either the dimensional inputs or M and L, not both")
+        M = _finite_positive("M", M)
+        L = _finite_positive("L", L, allow_zero=True)
+        ref = REFERENCE_CASE
+        E_Pa, R_m, eta0_Pas = ref["E_Pa"], ref["R_m"], ref["eta0_Pas"]
+        if L > 0.0:
+            alpha_Pa_inv = ref["alpha_Pa_inv"]
+            U = 0.5 * (L / (alpha_Pa_inv * E_Pa)) ** 4
+        else:
+            alpha_Pa_inv = 0.0
+            U = ref["U_isoviscous"]
+        W = M * math.sqrt(2.0 * U)
+        w_N_per_m = W * E_Pa * R_m
+        u_m_s = U * E_Pa * R_m / eta0_Pas
+    else:
+        names = ["R_m", "E_Pa", "w_N_per_m", "u_m_s", "eta0_Pas", "alpha_Pa_inv"]
+        for n_, v in zip(names, dimensional):
+            if v is None:
+                raise EHLInputError(f"{n_} is required (or give M and L)")
+        R_m = _finite_positive("R_m", R_m)
+        E_Pa = _finite_positive("E_Pa", E_Pa)
+        w_N_per_m = _finite_positive("w_N_per_m", w_N_per_m)
+        u_m_s = _finite_positive("u_m_s", u_m_s)
+        eta0_Pas = _finite_positive("eta0_Pas", eta0_Pas)
+        alpha_Pa_inv = _finite_positive("alpha_Pa_inv", alpha_Pa_inv, allow_zero=True)
+        W = w_N_per_m / (E_Pa * R_m)
+        U = eta0_Pas * u_m_s / (E_Pa * R_m)
+        M = W / math.sqrt(2.0 * U)
+        L = alpha_Pa_inv * E_Pa * (2.0 * U) ** 0.25
+    rho0_kg_m3 = _finite_positive("rho0_kg_m3", rho0_kg_m3)
+    A = math.log(eta0_Pas) - ROELANDS_LN_ETA_INF
+    if A <= 0.0:
+        raise EHLInputError(f"eta0_Pas={eta0_Pas!r} is below the Roelands limit 6.31e-5 Pa s")
+    if not (x_in < -1.0 and x_out > 1.0):
+        raise EHLInputError(f"x_in={x_in!r}, x_out={x_out!r}: the domain must contain [-1, 1]")
+    b_m = R_m * math.sqrt(8.0 * W / math.pi)
+    ph_Pa = E_Pa * math.sqrt(W / (2.0 * math.pi))
+    lam = 3.0 * math.pi ** 2 / (8.0 * M ** 2)
+    if viscosity == "roelands":
+        z = alpha_Pa_inv * ROELANDS_P0_PA / A
+        A_kernel = A
+    elif viscosity == "barus":
+        # Barus: eta = eta0 exp(alpha p); the kernel flags it with z < 0 and A = alpha p_h
+        z = -1.0 if alpha_Pa_inv > 0 else 0.0
+        A_kernel = alpha_Pa_inv * ph_Pa
+    else:
+        raise EHLInputError(f"viscosity={viscosity!r}: must be 'roelands' or 'barus'")
+    prm = EHLParams(lam=lam, A=A_kernel, z=z, php0=ph_Pa / ROELANDS_P0_PA, c1=DH_C1_PA / ph_Pa,
+                    compressible=bool(compressible), x_in=float(x_in), x_out=float(x_out))
+
+    Hc_guess = math.pi * moes_central_film(M, L) / (8.0 * M)   # VL units
+    n_nodes, n_coarse, n_levels = choose_grid(Hc_guess, x_out - x_in, n_nodes, n_coarse)
+    rfun = _roughness_function(roughness_m)
+    scale_H = R_m / b_m ** 2  # h -> H
+    rough_fn = None
+    if rfun is not None:
+        def rough_fn(X):
+            zr = np.asarray(rfun(X * b_m), float)
+            if zr.shape != X.shape or not np.all(np.isfinite(zr)):
+                raise EHLInputError("roughness_m: must return finite heights (m), one per x")
+            return zr * scale_H
+
+    if multigrid_options:
+        attempts = [dict(multigrid_options)]
+    else:
+        attempts = [dict(a) for a in RELAXATION_SETTINGS]
+    for k_att, opts in enumerate(attempts):
+        solver, hist, converged, it = _iterate(
+            prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
+            min_cycles, tol_pressure, tol_load, tol_residual)
+        if converged:
+            break
+    top = solver.levels[-1]
+    hist["settings"] = opts
+    hist["attempt"] = k_att
+
+    X = top.X
+    H = top.H
+    x_m = X * b_m
+    h_m = H / scale_H
+    rough_m = top.rough / scale_H
+    imin = int(np.argmin(h_m))
+    sigma_m = float(np.std(rough_m)) if rfun is not None else 0.0
+    if np.all(np.isfinite(h_m)) and h_m[imin] <= 0.0:
+        lam_f = h_m[imin] / sigma_m if sigma_m > 0 else float("-inf")
+        raise FilmCollapseError(
+            f"film collapse: h = {h_m[imin]:.3e} m <= 0 at x = {x_m[imin]:.4e} m "
+            f"(X = {X[imin]:.3f}); film parameter lambda = h_min/sigma = {lam_f:.3f} "
+            f"(sigma = {sigma_m:.3e} m); the full-film model (seed 000) does not hold",
+            x_m=float(x_m[imin]), film_parameter=float(lam_f), h_min_m=float(h_m[imin]))
+    if not converged:
+        last = {k_: (hist[k_][-1] if hist[k_] else float("nan"))
+                for k_ in ("pressure_change", "load_balance", "reynolds_residual")}
+        if not math.isfinite(last["pressure_change"]) or last["pressure_change"] >= tol_pressure:
+            name, val, tol = "pressure_change", last["pressure_change"], tol_pressure
+        elif not last["reynolds_residual"] < tol_residual:
+            name, val, tol = "reynolds_residual", last["reynolds_residual"], tol_residual
+        else:
+            name, val, tol = "load_balance", last["load_balance"], tol_load
+        raise EHLConvergenceError(
+            f"EHL multigrid did not converge in {it} W-cycles (M={M:.4g}, L={L:.4g}): "
+            f"residual '{name}' stalled at {val:.3e} (tolerance {tol:.1e}); "
+            f"reynolds_residual={last['reynolds_residual']:.3e}",
+            residual_name=name, value=val, history=hist)
+
+    # central film: linear interpolation at X = 0
+    h_c = float(np.interp(0.0, X, h_m))
+    s2U = math.sqrt(2.0 * U)
+    p_Pa = top.P * ph_Pa
+    return LineContactResult(
+        x_m=x_m, X=X.copy(), p_Pa=p_Pa, P=top.P.copy(), h_m=h_m, H=H.copy(),
+        h_central_m=h_c, h_min_m=float(h_m[imin]), x_min_m=float(x_m[imin]),
+        H_central_moes=h_c / R_m / s2U, H_min_moes=float(h_m[imin]) / R_m / s2U,
+        M=M, L=L, b_m=b_m, ph_Pa=ph_Pa, load_N_per_m=float(top.load() * ph_Pa * b_m),
+        iterations=it, residuals=hist, converged=True,
+        grid_levels=n_levels,
+        inputs=dict(R_m=R_m, E_Pa=E_Pa, w_N_per_m=w_N_per_m, u_m_s=u_m_s,
+                    eta0_Pas=eta0_Pas, alpha_Pa_inv=alpha_Pa_inv, rho0_kg_m3=rho0_kg_m3),
+        roughness_m=rough_m, wall_time_s=time.perf_counter() - t_start)
