@@ -4,6 +4,7 @@
     gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
     gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
     gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
+    gearfmu ssp      [SCENE] -o OUT.ssp [--variant NAME:PARAM=VALUE]  SSP package with variants
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -183,6 +184,17 @@ def print_report(rep: dict) -> None:
     print(f"wall time: native {rep['native_wall_s']:.4f} s, FMU (fmpy) {rep['fmu_wall_s']:.4f} s")
 
 
+def cmd_ssp(args) -> int:
+    from .ssp import parse_variant, ssp_from_scene
+
+    scene = _scene(args.scene)
+    out = Path(args.output or f"build/{scene.fmu.model_name}.ssp")
+    variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
+    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet)
+    print(f"wrote {path}")
+    return 0
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gearfmu", description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -217,6 +229,14 @@ def make_parser() -> argparse.ArgumentParser:
     v.add_argument("--output-interval", type=_positive("--output-interval"))
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
     v.set_defaults(func=cmd_validate)
+
+    x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
+    x.add_argument("scene", nargs="?")
+    x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
+    x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
+                   help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
+    x.add_argument("-q", "--quiet", action="store_true")
+    x.set_defaults(func=cmd_ssp)
     return p
 
 

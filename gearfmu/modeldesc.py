@@ -260,8 +260,9 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         "canInterpolateInputs": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false",
         "canNotUseMemoryManagementFunctions": "true",
-        "canGetAndSetFMUstate": "false",
-        "canSerializeFMUstate": "false",
+        # the runtime saves its whole internal state (docs/robustness.md "FMU state")
+        "canGetAndSetFMUstate": "true",
+        "canSerializeFMUstate": "true",
     })
     used_units = sorted({v.unit for v in variables if v.unit is not None})
     if used_units:

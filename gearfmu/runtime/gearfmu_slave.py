@@ -22,6 +22,7 @@ import hashlib
 import json
 import math
 import os
+import struct
 
 import numpy as np
 from pythonfmu import Fmi2Slave
@@ -29,6 +30,17 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 from pythonfmu.variables import Integer, Real
 
 RUNTIME_FILE = "gearfmu_runtime.json"
+TABLE_VERSIONS = (1,)  # docs/tables.md
+
+# Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian
+# header, the raw bytes of the kernel's gk_state, the output vector, the values
+# of all non-output variables, a few runtime scalars, then the SHA-256 of all
+# that.  No pickle: plain bytes of POD data.
+STATE_MAGIC = b"GEARFMUS"
+STATE_VERSION = 1
+_STATE_HEAD = struct.Struct("<8sHHI32sIII")  # magic, version, flags, reserved, fingerprint, n_state, n_out, n_values
+_STATE_TAIL = struct.Struct("<ddQ")          # zeta applied (NaN = none), start time, accepted steps
+_FLAG_INITIALIZED, _FLAG_WARNED_RANGE, _FLAG_TERMINATED = 1, 2, 4
 
 _KERNEL_ERRORS = {
     1: "bad table dimensions or scalars",
@@ -72,6 +84,9 @@ def _load_resources(res, cfg):
                 f"resources/{fname}: SHA-256 checksum mismatch (file corrupted or tampered with); refusing to run")
     with open(os.path.join(res, "tables.json"), "rb") as f:
         meta = json.loads(f.read().decode("utf-8"))
+    if meta.get("version") not in TABLE_VERSIONS:
+        raise GearFmuResourceError(f"resources/tables.json: table format version {meta.get('version')!r} found; "
+                                   f"this runtime reads versions {list(TABLE_VERSIONS)}")
     with open(os.path.join(res, "tables.bin"), "rb") as f:
         binary = f.read()
     if hashlib.sha256(binary).hexdigest() != meta.get("bin_sha256"):
@@ -193,6 +208,12 @@ class GearFmuSlave(Fmi2Slave):
         self._initialized = False
         self._zeta_applied = None
         self._warned_range = False
+        self._terminated = False
+        self._n_steps = 0  # accepted communication steps (part of the FMU state)
+        self._t0 = 0.0
+        self._fingerprint = hashlib.sha256(json.dumps(
+            [cfg["sha256"], lib.gk_abi_version(), lib.gk_sizeof_model(), lib.gk_sizeof_state(),
+             [v["name"] for v in cfg["variables"]]]).encode("utf-8")).digest()
         self._v = {}
         self._limits = {}
         for ent in cfg["variables"]:
@@ -315,8 +336,15 @@ class GearFmuSlave(Fmi2Slave):
             self.log(f"initialisation failed: {exc!r}", Fmi2Status.error)
             self._initialized = False
 
+    def terminate(self):
+        self._terminated = True
+
     def do_step(self, current_time, step_size):
         try:
+            if self._terminated:
+                self.log(f"do_step at t = {current_time!r} s after fmi2Terminate: refused (only fmi2Reset or "
+                         f"fmi2FreeInstance may follow); state unchanged", Fmi2Status.error)
+                return False
             if not self._initialized and not self._init_state(current_time):
                 return False
             msgs = [m for m in (self._bad_value("pinion_torque", current_time),
@@ -337,7 +365,147 @@ class GearFmuSlave(Fmi2Slave):
                 self.log(f"step at t = {current_time!r} s, H = {step_size!r} s rejected: "
                          f"{_KERNEL_ERRORS.get(st, st)}; state unchanged", Fmi2Status.discard)
                 return False
+            self._n_steps += 1
             return True
         except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
             self.log(f"do_step failed: {exc!r}", Fmi2Status.error)
             return False
+
+    # ------------------------------------------------- get/set, never raising
+    # pythonfmu 0.7.0's wrapper turns any Python exception into fmi2Fatal and
+    # then releases the slave object while keeping the dangling pointer (a
+    # later call or fmi2FreeInstance touches freed memory).  So nothing below
+    # raises: a bad call is logged with its reason (status error) and ignored;
+    # a getter returns NaN / 0 for value references it cannot serve.
+    def _guarded_get(self, kind, vrs, fill):
+        try:
+            return getattr(super(), "get_" + kind)(vrs)
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2Get{kind.capitalize()}({list(vrs)!r}) refused: {exc}; returned {fill!r}",
+                     Fmi2Status.error)
+            return [fill] * len(vrs)
+
+    def _guarded_set(self, kind, vrs, values):
+        try:
+            if self._terminated:
+                self.log(f"fmi2Set{kind.capitalize()}({list(vrs)!r}) after fmi2Terminate: ignored",
+                         Fmi2Status.error)
+                return
+            getattr(super(), "set_" + kind)(vrs, values)
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2Set{kind.capitalize()}({list(vrs)!r}) refused: {exc}", Fmi2Status.error)
+
+    def get_real(self, vrs):
+        return self._guarded_get("real", vrs, float("nan"))
+
+    def get_integer(self, vrs):
+        return self._guarded_get("integer", vrs, 0)
+
+    def get_boolean(self, vrs):
+        return self._guarded_get("boolean", vrs, False)
+
+    def get_string(self, vrs):
+        return self._guarded_get("string", vrs, "")
+
+    def set_real(self, vrs, values):
+        self._guarded_set("real", vrs, values)
+
+    def set_integer(self, vrs, values):
+        self._guarded_set("integer", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._guarded_set("boolean", vrs, values)
+
+    def set_string(self, vrs, values):
+        self._guarded_set("string", vrs, values)
+
+    # ------------------------------------------------------------ FMU state
+    # The wrapper keeps whatever _get_fmu_state returns as the fmi2FMUstate and
+    # hands it to _set_fmu_state and to the static _fmu_state_to_bytes.  Our
+    # state object is already the serialized bytes (immutable, so a stored
+    # state can be set any number of times).
+    def _state_values(self):
+        return [ent["name"] for ent in self._cfg["variables"] if ent["causality"] != "output"]
+
+    def _get_fmu_state(self):
+        try:
+            names = self._state_values()
+            flags = ((_FLAG_INITIALIZED if self._initialized else 0) | (_FLAG_WARNED_RANGE if self._warned_range else 0)
+                     | (_FLAG_TERMINATED if self._terminated else 0))
+            state = self._state.tobytes()
+            body = b"".join([
+                _STATE_HEAD.pack(STATE_MAGIC, STATE_VERSION, flags, 0, self._fingerprint, len(state),
+                                 self._out.size, len(names)),
+                state, self._out.astype("<f8").tobytes(),
+                np.array([float(self._v[n]) for n in names], dtype="<f8").tobytes(),
+                _STATE_TAIL.pack(float("nan") if self._zeta_applied is None else float(self._zeta_applied),
+                                 float(self._t0), int(self._n_steps)),
+            ])
+            return body + hashlib.sha256(body).digest()
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2GetFMUstate failed: {exc!r}; the state returned cannot be set", Fmi2Status.error)
+            return b""
+
+    def _set_fmu_state(self, state):
+        try:
+            msg = self._restore(state)
+        except Exception as exc:  # noqa: BLE001
+            msg = repr(exc)
+        if msg:
+            self.log(f"fmi2SetFMUstate refused: {msg}; instance state unchanged", Fmi2Status.error)
+
+    def _restore(self, state):
+        if not isinstance(state, (bytes, bytearray)):
+            return f"not a gearfmu state (a {type(state).__name__})"
+        state = bytes(state)
+        hs, ts = _STATE_HEAD.size, _STATE_TAIL.size
+        if len(state) < hs + ts + 32 or state[:8] != STATE_MAGIC:
+            return "not a gearfmu state (bad magic or too short)"
+        magic, version, flags, _, fp, n_state, n_out, n_values = _STATE_HEAD.unpack_from(state, 0)
+        if version != STATE_VERSION:
+            return f"state format version {version} found; this runtime reads version {STATE_VERSION}"
+        if hashlib.sha256(state[:-32]).digest() != state[-32:]:
+            return "state checksum mismatch (bytes corrupted)"
+        if fp != self._fingerprint:
+            return "the state belongs to a different FMU (tables, kernel or variables differ)"
+        names = self._state_values()
+        if (n_state != self._state.nbytes or n_out != self._out.size or n_values != len(names)
+                or len(state) != hs + n_state + 8 * (n_out + n_values) + ts + 32):
+            return "state sizes do not match this FMU"
+        o = hs
+        kernel_state = np.frombuffer(state, dtype=np.float64, count=n_state // 8, offset=o)
+        o += n_state
+        out = np.frombuffer(state, dtype="<f8", count=n_out, offset=o)
+        o += 8 * n_out
+        values = np.frombuffer(state, dtype="<f8", count=n_values, offset=o)
+        o += 8 * n_values
+        zeta, t0, n_steps = _STATE_TAIL.unpack_from(state, o)
+        if math.isfinite(zeta):
+            st = self._lib.gk_set_damping(self._pm, zeta, int(values[names.index("damping_model")]))
+            if st != 0:
+                return f"damping_ratio = {zeta!r} in the state: {_KERNEL_ERRORS.get(st, st)}"
+        if flags & _FLAG_INITIALIZED and "integrator" in names:  # a model setting applied at initialisation
+            st = self._lib.gk_set_integrator(self._pm, int(values[names.index("integrator")]))
+            if st != 0:
+                return f"integrator in the state: {_KERNEL_ERRORS.get(st, st)}"
+        # from here on nothing can fail: copy everything in place
+        self._zeta_applied = zeta if math.isfinite(zeta) else None
+        self._state[:] = kernel_state
+        self._out[:] = out
+        types = {ent["name"]: ent["type"] for ent in self._cfg["variables"]}
+        for n, val in zip(names, values.tolist()):
+            self._v[n] = int(val) if types[n] == "Integer" else val
+        self._initialized = bool(flags & _FLAG_INITIALIZED)
+        self._warned_range = bool(flags & _FLAG_WARNED_RANGE)
+        self._terminated = bool(flags & _FLAG_TERMINATED)
+        self._t0 = t0
+        self._n_steps = n_steps
+        return None
+
+    @staticmethod
+    def _fmu_state_to_bytes(state):
+        return state if isinstance(state, bytes) else b""
+
+    @staticmethod
+    def _fmu_state_from_bytes(state):
+        return bytes(state)  # checked by _set_fmu_state

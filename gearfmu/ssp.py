@@ -1,0 +1,259 @@
+"""SSP package of a gear FMU: system structure, FMU and named parameter sets.
+
+An SSP (System Structure and Parameterization, Modelica Association,
+*SSP 1.0*, 2019) archive is a zip holding ``SystemStructure.ssd`` (the default
+variant), further ``.ssd`` files (other variants, SSP 1.0 section 3), and
+``resources/`` (the FMU and ``.ssv`` parameter value sets, SSP 1.0 sections
+5 and 6).  :func:`build_ssp` writes
+
+```
+SystemStructure.ssd            variant = the first parameter set (e.g. nominal)
+<variant>.ssd                  one per further parameter set, same system, its own binding
+resources/<model>.fmu          the gear FMU
+resources/<variant>.ssv        one ParameterSet per variant
+```
+
+The system holds one component (the gear FMU) with every FMU variable as a
+connector (inputs, outputs, parameters; SI units from
+``modeldescription/variables.toml``) and one ``ParameterBinding`` to its
+variant's ``.ssv``.  Every XML file is checked against the SSP 1.0 XSD shipped
+with pyssp-standard before the archive is written; a package that fails the
+check is never written.
+
+Variants are named sets of parameter values of the FMU (for example two
+damping ratios).  Choices (docs/robustness.md "SSP"): with no explicit
+variants, :func:`ssp_from_scene` makes ``nominal`` (the scene's damping
+ratio), ``damping_low`` (half of it) and ``damping_high`` (twice it, at most
+1); an oil-temperature variant needs a temperature input in the FMU, which the
+FMU does not have yet, so none is made.  Parameter values are checked against
+the FMU's modelDescription (name, causality parameter, min/max) and the error
+names the variant and the parameter.
+"""
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import tempfile
+import uuid
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+from typing import Dict, Mapping, Optional
+
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+}
+for _p, _u in NS.items():
+    ET.register_namespace(_p, _u)
+
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
+
+
+class SspError(ValueError):
+    """Bad SSP input (variant name, parameter name or value); the message names it."""
+
+
+def _q(prefix: str, tag: str) -> str:
+    return f"{{{NS[prefix]}}}{tag}"
+
+
+def _fmu_interface(fmu_path: Path):
+    """(model description, units {name: base exponents}) of an FMU."""
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmu_path))
+    units = {}
+    for u in md.unitDefinitions:
+        bu = u.baseUnit
+        units[u.name] = {} if bu is None else {k: getattr(bu, k) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+                                                 if getattr(bu, k, 0)}
+    return md, units
+
+
+def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str, Dict[str, float]]:
+    """Check variant names and parameter values against the FMU's model description."""
+    if not variants:
+        raise SspError("variants: at least one named parameter set is needed")
+    params = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+    out = {}
+    for name, values in variants.items():
+        if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure":
+            raise SspError(f"variants: name {name!r} must be a letter then letters, digits or _ (max 64), "
+                           f"and not 'SystemStructure'")
+        if not values:
+            raise SspError(f"variants.{name}: no parameter values")
+        checked = {}
+        for p, val in values.items():
+            if p not in params:
+                raise SspError(f"variants.{name}.{p}: not a parameter of the FMU (parameters: {sorted(params)})")
+            var = params[p]
+            try:
+                x = float(val)
+            except (TypeError, ValueError):
+                raise SspError(f"variants.{name}.{p}: not a number: {val!r}") from None
+            if not math.isfinite(x):
+                raise SspError(f"variants.{name}.{p}: must be finite, got {x!r}")
+            if var.min is not None and x < float(var.min) or var.max is not None and x > float(var.max):
+                raise SspError(f"variants.{name}.{p} = {x!r}: outside the FMU's range [{var.min}, {var.max}]")
+            if var.type == "Integer":
+                if x != int(x):
+                    raise SspError(f"variants.{name}.{p}: Integer parameter, got {x!r}")
+                x = int(x)
+            checked[p] = x
+        out[name] = checked
+    return out
+
+
+def _ssv_xml(name: str, values: Mapping[str, float], md) -> bytes:
+    vtype = {v.name: v.type for v in md.modelVariables}
+    vunit = {v.name: v.unit for v in md.modelVariables}
+    root = ET.Element(_q("ssv", "ParameterSet"), {"version": "1.0", "name": name})
+    params = ET.SubElement(root, _q("ssv", "Parameters"))
+    for p, x in values.items():
+        pe = ET.SubElement(params, _q("ssv", "Parameter"), {"name": p})
+        if vtype[p] == "Integer":
+            ET.SubElement(pe, _q("ssv", "Integer"), {"value": str(int(x))})
+        else:
+            attrs = {"value": repr(float(x))}
+            if vunit.get(p):
+                attrs["unit"] = vunit[p]
+            ET.SubElement(pe, _q("ssv", "Real"), attrs)
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def _ssd_xml(system_name: str, fmu_rel: str, ssv_rel: str, md, units, stop_time_s: float,
+             description: str) -> bytes:
+    root = ET.Element(_q("ssd", "SystemStructureDescription"),
+                      {"version": "1.0", "name": system_name, "generationTool": "gearfmu",
+                       "description": description})
+    system = ET.SubElement(root, _q("ssd", "System"), {"name": "drivetrain"})
+    elements = ET.SubElement(system, _q("ssd", "Elements"))
+    comp = ET.SubElement(elements, _q("ssd", "Component"),
+                         {"name": "gear", "type": "application/x-fmu-sharedlibrary", "source": fmu_rel})
+    conns = ET.SubElement(comp, _q("ssd", "Connectors"))
+    used_units = set()
+    for v in md.modelVariables:
+        kind = {"input": "input", "output": "output", "parameter": "parameter"}.get(v.causality)
+        if kind is None:
+            continue
+        c = ET.SubElement(conns, _q("ssd", "Connector"), {"name": v.name, "kind": kind})
+        if v.type == "Integer":
+            ET.SubElement(c, _q("ssc", "Integer"))
+        else:
+            ET.SubElement(c, _q("ssc", "Real"), {"unit": v.unit} if v.unit else {})
+            if v.unit:
+                used_units.add(v.unit)
+    binds = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
+    ET.SubElement(binds, _q("ssd", "ParameterBinding"), {"source": ssv_rel})
+    if used_units:
+        ue = ET.SubElement(root, _q("ssd", "Units"))
+        for u in sorted(used_units):
+            un = ET.SubElement(ue, _q("ssc", "Unit"), {"name": u})
+            ET.SubElement(un, _q("ssc", "BaseUnit"), {k: str(e) for k, e in units.get(u, {}).items()})
+    ET.SubElement(root, _q("ssd", "DefaultExperiment"), {"startTime": "0.0", "stopTime": repr(float(stop_time_s))})
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def validate_ssp_dir(directory) -> None:
+    """Schema-validate every .ssd and .ssv under ``directory`` with pyssp-standard
+    (SSP 1.0 XSD); raise SspError naming the file on the first failure."""
+    from pyssp_standard import SSD, SSV
+
+    d = Path(directory)
+    files = sorted(d.glob("*.ssd")) + sorted((d / "resources").glob("*.ssv"))
+    if not (d / "SystemStructure.ssd").is_file():
+        raise SspError(f"{d}: SystemStructure.ssd missing")
+    for f in files:
+        try:
+            (SSD if f.suffix == ".ssd" else SSV)(f, mode="r").__check_compliance__()
+        except Exception as exc:  # noqa: BLE001 - xmlschema raises several types
+            raise SspError(f"{f.relative_to(d)}: not valid SSP 1.0 ({str(exc).splitlines()[0]})") from None
+
+
+def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *,
+              stop_time_s: Optional[float] = None, system_name: str = "gearpair") -> Path:
+    """Write an SSP archive with the FMU at ``fmu_path`` and one variant per
+    entry of ``variants`` ({variant name: {parameter name: value}}); the first
+    variant is the default (``SystemStructure.ssd``).  Units of the values: the
+    FMU parameter's unit (SI).  Returns ``out_path``."""
+    fmu_path = Path(fmu_path)
+    out_path = Path(out_path)
+    if not fmu_path.is_file():
+        raise SspError(f"fmu_path: not a file: {fmu_path}")
+    if out_path.suffix != ".ssp":
+        raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
+    md, units = _fmu_interface(fmu_path)
+    checked = check_variants(md, variants)
+    if stop_time_s is None:
+        de = md.defaultExperiment
+        stop_time_s = float(de.stopTime) if de is not None and de.stopTime is not None else 0.1
+    if not (math.isfinite(stop_time_s) and stop_time_s > 0):
+        raise SspError(f"stop_time_s: must be finite and > 0, got {stop_time_s!r}")
+    fmu_rel = f"resources/{fmu_path.stem}.fmu"
+    with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_") as tmpd:
+        stage = Path(tmpd)
+        (stage / "resources").mkdir()
+        shutil.copy2(fmu_path, stage / fmu_rel)
+        for i, (name, values) in enumerate(checked.items()):
+            ssv_rel = f"resources/{name}.ssv"
+            (stage / ssv_rel).write_bytes(_ssv_xml(name, values, md))
+            desc = (f"gear pair {md.modelName}, parameter set {name!r}: "
+                    + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
+            ssd = _ssd_xml(f"{system_name}_{name}", fmu_rel, ssv_rel, md, units, stop_time_s, desc)
+            (stage / f"{name}.ssd").write_bytes(ssd)
+            if i == 0:
+                (stage / "SystemStructure.ssd").write_bytes(ssd)
+        validate_ssp_dir(stage)
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
+        try:
+            with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as z:
+                for f in sorted(stage.rglob("*")):
+                    if f.is_file():
+                        z.write(f, f.relative_to(stage).as_posix())
+            part.replace(out_path)
+        finally:
+            if part.exists():
+                part.unlink()
+    return out_path
+
+
+def default_variants(damping_ratio: float) -> Dict[str, Dict[str, float]]:
+    """nominal / damping_low (half) / damping_high (twice, at most 1) damping ratios."""
+    z = float(damping_ratio)
+    return {"nominal": {"damping_ratio": z}, "damping_low": {"damping_ratio": 0.5 * z},
+            "damping_high": {"damping_ratio": min(1.0, 2.0 * z)}}
+
+
+def parse_variant(text: str):
+    """``NAME:PARAM=VALUE[,PARAM=VALUE...]`` -> (name, {param: value})."""
+    name, sep, rest = text.partition(":")
+    if not sep or not rest:
+        raise SspError(f"--variant {text!r}: expected NAME:PARAM=VALUE[,PARAM=VALUE...]")
+    values = {}
+    for item in rest.split(","):
+        p, eq, v = item.partition("=")
+        if not eq:
+            raise SspError(f"--variant {text!r}: {item!r} is not PARAM=VALUE")
+        try:
+            values[p.strip()] = float(v)
+        except ValueError:
+            raise SspError(f"--variant {text!r}: {p.strip()} value {v!r} is not a number") from None
+    return name.strip(), values
+
+
+def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[str, float]]] = None,
+                   progress: bool = False) -> Path:
+    """Scene -> tables -> FMU -> SSP archive at ``out_path``."""
+    from .pipeline import build
+
+    out_path = Path(out_path)
+    if out_path.suffix != ".ssp":
+        raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
+    with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
+        res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress)
+        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio),
+                         stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)

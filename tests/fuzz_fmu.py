@@ -1,0 +1,303 @@
+"""Fuzz the gearfmu FMU through fmpy's low-level FMI 2.0 API.
+
+Random sequences of FMI calls -- out of order, NaN/inf/huge/negative inputs
+and parameters, zero/negative/non-finite/huge communication steps, calls
+after terminate, repeated reset, FMU state get/set/free/serialize/deserialize
+in any order, corrupted serialized states, invalid value references -- against
+one small FMU (two tooth-pair slots, a two-row torque axis so that torque
+clamping is exercised).
+
+Each batch of sequences runs in a child process: a host crash (signal or
+non-zero exit code, also at interpreter exit) is *counted*, never fatal to
+the fuzzer.  Every call that returns a status other than fmi2OK/fmi2Warning
+must have logged at least one message during that call (its reason);
+``unlogged_refusals`` counts those that did not.
+
+Usage::
+
+    python tests/fuzz_fmu.py --sequences 10000 --json [--batch 50] [--seed 0] [--jobs 2]
+
+prints ``{"sequences", "host_crashes", "fmi_errors", "fmi_fatal", ...}``.
+Importable: :func:`run_fuzz` (used by tests/test_fuzz.py), :func:`build_fuzz_fmu`.
+A sequence is reproducible from its seed: ``--first-seed S --sequences 1``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+OK, WARNING, DISCARD, ERROR, FATAL, PENDING = 0, 1, 2, 3, 4, 5
+
+#: values thrown at Real inputs and parameters
+NASTY_REALS = [float("nan"), float("inf"), -float("inf"), 1e308, -1e308, 1e-308, 0.0, -0.0, -1.0, 1e6, -1e6, 5e-324]
+#: communication step sizes
+NASTY_STEPS = [0.0, -1e-4, float("nan"), float("inf"), -float("inf"), 1e6, 1e-300, 5e-324, 1e308]
+
+
+def build_fuzz_fmu(directory) -> Path:
+    """A small FMU for fuzzing: synthetic rectangular-wave tables (P = 2),
+    torque axis [50, 150] N.m, max_step 1e-5 s."""
+    import numpy as np
+
+    from gearfmu.fmubuild import build_fmu
+    from gearfmu.synthetic import rectangular_wave_tables
+
+    t = rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=32, backlash_half_m=1e-5)
+    t = replace(t, torque_Nm=np.array([50.0, 150.0]), k_N_per_m=np.concatenate([t.k_N_per_m, 1.1 * t.k_N_per_m]),
+                e_m=np.concatenate([t.e_m, t.e_m]), e_comprehensive_m=None, static_te_m=None,
+                provenance={"source": "tests/fuzz_fmu.py"})
+    return build_fmu(t, Path(directory) / "fuzz.fmu", model_name="fuzz", max_step_s=1e-5, stop_time_s=0.01,
+                     output_interval_s=1e-4, pinion_torque_start_Nm=100.0)
+
+
+# ---------------------------------------------------------------- the child
+def _child(fmu_path: str, seeds: list[int]) -> None:
+    """Run the sequences ``seeds``; print one JSON line per finished sequence."""
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+
+    md = fmpy.read_model_description(fmu_path)
+    unzip = fmpy.extract(fmu_path)
+    reals = [v for v in md.modelVariables if v.type == "Real"]
+    writable = [v.valueReference for v in reals if v.causality in ("input", "parameter")]
+    outputs = [v.valueReference for v in reals if v.causality == "output"]
+    ints = [v.valueReference for v in md.modelVariables if v.type == "Integer"]
+    all_real = [v.valueReference for v in reals]
+    log = []
+    trace = bool(os.environ.get("GEARFMU_FUZZ_TRACE"))
+
+    def logger(env, instance, status, category, message):
+        log.append((int(status), (category or b"").decode("utf-8", "replace"),
+                    (message or b"").decode("utf-8", "replace")))
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+
+    for seed in seeds:
+        rng = random.Random(seed)
+        counts = {"calls": 0, "ok": 0, "warning": 0, "discard": 0, "error": 0, "fatal": 0,
+                  "unlogged_refusals": 0, "logged_errors_on_ok": 0, "unlogged_examples": []}
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                        instanceName=f"fuzz{seed}")
+        states, blobs = [], []
+        t = 0.0
+        logging_on = True  # the host may switch logging off (fmi2SetDebugLogging); then refusals are silent
+
+        def call(name, fn, *args):
+            nonlocal t
+            del log[:]
+            counts["calls"] += 1
+            if trace:
+                print(f"CALL {name}{args!r:.100}", file=sys.stderr, flush=True)
+            try:
+                r = fn(*args)
+                status = OK
+            except FMICallException as exc:
+                status, r = int(exc.status), None
+            key = {OK: "ok", WARNING: "warning", DISCARD: "discard", ERROR: "error", FATAL: "fatal"}.get(status, "error")
+            counts[key] += 1
+            if trace:
+                print(f"{name}{args!r:.100} -> {status} {log!r:.300}", file=sys.stderr, flush=True)
+            if status >= DISCARD and logging_on and not any(s >= WARNING and m for s, _, m in log):
+                counts["unlogged_refusals"] += 1
+                if len(counts["unlogged_examples"]) < 3:
+                    counts["unlogged_examples"].append(f"{name}{args!r:.80}")
+            if status == OK and any(s >= ERROR for s, _, _ in log):
+                counts["logged_errors_on_ok"] += 1
+            return status, r
+
+        try:
+            fmu.instantiate(callbacks=callbacks, loggingOn=True)
+        except Exception:  # noqa: BLE001 - a refused instantiation is an error, not a crash
+            counts["error"] += 1
+            print(json.dumps({"seed": seed, **counts}), flush=True)
+            continue
+        fatal = False
+        for _ in range(rng.randint(5, 40)):
+            op = rng.choice(["setup", "enter", "exit", "step", "step", "step", "step", "setreal", "setreal",
+                             "setint", "get", "getint", "getstate", "setstate", "freestate", "serialize",
+                             "deserialize", "terminate", "reset", "badvr", "debug"])
+            if op == "setup":
+                st, _ = call(op, fmu.setupExperiment, None, rng.choice([0.0, t, -1.0, 1e300]))
+            elif op == "enter":
+                st, _ = call(op, fmu.enterInitializationMode)
+            elif op == "exit":
+                st, _ = call(op, fmu.exitInitializationMode)
+            elif op == "step":
+                H = rng.choice(NASTY_STEPS) if rng.random() < 0.3 else rng.choice([1e-5, 1e-4, 3.3e-4, 2e-3])
+                st, _ = call(op, fmu.doStep, t, H)
+                if st == OK and math.isfinite(H):
+                    t += H
+            elif op == "setreal":
+                vr = rng.choice(writable)
+                val = rng.choice(NASTY_REALS) if rng.random() < 0.5 else rng.uniform(-300.0, 300.0)
+                st, _ = call(op, fmu.setReal, [vr], [val])
+            elif op == "setint":
+                st, _ = call(op, fmu.setInteger, [rng.choice(ints)], [rng.choice([0, 1, 2, -1, 2 ** 31 - 1])])
+            elif op == "get":
+                st, _ = call(op, fmu.getReal, all_real)
+            elif op == "getint":
+                st, _ = call(op, fmu.getInteger, ints)
+            elif op == "getstate":
+                st, s = call(op, fmu.getFMUstate)
+                if st == OK:
+                    states.append(s)
+            elif op == "setstate":
+                if not states:
+                    continue
+                st, _ = call(op, fmu.setFMUstate, rng.choice(states))
+            elif op == "freestate":
+                if not states:
+                    continue
+                st, _ = call(op, fmu.freeFMUstate, states.pop(rng.randrange(len(states))))
+            elif op == "serialize":
+                if not states:
+                    continue
+                st, b = call(op, fmu.serializeFMUstate, rng.choice(states))
+                if st == OK:
+                    blobs.append(b)
+            elif op == "deserialize":
+                if blobs and rng.random() < 0.7:
+                    b = bytearray(rng.choice(blobs))
+                    kind = rng.random()
+                    if kind < 0.3 and b:
+                        b[rng.randrange(len(b))] ^= 1 << rng.randrange(8)  # one bit flipped
+                    elif kind < 0.45:
+                        b = b[: rng.randrange(len(b) + 1)]  # truncated
+                else:
+                    b = bytearray(rng.randbytes(rng.randrange(1, 400)))  # garbage
+                st, s = call(op, fmu.deSerializeFMUstate, bytes(b) or b"\0")
+                if st == OK:
+                    states.append(s)
+                    if rng.random() < 0.8:
+                        call("setstate", fmu.setFMUstate, s)
+            elif op == "terminate":
+                st, _ = call(op, fmu.terminate)
+            elif op == "reset":
+                st, _ = call(op, fmu.reset)
+                t = 0.0
+            elif op == "badvr":
+                if rng.random() < 0.5:
+                    st, _ = call(op, fmu.getReal, [10 ** 6])
+                else:
+                    st, _ = call(op, fmu.setReal, [rng.choice(outputs + [10 ** 6])], [1.0])
+            else:
+                on = rng.random() < 0.5
+                st, _ = call(op, fmu.setDebugLogging, on, [])
+                logging_on = on
+            if st == FATAL:
+                fatal = True  # FMI 2.0: no further call on this instance is allowed
+                break
+        if not fatal:
+            for s in states:
+                call("freestate", fmu.freeFMUstate, s)
+            try:
+                fmu.freeInstance()
+            except Exception:  # noqa: BLE001
+                counts["error"] += 1
+        print(json.dumps({"seed": seed, **counts}), flush=True)
+
+
+# --------------------------------------------------------------- the parent
+def run_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 50, jobs: int = 2,
+             timeout_s: float = 600.0, progress: bool = False) -> dict:
+    """Run ``sequences`` sequences (seeds first_seed ...) in child processes of
+    ``batch`` sequences each, ``jobs`` at a time; return the summary dict."""
+    pending = [list(range(s, min(s + batch, first_seed + sequences)))
+               for s in range(first_seed, first_seed + sequences, batch)]
+    totals = {"sequences": 0, "host_crashes": 0, "fmi_errors": 0, "fmi_fatal": 0, "fmi_discards": 0,
+              "fmi_warnings": 0, "calls": 0, "unlogged_refusals": 0, "logged_errors_on_ok": 0,
+              "crashes": [], "unlogged_examples": []}
+    running = []
+    t0 = time.time()
+    while pending or running:
+        while pending and len(running) < jobs:
+            seeds = pending.pop(0)
+            p = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--child", str(fmu_path),
+                                  ",".join(map(str, seeds))], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True)
+            running.append((p, seeds, time.time()))
+        time.sleep(0.02)
+        for item in list(running):
+            p, seeds, started = item
+            if p.poll() is None and time.time() - started < timeout_s:
+                continue
+            if p.poll() is None:
+                p.kill()
+            out, err = p.communicate()
+            running.remove(item)
+            done = []
+            for line in out.splitlines():
+                try:
+                    rec = json.loads(line)
+                except ValueError:
+                    continue
+                if not isinstance(rec, dict) or "seed" not in rec:
+                    continue
+                done.append(rec["seed"])
+                totals["sequences"] += 1
+                totals["calls"] += rec["calls"]
+                totals["fmi_errors"] += rec["error"]
+                totals["fmi_fatal"] += rec["fatal"]
+                totals["fmi_discards"] += rec["discard"]
+                totals["fmi_warnings"] += rec["warning"]
+                totals["unlogged_refusals"] += rec["unlogged_refusals"]
+                totals["logged_errors_on_ok"] += rec["logged_errors_on_ok"]
+                totals["unlogged_examples"] += rec["unlogged_examples"][: max(0, 5 - len(totals["unlogged_examples"]))]
+            if p.returncode != 0:
+                totals["host_crashes"] += 1
+                left = [s for s in seeds if s not in done]
+                where = left[0] if left else "interpreter exit"
+                totals["crashes"].append({"seed": where, "returncode": p.returncode, "stderr": err[-300:]})
+                if left:  # the crashed sequence counts; the rest of the batch runs again
+                    totals["sequences"] += 1
+                    if left[1:]:
+                        pending.append(left[1:])
+            if progress:
+                print(f"fuzz: {totals['sequences']}/{sequences} sequences, {totals['host_crashes']} crashes, "
+                      f"{time.time() - t0:.0f} s", file=sys.stderr, flush=True)
+    totals["wall_s"] = round(time.time() - t0, 2)
+    return totals
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sequences", type=int, default=1000)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--batch", type=int, default=50, help="sequences per child process")
+    ap.add_argument("--jobs", type=int, default=2, help="child processes at a time")
+    ap.add_argument("--fmu", help="FMU to fuzz (default: build a small one)")
+    ap.add_argument("--json", action="store_true", help="print the summary as JSON")
+    ap.add_argument("--child", nargs=2, metavar=("FMU", "SEEDS"), help=argparse.SUPPRESS)
+    a = ap.parse_args(argv)
+    if a.child:
+        _child(a.child[0], [int(s) for s in a.child[1].split(",")])
+        return 0
+    if a.sequences < 1 or a.batch < 1 or a.jobs < 1:
+        ap.error("--sequences, --batch and --jobs must be >= 1")
+    with tempfile.TemporaryDirectory(prefix="gearfmu_fuzz_") as d:
+        fmu = a.fmu or str(build_fuzz_fmu(d))
+        res = run_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
+    if a.json:
+        print(json.dumps(res))
+    else:
+        for k, v in res.items():
+            print(f"{k}: {v}")
+    return 0 if res["host_crashes"] == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
