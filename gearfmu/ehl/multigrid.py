@@ -331,7 +331,7 @@ class MultigridSolver:
         """Load balance (seed 000 eq 7) on the current finest grid: H0 moves
         against the load error, H0 <- H0 - c (pi/2 - dX sum P).  The gain c
         is halved whenever the step changes sign without shrinking (an
-        over-correction) and recovers slowly (x1.1) while it keeps its sign."""
+        over-correction) and recovers (x1.5) while it keeps its sign."""
         dH0 = -self.c_cur * (0.5 * np.pi - lv.load())
         # never move H0 by more than a fraction of the film itself: for thin
         # films (high M) the load is very sensitive to H0
@@ -341,7 +341,7 @@ class MultigridSolver:
         if dH0 * self._dH0_prev < 0.0 and abs(dH0) > 0.5 * abs(self._dH0_prev):
             self.c_cur *= 0.5
         elif dH0 * self._dH0_prev > 0.0:
-            self.c_cur = min(self.c_cur * 1.1, self.c_h0)
+            self.c_cur = min(self.c_cur * 1.5, self.c_h0)
         self._dH0_prev = dH0
         lv.H0 += dH0
         lv.update_H()

@@ -211,7 +211,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        compressible: bool = True, viscosity: str = "roelands",
                        n_nodes: Optional[int] = None, n_coarse: Optional[int] = None,
                        x_in: float = -4.5, x_out: float = 1.5,
-                       tol_pressure: float = 1e-7, tol_load: float = 1e-7,
+                       tol_pressure: float = 1e-5, tol_load: float = 1e-6,
                        tol_residual: float = 1e-6,
                        max_cycles: int = 60, min_cycles: int = 2,
                        fmg_cycles: int = 0, **multigrid_options) -> LineContactResult:

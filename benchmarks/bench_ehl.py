@@ -1,0 +1,59 @@
+"""Benchmark of the line-contact EHL solver (prints JSON; not a test).
+
+Time per smooth solve (median of repeats, numba compilation excluded) for
+several grid sizes at fixed operating points, the number of W-cycles, the
+time per W-cycle per node, and the central film (Moes scaling) so that the
+cost can be read against the discretisation error.
+
+    python benchmarks/bench_ehl.py [--repeats 3]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import time
+
+import numpy as np
+
+from gearfmu.ehl import solve_line_contact
+from gearfmu.ehl.fits import moes_central_film
+
+
+def bench(M, L, sizes, repeats, **kw):
+    rows = []
+    for n in sizes:
+        times = []
+        r = None
+        for _ in range(repeats):
+            t = time.perf_counter()
+            r = solve_line_contact(M=M, L=L, n_nodes=n + 1, **kw)
+            times.append(time.perf_counter() - t)
+        t_med = float(np.median(times))
+        rows.append(dict(n_intervals=n, levels=r.grid_levels, w_cycles=r.iterations,
+                         attempt=r.residuals["attempt"], time_s=t_med,
+                         time_per_cycle_ms=1e3 * t_med / r.iterations,
+                         us_per_cycle_per_node_over_log2n=1e6 * t_med / r.iterations / (n * math.log2(n)),
+                         H_central_moes=r.H_central_moes,
+                         rel_dev_from_moes=r.H_central_moes / moes_central_film(M, L) - 1.0))
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+    solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
+    out = dict(python=platform.python_version(), machine=platform.machine(), cases=[])
+    for M, L, kw in [(20.0, 5.0, dict(viscosity="barus", compressible=False, n_coarse=32)),
+                     (100.0, 10.0, dict(viscosity="barus", compressible=False, n_coarse=64)),
+                     (100.0, 10.0, dict(viscosity="roelands", compressible=True, n_coarse=64))]:
+        out["cases"].append(dict(M=M, L=L, options={k: v for k, v in kw.items()},
+                                 rows=bench(M, L, [256, 512, 1024, 2048, 4096], args.repeats,
+                                            **kw)))
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
