@@ -191,3 +191,43 @@ def test_small_roughness_converges_and_zero_roughness_is_smooth():
     rr = solve_line_contact(**kw, roughness_m=lambda x: 0.02e-6 * np.cos(2 * np.pi * x / 1e-4))
     assert rr.converged and rr.h_min_m > 0
     assert np.ptp(rr.h_m[np.abs(rr.X) < 0.5]) > np.ptp(r0.h_m[np.abs(r0.X) < 0.5])
+
+
+# --------------------------------------------------------------------------- film stiffness
+def test_bulk_modulus_is_tait_tangent_modulus_with_right_limits():
+    # Reference: isothermal Tait equation V/V0 = 1 - ln(1 + p (1+B0')/B0)/(1+B0')
+    # (Bair 2007); its tangent modulus -V dp/dV is seed 000 eq 9.  Limits:
+    # B(0) = B0 and dB/dp(0) = B0' (definition of B0').
+    from gearfmu.ehl.film_stiffness import bulk_modulus_Pa
+    B0, B1 = 1.9e9, 10.5
+    V = lambda p: 1.0 - math.log(1.0 + p * (1 + B1) / B0) / (1 + B1)
+    for p in (0.0, 0.2e9, 0.5e9, 1.5e9):
+        dp = 1e3
+        tangent = -V(p) * 2 * dp / (V(p + dp) - V(p - dp)) if p > 0 else None
+        if tangent is not None:
+            assert float(bulk_modulus_Pa(p, B0, B1)) == pytest.approx(tangent, rel=1e-6)
+    assert float(bulk_modulus_Pa(0.0, B0, B1)) == pytest.approx(B0, rel=1e-15)
+    slope = (float(bulk_modulus_Pa(1e3, B0, B1)) - B0) / 1e3
+    assert slope == pytest.approx(B1, rel=1e-4)
+
+
+def test_film_stiffness_limits_and_trend_with_load():
+    from gearfmu.ehl.film_stiffness import (film_stiffness_N_per_m, slice_film_stiffness_N_per_m,
+                                            total_film_stiffness_N_per_m, B0_DEFAULT_PA)
+    # eq 8 limits: p_m -> 0 gives A B0 / h; k ~ 1/h.
+    k1 = film_stiffness_N_per_m(1e-6, 1e-6, 0.0)
+    assert k1 == pytest.approx(1e-6 * B0_DEFAULT_PA / 1e-6, rel=1e-15)
+    assert film_stiffness_N_per_m(1e-6, 0.5e-6, 0.0) == pytest.approx(2 * k1, rel=1e-15)
+    # eq 10: slices in parallel add.
+    assert total_film_stiffness_N_per_m([1.0, 2.0, 3.5]) == 6.5
+    # More load -> thinner film and higher pressure -> stiffer film (seed 000
+    # Fig. 15 trend: film stiffness rises with torque).
+    kw = dict(R_m=0.02, E_Pa=2.26e11, u_m_s=5.0, eta0_Pas=0.04, alpha_Pa_inv=2.2e-8)
+    ks = [slice_film_stiffness_N_per_m(solve_line_contact(w_N_per_m=w, **kw), 1e-3)
+          for w in (1.5e5, 4.5e5)]
+    assert ks[1] > ks[0]
+    # Higher entrainment speed -> thicker film -> softer film (seed 000 Fig. 14).
+    kw.pop("u_m_s")
+    kv = [slice_film_stiffness_N_per_m(solve_line_contact(w_N_per_m=3e5, u_m_s=u, **kw), 1e-3)
+          for u in (2.0, 10.0)]
+    assert kv[1] < kv[0]
