@@ -20,8 +20,8 @@ from gearfmu import roughness as R
 def test_table2_Ra_reproduced_within_10_percent(level):
     # Reference: seed 000 Table 2 Ra.  Convention (docs/ehl.md): G in mm,
     # L_s = 0.5 mm, unfiltered Ra over 4 mm, mean of the 44 face-width slices
-    # (1 mm slices of the 44 mm Table 1 gear).  Measured: -9.1 %, +7.7 %,
-    # +8.4 %, +8.1 % for levels 1-4.
+    # (1 mm slices of the 44 mm Table 1 gear).  Measured: -9.2 %, +7.4 %,
+    # +8.1 %, +7.8 % for levels 1-4.
     lv = R.SEED000_LEVELS[level]
     ra = R.level_Ra_m(level, n_slices=44, seed=2022)
     assert abs(ra / lv.Ra_m - 1.0) < 0.10
