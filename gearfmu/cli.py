@@ -1,6 +1,6 @@
 """The ``gearfmu`` command line.
 
-    gearfmu build    [SCENE] -o OUT.fmu        scene -> tables -> FMU
+    gearfmu build    [SCENE] -o OUT.fmu [--runtime pythonfmu|standalone]  scene -> tables -> FMU
     gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
     gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
     gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
@@ -48,7 +48,7 @@ def cmd_build(args) -> int:
 
     scene = _scene(args.scene)
     out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
-    res = build(scene, out, progress=not args.quiet)
+    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None))
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     return 0
@@ -203,6 +203,8 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
+    b.add_argument("--runtime", choices=("pythonfmu", "standalone"),
+                   help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
     b.set_defaults(func=cmd_build)
 
     t = sub.add_parser("tables", help="compute, save (.gtab, .csv) and plot (.png) the tooth-pair tables")

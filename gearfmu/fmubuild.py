@@ -250,6 +250,12 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         raw_fmu = tmp / "raw" / f"{identifier}.fmu"
         raw_fmu.parent.mkdir()
         _pythonfmu_build(script, raw_fmu, [*files, src_dir])
+        from .standalone_build import validation_record  # shared with the standalone runtime
+
+        record = validation_record(
+            tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
+            parameters={k: v for k, v in provenance["parameters"].items() if k not in ("stop_time_s", "output_interval_s")},
+            scene_text=scene_text, compiler=provenance["kernel"]["compiler"])
 
         with zipfile.ZipFile(raw_fmu) as zin:
             registered = zin.read("modelDescription.xml")
@@ -272,6 +278,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                         if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
                             continue  # the kernel is compiled for this platform only
                         zout.writestr(info, zin.read(n))
+                    for rel, data in record.items():  # resources/validation/ (docs/standalone.md)
+                        zout.writestr(rel, data)
                 os.replace(part, out_path)
             finally:
                 if part.exists():

@@ -77,9 +77,16 @@ class BuildResult:
     max_step_s: float
 
 
-def build(scene, out_path, *, progress: bool = False) -> BuildResult:
-    """Scene -> tables -> FMU at ``out_path``."""
+def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None) -> BuildResult:
+    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
+    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``."""
     from .fmubuild import build_fmu
+
+    runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
+    if runtime == "standalone":
+        from .standalone_build import build_standalone_fmu as build_fmu  # same arguments
+    elif runtime != "pythonfmu":
+        raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
 
     t0 = time.perf_counter()
     tables = compute_tables(scene, progress=progress)

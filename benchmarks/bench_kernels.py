@@ -1,0 +1,130 @@
+#!/usr/bin/env python3
+"""Benchmark: per-internal-step cost of the C kernel (gearkernel.c, the FMUs'
+kernel) against the numba native kernel (gearfmu.native), measured in one run.
+
+Both integrate the same tables with the same RK4 substeps: a communication
+step spans ``--substeps`` internal steps, so per-call overhead (ctypes for C,
+the Python wrapper for numba) is spread thin.  C: ``gk_do_step`` called via
+ctypes on the kernel compiled exactly as the FMUs compile it; numba:
+``gearfmu.native.simulate`` (its ``wall_s`` excludes JIT compilation).  Two
+cases: the default scene's tables and a hard case with contact loss and
+impacts (rectangular-wave tables with backlash, light load).
+
+Prints one JSON object: per case ``c_ns_per_step``, ``numba_ns_per_step``
+and ``numba_over_c`` (the goal in issue 6: numba within 1.3x of C per step).
+Each timing is the best of ``--repeat`` runs (shared, noisy machines: compare
+ratios, not absolute times).
+
+    python benchmarks/bench_kernels.py [--sim-time 0.2] [--substeps 100] [--repeat 5]
+"""
+import argparse
+import ctypes
+import json
+import math
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+
+def _c_kernel(tmp):
+    from gearfmu.fmubuild import compile_kernel
+
+    lib = ctypes.CDLL(str(compile_kernel(tmp)))
+    c_int, c_double, c_void_p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
+    lib.gk_sizeof_model.restype = c_int
+    lib.gk_sizeof_state.restype = c_int
+    lib.gk_n_outputs.argtypes, lib.gk_n_outputs.restype = [c_int], c_int
+    lib.gk_init.argtypes = [c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6
+    lib.gk_set_damping.argtypes = [c_void_p, c_double, c_int]
+    lib.gk_initialize.argtypes = [c_void_p, c_void_p, c_double, c_double, c_double]
+    lib.gk_do_step.argtypes = [c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p]
+    for f in ("gk_init", "gk_set_damping", "gk_initialize", "gk_do_step"):
+        getattr(lib, f).restype = c_int
+    return lib
+
+
+def _run_c(lib, t, case, n_comm, H, hmax):
+    arrs = [np.ascontiguousarray(a, dtype=np.float64) for a in (t.torque_Nm, t.k_N_per_m, t.e_m, t.backlash_half_m)]
+    model = np.zeros(lib.gk_sizeof_model() // 8 + 2)
+    state = np.zeros(lib.gk_sizeof_state() // 8 + 1)
+    out = np.zeros(lib.gk_n_outputs(t.slots))
+    pm, ps, po = model.ctypes.data, state.ctypes.data, out.ctypes.data
+    assert lib.gk_init(pm, t.slots, t.n_phi, t.n_torque, *[a.ctypes.data for a in arrs], t.phi_period_rad,
+                       t.base_radius_pinion_m, t.base_radius_gear_m, t.inertia_pinion_kgm2, t.inertia_gear_kgm2,
+                       t.k_mean_N_per_m) == 0
+    assert lib.gk_set_damping(pm, case["zeta"], 0) == 0
+    assert lib.gk_initialize(pm, ps, 0.0, case["w0"], case["T1"]) == 0
+    step = lib.gk_do_step
+    T1, T2 = case["T1"], case["T2"]
+    t0 = time.perf_counter()
+    for _ in range(n_comm):
+        if step(pm, ps, T1, T2, H, hmax, po) != 0:
+            raise RuntimeError("C kernel step failed")
+    return time.perf_counter() - t0, float(out[4])
+
+
+def _cases():
+    from gearfmu.native import choose_max_step_s
+    from gearfmu.pipeline import compute_tables, gear_torque_for, load
+    from gearfmu.synthetic import rectangular_wave_tables
+
+    scene = load(None)
+    td = compute_tables(scene)
+    ti = rectangular_wave_tables(1e8, contact_ratio=1.6, backlash_half_m=20e-6,
+                                 pair_error_m=lambda j, u: 10e-6 * np.sin(np.pi * u) * (1 + 0.5 * j))
+    wi = math.sqrt(ti.k_mean_N_per_m / ti.equivalent_mass_kg) * ti.mesh_period_rad / (2 * math.pi)
+    T1 = scene.operating.torque_Nm
+    return {
+        "default_scene": dict(tables=td, T1=T1, T2=gear_torque_for(td, T1), w0=scene.operating.speed_rad_s,
+                              zeta=scene.fmu.damping_ratio,
+                              hmax=choose_max_step_s(td, 1.5 * scene.operating.speed_rad_s)),
+        "impacts": dict(tables=ti, T1=10.0, T2=gear_torque_for(ti, 10.0), w0=wi, zeta=0.02, hmax=4.5e-6),
+    }
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sim-time", type=float, default=0.2, help="simulated time per run, s")
+    ap.add_argument("--substeps", type=int, default=100, help="internal steps per communication step")
+    ap.add_argument("--repeat", type=int, default=5)
+    a = ap.parse_args(argv)
+    from gearfmu.native import simulate
+
+    report = {"benchmark": "bench_kernels", "python": sys.version.split()[0], "machine": platform.machine(),
+              "sim_time_s": a.sim_time, "substeps_per_comm_step": a.substeps, "repeat": a.repeat, "cases": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        lib = _c_kernel(tmp)
+        for name, c in _cases().items():
+            t = c["tables"]
+            hmax = c["hmax"]
+            H = a.substeps * hmax * (1 - 1e-9)  # exactly `substeps` internal steps of <= hmax
+            n_comm = max(1, int(a.sim_time / H))
+            n_steps = n_comm * a.substeps
+            kw = dict(stop_time_s=n_comm * H, comm_step_s=H, max_step_s=hmax, pinion_torque_Nm=c["T1"],
+                      gear_torque_Nm=c["T2"], pinion_speed_start_rad_s=c["w0"], damping_ratio=c["zeta"])
+            simulate(t, **dict(kw, stop_time_s=H))  # JIT warm-up
+            nb, cc = [], []
+            for _ in range(a.repeat):
+                r = simulate(t, **kw)
+                nb.append(r.wall_s)
+                w, dte_c = _run_c(lib, t, c, n_comm, H, hmax)
+                cc.append(w)
+            rel = abs(float(r.dte[-1]) - dte_c) / max(float(np.ptp(r.dte)), 1e-300)
+            report["cases"][name] = {
+                "slots": t.slots, "internal_steps": n_steps, "max_step_s": hmax,
+                "c_ns_per_step": min(cc) / n_steps * 1e9, "numba_ns_per_step": min(nb) / n_steps * 1e9,
+                "numba_over_c": min(nb) / min(cc), "final_dte_rel_diff": rel,
+            }
+            print(f"{name}: C {report['cases'][name]['c_ns_per_step']:.0f} ns/step, numba "
+                  f"{report['cases'][name]['numba_ns_per_step']:.0f} ns/step", file=sys.stderr, flush=True)
+    print(json.dumps(report, indent=1))
+
+
+if __name__ == "__main__":
+    main()
