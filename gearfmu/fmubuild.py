@@ -51,6 +51,10 @@ TEMPLATE_CLASS = "GearFmuSlave"
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
 KERNEL_ABI_VERSION = 1
 DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
+#: integrator names -> kernel code (gearkernel.h GK_INTEGRATOR_*, gearfmu.native.INTEGRATORS)
+INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+#: gearkernel.h GK_KINK_MAX_SLOTS
+KINK_MAX_SLOTS = 32
 
 
 class FmuBuildError(ValueError):
@@ -144,18 +148,34 @@ def _replace_class_name(template: str, class_name: str) -> str:
     return text
 
 
+def _integrator_code(integrator, slots: int) -> int:
+    """0/'rk4' or 1/'rk4_kink' (gearfmu.native.INTEGRATORS) -> the kernel code."""
+    if isinstance(integrator, str):
+        if integrator not in INTEGRATORS:
+            raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
+        code = INTEGRATORS[integrator]
+    elif isinstance(integrator, bool) or integrator not in (0, 1):
+        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4) or 1 (rk4_kink)")
+    else:
+        code = int(integrator)
+    if code == 1 and slots > KINK_MAX_SLOTS:
+        raise FmuBuildError(f"integrator: rk4_kink handles at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
+    return code
+
+
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
               pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
               damping_model: Union[int, str] = 0, stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
               scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None) -> Path:
+              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 0) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
     Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
     ``gear_torque_start_Nm`` None means the static balance
     ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
-    "elastobacklash", 1 or "seed003" (docs/model.md).  ``stop_time_s`` and
+    "elastobacklash", 1 or "seed003" (docs/model.md).  ``integrator``: 0 or
+    "rk4", 1 or "rk4_kink" (docs/model.md "Integration"; FMU parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize).
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
@@ -177,6 +197,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     tstop = _check_positive("stop_time_s", stop_time_s)
     dt = _check_positive("output_interval_s", output_interval_s)
     dm = _damping_model_code(damping_model)
+    ig = _integrator_code(integrator, tables.slots)
     if scene_text is not None and not isinstance(scene_text, str):
         raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
     out_path = Path(out_path)
@@ -187,10 +208,10 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     variables = expand_variables(spec, tables.slots)
     variables = apply_start_values(variables, {
         "pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
-        "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm})
+        "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm, "integrator": ig})
 
     meta_bytes, bin_bytes = tables.to_bytes()
-    digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm)).encode())
+    digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
     suffix = f"{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
     identifier = f"gearfmu_{suffix}"       # module name and modelIdentifier
     class_name = f"GearFmu_{suffix}"
@@ -230,7 +251,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             "model_identifier": identifier, "guid": guid,
             "parameters": {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
                            "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
-                           "damping_model": dm, "stop_time_s": tstop, "output_interval_s": dt},
+                           "damping_model": dm, "integrator": ig, "stop_time_s": tstop,
+                           "output_interval_s": dt},
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
             "tables_provenance": tables.provenance,
             "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": _compiler_version(cc),

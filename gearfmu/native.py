@@ -39,6 +39,8 @@ __all__ = [
     "SimResult",
     "DimensionlessResult",
     "DAMPING_MODELS",
+    "INTEGRATORS",
+    "DEFAULT_INTEGRATOR",
     "simulate",
     "simulate_sdof",
     "dimensionless",
@@ -49,6 +51,11 @@ __all__ = [
 
 #: damping-model names -> kernel code (docs/model.md "Per-pair force")
 DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
+#: integrator names -> kernel code (docs/model.md "Integration"); the FMU
+#: parameter ``integrator`` takes the code
+INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+#: the setting on the speed-against-error front (benchmarks/bench_integrators.py, docs/native.md)
+DEFAULT_INTEGRATOR = "rk4"
 
 InputLike = Union[float, np.ndarray, Callable[[float], float]]
 
@@ -399,6 +406,417 @@ def _run_sdof(th0, om, x, v, t1s, H, n_sub, h, rb1, me, k, e, b, torque,
     return n_steps
 
 
+# ------------------------------------------------------ rk4_kink (docs/model.md)
+#: events (mode switches) located per substep before the rest of the substep is
+#: taken without detection (guards a grazing ping-pong); docs/model.md "rk4_kink"
+KINK_MAX_EVENTS = 1000
+#: largest slot count the rk4_kink integrator accepts (fixed arrays in the C kernel)
+KINK_MAX_SLOTS = 32
+_KINK_TOL_S = 1e-12     # root bracket width in the unit substep fraction s
+_KINK_MAX_IT = 60       # Illinois iterations per root
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _cell_nodes(nd, n_phi):
+    """(i0, i1) of global cell nd (float holding an integer): i0 = nd mod N."""
+    r = nd - n_phi * np.floor(nd / n_phi)
+    i0 = int(r)
+    if i0 < 0:
+        i0 = 0
+    if i0 >= n_phi:
+        i0 = n_phi - 1
+    i1 = i0 + 1
+    if i1 == n_phi:
+        i1 = 0
+    return i0, i1
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
+    """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
+    separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
+    kpos (seed003) the pair is in the contact zone in this cell."""
+    de = es * omega1
+    d = x - ev
+    if reg == 1:
+        fc = kv * (d - bv)
+    elif reg == -1:
+        fc = kv * (d + bv)
+    else:
+        fc = 0.0
+    fd = c * (v - de)
+    if model == 0:
+        if reg == 0 or sub == 2:
+            return 0.0
+        if sub == 0:
+            return fc + fc
+        return fc + fd
+    if kpos != 0:
+        return fc + fd
+    return 0.0
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
+    """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
+    1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
+    d = x - ev
+    if reg == 0:
+        if q == 0:
+            return bv - d
+        if q == 1:
+            return d + bv
+        return 1.0
+    if q == 0:
+        if reg == 1:
+            return d - bv
+        return -(d + bv)
+    if model != 0:
+        return 1.0
+    if reg == 1:
+        fc = kv * (d - bv)
+    else:
+        fc = kv * (d + bv)
+    fd = c * (v - es * omega1)
+    if reg == 1:
+        if sub == 0:
+            return fd - fc if q == 1 else 1.0
+        if sub == 1:
+            return fc - fd if q == 1 else fc + fd
+        return -(fc + fd) if q == 1 else 1.0
+    if sub == 0:
+        return fc - fd if q == 1 else 1.0
+    if sub == 1:
+        return fd - fc if q == 1 else -(fc + fd)
+    return fc + fd if q == 1 else 1.0
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
+    """Sub-mode of the elastobacklash law at the state (docs/model.md 'Per-pair force')."""
+    if reg == 0:
+        return 0
+    d = x - ev
+    fd = c * (v - es * omega1)
+    if reg == 1:
+        fc = kv * (d - bv)
+        if fc < fd:
+            return 0
+        if fc + fd < 0.0:
+            return 2
+        return 1
+    fc = kv * (d + bv)
+    if fc > fd:
+        return 0
+    if fc + fd > 0.0:
+        return 2
+    return 1
+
+
+@njit(cache=False, error_model="numpy", inline="always")
+def _deriv_locked(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model,
+                  reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me):
+    """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
+    Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
+    omega1' = 0, m_e v' = F_m - F)."""
+    w = (th - nd * dphi) / dphi
+    f = 0.0
+    for j in range(k0.shape[0]):
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, reg[j], sub[j], kpos[j])
+    if sdof:
+        return om, 0.0, v, (fm - f) / me
+    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
+
+
+@njit(cache=False, error_model="numpy")
+def _rk4_locked(th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me):
+    """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
+    the arithmetic of :func:`_rk4_step`."""
+    h2 = h / 2.0
+    ka = fa
+    kb = fb
+    kc = fc
+    kd = fd
+    sa = fa
+    sb = fb
+    sc = fc
+    sd = fd
+    for stage in range(1, 4):
+        if stage == 3:
+            ya = th + h * ka
+            yb = om + h * kb
+            yc = x + h * kc
+            yd = v + h * kd
+        else:
+            ya = th + h2 * ka
+            yb = om + h2 * kb
+            yc = x + h2 * kc
+            yd = v + h2 * kd
+        ka, kb, kc, kd = _deriv_locked(ya, yb, yc, yd, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                                       model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
+        if stage == 3:
+            sa = sa + ka
+            sb = sb + kb
+            sc = sc + kc
+            sd = sd + kd
+        else:
+            sa = sa + 2.0 * ka
+            sb = sb + 2.0 * kb
+            sc = sc + 2.0 * kc
+            sd = sd + 2.0 * kd
+    h6 = h / 6.0
+    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
+
+
+@njit(cache=False, error_model="numpy")
+def _guard_at(gi, th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub):
+    """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
+    2 + 3*j + q guard q of pair j."""
+    if gi == 0:
+        return th - nd * dphi
+    if gi == 1:
+        return (nd + 1.0) * dphi - th
+    j = (gi - 2) // 3
+    q = (gi - 2) - 3 * j
+    w = (th - nd * dphi) / dphi
+    kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+    return _pair_guard(q, kv, ev, es, bv, x, v, om, c, model, reg[j], sub[j])
+
+
+@njit(cache=False, error_model="numpy")
+def _hermite_guard(s, gi, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                   model, reg, sub):
+    """Guard gi on the cubic Hermite interpolant of the step at fraction s in [0, 1]."""
+    u = 1.0 - s
+    h00 = (1.0 + 2.0 * s) * u * u
+    h10 = s * u * u
+    h01 = s * s * (3.0 - 2.0 * s)
+    h11 = s * s * (s - 1.0)
+    ya = ((h00 * y0[0] + h10 * (tau * f0[0])) + h01 * y1[0]) + h11 * (tau * f1[0])
+    yb = ((h00 * y0[1] + h10 * (tau * f0[1])) + h01 * y1[1]) + h11 * (tau * f1[1])
+    yc = ((h00 * y0[2] + h10 * (tau * f0[2])) + h01 * y1[2]) + h11 * (tau * f1[2])
+    yd = ((h00 * y0[3] + h10 * (tau * f0[3])) + h01 * y1[3]) + h11 * (tau * f1[3])
+    return _guard_at(gi, ya, yb, yc, yd, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub)
+
+
+@njit(cache=False, error_model="numpy")
+def _guard_root(gi, g_end, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                model, reg, sub):
+    """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
+    (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
+    ga = _guard_at(gi, y0[0], y0[1], y0[2], y0[3], nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                   model, reg, sub)
+    if not ga > 0.0:
+        return 0.0
+    a = 0.0
+    bb = 1.0
+    gb = g_end
+    side = 0
+    for _ in range(_KINK_MAX_IT):
+        s = (a * gb - bb * ga) / (gb - ga)
+        if not (s > a and s < bb):
+            s = 0.5 * (a + bb)
+        gs = _hermite_guard(s, gi, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi,
+                            c, model, reg, sub)
+        if gs < 0.0:
+            bb = s
+            gb = gs
+            if side == -1:
+                ga = 0.5 * ga
+            side = -1
+        elif gs == 0.0:
+            bb = s
+            break
+        else:
+            a = s
+            ga = gs
+            if side == 1:
+                gb = 0.5 * gb
+            side = 1
+        if bb - a <= _KINK_TOL_S:
+            break
+    return bb
+
+
+@njit(cache=False, error_model="numpy")
+def _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
+               from_state):
+    """Set kpos of every pair for cell nd and the sub-modes of pairs in contact;
+    with from_state also the regions (the start of a communication step)."""
+    w = (th - nd * dphi) / dphi
+    for j in range(k0.shape[0]):
+        km, em, esm, bm = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, 0.5, dphi)
+        kpos[j] = 1 if km > 0.0 else 0
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        if from_state:
+            d = x - ev
+            if d > bv:
+                reg[j] = 1
+            elif d < -bv:
+                reg[j] = -1
+            else:
+                reg[j] = 0
+        if model == 0:
+            sub[j] = _decide_sub(reg[j], kv, ev, es, bv, x, v, om, c)
+        else:
+            sub[j] = 0
+
+
+@njit(cache=False, error_model="numpy")
+def _kink_substep(th, om, x, v, h, nd, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
+                  sdof, t1, t2, rb1, rb2, in1, in2, fm, me, y0, f0, y1, f1):
+    """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
+    Returns (theta1, omega1, x, v, nd, events); reg/sub/kpos are updated in place."""
+    n_phi = k0.shape[1]
+    n_guard = 2 + 3 * k0.shape[0]
+    i0, i1 = _cell_nodes(nd, n_phi)
+    rem = h
+    nev = 0
+    while True:
+        fa, fb, fc, fd = _deriv_locked(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                                       model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
+        ta, tb, tc, td = _rk4_locked(th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1, k0, e0, k1, e1, rows2,
+                                     wt, b, dphi, c, model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1,
+                                     in2, fm, me)
+        if nev >= KINK_MAX_EVENTS:
+            th, om, x, v = ta, tb, tc, td
+            nd = np.floor(th / dphi)
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub,
+                       kpos, True)
+            break
+        best = 2.0
+        best_gi = -1
+        have_f1 = False
+        # scan the guards at the trial end: cheap test first (one lookup per pair)
+        any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
+        if not any_neg:
+            w = (ta - nd * dphi) / dphi
+            for j in range(k0.shape[0]):
+                kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+                for q in range(3):
+                    if _pair_guard(q, kv, ev, es, bv, tc, td, tb, c, model, reg[j], sub[j]) < 0.0:
+                        any_neg = True
+                if any_neg:
+                    break
+        for gi in range(n_guard if any_neg else 0):
+            g = _guard_at(gi, ta, tb, tc, td, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model,
+                          reg, sub)
+            if g < 0.0:
+                if not have_f1:
+                    y0[0] = th
+                    y0[1] = om
+                    y0[2] = x
+                    y0[3] = v
+                    f0[0] = fa
+                    f0[1] = fb
+                    f0[2] = fc
+                    f0[3] = fd
+                    y1[0] = ta
+                    y1[1] = tb
+                    y1[2] = tc
+                    y1[3] = td
+                    ga_, gb_, gc_, gd_ = _deriv_locked(ta, tb, tc, td, nd, i0, i1, k0, e0, k1, e1, rows2,
+                                                       wt, b, dphi, c, model, reg, sub, kpos, sdof, t1,
+                                                       t2, rb1, rb2, in1, in2, fm, me)
+                    f1[0] = ga_
+                    f1[1] = gb_
+                    f1[2] = gc_
+                    f1[3] = gd_
+                    have_f1 = True
+                s = _guard_root(gi, g, y0, f0, y1, f1, rem, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b,
+                                dphi, c, model, reg, sub)
+                if s < best:
+                    best = s
+                    best_gi = gi
+        if best_gi < 0:
+            th, om, x, v = ta, tb, tc, td
+            break
+        # step exactly to the event, then switch the mode
+        if best >= 1.0:
+            th, om, x, v = ta, tb, tc, td
+            rem = 0.0
+        elif best > 0.0:
+            tau = best * rem
+            th, om, x, v = _rk4_locked(th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1, k0, e0, k1, e1,
+                                       rows2, wt, b, dphi, c, model, reg, sub, kpos, sdof, t1, t2, rb1,
+                                       rb2, in1, in2, fm, me)
+            rem = rem - tau
+        nev += 1
+        if best_gi < 2:
+            nd = nd - 1.0 if best_gi == 0 else nd + 1.0
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub,
+                       kpos, False)
+        else:
+            j = (best_gi - 2) // 3
+            q = (best_gi - 2) - 3 * j
+            if reg[j] == 0:
+                reg[j] = 1 if q == 0 else -1
+                if model == 0:
+                    w = (th - nd * dphi) / dphi
+                    kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+                    sub[j] = _decide_sub(reg[j], kv, ev, es, bv, x, v, om, c)
+            elif q == 0:
+                reg[j] = 0
+                sub[j] = 0
+            elif sub[j] == 1:
+                sub[j] = 0 if q == 1 else 2
+            else:
+                sub[j] = 1
+        if not rem > 0.0:
+            break
+    return th, om, x, v, nd, nev
+
+
+@njit(cache=False, error_model="numpy")
+def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k, e, b, torque,
+              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
+    """rk4_kink loop over communication steps (two-inertia or, with sdof, the
+    time-indexed SDOF at constant omega1); the mode is set from the state at the
+    start of every communication step."""
+    n_steps = out_state.shape[0] - 1
+    p = k.shape[1]
+    n_phi = k.shape[2]
+    reg = np.zeros(p, dtype=np.int64)
+    sub = np.zeros(p, dtype=np.int64)
+    kpos = np.zeros(p, dtype=np.int64)
+    y0 = np.empty(4)
+    f0 = np.empty(4)
+    y1 = np.empty(4)
+    f1 = np.empty(4)
+    for s in range(n_steps):
+        t1 = t1s[s]
+        t2 = t2s[s]
+        fm = t1 / rb1
+        it, wt = _torque_index(t1, torque)
+        k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        nd = np.floor(th / dphi)
+        i0, i1 = _cell_nodes(nd, n_phi)
+        _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
+                   True)
+        nev = 0
+        for _ in range(n_sub):
+            th, om, x, v, nd, ne = _kink_substep(th, om, x, v, h, nd, k0, e0, k1, e1, rows2, wt, b, dphi, c,
+                                                 model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2,
+                                                 fm, me, y0, f0, y1, f1)
+            nev += ne
+        out_events[s + 1] = nev
+        out_state[s + 1, 0] = th
+        out_state[s + 1, 1] = om
+        out_state[s + 1, 2] = x
+        out_state[s + 1, 3] = v
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+                                out_pair, s + 1)
+        out_force[s + 1] = ftot
+        out_stiff[s + 1] = ks
+        if not (math.isfinite(th) and math.isfinite(om) and math.isfinite(x) and math.isfinite(v)):
+            return s + 1
+    return n_steps
+
+
 @njit(cache=False, error_model="numpy")
 def _row0(th, om, x, v, t1, k, e, b, torque, phi_period, dphi, c, model,
           out_state, out_pair, out_force, out_stiff):
@@ -611,11 +1029,28 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
 
 
 _COMPILED = False
+_COMPILED_KINK = False
 
 
-def _warmup() -> None:
-    """Compile the kernels on a tiny problem so wall_s excludes JIT time."""
-    global _COMPILED
+def _warmup(kink: bool = False) -> None:
+    """Compile the kernels on a tiny problem so wall_s excludes JIT time
+    (the rk4_kink kernels only when first used)."""
+    global _COMPILED, _COMPILED_KINK
+    if kink and not _COMPILED_KINK:
+        k = np.ones((2, 1, 4)) * 1e8
+        e = np.zeros((2, 1, 4))
+        b = np.zeros((1, 4))
+        tq = np.array([0.0, 1.0])
+        for model in (0, 1):
+            st = np.zeros((2, 4))
+            pf = np.zeros((2, 1))
+            fo = np.zeros(2)
+            ks = np.zeros(2)
+            ev = np.zeros(2, dtype=np.int64)
+            for sdof in (False, True):
+                _run_kink(0.0, 1.0, 0.0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0, sdof,
+                          k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks, ev)
+        _COMPILED_KINK = True
     if _COMPILED:
         return
     k = np.ones((2, 1, 4)) * 1e8
@@ -634,6 +1069,15 @@ def _warmup() -> None:
         _run_sdof(0.0, 1.0, x0, 0.0, np.ones(2), 1e-6, 1, 1e-6, 0.1, 1.0, k, e, b, tq,
                   1.0, 0.25, 1.0, model, st, pf, fo, ks)
     _COMPILED = True
+
+
+def _integrator_code(integrator, slots) -> int:
+    if integrator not in INTEGRATORS:
+        raise NativeInputError(f"integrator: {integrator!r} unknown; choose one of {sorted(INTEGRATORS)}")
+    if integrator == "rk4_kink" and slots > KINK_MAX_SLOTS:
+        raise NativeInputError(f"integrator: 'rk4_kink' handles at most {KINK_MAX_SLOTS} slots, "
+                               f"the tables have {slots}")
+    return INTEGRATORS[integrator]
 
 
 def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model):
@@ -692,6 +1136,7 @@ def simulate(
     pinion_angle_start_rad: float = 0.0,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
+    integrator: str = DEFAULT_INTEGRATOR,
 ) -> SimResult:
     """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
 
@@ -705,8 +1150,12 @@ def simulate(
     last state of a previous run (continuation in a speed sweep).
     If the state turns non-finite the run stops there; the remaining rows are
     NaN and ``info['diverged_at_step']`` says where.
+    ``integrator``: 'rk4' (fixed-step classical RK4) or 'rk4_kink' (RK4 that
+    steps exactly to every table node and contact-mode change, docs/model.md
+    "rk4_kink"; ``info['events']`` counts the located events).
     """
     t = _check_tables(tables)
+    icode = _integrator_code(integrator, t.slots)
     w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
     if max_step_s is None:
         max_step_s = choose_max_step_s(t, max(1.5 * abs(w0), 1.0))
@@ -725,17 +1174,24 @@ def simulate(
     pair = np.full((n_steps + 1, t.slots), np.nan)
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
-    _warmup()
+    _warmup(kink=icode == 1)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
     _row0(th0, w0, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    events = np.zeros(n_steps + 1, dtype=np.int64)
     t_start = _time.perf_counter()
-    done = _run_2dof(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
-                     float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
-                     k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    if icode == 0:
+        done = _run_2dof(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
+                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
+                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    else:
+        done = _run_kink(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
+                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, False,
+                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff, events)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n_steps + 1) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
-                   done, {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me})
+                   done, {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me,
+                          "integrator": integrator, "events": int(events.sum())})
 
 
 def simulate_sdof(
@@ -751,6 +1207,7 @@ def simulate_sdof(
     pinion_angle_start_rad: float = 0.0,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
+    integrator: str = DEFAULT_INTEGRATOR,
 ) -> SimResult:
     """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
 
@@ -759,8 +1216,11 @@ def simulate_sdof(
     F the same per-pair force sum as :func:`simulate` (de_j = slope*omega1).
     Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
+    ``integrator`` 'rk4_kink' integrates theta1 as a state with omega1' = 0
+    and steps to every table node and contact-mode change (docs/model.md).
     """
     t = _check_tables(tables)
+    icode = _integrator_code(integrator, t.slots)
     om = _finite("omega1_rad_s", omega1_rad_s)
     if max_step_s is None:
         max_step_s = choose_max_step_s(t, max(abs(om), 1.0))
@@ -776,17 +1236,23 @@ def simulate_sdof(
     pair = np.full((n_steps + 1, t.slots), np.nan)
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
-    _warmup()
+    _warmup(kink=icode == 1)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
     _row0(th0, om, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    events = np.zeros(n_steps + 1, dtype=np.int64)
     t_start = _time.perf_counter()
-    done = _run_sdof(th0, om, x0, v0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
-                     phi_period, dphi, c, model, state, pair, force, stiff)
+    if icode == 0:
+        done = _run_sdof(th0, om, x0, v0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
+                         phi_period, dphi, c, model, state, pair, force, stiff)
+    else:
+        done = _run_kink(th0, om, x0, v0, t1s, t2s, n_sub, h, rb1, float(t.base_radius_gear_m),
+                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, True,
+                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff, events)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n_steps + 1) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
                    done, {"form": "time-indexed SDOF (seed 003 eq 3-6)", "equivalent_mass_kg": me,
-                          "omega1_rad_s": om})
+                          "omega1_rad_s": om, "integrator": integrator, "events": int(events.sum())})
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:

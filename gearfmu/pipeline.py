@@ -105,9 +105,23 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
+        **_integrator_kw(build_fmu, scene),
     )
     t2 = time.perf_counter()
     return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max)
+
+
+def _integrator_kw(builder, scene) -> dict:
+    """{'integrator': scene.solver.integrator} for a builder that takes it; a builder
+    without the argument gets nothing for 'rk4' (its kernel default) and an error otherwise."""
+    import inspect
+
+    name = getattr(scene.solver, "integrator", "rk4")
+    if "integrator" in inspect.signature(builder).parameters:
+        return {"integrator": name}
+    if name != "rk4":
+        raise ValueError(f"solver.integrator: {name!r} is not supported by this FMU runtime's builder")
+    return {}
 
 
 def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
@@ -126,4 +140,5 @@ def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_st
         pinion_speed_start_rad_s=scene.operating.speed_rad_s,
         damping_ratio=scene.fmu.damping_ratio if damping_ratio is None else damping_ratio,
         damping_model=scene.solver.damping_model,
+        integrator=getattr(scene.solver, "integrator", "rk4"),
     )

@@ -64,7 +64,22 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->damping_ratio = 0.0;
     m->c_Ns_per_m = 0.0;
     m->damping_model = GK_DAMPING_ELASTOBACKLASH;
+    m->integrator = GK_INTEGRATOR_RK4;
     return GK_OK;
+}
+
+int gk_set_integrator(gk_model *m, int integrator)
+{
+    if (m == NULL) return GK_ERR_MODEL;
+    if (integrator == GK_INTEGRATOR_RK4) {
+        m->integrator = integrator;
+        return GK_OK;
+    }
+    if (integrator == GK_INTEGRATOR_RK4_KINK && m->P <= GK_KINK_MAX_SLOTS) {
+        m->integrator = integrator;
+        return GK_OK;
+    }
+    return GK_ERR_PARAM;
 }
 
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model)
@@ -210,6 +225,309 @@ static void deriv(const gk_model *m, const gk_tq *t, double T1, double T2,
     dy[3] = Rb1 * (T1 - Rb1 * F) / m->I1_kgm2 - Rb2 * (Rb2 * F - T2) / m->I2_kgm2;
 }
 
+
+/* --------------------------------------------------------------- rk4_kink
+ * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
+ * elastobacklash sub-mode sub, seed003 flag kpos) is held during each RK4
+ * step; guards (>= 0 while the mode holds) are tested at the step end, the
+ * earliest zero is located on the cubic Hermite interpolant of the step, the
+ * step is retaken exactly to it and the mode switched there.  Same arithmetic
+ * as gearfmu/native.py (_kink_substep and friends). */
+
+#define KINK_TOL_S 1e-12
+#define KINK_MAX_IT 60
+
+typedef struct {
+    double nd;                       /* global cell index (integer value) */
+    int i0, i1;
+    int reg[GK_KINK_MAX_SLOTS];      /* 1 drive, -1 back, 0 separated */
+    int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
+    int kpos[GK_KINK_MAX_SLOTS];     /* seed003: k > 0 inside the cell */
+} gk_mode;
+
+static void cell_nodes(gk_mode *md, int N)
+{
+    double r = md->nd - (double)N * floor(md->nd / (double)N);
+    int i0 = (int)r;
+    if (i0 < 0) i0 = 0;
+    if (i0 >= N) i0 = N - 1;
+    md->i0 = i0;
+    md->i1 = (i0 + 1 == N) ? 0 : i0 + 1;
+}
+
+/* k, e, de/dphi, b of slot j at angle th with the cell held */
+static void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, double th, int j,
+                          double *k, double *e, double *es, double *b)
+{
+    gk_ph c;
+    c.i0 = md->i0;
+    c.i1 = md->i1;
+    c.w = (th - md->nd * m->dphi_rad) / m->dphi_rad;
+    slot_tables(m, t, &c, j, k, e, es, b);
+}
+
+static double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
+                                double om, double c, int model, int reg, int sub, int kpos)
+{
+    double de = es * om, d = x - ev, fc, fd;
+    if (reg == 1) fc = kv * (d - bv);
+    else if (reg == -1) fc = kv * (d + bv);
+    else fc = 0.0;
+    fd = c * (v - de);
+    if (model == GK_DAMPING_ELASTOBACKLASH) {
+        if (reg == 0 || sub == 2) return 0.0;
+        if (sub == 0) return fc + fc;
+        return fc + fd;
+    }
+    if (kpos != 0) return fc + fd;
+    return 0.0;
+}
+
+static double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
+                         double om, double c, int model, int reg, int sub)
+{
+    double d = x - ev, fc, fd;
+    if (reg == 0) {
+        if (q == 0) return bv - d;
+        if (q == 1) return d + bv;
+        return 1.0;
+    }
+    if (q == 0) {
+        if (reg == 1) return d - bv;
+        return -(d + bv);
+    }
+    if (model != GK_DAMPING_ELASTOBACKLASH) return 1.0;
+    if (reg == 1) fc = kv * (d - bv);
+    else fc = kv * (d + bv);
+    fd = c * (v - es * om);
+    if (reg == 1) {
+        if (sub == 0) return (q == 1) ? fd - fc : 1.0;
+        if (sub == 1) return (q == 1) ? fc - fd : fc + fd;
+        return (q == 1) ? -(fc + fd) : 1.0;
+    }
+    if (sub == 0) return (q == 1) ? fc - fd : 1.0;
+    if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
+    return (q == 1) ? fc + fd : 1.0;
+}
+
+static int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
+                      double om, double c)
+{
+    double d, fd, fc;
+    if (reg == 0) return 0;
+    d = x - ev;
+    fd = c * (v - es * om);
+    if (reg == 1) {
+        fc = kv * (d - bv);
+        if (fc < fd) return 0;
+        if (fc + fd < 0.0) return 2;
+        return 1;
+    }
+    fc = kv * (d + bv);
+    if (fc > fd) return 0;
+    if (fc + fd > 0.0) return 2;
+    return 1;
+}
+
+static void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                         const double *y, double *dy)
+{
+    double f = 0.0, Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    int j;
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv;
+        locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+        f += pair_force_locked(kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model,
+                               md->reg[j], md->sub[j], md->kpos[j]);
+    }
+    dy[0] = y[1];
+    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[2] = y[3];
+    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+}
+
+/* classical RK4 of length h from y with first stage f0 given, mode held */
+static void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                       const double *y, const double *f0, double h, double *yn)
+{
+    double h2 = h / 2.0, h6, k[4], sum[4], yt[4];
+    int q, stage;
+    for (q = 0; q < 4; ++q) {
+        k[q] = f0[q];
+        sum[q] = f0[q];
+    }
+    for (stage = 1; stage < 4; ++stage) {
+        for (q = 0; q < 4; ++q) yt[q] = (stage == 3) ? y[q] + h * k[q] : y[q] + h2 * k[q];
+        deriv_locked(m, t, md, T1, T2, yt, k);
+        for (q = 0; q < 4; ++q) sum[q] = (stage == 3) ? sum[q] + k[q] : sum[q] + 2.0 * k[q];
+    }
+    h6 = h / 6.0;
+    for (q = 0; q < 4; ++q) yn[q] = y[q] + h6 * sum[q];
+}
+
+/* guard gi at state y: 0 cell start, 1 cell end, 2 + 3 j + q guard q of pair j */
+static double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y)
+{
+    int j, q;
+    double kv, ev, es, bv;
+    if (gi == 0) return y[0] - md->nd * m->dphi_rad;
+    if (gi == 1) return (md->nd + 1.0) * m->dphi_rad - y[0];
+    j = (gi - 2) / 3;
+    q = (gi - 2) - 3 * j;
+    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+    return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model,
+                      md->reg[j], md->sub[j]);
+}
+
+static double hermite_guard(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
+                            const double *y0, const double *f0, const double *y1, const double *f1,
+                            double tau)
+{
+    double u = 1.0 - s, yy[4];
+    double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
+    double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
+    int q;
+    for (q = 0; q < 4; ++q)
+        yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
+    return guard_at(m, t, md, gi, yy);
+}
+
+/* fraction s in [0, 1] of the guard's zero on the Hermite interpolant (Illinois) */
+static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
+                         const double *y0, const double *f0, const double *y1, const double *f1,
+                         double tau)
+{
+    double ga = guard_at(m, t, md, gi, y0), gb = g_end, a = 0.0, b = 1.0, s, gs;
+    int side = 0, it;
+    if (!(ga > 0.0)) return 0.0;
+    for (it = 0; it < KINK_MAX_IT; ++it) {
+        s = (a * gb - b * ga) / (gb - ga);
+        if (!(s > a && s < b)) s = 0.5 * (a + b);
+        gs = hermite_guard(m, t, md, gi, s, y0, f0, y1, f1, tau);
+        if (gs < 0.0) {
+            b = s;
+            gb = gs;
+            if (side == -1) ga = 0.5 * ga;
+            side = -1;
+        } else if (gs == 0.0) {
+            b = s;
+            break;
+        } else {
+            a = s;
+            ga = gs;
+            if (side == 1) gb = 0.5 * gb;
+            side = 1;
+        }
+        if (b - a <= KINK_TOL_S) break;
+    }
+    return b;
+}
+
+/* kpos of every pair for the held cell and the sub-modes of pairs in contact;
+ * with from_state also the regions */
+static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y, int from_state)
+{
+    int j;
+    gk_ph half;
+    half.i0 = md->i0;
+    half.i1 = md->i1;
+    half.w = 0.5;
+    for (j = 0; j < m->P; ++j) {
+        double km, em, esm, bm, kv, ev, es, bv;
+        slot_tables(m, t, &half, j, &km, &em, &esm, &bm);
+        md->kpos[j] = (km > 0.0) ? 1 : 0;
+        locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+        if (from_state) {
+            double d = y[2] - ev;
+            if (d > bv) md->reg[j] = 1;
+            else if (d < -bv) md->reg[j] = -1;
+            else md->reg[j] = 0;
+        }
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+            md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+        else
+            md->sub[j] = 0;
+    }
+}
+
+static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y)
+{
+    md->nd = floor(y[0] / m->dphi_rad);
+    cell_nodes(md, m->n_phi);
+    mode_sync(m, t, md, y, 1);
+}
+
+static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2,
+                         double *y, double h)
+{
+    double rem = h, f0[4], y1[4], f1[4];
+    int nev = 0, n_guard = 2 + 3 * m->P, q;
+    for (;;) {
+        double best = 2.0;
+        int best_gi = -1, have_f1 = 0, gi, any_neg;
+        deriv_locked(m, t, md, T1, T2, y, f0);
+        rk4_locked(m, t, md, T1, T2, y, f0, rem, y1);
+        if (nev >= GK_KINK_MAX_EVENTS) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            mode_from_state(m, t, md, y);
+            break;
+        }
+        any_neg = 0;
+        for (gi = 0; gi < n_guard && !any_neg; ++gi)
+            if (guard_at(m, t, md, gi, y1) < 0.0) any_neg = 1;
+        for (gi = 0; any_neg && gi < n_guard; ++gi) {
+            double g = guard_at(m, t, md, gi, y1), s;
+            if (!(g < 0.0)) continue;
+            if (!have_f1) {
+                deriv_locked(m, t, md, T1, T2, y1, f1);
+                have_f1 = 1;
+            }
+            s = guard_root(m, t, md, gi, g, y, f0, y1, f1, rem);
+            if (s < best) {
+                best = s;
+                best_gi = gi;
+            }
+        }
+        if (best_gi < 0) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            break;
+        }
+        if (best >= 1.0) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            rem = 0.0;
+        } else if (best > 0.0) {
+            double tau = best * rem, ye[4];
+            rk4_locked(m, t, md, T1, T2, y, f0, tau, ye);
+            for (q = 0; q < 4; ++q) y[q] = ye[q];
+            rem = rem - tau;
+        }
+        nev += 1;
+        if (best_gi < 2) {
+            md->nd = (best_gi == 0) ? md->nd - 1.0 : md->nd + 1.0;
+            cell_nodes(md, m->n_phi);
+            mode_sync(m, t, md, y, 0);
+        } else {
+            int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
+            if (md->reg[j] == 0) {
+                md->reg[j] = (qq == 0) ? 1 : -1;
+                if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+                    double kv, ev, es, bv;
+                    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+                    md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+                }
+            } else if (qq == 0) {
+                md->reg[j] = 0;
+                md->sub[j] = 0;
+            } else if (md->sub[j] == 1) {
+                md->sub[j] = (qq == 1) ? 0 : 2;
+            } else {
+                md->sub[j] = 1;
+            }
+        }
+        if (!(rem > 0.0)) break;
+    }
+}
+
 /* ------------------------------------------------------------ public API */
 
 int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
@@ -312,6 +630,13 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     y[1] = s->omega1_rad_s;
     y[2] = s->x_m;
     y[3] = s->v_m_s;
+    if (m->integrator == GK_INTEGRATOR_RK4_KINK) {
+        gk_mode md;
+        if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+        mode_from_state(m, &t, &md, y);
+        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h);
+        nsub = 0;
+    }
     for (i = 0; i < nsub; ++i) {
         deriv(m, &t, T1_Nm, T2_Nm, y, k1);
         for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k1[q];

@@ -33,6 +33,15 @@ extern "C" {
 #define GK_DAMPING_ELASTOBACKLASH 0
 #define GK_DAMPING_SEED003 1
 
+/* integrators (docs/model.md "Integration"): fixed-step classical RK4, and
+ * RK4 that steps exactly to every table node and contact-mode change */
+#define GK_INTEGRATOR_RK4 0
+#define GK_INTEGRATOR_RK4_KINK 1
+/* rk4_kink: most slots it accepts, and events located per substep before the
+ * rest of the substep is taken without detection */
+#define GK_KINK_MAX_SLOTS 32
+#define GK_KINK_MAX_EVENTS 1000
+
 /* layout of the output vector written by gk_do_step / gk_outputs
  * (length gk_n_outputs(P) = GK_OUT_PAIR_FORCE + 2*P) */
 #define GK_OUT_PINION_ANGLE 0   /* rad */
@@ -64,6 +73,7 @@ typedef struct gk_model {
     double damping_ratio;           /* zeta (1) */
     double c_Ns_per_m;              /* 2 zeta sqrt(k_mean m_e) */
     int damping_model;              /* GK_DAMPING_* */
+    int integrator;                 /* GK_INTEGRATOR_* (gk_init: RK4) */
 } gk_model;
 
 typedef struct gk_state {
@@ -91,13 +101,18 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
 /* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_SEED003 */
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
 
+/* GK_INTEGRATOR_RK4 or GK_INTEGRATOR_RK4_KINK (the latter needs P <= GK_KINK_MAX_SLOTS);
+ * GK_ERR_PARAM otherwise. */
+int gk_set_integrator(gk_model *m, int integrator);
+
 /* Initial state of docs/model.md: theta1 = theta1_0, omega1 = omega1_0, v = 0,
  * x by exactly 200 bisections of the quasi-static balance under F_m = T1/Rb1. */
 int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
                   double omega1_0_rad_s, double T1_Nm);
 
 /* One communication step of length H_s with constant inputs T1, T2:
- * n = max(1, ceil(H/h_max*(1 - 1e-12))) classical RK4 substeps.  On success
+ * n = max(1, ceil(H/h_max*(1 - 1e-12))) substeps of the model's integrator
+ * (classical RK4, or rk4_kink: docs/model.md).  On success
  * writes the outputs (may be NULL) and returns GK_OK; on any error the state
  * is left unchanged and the outputs are not written. */
 int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,

@@ -109,6 +109,7 @@ def _bind(lib):
         "gk_n_outputs": ([c_int], c_int),
         "gk_init": ([c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6, c_int),
         "gk_set_damping": ([c_void_p, c_double, c_int], c_int),
+        "gk_set_integrator": ([c_void_p, c_int], c_int),
         "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
         "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
         "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
@@ -270,6 +271,8 @@ class GearFmuSlave(Fmi2Slave):
             msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
         if not msgs and int(self._v["damping_model"]) not in (0, 1):
             msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (seed003)")
+        if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1):
+            msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4) or 1 (rk4_kink)")
         return msgs
 
     def _apply_damping(self):
@@ -313,6 +316,11 @@ class GearFmuSlave(Fmi2Slave):
         self._zeta_applied = None
         if not self._apply_damping():
             return False
+        if "integrator" in self._v:  # docs/model.md "Integration"
+            st = self._lib.gk_set_integrator(self._pm, int(self._v["integrator"]))
+            if st != 0:
+                self.log(f"integrator = {self._v['integrator']!r}: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
+                return False
         T1 = float(self._v["pinion_torque"])
         st = self._lib.gk_initialize(self._pm, self._ps, float(self._v["pinion_angle_start"]),
                                      float(self._v["pinion_speed_start"]), T1)
