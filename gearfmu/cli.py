@@ -4,6 +4,8 @@
     gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
     gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
     gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
+    gearfmu build [SCENE] --tables T.csv --tables-meta M.toml   imported tables -> FMU
+    gearfmu bench accuracy [--json] [--png P]  speed against error (gearfmu.bench)
     gearfmu ssp      [SCENE] -o OUT.ssp [--variant NAME:PARAM=VALUE]  SSP package with variants
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
@@ -48,7 +50,14 @@ def cmd_build(args) -> int:
 
     scene = _scene(args.scene)
     out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
-    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None))
+    tables = None
+    if getattr(args, "tables", None):  # imported tables instead of the scene's physics
+        from .table_import import load_tables_file
+
+        if not Path(args.tables).exists():
+            raise CliError(f"--tables: file not found: {args.tables}")
+        tables = load_tables_file(args.tables, args.tables_meta)
+    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     return 0
@@ -205,7 +214,16 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("-q", "--quiet", action="store_true")
     b.add_argument("--runtime", choices=("pythonfmu", "standalone"),
                    help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
+    b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
+    b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")
     b.set_defaults(func=cmd_build)
+
+    be = sub.add_parser("bench", help="benchmarks: `bench accuracy` = speed against error (gearfmu.bench)")
+    be.add_argument("what", choices=("accuracy",))
+    be.add_argument("--case", default="single_sided_impacts", help="hard case (gearfmu.bench.HARD_CASES)")
+    be.add_argument("--json", action="store_true", help="print the report as JSON")
+    be.add_argument("--png", help="write the Pareto plot (wall time against error) here")
+    be.set_defaults(func=lambda a: __import__("gearfmu.bench", fromlist=["main_accuracy"]).main_accuracy(a))
 
     t = sub.add_parser("tables", help="compute, save (.gtab, .csv) and plot (.png) the tooth-pair tables")
     t.add_argument("scene", nargs="?")

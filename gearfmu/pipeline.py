@@ -77,9 +77,12 @@ class BuildResult:
     max_step_s: float
 
 
-def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None) -> BuildResult:
+def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
+          tables=None) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
-    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``."""
+    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
+    ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
+    gearfmu.table_import); the scene then only gives the FMU and operating settings."""
     from .fmubuild import build_fmu
 
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
@@ -89,7 +92,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
 
     t0 = time.perf_counter()
-    tables = compute_tables(scene, progress=progress)
+    if tables is None:
+        tables = compute_tables(scene, progress=progress)
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
