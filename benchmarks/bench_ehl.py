@@ -1,6 +1,8 @@
 """Benchmark of the line-contact EHL solver (prints JSON; not a test).
 
-Time per smooth solve (median of repeats, numba compilation excluded) for
+Wall and CPU time per smooth solve (median of repeats, numba compilation
+excluded; the machine's load average is recorded because other jobs inflate
+wall time) for
 several grid sizes at fixed operating points, the number of W-cycles, the
 time per W-cycle per node, and the central film (Moes scaling) so that the
 cost can be read against the discretisation error.
@@ -12,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import platform
 import time
 
@@ -24,15 +27,18 @@ from gearfmu.ehl.fits import moes_central_film
 def bench(M, L, sizes, repeats, **kw):
     rows = []
     for n in sizes:
-        times = []
+        times, cpu = [], []
         r = None
         for _ in range(repeats):
             t = time.perf_counter()
+            c = time.process_time()
             r = solve_line_contact(M=M, L=L, n_nodes=n + 1, **kw)
             times.append(time.perf_counter() - t)
+            cpu.append(time.process_time() - c)
         t_med = float(np.median(times))
         rows.append(dict(n_intervals=n, levels=r.grid_levels, w_cycles=r.iterations,
                          attempt=r.residuals["attempt"], time_s=t_med,
+                         cpu_time_s=float(np.median(cpu)),
                          time_per_cycle_ms=1e3 * t_med / r.iterations,
                          us_per_cycle_per_node_over_log2n=1e6 * t_med / r.iterations / (n * math.log2(n)),
                          H_central_moes=r.H_central_moes,
@@ -45,7 +51,8 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
     solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
-    out = dict(python=platform.python_version(), machine=platform.machine(), cases=[])
+    out = dict(python=platform.python_version(), machine=platform.machine(),
+               load_average_1min=os.getloadavg()[0], cpu_count=os.cpu_count(), cases=[])
     for M, L, kw in [(20.0, 5.0, dict(viscosity="barus", compressible=False, n_coarse=32)),
                      (100.0, 10.0, dict(viscosity="barus", compressible=False, n_coarse=64)),
                      (100.0, 10.0, dict(viscosity="roelands", compressible=True, n_coarse=64))]:

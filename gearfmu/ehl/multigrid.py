@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .deformation import DeformationOperator
+from .deformation import DeformationOperator, fft_deformation
 
 
 @njit(cache=False)
@@ -191,6 +191,28 @@ def _scaled_residual(P, H, f, rho, eps, dX, K, order2):
 
 
 @njit(cache=False)
+def _relax_sweeps(P, H, f, base, tauH, H0, khr, khi, twr, twi, dX, K, lam, A, z, php0, c1,
+                  compressible, omega_gs, omega_j, switch, order2, dmax, sweeps):
+    """``sweeps`` relaxation sweeps, each followed by the film update
+    H = H0 + base + V(P) + tauH (FFT); P and H changed in place."""
+    change = 0.0
+    for _ in range(sweeps):
+        rho, eps, dle, drho = _coefficients(P, H, lam, A, z, php0, c1, compressible)
+        change, _r = _relax(P, H, f, rho, eps, dle, drho, dX, K, omega_gs, omega_j, switch,
+                            order2, dmax)
+        V = fft_deformation(P, khr, khi, twr, twi, K)
+        for i in range(P.size):
+            H[i] = H0 + base[i] + V[i] + tauH[i]
+    return change
+
+
+@njit(cache=False)
+def _operator_full(P, H, dX, lam, A, z, php0, c1, compressible, order2):
+    rho, eps, _d, _r = _coefficients(P, H, lam, A, z, php0, c1, compressible)
+    return _operator(P, H, rho, eps, dX, order2)
+
+
+@njit(cache=False)
 def _restrict_fw(r):
     nc = (r.size - 1) // 2 + 1
     out = np.zeros(nc)
@@ -292,25 +314,24 @@ class MultigridSolver:
         return _coefficients(lv.P, lv.H, p.lam, p.A, p.z, p.php0, p.c1, p.compressible)
 
     def relax(self, lv: Level, sweeps: int):
-        change = 0.0
-        for _ in range(sweeps):
-            rho, eps, dle, drho = self._coef(lv)
-            change, _ = _relax(lv.P, lv.H, lv.f, rho, eps, dle, drho, lv.dX, lv.K,
-                               self.omega_gs, self.omega_j, self.switch, self.order2, self.dmax)
-            lv.update_H()
-        return change
+        p = self.prm
+        d = lv.defo
+        return _relax_sweeps(lv.P, lv.H, lv.f, lv.base, lv.tauH, lv.H0, d.khr, d.khi, d.twr,
+                             d.twi, lv.dX, lv.K, p.lam, p.A, p.z, p.php0, p.c1, p.compressible,
+                             self.omega_gs, self.omega_j, self.switch, self.order2, self.dmax,
+                             sweeps)
 
     def residual(self, lv: Level) -> np.ndarray:
-        rho, eps, _, _ = self._coef(lv)
-        return lv.f - _operator(lv.P, lv.H, rho, eps, lv.dX, self.order2)
+        return lv.f - self.operator(lv)
 
     def scaled_residual(self, lv: Level) -> float:
         rho, eps, _, _ = self._coef(lv)
         return _scaled_residual(lv.P, lv.H, lv.f, rho, eps, lv.dX, lv.K, self.order2)
 
     def operator(self, lv: Level) -> np.ndarray:
-        rho, eps, _, _ = self._coef(lv)
-        return _operator(lv.P, lv.H, rho, eps, lv.dX, self.order2)
+        p = self.prm
+        return _operator_full(lv.P, lv.H, lv.dX, p.lam, p.A, p.z, p.php0, p.c1,
+                              p.compressible, self.order2)
 
     def relax_coarsest(self, lv: Level):
         if self.load_on_coarse:
@@ -368,7 +389,7 @@ class MultigridSolver:
         cv.H0 = lv.H0
         # FAS for the film equation as well: the coarse film starts equal to the
         # (injected) fine film, and changes with the coarse-grid kernel
-        cv.tauH = 0.0
+        cv.tauH = np.zeros(cv.n)
         cv.update_H()
         cv.tauH = lv.H[::2] - cv.H
         cv.H = lv.H[::2].copy()
