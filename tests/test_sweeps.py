@@ -177,7 +177,6 @@ def test_damping_lowers_second_harmonic_and_branches_split_at_low_damping():
 
 # ---------------------------------------------------------------- executors
 def test_dask_cluster_gives_the_local_results_exactly(t340):
-    distributed = pytest.importorskip  # noqa: F841 (dask is in the test extra; import must work)
     from distributed import Client, LocalCluster
 
     st = PointSettings(settle_meshes=40, record_meshes=10)
