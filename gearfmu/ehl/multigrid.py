@@ -309,6 +309,13 @@ class MultigridSolver:
         self.H_scale = 1.0   # typical film (VL units), set by the starts
 
     # -- elementary operations ------------------------------------------------
+    def set_roughness_scale(self, a: float):
+        """Scale the roughness of every level by ``a`` (continuation from the
+        smooth solution, Venner & Lubrecht 2000 ch. 12 practice)."""
+        for lv in self.levels:
+            lv.base = 0.5 * lv.X ** 2 + a * lv.rough
+            lv.update_H()
+
     def _coef(self, lv: Level):
         p = self.prm
         return _coefficients(lv.P, lv.H, p.lam, p.A, p.z, p.php0, p.c1, p.compressible)
