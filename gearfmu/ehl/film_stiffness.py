@@ -36,23 +36,7 @@ import numpy as np
 
 from .errors import EHLInputError
 
-#: Default bulk modulus at ambient pressure (Pa): rho c^2 = 870 * 1450^2.
-B0_DEFAULT_PA = 870.0 * 1450.0 ** 2
-#: Default pressure derivative of the bulk modulus (Tait K0').
-B0_PRIME_DEFAULT = 11.0
-
-
-def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
-    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), seed 000 eq 9."""
-    p = np.asarray(p_Pa, dtype=float)
-    if not np.all(np.isfinite(p)) or np.any(p < 0.0):
-        raise EHLInputError("p_Pa must be finite and >= 0")
-    if not (math.isfinite(B0_Pa) and B0_Pa > 0):
-        raise EHLInputError(f"B0_Pa={B0_Pa!r}: must be finite and > 0")
-    if not (math.isfinite(B0_prime) and B0_prime > -1.0):
-        raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
-    a = 1.0 + B0_prime
-    return (1.0 - np.log1p(p / B0_Pa * a) / a) * (B0_Pa + p * a)
+from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa  # noqa: F401  (eq 9)
 
 
 def film_stiffness_N_per_m(area_m2: float, h_m: float, p_mean_Pa: float,

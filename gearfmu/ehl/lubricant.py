@@ -14,8 +14,10 @@
 
       rho(p) = rho0 * (0.59e9 + 1.34 p) / (0.59e9 + p)
 
-* Bulk modulus of the lubricant against mean pressure, seed 000 eq 9, see
-  :mod:`gearfmu.ehl.film_stiffness` (Dwyer-Joyce, Reddyhoff & Zhu 2011).
+* Bulk modulus of the lubricant against pressure, seed 000 eq 9 (tangent
+  modulus of the isothermal Tait equation; Dwyer-Joyce, Reddyhoff & Zhu 2011),
+  :func:`bulk_modulus_Pa`; the choice of B0, B0' is explained in
+  :mod:`gearfmu.ehl.film_stiffness`.
 
 Negative pressures are not physical in the cavitated film; every law here
 treats ``p < 0`` as an error.
@@ -85,3 +87,22 @@ def dowson_higginson_density_kg_m3(p_Pa, rho0_kg_m3: float = 1.0):
         raise EHLInputError("p_Pa must be finite and >= 0")
     rho0 = _check_positive("rho0_kg_m3", rho0_kg_m3)
     return rho0 * (DH_C1_PA + DH_C2 * p) / (DH_C1_PA + p)
+
+
+#: Default bulk modulus at ambient pressure (Pa): rho c^2 = 870 * 1450^2.
+B0_DEFAULT_PA = 870.0 * 1450.0 ** 2
+#: Default pressure derivative of the bulk modulus (Tait K0').
+B0_PRIME_DEFAULT = 11.0
+
+
+def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
+    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), seed 000 eq 9."""
+    p = np.asarray(p_Pa, dtype=float)
+    if not np.all(np.isfinite(p)) or np.any(p < 0.0):
+        raise EHLInputError("p_Pa must be finite and >= 0")
+    if not (math.isfinite(B0_Pa) and B0_Pa > 0):
+        raise EHLInputError(f"B0_Pa={B0_Pa!r}: must be finite and > 0")
+    if not (math.isfinite(B0_prime) and B0_prime > -1.0):
+        raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
+    a = 1.0 + B0_prime
+    return (1.0 - np.log1p(p / B0_Pa * a) / a) * (B0_Pa + p * a)
