@@ -13,7 +13,7 @@ p_h = b E' / (4 R)) this is
 
 which is absorbed into the rigid-body approach H0.
 
-Discretisation (Venner & Lubrecht 2000, section 2.4): P piecewise constant on
+Discretisation (Venner & Lubrecht 2000): P piecewise constant on
 cells of width dX around each node, integrated exactly, giving the Toeplitz
 coefficients
 

@@ -24,7 +24,7 @@ def moes_central_film(M: float, L: float) -> float:
 
     Moes, H., "Optimum similarity analysis with applications to
     elastohydrodynamic lubrication", Wear 159 (1992) 57-66; the form quoted by
-    Venner & Lubrecht (2000) eq 8.27:
+    Venner & Lubrecht (2000):
     H_RI = 3/M, H_EI = 2.621 M^(-1/5), H_RP = 1.287 L^(2/3),
     H_EP = 1.311 M^(-1/8) L^(3/4), s = (7 + 8 exp(-2 H_EI/H_RI))/5,
     H_c = [(H_RI^(7/3) + H_EI^(7/3))^(3s/7) + (H_RP^(-7/2) + H_EP^(-7/2))^(-2s/7)]^(1/s).

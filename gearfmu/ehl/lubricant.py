@@ -2,7 +2,7 @@
 
 * Roelands-type pressure-viscosity law, seed 000 eq 5 (Roelands 1966, in the
   form used by Venner & Lubrecht 2000, *Multilevel Methods in Lubrication*,
-  Elsevier, eq 2.10):
+  Elsevier):
 
       eta(p) = eta0 * exp{ (ln(eta0) + 9.67) * [ -1 + (1 + p/p0)^z ] }
 
@@ -50,7 +50,7 @@ def roelands_z(eta0_Pas: float, alpha_Pa_inv: float, p0_Pa: float = ROELANDS_P0_
     """Roelands viscosity-pressure index z (dimensionless).
 
     z = alpha * p0 / (ln(eta0) + 9.67), eta0 in Pa s, alpha in 1/Pa, p0 in Pa
-    (Venner & Lubrecht 2000, eq 2.11): the Roelands law then has the same
+    (Venner & Lubrecht 2000): the Roelands law then has the same
     initial pressure-viscosity slope as Barus' law with coefficient alpha.
     """
     eta0 = _check_positive("eta0_Pas", eta0_Pas)

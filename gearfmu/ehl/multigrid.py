@@ -1,7 +1,7 @@
 """Multilevel solution of the dimensionless line-contact EHL problem.
 
 Equations (seed 000 eq 2-7 in the Hertzian scaling of Venner & Lubrecht 2000,
-*Multilevel Methods in Lubrication*, ch. 8):
+*Multilevel Methods in Lubrication*):
 
     d/dX( eps dP/dX ) - d(rho H)/dX = 0,   eps = rho H^3 / (eta lambda)    (Reynolds, eq 2)
     H = H0 + X^2/2 - (1/pi) int P ln|X - X'| dX' + R(X)                     (film, eq 3-4)
@@ -14,7 +14,7 @@ Discretisation: central differences for the Poiseuille term with eps at the
 half nodes as the mean of the node values, second-order upstream differences
 for the wedge term (first order at the first interior node).
 
-Solver (Venner & Lubrecht 2000, ch. 8; Algorithm 1 of seed 000): FAS
+Solver (Venner & Lubrecht 2000; Algorithm 1 of seed 000): FAS
 multigrid with W-cycles (nu1 pre-, nu2 post-relaxations), injection of P and
 full weighting of the residual to the coarse grid, FAS also on the film
 equation (the coarse film starts equal to the injected fine film and changes
@@ -311,7 +311,7 @@ class MultigridSolver:
     # -- elementary operations ------------------------------------------------
     def set_roughness_scale(self, a: float):
         """Scale the roughness of every level by ``a`` (continuation from the
-        smooth solution, Venner & Lubrecht 2000 ch. 12 practice)."""
+        smooth solution)."""
         for lv in self.levels:
             lv.base = 0.5 * lv.X ** 2 + a * lv.rough
             lv.update_H()
