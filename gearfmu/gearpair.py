@@ -123,4 +123,6 @@ class MeshModelOptions:
     contact_model: str = "hertz"  # "hertz" (this issue); later "smooth_ehl", "rough_ehl", "fractal_mixed"
     slices: int = 1
     foundation: bool = True  # Sainsot et al. (2004) fillet-foundation stiffness
-    shared_foundation_correction: bool = True  # Ma et al. (2016) correction (seed 000 eq 11)
+    # Ma et al. (2016) shared-foundation correction (seed 000 eq 11) with lambda = 1; off by default:
+    # docs/physics_stiffness.md, 'Why the correction is off by default'
+    shared_foundation_correction: bool = False

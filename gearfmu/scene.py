@@ -384,7 +384,7 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _e("contact_model", CONTACT_MODELS, "hertz", "contact stiffness model"),
         _i("slices", 1, "face-width slices of the sliced stiffness model", 1, 1000),
         Key("foundation", "bool", "-", True, "fillet-foundation stiffness (Sainsot et al. 2004)"),
-        Key("shared_foundation_correction", "bool", "-", True,
+        Key("shared_foundation_correction", "bool", "-", False,
             "shared-foundation correction (Ma et al. 2016, seed 000 eq 11)"),
     ),
     "operating": (

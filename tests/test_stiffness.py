@@ -194,7 +194,8 @@ def test_mean_mesh_stiffness_in_iso_band(name, case):
     b = case["b"]
     cp, cga = iso_6336_c_prime_and_c_gamma(g.z1, g.z2, g.x1, g.x2, g.contact_ratio,
                                            1.0 + pair.pinion.tip_clearance_coefficient)
-    for opts in (MeshModelOptions(), MeshModelOptions(shared_foundation_correction=False)):
+    for opts in (MeshModelOptions(shared_foundation_correction=True),
+                 MeshModelOptions(shared_foundation_correction=False)):
         km = mean_mesh_stiffness_N_per_m(pair, g, opts) / b / 1e9
         assert km == pytest.approx(cga, rel=0.25), (name, opts, km, cga)
     st = slot_stiffness(pair, g, MeshModelOptions())
@@ -208,7 +209,7 @@ def test_slot_structure_and_shared_foundation():
     pair = spur_pair(**SEED004_I)
     g = pair_geometry(pair)
     n = 200
-    on = slot_stiffness(pair, g, MeshModelOptions(), 2, n)
+    on = slot_stiffness(pair, g, MeshModelOptions(shared_foundation_correction=True), 2, n)
     off = slot_stiffness(pair, g, MeshModelOptions(shared_foundation_correction=False), 2, n)
     assert on.k_N_per_m.shape == (2, 2 * n) and on.phi_rad.shape == (2 * n,)
     assert on.phi_rad[1] == pytest.approx(g.mesh_period_rad / n)
