@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional, Union
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import intrinsic
 
 from .tables import MeshTables
 
@@ -415,8 +416,37 @@ KINK_MAX_SLOTS = 32
 _KINK_TOL_S = 1e-12     # root bracket width in the unit substep fraction s
 _KINK_MAX_IT = 60       # Illinois iterations per root
 
+# Speed (docs/native.md "rk4_kink speed"): the rk4_kink helpers below never take
+# a numpy array.  Every numba call with an array argument increfs/decrefs the
+# array's memory block (atomic operations the refcount pruner cannot remove
+# across calls, loops and branches), and the locked right-hand side, the guards
+# and the root finder call each other ~20 times per substep.  So _run_kink
+# takes raw data pointers once (_ptr) and hands the helpers one struct-like
+# tuple ``tab`` of pointers and scalars, the inputs as a tuple ``dyn``, the
+# mode as an int64 pointer ``md`` (reg[j] = md[j], sub[j] = md[P + j],
+# kpos[j] = md[2P + j]) and the Hermite data as a float64 pointer ``wk``
+# (y0 = wk[0:4], f0 = wk[4:8], y1 = wk[8:12], f1 = wk[12:16]).  LLVM then
+# inlines the whole substep; no allocation or slicing happens in the loop.
+# The arithmetic is unchanged operation by operation (bitwise agreement with
+# gearkernel.c).
 
-@njit(cache=False, error_model="numpy", inline="always")
+
+@intrinsic
+def _ptr(typingctx, arr):
+    """Data pointer (CPointer) of a C-contiguous array, no reference counting.
+    Valid while the array is alive; the caller (_run_kink) owns the arrays."""
+    if not isinstance(arr, types.Array):
+        return None
+    sig = types.CPointer(arr.dtype)(arr)
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
+        return ary.data
+
+    return sig, codegen
+
+
+@njit(cache=False, error_model="numpy")
 def _cell_nodes(nd, n_phi):
     """(i0, i1) of global cell nd (float holding an integer): i0 = nd mod N."""
     r = nd - n_phi * np.floor(nd / n_phi)
@@ -431,7 +461,7 @@ def _cell_nodes(nd, n_phi):
     return i0, i1
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=False, error_model="numpy")
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
@@ -456,7 +486,7 @@ def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     return 0.0
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=False, error_model="numpy")
 def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
     """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
     1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
@@ -491,7 +521,7 @@ def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
     return fc + fd if q == 1 else 1.0
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=False, error_model="numpy")
 def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     """Sub-mode of the elastobacklash law at the state (docs/model.md 'Per-pair force')."""
     if reg == 0:
@@ -513,101 +543,121 @@ def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     return 1
 
 
-@njit(cache=False, error_model="numpy", inline="always")
-def _deriv_locked(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model,
-                  reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me):
+@njit(cache=False, error_model="numpy")
+def _kvals(tab, j, i0, i1, w):
+    """k_j, e_j, de_j/dphi, b_j of slot j at cell nodes (i0, i1) and weight w; the
+    arithmetic of :func:`_pair_values` on the pointers of ``tab``."""
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model = tab
+    r = j * n_phi
+    ka = kp[o0 + r + i0]
+    kb = kp[o0 + r + i1]
+    kv = ka + w * (kb - ka)
+    ea = ep[o0 + r + i0]
+    eb = ep[o0 + r + i1]
+    ev = ea + w * (eb - ea)
+    es = (eb - ea) / dphi
+    if rows2:
+        ka2 = kp[o1 + r + i0]
+        kb2 = kp[o1 + r + i1]
+        kv2 = ka2 + w * (kb2 - ka2)
+        ea2 = ep[o1 + r + i0]
+        eb2 = ep[o1 + r + i1]
+        ev2 = ea2 + w * (eb2 - ea2)
+        es2 = (eb2 - ea2) / dphi
+        kv = kv + wt * (kv2 - kv)
+        ev = ev + wt * (ev2 - ev)
+        es = es + wt * (es2 - es)
+    ba = bp[r + i0]
+    bb = bp[r + i1]
+    bv = ba + w * (bb - ba)
+    return kv, ev, es, bv
+
+
+@njit(cache=False, error_model="numpy")
+def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
     Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
     omega1' = 0, m_e v' = F_m - F)."""
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    p = tab[8]
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
     w = (th - nd * dphi) / dphi
     f = 0.0
-    for j in range(k0.shape[0]):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
-        f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, reg[j], sub[j], kpos[j])
+    for j in range(p):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
     if sdof:
         return om, 0.0, v, (fm - f) / me
     return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
 
 
 @njit(cache=False, error_model="numpy")
-def _rk4_locked(th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me):
+def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
     """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
-    the arithmetic of :func:`_rk4_step`."""
+    the arithmetic of :func:`_rk4_step` (stages unrolled)."""
     h2 = h / 2.0
-    ka = fa
-    kb = fb
-    kc = fc
-    kd = fd
-    sa = fa
-    sb = fb
-    sc = fc
-    sd = fd
-    for stage in range(1, 4):
-        if stage == 3:
-            ya = th + h * ka
-            yb = om + h * kb
-            yc = x + h * kc
-            yd = v + h * kd
-        else:
-            ya = th + h2 * ka
-            yb = om + h2 * kb
-            yc = x + h2 * kc
-            yd = v + h2 * kd
-        ka, kb, kc, kd = _deriv_locked(ya, yb, yc, yd, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                                       model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
-        if stage == 3:
-            sa = sa + ka
-            sb = sb + kb
-            sc = sc + kc
-            sd = sd + kd
-        else:
-            sa = sa + 2.0 * ka
-            sb = sb + 2.0 * kb
-            sc = sc + 2.0 * kc
-            sd = sd + 2.0 * kd
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * fa, om + h2 * fb, x + h2 * fc, v + h2 * fd,
+                                   nd, i0, i1)
+    sa = fa + 2.0 * ka
+    sb = fb + 2.0 * kb
+    sc = fc + 2.0 * kc
+    sd = fd + 2.0 * kd
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * ka, om + h2 * kb, x + h2 * kc, v + h2 * kd,
+                                   nd, i0, i1)
+    sa = sa + 2.0 * ka
+    sb = sb + 2.0 * kb
+    sc = sc + 2.0 * kc
+    sd = sd + 2.0 * kd
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h * ka, om + h * kb, x + h * kc, v + h * kd,
+                                   nd, i0, i1)
+    sa = sa + ka
+    sb = sb + kb
+    sc = sc + kc
+    sd = sd + kd
     h6 = h / 6.0
     return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
 
 
 @njit(cache=False, error_model="numpy")
-def _guard_at(gi, th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub):
+def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
     """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
     2 + 3*j + q guard q of pair j."""
+    dphi = tab[9]
     if gi == 0:
         return th - nd * dphi
     if gi == 1:
         return (nd + 1.0) * dphi - th
+    p = tab[8]
     j = (gi - 2) // 3
     q = (gi - 2) - 3 * j
     w = (th - nd * dphi) / dphi
-    kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
-    return _pair_guard(q, kv, ev, es, bv, x, v, om, c, model, reg[j], sub[j])
+    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
 
 
 @njit(cache=False, error_model="numpy")
-def _hermite_guard(s, gi, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                   model, reg, sub):
-    """Guard gi on the cubic Hermite interpolant of the step at fraction s in [0, 1]."""
+def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
+    """Guard gi on the cubic Hermite interpolant of the step (wk: y0, f0, y1, f1)
+    at fraction s in [0, 1]."""
     u = 1.0 - s
     h00 = (1.0 + 2.0 * s) * u * u
     h10 = s * u * u
     h01 = s * s * (3.0 - 2.0 * s)
     h11 = s * s * (s - 1.0)
-    ya = ((h00 * y0[0] + h10 * (tau * f0[0])) + h01 * y1[0]) + h11 * (tau * f1[0])
-    yb = ((h00 * y0[1] + h10 * (tau * f0[1])) + h01 * y1[1]) + h11 * (tau * f1[1])
-    yc = ((h00 * y0[2] + h10 * (tau * f0[2])) + h01 * y1[2]) + h11 * (tau * f1[2])
-    yd = ((h00 * y0[3] + h10 * (tau * f0[3])) + h01 * y1[3]) + h11 * (tau * f1[3])
-    return _guard_at(gi, ya, yb, yc, yd, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub)
+    ya = ((h00 * wk[0] + h10 * (tau * wk[4])) + h01 * wk[8]) + h11 * (tau * wk[12])
+    yb = ((h00 * wk[1] + h10 * (tau * wk[5])) + h01 * wk[9]) + h11 * (tau * wk[13])
+    yc = ((h00 * wk[2] + h10 * (tau * wk[6])) + h01 * wk[10]) + h11 * (tau * wk[14])
+    yd = ((h00 * wk[3] + h10 * (tau * wk[7])) + h01 * wk[11]) + h11 * (tau * wk[15])
+    return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1)
 
 
 @njit(cache=False, error_model="numpy")
-def _guard_root(gi, g_end, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                model, reg, sub):
+def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
     """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
     (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
-    ga = _guard_at(gi, y0[0], y0[1], y0[2], y0[3], nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                   model, reg, sub)
+    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1)
     if not ga > 0.0:
         return 0.0
     a = 0.0
@@ -618,8 +668,7 @@ def _guard_root(gi, g_end, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows
         s = (a * gb - bb * ga) / (gb - ga)
         if not (s > a and s < bb):
             s = 0.5 * (a + bb)
-        gs = _hermite_guard(s, gi, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi,
-                            c, model, reg, sub)
+        gs = _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1)
         if gs < 0.0:
             bb = s
             gb = gs
@@ -641,93 +690,96 @@ def _guard_root(gi, g_end, y0, f0, y1, f1, tau, nd, i0, i1, k0, e0, k1, e1, rows
 
 
 @njit(cache=False, error_model="numpy")
-def _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
-               from_state):
+def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
     """Set kpos of every pair for cell nd and the sub-modes of pairs in contact;
     with from_state also the regions (the start of a communication step)."""
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    p = tab[8]
     w = (th - nd * dphi) / dphi
-    for j in range(k0.shape[0]):
-        km, em, esm, bm = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, 0.5, dphi)
-        kpos[j] = 1 if km > 0.0 else 0
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+    for j in range(p):
+        km, em, esm, bm = _kvals(tab, j, i0, i1, 0.5)
+        md[2 * p + j] = 1 if km > 0.0 else 0
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
         if from_state:
             d = x - ev
             if d > bv:
-                reg[j] = 1
+                md[j] = 1
             elif d < -bv:
-                reg[j] = -1
+                md[j] = -1
             else:
-                reg[j] = 0
+                md[j] = 0
         if model == 0:
-            sub[j] = _decide_sub(reg[j], kv, ev, es, bv, x, v, om, c)
+            md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
         else:
-            sub[j] = 0
+            md[p + j] = 0
 
 
 @njit(cache=False, error_model="numpy")
-def _kink_substep(th, om, x, v, h, nd, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
-                  sdof, t1, t2, rb1, rb2, in1, in2, fm, me, y0, f0, y1, f1):
+def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
-    Returns (theta1, omega1, x, v, nd, events); reg/sub/kpos are updated in place."""
-    n_phi = k0.shape[1]
-    n_guard = 2 + 3 * k0.shape[0]
+    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place."""
+    n_phi = tab[7]
+    p = tab[8]
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    n_guard = 2 + 3 * p
     i0, i1 = _cell_nodes(nd, n_phi)
     rem = h
     nev = 0
     while True:
-        fa, fb, fc, fd = _deriv_locked(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                                       model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
-        ta, tb, tc, td = _rk4_locked(th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1, k0, e0, k1, e1, rows2,
-                                     wt, b, dphi, c, model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1,
-                                     in2, fm, me)
+        fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
+        ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
         if nev >= KINK_MAX_EVENTS:
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th / dphi)
             i0, i1 = _cell_nodes(nd, n_phi)
-            _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub,
-                       kpos, True)
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
-        best = 2.0
-        best_gi = -1
-        have_f1 = False
         # scan the guards at the trial end: cheap test first (one lookup per pair)
         any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
         if not any_neg:
             w = (ta - nd * dphi) / dphi
-            for j in range(k0.shape[0]):
-                kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
-                for q in range(3):
-                    if _pair_guard(q, kv, ev, es, bv, tc, td, tb, c, model, reg[j], sub[j]) < 0.0:
-                        any_neg = True
-                if any_neg:
+            for j in range(p):
+                kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                rj = md[j]
+                sj = md[p + j]
+                if (_pair_guard(0, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
+                        or _pair_guard(1, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
+                        or _pair_guard(2, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0):
+                    any_neg = True
                     break
-        for gi in range(n_guard if any_neg else 0):
-            g = _guard_at(gi, ta, tb, tc, td, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model,
-                          reg, sub)
+        if not any_neg:
+            th, om, x, v = ta, tb, tc, td
+            break
+        best = 2.0
+        best_gi = -1
+        have_f1 = False
+        for gi in range(n_guard):
+            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1)
             if g < 0.0:
                 if not have_f1:
-                    y0[0] = th
-                    y0[1] = om
-                    y0[2] = x
-                    y0[3] = v
-                    f0[0] = fa
-                    f0[1] = fb
-                    f0[2] = fc
-                    f0[3] = fd
-                    y1[0] = ta
-                    y1[1] = tb
-                    y1[2] = tc
-                    y1[3] = td
-                    ga_, gb_, gc_, gd_ = _deriv_locked(ta, tb, tc, td, nd, i0, i1, k0, e0, k1, e1, rows2,
-                                                       wt, b, dphi, c, model, reg, sub, kpos, sdof, t1,
-                                                       t2, rb1, rb2, in1, in2, fm, me)
-                    f1[0] = ga_
-                    f1[1] = gb_
-                    f1[2] = gc_
-                    f1[3] = gd_
+                    wk[0] = th
+                    wk[1] = om
+                    wk[2] = x
+                    wk[3] = v
+                    wk[4] = fa
+                    wk[5] = fb
+                    wk[6] = fc
+                    wk[7] = fd
+                    wk[8] = ta
+                    wk[9] = tb
+                    wk[10] = tc
+                    wk[11] = td
+                    ga_, gb_, gc_, gd_ = _deriv_locked(tab, dyn, md, ta, tb, tc, td, nd, i0, i1)
+                    wk[12] = ga_
+                    wk[13] = gb_
+                    wk[14] = gc_
+                    wk[15] = gd_
                     have_f1 = True
-                s = _guard_root(gi, g, y0, f0, y1, f1, rem, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b,
-                                dphi, c, model, reg, sub)
+                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
                 if s < best:
                     best = s
                     best_gi = gi
@@ -740,32 +792,29 @@ def _kink_substep(th, om, x, v, h, nd, k0, e0, k1, e1, rows2, wt, b, dphi, c, mo
             rem = 0.0
         elif best > 0.0:
             tau = best * rem
-            th, om, x, v = _rk4_locked(th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1, k0, e0, k1, e1,
-                                       rows2, wt, b, dphi, c, model, reg, sub, kpos, sdof, t1, t2, rb1,
-                                       rb2, in1, in2, fm, me)
+            th, om, x, v = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
             rem = rem - tau
         nev += 1
         if best_gi < 2:
             nd = nd - 1.0 if best_gi == 0 else nd + 1.0
             i0, i1 = _cell_nodes(nd, n_phi)
-            _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub,
-                       kpos, False)
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
         else:
             j = (best_gi - 2) // 3
             q = (best_gi - 2) - 3 * j
-            if reg[j] == 0:
-                reg[j] = 1 if q == 0 else -1
+            if md[j] == 0:
+                md[j] = 1 if q == 0 else -1
                 if model == 0:
                     w = (th - nd * dphi) / dphi
-                    kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
-                    sub[j] = _decide_sub(reg[j], kv, ev, es, bv, x, v, om, c)
+                    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
             elif q == 0:
-                reg[j] = 0
-                sub[j] = 0
-            elif sub[j] == 1:
-                sub[j] = 0 if q == 1 else 2
+                md[j] = 0
+                md[p + j] = 0
+            elif md[p + j] == 1:
+                md[p + j] = 0 if q == 1 else 2
             else:
-                sub[j] = 1
+                md[p + j] = 1
         if not rem > 0.0:
             break
     return th, om, x, v, nd, nev
@@ -776,32 +825,34 @@ def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k,
               phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
     """rk4_kink loop over communication steps (two-inertia or, with sdof, the
     time-indexed SDOF at constant omega1); the mode is set from the state at the
-    start of every communication step."""
+    start of every communication step.  k, e (NT, P, N) and b (P, N) must be
+    C-contiguous (the helpers index their data pointers)."""
     n_steps = out_state.shape[0] - 1
     p = k.shape[1]
     n_phi = k.shape[2]
-    reg = np.zeros(p, dtype=np.int64)
-    sub = np.zeros(p, dtype=np.int64)
-    kpos = np.zeros(p, dtype=np.int64)
-    y0 = np.empty(4)
-    f0 = np.empty(4)
-    y1 = np.empty(4)
-    f1 = np.empty(4)
+    mode = np.zeros(3 * p, dtype=np.int64)
+    work = np.zeros(16)
+    md = _ptr(mode)
+    wk = _ptr(work)
+    kp = _ptr(k)
+    ep = _ptr(e)
+    bp = _ptr(b)
     for s in range(n_steps):
         t1 = t1s[s]
         t2 = t2s[s]
         fm = t1 / rb1
         it, wt = _torque_index(t1, torque)
         k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        o0 = it * p * n_phi
+        o1 = (it + 1) * p * n_phi if rows2 else o0
+        tab = (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model)
+        dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
         nd = np.floor(th / dphi)
         i0, i1 = _cell_nodes(nd, n_phi)
-        _mode_sync(th, om, x, v, nd, i0, i1, k0, e0, k1, e1, rows2, wt, b, dphi, c, model, reg, sub, kpos,
-                   True)
+        _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
         nev = 0
         for _ in range(n_sub):
-            th, om, x, v, nd, ne = _kink_substep(th, om, x, v, h, nd, k0, e0, k1, e1, rows2, wt, b, dphi, c,
-                                                 model, reg, sub, kpos, sdof, t1, t2, rb1, rb2, in1, in2,
-                                                 fm, me, y0, f0, y1, f1)
+            th, om, x, v, nd, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd)
             nev += ne
         out_events[s + 1] = nev
         out_state[s + 1, 0] = th
