@@ -1,4 +1,4 @@
-"""Plain-data description of a spur gear pair (SI units throughout).
+"""Plain-data description of a spur or helical gear pair (SI units throughout).
 
 These small frozen dataclasses are the input of every physics module
 (geometry, stiffness, errors, loaded mesh).  The scene parser
@@ -98,6 +98,14 @@ class GearSpec:
     material: Material = Material()
     inertia_kgm2: Optional[float] = None  # None: solid disc between hub and root radius
     deviations: GearDeviations = GearDeviations()
+    # Helical gears (docs/helical.md): reference helix angle beta (rad, 0 = spur, [0, pi/4]);
+    # with beta != 0, ``module_m``, ``pressure_angle_rad``, ``profile_shift``,
+    # ``addendum_coefficient`` and ``tip_clearance_coefficient`` are NORMAL-section values
+    # (m_n, alpha_n, x_n, h_an*, c_n*: the basic rack of the cutting tool, ISO 21771 / ISO 53);
+    # the transverse ones follow in gearfmu.geometry.  ``helix_hand`` "right" | "left": the
+    # two gears of an external pair have opposite hands and the same beta.
+    helix_angle_rad: float = 0.0
+    helix_hand: str = "right"
 
 
 @dataclass(frozen=True)

@@ -239,6 +239,47 @@ def slot_errors_m(pair: GearPairSpec, geom, slots: int, n_mesh: int, points_per_
     return pair_error_m(pair, ranges, n, s)
 
 
+def slot_slice_errors_m(pair: GearPairSpec, geom, slots: int, n_mesh: int, points_per_mesh: int,
+                        slices: int) -> np.ndarray:
+    """Meshing error seen by each face-width slice of the pair in each slot (m), shape (P, NS, N).
+
+    Helical pairs (docs/helical.md): slice n of a pair meets the line of action
+    lag_n = y_n tan(beta_b)/p_bt mesh periods after the leading face end
+    (:func:`gearfmu.stiffness.slice_lag_mesh_periods`), so at a given pinion angle
+    it sees the profile deviation at s = s_A + rb1 (phi - phi_entry) - lag_n p_bt
+    (clamped to [s_A, s_E] like :func:`slot_errors_m`); pitch deviations are the
+    same for every slice.  Spur pairs: every slice equals :func:`slot_errors_m`.
+    """
+    from .stiffness import slice_lag_mesh_periods
+
+    ranges = evaluation_ranges(geom)
+    n, local = slot_mesh_numbers(slots, n_mesh, points_per_mesh)
+    dphi = geom.mesh_period_rad / points_per_mesh
+    lag = slice_lag_mesh_periods(geom, slices) if geom.helix_angle_rad != 0.0 else np.zeros(int(slices))
+    s = geom.s_start_m + geom.rb1_m * local[:, None, :] * dphi - lag[None, :, None] * geom.base_pitch_m
+    s = np.clip(s, geom.s_start_m, geom.s_end_m)
+    nn = np.broadcast_to(n[:, None, :], s.shape)
+    return pair_error_m(pair, ranges, nn, s)
+
+
+def stiffness_weighted_pair_error_m(e_slice_m, k_slice_N_per_m) -> np.ndarray:
+    """Pair error (P, N) from per-slice errors (P, NS, N), weighted by the slice stiffness.
+
+    A pair whose slices are springs k_n at gaps e_n carries
+    sum_n k_n (x - e_n) = k (x - e) with k = sum_n k_n and e = sum_n k_n e_n / k
+    when all its engaged slices touch (docs/helical.md); where no slice of the
+    pair is engaged the plain slice mean keeps the table smooth.
+    """
+    e = np.asarray(e_slice_m, dtype=float)
+    k = np.asarray(k_slice_N_per_m, dtype=float)
+    if e.shape != k.shape or e.ndim != 3:
+        raise MeshingErrorInputError(f"k_slice_N_per_m: shape {k.shape} must equal e_slice_m {e.shape} (P, NS, N)")
+    ks = k.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = (k * e).sum(axis=1) / np.where(ks > 0, ks, 1.0)
+    return np.where(ks > 0, w, e.mean(axis=1))
+
+
 # ----------------------------------------------------------- comprehensive error
 def comprehensive_error_m(e_m: np.ndarray, in_contact: np.ndarray) -> np.ndarray:
     """Comprehensive (envelope) meshing error for the traditional model (m).

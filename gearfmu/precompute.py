@@ -19,7 +19,7 @@ import numpy as np
 from .gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from .loaded_mesh import loaded_static_mesh
 from .meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
-                             slot_errors_m)
+                             slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
 from .tables import MeshTables
 
 #: default torque axis with lead crowning, as multiples of the nominal torque
@@ -167,6 +167,11 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     geom = pair_geometry(pair)
     eps = float(geom.contact_ratio)
     p_min = default_slots(eps)
+    helical = geom.helix_angle_rad != 0.0
+    if helical:  # docs/helical.md: slots from the total contact ratio eps_gamma
+        from .stiffness import required_slots
+        eps = float(geom.total_contact_ratio)
+        p_min = required_slots(geom)
     if slots is None:
         slots = p_min
     if int(slots) != slots or slots < p_min:
@@ -190,6 +195,11 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     ss_cache = None
     if not load_dep_k:
         ss_cache = _slot_stiffness(pair, geom, opts, slots, points_per_mesh, None)
+    if helical:  # slices see different roll positions: stiffness-weighted pair error
+        ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
+                                                                     float(nominal_torque_Nm))
+        e_slot = stiffness_weighted_pair_error_m(
+            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
     bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
 
     k_rows, e_rows, te_rows = [], [], []

@@ -372,6 +372,10 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            "of seed 003 eq 6 is half of it", 0.0, 5000.0, scale=1e-6),
         _f("center_distance_mm", "mm", None, "operating centre distance (none = zero-backlash distance "
            "from the profile shifts)", 0.0, None, lo_open=True, scale=1e-3),
+        _f("helix_angle_deg", "deg", 0.0, "reference helix angle beta (0 = spur); with beta > 0 module, "
+           "pressure angle, shifts and addendum/clearance coefficients are normal-section values "
+           "(docs/helical.md)", 0.0, 45.0, scale=math.pi / 180.0),
+        _e("hand", ("right", "left"), "right", "helix hand of the pinion (the gear has the opposite hand)"),
     ),
     "gears.pinion": _GEAR_KEYS,
     "gears.gear": _GEAR_KEYS,
@@ -754,8 +758,12 @@ def _gear_spec(r: _Reader, data: Any, role: str, shared: Dict[str, Any], mat: Di
                         density_kg_m3=vals["density_kg_m3"], thermal_expansion_per_K=vals["thermal_expansion_per_K"])
     m = shared["module_mm"]
     hub = g["hub_radius_mm"]
+    beta = shared.get("helix_angle_deg") or 0.0
+    hand = shared.get("hand") or "right"
+    if role == "gear" and beta != 0.0:
+        hand = "left" if hand == "right" else "right"
     if hub is not None:
-        root = m * (g["teeth"] / 2.0 - g["addendum_coefficient"] - g["tip_clearance_coefficient"]
+        root = m * (g["teeth"] / (2.0 * math.cos(beta)) - g["addendum_coefficient"] - g["tip_clearance_coefficient"]
                     + g["profile_shift"])
         if hub >= root:
             r.add(f"gears.{role}.hub_radius_mm",
@@ -766,7 +774,8 @@ def _gear_spec(r: _Reader, data: Any, role: str, shared: Dict[str, Any], mat: Di
                     addendum_coefficient=g["addendum_coefficient"],
                     tip_clearance_coefficient=g["tip_clearance_coefficient"], hub_radius_m=hub,
                     material=material, inertia_kgm2=g["inertia_kgm2"],
-                    deviations=dev if dev is not None else GearDeviations())
+                    deviations=dev if dev is not None else GearDeviations(),
+                    helix_angle_rad=beta, helix_hand=hand)
 
 
 def _deviations(r: _Reader, data: Any, role: str, teeth: Optional[int]) -> Optional[GearDeviations]:
@@ -905,8 +914,10 @@ _FIELD_TO_KEY = {
     "center_distance_m": "center_distance_mm", "youngs_modulus_Pa": "youngs_modulus_GPa",
     "poisson_ratio": "poisson_ratio", "density_kg_m3": "density_kg_m3",
     "thermal_expansion_per_K": "thermal_expansion_per_K",
+    "helix_angle_rad": "helix_angle_deg", "helix_hand": "hand",
 }
-_SHARED = ("module_m", "pressure_angle_rad", "face_width_m", "backlash_m", "center_distance_m")
+_SHARED = ("module_m", "pressure_angle_rad", "face_width_m", "backlash_m", "center_distance_m",
+           "helix_angle_rad", "helix_hand")
 
 
 def _geometry_key_path(field: str) -> str:

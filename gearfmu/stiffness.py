@@ -1,4 +1,6 @@
-"""Tooth, foundation and tooth-pair mesh stiffness (TVMS) of a spur gear pair.
+"""Tooth, foundation and tooth-pair mesh stiffness (TVMS) of a spur or helical gear pair.
+
+Helical pairs: staggered face-width slices, :func:`helical_slot_stiffness` (docs/helical.md).
 
 Seed 000 eq (11)-(15): potential-energy (Yang & Lin 1987; Tian 2004; Chen &
 Shao 2011; Sun, Ma et al. 2018 MMT 129 = seed 000 ref [46]) bending, shear and
@@ -58,7 +60,7 @@ coefficient could not be checked against the original here, lambda = 1 is the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional, Tuple
 
 import numpy as np
@@ -218,6 +220,9 @@ class SlotStiffness:
     slices: int
     slice_width_m: float
     mesh_period_rad: float
+    #: helical pairs only (docs/helical.md): (slots, slices, n) LOA position of each slice's
+    #: contact point, NaN out of contact; None for spur pairs (every slice at ``s_m``)
+    s_slice_m: Optional[np.ndarray] = None
 
     @property
     def k_total_N_per_m(self) -> np.ndarray:
@@ -225,11 +230,17 @@ class SlotStiffness:
         return self.k_N_per_m.sum(axis=0)
 
 
-def _pair_components(pair: GearPairSpec, geom: PairGeometry, s: np.ndarray, width_m: float):
-    """Per-pair tooth stiffness k_tooth^i and foundation compliances at positions s (1-D)."""
+def _pair_components(pair: GearPairSpec, geom: PairGeometry, s: np.ndarray, width_m: float,
+                     contact_factor: float = 1.0):
+    """Per-pair tooth stiffness k_tooth^i and foundation compliances at positions s (1-D).
+
+    ``contact_factor`` scales the contact stiffness (helical slices: cos(beta_b), docs/helical.md).
+    """
     cp = tooth_compliance_m_per_N(pair.pinion, geom, 1, s, width_m)
     cg = tooth_compliance_m_per_N(pair.gear, geom, 2, s, width_m)
     kh = hertz_stiffness_N_per_m(pair, width_m)
+    if contact_factor != 1.0:
+        kh = kh * contact_factor
     c_teeth = (cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"])
     k_tooth = 1.0 / (1.0 / kh + c_teeth)
     return k_tooth, cp["foundation"], cg["foundation"]
@@ -272,6 +283,9 @@ def slot_stiffness(pair: GearPairSpec, geom: Optional[PairGeometry] = None,
     """
     geom = pair_geometry(pair) if geom is None else geom
     opts = MeshModelOptions() if opts is None else opts
+    if geom.helix_angle_rad != 0.0:
+        return helical_slot_stiffness(pair, geom, opts, slots, n_per_mesh,
+                                      foundation_lambda=foundation_lambda)
     eps = geom.contact_ratio
     min_slots = int(math.ceil(eps - 1e-12))
     if slots is None:
@@ -307,6 +321,172 @@ def slot_stiffness(pair: GearPairSpec, geom: Optional[PairGeometry] = None,
     return SlotStiffness(phi_rad=phi, k_N_per_m=k_slice * n_slices, s_m=s,
                          k_per_slice_N_per_m=k_slice, slices=n_slices, slice_width_m=w,
                          mesh_period_rad=mp)
+
+
+def required_slots(geom: PairGeometry) -> int:
+    """Minimum slot count P of a pair (docs/helical.md).
+
+    Spur: ceil(eps_alpha) (at least 1).  Helical: ceil(eps_gamma), plus one
+    when eps_gamma is an integer (to 1e-9), so that the pair leaving a slot
+    and the one entering it never need the slot at the same grid angle.
+    """
+    if geom.helix_angle_rad == 0.0:
+        return max(1, int(math.ceil(geom.contact_ratio - 1e-12)))
+    eg = geom.total_contact_ratio
+    p = max(1, int(math.ceil(eg - 1e-12)))
+    if abs(eg - round(eg)) < 1e-9:
+        p = int(round(eg)) + 1
+    return p
+
+
+def slice_lag_mesh_periods(geom: PairGeometry, slices: int) -> np.ndarray:
+    """Lag (in mesh periods) of each face-width slice of a helical pair (docs/helical.md).
+
+    The face is cut into ``slices`` equal slices; slice n's centre lies at
+    y_n = (n + 1/2) b/slices from the face end that enters mesh first.  Its
+    transverse section meets the line of action y_n tan(beta_b) behind that
+    face end (the contact line is inclined at the base helix angle on the plane
+    of action), i.e. y_n tan(beta_b)/p_bt mesh periods later.  Spur: all zero.
+    """
+    n = int(slices)
+    y = (np.arange(n) + 0.5) * (geom.face_width_m / n)
+    return y * math.tan(geom.base_helix_angle_rad) / geom.base_pitch_m
+
+
+def virtual_normal_section(pair: GearPairSpec, geom: PairGeometry) -> Tuple[GearPairSpec, PairGeometry]:
+    """Virtual spur pair of the NORMAL section of a helical pair (ISO 6336-1 method B, ISO 21771).
+
+    Virtual tooth numbers z_n = z/(cos^2(beta_b) cos(beta)) (ISO 6336-1), normal
+    module m_n, normal pressure angle alpha_n, normal shift x_n, the real
+    gears' addendum heights (r_a - r) and dedendum (h_a* + c* - x_n) m_n;
+    hub radius scaled so that Sainsot's h_f = r_f/r_int is the real gear's.
+    Only the per-gear quantities the tooth compliance needs are meaningful
+    (radii, z, x, m_n, alpha_n); the line-of-action fields are set so that
+    ``roll_length_at(1, s) = s`` and ``roll_length_at(2, s) = L - s`` with L the
+    virtual pair's N1N2 at its reference centre distance.
+    """
+    cbb, cb = math.cos(geom.base_helix_angle_rad), math.cos(geom.helix_angle_rad)
+    mn, an = geom.normal_module_m, geom.normal_pressure_angle_rad
+    vals = {}
+    specs = {}
+    for which, gs in ((1, pair.pinion), (2, pair.gear)):
+        gv = geom.gear_values(which)
+        zn = gv["z"] / (cbb * cbb * cb)
+        rn = mn * zn / 2.0
+        rfn = rn - mn * (gs.addendum_coefficient + gs.tip_clearance_coefficient - gs.profile_shift)
+        hf = gv["rf"] / hub_radius_m(gs, geom, which)
+        vals[which] = dict(z=zn, x=gs.profile_shift, r=rn, rb=rn * math.cos(an),
+                           ra=rn + (gv["ra"] - gv["r"]), rf=rfn)
+        specs[which] = replace(gs, hub_radius_m=rfn / hf, helix_angle_rad=0.0)
+    v1, v2 = vals[1], vals[2]
+    L = (v1["r"] + v2["r"]) * math.sin(an)
+    vgeom = replace(geom, z1=v1["z"], z2=v2["z"], module_m=mn, alpha_rad=an, x1=v1["x"], x2=v2["x"],
+                    r1_m=v1["r"], r2_m=v2["r"], rb1_m=v1["rb"], rb2_m=v2["rb"], ra1_m=v1["ra"],
+                    ra2_m=v2["ra"], rf1_m=v1["rf"], rf2_m=v2["rf"], rw1_m=v1["r"], rw2_m=v2["r"],
+                    alpha_w_rad=an, center_distance_m=v1["r"] + v2["r"],
+                    reference_center_distance_m=v1["r"] + v2["r"], base_pitch_m=math.pi * mn * math.cos(an),
+                    loa_length_m=L, helix_angle_rad=0.0, base_helix_angle_rad=0.0, overlap_ratio=0.0)
+    return replace(pair, pinion=specs[1], gear=specs[2]), vgeom
+
+
+def _normal_roll_m(geom: PairGeometry, vgeom: PairGeometry, which: int, s_m: np.ndarray) -> np.ndarray:
+    """Roll length on the virtual normal-section gear of the point at the same height above the
+    reference circle as the transverse contact point at LOA position s (m)."""
+    gv, vv = geom.gear_values(which), vgeom.gear_values(which)
+    rho = np.sqrt(gv["rb"] ** 2 + geom.roll_length_at(which, s_m) ** 2)
+    rho_v = vv["r"] + (rho - gv["r"])
+    return np.sqrt(np.maximum(rho_v * rho_v - vv["rb"] ** 2, 0.0))
+
+
+def _helical_slice_components(pair: GearPairSpec, geom: PairGeometry, s_m: np.ndarray, width_m: float):
+    """(k_tooth, foundation compliance pinion, gear) of helical slices at transverse LOA positions s,
+    along the transverse line of action (see :func:`helical_slot_stiffness`)."""
+    vpair, vgeom = virtual_normal_section(pair, geom)
+    cbb = math.cos(geom.base_helix_angle_rad)
+    wn = width_m / cbb                                   # contact-line length of the slice
+    u1 = _normal_roll_m(geom, vgeom, 1, s_m)
+    u2 = _normal_roll_m(geom, vgeom, 2, s_m)
+    cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
+    cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
+    kh = hertz_stiffness_N_per_m(pair, wn)
+    c_teeth = (cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"])
+    k_tooth_n = 1.0 / (1.0 / kh + c_teeth)
+    t = cbb * cbb                                        # normal -> transverse: k_t = k_n cos^2(beta_b)
+    return k_tooth_n * t, cp["foundation"] / t, cg["foundation"] / t
+
+
+def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshModelOptions,
+                           slots: Optional[int] = None, n_per_mesh: int = 128, *,
+                           foundation_lambda: Tuple[float, float] = (1.0, 1.0),
+                           section: str = "normal") -> SlotStiffness:
+    """Per-slot TVMS of a perfect helical pair by staggered face-width slices (docs/helical.md).
+
+    Each of the ``opts.slices`` slices (width w = b/slices) is a thin spur gear
+    in the transverse plane (the pair's transverse section,
+    :func:`gearfmu.geometry.transverse_equivalent`) whose contact point is
+    s_n = s_A + p_bt (tau - lag_n), tau the mesh periods since the pair's leading
+    face end passed A, lag_n from :func:`slice_lag_mesh_periods`; it is in
+    contact for 0 <= tau - lag_n <= eps_alpha.  Its stiffness along the transverse
+    line of action is the spur slice stiffness of the transverse tooth (bending,
+    shear, axial compression, Sainsot foundation: the transverse component of the
+    normal load is the transverse force) in series with the contact stiffness
+    times cos(beta_b) (CHOICE, docs/helical.md: the contact line of a slice is
+    w/cos(beta_b) long, the normal load F_t/cos(beta_b), the normal approach
+    delta_t cos(beta_b), so k_h,t = k_h(w/cos beta_b) cos^2 beta_b = k_h(w) cos beta_b).
+    Slices are independent springs in parallel (no coupling through the tooth,
+    the usual slicing assumption); the pair's stiffness is the sum over its
+    slices in contact.  The foundation options act per slice across the pairs.
+    Slot rule: :func:`required_slots`.  Stiffness is along the transverse line
+    of action, so the dynamic model (x = theta1 rb1 - theta2 rb2) is unchanged.
+    """
+    from .geometry import transverse_equivalent
+
+    need = required_slots(geom)
+    if slots is None:
+        slots = need
+    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < need:
+        raise StiffnessError(f"slots: must be an integer >= {need} (from the total contact ratio "
+                             f"{geom.total_contact_ratio:.6g}), got {slots!r}")
+    if isinstance(n_per_mesh, bool) or not isinstance(n_per_mesh, (int, np.integer)) or n_per_mesh < 2:
+        raise StiffnessError(f"n_per_mesh: must be an integer >= 2, got {n_per_mesh!r}")
+    NS = int(opts.slices)
+    if NS < 1:
+        raise StiffnessError(f"opts.slices: must be >= 1, got {opts.slices!r}")
+    for lam in foundation_lambda:
+        if not (lam > 0):
+            raise StiffnessError(f"foundation_lambda: must be > 0, got {foundation_lambda!r}")
+    if section not in ("normal", "transverse"):
+        raise StiffnessError(f"section: must be 'normal' or 'transverse', got {section!r}")
+    eps = geom.contact_ratio
+    w = geom.face_width_m / NS
+    mp = geom.mesh_period_rad
+    n = slots * n_per_mesh
+    j = np.arange(n)
+    phi = j * (mp / n_per_mesh)
+    tau = ((j[None, :] - np.arange(slots)[:, None] * n_per_mesh) % n) / n_per_mesh      # (P, n)
+    tau_n = tau[:, None, :] - slice_lag_mesh_periods(geom, NS)[None, :, None]           # (P, NS, n)
+    in_contact = (tau_n >= 0.0) & (tau_n <= eps * (1.0 + 1e-12))
+    s = np.where(in_contact, geom.s_start_m + tau_n * geom.base_pitch_m, np.nan)
+    s = np.minimum(s, geom.s_end_m)
+    kt = np.zeros_like(s)
+    cfp = np.zeros_like(s)
+    cfg = np.zeros_like(s)
+    if np.any(in_contact):
+        if section == "normal":
+            k1, f1, f2 = _helical_slice_components(pair, geom, s[in_contact], w)
+        else:
+            k1, f1, f2 = _pair_components(transverse_equivalent(pair), geom, s[in_contact], w,
+                                          contact_factor=math.cos(geom.base_helix_angle_rad))
+        kt[in_contact], cfp[in_contact], cfg[in_contact] = k1, f1, f2
+    shape = (slots, NS * n)
+    k_slice = combine_pairs(kt.reshape(shape), cfp.reshape(shape), cfg.reshape(shape), opts,
+                            foundation_lambda).reshape(slots, NS, n)
+    k_pair = k_slice.sum(axis=1)
+    cnt = in_contact.sum(axis=1)
+    s_sum = np.where(in_contact, s, 0.0).sum(axis=1)
+    s_mean = np.where(cnt > 0, s_sum / np.maximum(cnt, 1), np.nan)   # mean over slices in contact
+    return SlotStiffness(phi_rad=phi, k_N_per_m=k_pair, s_m=s_mean, k_per_slice_N_per_m=k_slice,
+                         slices=NS, slice_width_m=w, mesh_period_rad=mp, s_slice_m=s)
 
 
 def pair_stiffness_at_N_per_m(pair: GearPairSpec, geom: PairGeometry, s_m, width_m: Optional[float] = None,
