@@ -7,6 +7,7 @@
     gearfmu build [SCENE] --tables T.csv --tables-meta M.toml   imported tables -> FMU
     gearfmu bench accuracy [--json] [--png P]  speed against error (gearfmu.bench)
     gearfmu ssp      [SCENE] -o OUT.ssp [--variant NAME:PARAM=VALUE]  SSP package with variants
+    gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -204,6 +205,16 @@ def cmd_ssp(args) -> int:
     return 0
 
 
+def cmd_plan(args) -> int:
+    from .plan import format_report, plan_scene
+
+    scene = _scene(args.scene)
+    plan = plan_scene(scene, progress=not args.quiet and not args.json, measure_fmu=args.fmu,
+                      fmu_dir=args.output)
+    print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
+    return 0
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gearfmu", description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -257,6 +268,15 @@ def make_parser() -> argparse.ArgumentParser:
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
     x.add_argument("-q", "--quiet", action="store_true")
     x.set_defaults(func=cmd_ssp)
+
+    pl = sub.add_parser("plan", help="fidelity plan: each modelling choice's error over the envelope, "
+                                     "kept/dropped, cost (docs/plan.md)")
+    pl.add_argument("scene", nargs="?")
+    pl.add_argument("--json", action="store_true", help="print the report as JSON")
+    pl.add_argument("--fmu", action="store_true", help="also build the chosen and the full FMU to measure their sizes")
+    pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
+    pl.add_argument("-q", "--quiet", action="store_true")
+    pl.set_defaults(func=cmd_plan)
     return p
 
 

@@ -1,0 +1,84 @@
+"""Fidelity plans of full scenes (docs/plan.md): JSON report and PNG per scene.
+
+For each shipped scene, with an envelope and a 2 % / 2 % accuracy target added, run the planner
+and write examples/output/plan_study.json (every plan's report) and plan_study.png (error
+contribution of each choice's chosen level, and the cost of the chosen model against the full one).
+
+    python examples/plan_study.py [--fmu]
+"""
+import argparse
+import json
+import sys
+import tomllib
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from gearfmu.plan import format_report, plan_scene  # noqa: E402
+from gearfmu.scene import dumps_toml, load_scene  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+OUT = HERE / "output"
+
+#: scene file -> sections added for the study (envelope from the scene's own ranges where it has them)
+STUDIES = {
+    "seed000_table1.toml": {"envelope": {"torque_range_Nm": [500.0, 2500.0], "speed_range_rpm": [1000.0, 3000.0]},
+                            "accuracy": {"dte_rel_error": 0.02, "mesh_force_rel_error": 0.02,
+                                         "pin": ["contact_model"]}},
+    "seed003_table1.toml": {"envelope": {"speed_range_rpm": [1000.0, 4000.0]},
+                            "accuracy": {"dte_rel_error": 0.02, "mesh_force_rel_error": 0.02,
+                                         "pin": ["contact_model"]}},
+}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--fmu", action="store_true", help="also build both FMUs to measure their sizes")
+    args = ap.parse_args(argv)
+    OUT.mkdir(parents=True, exist_ok=True)
+    reports = {}
+    for name, extra in STUDIES.items():
+        data = tomllib.loads((HERE / "scenes" / name).read_text(encoding="utf-8"))
+        data.update(extra)
+        scene = load_scene(dumps_toml(data))
+        print(f"== {name}", file=sys.stderr, flush=True)
+        plan = plan_scene(scene, progress=True, measure_fmu=args.fmu, fmu_dir=str(OUT / "plan_fmus"))
+        print(format_report(plan))
+        reports[name] = plan.to_dict()
+    (OUT / "plan_study.json").write_text(json.dumps(reports, indent=1), encoding="utf-8")
+
+    fig, axes = plt.subplots(len(reports), 2, figsize=(12, 4 * len(reports)), squeeze=False)
+    for row, (name, rep) in enumerate(reports.items()):
+        rows = [r for r in rep["choices"] if r["status"] not in ("fixed", "pinned")]
+        labels = [f"{r['choice']}\n{r['full']}→{r['chosen']}" for r in rows]
+        ax = axes[row][0]
+        x = range(len(rows))
+        for j, (key, lab) in enumerate((("tvms_rel", "TVMS"), ("dte_rel", "DTE"), ("mesh_force_rel", "mesh force"))):
+            vals = [max(float(r["contribution"][key] or 0.0), 1e-16) for r in rows]
+            ax.bar([i + 0.27 * (j - 1) for i in x], vals, width=0.27, label=lab)
+        ax.axhline(rep["target"]["dte_rel"], color="k", ls="--", lw=1, label="target")
+        ax.set_yscale("log")
+        ax.set_xticks(list(x))
+        ax.set_xticklabels(labels, fontsize=7)
+        ax.set_ylabel("relative RMS error vs full")
+        ax.set_title(f"{rep['scene']}: contribution of each chosen level")
+        ax.legend(fontsize=7)
+        ax = axes[row][1]
+        keys = [k for k in ("table_build_s", "table_bytes", "wall_per_sim_s", "fmu_bytes")
+                if k in rep["cost"]["full"] and k in rep["cost"]["chosen"]]
+        ratio = [rep["cost"]["chosen"][k] / rep["cost"]["full"][k] for k in keys]
+        ax.bar(keys, ratio, color="tab:green")
+        ax.axhline(1.0, color="k", lw=1)
+        ax.set_ylabel("chosen / full")
+        v = rep["verification"]
+        ax.set_title(f"cost; verified DTE {v['dte_rel']:.2g}, force {v['mesh_force_rel']:.2g}")
+    fig.tight_layout()
+    fig.savefig(OUT / "plan_study.png", dpi=110)
+    print(f"wrote {OUT / 'plan_study.json'} and {OUT / 'plan_study.png'}")
+
+
+if __name__ == "__main__":
+    main()

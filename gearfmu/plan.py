@@ -1,0 +1,704 @@
+"""Fidelity planner: only what a scene needs (docs/plan.md).
+
+Given a scene, its operating envelope and its accuracy target
+(:mod:`gearfmu.envelope`), :func:`plan_scene` estimates what every modelling
+choice contributes to the TVMS and to the DTE and mesh force over the
+envelope, keeps what the target needs, drops the rest and measures the cost
+of the chosen model against the full one.  :func:`planned_scene` turns a plan
+into the scene that ``gearfmu build`` builds.
+
+Choices (``gearfmu.envelope.PLAN_CHOICES``) and their levels, cheapest first,
+the last one being the full-fidelity level:
+
+* ``contact_model`` -- the contact models :mod:`gearfmu.contact_models` offers
+  (when present; ``hertz`` alone otherwise), ordered hertz < smooth_ehl <
+  rough_ehl; lubricated ones only with a ``[lubricant]``.
+* ``thermal`` -- seed 004 temperature stiffness on/off (only with an envelope
+  temperature range).  Kept, the FMU gets a temperature axis over the range;
+  dropped, it gets none (no temperature input).
+* ``tooth_specific_errors`` -- per-tooth deviations (table period = the
+  hunting-tooth cycle) against every tooth carrying its gear's default
+  deviation (table period = P mesh periods).
+* ``slices`` -- 1, 2, 4, 8, ... up to the scene's slices.
+* ``points_per_mesh`` -- 16, 32, 64, 128, 256 (the full level is max(256, scene)).
+* ``torque_points`` -- 1 (nominal torque only), 2, 3, 5, 9 equally spaced over
+  the envelope torque range (full: max(9, scene)).
+* ``slots`` -- ceil(contact ratio), or the scene's larger count.
+* ``integrator`` -- rk4, rk4_kink (full).
+* ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.native.choose_max_step_s`
+  of the full tables at the top envelope speed (full: h0/4).
+
+Error measure (docs/plan.md): for every envelope point (torque low / nominal /
+high x speed low / nominal / high x temperature corners) a native run of
+``run_mesh_periods`` mesh periods from the quasi-static start with balanced
+torques; the relative RMS difference rms(y - y_full)/rms(y_full) of the DTE
+and of the total mesh force, worst over the points.  The TVMS measure is the
+relative RMS difference of the total mesh stiffness over the table period at
+the envelope torques and temperatures.  The budget rule (greedy by cost saved
+per error added, with a verification run of the combined choice) is in
+:func:`plan_scene`.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
+
+__all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
+           "relative_rms", "CONTACT_ORDER"]
+
+#: contact models from the cheapest to the most detailed
+CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
+_LUBRICATED = ("smooth_ehl", "rough_ehl")
+_PPM_LEVELS = (16, 32, 64, 128, 256)
+_TORQUE_LEVELS = (1, 2, 3, 5, 9)
+_STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
+_THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a scene axis (CHOICE)
+
+
+class PlanError(ValueError):
+    """The planner cannot plan a scene (names the field and the reason)."""
+
+
+def relative_rms(y, y_ref) -> float:
+    """rms(y - y_ref) / rms(y_ref) (dimensionless); 0 when both are identically 0,
+    inf when only the reference is; NaN-safe inputs are required."""
+    y, y_ref = np.asarray(y, dtype=float), np.asarray(y_ref, dtype=float)
+    num = float(np.sqrt(np.mean((y - y_ref) ** 2)))
+    den = float(np.sqrt(np.mean(y_ref ** 2)))
+    if den == 0.0:
+        return 0.0 if num == 0.0 else math.inf
+    return num / den
+
+
+# ============================================================== choices
+@dataclass
+class Choice:
+    """One modelling choice: its levels (cheapest first, last = full), whether the
+    scene pins it, and the measurements of each level against the full model."""
+
+    name: str
+    levels: list
+    pinned: bool = False
+    note: str = ""
+    measured: Dict[int, dict] = field(default_factory=dict)  # level index -> measures
+
+    @property
+    def full(self):
+        return self.levels[-1]
+
+    @property
+    def fixed(self) -> bool:
+        return len(self.levels) <= 1
+
+
+def _available_contact_models() -> Tuple[str, ...]:
+    """Contact models the table builder offers: the registry
+    ``gearfmu.contact_models.CONTACT_MODELS`` when that module exists and the
+    table builder takes a contact environment, else hertz alone."""
+    import inspect
+
+    from .precompute import precompute_tables
+    try:
+        from . import contact_models  # type: ignore[attr-defined]
+    except ImportError:
+        return ("hertz",)
+    if "contact_env" not in inspect.signature(precompute_tables).parameters:
+        return ("hertz",)
+    names = getattr(contact_models, "CONTACT_MODELS", None) or {"hertz": None}
+    return tuple(n for n in names if isinstance(n, str))
+
+
+def _p_min(scene) -> int:
+    from .geometry import pair_geometry
+    from .precompute import default_slots
+
+    return default_slots(float(pair_geometry(scene.pair).contact_ratio))
+
+
+def _teeth_differ(scene, slots: int) -> bool:
+    from .meshing_errors import pair_table_mesh_count
+
+    return pair_table_mesh_count(scene.pair, slots) > slots
+
+
+def _scene_has_thermal(scene) -> bool:
+    return getattr(scene, "thermal", None) is not None
+
+
+def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
+    pin = set(acc.pin)
+    ch: Dict[str, Choice] = {}
+
+    def add(name, levels, scene_value, note=""):
+        if name in pin:
+            ch[name] = Choice(name, [scene_value], pinned=True, note="pinned by the scene")
+        else:
+            ch[name] = Choice(name, list(levels), note=note if len(levels) > 1 else (note or "no alternative"))
+
+    avail = _available_contact_models()
+    cm = [m for m in CONTACT_ORDER if m in avail and (m not in _LUBRICATED or scene.lubricant is not None)]
+    if scene.mesh.contact_model not in cm:
+        cm.append(scene.mesh.contact_model)
+    add("contact_model", cm, scene.mesh.contact_model,
+        "" if len(cm) > 1 else "the table builder offers hertz only")
+    if env.temperature_range_C is not None:
+        add("thermal", [False, True], _scene_has_thermal(scene))
+    else:  # no temperature variation to plan for: the scene's [thermal] as written
+        ch["thermal"] = Choice("thermal", [_scene_has_thermal(scene)], pinned="thermal" in pin,
+                               note="no temperature range in the envelope: as the scene says")
+    pmin = _p_min(scene)
+    full_slots = scene.tables.slots or pmin
+    if _teeth_differ(scene, full_slots):
+        add("tooth_specific_errors", [False, True], True)
+    else:
+        ch["tooth_specific_errors"] = Choice("tooth_specific_errors", [True], note="all teeth alike")
+    ns = int(scene.mesh.slices)
+    add("slices", sorted({n for n in (1, 2, 4, 8, 16, 32, 64, 128, 256, 512) if n < ns} | {ns}), ns)
+    ppm = int(scene.tables.points_per_mesh)
+    full_ppm = max(256, ppm)
+    add("points_per_mesh", sorted({p for p in _PPM_LEVELS if p < full_ppm} | {full_ppm}), ppm)
+    tlo, thi = env.torque_range_Nm
+    if thi > tlo:
+        ntq = max(9, int(scene.tables.torque_points))
+        add("torque_points", sorted({n for n in _TORQUE_LEVELS if n < ntq} | {ntq}), int(scene.tables.torque_points))
+    else:
+        ch["torque_points"] = Choice("torque_points", [1], note="no torque range in the envelope")
+    add("slots", [pmin] if full_slots == pmin else [pmin, full_slots], full_slots)
+    add("integrator", ["rk4", "rk4_kink"], scene.solver.integrator)
+    # levels: multiples of h0 (the automatic step at the top envelope speed); pinned: the scene's
+    # max_step_s in s, or 1 x h0 when the scene says "auto" (_step_absolute tells which)
+    add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,
+        "levels are multiples of h0")
+    return ch
+
+
+def _step_absolute(scene, acc: AccuracyTarget) -> bool:
+    """True when the max_step level is a step in s (pinned to the scene's max_step_s)."""
+    return "max_step" in acc.pin and scene.solver.max_step_s is not None
+
+
+# ============================================================== model evaluation
+class _Evaluator:
+    """Builds tables and runs the native solver for configurations (dicts choice -> level value)."""
+
+    def __init__(self, scene, env: Envelope, acc: AccuracyTarget, progress: bool):
+        self.scene, self.env, self.acc, self.progress = scene, env, acc, progress
+        self._tables: Dict[tuple, tuple] = {}
+        self._factors: Dict[tuple, np.ndarray] = {}
+        self._runs: Dict[tuple, dict] = {}
+        self.h0: Optional[float] = None
+        self.t0_C = scene.thermal.standard_temperature_C if getattr(scene, "thermal", None) else 30.0
+
+    # -------------------------------------------------------- tables
+    def table_key(self, cfg: dict) -> tuple:
+        return (cfg["contact_model"], cfg["tooth_specific_errors"], cfg["slices"], cfg["points_per_mesh"],
+                cfg["torque_points"], cfg["slots"])
+
+    def pair(self, tooth_specific: bool):
+        from .gearpair import GearDeviations
+
+        p = self.scene.pair
+        if tooth_specific:
+            return p
+
+        def uniform(g):
+            d = g.deviations
+            return replace(g, deviations=GearDeviations(default=d.default, per_tooth=(),
+                                                        lead_crowning_m=d.lead_crowning_m))
+        return replace(p, pinion=uniform(p.pinion), gear=uniform(p.gear))
+
+    def torque_axis(self, n: int) -> Tuple[float, ...]:
+        if n <= 1:
+            return (float(self.env.nominal_torque_Nm),)
+        lo, hi = self.env.torque_range_Nm
+        return tuple(lo + (hi - lo) * i / (n - 1) for i in range(n))
+
+    def tables(self, cfg: dict):
+        """(MeshTables, build wall time in s) of a configuration (cached)."""
+        from .precompute import precompute_tables
+
+        key = self.table_key(cfg)
+        if key not in self._tables:
+            t0 = time.perf_counter()
+            tb = precompute_tables(**self.table_args(cfg))
+            self._tables[key] = (tb, time.perf_counter() - t0)
+        return self._tables[key]
+
+    def table_args(self, cfg: dict) -> dict:
+        """Arguments of :func:`gearfmu.precompute.precompute_tables` for a configuration."""
+        opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
+        pair = self.pair(cfg["tooth_specific_errors"])
+        kw = dict(pair=pair, opts=opts, points_per_mesh=int(cfg["points_per_mesh"]),
+                  torque_axis_Nm=self.torque_axis(int(cfg["torque_points"])),
+                  nominal_torque_Nm=self.env.nominal_torque_Nm, slots=int(cfg["slots"]))
+        if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
+            from .contact_models import environment_from_scene
+
+            kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
+        return kw
+
+    def thermal_factor(self, cfg: dict, temperature_C: float) -> np.ndarray:
+        """k(T)/k(t0) per slot and angle on the tables' grid (seed 004 temperature
+        stiffness of :func:`gearfmu.thermal.thermal_slot_stiffness` at the nominal
+        torque; 1 out of contact).  CHOICE: applied to every torque row."""
+        from .thermal import thermal_slot_stiffness
+
+        key = self.table_key(cfg) + (float(temperature_C),)
+        if key not in self._factors:
+            tb, _ = self.tables(cfg)
+            opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
+            law = self.scene.thermal.flank_law if getattr(self.scene, "thermal", None) else "radial_tangential"
+            ts = thermal_slot_stiffness(self.scene.pair, opts, torque_Nm=self.env.nominal_torque_Nm,
+                                        temperatures_C=[float(temperature_C)], standard_temperature_C=self.t0_C,
+                                        slots=int(cfg["slots"]), n_per_mesh=int(cfg["points_per_mesh"]), law=law)
+            ks = ts.k_standard_N_per_m
+            f = np.where(ks > 0, ts.k_N_per_m[0] / np.where(ks > 0, ks, 1.0), 1.0)
+            reps = tb.n_phi // f.shape[1]
+            self._factors[key] = np.tile(f, (1, reps))
+        return self._factors[key]
+
+    def tables_at(self, cfg: dict, temperature_C: Optional[float]):
+        tb, _ = self.tables(cfg)
+        if not cfg["thermal"] or temperature_C is None:
+            return tb
+        f = self.thermal_factor(cfg, temperature_C)
+        return replace(tb, k_N_per_m=np.ascontiguousarray(tb.k_N_per_m * f[None, :, :]))
+
+    def table_bytes(self, cfg: dict) -> int:
+        tb, _ = self.tables(cfg)
+        n = sum(np.asarray(a).nbytes for a in (tb.k_N_per_m, tb.e_m, tb.backlash_half_m, tb.torque_Nm,
+                                               tb.e_comprehensive_m, tb.static_te_m) if a is not None)
+        if cfg["thermal"]:  # a temperature axis multiplies k and e (and the derived rows)
+            n = int(n * _THERMAL_AXIS_POINTS)
+        return int(n)
+
+    # -------------------------------------------------------- TVMS measure
+    def k_total(self, cfg: dict, torque_Nm: float, temperature_C: Optional[float]):
+        """(phi grid (rad), total mesh stiffness (N/m)) at a torque (rows interpolated as the kernel does)."""
+        tb = self.tables_at(cfg, temperature_C)
+        kt = tb.k_N_per_m.sum(axis=1)
+        tq = np.asarray(tb.torque_Nm, dtype=float)
+        if tq.size == 1:
+            row = kt[0]
+        else:
+            T = min(max(torque_Nm, tq[0]), tq[-1])
+            i = int(min(np.searchsorted(tq, T, side="right") - 1, tq.size - 2))
+            w = (T - tq[i]) / (tq[i + 1] - tq[i])
+            row = kt[i] + w * (kt[i + 1] - kt[i])
+        return tb.phi_rad, row, tb.phi_period_rad
+
+    def tvms_error(self, cfg: dict, full: dict) -> float:
+        worst = 0.0
+        for T in self.env.torques_Nm():
+            for temp in (self.env.temperatures_C() or (None,)):
+                phi_f, k_f, per_f = self.k_total(full, T, temp)
+                phi_r, k_r, per_r = self.k_total(cfg, T, temp)
+                x = np.mod(phi_f, per_r)
+                k_ri = np.interp(x, np.append(phi_r, per_r), np.append(k_r, k_r[0]))
+                worst = max(worst, relative_rms(k_ri, k_f))
+        return worst
+
+    # -------------------------------------------------------- dynamics
+    def points(self) -> List[Tuple[float, float, Optional[float]]]:
+        """Envelope points (pinion torque N*m, pinion speed rad/s, temperature degC or None)."""
+        return [(T, w, temp) for T in self.env.torques_Nm() for w in self.env.speeds_rad_s()
+                for temp in (self.env.temperatures_C() or (None,))]
+
+    def step(self, cfg: dict) -> float:
+        v = float(cfg["max_step"])
+        return v if _step_absolute(self.scene, self.acc) else v * self.h0
+
+    def run(self, cfg: dict, point) -> dict:
+        """Native run at one envelope point: dte, mesh_force (arrays), wall_s and simulated time."""
+        from .native import simulate
+
+        key = self.table_key(cfg) + (cfg["thermal"], cfg["integrator"], self.step(cfg), point)
+        if key in self._runs:
+            return self._runs[key]
+        T, w, temp = point
+        tb = self.tables_at(cfg, temp)
+        mesh_s = tb.mesh_period_rad / w
+        n = int(self.acc.run_mesh_periods)
+        res = simulate(tb, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
+                       pinion_torque_Nm=T, pinion_speed_start_rad_s=w,
+                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
+                       integrator=cfg["integrator"])
+        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s}
+        self._runs[key] = out
+        return out
+
+    def dynamic_error(self, cfg: dict, full: dict) -> dict:
+        """Worst relative RMS DTE / mesh-force difference over the envelope points, and the
+        native wall time per simulated second of ``cfg``."""
+        dte = force = 0.0
+        wall = sim = 0.0
+        for pt in self.points():
+            a, b = self.run(cfg, pt), self.run(full, pt)
+            if not (np.all(np.isfinite(a["dte"])) and np.all(np.isfinite(b["dte"]))):
+                dte = force = math.inf
+                continue
+            dte = max(dte, relative_rms(a["dte"], b["dte"]))
+            force = max(force, relative_rms(a["mesh_force"], b["mesh_force"]))
+            wall += a["wall_s"]
+            sim += a["sim_s"]
+        return {"dte_rel": dte, "mesh_force_rel": force, "wall_per_sim_s": wall / sim if sim else math.nan}
+
+    def measure(self, cfg: dict, full: dict) -> dict:
+        _, build_s = self.tables(cfg)
+        m = {"tvms_rel": self.tvms_error(cfg, full)}
+        m.update(self.dynamic_error(cfg, full))
+        m["table_build_s"] = build_s
+        m["table_bytes"] = self.table_bytes(cfg)
+        return m
+
+
+# ============================================================== the plan
+@dataclass
+class Plan:
+    """Result of :func:`plan_scene`: the chosen and the full configuration, the
+    per-choice measurements, the verification of the chosen model and the costs.
+    :meth:`to_dict` is the JSON report (``gearfmu plan --json``)."""
+
+    scene_name: str
+    envelope: Envelope
+    target: AccuracyTarget
+    choices: Dict[str, Choice]
+    full: dict
+    chosen: dict
+    h0_s: float
+    step_absolute: bool
+    verification: dict
+    cost: dict
+    log: List[str] = field(default_factory=list)
+
+    def max_step_s(self, which: str = "chosen") -> float:
+        """Largest internal step (s) of the chosen or the full configuration."""
+        cfg = self.chosen if which == "chosen" else self.full
+        v = float(cfg["max_step"])
+        return v if self.step_absolute else v * self.h0_s
+
+    def status(self, name: str) -> str:
+        ch = self.choices[name]
+        if ch.pinned:
+            return "pinned"
+        if ch.fixed:
+            return "fixed"
+        v, full = self.chosen[name], ch.full
+        if v == full:
+            return "kept"
+        if v is False or (name == "torque_points" and v == 1) or (name == "contact_model" and v == "hertz"):
+            return "dropped"
+        return "reduced"
+
+    def to_dict(self) -> dict:
+        def jv(v):
+            if isinstance(v, float) and not math.isfinite(v):
+                return None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+            return v
+
+        rows = []
+        for name, ch in self.choices.items():
+            idx = ch.levels.index(self.chosen[name])
+            m = ch.measured.get(idx, {})
+            rows.append({
+                "choice": name, "status": self.status(name), "full": ch.full, "chosen": self.chosen[name],
+                "levels": ch.levels, "note": ch.note,
+                "contribution": {k: jv(m.get(k, 0.0)) for k in ("tvms_rel", "dte_rel", "mesh_force_rel")},
+                "measured": [{"level": ch.levels[i], **{k: jv(v) for k, v in mm.items()}}
+                             for i, mm in sorted(ch.measured.items())],
+            })
+        env = self.envelope
+        return {
+            "scene": self.scene_name,
+            "envelope": {"torque_range_Nm": list(env.torque_range_Nm),
+                         "speed_range_rpm": [w * 60 / (2 * math.pi) for w in env.speed_range_rad_s],
+                         "temperature_range_C": list(env.temperature_range_C) if env.temperature_range_C else None,
+                         "duty_cycle": env.duty_cycle.source if env.duty_cycle is not None else None},
+            "target": {"dte_rel": self.target.dte_rel, "mesh_force_rel": self.target.mesh_force_rel,
+                       "safety_factor": self.target.safety_factor, "pin": list(self.target.pin)},
+            "h0_s": self.h0_s,
+            "choices": rows,
+            "chosen": dict(self.chosen, max_step_s=self.max_step_s("chosen")),
+            "full": dict(self.full, max_step_s=self.max_step_s("full")),
+            "verification": {k: jv(v) for k, v in self.verification.items()},
+            "cost": self.cost,
+            "log": self.log,
+        }
+
+
+def _say(progress: bool, msg: str, log: List[str]) -> None:
+    log.append(msg)
+    if progress:
+        print(f"gearfmu plan: {msg}", file=sys.stderr, flush=True)
+
+
+def _budget_use(m: dict, acc: AccuracyTarget) -> float:
+    return max(m["dte_rel"] / acc.dte_rel, m["mesh_force_rel"] / acc.mesh_force_rel)
+
+
+_COST_KEYS = ("table_build_s", "table_bytes", "wall_per_sim_s")
+
+
+def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) -> float:
+    """Relative cost estimate of a configuration: sum over table build time, table
+    size and time per simulated second of the product of the single-choice ratios
+    to the full model (each choice taken as acting independently)."""
+    total = 0.0
+    for k in _COST_KEYS:
+        r = 1.0
+        for name, i in levels.items():
+            m = choices[name].measured.get(i)
+            if m is not None and base.get(k):
+                r *= m[k] / base[k]
+        total += r
+    return total
+
+
+def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
+               fmu_dir: Optional[str] = None) -> Plan:
+    """Plan the fidelity of a scene (docs/plan.md).
+
+    1. Levels of every choice (:func:`_choices`; pinned ones are fixed).
+    2. Each non-full level is measured alone against the full model (all other
+       choices full): TVMS, DTE and mesh-force relative RMS errors over the
+       envelope points, table build time, table size and native time per
+       simulated second.
+    3. Greedy rule: starting from the full model, repeatedly take the level
+       change that saves the most estimated cost per unit of added budget use
+       (budget use of a level = max(DTE error / DTE target, force error / force
+       target)) while the summed budget use of all choices stays <= the safety
+       factor (by the triangle inequality the combined error is about at most
+       the sum of the single-choice errors).
+    4. Verification: the combined chosen model is run against the full one at
+       every envelope point; while its error exceeds the target, the choice with
+       the largest budget use goes back one level towards full.
+    5. Costs of the chosen and the full model: table build time, table size and
+       time per simulated second, and with ``measure_fmu`` the FMU sizes (both
+       FMUs built in ``fmu_dir`` or a temporary directory).
+    """
+    env, acc = envelope_of(scene), accuracy_of(scene)
+    log: List[str] = []
+    choices = _choices(scene, env, acc)
+    for name in PLAN_CHOICES:
+        if name not in choices:
+            raise PlanError(f"{name}: no levels (planner bug)")  # pragma: no cover
+    ev = _Evaluator(scene, env, acc, progress)
+    full = {n: c.full for n, c in choices.items()}
+    tb_full, _ = ev.tables(full)
+    from .native import choose_max_step_s
+
+    ev.h0 = choose_max_step_s(tb_full, max(env.speed_range_rad_s[1], env.nominal_speed_rad_s))
+    full = {n: c.full for n, c in choices.items()}
+    npts = len(ev.points())
+    _say(progress, f"{npts} envelope points, full tables {tb_full.slots} slots x {tb_full.n_phi} angles x "
+                   f"{tb_full.n_torque} torques, h0 = {ev.h0:.3g} s", log)
+
+    base = ev.measure(full, full)
+    for c in choices.values():
+        c.measured[len(c.levels) - 1] = dict(base)
+    for name, c in choices.items():
+        for i, lv in enumerate(c.levels[:-1]):
+            cfg = dict(full, **{name: lv})
+            try:
+                c.measured[i] = ev.measure(cfg, full)
+            except (ValueError, ArithmeticError) as exc:  # a level the physics rejects is not offered
+                c.measured[i] = {"tvms_rel": math.inf, "dte_rel": math.inf, "mesh_force_rel": math.inf,
+                                 "table_build_s": math.nan, "table_bytes": 0, "wall_per_sim_s": math.nan,
+                                 "error": str(exc)}
+            m = c.measured[i]
+            _say(progress, f"{name} = {lv}: TVMS {m['tvms_rel']:.2e}, DTE {m['dte_rel']:.2e}, "
+                           f"force {m['mesh_force_rel']:.2e}", log)
+
+    # ---------------------------------------------------------- greedy
+    level = {n: len(c.levels) - 1 for n, c in choices.items()}
+    use = {n: 0.0 for n in choices}
+
+    def cost_of(lv):
+        return _est_cost(lv, choices, base)
+
+    history: List[str] = []
+    while True:
+        best = None
+        cur_cost, total = cost_of(level), sum(use.values())
+        for name, c in choices.items():
+            # levels are ordered by cost by construction: the candidate is the cheapest one that fits
+            for i in range(level[name]):
+                u = _budget_use(c.measured[i], acc)
+                if math.isfinite(u) and total - use[name] + u <= acc.safety_factor:
+                    break
+            else:
+                continue
+            saved = max(cur_cost - cost_of(dict(level, **{name: i})), 0.0)  # measured (noisy) saving
+            score = (saved + 1e-6) / max(u - use[name], 1e-6)
+            if best is None or score > best[0]:
+                best = (score, name, i, u)
+        if best is None:
+            break
+        _, name, i, u = best
+        level[name], use[name] = i, u
+        history.append(name)
+        _say(progress, f"take {name} = {choices[name].levels[i]} (budget use {u:.3f}, "
+                       f"total {sum(use.values()):.3f})", log)
+
+    # ---------------------------------------------------------- verification
+    def cfg_of(lv):
+        return {n: choices[n].levels[i] for n, i in lv.items()}
+
+    for _ in range(4 * len(choices)):
+        chosen = cfg_of(level)
+        ver = ev.dynamic_error(chosen, full)
+        ver["tvms_rel"] = ev.tvms_error(chosen, full)
+        ok = ver["dte_rel"] <= acc.dte_rel and ver["mesh_force_rel"] <= acc.mesh_force_rel
+        _say(progress, f"verify: DTE {ver['dte_rel']:.2e}, force {ver['mesh_force_rel']:.2e} "
+                       f"({'within' if ok else 'above'} target)", log)
+        if ok:
+            break
+        worst = max((n for n in choices if level[n] < len(choices[n].levels) - 1), key=lambda n: use[n],
+                    default=None)
+        if worst is None:
+            break
+        level[worst] += 1
+        use[worst] = _budget_use(choices[worst].measured[level[worst]], acc)
+        _say(progress, f"back off {worst} to {choices[worst].levels[level[worst]]}", log)
+    chosen = cfg_of(level)
+    ver["within_target"] = bool(ver["dte_rel"] <= acc.dte_rel and ver["mesh_force_rel"] <= acc.mesh_force_rel)
+    ver["points"] = npts
+
+    # ---------------------------------------------------------- costs
+    cost = {"full": _cost_entry(ev, full), "chosen": _cost_entry(ev, chosen)}
+    plan = Plan(scene_name=scene.name, envelope=env, target=acc, choices=choices, full=full, chosen=chosen,
+                h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log)
+    if measure_fmu:
+        _measure_fmus(scene, plan, ev, fmu_dir, progress)
+    g = {}
+    for k in ("table_build_s", "table_bytes", "wall_per_sim_s", "fmu_bytes"):
+        a, b = cost["full"].get(k), cost["chosen"].get(k)
+        if a and b:
+            g[k] = a / b
+    cost["gain_full_over_chosen"] = g
+    return plan
+
+
+def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
+    """Fresh measurement of one configuration's costs (tables rebuilt, runs at every envelope point)."""
+    from .precompute import precompute_tables
+
+    tb, _ = ev.tables(cfg)
+    t0 = time.perf_counter()
+    precompute_tables(**ev.table_args(cfg))
+    build_s = time.perf_counter() - t0
+    wall = sim = 0.0
+    for pt in ev.points():
+        r = ev.run(cfg, pt)
+        wall += r["wall_s"]
+        sim += r["sim_s"]
+    return {"table_build_s": build_s, "table_bytes": ev.table_bytes(cfg), "wall_per_sim_s": wall / sim,
+            "tables_shape": [int(tb.n_torque), int(tb.slots), int(tb.n_phi)]}
+
+
+def _measure_fmus(scene, plan: Plan, ev: _Evaluator, fmu_dir, progress) -> None:
+    from .pipeline import build
+
+    d = Path(fmu_dir) if fmu_dir else Path(tempfile.mkdtemp(prefix="gearfmu_plan_"))
+    d.mkdir(parents=True, exist_ok=True)
+    for which in ("full", "chosen"):
+        sc = planned_scene(scene, plan, which=which)
+        _say(progress, f"building the {which} FMU", plan.log)
+        res = build(sc, d / f"{scene.fmu.model_name}_{which}.fmu", tables=ev.tables(
+            plan.full if which == "full" else plan.chosen)[0])
+        plan.cost[which]["fmu_bytes"] = res.fmu_path.stat().st_size
+        plan.cost[which]["fmu_path"] = str(res.fmu_path)
+        plan.cost[which]["fmu_build_s"] = res.build_wall_s
+
+
+# ============================================================== scene of a plan
+def planned_scene(scene, plan: Plan, which: str = "chosen"):
+    """The scene ``gearfmu build`` builds for a plan: the chosen (or, ``which="full"``,
+    the full-fidelity) configuration written into the scene's mesh, table, solver,
+    operating, deviation and thermal settings.  Its ``accuracy`` is None (a planned
+    scene is not planned again); ``text`` stays the original scene source."""
+    from .gearpair import GearDeviations
+
+    cfg = plan.chosen if which == "chosen" else plan.full
+    env = plan.envelope
+    mesh = replace(scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
+    ntq = int(cfg["torque_points"])
+    op = replace(scene.operating, torque_points=ntq,
+                 torque_range_Nm=env.torque_range_Nm if ntq > 1 else scene.operating.torque_range_Nm)
+    tables = replace(scene.tables, points_per_mesh=int(cfg["points_per_mesh"]), torque_points=ntq,
+                     slots=int(cfg["slots"]))
+    solver = replace(scene.solver, integrator=cfg["integrator"], max_step_s=plan.max_step_s(which))
+    pair = scene.pair
+    if not cfg["tooth_specific_errors"]:
+        def uniform(g):
+            d = g.deviations
+            return replace(g, deviations=GearDeviations(default=d.default, per_tooth=(),
+                                                        lead_crowning_m=d.lead_crowning_m))
+        pair = replace(pair, pinion=uniform(pair.pinion), gear=uniform(pair.gear))
+    thermal = getattr(scene, "thermal", None)
+    if cfg["thermal"]:
+        from .scene import ThermalOptions
+
+        th = thermal if thermal is not None else ThermalOptions()
+        if not len(th.temperature_axis_C) and env.temperature_range_C is not None:
+            lo, hi = env.temperature_range_C
+            th = replace(th, temperature_axis_C=tuple(float(x) for x in np.linspace(lo, hi, _THERMAL_AXIS_POINTS)))
+        thermal = th
+    else:  # dropped: no thermal correction and no temperature axis (so no temperature input)
+        thermal = None
+    return replace(scene, mesh=mesh, operating=op, tables=tables, solver=solver, pair=pair, thermal=thermal,
+                   accuracy=None)
+
+
+def full_scene(scene, plan: Plan):
+    """The full-fidelity scene of a plan (``planned_scene(..., which="full")``)."""
+    return planned_scene(scene, plan, which="full")
+
+
+# ============================================================== report
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return str(v)
+        return f"{v:.3g}"
+    return str(v)
+
+
+def format_report(plan: Plan) -> str:
+    """The fidelity report as a text table."""
+    d = plan.to_dict()
+    t = d["target"]
+    lines = [f"fidelity plan for scene {d['scene']}: target DTE {t['dte_rel']:g}, mesh force "
+             f"{t['mesh_force_rel']:g} (relative RMS error vs full model; safety {t['safety_factor']:g})",
+             f"envelope: torque {d['envelope']['torque_range_Nm']} N*m, speed "
+             f"[{d['envelope']['speed_range_rpm'][0]:.6g}, {d['envelope']['speed_range_rpm'][1]:.6g}] rpm, "
+             f"temperature {d['envelope']['temperature_range_C']} degC; "
+             f"{d['verification']['points']} envelope points", ""]
+    lines.append(f"{'choice':<22}{'full':>10}{'chosen':>10}{'status':>9}{'TVMS':>10}{'DTE':>10}{'force':>10}")
+    for r in d["choices"]:
+        c = r["contribution"]
+        full, chosen = r["full"], r["chosen"]
+        if r["choice"] == "max_step":
+            full, chosen = f"{d['full']['max_step_s']:.2g}s", f"{d['chosen']['max_step_s']:.2g}s"
+        lines.append(f"{r['choice']:<22}{_fmt(full):>10}{_fmt(chosen):>10}{r['status']:>9}"
+                     f"{_fmt(c['tvms_rel']):>10}{_fmt(c['dte_rel']):>10}{_fmt(c['mesh_force_rel']):>10}")
+    v = d["verification"]
+    lines += ["", f"chosen model against the full one: DTE {_fmt(v['dte_rel'])}, mesh force "
+                  f"{_fmt(v['mesh_force_rel'])}, TVMS {_fmt(v['tvms_rel'])} -> "
+                  f"{'within' if v['within_target'] else 'ABOVE'} target", ""]
+    lines.append(f"{'cost':<26}{'full':>14}{'chosen':>14}{'full/chosen':>13}")
+    cf, cc, g = d["cost"]["full"], d["cost"]["chosen"], d["cost"]["gain_full_over_chosen"]
+    for k, label in (("table_build_s", "table build time (s)"), ("table_bytes", "table size (bytes)"),
+                     ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
+        if k in cf and k in cc:
+            lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
+    return "\n".join(lines)

@@ -1,0 +1,309 @@
+"""Fidelity planner (gearfmu.plan, gearfmu.envelope; docs/plan.md).
+
+References:
+* The accuracy target is the user's number: the planned model (FMU and native)
+  is run against the full-fidelity model over the scene's envelope and the
+  measured relative RMS error of DTE and mesh force must stay within it.
+* Closed forms: the hunting-tooth table period lcm(P, z1) mesh periods
+  (P = 2 slots, z1 = 20 -> 20; uniform teeth -> P); a tooth-pair stiffness
+  linear in face width (Yang & Sun Hertz k = pi E b / (4 (1 - nu^2)), the
+  potential-energy and Sainsot foundation compliances ~ 1/b) so equal slices
+  add up to the unsliced pair exactly; without lead crowning the Hertz
+  stiffness does not depend on load, so a torque axis adds nothing; a rigid
+  run-up omega(t) = omega0 + dT t / (I1 + I2 (Rb1/Rb2)^2).
+* Hand-written duty-cycle CSV numbers and rpm -> rad/s = 2 pi / 60.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gearfmu.cli import main
+from gearfmu.envelope import envelope_of
+from gearfmu.plan import full_scene, plan_scene, planned_scene, relative_rms
+from gearfmu.scene import SceneError, load_scene
+
+RPM = 2 * math.pi / 60
+
+SMALL = """
+[scene]
+name = "plan_small"
+
+[gears]
+module_mm = 3.0
+face_width_mm = 20.0
+backlash_um = 100.0
+
+[gears.pinion]
+teeth = 20
+
+[gears.gear]
+teeth = 31
+
+[deviations.pinion]
+profile_form_um = 5.0
+lead_crowning_um = 8.0
+
+[[deviations.pinion.tooth]]
+index = 3
+profile_form_um = 12.0
+
+[mesh]
+slices = 8
+
+[operating]
+torque_Nm = 200.0
+speed_rpm = 1000.0
+
+[tables]
+points_per_mesh = 32
+
+[fmu]
+stop_time_s = 0.02
+output_interval_s = 1e-4
+
+[envelope]
+torque_range_Nm = [80.0, 200.0]
+speed_range_rpm = [1000.0, 2000.0]
+
+[accuracy]
+dte_rel_error = 0.05
+mesh_force_rel_error = 0.05
+run_mesh_periods = 12
+"""
+
+PLAIN = """
+[scene]
+name = "plan_plain"
+
+[gears]
+module_mm = 3.0
+face_width_mm = 20.0
+backlash_um = 100.0
+
+[gears.pinion]
+teeth = 20
+
+[gears.gear]
+teeth = 31
+
+[deviations.pinion]
+profile_form_um = 5.0
+
+[mesh]
+slices = 4
+
+[operating]
+torque_Nm = 200.0
+speed_rpm = 1000.0
+
+[envelope]
+torque_range_Nm = [80.0, 200.0]
+
+[accuracy]
+run_mesh_periods = 10
+pin = ["points_per_mesh", "integrator", "max_step"]
+"""
+
+
+def _scene(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return load_scene(p)
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    d = tmp_path_factory.mktemp("plan")
+    p = d / "small.toml"
+    p.write_text(SMALL, encoding="utf-8")
+    scene = load_scene(p)
+    plan = plan_scene(scene)
+    return scene, plan, d
+
+
+# ------------------------------------------------------------------ envelope and target
+def test_envelope_defaults_and_duty_cycle(tmp_path):
+    base = PLAIN.replace('[envelope]\ntorque_range_Nm = [80.0, 200.0]\n', "")
+    s = _scene(tmp_path, base.replace("[operating]", "[operating]\nspeed_range_rpm = [600.0, 1200.0]"))
+    env = envelope_of(s)  # no [envelope]: [operating]'s ranges, else the nominal point
+    assert env.torque_range_Nm == (200.0, 200.0)
+    assert env.speed_range_rad_s == pytest.approx((600 * RPM, 1200 * RPM), rel=1e-15)
+    assert env.temperature_range_C is None
+    (tmp_path / "duty.csv").write_text("time_s,torque_Nm,speed_rpm,temperature_C\n0,150,900,40\n"
+                                       "1,250,1500,75\n2,60,1100,55\n", encoding="utf-8")
+    s = _scene(tmp_path, base + '\n[envelope]\nduty_cycle_csv = "duty.csv"\n')
+    env = s.envelope
+    assert env.torque_range_Nm == (60.0, 250.0)  # duty extremes widen the nominal point
+    assert env.speed_range_rad_s == pytest.approx((900 * RPM, 1500 * RPM), rel=1e-15)
+    assert env.temperature_range_C == (40.0, 75.0)
+    assert env.duty_cycle.time_s.tolist() == [0.0, 1.0, 2.0]
+    assert s.accuracy.pin == ("points_per_mesh", "integrator", "max_step")
+
+
+@pytest.mark.parametrize("edit, key", [
+    (("run_mesh_periods = 10", "dte_rel_error = 0.0"), "accuracy.dte_rel_error"),
+    (("run_mesh_periods = 10", "mesh_force_rel_error = 2.0"), "accuracy.mesh_force_rel_error"),
+    (('pin = ["points_per_mesh", "integrator", "max_step"]', 'pin = ["slicez"]'), "accuracy.pin"),
+    (("torque_range_Nm = [80.0, 200.0]", "torque_range_Nm = [200.0, 80.0]"), "envelope.torque_range_Nm"),
+    (("torque_range_Nm = [80.0, 200.0]", 'duty_cycle_csv = "missing.csv"'), "envelope.duty_cycle_csv"),
+    (("torque_range_Nm = [80.0, 200.0]", "speed_range_rpm = [0.0, 100.0]"), "envelope.speed_range_rpm"),
+    (("[envelope]", "[envelope]\nspeed_rang_rpm = 3"), "envelope.speed_rang_rpm"),
+])
+def test_bad_envelope_and_accuracy_name_the_key(tmp_path, edit, key):
+    with pytest.raises(SceneError) as ei:
+        _scene(tmp_path, PLAIN.replace(*edit))
+    assert key in str(ei.value)
+
+
+def test_bad_duty_cycle_rows(tmp_path):
+    (tmp_path / "d.csv").write_text("time_s,torque_Nm,speed_rpm\n0,1,100\n0,2,100\n", encoding="utf-8")
+    with pytest.raises(SceneError, match="envelope.duty_cycle_csv: time_s must be strictly ascending"):
+        _scene(tmp_path, PLAIN.replace("torque_range_Nm = [80.0, 200.0]", 'duty_cycle_csv = "d.csv"'))
+
+
+def test_relative_rms_closed_form():
+    t = np.linspace(0, 1, 1001)[:-1]
+    y = np.sin(2 * np.pi * t)
+    assert relative_rms(1.1 * y, y) == pytest.approx(0.1, rel=1e-12)
+
+
+# ------------------------------------------------------------------ choices with closed-form answers
+def test_load_independent_and_width_linear_choices_are_dropped(tmp_path):
+    s = _scene(tmp_path, PLAIN)
+    plan = plan_scene(s)
+    d = {r["choice"]: r for r in plan.to_dict()["choices"]}
+    # no crowning: Hertz k does not depend on load -> every torque axis gives the same tables
+    tq = d["torque_points"]
+    assert [m["tvms_rel"] for m in tq["measured"]] == [0.0] * len(tq["levels"])
+    assert [m["dte_rel"] for m in tq["measured"]] == [0.0] * len(tq["levels"])
+    assert tq["chosen"] == 1 and tq["status"] == "dropped"
+    # stiffness linear in face width: 1 slice = 4 slices to round-off
+    sl = d["slices"]
+    assert max(m["tvms_rel"] for m in sl["measured"]) < 1e-12
+    assert sl["chosen"] == 1
+    # all teeth alike: nothing to choose, table period P = 2 mesh periods
+    assert d["tooth_specific_errors"]["status"] == "fixed"
+    assert plan.cost["chosen"]["tables_shape"] == [1, 2, 2 * 64]
+    # pinned choices keep the scene's values
+    assert plan.chosen["points_per_mesh"] == 64 and plan.chosen["integrator"] == s.solver.integrator
+    assert plan.max_step_s() == pytest.approx(plan.h0_s, rel=1e-15)  # pinned "auto" = h0
+    assert plan.verification["within_target"]
+
+
+def test_small_scene_plan_hunting_cycle_and_budget(small):
+    scene, plan, _ = small
+    # full: tooth 3 differs -> lcm(2, 20) = 20 mesh periods of 256 points; 9 torque rows
+    assert plan.cost["full"]["tables_shape"] == [9, 2, 20 * 256]
+    ch = plan.choices["tooth_specific_errors"]
+    m = ch.measured[0]
+    assert 0 < m["dte_rel"] < 1  # a real contribution that the planner measured
+    # the verification run of the chosen model stays within the target
+    v = plan.verification
+    assert v["within_target"] and v["dte_rel"] <= 0.05 and v["mesh_force_rel"] <= 0.05
+    # crowning makes the stiffness load dependent: one torque row is not the 9-row model
+    tq = plan.choices["torque_points"].measured[0]
+    assert tq["tvms_rel"] > 1e-3
+    assert plan.cost["chosen"]["table_bytes"] < plan.cost["full"]["table_bytes"]
+    txt = json.dumps(plan.to_dict())  # the report is JSON-serialisable
+    assert "verification" in txt
+
+
+def test_tight_target_keeps_loose_target_drops(tmp_path, small):
+    _, plan_small, _ = small
+    contrib = plan_small.choices["tooth_specific_errors"].measured[0]
+    u = max(contrib["dte_rel"], contrib["mesh_force_rel"])
+    pins = 'pin = ["slices", "points_per_mesh", "torque_points", "integrator", "max_step"]'
+    tight = SMALL.replace("run_mesh_periods = 12", pins + "\nrun_mesh_periods = 12") \
+        .replace("dte_rel_error = 0.05", f"dte_rel_error = {u / 10:.3g}") \
+        .replace("mesh_force_rel_error = 0.05", f"mesh_force_rel_error = {u / 10:.3g}")
+    p = plan_scene(_scene(tmp_path, tight, "t.toml"))
+    assert p.chosen["tooth_specific_errors"] is True and p.status("tooth_specific_errors") == "kept"
+    loose = tight.replace(f"dte_rel_error = {u / 10:.3g}", "dte_rel_error = 0.5") \
+        .replace(f"mesh_force_rel_error = {u / 10:.3g}", "mesh_force_rel_error = 0.5")
+    s = _scene(tmp_path, loose, "l.toml")
+    p = plan_scene(s)
+    assert p.chosen["tooth_specific_errors"] is False and p.status("tooth_specific_errors") == "dropped"
+    assert planned_scene(s, p).pair.pinion.deviations.per_tooth == ()
+
+
+def test_thermal_choice_and_temperature_axis(tmp_path):
+    text = PLAIN.replace("torque_range_Nm = [80.0, 200.0]", "temperature_range_C = [30.0, 90.0]")
+    loose = text.replace("run_mesh_periods = 10", "run_mesh_periods = 10\ndte_rel_error = 1.0\n"
+                                                  "mesh_force_rel_error = 1.0")
+    s = _scene(tmp_path, loose)
+    p = plan_scene(s)
+    th = p.choices["thermal"]
+    assert th.levels == [False, True]
+    assert th.measured[0]["tvms_rel"] > 0  # seed 004: the mesh stiffness changes with temperature
+    assert p.chosen["thermal"] is False and planned_scene(s, p).thermal is None  # no temperature input
+    full = full_scene(s, p)
+    assert full.thermal.temperature_axis_C == (30.0, 60.0, 90.0)
+
+
+# ------------------------------------------------------------------ verification: FMU and native
+def _fmu_run(path, scene, tables, stop, step):
+    from gearfmu.compare import run_fmu
+
+    return run_fmu(path, stop_time_s=stop, comm_step_s=step, names=["dte", "mesh_force"]).columns
+
+
+def test_steady_point_planned_fmu_within_target(small):
+    from gearfmu.pipeline import build
+
+    scene, plan, d = small
+    res = build(scene, d / "planned.fmu")  # the scene has [accuracy]: build follows the plan
+    assert res.plan is not None and res.plan.chosen == plan.chosen
+    assert res.tables.slots == plan.chosen["slots"] and res.tables.n_torque == plan.chosen["torque_points"]
+    full = build(full_scene(scene, plan), d / "full.fmu")
+    mesh_s = res.tables.mesh_period_rad / scene.operating.speed_rad_s
+    stop, step = 30 * mesh_s, mesh_s / 16
+    a = _fmu_run(res.fmu_path, scene, res.tables, stop, step)
+    b = _fmu_run(full.fmu_path, scene, full.tables, stop, step)
+    e_dte, e_f = relative_rms(a["dte"], b["dte"]), relative_rms(a["mesh_force"], b["mesh_force"])
+    print(f"steady: DTE {e_dte:.3e}, force {e_f:.3e}; FMU {res.fmu_path.stat().st_size} vs "
+          f"{full.fmu_path.stat().st_size} bytes; tables {res.tables_wall_s:.3f} vs {full.tables_wall_s:.3f} s")
+    assert e_dte <= 0.05 and e_f <= 0.05
+    assert 0 < e_dte  # the two models really differ
+    assert res.fmu_path.stat().st_size < full.fmu_path.stat().st_size
+
+
+def test_run_up_over_speed_range_within_target(small):
+    from gearfmu.native import simulate
+    from gearfmu.pipeline import compute_tables
+
+    scene, plan, _ = small
+    env = plan.envelope
+    w0, w1 = env.speed_range_rad_s
+    runs = {}
+    for which in ("chosen", "full"):
+        sc = planned_scene(scene, plan, which=which)
+        tb = compute_tables(sc)
+        i_red = tb.inertia_pinion_kgm2 + tb.inertia_gear_kgm2 * (tb.base_radius_pinion_m / tb.base_radius_gear_m) ** 2
+        t_run = 0.03
+        dT = i_red * (w1 - w0) / t_run
+        T1 = scene.operating.torque_Nm
+        runs[which] = simulate(tb, stop_time_s=t_run, comm_step_s=2e-5, max_step_s=plan.max_step_s(which),
+                               pinion_torque_Nm=T1 + dT, gear_torque_Nm=T1 * tb.base_radius_gear_m /
+                               tb.base_radius_pinion_m, pinion_speed_start_rad_s=w0,
+                               damping_ratio=scene.fmu.damping_ratio, integrator=sc.solver.integrator)
+        # rigid-body closed form of the run-up: the end speed is the top of the envelope
+        assert runs[which].pinion_speed[-1] == pytest.approx(w1, rel=0.02)
+    a, b = runs["chosen"], runs["full"]
+    e_dte, e_f = relative_rms(a.dte, b.dte), relative_rms(a.mesh_force, b.mesh_force)
+    print(f"run-up: DTE {e_dte:.3e}, force {e_f:.3e}; wall {a.wall_s:.3f} vs {b.wall_s:.3f} s")
+    assert e_dte <= 0.05 and e_f <= 0.05
+
+
+def test_cli_plan_json(tmp_path, capsys):
+    p = tmp_path / "plain.toml"
+    p.write_text(PLAIN, encoding="utf-8")
+    assert main(["plan", str(p), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert {r["choice"] for r in rep["choices"]} >= {"slices", "torque_points", "thermal", "max_step"}
+    assert all(r["status"] in ("kept", "reduced", "dropped", "fixed", "pinned") for r in rep["choices"])
+    assert rep["verification"]["within_target"] is True
+    assert main(["plan", str(p)]) == 0
+    assert "fidelity plan" in capsys.readouterr().out
+    assert main(["plan", str(tmp_path / "nope.toml")]) == 2
