@@ -36,7 +36,7 @@ def bench(M, L, sizes, repeats, **kw):
             times.append(time.perf_counter() - t)
             cpu.append(time.process_time() - c)
         t_med = float(np.median(times))
-        rows.append(dict(n_intervals=n, levels=r.grid_levels, w_cycles=r.iterations,
+        rows.append(dict(n_intervals=n, solver=kw.get('solver', 'compiled'), levels=r.grid_levels, w_cycles=r.iterations,
                          attempt=r.residuals["attempt"], time_s=t_med,
                          cpu_time_s=float(np.median(cpu)),
                          time_per_cycle_ms=1e3 * t_med / r.iterations,
@@ -53,12 +53,33 @@ def main(argv=None):
     solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
     out = dict(python=platform.python_version(), machine=platform.machine(),
                load_average_1min=os.getloadavg()[0], cpu_count=os.cpu_count(), cases=[])
+    solve_line_contact(M=20.0, L=5.0, n_nodes=257, solver="python")
     for M, L, kw in [(20.0, 5.0, dict(viscosity="barus", compressible=False, n_coarse=32)),
                      (100.0, 10.0, dict(viscosity="barus", compressible=False, n_coarse=64)),
-                     (100.0, 10.0, dict(viscosity="roelands", compressible=True, n_coarse=64))]:
+                     (100.0, 10.0, dict(viscosity="roelands", compressible=True, n_coarse=64)),
+                     (100.0, 10.0, dict(viscosity="roelands", compressible=True, n_coarse=64,
+                                        solver="python"))]:
         out["cases"].append(dict(M=M, L=L, options={k: v for k, v in kw.items()},
                                  rows=bench(M, L, [256, 512, 1024, 2048, 4096], args.repeats,
                                             **kw)))
+    # warm start along 8 neighbouring loads (a meshing-position sweep)
+    kw = dict(R_m=0.02, E_Pa=2.26e11, u_m_s=5.0, eta0_Pas=0.04, alpha_Pa_inv=2.2e-8,
+              )
+    loads = np.linspace(3.0e5, 3.35e5, 8)
+    t = time.perf_counter()
+    cold = [solve_line_contact(w_N_per_m=w, **kw) for w in loads]
+    t_cold = time.perf_counter() - t
+    t = time.perf_counter()
+    prev, warm = None, []
+    for w in loads:
+        prev = solve_line_contact(w_N_per_m=w, initial=prev, **kw)
+        warm.append(prev)
+    t_warm = time.perf_counter() - t
+    out["warm_start"] = dict(n_solves=len(loads), cold_s=t_cold, warm_s=t_warm,
+                             cold_cycles=[r.iterations for r in cold],
+                             warm_cycles=[r.iterations for r in warm],
+                             max_rel_diff_h_central=max(abs(a.h_central_m / b.h_central_m - 1)
+                                                        for a, b in zip(warm, cold)))
     print(json.dumps(out, indent=1))
 
 

@@ -38,6 +38,7 @@ from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .fits import moes_central_film
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .multigrid import EHLParams, MultigridSolver
+from .mgcore import FlatMultigrid, OPT_KEYS
 
 #: Reference dimensional case used when only Moes' M and L are given
 #: (Venner & Lubrecht 2000's standard mineral oil on steel): E' = 2.2e11 Pa,
@@ -89,15 +90,68 @@ class LineContactResult:
         return self.h_min_m
 
 
-#: Relaxation settings tried in turn (see docs/ehl.md): the first converges
-#: for isoviscous and moderate piezoviscous cases; the others for strongly
-#: piezoviscous cases (sharp pressure spike), found by numerical experiment.
+#: Relaxation settings tried in turn by the compiled solver (see docs/ehl.md):
+#: the first (old default) converges for isoviscous and moderately piezoviscous
+#: cases; the second (Venner & Lubrecht's arrangement: switch 0.3, GS/Jacobi
+#: under-relaxation 0.6/0.3, load balance on the coarsest grid, switching
+#: hysteresis) for strongly piezoviscous high-M cases; the others are
+#: fallbacks found by numerical experiment (grid over M, L in docs/ehl.md).
 RELAXATION_SETTINGS = (
+    dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.3, load_mode=1, c_h0=0.1,
+         stick=10.0),
+    dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6, stick=10.0),
+    dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
+)
+
+#: Settings of the previous (Python-driven) solver, kept for ``solver="python"``.
+PYTHON_RELAXATION_SETTINGS = (
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
     dict(switch=0.3, nu1=2, nu2=2, omega_gs=0.8, omega_j=0.6),
     dict(switch=1.0, nu1=2, nu2=2, omega_gs=0.8, omega_j=0.6),
     dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
 )
+
+
+def _flat_opts(opts):
+    """Map the options of the Python solver onto the compiled one."""
+    o = dict(opts)
+    if "load_on_coarse" in o:
+        o["load_mode"] = 1 if o.pop("load_on_coarse") else 0
+    if "order2" in o:
+        o["order2"] = 1 if o["order2"] else 0
+    return o
+
+
+def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
+                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,)):
+    """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid) or a
+    Hertzian pressure; with roughness the amplitude steps of ``ramp``."""
+    solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **_flat_opts(opts))
+    if rough_fn is not None:
+        solver.base[:] = np.concatenate([0.5 * x ** 2 for x in solver.X])
+    if P_start is None:
+        solver.hertz_start(Hc_guess)
+    else:
+        solver.start(P_start, Hc_guess)
+    hist = {"pressure_change": [], "load_balance": [], "reynolds_residual": []}
+    stages = list(ramp) if rough_fn is not None else [None]
+    if rough_fn is not None and P_start is None:
+        stages = [0.0] + stages
+    it = 0
+    converged = False
+    for a in stages:
+        if a is not None:
+            solver.set_roughness_scale(a)
+        converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
+                                          tol_pressure=tol_pressure, tol_load=tol_load,
+                                          tol_residual=tol_residual)
+        it += nc
+        for k_ in hist:
+            hist[k_].extend(h[k_])
+        if not converged:
+            break
+    return solver, hist, converged, it
 
 
 def _iterate(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
@@ -148,6 +202,24 @@ def _iterate(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_
         if not converged:
             break
     return solver, hist, converged, it
+
+
+def band_limit(z: np.ndarray, min_wavelength_samples: float) -> np.ndarray:
+    """Low-pass filter of a uniformly sampled profile ``z``: Fourier
+    components with wavelength shorter than ``min_wavelength_samples``
+    samples are removed (ideal cut of the FFT of the profile extended by its
+    mirror image, so that no jump at the ends leaks into the band).  Units
+    of ``z`` are kept."""
+    z = np.asarray(z, float)
+    n = z.size
+    if n < 4 or min_wavelength_samples <= 2.0:
+        return z.copy()
+    ext = np.concatenate((z, z[-2:0:-1]))        # even extension, period 2n - 2
+    m = ext.size
+    Z = np.fft.rfft(ext)
+    f = np.arange(Z.size) / m                     # cycles per sample
+    Z[f > 1.0 / min_wavelength_samples] = 0.0
+    return np.fft.irfft(Z, m)[:n]
 
 
 def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None):
@@ -228,6 +300,9 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        tol_residual: float = 1e-6,
                        max_cycles: int = 60, min_cycles: int = 2,
                        fmg_cycles: int = 0, roughness_ramp=(1.0,),
+                       initial: Optional["LineContactResult"] = None,
+                       roughness_min_wavelength_dX: float = 8.0,
+                       solver: str = "compiled",
                        **multigrid_options) -> LineContactResult:
     """Solve the steady isothermal line-contact EHL problem (seed 000 eq 2-7).
 
@@ -252,6 +327,21 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     (1.0,): one step -- finer ramps did not help in the cases tried).
     ``viscosity``: "roelands" (seed 000 eq 5, default) or "barus"
     (exp(alpha p), the law behind Moes' fit; used by the validation tests).  Film collapse (h <= 0): :class:`FilmCollapseError`.
+
+    Fast paths (added with the compiled solver, docs/ehl.md):
+
+    * ``initial``: a :class:`LineContactResult` of a nearby problem (e.g. the
+      neighbouring meshing position).  Its pressure P(x/b) and central film
+      (converted to the new scaling) start the iteration and its relaxation
+      settings are tried first; typically 2-4x fewer W-cycles.
+    * ``roughness_min_wavelength_dX``: the roughness is sampled on the finest
+      grid and low-pass filtered (FFT, ideal cut) to wavelengths of at least
+      this many grid spacings (default 8; 0 switches filtering off), because
+      shorter wavelengths are not resolved by the discretisation and make
+      the relaxation limit-cycle.  ``result.roughness_m`` is the filtered
+      profile actually used.
+    * ``solver``: "compiled" (default; whole W-cycle in numba,
+      :mod:`.mgcore`) or "python" (the previous driver, :mod:`.multigrid`).
     """
     t_start = time.perf_counter()
     dimensional = [R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv]
@@ -318,31 +408,67 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     scale_H = R_m / b_m ** 2  # h -> H
     rough_fn = None
     if rfun is not None:
-        def rough_fn(X):
-            zr = np.asarray(rfun(X * b_m), float)
-            if zr.shape != X.shape or not np.all(np.isfinite(zr)):
-                raise EHLInputError("roughness_m: must return finite heights (m), one per x")
-            return zr * scale_H
+        Xf = np.linspace(x_in, x_out, n_nodes)
+        zr = np.asarray(rfun(Xf * b_m), float)
+        if zr.shape != Xf.shape or not np.all(np.isfinite(zr)):
+            raise EHLInputError("roughness_m: must return finite heights (m), one per x")
+        lw = float(roughness_min_wavelength_dX)
+        if not math.isfinite(lw) or lw < 0.0:
+            raise EHLInputError(f"roughness_min_wavelength_dX={roughness_min_wavelength_dX!r}: "
+                                "must be finite and >= 0")
+        if lw > 0.0:
+            zr = band_limit(zr, lw)
+        zr_H = zr * scale_H
 
+        def rough_fn(X):
+            return np.interp(X, Xf, zr_H)
+
+    if solver not in ("compiled", "python"):
+        raise EHLInputError(f"solver={solver!r}: must be 'compiled' or 'python'")
+    if solver == "python" or fmg_cycles > 0:
+        table = PYTHON_RELAXATION_SETTINGS
+    else:
+        table = RELAXATION_SETTINGS
     if multigrid_options:
         attempts = [dict(multigrid_options)]
     else:
-        attempts = [dict(a) for a in RELAXATION_SETTINGS]
+        attempts = [dict(a) for a in table]
+    P_start = None
+    if initial is not None:
+        if not isinstance(initial, LineContactResult):
+            raise EHLInputError("initial: must be a LineContactResult of an earlier solve")
+        Xg = np.linspace(x_in, x_out, n_nodes)
+        P_start = np.interp(Xg, initial.X, initial.P, left=0.0, right=0.0)
+        Hc_guess = initial.h_central_m * scale_H
+        prev = initial.residuals.get("settings")
+        if prev is not None and not multigrid_options and solver == "compiled":
+            attempts = [dict(prev)] + [a for a in attempts if a != prev]
     for k_att, opts in enumerate(attempts):
-        solver, hist, converged, it = _iterate(
-            prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
-            min_cycles, tol_pressure, tol_load, tol_residual, tuple(roughness_ramp))
+        if solver == "python" or fmg_cycles > 0:
+            solver_obj, hist, converged, it = _iterate(
+                prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
+                min_cycles, tol_pressure, tol_load, tol_residual, tuple(roughness_ramp))
+        else:
+            solver_obj, hist, converged, it = _iterate_flat(
+                prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
+                P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
+                tol_load, tol_residual, tuple(roughness_ramp))
         if converged:
             break
-    top = solver.levels[-1]
     hist["settings"] = opts
     hist["attempt"] = k_att
-
-    X = top.X
-    H = top.H
+    if isinstance(solver_obj, FlatMultigrid):
+        X = solver_obj.X[solver_obj.top]
+        H = solver_obj.level_H().copy()
+        P_top = solver_obj.level_P().copy()
+        rough_top = solver_obj.rough[solver_obj._sl(solver_obj.top)]
+        load_top = solver_obj.load()
+    else:
+        top = solver_obj.levels[-1]
+        X, H, P_top, rough_top, load_top = top.X, top.H, top.P, top.rough, top.load()
     x_m = X * b_m
     h_m = H / scale_H
-    rough_m = top.rough / scale_H
+    rough_m = rough_top / scale_H
     imin = int(np.argmin(h_m))
     sigma_m = float(np.std(rough_m)) if rfun is not None else 0.0
     if np.all(np.isfinite(h_m)) and h_m[imin] <= 0.0:
@@ -370,12 +496,12 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     # central film: linear interpolation at X = 0
     h_c = float(np.interp(0.0, X, h_m))
     s2U = math.sqrt(2.0 * U)
-    p_Pa = top.P * ph_Pa
+    p_Pa = P_top * ph_Pa
     return LineContactResult(
-        x_m=x_m, X=X.copy(), p_Pa=p_Pa, P=top.P.copy(), h_m=h_m, H=H.copy(),
+        x_m=x_m, X=X.copy(), p_Pa=p_Pa, P=P_top.copy(), h_m=h_m, H=H.copy(),
         h_central_m=h_c, h_min_m=float(h_m[imin]), x_min_m=float(x_m[imin]),
         H_central_moes=h_c / R_m / s2U, H_min_moes=float(h_m[imin]) / R_m / s2U,
-        M=M, L=L, b_m=b_m, ph_Pa=ph_Pa, load_N_per_m=float(top.load() * ph_Pa * b_m),
+        M=M, L=L, b_m=b_m, ph_Pa=ph_Pa, load_N_per_m=float(load_top * ph_Pa * b_m),
         iterations=it, residuals=hist, converged=True,
         grid_levels=n_levels,
         inputs=dict(R_m=R_m, E_Pa=E_Pa, w_N_per_m=w_N_per_m, u_m_s=u_m_s,

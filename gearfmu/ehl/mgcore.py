@@ -1,0 +1,642 @@
+"""Compiled FAS multigrid core of the line-contact EHL solver (whole W-cycle in numba).
+
+Same equations and discretisation as :mod:`.multigrid` (seed 000 eq 2-7 in the
+Hertzian scaling of Venner & Lubrecht 2000, *Multilevel Methods in
+Lubrication*, Elsevier): Reynolds with eps at half nodes, wedge term first- or
+second-order upstream, deformation with piecewise-constant pressure
+(:mod:`.deformation`), P = max(P, 0) cavitation, load balance dX sum P = pi/2.
+
+What differs from the Python-driven :class:`.multigrid.MultigridSolver` is the
+organisation: all levels live in flat arrays (level l at offset ``off[l]``),
+a W-cycle is a precomputed *schedule* of integer codes (+k: relax and restrict
+from level k; 0: solve on the coarsest grid; -k: prolong the correction to
+level k and relax), and the cycle loop with its convergence test runs in one
+compiled call.  Coarse levels with at most ``N_DIRECT`` nodes evaluate the
+deformation by the direct O(n^2) sum, finer ones by FFT.
+
+Relaxation (Venner & Lubrecht 2000): point Newton, Gauss-Seidel where
+eps_i/dX^2 >= ``switch`` or next to cavitation, distributive Jacobi
+elsewhere.  Two distribution patterns are available: ``dist = 1`` the
+symmetric pattern of Venner & Lubrecht (P_i += d_i - (d_{i-1} + d_{i+1})/4),
+``dist = 0`` the dipole of seed 000 (+d_i at i, -d_i at i-1).  The Jacobians
+include the deformation kernel and the density derivative of the wedge term.
+Load balance: ``load_mode = 0`` moves H0 on the finest grid after every cycle
+(adaptive gain), ``load_mode = 1`` moves H0 on the coarsest grid inside the
+cycle with the FAS load right-hand side (Venner & Lubrecht's arrangement).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .deformation import _fft_inplace
+
+#: levels with at most this many nodes use the direct O(n^2) deformation sum
+N_DIRECT = 160
+
+
+@njit(cache=True)
+def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
+    """V = -(1/pi) sum_j K_|i-j| P_j on level l (direct sum or FFT)."""
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    if n <= N_DIRECT:
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                d = i - j
+                if d < 0:
+                    d = -d
+                s += K[ko + d] * P[o + j]
+            V[i] = -s / math.pi
+        return
+    mo = iarr[3, l]
+    m = iarr[4, l]
+    to = iarr[5, l]
+    for i in range(m):
+        re[i] = 0.0
+        im[i] = 0.0
+    for i in range(1, n - 1):
+        re[i] = P[o + i]
+    _fft_inplace(re[:m], im[:m], twr[to:to + m // 2], twi[to:to + m // 2], 1.0)
+    for i in range(m):
+        a = re[i] * khr[mo + i] - im[i] * khi[mo + i]
+        b = re[i] * khi[mo + i] + im[i] * khr[mo + i]
+        re[i] = a
+        im[i] = b
+    _fft_inplace(re[:m], im[:m], twr[to:to + m // 2], twi[to:to + m // 2], -1.0)
+    p0 = P[o]
+    p1 = P[o + n - 1]
+    for i in range(n):
+        V[i] = re[i] / m - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
+
+
+@njit(cache=True)
+def _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V):
+    o = iarr[0, l]
+    n = iarr[1, l]
+    _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im)
+    for i in range(n):
+        H[o + i] = H0[l] + base[o + i] + V[i] + tauH[o + i]
+
+
+@njit(cache=True)
+def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
+    """rho, eps = rho H^3/(eta lambda), d ln(eps)/dP and d rho/dP on level l."""
+    lam, A, z, php0, c1, comp = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]
+    o = iarr[0, l]
+    n = iarr[1, l]
+    for i in range(o, o + n):
+        p = P[i] if P[i] > 0.0 else 0.0
+        dl = 0.0
+        r = 1.0
+        dr = 0.0
+        if comp > 0.0:
+            r = (c1 + 1.34 * p) / (c1 + p)
+            dl += 1.34 / (c1 + 1.34 * p) - 1.0 / (c1 + p)
+            dr = 0.34 * c1 / ((c1 + p) * (c1 + p))
+        if z > 0.0:
+            q = (1.0 + p * php0) ** z
+            eta = math.exp(A * (q - 1.0))
+            dl -= A * z * php0 * q / (1.0 + p * php0)
+        elif z < 0.0:
+            eta = math.exp(A * p)
+            dl -= A
+        else:
+            eta = 1.0
+        hh = H[i] if H[i] > 0.0 else 0.0
+        rho[i] = r
+        drho[i] = dr
+        eps[i] = r * hh * hh * hh / (eta * lam)
+        dle[i] = dl
+
+
+@njit(cache=True)
+def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2):
+    """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends)."""
+    o = iarr[0, l]
+    n = iarr[1, l]
+    dX = dx[l]
+    h2 = dX * dX
+    out[o] = 0.0
+    out[o + n - 1] = 0.0
+    for k in range(1, n - 1):
+        i = o + k
+        em = 0.5 * (eps[i - 1] + eps[i])
+        ep = 0.5 * (eps[i] + eps[i + 1])
+        poi = (em * (P[i - 1] - P[i]) + ep * (P[i + 1] - P[i])) / h2
+        if k >= 2 and order2:
+            wedge = (1.5 * rho[i] * H[i] - 2.0 * rho[i - 1] * H[i - 1]
+                     + 0.5 * rho[i - 2] * H[i - 2]) / dX
+        else:
+            wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
+        out[i] = f[i] - (poi - wedge)
+
+
+@njit(cache=True)
+def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
+    """One relaxation sweep on level l (P in place; H stale afterwards)."""
+    omega_gs, omega_j, switch, order2, dmax, dist = opt[0], opt[1], opt[2], opt[3] > 0, \
+        opt[4], opt[5]
+    stick = opt[13]
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    dX = dx[l]
+    h2 = dX * dX
+    ipi = 1.0 / math.pi
+    K0 = K[ko]
+    K1 = K[ko + 1]
+    K2 = K[ko + 2]
+    K3 = K[ko + 3]
+    # film change per unit distributed change, c(m) for m = 0, -1, -2
+    if dist > 0.5:
+        c0 = K0 - 0.5 * K1
+        cm1 = K1 - 0.25 * (K0 + K2)
+        cm2 = K2 - 0.25 * (K1 + K3)
+        pm1 = -0.25
+        poifac = 1.25
+    else:
+        c0 = K0 - K1
+        cm1 = K1 - K0
+        cm2 = K2 - K1
+        pm1 = -1.0
+        poifac = 0.0
+    for k in range(n):
+        delta[o + k] = 0.0
+    for k in range(1, n - 1):
+        i = o + k
+        em = 0.5 * (eps[i - 1] + eps[i])
+        ep = 0.5 * (eps[i] + eps[i + 1])
+        poi = (em * (P[i - 1] - P[i]) + ep * (P[i + 1] - P[i])) / h2
+        sec = k >= 2 and order2
+        if sec:
+            wedge = (1.5 * rho[i] * H[i] - 2.0 * rho[i - 1] * H[i - 1]
+                     + 0.5 * rho[i - 2] * H[i - 2]) / dX
+        else:
+            wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
+        r = f[i] - (poi - wedge)
+        xtra = -abs(0.5 * eps[i] * dle[i] * (P[i - 1] - 2.0 * P[i] + P[i + 1]) / h2)
+        # hysteresis (``stick`` >= 1): a node relaxed by Jacobi stays Jacobi
+        # until eps/dX^2 exceeds stick * switch (prevents switching limit cycles)
+        thr = switch * stick if mode[i] == 1 else switch
+        gs = eps[i] / h2 >= thr or P[i - 1] <= 0.0 or P[i + 1] <= 0.0 or P[i] <= 0.0
+        mode[i] = 0 if gs else 1
+        if gs:
+            if sec:
+                w = (1.5 * rho[i] * K0 - 2.0 * rho[i - 1] * K1 + 0.5 * rho[i - 2] * K2) * ipi
+                w = (w - 1.5 * H[i] * drho[i]) / dX
+            else:
+                w = ((rho[i] * K0 - rho[i - 1] * K1) * ipi - H[i] * drho[i]) / dX
+            J = -(em + ep) / h2 + w + xtra
+            d = omega_gs * r / J
+            if abs(d * dle[i]) > dmax:
+                d = math.copysign(dmax / abs(dle[i]), d)
+            newp = P[i] + d
+            if newp < 0.0:
+                newp = 0.0
+            P[i] = newp
+        else:
+            if sec:
+                w = (1.5 * rho[i] * c0 - 2.0 * rho[i - 1] * cm1 + 0.5 * rho[i - 2] * cm2) * ipi
+                w -= 1.5 * H[i] * drho[i] - 2.0 * H[i - 1] * drho[i - 1] * pm1
+            else:
+                w = (rho[i] * c0 - rho[i - 1] * cm1) * ipi
+                w -= H[i] * drho[i] - H[i - 1] * drho[i - 1] * pm1
+            w /= dX
+            if dist > 0.5:
+                Jp = -poifac * (em + ep) / h2
+            else:
+                Jp = -(2.0 * em + ep) / h2
+            J = Jp + w + xtra
+            d = omega_j * r / J
+            if abs(d * dle[i]) > dmax:
+                d = math.copysign(dmax / abs(dle[i]), d)
+            delta[i] = d
+    if dist > 0.5:
+        for k in range(1, n - 1):
+            i = o + k
+            d = delta[i] - 0.25 * (delta[i - 1] + delta[i + 1])
+            if d != 0.0 and P[i] > 0.0:
+                P[i] += d
+    else:
+        for k in range(1, n - 1):
+            i = o + k
+            d = delta[i]
+            if d != 0.0:
+                P[i] += d
+                P[i - 1] -= d
+    P[o] = 0.0
+    P[o + n - 1] = 0.0
+    for k in range(n):
+        if P[o + k] < 0.0:
+            P[o + k] = 0.0
+
+
+@njit(cache=True)
+def _relax(l, sweeps, load_here, S):
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, l]
+    n = iarr[1, l]
+    for _ in range(sweeps):
+        _coef(l, P, H, rho, eps, dle, drho, iarr, prm)
+        _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode)
+        if load_here:
+            # load balance on this (coarsest) grid: H0 against the load error
+            s = 0.0
+            for k in range(n):
+                s += P[o + k]
+            err = g[l] - dx[l] * s
+            i0 = int(round(-prm[6] / dx[l]))
+            Hc = H[o + i0]
+            scale = max(Hc, 0.2 * prm[8])
+            dH0 = -opt[6] * err
+            lim = opt[7] * scale
+            if dH0 > lim:
+                dH0 = lim
+            elif dH0 < -lim:
+                dH0 = -lim
+            H0[l] += dH0
+        _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+
+
+@njit(cache=True)
+def _load(l, P, iarr, dx):
+    o = iarr[0, l]
+    n = iarr[1, l]
+    s = 0.0
+    for k in range(n):
+        s += P[o + k]
+    return dx[l] * s
+
+
+@njit(cache=True)
+def _down(k, S):
+    """Pre-relax on level k and set up the FAS problem on level k-1."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    nu1 = int(opt[8])
+    _relax(k, nu1, False, S)
+    of = iarr[0, k]
+    nf = iarr[1, k]
+    oc = iarr[0, k - 1]
+    nc = iarr[1, k - 1]
+    order2 = opt[3] > 0
+    _coef(k, P, H, rho, eps, dle, drho, iarr, prm)
+    _residual(k, P, H, f, rho, eps, wrk, iarr, dx, order2)
+    for i in range(nf):
+        if P[of + i] <= 0.0:
+            wrk[of + i] = 0.0
+    for I in range(nc):
+        P[oc + I] = P[of + 2 * I]
+        Pold[oc + I] = P[oc + I]
+        tauH[oc + I] = 0.0
+    H0[k - 1] = H0[k]
+    _film(k - 1, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+    for I in range(nc):
+        tauH[oc + I] = H[of + 2 * I] - H[oc + I]
+        H[oc + I] = H[of + 2 * I]
+    _coef(k - 1, P, H, rho, eps, dle, drho, iarr, prm)
+    # f_c = L_c(P_c) + restricted residual  (wrk on level k-1 receives f_c - L_c = -(-r))
+    for I in range(nc):
+        f[oc + I] = 0.0
+    _residual(k - 1, P, H, f, rho, eps, wrk, iarr, dx, order2)   # wrk_c = -L_c
+    for I in range(1, nc - 1):
+        i = of + 2 * I
+        rr = 0.25 * wrk[i - 1] + 0.5 * wrk[i] + 0.25 * wrk[i + 1]
+        f[oc + I] = -wrk[oc + I] + rr
+    f[oc] = 0.0
+    f[oc + nc - 1] = 0.0
+    g[k - 1] = g[k] + _load(k - 1, P, iarr, dx) - _load(k, P, iarr, dx)
+    H0old[k - 1] = H0[k - 1]
+
+
+@njit(cache=True)
+def _up(k, S):
+    """Prolong the level k-1 correction to level k and post-relax."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    of = iarr[0, k]
+    nf = iarr[1, k]
+    oc = iarr[0, k - 1]
+    for i in range(1, nf - 1):
+        if i % 2 == 0:
+            c = P[oc + i // 2] - Pold[oc + i // 2]
+        else:
+            j = i // 2
+            c = 0.5 * (P[oc + j] - Pold[oc + j] + P[oc + j + 1] - Pold[oc + j + 1])
+        if P[of + i] > 0.0:
+            P[of + i] += c
+            if P[of + i] < 0.0:
+                P[of + i] = 0.0
+    H0[k] += H0[k - 1] - H0old[k - 1]
+    _film(k, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+    _relax(k, int(opt[9]), False, S)
+
+
+@njit(cache=True)
+def _run_schedule(sched, S):
+    opt = S[25]
+    for code in sched:
+        if code > 0:
+            _down(code, S)
+        elif code == 0:
+            _relax(0, int(opt[10]), opt[11] > 0.5, S)
+        else:
+            _up(-code, S)
+
+
+@njit(cache=True)
+def _scaled_residual(l, S, order2, zero_f):
+    """Mean over pressurised nodes of |r_i / (dL_i/dP_i)| (units of p_h);
+    ``zero_f``: residual of the undisturbed equation (f = 0)."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    _coef(l, P, H, rho, eps, dle, drho, iarr, prm)
+    if zero_f:
+        o2 = iarr[0, l]
+        for k in range(iarr[1, l]):
+            delta[o2 + k] = 0.0
+        _residual(l, P, H, delta, rho, eps, wrk, iarr, dx, order2)
+    else:
+        _residual(l, P, H, f, rho, eps, wrk, iarr, dx, order2)
+    dX = dx[l]
+    h2 = dX * dX
+    s = 0.0
+    cnt = 0
+    for k in range(1, n - 1):
+        i = o + k
+        if P[i] <= 0.0:
+            continue
+        em = 0.5 * (eps[i - 1] + eps[i])
+        ep = 0.5 * (eps[i] + eps[i + 1])
+        J = -(em + ep) / h2 + rho[i] * (K[ko] - K[ko + 1]) / (math.pi * dX)
+        s += abs(wrk[i] / J)
+        cnt += 1
+    return s / max(cnt, 1)
+
+
+@njit(cache=True)
+def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, stall_window):
+    """W-cycles until converged (returns +cycles) or stalled/failed (-cycles).
+
+    hist[:, k] = (pressure change, load error, scaled residual) of cycle k."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    nl = iarr.shape[1]
+    top = nl - 1
+    o = iarr[0, top]
+    n = iarr[1, top]
+    Pprev = np.empty(n)
+    c_cur = opt[6]
+    dprev = 0.0
+    load_mode = opt[11] > 0.5
+    defect = opt[12] > 0.5
+    i0 = int(round(-prm[6] / dx[top]))
+    for cyc in range(max_cycles):
+        for k in range(n):
+            Pprev[k] = P[o + k]
+        g[top] = 0.5 * math.pi
+        if defect:
+            # defect correction (Venner & Lubrecht 2000): the cycles relax the
+            # first-order upstream operator L1 with f = L1(P) - L2(P), so that
+            # a fixed point solves the second-order equation L2(P) = 0
+            for k in range(n):
+                f[o + k] = 0.0
+            _coef(top, P, H, rho, eps, dle, drho, iarr, prm)
+            _residual(top, P, H, f, rho, eps, wrk, iarr, dx, True)      # -L2
+            _residual(top, P, H, f, rho, eps, delta, iarr, dx, False)   # -L1
+            for k in range(1, n - 1):
+                f[o + k] = wrk[o + k] - delta[o + k]
+        _run_schedule(sched, S)
+        if not load_mode or nl == 1:
+            err = 0.5 * math.pi - _load(top, P, iarr, dx)
+            dH0 = -c_cur * err
+            scale = max(H[o + i0], 0.2 * prm[8])
+            lim = opt[7] * scale
+            if dH0 > lim:
+                dH0 = lim
+            elif dH0 < -lim:
+                dH0 = -lim
+            if dH0 * dprev < 0.0 and abs(dH0) > 0.5 * abs(dprev):
+                c_cur *= 0.5
+            elif dH0 * dprev > 0.0:
+                c_cur = min(c_cur * 1.5, opt[6])
+            dprev = dH0
+            H0[top] += dH0
+            _film(top, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+        sp = 0.0
+        dp = 0.0
+        for k in range(n):
+            sp += abs(P[o + k])
+            dp += abs(P[o + k] - Pprev[k])
+        dP = dp / max(sp, 1e-300)
+        dW = abs(_load(top, P, iarr, dx) - 0.5 * math.pi) / (0.5 * math.pi)
+        if defect:
+            res = _scaled_residual(top, S, True, True)
+        else:
+            res = _scaled_residual(top, S, opt[3] > 0, False)
+        hist[0, cyc] = dP
+        hist[1, cyc] = dW
+        hist[2, cyc] = res
+        if not (math.isfinite(dP) and math.isfinite(dW) and math.isfinite(res)):
+            return -(cyc + 1)
+        if cyc + 1 >= min_cycles and dP < tol_p and dW < tol_w and res < tol_r:
+            return cyc + 1
+        if cyc + 1 >= 2 * stall_window:
+            # stall: neither the change nor the residual fell 3x in the last window
+            mr_old = 1e300
+            mp_old = 1e300
+            for j in range(cyc + 1 - stall_window):
+                mr_old = min(mr_old, hist[2, j])
+                mp_old = min(mp_old, hist[0, j])
+            mr_new = 1e300
+            mp_new = 1e300
+            for j in range(cyc + 1 - stall_window, cyc + 1):
+                mr_new = min(mr_new, hist[2, j])
+                mp_new = min(mp_new, hist[0, j])
+            if mr_new > mr_old / 3.0 and mp_new > mp_old / 3.0:
+                return -(cyc + 1)
+    return -max_cycles
+
+
+def w_schedule(n_levels: int, gamma: int = 2) -> np.ndarray:
+    """Integer codes of one W-cycle (gamma = 2; V-cycle with gamma = 1) whose
+    finest level is n_levels - 1: +k relax on k and go down, 0 coarsest
+    solve, -k come up to k and relax."""
+    ops = []
+
+    def cyc(k):
+        if k == 0:
+            ops.append(0)
+            return
+        ops.append(k)
+        for _ in range(gamma if k > 1 else 1):
+            cyc(k - 1)
+        ops.append(-k)
+
+    cyc(n_levels - 1)
+    return np.array(ops, dtype=np.int64)
+
+
+#: option vector layout of the compiled core
+OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
+            "nu1", "nu2", "nu0", "load_mode", "defect", "stick")
+OPT_DEFAULTS = dict(omega_gs=0.8, omega_j=0.6, switch=3.0, order2=1, dmax=0.3, dist=0,
+                    c_h0=0.5, h0_step=0.5, nu1=2, nu2=1, nu0=10, load_mode=0,
+                    defect=0, stick=1.0)
+
+
+class FlatMultigrid:
+    """Level hierarchy in flat arrays for the compiled W-cycle (see module doc).
+
+    ``prm`` is an :class:`.multigrid.EHLParams`; level 0 is the coarsest
+    (``n_coarse`` intervals), level ``n_levels - 1`` the finest.  ``rough_fn``
+    maps X (Hertz units) to the roughness in film units (h R / b^2)."""
+
+    def __init__(self, prm, n_levels: int, n_coarse: int, rough_fn=None, **opts):
+        bad = set(opts) - set(OPT_KEYS) - {"gamma"}
+        if bad:
+            from .errors import EHLInputError
+            raise EHLInputError(f"unknown multigrid option(s) {sorted(bad)!r}; "
+                                f"known: {list(OPT_KEYS) + ['gamma']}")
+        self.prm = prm
+        self.n_levels = int(n_levels)
+        o = dict(OPT_DEFAULTS)
+        o.update({k: v for k, v in opts.items() if k != "gamma"})
+        self.opts = o
+        self.gamma = int(opts.get("gamma", 2))
+        ns = [n_coarse * 2 ** k + 1 for k in range(n_levels)]
+        off = np.concatenate(([0], np.cumsum(ns)))
+        ms = []
+        for n in ns:
+            m = 1
+            while m < 2 * n - 3:
+                m *= 2
+            ms.append(m if n > N_DIRECT else 0)
+        moff = np.concatenate(([0], np.cumsum(ms)))
+        toff = np.concatenate(([0], np.cumsum([m // 2 for m in ms])))
+        self.iarr = np.zeros((6, n_levels), dtype=np.int64)
+        self.iarr[0] = off[:-1]
+        self.iarr[1] = ns
+        self.iarr[2] = off[:-1]          # kernel coefficients share the level offsets
+        self.iarr[3] = moff[:-1]
+        self.iarr[4] = ms
+        self.iarr[5] = toff[:-1]
+        ntot = int(off[-1])
+        self.X = [np.linspace(prm.x_in, prm.x_out, n) for n in ns]
+        self.dx = np.array([x[1] - x[0] for x in self.X])
+        from .deformation import kernel_coefficients
+        from scipy import fft as _fft
+        self.K = np.concatenate([kernel_coefficients(n, d) for n, d in zip(ns, self.dx)])
+        self.khr = np.zeros(max(int(moff[-1]), 1))
+        self.khi = np.zeros_like(self.khr)
+        self.twr = np.zeros(max(int(toff[-1]), 1))
+        self.twi = np.zeros_like(self.twr)
+        for l, (n, m) in enumerate(zip(ns, ms)):
+            if m == 0:
+                continue
+            Kl = self.K[off[l]:off[l] + n]
+            c = np.zeros(m)
+            c[:n] = Kl
+            c[m - n + 1:] = Kl[1:][::-1]
+            kh = _fft.fft(c) * (-1.0 / np.pi)
+            self.khr[moff[l]:moff[l] + m] = kh.real
+            self.khi[moff[l]:moff[l] + m] = kh.imag
+            ang = -2.0 * np.pi * np.arange(m // 2) / m
+            self.twr[toff[l]:toff[l] + m // 2] = np.cos(ang)
+            self.twi[toff[l]:toff[l] + m // 2] = np.sin(ang)
+        mmax = max(max(ms), 1)
+        z = lambda: np.zeros(ntot)
+        self.P, self.H, self.f, self.tauH = z(), z(), z(), z()
+        self.rough = np.concatenate([np.zeros(n) if rough_fn is None else
+                                     np.asarray(rough_fn(x), float) for n, x in
+                                     zip(ns, self.X)])
+        self.base = np.concatenate([0.5 * x ** 2 for x in self.X]) + self.rough
+        self.work = [z() for _ in range(7)]   # rho eps dle drho delta wrk Pold
+        self.H0 = np.zeros(n_levels)
+        self.H0old = np.zeros(n_levels)
+        self.mode = np.zeros(ntot, dtype=np.int8)
+        self.g = np.full(n_levels, 0.5 * np.pi)
+        self.re = np.zeros(mmax)
+        self.im = np.zeros(mmax)
+        self.V = np.zeros(max(ns))
+        self.prmv = np.array([prm.lam, prm.A, prm.z, prm.php0, prm.c1,
+                              1.0 if prm.compressible else 0.0, prm.x_in, prm.x_out, 1.0])
+        self.optv = np.array([float(o[k]) for k in OPT_KEYS])
+        self.sched = w_schedule(n_levels, self.gamma)
+
+    # -- access ---------------------------------------------------------------
+    def _sl(self, l):
+        o, n = self.iarr[0, l], self.iarr[1, l]
+        return slice(int(o), int(o + n))
+
+    @property
+    def top(self):
+        return self.n_levels - 1
+
+    def level_P(self, l=None):
+        return self.P[self._sl(self.top if l is None else l)]
+
+    def level_H(self, l=None):
+        return self.H[self._sl(self.top if l is None else l)]
+
+    def state(self):
+        S = (self.P, self.H, self.f, self.tauH, self.base, *self.work, self.H0, self.g,
+             self.iarr, self.dx, self.K, self.khr, self.khi, self.twr, self.twi, self.re,
+             self.im, self.V, self.prmv, self.optv, self.H0old, self.mode)
+        return S
+
+    def set_roughness_scale(self, a: float):
+        self.base[:] = np.concatenate([0.5 * x ** 2 for x in self.X]) + a * self.rough
+        self.update_film(self.top)
+
+    def update_film(self, l):
+        _film(l, self.P, self.H, self.base, self.tauH, self.H0, self.iarr, self.K, self.khr,
+              self.khi, self.twr, self.twi, self.re, self.im, self.V)
+
+    def load(self, l=None) -> float:
+        l = self.top if l is None else l
+        return float(self.dx[l] * np.sum(self.P[self._sl(l)]))
+
+    # -- starts ---------------------------------------------------------------
+    def start(self, P_top: np.ndarray, Hc: float):
+        """Finest-grid pressure ``P_top`` and H0 such that the central film
+        is ``Hc`` (Venner-Lubrecht units)."""
+        t = self.top
+        sl = self._sl(t)
+        self.prmv[8] = Hc
+        P = np.clip(np.asarray(P_top, float), 0.0, None)
+        P[0] = P[-1] = 0.0
+        self.P[sl] = P
+        self.f[:] = 0.0
+        self.tauH[:] = 0.0
+        self.H0[t] = 0.0
+        self.update_film(t)
+        self.H0[t] = Hc - float(np.interp(0.0, self.X[t], self.H[sl]))
+        self.update_film(t)
+
+    def hertz_start(self, Hc: float):
+        X = self.X[self.top]
+        self.start(np.sqrt(np.clip(1.0 - X ** 2, 0.0, None)), Hc)
+
+    # -- iteration ------------------------------------------------------------
+    def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
+                tol_residual=1e-6, stall_window=12):
+        """Compiled W-cycles; returns (converged, cycles, history dict)."""
+        hist = np.full((3, max_cycles), np.nan)
+        self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
+        k = _iterate(self.sched, self.state(), hist, int(max_cycles), int(min_cycles),
+                     float(tol_pressure), float(tol_load), float(tol_residual),
+                     int(stall_window))
+        nc = abs(int(k))
+        h = {"pressure_change": hist[0, :nc].tolist(), "load_balance": hist[1, :nc].tolist(),
+             "reynolds_residual": hist[2, :nc].tolist()}
+        return k > 0, nc, h
