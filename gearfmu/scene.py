@@ -233,8 +233,6 @@ class Scene:
     lubricant: Optional[Lubricant] = None
     source_path: Optional[str] = None
     thermal: Optional[ThermalOptions] = None
-    envelope: Optional[Any] = None  # gearfmu.envelope.Envelope ([envelope], docs/plan.md)
-    accuracy: Optional[Any] = None  # gearfmu.envelope.AccuracyTarget ([accuracy], docs/plan.md)
 
     @property
     def sha256(self) -> str:
@@ -245,6 +243,12 @@ class Scene:
     def torque_axis_Nm(self) -> Tuple[float, ...]:
         """The tables' torque axis (N*m), see :meth:`OperatingPoint.torque_axis_Nm`."""
         return self.operating.torque_axis_Nm(self.tables.torque_points)
+
+    @property
+    def roughness(self) -> Optional["RoughnessOptions"]:
+        """The ``[roughness]`` table (:class:`RoughnessOptions`, SI) or None when absent
+        (read from :attr:`text`, validated by :func:`load_scene`)."""
+        return _roughness_from_text(self.text)
 
 
 # ============================================================== viscosity law
@@ -454,40 +458,86 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _e("flank_law", ("radial_tangential", "homogeneous"), "radial_tangential",
            "free thermal deformation of a flank (docs/thermal.md)"),
     ),
-    # operating envelope and accuracy target of the fidelity planner (gearfmu/envelope.py, docs/plan.md)
-    "envelope": (
-        _f("torque_range_Nm", "N*m", None, "[low, high] pinion torque envelope (none = "
-           "operating.torque_range_Nm, else the nominal torque)", 0.0, 1e7, kind="float_pair"),
-        _f("speed_range_rpm", "rpm", None, "[low, high] pinion speed envelope (none = "
-           "operating.speed_range_rpm, else the nominal speed)", 0.0, 1e6, scale=_RPM_TO_RAD_S,
-           kind="float_pair"),
-        _f("temperature_range_C", "degC", None, "[low, high] bulk temperature envelope (none = no "
-           "temperature variation)", -200.0, 500.0, kind="float_pair"),
-        Key("duty_cycle_csv", "str", "-", None, "duty-cycle CSV (time_s, torque_Nm, speed_rpm[, "
-            "temperature_C]) relative to the scene file; its extremes widen the ranges"),
-    ),
-    "accuracy": (
-        _f("dte_rel_error", "1", 0.02, "largest acceptable relative RMS error of the DTE", 0.0, 1.0,
-           lo_open=True),
-        _f("mesh_force_rel_error", "1", 0.02, "largest acceptable relative RMS error of the mesh force",
-           0.0, 1.0, lo_open=True),
-        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates may use",
-           0.0, 1.0, lo_open=True),
-        _i("run_mesh_periods", 40, "mesh periods of each dynamic comparison run", 5, 100000),
-        Key("pin", "str_list", "-", (), "choices taken from the scene as written, not planned"),
-    ),
 }
 
 #: sub-tables that may appear inside a table (besides its keys)
 _SUBTABLES = {
     "": ("scene", "gears", "material", "deviations", "mesh", "operating", "tables", "solver", "fmu",
-         "lubricant", "thermal", "envelope", "accuracy"),
+         "lubricant", "thermal"),
     "gears": ("pinion", "gear"),
     "deviations": ("pinion", "gear"),
     "deviations.pinion": ("tooth",),
     "deviations.gear": ("tooth",),
 }
 _REQUIRED_TABLES = ("gears", "gears.pinion", "gears.gear", "operating")
+
+# [roughness]: W-M flank roughness of the rough-EHL contact model (seed 000 eq 1, Table 2;
+# gearfmu/contact_models.py, docs/ehl_mesh.md)
+SCHEMA["roughness"] = (
+    _i("level", 1, "seed 000 Table 2 roughness level 1-4 (D and G from the table), or 0 = use "
+       "fractal_dimension and G_nm", 0, 4),
+    _f("fractal_dimension", "1", None, "W-M fractal dimension D (level = 0 only)", 1.0, 2.0,
+       lo_open=True, hi_open=True),
+    _f("G_nm", "nm", None, "W-M characteristic scale G (level = 0 only); seed 000 Table 2's G "
+       "read in mm, so G_nm = 1e6 x the table value (level 4: 5.229 nm)", 0.0, 1e6, lo_open=True, scale=1e-9),
+    _i("seed", 2022, "seed of the random phases (per flank and slice; reproducible)", 0, 2 ** 63 - 1),
+    _f("max_frequency_per_mm", "1/mm", 10.0, "band limit of the roughness (highest W-M frequency)",
+       0.0, 1e4, lo_open=True, scale=1e3),
+    _e("on_film_failure", ("hertz", "error"), "hertz", "where the rough film collapses or does not "
+       "converge: use the Hertz stiffness there and record it, or stop with an error"),
+)
+_SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
+
+
+@dataclass(frozen=True)
+class RoughnessOptions:
+    """The ``[roughness]`` table in SI: ``D``, ``G_m`` (m), ``seed``,
+    ``f_max_per_m`` (1/m), ``level`` (0 = custom), ``on_failure``."""
+
+    D: float
+    G_m: float
+    seed: int = 2022
+    f_max_per_m: float = 1e4
+    level: int = 1
+    on_failure: str = "hertz"
+
+
+def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
+    """Read ``[roughness]`` (None when absent)."""
+    raw = _sub(data, "roughness")
+    if raw is None:
+        return None
+    n0 = len(r.problems)
+    ro = r.table(raw, "roughness")
+    if len(r.problems) > n0:
+        return None
+    level = ro["level"]
+    if level == 0:
+        for k in ("fractal_dimension", "G_nm"):
+            if ro[k] is None:
+                r.add(f"roughness.{k}", "required when roughness.level = 0")
+        if len(r.problems) > n0:
+            return None
+        D, G = ro["fractal_dimension"], ro["G_nm"]
+    else:
+        for k in ("fractal_dimension", "G_nm"):
+            if isinstance(raw, dict) and k in raw:
+                r.add(f"roughness.{k}", f"only with roughness.level = 0 (level {level} takes D and G "
+                                        "from seed 000 Table 2)")
+        if len(r.problems) > n0:
+            return None
+        from .roughness import SEED000_LEVELS
+        D, G = SEED000_LEVELS[level].D, SEED000_LEVELS[level].G_m
+    return RoughnessOptions(D=D, G_m=G, seed=ro["seed"], f_max_per_m=ro["max_frequency_per_mm"],
+                            level=level, on_failure=ro["on_film_failure"])
+
+
+def _roughness_from_text(text: str) -> Optional[RoughnessOptions]:
+    r = _Reader()
+    out = _roughness(r, _toml.loads(text))
+    if r.problems:
+        raise SceneError(r.problems)
+    return out
 
 
 # ============================================================== helpers
@@ -620,11 +670,6 @@ class _Reader:
                                f"got {_describe(v)}{hint}")
                 return None
             return v
-        if k == "str_list":
-            if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
-                self.add(path, f"must be an array of strings, got {_describe(v)}")
-                return None
-            return tuple(v)
         if k in ("float_list", "float_pair"):
             if not isinstance(v, list):
                 self.add(path, f"must be an array of numbers, got {_describe(v)}")
@@ -1024,10 +1069,9 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
     tab = r.table(_sub(data, "tables"), "tables")
     sol = r.table(_sub(data, "solver"), "solver")
     fmu = r.table(_sub(data, "fmu"), "fmu")
+    _roughness(r, data)  # validated here; Scene.roughness reads it
     lub = _lubricant(r, data)
     thermal = _thermal(r, data)
-    from .envelope import read_envelope_sections  # [envelope] / [accuracy], docs/plan.md
-    envelope, accuracy = read_envelope_sections(r, data, op, source_path)
 
     # ---------------- cross-key checks (only on values that passed their own checks)
     for k, rk in (("torque_Nm", "torque_range_Nm"), ("speed_rpm", "speed_range_rpm")):
@@ -1074,7 +1118,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                        output_interval_s=fmu["output_interval_s"])
     return Scene(name=name, description=sc["description"], text=text, pair=pair, mesh=mesh,
                  operating=operating, tables=tables, solver=solver, fmu=fmu_o, lubricant=lub,
-                 source_path=source_path, thermal=thermal, envelope=envelope, accuracy=accuracy)
+                 source_path=source_path, thermal=thermal)
 
 
 # ============================================================== public entry points

@@ -259,7 +259,7 @@ def test_unknown_key_with_unit_hint():
     e = problems_of(DEFAULT_TEXT.replace("slices = 44", "slics = 44"))
     assert "mesh.slics: unknown key; did you mean 'slices'?" in str(e)
     e = problems_of(DEFAULT_TEXT + "\n[roughnes]\nlevel = 1\n")
-    assert e.problems == [("roughnes", "unknown key")]
+    assert e.problems == [("roughnes", "unknown key; did you mean 'roughness'?")]  # [roughness] exists (docs/ehl_mesh.md)
 
 
 def test_wrong_type_and_out_of_range_name_the_key_path():

@@ -1,0 +1,303 @@
+"""The EHL oil film along the line of action: contact kinematics, flank
+roughness at the contact, and the film stiffness of each face-width slice of
+each tooth pair at each meshing position (seed 000 eq 3, 8-10), solved
+through a ``concurrent.futures``-style executor.  SI units throughout.
+
+Kinematics of an involute contact (textbook: e.g. Johnson, *Contact
+Mechanics*, 1985, ch. 13 on gears; ISO/TS 6336-22 uses the same sums):
+the contact point at LOA position s (m from N1, the pinion's base-circle
+tangent point) has the roll lengths s1 = s (pinion) and s2 = N1N2 - s (gear).
+The radius of curvature of an involute at a point equals its roll length,
+so the reduced radius of the two cylinders in contact is
+
+    R = s1 s2 / (s1 + s2)                                     (1/R = 1/s1 + 1/s2).
+
+Rolling (tangential) velocities: the pinion surface point at the contact has
+velocity omega1 x r; its component along the common tangent (normal to the
+LOA) is omega1 * s1, and likewise omega2 * s2 for the gear (the component
+along the LOA, omega rb, is equal for both and is the motion of the contact
+point itself).  With omega2 = omega1 z1/z2:
+
+    u1 = omega1 s1,  u2 = omega1 (z1/z2) s2,
+    u_s = (u1 + u2)/2   (seed 000 eq 2's entrainment velocity),
+    sliding u1 - u2 = 0 at the pitch point, where u_s = omega1 r_w1 sin(alpha_w).
+
+Roughness at the contact (seed 000 eq 3's wm; a CHOICE where the seed is
+silent): every flank carries, on each slice, its own W-M profile along the
+flank arc length a measured from the base circle, a = rho^2/(2 r_b) for roll
+length rho (arc length of an involute).  Relative to the moving contact point
+the pinion material flows towards its root and the gear material towards its
+tip (both in the entrainment direction +x), so at local coordinate x the gap
+holds the composite roughness
+
+    wm(x) = z1_n(a1(s1) - x) + z2_n(a2(s2) + x).
+
+The same realisation is used on every tooth of a gear (the tables then stay
+periodic in the mesh period); slices and the two flanks are independent
+(``numpy.random.SeedSequence(seed)``: child 0 pinion, child 1 gear, each
+spawned per slice).  The roughness is band-limited to ``f_max_per_m`` (default
+1e4 1/m: wavelengths >= 100 um, about 14 grid spacings of the default 256
+interval EHL grid at the seed 000 operating point; finer roughness does not
+converge, docs/ehl.md) -- the band limit keeps 63-77 % of the roughness
+variance of the Table 2 levels.
+
+Film stiffness per slice: seed 000 eq 8-9 with A = 2 b width and the means of
+p and h over the Hertz band (:func:`gearfmu.ehl.film_stiffness.slice_film_stiffness_N_per_m`,
+``method="seed"``).
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .errors import EHLConvergenceError, EHLError, EHLInputError, FilmCollapseError
+from .film_stiffness import slice_film_stiffness_N_per_m
+from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
+
+
+class MeshFilmInputError(EHLInputError):
+    """Bad input to the mesh-film functions (names the field and the reason)."""
+
+
+# ---------------------------------------------------------------- kinematics
+def contact_kinematics(geom, s_m, omega1_rad_s: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R_m, u_m_s, sliding_m_s) at LOA positions ``s_m`` (m from N1).
+
+    R = s1 s2/(s1 + s2) (m), entrainment u_s = (omega1 s1 + omega2 s2)/2 (m/s),
+    sliding u1 - u2 (m/s), omega2 = omega1 z1/z2 (module docstring)."""
+    if not (math.isfinite(omega1_rad_s) and omega1_rad_s > 0):
+        raise MeshFilmInputError(f"omega1_rad_s={omega1_rad_s!r}: must be finite and > 0 (rad/s)")
+    s = np.asarray(s_m, dtype=float)
+    s1 = geom.roll_length_at(1, s)
+    s2 = geom.roll_length_at(2, s)
+    if np.any(~np.isfinite(s)) or np.any(s1 <= 0) or np.any(s2 <= 0):
+        raise MeshFilmInputError("s_m: contact positions must lie strictly between N1 and N2")
+    omega2 = omega1_rad_s * geom.z1 / geom.z2
+    u1 = omega1_rad_s * s1
+    u2 = omega2 * s2
+    return s1 * s2 / (s1 + s2), 0.5 * (u1 + u2), u1 - u2
+
+
+def involute_arc_length_m(roll_m, base_radius_m: float):
+    """Arc length (m) of an involute from the base circle to roll length ``roll_m``:
+    a = rho^2 / (2 r_b) (integral of rho d(rho)/r_b)."""
+    r = np.asarray(roll_m, dtype=float)
+    return r * r / (2.0 * base_radius_m)
+
+
+# ---------------------------------------------------------------- roughness
+@dataclass
+class FlankRoughness:
+    """Sampled W-M roughness of both flanks, per slice (m).
+
+    ``a1_m``/``a2_m``: arc-length grids of the pinion / gear flank; ``z1_m``,
+    ``z2_m``: (n_slices, len(a)) heights."""
+
+    a1_m: np.ndarray
+    z1_m: np.ndarray
+    a2_m: np.ndarray
+    z2_m: np.ndarray
+    D: float
+    G_m: float
+    seed: int
+    f_max_per_m: float
+
+    @property
+    def n_slices(self) -> int:
+        return int(self.z1_m.shape[0])
+
+    def composite_m(self, slice_index: int, a1_m: float, a2_m: float, x_m) -> np.ndarray:
+        """wm(x) = z1(a1 - x) + z2(a2 + x) of slice ``slice_index`` (m)."""
+        x = np.asarray(x_m, dtype=float)
+        return (np.interp(a1_m - x, self.a1_m, self.z1_m[slice_index])
+                + np.interp(a2_m + x, self.a2_m, self.z2_m[slice_index]))
+
+
+def make_flank_roughness(geom, D: float, G_m: float, n_slices: int, seed: int, *,
+                         f_max_per_m: float = 1e4, margin_m: float = 3e-3,
+                         step_m: Optional[float] = None) -> FlankRoughness:
+    """W-M roughness of the active pinion and gear flanks (seed 000 eq 1, per slice).
+
+    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.roughness.SEED000_LEVELS`);
+    the profiles cover the active flank arc length plus ``margin_m`` on both
+    sides, sampled at ``step_m`` (default a tenth of the shortest wavelength)."""
+    from ..roughness import RoughnessInputError, wm_profile_m
+
+    if int(n_slices) != n_slices or n_slices < 1:
+        raise MeshFilmInputError(f"n_slices={n_slices!r}: must be an integer >= 1")
+    if not (math.isfinite(f_max_per_m) and f_max_per_m > 0):
+        raise MeshFilmInputError(f"f_max_per_m={f_max_per_m!r}: must be finite and > 0 (1/m)")
+    step = 0.1 / f_max_per_m if step_m is None else float(step_m)
+    children = np.random.SeedSequence(int(seed)).spawn(2)
+    grids, heights = [], []
+    for which, ch in ((1, children[0]), (2, children[1])):
+        lo_roll, hi_roll = geom.active_roll1_m if which == 1 else geom.active_roll2_m
+        rb = geom.rb1_m if which == 1 else geom.rb2_m
+        a_lo = float(involute_arc_length_m(max(lo_roll, 0.0), rb)) - margin_m
+        a_hi = float(involute_arc_length_m(hi_roll, rb)) + margin_m
+        a = np.arange(a_lo, a_hi + step, step)
+        try:
+            z = np.stack([wm_profile_m(a, D, G_m, rng=np.random.default_rng(c), f_max_per_m=f_max_per_m)
+                          for c in ch.spawn(int(n_slices))])
+        except RoughnessInputError as exc:
+            raise MeshFilmInputError(f"roughness: {exc}") from None
+        grids.append(a)
+        heights.append(z)
+    return FlankRoughness(grids[0], heights[0], grids[1], heights[1], float(D), float(G_m), int(seed),
+                          float(f_max_per_m))
+
+
+# ---------------------------------------------------------------- one solve
+@dataclass(frozen=True)
+class FilmEnvironment:
+    """Everything a film solve needs besides position, load and roughness (SI).
+
+    ``E_prime_Pa`` = 2 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2); lubricant eta0 (Pa s)
+    at the oil temperature, alpha (1/Pa), rho0 (kg/m^3); bulk-modulus law
+    B0 (Pa), B0' (seed 000 eq 9); ``n_nodes`` of the EHL grid (None: solver's
+    choice)."""
+
+    E_prime_Pa: float
+    eta0_Pas: float
+    alpha_Pa_inv: float
+    rho0_kg_m3: float
+    width_m: float
+    B0_Pa: float = B0_DEFAULT_PA
+    B0_prime: float = B0_PRIME_DEFAULT
+    n_nodes: Optional[int] = None
+
+
+@dataclass
+class FilmOutcome:
+    """Result of one slice solve.  ``status``: 'ok', 'collapse' (FilmCollapseError)
+    or 'stall' (EHLConvergenceError); ``k_N_per_m`` NaN unless ok."""
+
+    k_N_per_m: float
+    h_central_m: float
+    h_min_m: float
+    p_mean_Pa: float
+    sigma_m: float
+    status: str
+    film_parameter: float = float("nan")
+    message: str = ""
+
+
+def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: float,
+                     roughness=None, return_result: bool = False):
+    """Film of one slice: solve seed 000 eq 2-7 and eq 8-9 (see module doc).
+
+    ``roughness``: None (smooth) or an ``(x_m, z_m)`` composite profile.
+    Returns a :class:`FilmOutcome` (and the LineContactResult when
+    ``return_result``; None when the solve failed)."""
+    from .solver import solve_line_contact
+
+    res = None
+    sigma = 0.0 if roughness is None else float(np.std(roughness[1]))
+    try:
+        try:
+            res = solve_line_contact(R_m, env.E_prime_Pa, w_N_per_m, u_m_s, env.eta0_Pas, env.alpha_Pa_inv,
+                                     env.rho0_kg_m3, roughness_m=roughness, n_nodes=env.n_nodes)
+        except EHLConvergenceError:
+            if roughness is not None:
+                raise
+            # smooth films at low M (light loads, M < 1) sometimes need more W-cycles: one retry
+            res = solve_line_contact(R_m, env.E_prime_Pa, w_N_per_m, u_m_s, env.eta0_Pas, env.alpha_Pa_inv,
+                                     env.rho0_kg_m3, n_nodes=env.n_nodes, max_cycles=200)
+        band = np.abs(res.x_m) <= res.b_m
+        k = slice_film_stiffness_N_per_m(res, env.width_m, "seed", env.B0_Pa, env.B0_prime)
+        sig = float(np.std(res.roughness_m[band])) if roughness is not None else 0.0
+        out = FilmOutcome(k, res.h_central_m, res.h_min_m, float(np.mean(res.p_Pa[band])), sig, "ok",
+                          res.h_min_m / sig if sig > 0 else float("inf"))
+    except FilmCollapseError as exc:
+        out = FilmOutcome(float("nan"), float("nan"), exc.h_min_m, float("nan"), sigma, "collapse",
+                          exc.film_parameter, str(exc)[:300])
+    except EHLConvergenceError as exc:
+        out = FilmOutcome(float("nan"), float("nan"), float("nan"), float("nan"), sigma, "stall",
+                          float("nan"), str(exc)[:300])
+    if return_result:
+        return out, res
+    return out
+
+
+def _solve_chunk(env: FilmEnvironment, items):
+    """Worker: solve a list of (R, u, w, roughness-or-None) requests."""
+    return [solve_slice_film(env, R, u, w, rough) for (R, u, w, rough) in items]
+
+
+# ---------------------------------------------------------------- batches
+class _Progress:
+    """tqdm when installed, else one stderr line per ~5 % (and at the end)."""
+
+    def __init__(self, enabled: bool, total: int, label: str):
+        self.enabled, self.total, self.label, self.done = enabled, total, label, 0
+        self.t0 = time.perf_counter()
+        self._bar = None
+        self._next = 0
+        if enabled:
+            try:
+                from tqdm import tqdm  # type: ignore
+                self._bar = tqdm(total=total, desc=label)
+            except ImportError:
+                self._bar = None
+
+    def update(self, n: int) -> None:
+        if not self.enabled:
+            return
+        self.done += n
+        if self._bar is not None:
+            self._bar.update(n)
+        elif self.done >= self._next or self.done >= self.total:
+            self._next = self.done + max(1, self.total // 20)
+            print(f"{self.label}: {self.done}/{self.total} film solves "
+                  f"({time.perf_counter() - self.t0:.1f} s)", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=None,
+                max_workers: Optional[int] = None, chunk_size: Optional[int] = None,
+                progress: bool = False, label: str = "EHL films") -> List[FilmOutcome]:
+    """Solve independent slice films ``requests`` = [(R_m, u_m_s, w_N_per_m, roughness|None), ...].
+
+    ``executor``: any ``concurrent.futures``-style object with ``submit`` (e.g.
+    ``distributed.Client(...).get_executor()``; left open); None: a local
+    process pool (``spawn``, min(CPU count, chunks) workers; in-process for a
+    single chunk or ``max_workers`` = 1).  Results in request order."""
+    from concurrent.futures import as_completed
+
+    from ..sweeps import make_executor
+
+    reqs = list(requests)
+    if not reqs:
+        return []
+    n_cpu = os.cpu_count() or 1
+    if chunk_size is None:
+        chunk_size = max(1, min(32, math.ceil(len(reqs) / (4 * n_cpu))))
+    chunks = [reqs[i:i + chunk_size] for i in range(0, len(reqs), chunk_size)]
+    bar = _Progress(progress, len(reqs), label)
+    out: List[Optional[FilmOutcome]] = [None] * len(reqs)
+    if executor is None:
+        nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
+        ctx = make_executor(max_workers=nw)
+    else:
+        from ..sweeps import _ManagedExecutor
+        ctx = _ManagedExecutor(executor, None, own=False)
+    try:
+        with ctx as ex:
+            futs = {ex.submit(_solve_chunk, env, c): i for i, c in enumerate(chunks)}
+            for f in as_completed(futs):
+                i = futs[f]
+                res = f.result()
+                out[i * chunk_size:i * chunk_size + len(res)] = res
+                bar.update(len(res))
+    finally:
+        bar.close()
+    return out  # type: ignore[return-value]
