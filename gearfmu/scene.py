@@ -233,6 +233,8 @@ class Scene:
     lubricant: Optional[Lubricant] = None
     source_path: Optional[str] = None
     thermal: Optional[ThermalOptions] = None
+    envelope: Optional[Any] = None  # gearfmu.envelope.Envelope ([envelope], docs/plan.md)
+    accuracy: Optional[Any] = None  # gearfmu.envelope.AccuracyTarget ([accuracy], docs/plan.md)
 
     @property
     def sha256(self) -> str:
@@ -458,12 +460,34 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _e("flank_law", ("radial_tangential", "homogeneous"), "radial_tangential",
            "free thermal deformation of a flank (docs/thermal.md)"),
     ),
+    # operating envelope and accuracy target of the fidelity planner (gearfmu/envelope.py, docs/plan.md)
+    "envelope": (
+        _f("torque_range_Nm", "N*m", None, "[low, high] pinion torque envelope (none = "
+           "operating.torque_range_Nm, else the nominal torque)", 0.0, 1e7, kind="float_pair"),
+        _f("speed_range_rpm", "rpm", None, "[low, high] pinion speed envelope (none = "
+           "operating.speed_range_rpm, else the nominal speed)", 0.0, 1e6, scale=_RPM_TO_RAD_S,
+           kind="float_pair"),
+        _f("temperature_range_C", "degC", None, "[low, high] bulk temperature envelope (none = no "
+           "temperature variation)", -200.0, 500.0, kind="float_pair"),
+        Key("duty_cycle_csv", "str", "-", None, "duty-cycle CSV (time_s, torque_Nm, speed_rpm[, "
+            "temperature_C]) relative to the scene file; its extremes widen the ranges"),
+    ),
+    "accuracy": (
+        _f("dte_rel_error", "1", 0.02, "largest acceptable relative RMS error of the DTE", 0.0, 1.0,
+           lo_open=True),
+        _f("mesh_force_rel_error", "1", 0.02, "largest acceptable relative RMS error of the mesh force",
+           0.0, 1.0, lo_open=True),
+        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates may use",
+           0.0, 1.0, lo_open=True),
+        _i("run_mesh_periods", 40, "mesh periods of each dynamic comparison run", 5, 100000),
+        Key("pin", "str_list", "-", (), "choices taken from the scene as written, not planned"),
+    ),
 }
 
 #: sub-tables that may appear inside a table (besides its keys)
 _SUBTABLES = {
     "": ("scene", "gears", "material", "deviations", "mesh", "operating", "tables", "solver", "fmu",
-         "lubricant", "thermal"),
+         "lubricant", "thermal", "envelope", "accuracy"),
     "gears": ("pinion", "gear"),
     "deviations": ("pinion", "gear"),
     "deviations.pinion": ("tooth",),
@@ -670,6 +694,11 @@ class _Reader:
                                f"got {_describe(v)}{hint}")
                 return None
             return v
+        if k == "str_list":
+            if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+                self.add(path, f"must be an array of strings, got {_describe(v)}")
+                return None
+            return tuple(v)
         if k in ("float_list", "float_pair"):
             if not isinstance(v, list):
                 self.add(path, f"must be an array of numbers, got {_describe(v)}")
@@ -1072,6 +1101,8 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
     _roughness(r, data)  # validated here; Scene.roughness reads it
     lub = _lubricant(r, data)
     thermal = _thermal(r, data)
+    from .envelope import read_envelope_sections  # [envelope] / [accuracy], docs/plan.md
+    envelope, accuracy = read_envelope_sections(r, data, op, source_path)
 
     # ---------------- cross-key checks (only on values that passed their own checks)
     for k, rk in (("torque_Nm", "torque_range_Nm"), ("speed_rpm", "speed_range_rpm")):
@@ -1118,7 +1149,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                        output_interval_s=fmu["output_interval_s"])
     return Scene(name=name, description=sc["description"], text=text, pair=pair, mesh=mesh,
                  operating=operating, tables=tables, solver=solver, fmu=fmu_o, lubricant=lub,
-                 source_path=source_path, thermal=thermal)
+                 source_path=source_path, thermal=thermal, envelope=envelope, accuracy=accuracy)
 
 
 # ============================================================== public entry points
