@@ -39,7 +39,8 @@ from typing import Optional, Union
 
 from . import __version__
 from .modeldesc import (apply_start_values, check_model_description, check_registered,
-                        expand_variables, load_spec, model_description_xml, runtime_variable_table)
+                        expand_variables, features_of, load_spec, model_description_xml,
+                        runtime_variable_table)
 from .tables import MeshTables
 
 HERE = Path(__file__).resolve().parent
@@ -49,7 +50,7 @@ SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
 TEMPLATE_CLASS = "GearFmuSlave"
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 1
+KERNEL_ABI_VERSION = 2  # gearkernel.h GK_ABI_VERSION (2: temperature axis)
 DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
 #: integrator names -> kernel code (gearkernel.h GK_INTEGRATOR_*, gearfmu.native.INTEGRATORS)
 INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
@@ -163,6 +164,23 @@ def _integrator_code(integrator, slots: int) -> int:
     return code
 
 
+def temperature_input(variables, tables: MeshTables):
+    """The ``bulk_temperature`` input for tables with a temperature axis: start =
+    :attr:`MeshTables.default_temperature_C`, min/max = the axis ends (degC).
+    Returns (variables, start or None)."""
+    if not tables.has_temperature_axis:
+        return list(variables), None
+    from dataclasses import replace
+
+    lo, hi = tables.temperature_range_C
+    start = tables.default_temperature_C
+    out = [replace(v, start=start, min=lo, max=hi) if v.name == "bulk_temperature" else v for v in variables]
+    if not any(v.name == "bulk_temperature" for v in out):
+        raise FmuBuildError("bulk_temperature: the tables have a temperature axis but the interface spec "
+                            "has no 'bulk_temperature' input (requires = \"temperature_axis\")")
+    return out, start
+
+
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
               pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
@@ -205,10 +223,11 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
 
     spec = load_spec(spec_path)
-    variables = expand_variables(spec, tables.slots)
+    variables = expand_variables(spec, tables.slots, features_of(tables))
     variables = apply_start_values(variables, {
         "pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
         "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm, "integrator": ig})
+    variables, temp0 = temperature_input(variables, tables)
 
     meta_bytes, bin_bytes = tables.to_bytes()
     digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
@@ -252,7 +271,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             "parameters": {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
                            "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
                            "damping_model": dm, "integrator": ig, "stop_time_s": tstop,
-                           "output_interval_s": dt},
+                           "output_interval_s": dt,
+                           **({} if temp0 is None else {"bulk_temperature_start_C": temp0})},
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
             "tables_provenance": tables.provenance,
             "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": _compiler_version(cc),

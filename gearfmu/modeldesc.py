@@ -52,6 +52,11 @@ VARIABILITIES = ("constant", "fixed", "tunable", "discrete", "continuous")
 INITIALS = ("exact", "approx", "calculated")
 TYPES = ("Real", "Integer")
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+UNIT_SCALING = ("factor", "offset")
+#: conditions an entry may name in ``requires`` (the FMU carries a variable only
+#: when its tables need it): "temperature_axis" = the tables have a temperature
+#: axis (docs/tables.md "Operating axes")
+FEATURES = ("temperature_axis",)
 
 #: log categories (the ones pythonfmu's wrapper logs with)
 LOG_CATEGORIES = {
@@ -118,6 +123,10 @@ def load_spec(path=None) -> Spec:
     units = data.get("units", {})
     for uname, exps in units.items():
         for b, e in exps.items():
+            if b in UNIT_SCALING:  # FMI 2.0 BaseUnit factor / offset (e.g. degC: K = 1, offset = 273.15)
+                if isinstance(e, bool) or not isinstance(e, (int, float)) or not math.isfinite(e):
+                    raise SpecError(f"{p}: units.{uname}: {b} = {e!r} must be a finite number")
+                continue
             if b not in BASE_UNITS or not isinstance(e, int):
                 raise SpecError(f"{p}: units.{uname}: base unit {b!r} = {e!r} (need one of {BASE_UNITS}, integer exponent)")
     entries = data.get("variable", [])
@@ -151,6 +160,8 @@ def load_spec(path=None) -> Spec:
             raise SpecError(f"{where}: output_index: every output needs its kernel output position")
         if not isinstance(ent.get("description", ""), str):
             raise SpecError(f"{where}: description must be a string")
+        if "requires" in ent and ent["requires"] not in FEATURES:
+            raise SpecError(f"{where}: requires {ent['requires']!r} not one of {FEATURES}")
     de = data.get("default_experiment", {})
     for k in ("start_time_s", "stop_time_s", "step_size_s"):
         if k in de and not (isinstance(de[k], (int, float)) and math.isfinite(de[k])):
@@ -168,12 +179,27 @@ def _output_index(raw, slots: int, slot: int, where: str) -> int:
     return base + slot
 
 
-def expand_variables(spec: Spec, slots: int) -> List[Variable]:
-    """Expand per-slot entries for ``slots`` tooth-pair slots and number all variables."""
+def features_of(tables) -> tuple:
+    """The spec features (:data:`FEATURES`) a table set needs."""
+    return ("temperature_axis",) if getattr(tables, "has_temperature_axis", False) else ()
+
+
+def expand_variables(spec: Spec, slots: int, features: Iterable[str] = ()) -> List[Variable]:
+    """Expand per-slot entries for ``slots`` tooth-pair slots and number all
+    variables.  An entry with ``requires = "<feature>"`` is kept only when the
+    feature is in ``features`` (the FMU carries only what its tables need); the
+    spec lists such entries last so that the value references of the others do
+    not depend on them."""
     if not isinstance(slots, int) or slots < 1:
         raise SpecError(f"slots: need an integer >= 1, got {slots!r}")
+    features = tuple(features)
+    for f in features:
+        if f not in FEATURES:
+            raise SpecError(f"features: {f!r} not one of {FEATURES}")
     out: List[Variable] = []
     for ent in spec.entries:
+        if "requires" in ent and ent["requires"] not in features:
+            continue
         per_slot = bool(ent.get("per_slot", False))
         for i in range(slots if per_slot else 1):
             name = f"{ent['name']}[{i + 1}]" if per_slot else ent["name"]
@@ -271,7 +297,8 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
             ue = ET.SubElement(ud, "Unit", {"name": u})
             exps = spec.units[u]
             if exps:
-                ET.SubElement(ue, "BaseUnit", {b: str(e) for b, e in exps.items()})
+                ET.SubElement(ue, "BaseUnit", {b: (repr(float(e)) if b in UNIT_SCALING else str(e))
+                                               for b, e in exps.items()})
     cats = ET.SubElement(root, "LogCategories")
     for c, d in LOG_CATEGORIES.items():
         ET.SubElement(cats, "Category", {"name": c, "description": d})

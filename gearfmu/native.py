@@ -969,6 +969,9 @@ class DimensionlessResult:
 def _check_tables(tables) -> MeshTables:
     if not isinstance(tables, MeshTables):
         raise NativeInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
+    if tables.has_temperature_axis:
+        raise NativeInputError("tables: have a temperature axis; pass bulk_temperature_C to simulate / "
+                               "simulate_sdof, or select one with tables.at_temperature(T)")
     return tables.validate()
 
 
@@ -1188,6 +1191,7 @@ def simulate(
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
     integrator: str = DEFAULT_INTEGRATOR,
+    bulk_temperature_C: Optional[InputLike] = None,
 ) -> SimResult:
     """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
 
@@ -1204,7 +1208,19 @@ def simulate(
     ``integrator``: 'rk4' (fixed-step classical RK4) or 'rk4_kink' (RK4 that
     steps exactly to every table node and contact-mode change, docs/model.md
     "rk4_kink"; ``info['events']`` counts the located events).
+    ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
+    input ``bulk_temperature``, an input like the torques (None: the tables'
+    ``default_temperature_C``); docs/model.md "Temperature axis".
     """
+    if isinstance(tables, MeshTables) and tables.has_temperature_axis:
+        return _simulate_temperature_axis(
+            tables, bulk_temperature_C, stop_time_s=stop_time_s, comm_step_s=comm_step_s, max_step_s=max_step_s,
+            pinion_torque_Nm=pinion_torque_Nm, gear_torque_Nm=gear_torque_Nm,
+            pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
+            damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
+            dte_rate_start_m_s=dte_rate_start_m_s, integrator=integrator)
+    if bulk_temperature_C is not None:
+        raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     t = _check_tables(tables)
     icode = _integrator_code(integrator, t.slots)
     w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
@@ -1259,6 +1275,7 @@ def simulate_sdof(
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
     integrator: str = DEFAULT_INTEGRATOR,
+    bulk_temperature_C: Optional[float] = None,
 ) -> SimResult:
     """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
 
@@ -1269,7 +1286,14 @@ def simulate_sdof(
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
     ``integrator`` 'rk4_kink' integrates theta1 as a state with omega1' = 0
     and steps to every table node and contact-mode change (docs/model.md).
+    ``bulk_temperature_C`` (degC, constant; tables with a temperature axis):
+    the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).
     """
+    if isinstance(tables, MeshTables) and tables.has_temperature_axis:
+        tables = _at_temperature(tables, tables.default_temperature_C if bulk_temperature_C is None
+                                 else bulk_temperature_C)
+    elif bulk_temperature_C is not None:
+        raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     t = _check_tables(tables)
     icode = _integrator_code(integrator, t.slots)
     om = _finite("omega1_rad_s", omega1_rad_s)
@@ -1326,3 +1350,78 @@ def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) 
         zeta=result.damping_Ns_per_m / (2.0 * me * wn),
         load=float(result.pinion_torque[0]) / t.base_radius_pinion_m / (t.k_mean_N_per_m * l),
         length_scale_m=l)
+
+# ------------------------------------------------- temperature axis (docs/model.md)
+def _at_temperature(tables: MeshTables, temperature_C) -> MeshTables:
+    from .tables import TemperatureRangeError
+
+    try:
+        return tables.at_temperature(float(temperature_C))
+    except (TypeError, ValueError) as exc:
+        if isinstance(exc, TemperatureRangeError):
+            raise NativeInputError(f"bulk_temperature_C: {exc}") from None
+        raise NativeInputError(f"bulk_temperature_C: expected a number, got {temperature_C!r}") from None
+
+
+def _simulate_temperature_axis(tables: MeshTables, bulk_temperature_C, *, stop_time_s, comm_step_s, max_step_s,
+                               pinion_torque_Nm, gear_torque_Nm, pinion_speed_start_rad_s, damping_ratio,
+                               damping_model, pinion_angle_start_rad, dte_start_m, dte_rate_start_m_s,
+                               integrator) -> SimResult:
+    """:func:`simulate` on tables with a temperature axis.  The temperature is held
+    over each communication step like the torques; every run of steps with one
+    temperature is simulated on ``tables.at_temperature(T)`` (the node-wise blend of
+    docs/model.md "Temperature axis", the arithmetic of the C kernel), continuing
+    from the state [theta1, omega1, x, v] of the previous run -- the same
+    per-step computation as an FMU whose input changes at those steps."""
+    t = tables.validate()
+    H = _finite("comm_step_s", comm_step_s, positive=True)
+    n_steps = _n_steps(_finite("stop_time_s", stop_time_s, positive=True), H)
+    temps = _input_series("bulk_temperature_C", t.default_temperature_C if bulk_temperature_C is None
+                          else bulk_temperature_C, n_steps, H)
+    slices = {}
+    for T in np.unique(temps[:n_steps + 1]):
+        slices[float(T)] = _at_temperature(t, T)
+    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
+    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
+    t2s = t1s * rb2 / rb1 if gear_torque_Nm is None else _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
+    w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
+    if max_step_s is None:  # k_mean does not depend on temperature: one step bound for all runs
+        max_step_s = choose_max_step_s(slices[float(temps[0])], max(1.5 * abs(w0), 1.0))
+    parts = []
+    th, om, x, v = _finite("pinion_angle_start_rad", pinion_angle_start_rad), w0, dte_start_m, dte_rate_start_m_s
+    i = 0
+    while i < n_steps:
+        j = i + 1
+        while j < n_steps and temps[j] == temps[i]:
+            j += 1
+        r = simulate(slices[float(temps[i])], stop_time_s=(j - i) * H, comm_step_s=H, max_step_s=max_step_s,
+                     pinion_torque_Nm=t1s[i:j], gear_torque_Nm=t2s[i:j], pinion_speed_start_rad_s=om,
+                     damping_ratio=damping_ratio, damping_model=damping_model, pinion_angle_start_rad=th,
+                     dte_start_m=x, dte_rate_start_m_s=v, integrator=integrator)
+        parts.append((i, r))
+        if "diverged_at_step" in r.info:
+            break
+        th, om, x, v = (float(r.pinion_angle[-1]), float(r.pinion_speed[-1]), float(r.dte[-1]),
+                        float(r.dte_rate[-1]))
+        i = j
+    first = parts[0][1]
+    names = ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "dte", "dte_rate", "mesh_force",
+             "pair_force", "load_sharing", "mesh_stiffness")
+    out = {}
+    for n in names:
+        a0 = getattr(first, n)
+        arr = np.full((n_steps + 1,) + a0.shape[1:], np.nan)
+        arr[0] = a0[0]
+        for i0, r in parts:
+            seg = getattr(r, n)[1:]
+            arr[i0 + 1: i0 + 1 + seg.shape[0]] = seg
+        out[n] = arr
+    done = sum(int(r.info["completed_steps"]) for _, r in parts)
+    info = dict(first.info, completed_steps=done, events=int(sum(r.info.get("events", 0) for _, r in parts)),
+                bulk_temperature_C=temps, temperature_runs=len(parts))
+    info.pop("diverged_at_step", None)
+    if done < n_steps:
+        info["diverged_at_step"] = done
+    return SimResult(time_s=np.arange(n_steps + 1) * H, **out, pinion_torque=t1s, gear_torque=t2s,
+                     step_s=first.step_s, substeps=first.substeps, damping_Ns_per_m=first.damping_Ns_per_m,
+                     damping_model=first.damping_model, wall_s=float(sum(r.wall_s for _, r in parts)), info=info)

@@ -24,8 +24,9 @@ Variants are named sets of parameter values of the FMU (for example two
 damping ratios).  Choices (docs/robustness.md "SSP"): with no explicit
 variants, :func:`ssp_from_scene` makes ``nominal`` (the scene's damping
 ratio), ``damping_low`` (half of it) and ``damping_high`` (twice it, at most
-1); an oil-temperature variant needs a temperature input in the FMU, which the
-FMU does not have yet, so none is made.  Parameter values are checked against
+1); when the FMU has the ``bulk_temperature`` input (tables with a temperature
+axis) also ``temperature_low`` / ``temperature_high`` at the ends of the axis
+(the input's start value is bound like a parameter).  Parameter values are checked against
 the FMU's modelDescription (name, causality parameter, min/max) and the error
 names the variant and the parameter.
 """
@@ -50,6 +51,10 @@ for _p, _u in NS.items():
     ET.register_namespace(_p, _u)
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
+
+
+#: inputs a variant may set (their start value), besides parameters
+VARIANT_INPUTS = ("bulk_temperature",)
 
 
 class SspError(ValueError):
@@ -78,6 +83,8 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
     if not variants:
         raise SspError("variants: at least one named parameter set is needed")
     params = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+    # the temperature input (tables with a temperature axis) takes a start value per variant too
+    params.update({v.name: v for v in md.modelVariables if v.causality == "input" and v.name in VARIANT_INPUTS})
     out = {}
     for name, values in variants.items():
         if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure":
@@ -221,11 +228,19 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
     return out_path
 
 
-def default_variants(damping_ratio: float) -> Dict[str, Dict[str, float]]:
-    """nominal / damping_low (half) / damping_high (twice, at most 1) damping ratios."""
+def default_variants(damping_ratio: float, temperature_range_C=None) -> Dict[str, Dict[str, float]]:
+    """nominal / damping_low (half) / damping_high (twice, at most 1) damping ratios;
+    with ``temperature_range_C`` = (lowest, highest) of the tables' temperature axis
+    (degC, FMUs with the ``bulk_temperature`` input) also ``temperature_low`` /
+    ``temperature_high`` at the nominal damping and the two ends of the axis."""
     z = float(damping_ratio)
-    return {"nominal": {"damping_ratio": z}, "damping_low": {"damping_ratio": 0.5 * z},
-            "damping_high": {"damping_ratio": min(1.0, 2.0 * z)}}
+    out = {"nominal": {"damping_ratio": z}, "damping_low": {"damping_ratio": 0.5 * z},
+           "damping_high": {"damping_ratio": min(1.0, 2.0 * z)}}
+    if temperature_range_C is not None:
+        lo, hi = (float(x) for x in temperature_range_C)
+        out["temperature_low"] = {"damping_ratio": z, "bulk_temperature": lo}
+        out["temperature_high"] = {"damping_ratio": z, "bulk_temperature": hi}
+    return out
 
 
 def parse_variant(text: str):
@@ -255,5 +270,6 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
         res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress)
-        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio),
+        trange = getattr(res.tables, "temperature_range_C", None)
+        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange),
                          stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)

@@ -52,8 +52,8 @@ from typing import Dict, Optional, Union
 from . import __version__
 from .fmubuild import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
                        _check_finite, _check_positive, _compiler_version, _damping_model_code, _platform_dir,
-                       find_c_compiler)
-from .modeldesc import (apply_start_values, check_model_description, expand_variables, load_spec,
+                       find_c_compiler, temperature_input)
+from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
 from .tables import MeshTables
 
@@ -154,6 +154,9 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
     ]
     for name in ("torque_Nm", "k_N_per_m", "e_m", "backlash_half_m"):
         lines.append(f"offset.{name}={int(meta['arrays'][name]['offset'])}")
+    if "temperature_C" in meta["arrays"]:  # version 2 temperature axis (docs/tables.md)
+        lines.append(f"n_temperature={int(meta['n_temperature'])}")
+        lines.append(f"offset.temperature_C={int(meta['arrays']['temperature_C']['offset'])}")
     for name in ("phi_period_rad", "base_radius_pinion_m", "base_radius_gear_m", "inertia_pinion_kgm2",
                  "inertia_gear_kgm2", "k_mean_N_per_m"):
         lines.append(f"{name}={_hexf(sc[name])}")
@@ -226,6 +229,8 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
     extra = {}
     if int(p.get("integrator", 0)) != 0 or "integrator" in inspect.signature(simulate).parameters:
         extra["integrator"] = {v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))]
+    if p.get("bulk_temperature_start_C") is not None:
+        extra["bulk_temperature_C"] = float(p["bulk_temperature_start_C"])
     res = simulate(tables, **extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s,
                    max_step_s=p["max_step_s"], pinion_torque_Nm=p["pinion_torque_start_Nm"],
                    gear_torque_Nm=p["gear_torque_start_Nm"],
@@ -314,7 +319,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     ext = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
 
     spec = load_spec(spec_path)
-    variables = expand_variables(spec, tables.slots)
+    variables = expand_variables(spec, tables.slots, features_of(tables))
     starts = {"pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
               "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm}
     if any(v.name == "integrator" for v in variables):
@@ -322,6 +327,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     elif ig != 0:
         raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")
     variables = apply_start_values(variables, starts)
+    variables, temp0 = temperature_input(variables, tables)
 
     meta_bytes, bin_bytes = tables.to_bytes()
     digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
@@ -332,6 +338,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     params = {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
               "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
               "damping_model": dm, "integrator": ig}
+    if temp0 is not None:
+        params["bulk_temperature_start_C"] = temp0
 
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"

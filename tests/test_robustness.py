@@ -43,8 +43,8 @@ def fmu2(tmp_path_factory):
 
 
 # ------------------------------------------------------------ table versions
-@pytest.mark.parametrize("version", [0, 2, 99, "1", None])
-def test_table_versions_other_than_1_are_rejected_naming_found_and_supported(tmp_path, version):
+@pytest.mark.parametrize("version", [0, 3, 99, "1", None, True])
+def test_table_versions_other_than_1_and_2_are_rejected_naming_found_and_supported(tmp_path, version):
     meta, binary = make_tables().to_bytes()
     m = json.loads(meta)
     m["version"] = version
@@ -55,7 +55,7 @@ def test_table_versions_other_than_1_are_rejected_naming_found_and_supported(tmp
     with pytest.raises(TableError) as info:
         load_tables(d)
     msg = str(info.value)
-    assert f"version {version!r} found" in msg and "[1]" in msg and "tables.json" in msg
+    assert f"version {version!r} found" in msg and "[1, 2]" in msg and "tables.json" in msg
 
 
 def test_table_version_1_round_trips(tmp_path):

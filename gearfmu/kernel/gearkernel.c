@@ -65,6 +65,50 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->c_Ns_per_m = 0.0;
     m->damping_model = GK_DAMPING_ELASTOBACKLASH;
     m->integrator = GK_INTEGRATOR_RK4;
+    m->n_temp = 1;
+    m->temperature_C = NULL;
+    m->temp_ia = 0;
+    m->temp_two = 0;
+    m->temp_w = 0.0;
+    m->temperature_now_C = 0.0;
+    return GK_OK;
+}
+
+int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C)
+{
+    int i;
+    if (m == NULL || temperature_C == NULL || n_temp < 1) return GK_ERR_MODEL;
+    for (i = 0; i < n_temp; ++i) {
+        if (!isfinite(temperature_C[i])) return GK_ERR_MODEL;
+        if (i > 0 && !(temperature_C[i] > temperature_C[i - 1])) return GK_ERR_MODEL;
+    }
+    m->n_temp = n_temp;
+    m->temperature_C = temperature_C;
+    m->temp_ia = 0;
+    m->temp_two = 0;
+    m->temp_w = 0.0;
+    m->temperature_now_C = temperature_C[0];
+    return GK_OK;
+}
+
+int gk_set_temperature(gk_model *m, double T)
+{
+    int ia = 0, nt;
+    if (m == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T)) return GK_ERR_INPUT;
+    nt = m->n_temp;
+    if (m->temperature_C == NULL) return GK_ERR_INPUT; /* no axis: nothing to select */
+    if (T < m->temperature_C[0] || T > m->temperature_C[nt - 1]) return GK_ERR_INPUT;
+    while (ia < nt - 1 && m->temperature_C[ia + 1] <= T) ia++;
+    m->temp_ia = ia;
+    if (m->temperature_C[ia] == T) {
+        m->temp_two = 0;
+        m->temp_w = 0.0;
+    } else {
+        m->temp_two = 1;
+        m->temp_w = (T - m->temperature_C[ia]) / (m->temperature_C[ia + 1] - m->temperature_C[ia]);
+    }
+    m->temperature_now_C = T;
     return GK_OK;
 }
 
@@ -152,20 +196,42 @@ static void row_interp(const double *A, const gk_ph *c, double dphi, double *val
     if (slope != NULL) *slope = (a1 - a0) / dphi;
 }
 
+/* row_interp on the nodes of the selected temperature: with two slices each node
+ * is A[i] + wT*(B[i] - A[i]) first (docs/model.md "Temperature axis"); B is the
+ * next temperature slice of the same torque row */
+static void row_interp_t(const gk_model *m, const double *A, const gk_ph *c, double *val, double *slope)
+{
+    double a0, a1;
+    const double *B;
+    if (!m->temp_two) {
+        row_interp(A, c, m->dphi_rad, val, slope);
+        return;
+    }
+    B = A + (size_t)m->P * m->n_phi;
+    a0 = A[c->i0];
+    a1 = A[c->i1];
+    a0 = a0 + m->temp_w * (B[c->i0] - a0);
+    a1 = a1 + m->temp_w * (B[c->i1] - a1);
+    *val = a0 + c->w * (a1 - a0);
+    if (slope != NULL) *slope = (a1 - a0) / m->dphi_rad;
+}
+
 /* k, e, de/dphi, b of slot j */
 static void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j,
                         double *k, double *e, double *de_dphi, double *b)
 {
     int P = m->P, N = m->n_phi;
-    const double *ka = m->k_N_per_m + ((size_t)t->it * P + j) * N;
-    const double *ea = m->e_m + ((size_t)t->it * P + j) * N;
+    size_t row = (((size_t)t->it * m->n_temp + m->temp_ia) * P + j) * N;  /* [it][ia][j][:] */
+    size_t next_torque = (size_t)m->n_temp * P * N;
+    const double *ka = m->k_N_per_m + row;
+    const double *ea = m->e_m + row;
     double kv, ev, es;
-    row_interp(ka, c, m->dphi_rad, &kv, NULL);
-    row_interp(ea, c, m->dphi_rad, &ev, &es);
+    row_interp_t(m, ka, c, &kv, NULL);
+    row_interp_t(m, ea, c, &ev, &es);
     if (t->two_rows) {
         double kv2, ev2, es2;
-        row_interp(ka + (size_t)P * N, c, m->dphi_rad, &kv2, NULL);
-        row_interp(ea + (size_t)P * N, c, m->dphi_rad, &ev2, &es2);
+        row_interp_t(m, ka + next_torque, c, &kv2, NULL);
+        row_interp_t(m, ea + next_torque, c, &ev2, &es2);
         kv = kv + t->wT * (kv2 - kv);
         ev = ev + t->wT * (ev2 - ev);
         es = es + t->wT * (es2 - es);

@@ -18,7 +18,7 @@
 extern "C" {
 #endif
 
-#define GK_ABI_VERSION 1
+#define GK_ABI_VERSION 2
 
 /* status codes */
 #define GK_OK 0
@@ -61,8 +61,8 @@ typedef struct gk_model {
     int n_phi;             /* angle points per period */
     int n_torque;          /* torque rows (>= 1) */
     const double *torque_Nm;        /* [n_torque], strictly ascending */
-    const double *k_N_per_m;        /* [n_torque][P][n_phi] */
-    const double *e_m;              /* [n_torque][P][n_phi] */
+    const double *k_N_per_m;        /* [n_torque][n_temp][P][n_phi] */
+    const double *e_m;              /* [n_torque][n_temp][P][n_phi] */
     const double *backlash_half_m;  /* [P][n_phi] */
     double phi_period_rad;
     double dphi_rad;                /* phi_period_rad / n_phi */
@@ -74,6 +74,13 @@ typedef struct gk_model {
     double c_Ns_per_m;              /* 2 zeta sqrt(k_mean m_e) */
     int damping_model;              /* GK_DAMPING_* */
     int integrator;                 /* GK_INTEGRATOR_* (gk_init: RK4) */
+    /* temperature axis (docs/model.md "Temperature axis"; gk_init: none, n_temp = 1) */
+    int n_temp;                     /* temperature slices (>= 1) */
+    const double *temperature_C;    /* [n_temp], strictly ascending, degC (NULL when n_temp = 1 without axis) */
+    int temp_ia;                    /* selected slice */
+    int temp_two;                   /* 1: blend slices temp_ia, temp_ia + 1 with temp_w */
+    double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
+    double temperature_now_C;       /* the temperature selected last (degC) */
 } gk_model;
 
 typedef struct gk_state {
@@ -97,6 +104,17 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *e_m, const double *backlash_half_m,
             double phi_period_rad, double Rb1_m, double Rb2_m,
             double I1_kgm2, double I2_kgm2, double k_mean_N_per_m);
+
+/* Declare a temperature axis (call after gk_init): k and e are then laid out
+ * [n_torque][n_temp][P][n_phi].  temperature_C (degC, borrowed) finite and
+ * strictly ascending, n_temp >= 1.  Selects the first slice.  GK_ERR_MODEL otherwise. */
+int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C);
+
+/* Select the bulk temperature (degC) for the following steps and outputs:
+ * docs/model.md "Temperature axis" (node-wise linear blend of the bracketing
+ * slices; exactly one slice at a node).  Non-finite or outside
+ * [axis[0], axis[n_temp-1]] (no clamping): GK_ERR_INPUT, selection unchanged. */
+int gk_set_temperature(gk_model *m, double temperature_C);
 
 /* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_SEED003 */
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);

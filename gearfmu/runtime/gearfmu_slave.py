@@ -30,7 +30,8 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 from pythonfmu.variables import Integer, Real
 
 RUNTIME_FILE = "gearfmu_runtime.json"
-TABLE_VERSIONS = (1,)  # docs/tables.md
+TABLE_VERSIONS = (1, 2)  # docs/tables.md (2: operating axes with a temperature axis)
+TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects the temperature axis (docs/model.md)
 
 # Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian
 # header, the raw bytes of the kernel's gk_state, the output vector, the values
@@ -110,6 +111,8 @@ def _bind(lib):
         "gk_init": ([c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6, c_int),
         "gk_set_damping": ([c_void_p, c_double, c_int], c_int),
         "gk_set_integrator": ([c_void_p, c_int], c_int),
+        "gk_set_temperature_axis": ([c_void_p, c_int, c_void_p], c_int),
+        "gk_set_temperature": ([c_void_p, c_double], c_int),
         "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
         "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
         "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
@@ -204,6 +207,16 @@ class GearFmuSlave(Fmi2Slave):
             msg = f"resources/tables.json: kernel rejects the tables ({_KERNEL_ERRORS.get(st, st)})"
             self.log(msg, Fmi2Status.fatal)
             raise GearFmuResourceError(msg)
+        self._temperature_range = None
+        if "temperature_C" in arr:  # version 2 tables with a temperature axis (docs/tables.md)
+            self._tax = arr["temperature_C"]
+            st = lib.gk_set_temperature_axis(self._pm, int(self._tax.size), self._tax.ctypes.data)
+            if st != 0 or TEMPERATURE_INPUT not in [v["name"] for v in cfg["variables"]]:
+                msg = (f"resources/tables.json: temperature axis rejected by the kernel or no "
+                       f"{TEMPERATURE_INPUT} input in the variable table")
+                self.log(msg, Fmi2Status.fatal)
+                raise GearFmuResourceError(msg)
+            self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
         self._slots = P
         self._torque_range = (float(self._torque[0]), float(self._torque[-1])) if nt > 1 else None
         self._initialized = False
@@ -290,6 +303,25 @@ class GearFmuSlave(Fmi2Slave):
         self._zeta_applied = zeta
         return True
 
+    def _apply_temperature(self, t):
+        """Select the bulk temperature in the kernel; a message if it is NaN/inf or
+        outside the temperature axis (policy: reject, no clamping; docs/fmu.md)."""
+        if self._temperature_range is None:
+            return None
+        val = self._v[TEMPERATURE_INPUT]
+        lo, hi = self._temperature_range
+        try:
+            T = float(val)
+        except (TypeError, ValueError):
+            return f"{TEMPERATURE_INPUT} = {val!r} at t = {t!r} s: not a number"
+        if not math.isfinite(T) or not lo <= T <= hi:
+            return (f"{TEMPERATURE_INPUT} = {T!r} degC at t = {t!r} s outside the table range "
+                    f"[{lo!r}, {hi!r}] degC")
+        st = self._lib.gk_set_temperature(self._pm, T)
+        if st != 0:
+            return f"{TEMPERATURE_INPUT} = {T!r} degC at t = {t!r} s: {_KERNEL_ERRORS.get(st, st)}"
+        return None
+
     def _check_torque_range(self, T1, t):
         if self._torque_range is None:
             return
@@ -321,6 +353,10 @@ class GearFmuSlave(Fmi2Slave):
             if st != 0:
                 self.log(f"integrator = {self._v['integrator']!r}: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
                 return False
+        msg = self._apply_temperature(t)
+        if msg:
+            self.log(msg + "; cannot compute the initial state", Fmi2Status.error)
+            return False
         T1 = float(self._v["pinion_torque"])
         st = self._lib.gk_initialize(self._pm, self._ps, float(self._v["pinion_angle_start"]),
                                      float(self._v["pinion_speed_start"]), T1)
@@ -357,6 +393,10 @@ class GearFmuSlave(Fmi2Slave):
                 return False
             msgs = [m for m in (self._bad_value("pinion_torque", current_time),
                                 self._bad_value("gear_torque", current_time)) if m]
+            if not msgs:
+                msg = self._apply_temperature(current_time)
+                if msg:
+                    msgs.append(msg)
             if not (isinstance(step_size, float) and math.isfinite(step_size) and step_size > 0.0):
                 msgs.append(f"communication step size {step_size!r} at t = {current_time!r} s: must be finite and > 0")
             if msgs:

@@ -84,13 +84,15 @@ typedef struct {
     gf_var *vars;
     double *values;       /* current value of every variable (Integer ones held exactly) */
     unsigned char *blob;  /* tables.bin */
-    double *arr_torque, *arr_k, *arr_e, *arr_b;
+    double *arr_torque, *arr_k, *arr_e, *arr_b, *arr_temp;
     gk_model *model;
     gk_state state;
     double *out;
     int n_out;
     int P;
     int vr_T1, vr_T2, vr_zeta, vr_w0, vr_th0, vr_hmax, vr_dm, vr_integrator;
+    int vr_temp;          /* bulk_temperature input, -1 without a temperature axis */
+    double temp_lo, temp_hi;
     int mode;
     int initialized;
     int warned_range;
@@ -327,6 +329,7 @@ typedef struct {
     char sha[65];
     long P, n_phi, n_torque, bin_size;
     long off_torque, off_k, off_e, off_b;
+    long n_temp, off_temp;  /* optional: temperature axis (n_temp = 0: none) */
     double phi_period, Rb1, Rb2, I1, I2, k_mean;
     int have_mask;
 } gf_config;
@@ -436,6 +439,8 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
         GF_L("offset.k_N_per_m", off_k, HAVE_OK)
         GF_L("offset.e_m", off_e, HAVE_OE)
         GF_L("offset.backlash_half_m", off_b, HAVE_OB)
+        GF_L("n_temperature", n_temp, 0)
+        GF_L("offset.temperature_C", off_temp, 0)
         GF_D("phi_period_rad", phi_period, HAVE_PHI)
         GF_D("base_radius_pinion_m", Rb1, HAVE_RB1)
         GF_D("base_radius_gear_m", Rb2, HAVE_RB2)
@@ -566,6 +571,25 @@ static void check_torque_range(gf_inst *c, double T1)
     }
 }
 
+/* Select the bulk temperature in the kernel (docs/model.md "Temperature axis");
+ * NULL if fine, else a message in buf (NaN/inf or outside the axis: rejected, no clamping) */
+static const char *apply_temperature(gf_inst *c, char *buf, size_t cap)
+{
+    double T;
+    if (c->vr_temp < 0) return NULL;
+    T = c->values[c->vr_temp];
+    if (!isfinite(T) || T < c->temp_lo || T > c->temp_hi) {
+        snprintf(buf, cap, "bulk_temperature = %.17g degC at t = %.17g s outside the table range [%.17g, %.17g] degC",
+                 T, c->time, c->temp_lo, c->temp_hi);
+        return buf;
+    }
+    if (gk_set_temperature(c->model, T) != GK_OK) {
+        snprintf(buf, cap, "bulk_temperature = %.17g degC at t = %.17g s: rejected by the kernel", T, c->time);
+        return buf;
+    }
+    return NULL;
+}
+
 static int init_state(gf_inst *c)
 {
     char buf[512];
@@ -598,6 +622,10 @@ static int init_state(gf_inst *c)
         }
     }
 #endif
+    if (ok && apply_temperature(c, buf, sizeof buf) != NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "%s; cannot compute the initial state", buf);
+        ok = 0;
+    }
     if (!ok) return 0;
     c->zeta_valid = 0;
     if (!apply_damping(c)) return 0;
@@ -668,6 +696,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     copy_str(c->instance_name, sizeof c->instance_name, instanceName ? instanceName : "gearfmu");
     c->logging_on = loggingOn ? 1 : 0;
     c->vr_integrator = -1;
+    c->vr_temp = -1;
     if (fmuType != fmi2CoSimulation) return instantiate_error(c, "only Co-Simulation is supported");
     if (!resource_path(fmuResourceLocation, GF_CONFIG_FILE, path, sizeof path))
         return instantiate_error(c, "resource location is not a file:// URI");
@@ -701,13 +730,16 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     c->tables_tag = 0;
     for (i = 0; i < 16; ++i) c->tables_tag = (c->tables_tag << 4) | (uint64_t)hexval(cfg.sha[i]);
     {
-        long P = cfg.P, N = cfg.n_phi, NT = cfg.n_torque;
-        long need[4], offs[4];
-        if (P < 1 || N < 2 || NT < 1 || P > 1000 || N > 100000000L / P || NT > 10000)
+        long P = cfg.P, N = cfg.n_phi, NT = cfg.n_torque, NTemp = cfg.n_temp > 0 ? cfg.n_temp : 1;
+        long need[5], offs[5];
+        int n_arr = cfg.n_temp > 0 ? 5 : 4;
+        if (P < 1 || N < 2 || NT < 1 || P > 1000 || N > 100000000L / P || NT > 10000 || NTemp > 10000 ||
+            NT * NTemp > 10000)
             return instantiate_error(c, "table dimensions out of range");
-        need[0] = NT; need[1] = NT * P * N; need[2] = NT * P * N; need[3] = P * N;
+        need[0] = NT; need[1] = NT * NTemp * P * N; need[2] = NT * NTemp * P * N; need[3] = P * N; need[4] = NTemp;
         offs[0] = cfg.off_torque; offs[1] = cfg.off_k; offs[2] = cfg.off_e; offs[3] = cfg.off_b;
-        for (i = 0; i < 4; ++i)
+        offs[4] = cfg.off_temp;
+        for (i = 0; i < n_arr; ++i)
             if (offs[i] < 0 || offs[i] % 8 != 0 || offs[i] + 8 * need[i] > (long)size)
                 return instantiate_error(c, "table array offsets outside resources/tables.bin");
         if (!host_little_endian()) swap8(c->blob, size / 8); /* stored little-endian (docs/tables.md) */
@@ -715,6 +747,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         c->arr_k = (double *)(void *)(c->blob + cfg.off_k);
         c->arr_e = (double *)(void *)(c->blob + cfg.off_e);
         c->arr_b = (double *)(void *)(c->blob + cfg.off_b);
+        c->arr_temp = (double *)(void *)(c->blob + cfg.off_temp);
         c->P = (int)P;
         c->model = (gk_model *)calloc(1, (size_t)gk_sizeof_model());
         c->n_out = gk_n_outputs(c->P);
@@ -725,6 +758,12 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         if (st != GK_OK) {
             snprintf(err, sizeof err, "kernel rejects the tables (%s)", kernel_error(st));
             return instantiate_error(c, err);
+        }
+        if (cfg.n_temp > 0) { /* temperature axis: k, e are [NT][NTemp][P][N] */
+            if (gk_set_temperature_axis(c->model, (int)NTemp, c->arr_temp) != GK_OK)
+                return instantiate_error(c, "kernel rejects the temperature axis (not finite and ascending)");
+            c->temp_lo = c->arr_temp[0];
+            c->temp_hi = c->arr_temp[NTemp - 1];
         }
         c->has_torque_range = NT > 1;
         c->torque_lo = c->arr_torque[0];
@@ -739,6 +778,10 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     c->vr_hmax = find_var(c, "max_step");
     c->vr_dm = find_var(c, "damping_model");
     c->vr_integrator = find_var(c, "integrator");
+    if (cfg.n_temp > 0) {
+        c->vr_temp = find_var(c, "bulk_temperature");
+        if (c->vr_temp < 0) return instantiate_error(c, "tables have a temperature axis but no bulk_temperature input");
+    }
     if (c->vr_T1 < 0 || c->vr_T2 < 0 || c->vr_zeta < 0 || c->vr_w0 < 0 || c->vr_th0 < 0 || c->vr_hmax < 0 ||
         c->vr_dm < 0)
         return instantiate_error(c, "variable table lacks one of pinion_torque, gear_torque, damping_ratio, "
@@ -1135,6 +1178,10 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
         gf_log(c, fmi2Discard, "logStatusDiscard",
                "communication step size %g at t = %.17g s: must be finite and > 0; step rejected, state unchanged",
                H, c->time);
+        bad = 1;
+    }
+    if (!bad && apply_temperature(c, buf, sizeof buf) != NULL) {
+        gf_log(c, fmi2Discard, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
         bad = 1;
     }
     if (bad) return fmi2Discard;

@@ -1,0 +1,394 @@
+"""Temperature axis of the tables (format version 2) and the FMU input
+``bulk_temperature`` (issue 4; docs/tables.md "Operating axes", docs/model.md
+"Temperature axis", docs/fmu.md).
+
+References, none produced by gearfmu:
+* the stored slices themselves: at an axis node every kernel must reproduce the
+  single-temperature tables bit for bit (docs/model.md: one slice at a node);
+* between nodes the trilinear interpolation in (temperature, pinion angle,
+  torque) written out by hand as the weighted sum of the 8 corner values
+  (a formula independent of the kernels' nested arithmetic), to 1e-12;
+* native (numba), pythonfmu FMU and standalone FMU: three implementations of the
+  same rule, compared with each other under a temperature ramp (<= 1e-9 of
+  range, the project's agreement criterion; docs/standalone.md);
+* seed 004 Fig. 5 ("low-high-low"): the mesh stiffness is highest at the
+  standard temperature 30 degC and lower at 70 degC (expansion) and lower
+  still at 10 degC (shrinkage; seed 004 Tables 2-3: the 10 degC shrinkage lowers
+  every stiffness more than the 70 degC expansion) -- checked on the mean
+  mesh_stiffness output of dynamic runs;
+* the FMI 2.0 standard for the interface: fmi2Discard and a log message for a
+  rejected step, the value restored by fmi2SetFMUstate.
+"""
+import ctypes
+import json
+import math
+from pathlib import Path
+
+import fmpy
+from fmpy.fmi1 import FMICallException
+import numpy as np
+import pytest
+
+from gearfmu.compare import native_columns, output_names
+from gearfmu.fmubuild import build_fmu, compile_kernel
+from gearfmu.modeldesc import expand_variables, load_spec
+from gearfmu.native import NativeInputError, simulate
+from gearfmu.pipeline import compute_tables
+from gearfmu.scene import load_scene
+from gearfmu.ssp import build_ssp, default_variants
+from gearfmu.standalone_build import build_standalone_fmu
+from gearfmu.tables import TableError, TemperatureRangeError, load_tables, stack_temperatures
+
+from test_fmu import make_tables
+from test_standalone import _callbacks
+from test_state import Inst as _Inst
+
+AXIS = (10.0, 30.0, 70.0)
+H = 1e-4
+N_STEPS = 80
+REPO = Path(__file__).resolve().parent.parent
+
+
+class Inst(_Inst):
+    """test_state.Inst with a logger that formats the C runtime's printf-style messages."""
+
+    def __init__(self, path, name):
+        from fmpy.fmi2 import FMU2Slave
+        self.md = fmpy.read_model_description(str(path))
+        self.log = []
+        self._cb = _callbacks(self.log)
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=fmpy.extract(str(path)),
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.fmu.instantiate(callbacks=self._cb, loggingOn=True)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+
+
+def temp_tables():
+    """P = 2, torque axis [50, 150] N.m, three temperature slices that differ in k and e."""
+    slices = []
+    for f, g in ((0.8, 1.3), (1.0, 1.0), (0.9, 0.7)):
+        t = make_tables(torque=(50.0, 150.0))
+        t.k_N_per_m[:] *= f
+        t.k_N_per_m[1] *= 1.15
+        t.e_m[:] *= g
+        slices.append(t)
+    return stack_temperatures(slices, AXIS, temperature_reference_C=30.0), slices
+
+
+@pytest.fixture(scope="module")
+def tabs():
+    return temp_tables()
+
+
+@pytest.fixture(scope="module")
+def fmus(tabs, tmp_path_factory):
+    d = tmp_path_factory.mktemp("tempaxis")
+    tt, _ = tabs
+    kw = dict(max_step_s=1e-5, pinion_torque_start_Nm=100.0, pinion_speed_start_rad_s=100.0,
+              stop_time_s=N_STEPS * H, output_interval_s=H)
+    return {"pythonfmu": build_fmu(tt, d / "py.fmu", model_name="tempPy", **kw),
+            "standalone": build_standalone_fmu(tt, d / "sa.fmu", model_name="tempSa", validation=False, **kw),
+            "plain": build_fmu(make_tables(), d / "plain.fmu", model_name="plain", **kw)}
+
+
+# ------------------------------------------------------------------ format
+def test_tables_with_temperature_axis_round_trip_as_version_2(tabs, tmp_path):
+    tt, _ = tabs
+    for back in (load_tables(tt.save(tmp_path / "t.gtab")), load_tables(tt.write_dir(tmp_path / "d"))):
+        assert back.has_temperature_axis and back.temperature_C.tolist() == list(AXIS)
+        assert back.temperature_reference_C == 30.0
+        for n in ("k_N_per_m", "e_m", "backlash_half_m", "torque_Nm", "e_comprehensive_m", "static_te_m"):
+            a, b = getattr(back, n), getattr(tt, n)
+            assert (a is None and b is None) or np.array_equal(a, b), n
+    meta = json.loads((tmp_path / "d" / "tables.json").read_text())
+    assert meta["version"] == 2 and meta["n_temperature"] == 3
+    assert [a["name"] for a in meta["axes"]] == ["torque_Nm", "temperature_C"]
+    assert meta["arrays"]["k_N_per_m"]["shape"] == [2, 3, 2, 64]
+    # tables without the axis are still written as version 1 and read with NTemp = 1
+    plain = make_tables()
+    assert json.loads(plain.to_bytes()[0])["version"] == 1
+    back = load_tables(plain.save(tmp_path / "p.gtab"))
+    assert not back.has_temperature_axis and back.n_temperature == 1
+
+
+def test_version_2_with_an_unknown_operating_axis_is_rejected(tabs, tmp_path):
+    tt, _ = tabs
+    meta, binary = tt.to_bytes()
+    m = json.loads(meta)
+    m["axes"][1]["name"] = "speed_rad_s"
+    d = tmp_path / "t"
+    d.mkdir()
+    (d / "tables.json").write_text(json.dumps(m))
+    (d / "tables.bin").write_bytes(binary)
+    with pytest.raises(TableError, match="operating axis 'speed_rad_s' unknown"):
+        load_tables(d)
+
+
+# -------------------------------------------------------------- the C kernel
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("k"))))
+    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
+    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
+    L.gk_set_damping.argtypes = [p, d, i]
+    L.gk_set_temperature_axis.argtypes = [p, i, p]
+    L.gk_set_temperature.argtypes = [p, d]
+    L.gk_initialize.argtypes = [p, p, d, d, d]
+    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+    L.gk_outputs.argtypes = [p, p, d, p]
+    return L
+
+
+class Kernel:
+    def __init__(self, L, t):
+        self.L, self.t = L, t
+        self.arrs = [np.ascontiguousarray(a, dtype=float) for a in
+                     (t.torque_Nm, t.k_N_per_m, t.e_m, t.backlash_half_m)]
+        self.m = np.zeros(L.gk_sizeof_model() // 8 + 2)
+        self.s = np.zeros(4)
+        self.out = np.zeros(L.gk_n_outputs(t.slots))
+        assert L.gk_init(self.m.ctypes.data, t.slots, t.n_phi, t.n_torque, *[a.ctypes.data for a in self.arrs],
+                         t.phi_period_rad, t.base_radius_pinion_m, t.base_radius_gear_m, t.inertia_pinion_kgm2,
+                         t.inertia_gear_kgm2, t.k_mean_N_per_m) == 0
+        assert L.gk_set_damping(self.m.ctypes.data, 0.02, 0) == 0
+        if t.has_temperature_axis:
+            self.tax = np.ascontiguousarray(t.temperature_C)
+            assert L.gk_set_temperature_axis(self.m.ctypes.data, self.tax.size, self.tax.ctypes.data) == 0
+
+    def temperature(self, T):
+        return self.L.gk_set_temperature(self.m.ctypes.data, T)
+
+    def run(self, T1, n=40):
+        assert self.L.gk_initialize(self.m.ctypes.data, self.s.ctypes.data, 0.01, 100.0, T1) == 0
+        rows = []
+        for _ in range(n):
+            assert self.L.gk_do_step(self.m.ctypes.data, self.s.ctypes.data, T1, T1 * 1.5, H, 1e-5,
+                                     self.out.ctypes.data) == 0
+            rows.append(self.out.copy())
+        return np.array(rows)
+
+    def stiffness_at(self, theta, T1):
+        """mesh_stiffness with every slot pressed into contact (x far beyond e + b)."""
+        self.s[:] = (theta, 0.0, 1e-3, 0.0)
+        assert self.L.gk_outputs(self.m.ctypes.data, self.s.ctypes.data, T1, self.out.ctypes.data) == 0
+        return self.out[6]
+
+
+@pytest.mark.parametrize("T1", [100.0, 150.0])
+def test_at_a_node_both_kernels_reproduce_the_single_temperature_tables_exactly(tabs, lib, T1):
+    tt, slices = tabs
+    for T, sl in zip(AXIS, slices):
+        k = Kernel(lib, tt)
+        assert k.temperature(T) == 0
+        ref = Kernel(lib, sl).run(T1)
+        assert np.array_equal(k.run(T1), ref), T
+        for ig in ("rk4", "rk4_kink"):
+            kw = dict(stop_time_s=20 * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=T1,
+                      pinion_speed_start_rad_s=100.0, damping_ratio=0.02, integrator=ig)
+            a = simulate(tt, bulk_temperature_C=T, **kw)
+            b = simulate(sl, **kw)
+            assert np.array_equal(a.dte, b.dte) and np.array_equal(a.pair_force, b.pair_force), (T, ig)
+
+
+def test_between_nodes_the_trilinear_rule_by_hand(tabs, lib):
+    """k at (T, theta1, T1) = sum over the 8 corners of w_T w_phi w_Tq k[corner]
+    (docs/model.md "Temperature axis"), by hand; the C kernel and
+    tables.at_temperature (the native path) to 1e-12, and bitwise to each other."""
+    tt, _ = tabs
+    kern = Kernel(lib, tt)
+    dphi = tt.phi_period_rad / tt.n_phi
+    rng = np.random.default_rng(4)
+    for _ in range(25):
+        T = rng.uniform(10.0, 70.0)
+        T1 = rng.uniform(50.0, 150.0)
+        theta = rng.uniform(0.0, tt.phi_period_rad)
+        a = 0 if T < 30.0 else 1
+        wT = (T - AXIS[a]) / (AXIS[a + 1] - AXIS[a])
+        wq = (T1 - 50.0) / 100.0
+        s = theta / dphi
+        i0 = int(math.floor(s))
+        wp = s - i0
+        i1 = (i0 + 1) % tt.n_phi
+        hand = 0.0
+        for ia, fa in ((a, 1 - wT), (a + 1, wT)):
+            for ip, fp in ((i0, 1 - wp), (i1, wp)):
+                for iq, fq in ((0, 1 - wq), (1, wq)):
+                    hand += fa * fp * fq * tt.k_N_per_m[iq, ia, :, ip].sum()
+        assert kern.temperature(T) == 0
+        c_val = kern.stiffness_at(theta, T1)
+        ref_tab = tt.at_temperature(T)
+        py_val = Kernel(lib, ref_tab).stiffness_at(theta, T1)
+        assert c_val == pytest.approx(hand, rel=1e-12)
+        assert c_val == py_val  # node-wise blend first: the same arithmetic in both paths
+
+
+def test_kernel_rejects_temperatures_outside_the_axis_and_nan(tabs, lib):
+    tt, _ = tabs
+    k = Kernel(lib, tt)
+    assert k.temperature(30.0) == 0
+    for bad in (9.999, 70.001, float("nan"), float("inf")):
+        assert k.temperature(bad) == 2  # GK_ERR_INPUT
+    assert k.temperature(10.0) == 0 and k.temperature(70.0) == 0
+
+
+def test_native_rejects_out_of_range_and_missing_axis(tabs):
+    tt, slices = tabs
+    kw = dict(stop_time_s=5 * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=100.0,
+              pinion_speed_start_rad_s=100.0, damping_ratio=0.02)
+    with pytest.raises(NativeInputError, match=r"80.0 degC outside the table range \[10.0, 70.0\]"):
+        simulate(tt, bulk_temperature_C=80.0, **kw)
+    with pytest.raises(NativeInputError, match="bulk_temperature_C: contains NaN"):
+        simulate(tt, bulk_temperature_C=[30.0, float("nan"), 30.0, 30.0, 30.0], **kw)
+    with pytest.raises(NativeInputError, match="no temperature axis"):
+        simulate(slices[0], bulk_temperature_C=30.0, **kw)
+    with pytest.raises(TemperatureRangeError):
+        tt.at_temperature(5.0)
+
+
+# ------------------------------------------------------------- the FMUs
+def _ramp():
+    return np.linspace(12.0, 68.0, N_STEPS + 1)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink"])
+def test_native_pythonfmu_standalone_agree_with_a_temperature_ramp(tabs, fmus, integrator):
+    tt, _ = tabs
+    temps = _ramp()
+    ref = simulate(tt, stop_time_s=N_STEPS * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=100.0,
+                   pinion_speed_start_rad_s=100.0, damping_ratio=0.02, bulk_temperature_C=temps,
+                   integrator=integrator)
+    assert ref.info["temperature_runs"] == N_STEPS
+    cols = native_columns(ref, tt.slots)
+    sig = np.array([(i * H, temps[i]) for i in range(N_STEPS + 1)],
+                   dtype=[("time", float), ("bulk_temperature", float)])
+    for kind in ("pythonfmu", "standalone"):
+        res = fmpy.simulate_fmu(str(fmus[kind]), stop_time=N_STEPS * H, output_interval=H, step_size=H,
+                                input=sig, start_values={"integrator": 1 if integrator == "rk4_kink" else 0})
+        for n in output_names(tt.slots):
+            rngv = max(float(np.ptp(cols[n])), 1e-300)
+            assert np.max(np.abs(res[n] - cols[n])) <= 1e-9 * rngv, (kind, n)
+    # the temperature matters: a run at constant 30 degC differs by far more than that
+    flat = simulate(tt, stop_time_s=N_STEPS * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=100.0,
+                    pinion_speed_start_rad_s=100.0, damping_ratio=0.02, bulk_temperature_C=30.0)
+    assert np.max(np.abs(flat.dte - ref.dte)) > 1e-3 * np.ptp(ref.dte)
+
+
+@pytest.mark.parametrize("kind", ["pythonfmu", "standalone"])
+def test_out_of_range_or_nan_temperature_is_discarded_with_log_state_unchanged(fmus, kind):
+    x = Inst(fmus[kind], "oor")
+    for i in range(3):
+        x.set(bulk_temperature=30.0)
+        x.fmu.doStep(i * H, H)  # fmpy raises FMICallException on any status above warning
+    before = x.out()
+    for bad in (75.0, 5.0, float("nan")):
+        x.set(bulk_temperature=bad)
+        with pytest.raises(FMICallException) as info:
+            x.fmu.doStep(3 * H, H)
+        assert info.value.status == 2  # fmi2Discard
+        assert np.array_equal(x.out(), before)  # the step was not taken
+    x.set(bulk_temperature=70.0)
+    x.fmu.doStep(3 * H, H)  # the upper end itself is inside
+    x.close()
+    msgs = [m for st, m in x.log if st == 2]
+    assert any("bulk_temperature = 75" in m and "outside the table range [10" in m and "70" in m for m in msgs), msgs
+    assert any("bulk_temperature = 5" in m and "outside the table range" in m for m in msgs), msgs
+    assert any("bulk_temperature = nan" in m.lower() for m in msgs), msgs
+
+
+@pytest.mark.parametrize("kind", ["pythonfmu", "standalone"])
+def test_fmu_state_restores_the_temperature_input(fmus, kind):
+    x = Inst(fmus[kind], "st")
+    for i in range(5):
+        x.set(bulk_temperature=20.0 + i)
+        x.fmu.doStep(i * H, H)
+    saved = x.fmu.getFMUstate()
+    serial = x.fmu.serializeFMUstate(saved)
+    rows_a = []
+    for i in range(5, 15):
+        x.fmu.doStep(i * H, H)  # the input keeps its last value, 24 degC
+        rows_a.append(x.out())
+    x.set(bulk_temperature=60.0)
+    x.fmu.doStep(15 * H, H)
+    restored = x.fmu.deSerializeFMUstate(serial)
+    x.fmu.setFMUstate(restored)
+    vr = x.vr["bulk_temperature"]
+    assert x.fmu.getReal([vr]) == [24.0]
+    rows_b = []
+    for i in range(5, 15):
+        x.fmu.doStep(i * H, H)
+        rows_b.append(x.out())
+    x.fmu.freeFMUstate(saved)
+    x.fmu.freeFMUstate(restored)
+    x.close()
+    assert np.array_equal(np.array(rows_a), np.array(rows_b))
+
+
+def test_interface_has_the_input_only_with_a_temperature_axis(fmus, tabs):
+    tt, _ = tabs
+    md = fmpy.read_model_description(str(fmus["pythonfmu"]))
+    v = {x.name: x for x in md.modelVariables}
+    bt = v["bulk_temperature"]
+    assert (bt.causality, bt.variability, bt.unit) == ("input", "continuous", "degC")
+    assert (float(bt.start), float(bt.min), float(bt.max)) == (30.0, 10.0, 70.0)
+    assert max(x.valueReference for x in md.modelVariables) == bt.valueReference  # listed last
+    unit = {u.name: u for u in md.unitDefinitions}["degC"]
+    assert unit.baseUnit.K == 1 and unit.baseUnit.offset == 273.15  # FMI 2.0 BaseUnit of degC
+    sa = {x.name for x in fmpy.read_model_description(str(fmus["standalone"])).modelVariables}
+    assert "bulk_temperature" in sa
+    plain = {x.name: x.valueReference for x in fmpy.read_model_description(str(fmus["plain"])).modelVariables}
+    assert "bulk_temperature" not in plain
+    assert all(plain[n] == v[n].valueReference for n in plain)  # other value references unchanged
+    spec = load_spec()
+    assert len(expand_variables(spec, 2, ("temperature_axis",))) == len(expand_variables(spec, 2)) + 1
+
+
+def test_ssp_temperature_variants(fmus, tmp_path):
+    var = default_variants(0.02, (10.0, 70.0))
+    assert var["temperature_low"]["bulk_temperature"] == 10.0 and var["temperature_high"]["bulk_temperature"] == 70.0
+    assert "temperature_low" not in default_variants(0.02)
+    import zipfile
+    p = build_ssp(fmus["pythonfmu"], tmp_path / "t.ssp", var, stop_time_s=N_STEPS * H)
+    with zipfile.ZipFile(p) as z:
+        ssv = z.read("resources/temperature_high.ssv").decode()
+    assert 'name="bulk_temperature"' in ssv and 'value="70.0"' in ssv and 'unit="degC"' in ssv
+
+
+# --------------------------------------------------- scene -> tables (seed 004)
+SEED004_SCENE = (REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text().replace(
+    "slices = 25", "slices = 5")
+
+
+@pytest.fixture(scope="module")
+def seed004():
+    plain = compute_tables(load_scene(SEED004_SCENE))
+    hot = compute_tables(load_scene(SEED004_SCENE + "\n[thermal]\nstandard_temperature_C = 30.0\n"
+                                                    "temperature_axis_C = [10.0, 30.0, 70.0]\n"))
+    return plain, hot
+
+
+def test_scene_temperature_axis_slice_at_standard_temperature_is_the_standard_table(seed004):
+    plain, hot = seed004
+    assert hot.temperature_C.tolist() == [10.0, 30.0, 70.0] and hot.default_temperature_C == 30.0
+    at30 = hot.at_temperature(30.0)
+    # seed 004 eq 27-28 at t = t0: no thermal compliance, the standard stiffness
+    assert np.array_equal(at30.k_N_per_m, plain.k_N_per_m) and np.array_equal(at30.e_m, plain.e_m)
+    assert np.array_equal(at30.static_te_m, plain.static_te_m)
+    assert hot.provenance["thermal"]["flank_law"] == "radial_tangential"
+
+
+def test_seed004_low_high_low_in_dynamic_runs(seed004):
+    """Seed 004 Fig. 5: stiffness highest at the standard 30 degC; the 10 degC
+    shrinkage lowers it more than the 70 degC expansion (Tables 2-3)."""
+    _, hot = seed004
+    w = 2000.0 * 2 * math.pi / 60
+    period = 2 * math.pi / w  # one pinion revolution
+    mean_k = {}
+    for T in (10.0, 30.0, 70.0):
+        r = simulate(hot, stop_time_s=round(period / 2e-5) * 2e-5, comm_step_s=2e-5, pinion_torque_Nm=381.97,
+                     pinion_speed_start_rad_s=w, damping_ratio=0.05, bulk_temperature_C=T)
+        assert "diverged_at_step" not in r.info
+        mean_k[T] = float(np.mean(r.mesh_stiffness[len(r.mesh_stiffness) // 4:]))
+    assert mean_k[30.0] > mean_k[70.0] > mean_k[10.0], mean_k
