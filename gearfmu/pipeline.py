@@ -49,8 +49,18 @@ def compute_tables(scene, *, progress: bool = False):
         slots=scene.tables.slots,
         progress=progress,
         provenance=prov,
+        **_contact_kw(scene, progress),
         thermal=getattr(scene, "thermal", None),
     )
+
+
+def _contact_kw(scene, progress: bool) -> dict:
+    """``contact_env`` for the EHL contact models (gearfmu/contact_models.py); {} for Hertz."""
+    if scene.mesh.contact_model == "hertz":
+        return {}
+    from .contact_models import environment_from_scene
+
+    return {"contact_env": environment_from_scene(scene, progress=progress)}
 
 
 def max_step_for(scene, tables) -> float:
@@ -76,6 +86,7 @@ class BuildResult:
     tables_wall_s: float
     build_wall_s: float
     max_step_s: float
+    plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
@@ -92,6 +103,12 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     elif runtime != "pythonfmu":
         raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
 
+    plan = None
+    if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
+        from .plan import plan_scene, planned_scene
+
+        plan = plan_scene(scene, progress=progress)
+        scene = planned_scene(scene, plan)
     t0 = time.perf_counter()
     if tables is None:
         tables = compute_tables(scene, progress=progress)
@@ -113,7 +130,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         **_integrator_kw(build_fmu, scene),
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
 
 
 def _integrator_kw(builder, scene) -> dict:

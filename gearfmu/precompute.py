@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from dataclasses import replace
 import sys
 import time
 from typing import Optional, Sequence
@@ -137,10 +138,182 @@ def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
     return k_tile, k_slice
 
 
+#: torque axis (multiples of the nominal torque) given to the tables of a load-dependent
+#: contact model (EHL film) when no axis with at least two torques is asked for
+LOAD_DEPENDENT_TORQUE_FACTORS = (0.5, 1.0, 1.5)
+#: load-sharing iteration with a load-dependent contact stiffness: largest change of a
+#: slice load between passes, relative to the mean slice load F/NS, and the pass limit
+LOAD_ITERATION_TOL = 1e-3
+LOAD_ITERATION_MAX = 8
+#: load floor of every slice in the contact zone (light or no static load), a share
+#: of the mean line load F/b): its film is evaluated there (docs/ehl_mesh.md)
+UNLOADED_SLICE_LOAD_SHARE = 0.5
+
+
+def _slice_loads_N(k_slice, e_pair, crowning, force_N):
+    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (seed 000 eq 16)."""
+    lm = loaded_static_mesh(k_slice, e_pair, crowning, force_N)
+    gap = e_pair[:, None, :] + crowning[None, :, None]
+    return k_slice * np.maximum(0.0, lm.static_te_m[None, None, :] - gap)
+
+
+class _ContactIteration:
+    """Slice stiffness with a load-dependent contact model, iterated with the
+    loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
+
+    def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
+        from .contact_models import get_contact_model, tooth_compliances
+        from .stiffness import slot_stiffness
+
+        self.model = get_contact_model(opts.contact_model)
+        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:
+            raise PrecomputeInputError(f"contact_model: {opts.contact_model!r} is implemented for spur pairs "
+                                       "only (use 'hertz' for helical pairs)")
+        self.env, self.opts, self.e, self.E = env, opts, e_slot, E
+        ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
+        self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
+        self.NS = int(opts.slices)
+        ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
+        self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
+        self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
+        self.width = ss.slice_width_m
+        self.face = ss.slice_width_m * self.NS
+        self.nominal_F = nominal_F
+        self.zone = np.broadcast_to(np.isfinite(self.s)[:, None, :], self.k_hertz.shape)
+        self.solves = 0
+        self.records = []
+        self._pool = None
+
+    def __enter__(self):
+        """Open one local process pool for all passes and rows (unless the
+        environment brings an executor or asks for max_workers = 1)."""
+        env = self.env
+        if env.executor is None and (env.max_workers is None or env.max_workers > 1):
+            from .sweeps import make_executor
+
+            self._pool = make_executor(max_workers=env.max_workers)
+            self.env = replace(env, executor=self._pool.__enter__())
+        return self
+
+    def __exit__(self, *exc):
+        if self._pool is not None:
+            self._pool.__exit__(*exc)
+            self.env = replace(self.env, executor=None)
+            self._pool = None
+        return False
+
+    def k_slice(self, torque_Nm: float, rb1: float):
+        from .contact_models import sliced_mesh_stiffness
+
+        F = torque_Nm / rb1
+        F_eval = F if F > 0 else self.nominal_F
+        floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
+        k = self.k_hertz
+        loads = _slice_loads_N(k, self.e, self.E, F)
+        idx = np.nonzero(self.zone)
+        j, n, i = idx
+        kc = np.zeros(k.shape)
+        w_prev = np.full(j.shape, np.nan)
+        failed = np.zeros(j.shape, dtype=bool)
+        failures = {}
+        change = float("nan")
+        for it in range(1, LOAD_ITERATION_MAX + 1):
+            w = np.maximum(loads[idx] / self.width, floor)
+            # a (position, slice) whose film failed keeps its fallback in later passes
+            # (re-trying it at a slightly different load would let the sharing oscillate)
+            redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
+            if np.any(redo):
+                res = self.model.fn(self.env, self.s[j[redo], i[redo]], n[redo], w[redo])
+                self.solves += res.solves
+                kc[j[redo], n[redo], i[redo]] = res.k_N_per_m
+                w_prev = np.where(redo, w, w_prev)
+                for f in res.failures:
+                    failures[(f["s_m"], f["slice"])] = f
+                if res.failures:
+                    bad = {(f["s_m"], f["slice"]) for f in res.failures}
+                    sk = np.array([float(f"{x:.10g}") for x in self.s[j, i]])
+                    failed |= np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
+            k = sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts)
+            new = _slice_loads_N(k, self.e, self.E, F)
+            change = float(np.max(np.abs(new - loads)) / max(F / self.NS, 1e-300)) if F > 0 else 0.0
+            loads = new
+            if change < LOAD_ITERATION_TOL:
+                break
+        else:
+            import warnings
+            warnings.warn(f"{self.model.name}: load sharing not converged at torque {torque_Nm:g} N m after "
+                          f"{LOAD_ITERATION_MAX} passes (max slice-load change {change:.2e} of F/NS)")
+        self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
+                                 failures=len(failures), failure_list=list(failures.values())))
+        return k
+
+
+def _contact_provenance(ci, axis_note) -> dict:
+    """Provenance of a contact-model run: settings, passes, solves, film failures."""
+    import warnings
+
+    env = ci.env
+    fails = [f for r in ci.records for f in r["failure_list"]]
+    out = {
+        "model": ci.model.name, "load_dependent": ci.model.load_dependent,
+        "speed_rad_s": env.omega1_rad_s, "eta0_Pas": env.eta0_Pas, "alpha_Pa_inv": env.alpha_Pa_inv,
+        "rho0_kg_m3": env.rho0_kg_m3, "ehl_nodes": env.ehl_nodes,
+        "load_iteration": {"tol_slice_load_over_F_per_NS": LOAD_ITERATION_TOL, "max_passes": LOAD_ITERATION_MAX,
+                           "unloaded_slice_load_share": UNLOADED_SLICE_LOAD_SHARE,
+                           "rows": [{k: v for k, v in r.items() if k != "failure_list"} for r in ci.records]},
+        "solves": ci.solves,
+    }
+    if axis_note:
+        out["torque_axis_note"] = axis_note
+    r = env.roughness
+    if r is not None and ci.model.name == "rough_ehl":
+        out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
+                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure}
+        out["film_failures"] = len(fails)
+        out["film_failures_first"] = [
+            {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
+        if fails:
+            lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
+            msg = (f"rough_ehl: the rough film failed at {len(fails)} (position, slice, torque) points "
+                   f"(lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g}); Hertz contact stiffness used "
+                   "there (recorded in the tables' provenance 'contact.film_failures_first')"
+                   if lam else f"rough_ehl: the rough film failed at {len(fails)} points; Hertz used there")
+            out["warning"] = msg
+            warnings.warn(msg)
+    return out
+
+
+def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS, reps, e_slot, E,
+                  rb1, crowned, torques, nominal_torque_Nm, bar):
+    """Stiffness and error rows of the tables, one per torque of ``rows``."""
+    k_rows, e_rows, te_rows = [], [], []
+    k_nominal = None
+    for T in rows:
+        if contact_it is not None:
+            k_slice = contact_it.k_slice(T, rb1)
+            k_tile = k_slice.sum(axis=1)
+        else:
+            ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
+            k_tile, k_slice = _per_slice(ss, NS, reps)
+        lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
+        if crowned:
+            k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
+        else:
+            k_row, e_row = k_tile, e_slot + E[0]
+        if T == nominal_torque_Nm:
+            k_nominal = k_row
+        if len(k_rows) < len(torques):
+            k_rows.append(k_row)
+            e_rows.append(e_row)
+            te_rows.append(lm.static_te_m)
+        bar.step(f"torque {T:g} N m")
+    return k_rows, e_rows, te_rows, k_nominal
+
+
 def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_mesh: int = 64,
                       torque_axis_Nm: Optional[Sequence[float]] = None, nominal_torque_Nm: float,
                       slots: Optional[int] = None, progress: bool = False,
-                      provenance: Optional[dict] = None, thermal=None) -> MeshTables:
+                      provenance: Optional[dict] = None, contact_env=None, thermal=None) -> MeshTables:
     """Precompute the tooth-pair tables of a gear pair.
 
     ``points_per_mesh``: angle points per mesh period 2 pi/z1; ``torque_axis_Nm``:
@@ -153,6 +326,15 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     secant stiffness and effective error of :func:`gearfmu.loaded_mesh.loaded_static_mesh`
     (they reproduce the loaded static TE of that row exactly).  Lead crowning
     only acts with ``opts.slices`` > 1 (one slice sits at the face centre).
+
+    Load-dependent contact models (``opts.contact_model`` 'smooth_ehl',
+    'rough_ehl', :mod:`gearfmu.contact_models`) need ``contact_env`` (a
+    :class:`gearfmu.contact_models.ContactEnvironment`, e.g. from
+    :func:`gearfmu.contact_models.environment_from_scene`); every torque row
+    then holds the slice stiffness with the contact stiffness at that row's
+    slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
+    torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
+    x nominal (docs/ehl_mesh.md).
     """
     from .geometry import pair_geometry
 
@@ -183,6 +365,21 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     crowned = bool(np.any(E != E[0]))
     torques = _torque_axis(torque_axis_Nm, nominal_torque_Nm, crowned)
     load_dep_k = _stiffness_depends_on_load()
+    contact_it = None
+    axis_note = None
+    if opts.contact_model != "hertz":
+        from .contact_models import get_contact_model
+
+        cm = get_contact_model(opts.contact_model)
+        if cm.load_dependent or cm.needs_lubricant:
+            if contact_env is None:
+                raise PrecomputeInputError(f"contact_env: contact_model {opts.contact_model!r} needs a "
+                                           "ContactEnvironment (lubricant, speed, roughness)")
+            if cm.load_dependent and torques.size < 2:
+                torques = nominal_torque_Nm * np.asarray(LOAD_DEPENDENT_TORQUE_FACTORS, dtype=float)
+                axis_note = (f"torque axis {list(LOAD_DEPENDENT_TORQUE_FACTORS)} x nominal added: "
+                             f"contact model {opts.contact_model!r} is load-dependent")
+            load_dep_k = True
     n_mesh = pair_table_mesh_count(pair, slots)
     reps = n_mesh // slots
     N = n_mesh * points_per_mesh
@@ -192,8 +389,13 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     bar = _Progress(progress, 1 + len(rows), "gearfmu tables")
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
+    if opts.contact_model != "hertz":
+        contact_it = _ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
+                                       nominal_torque_Nm / rb1)
     ss_cache = None
-    if not load_dep_k:
+    if contact_it is not None:
+        pass
+    elif not load_dep_k:
         ss_cache = _slot_stiffness(pair, geom, opts, slots, points_per_mesh, None)
     if helical:  # slices see different roll positions: stiffness-weighted pair error
         ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
@@ -202,23 +404,15 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
             slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
     bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
 
-    k_rows, e_rows, te_rows = [], [], []
-    k_nominal = None
-    for T in rows:
-        ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
-        k_tile, k_slice = _per_slice(ss, NS, reps)
-        lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
-        if crowned:
-            k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
-        else:
-            k_row, e_row = k_tile, e_slot + E[0]
-        if T == nominal_torque_Nm:
-            k_nominal = k_row
-        if len(k_rows) < len(torques):
-            k_rows.append(k_row)
-            e_rows.append(e_row)
-            te_rows.append(lm.static_te_m)
-        bar.step(f"torque {T:g} N m")
+    if contact_it is not None:
+        contact_it.__enter__()
+    try:
+        _rows_loop = _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS,
+                                   reps, e_slot, E, rb1, crowned, torques, nominal_torque_Nm, bar)
+    finally:
+        if contact_it is not None:
+            contact_it.__exit__(None, None, None)
+    k_rows, e_rows, te_rows, k_nominal = _rows_loop
     bar.close()
 
     k_arr = np.ascontiguousarray(np.stack(k_rows))
@@ -234,6 +428,8 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         else ("load-dependent stiffness" if load_dep_k else "load-independent stiffness"),
         "wall_s": round(time.perf_counter() - t_start, 3),
     })
+    if contact_it is not None:
+        prov["contact"] = _contact_provenance(contact_it, axis_note)
     tables = MeshTables(
         torque_Nm=np.ascontiguousarray(torques, dtype=float),
         k_N_per_m=k_arr,
