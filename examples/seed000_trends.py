@@ -164,7 +164,7 @@ def _figures(base, curves, out: Path, slices: int) -> None:
     for name in ("hertz", "smooth", "rough_level_1", "rough_level_4"):
         ax[0].plot(curves[name][1] / 1e9, label=name)
     for name in curves:
-        if name.startswith("rough_level"):
+        if name.startswith("rough_level") and "@" not in name:
             ax[1].plot(curves[name][1] / 1e9, label=name)
     for r, t in enumerate(TORQUES):
         ax[2].plot(curves["smooth"][r] / 1e9, label=f"smooth {t:g} N m")
