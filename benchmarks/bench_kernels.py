@@ -2,20 +2,24 @@
 """Benchmark: per-internal-step cost of the C kernel (gearkernel.c, the FMUs'
 kernel) against the numba native kernel (gearfmu.native), measured in one run.
 
-Both integrate the same tables with the same RK4 substeps: a communication
-step spans ``--substeps`` internal steps, so per-call overhead (ctypes for C,
-the Python wrapper for numba) is spread thin.  C: ``gk_do_step`` called via
+Both integrate the same tables with the same substeps, once per integrator
+('rk4' and 'rk4_kink', docs/model.md; the integrator code is set in the C model
+with ``gk_set_integrator``): a communication step spans ``--substeps`` internal
+steps, so per-call overhead (ctypes for C, the Python wrapper for numba) is
+spread thin.  For 'rk4_kink' a "step" is a nominal substep, events included.  C: ``gk_do_step`` called via
 ctypes on the kernel compiled exactly as the FMUs compile it; numba:
 ``gearfmu.native.simulate`` (its ``wall_s`` excludes JIT compilation).  Two
 cases: the default scene's tables and a hard case with contact loss and
 impacts (rectangular-wave tables with backlash, light load).
 
-Prints one JSON object: per case ``c_ns_per_step``, ``numba_ns_per_step``
-and ``numba_over_c`` (the goal in issue 6: numba within 1.3x of C per step).
+Prints one JSON object: per case and integrator (key ``case/integrator``)
+``c_ns_per_step``, ``numba_ns_per_step``, ``numba_over_c`` and ``events``, and
+``max_numba_over_c`` over all (the goal in issue 6: numba within 1.3x of C per step).
+C and numba runs alternate, so both see the same machine load.
 Each timing is the best of ``--repeat`` runs (shared, noisy machines: compare
 ratios, not absolute times).
 
-    python benchmarks/bench_kernels.py [--sim-time 0.2] [--substeps 100] [--repeat 5]
+    python benchmarks/bench_kernels.py [--sim-time 0.2] [--substeps 100] [--repeat 5] [--integrators rk4,rk4_kink]
 """
 import argparse
 import ctypes

@@ -77,15 +77,39 @@ def diff_report(ref: Dict[str, np.ndarray], other: Dict[str, np.ndarray]) -> Dic
     return out
 
 
+def fmu_integrator(fmu_path, start_values=None):
+    """Name of the integrator an FMU runs with ('rk4', 'rk4_kink'): its parameter
+    ``integrator`` (docs/model.md; code 0/1) from ``start_values`` or else the start
+    value in its modelDescription.xml; None if the FMU has no such parameter."""
+    from fmpy import read_model_description
+
+    from .native import INTEGRATORS
+
+    if start_values and "integrator" in start_values:
+        code = int(start_values["integrator"])
+    else:
+        md = read_model_description(str(fmu_path))
+        var = next((v for v in md.modelVariables if v.name == "integrator"), None)
+        if var is None or var.start is None:
+            return None
+        code = int(var.start)
+    return {v: k for k, v in INTEGRATORS.items()}.get(code)
+
+
 def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_time_s: float,
                                 comm_step_s: float, start_values=None) -> dict:
     """The report of ``gearfmu validate``: fmpy validation problems, per-output
-    differences (FMU minus native), wall time of each."""
+    differences (FMU minus native), wall time of each.  Without ``integrator`` in
+    ``native_kwargs`` the native run uses the FMU's own (:func:`fmu_integrator`)."""
     from fmpy.validation import validate_fmu
 
     from .native import simulate
 
     problems = [str(p) for p in validate_fmu(str(fmu_path))]
+    if "integrator" not in native_kwargs:
+        integ = fmu_integrator(fmu_path, start_values)
+        if integ is not None:
+            native_kwargs = dict(native_kwargs, integrator=integ)
     names = output_names(tables.slots)
     fmu = run_fmu(fmu_path, stop_time_s=stop_time_s, comm_step_s=comm_step_s,
                   start_values=start_values, names=names)

@@ -186,14 +186,15 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
               damping_model: Union[int, str] = 0, stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
               scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 0) -> Path:
+              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
     Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
     ``gear_torque_start_Nm`` None means the static balance
     ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
     "elastobacklash", 1 or "seed003" (docs/model.md).  ``integrator``: 0 or
-    "rk4", 1 or "rk4_kink" (docs/model.md "Integration"; FMU parameter ``integrator``).  ``stop_time_s`` and
+    "rk4", 1 or "rk4_kink" (default; docs/model.md "Integration", docs/dynamics_validation.md;
+    FMU parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize).
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the

@@ -55,8 +55,12 @@ DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
 #: integrator names -> kernel code (docs/model.md "Integration"); the FMU
 #: parameter ``integrator`` takes the code
 INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
-#: the setting on the speed-against-error front (benchmarks/bench_integrators.py, docs/native.md)
-DEFAULT_INTEGRATOR = "rk4"
+#: the setting on the speed-against-error front below ~5e-4 relative error
+#: (benchmarks/bench_integrators.py, ``gearfmu bench accuracy``, docs/dynamics_validation.md);
+#: the default of :func:`simulate`, :func:`simulate_sdof`, the scene, the FMU builders
+#: and the FMU parameter ``integrator`` alike, so a native run and an FMU built with
+#: defaults integrate identically.  Pass ``integrator='rk4'`` for classical RK4.
+DEFAULT_INTEGRATOR = "rk4_kink"
 
 InputLike = Union[float, np.ndarray, Callable[[float], float]]
 
@@ -1205,9 +1209,10 @@ def simulate(
     last state of a previous run (continuation in a speed sweep).
     If the state turns non-finite the run stops there; the remaining rows are
     NaN and ``info['diverged_at_step']`` says where.
-    ``integrator``: 'rk4' (fixed-step classical RK4) or 'rk4_kink' (RK4 that
+    ``integrator``: 'rk4_kink' (default, :data:`DEFAULT_INTEGRATOR`: RK4 that
     steps exactly to every table node and contact-mode change, docs/model.md
-    "rk4_kink"; ``info['events']`` counts the located events).
+    "rk4_kink"; ``info['events']`` counts the located events; at most
+    KINK_MAX_SLOTS slots) or 'rk4' (fixed-step classical RK4).
     ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
@@ -1350,6 +1355,7 @@ def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) 
         zeta=result.damping_Ns_per_m / (2.0 * me * wn),
         load=float(result.pinion_torque[0]) / t.base_radius_pinion_m / (t.k_mean_N_per_m * l),
         length_scale_m=l)
+
 
 # ------------------------------------------------- temperature axis (docs/model.md)
 def _at_temperature(tables: MeshTables, temperature_C) -> MeshTables:

@@ -284,12 +284,12 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
-                         integrator: Union[int, str] = 0) -> Path:
+                         integrator: Union[int, str] = 1) -> Path:
     """Build the standalone FMI 2.0 CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmubuild.build_fmu` (damping
     ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
-    0/"rk4" or 1/"rk4_kink", the FMU parameter ``integrator``); ``validation``
+    0/"rk4" or 1/"rk4_kink" (default), the FMU parameter ``integrator``); ``validation``
     False skips the validation record (and its native run).  Written under a
     temporary name beside ``out_path`` and renamed at the end.
     """

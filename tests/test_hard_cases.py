@@ -1,4 +1,6 @@
-"""Hard cases of the dynamic model (issue 5): the native RK4 solver and the FMU
+"""Hard cases of the dynamic model (issue 5): the native RK4 solver (``integrator="rk4"``,
+passed explicitly: the default is rk4_kink, whose hard-case checks are in
+tests/test_integrators.py) and the FMU
 against the event-located scipy reference (gearfmu.reference, checked against
 closed forms in tests/test_reference.py), never NaN.
 
@@ -34,7 +36,7 @@ def run_pair(name):
     tables, kw = hard_case(name)
     n, tol = STEPS[name]
     ref = simulate_reference(tables, **kw)
-    nat = simulate(tables, max_step_s=kw["comm_step_s"] / n, **kw)
+    nat = simulate(tables, max_step_s=kw["comm_step_s"] / n, integrator="rk4", **kw)
     for r in (ref, nat):
         assert np.all(np.isfinite(r.dte)) and np.all(np.isfinite(r.mesh_force)) and np.all(np.isfinite(r.pair_force))
     err = rel_errors(nat, ref)
@@ -118,14 +120,14 @@ def test_4_low_damping_up_and_down_sweep_land_on_different_branches():
     for om in (0.65, 0.7, 0.75):  # up
         if om == 0.75:
             starts["up"] = st
-        r = run(om, st, max_step_s=None)
+        r = run(om, st, max_step_s=None, integrator="rk4")
         st = last(r)
     up_native = r
     st = None
     for om in (0.95, 0.9, 0.85, 0.8, 0.75):  # down
         if om == 0.75:
             starts["down"] = st
-        r = run(om, st)
+        r = run(om, st, integrator="rk4")
         st = last(r)
     down_native = r
     half = len(r.dte) // 2
@@ -136,7 +138,7 @@ def test_4_low_damping_up_and_down_sweep_land_on_different_branches():
     for key in ("up", "down"):
         ref = run(0.75, starts[key], fn=simulate_reference, mesh=20)
         w1 = speed_for(tables, 0.75)
-        nat = run(0.75, starts[key], mesh=20, max_step_s=tables.mesh_period_rad / w1 / 4 / 1024)
+        nat = run(0.75, starts[key], mesh=20, max_step_s=tables.mesh_period_rad / w1 / 4 / 1024, integrator="rk4")
         err = rel_errors(nat, ref)
         assert err["dte_rel_max_err"] < 2e-5, (key, err)  # measured ~3e-6
         amp = np.ptp(ref.dte[len(ref.dte) // 2:])
@@ -160,12 +162,12 @@ def test_8_fmu_long_communication_steps_match_native(tmp_path):
     kw = dict(kw, pinion_angle_start_rad=0.0)
     fmu = build_fmu(tables, tmp_path / "rect.fmu", model_name="rect", damping_ratio=kw["damping_ratio"],
                     pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"], pinion_torque_start_Nm=kw["pinion_torque_Nm"],
-                    max_step_s=hmax, stop_time_s=kw["stop_time_s"], output_interval_s=Tm)
+                    max_step_s=hmax, stop_time_s=kw["stop_time_s"], output_interval_s=Tm, integrator="rk4")
     ref = simulate_reference(tables, **kw)
     for m in (0.25, 1, 5, 10):
         H = m * Tm
         run = run_fmu(fmu, stop_time_s=kw["stop_time_s"], comm_step_s=H, names=output_names(tables.slots))
-        nat = simulate(tables, **dict(kw, comm_step_s=H, max_step_s=hmax))
+        nat = simulate(tables, **dict(kw, comm_step_s=H, max_step_s=hmax), integrator="rk4")
         assert np.all(np.isfinite(run.columns["dte"]))
         for name in ("dte", "mesh_force", "pinion_speed"):
             a, b = run.columns[name], getattr(nat, name)

@@ -74,7 +74,7 @@ def test_sdof_linear_step_response_closed_form_and_rk4_order():
         H = period / 20
         r = simulate_sdof(tb, omega1_rad_s=w1, stop_time_s=200 * H, comm_step_s=H,
                           max_step_s=period / ppp, pinion_torque_Nm=T1, damping_ratio=zeta,
-                          damping_model="seed003", dte_start_m=0.0)
+                          damping_model="seed003", dte_start_m=0.0, integrator="rk4")
         assert r.substeps == ppp // 20
         c = 2 * zeta * math.sqrt(K_CONST * me)
         x_ref, v_ref = oscillator(r.time_s, me, c, K_CONST, T1 / RB, 0.0, 0.0)
@@ -110,7 +110,7 @@ def test_two_inertia_matches_rk4_propagator_and_closed_form():
     H = period / 16
     r = simulate(tb, stop_time_s=160 * H, comm_step_s=H, max_step_s=period / 128,
                  pinion_torque_Nm=T1, gear_torque_Nm=T2, pinion_speed_start_rad_s=w0,
-                 damping_ratio=zeta, dte_start_m=x0)
+                 damping_ratio=zeta, dte_start_m=x0, integrator="rk4")
     assert np.all(r.dte > 0) and np.all(np.abs(c * r.dte_rate) < K_CONST * r.dte)
     h = r.step_s
     A = np.array([[0.0, 1.0], [-K_CONST / me, -c / me]])
@@ -197,7 +197,8 @@ def test_rectangular_wave_with_backlash_vs_scipy(model):
     mp = tb.mesh_period_rad / w0
     H = mp / 32
     r = simulate(tb, stop_time_s=4 * 32 * H, comm_step_s=H, max_step_s=H / 1600, pinion_torque_Nm=T1,
-                 pinion_speed_start_rad_s=w0, damping_ratio=zeta, dte_start_m=x0, damping_model=model)
+                 pinion_speed_start_rad_s=w0, damping_ratio=zeta, dte_start_m=x0, damping_model=model,
+                 integrator="rk4")
     rhs, force = _table_rhs(tb, T1, T2, zeta, model)
     sol = solve_ivp(rhs, (0.0, r.time_s[-1]), [0.0, w0, x0, 0.0], method="DOP853", rtol=1e-10,
                     atol=[1e-14, 1e-10, 1e-17, 1e-12], t_eval=r.time_s)
@@ -289,7 +290,8 @@ def test_traditional_model_vs_scipy_eq12():
     mp = tb.mesh_period_rad / w1
     H = mp / 32
     r = simulate_sdof(tr, omega1_rad_s=w1, stop_time_s=5 * 32 * H, comm_step_s=H, max_step_s=H / 6400,
-                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="seed003", dte_start_m=0.0)
+                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="seed003", dte_start_m=0.0,
+                      integrator="rk4")
     Phi, N = tr.phi_period_rad, tr.n_phi
     dphi = Phi / N
     K, E, B = tr.k_N_per_m[0, 0], tr.e_m[0, 0], tr.backlash_half_m[0]
