@@ -77,7 +77,7 @@ class PointSettings:
     record_meshes : mesh periods recorded (rounded up to whole table periods).
     samples_per_mesh : output samples per mesh period (the spectrum's Nyquist
         order is samples_per_mesh*z1/2 shaft orders).
-    points_per_period : internal RK4 steps per min(natural period, mesh period)
+    points_per_period : internal integrator steps (native default integrator) per min(natural period, mesh period)
         (:func:`gearfmu.native.choose_max_step_s`).
     length_scale_m : nominal length l of seed 003 eq 7 (m).
     bandwidth_orders : BW of seed 003 eq 11 (shaft orders).

@@ -67,10 +67,10 @@ def test_linear_oscillator_harmonics_match_closed_form():
             E = a[r - 1] * (math.sin(x) / x) ** 2
             X = E * math.sqrt(k ** 2 + (c * w) ** 2) / math.sqrt((k - me * w * w) ** 2 + (c * w) ** 2)
             expect.append(X / math.sqrt(2.0) / st.length_scale_m)          # RMS, in units of l
-        # RK4 with the interpolant's kinks converges O(h) (docs/native.md): measured <= 1e-4 here
+        # the table interpolates the harmonic error linearly; tolerance as set for classical RK4 (O(h) at the kinks)
         assert np.allclose(p.A_r, expect, rtol=2e-4)
         assert p.q_mean == pytest.approx(T1 / t.base_radius_pinion_m / k / st.length_scale_m, rel=1e-6)
-        # not exactly periodic: RK4 steps do not align with the table nodes (measured 6e-6)
+        # not exactly periodic: the internal steps do not align with the table nodes
         assert p.settled_rel < 1e-4 and not p.contact_loss
 
 
