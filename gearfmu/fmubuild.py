@@ -181,6 +181,34 @@ def temperature_input(variables, tables: MeshTables):
     return out, start
 
 
+def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_start_rad_s,
+                          pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
+                          max_step_s, stop_time_s, output_interval_s, damping_model):
+    """Check the arguments both FMU builders share (pythonfmu and standalone runtimes).
+
+    Returns (damping ratio, pinion speed rad/s, pinion angle rad, pinion torque N*m,
+    gear torque N*m, max step s, stop time s, output interval s, damping model code);
+    raises :class:`FmuBuildError` naming the field.  ``gear_torque_start_Nm`` None
+    means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``.
+    """
+    if not isinstance(tables, MeshTables):
+        raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
+    tables.validate()
+    if not isinstance(model_name, str) or not model_name.strip():
+        raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
+    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
+    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
+    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
+    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
+    if gear_torque_start_Nm is None:
+        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
+    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
+    hmax = _check_positive("max_step_s", max_step_s)
+    tstop = _check_positive("stop_time_s", stop_time_s)
+    dt = _check_positive("output_interval_s", output_interval_s)
+    return zeta, w0, th0, T1, T2, hmax, tstop, dt, _damping_model_code(damping_model)
+
+
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
               pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
@@ -200,22 +228,12 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
     """
-    if not isinstance(tables, MeshTables):
-        raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
-    tables.validate()
-    if not isinstance(model_name, str) or not model_name.strip():
-        raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
-    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
-    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
-    if gear_torque_start_Nm is None:
-        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
-    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
-    hmax = _check_positive("max_step_s", max_step_s)
-    tstop = _check_positive("stop_time_s", stop_time_s)
-    dt = _check_positive("output_interval_s", output_interval_s)
-    dm = _damping_model_code(damping_model)
+    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
+        tables, model_name=model_name, damping_ratio=damping_ratio,
+        pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
+        pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+        max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+        damping_model=damping_model)
     ig = _integrator_code(integrator, tables.slots)
     if scene_text is not None and not isinstance(scene_text, str):
         raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")

@@ -51,7 +51,7 @@ from typing import Dict, Optional, Union
 
 from . import __version__
 from .fmubuild import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
-                       _check_finite, _check_positive, _compiler_version, _damping_model_code, _platform_dir,
+                       _compiler_version, _platform_dir, check_build_arguments,
                        find_c_compiler, temperature_input)
 from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
@@ -293,22 +293,12 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     False skips the validation record (and its native run).  Written under a
     temporary name beside ``out_path`` and renamed at the end.
     """
-    if not isinstance(tables, MeshTables):
-        raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
-    tables.validate()
-    if not isinstance(model_name, str) or not model_name.strip():
-        raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
-    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
-    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
-    if gear_torque_start_Nm is None:
-        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
-    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
-    hmax = _check_positive("max_step_s", max_step_s)
-    tstop = _check_positive("stop_time_s", stop_time_s)
-    dt = _check_positive("output_interval_s", output_interval_s)
-    dm = _damping_model_code(damping_model)
+    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
+        tables, model_name=model_name, damping_ratio=damping_ratio,
+        pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
+        pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+        max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+        damping_model=damping_model)
     ig = _integrator_code(integrator)
     if scene_text is not None and not isinstance(scene_text, str):
         raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
