@@ -51,7 +51,8 @@ from typing import Dict, Optional, Union
 
 from . import __version__
 from .fmubuild import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
-                       _compiler_version, _platform_dir, check_build_arguments,
+                       _compiler_version, _integrator_code, _platform_dir, INTEGRATORS,
+                       check_build_arguments,
                        find_c_compiler, temperature_input)
 from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
@@ -68,8 +69,6 @@ CONFIG_VERSION = 1
 #: interpose each other's kernel symbols)
 STANDALONE_CFLAGS = (*CFLAGS, "-fvisibility=hidden")
 VALIDATION_DIR = "resources/validation"
-#: integrator names -> kernel code (gearkernel.h GK_INTEGRATOR_*)
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
 #: packages whose versions the validation record names
 RECORD_PACKAGES = ("numpy", "scipy", "numba", "fmpy", "pythonfmu", "libcosimpy")
 
@@ -116,16 +115,6 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None) -> lis
     if proc.returncode != 0:
         raise FmuBuildError(f"standalone binary: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
     return cmd
-
-
-def _integrator_code(integrator) -> int:
-    if isinstance(integrator, str):
-        if integrator not in INTEGRATORS:
-            raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
-        return INTEGRATORS[integrator]
-    if isinstance(integrator, bool) or integrator not in (0, 1):
-        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4) or 1 (rk4_kink)")
-    return int(integrator)
 
 
 def _hexf(v) -> str:
@@ -299,7 +288,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
         max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
         damping_model=damping_model)
-    ig = _integrator_code(integrator)
+    ig = _integrator_code(integrator, tables.slots)
     if scene_text is not None and not isinstance(scene_text, str):
         raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
     out_path = Path(out_path)
