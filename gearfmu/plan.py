@@ -53,7 +53,8 @@ import numpy as np
 from .envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
-           "relative_rms", "CONTACT_ORDER"]
+           "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
+           "verify_fmus", "TEMPERATURE_INPUTS"]
 
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
@@ -181,6 +182,32 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     return ch
 
 
+def _thermal_options(scene, env: Envelope):
+    """The ``[thermal]`` options of the kept thermal level: the scene's section (a
+    default :class:`gearfmu.scene.ThermalOptions` when it has none) whose temperature
+    axis is the scene's ``temperature_axis_C`` or, when that is empty and the envelope
+    has a temperature range, ``_THERMAL_AXIS_POINTS`` equally spaced points over the
+    range (CHOICE, docs/plan.md).  Raises :class:`PlanError` when the scene's axis does
+    not cover the envelope's temperature range (the FMU would refuse those inputs)."""
+    from .scene import ThermalOptions
+
+    th = getattr(scene, "thermal", None)
+    th = th if th is not None else ThermalOptions()
+    rng = env.temperature_range_C
+    if rng is None:
+        return th
+    lo, hi = rng
+    if not len(th.temperature_axis_C):
+        if hi == lo:  # one temperature: the seed 004 state of both gears at it, no axis
+            return replace(th, pinion_temperature_C=float(lo), gear_temperature_C=float(lo))
+        return replace(th, temperature_axis_C=tuple(float(x) for x in np.linspace(lo, hi, _THERMAL_AXIS_POINTS)))
+    ax = th.temperature_axis_C
+    if ax[0] > lo or ax[-1] < hi:
+        raise PlanError(f"thermal.temperature_axis_C: [{ax[0]:g}, {ax[-1]:g}] degC does not cover the envelope "
+                        f"temperature range [{lo:g}, {hi:g}] degC (the FMU refuses temperatures outside its axis)")
+    return th
+
+
 def _step_absolute(scene, acc: AccuracyTarget) -> bool:
     """True when the max_step level is a step in s (pinned to the scene's max_step_s)."""
     return "max_step" in acc.pin and scene.solver.max_step_s is not None
@@ -193,7 +220,7 @@ class _Evaluator:
     def __init__(self, scene, env: Envelope, acc: AccuracyTarget, progress: bool):
         self.scene, self.env, self.acc, self.progress = scene, env, acc, progress
         self._tables: Dict[tuple, tuple] = {}
-        self._factors: Dict[tuple, np.ndarray] = {}
+        self._factors: Dict[tuple, object] = {}  # (table key, degC) -> tables at that temperature
         self._runs: Dict[tuple, dict] = {}
         self.h0: Optional[float] = None
         self.t0_C = scene.thermal.standard_temperature_C if getattr(scene, "thermal", None) else 30.0
@@ -201,7 +228,7 @@ class _Evaluator:
     # -------------------------------------------------------- tables
     def table_key(self, cfg: dict) -> tuple:
         return (cfg["contact_model"], cfg["tooth_specific_errors"], cfg["slices"], cfg["points_per_mesh"],
-                cfg["torque_points"], cfg["slots"])
+                cfg["torque_points"], cfg["slots"], bool(cfg["thermal"]))
 
     def pair(self, tooth_specific: bool):
         from .gearpair import GearDeviations
@@ -240,45 +267,33 @@ class _Evaluator:
         kw = dict(pair=pair, opts=opts, points_per_mesh=int(cfg["points_per_mesh"]),
                   torque_axis_Nm=self.torque_axis(int(cfg["torque_points"])),
                   nominal_torque_Nm=self.env.nominal_torque_Nm, slots=int(cfg["slots"]))
+        if cfg["thermal"]:  # the table builder's own temperature axis (docs/plan.md "Thermal estimate")
+            kw["thermal"] = _thermal_options(self.scene, self.env)
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
             from .contact_models import environment_from_scene
 
             kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
         return kw
 
-    def thermal_factor(self, cfg: dict, temperature_C: float) -> np.ndarray:
-        """k(T)/k(t0) per slot and angle on the tables' grid (seed 004 temperature
-        stiffness of :func:`gearfmu.thermal.thermal_slot_stiffness` at the nominal
-        torque; 1 out of contact).  CHOICE: applied to every torque row."""
-        from .thermal import thermal_slot_stiffness
-
-        key = self.table_key(cfg) + (float(temperature_C),)
-        if key not in self._factors:
-            tb, _ = self.tables(cfg)
-            opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
-            law = self.scene.thermal.flank_law if getattr(self.scene, "thermal", None) else "radial_tangential"
-            ts = thermal_slot_stiffness(self.scene.pair, opts, torque_Nm=self.env.nominal_torque_Nm,
-                                        temperatures_C=[float(temperature_C)], standard_temperature_C=self.t0_C,
-                                        slots=int(cfg["slots"]), n_per_mesh=int(cfg["points_per_mesh"]), law=law)
-            ks = ts.k_standard_N_per_m
-            f = np.where(ks > 0, ts.k_N_per_m[0] / np.where(ks > 0, ks, 1.0), 1.0)
-            reps = tb.n_phi // f.shape[1]
-            self._factors[key] = np.tile(f, (1, reps))
-        return self._factors[key]
-
     def tables_at(self, cfg: dict, temperature_C: Optional[float]):
+        """The configuration's tables at a bulk temperature (degC): the table builder's
+        temperature axis interpolated by :meth:`gearfmu.tables.MeshTables.at_temperature`
+        (the rule of the FMU kernel, bitwise at the nodes); None = the tables' default
+        temperature.  Tables without a temperature axis are returned as they are."""
         tb, _ = self.tables(cfg)
-        if not cfg["thermal"] or temperature_C is None:
+        if not tb.has_temperature_axis:
             return tb
-        f = self.thermal_factor(cfg, temperature_C)
-        return replace(tb, k_N_per_m=np.ascontiguousarray(tb.k_N_per_m * f[None, :, :]))
+        t = tb.default_temperature_C if temperature_C is None else float(temperature_C)
+        key = self.table_key(cfg) + (t,)
+        if key not in self._factors:
+            self._factors[key] = tb.at_temperature(t)
+        return self._factors[key]
 
     def table_bytes(self, cfg: dict) -> int:
         tb, _ = self.tables(cfg)
         n = sum(np.asarray(a).nbytes for a in (tb.k_N_per_m, tb.e_m, tb.backlash_half_m, tb.torque_Nm,
-                                               tb.e_comprehensive_m, tb.static_te_m) if a is not None)
-        if cfg["thermal"]:  # a temperature axis multiplies k and e (and the derived rows)
-            n = int(n * _THERMAL_AXIS_POINTS)
+                                               tb.e_comprehensive_m, tb.static_te_m,
+                                               getattr(tb, "temperature_C", None)) if a is not None)
         return int(n)
 
     # -------------------------------------------------------- TVMS measure
@@ -379,6 +394,7 @@ class Plan:
     verification: dict
     cost: dict
     log: List[str] = field(default_factory=list)
+    fmu_verification: dict = field(default_factory=dict)  # verify_fmus() when measured (plan --fmu)
 
     def max_step_s(self, which: str = "chosen") -> float:
         """Largest internal step (s) of the chosen or the full configuration."""
@@ -431,8 +447,22 @@ class Plan:
             "full": dict(self.full, max_step_s=self.max_step_s("full")),
             "verification": {k: jv(v) for k, v in self.verification.items()},
             "cost": self.cost,
+            "fmu_verification": _json_clean(self.fmu_verification),
             "log": self.log,
         }
+
+
+def _json_clean(v):
+    """JSON-ready copy: non-finite floats as None / "inf" / "-inf", numpy scalars as Python numbers."""
+    if isinstance(v, dict):
+        return {k: _json_clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_clean(x) for x in v]
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+    return v
 
 
 def _say(progress: bool, msg: str, log: List[str]) -> None:
@@ -486,6 +516,8 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
        FMUs built in ``fmu_dir`` or a temporary directory).
     """
     env, acc = envelope_of(scene), accuracy_of(scene)
+    if env.temperature_range_C is not None:
+        _thermal_options(scene, env)  # the scene's temperature axis must cover the envelope (PlanError)
     log: List[str] = []
     choices = _choices(scene, env, acc)
     for name in PLAN_CHOICES:
@@ -496,7 +528,11 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     tb_full, _ = ev.tables(full)
     from .native import choose_max_step_s
 
-    ev.h0 = choose_max_step_s(tb_full, max(env.speed_range_rad_s[1], env.nominal_speed_rad_s))
+    w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
+    if tb_full.has_temperature_axis:  # the smallest automatic step over the axis nodes
+        ev.h0 = min(choose_max_step_s(tb_full.at_temperature(float(t)), w_top) for t in tb_full.temperature_C)
+    else:
+        ev.h0 = choose_max_step_s(tb_full, w_top)
     full = {n: c.full for n, c in choices.items()}
     npts = len(ev.points())
     _say(progress, f"{npts} envelope points, full tables {tb_full.slots} slots x {tb_full.n_phi} angles x "
@@ -606,18 +642,262 @@ def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
 
 
 def _measure_fmus(scene, plan: Plan, ev: _Evaluator, fmu_dir, progress) -> None:
+    """Build the full and the chosen FMU and drive both through the verification
+    cases (:func:`verify_fmus`); sizes, build times and errors go into the plan."""
+    plan.fmu_verification = verify_fmus(scene, plan, fmu_dir=fmu_dir, progress=progress)
+    for which in ("full", "chosen"):
+        f = plan.fmu_verification["fmus"][which]
+        plan.cost[which].update(fmu_bytes=f["fmu_bytes"], fmu_path=f["fmu_path"], fmu_build_s=f["fmu_build_s"])
+
+
+# ============================================================== verification through the FMUs
+#: FMU inputs that select the tables' temperature axis (modeldescription/variables.toml)
+TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
+_SAMPLES_PER_MESH = 16      # communication steps per mesh period at the case's top speed (CHOICE)
+_CASE_MESH_PERIODS = 3      # a case lasts 3 x accuracy.run_mesh_periods mesh periods (CHOICE)
+_RUN_UP_LOAD_SHARE = 0.1    # run-up: acceleration torque <= 10 % of the nominal torque (CHOICE)
+
+
+@dataclass(frozen=True)
+class DriveCase:
+    """One verification drive, the same for both FMUs (docs/plan.md "Verification
+    through the FMUs"): communication step ``comm_step_s`` (s); per step the held
+    (zero-order hold) inputs ``pinion_torque_Nm`` and ``gear_torque_Nm`` (N*m) and the
+    bulk temperature ``temperature_C`` (degC, None = the FMU's start value; an FMU
+    without a temperature input gets none); ``pinion_speed_start_rad_s`` (rad/s); and
+    ``speed_profile_rad_s``, the rigid-body pinion speed at the end of each step that the
+    torques were computed for (the drive's target speed)."""
+
+    name: str
+    comm_step_s: float
+    pinion_torque_Nm: np.ndarray
+    gear_torque_Nm: np.ndarray
+    temperature_C: Optional[np.ndarray]
+    pinion_speed_start_rad_s: float
+    speed_profile_rad_s: np.ndarray
+    note: str = ""
+
+    @property
+    def stop_time_s(self) -> float:
+        return self.comm_step_s * len(self.pinion_torque_Nm)
+
+
+def drive_case(name: str, tables, *, stop_time_s: float, comm_step_s: float, torque_Nm, speed_rad_s,
+               temperature_C=None, note: str = "") -> DriveCase:
+    """A drive that makes the pinion follow a speed profile under a pinion torque profile.
+
+    ``torque_Nm(t)``, ``speed_rad_s(t)``, ``temperature_C(t)`` (or None): callables of
+    time arrays (s).  The communication step is shortened so that a whole number of
+    steps fills ``stop_time_s``.  Per step [t_i, t_i+1] the pinion torque and the
+    temperature are their values at the step's midpoint, and the gear (load) torque is
+    the rigid-body inverse dynamics of the pinion-referred pair,
+    T2 = (T1 - I_red * a) * Rb2 / Rb1 with I_red = I1 + I2 (Rb1/Rb2)^2 and
+    a = (w(t_i+1) - w(t_i)) / H (seed 003's two-inertia model with a rigid mesh), so a
+    rigid pair under these held torques reaches w(t_i+1) exactly at every step end.
+    """
+    n = max(int(math.ceil(stop_time_s / comm_step_s - 1e-9)), 1)
+    h = stop_time_s / n
+    t = np.arange(n + 1) * h
+    tm = t[:-1] + 0.5 * h
+    w = np.asarray(speed_rad_s(t), dtype=float)
+    T1 = np.asarray(torque_Nm(tm), dtype=float) * np.ones(n)
+    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+    i_red = float(tables.inertia_pinion_kgm2) + float(tables.inertia_gear_kgm2) * (rb1 / rb2) ** 2
+    acc = np.diff(w) / h
+    T2 = (T1 - i_red * acc) * rb2 / rb1
+    temp = None if temperature_C is None else np.asarray(temperature_C(tm), dtype=float) * np.ones(n)
+    return DriveCase(name=name, comm_step_s=h, pinion_torque_Nm=T1, gear_torque_Nm=T2, temperature_C=temp,
+                     pinion_speed_start_rad_s=float(w[0]), speed_profile_rad_s=w[1:], note=note)
+
+
+def verification_cases(scene, plan: Plan, tables) -> List[DriveCase]:
+    """The verification drives of a plan's envelope (docs/plan.md "Verification through
+    the FMUs"); ``tables``: the full tables (inertias, base radii, mesh period).
+
+    * ``steady``: nominal torque and speed, balanced load, middle of the temperature range;
+    * ``run_up``: pinion speed linear from the low to the high end of the speed range at the
+      nominal pinion torque, the load torque lowered by the acceleration torque (only with a
+      speed range);
+    * ``warm_up``: bulk temperature linear from the low to the high end of the temperature
+      range at the nominal torque and speed (only with a temperature range);
+    * ``duty_cycle``: the envelope's duty cycle replayed on its own time axis (torque and
+      temperature columns interpolated linearly, the speed column followed through the load
+      torque; temperature: the column, else the middle of the range).
+
+    Each of the first three lasts ``_CASE_MESH_PERIODS`` x ``accuracy.run_mesh_periods``
+    mesh periods at its mean speed (CHOICE: a warm-up of a real gearbox takes minutes;
+    the stiffness follows the temperature quasi-statically, so the ramp is compressed into
+    a run the FMUs take in seconds); the communication step is a 1/16 mesh period at the
+    case's top speed.
+    """
+    env, acc = plan.envelope, plan.target
+    T_nom, w_nom = env.nominal_torque_Nm, env.nominal_speed_rad_s
+    mesh_rad = float(tables.mesh_period_rad)
+    n_mesh = _CASE_MESH_PERIODS * int(acc.run_mesh_periods)
+    temp_rng = env.temperature_range_C
+    t_mid = None if temp_rng is None else 0.5 * (temp_rng[0] + temp_rng[1])
+
+    def const(v):
+        return None if v is None else (lambda t: np.full(np.shape(t), float(v)))
+
+    def comm(w_top):
+        return mesh_rad / w_top / _SAMPLES_PER_MESH
+
+    cases = [drive_case("steady", tables, stop_time_s=n_mesh * mesh_rad / w_nom, comm_step_s=comm(w_nom),
+                        torque_Nm=const(T_nom), speed_rad_s=const(w_nom), temperature_C=const(t_mid),
+                        note="nominal torque and speed, balanced load")]
+    w0, w1 = env.speed_range_rad_s
+    if w1 > w0:
+        rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+        i_red = float(tables.inertia_pinion_kgm2) + float(tables.inertia_gear_kgm2) * (rb1 / rb2) ** 2
+        t_run = max(n_mesh * mesh_rad / (0.5 * (w0 + w1)), i_red * (w1 - w0) / (_RUN_UP_LOAD_SHARE * T_nom))
+        cases.append(drive_case("run_up", tables, stop_time_s=t_run, comm_step_s=comm(w1), torque_Nm=const(T_nom),
+                                speed_rad_s=lambda t: w0 + (w1 - w0) * np.asarray(t) / t_run,
+                                temperature_C=const(t_mid),
+                                note=f"{w0 * 30 / math.pi:.6g} -> {w1 * 30 / math.pi:.6g} rpm in {t_run:.3g} s"))
+    if temp_rng is not None and temp_rng[1] > temp_rng[0]:
+        lo, hi = temp_rng
+        t_run = n_mesh * mesh_rad / w_nom
+        cases.append(drive_case("warm_up", tables, stop_time_s=t_run, comm_step_s=comm(w_nom),
+                                torque_Nm=const(T_nom), speed_rad_s=const(w_nom),
+                                temperature_C=lambda t: lo + (hi - lo) * np.asarray(t) / t_run,
+                                note=f"{lo:g} -> {hi:g} degC in {t_run:.3g} s"))
+    dc = env.duty_cycle
+    if dc is not None:
+        t0 = float(dc.time_s[0])
+        tt = dc.time_s - t0
+
+        def col(y):
+            return lambda t: np.interp(t, tt, y)
+
+        temp_fn = col(dc.temperature_C) if dc.temperature_C is not None else const(t_mid)
+        cases.append(drive_case("duty_cycle", tables, stop_time_s=float(tt[-1]),
+                                comm_step_s=comm(float(dc.speed_rad_s.max())), torque_Nm=col(dc.torque_Nm),
+                                speed_rad_s=col(dc.speed_rad_s), temperature_C=temp_fn,
+                                note=f"{Path(dc.source).name}: {len(tt)} points over {tt[-1]:.3g} s"))
+    return cases
+
+
+def run_fmu_drive(fmu_path, case: DriveCase, names=("dte", "mesh_force", "pinion_speed", "pinion_angle")) -> dict:
+    """Drive one FMU (fmpy, FMI 2.0 co-simulation, step by step) through a case.
+
+    Returns the output arrays (one value per communication step, at its end), the wall
+    time and the CPU time of this thread spent in the stepping loop (the FMU runs in this
+    process: pythonfmu wrapper, its Python slave and the C kernel; both FMUs pay the same
+    per-step host overhead), and whether the FMU had a temperature input."""
+    import shutil
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    tname = next((n for n in TEMPERATURE_INPUTS if n in vr), None)
+    unzip = extract(str(fmu_path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="plan_verify")
+    use_temp = tname is not None and case.temperature_C is not None
+    in_vr = [vr["pinion_torque"], vr["gear_torque"]] + ([vr[tname]] if use_temp else [])
+    out_vr = [vr[n] for n in names]
+    n = len(case.pinion_torque_Nm)
+    out = np.empty((n, len(names)))
+    h = case.comm_step_s
+    try:
+        fmu.instantiate()
+        fmu.setReal([vr["pinion_speed_start"]], [case.pinion_speed_start_rad_s])
+
+        def inputs(i):
+            v = [float(case.pinion_torque_Nm[i]), float(case.gear_torque_Nm[i])]
+            return v + ([float(case.temperature_C[i])] if use_temp else [])
+
+        fmu.setReal(in_vr, inputs(0))
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        start = fmu.getReal(out_vr)
+        c0, w0 = time.thread_time(), time.perf_counter()
+        for i in range(n):
+            fmu.setReal(in_vr, inputs(i))
+            fmu.doStep(currentCommunicationPoint=i * h, communicationStepSize=h)
+            out[i] = fmu.getReal(out_vr)
+        cpu, wall = time.thread_time() - c0, time.perf_counter() - w0
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+        shutil.rmtree(unzip, ignore_errors=True)
+    res = {nm: out[:, j] for j, nm in enumerate(names)}
+    res["start"] = dict(zip(names, start))
+    res.update(wall_s=wall, cpu_s=cpu, temperature_input=tname if use_temp else None)
+    return res
+
+
+def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, cases=None,
+                runtime: Optional[str] = None) -> dict:
+    """The planned FMU against the full-fidelity FMU over the scene's envelope (issue 8).
+
+    Builds both with :func:`gearfmu.pipeline.build` from :func:`planned_scene` (chosen)
+    and :func:`full_scene` (their tables computed from the scene, timed), drives both
+    through the same cases (:func:`verification_cases`, or ``cases``) with
+    :func:`run_fmu_drive` and returns, as JSON-ready data: per FMU its size, table build
+    time, FMU build time and temperature input; per case the relative RMS error
+    rms(y - y_full)/rms(y_full) of the DTE and of the mesh force (the planner's error
+    measure), whether both are within the target, the FMUs' wall and CPU time per
+    simulated second and their ratio, and how far the full FMU's pinion turned from the
+    drive's rigid-body target (|angle - integral of w_target dt| / that integral)."""
     from .pipeline import build
 
     d = Path(fmu_dir) if fmu_dir else Path(tempfile.mkdtemp(prefix="gearfmu_plan_"))
     d.mkdir(parents=True, exist_ok=True)
+    fmus, built = {}, {}
     for which in ("full", "chosen"):
         sc = planned_scene(scene, plan, which=which)
         _say(progress, f"building the {which} FMU", plan.log)
-        res = build(sc, d / f"{scene.fmu.model_name}_{which}.fmu", tables=ev.tables(
-            plan.full if which == "full" else plan.chosen)[0])
-        plan.cost[which]["fmu_bytes"] = res.fmu_path.stat().st_size
-        plan.cost[which]["fmu_path"] = str(res.fmu_path)
-        plan.cost[which]["fmu_build_s"] = res.build_wall_s
+        res = build(sc, d / f"{scene.fmu.model_name}_{which}.fmu", runtime=runtime)
+        built[which] = res
+        fmus[which] = {"fmu_path": str(res.fmu_path), "fmu_bytes": res.fmu_path.stat().st_size,
+                       "table_build_s": res.tables_wall_s, "fmu_build_s": res.build_wall_s,
+                       "tables_shape": [int(x) for x in np.shape(res.tables.k_N_per_m)],
+                       "max_step_s": res.max_step_s, "integrator": sc.solver.integrator}
+    if cases is None:
+        cases = verification_cases(scene, plan, built["full"].tables)
+    acc = plan.target
+    out = {}
+    for case in cases:
+        _say(progress, f"FMU case {case.name}: {len(case.pinion_torque_Nm)} steps of {case.comm_step_s:.3g} s",
+             plan.log)
+        r = {w: run_fmu_drive(built[w].fmu_path, case) for w in ("full", "chosen")}
+        for w in ("chosen", "full"):  # a second run in the other order: the smaller time counts (noise)
+            again = run_fmu_drive(built[w].fmu_path, case)
+            for k in ("wall_s", "cpu_s"):
+                r[w][k] = min(r[w][k], again[k])
+        a, b = r["chosen"], r["full"]
+        e_d, e_f = relative_rms(a["dte"], b["dte"]), relative_rms(a["mesh_force"], b["mesh_force"])
+        sim = case.stop_time_s
+        # rigid-body closed form of the drive: the pinion turns through the integral of the
+        # target speed (trapezoids: the speed is linear within each step); the mesh deflection
+        # only adds micro-radians
+        w_all = np.concatenate(([case.pinion_speed_start_rad_s], case.speed_profile_rad_s))
+        turn_ref = float(np.sum(0.5 * (w_all[1:] + w_all[:-1])) * case.comm_step_s)
+        track = abs(float(b["pinion_angle"][-1] - b["start"]["pinion_angle"]) - turn_ref) / turn_ref
+        out[case.name] = {
+            "note": case.note, "stop_time_s": sim, "steps": len(case.pinion_torque_Nm),
+            "comm_step_s": case.comm_step_s,
+            "temperature_C": None if case.temperature_C is None else
+            [float(case.temperature_C.min()), float(case.temperature_C.max())],
+            "temperature_input": {w: r[w]["temperature_input"] for w in r},
+            "dte_rel": e_d, "mesh_force_rel": e_f,
+            "within_target": bool(e_d <= acc.dte_rel and e_f <= acc.mesh_force_rel),
+            "wall_per_sim_s": {w: r[w]["wall_s"] / sim for w in r},
+            "cpu_per_sim_s": {w: r[w]["cpu_s"] / sim for w in r},
+            "cpu_gain_full_over_chosen": r["full"]["cpu_s"] / r["chosen"]["cpu_s"] if r["chosen"]["cpu_s"] else None,
+            "angle_tracking_rel": track,
+        }
+        _say(progress, f"FMU case {case.name}: DTE {e_d:.2e}, force {e_f:.2e} "
+                       f"({'within' if out[case.name]['within_target'] else 'above'} target)", plan.log)
+    gains = {k: fmus["full"][k] / fmus["chosen"][k] for k in ("fmu_bytes", "table_build_s")
+             if fmus["chosen"][k]}
+    return {"fmus": fmus, "cases": out, "gain_full_over_chosen": gains,
+            "within_target": all(c["within_target"] for c in out.values())}
 
 
 # ============================================================== scene of a plan
@@ -644,17 +924,9 @@ def planned_scene(scene, plan: Plan, which: str = "chosen"):
             return replace(g, deviations=GearDeviations(default=d.default, per_tooth=(),
                                                         lead_crowning_m=d.lead_crowning_m))
         pair = replace(pair, pinion=uniform(pair.pinion), gear=uniform(pair.gear))
-    thermal = getattr(scene, "thermal", None)
-    if cfg["thermal"]:
-        from .scene import ThermalOptions
-
-        th = thermal if thermal is not None else ThermalOptions()
-        if not len(th.temperature_axis_C) and env.temperature_range_C is not None:
-            lo, hi = env.temperature_range_C
-            th = replace(th, temperature_axis_C=tuple(float(x) for x in np.linspace(lo, hi, _THERMAL_AXIS_POINTS)))
-        thermal = th
-    else:  # dropped: no thermal correction and no temperature axis (so no temperature input)
-        thermal = None
+    # kept: the thermal options the planner measured (the builder's temperature axis); dropped: no
+    # thermal correction and no temperature axis (so no temperature input)
+    thermal = _thermal_options(scene, env) if cfg["thermal"] else None
     return replace(scene, mesh=mesh, operating=op, tables=tables, solver=solver, pair=pair, thermal=thermal,
                    accuracy=None)
 
@@ -701,4 +973,18 @@ def format_report(plan: Plan) -> str:
                      ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
         if k in cf and k in cc:
             lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
+    fv = d.get("fmu_verification") or {}
+    if fv.get("cases"):
+        ff, fc = fv["fmus"]["full"], fv["fmus"]["chosen"]
+        lines += ["", "planned FMU against the full FMU (fmpy; relative RMS error; CPU s per simulated s):",
+                  f"  FMU size {ff['fmu_bytes']} -> {fc['fmu_bytes']} bytes, table build "
+                  f"{_fmt(ff['table_build_s'])} -> {_fmt(fc['table_build_s'])} s, temperature input "
+                  f"{next(iter(fv['cases'].values()))['temperature_input']['full']} -> "
+                  f"{next(iter(fv['cases'].values()))['temperature_input']['chosen']}",
+                  f"  {'case':<12}{'DTE':>10}{'force':>10}{'target':>8}{'full':>11}{'chosen':>11}{'gain':>7}  drive"]
+        for name, c in fv["cases"].items():
+            cps = c["cpu_per_sim_s"]
+            lines.append(f"  {name:<12}{_fmt(c['dte_rel']):>10}{_fmt(c['mesh_force_rel']):>10}"
+                         f"{'ok' if c['within_target'] else 'ABOVE':>8}{_fmt(cps['full']):>11}{_fmt(cps['chosen']):>11}"
+                         f"{_fmt(c['cpu_gain_full_over_chosen']):>7}  {c['note']}")
     return "\n".join(lines)
