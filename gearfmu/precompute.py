@@ -166,20 +166,24 @@ class _ContactIteration:
         from .stiffness import slot_stiffness
 
         self.model = get_contact_model(opts.contact_model)
-        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:
-            raise PrecomputeInputError(f"contact_model: {opts.contact_model!r} is implemented for spur pairs "
-                                       "only (use 'hertz' for helical pairs)")
         self.env, self.opts, self.e, self.E = env, opts, e_slot, E
         ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
         self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
         self.NS = int(opts.slices)
-        ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
-        self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
         self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
+        self.helical = None
+        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:  # per-slice normal-section requests (docs/helical.md)
+            self.helical = _HelicalContactView(pair, geom, env, ss, reps)
+            self.env = self.helical.env
+            self.s_req = self.helical.s_req                                  # (P, NS, N)
+        else:
+            ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
+            self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
+            self.s_req = np.broadcast_to(self.s[:, None, :], self.k_hertz.shape)
         self.width = ss.slice_width_m
         self.face = ss.slice_width_m * self.NS
         self.nominal_F = nominal_F
-        self.zone = np.broadcast_to(np.isfinite(self.s)[:, None, :], self.k_hertz.shape)
+        self.zone = np.isfinite(self.s_req)
         self.solves = 0
         self.records = []
         self._pool = None
@@ -223,7 +227,7 @@ class _ContactIteration:
             # (re-trying it at a slightly different load would let the sharing oscillate)
             redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
             if np.any(redo):
-                res = self.model.fn(self.env, self.s[j[redo], i[redo]], n[redo], w[redo])
+                res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
                 self.solves += res.solves
                 kc[j[redo], n[redo], i[redo]] = res.k_N_per_m
                 w_prev = np.where(redo, w, w_prev)
@@ -231,9 +235,10 @@ class _ContactIteration:
                     failures[(f["s_m"], f["slice"])] = f
                 if res.failures:
                     bad = {(f["s_m"], f["slice"]) for f in res.failures}
-                    sk = np.array([float(f"{x:.10g}") for x in self.s[j, i]])
+                    sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
                     failed |= np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
-            k = sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts)
+            k = (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
+                 else self.helical.mesh_stiffness(kc, self.opts))
             new = _slice_loads_N(k, self.e, self.E, F)
             change = float(np.max(np.abs(new - loads)) / max(F / self.NS, 1e-300)) if F > 0 else 0.0
             loads = new
@@ -246,6 +251,89 @@ class _ContactIteration:
         self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
                                  failures=len(failures), failure_list=list(failures.values())))
         return k
+
+
+class _HelicalContactView:
+    """Contact-model requests of a helical pair, slice by slice (docs/helical.md,
+    "Load-dependent contact models").
+
+    Each slice is a thin spur gear of the transverse section whose stiffness is taken on the
+    normal section (:func:`gearfmu.stiffness.helical_slot_stiffness`).  The contact model sees
+    the slice as a line contact of length w / cos(beta_b) (the slice's piece of the inclined
+    contact line) at the slice's own transverse LOA position ``s_slice_m`` and load:
+
+    * radius of curvature in the normal section rho_n = rho_t / cos(beta_b) (ISO 6336-2
+      Z_H / Z_beta derivation; Niemann/Winter, Maschinenelemente II, ch. 21): the model's
+      geometry is the transverse one with every LOA length (N1N2, A, C, E, the request
+      positions) divided by cos(beta_b), so R = s1 s2/(s1 + s2) becomes rho_n;
+    * entrainment speed normal to the contact line u_n = u_t cos(beta_b) (CHOICE: the flank
+      velocities lie in the transverse plane, the contact line is inclined at beta_b on the
+      plane of action, and only the component normal to a line contact enters the 1-D
+      Reynolds equation, Johnson 1985, Contact Mechanics, ch. 13): the model's pinion speed is
+      omega1 cos^2(beta_b) (with the lengths scaled by 1/cos(beta_b)); sliding likewise;
+    * load per unit length of contact line w_n = (F_t / cos beta_b)/(w / cos beta_b) = F_t / w,
+      the transverse slice load per face width unchanged (ISO 6336-2: F_bn/l_b);
+    * the model's normal stiffness k_n (N/m per contact-line length w/cos(beta_b)) goes in
+      series with the normal-section tooth compliances of the slice (virtual spur gear,
+      :func:`gearfmu.stiffness.virtual_normal_section`, same strip length) and the result is
+      turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz slice of
+      :func:`gearfmu.stiffness.helical_slot_stiffness` (with the 'hertz' model this reproduces
+      that function's slice stiffness to round-off).
+    """
+
+    def __init__(self, pair, geom, env, ss, reps):
+        from .stiffness import _normal_roll_m, tooth_compliance_m_per_N, virtual_normal_section
+
+        if ss.s_slice_m is None:
+            raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
+        c = math.cos(geom.base_helix_angle_rad)
+        self.cos_beta_b = c
+        self.t = c * c
+        self.omega1_rad_s = float(env.omega1_rad_s)
+        self.width_transverse_m = float(env.width_m)
+        s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
+        self.geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
+                              s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
+        self.env = replace(env, geom=self.geom_n, omega1_rad_s=env.omega1_rad_s * c * c,
+                           width_m=env.width_m / c, _flanks=None)
+        self.s_req = np.tile(s_t / c, (1, 1, reps))                                  # (P, NS, N)
+        vpair, vgeom = virtual_normal_section(pair, geom)
+        wn = ss.slice_width_m / c
+        on = np.isfinite(s_t)
+        ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
+        if np.any(on):
+            u1 = _normal_roll_m(geom, vgeom, 1, s_t[on])
+            u2 = _normal_roll_m(geom, vgeom, 2, s_t[on])
+            cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
+            cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
+            ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
+            fp[on], fg[on] = cp["foundation"], cg["foundation"]
+        self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
+
+    def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
+        """(P, NS, N) transverse slice stiffness from the models' normal contact stiffness:
+        k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
+        :func:`gearfmu.stiffness.combine_pairs` slice by slice (normal-section compliances;
+        combine_pairs is homogeneous, so scaling after it equals scaling before)."""
+        from .contact_models import sliced_mesh_stiffness
+
+        kc = np.asarray(kc_normal_N_per_m, dtype=float)
+        P, NS, N = kc.shape
+        flat = (P, NS * N)
+        k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
+                                  kc.reshape(P, 1, NS * N), opts)
+        return self.t * k.reshape(P, NS, N)
+
+    def provenance(self) -> dict:
+        """The request mapping, for the tables' provenance ('contact')."""
+        return {"speed_rad_s": self.omega1_rad_s,
+                "helical_normal_section": {
+                    "base_helix_angle_rad": math.acos(self.cos_beta_b),
+                    "radius_of_curvature": "rho_t / cos(beta_b)",
+                    "entrainment_speed": "u_t cos(beta_b)",
+                    "load_per_contact_line_length": "F_t / w (slice face width w)",
+                    "contact_line_length_per_slice_m": self.width_transverse_m / self.cos_beta_b,
+                    "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
 
 
 def _contact_provenance(ci, axis_note) -> dict:
@@ -402,6 +490,8 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
                                                                      float(nominal_torque_Nm))
         e_slot = stiffness_weighted_pair_error_m(
             slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
+        if contact_it is not None:  # the load iteration uses the pair error of the helical pair
+            contact_it.e = e_slot
     bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
 
     if contact_it is not None:
@@ -430,6 +520,8 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     })
     if contact_it is not None:
         prov["contact"] = _contact_provenance(contact_it, axis_note)
+        if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
+            prov["contact"].update(contact_it.helical.provenance())
     tables = MeshTables(
         torque_Nm=np.ascontiguousarray(torques, dtype=float),
         k_N_per_m=k_arr,
