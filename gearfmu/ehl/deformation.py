@@ -25,6 +25,8 @@ O(N log N); :func:`deformation_direct` is the O(N^2) sum used to check it.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 from scipy import fft as _fft
@@ -84,30 +86,127 @@ def _fft_inplace(re, im, twr, twi, sign):
         length <<= 1
 
 
-@njit(cache=False)
+@njit(cache=True, fastmath=True)
+def _cfft(re, im, N, twr, twi, ts, sign):
+    """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
+    power of 2, no 1/N scaling); twiddles exp(-2 pi i k/N) = twr[k ts] +
+    i twi[k ts] (``ts``: stride into a longer table); ``sign`` = +1 forward,
+    -1 inverse.  Stage loops run block by block (contiguous memory)."""
+    j = 0
+    for i in range(1, N):
+        bit = N >> 1
+        while j & bit:
+            j ^= bit
+            bit >>= 1
+        j ^= bit
+        if i < j:
+            t = re[i]
+            re[i] = re[j]
+            re[j] = t
+            t = im[i]
+            im[i] = im[j]
+            im[j] = t
+    for i in range(0, N - 1, 2):          # length-2 stage: twiddle 1
+        ar = re[i]
+        ai = im[i]
+        br = re[i + 1]
+        bi = im[i + 1]
+        re[i] = ar + br
+        im[i] = ai + bi
+        re[i + 1] = ar - br
+        im[i + 1] = ai - bi
+    length = 4
+    while length <= N:
+        half = length >> 1
+        step = (N // length) * ts
+        for s in range(0, N, length):
+            for k in range(half):
+                wr = twr[k * step]
+                wi = sign * twi[k * step]
+                i = s + k
+                i2 = i + half
+                vr = re[i2] * wr - im[i2] * wi
+                vi = re[i2] * wi + im[i2] * wr
+                re[i2] = re[i] - vr
+                im[i2] = im[i] - vi
+                re[i] += vr
+                im[i] += vi
+        length <<= 1
+
+
+@njit(cache=True, fastmath=True)
+def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
+    """V_i = -(1/pi) sum_j K_|i-j| P_{o+j} (i, j < n) by FFT.
+
+    Circulant embedding of period m >= 2n - 3 (exact for the interior nodes;
+    the end nodes are added by direct sums); ``khr[mo:mo+m]`` is the
+    spectrum of -(1/pi) times the embedded kernel, which is *real* because
+    the embedding is symmetric.  The real input is packed into a complex
+    sequence of length m/2 (even samples real, odd samples imaginary), so
+    one complex FFT of length m/2 forward and one back replace two of length
+    m (standard real-FFT packing, e.g. Press et al., Numerical Recipes
+    sec. 12.3).  Twiddles ``twr/twi[to:to+m/2]`` = exp(-2 pi i k/m).
+    Work buffers re, im, yr, yi need m/2 + 1 entries."""
+    N = m // 2
+    for k in range(N):
+        a = 2 * k
+        re[k] = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
+        im[k] = P[o + a + 1] if a + 1 <= n - 2 else 0.0
+    _cfft(re, im, N, twr[to:], twi[to:], 2, 1.0)
+    for k in range(N + 1):
+        kk = k if k < N else 0
+        jj = (N - k) % N
+        zr = re[kk]
+        zi = im[kk]
+        cr = re[jj]
+        ci = -im[jj]
+        er = 0.5 * (zr + cr)
+        ei = 0.5 * (zi + ci)
+        orr = 0.5 * (zi - ci)
+        oi = -0.5 * (zr - cr)
+        if k < N:
+            wr = twr[to + k]
+            wi = twi[to + k]
+        else:
+            wr = -1.0
+            wi = 0.0
+        kh = khr[mo + k]
+        yr[k] = (er + wr * orr - wi * oi) * kh
+        yi[k] = (ei + wr * oi + wi * orr) * kh
+    for k in range(N):
+        j = N - k
+        ar = yr[k]
+        ai = yi[k]
+        cr = yr[j]
+        ci = -yi[j]
+        dr = 0.5 * (ar - cr)
+        di = 0.5 * (ai - ci)
+        wr = twr[to + k]
+        wi = -twi[to + k]
+        re[k] = 0.5 * (ar + cr) - (dr * wi + di * wr)
+        im[k] = 0.5 * (ai + ci) + (dr * wr - di * wi)
+    _cfft(re, im, N, twr[to:], twi[to:], 2, -1.0)
+    inv = 1.0 / N
+    p0 = P[o]
+    p1 = P[o + n - 1]
+    for i in range(n):
+        h = i >> 1
+        v = re[h] if (i & 1) == 0 else im[h]
+        V[i] = v * inv - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
+
+
+@njit(cache=True)
 def fft_deformation(P, khr, khi, twr, twi, K):
-    """V = -(1/pi) K * P by zero-padded circular convolution (numba FFT);
-    (khr, khi) is the FFT of the circulant embedding of -(1/pi) K with a
-    period m >= 2n - 3: exact for the interior nodes 1..n-2; the two end
-    nodes (zero in the EHL problem) are added by direct sums."""
+    """V = -(1/pi) K * P by zero-padded circular convolution (numba FFT,
+    :func:`conv_real`); (khr, khi) is the FFT of the circulant embedding of
+    -(1/pi) K with a period m >= 2n - 3 (khi is zero up to round-off: the
+    embedding is symmetric); exact for the interior nodes 1..n-2, the two
+    end nodes are added by direct sums."""
     n = P.size
     m = khr.size
-    re = np.zeros(m)
-    im = np.zeros(m)
-    for i in range(1, n - 1):
-        re[i] = P[i]
-    _fft_inplace(re, im, twr, twi, 1.0)
-    for i in range(m):
-        a = re[i] * khr[i] - im[i] * khi[i]
-        b = re[i] * khi[i] + im[i] * khr[i]
-        re[i] = a
-        im[i] = b
-    _fft_inplace(re, im, twr, twi, -1.0)
+    buf = np.zeros((4, m // 2 + 2))
     out = np.empty(n)
-    p0 = P[0]
-    p1 = P[n - 1]
-    for i in range(n):
-        out[i] = re[i] / m - (K[i] * p0 + K[n - 1 - i] * p1) / np.pi
+    conv_real(P, 0, n, khr, 0, m, twr, twi, 0, K, 0, buf[0], buf[1], buf[2], buf[3], out)
     return out
 
 

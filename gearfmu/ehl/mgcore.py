@@ -31,10 +31,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .deformation import _fft_inplace
+from .deformation import conv_real
 
 #: levels with at most this many nodes use the direct O(n^2) deformation sum
-N_DIRECT = 160
+N_DIRECT = 64
 
 
 @njit(cache=True)
@@ -56,22 +56,10 @@ def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
     mo = iarr[3, l]
     m = iarr[4, l]
     to = iarr[5, l]
-    for i in range(m):
-        re[i] = 0.0
-        im[i] = 0.0
-    for i in range(1, n - 1):
-        re[i] = P[o + i]
-    _fft_inplace(re[:m], im[:m], twr[to:to + m // 2], twi[to:to + m // 2], 1.0)
-    for i in range(m):
-        a = re[i] * khr[mo + i] - im[i] * khi[mo + i]
-        b = re[i] * khi[mo + i] + im[i] * khr[mo + i]
-        re[i] = a
-        im[i] = b
-    _fft_inplace(re[:m], im[:m], twr[to:to + m // 2], twi[to:to + m // 2], -1.0)
-    p0 = P[o]
-    p1 = P[o + n - 1]
-    for i in range(n):
-        V[i] = re[i] / m - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
+    h = m // 2 + 1
+    # re/im hold 2 (m/2 + 1) entries: packed sequence and product spectrum
+    conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re[:h], im[:h], re[h:2 * h],
+              im[h:2 * h], V)
 
 
 @njit(cache=True)
@@ -384,10 +372,15 @@ def _scaled_residual(l, S, order2, zero_f):
 
 
 @njit(cache=True)
-def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, stall_window):
-    """W-cycles until converged (returns +cycles) or stalled/failed (-cycles).
+def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
+             stall_window):
+    """Cycles until converged (returns +cycles) or stalled/failed (-cycles).
 
-    hist[:, k] = (pressure change, load error, scaled residual) of cycle k."""
+    hist[:, k] = (pressure change, load error, scaled residual, central film,
+    minimum film, relative film change) of cycle k (films in Venner-Lubrecht
+    units, central = node at X = 0); converged when the first three and the
+    relative change of the central and minimum films are below tol_p, tol_w,
+    tol_r, tol_f."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     nl = iarr.shape[1]
@@ -446,9 +439,22 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, stall_
         hist[0, cyc] = dP
         hist[1, cyc] = dW
         hist[2, cyc] = res
+        hc = H[o + i0]
+        hm = H[o]
+        for k in range(1, n):
+            if H[o + k] < hm:
+                hm = H[o + k]
+        hist[3, cyc] = hc
+        hist[4, cyc] = hm
+        if cyc > 0:
+            dh = max(abs(hc - hist[3, cyc - 1]) / max(abs(hc), 1e-300),
+                     abs(hm - hist[4, cyc - 1]) / max(abs(hm), 1e-300))
+        else:
+            dh = 1.0
+        hist[5, cyc] = dh
         if not (math.isfinite(dP) and math.isfinite(dW) and math.isfinite(res)):
             return -(cyc + 1)
-        if cyc + 1 >= min_cycles and dP < tol_p and dW < tol_w and res < tol_r:
+        if cyc + 1 >= min_cycles and dP < tol_p and dW < tol_w and res < tol_r and dh < tol_f:
             return cyc + 1
         if cyc + 1 >= 2 * stall_window:
             # stall: neither the change nor the residual fell 3x in the last window
@@ -467,22 +473,35 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, stall_
     return -max_cycles
 
 
-def w_schedule(n_levels: int, gamma: int = 2) -> np.ndarray:
-    """Integer codes of one W-cycle (gamma = 2; V-cycle with gamma = 1) whose
-    finest level is n_levels - 1: +k relax on k and go down, 0 coarsest
-    solve, -k come up to k and relax."""
+def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
+    """Integer codes of one multigrid cycle whose finest level is
+    n_levels - 1: +k relax on k and go down, 0 coarsest solve, -k come up to
+    k and relax.  ``gamma`` = 2: W-cycle, 1: V-cycle, "F": F-cycle (on each
+    level an F-cycle then a V-cycle on the next coarser level; Trottenberg,
+    Oosterlee & Schueller 2001, *Multigrid*, sec. 2.4: W-cycle-like
+    convergence with the coarsest grid visited n_levels - 1 times instead of
+    2^(n_levels - 2))."""
     ops = []
 
-    def cyc(k):
+    def cyc(k, g):
         if k == 0:
             ops.append(0)
             return
         ops.append(k)
-        for _ in range(gamma if k > 1 else 1):
-            cyc(k - 1)
+        if k == 1:
+            cyc(0, g)
+        elif g == "F":
+            cyc(k - 1, "F")
+            cyc(k - 1, 1)
+        else:
+            for _ in range(int(g)):
+                cyc(k - 1, g)
         ops.append(-k)
 
-    cyc(n_levels - 1)
+    if gamma not in (1, 2, "F"):
+        from .errors import EHLInputError
+        raise EHLInputError(f"gamma={gamma!r}: must be 1 (V-cycle), 2 (W-cycle) or 'F'")
+    cyc(n_levels - 1, gamma)
     return np.array(ops, dtype=np.int64)
 
 
@@ -512,7 +531,7 @@ class FlatMultigrid:
         o = dict(OPT_DEFAULTS)
         o.update({k: v for k, v in opts.items() if k != "gamma"})
         self.opts = o
-        self.gamma = int(opts.get("gamma", 2))
+        self.gamma = opts.get("gamma", 2)
         ns = [n_coarse * 2 ** k + 1 for k in range(n_levels)]
         off = np.concatenate(([0], np.cumsum(ns)))
         ms = []
@@ -565,8 +584,8 @@ class FlatMultigrid:
         self.H0old = np.zeros(n_levels)
         self.mode = np.zeros(ntot, dtype=np.int8)
         self.g = np.full(n_levels, 0.5 * np.pi)
-        self.re = np.zeros(mmax)
-        self.im = np.zeros(mmax)
+        self.re = np.zeros(mmax + 4)
+        self.im = np.zeros(mmax + 4)
         self.V = np.zeros(max(ns))
         self.prmv = np.array([prm.lam, prm.A, prm.z, prm.php0, prm.c1,
                               1.0 if prm.compressible else 0.0, prm.x_in, prm.x_out, 1.0])
@@ -629,14 +648,15 @@ class FlatMultigrid:
 
     # -- iteration ------------------------------------------------------------
     def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
-                tol_residual=1e-6, stall_window=12):
+                tol_residual=1e-6, stall_window=12, tol_film=1.0):
         """Compiled W-cycles; returns (converged, cycles, history dict)."""
-        hist = np.full((3, max_cycles), np.nan)
+        hist = np.full((6, max_cycles), np.nan)
         self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
         k = _iterate(self.sched, self.state(), hist, int(max_cycles), int(min_cycles),
                      float(tol_pressure), float(tol_load), float(tol_residual),
-                     int(stall_window))
+                     float(tol_film), int(stall_window))
         nc = abs(int(k))
         h = {"pressure_change": hist[0, :nc].tolist(), "load_balance": hist[1, :nc].tolist(),
-             "reynolds_residual": hist[2, :nc].tolist()}
+             "reynolds_residual": hist[2, :nc].tolist(), "H_central": hist[3, :nc].tolist(),
+             "H_min": hist[4, :nc].tolist(), "film_change": hist[5, :nc].tolist()}
         return k > 0, nc, h

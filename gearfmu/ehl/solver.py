@@ -97,6 +97,8 @@ class LineContactResult:
 #: hysteresis) for strongly piezoviscous high-M cases; the others are
 #: fallbacks found by numerical experiment (grid over M, L in docs/ehl.md).
 RELAXATION_SETTINGS = (
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
+         stick=10.0),
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.3, load_mode=1, c_h0=0.1,
          stick=10.0),
@@ -124,7 +126,7 @@ def _flat_opts(opts):
 
 
 def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
-                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,)):
+                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0):
     """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid) or a
     Hertzian pressure; with roughness the amplitude steps of ``ramp``."""
     solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **_flat_opts(opts))
@@ -134,7 +136,8 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         solver.hertz_start(Hc_guess)
     else:
         solver.start(P_start, Hc_guess)
-    hist = {"pressure_change": [], "load_balance": [], "reynolds_residual": []}
+    hist = {"pressure_change": [], "load_balance": [], "reynolds_residual": [],
+            "H_central": [], "H_min": [], "film_change": []}
     stages = list(ramp) if rough_fn is not None else [None]
     if rough_fn is not None and P_start is None:
         stages = [0.0] + stages
@@ -145,7 +148,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
             solver.set_roughness_scale(a)
         converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
                                           tol_pressure=tol_pressure, tol_load=tol_load,
-                                          tol_residual=tol_residual)
+                                          tol_residual=tol_residual, tol_film=tol_film)
         it += nc
         for k_ in hist:
             hist[k_].extend(h[k_])
@@ -297,7 +300,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        n_nodes: Optional[int] = None, n_coarse: Optional[int] = None,
                        x_in: float = -4.5, x_out: float = 1.5,
                        tol_pressure: float = 1e-5, tol_load: float = 1e-6,
-                       tol_residual: float = 1e-6,
+                       tol_residual: float = 1e-6, tol_film: float = 1.0,
                        max_cycles: int = 60, min_cycles: int = 2,
                        fmg_cycles: int = 0, roughness_ramp=(1.0,),
                        initial: Optional["LineContactResult"] = None,
@@ -452,7 +455,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             solver_obj, hist, converged, it = _iterate_flat(
                 prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
                 P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
-                tol_load, tol_residual, tuple(roughness_ramp))
+                tol_load, tol_residual, tuple(roughness_ramp), tol_film)
         if converged:
             break
     hist["settings"] = opts
