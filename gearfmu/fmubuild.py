@@ -165,19 +165,21 @@ def _integrator_code(integrator, slots: int) -> int:
 
 
 def temperature_input(variables, tables: MeshTables):
-    """The ``bulk_temperature`` input for tables with a temperature axis: start =
-    :attr:`MeshTables.default_temperature_C`, min/max = the axis ends (degC).
-    Returns (variables, start or None)."""
+    """The temperature input (:attr:`MeshTables.temperature_input`: ``bulk_temperature``,
+    ``oil_temperature`` or ``gearbox_temperature``) for tables with a temperature
+    axis: start = :attr:`MeshTables.default_temperature_C`, min/max = the axis
+    ends (degC).  Returns (variables, start or None)."""
     if not tables.has_temperature_axis:
         return list(variables), None
     from dataclasses import replace
 
+    name = tables.temperature_input
     lo, hi = tables.temperature_range_C
     start = tables.default_temperature_C
-    out = [replace(v, start=start, min=lo, max=hi) if v.name == "bulk_temperature" else v for v in variables]
-    if not any(v.name == "bulk_temperature" for v in out):
-        raise FmuBuildError("bulk_temperature: the tables have a temperature axis but the interface spec "
-                            "has no 'bulk_temperature' input (requires = \"temperature_axis\")")
+    out = [replace(v, start=start, min=lo, max=hi) if v.name == name else v for v in variables]
+    if not any(v.name == name for v in out):
+        raise FmuBuildError(f"{name}: the tables have a temperature axis but the interface spec "
+                            f"has no {name!r} input (a 'requires' entry for it)")
     return out, start
 
 

@@ -54,9 +54,15 @@ TYPES = ("Real", "Integer")
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 UNIT_SCALING = ("factor", "offset")
 #: conditions an entry may name in ``requires`` (the FMU carries a variable only
-#: when its tables need it): "temperature_axis" = the tables have a temperature
-#: axis (docs/tables.md "Operating axes")
-FEATURES = ("temperature_axis",)
+#: when its tables need it): "temperature_axis" = the tables have a bulk
+#: temperature axis (input bulk_temperature), "oil_temperature_axis" an oil
+#: temperature axis (input oil_temperature), "gearbox_temperature_axis" a
+#: gears-and-oil axis (input gearbox_temperature) (docs/tables.md "Operating
+#: axes", docs/thermal.md)
+FEATURES = ("temperature_axis", "oil_temperature_axis", "gearbox_temperature_axis")
+#: FMU input selecting the temperature axis -> the feature that declares it
+TEMPERATURE_INPUT_FEATURES = {"bulk_temperature": "temperature_axis", "oil_temperature": "oil_temperature_axis",
+                              "gearbox_temperature": "gearbox_temperature_axis"}
 
 #: log categories (the ones pythonfmu's wrapper logs with)
 LOG_CATEGORIES = {
@@ -181,7 +187,12 @@ def _output_index(raw, slots: int, slot: int, where: str) -> int:
 
 def features_of(tables) -> tuple:
     """The spec features (:data:`FEATURES`) a table set needs."""
-    return ("temperature_axis",) if getattr(tables, "has_temperature_axis", False) else ()
+    if not getattr(tables, "has_temperature_axis", False):
+        return ()
+    name = getattr(tables, "temperature_input", None) or "bulk_temperature"
+    if name not in TEMPERATURE_INPUT_FEATURES:
+        raise SpecError(f"tables: temperature input {name!r} not one of {sorted(TEMPERATURE_INPUT_FEATURES)}")
+    return (TEMPERATURE_INPUT_FEATURES[name],)
 
 
 def expand_variables(spec: Spec, slots: int, features: Iterable[str] = ()) -> List[Variable]:

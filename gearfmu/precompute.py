@@ -541,58 +541,83 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         static_te_m=np.ascontiguousarray(np.stack(te_rows)),
         provenance=prov,
     )
-    if thermal is not None and len(getattr(thermal, "temperature_axis_C", ()) or ()) > 0:
-        # the tables' temperature axis (seed 004; docs/tables.md "Operating axes")
-        tables = _add_temperature_axis(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,
-                                       ss_cache=ss_cache, slots=slots, points_per_mesh=points_per_mesh,
-                                       reps=reps, progress=progress)
+    if thermal is not None:
+        # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
+        tables = _apply_thermal(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,
+                                ss_cache=ss_cache, slots=slots, points_per_mesh=points_per_mesh, reps=reps,
+                                progress=progress, contact_env=contact_env, nominal_torque_Nm=nominal_torque_Nm)
     return tables.validate()
 
 
-def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
-                          points_per_mesh, reps, progress=False) -> MeshTables:
-    """Tables with the temperature axis ``thermal.temperature_axis_C`` (degC; uniform
-    bulk temperature of both gears, the FMU input ``bulk_temperature``;
-    docs/tables.md "Operating axes", docs/thermal.md).
+def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
+                   points_per_mesh, reps, progress, contact_env, nominal_torque_Nm) -> MeshTables:
+    """The ``[thermal]`` options (:class:`gearfmu.scene.ThermalOptions`) applied to
+    single-temperature tables: a temperature axis whose meaning is
+    ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
+    "bulk_and_oil": :func:`_add_oil_temperature_axis`), else the gears' thermal
+    state alone (:func:`_apply_thermal_state`; unchanged at the standard temperature)."""
+    from .thermal import thermal_state_from_scene
 
-    Per torque row T (N m, > 0: the seed 004 temperature stiffness is a secant
-    stiffness under load) and axis temperature t: the ratio r = k_T/k of
-    :func:`gearfmu.thermal.thermal_slot_stiffness` (seed 004 eq 5-28, standard
-    temperature ``thermal.standard_temperature_C``, ``thermal.flank_law``),
-    per slot and angle.  Without lead crowning the row's stiffness is r*k and
-    its error unchanged; with crowning every slice stiffness is scaled by r
-    (the thermal compliance is a series spring of the pair shared by its slices
-    in proportion to their stiffness -- CHOICE, docs/tables.md) and the loaded
-    mesh gives the row's secant stiffness and effective error.  At t = t0,
-    r = 1 exactly and the slice equals the single-temperature row bit for bit.
-    Meshing errors and backlash do not depend on temperature (seed 004 models
-    no thermal profile distortion); ``k_mean_N_per_m`` (the damping) stays the
-    standard one.
-    """
+    quantity = getattr(thermal, "axis_quantity", "bulk")
+    has_axis = len(getattr(thermal, "temperature_axis_C", ()) or ()) > 0
+    kw = dict(e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
+              points_per_mesh=points_per_mesh, reps=reps, progress=progress)
+    if has_axis and quantity in ("oil", "bulk_and_oil"):
+        return _add_oil_temperature_axis(tables, pair, opts, thermal, contact_env=contact_env, slots=slots,
+                                         points_per_mesh=points_per_mesh, nominal_torque_Nm=nominal_torque_Nm,
+                                         progress=progress)
+    if has_axis:
+        if quantity != "bulk":
+            raise PrecomputeInputError(f"axis_quantity: must be one of ('bulk', 'oil', 'bulk_and_oil'), got {quantity!r}")
+        return _add_temperature_axis(tables, pair, opts, geom, thermal, **kw)
+    state = thermal_state_from_scene(thermal)
+    if _is_standard_state(state):
+        return tables
+    return _apply_thermal_state(tables, pair, opts, geom, state, getattr(thermal, "flank_law", "radial_tangential"),
+                                **kw)
+
+
+def _is_standard_state(state) -> bool:
+    """Both gears uniformly at the standard temperature (no thermal compliance)."""
+    t0 = float(state.standard_temperature_C)
+    return all(not hasattr(t, "at_gamma") and float(t) == t0 for t in (state.pinion, state.gear))
+
+
+def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_slot, E, crowned, ss_cache, slots,
+                  points_per_mesh, reps, progress=False, label="gearfmu temperature axis"):
+    """Per torque row T (N m, > 0) and thermal state (:class:`gearfmu.thermal.ThermalState`):
+    (k, e, static TE) arrays of shape (NT, NStates, P, n) / (NT, NStates, n).
+
+    The ratio r = k_T/k of :func:`gearfmu.thermal.thermal_slot_stiffness` (seed 004
+    eq 5-28 at the state, load share of CHOICE 4), per slot and angle.  Without
+    lead crowning the row's stiffness is r*k and its error unchanged; with
+    crowning every slice stiffness is scaled by r (the thermal compliance is a
+    series spring of the pair shared by its slices in proportion to their
+    stiffness -- CHOICE, docs/tables.md) and the loaded mesh gives the row's
+    secant stiffness and effective error.  At the standard state r = 1 exactly
+    and the row equals the single-temperature row bit for bit."""
     from .thermal import thermal_slot_stiffness
 
-    axis = np.asarray(thermal.temperature_axis_C, dtype=float)
-    t0 = float(thermal.standard_temperature_C)
     torques = np.asarray(tables.torque_Nm, dtype=float)
     if np.any(torques <= 0):
         raise PrecomputeInputError(
-            f"torque_axis_Nm: the temperature axis needs torques > 0 (seed 004 stiffness is a secant "
+            f"torque_axis_Nm: a non-standard temperature needs torques > 0 (seed 004 stiffness is a secant "
             f"stiffness under load), got {torques.tolist()!r}")
     rb1 = float(geom.rb1_m)
-    bar = _Progress(progress, len(torques), "gearfmu temperature axis")
+    bar = _Progress(progress, len(torques), label)
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
         ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
         k_tile, k_slice = _per_slice(ss, int(opts.slices), reps)
-        th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), temperatures_C=axis,
+        th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), states=states,
                                     standard_temperature_C=t0, slots=slots, n_per_mesh=points_per_mesh,
-                                    law=thermal.flank_law, geom=geom)
+                                    law=law, geom=geom)
         kstd = np.asarray(th.k_standard_N_per_m, dtype=float)
         if kstd.shape[-1] * reps != tables.n_phi or kstd.shape[0] != tables.slots:
             raise PrecomputeInputError(f"temperature axis: thermal grid {kstd.shape} does not tile the table "
                                        f"grid ({tables.slots}, {tables.n_phi})")
         k_row, e_row, te_row = [], [], []
-        for a in range(axis.size):
+        for a in range(len(states)):
             kt = np.asarray(th.k_N_per_m[a], dtype=float)
             ratio = np.tile(np.where(kstd > 0, kt / np.where(kstd > 0, kstd, 1.0), 0.0), (1, reps))
             lm = loaded_static_mesh(k_slice * ratio[:, None, :], e_slot, E, float(T) / rb1)
@@ -606,23 +631,160 @@ def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_sl
         k4.append(np.stack(k_row))
         e4.append(np.stack(e_row))
         te4.append(np.stack(te_row))
-        bar.step(f"torque {float(T):g} N m, {axis.size} temperatures")
+        bar.step(f"torque {float(T):g} N m, {len(states)} thermal states")
     bar.close()
-    k_arr = np.ascontiguousarray(np.stack(k4))
-    e_arr = np.ascontiguousarray(np.stack(e4))
+    return np.ascontiguousarray(np.stack(k4)), np.ascontiguousarray(np.stack(e4)), np.stack(te4)
+
+
+def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
+                          points_per_mesh, reps, progress=False) -> MeshTables:
+    """Tables with the temperature axis ``thermal.temperature_axis_C`` (degC; uniform
+    bulk temperature of both gears, the FMU input ``bulk_temperature``;
+    docs/tables.md "Operating axes", docs/thermal.md): :func:`_thermal_rows` at
+    the states (t, t) of the axis, standard temperature
+    ``thermal.standard_temperature_C``, ``thermal.flank_law``.
+    Meshing errors and backlash do not depend on temperature (seed 004 models
+    no thermal profile distortion); ``k_mean_N_per_m`` (the damping) stays the
+    standard one.
+    """
+    from .thermal import ThermalState
+
+    axis = np.asarray(thermal.temperature_axis_C, dtype=float)
+    t0 = float(thermal.standard_temperature_C)
+    states = [ThermalState(float(t), float(t), t0) for t in axis]
+    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, states, thermal.flank_law, t0, e_slot=e_slot, E=E,
+                                     crowned=crowned, ss_cache=ss_cache, slots=slots,
+                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress)
     e_comp = np.ascontiguousarray(np.stack([comprehensive_error_m(e_arr[:, a], k_arr[:, a] > 0)
                                             for a in range(axis.size)], axis=1))
     prov = dict(tables.provenance)
     prov["thermal"] = {"temperature_axis_C": axis.tolist(), "standard_temperature_C": t0,
-                       "flank_law": thermal.flank_law, "input": "bulk_temperature",
+                       "flank_law": thermal.flank_law, "axis_quantity": "bulk", "input": "bulk_temperature",
                        "model": "seed 004 eq 5-28 (gearfmu.thermal.thermal_slot_stiffness), k scaled by k_T/k"}
-    return MeshTables(
-        torque_Nm=tables.torque_Nm, k_N_per_m=k_arr, e_m=e_arr, backlash_half_m=tables.backlash_half_m,
-        phi_period_rad=tables.phi_period_rad, mesh_period_rad=tables.mesh_period_rad,
-        base_radius_pinion_m=tables.base_radius_pinion_m, base_radius_gear_m=tables.base_radius_gear_m,
-        inertia_pinion_kgm2=tables.inertia_pinion_kgm2, inertia_gear_kgm2=tables.inertia_gear_kgm2,
-        teeth_pinion=tables.teeth_pinion, teeth_gear=tables.teeth_gear, contact_ratio=tables.contact_ratio,
-        k_mean_N_per_m=tables.k_mean_N_per_m, e_comprehensive_m=e_comp,
-        static_te_m=np.ascontiguousarray(np.stack(te4)), provenance=prov,
-        temperature_C=np.ascontiguousarray(axis), temperature_reference_C=t0,
-    ).validate()
+    return replace(tables, k_N_per_m=k_arr, e_m=e_arr, e_comprehensive_m=e_comp,
+                   static_te_m=np.ascontiguousarray(te), provenance=prov,
+                   temperature_C=np.ascontiguousarray(axis), temperature_reference_C=t0).validate()
+
+
+def _state_description(state) -> dict:
+    def one(t):
+        if hasattr(t, "at_gamma"):
+            return {"profile_gamma": list(t.gamma), "profile_C": list(t.temperature_C)}
+        return float(t)
+    return {"pinion_C": one(state.pinion), "gear_C": one(state.gear)}
+
+
+def _apply_thermal_state(tables: MeshTables, pair, opts, geom, state, law, *, e_slot, E, crowned, ss_cache, slots,
+                         points_per_mesh, reps, progress=False) -> MeshTables:
+    """Single-temperature tables at a non-standard thermal state of the gears
+    (``[thermal]`` pinion/gear temperatures or profiles without an axis): seed 004
+    eq 27-28 at that state applied to every torque row by :func:`_thermal_rows`
+    (docs/thermal.md "One temperature without an axis")."""
+    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, [state], law, float(state.standard_temperature_C),
+                                     e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
+                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress,
+                                     label="gearfmu thermal state")
+    k_arr, e_arr = np.ascontiguousarray(k_arr[:, 0]), np.ascontiguousarray(e_arr[:, 0])
+    prov = dict(tables.provenance)
+    prov["thermal"] = {"state": _state_description(state),
+                       "standard_temperature_C": float(state.standard_temperature_C), "flank_law": law,
+                       "model": "seed 004 eq 5-28 (gearfmu.thermal.thermal_slot_stiffness), k scaled by k_T/k"}
+    return replace(tables, k_N_per_m=k_arr, e_m=e_arr,
+                   e_comprehensive_m=np.ascontiguousarray(comprehensive_error_m(e_arr, k_arr > 0)),
+                   static_te_m=np.ascontiguousarray(te[:, 0]), provenance=prov).validate()
+
+
+def oil_axis_eta0_Pas(lubricant, temperatures_C) -> np.ndarray:
+    """eta0 (Pa s) at each oil temperature (degC) of an oil temperature axis: the
+    lubricant's Walther / ASTM D341 law times its (constant) density,
+    :func:`gearfmu.thermal.oil_dynamic_viscosity_Pas`.  ``lubricant``: a
+    :class:`gearfmu.scene.Lubricant` with both kinematic viscosities."""
+    from .thermal import ThermalError, oil_dynamic_viscosity_Pas
+
+    if lubricant is None:
+        raise PrecomputeInputError("lubricant: an oil temperature axis needs the lubricant's viscosity-temperature "
+                                   "law (thermal.lubricant, set by the scene reader from [lubricant])")
+    nu40 = getattr(lubricant, "kinematic_viscosity_40C_m2_s", None)
+    nu100 = getattr(lubricant, "kinematic_viscosity_100C_m2_s", None)
+    if nu40 is None or nu100 is None:
+        raise PrecomputeInputError("lubricant.eta0_Pas: an oil temperature axis needs a viscosity-temperature law "
+                                   "(kinematic_viscosity_40C_cSt and kinematic_viscosity_100C_cSt)")
+    try:
+        eta = np.atleast_1d(oil_dynamic_viscosity_Pas(nu40, nu100, lubricant.density_kg_m3, temperatures_C))
+    except (ThermalError, ValueError, OverflowError) as exc:
+        raise PrecomputeInputError(f"temperature_axis_C: {exc}") from None
+    if not np.all(np.isfinite(eta) & (eta > 0)):
+        raise PrecomputeInputError(f"temperature_axis_C: the viscosity law gives no usable eta0 at "
+                                   f"{list(np.asarray(temperatures_C, float))!r} degC")
+    return eta
+
+
+def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contact_env, slots, points_per_mesh,
+                              nominal_torque_Nm, progress=False) -> MeshTables:
+    """Tables with an oil temperature axis (``thermal.axis_quantity`` "oil": FMU input
+    ``oil_temperature``; "bulk_and_oil": gears and oil at one temperature, input
+    ``gearbox_temperature``; docs/thermal.md "Oil temperature axis").
+
+    Each slice t is the whole table build of :func:`precompute_tables` with the
+    contact environment's eta0 replaced by eta0(t) of :func:`oil_axis_eta0_Pas`
+    (the lubricated contact model's film / contact stiffness rebuilt at that
+    viscosity, load sharing iterated again); alpha and the density are kept
+    (CHOICE, docs/thermal.md).  The gears' state: for "oil" the ``[thermal]``
+    pinion/gear temperatures or profiles (standard when absent) at every node;
+    for "bulk_and_oil" both gears uniformly at t (seed 004 eq 27-28).  The
+    slice at the lubricant's own temperature is the scene's table bit for bit;
+    ``k_mean_N_per_m`` (the damping) is the scene's (``tables``, built at the
+    lubricant temperature); the FMU input starts at the lubricant temperature
+    clamped into the axis."""
+    from .tables import TEMPERATURE_INPUTS, stack_temperatures
+    from .thermal import thermal_state_from_scene
+
+    quantity = thermal.axis_quantity
+    if opts.contact_model == "hertz" or contact_env is None:
+        raise PrecomputeInputError(
+            f"axis_quantity: {quantity!r} acts through eta0 of a lubricated contact model, but contact_model = "
+            f"{opts.contact_model!r}" + (" uses no lubricant" if opts.contact_model == "hertz"
+                                         else " got no contact_env"))
+    from .contact_models import get_contact_model
+
+    if not get_contact_model(opts.contact_model).needs_lubricant:
+        raise PrecomputeInputError(f"axis_quantity: {quantity!r} needs a contact model that uses the lubricant; "
+                                   f"{opts.contact_model!r} does not")
+    lub = getattr(thermal, "lubricant", None)
+    axis = np.asarray(thermal.temperature_axis_C, dtype=float)
+    eta = oil_axis_eta0_Pas(lub, axis)
+    t0 = float(thermal.standard_temperature_C)
+    if quantity == "oil":  # the gears keep the scene's state at every oil temperature
+        gear_thermal = replace(thermal, temperature_axis_C=(), axis_quantity="bulk", lubricant=None)
+    slices, contact = [], []
+    for a, t in enumerate(axis):
+        if quantity == "bulk_and_oil":
+            gear_thermal = replace(thermal, temperature_axis_C=(), axis_quantity="bulk", lubricant=None,
+                                   pinion_temperature_C=float(t), gear_temperature_C=float(t),
+                                   pinion_profile_gamma=(), pinion_profile_C=(), gear_profile_gamma=(),
+                                   gear_profile_C=())
+        if float(eta[a]) == contact_env.eta0_Pas and _is_standard_state(thermal_state_from_scene(gear_thermal)):
+            tab = tables  # the scene's own oil temperature, gears standard: the table just built
+        else:
+            tab = precompute_tables(pair, opts, points_per_mesh=points_per_mesh, torque_axis_Nm=tables.torque_Nm,
+                                    nominal_torque_Nm=nominal_torque_Nm, slots=slots, progress=progress,
+                                    contact_env=replace(contact_env, eta0_Pas=float(eta[a])), thermal=gear_thermal)
+        if not np.array_equal(tab.torque_Nm, tables.torque_Nm):
+            raise PrecomputeInputError(f"temperature axis: the torque axis at {t:g} degC differs")
+        c = tab.provenance.get("contact", {})
+        contact.append({"temperature_C": float(t), "eta0_Pas": float(eta[a]), "solves": c.get("solves"),
+                        "film_failures": c.get("film_failures", 0)})
+        slices.append(replace(tab, provenance={}))
+    out = stack_temperatures(slices, axis, temperature_reference_C=float(lub.temperature_C))
+    prov = dict(tables.provenance)
+    prov["thermal"] = {
+        "temperature_axis_C": axis.tolist(), "axis_quantity": quantity, "input": TEMPERATURE_INPUTS[quantity],
+        "standard_temperature_C": t0, "flank_law": thermal.flank_law,
+        "oil": {"law": "Walther (ASTM D341) through kinematic_viscosity_40C/100C, eta0 = rho nu, rho constant",
+                "eta0_Pas": eta.tolist(), "alpha_Pa_inv": contact_env.alpha_Pa_inv, "alpha": "constant (CHOICE)",
+                "reference_temperature_C": float(lub.temperature_C), "slices": contact},
+        "gears": ("both at the axis temperature (seed 004 eq 5-28)" if quantity == "bulk_and_oil"
+                  else _state_description(thermal_state_from_scene(thermal))),
+        "model": "each slice rebuilt by precompute_tables with eta0(t); k_mean from the lubricant temperature",
+    }
+    return replace(out, k_mean_N_per_m=tables.k_mean_N_per_m, provenance=prov).validate()

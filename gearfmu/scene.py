@@ -53,6 +53,8 @@ __all__ = [
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
 #: contact models that need a [lubricant] section
 LUBRICATED_CONTACT_MODELS = ("smooth_ehl", "rough_ehl", "fractal_mixed")
+#: [thermal] axis_quantity -> the FMU input that selects the temperature axis (docs/thermal.md)
+THERMAL_AXIS_QUANTITIES = ("bulk", "oil", "bulk_and_oil")
 DAMPING_MODELS = ("elastobacklash", "seed003")
 INTEGRATORS = ("rk4", "rk4_kink")
 RUNTIMES = ("pythonfmu", "standalone")
@@ -200,7 +202,18 @@ class ThermalOptions:
     coordinate Gamma_K (overrides the uniform value when given);
     ``temperature_axis_C``: temperatures of the tables' temperature axis
     (empty = no axis); ``flank_law``: free flank deformation law of
-    :func:`gearfmu.thermal.free_flank_deformation_m`.
+    :func:`gearfmu.thermal.free_flank_deformation_m`; ``axis_quantity``: what
+    the axis is (:data:`THERMAL_AXIS_QUANTITIES`): "bulk" the bulk temperature of
+    both gears (seed 004 stiffness, FMU input ``bulk_temperature``), "oil" the
+    oil temperature (eta0 of a lubricated contact model, input
+    ``oil_temperature``), "bulk_and_oil" both at one temperature (input
+    ``gearbox_temperature``); ``lubricant``: the scene's ``[lubricant]`` (its
+    viscosity-temperature law), attached by the scene reader when the axis
+    involves the oil.  Without an axis, ``pinion_temperature_C`` /
+    ``gear_temperature_C`` / the profiles change the tables (seed 004 eq 27-28
+    at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
+    temperatures and these keys must be absent; with an "oil" axis they give
+    the gears' state at every oil temperature (docs/thermal.md).
     """
 
     standard_temperature_C: float = 30.0
@@ -212,6 +225,8 @@ class ThermalOptions:
     gear_profile_C: Tuple[float, ...] = ()
     temperature_axis_C: Tuple[float, ...] = ()
     flank_law: str = "radial_tangential"
+    axis_quantity: str = "bulk"
+    lubricant: Optional["Lubricant"] = None
 
 
 @dataclass(frozen=True)
@@ -460,6 +475,9 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            "gears), ascending; empty = none", -200.0, 500.0, kind="float_list"),
         _e("flank_law", ("radial_tangential", "homogeneous"), "radial_tangential",
            "free thermal deformation of a flank (docs/thermal.md)"),
+        _e("axis_quantity", THERMAL_AXIS_QUANTITIES, "bulk", "what temperature_axis_C is: bulk temperature "
+           "of both gears (FMU input bulk_temperature), oil temperature (eta0 of a lubricated contact model; "
+           "input oil_temperature) or both at one temperature (input gearbox_temperature)"),
     ),
     # operating envelope and accuracy target of the fidelity planner (gearfmu/envelope.py, docs/plan.md)
     "envelope": (
@@ -1009,6 +1027,50 @@ def _thermal(r: _Reader, data: Any) -> Optional[ThermalOptions]:
     return ThermalOptions(**th)
 
 
+def _thermal_cross_checks(r: _Reader, th: Optional[ThermalOptions], contact_model: Optional[str],
+                          lub: Optional[Lubricant]) -> Optional[ThermalOptions]:
+    """[thermal] against [mesh] and [lubricant] (docs/thermal.md "Oil temperature axis"):
+    an axis_quantity other than "bulk" needs an axis, a contact model that uses
+    the lubricant and a viscosity-temperature law usable at every axis
+    temperature; a bulk temperature axis excludes fixed gear temperatures.
+    Returns the options with the lubricant attached when the axis involves the oil."""
+    if th is None:
+        return None
+    q = th.axis_quantity
+    fixed = [k for k in ("pinion_temperature_C", "gear_temperature_C") if getattr(th, k) is not None] + \
+        [k for k in ("pinion_profile_C", "gear_profile_C") if len(getattr(th, k))]
+    if len(th.temperature_axis_C) and q in ("bulk", "bulk_and_oil") and fixed:
+        r.add(f"thermal.{fixed[0]}", f"the {q!r} temperature axis sets the temperature of both gears; remove "
+                                     f"{', '.join(fixed)} or use axis_quantity = \"oil\"")
+    if q == "bulk":
+        return th
+    if not len(th.temperature_axis_C):
+        r.add("thermal.axis_quantity", f"{q!r} needs thermal.temperature_axis_C (the oil temperatures of the "
+                                       "tables' axis)")
+        return th
+    if contact_model not in LUBRICATED_CONTACT_MODELS:
+        r.add("thermal.axis_quantity", f"{q!r}: the oil temperature acts through eta0 of a lubricated contact "
+                                       f"model, but mesh.contact_model = {contact_model!r} uses no lubricant "
+                                       f"(use one of {list(LUBRICATED_CONTACT_MODELS)}, or axis_quantity = \"bulk\")")
+        return th
+    if lub is None:
+        return th  # the missing [lubricant] is reported above
+    if lub.kinematic_viscosity_40C_m2_s is None or lub.kinematic_viscosity_100C_m2_s is None:
+        r.add("lubricant.eta0_Pas", f"thermal.axis_quantity = {q!r} needs a viscosity-temperature law: give "
+                                    "kinematic_viscosity_40C_cSt and kinematic_viscosity_100C_cSt instead")
+        return th
+    for t in th.temperature_axis_C:
+        try:
+            eta = lub.density_kg_m3 * lub.kinematic_viscosity_m2_s(float(t))
+        except (OverflowError, ValueError):
+            eta = float("nan")
+        if not (math.isfinite(eta) and eta > 0):
+            r.add("thermal.temperature_axis_C", f"the lubricant's viscosity law gives no usable viscosity at "
+                                                f"{t:g} degC")
+            return th
+    return replace(th, lubricant=lub)
+
+
 #: GearPairSpec / GearSpec field names -> scene key names (for GeometryError)
 _FIELD_TO_KEY = {
     "teeth": "teeth", "module_m": "module_mm", "pressure_angle_rad": "pressure_angle_deg",
@@ -1121,6 +1183,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                                        f"got {fmu['output_interval_s']:g}")
     if mesh_d["contact_model"] in LUBRICATED_CONTACT_MODELS and _sub(data, "lubricant") is None:
         r.add("lubricant", f"missing table (required by mesh.contact_model = {mesh_d['contact_model']!r})")
+    thermal = _thermal_cross_checks(r, thermal, mesh_d["contact_model"], lub)
 
     pair = None
     if gears["pinion"] is not None and gears["gear"] is not None and shared["backlash_um"] is not None \

@@ -54,7 +54,7 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
 
 
 #: inputs a variant may set (their start value), besides parameters
-VARIANT_INPUTS = ("bulk_temperature",)
+VARIANT_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
 
 class SspError(ValueError):
@@ -228,18 +228,22 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
     return out_path
 
 
-def default_variants(damping_ratio: float, temperature_range_C=None) -> Dict[str, Dict[str, float]]:
+def default_variants(damping_ratio: float, temperature_range_C=None,
+                     temperature_input: str = "bulk_temperature") -> Dict[str, Dict[str, float]]:
     """nominal / damping_low (half) / damping_high (twice, at most 1) damping ratios;
     with ``temperature_range_C`` = (lowest, highest) of the tables' temperature axis
-    (degC, FMUs with the ``bulk_temperature`` input) also ``temperature_low`` /
-    ``temperature_high`` at the nominal damping and the two ends of the axis."""
+    (degC, FMUs with a temperature input: ``temperature_input``, one of
+    :data:`VARIANT_INPUTS`) also ``temperature_low`` / ``temperature_high`` at the
+    nominal damping and the two ends of the axis."""
     z = float(damping_ratio)
     out = {"nominal": {"damping_ratio": z}, "damping_low": {"damping_ratio": 0.5 * z},
            "damping_high": {"damping_ratio": min(1.0, 2.0 * z)}}
     if temperature_range_C is not None:
         lo, hi = (float(x) for x in temperature_range_C)
-        out["temperature_low"] = {"damping_ratio": z, "bulk_temperature": lo}
-        out["temperature_high"] = {"damping_ratio": z, "bulk_temperature": hi}
+        if temperature_input not in VARIANT_INPUTS:
+            raise SspError(f"temperature_input: {temperature_input!r} not one of {VARIANT_INPUTS}")
+        out["temperature_low"] = {"damping_ratio": z, temperature_input: lo}
+        out["temperature_high"] = {"damping_ratio": z, temperature_input: hi}
     return out
 
 
@@ -271,5 +275,6 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
         res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress)
         trange = getattr(res.tables, "temperature_range_C", None)
-        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange),
+        tin = getattr(res.tables, "temperature_input", None) or "bulk_temperature"
+        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),
                          stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)

@@ -46,6 +46,9 @@ FORMAT_VERSION_AXES = 2
 SUPPORTED_VERSIONS = (1, 2)
 #: operating axes of version 2, in array order: name -> (unit, FMU input selecting it or None)
 OPERATING_AXES = {"torque_Nm": ("N*m", "pinion_torque"), "temperature_C": ("degC", "bulk_temperature")}
+#: what a temperature axis means ([thermal] axis_quantity) -> the FMU input that selects it
+#: (docs/thermal.md); the tables record it in provenance["thermal"]["input"] (default bulk_temperature)
+TEMPERATURE_INPUTS = {"bulk": "bulk_temperature", "oil": "oil_temperature", "bulk_and_oil": "gearbox_temperature"}
 
 #: arrays every table set has, with their axes and units
 ARRAY_FIELDS = {
@@ -81,7 +84,7 @@ class TemperatureRangeError(TableError):
     """A temperature outside the tables' temperature axis (or not finite)."""
 
 
-def temperature_bracket(axis_C, temperature_C: float) -> tuple:
+def temperature_bracket(axis_C, temperature_C: float, name: str = "bulk_temperature") -> tuple:
     """(ia, w, two) of docs/model.md "Temperature axis": ia is the largest index
     with axis[ia] <= T; at a node (axis[ia] == T, also the last one) one slice
     (two = False, w = 0.0), else slices ia, ia+1 with w = (T - axis[ia])/(axis[ia+1] - axis[ia]).
@@ -90,15 +93,15 @@ def temperature_bracket(axis_C, temperature_C: float) -> tuple:
     ax = np.asarray(axis_C, dtype=float)
     T = float(temperature_C)
     if not np.isfinite(T):
-        raise TemperatureRangeError(f"bulk_temperature = {T!r} degC: not finite")
+        raise TemperatureRangeError(f"{name} = {T!r} degC: not finite")
     if ax.size == 1:
         if T != ax[0]:
             raise TemperatureRangeError(
-                f"bulk_temperature = {T!r} degC outside the table range [{ax[0]!r}, {ax[0]!r}] degC")
+                f"{name} = {T!r} degC outside the table range [{ax[0]!r}, {ax[0]!r}] degC")
         return 0, 0.0, False
     if T < ax[0] or T > ax[-1]:
         raise TemperatureRangeError(
-            f"bulk_temperature = {T!r} degC outside the table range [{float(ax[0])!r}, {float(ax[-1])!r}] degC")
+            f"{name} = {T!r} degC outside the table range [{float(ax[0])!r}, {float(ax[-1])!r}] degC")
     ia = 0
     while ia < ax.size - 1 and ax[ia + 1] <= T:
         ia += 1
@@ -172,6 +175,17 @@ class MeshTables:
         return float(self.temperature_C[0]), float(self.temperature_C[-1])
 
     @property
+    def temperature_input(self) -> Optional[str]:
+        """Name of the FMU input that selects the temperature axis (one of
+        :data:`TEMPERATURE_INPUTS`' values, from ``provenance["thermal"]["input"]``,
+        default ``bulk_temperature``); None without a temperature axis."""
+        if self.temperature_C is None:
+            return None
+        th = self.provenance.get("thermal") if isinstance(self.provenance, dict) else None
+        name = th.get("input") if isinstance(th, dict) else None
+        return name if name in TEMPERATURE_INPUTS.values() else "bulk_temperature"
+
+    @property
     def default_temperature_C(self) -> Optional[float]:
         """Start value of the FMU input ``bulk_temperature`` (degC): the standard
         temperature t0 clamped into the axis (the axis' first point when t0 is
@@ -194,7 +208,7 @@ class MeshTables:
         the tables themselves are returned."""
         if self.temperature_C is None:
             return self
-        ia, w, two = temperature_bracket(self.temperature_C, temperature_C)
+        ia, w, two = temperature_bracket(self.temperature_C, temperature_C, self.temperature_input)
 
         def blend(a):
             if a is None:
@@ -362,7 +376,7 @@ class MeshTables:
             meta["axes"] = [
                 {"name": "torque_Nm", "unit": "N*m", "size": self.n_torque, "input": "pinion_torque",
                  "out_of_range": "clamp"},
-                {"name": "temperature_C", "unit": "degC", "size": self.n_temperature, "input": "bulk_temperature",
+                {"name": "temperature_C", "unit": "degC", "size": self.n_temperature, "input": self.temperature_input,
                  "out_of_range": "reject", "reference_C": self.temperature_reference_C,
                  "start_C": self.default_temperature_C},
             ]

@@ -392,3 +392,183 @@ def test_seed004_low_high_low_in_dynamic_runs(seed004):
         assert "diverged_at_step" not in r.info
         mean_k[T] = float(np.mean(r.mesh_stiffness[len(r.mesh_stiffness) // 4:]))
     assert mean_k[30.0] > mean_k[70.0] > mean_k[10.0], mean_k
+
+
+# ------------------------------------------- oil temperature axis (eta0 of the EHL film), issue 4
+# Tiny smooth_ehl scene: seed 004 pair I with its Table 4 oil (SCH632, 320 / 38.5 cSt at 40 / 100 degC),
+# here at 40 degC, one face slice, 8 points per mesh period, two torque rows, in-process film solves.
+OIL_AXIS = (40.0, 80.0)
+OIL_TEXT = ((REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
+            .replace('contact_model = "hertz"', 'contact_model = "smooth_ehl"').replace("slices = 25", "slices = 1")
+            .replace("points_per_mesh = 64", "points_per_mesh = 8\ntorque_points = 2")
+            .replace("torque_Nm = 381.97", "torque_Nm = 381.97\ntorque_range_Nm = [381.97, 450.0]")
+            .replace("temperature_C = 60.0", "temperature_C = 40.0"))
+
+
+def _oil_tables(text):
+    from gearfmu.contact_models import environment_from_scene
+    from gearfmu.precompute import precompute_tables
+
+    sc = load_scene(text)
+    return sc, precompute_tables(sc.pair, sc.mesh, points_per_mesh=sc.tables.points_per_mesh,
+                                 nominal_torque_Nm=sc.operating.torque_Nm,
+                                 contact_env=environment_from_scene(sc, max_workers=1), thermal=sc.thermal)
+
+
+@pytest.fixture(scope="module")
+def oil():
+    sc, tab = _oil_tables(OIL_TEXT + f"\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = {list(OIL_AXIS)}\n")
+    # the table built at one oil temperature (no axis): the scene's [lubricant] temperature_C = 80
+    _, single80 = _oil_tables(OIL_TEXT.replace("temperature_C = 40.0", "temperature_C = 80.0"))
+    return sc, tab, single80
+
+
+def test_oil_axis_film_thickness_follows_dowson_higginson_and_moes(oil):
+    """The oil axis changes eta0 by Walther / ASTM D341 (solved here with numpy, independent of
+    gearfmu) and the film with it: h_min(40)/h_min(80) at the pitch point against Dowson &
+    Higginson (1966) h_min ~ U^0.70 = (eta0 ratio)^0.70, and h_c against Moes (1992), both fits,
+    within 3 %; h_min itself within 15 % of Dowson-Higginson (seed 000 test tolerance)."""
+    import dataclasses
+
+    from gearfmu.contact_models import environment_from_scene
+    from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film, moes_parameters
+    from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
+    from gearfmu.geometry import pair_geometry
+
+    sc, tab, _ = oil
+    eta = tab.provenance["thermal"]["oil"]["eta0_Pas"]
+    M = np.array([[1.0, -math.log10(313.15)], [1.0, -math.log10(373.15)]])
+    A, B = np.linalg.solve(M, [math.log10(math.log10(320.7)), math.log10(math.log10(39.2))])
+    for t, e in zip(OIL_AXIS, eta):
+        assert e == pytest.approx(870.0e-6 * (10 ** (10 ** (A - B * math.log10(t + 273.15))) - 0.7), rel=1e-10)
+    g = pair_geometry(sc.pair)
+    env = environment_from_scene(sc, max_workers=1)
+    R, u, _ = (float(x) for x in contact_kinematics(g, g.s_pitch_m, env.omega1_rad_s))
+    w = sc.operating.torque_Nm / g.rb1_m / sc.pair.pinion.face_width_m
+    h_min, h_c, dh, moes = [], [], [], []
+    for e in eta:
+        fe = dataclasses.replace(env, eta0_Pas=e).film_environment()
+        out = solve_slice_film(fe, R, u, w)
+        assert out.status == "ok"
+        E = fe.E_prime_Pa
+        W, U, G = w / (E * R), e * u / (E * R), fe.alpha_Pa_inv * E
+        h_min.append(out.h_min_m)
+        h_c.append(out.h_central_m)
+        dh.append(R * dowson_higginson_min_film(W, U, G))
+        moes.append(R * moes_central_film(*moes_parameters(W, U, G)) * math.sqrt(2 * U))
+    assert h_min[1] < h_min[0] and h_c[1] < h_c[0]                      # hotter oil, thinner film
+    assert h_min[0] / h_min[1] == pytest.approx((eta[0] / eta[1]) ** 0.70, rel=0.03)
+    assert h_c[0] / h_c[1] == pytest.approx(moes[0] / moes[1], rel=0.03)
+    assert h_min == pytest.approx(dh, rel=0.15)
+    # thinner film, stiffer film (seed 000 eq 8: k_film = A B / h): the mesh stiffness rises with T
+    k = tab.k_total_N_per_m().mean(axis=-1)                             # (NT, NTemp)
+    assert np.all(k[:, 1] > k[:, 0])
+
+
+def test_oil_axis_slice_is_the_table_built_at_that_oil_temperature(oil):
+    """The slice at 80 degC equals, bit for bit, the whole table build of the scene whose
+    lubricant is at 80 degC (an independent precompute run); the start value is the scene's
+    oil temperature; the input is named oil_temperature everywhere."""
+    sc, tab, single80 = oil
+    at80 = tab.at_temperature(80.0)
+    for n in ("k_N_per_m", "e_m", "static_te_m", "torque_Nm"):
+        assert np.array_equal(getattr(at80, n), getattr(single80, n)), n
+    assert tab.temperature_input == "oil_temperature" and tab.default_temperature_C == 40.0
+    assert tab.provenance["thermal"]["axis_quantity"] == "oil"
+    with pytest.raises(TemperatureRangeError, match=r"oil_temperature = 90.0 degC outside the table range \[40.0, 80.0\]"):
+        tab.at_temperature(90.0)
+    names = [v.name for v in expand_variables(load_spec(), tab.slots, ("oil_temperature_axis",))]
+    assert "oil_temperature" in names and "bulk_temperature" not in names
+
+
+@pytest.fixture(scope="module")
+def oil_fmus(oil, tmp_path_factory):
+    d = tmp_path_factory.mktemp("oilaxis")
+    _, tab, _ = oil
+    kw = dict(max_step_s=1e-5, pinion_torque_start_Nm=381.97, pinion_speed_start_rad_s=209.0,
+              stop_time_s=N_STEPS * H, output_interval_s=H, damping_ratio=0.05)
+    return {"pythonfmu": build_fmu(tab, d / "oil_py.fmu", model_name="oilPy", **kw),
+            "standalone": build_standalone_fmu(tab, d / "oil_sa.fmu", model_name="oilSa", validation=False, **kw)}
+
+
+@pytest.mark.parametrize("kind", ["pythonfmu", "standalone"])
+def test_fmu_oil_temperature_input_matches_native_on_the_single_temperature_table(oil, oil_fmus, kind):
+    """FMU (fmpy) with oil_temperature = 80 degC (an axis node) against the native solver on the
+    table built at 80 degC alone (1e-9 of range, the project's agreement criterion).  Its
+    k_mean (damping reference) is the axis tables' one, the scene's 40 degC (docs/thermal.md)."""
+    import dataclasses
+
+    _, tab, single80 = oil
+    ref_tab = dataclasses.replace(single80, k_mean_N_per_m=tab.k_mean_N_per_m)
+    ref = simulate(ref_tab, stop_time_s=N_STEPS * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=381.97,
+                   pinion_speed_start_rad_s=209.0, damping_ratio=0.05)
+    cols = native_columns(ref, tab.slots)
+    md = {v.name: v for v in fmpy.read_model_description(str(oil_fmus[kind])).modelVariables}
+    assert "oil_temperature" in md and "bulk_temperature" not in md
+    v = md["oil_temperature"]
+    assert (v.causality, v.unit, float(v.start), float(v.min), float(v.max)) == ("input", "degC", 40.0, 40.0, 80.0)
+    res = fmpy.simulate_fmu(str(oil_fmus[kind]), stop_time=N_STEPS * H, output_interval=H, step_size=H,
+                            start_values={"oil_temperature": 80.0})
+    for n in ("mesh_stiffness", "dte", "mesh_force"):
+        rngv = max(float(np.ptp(cols[n])), 1e-300)
+        assert np.max(np.abs(res[n] - cols[n])) <= 1e-9 * rngv, n
+    # the oil temperature matters: at 40 degC the stiffness differs by far more than that
+    cold = fmpy.simulate_fmu(str(oil_fmus[kind]), stop_time=N_STEPS * H, output_interval=H, step_size=H)
+    assert np.max(np.abs(cold["mesh_stiffness"] - cols["mesh_stiffness"])) > 1e-4 * np.mean(cols["mesh_stiffness"])
+
+
+@pytest.mark.parametrize("kind", ["pythonfmu", "standalone"])
+def test_fmu_oil_temperature_out_of_range_is_discarded_with_a_log_naming_it(oil_fmus, kind):
+    x = Inst(oil_fmus[kind], "oiloor")
+    x.set(oil_temperature=50.0)
+    x.fmu.doStep(0.0, H)
+    before = x.out()
+    for bad in (95.0, float("nan")):
+        x.set(oil_temperature=bad)
+        with pytest.raises(FMICallException) as info:
+            x.fmu.doStep(H, H)
+        assert info.value.status == 2  # fmi2Discard
+        assert np.array_equal(x.out(), before)
+    x.close()
+    msgs = [m for st, m in x.log if st == 2]
+    assert any("oil_temperature = 95" in m and "outside the table range [40" in m and "80" in m for m in msgs), msgs
+    assert any("oil_temperature = nan" in m.lower() for m in msgs), msgs
+
+
+def test_bulk_and_oil_axis_is_gears_and_oil_at_one_temperature(oil):
+    """axis_quantity = "bulk_and_oil": the slice at 80 degC equals the single table of the scene
+    with the oil at 80 degC AND both gears at 80 degC (seed 004 eq 27-28 on top of the film);
+    FMU input gearbox_temperature."""
+    # standard temperature 40 degC = the oil's: the 40 degC node is the scene's table (no rebuild)
+    text = OIL_TEXT + ("\n[thermal]\naxis_quantity = \"bulk_and_oil\"\nstandard_temperature_C = 40.0\n"
+                       "temperature_axis_C = [40.0, 80.0]\n")
+    _, tab = _oil_tables(text)
+    _, single = _oil_tables(OIL_TEXT.replace("temperature_C = 40.0", "temperature_C = 80.0")
+                            + "\n[thermal]\nstandard_temperature_C = 40.0\npinion_temperature_C = 80.0\n"
+                              "gear_temperature_C = 80.0\n")
+    _, _, oil_only = oil                                                  # oil at 80 degC, gears standard
+    assert np.array_equal(tab.at_temperature(80.0).k_N_per_m, single.k_N_per_m)
+    assert np.all(single.k_N_per_m <= oil_only.k_N_per_m)                 # seed 004: 40 K above t0 lowers k
+    assert np.mean(single.k_total_N_per_m()) < (1 - 1e-3) * np.mean(oil_only.k_total_N_per_m())
+    assert tab.temperature_input == "gearbox_temperature"
+    names = [v.name for v in expand_variables(load_spec(), tab.slots, ("gearbox_temperature_axis",))]
+    assert "gearbox_temperature" in names and "oil_temperature" not in names
+
+
+def test_oil_axis_refused_without_a_lubricated_contact_model():
+    """Hertz contact uses no lubricant: the scene reader and the table builder refuse an oil axis."""
+    from gearfmu.precompute import PrecomputeInputError, precompute_tables
+    from gearfmu.scene import SceneError
+
+    hertz = (REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
+    with pytest.raises(SceneError, match=r"thermal\.axis_quantity: 'oil'.*uses no lubricant"):
+        load_scene(hertz + "\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = [40.0, 80.0]\n")
+    sc = load_scene(hertz + "\n[thermal]\ntemperature_axis_C = [40.0, 80.0]\n")
+    import dataclasses
+    th = dataclasses.replace(sc.thermal, axis_quantity="oil", lubricant=sc.lubricant)
+    with pytest.raises(PrecomputeInputError, match="axis_quantity: 'oil'.*'hertz' uses no lubricant"):
+        precompute_tables(sc.pair, sc.mesh, points_per_mesh=8, nominal_torque_Nm=381.97, thermal=th)
+    eta_only = OIL_TEXT.replace("kinematic_viscosity_40C_cSt = 320.0", "eta0_Pas = 0.1").replace(
+        "kinematic_viscosity_100C_cSt = 38.5", "")
+    with pytest.raises(SceneError, match=r"lubricant\.eta0_Pas: .*viscosity-temperature law"):
+        load_scene(eta_only + "\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = [40.0, 80.0]\n")

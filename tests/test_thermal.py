@@ -328,15 +328,22 @@ def test_thermal_slot_stiffness_axis():
 # ------------------------------------------------------------------ scene and oil
 def test_scene_thermal_section():
     text = SCENE["I"].read_text() + ("\n[thermal]\nstandard_temperature_C = 30\npinion_temperature_C = 70\n"
-                                     "temperature_axis_C = [10, 30, 70]\n"
                                      "gear_profile_gamma = [-0.5, 0.5]\ngear_profile_C = [70, 80]\n")
     t = load_scene(text).thermal
     assert t.pinion_temperature_C == 70.0 and t.gear_temperature_C is None
-    assert t.temperature_axis_C == (10.0, 30.0, 70.0) and t.gear_profile_C == (70.0, 80.0)
+    assert t.gear_profile_C == (70.0, 80.0) and t.axis_quantity == "bulk" and t.lubricant is None
+    t = load_scene(SCENE["I"].read_text() + "\n[thermal]\ntemperature_axis_C = [10, 30, 70]\n").thermal
+    assert t.temperature_axis_C == (10.0, 30.0, 70.0)
     assert load_scene(SCENE["I"]).thermal is None
     for bad, key in (("temperature_axis_C = [30, 10]", "thermal.temperature_axis_C"),
                      ("pinion_profile_gamma = [0.1]", "thermal.pinion_profile_C"),
-                     ("flank_law = \"linear\"", "thermal.flank_law")):
+                     ("flank_law = \"linear\"", "thermal.flank_law"),
+                     ("axis_quantity = \"wall\"", "thermal.axis_quantity"),
+                     # a bulk axis sets both gears' temperature: a fixed one contradicts it
+                     ("temperature_axis_C = [10, 70]\npinion_temperature_C = 70", "thermal.pinion_temperature_C"),
+                     # the oil axis needs a lubricated contact model (pair I is Hertz)
+                     ("temperature_axis_C = [40, 80]\naxis_quantity = \"oil\"", "thermal.axis_quantity"),
+                     ("axis_quantity = \"oil\"", "thermal.axis_quantity")):
         with pytest.raises(SceneError, match=key.replace(".", r"\.")):
             load_scene(SCENE["I"].read_text() + "\n[thermal]\n" + bad + "\n")
 
@@ -365,3 +372,81 @@ def test_scene_to_thermal_state():
     assert st.gear == th.TemperatureProfile((-0.5, 0.5), (70.0, 80.0))
     st = th.thermal_state_from_scene(load_scene(SCENE["I"].read_text() + "\n[thermal]\n").thermal)
     assert st.pinion == 30.0 and st.gear == 30.0
+
+
+# ------------------------------------------------- one temperature without an axis (scene -> tables)
+def _slot_positions(scene, tables):
+    """LOA position (m from N1) of every slot and table angle, NaN out of contact."""
+    from gearfmu.stiffness import slot_stiffness
+
+    g = pair_geometry(scene.pair)
+    ss = slot_stiffness(scene.pair, g, scene.mesh, tables.slots, scene.tables.points_per_mesh)
+    return g, np.tile(ss.s_m, (1, tables.n_phi // ss.s_m.shape[1]))
+
+
+def test_single_temperature_without_axis_changes_the_tables():
+    """[thermal] pinion/gear temperature alone (no axis) gives the tables at that state.
+
+    Reference: seed 004 eq 23-26 written out here for 10 degC (shrinkage, t0 = 30): the free
+    shrinkage of both flanks adds in series to the elastic deformation of each pair,
+    k_S = F_j / (F_j/k_j + |dx_1| + |dx_2|), with the load share F_j = F_n k_j / sum k
+    (docs/thermal.md CHOICE 4), F_n = T/r_b1, k_j the standard table, dx_i of
+    free_flank_deformation_m (checked against the scaled involute and by hand above).
+    The table mean equals the mean of thermal_slot_stiffness at that state, and is below
+    the standard one (seed 004: shrinkage lowers the stiffness)."""
+    from gearfmu.pipeline import compute_tables
+
+    base = SCENE["I"].read_text().replace("slices = 25", "slices = 5")
+    plain_sc = load_scene(base)
+    plain = compute_tables(plain_sc)
+    cold_sc = load_scene(base + "\n[thermal]\nstandard_temperature_C = 30\npinion_temperature_C = 10\n"
+                                "gear_temperature_C = 10\n")
+    cold = compute_tables(cold_sc)
+    assert not cold.has_temperature_axis and cold.k_N_per_m.shape == plain.k_N_per_m.shape
+    g, s = _slot_positions(plain_sc, plain)
+    k = plain.k_N_per_m[0]
+    on = k > 0
+    F = plain_sc.operating.torque_Nm / g.rb1_m
+    Fj = F * k / k.sum(axis=0)[None, :]
+    alpha = plain_sc.pair.pinion.material.thermal_expansion_per_K
+    d1 = np.abs(th.free_flank_deformation_m(g, 1, s[on], -20.0, alpha))
+    d2 = np.abs(th.free_flank_deformation_m(g, 2, s[on], -20.0, alpha))
+    hand = Fj[on] / (Fj[on] / k[on] + d1 + d2)
+    np.testing.assert_allclose(cold.k_N_per_m[0][on], hand, rtol=1e-12)
+    assert np.all(cold.k_N_per_m[0][~on] == 0.0)
+    assert np.array_equal(cold.e_m, plain.e_m)            # no thermal profile distortion in seed 004
+    km_cold, km_std = cold.k_total_N_per_m()[0].mean(), plain.k_total_N_per_m()[0].mean()
+    ts = th.thermal_slot_stiffness(cold_sc.pair, cold_sc.mesh, torque_Nm=cold_sc.operating.torque_Nm,
+                                   states=[th.thermal_state_from_scene(cold_sc.thermal)],
+                                   n_per_mesh=cold_sc.tables.points_per_mesh, slots=cold.slots)
+    assert km_cold == pytest.approx(ts.k_N_per_m[0].sum(axis=0).mean(), rel=1e-12)
+    assert km_cold < 0.95 * km_std
+    assert cold.provenance["thermal"]["state"] == {"pinion_C": 10.0, "gear_C": 10.0}
+    # the standard temperature written out is the standard table, bit for bit
+    std = compute_tables(load_scene(base + "\n[thermal]\npinion_temperature_C = 30\n"))
+    assert np.array_equal(std.k_N_per_m, plain.k_N_per_m)
+
+
+def test_different_gear_temperatures_and_a_profile_without_axis():
+    """Pinion on a profile along the LOA, gear uniform above t0 (seed 004 Fig. 6, CHOICE 1 and 5):
+    the tables equal thermal_slot_stiffness at that ThermalState (each contact point at the
+    local flank temperatures), and a profile differs from its mean (docs/thermal.md)."""
+    from gearfmu.pipeline import compute_tables
+
+    base = SCENE["I"].read_text().replace("slices = 25", "slices = 5")
+    prof = compute_tables(load_scene(base + "\n[thermal]\npinion_profile_gamma = [-0.5, 0.5]\n"
+                                            "pinion_profile_C = [60, 90]\ngear_temperature_C = 70\n"))
+    sc = load_scene(base + "\n[thermal]\npinion_profile_gamma = [-0.5, 0.5]\npinion_profile_C = [60, 90]\n"
+                           "gear_temperature_C = 70\n")
+    st = th.thermal_state_from_scene(sc.thermal)
+    ts = th.thermal_slot_stiffness(sc.pair, sc.mesh, torque_Nm=sc.operating.torque_Nm, states=[st],
+                                   n_per_mesh=sc.tables.points_per_mesh, slots=prof.slots)
+    reps = prof.n_phi // ts.k_N_per_m.shape[-1]
+    np.testing.assert_allclose(prof.k_N_per_m[0], np.tile(ts.k_N_per_m[0], (1, reps)), rtol=1e-12, atol=0)
+    mean_C = st.pinion.mean_C(pair_geometry(sc.pair))
+    mean = compute_tables(load_scene(base + f"\n[thermal]\npinion_temperature_C = {mean_C!r}\n"
+                                            "gear_temperature_C = 70\n"))
+    d = prof.k_total_N_per_m()[0] / mean.k_total_N_per_m()[0] - 1.0
+    assert np.max(np.abs(d)) > 1e-4                      # the distribution is not its mean
+    assert prof.provenance["thermal"]["state"]["pinion_C"] == {"profile_gamma": [-0.5, 0.5],
+                                                              "profile_C": [60.0, 90.0]}

@@ -31,7 +31,10 @@ from pythonfmu.variables import Integer, Real
 
 RUNTIME_FILE = "gearfmu_runtime.json"
 TABLE_VERSIONS = (1, 2)  # docs/tables.md (2: operating axes with a temperature axis)
-TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects the temperature axis (docs/model.md)
+TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects a bulk temperature axis (docs/model.md)
+#: inputs that may select the temperature axis, by what the axis is (docs/thermal.md); the
+#: variable table holds exactly one of them when the tables have a temperature axis
+TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
 # Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian
 # header, the raw bytes of the kernel's gk_state, the output vector, the values
@@ -211,9 +214,11 @@ class GearFmuSlave(Fmi2Slave):
         if "temperature_C" in arr:  # version 2 tables with a temperature axis (docs/tables.md)
             self._tax = arr["temperature_C"]
             st = lib.gk_set_temperature_axis(self._pm, int(self._tax.size), self._tax.ctypes.data)
-            if st != 0 or TEMPERATURE_INPUT not in [v["name"] for v in cfg["variables"]]:
-                msg = (f"resources/tables.json: temperature axis rejected by the kernel or no "
-                       f"{TEMPERATURE_INPUT} input in the variable table")
+            names = [n for n in TEMPERATURE_INPUTS if n in [v["name"] for v in cfg["variables"]]]
+            self._temp_name = names[0] if len(names) == 1 else TEMPERATURE_INPUT
+            if st != 0 or len(names) != 1:
+                msg = (f"resources/tables.json: temperature axis rejected by the kernel or not exactly one "
+                       f"of {list(TEMPERATURE_INPUTS)} inputs in the variable table")
                 self.log(msg, Fmi2Status.fatal)
                 raise GearFmuResourceError(msg)
             self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
@@ -304,22 +309,22 @@ class GearFmuSlave(Fmi2Slave):
         return True
 
     def _apply_temperature(self, t):
-        """Select the bulk temperature in the kernel; a message if it is NaN/inf or
+        """Select the temperature (bulk, oil or gearbox) in the kernel; a message if it is NaN/inf or
         outside the temperature axis (policy: reject, no clamping; docs/fmu.md)."""
         if self._temperature_range is None:
             return None
-        val = self._v[TEMPERATURE_INPUT]
+        val = self._v[self._temp_name]
         lo, hi = self._temperature_range
         try:
             T = float(val)
         except (TypeError, ValueError):
-            return f"{TEMPERATURE_INPUT} = {val!r} at t = {t!r} s: not a number"
+            return f"{self._temp_name} = {val!r} at t = {t!r} s: not a number"
         if not math.isfinite(T) or not lo <= T <= hi:
-            return (f"{TEMPERATURE_INPUT} = {T!r} degC at t = {t!r} s outside the table range "
+            return (f"{self._temp_name} = {T!r} degC at t = {t!r} s outside the table range "
                     f"[{lo!r}, {hi!r}] degC")
         st = self._lib.gk_set_temperature(self._pm, T)
         if st != 0:
-            return f"{TEMPERATURE_INPUT} = {T!r} degC at t = {t!r} s: {_KERNEL_ERRORS.get(st, st)}"
+            return f"{self._temp_name} = {T!r} degC at t = {t!r} s: {_KERNEL_ERRORS.get(st, st)}"
         return None
 
     def _check_torque_range(self, T1, t):

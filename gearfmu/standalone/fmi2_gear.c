@@ -91,7 +91,8 @@ typedef struct {
     int n_out;
     int P;
     int vr_T1, vr_T2, vr_zeta, vr_w0, vr_th0, vr_hmax, vr_dm, vr_integrator;
-    int vr_temp;          /* bulk_temperature input, -1 without a temperature axis */
+    int vr_temp;          /* temperature input (bulk_, oil_ or gearbox_temperature), -1 without a temperature axis */
+    const char *temp_name; /* its name, for the log messages */
     double temp_lo, temp_hi;
     int mode;
     int initialized;
@@ -579,12 +580,12 @@ static const char *apply_temperature(gf_inst *c, char *buf, size_t cap)
     if (c->vr_temp < 0) return NULL;
     T = c->values[c->vr_temp];
     if (!isfinite(T) || T < c->temp_lo || T > c->temp_hi) {
-        snprintf(buf, cap, "bulk_temperature = %.17g degC at t = %.17g s outside the table range [%.17g, %.17g] degC",
-                 T, c->time, c->temp_lo, c->temp_hi);
+        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s outside the table range [%.17g, %.17g] degC",
+                 c->temp_name, T, c->time, c->temp_lo, c->temp_hi);
         return buf;
     }
     if (gk_set_temperature(c->model, T) != GK_OK) {
-        snprintf(buf, cap, "bulk_temperature = %.17g degC at t = %.17g s: rejected by the kernel", T, c->time);
+        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s: rejected by the kernel", c->temp_name, T, c->time);
         return buf;
     }
     return NULL;
@@ -697,6 +698,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     c->logging_on = loggingOn ? 1 : 0;
     c->vr_integrator = -1;
     c->vr_temp = -1;
+    c->temp_name = "bulk_temperature";
     if (fmuType != fmi2CoSimulation) return instantiate_error(c, "only Co-Simulation is supported");
     if (!resource_path(fmuResourceLocation, GF_CONFIG_FILE, path, sizeof path))
         return instantiate_error(c, "resource location is not a file:// URI");
@@ -779,8 +781,16 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     c->vr_dm = find_var(c, "damping_model");
     c->vr_integrator = find_var(c, "integrator");
     if (cfg.n_temp > 0) {
-        c->vr_temp = find_var(c, "bulk_temperature");
-        if (c->vr_temp < 0) return instantiate_error(c, "tables have a temperature axis but no bulk_temperature input");
+        /* the one temperature input the interface declares (docs/thermal.md: what the axis is) */
+        static const char *const temp_names[3] = {"bulk_temperature", "oil_temperature", "gearbox_temperature"};
+        int ti, found = 0;
+        for (ti = 0; ti < 3; ti++) {
+            int vr = find_var(c, temp_names[ti]);
+            if (vr >= 0) { c->vr_temp = vr; c->temp_name = temp_names[ti]; found++; }
+        }
+        if (found != 1)
+            return instantiate_error(c, "tables have a temperature axis but not exactly one bulk_temperature, "
+                                        "oil_temperature or gearbox_temperature input");
     }
     if (c->vr_T1 < 0 || c->vr_T2 < 0 || c->vr_zeta < 0 || c->vr_w0 < 0 || c->vr_th0 < 0 || c->vr_hmax < 0 ||
         c->vr_dm < 0)
