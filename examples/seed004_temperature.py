@@ -10,9 +10,13 @@ Without --json it writes to DIR (default examples/output/seed004_temperature):
                                  temperature ("low-high-low", seed Fig. 5)
   fig7_pairI.png, fig7.csv       bulk temperature along the LOA vs its mean (seed Figs. 6-7; the profile
                                  is illustrative: Fig. 6b's data are not in the text)
+  fig7_tvms_pairI.png, fig7.json the same profile vs its mean as TVMS over a mesh period (tables' path)
+                                 and at the key points: the difference between a distribution and its mean
   tvms_temperature_pair{I,II}.png/.csv  total mesh stiffness over a mesh period at several temperatures
-  oil_temperature.png/.csv/.json eta0(T) by Walther / ASTM D341 (seed Table 4 oil) and the central film
-                                 thickness (Moes fit; the multigrid solver with --ehl-solver)
+  oil_temperature.png/.csv/.json eta0(T) by Walther / ASTM D341 (seed Table 4 oil) and the film
+                                 thickness (Moes, Dowson-Higginson fits; with --ehl-solver also the slice
+                                 film of the smooth_ehl contact model, the one the oil temperature axis
+                                 of the tables rebuilds, docs/thermal.md)
 
 Load: seed 004 Table 4, 80 kW at 2000 rpm, T1 = 381.97 N m, F_n = T1/r_b1 on one pair at every key
 point (the load that reproduces its Table 2, docs/thermal.md) for both pairs.
@@ -192,6 +196,41 @@ def fig7(out: Path, plt):
         for row in zip(g, pin.at_s(geom, s), gear.at_s(geom, s), dist.k_N_per_m, mean.k_N_per_m,
                        dist.k1_N_per_m, mean.k1_N_per_m, dist.k2_N_per_m, mean.k2_N_per_m):
             w.writerow([f"{v:.6g}" for v in row])
+    # the same profile and its mean through the tables' path (per-slot TVMS, quasi-static load share)
+    st_d = th.ThermalState(pin, gear, T_STANDARD_C)
+    st_m = th.ThermalState(pin.mean_C(geom), gear.mean_C(geom), T_STANDARD_C)
+    r = th.thermal_slot_stiffness(sc.pair, sc.mesh, torque_Nm=TORQUE_NM, states=[st_d, st_m],
+                                  standard_temperature_C=T_STANDARD_C, n_per_mesh=128)
+    k_d, k_m = r.k_N_per_m[0].sum(axis=0), r.k_N_per_m[1].sum(axis=0)
+    kp = {}
+    for name, sk in th.key_points_m(geom).items():
+        a = th.key_point_stiffness(sc.pair, st_d, Fn, [sk], geom)
+        b = th.key_point_stiffness(sc.pair, st_m, Fn, [sk], geom)
+        kp[name] = {"gamma": float(th.gamma_from_s(geom, sk)), "k_profile_N_per_m": float(a.k_N_per_m[0]),
+                    "k_mean_N_per_m": float(b.k_N_per_m[0]),
+                    "difference_percent": float(100.0 * (a.k_N_per_m[0] / b.k_N_per_m[0] - 1.0))}
+    summary = {
+        "what": "pair I, illustrative linear bulk-temperature profiles (seed Fig. 7 means +-4 K) vs the "
+                "uniform mean temperatures of each gear; seed 004 eq 5-28, radial_tangential law",
+        "pinion_mean_C": pin.mean_C(geom), "gear_mean_C": gear.mean_C(geom), "torque_Nm": TORQUE_NM,
+        "key_points_one_pair_whole_load": kp,
+        "tvms": {"mean_profile_N_per_m": float(k_d.mean()), "mean_uniform_N_per_m": float(k_m.mean()),
+                 "mean_difference_percent": float(100.0 * (k_d.mean() / k_m.mean() - 1.0)),
+                 "max_abs_difference_percent": float(100.0 * np.max(np.abs(k_d / k_m - 1.0)))},
+    }
+    (out / "fig7.json").write_text(json.dumps(summary, indent=1))
+    fig, ax = plt.subplots(figsize=(7, 4))
+    x = r.phi_rad / geom.mesh_period_rad
+    ax.plot(x, k_d / 1e8, label="profile along the LOA")
+    ax.plot(x, k_m / 1e8, "--", label="uniform mean temperature")
+    ax.set(xlabel="pinion angle (mesh periods)", ylabel="total mesh stiffness (1e8 N/m)",
+           title=f"pair I: distribution vs its mean, T1 = {TORQUE_NM:.1f} N m")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "fig7_tvms_pairI.png", dpi=120)
+    plt.close(fig)
+    print(f"fig 7: TVMS mean {summary['tvms']['mean_difference_percent']:+.3f} %, max "
+          f"{summary['tvms']['max_abs_difference_percent']:.3f} % (profile vs mean)", file=sys.stderr)
 
 
 def tvms(out: Path, plt):
@@ -246,16 +285,19 @@ def oil(out: Path, plt, use_solver: bool):
         h_dh = 2.65 * U ** 0.70 * G ** 0.54 * W ** -0.13 * R
         row = {"temperature_C": float(t), "eta0_Pas": float(e), "h_central_moes_m": h_moes,
                "h_min_dowson_higginson_m": h_dh, "M": M, "L": L}
-        if use_solver:
-            try:
-                from gearfmu.ehl import EHLError, solve_line_contact
-                res = solve_line_contact(R, E, w, um, float(e), a)
-                row["h_central_solver_m"] = float(getattr(res, "h_central_m", float("nan")))
-                row["h_min_solver_m"] = float(getattr(res, "h_min_m", float("nan")))
-            except ImportError as exc:
-                row["solver"] = f"not available: {exc}"
-            except (ValueError, ArithmeticError) as exc:   # EHLError is a ValueError
-                row["solver"] = f"failed: {exc}"
+        if use_solver:  # the slice film of the tables' contact models at eta0(T) (docs/ehl_mesh.md)
+            import dataclasses
+
+            from gearfmu.contact_models import environment_from_scene
+            from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
+
+            env = dataclasses.replace(environment_from_scene(sc, max_workers=1), eta0_Pas=float(e))
+            Rk, uk, _ = (float(v) for v in contact_kinematics(geom, geom.s_pitch_m, env.omega1_rad_s))
+            res = solve_slice_film(env.film_environment(), Rk, uk, w)
+            row["solver_status"] = res.status
+            row["h_central_solver_m"] = float(res.h_central_m)
+            row["h_min_solver_m"] = float(res.h_min_m)
+            row["k_film_solver_N_per_m_per_m"] = float(res.k_N_per_m) / env.width_m
         rows.append(row)
         print(f"oil {t:5.1f} degC: eta0 = {e:.4g} Pa s, h_c (Moes) = {h_moes * 1e6:.3f} um", file=sys.stderr)
     (out / "oil_temperature.json").write_text(json.dumps({
@@ -276,6 +318,8 @@ def oil(out: Path, plt, use_solver: bool):
     if use_solver:
         hs = [r.get("h_central_solver_m", float("nan")) * 1e6 for r in rows]
         ax[1].plot(temps, hs, "x", label="central, multigrid solver")
+        ax[1].plot(temps, [r.get("h_min_solver_m", float("nan")) * 1e6 for r in rows], "+",
+                   label="minimum, multigrid solver")
     ax[1].set(xlabel="oil temperature (°C)", ylabel="film thickness (µm)", title="pair I pitch point")
     ax[1].legend(fontsize=7)
     fig.tight_layout()
