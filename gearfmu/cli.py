@@ -61,7 +61,22 @@ def cmd_build(args) -> int:
     res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    _print_contact(res.tables)
     return 0
+
+
+def _print_contact(tables) -> None:
+    """One line on the contact model the tables were computed with, from their provenance: the
+    environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model."""
+    c = (getattr(tables, "provenance", None) or {}).get("contact")
+    if not c:
+        return
+    fails = sum(r.get("failures", 0) for r in c.get("load_iteration", {}).get("rows", []))
+    eta = c.get("eta0_Pas")
+    print(f"contact model {c.get('model')}: eta0 {eta if eta is None else format(eta, '.4g')} Pa s, "
+          f"pinion speed {c.get('speed_rad_s', float('nan')):.4g} rad/s, {c.get('solves', 0)} contact solves"
+          + (f", {fails} flagged points (tables' provenance 'contact')" if fails else "")
+          + (", helical: normal-section requests per slice" if "helical_normal_section" in c else ""))
 
 
 def cmd_tables(args) -> int:
@@ -80,6 +95,7 @@ def cmd_tables(args) -> int:
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
           f"{wall:.2f} s); plot {png}; csv {csv}")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
+    _print_contact(tables)
     return 0
 
 

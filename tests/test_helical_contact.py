@@ -144,7 +144,7 @@ def test_helical_smooth_ehl_tables_and_beta_to_zero():
     np.testing.assert_allclose(a[:, :, same], b[:, :, same], rtol=1e-4, atol=0)   # measured 2.2e-5
 
 
-def test_cli_tables_and_build_pass_the_contact_environment(tmp_path):
+def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
     # gearfmu tables / build on a tiny helical fractal_mixed scene: the tables carry the scene's lubricant
     # and speed (provenance) and equal the library call with environment_from_scene
     import json
@@ -162,6 +162,8 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path):
     scene = load_scene(p)
     assert scene.mesh.slices == 2 and scene.mesh.contact_model == "fractal_mixed"
     assert main(["tables", str(p), "-o", str(tmp_path / "t.gtab"), "-q"]) == 0
+    eta = scene.lubricant.dynamic_viscosity_Pas
+    assert f"contact model fractal_mixed: eta0 {eta:.4g} Pa s, pinion speed 104.7 rad/s" in capsys.readouterr().out
     t = load_tables(tmp_path / "t.gtab")
     c = t.provenance["contact"]
     assert c["model"] == "fractal_mixed"
@@ -171,6 +173,7 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path):
                             contact_env=environment_from_scene(scene))
     np.testing.assert_allclose(t.k_N_per_m, ref.k_N_per_m, rtol=1e-12)
     assert main(["build", str(p), "-o", str(tmp_path / "t.fmu"), "-q"]) == 0
+    assert "contact model fractal_mixed" in capsys.readouterr().out
     with zipfile.ZipFile(tmp_path / "t.fmu") as z:
         names = [n for n in z.namelist() if n.endswith("tables.json")]
         meta = json.loads(z.read(names[0]))
