@@ -76,7 +76,19 @@ log10 log10(nu + 0.7) = A - B log10(T/K), through two kinematic viscosities
 (:func:`gearfmu.scene.walther_kinematic_viscosity_cSt`), times the density;
 CHOICE: the oil density is held at its scene value (its thermal expansion,
 about 0.07 %/K, is left out: it changes eta0 by less than 3 % over 40 K, against
-a factor 8 in the kinematic viscosity between 40 and 100 degC).
+a factor 8 in the kinematic viscosity between 40 and 100 degC).  CHOICE: the
+pressure-viscosity coefficient alpha is kept at its scene value at every oil
+temperature (no alpha(T) law in the seeds or the scene; film thickness goes as
+alpha^0.54 in Dowson-Higginson, so a falling alpha would thin the hot film a
+little more).  The tables' oil temperature axis (``[thermal] axis_quantity =
+"oil"``, :func:`gearfmu.precompute.oil_axis_eta0_Pas`) feeds eta0(T) of this law
+into the lubricated contact model's ``ContactEnvironment`` and rebuilds the
+tables at every axis temperature (docs/thermal.md "Oil temperature axis").
+
+Scene -> state (:func:`thermal_state_from_scene`): without an axis, a pinion /
+gear temperature or profile different from the standard temperature changes
+the tables at that one state (seed 004 eq 27-28, every torque row;
+docs/thermal.md "One temperature without an axis").
 """
 from __future__ import annotations
 
