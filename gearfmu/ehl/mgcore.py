@@ -130,6 +130,8 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     omega_gs, omega_j, switch, order2, dmax, dist = opt[0], opt[1], opt[2], opt[3] > 0, \
         opt[4], opt[5]
     stick = opt[13]
+    freeze = opt[14] > 0.5
+    top_level = iarr.shape[1] - 1
     o = iarr[0, l]
     n = iarr[1, l]
     ko = iarr[2, l]
@@ -172,6 +174,9 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
         # until eps/dX^2 exceeds stick * switch (prevents switching limit cycles)
         thr = switch * stick if mode[i] == 1 else switch
         gs = eps[i] / h2 >= thr or P[i - 1] <= 0.0 or P[i + 1] <= 0.0 or P[i] <= 0.0
+        if freeze and l == top_level:
+            # frozen switch (finest grid): keep the relaxation type of each node
+            gs = mode[i] == 0
         mode[i] = 0 if gs else 1
         if gs:
             if sec:
@@ -507,10 +512,10 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
 
 #: option vector layout of the compiled core
 OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
-            "nu1", "nu2", "nu0", "load_mode", "defect", "stick")
+            "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze")
 OPT_DEFAULTS = dict(omega_gs=0.8, omega_j=0.6, switch=3.0, order2=1, dmax=0.3, dist=0,
                     c_h0=0.5, h0_step=0.5, nu1=2, nu2=1, nu0=10, load_mode=0,
-                    defect=0, stick=1.0)
+                    defect=0, stick=1.0, freeze=0)
 
 
 class FlatMultigrid:

@@ -106,6 +106,12 @@ RELAXATION_SETTINGS = (
     dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
 )
 
+#: A relaxation setting that stalls with a relative pressure change per cycle
+#: below this value is continued with the switch frozen (``freeze`` option of
+#: :mod:`.mgcore`): the stall is then a switching limit cycle of the
+#: relaxation close to the solution (measured on rough films, docs/ehl.md).
+FREEZE_BELOW_PRESSURE_CHANGE = 1e-3
+
 #: Settings of the previous (Python-driven) solver, kept for ``solver="python"``.
 PYTHON_RELAXATION_SETTINGS = (
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
@@ -125,6 +131,10 @@ def _flat_opts(opts):
     return o
 
 
+_HIST_KEYS = ("pressure_change", "load_balance", "reynolds_residual", "H_central", "H_min",
+              "film_change")
+
+
 def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
                   min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0):
     """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid) or a
@@ -136,8 +146,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         solver.hertz_start(Hc_guess)
     else:
         solver.start(P_start, Hc_guess)
-    hist = {"pressure_change": [], "load_balance": [], "reynolds_residual": [],
-            "H_central": [], "H_min": [], "film_change": []}
+    hist = {k_: [] for k_ in _HIST_KEYS}
     stages = list(ramp) if rough_fn is not None else [None]
     if rough_fn is not None and P_start is None:
         stages = [0.0] + stages
@@ -150,8 +159,21 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
                                           tol_pressure=tol_pressure, tol_load=tol_load,
                                           tol_residual=tol_residual, tol_film=tol_film)
         it += nc
-        for k_ in hist:
+        for k_ in _HIST_KEYS:
             hist[k_].extend(h[k_])
+        last_dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
+        if not converged and math.isfinite(last_dp) and last_dp < FREEZE_BELOW_PRESSURE_CHANGE:
+            # limit cycle close to the solution: continue with the Gauss-Seidel /
+            # Jacobi choice of every finest-grid node frozen (docs/ehl.md)
+            solver.opts["freeze"] = 1
+            converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=1,
+                                              tol_pressure=tol_pressure, tol_load=tol_load,
+                                              tol_residual=tol_residual, tol_film=tol_film)
+            solver.opts["freeze"] = 0
+            hist["frozen_switch_from_cycle"] = [it]
+            it += nc
+            for k_ in _HIST_KEYS:
+                hist[k_].extend(h[k_])
         if not converged:
             break
     return solver, hist, converged, it
