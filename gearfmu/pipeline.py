@@ -73,6 +73,8 @@ def max_step_for(scene, tables) -> float:
     rng = getattr(scene.operating, "speed_range_rad_s", None)
     if rng:
         vmax = max(abs(v) for v in rng)
+    if getattr(tables, "has_temperature_axis", False):  # the bound of the stiffest temperature slice
+        return min(choose_max_step_s(tables.at_temperature(float(t)), abs(vmax)) for t in tables.temperature_C)
     return choose_max_step_s(tables, abs(vmax))
 
 
