@@ -572,3 +572,17 @@ def test_oil_axis_refused_without_a_lubricated_contact_model():
         "kinematic_viscosity_100C_cSt = 38.5", "")
     with pytest.raises(SceneError, match=r"lubricant\.eta0_Pas: .*viscosity-temperature law"):
         load_scene(eta_only + "\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = [40.0, 80.0]\n")
+
+
+def test_automatic_max_step_of_a_temperature_axis_scene(seed004):
+    """solver.max_step_s = "auto" with a temperature axis (gearfmu build of such a scene): the
+    bound of the stiffest slice, i.e. the smallest of choose_max_step_s over the axis slices."""
+    from gearfmu.native import choose_max_step_s
+    from gearfmu.pipeline import max_step_for
+
+    _, hot = seed004
+    sc = load_scene(SEED004_SCENE + "\n[thermal]\ntemperature_axis_C = [10.0, 30.0, 70.0]\n")
+    assert sc.solver.max_step_s is None
+    w = sc.operating.speed_rad_s
+    per = [choose_max_step_s(hot.at_temperature(t), w) for t in (10.0, 30.0, 70.0)]
+    assert max_step_for(sc, hot) == min(per)
