@@ -28,13 +28,19 @@ Models here:
   identical, so one solve per distinct (position, load).
 * ``rough_ehl``: the same with the W-M fractal roughness of both flanks per
   slice (seed 000 eq 1, 3; :mod:`gearfmu.ehl.mesh_film`).  Where the rough
-  film collapses (FilmCollapseError) or the solver stalls (EHLConvergenceError,
-  which happens at film parameters lambda = h_min/sigma below about 3), the
-  policy ``RoughnessSpec.on_failure`` decides: ``"hertz"`` (default) uses the
-  Hertz stiffness of that slice and records the failure (provenance + one
-  warning) -- seed 000 section 5.1 notes that at high roughness the mesh
-  stiffness approaches the Hertz value; ``"error"`` raises
-  :class:`ContactModelError` naming the position, the slice and lambda.
+  film parameter Lambda = h_min/sigma (Dowson-Higginson h_min, composite W-M
+  sigma; :func:`film_parameter`) lies below ``RoughnessSpec.full_film_parameter``
+  (default 3, the full-film limit of Tallian 1967), or the rough film
+  collapses (FilmCollapseError) or stalls (EHLConvergenceError), the policy
+  ``RoughnessSpec.on_failure`` decides: ``"fractal_mixed"`` (default) uses
+  seed 001's mixed-lubrication stiffness K_n = K_s + K_l
+  (:mod:`gearfmu.fractal_contact`) there, ``"hertz"`` the Hertz stiffness
+  (seed 000 section 5.1: at high roughness the mesh stiffness approaches the
+  Hertz value), ``"error"`` raises :class:`ContactModelError` naming the
+  position, the slice and Lambda.  Every switched point is recorded.
+  Speed: with ``RoughnessSpec.position_nodes`` > 0 (default) the films are
+  solved on a grid of contact positions x loads shared by all pair slots and
+  interpolated (:class:`RoughFilmGrid`, docs/ehl_mesh.md "Speed").
 """
 from __future__ import annotations
 
@@ -51,19 +57,51 @@ class ContactModelError(ValueError):
     """Bad contact-model input, or a film failure under ``on_failure = "error"``."""
 
 
+#: what a rough-EHL request uses where the full film does not hold (RoughnessSpec.on_failure)
+FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error")
+#: full-film limit of the film parameter Lambda = h_min/sigma (Tallian 1967; Johnson,
+#: Greenwood & Poon 1972; gearfmu.fractal_contact.FULL_FILM_LAMBDA)
+FULL_FILM_PARAMETER = 3.0
+#: contact positions (uniform over the path of contact, ends included) at which the rough
+#: films are solved and between which the film stiffness is interpolated (docs/ehl_mesh.md)
+DEFAULT_FILM_POSITION_NODES = 17
+#: ratio of neighbouring load nodes of the film grid (geometric, anchored at the scene's
+#: nominal line load) when no load range is known
+FILM_LOAD_NODE_RATIO = 2.0
+#: rough load nodes over a known load range (ContactEnvironment.film_load_range_N_per_m,
+#: set by the table builder: the load floor to the largest static slice load)
+FILM_LOAD_NODES = 3
+
+
 @dataclass(frozen=True)
 class RoughnessSpec:
     """W-M flank roughness (seed 000 eq 1).  ``D`` fractal dimension, ``G_m``
     characteristic scale (m; Table 2's G read in mm, docs/ehl.md), ``seed``
     of the random phases, ``f_max_per_m`` band limit (1/m), ``level`` the
-    Table 2 level it came from (0 = custom), ``on_failure`` 'hertz' | 'error'."""
+    Table 2 level it came from (0 = custom), ``on_failure`` 'fractal_mixed' |
+    'hertz' | 'error' (where Lambda < ``full_film_parameter`` or the rough
+    film fails), ``position_nodes``: contact positions of the film grid (0 =
+    solve at every requested position)."""
 
     D: float
     G_m: float
     seed: int = 2022
     f_max_per_m: float = 1e4
     level: int = 0
-    on_failure: str = "hertz"
+    on_failure: str = "fractal_mixed"
+    full_film_parameter: float = FULL_FILM_PARAMETER
+    position_nodes: int = DEFAULT_FILM_POSITION_NODES
+
+    def __post_init__(self):
+        if self.on_failure not in FILM_FAILURE_POLICIES:
+            raise ContactModelError(f"on_failure={self.on_failure!r}: must be one of "
+                                    f"{', '.join(FILM_FAILURE_POLICIES)}")
+        lam = self.full_film_parameter
+        if not (isinstance(lam, (int, float)) and math.isfinite(lam) and lam >= 0):
+            raise ContactModelError(f"full_film_parameter={lam!r}: must be finite and >= 0")
+        k = self.position_nodes
+        if int(k) != k or k < 0 or k == 1:
+            raise ContactModelError(f"position_nodes={k!r}: must be 0 (every position) or an integer >= 2")
 
     @staticmethod
     def from_level(level: int, **kw) -> "RoughnessSpec":
@@ -82,7 +120,11 @@ class ContactEnvironment:
     lubricant eta0 (Pa s, at the oil temperature), alpha (1/Pa), rho0 (kg/m^3)
     (None for 'hertz'); ``n_slices`` and ``width_m`` of a slice; ``roughness``
     for 'rough_ehl'; ``executor`` / ``max_workers`` / ``progress`` for the EHL
-    solves; ``ehl_nodes``: EHL grid nodes (None: the solver's choice)."""
+    solves; ``ehl_nodes``: EHL grid nodes (None: the solver's choice);
+    ``film_load_anchor_N_per_m``: a load node of the rough film grid (N/m; the
+    scene's nominal line load T/(r_b1 b); None: 1e5 N/m); ``film_load_range_N_per_m``:
+    (lowest, highest) slice load the tables will ask for (N/m; the grid then puts
+    :data:`FILM_LOAD_NODES` load nodes over it)."""
 
     pair: object
     geom: object
@@ -97,7 +139,10 @@ class ContactEnvironment:
     max_workers: Optional[int] = None
     progress: bool = False
     ehl_nodes: Optional[int] = None
+    film_load_anchor_N_per_m: Optional[float] = None
+    film_load_range_N_per_m: Optional[tuple] = None
     _flanks: object = field(default=None, repr=False)
+    _grid: object = field(default=None, repr=False)
 
     def film_environment(self):
         from .ehl.mesh_film import FilmEnvironment
@@ -196,61 +241,447 @@ def smooth_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Co
     return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq))
 
 
+def composite_sigma_m(spec: RoughnessSpec) -> float:
+    """Composite RMS roughness sigma = sqrt(sigma1^2 + sigma2^2) (m) of the two flanks:
+    both carry the W-M roughness of ``spec`` (same D, G), so sigma = sqrt(2) sigma_WM with
+    sigma_WM the expected RMS height of the full W-M sum
+    (:func:`gearfmu.roughness.wm_sigma_m`, the convention that reproduces seed 000
+    Table 2's Ra; CHOICE: the full band, not the band-limited profile the solver sees, since
+    Lambda describes the real surfaces)."""
+    from .roughness import wm_sigma_m
+
+    return math.sqrt(2.0) * wm_sigma_m(spec.D, spec.G_m)
+
+
+def film_parameter(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndarray:
+    """Film parameter Lambda = h_min / sigma per request (1).
+
+    h_min: Dowson & Higginson (1966) minimum film of the smooth line contact,
+    h_min/R = 2.65 U^0.70 G^0.54 W^-0.13 (:func:`gearfmu.ehl.fits.dowson_higginson_min_film`)
+    with R, u_s of the position (:func:`gearfmu.ehl.mesh_film.contact_kinematics`),
+    W = w/(E' R), U = eta0 u_s/(E' R), G = alpha E'; sigma: :func:`composite_sigma_m`
+    (Lambda as defined by Tallian 1967; full film above 3)."""
+    from .ehl.fits import dowson_higginson_min_film
+    from .ehl.mesh_film import contact_kinematics
+
+    if env.roughness is None:
+        raise ContactModelError("roughness: the film parameter needs a RoughnessSpec")
+    a = env.alpha_Pa_inv
+    if a is None or not math.isfinite(a) or a <= 0:
+        raise ContactModelError(f"alpha_Pa_inv={a!r}: the film parameter (Dowson-Higginson) needs alpha > 0")
+    s = np.atleast_1d(np.asarray(s_m, dtype=float))
+    w = np.broadcast_to(np.asarray(w_N_per_m, dtype=float), s.shape)
+    Ep = 2.0 * reduced_modulus_Pa(env.pair)
+    R, u, _ = contact_kinematics(env.geom, s, env.omega1_rad_s)
+    h = np.array([Ri * dowson_higginson_min_film(wi / (Ep * Ri), env.eta0_Pas * ui / (Ep * Ri), a * Ep)
+                  for Ri, ui, wi in zip(R.ravel(), u.ravel(), w.ravel())]).reshape(s.shape)
+    return h / composite_sigma_m(env.roughness)
+
+
+def _rough_profile(env, fenv, fl, s: float, slice_index: int, w: float, R: float):
+    """Composite roughness (x, wm(x)) of one slice at LOA position ``s`` for the load ``w``
+    (sampled on [-5b, 2b], b the Hertz half-width; module doc of gearfmu.ehl.mesh_film)."""
+    from .ehl.mesh_film import involute_arc_length_m
+
+    a1 = float(involute_arc_length_m(env.geom.roll_length_at(1, s), env.geom.rb1_m))
+    a2 = float(involute_arc_length_m(env.geom.roll_length_at(2, s), env.geom.rb2_m))
+    b = math.sqrt(8.0 * w * R / (math.pi * fenv.E_prime_Pa))
+    x = np.linspace(-5.0 * b, 2.0 * b, 2801)
+    return x, fl.composite_m(slice_index, a1, a2, x)
+
+
+class RoughFilmGrid:
+    """Rough-film stiffness on a grid of contact positions x loads, interpolated to any
+    (position, slice, load) request (docs/ehl_mesh.md "Speed").
+
+    Positions: ``K`` uniform nodes over the path of contact [A, E] (ends included), shared
+    by all pair slots (every tooth carries the same roughness realisation).  Loads:
+    geometric nodes w_j = anchor * q^j, :data:`FILM_LOAD_NODES` over
+    ``env.film_load_range_N_per_m`` when given (the table builder sets it), else
+    anchored at the nominal line load with q = :data:`FILM_LOAD_NODE_RATIO`; columns
+    are solved lazily as requests need them (one more on each side for the smooth film).  At each node the smooth film is solved once and every slice's
+    rough film is warm-started from it (:func:`gearfmu.ehl.mesh_film.solve_node_films`).
+    Interpolation (CHOICE, errors measured in benchmarks/bench_ehl_tables.py):
+
+    * smooth stiffness: log k_s cubic spline in s, cubic Lagrange in log w (4 nodes);
+    * rough/smooth ratio r = k_r/k_s per slice: piecewise linear in s and in log w.
+
+    k_rough = k_s * r.  A failed node (stall or collapse) makes every request that uses it
+    (non-zero weight) a failure, which the caller's policy handles.  The grid is kept on
+    the environment and reused by all load-iteration passes and torque rows."""
+
+    def __init__(self, env: "ContactEnvironment", K: int):
+        g = env.geom
+        self.K = int(K)
+        self.s_nodes = np.linspace(float(g.s_start_m), float(g.s_end_m), self.K)
+        self.ds = float(self.s_nodes[1] - self.s_nodes[0])
+        rng = env.film_load_range_N_per_m
+        if rng is not None:  # FILM_LOAD_NODES geometric nodes over the range the tables need
+            lo, hi = float(rng[0]), float(rng[1])
+            self.anchor = lo
+            self.q = max((hi / lo) ** (1.0 / (FILM_LOAD_NODES - 1)), 1.05)
+        else:
+            self.anchor = float(env.film_load_anchor_N_per_m or 1e5)
+            self.q = FILM_LOAD_NODE_RATIO
+        self.NS = int(env.n_slices)
+        self.smooth: Dict[int, np.ndarray] = {}     # j -> (K,) smooth k (NaN failed)
+        self.smooth_status: Dict[int, list] = {}
+        self.ratio: Dict[int, np.ndarray] = {}      # j -> (NS, K) rough/smooth (NaN failed)
+        self.status: Dict[int, np.ndarray] = {}     # j -> (NS, K) status strings
+        self.mixed: Dict[int, np.ndarray] = {}      # j -> (K,) fractal K_n
+        self.solves = 0
+        self.rough_solves = 0
+        self.key = _grid_key(env)
+
+    def w_node(self, j) -> np.ndarray:
+        return self.anchor * self.q ** np.asarray(j, dtype=float)
+
+    def _jpos(self, w):
+        return np.log(np.asarray(w, float) / self.anchor) / math.log(self.q)
+
+    # ----------------------------------------------------------- solving
+    def ensure(self, env, fenv, smooth_j, rough_j):
+        """Solve the missing smooth columns ``smooth_j`` and rough columns ``rough_j``."""
+        from .ehl.mesh_film import _solve_node_chunk, contact_kinematics, map_chunks
+
+        rough_new = sorted(set(int(j) for j in rough_j) - set(self.ratio))
+        smooth_new = sorted((set(int(j) for j in smooth_j) | set(rough_new)) - set(self.smooth))
+        if not smooth_new and not rough_new:
+            return
+        fl = env.flanks() if rough_new else None
+        R, u, _ = contact_kinematics(env.geom, self.s_nodes, env.omega1_rad_s)
+        chunks, counts, where = [], [], []
+        n_cpu = __import__("os").cpu_count() or 1
+        cols = sorted(set(smooth_new) | set(rough_new))
+        n_rough_nodes = len(rough_new) * self.K
+        # split the slices of a node into groups so that there are >= 4 chunks per CPU
+        groups = max(1, min(self.NS, math.ceil(4 * n_cpu / max(n_rough_nodes, 1))))
+        per = math.ceil(self.NS / groups)
+        for j in cols:
+            wj = float(self.w_node(j))
+            for k in range(self.K):
+                if j in rough_new:
+                    for n0 in range(0, self.NS, per):
+                        sl = list(range(n0, min(self.NS, n0 + per)))
+                        prof = [_rough_profile(env, fenv, fl, float(self.s_nodes[k]), n, wj, float(R[k])) for n in sl]
+                        chunks.append([(float(R[k]), float(u[k]), wj, prof)])
+                        counts.append(1 + len(sl))
+                        where.append((j, k, sl))
+                else:
+                    chunks.append([(float(R[k]), float(u[k]), wj, [])])
+                    counts.append(1)
+                    where.append((j, k, []))
+        res = map_chunks(_solve_node_chunk, fenv, chunks, counts, executor=env.executor,
+                         max_workers=env.max_workers, progress=env.progress, label="rough EHL film grid")
+        for j in smooth_new:
+            self.smooth[j] = np.full(self.K, np.nan)
+            self.smooth_status[j] = [""] * self.K
+        for j in rough_new:
+            self.ratio[j] = np.full((self.NS, self.K), np.nan)
+            self.status[j] = np.full((self.NS, self.K), "", dtype=object)
+        for (j, k, sl), r in zip(where, res):
+            sm, outs = r[0]
+            self.solves += 1 + len(outs)
+            self.rough_solves += len(outs)
+            if j in smooth_new:
+                self.smooth[j][k] = sm.k_N_per_m if sm.status == "ok" else np.nan
+                self.smooth_status[j][k] = sm.status
+            for n, o in zip(sl, outs):
+                ok = o.status == "ok" and sm.status == "ok"
+                self.ratio[j][n, k] = o.k_N_per_m / sm.k_N_per_m if ok else np.nan
+                self.status[j][n, k] = o.status if sm.status == "ok" else f"smooth {sm.status}"
+
+    def ensure_mixed(self, env, js):
+        """Seed 001 K_n at the grid nodes of the columns ``js`` (in-process)."""
+        from .fractal_contact import FractalMeshOptions, slice_contact_stiffness
+        from .ehl.mesh_film import contact_kinematics
+
+        new = sorted(set(int(j) for j in js) - set(self.mixed))
+        if not new:
+            return
+        spec = env.roughness
+        mo = getattr(env, "fractal", None) or FractalMeshOptions()
+        Es = reduced_modulus_Pa(env.pair)
+        R, u, _ = contact_kinematics(env.geom, self.s_nodes, env.omega1_rad_s)
+        for j in new:
+            wj = float(self.w_node(j))
+            col = np.full(self.K, np.nan)
+            for k in range(self.K):
+                col[k] = _mixed_or_nan(spec, float(R[k]), float(u[k]), wj, env, Es, mo)
+            self.mixed[j] = col
+
+    # ----------------------------------------------------------- interpolation
+    def _s_weights(self, s):
+        t = (np.asarray(s, float) - self.s_nodes[0]) / self.ds
+        i0 = np.clip(np.floor(t).astype(int), 0, self.K - 2)
+        f = np.clip(t - i0, 0.0, 1.0)
+        return i0, f
+
+    def columns_for(self, w, cubic: bool):
+        """(smooth columns, rough columns) needed by loads ``w``."""
+        jp = self._jpos(w)
+        j0 = np.floor(jp).astype(int)
+        lo, hi = int(j0.min()), int(j0.max())
+        rough = set(range(lo, hi + 2))
+        smooth = set(range(lo - 1, hi + 3)) if cubic else rough
+        return smooth, rough
+
+    def _log_cubic(self, table: Dict[int, np.ndarray], s, w):
+        """exp of: cubic spline in s of log(table[j]) at the 4 load nodes around w, then
+        cubic Lagrange in log w (NaN where a node used is NaN)."""
+        from scipy.interpolate import CubicSpline
+
+        jp = self._jpos(w)
+        j0 = np.floor(jp).astype(int)
+        out = np.full(jp.shape, np.nan)
+        for jj in np.unique(j0):
+            m = j0 == jj
+            nodes = [jj - 1, jj, jj + 1, jj + 2]
+            vals = []
+            for j in nodes:
+                col = np.log(table[j])
+                if np.all(np.isfinite(col)):
+                    vals.append(CubicSpline(self.s_nodes, col)(s[m]))
+                else:  # a failed node: piecewise linear, NaN next to it
+                    i0, f = self._s_weights(s[m])
+                    vals.append(_lin(col[i0], col[i0 + 1], f))
+            x = jp[m]
+            acc = np.zeros(x.shape)
+            for a, ja in enumerate(nodes):
+                L = np.ones(x.shape)
+                for b_, jb in enumerate(nodes):
+                    if b_ != a:
+                        L *= (x - jb) / (ja - jb)
+                acc += L * vals[a]
+            # an outer node that failed (e.g. a smooth film below the load floor): linear in
+            # log w between the two nodes around w
+            lin = _lin(vals[1], vals[2], np.clip(x - jj, 0.0, 1.0))
+            out[m] = np.exp(np.where(np.isfinite(acc), acc, lin))
+        return out
+
+    def rough_k(self, s, n, w):
+        """Interpolated rough film stiffness (N/m; NaN where a node used failed) and, per
+        request, the status of the first failed node used ('' if none)."""
+        s = np.asarray(s, float)
+        n = np.asarray(n, int)
+        ks = self._log_cubic(self.smooth, s, w)
+        i0, f = self._s_weights(s)
+        jp = self._jpos(w)
+        j0 = np.floor(jp).astype(int)
+        v = np.clip(jp - j0, 0.0, 1.0)
+        r = np.full(s.shape, np.nan)
+        st = np.full(s.shape, "", dtype=object)
+        for jj in np.unique(j0):
+            m = j0 == jj
+            ra, rb = self.ratio[jj], self.ratio[jj + 1]
+            ca = _lin(ra[n[m], i0[m]], ra[n[m], i0[m] + 1], f[m])
+            cb = _lin(rb[n[m], i0[m]], rb[n[m], i0[m] + 1], f[m])
+            r[m] = _lin(ca, cb, v[m])
+            for j, wt in ((jj, 1.0 - v[m]), (jj + 1, v[m])):
+                for kk, wk in ((i0[m], 1.0 - f[m]), (i0[m] + 1, f[m])):
+                    bad = (wt > 0) & (wk > 0) & (st[m] == "") & ~np.isfinite(self.ratio[j][n[m], kk])
+                    if np.any(bad):
+                        sub = st[m]
+                        sub[bad] = self.status[j][n[m][bad], kk[bad]]
+                        st[m] = sub
+        return ks * r, st
+
+    def mixed_k(self, env, s, w):
+        """Seed 001 K_n (N/m): log K_n cubic spline in s, linear in log w between the two
+        load nodes around w (NaN where a node has no solution)."""
+        from scipy.interpolate import CubicSpline
+
+        s = np.asarray(s, float)
+        _, cols = self.columns_for(w, cubic=False)
+        self.ensure_mixed(env, cols)
+        jp = self._jpos(w)
+        j0 = np.floor(jp).astype(int)
+        v = np.clip(jp - j0, 0.0, 1.0)
+        out = np.full(s.shape, np.nan)
+        for jj in np.unique(j0):
+            m = j0 == jj
+            vals = []
+            for j in (jj, jj + 1):
+                col = np.log(self.mixed[j])
+                if np.all(np.isfinite(col)):
+                    vals.append(CubicSpline(self.s_nodes, col)(s[m]))
+                else:
+                    i0, f = self._s_weights(s[m])
+                    vals.append(_lin(col[i0], col[i0 + 1], f))
+            out[m] = np.exp(_lin(vals[0], vals[1], v[m]))
+        return out
+
+    def summary(self) -> dict:
+        bad = int(sum(int(np.sum(~np.isfinite(r))) for r in self.ratio.values()))
+        return {"position_nodes": self.K, "s_nodes_m": [float(self.s_nodes[0]), float(self.s_nodes[-1])],
+                "load_nodes_N_per_m": [float(self.w_node(j)) for j in sorted(self.smooth)],
+                "rough_load_nodes_N_per_m": [float(self.w_node(j)) for j in sorted(self.ratio)],
+                "film_solves": self.solves, "rough_film_solves": self.rough_solves,
+                "failed_rough_nodes": bad,
+                "interpolation": "smooth k: cubic spline in s, cubic Lagrange in log w; rough/smooth "
+                                 "ratio per slice: linear in s and log w"}
+
+
+def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:
+    """Seed 001 K_n of one slice, NaN where the asperities cannot carry the load on the
+    Hertz band (FractalInputError, or a real contact area A_r >= A0)."""
+    from .fractal_contact import FractalInputError, slice_contact_stiffness
+
+    try:
+        r = slice_contact_stiffness(spec.D, spec.G_m, R, u, w, env.width_m, Es, env.eta0_Pas, env.alpha_Pa_inv, mo)
+    except FractalInputError:
+        return float("nan")
+    # A_r >= A0: the asperity model has left its range (complete contact of the band)
+    return float(r["K_n_N_per_m"]) if r["real_area_ratio"] < 1.0 else float("nan")
+
+
+def _lin(a, b, f):
+    """(1-f) a + f b without letting a NaN with zero weight through."""
+    a = np.asarray(a, float)
+    b = np.asarray(b, float)
+    return np.where(f >= 1.0, b, np.where(f <= 0.0, a, (1.0 - f) * a + f * b))
+
+
+def _grid_key(env) -> tuple:
+    r = env.roughness
+    return (r.D, r.G_m, r.seed, r.f_max_per_m, r.position_nodes, env.omega1_rad_s, env.n_slices, env.width_m,
+            env.eta0_Pas, env.alpha_Pa_inv, env.rho0_kg_m3, env.ehl_nodes, env.film_load_anchor_N_per_m,
+            env.film_load_range_N_per_m, id(env.geom), id(env.pair))
+
+
+def film_grid(env: "ContactEnvironment") -> RoughFilmGrid:
+    """The environment's :class:`RoughFilmGrid` (made once, kept while the settings hold)."""
+    g = env._grid
+    if g is None or g.key != _grid_key(env):
+        g = RoughFilmGrid(env, env.roughness.position_nodes)
+        env._grid = g
+    return g
+
+
+def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_m) -> np.ndarray:
+    """Contact stiffness (N/m) where the full film does not hold, per ``env.roughness.on_failure``:
+    'fractal_mixed' seed 001 K_n = K_s + K_l (on the film grid when ``position_nodes`` > 0,
+    else :func:`gearfmu.fractal_contact.fractal_mixed_model` per request), 'hertz' the Yang &
+    Sun Hertz stiffness.  ('error' is raised by the model before this is called.)"""
+    s = np.asarray(s_m, float)
+    w = np.asarray(w_N_per_m, float)
+    pol = env.roughness.on_failure
+    if s.size == 0:
+        return np.zeros(0)
+    if pol == "hertz":
+        return np.full(s.shape, hertz_stiffness_N_per_m(env.pair, env.width_m))
+    if pol != "fractal_mixed":
+        raise ContactModelError(f"on_failure={pol!r}: no fallback stiffness")
+    from .ehl.mesh_film import contact_kinematics
+    from .fractal_contact import FractalMeshOptions
+
+    k = film_grid(env).mixed_k(env, s, w) if env.roughness.position_nodes else np.full(s.shape, np.nan)
+    bad = ~np.isfinite(k)
+    if np.any(bad):  # per request (no grid, or a grid node without a solution)
+        R, u, _ = contact_kinematics(env.geom, s[bad], env.omega1_rad_s)
+        mo = getattr(env, "fractal", None) or FractalMeshOptions()
+        Es = reduced_modulus_Pa(env.pair)
+        k[bad] = [_mixed_or_nan(env.roughness, float(Ri), float(ui), float(wi), env, Es, mo)
+                  for Ri, ui, wi in zip(R, u, w[bad])]
+    # no mixed solution: the load exceeds what the asperities carry on the Hertz band, i.e. the
+    # surfaces are in full solid contact there -- Hertz (CHOICE, docs/ehl_mesh.md)
+    return np.where(np.isfinite(k), k, hertz_stiffness_N_per_m(env.pair, env.width_m))
+
+
 def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> ContactStiffness:
     """Rough-film stiffness per request (roughness of the request's slice at its
-    position); failures follow ``env.roughness.on_failure`` (module doc)."""
-    from .ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_films
+    position).  Requests with Lambda < ``full_film_parameter`` (:func:`film_parameter`)
+    and requests whose rough film fails follow ``env.roughness.on_failure``
+    (module doc); they are returned in ``failures`` (s_m, slice, w_N_per_m, status
+    'low_film_parameter' | 'stall' | 'collapse' | ..., film_parameter, used, message)."""
+    from .ehl.mesh_film import contact_kinematics, solve_films
 
     s, n, w = _check(env, s_m, slice_index, w_N_per_m)
     spec = env.roughness
     if spec is None:
         raise ContactModelError("roughness: 'rough_ehl' needs a RoughnessSpec (scene [roughness])")
-    if spec.on_failure not in ("hertz", "error"):
-        raise ContactModelError(f"on_failure={spec.on_failure!r}: must be 'hertz' or 'error'")
+    if spec.on_failure not in FILM_FAILURE_POLICIES:
+        raise ContactModelError(f"on_failure={spec.on_failure!r}: must be one of {', '.join(FILM_FAILURE_POLICIES)}")
     fenv = env.film_environment()
-    fl = env.flanks()
-    keys = [(_key(a), int(b), _key(c)) for a, b, c in zip(s, n, w)]
-    uniq = list(dict.fromkeys(keys))
-    su = np.array([k[0] for k in uniq])
-    wu = np.array([k[2] for k in uniq])
-    R, u, _ = contact_kinematics(env.geom, su, env.omega1_rad_s)
-    a1 = involute_arc_length_m(env.geom.roll_length_at(1, su), env.geom.rb1_m)
-    a2 = involute_arc_length_m(env.geom.roll_length_at(2, su), env.geom.rb2_m)
-    # Hertz half width b = sqrt(8 w R / (pi E')): the roughness is sampled on [-5b, 2b]
-    b = np.sqrt(8.0 * wu * R / (math.pi * fenv.E_prime_Pa))
-    reqs = []
-    for i, (sk, nk, wk) in enumerate(uniq):
-        x = np.linspace(-5.0 * b[i], 2.0 * b[i], 2801)
-        reqs.append((float(R[i]), float(u[i]), wk, (x, fl.composite_m(nk, float(a1[i]), float(a2[i]), x))))
-    outs = solve_films(fenv, reqs, executor=env.executor, max_workers=env.max_workers,
-                       progress=env.progress, label="rough EHL films")
-    kh = hertz_stiffness_N_per_m(env.pair, env.width_m)
-    kmap, failures = {}, []
-    for i, o in enumerate(outs):
-        if o.status == "ok":
-            kmap[uniq[i]] = o.k_N_per_m
-            continue
-        sk, nk, wk = uniq[i]
-        lam = o.film_parameter
-        if not math.isfinite(lam):  # stall: lambda from the smooth film at this point
-            from .ehl.mesh_film import solve_slice_film
-            sm = solve_slice_film(fenv, float(R[i]), float(u[i]), wk)
-            x, z = reqs[i][3]
-            band = np.abs(x) <= b[i]
-            sig = float(np.std(z[band]))
-            lam = sm.h_min_m / sig if (sm.status == "ok" and sig > 0) else float("nan")
-        failures.append(dict(s_m=sk, slice=nk, w_N_per_m=wk, status=o.status, film_parameter=lam,
-                             message=o.message[:160]))
-        kmap[uniq[i]] = kh
+    lam = film_parameter(env, s, w)
+    full = lam >= spec.full_film_parameter
+    k = np.full(s.shape, np.nan)
+    status = np.full(s.shape, "low_film_parameter", dtype=object)
+    solves = 0
+    if np.any(full) and spec.position_nodes:
+        g = film_grid(env)
+        before = g.solves
+        sj, rj = g.columns_for(w[full], cubic=True)
+        g.ensure(env, fenv, sj, rj)
+        kf, st = g.rough_k(s[full], n[full], w[full])
+        k[full] = kf
+        status[full] = np.where(np.isfinite(kf), "ok", np.where(st == "", "smooth film failed", st))
+        solves = g.solves - before
+    elif np.any(full):
+        fl = env.flanks()
+        idx = np.nonzero(full)[0]
+        keys = [(_key(s[i]), int(n[i]), _key(w[i])) for i in idx]
+        uniq = list(dict.fromkeys(keys))
+        su = np.array([q[0] for q in uniq])
+        R, u, _ = contact_kinematics(env.geom, su, env.omega1_rad_s)
+        reqs = [(float(R[i]), float(u[i]), q[2], _rough_profile(env, fenv, fl, q[0], q[1], q[2], float(R[i])))
+                for i, q in enumerate(uniq)]
+        outs = solve_films(fenv, reqs, executor=env.executor, max_workers=env.max_workers,
+                           progress=env.progress, label="rough EHL films")
+        omap = dict(zip(uniq, outs))
+        for i, kk in zip(idx, keys):
+            o = omap[kk]
+            k[i] = o.k_N_per_m if o.status == "ok" else np.nan
+            status[i] = o.status
+        solves = len(uniq)
+    failed = ~np.isfinite(k)
+    used = np.full(s.shape, spec.on_failure, dtype=object)
+    # a rough solve that stalls or collapses although Lambda is in the full-film range is a limit of
+    # the solver, not of the film: under 'fractal_mixed' the smooth film stands in there (the
+    # roughness changes a converged film's stiffness by a few % at most, docs/ehl_mesh.md)
+    sub = failed & full
+    if spec.on_failure == "fractal_mixed" and np.any(sub):
+        ks = _smooth_film_k(env, fenv, s[sub], w[sub])
+        k[sub] = ks
+        used[sub] = np.where(np.isfinite(ks), "smooth_ehl", spec.on_failure)
+    failures = []
+    for i in np.nonzero(failed)[0]:
+        st = str(status[i]) or "failed"
+        failures.append(dict(s_m=_key(s[i]), slice=int(n[i]), w_N_per_m=_key(w[i]), status=st,
+                             film_parameter=float(lam[i]), used=str(used[i]),
+                             message=("film parameter below the full-film limit "
+                                      f"{spec.full_film_parameter:g}" if st == "low_film_parameter"
+                                      else f"rough EHL film {st} (interpolation node or request)")))
     if failures and spec.on_failure == "error":
         f0 = failures[0]
         raise ContactModelError(
-            f"rough EHL film {f0['status']} at s = {f0['s_m'] * 1e3:.4f} mm (LOA from N1), slice "
+            f"rough EHL film: {f0['status']} at s = {f0['s_m'] * 1e3:.4f} mm (LOA from N1), slice "
             f"{f0['slice']}, film parameter lambda = h_min/sigma = {f0['film_parameter']:.3g} "
-            f"({len(failures)} of {len(uniq)} solves failed; roughness level {spec.level}); "
-            f"set on_failure = 'hertz' to fall back to Hertz contact there")
-    return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq), failures=failures,
-                            fallbacks=len(failures))
+            f"(full-film limit {spec.full_film_parameter:g}; {len(failures)} of {s.size} requests; roughness "
+            f"level {spec.level}); set [roughness] on_film_failure = 'fractal_mixed' or 'hertz' to continue")
+    rest = ~np.isfinite(k)
+    if np.any(rest):
+        k[rest] = film_failure_stiffness(env, s[rest], n[rest], w[rest])
+    return ContactStiffness(k, solves=solves, failures=failures, fallbacks=int(np.sum(failed)))
+
+
+def _smooth_film_k(env, fenv, s, w) -> np.ndarray:
+    """Smooth-film stiffness (N/m; NaN where it fails): from the film grid when it exists,
+    else one smooth solve per distinct request."""
+    from .ehl.mesh_film import contact_kinematics, solve_films
+
+    if env.roughness.position_nodes and env._grid is not None:
+        g = film_grid(env)
+        sj, _ = g.columns_for(w, cubic=True)
+        g.ensure(env, fenv, sj, [])
+        return g._log_cubic(g.smooth, np.asarray(s, float), w)
+    keys = [(_key(a), _key(b)) for a, b in zip(s, w)]
+    uniq = list(dict.fromkeys(keys))
+    R, u, _ = contact_kinematics(env.geom, np.array([q[0] for q in uniq]), env.omega1_rad_s)
+    outs = solve_films(fenv, [(float(R[i]), float(u[i]), q[1], None) for i, q in enumerate(uniq)],
+                       executor=env.executor, max_workers=env.max_workers, progress=False)
+    kmap = {q: (o.k_N_per_m if o.status == "ok" else np.nan) for q, o in zip(uniq, outs)}
+    return np.array([kmap[q] for q in keys])
 
 
 #: name -> :class:`ContactModel`
@@ -309,14 +740,18 @@ def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
     if ro is not None:
         rough = ro if isinstance(ro, RoughnessSpec) else RoughnessSpec(
             D=ro.D, G_m=ro.G_m, seed=ro.seed, f_max_per_m=ro.f_max_per_m, level=ro.level,
-            on_failure=ro.on_failure)
+            on_failure=ro.on_failure,
+            full_film_parameter=getattr(ro, "full_film_parameter", FULL_FILM_PARAMETER),
+            position_nodes=getattr(ro, "film_position_nodes", DEFAULT_FILM_POSITION_NODES))
     elif scene.mesh.contact_model == "rough_ehl":
         rough = RoughnessSpec.from_level(1)
     args = dict(pair=pair, geom=geom, omega1_rad_s=float(scene.operating.speed_rad_s), n_slices=ns,
                 width_m=min(pair.pinion.face_width_m, pair.gear.face_width_m) / ns,
                 eta0_Pas=None if lub is None else lub.dynamic_viscosity_Pas,
                 alpha_Pa_inv=None if lub is None else lub.pressure_viscosity_Pa_inv,
-                rho0_kg_m3=None if lub is None else lub.density_kg_m3, roughness=rough)
+                rho0_kg_m3=None if lub is None else lub.density_kg_m3, roughness=rough,
+                film_load_anchor_N_per_m=float(scene.operating.torque_Nm) / float(geom.rb1_m)
+                / min(pair.pinion.face_width_m, pair.gear.face_width_m))
     args.update(kw)
     return ContactEnvironment(**args)
 

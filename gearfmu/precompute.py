@@ -206,6 +206,16 @@ class _ContactIteration:
             self._pool = None
         return False
 
+    def set_load_range(self, torques, rb1: float) -> None:
+        """Tell the contact model which slice loads (N/m) the rows will ask for: the load floor
+        of the lightest row to 1.1 x the largest Hertz static slice load of the heaviest, so that
+        a film grid can place its load nodes (contact_models.RoughFilmGrid, docs/ehl_mesh.md)."""
+        F = [float(t) / rb1 for t in torques]
+        lo = UNLOADED_SLICE_LOAD_SHARE * min(f if f > 0 else self.nominal_F for f in F) / self.face
+        hi = max([float(np.max(_slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
+                  for f in F if f > 0] + [0.0]) / self.width
+        self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
+
     def k_slice(self, torque_Nm: float, rb1: float):
         from .contact_models import sliced_mesh_stiffness
 
@@ -355,17 +365,32 @@ def _contact_provenance(ci, axis_note) -> dict:
         out["torque_axis_note"] = axis_note
     r = env.roughness
     if r is not None and ci.model.name == "rough_ehl":
+        from .contact_models import composite_sigma_m
+
         out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
-                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure}
+                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
+                            "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
+                            "composite_sigma_m": composite_sigma_m(r)}
+        if getattr(env, "_grid", None) is not None:
+            out["film_grid"] = env._grid.summary()
         out["film_failures"] = len(fails)
+        out["film_failures_by_status"] = {st: sum(1 for f in fails if f["status"] == st)
+                                          for st in sorted({f["status"] for f in fails})}
         out["film_failures_first"] = [
             {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
         if fails:
             lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
-            msg = (f"rough_ehl: the rough film failed at {len(fails)} (position, slice, torque) points "
-                   f"(lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g}); Hertz contact stiffness used "
-                   "there (recorded in the tables' provenance 'contact.film_failures_first')"
-                   if lam else f"rough_ehl: the rough film failed at {len(fails)} points; Hertz used there")
+            names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
+                     "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
+            uses = {}
+            for f in fails:
+                uses[f.get("used", r.on_failure)] = uses.get(f.get("used", r.on_failure), 0) + 1
+            out["film_failures_by_use"] = uses
+            rng = f" (lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g})" if lam else ""
+            msg = (f"rough_ehl: film parameter below {r.full_film_parameter:g} or rough film failed at "
+                   f"{len(fails)} (position, slice, torque) points{rng}; used there: "
+                   + ", ".join(f"{names.get(k, k)} at {v}" for k, v in sorted(uses.items()))
+                   + " (tables' provenance 'contact.film_failures_first')")
             out["warning"] = msg
             warnings.warn(msg)
     return out
@@ -480,6 +505,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     if opts.contact_model != "hertz":
         contact_it = _ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
                                        nominal_torque_Nm / rb1)
+        contact_it.set_load_range(rows, rb1)
     ss_cache = None
     if contact_it is not None:
         pass

@@ -526,8 +526,13 @@ SCHEMA["roughness"] = (
     _i("seed", 2022, "seed of the random phases (per flank and slice; reproducible)", 0, 2 ** 63 - 1),
     _f("max_frequency_per_mm", "1/mm", 10.0, "band limit of the roughness (highest W-M frequency)",
        0.0, 1e4, lo_open=True, scale=1e3),
-    _e("on_film_failure", ("hertz", "error"), "hertz", "where the rough film collapses or does not "
-       "converge: use the Hertz stiffness there and record it, or stop with an error"),
+    _e("on_film_failure", ("fractal_mixed", "hertz", "error"), "fractal_mixed", "where the film parameter "
+       "h_min/sigma is below full_film_parameter or the rough film collapses or does not converge: seed 001 "
+       "fractal mixed-lubrication stiffness, Hertz stiffness (both recorded), or stop with an error"),
+    _f("full_film_parameter", "1", 3.0, "film parameter Lambda = h_min/sigma (Dowson-Higginson h_min, "
+       "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
+    _i("film_position_nodes", 17, "contact positions along the path of contact at which the rough films "
+       "are solved and interpolated (0 = every table position)", 0, 10000),
 )
 _SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
 
@@ -535,14 +540,17 @@ _SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
 @dataclass(frozen=True)
 class RoughnessOptions:
     """The ``[roughness]`` table in SI: ``D``, ``G_m`` (m), ``seed``,
-    ``f_max_per_m`` (1/m), ``level`` (0 = custom), ``on_failure``."""
+    ``f_max_per_m`` (1/m), ``level`` (0 = custom), ``on_failure``,
+    ``full_film_parameter``, ``film_position_nodes`` (docs/ehl_mesh.md)."""
 
     D: float
     G_m: float
     seed: int = 2022
     f_max_per_m: float = 1e4
     level: int = 1
-    on_failure: str = "hertz"
+    on_failure: str = "fractal_mixed"
+    full_film_parameter: float = 3.0
+    film_position_nodes: int = 17
 
 
 def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
@@ -571,8 +579,13 @@ def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
             return None
         from .roughness import SEED000_LEVELS
         D, G = SEED000_LEVELS[level].D, SEED000_LEVELS[level].G_m
+    if ro["film_position_nodes"] == 1:
+        r.add("roughness.film_position_nodes", "must be 0 (every table position) or >= 2 (interpolation nodes)")
+        return None
     return RoughnessOptions(D=D, G_m=G, seed=ro["seed"], f_max_per_m=ro["max_frequency_per_mm"],
-                            level=level, on_failure=ro["on_film_failure"])
+                            level=level, on_failure=ro["on_film_failure"],
+                            full_film_parameter=ro["full_film_parameter"],
+                            film_position_nodes=ro["film_position_nodes"])
 
 
 def _roughness_from_text(text: str) -> Optional[RoughnessOptions]:

@@ -189,10 +189,12 @@ class FilmOutcome:
 
 
 def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: float,
-                     roughness=None, return_result: bool = False):
+                     roughness=None, return_result: bool = False, initial=None):
     """Film of one slice: solve seed 000 eq 2-7 and eq 8-9 (see module doc).
 
     ``roughness``: None (smooth) or an ``(x_m, z_m)`` composite profile.
+    ``initial``: a LineContactResult to start from (warm start, e.g. the smooth
+    film at the same position and load: about 3x fewer W-cycles for a rough solve).
     Returns a :class:`FilmOutcome` (and the LineContactResult when
     ``return_result``; None when the solve failed)."""
     from .solver import solve_line_contact
@@ -202,7 +204,7 @@ def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: 
     try:
         try:
             res = solve_line_contact(R_m, env.E_prime_Pa, w_N_per_m, u_m_s, env.eta0_Pas, env.alpha_Pa_inv,
-                                     env.rho0_kg_m3, roughness_m=roughness, n_nodes=env.n_nodes)
+                                     env.rho0_kg_m3, roughness_m=roughness, n_nodes=env.n_nodes, initial=initial)
         except EHLConvergenceError:
             if roughness is not None:
                 raise
@@ -228,6 +230,28 @@ def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: 
 def _solve_chunk(env: FilmEnvironment, items):
     """Worker: solve a list of (R, u, w, roughness-or-None) requests."""
     return [solve_slice_film(env, R, u, w, rough) for (R, u, w, rough) in items]
+
+
+def solve_node_films(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: float,
+                     roughness_list: Sequence) -> Tuple[FilmOutcome, List[FilmOutcome]]:
+    """Smooth film at one (position, load) node, then the rough film of every
+    profile in ``roughness_list`` (one per slice) warm-started from it
+    (``initial=``; measured 16 ms against 52 ms cold at the seed 000 pitch
+    point, 257 nodes); a warm-started solve that stalls is retried cold once.
+    Returns (smooth outcome, rough outcomes)."""
+    sm, res = solve_slice_film(env, R_m, u_m_s, w_N_per_m, None, return_result=True)
+    outs = []
+    for r in roughness_list:
+        o = solve_slice_film(env, R_m, u_m_s, w_N_per_m, r, initial=res)
+        if o.status == "stall" and res is not None:  # a warm start can stall where a cold start does not
+            o = solve_slice_film(env, R_m, u_m_s, w_N_per_m, r)
+        outs.append(o)
+    return sm, outs
+
+
+def _solve_node_chunk(env: FilmEnvironment, items):
+    """Worker: :func:`solve_node_films` for a list of (R, u, w, [profiles]) items."""
+    return [solve_node_films(env, R, u, w, rl) for (R, u, w, rl) in items]
 
 
 # ---------------------------------------------------------------- batches
@@ -271,10 +295,6 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
     ``distributed.Client(...).get_executor()``; left open); None: a local
     process pool (``spawn``, min(CPU count, chunks) workers; in-process for a
     single chunk or ``max_workers`` = 1).  Results in request order."""
-    from concurrent.futures import as_completed
-
-    from ..sweeps import make_executor
-
     reqs = list(requests)
     if not reqs:
         return []
@@ -282,8 +302,26 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
     if chunk_size is None:
         chunk_size = max(1, min(32, math.ceil(len(reqs) / (4 * n_cpu))))
     chunks = [reqs[i:i + chunk_size] for i in range(0, len(reqs), chunk_size)]
-    bar = _Progress(progress, len(reqs), label)
-    out: List[Optional[FilmOutcome]] = [None] * len(reqs)
+    res = map_chunks(_solve_chunk, env, chunks, [len(c) for c in chunks], executor=executor,
+                     max_workers=max_workers, progress=progress, label=label)
+    return [o for r in res for o in r]
+
+
+def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, executor=None,
+               max_workers: Optional[int] = None, progress: bool = False,
+               label: str = "EHL films") -> List[list]:
+    """Run ``worker(env, chunk)`` for every chunk through an executor (see
+    :func:`solve_films`); ``counts``: film solves per chunk for the progress bar.
+    Returns the workers' results in chunk order."""
+    from concurrent.futures import as_completed
+
+    from ..sweeps import make_executor
+
+    if not chunks:
+        return []
+    n_cpu = os.cpu_count() or 1
+    bar = _Progress(progress, int(sum(counts)), label)
+    out: List[Optional[list]] = [None] * len(chunks)
     if executor is None:
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
         ctx = make_executor(max_workers=nw)
@@ -292,12 +330,11 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
         ctx = _ManagedExecutor(executor, None, own=False)
     try:
         with ctx as ex:
-            futs = {ex.submit(_solve_chunk, env, c): i for i, c in enumerate(chunks)}
+            futs = {ex.submit(worker, env, c): i for i, c in enumerate(chunks)}
             for f in as_completed(futs):
                 i = futs[f]
-                res = f.result()
-                out[i * chunk_size:i * chunk_size + len(res)] = res
-                bar.update(len(res))
+                out[i] = f.result()
+                bar.update(int(counts[i]))
     finally:
         bar.close()
     return out  # type: ignore[return-value]
