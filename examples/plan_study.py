@@ -1,14 +1,20 @@
 """Fidelity plans of full scenes (docs/plan.md): JSON report and PNG per scene.
 
-For each shipped scene, with an envelope and a 2 % / 2 % accuracy target added, run the planner
-and write examples/output/plan_study.json (every plan's report) and plan_study.png (error
-contribution of each choice's chosen level, and the cost of the chosen model against the full one).
+For each study scene (shipped scenes with an envelope and a 2 % / 2 % accuracy target added, and
+examples/scenes/plan_seed004_warmup.toml, which states its own temperature axis, warm-up range
+and duty cycle) run the planner, build the planned and the full-fidelity FMU and drive both
+through the verification cases (steady point, run-up over the speed range, warm-up in
+temperature, duty-cycle replay; gearfmu.plan.verify_fmus).  Writes
+examples/output/plan_study.json (every plan's report with its FMU verification) and
+plan_study.png (per scene: error contribution of each choice's chosen level; cost of the
+chosen model against the full one; measured planned-vs-full FMU error per case).
 
-    python examples/plan_study.py [--fmu]
+    python examples/plan_study.py [--no-fmu] [--only NAME]
 """
 import argparse
 import json
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -31,26 +37,38 @@ STUDIES = {
     "seed003_table1.toml": {"envelope": {"speed_range_rpm": [1000.0, 4000.0]},
                             "accuracy": {"dte_rel_error": 0.02, "mesh_force_rel_error": 0.02,
                                          "pin": ["contact_model"]}},
+    # its own [thermal] axis, [envelope] (warm-up 20 -> 90 degC, duty cycle) and [accuracy]
+    "plan_seed004_warmup.toml": {},
 }
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--fmu", action="store_true", help="also build both FMUs to measure their sizes")
+    ap.add_argument("--no-fmu", action="store_true", help="skip building and driving the FMUs")
+    ap.add_argument("--only", action="append", help="run only this study scene (repeatable)")
     args = ap.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     reports = {}
     for name, extra in STUDIES.items():
-        data = tomllib.loads((HERE / "scenes" / name).read_text(encoding="utf-8"))
-        data.update(extra)
-        scene = load_scene(dumps_toml(data))
+        if args.only and name not in args.only:
+            continue
+        path = HERE / "scenes" / name
+        if extra:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+            data.update(extra)
+            scene = load_scene(dumps_toml(data))
+        else:  # the scene file as it is (its duty-cycle CSV path is relative to it)
+            scene = load_scene(path)
         print(f"== {name}", file=sys.stderr, flush=True)
-        plan = plan_scene(scene, progress=True, measure_fmu=args.fmu, fmu_dir=str(OUT / "plan_fmus"))
-        print(format_report(plan))
+        t0, c0 = time.perf_counter(), time.process_time()
+        plan = plan_scene(scene, progress=True, measure_fmu=not args.no_fmu, fmu_dir=str(OUT / "plan_fmus"))
+        print(format_report(plan), flush=True)
         reports[name] = plan.to_dict()
+        reports[name]["study_wall_s"] = time.perf_counter() - t0
+        reports[name]["study_cpu_s"] = time.process_time() - c0
     (OUT / "plan_study.json").write_text(json.dumps(reports, indent=1), encoding="utf-8")
 
-    fig, axes = plt.subplots(len(reports), 2, figsize=(12, 4 * len(reports)), squeeze=False)
+    fig, axes = plt.subplots(len(reports), 3, figsize=(18, 4 * len(reports)), squeeze=False)
     for row, (name, rep) in enumerate(reports.items()):
         rows = [r for r in rep["choices"] if r["status"] not in ("fixed", "pinned")]
         labels = [f"{r['choice']}\n{r['full']}→{r['chosen']}" for r in rows]
@@ -75,6 +93,24 @@ def main(argv=None):
         ax.set_ylabel("chosen / full")
         v = rep["verification"]
         ax.set_title(f"cost; verified DTE {v['dte_rel']:.2g}, force {v['mesh_force_rel']:.2g}")
+        ax = axes[row][2]
+        cases = (rep.get("fmu_verification") or {}).get("cases") or {}
+        if cases:
+            names = list(cases)
+            xs = range(len(names))
+            for j, (key, lab) in enumerate((("dte_rel", "DTE"), ("mesh_force_rel", "mesh force"))):
+                ax.bar([i + 0.35 * (j - 0.5) for i in xs], [max(float(cases[n][key]), 1e-16) for n in names],
+                       width=0.35, label=lab)
+            ax.axhline(rep["target"]["dte_rel"], color="k", ls="--", lw=1, label="target")
+            ax.set_yscale("log")
+            ax.set_xticks(list(xs))
+            ax.set_xticklabels([f"{n}\nCPU gain {cases[n]['cpu_gain_full_over_chosen']:.2g}" for n in names],
+                               fontsize=7)
+            ax.set_ylabel("planned FMU vs full FMU (relative RMS)")
+            ax.legend(fontsize=7)
+            ax.set_title("through the FMUs (fmpy)")
+        else:
+            ax.set_axis_off()
     fig.tight_layout()
     fig.savefig(OUT / "plan_study.png", dpi=110)
     print(f"wrote {OUT / 'plan_study.json'} and {OUT / 'plan_study.png'}")

@@ -392,6 +392,8 @@ def _check_fmu_verification(plan, fv, target):
         assert c["angle_tracking_rel"] < 1e-4, name
         assert c["cpu_per_sim_s"]["full"] > 0 and c["cpu_per_sim_s"]["chosen"] > 0
     f = fv["fmus"]
+    print("FMU bytes", f["full"]["fmu_bytes"], f["chosen"]["fmu_bytes"], "table build s", f["full"]["table_build_s"],
+          f["chosen"]["table_build_s"], "plan chosen", plan.chosen)
     assert f["chosen"]["fmu_bytes"] < f["full"]["fmu_bytes"]
     assert plan.cost["full"]["fmu_bytes"] == f["full"]["fmu_bytes"]
     rep = json.loads(json.dumps(plan.to_dict()))
@@ -435,3 +437,34 @@ def test_warm_up_through_fmus_thermal_dropped_compared_at_the_same_temperatures(
     _check_fmu_verification(plan, fv, 0.3)
     # temperature matters in the comparison: the warm-up error exceeds the kept-thermal plan's 5 % target
     assert max(fv["cases"]["warm_up"]["dte_rel"], fv["cases"]["warm_up"]["mesh_force_rel"]) > 0.05
+
+
+LUBRICANT = """
+[lubricant]
+name = "seed 004 SCH632"
+kinematic_viscosity_40C_cSt = 320.0
+kinematic_viscosity_100C_cSt = 38.5
+pressure_viscosity_GPa_inv = 20.0
+density_kg_m3 = 870.0
+temperature_C = 60.0
+"""
+
+
+def test_contact_model_levels_follow_what_the_scene_states(tmp_path):
+    """hertz only without a lubricant; the film models with one; rough_ehl only when the
+    scene states a roughness (docs/plan.md "Choices and levels")."""
+    from gearfmu.contact_models import CONTACT_MODELS
+    from gearfmu.envelope import accuracy_of
+    from gearfmu.plan import _choices
+
+    assert {"hertz", "smooth_ehl", "rough_ehl"} <= set(CONTACT_MODELS)
+
+    def levels(text):
+        s = _scene(tmp_path, text, "c.toml")
+        return _choices(s, envelope_of(s), accuracy_of(s))["contact_model"].levels
+
+    assert levels(PLAIN) == ["hertz"]
+    assert levels(PLAIN + LUBRICANT) == ["hertz", "smooth_ehl"]
+    assert levels(PLAIN + LUBRICANT + "\n[roughness]\nlevel = 1\n") == ["hertz", "smooth_ehl", "rough_ehl"]
+    assert levels(PLAIN.replace("slices = 4", 'slices = 4\ncontact_model = "rough_ehl"') + LUBRICANT) == \
+        ["hertz", "smooth_ehl", "rough_ehl"]
