@@ -282,6 +282,38 @@ def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None):
     return n_nodes, n_coarse, n_levels
 
 
+#: grid rule of the refined retry: dX <= REFINE_DX_ALPHA / alpha_eff (found
+#: by experiment over the (M, L) table in docs/ehl.md: the pressure spike and
+#: the outlet drop are then resolved by several nodes)
+REFINE_DX_ALPHA = 0.15
+
+
+def effective_alpha(prm) -> float:
+    """alpha_eff = d ln(eta)/dP at P = 1 (dimensionless, Hertzian pressure
+    units): alpha p_h for Barus; A z (p_h/p0) (1 + p_h/p0)^(z-1) for Roelands
+    (seed 000 eq 5)."""
+    if prm.z < 0.0:
+        return float(prm.A)
+    if prm.z > 0.0:
+        return float(prm.A * prm.z * prm.php0 * (1.0 + prm.php0) ** (prm.z - 1.0))
+    return 0.0
+
+
+def refined_grid_intervals(prm, length: float, n_int: int) -> Optional[int]:
+    """Number of intervals of the retry grid after a failed solve on
+    ``n_int`` intervals (smooth solves whose grid was chosen automatically):
+    the power of 2 with dX <= REFINE_DX_ALPHA / alpha_eff, at least 2 n_int,
+    at most 16384; None when n_int is already 16384 or more."""
+    if n_int >= 16384:
+        return None
+    a = effective_alpha(prm)
+    need = length * a / REFINE_DX_ALPHA if a > 0.0 else 0.0
+    n = 2 * n_int
+    while n < need and n < 16384:
+        n *= 2
+    return min(n, 16384)
+
+
 def _finite_positive(name, v, allow_zero=False):
     try:
         v = float(v)
@@ -425,22 +457,23 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                     compressible=bool(compressible), x_in=float(x_in), x_out=float(x_out))
 
     Hc_guess = math.pi * moes_central_film(M, L) / (8.0 * M)   # VL units
+    user_grid = n_nodes is not None
     n_nodes, n_coarse, n_levels = choose_grid(Hc_guess, x_out - x_in, n_nodes, n_coarse)
     roughness_ramp = tuple(float(a) for a in roughness_ramp)
     if not roughness_ramp or roughness_ramp[-1] != 1.0:
         raise EHLInputError(f"roughness_ramp={roughness_ramp!r}: must end with 1.0")
     rfun = _roughness_function(roughness_m)
     scale_H = R_m / b_m ** 2  # h -> H
+    lw = float(roughness_min_wavelength_dX)
+    if not math.isfinite(lw) or lw < 0.0:
+        raise EHLInputError(f"roughness_min_wavelength_dX={roughness_min_wavelength_dX!r}: "
+                            "must be finite and >= 0")
     rough_fn = None
     if rfun is not None:
         Xf = np.linspace(x_in, x_out, n_nodes)
         zr = np.asarray(rfun(Xf * b_m), float)
         if zr.shape != Xf.shape or not np.all(np.isfinite(zr)):
             raise EHLInputError("roughness_m: must return finite heights (m), one per x")
-        lw = float(roughness_min_wavelength_dX)
-        if not math.isfinite(lw) or lw < 0.0:
-            raise EHLInputError(f"roughness_min_wavelength_dX={roughness_min_wavelength_dX!r}: "
-                                "must be finite and >= 0")
         if lw > 0.0:
             zr = band_limit(zr, lw)
         zr_H = zr * scale_H
@@ -462,24 +495,39 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     if initial is not None:
         if not isinstance(initial, LineContactResult):
             raise EHLInputError("initial: must be a LineContactResult of an earlier solve")
-        Xg = np.linspace(x_in, x_out, n_nodes)
-        P_start = np.interp(Xg, initial.X, initial.P, left=0.0, right=0.0)
         Hc_guess = initial.h_central_m * scale_H
         prev = initial.residuals.get("settings")
         if prev is not None and not multigrid_options and solver == "compiled":
             attempts = [dict(prev)] + [a for a in attempts if a != prev]
-    for k_att, opts in enumerate(attempts):
-        if solver == "python" or fmg_cycles > 0:
-            solver_obj, hist, converged, it = _iterate(
-                prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
-                min_cycles, tol_pressure, tol_load, tol_residual, tuple(roughness_ramp))
-        else:
-            solver_obj, hist, converged, it = _iterate_flat(
-                prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
-                P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
-                tol_load, tol_residual, tuple(roughness_ramp), tol_film)
+    # grids tried in turn: the default one and, for smooth solves on a grid
+    # chosen here, one refined from the effective pressure-viscosity
+    # coefficient (see refined_grid_intervals)
+    grids = [(n_nodes, n_coarse, n_levels)]
+    compiled = solver == "compiled" and fmg_cycles == 0
+    if compiled and not user_grid and rfun is None:
+        n_ref = refined_grid_intervals(prm, x_out - x_in, n_nodes - 1)
+        if n_ref is not None:
+            grids.append(choose_grid(Hc_guess, x_out - x_in, n_ref + 1, n_coarse))
+    for k_grid, (n_nodes, n_coarse, n_levels) in enumerate(grids):
+        if initial is not None:
+            Xg = np.linspace(x_in, x_out, n_nodes)
+            P_start = np.interp(Xg, initial.X, initial.P, left=0.0, right=0.0)
+        for k_att, opts in enumerate(attempts):
+            if not compiled:
+                solver_obj, hist, converged, it = _iterate(
+                    prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, fmg_cycles, max_cycles,
+                    min_cycles, tol_pressure, tol_load, tol_residual, tuple(roughness_ramp))
+            else:
+                solver_obj, hist, converged, it = _iterate_flat(
+                    prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
+                    P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
+                    tol_load, tol_residual, tuple(roughness_ramp), tol_film)
+            if converged:
+                break
         if converged:
             break
+    if len(grids) > 1:
+        hist["grid_refined"] = [float(k_grid)]
     hist["settings"] = opts
     hist["attempt"] = k_att
     if isinstance(solver_obj, FlatMultigrid):
