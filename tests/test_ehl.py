@@ -98,6 +98,40 @@ def test_smooth_central_film_against_moes(M, L, measured):
                                           rel=1e-12)
 
 
+# Every (M, L) of the grid M = 5..1000 x L = 0..20 that converges (docs/ehl.md,
+# "Convergence over (M, L)"); the strongly piezoviscous high-M corner (M >= 50
+# with L = 20, M >= 200 with L >= 15, M = 500 with L = 10, M = 1000 with L >= 15)
+# still raises EHLConvergenceError and is not listed.
+MOES_RANGE = [(M, L) for M in (5.0, 10.0, 20.0) for L in (0.0, 2.0, 5.0, 10.0, 15.0, 20.0)] + \
+             [(M, L) for M in (50.0, 100.0) for L in (0.0, 2.0, 5.0, 10.0, 15.0)] + \
+             [(200.0, L) for L in (0.0, 2.0, 5.0, 10.0)] + \
+             [(500.0, L) for L in (0.0, 2.0, 5.0)] + \
+             [(1000.0, L) for L in (0.0, 2.0, 5.0, 10.0)]
+
+
+def test_smooth_central_film_against_moes_over_the_M_L_range():
+    # Reference: Moes' fit (Barus, incompressible -- its assumptions) over
+    # M = 5..1000, L = 0..20 on the default grids.  Tolerances: every point
+    # within 6 % and the mean |deviation| below 3 % (the issue's aim).
+    # Measured: max 5.5 % (M = 1000, L = 0: the isoviscous-elastic asymptote
+    # of the fit sits 4-5 % above grid-converged solutions, docs/ehl.md),
+    # mean 2.6 % over these 39 points; 23 points with 0 < L <= 10 within 4.4 %.
+    devs = []
+    for M, L in MOES_RANGE:
+        r = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False)
+        assert r.converged
+        devs.append(r.H_central_moes / moes_central_film(M, L) - 1.0)
+        if (M, L) == (50.0, 15.0):
+            # fails on the default 1024 intervals; retried on the grid of the rule
+            # dX <= 0.15 / alpha_eff, alpha_eff = L sqrt(M / (2 pi)) = 42.3 for Barus:
+            # 6 / dX >= 1693 -> 2048 intervals
+            assert r.residuals["grid_refined"] == [1.0] and r.X.size - 1 == 2048
+    devs = np.abs(np.array(devs))
+    worst = MOES_RANGE[int(np.argmax(devs))]
+    assert devs.max() < 0.06, f"worst {worst}: {devs.max():.3f}"
+    assert devs.mean() < 0.03
+
+
 def test_minimum_film_against_dowson_higginson():
     # Reference: Dowson & Higginson h_min/R = 2.65 U^0.70 G^0.54 W^-0.13 with
     # their assumptions (compressible, exponential viscosity), steel/mineral
@@ -235,7 +269,7 @@ def test_film_stiffness_limits_and_trend_with_load():
 
 
 # --------------------------------------------------------------------------- compiled solver
-def _discrete_equations_check(r):
+def _discrete_equations_check(r, viscosity="roelands", compressible=True):
     """Independent numpy re-evaluation of the discretised equations (docs/ehl.md):
     film from P by a dense sum of the exact cell integrals of ln|x| (closed form
     f(x) = x(ln|x| - 1)), load dX sum P = pi/2, and the Reynolds residual with
@@ -254,8 +288,14 @@ def _discrete_equations_check(r):
     p = P * r.ph_Pa
     A = math.log(inp["eta0_Pas"]) + 9.67
     z = inp["alpha_Pa_inv"] * 1.96e8 / A
-    eta = np.exp(A * ((1 + p / 1.96e8) ** z - 1))    # Roelands (seed 000 eq 5)
-    rho = (0.59e9 + 1.34 * p) / (0.59e9 + p)         # Dowson-Higginson (eq 6)
+    if viscosity == "roelands":
+        eta = np.exp(A * ((1 + p / 1.96e8) ** z - 1))    # Roelands (seed 000 eq 5)
+    else:
+        eta = np.exp(inp["alpha_Pa_inv"] * p)            # Barus
+    if compressible:
+        rho = (0.59e9 + 1.34 * p) / (0.59e9 + p)         # Dowson-Higginson (eq 6)
+    else:
+        rho = np.ones_like(p)
     lam = 3 * math.pi ** 2 / (8 * r.M ** 2)
     eps = rho * H ** 3 / (eta * lam)
     em, ep = 0.5 * (eps[:-2] + eps[1:-1]), 0.5 * (eps[1:-1] + eps[2:])
@@ -332,3 +372,41 @@ def test_roughness_band_limit_removes_only_unresolved_wavelengths():
     assert np.max(np.abs(r.roughness_m)) < 0.01 * 0.01e-6
     with pytest.raises(EHLInputError, match="roughness_min_wavelength_dX"):
         solve_line_contact(**kw, roughness_m=lambda x: 0 * x, roughness_min_wavelength_dX=-1)
+
+
+# --------------------------------------------------------------------------- speed-up pieces
+@pytest.mark.parametrize("n", [3, 4, 5, 9, 17, 33, 100, 513])
+def test_packed_real_fft_convolution_equals_direct_sum(n):
+    # Reference: the O(N^2) Toeplitz sum (deformation_direct) on random
+    # pressures, including the smallest embeddings (n = 3: period 4, a
+    # complex FFT of length 2) and sizes that are not 2^k + 1.
+    rng = np.random.default_rng(n)
+    P = rng.random(n)
+    op = DeformationOperator(n, 6.0 / (n - 1))
+    np.testing.assert_allclose(op(P), deformation_direct(P, op.K), rtol=0, atol=1e-12)
+
+
+def test_cycle_schedules_visit_the_coarsest_grid_as_defined():
+    # Reference: the cycle definitions (Trottenberg, Oosterlee & Schueller
+    # 2001, sec. 2.4): with l levels a V-cycle visits the coarsest grid once,
+    # a W-cycle 2^(l-2) times (one visit from level 1), an F-cycle l - 1 times;
+    # every descent from level k is matched by an ascent to k.
+    from gearfmu.ehl.mgcore import w_schedule
+    for nl in (2, 3, 5, 7):
+        for gamma, visits in ((1, 1), (2, 2 ** (nl - 2)), ("F", nl - 1)):
+            s = w_schedule(nl, gamma)
+            assert int(np.sum(s == 0)) == visits
+            for k in range(1, nl):
+                assert np.sum(s == k) == np.sum(s == -k)
+            assert s[0] == nl - 1 and s[-1] == -(nl - 1)
+    with pytest.raises(EHLInputError, match="gamma"):
+        w_schedule(4, 3)
+
+
+def test_f_cycle_solution_satisfies_the_discrete_equations():
+    # Reference: the discretised equations re-evaluated in numpy (as above);
+    # the F-cycle is a different iteration towards the same discrete solution.
+    r = solve_line_contact(M=20.0, L=5.0, gamma="F", switch=0.3, nu1=2, nu2=1, omega_gs=0.6,
+                           omega_j=0.5, load_mode=1, c_h0=0.1, stick=10.0)
+    gap_spread, load_err, scaled = _discrete_equations_check(r)
+    assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5

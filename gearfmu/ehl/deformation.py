@@ -22,6 +22,8 @@ coefficients
 so V_i = -(1/pi) * sum_j K_|i-j| P_j.  The product of the Toeplitz matrix
 with P is evaluated by FFT (zero-padded circulant embedding) in
 O(N log N); :func:`deformation_direct` is the O(N^2) sum used to check it.
+The FFT (:func:`conv_real`) packs the real pressure into a complex sequence
+of half length and uses that the symmetric embedding has a real spectrum.
 """
 from __future__ import annotations
 

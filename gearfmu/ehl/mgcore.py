@@ -12,7 +12,9 @@ a W-cycle is a precomputed *schedule* of integer codes (+k: relax and restrict
 from level k; 0: solve on the coarsest grid; -k: prolong the correction to
 level k and relax), and the cycle loop with its convergence test runs in one
 compiled call.  Coarse levels with at most ``N_DIRECT`` nodes evaluate the
-deformation by the direct O(n^2) sum, finer ones by FFT.
+deformation by the direct O(n^2) sum, finer ones by FFT
+(:func:`.deformation.conv_real`).  Cycle types: W (default), V and F
+(:func:`w_schedule`).
 
 Relaxation (Venner & Lubrecht 2000): point Newton, Gauss-Seidel where
 eps_i/dX^2 >= ``switch`` or next to cavitation, distributive Jacobi

@@ -399,6 +399,18 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       profile actually used.
     * ``solver``: "compiled" (default; whole W-cycle in numba,
       :mod:`.mgcore`) or "python" (the previous driver, :mod:`.multigrid`).
+    * ``tol_film``: also require the relative change per cycle of the
+      central and minimum film below this (default 1: off; compiled solver).
+
+    Robustness (compiled solver, docs/ehl.md): the relaxation settings of
+    :data:`RELAXATION_SETTINGS` are tried in turn; a setting that stalls
+    with a pressure change per cycle below
+    :data:`FREEZE_BELOW_PRESSURE_CHANGE` continues with the finest-grid
+    Gauss-Seidel/Jacobi switch frozen (``residuals["frozen_switch_from_cycle"]``);
+    a smooth solve on an automatically chosen grid that fails on every
+    setting is retried once on the grid of :func:`refined_grid_intervals`
+    (``residuals["grid_refined"]``).  Every converged result meets the
+    stated tolerances; otherwise :class:`EHLConvergenceError`.
     """
     t_start = time.perf_counter()
     dimensional = [R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv]
