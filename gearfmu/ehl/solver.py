@@ -286,6 +286,10 @@ def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None):
 #: by experiment over the (M, L) table in docs/ehl.md: the pressure spike and
 #: the outlet drop are then resolved by several nodes)
 REFINE_DX_ALPHA = 0.15
+#: largest retry grid (intervals): the failures measured on finer retry grids
+#: (M >= 100 with L >= 15, M = 500 with L = 10) never converged there and cost
+#: 3-11 s each
+REFINE_MAX_INTERVALS = 4096
 
 
 def effective_alpha(prm) -> float:
@@ -302,16 +306,14 @@ def effective_alpha(prm) -> float:
 def refined_grid_intervals(prm, length: float, n_int: int) -> Optional[int]:
     """Number of intervals of the retry grid after a failed solve on
     ``n_int`` intervals (smooth solves whose grid was chosen automatically):
-    the power of 2 with dX <= REFINE_DX_ALPHA / alpha_eff, at least 2 n_int,
-    at most 16384; None when n_int is already 16384 or more."""
-    if n_int >= 16384:
-        return None
+    the power of 2 with dX <= REFINE_DX_ALPHA / alpha_eff, at least 2 n_int;
+    None when that exceeds REFINE_MAX_INTERVALS."""
     a = effective_alpha(prm)
     need = length * a / REFINE_DX_ALPHA if a > 0.0 else 0.0
     n = 2 * n_int
-    while n < need and n < 16384:
+    while n < need:
         n *= 2
-    return min(n, 16384)
+    return n if n <= REFINE_MAX_INTERVALS else None
 
 
 def _finite_positive(name, v, allow_zero=False):
