@@ -9,7 +9,7 @@ examples/output/plan_study.json (every plan's report with its FMU verification) 
 plan_study.png (per scene: error contribution of each choice's chosen level; cost of the
 chosen model against the full one; measured planned-vs-full FMU error per case).
 
-    python examples/plan_study.py [--no-fmu] [--only NAME]
+    python examples/plan_study.py [--no-fmu] [--only NAME] [--runtime pythonfmu|standalone]
 """
 import argparse
 import json
@@ -46,6 +46,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--no-fmu", action="store_true", help="skip building and driving the FMUs")
     ap.add_argument("--only", action="append", help="run only this study scene (repeatable)")
+    ap.add_argument("--runtime", choices=("pythonfmu", "standalone"), help="FMU runtime (default: the scene's)")
     args = ap.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     reports = {}
@@ -61,7 +62,8 @@ def main(argv=None):
             scene = load_scene(path)
         print(f"== {name}", file=sys.stderr, flush=True)
         t0, c0 = time.perf_counter(), time.process_time()
-        plan = plan_scene(scene, progress=True, measure_fmu=not args.no_fmu, fmu_dir=str(OUT / "plan_fmus"))
+        plan = plan_scene(scene, progress=True, measure_fmu=not args.no_fmu, fmu_dir=str(OUT / "plan_fmus"),
+                           fmu_runtime=args.runtime)
         print(format_report(plan), flush=True)
         reports[name] = plan.to_dict()
         reports[name]["study_wall_s"] = time.perf_counter() - t0

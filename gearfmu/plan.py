@@ -517,7 +517,7 @@ def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) ->
 
 
 def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
-               fmu_dir: Optional[str] = None) -> Plan:
+               fmu_dir: Optional[str] = None, fmu_runtime: Optional[str] = None) -> Plan:
     """Plan the fidelity of a scene (docs/plan.md).
 
     1. Levels of every choice (:func:`_choices`; pinned ones are fixed).
@@ -535,8 +535,10 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
        every envelope point; while its error exceeds the target, the choice with
        the largest budget use goes back one level towards full.
     5. Costs of the chosen and the full model: table build time, table size and
-       time per simulated second, and with ``measure_fmu`` the FMU sizes (both
-       FMUs built in ``fmu_dir`` or a temporary directory).
+       time per simulated second, and with ``measure_fmu`` both FMUs built (in
+       ``fmu_dir`` or a temporary directory; ``fmu_runtime``: "pythonfmu" or
+       "standalone", None = the scene's) and driven through the verification
+       cases (:func:`verify_fmus`, stored in ``Plan.fmu_verification``).
     """
     env, acc = envelope_of(scene), accuracy_of(scene)
     if env.temperature_range_C is not None:
@@ -637,7 +639,7 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     plan = Plan(scene_name=scene.name, envelope=env, target=acc, choices=choices, full=full, chosen=chosen,
                 h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log)
     if measure_fmu:
-        _measure_fmus(scene, plan, ev, fmu_dir, progress)
+        _measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
     g = {}
     for k in ("table_build_s", "table_bytes", "wall_per_sim_s", "fmu_bytes"):
         a, b = cost["full"].get(k), cost["chosen"].get(k)
@@ -667,10 +669,10 @@ def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
             "tables_shape": [int(tb.n_torque), int(tb.slots), int(tb.n_phi)]}
 
 
-def _measure_fmus(scene, plan: Plan, ev: _Evaluator, fmu_dir, progress) -> None:
+def _measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
     """Build the full and the chosen FMU and drive both through the verification
     cases (:func:`verify_fmus`); sizes, build times and errors go into the plan."""
-    plan.fmu_verification = verify_fmus(scene, plan, fmu_dir=fmu_dir, progress=progress)
+    plan.fmu_verification = verify_fmus(scene, plan, fmu_dir=fmu_dir, progress=progress, runtime=runtime)
     for which in ("full", "chosen"):
         f = plan.fmu_verification["fmus"][which]
         plan.cost[which].update(fmu_bytes=f["fmu_bytes"], fmu_path=f["fmu_path"], fmu_build_s=f["fmu_build_s"])

@@ -468,3 +468,16 @@ def test_contact_model_levels_follow_what_the_scene_states(tmp_path):
     assert levels(PLAIN + LUBRICANT + "\n[roughness]\nlevel = 1\n") == ["hertz", "smooth_ehl", "rough_ehl"]
     assert levels(PLAIN.replace("slices = 4", 'slices = 4\ncontact_model = "rough_ehl"') + LUBRICANT) == \
         ["hertz", "smooth_ehl", "rough_ehl"]
+
+
+def test_temperature_axis_must_cover_the_envelope(tmp_path):
+    """The FMU refuses temperatures outside its axis (docs/fmu.md), so a scene axis narrower than
+    the envelope's temperature range is an error naming the key."""
+    from gearfmu.plan import PlanError
+
+    (tmp_path / "duty.csv").write_text(DUTY.replace("0.04,160,1500,85", "0.04,160,1500,95"), encoding="utf-8")
+    s = _scene(tmp_path, WARM, "w.toml")  # the duty cycle's 95 degC widens the range beyond the 90 degC axis end
+    assert s.envelope.temperature_range_C == (20.0, 95.0)
+    with pytest.raises(PlanError, match=r"thermal.temperature_axis_C: \[20, 90\] degC does not cover the envelope "
+                                        r"temperature range \[20, 95\] degC"):
+        plan_scene(s)
