@@ -437,6 +437,12 @@ def test_warm_up_through_fmus_thermal_dropped_compared_at_the_same_temperatures(
     _check_fmu_verification(plan, fv, 0.3)
     # temperature matters in the comparison: the warm-up error exceeds the kept-thermal plan's 5 % target
     assert max(fv["cases"]["warm_up"]["dte_rel"], fv["cases"]["warm_up"]["mesh_force_rel"]) > 0.05
+    # `gearfmu build` of the scene follows the same plan: no temperature input either
+    from gearfmu.pipeline import build
+
+    res = build(s, tmp_path / "built.fmu")
+    assert res.plan.chosen == plan.chosen and not res.tables.has_temperature_axis
+    assert "bulk_temperature" not in {v.name for v in fmpy.read_model_description(str(res.fmu_path)).modelVariables}
 
 
 LUBRICANT = """
