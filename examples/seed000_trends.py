@@ -6,8 +6,9 @@ the line of action and across the face (Fig. 9), TVMS curves (Figs. 12-15).
 
 --json prints one JSON object (mean TVMS in N/m per contact model, speed and torque); PNG, CSV and
 JSON files go to examples/output/seed000_trends/.  Coarse defaults (4 points per mesh period,
-2 slices) keep the run to minutes; rough levels 3-4 fall back to Hertz where the film fails
-(recorded, see docs/ehl_mesh.md).
+2 slices) keep the run to minutes; where the film parameter is below 3 (levels 3-4) or a rough
+film fails, the scene's policy (default: seed 001 fractal mixed lubrication) applies, recorded
+in the notes (docs/ehl_mesh.md).
 """
 from __future__ import annotations
 
@@ -65,10 +66,11 @@ def run(ppm: int, slices: int, out: Path, log=print) -> dict:
         c = tab.provenance.get("contact", {})
         if c.get("film_failures"):
             fl = c["film_failures_first"]
-            result["notes"][name] = (f"{c['film_failures']} (position, slice, torque) rough films failed "
-                                     f"(FilmCollapseError / EHLConvergenceError, lambda = h_min/sigma "
+            result["notes"][name] = (f"{c['film_failures']} (position, slice, torque) points without a rough film "
+                                     f"(by status {c.get('film_failures_by_status')}; lambda = h_min/sigma "
                                      f"{min(f['film_parameter'] for f in fl):.2f}..{max(f['film_parameter'] for f in fl):.2f}"
-                                     " in the first 20); Hertz used there")
+                                     f" in the first 20); used there: {c.get('film_failures_by_use')} "
+                                     f"(on_film_failure = {c['roughness']['on_failure']!r})")
         curves[name] = k
     for name, model, level in (("smooth", "smooth_ehl", None), ("rough_level_1", "rough_ehl", 1)):
         result["speed_rpm"][name] = {}

@@ -64,7 +64,7 @@ FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error")
 FULL_FILM_PARAMETER = 3.0
 #: contact positions (uniform over the path of contact, ends included) at which the rough
 #: films are solved and between which the film stiffness is interpolated (docs/ehl_mesh.md)
-DEFAULT_FILM_POSITION_NODES = 17
+DEFAULT_FILM_POSITION_NODES = 9
 #: ratio of neighbouring load nodes of the film grid (geometric, anchored at the scene's
 #: nominal line load) when no load range is known
 FILM_LOAD_NODE_RATIO = 2.0

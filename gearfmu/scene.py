@@ -531,7 +531,7 @@ SCHEMA["roughness"] = (
        "fractal mixed-lubrication stiffness, Hertz stiffness (both recorded), or stop with an error"),
     _f("full_film_parameter", "1", 3.0, "film parameter Lambda = h_min/sigma (Dowson-Higginson h_min, "
        "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
-    _i("film_position_nodes", 17, "contact positions along the path of contact at which the rough films "
+    _i("film_position_nodes", 9, "contact positions along the path of contact at which the rough films "
        "are solved and interpolated (0 = every table position)", 0, 10000),
 )
 _SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
@@ -550,7 +550,7 @@ class RoughnessOptions:
     level: int = 1
     on_failure: str = "fractal_mixed"
     full_film_parameter: float = 3.0
-    film_position_nodes: int = 17
+    film_position_nodes: int = 9
 
 
 def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:

@@ -303,7 +303,7 @@ def test_scene_roughness_keys():
     base = (ROOT / "examples" / "scenes" / "seed000_table1.toml").read_text()
     r = load_scene(base + "\n[roughness]\nlevel = 3\nseed = 5\n").roughness
     assert (r.level, r.D, r.G_m, r.seed, r.f_max_per_m) == (3, 1.565, pytest.approx(4.513e-9), 5, 1e4)
-    assert (r.on_failure, r.full_film_parameter, r.film_position_nodes) == ("fractal_mixed", 3.0, 17)
+    assert (r.on_failure, r.full_film_parameter, r.film_position_nodes) == ("fractal_mixed", 3.0, 9)
     env = environment_from_scene(load_scene(base + "\n[roughness]\nlevel = 2\non_film_failure = \"hertz\"\n"
                                             "full_film_parameter = 2.5\nfilm_position_nodes = 0\n"))
     assert (env.roughness.on_failure, env.roughness.full_film_parameter, env.roughness.position_nodes) == \
