@@ -50,44 +50,6 @@ def kernel_coefficients(n_nodes: int, dX: float) -> np.ndarray:
     return f(a) - f(b)
 
 
-@njit(cache=False, fastmath=False)
-def _fft_inplace(re, im, twr, twi, sign):
-    """Iterative radix-2 FFT of (re, im) in place (length a power of 2);
-    twiddles exp(-2 pi i k/n) = twr + i twi for k < n/2; ``sign`` = +1 forward,
-    -1 inverse (no 1/n scaling)."""
-    n = re.size
-    j = 0
-    for i in range(1, n):
-        bit = n >> 1
-        while j & bit:
-            j ^= bit
-            bit >>= 1
-        j ^= bit
-        if i < j:
-            t = re[i]
-            re[i] = re[j]
-            re[j] = t
-            t = im[i]
-            im[i] = im[j]
-            im[j] = t
-    length = 2
-    while length <= n:
-        half = length // 2
-        step = n // length
-        for k in range(half):
-            wr = twr[k * step]
-            wi = sign * twi[k * step]
-            for i in range(k, n, length):
-                i2 = i + half
-                vr = re[i2] * wr - im[i2] * wi
-                vi = re[i2] * wi + im[i2] * wr
-                re[i2] = re[i] - vr
-                im[i2] = im[i] - vi
-                re[i] += vr
-                im[i] += vi
-        length <<= 1
-
-
 @njit(cache=True, fastmath=True)
 def _cfft(re, im, N, twr, twi, ts, sign):
     """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
