@@ -902,8 +902,8 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
         e_d, e_f = relative_rms(a["dte"], b["dte"]), relative_rms(a["mesh_force"], b["mesh_force"])
         sim = case.stop_time_s
         # rigid-body closed form of the drive: the pinion turns through the integral of the
-        # target speed (trapezoids: the speed is linear within each step); the mesh deflection
-        # only adds micro-radians
+        # target speed (trapezoids: the speed is linear within each step); the change of the
+        # mesh deflection over the run is the small rest
         w_all = np.concatenate(([case.pinion_speed_start_rad_s], case.speed_profile_rad_s))
         turn_ref = float(np.sum(0.5 * (w_all[1:] + w_all[:-1])) * case.comm_step_s)
         track = abs(float(b["pinion_angle"][-1] - b["start"]["pinion_angle"]) - turn_ref) / turn_ref
