@@ -145,12 +145,16 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     K2 = K[ko + 2]
     K3 = K[ko + 3]
     # film change per unit distributed change, c(m) for m = 0, -1, -2
+    # symmetric distribution d at i, -q d at i - 1 and i + 1: q = 1/4 (dist = 1,
+    # the point-contact weights of Venner & Lubrecht), q = 1/2 (dist = 2: zero
+    # net weight in 1-D, so that a change leaves the far film unchanged)
+    q = 0.5 if dist > 1.5 else 0.25
     if dist > 0.5:
-        c0 = K0 - 0.5 * K1
-        cm1 = K1 - 0.25 * (K0 + K2)
-        cm2 = K2 - 0.25 * (K1 + K3)
-        pm1 = -0.25
-        poifac = 1.25
+        c0 = K0 - 2.0 * q * K1
+        cm1 = K1 - q * (K0 + K2)
+        cm2 = K2 - q * (K1 + K3)
+        pm1 = -q
+        poifac = 1.0 + 2.0 * q
     else:
         c0 = K0 - K1
         cm1 = K1 - K0
@@ -214,7 +218,7 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     if dist > 0.5:
         for k in range(1, n - 1):
             i = o + k
-            d = delta[i] - 0.25 * (delta[i - 1] + delta[i + 1])
+            d = delta[i] - q * (delta[i - 1] + delta[i + 1])
             if d != 0.0 and P[i] > 0.0:
                 P[i] += d
     else:
