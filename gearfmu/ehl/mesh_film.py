@@ -237,8 +237,8 @@ def solve_node_films(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: 
     """Smooth film at one (position, load) node, then the rough film of every
     profile in ``roughness_list`` (one per slice) warm-started from it
     (``initial=``; measured 16 ms against 52 ms cold at the seed 000 pitch
-    point, 257 nodes; a cold retry of stalled ones was tried: with it 169 of 1188 level-2
-    nodes of the default scene still stalled, at twice the cost of a stall, so it is not
+    point, 257 nodes; a cold retry of stalled ones was tried: it recovered 3 of the 172
+    stalling level-2 nodes of the default scene at twice the cost of a stall, so it is not
     done).  Returns (smooth outcome, rough outcomes)."""
     sm, res = solve_slice_film(env, R_m, u_m_s, w_N_per_m, None, return_result=True)
     outs = [solve_slice_film(env, R_m, u_m_s, w_N_per_m, r, initial=res) for r in roughness_list]
