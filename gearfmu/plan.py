@@ -205,17 +205,31 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     return ch
 
 
-def _thermal_options(scene, env: Envelope):
+def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     """The ``[thermal]`` options of the kept thermal level: the scene's section (a
     default :class:`gearfmu.scene.ThermalOptions` when it has none) whose temperature
     axis is the scene's ``temperature_axis_C`` or, when that is empty and the envelope
     has a temperature range, ``_THERMAL_AXIS_POINTS`` equally spaced points over the
     range (CHOICE, docs/plan.md).  Raises :class:`PlanError` when the scene's axis does
-    not cover the envelope's temperature range (the FMU would refuse those inputs)."""
+    not cover the envelope's temperature range (the FMU would refuse those inputs).
+
+    ``contact_model``: the planned contact model.  An oil-temperature axis
+    (``axis_quantity`` "oil" / "bulk_and_oil", docs/thermal.md) acts through eta0 of a
+    lubricated model; when the plan chooses a model without a lubricant (hertz) the oil
+    part has nothing to act on, so "oil" loses its axis and "bulk_and_oil" becomes "bulk"."""
     from .scene import ThermalOptions
 
     th = getattr(scene, "thermal", None)
     th = th if th is not None else ThermalOptions()
+    q = getattr(th, "axis_quantity", "bulk")
+    if contact_model is not None and q != "bulk":
+        from .contact_models import get_contact_model
+
+        if not get_contact_model(contact_model).needs_lubricant:
+            th = (replace(th, temperature_axis_C=(), axis_quantity="bulk") if q == "oil"
+                  else replace(th, axis_quantity="bulk"))
+            if q == "oil":
+                return th
     rng = env.temperature_range_C
     if rng is None:
         return th
@@ -291,7 +305,7 @@ class _Evaluator:
                   torque_axis_Nm=self.torque_axis(int(cfg["torque_points"])),
                   nominal_torque_Nm=self.env.nominal_torque_Nm, slots=int(cfg["slots"]))
         if cfg["thermal"]:  # the table builder's own temperature axis (docs/plan.md "Thermal estimate")
-            kw["thermal"] = _thermal_options(self.scene, self.env)
+            kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
             from .contact_models import environment_from_scene
 
@@ -954,7 +968,7 @@ def planned_scene(scene, plan: Plan, which: str = "chosen"):
         pair = replace(pair, pinion=uniform(pair.pinion), gear=uniform(pair.gear))
     # kept: the thermal options the planner measured (the builder's temperature axis); dropped: no
     # thermal correction and no temperature axis (so no temperature input)
-    thermal = _thermal_options(scene, env) if cfg["thermal"] else None
+    thermal = _thermal_options(scene, env, cfg["contact_model"]) if cfg["thermal"] else None
     return replace(scene, mesh=mesh, operating=op, tables=tables, solver=solver, pair=pair, thermal=thermal,
                    accuracy=None)
 

@@ -487,3 +487,42 @@ def test_temperature_axis_must_cover_the_envelope(tmp_path):
     with pytest.raises(PlanError, match=r"thermal.temperature_axis_C: \[20, 90\] degC does not cover the envelope "
                                         r"temperature range \[20, 95\] degC"):
         plan_scene(s)
+
+
+# ------------------------------------------ an oil-temperature axis when the plan chooses hertz
+def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
+    """[thermal] axis_quantity "oil" acts through eta0 of a lubricated contact model
+    (docs/thermal.md). A plan that chooses hertz must not hand the table builder an oil axis
+    (the builder refuses it: the Hertz stiffness has no eta0): "oil" loses its axis,
+    "bulk_and_oil" becomes a bulk axis.  Reference: the tables of the same scene written by
+    hand with axis_quantity = "bulk" (equal bit for bit)."""
+    import dataclasses
+    from pathlib import Path
+
+    from gearfmu.plan import _thermal_options
+    from gearfmu.precompute import precompute_tables
+
+    text = ((Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed004_pair1.toml").read_text()
+            .replace('contact_model = "hertz"', 'contact_model = "smooth_ehl"').replace("slices = 25", "slices = 1")
+            .replace("points_per_mesh = 64", "points_per_mesh = 8")
+            .replace("temperature_C = 60.0", "temperature_C = 40.0"))
+    oil = load_scene(text + '\n[thermal]\naxis_quantity = "oil"\ntemperature_axis_C = [40.0, 80.0]\n')
+    env = envelope_of(oil)
+    th = _thermal_options(oil, env, "smooth_ehl")
+    assert th.axis_quantity == "oil" and tuple(th.temperature_axis_C) == (40.0, 80.0)
+    th = _thermal_options(oil, env, "hertz")
+    assert len(th.temperature_axis_C) == 0 and th.axis_quantity == "bulk"
+
+    both = load_scene(text + '\n[thermal]\naxis_quantity = "bulk_and_oil"\nstandard_temperature_C = 40.0\n'
+                      'temperature_axis_C = [40.0, 80.0]\n')
+    th = _thermal_options(both, envelope_of(both), "hertz")
+    assert th.axis_quantity == "bulk" and tuple(th.temperature_axis_C) == (40.0, 80.0)
+    hz = dataclasses.replace(both.mesh, contact_model="hertz")
+    kw = dict(points_per_mesh=8, nominal_torque_Nm=both.operating.torque_Nm)
+    planned = precompute_tables(both.pair, hz, thermal=th, **kw)
+    bulk = load_scene(text.replace('contact_model = "smooth_ehl"', 'contact_model = "hertz"')
+                      + '\n[thermal]\naxis_quantity = "bulk"\nstandard_temperature_C = 40.0\n'
+                      'temperature_axis_C = [40.0, 80.0]\n')
+    ref = precompute_tables(bulk.pair, bulk.mesh, thermal=bulk.thermal, **kw)
+    assert planned.temperature_C is not None and np.array_equal(planned.temperature_C, ref.temperature_C)
+    assert np.array_equal(planned.k_N_per_m, ref.k_N_per_m)
