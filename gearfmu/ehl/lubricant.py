@@ -16,8 +16,17 @@
 
 * Bulk modulus of the lubricant against pressure, seed 000 eq 9 (tangent
   modulus of the isothermal Tait equation; Dwyer-Joyce, Reddyhoff & Zhu 2011),
-  :func:`bulk_modulus_Pa`; the choice of B0, B0' is explained in
-  :mod:`gearfmu.ehl.film_stiffness`.
+  :func:`bulk_modulus_Pa`, and the equation of state it is the tangent modulus
+  of, :func:`tait_volume_ratio` / :func:`tait_density_ratio`; the choice of
+  B0, B0' is explained in :mod:`gearfmu.ehl.film_stiffness`.
+* Temperature AND pressure: Roelands' (1966) viscosity-temperature-pressure
+  correlation, :func:`roelands_viscosity_pT_Pas` (SI form of Houpert 1985),
+  its temperature-viscosity index S0 from two viscosities
+  (:func:`roelands_S0_from_viscosities`) and the pressure-viscosity coefficient
+  it implies at any oil temperature, :func:`roelands_alpha_Pa_inv` /
+  :func:`roelands_alpha_at_viscosity_Pa_inv` (Z constant over temperature,
+  Roelands' own assumption).  Not wired into the tables' oil axis yet
+  (docs/thermal.md).
 
 Negative pressures are not physical in the cavitated film; every law here
 treats ``p < 0`` as an error.
@@ -106,3 +115,138 @@ def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRI
         raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
     a = 1.0 + B0_prime
     return (1.0 - np.log1p(p / B0_Pa * a) / a) * (B0_Pa + p * a)
+
+
+def tait_volume_ratio(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
+    """V/V0 (dimensionless) at pressure ``p_Pa`` (Pa) of the isothermal Tait
+    equation of state whose tangent modulus -V dp/dV is seed 000 eq 9:
+
+        V/V0 = 1 - ln[1 + p (1 + B0')/B0] / (1 + B0')
+
+    (the "Tait" form of Hayward 1967, Br. J. Appl. Phys. 18, 965, and Bair
+    2007 with K0 = B0, K0' = B0'; :func:`bulk_modulus_Pa` is -V dp/dV of this,
+    which the tests check by differentiating it numerically).
+    """
+    p = np.asarray(p_Pa, dtype=float)
+    if not np.all(np.isfinite(p)) or np.any(p < 0.0):
+        raise EHLInputError("p_Pa must be finite and >= 0")
+    if not (math.isfinite(B0_Pa) and B0_Pa > 0):
+        raise EHLInputError(f"B0_Pa={B0_Pa!r}: must be finite and > 0")
+    if not (math.isfinite(B0_prime) and B0_prime > -1.0):
+        raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
+    a = 1.0 + B0_prime
+    return 1.0 - np.log1p(p / B0_Pa * a) / a
+
+
+def tait_density_ratio(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
+    """rho/rho0 = V0/V (dimensionless) of :func:`tait_volume_ratio`."""
+    return 1.0 / tait_volume_ratio(p_Pa, B0_Pa, B0_prime)
+
+
+#: Roelands' temperature constant in K: his (1 + t/135 degC) is (T - 138 K)/135 K
+#: (Houpert 1985 writes the SI form with 138; 273.15 - 135 = 138.15).
+ROELANDS_T_INF_K = 138.0
+
+
+def _check_temperature_K(name: str, T_K) -> np.ndarray:
+    T = np.asarray(T_K, dtype=float)
+    if not np.all(np.isfinite(T)) or np.any(T <= ROELANDS_T_INF_K):
+        raise EHLInputError(f"{name} must be finite and > {ROELANDS_T_INF_K} K (Roelands' temperature "
+                            f"origin -135 degC), got {T_K!r}")
+    return T
+
+
+def roelands_viscosity_pT_Pas(p_Pa, T_K, eta_ref_Pas: float, T_ref_K: float, Z: float, S0: float,
+                              p0_Pa: float = ROELANDS_P0_PA):
+    """Viscosity in Pa s at gauge pressure ``p_Pa`` (Pa) and temperature ``T_K`` (K):
+    Roelands' (1966) viscosity-temperature-pressure correlation.
+
+    Roelands, *Correlational aspects of the viscosity-temperature-pressure
+    relationship of lubricating oils*, thesis, TH Delft 1966 (also Roelands,
+    Vlugter & Waterman, J. Basic Eng. 85 (1963) 601), in his units
+    (eta in cP, t in degC, p in kgf/cm^2):
+
+        log10 eta + 1.200 = (log10 eta_R + 1.200) (1 + t/135)^(-S0) (1 + p/2000)^Z
+
+    which in SI units (Houpert 1985, J. Tribol. 107, 241; eta in Pa s, T in K,
+    p in Pa) is
+
+        eta = eta_R exp{ (ln eta_R + 9.67) [ ((T - 138)/(T_R - 138))^(-S0)
+                                             (1 + p/p0)^Z - 1 ] },  p0 = 1.96e8 Pa
+
+    (9.67 = 1.2 ln 10 + ln 1000; p0 = 2000 kgf/cm^2).  ``eta_ref_Pas`` is the
+    viscosity at ambient pressure and ``T_ref_K``; Z (viscosity-pressure index)
+    and S0 (viscosity-temperature index) are constants of the oil, independent of
+    T and p (Roelands).  At T = T_R this is seed 000 eq 5 with z = Z.
+    """
+    p = np.asarray(p_Pa, dtype=float)
+    if np.any(p < 0.0) or not np.all(np.isfinite(p)):
+        raise EHLInputError("p_Pa must be finite and >= 0")
+    T = _check_temperature_K("T_K", T_K)
+    T_ref = float(_check_temperature_K("T_ref_K", T_ref_K))
+    eta_ref = _check_positive("eta_ref_Pas", eta_ref_Pas)
+    a = math.log(eta_ref) - ROELANDS_LN_ETA_INF
+    if a <= 0.0:
+        raise EHLInputError(f"eta_ref_Pas={eta_ref!r} is below the Roelands limit viscosity 6.31e-5 Pa s")
+    Z = float(Z)
+    if not math.isfinite(Z) or Z < 0.0:
+        raise EHLInputError(f"Z must be finite and >= 0, got {Z!r}")
+    S0 = float(S0)
+    if not math.isfinite(S0) or S0 < 0.0:
+        raise EHLInputError(f"S0 must be finite and >= 0, got {S0!r}")
+    p0 = _check_positive("p0_Pa", p0_Pa)
+    theta = ((T - ROELANDS_T_INF_K) / (T_ref - ROELANDS_T_INF_K)) ** (-S0)
+    return eta_ref * np.exp(a * (theta * (1.0 + p / p0) ** Z - 1.0))
+
+
+def roelands_S0_from_viscosities(eta_ref_Pas: float, T_ref_K: float, eta_Pas: float, T_K: float) -> float:
+    """Roelands' viscosity-temperature index S0 (dimensionless) through two
+    ambient-pressure viscosities (Pa s) at two temperatures (K):
+
+        S0 = -ln[(ln eta + 9.67)/(ln eta_R + 9.67)] / ln[(T - 138)/(T_R - 138)]
+
+    (:func:`roelands_viscosity_pT_Pas` at p = 0 solved for S0)."""
+    e1, e2 = _check_positive("eta_ref_Pas", eta_ref_Pas), _check_positive("eta_Pas", eta_Pas)
+    T1 = float(_check_temperature_K("T_ref_K", T_ref_K))
+    T2 = float(_check_temperature_K("T_K", T_K))
+    if T1 == T2:
+        raise EHLInputError(f"T_K={T_K!r}: must differ from T_ref_K")
+    a1, a2 = math.log(e1) - ROELANDS_LN_ETA_INF, math.log(e2) - ROELANDS_LN_ETA_INF
+    if a1 <= 0.0 or a2 <= 0.0:
+        raise EHLInputError("eta_ref_Pas, eta_Pas: must be above the Roelands limit viscosity 6.31e-5 Pa s")
+    return float(-math.log(a2 / a1) / math.log((T2 - ROELANDS_T_INF_K) / (T1 - ROELANDS_T_INF_K)))
+
+
+def roelands_alpha_Pa_inv(eta0_Pas, Z: float, p0_Pa: float = ROELANDS_P0_PA):
+    """Pressure-viscosity coefficient (1/Pa) of the Roelands law at the
+    temperature where the ambient viscosity is ``eta0_Pas`` (Pa s): the initial
+    slope d ln(eta)/dp at p = 0 of :func:`roelands_viscosity_pT_Pas`,
+
+        alpha = Z (ln eta0 + 9.67) / p0
+
+    (the inverse of :func:`roelands_z`; Houpert 1985).  With Z constant (Roelands)
+    alpha falls with temperature as ln eta0 + 9.67 does."""
+    eta0 = np.asarray(eta0_Pas, dtype=float)
+    if not np.all(np.isfinite(eta0)) or np.any(eta0 <= 0.0):
+        raise EHLInputError(f"eta0_Pas must be finite and > 0, got {eta0_Pas!r}")
+    a = np.log(eta0) - ROELANDS_LN_ETA_INF
+    if np.any(a <= 0.0):
+        raise EHLInputError("eta0_Pas: below the Roelands limit viscosity 6.31e-5 Pa s")
+    Z = float(Z)
+    if not math.isfinite(Z) or Z < 0.0:
+        raise EHLInputError(f"Z must be finite and >= 0, got {Z!r}")
+    return Z * a / _check_positive("p0_Pa", p0_Pa)
+
+
+def roelands_alpha_at_viscosity_Pa_inv(alpha_ref_Pa_inv: float, eta0_ref_Pas: float, eta0_Pas):
+    """Pressure-viscosity coefficient (1/Pa) at another oil temperature, from
+    the one at a reference temperature, with Roelands' Z held constant:
+
+        alpha(T) = alpha_ref (ln eta0(T) + 9.67) / (ln eta0_ref + 9.67)
+
+    ``eta0_Pas`` (scalar or array, Pa s) is the ambient viscosity at the new
+    temperature(s) (e.g. from the Walther / ASTM D341 law of the oil axis),
+    ``eta0_ref_Pas`` the one at which ``alpha_ref_Pa_inv`` holds.  The form
+    the oil temperature axis would use (docs/thermal.md, "What is left")."""
+    z = roelands_z(eta0_ref_Pas, alpha_ref_Pa_inv)
+    return roelands_alpha_Pa_inv(eta0_Pas, z)
