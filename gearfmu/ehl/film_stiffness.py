@@ -15,13 +15,30 @@ B0 is the bulk modulus at ambient pressure and B0' its pressure derivative
 (dB/dp at p = 0 equals B0', which the tests check).  The slice stiffnesses
 add (eq 10): K_l = sum_n k_ln.
 
-Values of B0, B0' (a gap of seed 000, which cites Dwyer-Joyce et al. 2011
-for them): the defaults are B0 = 1.83 GPa and B0' = 11.  B0 = rho c^2 of a
-mineral oil at ambient conditions (rho = 870 kg/m^3, speed of sound
-c = 1450 m/s); B0' = 11 is the typical Tait K0' of liquid lubricants (Bair,
-*High Pressure Rheology for Quantitative Elastohydrodynamics*, Elsevier
-2007).  NOT yet checked against the table of Dwyer-Joyce et al. 2011 (the
-paper could not be consulted here); both are parameters.
+Values of B0, B0' (a gap of seed 000: eq 9 refers the reader to its ref [44],
+a misnumbering -- [44] is Ma et al. 2016 on tip relief; the law is that of
+ref [43], Dwyer-Joyce, Reddyhoff & Zhu 2011).  What that paper says about
+them (its abstract, J. Tribol. 133 (3) 031501, and the White Rose eprint
+43103): "the liquid film stiffness was calculated by using a predicted film
+thickness and a bulk modulus estimated from published rheological models of
+lubricants under high pressure" -- B0, B0' are not measured there but taken
+from the high-pressure rheology literature, i.e. the Tait parameters K0, K0'
+of the lubricant.  Its table of constants could not be read here (only the
+abstract and reference list are in the corpora searched; queries listed in
+docs/ehl.md), so the defaults are the literature values of that kind:
+
+* B0 = rho c^2 = 870 kg/m^3 x (1450 m/s)^2 = 1.83 GPa, the ambient bulk
+  modulus of a mineral oil (the isentropic one, as ultrasound sees it; the
+  isothermal one is lower by the factor Cp/Cv);
+* B0' = 11, the typical Tait K0' of liquid lubricants (Bair, *High Pressure
+  Rheology for Quantitative Elastohydrodynamics*, Elsevier 2007).
+
+Checked (tests/test_lubricant_laws.py): the equation of state whose tangent
+modulus eq 9 is (:func:`~gearfmu.ehl.lubricant.tait_density_ratio`) with
+these defaults stays within 1.7 % of the Dowson-Higginson density (seed 000
+eq 6, Dowson & Higginson 1966) from 0 to 2 GPa, and D-H's own ambient
+modulus 0.59 GPa/0.34 = 1.74 GPa is 5 % below B0; B0' = 5 would leave that
+band.  Both remain parameters.
 
 Contact patch of one slice (a choice, seed 000 does not define A and h_l):
 A = 2 b * width (the Hertz contact band |x| <= b), p_m and h_l the means of
