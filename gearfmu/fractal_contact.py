@@ -63,6 +63,7 @@ __all__ = [
     "line_contact_gap_m", "brinell_to_hardness_Pa", "dimensionless",
     "KE_STAGE1", "KE_STAGE2", "K_HY_DEFAULT", "film_regime", "FractalMeshOptions",
     "slice_contact_stiffness", "fractal_mixed_model", "FULL_FILM_LAMBDA", "BOUNDARY_LAMBDA",
+    "FullContactError", "solid_contact_extensive", "composite_sigma_m", "film_parameter",
 ]
 
 #: Kogut & Etsion (2002) FE fits (load coefficient, load exponent, area coefficient, area exponent)
@@ -77,6 +78,17 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
 
 class FractalInputError(ValueError):
     """Bad input to the fractal contact model; the message names the field and the reason."""
+
+
+class FullContactError(FractalInputError):
+    """The asperities would need a real contact area A_r >= A0 to carry the load: complete
+    contact, outside the fractal (isolated-asperity) model.  ``max_load_N`` is the load the
+    asperities carry at A_r = A0, ``load_N`` the requested one."""
+
+    def __init__(self, message: str, load_N: float = math.nan, max_load_N: float = math.nan):
+        super().__init__(message)
+        self.load_N = load_N
+        self.max_load_N = max_load_N
 
 
 def _pos(name: str, v, allow_zero: bool = False) -> float:
@@ -347,29 +359,80 @@ def solid_contact(surface: FractalSurface, material: FractalMaterial, a_l_m2: fl
                                 tuple(P_st), tuple(K_st), tuple(A_st))
 
 
+def _full_area_log_a_l(surface, material, A0, options) -> float:
+    """ln a_l at which the real area A_r of :func:`solid_contact` reaches the nominal area A0."""
+    D = surface.D
+
+    def g(u):
+        return math.log(solid_contact(surface, material, math.exp(u), A0, options).real_area_m2 / A0)
+
+    # elastic-only estimate A_r = lambda_c D/(2-D) a_l (MB 1991), then bracket (A_r grows with a_l)
+    u0 = math.log(A0 * (2.0 - D) / (D * options.lambda_c))
+    lo, hi = u0 - 2.0, u0 + 2.0
+    while g(lo) > 0:
+        lo -= 4.0
+    while g(hi) < 0:
+        hi += 4.0
+    return brentq(g, lo, hi, xtol=1e-12, rtol=1e-12)
+
+
 def solid_contact_at_load(surface: FractalSurface, material: FractalMaterial, load_N: float,
                           A0_m2: float, options: FractalOptions = FractalOptions()) -> FractalContactResult:
-    """:func:`solid_contact` with a_l found so that the asperities carry ``load_N`` (N)."""
+    """:func:`solid_contact` with a_l found so that the asperities carry ``load_N`` (N).
+
+    The real contact area must stay below the nominal one: if the asperities of ``A0_m2``
+    carry less than ``load_N`` at A_r = A0 (complete contact, outside the isolated-asperity
+    model), :class:`FullContactError` is raised (it is a :class:`FractalInputError`)."""
     P = _pos("load_N", load_N)
     A0 = _pos("A0_m2", A0_m2)
-    D = surface.D
 
     def f(u):
         return math.log(solid_contact(surface, material, math.exp(u), A0, options).load_N) - math.log(P)
 
-    # a_l bracket: A_r of the truncated population is lambda_c D/(2-D) a_l <= ~2 A0 at most
-    hi = math.log(2.0 * A0 * (2.0 - D) / (D * options.lambda_c))
+    hi = _full_area_log_a_l(surface, material, A0, options)
+    f_hi = f(hi)
+    if f_hi <= 0:
+        P_max = solid_contact(surface, material, math.exp(hi), A0, options).load_N
+        raise FullContactError(
+            f"load_N={P!r}: the asperities of A0_m2={A0!r} carry at most {P_max:.6g} N before the real "
+            f"contact area reaches the nominal area (real_area_ratio A_r/A0 >= 1: complete contact, "
+            f"outside the fractal model)", P, P_max)
     lo = hi - 10.0
     while f(lo) > 0:
         lo -= 10.0
         if lo < hi - 400:
             raise FractalInputError(f"load_N={P!r}: too small to resolve")
-    if f(hi) < 0:
-        raise FractalInputError(
-            f"load_N={P!r}: exceeds what the asperities of A0_m2={A0!r} carry "
-            "(real contact area would exceed the nominal area)")
     u = brentq(f, lo, hi, xtol=1e-12, rtol=1e-12)
     return solid_contact(surface, material, math.exp(u), A0, options)
+
+
+def solid_contact_extensive(surface: FractalSurface, material: FractalMaterial, pressure_Pa: float,
+                            A0_m2: float, element_m2: float,
+                            options: FractalOptions = FractalOptions()) -> FractalContactResult:
+    """Solid contact of the nominal area ``A0_m2`` under the nominal pressure ``pressure_Pa``,
+    evaluated on one reference element of area ``element_m2`` and scaled extensively:
+    load, real area and stiffness (all stages) = N x the element's, N = A0/element.
+
+    Why: the MB (1991) model ties the largest spot a_l to the real area (A_r = lambda_c
+    D/(2-D) a_l elastically) and gives P ~ A_r^((3-D)/2), so at equal nominal pressure
+    A_r/A0 grows as A0^((D-1)/(3-D)): the answer depends on how the nominal area is cut.
+    The W-M surface itself is defined on a sample of its longest wavelength L (lowest
+    frequency 1/L; Majumdar & Bhushan 1990/1991, Yan & Komvopoulos 1998 J. Appl. Phys.
+    84:3617 define the 3-D surface on an L x L sample), and a rough-contact result is
+    representative, hence additive over area, once the nominal area holds the longest
+    wavelength (Yastrebov, Anciaux & Molinari 2012).  CHOICE (docs/fractal_contact.md): the
+    element is L x L with L the W-M sample length; elements act in parallel, so stiffness,
+    load and area add and the result per unit nominal area depends on the pressure only.
+    Raises :class:`FullContactError` where the element would be in complete contact."""
+    p = _pos("pressure_Pa", pressure_Pa)
+    A0 = _pos("A0_m2", A0_m2)
+    Ae = _pos("element_m2", element_m2)
+    e = solid_contact_at_load(surface, material, p * Ae, Ae, options)
+    n = A0 / Ae
+    return FractalContactResult(
+        e.load_N * n, e.real_area_m2 * n, e.stiffness_N_per_m * n, e.asperity_stiffness_N_per_m * n,
+        e.a_l_m2, A0, e.a_c_m2, tuple(v * n for v in e.stage_load_N),
+        tuple(v * n for v in e.stage_stiffness_N_per_m), tuple(v * n for v in e.stage_area_m2))
 
 
 def oil_film_stiffness_N_per_m(A0_m2: float, real_area_m2: float, h_m: float, p_Pa: float = 0.0,
@@ -458,6 +521,26 @@ GEAR_STEEL_HARDNESS_PA = 6.4e9
 SEED001_ASPERITY_FRICTION = 0.12
 
 
+def composite_sigma_m(sigma1_m: float, sigma2_m: float) -> float:
+    """Composite RMS roughness sqrt(sigma1^2 + sigma2^2) (m) of two flanks (Johnson 1985,
+    ch. 13; ISO/TR 15144-1 uses the same composite in its specific film thickness)."""
+    return math.hypot(_pos("sigma1_m", sigma1_m, allow_zero=True), _pos("sigma2_m", sigma2_m, allow_zero=True))
+
+
+def film_parameter(h_min_m: float, sigma1_m: float, sigma2_m: float) -> float:
+    """The project's one film-parameter definition (1):
+    Lambda = h_min / sqrt(sigma1^2 + sigma2^2), h_min the minimum film thickness of the
+    smooth contact, sigma1, sigma2 the RMS roughness of the two flanks (Tallian 1967;
+    Johnson 1985 ch. 13; ISO/TR 15144-1 specific film thickness).  In the mesh h_min is the
+    Dowson & Higginson (1966) line-contact minimum film and sigma_i the W-M RMS of each
+    flank (:func:`gearfmu.roughness.wm_sigma_m`), the same as
+    :func:`gearfmu.contact_models.film_parameter`."""
+    sc = composite_sigma_m(sigma1_m, sigma2_m)
+    if sc <= 0:
+        raise FractalInputError("sigma1_m, sigma2_m: the composite roughness must be > 0")
+    return _pos("h_min_m", h_min_m, allow_zero=True) / sc
+
+
 def film_regime(film_parameter: float) -> str:
     """'full_film' (lambda >= 3), 'mixed' (1 <= lambda < 3) or 'boundary' (lambda < 1)."""
     lam = float(film_parameter)
@@ -487,40 +570,49 @@ def slice_contact_stiffness(D: float, G_m: float, rho_m: float, u_m_s: float, w_
                             width_m: float, E_star_Pa: float, eta0_Pas: Optional[float],
                             alpha_Pa_inv: Optional[float],
                             mesh_options: FractalMeshOptions = FractalMeshOptions()) -> dict:
-    """K_n (N/m) of one face-width slice: the Hertz band 2b x width as nominal area,
-    lambda_c from the curvature ``rho_m`` and line load ``w_N_per_m``, the whole
-    slice load on the asperities (seed 001 eq 24), the oil film of thickness
-    h_c (Pan & Hamrock 1989 central film at entrainment speed ``u_m_s``) on
-    the non-contact area.  Returns K_n, K_s, K_l, lambda_c, film parameter
-    h_min/sigma and its regime.  No lubricant (eta0 None): K_l = 0."""
-    from .ehl.fits import pan_hamrock_films
+    """K_n (N/m) of one face-width slice of width ``width_m`` at line load ``w_N_per_m``.
+
+    Nominal area A0 = 2b x width (Hertz band), nominal pressure p = w/(2b); the solid part
+    from :func:`solid_contact_extensive` on L_s x L_s elements (L_s = ``mesh_options.L_s_m``,
+    the W-M sample length) scaled by A0/L_s^2, so K_n per unit width does not depend on how
+    the face is sliced; the whole slice load on the asperities (seed 001 eq 24); lambda_c
+    from the curvature ``rho_m``, the line load and the composite roughness; the oil film of
+    thickness h_c (Pan & Hamrock 1989 central film at entrainment speed ``u_m_s``) on the
+    non-contact area.  Film parameter: :func:`film_parameter` with the Dowson & Higginson
+    h_min and both flanks' W-M sigma (the definition of gearfmu.contact_models).
+    Returns K_n, K_s, K_l, lambda_c, film parameter and its regime, A_r/A0, A0.
+    No lubricant (eta0 None): K_l = 0.  Raises :class:`FullContactError` where the
+    asperities cannot carry the load below complete contact (A_r >= A0)."""
+    from .ehl.fits import dowson_higginson_min_film, pan_hamrock_films
     from .roughness import wm_sigma_m
 
     mo = mesh_options
     surf = FractalSurface(D, G_m)
     mat = FractalMaterial(E_star_Pa, mo.H_Pa, friction=mo.friction)
-    b = hertz_half_width_m(rho_m, w_N_per_m, E_star_Pa)
+    w = _pos("w_N_per_m", w_N_per_m)
+    b = hertz_half_width_m(rho_m, w, E_star_Pa)
     A0 = 2.0 * b * _pos("width_m", width_m)
-    sigma = wm_sigma_m(D, G_m, mo.L_s_m)
-    lam_c = contact_correction_coefficient(rho_m, w_N_per_m, E_star_Pa, sigma, mo.L_s_m)
+    p_nom = w / (2.0 * b)
+    sig_flank = wm_sigma_m(D, G_m, mo.L_s_m)
+    sigma = composite_sigma_m(sig_flank, sig_flank)
+    lam_c = contact_correction_coefficient(rho_m, w, E_star_Pa, sigma, mo.L_s_m)
     opts = FractalOptions(lateral=mo.options.lateral, interaction=mo.options.interaction, lambda_c=lam_c)
-    sol = solid_contact_at_load(surf, mat, w_N_per_m * width_m, A0, opts)
+    sol = solid_contact_extensive(surf, mat, p_nom, A0, mo.L_s_m ** 2, opts)
     h_c = h_min = None
     Kl = 0.0
     lam = float("inf")
     if eta0_Pas is not None:
         Ep = 2.0 * E_star_Pa
-        W = w_N_per_m / (Ep * rho_m)
+        W = w / (Ep * rho_m)
         U = eta0_Pas * u_m_s / (Ep * rho_m)
         Gd = max(float(alpha_Pa_inv or 0.0) * Ep, 1e-9)
-        hm, hc = pan_hamrock_films(W, U, Gd)
-        h_min, h_c = hm * rho_m, hc * rho_m
-        lam = h_min / sigma
-        Kl = oil_film_stiffness_N_per_m(A0, min(sol.real_area_m2, A0), h_c, w_N_per_m / (2.0 * b),
-                                        mo.B0_Pa, mo.B0_prime)
+        h_c = pan_hamrock_films(W, U, Gd)[1] * rho_m
+        h_min = dowson_higginson_min_film(W, U, Gd) * rho_m
+        lam = film_parameter(h_min, sig_flank, sig_flank)
+        Kl = oil_film_stiffness_N_per_m(A0, sol.real_area_m2, h_c, p_nom, mo.B0_Pa, mo.B0_prime)
     return {"K_n_N_per_m": sol.stiffness_N_per_m + Kl, "K_s_N_per_m": sol.stiffness_N_per_m,
             "K_l_N_per_m": Kl, "lambda_c": lam_c, "film_parameter": lam,
-            "regime": film_regime(lam) if math.isfinite(lam) else "dry", "h_c_m": h_c,
+            "regime": film_regime(lam) if math.isfinite(lam) else "dry", "h_c_m": h_c, "h_min_m": h_min,
             "real_area_ratio": sol.real_area_m2 / A0, "A0_m2": A0}
 
 
@@ -530,9 +622,12 @@ def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
     Roughness from ``env.roughness`` (D, G_m; default seed 000 Table 2 level 1),
     settings from ``env.fractal`` (a :class:`FractalMeshOptions`) when present.
     Requests whose film parameter lies in the full-film range are recorded in
-    ``failures`` with status 'full_film' (the build reports them)."""
+    ``failures`` with status 'full_film' (the build reports them).  Requests whose
+    asperities would reach complete contact (A_r >= A0, :class:`FullContactError`) use the
+    Hertz stiffness, recorded with status 'complete_contact' and counted in ``fallbacks``
+    (the policy of gearfmu.contact_models for the rough-EHL switch)."""
     from .contact import reduced_modulus_Pa
-    from .contact_models import ContactStiffness, RoughnessSpec, _check, _key
+    from .contact_models import ContactStiffness, RoughnessSpec, _check, _key, hertz_stiffness_N_per_m
     from .ehl.mesh_film import contact_kinematics
 
     s, n, w = _check(env, s_m, slice_index, w_N_per_m)
@@ -542,13 +637,22 @@ def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
     keys = [(_key(a), _key(c)) for a, c in zip(s, w)]  # slices share D, G: same answer
     uniq = list(dict.fromkeys(keys))
     R, u, _ = contact_kinematics(env.geom, np.array([k[0] for k in uniq]), env.omega1_rad_s)
-    kmap, notes = {}, []
+    kmap, notes, full = {}, [], set()
     for i, (sk, wk) in enumerate(uniq):
-        r = slice_contact_stiffness(spec.D, spec.G_m, float(R[i]), float(u[i]), wk, env.width_m, Es,
-                                    env.eta0_Pas, env.alpha_Pa_inv, mo)
+        try:
+            r = slice_contact_stiffness(spec.D, spec.G_m, float(R[i]), float(u[i]), wk, env.width_m, Es,
+                                        env.eta0_Pas, env.alpha_Pa_inv, mo)
+        except FullContactError as e:
+            kmap[(sk, wk)] = hertz_stiffness_N_per_m(env.pair, env.width_m)
+            full.add((sk, wk))
+            notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="complete_contact",
+                              film_parameter=float("nan"), used="hertz",
+                              message=f"real contact area would reach the nominal area (Hertz used): {e}"))
+            continue
         kmap[(sk, wk)] = r["K_n_N_per_m"]
         if r["regime"] == "full_film":
             notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="full_film",
                               film_parameter=r["film_parameter"],
                               message="film parameter >= 3: full film, the mixed model overstates contact"))
-    return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq), failures=notes)
+    return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq), failures=notes,
+                            fallbacks=sum(k in full for k in keys))

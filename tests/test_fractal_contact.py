@@ -265,3 +265,133 @@ def test_fractal_mixed_is_registered_and_load_dependent():
     assert np.all(np.isfinite(k)) and np.all(k > 0)
     assert k[0] == k[1]            # slices share D and G
     assert k[2] > k[0]             # stiffer at the higher slice load
+
+
+# ------------------------------------------------------------ issue 9: slicing, complete contact, film parameter
+def _seed000_pitch():
+    """Seed 000 Table 1 pair at its pitch point and nominal line load w = T/(r_b1 b)."""
+    from pathlib import Path
+
+    from gearfmu.contact import reduced_modulus_Pa
+    from gearfmu.ehl.mesh_film import contact_kinematics
+    from gearfmu.geometry import pair_geometry
+    from gearfmu.scene import load_scene
+
+    sc = load_scene(Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed000_table1.toml")
+    g = pair_geometry(sc.pair)
+    R, u, _ = contact_kinematics(g, g.s_pitch_m, sc.operating.speed_rad_s)
+    w = sc.operating.torque_Nm / g.rb1_m / sc.pair.pinion.face_width_m
+    return sc, g, float(R), float(u), w, reduced_modulus_Pa(sc.pair)
+
+
+def _eta_alpha(sc):
+    from gearfmu.contact_models import environment_from_scene
+
+    env = environment_from_scene(sc, max_workers=1)
+    return env.eta0_Pas, env.alpha_Pa_inv
+
+
+@pytest.mark.parametrize("level", [1, 4])
+def test_slice_stiffness_per_unit_width_does_not_depend_on_the_slicing(level):
+    """Issue 9: the 44 mm face of the seed 000 pair at its pitch point and nominal line load, cut
+    into 1, 2, 4, 11 or 44 slices: K_n, K_s, K_l per unit width and A_r/A0 are the same.  Reference:
+    slices are springs in parallel under the same line load, so stiffness per unit width of a uniform
+    face is a property of the face (and the 1 mm + 43 mm cut adds up to the whole face).  The old
+    per-slice nominal area gave A_r/A0 = 0.68 (1 mm) against 1.44 (22 mm) at level 4.  Tolerance
+    rel 1e-9: only the root finder's (1e-12) and rounding errors may differ."""
+    from gearfmu.contact_models import RoughnessSpec
+
+    sc, _, R, u, w, Es = _seed000_pitch()
+    sp = RoughnessSpec.from_level(level)
+    eta, alpha = _eta_alpha(sc)
+    face = 44e-3
+
+    def k(width):
+        return fc.slice_contact_stiffness(sp.D, sp.G_m, R, u, w, width, Es, eta, alpha)
+
+    ref = k(face)
+    assert 0.0 < ref["real_area_ratio"] < 1.0 and ref["K_l_N_per_m"] > 0
+    for n in (2, 4, 11, 44):
+        r = k(face / n)
+        for key in ("K_n_N_per_m", "K_s_N_per_m", "K_l_N_per_m"):
+            assert r[key] * n == pytest.approx(ref[key], rel=1e-9), (n, key)
+        assert r["real_area_ratio"] == pytest.approx(ref["real_area_ratio"], rel=1e-9)
+    assert k(1e-3)["K_n_N_per_m"] + k(43e-3)["K_n_N_per_m"] == pytest.approx(ref["K_n_N_per_m"], rel=1e-9)
+    # the solid part is N = A0/L_s^2 reference elements in parallel (docs/fractal_contact.md)
+    mo = fc.FractalMeshOptions()
+    b = math.sqrt(4 * w * R / (math.pi * Es))                          # Hertz half-width (Johnson 1985)
+    opts = fc.FractalOptions(lateral=mo.options.lateral, interaction=mo.options.interaction,
+                             lambda_c=ref["lambda_c"])
+    e = fc.solid_contact_at_load(fc.FractalSurface(sp.D, sp.G_m), fc.FractalMaterial(Es, mo.H_Pa, friction=mo.friction),
+                                 w / (2 * b) * mo.L_s_m ** 2, mo.L_s_m ** 2, opts)
+    assert ref["K_s_N_per_m"] == pytest.approx(e.stiffness_N_per_m * 2 * b * face / mo.L_s_m ** 2, rel=1e-9)
+
+
+def test_raw_mb_area_ratio_grows_with_nominal_area_extensive_does_not():
+    """Why the mesh scales a reference element: in the MB (1991) model at equal nominal pressure
+    A_r/A0 grows with A0 (P ~ A_r^((3-D)/2) elastically), the element-scaled result does not."""
+    s = fc.FractalSurface(1.45, 1e-10)
+    p = 1e6
+    raw = [fc.solid_contact_at_load(s, MAT, p * a, a).real_area_m2 / a for a in (1e-8, 1e-6, 1e-4)]
+    ext = [fc.solid_contact_extensive(s, MAT, p, a, 1e-8).real_area_m2 / a for a in (1e-8, 1e-6, 1e-4)]
+    assert raw[0] < raw[1] < raw[2] and raw[2] > 2 * raw[0]
+    assert ext == pytest.approx([raw[0]] * 3, rel=1e-12)
+
+
+def test_real_area_reaching_the_nominal_area_raises():
+    """Issue 9: A_r >= A0 (complete contact) is outside the model: the load the asperities carry at
+    A_r = A0 is the limit; just below it the real area stays below A0, just above it
+    FullContactError (a FractalInputError) names load_N and real_area_ratio."""
+    s = fc.FractalSurface(1.45, 8e-9)
+    with pytest.raises(fc.FullContactError, match="load_N=.*real_area_ratio") as ei:
+        fc.solid_contact_at_load(s, MAT, 1e9, A0, fc.SEED001_FULL)
+    P_max = ei.value.max_load_N
+    assert isinstance(ei.value, fc.FractalInputError) and 0 < P_max < 1e9
+    r = fc.solid_contact_at_load(s, MAT, 0.999 * P_max, A0, fc.SEED001_FULL)
+    assert 0.99 < r.real_area_m2 / A0 < 1.0
+    with pytest.raises(fc.FullContactError):
+        fc.solid_contact_at_load(s, MAT, 1.001 * P_max, A0, fc.SEED001_FULL)
+
+
+def test_film_parameter_one_definition():
+    """Lambda = h_min / sqrt(sigma1^2 + sigma2^2) (Tallian 1967; Johnson 1985; ISO/TR 15144-1), with
+    h_min of Dowson & Higginson (h_min/R = 2.65 U^0.70 G^0.54 W^-0.13, written out here) and both
+    flanks' W-M sigma: the mixed model's Lambda equals the rough-EHL switch's
+    (gearfmu.contact_models.film_parameter) at the seed 000 pitch point, levels 1-4."""
+    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact_models import film_parameter as switch_lambda
+    from gearfmu.roughness import wm_sigma_m
+
+    assert fc.film_parameter(5e-7, 3e-7, 4e-7) == pytest.approx(1.0, rel=1e-15)
+    sc, g, R, u, w, Es = _seed000_pitch()
+    eta, alpha = _eta_alpha(sc)
+    Ep = 2 * Es
+    for level in (1, 2, 3, 4):
+        sp = RoughnessSpec.from_level(level)
+        r = fc.slice_contact_stiffness(sp.D, sp.G_m, R, u, w, 11e-3, Es, eta, alpha)
+        h = R * 2.65 * (eta * u / (Ep * R)) ** 0.70 * (alpha * Ep) ** 0.54 * (w / (Ep * R)) ** -0.13
+        lam = h / (math.sqrt(2) * wm_sigma_m(sp.D, sp.G_m, 0.5e-3))
+        assert r["film_parameter"] == pytest.approx(lam, rel=1e-12)
+        env = environment_from_scene(sc, roughness=sp, max_workers=1)
+        assert switch_lambda(env, [g.s_pitch_m], [w])[0] == pytest.approx(lam, rel=1e-12)
+
+
+def test_fractal_mixed_model_complete_contact_uses_hertz_and_says_so():
+    """A slice load whose asperities would reach complete contact (level 4, 4 MN/m) takes the Hertz
+    stiffness of the slice, recorded as 'complete_contact' (the rough-EHL policy's choice)."""
+    from gearfmu.contact_models import CONTACT_MODELS, ContactEnvironment, RoughnessSpec, hertz_stiffness_N_per_m
+    from gearfmu.gearpair import GearPairSpec, GearSpec
+    from gearfmu.geometry import pair_geometry
+
+    g = lambda z: GearSpec(teeth=z, module_m=6e-3, pressure_angle_rad=math.radians(20), face_width_m=44e-3)
+    pair = GearPairSpec(pinion=g(45), gear=g(34))
+    geom = pair_geometry(pair)
+    env = ContactEnvironment(pair=pair, geom=geom, omega1_rad_s=209.4, n_slices=4, width_m=11e-3,
+                             eta0_Pas=0.1, alpha_Pa_inv=2e-8, rho0_kg_m3=870.0,
+                             roughness=RoughnessSpec.from_level(4))
+    s = np.full(2, geom.s_pitch_m)
+    res = CONTACT_MODELS["fractal_mixed"].fn(env, s, np.array([0, 1]), np.array([3e5, 4e6]))
+    assert res.k_N_per_m[1] == hertz_stiffness_N_per_m(pair, 11e-3)
+    assert res.k_N_per_m[0] != res.k_N_per_m[1] and res.fallbacks == 1
+    f = [x for x in res.failures if x["status"] == "complete_contact"]
+    assert len(f) == 1 and f[0]["w_N_per_m"] == pytest.approx(4e6) and "real_area_ratio" in f[0]["message"]
