@@ -39,6 +39,17 @@ Rebuilt equations with their sources: docs/fractal_contact.md.  In short:
 * Contact-surface correction coefficient lambda_c for curved flanks: the
   seed's formula (eq 19) is dimensionally inconsistent as published; we
   rebuild it from its stated meaning and limits (contact_correction_coefficient).
+* Nominal area (issue 9): the MB model ties the largest spot a_l to the real
+  area, so at equal nominal pressure A_r/A0 grows with A0 (P ~ A_r^((3-D)/2)):
+  a result on the whole slice depends on the slice width.  The mesh evaluates
+  one reference element of the W-M sample size L_s x L_s (the surface's longest
+  wavelength; Yan & Komvopoulos 1998 define the 3-D W-M surface on an L x L
+  sample) under the nominal pressure and scales load, area and stiffness by
+  A0/L_s^2 (solid_contact_extensive), so K per unit face width does not depend
+  on the slicing.  A_r >= A0 (complete contact) raises FullContactError.
+* Film parameter: one definition, Lambda = h_min / sqrt(sigma1^2 + sigma2^2)
+  (Tallian 1967; Johnson 1985; ISO/TR 15144-1), h_min Dowson & Higginson, sigma_i
+  the W-M RMS of each flank (film_parameter; equal to gearfmu.contact_models').
 
 All quantities SI.  Areas in m^2; E is the composite (reduced) modulus as in
 the seed ("composite Young's modulus of the contact material").
@@ -389,21 +400,29 @@ def solid_contact_at_load(surface: FractalSurface, material: FractalMaterial, lo
     def f(u):
         return math.log(solid_contact(surface, material, math.exp(u), A0, options).load_N) - math.log(P)
 
-    hi = _full_area_log_a_l(surface, material, A0, options)
-    f_hi = f(hi)
-    if f_hi <= 0:
-        P_max = solid_contact(surface, material, math.exp(hi), A0, options).load_N
-        raise FullContactError(
+    def full_contact():
+        u_full = _full_area_log_a_l(surface, material, A0, options)
+        P_max = solid_contact(surface, material, math.exp(u_full), A0, options).load_N
+        return FullContactError(
             f"load_N={P!r}: the asperities of A0_m2={A0!r} carry at most {P_max:.6g} N before the real "
             f"contact area reaches the nominal area (real_area_ratio A_r/A0 >= 1: complete contact, "
             f"outside the fractal model)", P, P_max)
+
+    # a_l bracket up to A_r ~ 2 A0 (elastic estimate A_r = lambda_c D/(2-D) a_l); the answer is
+    # accepted only below A_r = A0 (A_r grows with a_l, so the load at A_r = A0 is the limit)
+    hi = math.log(2.0 * A0 * (2.0 - surface.D) / (surface.D * options.lambda_c))
+    if f(hi) < 0:
+        raise full_contact()
     lo = hi - 10.0
     while f(lo) > 0:
         lo -= 10.0
         if lo < hi - 400:
             raise FractalInputError(f"load_N={P!r}: too small to resolve")
     u = brentq(f, lo, hi, xtol=1e-12, rtol=1e-12)
-    return solid_contact(surface, material, math.exp(u), A0, options)
+    r = solid_contact(surface, material, math.exp(u), A0, options)
+    if r.real_area_m2 >= A0:
+        raise full_contact()
+    return r
 
 
 def solid_contact_extensive(surface: FractalSurface, material: FractalMaterial, pressure_Pa: float,
