@@ -13,7 +13,10 @@ other jobs inflate wall time; CPU time is the fairer number on a shared
 machine.
 
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
-                                   [--python-driver]
+                                   [--python-driver] [--no-fmg]
+
+Each case is timed with the default Hertzian start and with the full-multigrid
+start (``fmg_cycles=1``) in the same run.
 """
 from __future__ import annotations
 
@@ -43,15 +46,31 @@ def bench(M, L, sizes, repeats, **kw):
             cpu.append(time.process_time() - c)
         t_med = float(np.median(times))
         c_med = float(np.median(cpu))
+        hc = r.residuals["H_central"]
         rows.append(dict(n_intervals=n, solver=kw.get("solver", "compiled"),
+                         fmg_cycles=kw.get("fmg_cycles", 0),
+                         fmg_cycles_per_level=r.residuals.get("fmg_cycles_per_level"),
                          levels=r.grid_levels, cycles=r.iterations,
                          attempt=r.residuals["attempt"],
                          frozen_switch="frozen_switch_from_cycle" in r.residuals,
                          wall_time_ms=1e3 * t_med, cpu_time_ms=1e3 * c_med,
                          cpu_ms_per_cycle=1e3 * c_med / r.iterations,
                          H_central_moes=r.H_central_moes,
-                         rel_dev_from_moes=r.H_central_moes / moes_central_film(M, L) - 1.0))
+                         rel_dev_from_moes=r.H_central_moes / moes_central_film(M, L) - 1.0,
+                         # |H_c after cycle k / H_c at convergence - 1|, k = 1, 2, 3 (cycles
+                         # of the last setting tried; central node film)
+                         hc_rel_diff_after_cycle=[abs(h / hc[-1] - 1.0) for h in hc[:3]]))
     return rows
+
+
+def discretisation_error(rows):
+    """Richardson estimate of the relative discretisation error of H_c per
+    size: |H(n) - H(2n)| / 3 / H(2n) (second order); None for the finest."""
+    by_n = {r["n_intervals"]: r["H_central_moes"] for r in rows}
+    for r in rows:
+        h2 = by_n.get(2 * r["n_intervals"])
+        r["discretisation_error_estimate"] = (None if h2 is None else
+                                              abs(r["H_central_moes"] - h2) / 3.0 / h2)
 
 
 def fitted_exponent(ns, costs):
@@ -66,8 +85,11 @@ def main(argv=None):
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024, 2048, 4096])
     ap.add_argument("--python-driver", action="store_true",
                     help="also time the previous Python-driven W-cycle (slow)")
+    ap.add_argument("--no-fmg", action="store_true",
+                    help="skip the rows with the full-multigrid start (fmg_cycles=1)")
     args = ap.parse_args(argv)
     solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
+    solve_line_contact(M=20.0, L=5.0, n_nodes=257, fmg_cycles=1)
     out = dict(python=platform.python_version(), machine=platform.machine(),
                load_average_1min=os.getloadavg()[0], cpu_count=os.cpu_count(),
                note="CPU time per solve; the machine is shared (see load average)", cases=[])
@@ -78,8 +100,12 @@ def main(argv=None):
         solve_line_contact(M=20.0, L=5.0, n_nodes=257, solver="python")
         cases.append((100.0, 10.0, dict(viscosity="roelands", compressible=True,
                                         solver="python")))
+    if not args.no_fmg:
+        cases = [c for case in cases for c in
+                 (case, (case[0], case[1], dict(case[2], fmg_cycles=1)))]
     for M, L, kw in cases:
         rows = bench(M, L, args.sizes, args.repeats, **kw)
+        discretisation_error(rows)
         ns = [r["n_intervals"] for r in rows]
         out["cases"].append(dict(
             M=M, L=L, options=dict(kw), rows=rows,

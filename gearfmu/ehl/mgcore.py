@@ -657,6 +657,95 @@ class FlatMultigrid:
         X = self.X[self.top]
         self.start(np.sqrt(np.clip(1.0 - X ** 2, 0.0, None)), Hc)
 
+    def _substate(self, lo: int, hi: int):
+        """State tuple of the sub-hierarchy of levels lo..hi (level lo is its
+        coarsest, hi its finest); per-level arrays are views, so the compiled
+        kernels update this object's arrays."""
+        S = list(self.state())
+        sl = slice(lo, hi + 1)
+        S[12] = self.H0[sl]
+        S[13] = self.g[sl]
+        S[14] = np.ascontiguousarray(self.iarr[:, sl])
+        S[15] = self.dx[sl]
+        S[26] = self.H0old[sl]
+        return tuple(S)
+
+    def _prolong_solution(self, l: int):
+        """Start level l from the solution on level l-1: cubic (4-point,
+        Venner & Lubrecht 2000 sec. 3.x "FMG interpolation of higher order
+        than the discretisation": 2nd-order discretisation -> order >= 3)
+        interpolation of P, clipped to P >= 0; H0 carried over."""
+        Pc = self.level_P(l - 1)
+        nc = Pc.size
+        Pf = np.empty(2 * nc - 1)
+        Pf[0::2] = Pc
+        mid = 0.5 * (Pc[:-1] + Pc[1:])
+        if nc >= 4:
+            mid[1:-1] = (9.0 * (Pc[1:-2] + Pc[2:-1]) - (Pc[:-3] + Pc[3:])) / 16.0
+        Pf[1::2] = mid
+        np.clip(Pf, 0.0, None, out=Pf)
+        Pf[0] = Pf[-1] = 0.0
+        sl = self._sl(l)
+        self.P[sl] = Pf
+        self.f[sl] = 0.0
+        self.tauH[sl] = 0.0
+        self.H0[l] = self.H0[l - 1]
+        self.update_film(l)
+
+    def fmg_start(self, Hc: float, cycles_per_level: int = 1, coarse_cycles: int = 20,
+                  coarse_tol: float = 1e-4, alpha_dx: float = math.inf, alpha_eff: float = 0.0):
+        """Full multigrid start (Venner & Lubrecht 2000 ch. 3 and their EHL
+        chapters; Brandt 1984): solve on a coarse sub-hierarchy first, then
+        interpolate the solution up (:meth:`_prolong_solution`, cubic) and do
+        ``cycles_per_level`` cycles on each finer sub-hierarchy, up to (not
+        including) the finest level, which is then started from the
+        interpolated solution.
+
+        The FMG starts at the coarsest level with dX^2 <= Hc (Venner-Lubrecht
+        units; ``Hc`` the expected central film): coarser grids cannot carry
+        the film (the FAS corrections diverge at high M, docs/ehl.md).  The
+        first sub-hierarchy is that level and the next finer one, started
+        from the Hertzian pressure and iterated until the pressure change,
+        load error and scaled residual fall below ``coarse_tol`` (at most
+        ``coarse_cycles``).  Returns the number of cycles on each level."""
+        t = self.top
+        lo = 0
+        while lo < t and self.dx[lo] ** 2 > Hc:
+            lo += 1
+        first = lo + 1
+        while first < t and alpha_eff * self.dx[first] > alpha_dx:
+            first += 1
+        first = min(first, t)
+        counts = []
+        if first >= t:
+            self.hertz_start(Hc)
+            return counts
+        X = self.X[first]
+        sl = self._sl(first)
+        self.prmv[8] = Hc
+        self.f[:] = 0.0
+        self.tauH[:] = 0.0
+        self.P[sl] = np.sqrt(np.clip(1.0 - X ** 2, 0.0, None))
+        self.P[sl.start] = self.P[sl.stop - 1] = 0.0
+        self.H0[first] = 0.0
+        self.update_film(first)
+        self.H0[first] = Hc - float(np.interp(0.0, X, self.H[sl]))
+        self.update_film(first)
+        self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
+        for l in range(first, t):
+            if l > first:
+                self._prolong_solution(l)
+            ncyc = coarse_cycles if l == first else cycles_per_level
+            tol = coarse_tol if l == first else 0.0
+            hist = np.full((6, ncyc), np.nan)
+            k = _iterate(w_schedule(l - lo + 1, self.gamma), self._substate(lo, l), hist,
+                         int(ncyc), 1, tol, tol, tol, 1.0, 6 if l == first else 10 ** 6)
+            counts.append(abs(int(k)))
+            if not np.all(np.isfinite(self.level_P(l))):
+                break
+        self._prolong_solution(t)
+        return counts
+
     # -- iteration ------------------------------------------------------------
     def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
                 tol_residual=1e-6, stall_window=12, tol_film=1.0):

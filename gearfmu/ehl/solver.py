@@ -99,12 +99,25 @@ class LineContactResult:
 RELAXATION_SETTINGS = (
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
          stick=10.0),
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
+         stick=10.0, dmax=3.0),
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6),
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.3, load_mode=1, c_h0=0.1,
          stick=10.0),
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6, stick=10.0),
     dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
 )
+
+#: Stall test of the compiled solver: a setting stalls when neither the
+#: pressure change nor the scaled residual fell 3x over the last
+#: STALL_WINDOW cycles against all earlier ones (checked from 2 x
+#: STALL_WINDOW cycles on).  8 (was 12): the failing high-M cases of
+#: docs/ehl.md reach their floor within 10-15 cycles; 8 fails them about
+#: 1/3 sooner.
+STALL_WINDOW = 8
+#: stall window of the frozen-switch continuation (slow but steady
+#: convergence, e.g. Barus M = 10, L = 20: 83 cycles; 8 stopped it early)
+FROZEN_STALL_WINDOW = 12
 
 #: A relaxation setting that stalls with a relative pressure change per cycle
 #: below this value is continued with the switch frozen (``freeze`` option of
@@ -136,17 +149,24 @@ _HIST_KEYS = ("pressure_change", "load_balance", "reynolds_residual", "H_central
 
 
 def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
-                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0):
-    """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid) or a
-    Hertzian pressure; with roughness the amplitude steps of ``ramp``."""
+                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0,
+                  fmg=0):
+    """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid), a
+    full-multigrid start (``fmg`` > 0 cycles per level) or a Hertzian
+    pressure; with roughness the amplitude steps of ``ramp``."""
     solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **_flat_opts(opts))
     if rough_fn is not None:
         solver.base[:] = np.concatenate([0.5 * x ** 2 for x in solver.X])
-    if P_start is None:
+    fmg_counts = None
+    if P_start is None and fmg > 0:
+        fmg_counts = solver.fmg_start(Hc_guess, cycles_per_level=fmg)
+    elif P_start is None:
         solver.hertz_start(Hc_guess)
     else:
         solver.start(P_start, Hc_guess)
     hist = {k_: [] for k_ in _HIST_KEYS}
+    if fmg_counts is not None:
+        hist["fmg_cycles_per_level"] = list(fmg_counts)
     stages = list(ramp) if rough_fn is not None else [None]
     if rough_fn is not None and P_start is None:
         stages = [0.0] + stages
@@ -157,7 +177,8 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
             solver.set_roughness_scale(a)
         converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
                                           tol_pressure=tol_pressure, tol_load=tol_load,
-                                          tol_residual=tol_residual, tol_film=tol_film)
+                                          tol_residual=tol_residual, tol_film=tol_film,
+                                          stall_window=STALL_WINDOW)
         it += nc
         for k_ in _HIST_KEYS:
             hist[k_].extend(h[k_])
@@ -168,7 +189,8 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
             solver.opts["freeze"] = 1
             converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=1,
                                               tol_pressure=tol_pressure, tol_load=tol_load,
-                                              tol_residual=tol_residual, tol_film=tol_film)
+                                              tol_residual=tol_residual, tol_film=tol_film,
+                                              stall_window=FROZEN_STALL_WINDOW)
             solver.opts["freeze"] = 0
             hist["frozen_switch_from_cycle"] = [it]
             it += nc
@@ -403,6 +425,13 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       :mod:`.mgcore`) or "python" (the previous driver, :mod:`.multigrid`).
     * ``tol_film``: also require the relative change per cycle of the
       central and minimum film below this (default 1: off; compiled solver).
+    * ``fmg_cycles`` (compiled solver, smooth solves without ``initial``):
+      > 0 starts with a full-multigrid pass (:meth:`.mgcore.FlatMultigrid.fmg_start`:
+      coarse problem solved first on the coarsest grid with dX^2 <= H_c and the
+      next finer one, cubic interpolation up, ``fmg_cycles`` cycles per level)
+      instead of the Hertzian pressure; ``residuals["fmg_cycles_per_level"]``.
+      The convergence test after it is the same.  With ``solver="python"`` the
+      previous driver's FMG is used.
 
     Robustness (compiled solver, docs/ehl.md): the relaxation settings of
     :data:`RELAXATION_SETTINGS` are tried in turn; a setting that stalls
@@ -497,7 +526,10 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
 
     if solver not in ("compiled", "python"):
         raise EHLInputError(f"solver={solver!r}: must be 'compiled' or 'python'")
-    if solver == "python" or fmg_cycles > 0:
+    fmg_cycles = int(fmg_cycles)
+    if fmg_cycles < 0:
+        raise EHLInputError(f"fmg_cycles={fmg_cycles!r}: must be >= 0")
+    if solver == "python":
         table = PYTHON_RELAXATION_SETTINGS
     else:
         table = RELAXATION_SETTINGS
@@ -517,11 +549,12 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     # chosen here, one refined from the effective pressure-viscosity
     # coefficient (see refined_grid_intervals)
     grids = [(n_nodes, n_coarse, n_levels)]
-    compiled = solver == "compiled" and fmg_cycles == 0
+    compiled = solver == "compiled"
     if compiled and not user_grid and rfun is None:
         n_ref = refined_grid_intervals(prm, x_out - x_in, n_nodes - 1)
         if n_ref is not None:
             grids.append(choose_grid(Hc_guess, x_out - x_in, n_ref + 1, n_coarse))
+    collapsed = None
     for k_grid, (n_nodes, n_coarse, n_levels) in enumerate(grids):
         if initial is not None:
             Xg = np.linspace(x_in, x_out, n_nodes)
@@ -535,11 +568,21 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                 solver_obj, hist, converged, it = _iterate_flat(
                     prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
                     P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
-                    tol_load, tol_residual, tuple(roughness_ramp), tol_film)
+                    tol_load, tol_residual, tuple(roughness_ramp), tol_film,
+                    fmg=fmg_cycles if rough_fn is None else 0)
             if converged:
                 break
+            # remember the last attempt that ended with a collapsed film (h <= 0):
+            # if no attempt converges, that is reported (FilmCollapseError) rather
+            # than the stall of whichever setting happened to run last
+            H_end = (solver_obj.level_H() if isinstance(solver_obj, FlatMultigrid)
+                     else solver_obj.levels[-1].H)
+            if np.all(np.isfinite(H_end)) and float(np.min(H_end)) <= 0.0:
+                collapsed = (solver_obj, hist, opts, k_att, k_grid, it)
         if converged:
             break
+    if not converged and collapsed is not None:
+        solver_obj, hist, opts, k_att, k_grid, it = collapsed
     if len(grids) > 1:
         hist["grid_refined"] = [float(k_grid)]
     hist["settings"] = opts
