@@ -68,6 +68,11 @@ DEFAULT_FILM_POSITION_NODES = 9
 #: ratio of neighbouring load nodes of the film grid (geometric, anchored at the scene's
 #: nominal line load) when no load range is known
 FILM_LOAD_NODE_RATIO = 2.0
+#: a stalled rough grid node is replaced by linear interpolation in position of the
+#: rough/smooth ratio between the nearest converged nodes of the same slice and load
+#: column when they are at most this many node spacings apart (an end node: the adjacent
+#: node's ratio); otherwise the policy (smooth film) applies (fill_stalled_ratio)
+STALL_FILL_MAX_SPAN = 3
 #: rough load nodes over a known load range (ContactEnvironment.film_load_range_N_per_m,
 #: set by the table builder: the load floor to the largest static slice load)
 FILM_LOAD_NODES = 3
@@ -306,8 +311,11 @@ class RoughFilmGrid:
     * smooth stiffness: log k_s cubic spline in s, cubic Lagrange in log w (4 nodes);
     * rough/smooth ratio r = k_r/k_s per slice: piecewise linear in s and in log w.
 
-    k_rough = k_s * r.  A failed node (stall or collapse) makes every request that uses it
-    (non-zero weight) a failure, which the caller's policy handles.  The grid is kept on
+    k_rough = k_s * r.  A stalled node takes the ratio interpolated from its converged
+    neighbours in position (:func:`fill_stalled_ratio`; counted in :meth:`summary`); a node
+    still failed (collapse, smooth failure, stall without close converged neighbours) makes
+    every request that uses it (non-zero weight) a failure, which the caller's policy
+    handles.  The grid is kept on
     the environment and reused by all load-iteration passes and torque rows."""
 
     def __init__(self, env: "ContactEnvironment", K: int):
@@ -331,6 +339,7 @@ class RoughFilmGrid:
         self.mixed: Dict[int, np.ndarray] = {}      # j -> (K,) fractal K_n
         self.solves = 0
         self.rough_solves = 0
+        self.stalls_interpolated: List[tuple] = []   # (s_m, slice, w_N_per_m) of filled nodes
         self.key = _grid_key(env)
 
     def w_node(self, j) -> np.ndarray:
@@ -382,7 +391,7 @@ class RoughFilmGrid:
         for (j, k, sl), r in zip(where, res):
             sm, outs = r[0]
             self.solves += 1 + len(outs)
-            self.rough_solves += len(outs)
+            self.rough_solves += sum(1 for o in outs if not o.status.startswith("smooth "))
             if j in smooth_new:
                 self.smooth[j][k] = sm.k_N_per_m if sm.status == "ok" else np.nan
                 self.smooth_status[j][k] = sm.status
@@ -390,6 +399,15 @@ class RoughFilmGrid:
                 ok = o.status == "ok" and sm.status == "ok"
                 self.ratio[j][n, k] = o.k_N_per_m / sm.k_N_per_m if ok else np.nan
                 self.status[j][n, k] = o.status if sm.status == "ok" else f"smooth {sm.status}"
+        for j in rough_new:  # stalled nodes: ratio from the converged neighbours in position
+            for n in range(self.NS):
+                stalled = self.status[j][n] == "stall"
+                if np.any(stalled):
+                    row, filled = fill_stalled_ratio(self.s_nodes, self.ratio[j][n], stalled)
+                    self.ratio[j][n] = row
+                    for k in np.nonzero(filled)[0]:
+                        self.status[j][n, k] = "stall_interpolated"
+                        self.stalls_interpolated.append((float(self.s_nodes[k]), int(n), float(self.w_node(j))))
 
     def ensure_mixed(self, env, js):
         """Seed 001 K_n at the grid nodes of the columns ``js`` (in-process)."""
@@ -518,8 +536,54 @@ class RoughFilmGrid:
                 "rough_load_nodes_N_per_m": [float(self.w_node(j)) for j in sorted(self.ratio)],
                 "film_solves": self.solves, "rough_film_solves": self.rough_solves,
                 "failed_rough_nodes": bad,
+                "stalled_rough_nodes_interpolated": len(self.stalls_interpolated),
+                "stalled_rough_nodes_interpolated_first": [
+                    {"s_m": a, "slice": b, "w_N_per_m": c} for a, b, c in self.stalls_interpolated[:20]],
+                "stall_rule": "a stalled rough node takes the rough/smooth ratio interpolated linearly in "
+                              "position between the nearest converged nodes of its slice and load column "
+                              f"(at most {STALL_FILL_MAX_SPAN} node spacings apart; an end node the adjacent "
+                              "node's); otherwise the policy's smooth film",
                 "interpolation": "smooth k: cubic spline in s, cubic Lagrange in log w; rough/smooth "
                                  "ratio per slice: linear in s and log w"}
+
+
+def fill_stalled_ratio(s_nodes, ratio, stalled, max_span: int = STALL_FILL_MAX_SPAN):
+    """Stall replacement rule of the film grid (CHOICE, docs/ehl_mesh.md "Speed").
+
+    ``ratio``: rough/smooth film-stiffness ratios of one slice and load column at the
+    position nodes ``s_nodes`` (m, uniform), NaN where not converged; ``stalled``: bool
+    mask of the nodes whose rough solve stalled (collapses and smooth failures are not
+    replaced: a collapse is physics, not a solver limit).  A stalled interior node gets
+    the linear interpolation in s between the nearest converged nodes on both sides when
+    they are at most ``max_span`` node spacings apart; a stalled end node (no converged
+    node on one side) the ratio of its converged neighbour.  Reason: between the nodes
+    the grid already uses this piecewise-linear trend of the ratio (the position-to-
+    position roughness effect is not resolved, docs/ehl_mesh.md), so the stalled node
+    gets the value the grid would give there without it, instead of ratio 1 (the smooth
+    film), which is biased (a converged level-2 rough film is ~2 % stiffer than smooth
+    on average).  Returns (new ratio row, bool mask of filled nodes)."""
+    s = np.asarray(s_nodes, float)
+    r = np.array(ratio, dtype=float)
+    st = np.asarray(stalled, bool)
+    if r.shape != s.shape or st.shape != s.shape:
+        raise ContactModelError(f"fill_stalled_ratio: ratio {r.shape} and stalled {st.shape} must have "
+                                f"the shape of s_nodes {s.shape}")
+    good = np.nonzero(np.isfinite(r))[0]
+    filled = np.zeros(s.shape, bool)
+    out = r.copy()
+    for k in np.nonzero(st & ~np.isfinite(r))[0]:
+        lo = good[good < k]
+        hi = good[good > k]
+        if lo.size and hi.size:
+            a, b = lo[-1], hi[0]
+            if b - a <= max_span:
+                f = (s[k] - s[a]) / (s[b] - s[a])
+                out[k] = (1.0 - f) * r[a] + f * r[b]
+                filled[k] = True
+        elif (lo.size and k - lo[-1] == 1 and k == s.size - 1) or (hi.size and hi[0] - k == 1 and k == 0):
+            out[k] = r[lo[-1]] if lo.size else r[hi[0]]
+            filled[k] = True
+    return out, filled
 
 
 def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:

@@ -322,3 +322,46 @@ def test_scene_roughness_keys():
     with pytest.raises(SceneError, match="roughness.level"):
         load_scene(base + "\n[roughness]\nlevel = 5\n")
     assert load_scene(base).roughness is None
+
+
+def test_stalled_grid_node_takes_the_linear_trend_of_its_converged_neighbours():
+    """Stall replacement rule of the film grid (fill_stalled_ratio, docs/ehl_mesh.md): reference
+    = the ratio written down by hand on a tiny row.  Converged nodes follow r(s) = 1.02 - 3 s
+    (s in m), so an interior stalled node with converged nodes on both sides within 3 spacings
+    gets exactly 1.02 - 3 s_k; an end node the value of its converged neighbour; a run of
+    stalled nodes wider than 3 spacings, a collapse (not a solver limit) and an end node whose
+    neighbour also failed stay NaN (the policy's smooth film then applies)."""
+    from gearfmu.contact_models import fill_stalled_ratio
+
+    s = np.linspace(0.01, 0.02, 11)                       # spacing 1 mm
+    r = 1.02 - 3.0 * s
+    expected = r.copy()
+    stall = np.zeros(11, bool)
+    stall[[0, 3, 4, 7, 8, 9]] = True                       # 0: end; 3-4: gap of 3; 7-9: gap of 4
+    collapse = 5
+    r_in = r.copy()
+    r_in[stall] = np.nan
+    r_in[collapse] = np.nan
+    # node 5 collapsed -> 3-4 now lie between converged 2 and 6 (4 spacings): not filled
+    out, filled = fill_stalled_ratio(s, r_in, stall)
+    assert list(np.nonzero(filled)[0]) == [0]
+    assert out[0] == pytest.approx(expected[1], abs=1e-15)
+    assert np.all(np.isnan(out[[3, 4, 5, 7, 8, 9]]))
+    # without the collapse: 3 and 4 between converged 2 and 5 (3 spacings) -> the hand values
+    r_in[collapse] = r[collapse]
+    out, filled = fill_stalled_ratio(s, r_in, stall)
+    assert list(np.nonzero(filled)[0]) == [0, 3, 4]
+    assert out[3] == pytest.approx(1.02 - 3.0 * 0.013, abs=1e-12)
+    assert out[4] == pytest.approx(1.02 - 3.0 * 0.014, abs=1e-12)
+    assert np.all(np.isnan(out[[7, 8, 9]]))                # 6 and 10 are 4 spacings apart
+    assert np.array_equal(out[~stall], r_in[~stall])      # converged nodes untouched
+    # the last two nodes stalled: the end node's neighbour failed and node 9 has no converged
+    # node on its right, so neither is filled
+    r2 = r.copy()
+    r2[[9, 10]] = np.nan
+    st2 = np.zeros(11, bool)
+    st2[[9, 10]] = True
+    out2, filled2 = fill_stalled_ratio(s, r2, st2)
+    assert not np.any(filled2) and np.all(np.isnan(out2[[9, 10]]))
+    with pytest.raises(ContactModelError, match="shape"):
+        fill_stalled_ratio(s, r[:5], stall)
