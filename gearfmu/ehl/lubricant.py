@@ -123,9 +123,11 @@ def tait_volume_ratio(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_P
 
         V/V0 = 1 - ln[1 + p (1 + B0')/B0] / (1 + B0')
 
-    (the "Tait" form of Hayward 1967, Br. J. Appl. Phys. 18, 965, and Bair
-    2007 with K0 = B0, K0' = B0'; :func:`bulk_modulus_Pa` is -V dp/dV of this,
-    which the tests check by differentiating it numerically).
+    (the equation usually called Tait's -- Hayward 1967, Br. J. Appl. Phys. 18,
+    965, shows it to be a later misquotation of Tait's original, equivalent to
+    it near p = 0 -- in the form Bair 2007 uses with K0 = B0, K0' = B0';
+    :func:`bulk_modulus_Pa` is -V dp/dV of this, which the tests check by
+    differentiating it numerically).
     """
     p = np.asarray(p_Pa, dtype=float)
     if not np.all(np.isfinite(p)) or np.any(p < 0.0):
