@@ -64,13 +64,13 @@ def bench(M, L, sizes, repeats, **kw):
 
 
 def discretisation_error(rows):
-    """Richardson estimate of the relative discretisation error of H_c per
-    size: |H(n) - H(2n)| / 3 / H(2n) (second order); None for the finest."""
+    """Richardson estimate (second order) of the relative discretisation error
+    of H_c on each size n: |H(n) - H(n/2)| / 3 / H(n); None for the coarsest."""
     by_n = {r["n_intervals"]: r["H_central_moes"] for r in rows}
     for r in rows:
-        h2 = by_n.get(2 * r["n_intervals"])
-        r["discretisation_error_estimate"] = (None if h2 is None else
-                                              abs(r["H_central_moes"] - h2) / 3.0 / h2)
+        h = by_n.get(r["n_intervals"] // 2)
+        hn = r["H_central_moes"]
+        r["discretisation_error_estimate"] = (None if h is None else abs(hn - h) / 3.0 / hn)
 
 
 def fitted_exponent(ns, costs):
