@@ -754,8 +754,12 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
     Each slice t is the whole table build of :func:`precompute_tables` with the
     contact environment's eta0 replaced by eta0(t) of :func:`oil_axis_eta0_Pas`
     (the lubricated contact model's film / contact stiffness rebuilt at that
-    viscosity, load sharing iterated again); alpha and the density are kept
-    (CHOICE, docs/thermal.md).  The gears' state: for "oil" the ``[thermal]``
+    viscosity, load sharing iterated again); alpha follows ``thermal.oil_alpha``:
+    "roelands" (default) alpha(t) = alpha_ref (ln eta0(t) + 9.67)/(ln eta0_ref + 9.67)
+    with Roelands' Z constant (Roelands 1966;
+    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`, the scene's
+    alpha holding at the lubricant temperature), "constant" the scene's alpha at
+    every t; the density is kept (CHOICE, docs/thermal.md).  The gears' state: for "oil" the ``[thermal]``
     pinion/gear temperatures or profiles (standard when absent) at every node;
     for "bulk_and_oil" both gears uniformly at t (seed 004 eq 27-28).  The
     slice at the lubricant's own temperature is the scene's table bit for bit;
@@ -779,6 +783,14 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
     lub = getattr(thermal, "lubricant", None)
     axis = np.asarray(thermal.temperature_axis_C, dtype=float)
     eta = oil_axis_eta0_Pas(lub, axis)
+    if getattr(thermal, "oil_alpha", "roelands") == "roelands":
+        from .ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
+
+        alpha = np.asarray(roelands_alpha_at_viscosity_Pa_inv(contact_env.alpha_Pa_inv, contact_env.eta0_Pas, eta),
+                           dtype=float) * np.ones_like(eta)
+        alpha[eta == contact_env.eta0_Pas] = contact_env.alpha_Pa_inv   # the lubricant's own temperature: exact
+    else:
+        alpha = np.full_like(eta, contact_env.alpha_Pa_inv)
     t0 = float(thermal.standard_temperature_C)
     if quantity == "oil":  # the gears keep the scene's state at every oil temperature
         gear_thermal = replace(thermal, temperature_axis_C=(), axis_quantity="bulk", lubricant=None)
@@ -794,11 +806,14 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
         else:
             tab = precompute_tables(pair, opts, points_per_mesh=points_per_mesh, torque_axis_Nm=tables.torque_Nm,
                                     nominal_torque_Nm=nominal_torque_Nm, slots=slots, progress=progress,
-                                    contact_env=replace(contact_env, eta0_Pas=float(eta[a])), thermal=gear_thermal)
+                                    contact_env=replace(contact_env, eta0_Pas=float(eta[a]),
+                                                        alpha_Pa_inv=float(alpha[a])),
+                                    thermal=gear_thermal)
         if not np.array_equal(tab.torque_Nm, tables.torque_Nm):
             raise PrecomputeInputError(f"temperature axis: the torque axis at {t:g} degC differs")
         c = tab.provenance.get("contact", {})
-        contact.append({"temperature_C": float(t), "eta0_Pas": float(eta[a]), "solves": c.get("solves"),
+        contact.append({"temperature_C": float(t), "eta0_Pas": float(eta[a]), "alpha_Pa_inv": float(alpha[a]),
+                        "solves": c.get("solves"),
                         "film_failures": c.get("film_failures", 0)})
         slices.append(replace(tab, provenance={}))
     out = stack_temperatures(slices, axis, temperature_reference_C=float(lub.temperature_C))
@@ -807,7 +822,10 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
         "temperature_axis_C": axis.tolist(), "axis_quantity": quantity, "input": TEMPERATURE_INPUTS[quantity],
         "standard_temperature_C": t0, "flank_law": thermal.flank_law,
         "oil": {"law": "Walther (ASTM D341) through kinematic_viscosity_40C/100C, eta0 = rho nu, rho constant",
-                "eta0_Pas": eta.tolist(), "alpha_Pa_inv": contact_env.alpha_Pa_inv, "alpha": "constant (CHOICE)",
+                "eta0_Pas": eta.tolist(), "alpha_Pa_inv": alpha.tolist(),
+                "alpha": ("Roelands 1966, Z constant: alpha_ref (ln eta0 + 9.67)/(ln eta0_ref + 9.67)"
+                          if getattr(thermal, "oil_alpha", "roelands") == "roelands"
+                          else "constant: the [lubricant] value (CHOICE)"),
                 "reference_temperature_C": float(lub.temperature_C), "slices": contact},
         "gears": ("both at the axis temperature (seed 004 eq 5-28)" if quantity == "bulk_and_oil"
                   else _state_description(thermal_state_from_scene(thermal))),

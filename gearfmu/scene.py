@@ -214,6 +214,10 @@ class ThermalOptions:
     at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
     temperatures and these keys must be absent; with an "oil" axis they give
     the gears' state at every oil temperature (docs/thermal.md).
+    ``oil_alpha``: the pressure-viscosity coefficient along an oil axis:
+    "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T),
+    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`) or
+    "constant" (the ``[lubricant]`` value at every temperature).
     """
 
     standard_temperature_C: float = 30.0
@@ -226,6 +230,7 @@ class ThermalOptions:
     temperature_axis_C: Tuple[float, ...] = ()
     flank_law: str = "radial_tangential"
     axis_quantity: str = "bulk"
+    oil_alpha: str = "roelands"
     lubricant: Optional["Lubricant"] = None
 
 
@@ -478,6 +483,8 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _e("axis_quantity", THERMAL_AXIS_QUANTITIES, "bulk", "what temperature_axis_C is: bulk temperature "
            "of both gears (FMU input bulk_temperature), oil temperature (eta0 of a lubricated contact model; "
            "input oil_temperature) or both at one temperature (input gearbox_temperature)"),
+        _e("oil_alpha", ("roelands", "constant"), "roelands", "pressure-viscosity coefficient along an oil "
+           "axis: Roelands (constant Z, alpha from eta0(T)) or the [lubricant] value at every temperature"),
     ),
     # operating envelope and accuracy target of the fidelity planner (gearfmu/envelope.py, docs/plan.md)
     "envelope": (

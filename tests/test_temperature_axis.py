@@ -417,7 +417,11 @@ def _oil_tables(text):
 
 @pytest.fixture(scope="module")
 def oil():
-    sc, tab = _oil_tables(OIL_TEXT + f"\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = {list(OIL_AXIS)}\n")
+    # alpha held at the [lubricant] value along the axis (oil_alpha = "constant"), so that the
+    # 80 degC slice can be compared bit for bit with the scene written at 80 degC; the default
+    # (Roelands alpha(T)) has its own test below
+    sc, tab = _oil_tables(OIL_TEXT + f"\n[thermal]\naxis_quantity = \"oil\"\noil_alpha = \"constant\"\n"
+                                     f"temperature_axis_C = {list(OIL_AXIS)}\n")
     # the table built at one oil temperature (no axis): the scene's [lubricant] temperature_C = 80
     _, single80 = _oil_tables(OIL_TEXT.replace("temperature_C = 40.0", "temperature_C = 80.0"))
     return sc, tab, single80
@@ -540,7 +544,8 @@ def test_bulk_and_oil_axis_is_gears_and_oil_at_one_temperature(oil):
     with the oil at 80 degC AND both gears at 80 degC (seed 004 eq 27-28 on top of the film);
     FMU input gearbox_temperature."""
     # standard temperature 40 degC = the oil's: the 40 degC node is the scene's table (no rebuild)
-    text = OIL_TEXT + ("\n[thermal]\naxis_quantity = \"bulk_and_oil\"\nstandard_temperature_C = 40.0\n"
+    text = OIL_TEXT + ("\n[thermal]\naxis_quantity = \"bulk_and_oil\"\noil_alpha = \"constant\"\n"
+                       "standard_temperature_C = 40.0\n"
                        "temperature_axis_C = [40.0, 80.0]\n")
     _, tab = _oil_tables(text)
     _, single = _oil_tables(OIL_TEXT.replace("temperature_C = 40.0", "temperature_C = 80.0")
@@ -586,3 +591,27 @@ def test_automatic_max_step_of_a_temperature_axis_scene(seed004):
     w = sc.operating.speed_rad_s
     per = [choose_max_step_s(hot.at_temperature(t), w) for t in (10.0, 30.0, 70.0)]
     assert max_step_for(sc, hot) == min(per)
+
+
+def test_oil_axis_default_alpha_follows_roelands(oil):
+    """Default oil_alpha = "roelands": along the oil axis the pressure-viscosity coefficient
+    follows Roelands (1966) with Z constant, alpha(T) = Z (ln eta0(T) + 9.67) / p0,
+    p0 = 1.96e8 Pa, Z fixed by the [lubricant] alpha at the lubricant temperature (written out
+    here, not taken from gearfmu).  The 80 degC slice equals the table of the scene written at
+    80 degC with that alpha (an independent precompute run; 1e-12: the scene reader scales
+    1/GPa to 1/Pa), and the film at 80 degC is thinner than with a constant alpha, so the
+    mesh stiffness is higher (seed 000 eq 8: k_film = A B / h)."""
+    sc, tab = _oil_tables(OIL_TEXT + f"\n[thermal]\naxis_quantity = \"oil\"\ntemperature_axis_C = {list(OIL_AXIS)}\n")
+    _, const, single80_const = oil
+    eta = tab.provenance["thermal"]["oil"]["eta0_Pas"]
+    z = 20e-9 * 1.96e8 / (math.log(eta[0]) + 9.67)
+    alpha80 = z * (math.log(eta[1]) + 9.67) / 1.96e8
+    assert tab.provenance["thermal"]["oil"]["alpha_Pa_inv"] == pytest.approx([20e-9, alpha80], rel=1e-12)
+    assert 14e-9 < alpha80 < 18e-9                                          # falls with temperature
+    _, single80 = _oil_tables(OIL_TEXT.replace("temperature_C = 40.0", "temperature_C = 80.0")
+                              .replace("pressure_viscosity_GPa_inv = 20.0",
+                                       f"pressure_viscosity_GPa_inv = {alpha80 * 1e9!r}"))
+    at80 = tab.at_temperature(80.0)
+    np.testing.assert_allclose(at80.k_N_per_m, single80.k_N_per_m, rtol=1e-12)
+    assert np.array_equal(tab.at_temperature(40.0).k_N_per_m, const.at_temperature(40.0).k_N_per_m)
+    assert np.mean(at80.k_total_N_per_m()) > np.mean(single80_const.k_total_N_per_m())
