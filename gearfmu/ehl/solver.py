@@ -91,11 +91,14 @@ class LineContactResult:
 
 
 #: Relaxation settings tried in turn by the compiled solver (see docs/ehl.md):
-#: the first (old default) converges for isoviscous and moderately piezoviscous
-#: cases; the second (Venner & Lubrecht's arrangement: switch 0.3, GS/Jacobi
-#: under-relaxation 0.6/0.3, load balance on the coarsest grid, switching
-#: hysteresis) for strongly piezoviscous high-M cases; the others are
-#: fallbacks found by numerical experiment (grid over M, L in docs/ehl.md).
+#: (0) Venner & Lubrecht's arrangement (switch 0.3, GS/Jacobi under-relaxation
+#: 0.6/0.5, load balance on the coarsest grid, switching hysteresis);
+#: (1)-(4) the same with the trust region dmax = 3 (instead of 0.3: the
+#: clipped updates at the pressure spike kept residual floors) and GS/Jacobi
+#: 0.6/0.5, 0.4/0.2, 0.3/0.15, 0.3/0.1 -- the smaller Jacobi under-relaxation
+#: of the nodes upstream of the spike made the high-M piezoviscous corner
+#: converge (measured over the (M, L) tables); (5)-(8) older fallbacks found
+#: by numerical experiment.
 RELAXATION_SETTINGS = (
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
          stick=10.0),
