@@ -15,8 +15,10 @@ machine.
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
                                    [--python-driver] [--no-fmg]
 
-Each case is timed with the default Hertzian start and with the full-multigrid
-start (``fmg_cycles=1``) in the same run.
+Each case is timed with the default Hertzian start, with the full-multigrid
+start (``fmg_cycles=1``) and with the FMG start plus the stop at the estimated
+discretisation error (``stop_at_discretisation=0.1``) in the same run;
+``hc_rel_diff_vs_default`` is the central film's distance from the default row.
 """
 from __future__ import annotations
 
@@ -49,6 +51,8 @@ def bench(M, L, sizes, repeats, **kw):
         hc = r.residuals["H_central"]
         rows.append(dict(n_intervals=n, solver=kw.get("solver", "compiled"),
                          fmg_cycles=kw.get("fmg_cycles", 0),
+                         stop_at_discretisation=kw.get("stop_at_discretisation", 0.0),
+                         discretisation_stop=r.residuals.get("stopped_at_discretisation"),
                          fmg_cycles_per_level=r.residuals.get("fmg_cycles_per_level"),
                          levels=r.grid_levels, cycles=r.iterations,
                          attempt=r.residuals["attempt"],
@@ -102,7 +106,8 @@ def main(argv=None):
                                         solver="python")))
     if not args.no_fmg:
         cases = [c for case in cases for c in
-                 (case, (case[0], case[1], dict(case[2], fmg_cycles=1)))]
+                 (case, (case[0], case[1], dict(case[2], fmg_cycles=1)),
+                  (case[0], case[1], dict(case[2], fmg_cycles=1, stop_at_discretisation=0.1)))]
     for M, L, kw in cases:
         rows = bench(M, L, args.sizes, args.repeats, **kw)
         discretisation_error(rows)
@@ -112,6 +117,18 @@ def main(argv=None):
             cost_exponent_per_solve=fitted_exponent(ns, [r["cpu_time_ms"] for r in rows]),
             cost_exponent_per_cycle=fitted_exponent(ns, [r["cpu_ms_per_cycle"] for r in rows]),
             n_log_n_exponent_reference=fitted_exponent(ns, [n * math.log2(n) for n in ns])))
+    # H_c of every row against the default (Hertzian start, tight tolerances)
+    # row of the same case and size: the algebraic error left by the FMG rows
+    ref = {}
+    for c in out["cases"]:
+        if not c["options"].get("fmg_cycles"):
+            ref[(c["M"], c["L"], c["options"].get("viscosity"))] = {
+                r["n_intervals"]: r["H_central_moes"] for r in c["rows"]}
+    for c in out["cases"]:
+        base = ref.get((c["M"], c["L"], c["options"].get("viscosity")), {})
+        for r in c["rows"]:
+            h = base.get(r["n_intervals"])
+            r["hc_rel_diff_vs_default"] = None if h is None else abs(r["H_central_moes"] / h - 1)
     out["load_average_1min_end"] = os.getloadavg()[0]
     # warm start along 8 neighbouring loads (a meshing-position sweep)
     kw = dict(R_m=0.02, E_Pa=2.26e11, u_m_s=5.0, eta0_Pas=0.04, alpha_Pa_inv=2.2e-8)

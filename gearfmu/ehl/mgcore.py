@@ -384,14 +384,15 @@ def _scaled_residual(l, S, order2, zero_f):
 
 @njit(cache=True)
 def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
-             stall_window):
+             stall_window, tol_d):
     """Cycles until converged (returns +cycles) or stalled/failed (-cycles).
 
     hist[:, k] = (pressure change, load error, scaled residual, central film,
     minimum film, relative film change) of cycle k (films in Venner-Lubrecht
     units, central = node at X = 0); converged when the first three and the
     relative change of the central and minimum films are below tol_p, tol_w,
-    tol_r, tol_f."""
+    tol_r, tol_f -- or, with ``tol_d`` > 0, when the relative film change and
+    the load error are both below tol_d (stop at the discretisation error)."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     nl = iarr.shape[1]
@@ -465,7 +466,8 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
         hist[5, cyc] = dh
         if not (math.isfinite(dP) and math.isfinite(dW) and math.isfinite(res)):
             return -(cyc + 1)
-        if cyc + 1 >= min_cycles and dP < tol_p and dW < tol_w and res < tol_r and dh < tol_f:
+        if cyc + 1 >= min_cycles and ((dP < tol_p and dW < tol_w and res < tol_r and dh < tol_f)
+                                      or (dh < tol_d and dW < tol_d)):
             return cyc + 1
         if cyc + 1 >= 2 * stall_window:
             # stall: neither the change nor the residual fell 3x in the last window
@@ -699,7 +701,9 @@ class FlatMultigrid:
         interpolate the solution up (:meth:`_prolong_solution`, cubic) and do
         ``cycles_per_level`` cycles on each finer sub-hierarchy, up to (not
         including) the finest level, which is then started from the
-        interpolated solution.
+        interpolated solution.  ``self.fmg_hc``: central film (Venner-Lubrecht
+        units) on each FMG level after its cycles (for a Richardson estimate of
+        the discretisation error).
 
         The FMG starts at the coarsest level with dX^2 <= Hc (Venner-Lubrecht
         units; ``Hc`` the expected central film): coarser grids cannot carry
@@ -709,6 +713,7 @@ class FlatMultigrid:
         load error and scaled residual fall below ``coarse_tol`` (at most
         ``coarse_cycles``).  Returns the number of cycles on each level."""
         t = self.top
+        self.fmg_hc = []
         lo = 0
         while lo < t and self.dx[lo] ** 2 > Hc:
             lo += 1
@@ -739,8 +744,10 @@ class FlatMultigrid:
             tol = coarse_tol if l == first else 0.0
             hist = np.full((6, ncyc), np.nan)
             k = _iterate(w_schedule(l - lo + 1, self.gamma), self._substate(lo, l), hist,
-                         int(ncyc), 1, tol, tol, tol, 1.0, 6 if l == first else 10 ** 6)
+                         int(ncyc), 1, tol, tol, tol, 1.0, 6 if l == first else 10 ** 6, 0.0)
             counts.append(abs(int(k)))
+            Xl = self.X[l]
+            self.fmg_hc.append(float(np.interp(0.0, Xl, self.level_H(l))))
             if not np.all(np.isfinite(self.level_P(l))):
                 break
         self._prolong_solution(t)
@@ -748,13 +755,15 @@ class FlatMultigrid:
 
     # -- iteration ------------------------------------------------------------
     def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
-                tol_residual=1e-6, stall_window=12, tol_film=1.0):
-        """Compiled W-cycles; returns (converged, cycles, history dict)."""
+                tol_residual=1e-6, stall_window=12, tol_film=1.0, tol_discretisation=0.0):
+        """Compiled W-cycles; returns (converged, cycles, history dict).
+        ``tol_discretisation`` > 0: also stop when the relative film change per
+        cycle and the load error are below it."""
         hist = np.full((6, max_cycles), np.nan)
         self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
         k = _iterate(self.sched, self.state(), hist, int(max_cycles), int(min_cycles),
                      float(tol_pressure), float(tol_load), float(tol_residual),
-                     float(tol_film), int(stall_window))
+                     float(tol_film), int(stall_window), float(tol_discretisation))
         nc = abs(int(k))
         h = {"pressure_change": hist[0, :nc].tolist(), "load_balance": hist[1, :nc].tolist(),
              "reynolds_residual": hist[2, :nc].tolist(), "H_central": hist[3, :nc].tolist(),

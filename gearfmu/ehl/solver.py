@@ -159,7 +159,7 @@ _HIST_KEYS = ("pressure_change", "load_balance", "reynolds_residual", "H_central
 
 def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
                   min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0,
-                  fmg=0):
+                  fmg=0, stop_at_discretisation=0.0):
     """Compiled W-cycles (:mod:`.mgcore`) from ``P_start`` (finest grid), a
     full-multigrid start (``fmg`` > 0 cycles per level) or a Hertzian
     pressure; with roughness the amplitude steps of ``ramp``."""
@@ -167,6 +167,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
     if rough_fn is not None:
         solver.base[:] = np.concatenate([0.5 * x ** 2 for x in solver.X])
     fmg_counts = None
+    tol_disc = 0.0
     if P_start is None and fmg > 0:
         fmg_counts = solver.fmg_start(Hc_guess, cycles_per_level=fmg)
     elif P_start is None:
@@ -176,6 +177,15 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
     hist = {k_: [] for k_ in _HIST_KEYS}
     if fmg_counts is not None:
         hist["fmg_cycles_per_level"] = list(fmg_counts)
+        hc = solver.fmg_hc
+        if stop_at_discretisation > 0.0 and len(hc) >= 2 and hc[-1] > 0.0:
+            # Richardson (second order): error of the last FMG level
+            # |H_l - H_(l-1)| / 3, of the finest grid a quarter of that; stop when
+            # the film change per cycle and the load error are below
+            # stop_at_discretisation times that estimate (docs/ehl.md)
+            e_top = abs(hc[-1] - hc[-2]) / 3.0 / hc[-1] / 4.0
+            tol_disc = max(stop_at_discretisation * e_top, 1e-8)
+            hist["stopped_at_discretisation"] = [e_top, tol_disc]
     stages = list(ramp) if rough_fn is not None else [None]
     if rough_fn is not None and P_start is None:
         stages = [0.0] + stages
@@ -187,7 +197,8 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
                                           tol_pressure=tol_pressure, tol_load=tol_load,
                                           tol_residual=tol_residual, tol_film=tol_film,
-                                          stall_window=STALL_WINDOW)
+                                          stall_window=STALL_WINDOW,
+                                          tol_discretisation=tol_disc)
         it += nc
         for k_ in _HIST_KEYS:
             hist[k_].extend(h[k_])
@@ -392,7 +403,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        fmg_cycles: int = 0, roughness_ramp=(1.0,),
                        initial: Optional["LineContactResult"] = None,
                        roughness_min_wavelength_dX: float = 8.0,
-                       solver: str = "compiled",
+                       solver: str = "compiled", stop_at_discretisation: float = 0.0,
                        **multigrid_options) -> LineContactResult:
     """Solve the steady isothermal line-contact EHL problem (seed 000 eq 2-7).
 
@@ -441,6 +452,14 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       instead of the Hertzian pressure; ``residuals["fmg_cycles_per_level"]``.
       The convergence test after it is the same.  With ``solver="python"`` the
       previous driver's FMG is used.
+    * ``stop_at_discretisation`` (with ``fmg_cycles`` > 0; default 0: off): stop
+      the finest-grid cycles when the relative change per cycle of the central
+      and minimum film and the load error are below this factor times the
+      discretisation error of the central film estimated from the FMG levels
+      (Richardson, second order: |H_l - H_(l-1)| / 3 on the last FMG level, a
+      quarter of it on the finest grid) -- or when the normal tolerances are met.
+      ``residuals["stopped_at_discretisation"]`` = [estimate, tolerance].  Only
+      where the coarse grids resolve the solution (docs/ehl.md: low alpha_eff).
 
     Robustness (compiled solver, docs/ehl.md): the relaxation settings of
     :data:`RELAXATION_SETTINGS` are tried in turn; a setting that stalls
@@ -538,6 +557,10 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     fmg_cycles = int(fmg_cycles)
     if fmg_cycles < 0:
         raise EHLInputError(f"fmg_cycles={fmg_cycles!r}: must be >= 0")
+    sad = float(stop_at_discretisation)
+    if not math.isfinite(sad) or sad < 0.0 or (sad > 0.0 and fmg_cycles == 0):
+        raise EHLInputError(f"stop_at_discretisation={stop_at_discretisation!r}: must be "
+                            ">= 0 and needs fmg_cycles > 0 (the estimate comes from the FMG levels)")
     if solver == "python":
         table = PYTHON_RELAXATION_SETTINGS
     else:
@@ -578,7 +601,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                     prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
                     P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
                     tol_load, tol_residual, tuple(roughness_ramp), tol_film,
-                    fmg=fmg_cycles if rough_fn is None else 0)
+                    fmg=fmg_cycles if rough_fn is None else 0,
+                    stop_at_discretisation=float(stop_at_discretisation))
             if converged:
                 break
             # remember the last attempt that ended with a collapsed film (h <= 0):
