@@ -128,6 +128,12 @@ STALL_WINDOW = 8
 #: convergence, e.g. Barus M = 10, L = 20: 83 cycles; 8 stopped it early)
 FROZEN_STALL_WINDOW = 12
 
+#: upper limit of the film-change tolerance of ``stop_at_discretisation``: the
+#: FMG levels' error estimate is unreliable at high alpha_eff (3-50x too large
+#: at M = 100, L = 10, docs/ehl.md); the cap bounds the algebraic error left
+#: to a few 1e-4 whatever the estimate
+STOP_FILM_CHANGE_CAP = 3e-4
+
 #: A relaxation setting that stalls with a relative pressure change per cycle
 #: below this value is continued with the switch frozen (``freeze`` option of
 #: :mod:`.mgcore`): the stall is then a switching limit cycle of the
@@ -184,7 +190,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
             # the film change per cycle and the load error are below
             # stop_at_discretisation times that estimate (docs/ehl.md)
             e_top = abs(hc[-1] - hc[-2]) / 3.0 / hc[-1] / 4.0
-            tol_disc = max(stop_at_discretisation * e_top, 1e-8)
+            tol_disc = min(max(stop_at_discretisation * e_top, 1e-8), STOP_FILM_CHANGE_CAP)
             hist["stopped_at_discretisation"] = [e_top, tol_disc]
     stages = list(ramp) if rough_fn is not None else [None]
     if rough_fn is not None and P_start is None:
@@ -457,7 +463,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       and minimum film and the load error are below this factor times the
       discretisation error of the central film estimated from the FMG levels
       (Richardson, second order: |H_l - H_(l-1)| / 3 on the last FMG level, a
-      quarter of it on the finest grid) -- or when the normal tolerances are met.
+      quarter of it on the finest grid; the tolerance is capped at
+      :data:`STOP_FILM_CHANGE_CAP`) -- or when the normal tolerances are met.
       ``residuals["stopped_at_discretisation"]`` = [estimate, tolerance].  Only
       where the coarse grids resolve the solution (docs/ehl.md: low alpha_eff).
 
