@@ -8,6 +8,7 @@ solving every position.  Prints one JSON object.
     python benchmarks/bench_ehl_tables.py --position-nodes 0 --torques 2000   # old path (every position)
     options: [--points-per-mesh 64] [--slices 44] [--level 1] [--torques T ...] [--workers 2]
              [--position-nodes K] [--progress] [--accuracy-nodes 5 9 17 33] [--compare-tvms FILE.json]
+             [--levels 1 2 3 4]   # + build time, solves, stalls of each level (--save-tvms: one file each)
 
 Timing: wall and CPU of the parent, film solves, passes.  Old-path estimate: the distinct
 (position, slice) requests of the tables x passes x rows times the measured time of one cold
@@ -155,6 +156,8 @@ def main(argv=None) -> int:
     ap.add_argument("--accuracy", action="store_true")
     ap.add_argument("--accuracy-only", action="store_true")
     ap.add_argument("--accuracy-nodes", type=int, nargs="+", default=[5, 9, 17, 33])
+    ap.add_argument("--levels", type=int, nargs="+", default=None,
+                    help="also build the tables of these roughness levels (1-4): time, solves, stalls per level")
     ap.add_argument("--save-tvms", default=None, help="write the TVMS (P, N) of the first row to this .json")
     ap.add_argument("--compare-tvms", default=None, help="TVMS .json of another run: report the difference")
     a = ap.parse_args(argv)
@@ -202,11 +205,37 @@ def main(argv=None) -> int:
                                         "mean_rel_diff": [float(v) for v in ktot.mean(axis=1) / ko.mean(axis=1) - 1]}
             else:
                 out["tvms_vs_other"] = {"file": a.compare_tvms, "error": f"shape {ko.shape} != {ktot.shape}"}
+    if a.levels:
+        out["levels"] = [_level_row(lv, K, a) for lv in a.levels]
+        out["load_average_1min_end"] = os.getloadavg()[0]
     if a.accuracy or a.accuracy_only:
         out["accuracy_film"] = [_film_error(lv, a.accuracy_nodes) for lv in (1, 2)]
         out["accuracy_tvms"] = _tvms_error(1, [n for n in a.accuracy_nodes if n >= 9])
     print(json.dumps(out))
     return 0
+
+
+def _level_row(level, K, a):
+    """Build time and film-grid counts of one roughness level (default scene, same options)."""
+    sc = _scene(a.slices)
+    tab, wall, cpu = _tables(sc, level, K, a.points_per_mesh, a.torques, a.workers, a.progress)
+    c = tab.provenance["contact"]
+    g = c.get("film_grid") or {}
+    row = {"roughness_level": level, "wall_s": round(wall, 2), "parent_cpu_s": round(cpu[0], 2),
+           "workers_cpu_s": round(cpu[1], 2),
+           "ideal_wall_s_on_idle_cores": round(cpu[0] + cpu[1] / max(a.workers, 1), 1),
+           "film_solves": c["solves"], "rough_film_solves": g.get("rough_film_solves"),
+           "failed_rough_nodes": g.get("failed_rough_nodes"),
+           "stalled_rough_nodes_interpolated": g.get("stalled_rough_nodes_interpolated"),
+           "film_failures": c.get("film_failures", 0), "film_failures_by_status": c.get("film_failures_by_status"),
+           "film_failures_by_use": c.get("film_failures_by_use"),
+           "mean_tvms_N_per_m": [float(v) for v in tab.k_N_per_m.sum(axis=1).mean(axis=1)],
+           "load_average_1min": os.getloadavg()[0]}
+    if a.save_tvms:
+        p = Path(a.save_tvms)
+        p.with_name(f"{p.stem}_level{level}{p.suffix}").write_text(json.dumps(
+            {"torques_Nm": [float(t) for t in tab.torque_Nm], "tvms_N_per_m": tab.k_N_per_m.sum(axis=1).tolist()}))
+    return row
 
 
 def tab_geom(sc):
