@@ -44,7 +44,7 @@ temperature_C = 60.0
 """
 
 
-def _contact_tables(pair, model, slices, ppm, torques=(600.0, 1200.0)):
+def _contact_tables(pair, model, slices, ppm, torques=(600.0, 1200.0), roughness=None):
     """Tables of ``pair`` with a load-dependent contact model: SCH632 at 60 degC, 1000 rpm
     (seed 001 Table 1 speed), EHL grid of 129 nodes, one process."""
     from gearfmu.contact_models import ContactEnvironment
@@ -53,7 +53,7 @@ def _contact_tables(pair, model, slices, ppm, torques=(600.0, 1200.0)):
     b = min(pair.pinion.face_width_m, pair.gear.face_width_m)
     env = ContactEnvironment(pair=pair, geom=g, omega1_rad_s=1000.0 * math.pi / 30.0, n_slices=slices,
                              width_m=b / slices, eta0_Pas=0.118, alpha_Pa_inv=2e-8, rho0_kg_m3=870.0,
-                             max_workers=1, ehl_nodes=129)
+                             max_workers=1, ehl_nodes=129, roughness=roughness)
     return precompute_tables(pair, MeshModelOptions(slices=slices, contact_model=model), points_per_mesh=ppm,
                              torque_axis_Nm=list(torques), nominal_torque_Nm=torques[-1], contact_env=env)
 
@@ -178,3 +178,26 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
         names = [n for n in z.namelist() if n.endswith("tables.json")]
         meta = json.loads(z.read(names[0]))
     assert '"fractal_mixed"' in json.dumps(meta)
+
+
+def test_helical_rough_ehl_level1_is_the_smooth_film_limit():
+    """rough_ehl on a helical pair (per-slice normal-section requests, the film grid over each
+    slice's own positions).  Reference: the full-film limit -- seed 000 Table 2 level 1
+    (Ra 0.107 um) gives a film parameter Lambda = h_min/sigma far above 3 here, where the
+    roughness hardly changes the band-mean film (docs/ehl_mesh.md: level 1 equals smooth to
+    1e-4 on the spur pair), so the helical rough tables must equal the helical smooth ones
+    within 1 %; and ISO 6336-1 c_gamma_alpha within 25 % as for the other models."""
+    from gearfmu.contact_models import RoughnessSpec
+
+    pair = helical()
+    g = pair_geometry(pair)
+    t = _contact_tables(pair, "rough_ehl", 2, 8, roughness=RoughnessSpec.from_level(1))
+    sm = _contact_tables(pair, "smooth_ehl", 2, 8)
+    c = t.provenance["contact"]
+    assert c["model"] == "rough_ehl" and "helical_normal_section" in c
+    assert c["roughness"]["level"] == 1
+    on = sm.k_N_per_m > 0                                           # (torque, slot, angle)
+    assert np.array_equal(t.k_N_per_m > 0, on)
+    np.testing.assert_allclose(t.k_N_per_m[on], sm.k_N_per_m[on], rtol=0.01)          # measured 5.4e-4
+    k = t.k_N_per_m.sum(axis=1)                                     # mesh stiffness (torque, angle)
+    assert k[-1].mean() / g.face_width_m / 1e9 == pytest.approx(iso_c_gamma_alpha(g), rel=0.25)
