@@ -104,8 +104,8 @@ B0_DEFAULT_PA = 870.0 * 1450.0 ** 2
 B0_PRIME_DEFAULT = 11.0
 
 
-def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
-    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), seed 000 eq 9."""
+def _tait_inputs(p_Pa, B0_Pa: float, B0_prime: float):
+    """Checked pressure array (Pa) and 1 + B0' of the Tait law (EHLInputError naming the field)."""
     p = np.asarray(p_Pa, dtype=float)
     if not np.all(np.isfinite(p)) or np.any(p < 0.0):
         raise EHLInputError("p_Pa must be finite and >= 0")
@@ -113,7 +113,12 @@ def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRI
         raise EHLInputError(f"B0_Pa={B0_Pa!r}: must be finite and > 0")
     if not (math.isfinite(B0_prime) and B0_prime > -1.0):
         raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
-    a = 1.0 + B0_prime
+    return p, 1.0 + B0_prime
+
+
+def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
+    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), seed 000 eq 9."""
+    p, a = _tait_inputs(p_Pa, B0_Pa, B0_prime)
     return (1.0 - np.log1p(p / B0_Pa * a) / a) * (B0_Pa + p * a)
 
 
@@ -129,14 +134,7 @@ def tait_volume_ratio(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_P
     :func:`bulk_modulus_Pa` is -V dp/dV of this, which the tests check by
     differentiating it numerically).
     """
-    p = np.asarray(p_Pa, dtype=float)
-    if not np.all(np.isfinite(p)) or np.any(p < 0.0):
-        raise EHLInputError("p_Pa must be finite and >= 0")
-    if not (math.isfinite(B0_Pa) and B0_Pa > 0):
-        raise EHLInputError(f"B0_Pa={B0_Pa!r}: must be finite and > 0")
-    if not (math.isfinite(B0_prime) and B0_prime > -1.0):
-        raise EHLInputError(f"B0_prime={B0_prime!r}: must be finite and > -1")
-    a = 1.0 + B0_prime
+    p, a = _tait_inputs(p_Pa, B0_Pa, B0_prime)
     return 1.0 - np.log1p(p / B0_Pa * a) / a
 
 
