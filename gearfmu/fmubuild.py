@@ -183,6 +183,17 @@ def temperature_input(variables, tables: MeshTables):
     return out, start
 
 
+def check_output_arguments(out_path, scene_text) -> Path:
+    """``out_path`` as a Path ending in .fmu and ``scene_text`` a str or None (FmuBuildError
+    naming the field otherwise); shared by both FMU builders."""
+    if scene_text is not None and not isinstance(scene_text, str):
+        raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
+    out_path = Path(out_path)
+    if out_path.suffix != ".fmu":
+        raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
+    return out_path
+
+
 def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_start_rad_s,
                           pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
                           max_step_s, stop_time_s, output_interval_s, damping_model):
@@ -237,11 +248,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
         damping_model=damping_model)
     ig = _integrator_code(integrator, tables.slots)
-    if scene_text is not None and not isinstance(scene_text, str):
-        raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
-    out_path = Path(out_path)
-    if out_path.suffix != ".fmu":
-        raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
+    out_path = check_output_arguments(out_path, scene_text)
 
     spec = load_spec(spec_path)
     variables = expand_variables(spec, tables.slots, features_of(tables))

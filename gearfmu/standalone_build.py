@@ -52,7 +52,7 @@ from typing import Dict, Optional, Union
 from . import __version__
 from .fmubuild import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
                        _compiler_version, _integrator_code, _platform_dir, INTEGRATORS,
-                       check_build_arguments,
+                       check_build_arguments, check_output_arguments,
                        find_c_compiler, temperature_input)
 from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
@@ -289,11 +289,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
         damping_model=damping_model)
     ig = _integrator_code(integrator, tables.slots)
-    if scene_text is not None and not isinstance(scene_text, str):
-        raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
-    out_path = Path(out_path)
-    if out_path.suffix != ".fmu":
-        raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
+    out_path = check_output_arguments(out_path, scene_text)
     plat = _platform_dir()  # the binary folder is named after the build machine's platform
     ext = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
 
