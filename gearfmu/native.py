@@ -979,17 +979,20 @@ def _check_tables(tables) -> MeshTables:
     return tables.validate()
 
 
-def _finite(name, value, *, positive=False, nonneg=False) -> float:
+def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
+    """``value`` as a finite float (> 0 with ``positive``, >= 0 with ``nonneg``);
+    otherwise ``error`` (default NativeInputError) naming ``name`` and the reason."""
+    error = NativeInputError if error is None else error
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise NativeInputError(f"{name}: expected a number, got {value!r}") from None
+        raise error(f"{name}: expected a number, got {value!r}") from None
     if not math.isfinite(v):
-        raise NativeInputError(f"{name}: must be finite, got {value!r}")
+        raise error(f"{name}: must be finite, got {value!r}")
     if positive and v <= 0:
-        raise NativeInputError(f"{name}: must be > 0, got {value!r}")
+        raise error(f"{name}: must be > 0, got {value!r}")
     if nonneg and v < 0:
-        raise NativeInputError(f"{name}: must be >= 0, got {value!r}")
+        raise error(f"{name}: must be >= 0, got {value!r}")
     return v
 
 

@@ -83,17 +83,9 @@ class ReferenceInputError(ValueError):
 
 # ----------------------------------------------------------------- helpers
 def _num(name, value, *, positive=False, nonneg=False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ReferenceInputError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ReferenceInputError(f"{name}: must be finite, got {value!r}")
-    if positive and v <= 0:
-        raise ReferenceInputError(f"{name}: must be > 0, got {value!r}")
-    if nonneg and v < 0:
-        raise ReferenceInputError(f"{name}: must be >= 0, got {value!r}")
-    return v
+    from .native import _finite
+
+    return _finite(name, value, positive=positive, nonneg=nonneg, error=ReferenceInputError)
 
 
 def _series(name, value, n_steps, H) -> np.ndarray:
