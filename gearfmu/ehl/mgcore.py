@@ -22,6 +22,11 @@ elsewhere.  Two distribution patterns are available: ``dist = 1`` the
 symmetric pattern of Venner & Lubrecht (P_i += d_i - (d_{i-1} + d_{i+1})/4),
 ``dist = 0`` the dipole of seed 000 (+d_i at i, -d_i at i-1).  The Jacobians
 include the deformation kernel and the density derivative of the wedge term.
+Transient term (docs/ehl_transient.md, seed 000 eq 2 with d(rho H)/dT):
+option ``c_t`` (default 0) adds c_t (rho H)_i to the wedge term of every
+level and its derivative to the point Jacobians; the old time levels enter
+as the finest-grid right-hand side f (:meth:`FlatMultigrid.set_time_term`).
+With c_t = 0 every branch of the steady code runs unchanged (bitwise).
 Load balance: ``load_mode = 0`` moves H0 on the finest grid after every cycle
 (adaptive gain), ``load_mode = 1`` moves H0 on the coarsest grid inside the
 cycle with the FAS load right-hand side (Venner & Lubrecht's arrangement).
@@ -105,8 +110,13 @@ def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
 
 
 @njit(cache=True)
-def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2):
-    """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends)."""
+def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0):
+    """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends).
+
+    ``ct`` > 0: transient operator (seed 000 eq 2 with d(rho H)/dT, BDF1/BDF2,
+    docs/ehl_transient.md): the implicit part ct (rho H)_i is added to the
+    wedge term; the old time levels are in f (finest grid).  ct = 0 takes
+    the steady code path unchanged (bitwise)."""
     o = iarr[0, l]
     n = iarr[1, l]
     dX = dx[l]
@@ -123,6 +133,8 @@ def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2):
                      + 0.5 * rho[i - 2] * H[i - 2]) / dX
         else:
             wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
+        if ct != 0.0:
+            wedge += ct * rho[i] * H[i]
         out[i] = f[i] - (poi - wedge)
 
 
@@ -133,6 +145,7 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
         opt[4], opt[5]
     stick = opt[13]
     freeze = opt[14] > 0.5
+    ct = opt[15]
     top_level = iarr.shape[1] - 1
     o = iarr[0, l]
     n = iarr[1, l]
@@ -174,6 +187,8 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
                      + 0.5 * rho[i - 2] * H[i - 2]) / dX
         else:
             wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
+        if ct != 0.0:
+            wedge += ct * rho[i] * H[i]
         r = f[i] - (poi - wedge)
         xtra = -abs(0.5 * eps[i] * dle[i] * (P[i - 1] - 2.0 * P[i] + P[i + 1]) / h2)
         # hysteresis (``stick`` >= 1): a node relaxed by Jacobi stays Jacobi
@@ -190,6 +205,9 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
                 w = (w - 1.5 * H[i] * drho[i]) / dX
             else:
                 w = ((rho[i] * K0 - rho[i - 1] * K1) * ipi - H[i] * drho[i]) / dX
+            if ct != 0.0:
+                # d[ct rho_i H_i]/dP_i with dH_i/dP_i = -K0/pi (time term)
+                w += ct * (rho[i] * K0 * ipi - H[i] * drho[i])
             J = -(em + ep) / h2 + w + xtra
             d = omega_gs * r / J
             if abs(d * dle[i]) > dmax:
@@ -206,6 +224,9 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
                 w = (rho[i] * c0 - rho[i - 1] * cm1) * ipi
                 w -= H[i] * drho[i] - H[i - 1] * drho[i - 1] * pm1
             w /= dX
+            if ct != 0.0:
+                # time term: film change -c0/pi and density change at i per unit d
+                w += ct * (rho[i] * c0 * ipi - H[i] * drho[i])
             if dist > 0.5:
                 Jp = -poifac * (em + ep) / h2
             else:
@@ -286,7 +307,7 @@ def _down(k, S):
     nc = iarr[1, k - 1]
     order2 = opt[3] > 0
     _coef(k, P, H, rho, eps, dle, drho, iarr, prm)
-    _residual(k, P, H, f, rho, eps, wrk, iarr, dx, order2)
+    _residual(k, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])
     for i in range(nf):
         if P[of + i] <= 0.0:
             wrk[of + i] = 0.0
@@ -303,7 +324,7 @@ def _down(k, S):
     # f_c = L_c(P_c) + restricted residual  (wrk on level k-1 receives f_c - L_c = -(-r))
     for I in range(nc):
         f[oc + I] = 0.0
-    _residual(k - 1, P, H, f, rho, eps, wrk, iarr, dx, order2)   # wrk_c = -L_c
+    _residual(k - 1, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])   # wrk_c = -L_c
     for I in range(1, nc - 1):
         i = of + 2 * I
         rr = 0.25 * wrk[i - 1] + 0.5 * wrk[i] + 0.25 * wrk[i + 1]
@@ -363,9 +384,9 @@ def _scaled_residual(l, S, order2, zero_f):
         o2 = iarr[0, l]
         for k in range(iarr[1, l]):
             delta[o2 + k] = 0.0
-        _residual(l, P, H, delta, rho, eps, wrk, iarr, dx, order2)
+        _residual(l, P, H, delta, rho, eps, wrk, iarr, dx, order2, opt[15])
     else:
-        _residual(l, P, H, f, rho, eps, wrk, iarr, dx, order2)
+        _residual(l, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])
     dX = dx[l]
     h2 = dX * dX
     s = 0.0
@@ -377,6 +398,8 @@ def _scaled_residual(l, S, order2, zero_f):
         em = 0.5 * (eps[i - 1] + eps[i])
         ep = 0.5 * (eps[i] + eps[i + 1])
         J = -(em + ep) / h2 + rho[i] * (K[ko] - K[ko + 1]) / (math.pi * dX)
+        if opt[15] != 0.0:
+            J += opt[15] * rho[i] * K[ko] / math.pi
         s += abs(wrk[i] / J)
         cnt += 1
     return s / max(cnt, 1)
@@ -520,10 +543,10 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
 
 #: option vector layout of the compiled core
 OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
-            "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze")
+            "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze", "c_t")
 OPT_DEFAULTS = dict(omega_gs=0.8, omega_j=0.6, switch=3.0, order2=1, dmax=0.3, dist=0,
                     c_h0=0.5, h0_step=0.5, nu1=2, nu2=1, nu0=10, load_mode=0,
-                    defect=0, stick=1.0, freeze=0)
+                    defect=0, stick=1.0, freeze=0, c_t=0.0)
 
 
 class FlatMultigrid:
@@ -637,6 +660,40 @@ class FlatMultigrid:
     def load(self, l=None) -> float:
         l = self.top if l is None else l
         return float(self.dx[l] * np.sum(self.P[self._sl(l)]))
+
+    # -- transient term (docs/ehl_transient.md; default off) -------------------
+    def rho_H(self, l=None) -> np.ndarray:
+        """rho_i H_i on level l (finest by default; Dowson-Higginson rho of
+        the current P), the quantity whose time derivative seed 000 eq 2 keeps."""
+        l = self.top if l is None else l
+        rho, eps, dle, drho = self.work[0], self.work[1], self.work[2], self.work[3]
+        _coef(l, self.P, self.H, rho, eps, dle, drho, self.iarr, self.prmv)
+        sl = self._sl(l)
+        return rho[sl] * self.H[sl]
+
+    def set_time_term(self, c_t: float, f_top=None):
+        """Implicit time coefficient ``c_t`` (1/dT for BDF1, 1.5/dT for BDF2, 0:
+        steady) on every level and the old-time right-hand side ``f_top`` of the
+        finest grid (BDF1: -(rho H)^(n-1)/dT; BDF2: (-2 (rho H)^(n-1) +
+        0.5 (rho H)^(n-2))/dT; None: zero).  The coarse levels receive it through
+        the restricted residual (FAS).  Not combined with ``defect``."""
+        c_t = float(c_t)
+        if not math.isfinite(c_t) or c_t < 0.0:
+            from .errors import EHLInputError
+            raise EHLInputError(f"c_t={c_t!r}: must be finite and >= 0")
+        self.opts["c_t"] = c_t
+        self.optv[OPT_KEYS.index("c_t")] = c_t
+        sl = self._sl(self.top)
+        if f_top is None:
+            self.f[sl] = 0.0
+        else:
+            f_top = np.asarray(f_top, float)
+            if f_top.shape != (sl.stop - sl.start,):
+                from .errors import EHLInputError
+                raise EHLInputError(f"f_top: need {sl.stop - sl.start} finest-grid values, "
+                                    f"got shape {f_top.shape}")
+            self.f[sl] = f_top
+            self.f[sl.start] = self.f[sl.stop - 1] = 0.0
 
     # -- starts ---------------------------------------------------------------
     def start(self, P_top: np.ndarray, Hc: float):

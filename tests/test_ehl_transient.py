@@ -1,0 +1,135 @@
+"""Tests of the transient line-contact EHL extension (docs/ehl_transient.md).
+
+References (none produced by this code):
+* T0: the steady solver's own path is unchanged when the time coefficient is
+  0 -- the bitwise reference is the steady iteration without the option
+  (the old-vs-new module comparison is in docs/ehl_transient.md "Status");
+* the discretised transient Reynolds operator written out by hand in numpy
+  from seed 000 eq 2 (BDF1/BDF2 formulas of any numerical analysis text,
+  e.g. Hairer & Wanner, *Solving ODEs II*, sec. V.1);
+* T1: a stationary state has d(rho H)/dT = 0 exactly (BDF1 and BDF2 of a
+  constant are 0), so the steady solution solves the transient equations.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from gearfmu.ehl import solve_line_contact
+from gearfmu.ehl.mgcore import FlatMultigrid, _coef, _residual
+from gearfmu.ehl.solver import _flat_opts
+
+
+def _flat_from_result(res, prm_from):
+    """FlatMultigrid on the grid of ``res`` started from its converged pressure."""
+    prm, n_levels, n_coarse = prm_from
+    opts = _flat_opts(res.residuals["settings"])
+    fm = FlatMultigrid(prm, n_levels, n_coarse, None, **opts)
+    Hc = float(np.interp(0.0, res.X, res.H))
+    fm.start(res.P, Hc)
+    return fm
+
+
+def _params(res):
+    """EHLParams of a steady result (the formulas of solve_line_contact, Roelands)."""
+    from gearfmu.ehl.lubricant import DH_C1_PA, ROELANDS_LN_ETA_INF, ROELANDS_P0_PA
+    from gearfmu.ehl.multigrid import EHLParams
+    A = math.log(res.inputs["eta0_Pas"]) - ROELANDS_LN_ETA_INF
+    return EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * res.M ** 2), A=A,
+                     z=res.inputs["alpha_Pa_inv"] * ROELANDS_P0_PA / A,
+                     php0=res.ph_Pa / ROELANDS_P0_PA, c1=DH_C1_PA / res.ph_Pa,
+                     compressible=True, x_in=float(res.X[0]), x_out=float(res.X[-1]))
+
+
+def _steady_problem(M=20.0, L=10.0, n_nodes=257):
+    res = solve_line_contact(M=M, L=L, n_nodes=n_nodes, tol_pressure=1e-9, tol_residual=1e-9,
+                             tol_load=1e-10, max_cycles=200)
+    n_levels = res.grid_levels
+    n_coarse = (n_nodes - 1) // 2 ** (n_levels - 1)
+    return res, (_params(res), n_levels, n_coarse)
+
+
+# ------------------------------------------------------------------------- T0
+def test_T0_time_term_zero_is_bitwise_the_steady_iteration():
+    # Reference: the steady compiled W-cycles with the default options (c_t
+    # absent) -- setting the time coefficient to 0 explicitly, with a zero
+    # old-time right-hand side, must take exactly the same floating-point path.
+    res = solve_line_contact(M=20.0, L=10.0, n_nodes=257)
+    _res, pf = _steady_problem()
+    a = _flat_from_result(res, pf)
+    b = _flat_from_result(res, pf)
+    b.set_time_term(0.0, np.zeros(a.level_P().size))
+    # perturb both identically so that the cycles have work to do
+    for s in (a, b):
+        s.P[s._sl(s.top)] *= 1.01
+        s.update_film(s.top)
+    ka = a.iterate(max_cycles=6, min_cycles=6)
+    kb = b.iterate(max_cycles=6, min_cycles=6)
+    assert ka[1] == kb[1] == 6
+    assert np.array_equal(a.level_P(), b.level_P())
+    assert np.array_equal(a.level_H(), b.level_H())
+    assert ka[2]["reynolds_residual"] == kb[2]["reynolds_residual"]
+
+
+# ------------------------------------------------------------------------- operator
+@pytest.mark.parametrize("order2", [0, 1])
+def test_transient_residual_equals_hand_written_operator(order2):
+    # Reference: seed 000 eq 2 discretised by hand (numpy, not the kernel):
+    # L_i = [e_{i-1/2}(P_{i-1}-P_i) + e_{i+1/2}(P_{i+1}-P_i)]/dX^2
+    #       - D_X(rho H)_i - c_t (rho H)_i,   residual f_i - L_i.
+    res, pf = _steady_problem()
+    fm = _flat_from_result(res, pf)
+    rng = np.random.default_rng(3)
+    sl = fm._sl(fm.top)
+    fm.P[sl] *= 1.0 + 0.05 * rng.standard_normal(sl.stop - sl.start)
+    fm.P[sl] = np.clip(fm.P[sl], 0, None)
+    fm.update_film(fm.top)
+    ct = 1.5 / fm.dx[fm.top]
+    f_top = rng.standard_normal(sl.stop - sl.start)
+    fm.set_time_term(ct, f_top)
+    rho, eps, dle, drho, delta, wrk = fm.work[:6]
+    _coef(fm.top, fm.P, fm.H, rho, eps, dle, drho, fm.iarr, fm.prmv)
+    _residual(fm.top, fm.P, fm.H, fm.f, rho, eps, wrk, fm.iarr, fm.dx, bool(order2), ct)
+    P, H, r, e = fm.P[sl], fm.H[sl], rho[sl], eps[sl]
+    dX = fm.dx[fm.top]
+    rH = r * H
+    ref = np.zeros_like(P)
+    for i in range(1, P.size - 1):
+        em, ep = 0.5 * (e[i - 1] + e[i]), 0.5 * (e[i] + e[i + 1])
+        poi = (em * (P[i - 1] - P[i]) + ep * (P[i + 1] - P[i])) / dX ** 2
+        if order2 and i >= 2:
+            wedge = (1.5 * rH[i] - 2 * rH[i - 1] + 0.5 * rH[i - 2]) / dX
+        else:
+            wedge = (rH[i] - rH[i - 1]) / dX
+        ref[i] = fm.f[sl][i] - (poi - wedge - ct * rH[i])
+    np.testing.assert_allclose(wrk[sl], ref, rtol=1e-12, atol=1e-9 * np.abs(ref).max())
+
+
+# ------------------------------------------------------------------------- T1 (kernel)
+@pytest.mark.parametrize("scheme", ["bdf1", "bdf2"])
+def test_T1_kernel_stationary_state_is_a_transient_solution(scheme):
+    # Reference: d(rho H)/dT of a constant state is 0 for BDF1 and BDF2, so the
+    # converged steady solution must stay put (within the iteration
+    # tolerance) when the time term is switched on with old levels = it.
+    res, pf = _steady_problem()
+    fm = _flat_from_result(res, pf)
+    dT = fm.dx[fm.top]
+    rH = fm.rho_H()
+    if scheme == "bdf1":
+        fm.set_time_term(1.0 / dT, -rH / dT)
+    else:
+        fm.set_time_term(1.5 / dT, (-2.0 * rH + 0.5 * rH) / dT)
+    P0, H0 = fm.level_P().copy(), fm.level_H().copy()
+    ok, nc, h = fm.iterate(max_cycles=20, min_cycles=3, tol_pressure=1e-9, tol_load=1e-10,
+                           tol_residual=1e-9)
+    assert ok, h
+    hc0 = float(np.interp(0.0, res.X, H0))
+    hc1 = float(np.interp(0.0, res.X, fm.level_H()))
+    assert abs(hc1 - hc0) / hc0 < 1e-6
+    assert abs(fm.level_H().min() - H0.min()) / H0.min() < 1e-6
+    assert np.max(np.abs(fm.level_P() - P0)) < 1e-6
+    # the time term is active: with a zero old-time right-hand side (an
+    # empty gap at T = -dT) the same state is no longer a solution
+    fm.set_time_term(1.0 / dT, None)
+    fm.iterate(max_cycles=3, min_cycles=3)
+    assert np.max(np.abs(fm.level_P() - P0)) > 1e-3
