@@ -58,7 +58,7 @@ class ContactModelError(ValueError):
 
 
 #: what a rough-EHL request uses where the full film does not hold (RoughnessSpec.on_failure)
-FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error")
+FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error", "load_sharing")
 #: full-film limit of the film parameter Lambda = h_min/sigma (Tallian 1967; Johnson,
 #: Greenwood & Poon 1972; gearfmu.fractal_contact.FULL_FILM_LAMBDA)
 FULL_FILM_PARAMETER = 3.0
@@ -84,7 +84,8 @@ class RoughnessSpec:
     characteristic scale (m; Table 2's G read in mm, docs/ehl.md), ``seed``
     of the random phases, ``f_max_per_m`` band limit (1/m), ``level`` the
     Table 2 level it came from (0 = custom), ``on_failure`` 'fractal_mixed' |
-    'hertz' | 'error' (where Lambda < ``full_film_parameter`` or the rough
+    'hertz' | 'error' | 'load_sharing' (JGP film-asperity load sharing,
+    gearfmu.load_sharing, docs/load_sharing.md) (where Lambda < ``full_film_parameter`` or the rough
     film fails), ``position_nodes``: contact positions of the film grid (0 =
     solve at every requested position)."""
 
@@ -634,6 +635,8 @@ def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_
         return np.zeros(0)
     if pol == "hertz":
         return np.full(s.shape, hertz_stiffness_N_per_m(env.pair, env.width_m))
+    if pol == "load_sharing":
+        return load_sharing_stiffness(env, s, w)
     if pol != "fractal_mixed":
         raise ContactModelError(f"on_failure={pol!r}: no fallback stiffness")
     from .ehl.mesh_film import contact_kinematics
@@ -655,6 +658,42 @@ def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_
     # no mixed solution: the load exceeds what the asperities carry on the Hertz band, i.e. the
     # surfaces are in full solid contact there -- Hertz (CHOICE, docs/ehl_mesh.md)
     return np.where(np.isfinite(k), k, hertz_stiffness_N_per_m(env.pair, env.width_m))
+
+
+def load_sharing_stiffness(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndarray:
+    """Mixed-lubrication stiffness (N/m per slice) by film-asperity load sharing
+    (``on_failure = "load_sharing"``; :func:`gearfmu.load_sharing.load_sharing`, Johnson,
+    Greenwood & Poon 1972; docs/load_sharing.md): k = k_film + k_asp at the shared separation,
+    the film spring being the smooth film's stiffness at the request (film grid when
+    ``position_nodes`` > 0, else a smooth solve) times the seed 000 eq 8 ratio at the film's
+    share of the load; where the smooth film failed, eq 8 with Moes' film alone.  Summit
+    statistics from the W-M moments of both flanks (:func:`gearfmu.load_sharing.wm_spectral_moments`).
+    One evaluation per distinct (position, load): the slices share D, G and width."""
+    from .ehl.mesh_film import contact_kinematics
+    from .load_sharing import LineContactState, asperity_parameters, load_sharing, wm_spectral_moments
+
+    s = np.asarray(s_m, float).ravel()
+    w = np.asarray(w_N_per_m, float).ravel()
+    if s.size == 0:
+        return np.zeros(0)
+    spec = env.roughness
+    fenv = env.film_environment()
+    a = env.alpha_Pa_inv
+    asp = asperity_parameters(wm_spectral_moments(spec.D, spec.G_m))
+    keys = np.stack([np.array([_key(x) for x in s]), np.array([_key(x) for x in w])], axis=1)
+    pairs, inv = np.unique(keys, axis=0, return_inverse=True)
+    if spec.position_nodes:
+        film_grid(env)   # the smooth films come from the grid's smooth columns, not per request
+    ks = _smooth_film_k(env, fenv, pairs[:, 0], pairs[:, 1])
+    R, u, _ = contact_kinematics(env.geom, pairs[:, 0], env.omega1_rad_s)
+    vals = np.empty(len(pairs))
+    for i, (Ri, ui, (_, wi)) in enumerate(zip(R, u, pairs)):
+        st = LineContactState(R_m=float(Ri), u_m_per_s=float(ui), w_N_per_m=float(wi),
+                              E_prime_Pa=fenv.E_prime_Pa, eta0_Pas=float(env.eta0_Pas),
+                              alpha_Pa_inv=float(a), width_m=float(env.width_m))
+        k0 = float(ks[i]) if np.isfinite(ks[i]) and ks[i] > 0 else None
+        vals[i] = load_sharing(st, asp, k_smooth_N_per_m=k0).k_N_per_m
+    return vals[np.asarray(inv).ravel()].reshape(np.shape(s_m))
 
 
 def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> ContactStiffness:
@@ -709,7 +748,7 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
     # the solver, not of the film: under 'fractal_mixed' the smooth film stands in there (the
     # roughness changes a converged film's stiffness by a few % at most, docs/ehl_mesh.md)
     sub = failed & full
-    if spec.on_failure == "fractal_mixed" and np.any(sub):
+    if spec.on_failure in ("fractal_mixed", "load_sharing") and np.any(sub):
         ks = _smooth_film_k(env, fenv, s[sub], w[sub])
         k[sub] = ks
         used[sub] = np.where(np.isfinite(ks), "smooth_ehl", spec.on_failure)

@@ -533,9 +533,10 @@ SCHEMA["roughness"] = (
     _i("seed", 2022, "seed of the random phases (per flank and slice; reproducible)", 0, 2 ** 63 - 1),
     _f("max_frequency_per_mm", "1/mm", 10.0, "band limit of the roughness (highest W-M frequency)",
        0.0, 1e4, lo_open=True, scale=1e3),
-    _e("on_film_failure", ("fractal_mixed", "hertz", "error"), "fractal_mixed", "where the film parameter "
-       "h_min/sigma is below full_film_parameter or the rough film collapses or does not converge: seed 001 "
-       "fractal mixed-lubrication stiffness, Hertz stiffness (both recorded), or stop with an error"),
+    _e("on_film_failure", ("fractal_mixed", "hertz", "error", "load_sharing"), "fractal_mixed", "where the film "
+       "parameter h_min/sigma is below full_film_parameter or the rough film collapses or does not converge: seed 001 "
+       "fractal mixed-lubrication stiffness, Hertz stiffness (both recorded), stop with an error, or film-asperity "
+       "load sharing (Johnson, Greenwood & Poon 1972; docs/load_sharing.md)"),
     _f("full_film_parameter", "1", 3.0, "film parameter Lambda = h_min/sigma (Dowson-Higginson h_min, "
        "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
     _i("film_position_nodes", 9, "contact positions along the path of contact at which the rough films "
