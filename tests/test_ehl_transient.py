@@ -7,8 +7,17 @@ References (none produced by this code):
 * the discretised transient Reynolds operator written out by hand in numpy
   from seed 000 eq 2 (BDF1/BDF2 formulas of any numerical analysis text,
   e.g. Hairer & Wanner, *Solving ODEs II*, sec. V.1);
-* T1: a stationary state has d(rho H)/dT = 0 exactly (BDF1 and BDF2 of a
-  constant are 0), so the steady solution solves the transient equations.
+* T1, T2: a stationary state has d(rho H)/dT = 0 exactly (BDF1 and BDF2 of a
+  constant are 0), so the steady solution solves the transient equations
+  (smooth at any SRR; rough with the roughness frozen, U1 = U2 = 0);
+* T3: a harmonic waviness under pure rolling gives a time-periodic film
+  (period lambda/u_s): two successive periods agree;
+* T4-T6: Venner, Couhier, Lubrecht & Greenwood (1997), "Amplitude reduction of
+  waviness in transient EHL line contacts", Tribology Series 32, 103-112: the
+  deformed amplitude A_d/A_i is independent of A_i and a single function of
+  nabla = (lambda/b) M^(3/4)/L^(1/2); short waves (small nabla) pass almost
+  undeformed, long ones nearly vanish (thresholds are CHOICES of
+  docs/ehl_transient.md section 4 turning the abstract's words into numbers).
 """
 import math
 
@@ -133,3 +142,98 @@ def test_T1_kernel_stationary_state_is_a_transient_solution(scheme):
     fm.set_time_term(1.0 / dT, None)
     fm.iterate(max_cycles=3, min_cycles=3)
     assert np.max(np.abs(fm.level_P() - P0)) > 1e-3
+
+
+# ------------------------------------------------------------------------- T1
+@pytest.mark.parametrize("srr", [0.0, 0.5, -0.5])
+def test_T1_smooth_transient_stays_on_the_steady_solution(srr):
+    # Reference: smooth surfaces -> nothing depends on T; BDF of a constant is 0.
+    from gearfmu.ehl.transient import solve_line_contact_transient
+    tight = dict(tol_pressure=1e-9, tol_load=1e-10, tol_residual=1e-9)
+    r = solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, srr=srr, n_steps=50,
+                                     steady_options=dict(max_cycles=200), **tight)
+    s = r.steady
+    assert r.T.size == 51 and r.T[-1] == pytest.approx(50 * r.dT)
+    assert r.dT == pytest.approx(6.0 / 256)                    # default dT = dX
+    assert (r.U1, r.U2) == pytest.approx((1 + srr / 2, 1 - srr / 2))
+    assert np.max(np.abs(r.h_central_m / s.h_central_m - 1)) < 1e-6
+    assert np.max(np.abs(r.h_min_m / s.h_min_m - 1)) < 1e-6
+    assert np.max(np.abs(r.p_Pa - s.p_Pa)) / s.ph_Pa < 1e-6
+    red = r.film_stiffness_reductions(T_start=0.0)
+    assert red["k_mean_of_k_N_per_m"] == pytest.approx(red["k_of_means_N_per_m"], rel=1e-6)
+
+
+# ------------------------------------------------------------------------- T2
+def _seed000_pitch():
+    from pathlib import Path
+    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
+    from gearfmu.geometry import pair_geometry
+    from gearfmu.scene import load_scene
+    sc = load_scene(Path(__file__).resolve().parents[1] / "examples" / "scenes" /
+                    "seed000_table1.toml")
+    g = pair_geometry(sc.pair)
+    env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(1), max_workers=1)
+    w = sc.operating.torque_Nm / g.rb1_m / sc.pair.pinion.face_width_m
+    return env, g.s_pitch_m, w
+
+
+def test_T2_frozen_level1_roughness_equals_the_steady_rough_solve():
+    # Reference: with U1 = U2 = 0 the rough gap does not move, so the steady
+    # frozen-roughness film (seed 000 Table 1 pair, pitch point, level 1,
+    # slice 0) is a stationary state of the transient equations.
+    from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
+    from gearfmu.ehl.transient import flank_slice_case, solve_line_contact_transient
+    env, s, w = _seed000_pitch()
+    kw = flank_slice_case(env, s, w, 0)
+    assert kw["srr"] == pytest.approx(0.0, abs=1e-12)           # pitch point: pure rolling
+    kw.pop("srr")
+    tight = dict(tol_pressure=1e-9, tol_load=1e-10, tol_residual=1e-9)
+    r = solve_line_contact_transient(n_nodes=257, n_steps=20, speed_ratios=(0.0, 0.0),
+                                     steady_options=dict(max_cycles=200), **tight, **kw)
+    st = r.steady
+    k_st = slice_film_stiffness_N_per_m(st, env.width_m, "seed")
+    assert np.std(st.roughness_m) > 0.02 * st.h_central_m       # rough: sigma/h_c = 0.037
+    assert np.max(np.abs(r.h_central_m / st.h_central_m - 1)) < 1e-5
+    assert np.max(np.abs(r.k_film_N_per_m / k_st - 1)) < 1e-5
+    # moving roughness (U1 = U2 = 1) is not stationary: the film changes
+    kw2 = dict(kw, srr=0.0)
+    r2 = solve_line_contact_transient(n_nodes=257, n_steps=20, **kw2)
+    assert np.max(np.abs(r2.h_central_m / st.h_central_m - 1)) > 1e-3
+
+
+# ------------------------------------------------------------------------- T3
+def test_T3_pure_rolling_waviness_reaches_a_periodic_state():
+    # Reference: periodic forcing of period lambda/(b U) in T -> periodic film.
+    from gearfmu.ehl.transient import waviness_amplitude_ratio
+    d = waviness_amplitude_ratio(20.0, 10.0, 0.5, 0.1, n_nodes=257, steps_per_period=24)
+    assert d["periodicity_defect"] < 1e-4                       # measured 4e-7
+    assert d["cycles_per_step"] < 10                            # measured 3.7
+
+
+# ------------------------------------------------------------------------- errors
+def test_bad_inputs_name_the_field():
+    from gearfmu.ehl import EHLInputError
+    from gearfmu.ehl.transient import HarmonicWaviness, solve_line_contact_transient
+    with pytest.raises(EHLInputError, match="wavelength_m"):
+        HarmonicWaviness(1e-7, 0.0)
+    with pytest.raises(EHLInputError, match="surfaces"):
+        HarmonicWaviness(1e-7, 1e-4, surfaces=(3,))
+    with pytest.raises(EHLInputError, match="srr"):
+        solve_line_contact_transient(M=20.0, L=10.0, srr=3.0)
+    with pytest.raises(EHLInputError, match="scheme"):
+        solve_line_contact_transient(M=20.0, L=10.0, scheme="cn")
+    with pytest.raises(EHLInputError, match="roughness"):
+        solve_line_contact_transient(M=20.0, L=10.0, roughness=42)
+    with pytest.raises(EHLInputError, match="n_steps"):
+        solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, n_steps=0)
+
+
+def test_stalled_step_names_step_time_and_residual():
+    from gearfmu.ehl import EHLConvergenceError
+    from gearfmu.ehl.transient import HarmonicWaviness, solve_line_contact_transient
+    s = solve_line_contact(M=20.0, L=10.0, n_nodes=257)
+    wav = HarmonicWaviness(0.1 * s.h_central_m, 0.5 * s.b_m)
+    with pytest.raises(EHLConvergenceError, match=r"transient step 1 of 5 \(T = 0.02344.*residual"):
+        solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, roughness=wav, n_steps=5,
+                                     max_cycles_per_step=1,
+                                     relaxation_settings=[dict(switch=0.3, dist=1)])

@@ -1,0 +1,597 @@
+"""Transient line-contact EHL with roughness moving with the surfaces (issue 3).
+
+Equations (seed 000 eq 2-3 keeping the squeeze term; docs/ehl_transient.md
+section 1), Venner & Lubrecht 2000 scaling X = x/b, P = p/p_h, H = h R/b^2
+and **T = t u_s/b** (u_s the entrainment speed):
+
+    d/dX( eps dP/dX ) - d(rho H)/dX - d(rho H)/dT = 0                 (eq 2)
+    H(X, T) = H0(T) + X^2/2 + V(P)(X) + W(X, T)                         (eq 3-4)
+    W(X, T) = (R/b^2) [ z1(xi1) + z2(xi2) ],  xi_i = b (X - U_i T)      (eq 3, wm)
+    dX sum P = pi/2 at every T                                          (eq 7)
+
+A material point of surface i moves through the contact at u_i, so its
+height pattern is advected at U_i = u_i/u_s: U1 = 1 + SRR/2, U2 = 1 - SRR/2
+(SRR = (u1 - u2)/u_s, the definition of :func:`.mesh_film.contact_kinematics`).
+For a gear flank slice (:class:`FlankSliceRoughness`) this is wm(x, t) =
+z1(a1(t) - x) + z2(a2(t) + x) with da1/dt = u1, da2/dt = -u2 (involute arc
+length a = rho^2/(2 r_b), docs/ehl_transient.md).
+
+Time discretisation (CHOICE, docs/ehl_transient.md section 2): BDF2,
+d(rho H)/dT ~ [3 (rho H)^n - 4 (rho H)^(n-1) + (rho H)^(n-2)]/(2 dT), after a
+BDF1 (implicit Euler) first step; dT = dX by default (Courant number 1 on u_s).
+The implicit part c_t (rho H)^n is in the compiled multigrid operator
+(:mod:`.mgcore`, option ``c_t``), the old levels are its finest-grid right-hand
+side.  Each step: warm start from the previous step (P and H0 linearly
+extrapolated from the last two levels, P clipped at 0), W-cycles until the
+steady tolerances are met (load balance inside the cycles, so eq 7 holds per
+step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
+:data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
+setting raises :class:`.errors.EHLConvergenceError` naming the step and time.
+
+Roughness is evaluated from the surfaces' own profiles at every step (no
+band limit, unlike the steady solver's default 8 dX filter: CHOICE, the
+flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
+256-interval seed grid, docs/ehl_transient.md).  Cavitation stays P = max(P, 0)
+(not mass conserving at internal cavities: risk R2 of the design note).
+
+Outputs per step on the Hertz band |x| <= b: central and minimum film, mean
+film and mean pressure, and the film stiffness k(t) = A B(p_m)/h_m of seed 000
+eq 8 (:func:`.film_stiffness.film_stiffness_N_per_m`, ``method="seed"``:
+A = 2 b width); the two time reductions of docs/ehl_transient.md section 3
+are :meth:`TransientLineContactResult.film_stiffness_reductions`.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, Optional, Tuple, Union
+
+import numpy as np
+
+from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+from .film_stiffness import film_stiffness_N_per_m
+from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_ETA_INF,
+                        ROELANDS_P0_PA)
+from .mgcore import OPT_DEFAULTS, FlatMultigrid
+from .multigrid import EHLParams
+from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS,
+                     STALL_WINDOW, LineContactResult, _flat_opts, solve_line_contact)
+
+#: Relaxation settings of the time steps, tried in this order (the one that
+#: converged last is tried first at the next step), then the steady
+#: :data:`.solver.RELAXATION_SETTINGS`.  Measured (docs/ehl_transient.md
+#: "Status", M = 20, L = 10, 256 intervals, waviness 0.1 H_c, lambda = 0.5 b):
+#: the steady default (dipole distribution ``dist=0``) diverges within 2-5
+#: steps once c_t > 0 (the time term sees the dipole's 1/r far field) and the
+#: fallback omega_j = 0.1 needs ~14 cycles/step; the symmetric distribution
+#: ``dist=1`` (-d/4 at the neighbours) needs 3.8 (omega_j 0.6), ``dist=2`` 4.8.
+TRANSIENT_RELAXATION_SETTINGS = (
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.6, load_mode=1, c_h0=0.1,
+         stick=10.0, dist=1),
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
+         stick=10.0, dist=2),
+    dict(switch=0.3, nu1=2, nu2=2, omega_gs=0.4, omega_j=0.3, load_mode=1, c_h0=0.1,
+         stick=10.0, dist=1, dmax=3.0),
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.1, load_mode=1, c_h0=0.1,
+         stick=10.0),
+)
+
+#: averaging window after the wash-out (dimensionless time, CHOICE of
+#: docs/ehl_transient.md section 2: two contact widths at u_s)
+T_AVERAGE = 4.0
+
+
+# --------------------------------------------------------------------------- roughness inputs
+@dataclass(frozen=True)
+class HarmonicWaviness:
+    """Harmonic waviness z(xi) = amplitude_m cos(2 pi xi / wavelength_m + phase_rad)
+    on the surfaces listed in ``surfaces`` (1, 2 or both); xi (m) is the
+    material coordinate of the surface (its position at t = 0).  A positive
+    height opens the gap (seed 000 eq 3 sign of :mod:`.solver`)."""
+
+    amplitude_m: float
+    wavelength_m: float
+    surfaces: Tuple[int, ...] = (1,)
+    phase_rad: float = 0.0
+
+    def __post_init__(self):
+        if not (math.isfinite(self.amplitude_m) and self.amplitude_m >= 0.0):
+            raise EHLInputError(f"amplitude_m={self.amplitude_m!r}: must be finite and >= 0 (m)")
+        if not (math.isfinite(self.wavelength_m) and self.wavelength_m > 0.0):
+            raise EHLInputError(f"wavelength_m={self.wavelength_m!r}: must be finite and > 0 (m)")
+        s = tuple(self.surfaces)
+        if not s or any(k not in (1, 2) for k in s) or len(set(s)) != len(s):
+            raise EHLInputError(f"surfaces={self.surfaces!r}: must be (1,), (2,) or (1, 2)")
+        if not math.isfinite(self.phase_rad):
+            raise EHLInputError(f"phase_rad={self.phase_rad!r}: must be finite")
+
+    def surface_height_m(self, surface: int, xi_m: np.ndarray) -> np.ndarray:
+        if surface not in self.surfaces:
+            return np.zeros_like(xi_m)
+        return self.amplitude_m * np.cos(2.0 * math.pi * xi_m / self.wavelength_m
+                                         + self.phase_rad)
+
+
+@dataclass(frozen=True)
+class FlankSliceRoughness:
+    """The roughness of one face-width slice of a :class:`.mesh_film.FlankRoughness`
+    at contact arc lengths ``a1_m``, ``a2_m`` (pinion / gear flank, m) at t = 0:
+    wm(x, t) = z1(a1 + u1 t - x) + z2(a2 - u2 t + x) (seed 000 eq 3,
+    ``FlankRoughness.composite_m`` with the flanks moving)."""
+
+    flank: object
+    slice_index: int
+    a1_m: float
+    a2_m: float
+
+    def __post_init__(self):
+        n = getattr(self.flank, "n_slices", None)
+        if n is None:
+            raise EHLInputError("flank: must be a gearfmu.ehl.mesh_film.FlankRoughness")
+        if int(self.slice_index) != self.slice_index or not 0 <= self.slice_index < n:
+            raise EHLInputError(f"slice_index={self.slice_index!r}: must be in 0..{n - 1}")
+        for k in ("a1_m", "a2_m"):
+            if not math.isfinite(getattr(self, k)):
+                raise EHLInputError(f"{k}={getattr(self, k)!r}: must be finite (m)")
+
+    def surface_height_m(self, surface: int, xi_m: np.ndarray) -> np.ndarray:
+        fr, j = self.flank, int(self.slice_index)
+        if surface == 1:
+            return np.interp(self.a1_m - xi_m, fr.a1_m, fr.z1_m[j])
+        return np.interp(self.a2_m + xi_m, fr.a2_m, fr.z2_m[j])
+
+
+class _Profiles:
+    """Two callables of the material coordinate xi (m) -> height (m)."""
+
+    def __init__(self, f1, f2):
+        self.f = (f1, f2)
+
+    def surface_height_m(self, surface, xi_m):
+        fn = self.f[surface - 1]
+        if fn is None:
+            return np.zeros_like(xi_m)
+        z = np.asarray(fn(xi_m), float)
+        if z.shape != xi_m.shape or not np.all(np.isfinite(z)):
+            raise EHLInputError(f"roughness[{surface - 1}]: must return finite heights (m), "
+                                "one per position")
+        return z
+
+
+RoughnessInput = Union[None, HarmonicWaviness, FlankSliceRoughness,
+                       Tuple[Optional[Callable], Optional[Callable]]]
+
+
+def _roughness_model(roughness):
+    if roughness is None or isinstance(roughness, (HarmonicWaviness, FlankSliceRoughness)):
+        return roughness
+    if isinstance(roughness, tuple) and len(roughness) == 2 and \
+            all(r is None or callable(r) for r in roughness):
+        return _Profiles(*roughness)
+    raise EHLInputError("roughness: must be None, HarmonicWaviness, FlankSliceRoughness or a "
+                        "pair (z1, z2) of functions of the surface coordinate (m) or None")
+
+
+# --------------------------------------------------------------------------- parameters
+def dimensionless_params(res: LineContactResult, viscosity: str = "roelands",
+                         compressible: bool = True) -> EHLParams:
+    """The :class:`.multigrid.EHLParams` of a steady result (the formulas of
+    :func:`.solver.solve_line_contact`: lambda-bar = 3 pi^2/(8 M^2), Roelands
+    A = ln eta0 + 9.67, z = alpha p0/A (seed 000 eq 5) or Barus, D-H c1, eq 6)."""
+    eta0, alpha = res.inputs["eta0_Pas"], res.inputs["alpha_Pa_inv"]
+    A = math.log(eta0) - ROELANDS_LN_ETA_INF
+    if viscosity == "roelands":
+        z, A_k = alpha * ROELANDS_P0_PA / A, A
+    elif viscosity == "barus":
+        z, A_k = (-1.0 if alpha > 0 else 0.0), alpha * res.ph_Pa
+    else:
+        raise EHLInputError(f"viscosity={viscosity!r}: must be 'roelands' or 'barus'")
+    return EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * res.M ** 2), A=A_k, z=z,
+                     php0=res.ph_Pa / ROELANDS_P0_PA, c1=DH_C1_PA / res.ph_Pa,
+                     compressible=bool(compressible), x_in=float(res.X[0]),
+                     x_out=float(res.X[-1]))
+
+
+# --------------------------------------------------------------------------- result
+@dataclass
+class TransientLineContactResult:
+    """Time series of :func:`solve_line_contact_transient` (SI unless named
+    dimensionless).  Index 0 is the steady frozen-roughness start (T = 0)."""
+
+    T: np.ndarray                  #: dimensionless time t u_s / b
+    t_s: np.ndarray                #: time, s
+    h_central_m: np.ndarray        #: film at x = 0, m
+    h_min_m: np.ndarray            #: minimum film, m
+    h_mean_m: np.ndarray           #: mean film on |x| <= b, m
+    p_mean_Pa: np.ndarray          #: mean pressure on |x| <= b, Pa
+    k_film_N_per_m: np.ndarray     #: seed 000 eq 8 film stiffness of a width_m slice, N/m
+    cycles: np.ndarray             #: W-cycles per step (0 at T = 0)
+    attempts: np.ndarray           #: index of the relaxation setting that converged per step
+    dT: float                      #: time step, dimensionless (b/u_s units)
+    dt_s: float                    #: time step, s
+    scheme: str
+    U1: float                      #: u1/u_s
+    U2: float                      #: u2/u_s
+    width_m: float                 #: slice width used for k, m
+    x_m: np.ndarray                #: grid, m
+    X: np.ndarray                  #: grid, x/b
+    p_Pa: np.ndarray               #: pressure at the last step, Pa
+    h_m: np.ndarray                #: film at the last step, m
+    b_m: float
+    ph_Pa: float
+    M: float
+    L: float
+    steady: LineContactResult      #: the steady start (T = 0)
+    cpu_time_s: float              #: process time of the time loop, s
+    wall_time_s: float             #: wall time of the time loop, s
+    settings: Dict = field(default_factory=dict)   #: relaxation setting of the last step
+    B0_Pa: float = B0_DEFAULT_PA       #: Tait B0 used for k, Pa (seed 000 eq 9)
+    B0_prime: float = B0_PRIME_DEFAULT  #: Tait B0' used for k
+
+    @property
+    def srr(self) -> float:
+        """Slide-to-roll ratio (u1 - u2)/u_s."""
+        return self.U1 - self.U2
+
+    @property
+    def T_wash(self) -> float:
+        """Dimensionless time for the start-up error to leave the domain with
+        the slower moving surface: (x_out - x_in)/min(U1, U2) (0 if a surface is at rest)."""
+        u = min(self.U1, self.U2)
+        return 0.0 if u <= 0.0 else float(self.X[-1] - self.X[0]) / u
+
+    def window(self, T_start: Optional[float] = None, T_end: Optional[float] = None) -> np.ndarray:
+        """Boolean mask of the time levels with T_start <= T <= T_end (defaults:
+        T_wash and the end of the run)."""
+        a = self.T_wash if T_start is None else float(T_start)
+        b = self.T[-1] if T_end is None else float(T_end)
+        m = (self.T >= a - 1e-12) & (self.T <= b + 1e-12)
+        if m.sum() < 2:
+            raise EHLInputError(f"T_start={a!r}, T_end={b!r}: fewer than 2 time levels in the "
+                                f"window (run ends at T = {self.T[-1]:.4g}); run more n_steps")
+        return m
+
+    def film_stiffness_reductions(self, T_start=None, T_end=None) -> Dict[str, float]:
+        """docs/ehl_transient.md section 3: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
+        (b) ``k_of_means_N_per_m`` = A B(<p_m>)/<h_m> (seed 000 eq 8 on time means),
+        plus the window means of h_m, p_m and h_central."""
+        m = self.window(T_start, T_end)
+        kb = film_stiffness_N_per_m(2.0 * self.b_m * self.width_m, float(self.h_mean_m[m].mean()),
+                                    float(self.p_mean_Pa[m].mean()), self.B0_Pa,
+                                    self.B0_prime)
+        return dict(k_mean_of_k_N_per_m=float(self.k_film_N_per_m[m].mean()),
+                    k_of_means_N_per_m=float(kb), h_mean_m=float(self.h_mean_m[m].mean()),
+                    p_mean_Pa=float(self.p_mean_Pa[m].mean()),
+                    h_central_mean_m=float(self.h_central_m[m].mean()), n_samples=int(m.sum()))
+
+    def central_amplitude_m(self, T_start=None, T_end=None) -> float:
+        """Half the peak-to-peak of h_central over the window, m (the deformed
+        amplitude A_d of Venner et al. 1997 for a harmonic waviness)."""
+        m = self.window(T_start, T_end)
+        return 0.5 * float(np.ptp(self.h_central_m[m]))
+
+
+# --------------------------------------------------------------------------- solver
+def _finite(name, v, lo=None, lo_open=False):
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        raise EHLInputError(f"{name} must be a number, got {v!r}") from None
+    if not math.isfinite(v) or (lo is not None and (v < lo or (lo_open and v == lo))):
+        raise EHLInputError(f"{name}={v!r}: must be finite and {'>' if lo_open else '>='} {lo}")
+    return v
+
+
+def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
+                                 w_N_per_m: float = None, u_m_s: float = None,
+                                 eta0_Pas: float = None, alpha_Pa_inv: float = None,
+                                 rho0_kg_m3: float = 870.0, *, M: float = None, L: float = None,
+                                 roughness: RoughnessInput = None, srr: float = 0.0,
+                                 speed_ratios: Optional[Tuple[float, float]] = None,
+                                 n_steps: Optional[int] = None, dT: Optional[float] = None,
+                                 scheme: str = "bdf2", n_nodes: Optional[int] = None,
+                                 n_coarse: Optional[int] = None, x_in: float = -4.5,
+                                 x_out: float = 1.5, compressible: bool = True,
+                                 viscosity: str = "roelands", tol_pressure: float = 1e-5,
+                                 tol_load: float = 1e-6, tol_residual: float = 1e-6,
+                                 max_cycles_per_step: int = 40, width_m: float = 1.0,
+                                 B0_Pa: float = B0_DEFAULT_PA,
+                                 B0_prime: float = B0_PRIME_DEFAULT,
+                                 extrapolate: bool = True,
+                                 relaxation_settings=None,
+                                 steady_options: Optional[dict] = None
+                                 ) -> TransientLineContactResult:
+    """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
+
+    Inputs as :func:`.solver.solve_line_contact`: the dimensional ``R_m``,
+    ``E_Pa``, ``w_N_per_m``, ``u_m_s`` (entrainment speed u_s), ``eta0_Pas``,
+    ``alpha_Pa_inv`` or Moes' ``M``, ``L``; the load is constant in time.
+    ``roughness``: None (smooth), :class:`HarmonicWaviness`,
+    :class:`FlankSliceRoughness` or a pair (z1, z2) of functions of each
+    surface's material coordinate (m, its position at t = 0; None = smooth).
+    Surface speeds: ``srr`` = (u1 - u2)/u_s (U1 = 1 + srr/2, U2 = 1 - srr/2)
+    or ``speed_ratios`` = (U1, U2) directly (e.g. (0, 0): frozen roughness).
+    ``dT``: time step in units of b/u_s (default dX, Courant 1); ``n_steps``:
+    default (T_wash + T_AVERAGE)/dT with T_wash = (x_out - x_in)/min(U1, U2).
+    ``scheme``: "bdf2" (BDF1 first step) or "bdf1".  Per step: W-cycles until
+    the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
+    scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
+    ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
+    ``steady_options``: extra keyword arguments of the steady start solve.
+    ``extrapolate``: linear extrapolation of P, H0 from the last two steps as
+    the warm start (False: the last step's P, H0)."""
+    t_wall0 = time.perf_counter()
+    model = _roughness_model(roughness)
+    if speed_ratios is not None:
+        if np.ndim(speed_ratios) != 1 or len(speed_ratios) != 2:
+            raise EHLInputError(f"speed_ratios={speed_ratios!r}: must be a pair (U1, U2)")
+        U1 = _finite("speed_ratios[0]", speed_ratios[0], 0.0)
+        U2 = _finite("speed_ratios[1]", speed_ratios[1], 0.0)
+    else:
+        srr = _finite("srr", srr)
+        if not -2.0 <= srr <= 2.0:
+            raise EHLInputError(f"srr={srr!r}: must be in [-2, 2] (both surfaces moving in +x)")
+        U1, U2 = 1.0 + 0.5 * srr, 1.0 - 0.5 * srr
+    if scheme not in ("bdf1", "bdf2"):
+        raise EHLInputError(f"scheme={scheme!r}: must be 'bdf1' or 'bdf2'")
+    width_m = _finite("width_m", width_m, 0.0, True)
+    mc = int(max_cycles_per_step)
+    if mc < 1:
+        raise EHLInputError(f"max_cycles_per_step={max_cycles_per_step!r}: must be >= 1")
+    steady_kw = dict(steady_options or {})
+    for k in ("roughness_m", "M", "L", "n_nodes", "n_coarse", "x_in", "x_out", "compressible",
+              "viscosity"):
+        if k in steady_kw:
+            raise EHLInputError(f"steady_options: {k!r} is an argument of the transient solver")
+
+    def wm_m(x_m, t_s, u_s):
+        """Composite roughness (m) at positions x_m and time t_s."""
+        return (model.surface_height_m(1, x_m - U1 * u_s * t_s)
+                + model.surface_height_m(2, x_m - U2 * u_s * t_s))
+
+    # ---- steady frozen-roughness start (T = 0)
+    rough0 = None
+    if model is not None:
+        def rough0(x_m):
+            return wm_m(np.asarray(x_m, float), 0.0, 1.0)
+    steady = solve_line_contact(R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv, rho0_kg_m3,
+                                M=M, L=L, roughness_m=rough0, compressible=compressible,
+                                viscosity=viscosity, n_nodes=n_nodes, n_coarse=n_coarse,
+                                x_in=x_in, x_out=x_out, tol_pressure=tol_pressure,
+                                tol_load=tol_load, tol_residual=tol_residual,
+                                roughness_min_wavelength_dX=0.0, **steady_kw)
+    prm = dimensionless_params(steady, viscosity, compressible)
+    n_nodes = steady.X.size
+    n_levels = steady.grid_levels
+    n_coarse = (n_nodes - 1) // 2 ** (n_levels - 1)
+    b_m, ph_Pa, R = steady.b_m, steady.ph_Pa, steady.inputs["R_m"]
+    u_s = steady.inputs["u_m_s"]
+    scale_H = R / b_m ** 2
+    first = dict(steady.residuals["settings"])
+    solver = FlatMultigrid(prm, n_levels, n_coarse, None, **_flat_opts(first))
+    top = solver.top
+    dX = float(solver.dx[top])
+    dT = dX if dT is None else _finite("dT", dT, 0.0, True)
+    dt_s = dT * b_m / u_s
+    T_wash = 0.0 if min(U1, U2) <= 0 else (x_out - x_in) / min(U1, U2)
+    if n_steps is None:
+        n_steps = int(math.ceil((T_wash + T_AVERAGE) / dT))
+    if int(n_steps) != n_steps or n_steps < 1:
+        raise EHLInputError(f"n_steps={n_steps!r}: must be an integer >= 1")
+    n_steps = int(n_steps)
+
+    def set_base(T):
+        for l in range(n_levels):
+            Xl = solver.X[l]
+            w = 0.0 if model is None else wm_m(Xl * b_m, T * b_m / u_s, u_s) * scale_H
+            solver.base[solver._sl(l)] = 0.5 * Xl ** 2 + w
+
+    set_base(0.0)
+    Hc0 = float(np.interp(0.0, steady.X, steady.H))
+    solver.start(steady.P, Hc0)
+    Xt = solver.X[top]
+    band = np.abs(Xt) <= 1.0
+    area = 2.0 * b_m * width_m
+    Bc = (float(B0_Pa), float(B0_prime))
+
+    nT = n_steps + 1
+    out = {k: np.empty(nT) for k in ("hc", "hmin", "hm", "pm", "k")}
+    cycles = np.zeros(nT, dtype=np.int64)
+    attempts = np.zeros(nT, dtype=np.int64)
+
+    def record(n):
+        H = solver.level_H()
+        P = solver.level_P()
+        h = H / scale_H
+        if not np.all(np.isfinite(h)):
+            raise EHLConvergenceError(f"transient step {n} (T = {n * dT:.4g}): film not finite",
+                                      "pressure_change", float("nan"))
+        imin = int(np.argmin(h))
+        if h[imin] <= 0.0:
+            raise FilmCollapseError(
+                f"film collapse at transient step {n} (T = {n * dT:.4g}, t = {n * dt_s:.4g} s): "
+                f"h = {h[imin]:.3e} m <= 0 at x = {Xt[imin] * b_m:.4e} m; the full-film model "
+                "(seed 000) does not hold", x_m=float(Xt[imin] * b_m), h_min_m=float(h[imin]))
+        out["hc"][n] = float(np.interp(0.0, Xt, h))
+        out["hmin"][n] = float(h[imin])
+        out["hm"][n] = float(np.mean(h[band]))
+        out["pm"][n] = float(np.mean(P[band])) * ph_Pa
+        out["k"][n] = film_stiffness_N_per_m(area, out["hm"][n], out["pm"][n], *Bc)
+
+    record(0)
+    # settings: the steady start's first, then the others
+    if relaxation_settings is None:
+        order = [dict(s) for s in TRANSIENT_RELAXATION_SETTINGS]
+        order += [dict(s) for s in RELAXATION_SETTINGS if dict(s) not in order]
+    else:
+        order = [dict(s) for s in relaxation_settings]
+        if not order:
+            raise EHLInputError("relaxation_settings: need at least one settings dict")
+    cur = 0
+    P_hist = [solver.level_P().copy()]
+    H0_hist = [float(solver.H0[top])]
+    rH = [solver.rho_H()]
+    t_cpu0 = time.process_time()
+    for n in range(1, n_steps + 1):
+        T = n * dT
+        set_base(T)
+        bdf2 = scheme == "bdf2" and n >= 2
+        if bdf2:
+            ct = 1.5 / dT
+            f_old = (-2.0 * rH[-1] + 0.5 * rH[-2]) / dT
+        else:
+            ct = 1.0 / dT
+            f_old = -rH[-1] / dT
+        if extrapolate and n >= 2:
+            P_start = np.clip(2.0 * P_hist[-1] - P_hist[-2], 0.0, None)
+            H0_start = 2.0 * H0_hist[-1] - H0_hist[-2]
+        else:
+            P_start, H0_start = P_hist[-1], H0_hist[-1]
+        ok = False
+        tried = [cur] + [k for k in range(len(order)) if k != cur]
+        for k in tried:
+            o = dict(OPT_DEFAULTS)
+            o.update(_flat_opts(order[k]))
+            solver.opts.clear()
+            solver.opts.update(o)
+            sl = solver._sl(top)
+            solver.P[sl] = P_start
+            solver.P[sl.start] = solver.P[sl.stop - 1] = 0.0
+            solver.tauH[:] = 0.0
+            solver.H0[top] = H0_start
+            solver.mode[:] = 0
+            solver.update_film(top)
+            solver.set_time_term(ct, f_old)
+            ok, nc, h = solver.iterate(max_cycles=mc, min_cycles=1, tol_pressure=tol_pressure,
+                                       tol_load=tol_load, tol_residual=tol_residual,
+                                       stall_window=STALL_WINDOW)
+            ncyc = nc
+            dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
+            if not ok and math.isfinite(dp) and dp < FREEZE_BELOW_PRESSURE_CHANGE:
+                solver.opts["freeze"] = 1
+                ok, nc, h2 = solver.iterate(max_cycles=mc, min_cycles=1,
+                                            tol_pressure=tol_pressure, tol_load=tol_load,
+                                            tol_residual=tol_residual,
+                                            stall_window=FROZEN_STALL_WINDOW)
+                solver.opts["freeze"] = 0
+                ncyc += nc
+                if h2["pressure_change"]:
+                    h = h2
+            cycles[n] += ncyc
+            if ok:
+                cur = k
+                break
+        if not ok:
+            last = {q: (h[q][-1] if h[q] else float("nan"))
+                    for q in ("pressure_change", "load_balance", "reynolds_residual")}
+            if not last["pressure_change"] < tol_pressure:
+                name, val, tol = "pressure_change", last["pressure_change"], tol_pressure
+            elif not last["reynolds_residual"] < tol_residual:
+                name, val, tol = "reynolds_residual", last["reynolds_residual"], tol_residual
+            else:
+                name, val, tol = "load_balance", last["load_balance"], tol_load
+            raise EHLConvergenceError(
+                f"transient step {n} of {n_steps} (T = {T:.4g}, t = {T * b_m / u_s:.4g} s) did "
+                f"not converge on any of {len(order)} relaxation settings: residual '{name}' "
+                f"stalled at {val:.3e} (tolerance {tol:.1e}); reynolds_residual="
+                f"{last['reynolds_residual']:.3e}", residual_name=name, value=val, history=h)
+        attempts[n] = cur
+        record(n)
+        P_hist = [P_hist[-1], solver.level_P().copy()]
+        H0_hist = [H0_hist[-1], float(solver.H0[top])]
+        rH = [rH[-1], solver.rho_H()]
+    cpu = time.process_time() - t_cpu0
+    Tv = np.arange(nT) * dT
+    res = TransientLineContactResult(
+        T=Tv, t_s=Tv * b_m / u_s, h_central_m=out["hc"], h_min_m=out["hmin"],
+        h_mean_m=out["hm"], p_mean_Pa=out["pm"], k_film_N_per_m=out["k"], cycles=cycles,
+        attempts=attempts, dT=float(dT), dt_s=float(dt_s), scheme=scheme, U1=float(U1),
+        U2=float(U2), width_m=width_m, x_m=Xt * b_m, X=Xt.copy(),
+        p_Pa=solver.level_P() * ph_Pa, h_m=solver.level_H() / scale_H, b_m=b_m, ph_Pa=ph_Pa,
+        M=steady.M, L=steady.L, steady=steady, cpu_time_s=cpu,
+        wall_time_s=time.perf_counter() - t_wall0,
+        settings=dict(order[cur]), B0_Pa=Bc[0], B0_prime=Bc[1])
+    return res
+
+
+# --------------------------------------------------------------------------- amplitude reduction
+def waviness_nabla(wavelength_b: float, M: float, L: float) -> float:
+    """Venner, Couhier, Lubrecht & Greenwood (1997) line-contact wavelength
+    parameter nabla = (lambda/b) M^(3/4) / L^(1/2) (docs/ehl_transient.md section 4)."""
+    return float(wavelength_b) * float(M) ** 0.75 / math.sqrt(float(L))
+
+
+def waviness_amplitude_ratio(M: float, L: float, wavelength_b: float,
+                             amplitude_Hc: float = 0.1, *, surfaces=(1,), srr: float = 0.0,
+                             n_nodes: int = 257, periods_averaged: int = 1,
+                             steps_per_period: Optional[int] = None, **kw) -> Dict[str, float]:
+    """Amplitude reduction A_d/A_i of a harmonic waviness (Venner et al. 1997).
+
+    Waviness of amplitude A_i = ``amplitude_Hc`` x the smooth steady central
+    film on ``surfaces`` with wavelength ``wavelength_b`` x b, run from the
+    steady frozen start through the wash-out T_wash = (x_out - x_in)/min(U1, U2)
+    plus ``periods_averaged`` + 1 periods of the slowest wave pattern (period
+    lambda/(b U) in T); dT = period/ceil(period/dX) (Courant <= 1, whole steps per
+    period).  A_d = half the peak-to-peak of h(x = 0) over the last
+    ``periods_averaged`` periods (the deformed amplitude at the contact centre,
+    CHOICE: Venner et al.'s "amplitude at X = 0").  Returns A_d/A_i, nabla,
+    the periodicity defect (max |h_c(T) - h_c(T - period)| / h_c over the last
+    period), the mean cycles per step and the CPU time of the time loop."""
+    from .solver import solve_line_contact as _steady
+    M = _finite("M", M, 0.0, True)
+    L = _finite("L", L, 0.0, True)
+    wavelength_b = _finite("wavelength_b", wavelength_b, 0.0, True)
+    amplitude_Hc = _finite("amplitude_Hc", amplitude_Hc, 0.0, True)
+    smooth = _steady(M=M, L=L, n_nodes=n_nodes)
+    U = [1.0 + 0.5 * srr, 1.0 - 0.5 * srr]
+    Umin = min(U[s - 1] for s in surfaces)
+    if Umin <= 0.0:
+        raise EHLInputError(f"srr={srr!r}: the wavy surface must move (U > 0)")
+    period = wavelength_b / Umin
+    dX = float(smooth.X[1] - smooth.X[0])
+    k = int(steps_per_period) if steps_per_period else int(math.ceil(period / dX))
+    dT = period / k
+    T_wash = float(smooth.X[-1] - smooth.X[0]) / min(U)
+    n_steps = int(math.ceil(T_wash / dT)) + (int(periods_averaged) + 1) * k
+    A_i = amplitude_Hc * smooth.h_central_m
+    wav = HarmonicWaviness(A_i, wavelength_b * smooth.b_m, tuple(surfaces))
+    r = solve_line_contact_transient(M=M, L=L, n_nodes=n_nodes, roughness=wav, srr=srr,
+                                     dT=dT, n_steps=n_steps, **kw)
+    hc = r.h_central_m
+    last = hc[-k:]
+    prev = hc[-2 * k:-k]
+    A_d = 0.5 * float(np.ptp(hc[-int(periods_averaged) * k:]))
+    return dict(M=M, L=L, wavelength_b=wavelength_b, nabla=waviness_nabla(wavelength_b, M, L),
+                amplitude_Hc=amplitude_Hc, A_i_m=A_i, A_d_m=A_d, ratio=A_d / A_i,
+                periodicity_defect=float(np.max(np.abs(last - prev)) / smooth.h_central_m),
+                h_central_smooth_m=smooth.h_central_m, n_steps=n_steps, dT=dT,
+                cycles_per_step=float(r.cycles[1:].mean()),
+                cycles_per_step_max=int(r.cycles.max()), cpu_time_s=r.cpu_time_s,
+                cpu_per_step_ms=1e3 * r.cpu_time_s / n_steps)
+
+
+# --------------------------------------------------------------------------- gear contact
+def flank_slice_case(env, s_m: float, w_N_per_m: float, slice_index: Optional[int] = None
+                     ) -> Dict[str, object]:
+    """Keyword arguments of :func:`solve_line_contact_transient` for one slice of
+    a gear contact at LOA position ``s_m`` (m from N1) and line load
+    ``w_N_per_m`` (option A of docs/ehl_transient.md: R, u_s, SRR and w frozen
+    at the node, only the roughness moves).  ``env`` is a
+    :class:`gearfmu.contact_models.ContactEnvironment`; R, u_s and the sliding
+    speed from :func:`.mesh_film.contact_kinematics`, srr = (u1 - u2)/u_s, the
+    flank arc lengths a_i = rho_i^2/(2 r_bi) at the contact (t = 0);
+    ``slice_index`` None: smooth."""
+    from .mesh_film import contact_kinematics, involute_arc_length_m
+
+    fenv = env.film_environment()
+    R, u_s, slide = (float(np.asarray(v).ravel()[0]) for v in
+                     contact_kinematics(env.geom, np.array([s_m], float), env.omega1_rad_s))
+    kw = dict(R_m=R, E_Pa=fenv.E_prime_Pa, w_N_per_m=float(w_N_per_m), u_m_s=u_s,
+              eta0_Pas=fenv.eta0_Pas, alpha_Pa_inv=fenv.alpha_Pa_inv, rho0_kg_m3=fenv.rho0_kg_m3,
+              srr=slide / u_s, width_m=fenv.width_m, B0_Pa=fenv.B0_Pa, B0_prime=fenv.B0_prime)
+    if slice_index is not None:
+        a1 = float(involute_arc_length_m(env.geom.roll_length_at(1, s_m), env.geom.rb1_m))
+        a2 = float(involute_arc_length_m(env.geom.roll_length_at(2, s_m), env.geom.rb2_m))
+        kw["roughness"] = FlankSliceRoughness(env.flanks(), int(slice_index), a1, a2)
+    return kw
