@@ -210,6 +210,46 @@ def test_T3_pure_rolling_waviness_reaches_a_periodic_state():
     assert d["cycles_per_step"] < 10                            # measured 3.7
 
 
+# ------------------------------------------------------------------------- T4-T6
+def test_T4_amplitude_ratio_does_not_depend_on_the_amplitude():
+    # Reference: Venner et al. 1997 -- A_d/A_i independent of A_i.
+    # Measured (257 nodes): 0.6138 (A_i = 0.05 H_c), 0.6148 (0.2 H_c).
+    from gearfmu.ehl.transient import waviness_amplitude_ratio
+    a = waviness_amplitude_ratio(20.0, 10.0, 1.0, 0.05, n_nodes=257)["ratio"]
+    b = waviness_amplitude_ratio(20.0, 10.0, 1.0, 0.2, n_nodes=257)["ratio"]
+    assert abs(a - b) < 0.02
+    assert 0.2 < a < 0.95                                       # a real reduction
+
+
+def test_T5_amplitude_ratio_collapses_on_nabla():
+    # Reference: Venner et al. 1997 -- A_d/A_i = F(nabla) for all (M, L), nabla =
+    # (lambda/b) M^(3/4)/L^(1/2).  Two loads at nabla ~ 3; 513 nodes (the wave at
+    # M = 50 has lambda = 0.5 b: 21 nodes per wavelength on 257 damp it numerically,
+    # 0.552 vs 0.596 on 513).  Measured (513): 0.611 (M = 20), 0.596 (M = 50).
+    from gearfmu.ehl.transient import waviness_amplitude_ratio, waviness_nabla
+    lam50 = 1.0 * waviness_nabla(1.0, 20.0, 10.0) / waviness_nabla(1.0, 50.0, 10.0)
+    a = waviness_amplitude_ratio(20.0, 10.0, 1.0, 0.1, n_nodes=513)
+    b = waviness_amplitude_ratio(50.0, 10.0, lam50, 0.1, n_nodes=513)
+    assert a["nabla"] == pytest.approx(b["nabla"], rel=1e-12)
+    assert abs(a["ratio"] - b["ratio"]) < 0.05
+
+
+def test_T6_amplitude_ratio_limits_and_monotone():
+    # Reference: Venner et al. 1997 -- short waves (nabla << 1) hardly deformed,
+    # long waves nearly vanish.  CHOICE thresholds: > 0.9 at nabla ~ 0.5
+    # (M = 5, L = 10, lambda = 0.5 b; measured 0.950 on 257 nodes, 0.994 on 513),
+    # < 0.2 at nabla >= 20 (measured 0.073), monotone in between (M = 20, L = 10).
+    from gearfmu.ehl.transient import waviness_amplitude_ratio
+    short = waviness_amplitude_ratio(5.0, 10.0, 0.5, 0.1, n_nodes=257)
+    assert short["nabla"] < 0.6 and short["ratio"] > 0.9
+    scan = [waviness_amplitude_ratio(20.0, 10.0, lam, 0.1, n_nodes=257)
+            for lam in (0.5, 1.0, 2.0, 4.0, 6.7)]
+    nab = [d["nabla"] for d in scan]
+    rat = [short["ratio"]] + [d["ratio"] for d in scan]
+    assert nab[-1] >= 20.0 and scan[-1]["ratio"] < 0.2
+    assert all(x > y for x, y in zip(rat[:-1], rat[1:])), rat
+
+
 # ------------------------------------------------------------------------- errors
 def test_bad_inputs_name_the_field():
     from gearfmu.ehl import EHLInputError
