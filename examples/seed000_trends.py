@@ -3,6 +3,7 @@
 the line of action and across the face (Fig. 9), TVMS curves (Figs. 12-15).
 
     python examples/seed000_trends.py [--json] [--points-per-mesh 4] [--slices 2] [--out DIR]
+                                      [--also-policy load_sharing]
 
 --json prints one JSON object (mean TVMS in N/m per contact model, speed and torque); PNG, CSV and
 JSON files go to examples/output/seed000_trends/.  Coarse defaults (4 points per mesh period,
@@ -31,7 +32,7 @@ TORQUES = (1000.0, 2000.0, 3000.0)   # N m (seed 000 Fig. 15 uses several torque
 SPEEDS = (1000.0, 2000.0, 4000.0)    # rpm (Fig. 14)
 
 
-def run(ppm: int, slices: int, out: Path, log=print) -> dict:
+def run(ppm: int, slices: int, out: Path, log=print, policies=()) -> dict:
     from gearfmu.contact_models import RoughnessSpec, environment_from_scene
     from gearfmu.precompute import precompute_tables
     from gearfmu.scene import load_scene
@@ -41,12 +42,13 @@ def run(ppm: int, slices: int, out: Path, log=print) -> dict:
               "torques_Nm": list(TORQUES), "mean_tvms_N_per_m": {}, "speed_rpm": {}, "notes": {}}
     curves = {}
 
-    def tables(model, level=None, speed_rpm=2000.0, torques=TORQUES):
+    def tables(model, level=None, speed_rpm=2000.0, torques=TORQUES, policy=None):
         sc = dataclasses.replace(base, operating=dataclasses.replace(base.operating,
                                                                      speed_rad_s=speed_rpm * math.pi / 30))
         opts = dataclasses.replace(sc.mesh, contact_model=model, slices=slices)
         sc = dataclasses.replace(sc, mesh=opts)
-        kw = {"roughness": RoughnessSpec.from_level(level)} if level else {}
+        kw = {"roughness": RoughnessSpec.from_level(level, **({"on_failure": policy} if policy else {}))} \
+            if level else {}
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -59,8 +61,9 @@ def run(ppm: int, slices: int, out: Path, log=print) -> dict:
 
     for name, model, level in (("hertz", "hertz", None), ("smooth", "smooth_ehl", None),
                                ("rough_level_1", "rough_ehl", 1), ("rough_level_2", "rough_ehl", 2),
-                               ("rough_level_3", "rough_ehl", 3), ("rough_level_4", "rough_ehl", 4)):
-        tab = tables(model, level)
+                               ("rough_level_3", "rough_ehl", 3), ("rough_level_4", "rough_ehl", 4)) + tuple(
+            (f"rough_level_{lv}+{pol}", "rough_ehl", lv) for pol in policies for lv in (3, 4)):
+        tab = tables(model, level, policy=name.split("+")[1] if "+" in name else None)
         k = tab.k_N_per_m.sum(axis=1)                       # (torques, N) total TVMS
         result["mean_tvms_N_per_m"][name] = {f"{t:g}": float(v) for t, v in zip(TORQUES, k.mean(axis=1))}
         c = tab.provenance.get("contact", {})
@@ -187,9 +190,12 @@ def main(argv=None) -> int:
     ap.add_argument("--points-per-mesh", type=int, default=4)
     ap.add_argument("--slices", type=int, default=2)
     ap.add_argument("--out", default=str(ROOT / "examples" / "output" / "seed000_trends"))
+    ap.add_argument("--also-policy", action="append", default=[], metavar="POLICY",
+                    help="add levels 3-4 with this [roughness] on_film_failure (e.g. load_sharing) as "
+                         "rows 'rough_level_N+POLICY'")
     a = ap.parse_args(argv)
     log = (lambda *x: print(*x, file=sys.stderr, flush=True))
-    res = run(a.points_per_mesh, a.slices, Path(a.out), log)
+    res = run(a.points_per_mesh, a.slices, Path(a.out), log, policies=tuple(a.also_policy))
     if a.json:
         print(json.dumps(res))
     else:
