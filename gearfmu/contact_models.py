@@ -37,7 +37,9 @@ Models here:
   (:mod:`gearfmu.fractal_contact`) there, ``"hertz"`` the Hertz stiffness
   (seed 000 section 5.1: at high roughness the mesh stiffness approaches the
   Hertz value), ``"error"`` raises :class:`ContactModelError` naming the
-  position, the slice and Lambda.  Every switched point is recorded.
+  position, the slice and Lambda, ``"load_sharing"`` lets film and asperities
+  share the load (Johnson, Greenwood & Poon 1972; :func:`load_sharing_stiffness`,
+  :mod:`gearfmu.load_sharing`).  Every switched point is recorded.
   Speed: with ``RoughnessSpec.position_nodes`` > 0 (default) the films are
   solved on a grid of contact positions x loads shared by all pair slots and
   interpolated (:class:`RoughFilmGrid`, docs/ehl_mesh.md "Speed").
@@ -766,7 +768,8 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
             f"rough EHL film: {f0['status']} at s = {f0['s_m'] * 1e3:.4f} mm (LOA from N1), slice "
             f"{f0['slice']}, film parameter lambda = h_min/sigma = {f0['film_parameter']:.3g} "
             f"(full-film limit {spec.full_film_parameter:g}; {len(failures)} of {s.size} requests; roughness "
-            f"level {spec.level}); set [roughness] on_film_failure = 'fractal_mixed' or 'hertz' to continue")
+            f"level {spec.level}); set [roughness] on_film_failure = 'fractal_mixed', 'load_sharing' or 'hertz' to "
+            "continue")
     rest = ~np.isfinite(k)
     if np.any(rest):
         k[rest] = film_failure_stiffness(env, s[rest], n[rest], w[rest])
