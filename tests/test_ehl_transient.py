@@ -210,6 +210,24 @@ def test_T3_pure_rolling_waviness_reaches_a_periodic_state():
     assert d["cycles_per_step"] < 10                            # measured 3.7
 
 
+def test_T3b_smooth_start_with_ramp_reaches_the_same_periodic_state():
+    # Reference: the periodic state does not depend on the start (start-up error
+    # leaves the domain with the surfaces): frozen start vs smooth start with the
+    # waviness ramped in over T = 1; last period compared point by point.
+    from gearfmu.ehl.transient import HarmonicWaviness, solve_line_contact_transient
+    s = solve_line_contact(M=20.0, L=10.0, n_nodes=257)
+    wav = HarmonicWaviness(0.1 * s.h_central_m, 0.5 * s.b_m)
+    k = 24
+    dT = 0.5 / k
+    n = int(math.ceil((1.0 + 6.0) / dT)) + k
+    a = solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, roughness=wav, dT=dT, n_steps=n)
+    b = solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, roughness=wav, dT=dT, n_steps=n,
+                                     start="smooth", ramp_T=1.0)
+    assert a.start == "frozen" and b.start == "smooth" and b.T_settled == pytest.approx(7.0)
+    assert b.h_central_m[0] == pytest.approx(s.h_central_m, rel=1e-4)    # smooth at T = 0
+    assert np.max(np.abs(a.h_central_m[-k:] - b.h_central_m[-k:])) < 1e-4 * s.h_central_m
+
+
 # ------------------------------------------------------------------------- T4-T6
 def test_T4_amplitude_ratio_does_not_depend_on_the_amplitude():
     # Reference: Venner et al. 1997 -- A_d/A_i independent of A_i.
@@ -264,6 +282,8 @@ def test_bad_inputs_name_the_field():
         solve_line_contact_transient(M=20.0, L=10.0, scheme="cn")
     with pytest.raises(EHLInputError, match="roughness"):
         solve_line_contact_transient(M=20.0, L=10.0, roughness=42)
+    with pytest.raises(EHLInputError, match="start"):
+        solve_line_contact_transient(M=20.0, L=10.0, start="cold")
     with pytest.raises(EHLInputError, match="n_steps"):
         solve_line_contact_transient(M=20.0, L=10.0, n_nodes=257, n_steps=0)
 

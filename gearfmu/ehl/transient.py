@@ -226,6 +226,8 @@ class TransientLineContactResult:
     cpu_time_s: float              #: process time of the time loop, s
     wall_time_s: float             #: wall time of the time loop, s
     settings: Dict = field(default_factory=dict)   #: relaxation setting of the last step
+    start: str = "frozen"              #: "frozen" or "smooth" (roughness ramped in)
+    ramp_T: float = 0.0                #: ramp duration of the smooth start (dimensionless)
     B0_Pa: float = B0_DEFAULT_PA       #: Tait B0 used for k, Pa (seed 000 eq 9)
     B0_prime: float = B0_PRIME_DEFAULT  #: Tait B0' used for k
 
@@ -241,10 +243,15 @@ class TransientLineContactResult:
         u = min(self.U1, self.U2)
         return 0.0 if u <= 0.0 else float(self.X[-1] - self.X[0]) / u
 
+    @property
+    def T_settled(self) -> float:
+        """Start of the default averaging window: ramp_T + T_wash."""
+        return self.ramp_T + self.T_wash
+
     def window(self, T_start: Optional[float] = None, T_end: Optional[float] = None) -> np.ndarray:
         """Boolean mask of the time levels with T_start <= T <= T_end (defaults:
-        T_wash and the end of the run)."""
-        a = self.T_wash if T_start is None else float(T_start)
+        :attr:`T_settled` and the end of the run)."""
+        a = self.T_settled if T_start is None else float(T_start)
         b = self.T[-1] if T_end is None else float(T_end)
         m = (self.T >= a - 1e-12) & (self.T <= b + 1e-12)
         if m.sum() < 2:
@@ -299,7 +306,8 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
                                  B0_Pa: float = B0_DEFAULT_PA,
                                  B0_prime: float = B0_PRIME_DEFAULT,
                                  extrapolate: bool = True,
-                                 relaxation_settings=None,
+                                 relaxation_settings=None, start: str = "frozen",
+                                 ramp_T: float = 1.0,
                                  steady_options: Optional[dict] = None
                                  ) -> TransientLineContactResult:
     """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
@@ -320,7 +328,16 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
     ``steady_options``: extra keyword arguments of the steady start solve.
     ``extrapolate``: linear extrapolation of P, H0 from the last two steps as
-    the warm start (False: the last step's P, H0)."""
+    the warm start (False: the last step's P, H0).
+    ``start``: "frozen" (default; T = 0 is the steady frozen-roughness film,
+    docs/ehl_transient.md section 2), "smooth" (T = 0 is the smooth steady film
+    and the roughness amplitude is ramped linearly from 0 to 1 over ``ramp_T``;
+    CHOICE for rough films whose steady frozen solve stalls, e.g. level 2) or
+    "auto" ("frozen", and "smooth" if the frozen steady solve raises
+    :class:`.errors.EHLConvergenceError`).  The averaging window then starts at
+    ``ramp_T`` + T_wash (:attr:`TransientLineContactResult.T_settled`).
+    ``relaxation_settings``: option dicts of :mod:`.mgcore` tried in turn per step
+    (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones)."""
     t_wall0 = time.perf_counter()
     model = _roughness_model(roughness)
     if speed_ratios is not None:
@@ -333,6 +350,9 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         if not -2.0 <= srr <= 2.0:
             raise EHLInputError(f"srr={srr!r}: must be in [-2, 2] (both surfaces moving in +x)")
         U1, U2 = 1.0 + 0.5 * srr, 1.0 - 0.5 * srr
+    if start not in ("frozen", "smooth", "auto"):
+        raise EHLInputError(f"start={start!r}: must be 'frozen', 'smooth' or 'auto'")
+    ramp_T = _finite("ramp_T", ramp_T, 0.0, True)
     if scheme not in ("bdf1", "bdf2"):
         raise EHLInputError(f"scheme={scheme!r}: must be 'bdf1' or 'bdf2'")
     width_m = _finite("width_m", width_m, 0.0, True)
@@ -355,12 +375,26 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     if model is not None:
         def rough0(x_m):
             return wm_m(np.asarray(x_m, float), 0.0, 1.0)
-    steady = solve_line_contact(R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv, rho0_kg_m3,
-                                M=M, L=L, roughness_m=rough0, compressible=compressible,
-                                viscosity=viscosity, n_nodes=n_nodes, n_coarse=n_coarse,
-                                x_in=x_in, x_out=x_out, tol_pressure=tol_pressure,
-                                tol_load=tol_load, tol_residual=tol_residual,
-                                roughness_min_wavelength_dX=0.0, **steady_kw)
+    def steady_solve(rough):
+        return solve_line_contact(R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv,
+                                  rho0_kg_m3, M=M, L=L, roughness_m=rough,
+                                  compressible=compressible, viscosity=viscosity,
+                                  n_nodes=n_nodes, n_coarse=n_coarse, x_in=x_in, x_out=x_out,
+                                  tol_pressure=tol_pressure, tol_load=tol_load,
+                                  tol_residual=tol_residual, roughness_min_wavelength_dX=0.0,
+                                  **steady_kw)
+
+    ramp = 0.0
+    if start == "smooth" and model is not None:
+        steady, ramp = steady_solve(None), ramp_T
+    else:
+        try:
+            steady = steady_solve(rough0)
+        except EHLConvergenceError:
+            if start != "auto" or model is None:
+                raise
+            steady, ramp = steady_solve(None), ramp_T
+    start_used = "smooth" if ramp > 0.0 else "frozen"
     prm = dimensionless_params(steady, viscosity, compressible)
     n_nodes = steady.X.size
     n_levels = steady.grid_levels
@@ -376,7 +410,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     dt_s = dT * b_m / u_s
     T_wash = 0.0 if min(U1, U2) <= 0 else (x_out - x_in) / min(U1, U2)
     if n_steps is None:
-        n_steps = int(math.ceil((T_wash + T_AVERAGE) / dT))
+        n_steps = int(math.ceil((ramp + T_wash + T_AVERAGE) / dT))
     if int(n_steps) != n_steps or n_steps < 1:
         raise EHLInputError(f"n_steps={n_steps!r}: must be an integer >= 1")
     n_steps = int(n_steps)
@@ -384,7 +418,9 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     def set_base(T):
         for l in range(n_levels):
             Xl = solver.X[l]
-            w = 0.0 if model is None else wm_m(Xl * b_m, T * b_m / u_s, u_s) * scale_H
+            amp = 1.0 if ramp <= 0.0 else min(1.0, T / ramp)
+            w = 0.0 if model is None or amp == 0.0 else \
+                amp * wm_m(Xl * b_m, T * b_m / u_s, u_s) * scale_H
             solver.base[solver._sl(l)] = 0.5 * Xl ** 2 + w
 
     set_base(0.0)
@@ -511,7 +547,8 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         p_Pa=solver.level_P() * ph_Pa, h_m=solver.level_H() / scale_H, b_m=b_m, ph_Pa=ph_Pa,
         M=steady.M, L=steady.L, steady=steady, cpu_time_s=cpu,
         wall_time_s=time.perf_counter() - t_wall0,
-        settings=dict(order[cur]), B0_Pa=Bc[0], B0_prime=Bc[1])
+        settings=dict(order[cur]), B0_Pa=Bc[0], B0_prime=Bc[1], start=start_used,
+        ramp_T=float(ramp))
     return res
 
 
