@@ -78,6 +78,18 @@ STALL_FILL_MAX_SPAN = 3
 #: rough load nodes over a known load range (ContactEnvironment.film_load_range_N_per_m,
 #: set by the table builder: the load floor to the largest static slice load)
 FILM_LOAD_NODES = 3
+#: ``RoughnessSpec.film_transient`` values: "off" (steady frozen-roughness films only) or
+#: "correction" (docs/ehl_transient.md section 3 "last row": per film-grid node, transient
+#: runs with the roughness moving with the flanks on :data:`FILM_TRANSIENT_SLICES` slices give
+#: c = <k_transient>/k_steady, which multiplies every slice's steady rough/smooth ratio)
+FILM_TRANSIENT_MODES = ("off", "correction")
+#: slices per film-grid node run in time for the transient correction (CHOICE of
+#: docs/ehl_transient.md section 3: 4, spread evenly over the face; all when fewer)
+FILM_TRANSIENT_SLICES = 4
+#: time reductions of a transient run (docs/ehl_transient.md section 3): (b) "k_of_means" =
+#: A B(<p_m>)/<h_m> (the table's CHOICE, seed 000's "central OFT" explanation) and (a)
+#: "mean_of_k" = <A B(p_m)/h_m>
+FILM_TRANSIENT_REDUCTIONS = ("k_of_means", "mean_of_k")
 
 
 @dataclass(frozen=True)
@@ -89,7 +101,9 @@ class RoughnessSpec:
     'hertz' | 'error' | 'load_sharing' (JGP film-asperity load sharing,
     gearfmu.load_sharing, docs/load_sharing.md) (where Lambda < ``full_film_parameter`` or the rough
     film fails), ``position_nodes``: contact positions of the film grid (0 =
-    solve at every requested position)."""
+    solve at every requested position), ``film_transient``: 'off' (default) |
+    'correction' (transient film correction of the grid nodes, :data:`FILM_TRANSIENT_MODES`,
+    docs/ehl_transient.md section 3; needs ``position_nodes`` >= 2)."""
 
     D: float
     G_m: float
@@ -99,6 +113,7 @@ class RoughnessSpec:
     on_failure: str = "fractal_mixed"
     full_film_parameter: float = FULL_FILM_PARAMETER
     position_nodes: int = DEFAULT_FILM_POSITION_NODES
+    film_transient: str = "off"
 
     def __post_init__(self):
         if self.on_failure not in FILM_FAILURE_POLICIES:
@@ -110,6 +125,12 @@ class RoughnessSpec:
         k = self.position_nodes
         if int(k) != k or k < 0 or k == 1:
             raise ContactModelError(f"position_nodes={k!r}: must be 0 (every position) or an integer >= 2")
+        if self.film_transient not in FILM_TRANSIENT_MODES:
+            raise ContactModelError(f"film_transient={self.film_transient!r}: must be one of "
+                                    f"{', '.join(repr(m) for m in FILM_TRANSIENT_MODES)}")
+        if self.film_transient != "off" and k == 0:
+            raise ContactModelError(f"film_transient={self.film_transient!r}: the transient correction is "
+                                    "stored on the film grid; needs position_nodes >= 2 (got 0)")
 
     @staticmethod
     def from_level(level: int, **kw) -> "RoughnessSpec":
@@ -344,6 +365,13 @@ class RoughFilmGrid:
         self.rough_solves = 0
         self.stalls_interpolated: List[tuple] = []   # (s_m, slice, w_N_per_m) of filled nodes
         self.key = _grid_key(env)
+        # transient film correction (RoughnessSpec.film_transient, docs/ehl_transient.md section 3)
+        self.transient_mode = getattr(env.roughness, "film_transient", "off")
+        self.transient_reduction = FILM_TRANSIENT_REDUCTIONS[0]
+        self.transient_slices = transient_slices(self.NS)
+        self.transient: Dict[int, dict] = {}        # j -> c per node, statuses, costs
+        self.ratio_steady: Dict[int, np.ndarray] = {}
+        self.status_steady: Dict[int, np.ndarray] = {}
 
     def w_node(self, j) -> np.ndarray:
         return self.anchor * self.q ** np.asarray(j, dtype=float)
@@ -402,15 +430,92 @@ class RoughFilmGrid:
                 ok = o.status == "ok" and sm.status == "ok"
                 self.ratio[j][n, k] = o.k_N_per_m / sm.k_N_per_m if ok else np.nan
                 self.status[j][n, k] = o.status if sm.status == "ok" else f"smooth {sm.status}"
+        if rough_new and self.transient_mode != "off":
+            self._run_transients(env, fenv, rough_new)
+            for j in rough_new:
+                self.ratio_steady[j] = self.ratio[j].copy()
+                self.status_steady[j] = self.status[j].copy()
+                self._apply_transient(j)
         for j in rough_new:  # stalled nodes: ratio from the converged neighbours in position
-            for n in range(self.NS):
-                stalled = self.status[j][n] == "stall"
-                if np.any(stalled):
-                    row, filled = fill_stalled_ratio(self.s_nodes, self.ratio[j][n], stalled)
-                    self.ratio[j][n] = row
-                    for k in np.nonzero(filled)[0]:
-                        self.status[j][n, k] = "stall_interpolated"
-                        self.stalls_interpolated.append((float(self.s_nodes[k]), int(n), float(self.w_node(j))))
+            self._fill_stalls(j)
+
+    def _fill_stalls(self, j):
+        """Stalled nodes of rough column ``j``: ratio from the converged neighbours in position."""
+        for n in range(self.NS):
+            stalled = self.status[j][n] == "stall"
+            if np.any(stalled):
+                row, filled = fill_stalled_ratio(self.s_nodes, self.ratio[j][n], stalled)
+                self.ratio[j][n] = row
+                for k in np.nonzero(filled)[0]:
+                    self.status[j][n, k] = "stall_interpolated"
+                    self.stalls_interpolated.append((float(self.s_nodes[k]), int(n), float(self.w_node(j))))
+
+    # ----------------------------------------------------------- transient correction
+    def _run_transients(self, env, fenv, cols):
+        """Transient runs (:func:`gearfmu.ehl.transient.solve_line_contact_transient`, option A of
+        docs/ehl_transient.md: R, u_s, SRR and w frozen at the node, the roughness of both flanks
+        moving at u1, u2) on :attr:`transient_slices` at every node of the rough columns ``cols``,
+        through the grid's executor; stores per node c = mean over those slices of
+        k_transient/k_steady for both time reductions (:func:`transient_node_correction`)."""
+        from .ehl.mesh_film import map_chunks
+        from .ehl.transient import flank_slice_case
+
+        chunks, where = [], []
+        for j in cols:
+            wj = float(self.w_node(j))
+            for k in range(self.K):
+                cases = []
+                for n in self.transient_slices:
+                    kw = flank_slice_case(env, float(self.s_nodes[k]), wj, int(n))
+                    if fenv.n_nodes is not None:
+                        kw["n_nodes"] = int(fenv.n_nodes)
+                    cases.append(kw)
+                chunks.append(cases)
+                where.append((j, k))
+        res = map_chunks(_transient_node_chunk, None, chunks, [len(c) for c in chunks],
+                         executor=env.executor, max_workers=env.max_workers, progress=env.progress,
+                         label="transient film correction")
+        for j in cols:
+            self.transient[j] = {red: np.full(self.K, np.nan) for red in FILM_TRANSIENT_REDUCTIONS}
+            self.transient[j].update(status=[""] * self.K, message=[""] * self.K, cpu_s=0.0,
+                                     steps=[], cycles_per_step=[])
+        for (j, k), r in zip(where, res):
+            t = self.transient[j]
+            c = transient_node_correction(r["cases"])
+            for red in FILM_TRANSIENT_REDUCTIONS:
+                t[red][k] = c[red]
+            t["status"][k] = c["status"]
+            t["message"][k] = c["message"]
+            t["cpu_s"] += r["cpu_s"]
+            t["steps"] += [q["steps"] for q in r["cases"] if q["status"] == "ok"]
+            t["cycles_per_step"] += [q["cycles_per_step"] for q in r["cases"] if q["status"] == "ok"]
+
+    def _apply_transient(self, j):
+        """ratio = steady ratio x c of the node (every slice); a node whose transient failed is a
+        failed node of every slice (status 'stall' -> the stall fill rule, else the policy)."""
+        t = self.transient[j]
+        c = t[self.transient_reduction]
+        ok = np.array([st == "ok" for st in t["status"]])
+        self.ratio[j] = np.where(ok[None, :], self.ratio_steady[j] * c[None, :], np.nan)
+        st = self.status_steady[j].copy()
+        for k in np.nonzero(~ok)[0]:
+            steady_ok = st[:, k] == "ok"
+            st[steady_ok, k] = t["status"][k]
+        self.status[j] = st
+
+    def set_transient_reduction(self, reduction: str) -> None:
+        """Use time reduction ``reduction`` (:data:`FILM_TRANSIENT_REDUCTIONS`; default (b)
+        "k_of_means") for the correction of the columns solved so far and later ones, without
+        new solves (a study hook: examples/seed000_trends.py reports both)."""
+        if reduction not in FILM_TRANSIENT_REDUCTIONS:
+            raise ContactModelError(f"reduction={reduction!r}: must be one of "
+                                    f"{', '.join(FILM_TRANSIENT_REDUCTIONS)}")
+        self.transient_reduction = reduction
+        for j in sorted(self.transient):
+            wj = float(self.w_node(j))
+            self.stalls_interpolated = [q for q in self.stalls_interpolated if q[2] != wj]
+            self._apply_transient(j)
+            self._fill_stalls(j)
 
     def ensure_mixed(self, env, js):
         """Seed 001 K_n at the grid nodes of the columns ``js`` (in-process)."""
@@ -547,7 +652,34 @@ class RoughFilmGrid:
                               f"(at most {STALL_FILL_MAX_SPAN} node spacings apart; an end node the adjacent "
                               "node's); otherwise the policy's smooth film",
                 "interpolation": "smooth k: cubic spline in s, cubic Lagrange in log w; rough/smooth "
-                                 "ratio per slice: linear in s and log w"}
+                                 "ratio per slice: linear in s and log w",
+                **({"film_transient": self.transient_summary()} if self.transient_mode != "off" else {})}
+
+    def transient_summary(self) -> dict:
+        """Provenance of the transient film correction (docs/ehl_transient.md section 3)."""
+        t = self.transient
+        js = sorted(t)
+        failed = [(float(self.s_nodes[k]), float(self.w_node(j)), t[j]["status"][k], t[j]["message"][k])
+                  for j in js for k in range(self.K) if t[j]["status"][k] != "ok"]
+        steps = [x for j in js for x in t[j]["steps"]]
+        cyc = [x for j in js for x in t[j]["cycles_per_step"]]
+        return {"mode": self.transient_mode, "reduction": self.transient_reduction,
+                "slices": [int(n) for n in self.transient_slices],
+                "nodes": len(js) * self.K, "transient_runs": len(steps),
+                "failed_nodes": len(failed),
+                "failed_nodes_by_status": {st: sum(1 for f in failed if f[2] == st)
+                                           for st in sorted({f[2] for f in failed})},
+                "failed_nodes_first": [{"s_m": a, "w_N_per_m": b, "status": c, "message": m}
+                                       for a, b, c, m in failed[:10]],
+                "c_by_load_node": {f"{float(self.w_node(j)):.6g}": {
+                    red: [None if not np.isfinite(v) else float(v) for v in t[j][red]]
+                    for red in FILM_TRANSIENT_REDUCTIONS} for j in js},
+                "worker_cpu_s": float(sum(t[j]["cpu_s"] for j in js)),
+                "steps_per_run_mean": float(np.mean(steps)) if steps else None,
+                "cycles_per_step_mean": float(np.mean(cyc)) if cyc else None,
+                "rule": "c = mean over the listed slices of k_transient/k_steady (k_steady: the run's own "
+                        "steady frozen-roughness start); every slice's steady rough/smooth ratio x c; a node "
+                        "whose transient fails on any of its slices is a failed node (stall: fill rule)"}
 
 
 def fill_stalled_ratio(s_nodes, ratio, stalled, max_span: int = STALL_FILL_MAX_SPAN):
@@ -589,6 +721,60 @@ def fill_stalled_ratio(s_nodes, ratio, stalled, max_span: int = STALL_FILL_MAX_S
     return out, filled
 
 
+def transient_slices(n_slices: int, count: int = FILM_TRANSIENT_SLICES) -> np.ndarray:
+    """Slices run in time at each film-grid node for the transient correction (CHOICE,
+    docs/ehl_transient.md section 3): ``count`` slices spread evenly over the face,
+    round(linspace(0, NS - 1, count)); every slice when NS <= count."""
+    ns = int(n_slices)
+    if ns <= count:
+        return np.arange(ns)
+    return np.unique(np.round(np.linspace(0.0, ns - 1.0, int(count))).astype(int))
+
+
+def _transient_node_chunk(_env, cases):
+    """Worker: one film-grid node's transient runs (keyword arguments of
+    :func:`gearfmu.ehl.transient.solve_line_contact_transient`, one per slice).  Per run:
+    status 'ok' | 'stall' | 'collapse', k_steady (the run's steady frozen-roughness start,
+    seed 000 eq 8 on |x| <= b) and the time reductions (a) and (b) of docs/ehl_transient.md
+    section 3 over the default window (after the wash-out)."""
+    import time
+
+    from .ehl.errors import EHLConvergenceError, FilmCollapseError
+    from .ehl.transient import solve_line_contact_transient
+
+    t0 = time.process_time()
+    out = []
+    for kw in cases:
+        try:
+            r = solve_line_contact_transient(**kw)
+        except FilmCollapseError as exc:
+            out.append({"status": "collapse", "message": str(exc)[:300]})
+            continue
+        except EHLConvergenceError as exc:
+            out.append({"status": "stall", "message": str(exc)[:300]})
+            continue
+        red = r.film_stiffness_reductions()
+        out.append({"status": "ok", "message": "", "k_steady_N_per_m": float(r.k_film_N_per_m[0]),
+                    "k_of_means": red["k_of_means_N_per_m"], "mean_of_k": red["k_mean_of_k_N_per_m"],
+                    "steps": int(r.T.size - 1), "cycles_per_step": float(r.cycles[1:].mean())})
+    return {"cases": out, "cpu_s": time.process_time() - t0}
+
+
+def transient_node_correction(cases) -> dict:
+    """Transient film correction of one grid node from its runs (outputs of
+    :func:`_transient_node_chunk`): c = mean over the slices of <k_transient>/k_steady per time
+    reduction (docs/ehl_transient.md section 3 "last row"; k_steady is the run's own steady
+    frozen-roughness start, so c measures only the motion of the roughness).  Any failed run
+    fails the node: status of the first failure, c NaN."""
+    bad = [q for q in cases if q["status"] != "ok"]
+    if bad or not cases:
+        q = bad[0] if bad else {"status": "stall", "message": "no transient run"}
+        return {**{red: float("nan") for red in FILM_TRANSIENT_REDUCTIONS},
+                "status": q["status"], "message": q["message"]}
+    return {**{red: float(np.mean([q[red] / q["k_steady_N_per_m"] for q in cases]))
+               for red in FILM_TRANSIENT_REDUCTIONS}, "status": "ok", "message": ""}
+
+
 def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:
     """Seed 001 K_n of one slice, NaN where the asperities cannot carry the load on the
     Hertz band (FractalInputError, or a real contact area A_r >= A0)."""
@@ -613,7 +799,7 @@ def _grid_key(env) -> tuple:
     r = env.roughness
     return (r.D, r.G_m, r.seed, r.f_max_per_m, r.position_nodes, env.omega1_rad_s, env.n_slices, env.width_m,
             env.eta0_Pas, env.alpha_Pa_inv, env.rho0_kg_m3, env.ehl_nodes, env.film_load_anchor_N_per_m,
-            env.film_load_range_N_per_m, id(env.geom), id(env.pair))
+            env.film_load_range_N_per_m, id(env.geom), id(env.pair), getattr(r, "film_transient", "off"))
 
 
 def film_grid(env: "ContactEnvironment") -> RoughFilmGrid:
@@ -853,7 +1039,8 @@ def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
             D=ro.D, G_m=ro.G_m, seed=ro.seed, f_max_per_m=ro.f_max_per_m, level=ro.level,
             on_failure=ro.on_failure,
             full_film_parameter=getattr(ro, "full_film_parameter", FULL_FILM_PARAMETER),
-            position_nodes=getattr(ro, "film_position_nodes", DEFAULT_FILM_POSITION_NODES))
+            position_nodes=getattr(ro, "film_position_nodes", DEFAULT_FILM_POSITION_NODES),
+            film_transient=getattr(ro, "film_transient", "off"))
     elif scene.mesh.contact_model == "rough_ehl":
         rough = RoughnessSpec.from_level(1)
     args = dict(pair=pair, geom=geom, omega1_rad_s=float(scene.operating.speed_rad_s), n_slices=ns,

@@ -541,6 +541,10 @@ SCHEMA["roughness"] = (
        "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
     _i("film_position_nodes", 9, "contact positions along the path of contact at which the rough films "
        "are solved and interpolated (0 = every table position)", 0, 10000),
+    _e("film_transient", ("off", "correction"), "off", "off: steady films with the roughness frozen in the "
+       "contact; correction: at every film-grid node transient films with the roughness moving with the flanks on "
+       "4 slices give c = <k_transient>/k_steady, which multiplies every slice's rough/smooth ratio "
+       "(docs/ehl_transient.md section 3; needs film_position_nodes >= 2)"),
 )
 _SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
 
@@ -559,6 +563,7 @@ class RoughnessOptions:
     on_failure: str = "fractal_mixed"
     full_film_parameter: float = 3.0
     film_position_nodes: int = 9
+    film_transient: str = "off"
 
 
 def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
@@ -590,10 +595,15 @@ def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
     if ro["film_position_nodes"] == 1:
         r.add("roughness.film_position_nodes", "must be 0 (every table position) or >= 2 (interpolation nodes)")
         return None
+    if ro["film_transient"] != "off" and ro["film_position_nodes"] == 0:
+        r.add("roughness.film_transient", f"{ro['film_transient']!r} is stored on the film grid; needs "
+                                          "film_position_nodes >= 2 (got 0)")
+        return None
     return RoughnessOptions(D=D, G_m=G, seed=ro["seed"], f_max_per_m=ro["max_frequency_per_mm"],
                             level=level, on_failure=ro["on_film_failure"],
                             full_film_parameter=ro["full_film_parameter"],
-                            film_position_nodes=ro["film_position_nodes"])
+                            film_position_nodes=ro["film_position_nodes"],
+                            film_transient=ro["film_transient"])
 
 
 def _roughness_from_text(text: str) -> Optional[RoughnessOptions]:
