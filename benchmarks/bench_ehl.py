@@ -14,6 +14,7 @@ machine.
 
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
                                    [--python-driver] [--no-fmg]
+    python benchmarks/bench_ehl.py --ml-table barus|roelands   # convergence over (M, L)
 
 Each case is timed with the default Hertzian start, with the full-multigrid
 start (``fmg_cycles=1``) and with the FMG start plus the stop at the estimated
@@ -27,6 +28,7 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 
 import numpy as np
@@ -82,6 +84,37 @@ def fitted_exponent(ns, costs):
     return float(np.polyfit(np.log(np.asarray(ns, float)), np.log(np.asarray(costs, float)), 1)[0])
 
 
+ML_TABLE_M = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
+ML_TABLE_L = (0.0, 2.0, 5.0, 10.0, 15.0, 20.0)
+
+
+def ml_table(viscosity, compressible, Ms=ML_TABLE_M, Ls=ML_TABLE_L):
+    """Convergence over Moes' (M, L) with the default grid and settings: per point
+    converged or not, relaxation attempt, cycles, frozen switch, refined grid,
+    Newton-polish rounds, CPU time (also of a failure) and H_c against Moes' fit."""
+    from gearfmu.ehl.errors import EHLConvergenceError
+    rows = []
+    for M in Ms:
+        for L in Ls:
+            c = time.process_time()
+            row = dict(M=M, L=L)
+            try:
+                r = solve_line_contact(M=M, L=L, viscosity=viscosity, compressible=compressible)
+                h = r.residuals
+                row.update(converged=True, attempt=h["attempt"], cycles=r.iterations,
+                           n_intervals=r.X.size - 1,
+                           frozen="frozen_switch_from_cycle" in h,
+                           refined=bool(h.get("grid_refined", [0.0])[0]),
+                           polish_rounds=(h.get("newton_polish_rounds") or [0])[-1],
+                           rel_dev_from_moes=r.H_central_moes / moes_central_film(M, L) - 1.0)
+            except EHLConvergenceError as e:
+                row.update(converged=False, residual=e.residual_name, value=e.value)
+            row["cpu_s"] = time.process_time() - c
+            rows.append(row)
+            print(json.dumps(row), file=sys.stderr, flush=True)
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -91,7 +124,19 @@ def main(argv=None):
                     help="also time the previous Python-driven W-cycle (slow)")
     ap.add_argument("--no-fmg", action="store_true",
                     help="skip the rows with the full-multigrid start (fmg_cycles=1)")
+    ap.add_argument("--ml-table", choices=["barus", "roelands"],
+                    help="only the convergence table over M 5-1000 x L 0-20 (Barus: "
+                         "incompressible, Roelands: compressible), one JSON line per point")
     args = ap.parse_args(argv)
+    if args.ml_table:
+        solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
+        rows = ml_table(args.ml_table, args.ml_table == "roelands")
+        ok = [r for r in rows if r["converged"]]
+        print(json.dumps(dict(viscosity=args.ml_table, load_average_1min=os.getloadavg()[0],
+                              converged=len(ok), points=len(rows),
+                              failure_cpu_s=[round(r["cpu_s"], 3) for r in rows if not r["converged"]],
+                              total_cpu_s=sum(r["cpu_s"] for r in rows), rows=rows), indent=1))
+        return
     solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
     solve_line_contact(M=20.0, L=5.0, n_nodes=257, fmg_cycles=1)
     out = dict(python=platform.python_version(), machine=platform.machine(),
