@@ -103,7 +103,9 @@ class RoughnessSpec:
     film fails), ``position_nodes``: contact positions of the film grid (0 =
     solve at every requested position), ``film_transient``: 'off' (default) |
     'correction' (transient film correction of the grid nodes, :data:`FILM_TRANSIENT_MODES`,
-    docs/ehl_transient.md section 3; needs ``position_nodes`` >= 2)."""
+    docs/ehl_transient.md section 3; needs ``position_nodes`` >= 2), ``film_transient_reduction``:
+    its time reduction, 'k_of_means' (b, default) | 'mean_of_k' (a)
+    (:data:`FILM_TRANSIENT_REDUCTIONS`; a study option, not a scene key)."""
 
     D: float
     G_m: float
@@ -114,6 +116,7 @@ class RoughnessSpec:
     full_film_parameter: float = FULL_FILM_PARAMETER
     position_nodes: int = DEFAULT_FILM_POSITION_NODES
     film_transient: str = "off"
+    film_transient_reduction: str = FILM_TRANSIENT_REDUCTIONS[0]
 
     def __post_init__(self):
         if self.on_failure not in FILM_FAILURE_POLICIES:
@@ -128,6 +131,9 @@ class RoughnessSpec:
         if self.film_transient not in FILM_TRANSIENT_MODES:
             raise ContactModelError(f"film_transient={self.film_transient!r}: must be one of "
                                     f"{', '.join(repr(m) for m in FILM_TRANSIENT_MODES)}")
+        if self.film_transient_reduction not in FILM_TRANSIENT_REDUCTIONS:
+            raise ContactModelError(f"film_transient_reduction={self.film_transient_reduction!r}: must be one "
+                                    f"of {', '.join(repr(m) for m in FILM_TRANSIENT_REDUCTIONS)}")
         if self.film_transient != "off" and k == 0:
             raise ContactModelError(f"film_transient={self.film_transient!r}: the transient correction is "
                                     "stored on the film grid; needs position_nodes >= 2 (got 0)")
@@ -367,7 +373,7 @@ class RoughFilmGrid:
         self.key = _grid_key(env)
         # transient film correction (RoughnessSpec.film_transient, docs/ehl_transient.md section 3)
         self.transient_mode = getattr(env.roughness, "film_transient", "off")
-        self.transient_reduction = FILM_TRANSIENT_REDUCTIONS[0]
+        self.transient_reduction = getattr(env.roughness, "film_transient_reduction", FILM_TRANSIENT_REDUCTIONS[0])
         self.transient_slices = transient_slices(self.NS)
         self.transient: Dict[int, dict] = {}        # j -> c per node, statuses, costs
         self.ratio_steady: Dict[int, np.ndarray] = {}
@@ -799,7 +805,8 @@ def _grid_key(env) -> tuple:
     r = env.roughness
     return (r.D, r.G_m, r.seed, r.f_max_per_m, r.position_nodes, env.omega1_rad_s, env.n_slices, env.width_m,
             env.eta0_Pas, env.alpha_Pa_inv, env.rho0_kg_m3, env.ehl_nodes, env.film_load_anchor_N_per_m,
-            env.film_load_range_N_per_m, id(env.geom), id(env.pair), getattr(r, "film_transient", "off"))
+            env.film_load_range_N_per_m, id(env.geom), id(env.pair), getattr(r, "film_transient", "off"),
+            getattr(r, "film_transient_reduction", FILM_TRANSIENT_REDUCTIONS[0]))
 
 
 def film_grid(env: "ContactEnvironment") -> RoughFilmGrid:

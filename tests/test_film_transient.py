@@ -165,6 +165,8 @@ def _R(env, s):
 def test_bad_values_rejected():
     with pytest.raises(ContactModelError, match="film_transient='on'"):
         RoughnessSpec.from_level(1, film_transient="on")
+    with pytest.raises(ContactModelError, match="film_transient_reduction='median'"):
+        RoughnessSpec.from_level(1, film_transient="correction", film_transient_reduction="median")
     with pytest.raises(ContactModelError, match="film_transient.*position_nodes >= 2"):
         RoughnessSpec.from_level(1, film_transient="correction", position_nodes=0)
     text = SCENE.read_text(encoding="utf-8")
