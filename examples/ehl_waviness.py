@@ -9,10 +9,18 @@ Venner et al. the points of all (M, L) pairs should fall on one curve F(nabla).
 
     python examples/ehl_waviness.py [--json] [--quick] [--pairs 20,10 10,10] [--nabla 1 3 10]
                                     [--points-per-wavelength 32] [--max-intervals 1024] [--out DIR]
-    python examples/ehl_waviness.py --seed000 [--levels 1 2] [--slices 4] [--json]
+    python examples/ehl_waviness.py --seed000 [--levels 1 2] [--slices 4] [--intervals 256] [--json]
+    python examples/ehl_waviness.py --sliding [--json]
+
+``--sliding``: the kinematic check of Hooke (2006) (docs/ehl_transient.md section 4): with
+sliding, a waviness on the surface moving at v makes a "complementary" film wave that travels
+at the entrainment speed u with wavelength lambda u/v.  M = 20, L = 10, 512 intervals,
+lambda = b, A_i = 0.1 H_c, SRR = +-0.5 with the waviness on either surface; the film deviation
+from the smooth film on |X| <= 0.9 at the last step is fitted by least squares with a wave of
+the surface wavelength plus one of a scanned wavelength (0.3-3 b, step 0.005 b).
 
 ``--seed000``: instead of the scan, the seed 000 Table 1 pair at the pitch point
-(nominal load, 256 intervals): smooth film, and for each roughness level and
+(nominal load, ``--intervals`` 256 by default): smooth film, and for each roughness level and
 slice the transient film (option A of docs/ehl_transient.md: only the flank
 roughness moves, at U_i = u_i/u_s) against quasi-static steady films of the
 same moving roughness (8 frozen snapshots in the averaging window), with the
@@ -81,7 +89,7 @@ def run(pairs, nablas, ppw, max_int, log=print) -> dict:
                 amplitude_Hc=0.1, surfaces=[1], srr=0.0, rows=rows)
 
 
-def seed000_pitch_study(levels=(1, 2), slices=4, n_snap=8, log=print) -> dict:
+def seed000_pitch_study(levels=(1, 2), slices=4, n_snap=8, log=print, intervals=256) -> dict:
     """See the module doc (--seed000)."""
     import numpy as np
     from gearfmu.contact_models import RoughnessSpec, environment_from_scene
@@ -95,7 +103,7 @@ def seed000_pitch_study(levels=(1, 2), slices=4, n_snap=8, log=print) -> dict:
     g = pair_geometry(sc.pair)
     s_m = g.s_pitch_m
     w = sc.operating.torque_Nm / g.rb1_m / sc.pair.pinion.face_width_m
-    n_nodes = 257
+    n_nodes = int(intervals) + 1
     env0 = environment_from_scene(sc, roughness=RoughnessSpec.from_level(1), max_workers=1)
     kw0 = flank_slice_case(env0, s_m, w, None)
     t0 = time.process_time()
@@ -185,6 +193,42 @@ def seed000_pitch_study(levels=(1, 2), slices=4, n_snap=8, log=print) -> dict:
     return out
 
 
+def sliding_check(log=print) -> dict:
+    """See the module doc (--sliding)."""
+    import numpy as np
+    from gearfmu.ehl import solve_line_contact
+    from gearfmu.ehl.transient import HarmonicWaviness, solve_line_contact_transient
+
+    M, L, n, lam = 20.0, 10.0, 513, 1.0
+    s = solve_line_contact(M=M, L=L, n_nodes=n)
+    rows = []
+    for srr, surf in ((0.5, 1), (0.5, 2), (-0.5, 1)):
+        U = (1 + srr / 2) if surf == 1 else (1 - srr / 2)
+        wav = HarmonicWaviness(0.1 * s.h_central_m, lam * s.b_m, (surf,))
+        T_wash = 6.0 / min(1 + srr / 2, 1 - srr / 2)
+        r = solve_line_contact_transient(M=M, L=L, n_nodes=n, roughness=wav, srr=srr,
+                                         n_steps=int(math.ceil((T_wash + 2.0) / (6.0 / (n - 1)))))
+        m = np.abs(r.X) <= 0.9
+        x, y = r.X[m], ((r.h_m - s.h_m) / s.h_central_m)[m]
+        best = None
+        for lam2 in np.arange(0.3, 3.0 + 1e-9, 0.005):
+            A = np.stack([np.ones_like(x), x, np.cos(2 * np.pi * x / lam), np.sin(2 * np.pi * x / lam),
+                          np.cos(2 * np.pi * x / lam2), np.sin(2 * np.pi * x / lam2)], 1)
+            c = np.linalg.lstsq(A, y, rcond=None)[0]
+            rr = float(np.sum((A @ c - y) ** 2))
+            if best is None or rr < best[0]:
+                best = (rr, float(lam2), math.hypot(c[2], c[3]), math.hypot(c[4], c[5]))
+        row = dict(srr=srr, surface=surf, U_wavy=U, wavelength_b=lam,
+                   hooke_complementary_wavelength_b=lam / U, fitted_wavelength_b=best[1],
+                   relative_error=best[1] * U / lam - 1.0, surface_wave_amplitude_Hc=best[2],
+                   complementary_amplitude_Hc=best[3], cycles_per_step=float(r.cycles[1:].mean()),
+                   cpu_time_s=r.cpu_time_s)
+        rows.append(row)
+        log(json.dumps(row))
+    return dict(reference="Hooke 2006, Proc. IMechE Part J, doi:10.1243/13506501JET146: complementary "
+                          "wave at the entrainment speed, wavelength lambda u/v", rows=rows)
+
+
 def write_outputs(result: dict, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     rows = result["rows"]
@@ -222,8 +266,10 @@ def main(argv=None) -> int:
     ap.add_argument("--points-per-wavelength", type=float, default=32.0)
     ap.add_argument("--max-intervals", type=int, default=1024)
     ap.add_argument("--seed000", action="store_true", help="seed 000 pitch-point study (module doc)")
+    ap.add_argument("--sliding", action="store_true", help="Hooke (2006) complementary-wave check")
     ap.add_argument("--levels", nargs="*", type=int, default=[1, 2])
     ap.add_argument("--slices", type=int, default=4)
+    ap.add_argument("--intervals", type=int, default=256, help="--seed000 grid intervals (256)")
     ap.add_argument("--out", type=Path, default=ROOT / "examples" / "output" / "ehl_waviness")
     a = ap.parse_args(argv)
     pairs = PAIRS if a.pairs is None else []
@@ -238,10 +284,17 @@ def main(argv=None) -> int:
     if a.quick:
         pairs, nablas, max_int = PAIRS[:2], (1.0, 3.0, 10.0), min(max_int, 512)
     log = (lambda *s: print(*s, file=sys.stderr)) if a.json else print
-    if a.seed000:
-        res = seed000_pitch_study(tuple(a.levels), a.slices, log=log)
+    if a.sliding:
+        res = sliding_check(log=log)
         a.out.mkdir(parents=True, exist_ok=True)
-        (a.out / "seed000_pitch.json").write_text(json.dumps(res, indent=1))
+        (a.out / "sliding.json").write_text(json.dumps(res, indent=1))
+        if a.json:
+            print(json.dumps(res))
+        return 0
+    if a.seed000:
+        res = seed000_pitch_study(tuple(a.levels), a.slices, log=log, intervals=a.intervals)
+        a.out.mkdir(parents=True, exist_ok=True)
+        (a.out / f"seed000_pitch_{a.intervals}.json").write_text(json.dumps(res, indent=1))
         if a.json:
             print(json.dumps(res))
         return 0
