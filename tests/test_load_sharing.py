@@ -317,6 +317,27 @@ def test_policy_in_the_mesh_matches_the_pure_function_and_the_smooth_limit():
     assert k1 == pytest.approx(ks1, rel=1e-3)
 
 
+def test_policy_without_film_grid_uses_a_direct_smooth_solve():
+    """film_position_nodes = 0 (no grid): the film spring is built on the smooth film solved at the
+    request itself (the smooth_ehl contact model, seed 000 eq 2-9), 1e-9."""
+    from gearfmu.contact_models import get_contact_model
+
+    sc = dataclasses.replace(SCENE, mesh=dataclasses.replace(SCENE.mesh, contact_model="rough_ehl", slices=2))
+    env = environment_from_scene(sc, max_workers=1, roughness=RoughnessSpec.from_level(
+        4, on_failure="load_sharing", position_nodes=0))
+    s, w = np.array([env.geom.s_pitch_m]), np.array([3.0e5])
+    k = load_sharing_stiffness(env, s, w)
+    ks = get_contact_model("smooth_ehl").fn(env, s, np.array([0]), w).k_N_per_m
+    R, u, _ = contact_kinematics(env.geom, s, env.omega1_rad_s)
+    fenv = env.film_environment()
+    lv = SEED000_LEVELS[4]
+    st = LineContactState(float(R[0]), float(u[0]), 3.0e5, fenv.E_prime_Pa, env.eta0_Pas, env.alpha_Pa_inv,
+                          env.width_m)
+    ref = load_sharing(st, asperity_parameters(wm_spectral_moments(lv.D, lv.G_m)), k_smooth_N_per_m=float(ks[0]))
+    assert env._grid is None
+    assert k[0] == pytest.approx(ref.k_N_per_m, rel=1e-9)
+
+
 def test_scene_accepts_load_sharing_and_rejects_unknown_policy():
     """[roughness] on_film_failure = "load_sharing" parses into the environment; an unknown value
     is refused naming the key (docs/scene.md)."""
