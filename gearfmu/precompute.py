@@ -381,6 +381,7 @@ def _contact_provenance(ci, axis_note) -> dict:
         if fails:
             lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
             names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
+                     "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
                      "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
             uses = {}
             for f in fails:
