@@ -29,9 +29,10 @@ ratio to the smooth film; also the averaging-window check (window T_avg = 4
 against 8 after the wash-out).  JSON only (stdout with --json, else a file).
 
 Grid per point: the smallest power-of-2 number of intervals (>= 256) with at
-least ``--points-per-wavelength`` nodes per wavelength on the 6 b domain, capped
-at ``--max-intervals`` (the row then says how many points per wavelength it had:
-fewer than ~30 damp the wave numerically, docs/ehl_transient.md "Status").
+least ``--points-per-wavelength`` (20) nodes per wavelength on the 6 b domain,
+capped at ``--max-intervals``.  Default time scheme: the characteristic one
+(dT = dX, the wavelength rounded to whole steps per period; the rows give the
+nabla used), which does not damp the wave numerically (docs/ehl_transient.md 6.7).
 --json prints one JSON object; PNG and CSV go to examples/output/ehl_waviness/.
 """
 from __future__ import annotations
@@ -72,8 +73,9 @@ def run(pairs, nablas, ppw, max_int, log=print) -> dict:
                 status = "ok"
             except Exception as exc:  # report, do not hide: the row carries the error
                 d, status = {}, f"{type(exc).__name__}: {str(exc)[:160]}"
-            row = dict(M=M, L=L, nabla=nab, wavelength_b=lam, intervals=n,
-                       points_per_wavelength=lam * n / 6.0, status=status,
+            lam = d.get("wavelength_b", lam)      # rounded to whole steps per period
+            row = dict(M=M, L=L, nabla=d.get("nabla", nab), nabla_requested=nab, wavelength_b=lam,
+                       intervals=n, points_per_wavelength=lam * n / 6.0, status=status,
                        ratio=d.get("ratio", float("nan")),
                        periodicity_defect=d.get("periodicity_defect", float("nan")),
                        n_steps=d.get("n_steps", 0), cycles_per_step=d.get("cycles_per_step", float("nan")),
@@ -263,7 +265,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="two pairs, nabla 1, 3, 10; 512 intervals at most")
     ap.add_argument("--pairs", nargs="*", default=None, help="M,L pairs, e.g. 20,10 10,10")
     ap.add_argument("--nabla", nargs="*", type=float, default=None)
-    ap.add_argument("--points-per-wavelength", type=float, default=32.0)
+    ap.add_argument("--points-per-wavelength", type=float, default=20.0)
     ap.add_argument("--max-intervals", type=int, default=1024)
     ap.add_argument("--seed000", action="store_true", help="seed 000 pitch-point study (module doc)")
     ap.add_argument("--sliding", action="store_true", help="Hooke (2006) complementary-wave check")

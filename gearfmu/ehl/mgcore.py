@@ -110,13 +110,15 @@ def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
 
 
 @njit(cache=True)
-def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0):
+def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
     """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends).
 
     ``ct`` > 0: transient operator (seed 000 eq 2 with d(rho H)/dT, BDF1/BDF2,
     docs/ehl_transient.md): the implicit part ct (rho H)_i is added to the
     wedge term; the old time levels are in f (finest grid).  ct = 0 takes
-    the steady code path unchanged (bitwise)."""
+    the steady code path unchanged (bitwise).  ``char``: characteristic
+    scheme (Courant 1): the implicit time term ct (rho H)_i *replaces* the
+    wedge term, the shifted old levels are in f."""
     o = iarr[0, l]
     n = iarr[1, l]
     dX = dx[l]
@@ -134,7 +136,10 @@ def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0):
         else:
             wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
         if ct != 0.0:
-            wedge += ct * rho[i] * H[i]
+            if char:
+                wedge = ct * rho[i] * H[i]
+            else:
+                wedge += ct * rho[i] * H[i]
         out[i] = f[i] - (poi - wedge)
 
 
@@ -146,6 +151,7 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     stick = opt[13]
     freeze = opt[14] > 0.5
     ct = opt[15]
+    char = opt[16] > 0.5
     top_level = iarr.shape[1] - 1
     o = iarr[0, l]
     n = iarr[1, l]
@@ -188,7 +194,10 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
         else:
             wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
         if ct != 0.0:
-            wedge += ct * rho[i] * H[i]
+            if char:
+                wedge = ct * rho[i] * H[i]
+            else:
+                wedge += ct * rho[i] * H[i]
         r = f[i] - (poi - wedge)
         xtra = -abs(0.5 * eps[i] * dle[i] * (P[i - 1] - 2.0 * P[i] + P[i + 1]) / h2)
         # hysteresis (``stick`` >= 1): a node relaxed by Jacobi stays Jacobi
@@ -207,6 +216,8 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
                 w = ((rho[i] * K0 - rho[i - 1] * K1) * ipi - H[i] * drho[i]) / dX
             if ct != 0.0:
                 # d[ct rho_i H_i]/dP_i with dH_i/dP_i = -K0/pi (time term)
+                if char:
+                    w = 0.0
                 w += ct * (rho[i] * K0 * ipi - H[i] * drho[i])
             J = -(em + ep) / h2 + w + xtra
             d = omega_gs * r / J
@@ -226,6 +237,8 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
             w /= dX
             if ct != 0.0:
                 # time term: film change -c0/pi and density change at i per unit d
+                if char:
+                    w = 0.0
                 w += ct * (rho[i] * c0 * ipi - H[i] * drho[i])
             if dist > 0.5:
                 Jp = -poifac * (em + ep) / h2
@@ -307,7 +320,7 @@ def _down(k, S):
     nc = iarr[1, k - 1]
     order2 = opt[3] > 0
     _coef(k, P, H, rho, eps, dle, drho, iarr, prm)
-    _residual(k, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])
+    _residual(k, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15], opt[16] > 0.5)
     for i in range(nf):
         if P[of + i] <= 0.0:
             wrk[of + i] = 0.0
@@ -324,7 +337,7 @@ def _down(k, S):
     # f_c = L_c(P_c) + restricted residual  (wrk on level k-1 receives f_c - L_c = -(-r))
     for I in range(nc):
         f[oc + I] = 0.0
-    _residual(k - 1, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])   # wrk_c = -L_c
+    _residual(k - 1, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15], opt[16] > 0.5)   # wrk_c = -L_c
     for I in range(1, nc - 1):
         i = of + 2 * I
         rr = 0.25 * wrk[i - 1] + 0.5 * wrk[i] + 0.25 * wrk[i + 1]
@@ -384,9 +397,9 @@ def _scaled_residual(l, S, order2, zero_f):
         o2 = iarr[0, l]
         for k in range(iarr[1, l]):
             delta[o2 + k] = 0.0
-        _residual(l, P, H, delta, rho, eps, wrk, iarr, dx, order2, opt[15])
+        _residual(l, P, H, delta, rho, eps, wrk, iarr, dx, order2, opt[15], opt[16] > 0.5)
     else:
-        _residual(l, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15])
+        _residual(l, P, H, f, rho, eps, wrk, iarr, dx, order2, opt[15], opt[16] > 0.5)
     dX = dx[l]
     h2 = dX * dX
     s = 0.0
@@ -543,10 +556,10 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
 
 #: option vector layout of the compiled core
 OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
-            "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze", "c_t")
+            "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze", "c_t", "c_char")
 OPT_DEFAULTS = dict(omega_gs=0.8, omega_j=0.6, switch=3.0, order2=1, dmax=0.3, dist=0,
                     c_h0=0.5, h0_step=0.5, nu1=2, nu2=1, nu0=10, load_mode=0,
-                    defect=0, stick=1.0, freeze=0, c_t=0.0)
+                    defect=0, stick=1.0, freeze=0, c_t=0.0, c_char=0)
 
 
 #: grid constants (node positions, kernel coefficients, kernel spectra, FFT
@@ -694,18 +707,23 @@ class FlatMultigrid:
         sl = self._sl(l)
         return rho[sl] * self.H[sl]
 
-    def set_time_term(self, c_t: float, f_top=None):
+    def set_time_term(self, c_t: float, f_top=None, characteristic: bool = False):
         """Implicit time coefficient ``c_t`` (1/dT for BDF1, 1.5/dT for BDF2, 0:
         steady) on every level and the old-time right-hand side ``f_top`` of the
         finest grid (BDF1: -(rho H)^(n-1)/dT; BDF2: (-2 (rho H)^(n-1) +
         0.5 (rho H)^(n-2))/dT; None: zero).  The coarse levels receive it through
-        the restricted residual (FAS).  Not combined with ``defect``."""
+        the restricted residual (FAS).  Not combined with ``defect``.
+        ``characteristic``: the time term replaces the wedge term (Venner &
+        Lubrecht's discretisation along the characteristic at Courant 1, dT = dX:
+        c_t = 1.5/dX, f = (-2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2))/dX)."""
         c_t = float(c_t)
         if not math.isfinite(c_t) or c_t < 0.0:
             from .errors import EHLInputError
             raise EHLInputError(f"c_t={c_t!r}: must be finite and >= 0")
         self.opts["c_t"] = c_t
         self.optv[OPT_KEYS.index("c_t")] = c_t
+        self.opts["c_char"] = 1 if characteristic else 0
+        self.optv[OPT_KEYS.index("c_char")] = self.opts["c_char"]
         sl = self._sl(self.top)
         if f_top is None:
             self.f[sl] = 0.0

@@ -297,7 +297,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
                                  roughness: RoughnessInput = None, srr: float = 0.0,
                                  speed_ratios: Optional[Tuple[float, float]] = None,
                                  n_steps: Optional[int] = None, dT: Optional[float] = None,
-                                 scheme: str = "bdf2", n_nodes: Optional[int] = None,
+                                 scheme: Optional[str] = None, n_nodes: Optional[int] = None,
                                  n_coarse: Optional[int] = None, x_in: float = -4.5,
                                  x_out: float = 1.5, compressible: bool = True,
                                  viscosity: str = "roelands", tol_pressure: float = 1e-5,
@@ -322,7 +322,13 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     or ``speed_ratios`` = (U1, U2) directly (e.g. (0, 0): frozen roughness).
     ``dT``: time step in units of b/u_s (default dX, Courant 1); ``n_steps``:
     default (T_wash + T_AVERAGE)/dT with T_wash = (x_out - x_in)/min(U1, U2).
-    ``scheme``: "bdf2" (BDF1 first step) or "bdf1".  Per step: W-cycles until
+    ``scheme``: None (default: "characteristic" when dT = dX, else "bdf2"),
+    "bdf2" (BDF1 first step), "bdf1" or "characteristic" (the
+    convective and time derivatives together along the characteristic X - T at
+    Courant 1, second order after a first-order step: [1.5 (rho H)^n_i -
+    2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2)]/dX, after Venner & Lubrecht 2000's
+    transient chapters; needs dT = dX; a wave of the film moving at u_s is
+    shifted without numerical damping, docs/ehl_transient.md 6.7).  Per step: W-cycles until
     the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
     scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
     ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
@@ -353,8 +359,8 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     if start not in ("frozen", "smooth", "auto"):
         raise EHLInputError(f"start={start!r}: must be 'frozen', 'smooth' or 'auto'")
     ramp_T = _finite("ramp_T", ramp_T, 0.0, True)
-    if scheme not in ("bdf1", "bdf2"):
-        raise EHLInputError(f"scheme={scheme!r}: must be 'bdf1' or 'bdf2'")
+    if scheme not in (None, "bdf1", "bdf2", "characteristic"):
+        raise EHLInputError(f"scheme={scheme!r}: must be 'bdf1', 'bdf2' or 'characteristic'")
     width_m = _finite("width_m", width_m, 0.0, True)
     mc = int(max_cycles_per_step)
     if mc < 1:
@@ -407,6 +413,10 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     top = solver.top
     dX = float(solver.dx[top])
     dT = dX if dT is None else _finite("dT", dT, 0.0, True)
+    if scheme is None:
+        scheme = "characteristic" if abs(dT / dX - 1.0) <= 1e-9 else "bdf2"
+    if scheme == "characteristic" and abs(dT / dX - 1.0) > 1e-9:
+        raise EHLInputError(f"dT={dT!r}: scheme 'characteristic' needs dT = dX = {dX!r}")
     dt_s = dT * b_m / u_s
     T_wash = 0.0 if min(U1, U2) <= 0 else (x_out - x_in) / min(U1, U2)
     if n_steps is None:
@@ -473,7 +483,24 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         T = n * dT
         set_base(T)
         bdf2 = scheme == "bdf2" and n >= 2
-        if bdf2:
+        if scheme == "characteristic":
+            # old levels shifted one / two nodes upstream (Courant 1); node -1 of
+            # level n-2 by linear extrapolation (inlet, smooth film)
+            # (first step: the start state also stands for level -1, CHOICE -- a
+            # stationary start stays stationary, the scheme is second order from
+            # the first step; a first-order first step would differ from the
+            # steady second-order wedge and kick a smooth start)
+            r2 = rH[-2] if n >= 2 else rH[-1]
+            a1 = np.empty_like(rH[-1])
+            a1[1:] = rH[-1][:-1]
+            a1[0] = 0.0
+            a2 = np.empty_like(r2)
+            a2[2:] = r2[:-2]
+            a2[1] = 2.0 * r2[0] - r2[1]
+            a2[0] = 0.0
+            ct = 1.5 / dT
+            f_old = (-2.0 * a1 + 0.5 * a2) / dT
+        elif bdf2:
             ct = 1.5 / dT
             f_old = (-2.0 * rH[-1] + 0.5 * rH[-2]) / dT
         else:
@@ -498,7 +525,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
             solver.H0[top] = H0_start
             solver.mode[:] = 0
             solver.update_film(top)
-            solver.set_time_term(ct, f_old)
+            solver.set_time_term(ct, f_old, characteristic=scheme == "characteristic")
             ok, nc, h = solver.iterate(max_cycles=mc, min_cycles=1, tol_pressure=tol_pressure,
                                        tol_load=tol_load, tol_residual=tol_residual,
                                        stall_window=STALL_WINDOW)
@@ -562,15 +589,18 @@ def waviness_nabla(wavelength_b: float, M: float, L: float) -> float:
 def waviness_amplitude_ratio(M: float, L: float, wavelength_b: float,
                              amplitude_Hc: float = 0.1, *, surfaces=(1,), srr: float = 0.0,
                              n_nodes: int = 257, periods_averaged: int = 1,
-                             steps_per_period: Optional[int] = None, **kw) -> Dict[str, float]:
+                             steps_per_period: Optional[int] = None,
+                             scheme: str = "characteristic", **kw) -> Dict[str, float]:
     """Amplitude reduction A_d/A_i of a harmonic waviness (Venner et al. 1997).
 
     Waviness of amplitude A_i = ``amplitude_Hc`` x the smooth steady central
     film on ``surfaces`` with wavelength ``wavelength_b`` x b, run from the
     steady frozen start through the wash-out T_wash = (x_out - x_in)/min(U1, U2)
     plus ``periods_averaged`` + 1 periods of the slowest wave pattern (period
-    lambda/(b U) in T); dT = period/ceil(period/dX) (Courant <= 1, whole steps per
-    period).  A_d = half the peak-to-peak of h(x = 0) over the last
+    lambda/(b U) in T).  ``scheme`` "characteristic" (default): dT = dX and the
+    wavelength is rounded to a whole number of steps per period (lambda = k U dX
+    b, the returned ``wavelength_b`` and ``nabla`` are the ones used); other
+    schemes: dT = period/k with k = ``steps_per_period`` or ceil(period/dX).  A_d = half the peak-to-peak of h(x = 0) over the last
     ``periods_averaged`` periods (the deformed amplitude at the contact centre,
     CHOICE: Venner et al.'s "amplitude at X = 0").  Returns A_d/A_i, nabla,
     the periodicity defect (max |h_c(T) - h_c(T - period)| / h_c over the last
@@ -587,14 +617,22 @@ def waviness_amplitude_ratio(M: float, L: float, wavelength_b: float,
         raise EHLInputError(f"srr={srr!r}: the wavy surface must move (U > 0)")
     period = wavelength_b / Umin
     dX = float(smooth.X[1] - smooth.X[0])
-    k = int(steps_per_period) if steps_per_period else int(math.ceil(period / dX))
-    dT = period / k
+    if scheme == "characteristic":
+        if steps_per_period:
+            raise EHLInputError("steps_per_period: the characteristic scheme fixes dT = dX "
+                                "(the wavelength is rounded instead)")
+        k = max(2, int(round(period / dX)))
+        dT = dX
+        wavelength_b = k * dX * Umin
+    else:
+        k = int(steps_per_period) if steps_per_period else int(math.ceil(period / dX))
+        dT = period / k
     T_wash = float(smooth.X[-1] - smooth.X[0]) / min(U)
     n_steps = int(math.ceil(T_wash / dT)) + (int(periods_averaged) + 1) * k
     A_i = amplitude_Hc * smooth.h_central_m
     wav = HarmonicWaviness(A_i, wavelength_b * smooth.b_m, tuple(surfaces))
     r = solve_line_contact_transient(M=M, L=L, n_nodes=n_nodes, roughness=wav, srr=srr,
-                                     dT=dT, n_steps=n_steps, **kw)
+                                     dT=dT, n_steps=n_steps, scheme=scheme, **kw)
     hc = r.h_central_m
     last = hc[-k:]
     prev = hc[-2 * k:-k]
@@ -604,7 +642,7 @@ def waviness_amplitude_ratio(M: float, L: float, wavelength_b: float,
                 periodicity_defect=float(np.max(np.abs(last - prev)) / smooth.h_central_m),
                 h_central_smooth_m=smooth.h_central_m, n_steps=n_steps, dT=dT,
                 cycles_per_step=float(r.cycles[1:].mean()),
-                cycles_per_step_max=int(r.cycles.max()), cpu_time_s=r.cpu_time_s,
+                cycles_per_step_max=int(r.cycles.max()), cpu_time_s=r.cpu_time_s, scheme=scheme,
                 cpu_per_step_ms=1e3 * r.cpu_time_s / n_steps)
 
 
