@@ -16,12 +16,18 @@ For a gear flank slice (:class:`FlankSliceRoughness`) this is wm(x, t) =
 z1(a1(t) - x) + z2(a2(t) + x) with da1/dt = u1, da2/dt = -u2 (involute arc
 length a = rho^2/(2 r_b), docs/ehl_transient.md).
 
-Time discretisation (CHOICE, docs/ehl_transient.md section 2): BDF2,
-d(rho H)/dT ~ [3 (rho H)^n - 4 (rho H)^(n-1) + (rho H)^(n-2)]/(2 dT), after a
-BDF1 (implicit Euler) first step; dT = dX by default (Courant number 1 on u_s).
+Time discretisation (CHOICE, docs/ehl_transient.md sections 2 and 6.2): dT = dX
+by default (Courant number 1 on u_s) with the convective and time derivatives
+taken together along the characteristic,
+d(rho H)/dX + d(rho H)/dT ~ [1.5 (rho H)^n_i - 2 (rho H)^(n-1)_(i-1)
++ 0.5 (rho H)^(n-2)_(i-2)]/dX (our reading of Venner & Lubrecht 2000's transient
+scheme; a film wave moving at u_s is shifted without numerical damping); or
+BDF2, d(rho H)/dT ~ [3 (rho H)^n - 4 (rho H)^(n-1) + (rho H)^(n-2)]/(2 dT), after a
+BDF1 (implicit Euler) first step, with the steady wedge term (the design note's
+first choice; it damps waves with fewer than ~40 nodes per wavelength, measured).
 The implicit part c_t (rho H)^n is in the compiled multigrid operator
-(:mod:`.mgcore`, option ``c_t``), the old levels are its finest-grid right-hand
-side.  Each step: warm start from the previous step (P and H0 linearly
+(:mod:`.mgcore`, options ``c_t``, ``c_char``), the old levels are its
+finest-grid right-hand side.  Each step: warm start from the previous step (P and H0 linearly
 extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
 step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
