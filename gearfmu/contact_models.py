@@ -482,13 +482,13 @@ class RoughFilmGrid:
                          executor=env.executor, max_workers=env.max_workers, progress=env.progress,
                          label="transient film correction")
         for j in cols:
-            self.transient[j] = {red: np.full(self.K, np.nan) for red in FILM_TRANSIENT_REDUCTIONS}
+            self.transient[j] = {red: np.full(self.K, np.nan) for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS}
             self.transient[j].update(status=[""] * self.K, message=[""] * self.K, cpu_s=0.0,
                                      steps=[], cycles_per_step=[])
         for (j, k), r in zip(where, res):
             t = self.transient[j]
             c = transient_node_correction(r["cases"])
-            for red in FILM_TRANSIENT_REDUCTIONS:
+            for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS:
                 t[red][k] = c[red]
             t["status"][k] = c["status"]
             t["message"][k] = c["message"]
@@ -679,7 +679,7 @@ class RoughFilmGrid:
                                        for a, b, c, m in failed[:10]],
                 "c_by_load_node": {f"{float(self.w_node(j)):.6g}": {
                     red: [None if not np.isfinite(v) else float(v) for v in t[j][red]]
-                    for red in FILM_TRANSIENT_REDUCTIONS} for j in js},
+                    for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS} for j in js},
                 "worker_cpu_s": float(sum(t[j]["cpu_s"] for j in js)),
                 "steps_per_run_mean": float(np.mean(steps)) if steps else None,
                 "cycles_per_step_mean": float(np.mean(cyc)) if cyc else None,
@@ -762,7 +762,9 @@ def _transient_node_chunk(_env, cases):
         red = r.film_stiffness_reductions()
         out.append({"status": "ok", "message": "", "k_steady_N_per_m": float(r.k_film_N_per_m[0]),
                     "k_of_means": red["k_of_means_N_per_m"], "mean_of_k": red["k_mean_of_k_N_per_m"],
-                    "steps": int(r.T.size - 1), "cycles_per_step": float(r.cycles[1:].mean())})
+                    "steps": int(r.T.size - 1), "cycles_per_step": float(r.cycles[1:].mean()),
+                    "h_central_ratio": red["h_central_mean_m"] / float(r.h_central_m[0]),
+                    "h_mean_ratio": red["h_mean_m"] / float(r.h_mean_m[0])})
     return {"cases": out, "cpu_s": time.process_time() - t0}
 
 
@@ -775,10 +777,18 @@ def transient_node_correction(cases) -> dict:
     bad = [q for q in cases if q["status"] != "ok"]
     if bad or not cases:
         q = bad[0] if bad else {"status": "stall", "message": "no transient run"}
-        return {**{red: float("nan") for red in FILM_TRANSIENT_REDUCTIONS},
+        return {**{red: float("nan") for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS},
                 "status": q["status"], "message": q["message"]}
     return {**{red: float(np.mean([q[red] / q["k_steady_N_per_m"] for q in cases]))
-               for red in FILM_TRANSIENT_REDUCTIONS}, "status": "ok", "message": ""}
+               for red in FILM_TRANSIENT_REDUCTIONS},
+            **{h: float(np.mean([q.get(h, np.nan) for q in cases])) for h in _FILM_RATIOS},
+            "status": "ok", "message": ""}
+
+
+#: film-thickness ratios (window mean over the steady start) reported with the correction:
+#: central film and mean film on |x| <= b (seed 000's explanation of Figs. 12-13 is a thicker
+#: central film on rough surfaces)
+_FILM_RATIOS = ("h_central_ratio", "h_mean_ratio")
 
 
 def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:

@@ -119,7 +119,7 @@ def test_smooth_surfaces_give_c_one():
     fl = env.flanks()
     env._flanks = dataclasses.replace(fl, z1_m=np.zeros_like(fl.z1_m), z2_m=np.zeros_like(fl.z2_m))
     g = _grid(env)
-    for red in ("k_of_means", "mean_of_k"):
+    for red in ("k_of_means", "mean_of_k", "h_central_ratio", "h_mean_ratio"):
         # T1: stationary state, the time term vanishes; per-step tolerance tol_pressure = 1e-5
         np.testing.assert_allclose(g.transient[0][red], 1.0, rtol=0, atol=1e-5)
 
