@@ -9,6 +9,7 @@ solving every position.  Prints one JSON object.
     options: [--points-per-mesh 64] [--slices 44] [--level 1] [--torques T ...] [--workers 2]
              [--position-nodes K] [--progress] [--accuracy-nodes 5 9 17 33] [--compare-tvms FILE.json]
              [--levels 1 2 3 4]   # + build time, solves, stalls of each level (--save-tvms: one file each)
+    python benchmarks/bench_ehl_tables.py --transient [--levels 1 2]   # film_transient off vs correction
 
 Timing: wall and CPU of the parent, film solves, passes.  Old-path estimate: the distinct
 (position, slice) requests of the tables x passes x rows times the measured time of one cold
@@ -43,11 +44,12 @@ def _scene(slices, model="rough_ehl"):
     return dataclasses.replace(sc, mesh=opts)
 
 
-def _tables(sc, level, K, ppm, torques, workers, progress=False):
+def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"):
     from gearfmu.contact_models import RoughnessSpec, environment_from_scene
     from gearfmu.precompute import precompute_tables
 
-    env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=K),
+    env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=K,
+                                                                        film_transient=transient),
                                  max_workers=workers, progress=progress)
     import resource
 
@@ -160,12 +162,20 @@ def main(argv=None) -> int:
                     help="also build the tables of these roughness levels (1-4): time, solves, stalls per level")
     ap.add_argument("--save-tvms", default=None, help="write the TVMS (P, N) of the first row to this .json")
     ap.add_argument("--compare-tvms", default=None, help="TVMS .json of another run: report the difference")
+    ap.add_argument("--transient", action="store_true",
+                    help="only: build the tables of --level (or each of --levels) with [roughness] film_transient "
+                         "'off' and 'correction' (docs/ehl_transient.md section 3): build time (CPU), mean TVMS, "
+                         "the correction's provenance")
     a = ap.parse_args(argv)
 
     from gearfmu.contact_models import DEFAULT_FILM_POSITION_NODES
 
     K = DEFAULT_FILM_POSITION_NODES if a.position_nodes is None else a.position_nodes
     out = {"benchmark": "rough-EHL tables, default scene", "cpu_count": os.cpu_count()}
+    if a.transient:
+        out["film_transient"] = [_transient_row(lv, K, a) for lv in (a.levels or [a.level])]
+        print(json.dumps(out))
+        return 0
     if not a.accuracy_only:
         sc = _scene(a.slices)
         tab, wall, cpu = _tables(sc, a.level, K, a.points_per_mesh, a.torques, a.workers, a.progress)
@@ -235,6 +245,31 @@ def _level_row(level, K, a):
         p = Path(a.save_tvms)
         p.with_name(f"{p.stem}_level{level}{p.suffix}").write_text(json.dumps(
             {"torques_Nm": [float(t) for t in tab.torque_Nm], "tvms_N_per_m": tab.k_N_per_m.sum(axis=1).tolist()}))
+    return row
+
+
+def _transient_row(level, K, a):
+    """film_transient 'off' against 'correction' on the same scene and options (one run each)."""
+    sc = _scene(a.slices)
+    row = {"roughness_level": level, "points_per_mesh": a.points_per_mesh, "slices": a.slices,
+           "position_nodes": K, "workers": a.workers}
+    for mode in ("off", "correction"):
+        tab, wall, cpu = _tables(sc, level, K, a.points_per_mesh, a.torques, a.workers, a.progress, mode)
+        c = tab.provenance["contact"]
+        g = c.get("film_grid") or {}
+        row[mode] = {"wall_s": round(wall, 2), "parent_cpu_s": round(cpu[0], 2), "workers_cpu_s": round(cpu[1], 2),
+                     "total_cpu_s": round(cpu[0] + cpu[1], 2), "film_solves": c["solves"],
+                     "failed_rough_nodes": g.get("failed_rough_nodes"),
+                     "stalled_rough_nodes_interpolated": g.get("stalled_rough_nodes_interpolated"),
+                     "film_failures": c.get("film_failures", 0),
+                     "torques_Nm": [float(t) for t in tab.torque_Nm],
+                     "mean_tvms_N_per_m": [float(v) for v in tab.k_N_per_m.sum(axis=1).mean(axis=1)],
+                     "load_average_1min": os.getloadavg()[0]}
+        if mode != "off":
+            row[mode]["film_transient"] = g.get("film_transient")
+    row["cpu_ratio_correction_to_off"] = round(row["correction"]["total_cpu_s"] / max(row["off"]["total_cpu_s"], 1e-9), 2)
+    row["mean_tvms_rel_change"] = [b / a_ - 1.0 for a_, b in zip(row["off"]["mean_tvms_N_per_m"],
+                                                                 row["correction"]["mean_tvms_N_per_m"])]
     return row
 
 

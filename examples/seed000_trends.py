@@ -3,13 +3,16 @@
 the line of action and across the face (Fig. 9), TVMS curves (Figs. 12-15).
 
     python examples/seed000_trends.py [--json] [--points-per-mesh 4] [--slices 2] [--out DIR]
-                                      [--also-policy load_sharing]
+                                      [--also-policy load_sharing] [--transient-levels 1 2]
 
 --json prints one JSON object (mean TVMS in N/m per contact model, speed and torque); PNG, CSV and
 JSON files go to examples/output/seed000_trends/.  Coarse defaults (4 points per mesh period,
 2 slices) keep the run to minutes; where the film parameter is below 3 (levels 3-4) or a rough
 film fails, the scene's policy (default: seed 001 fractal mixed lubrication) applies, recorded
-in the notes (docs/ehl_mesh.md).
+in the notes (docs/ehl_mesh.md).  --transient-levels adds, per level, the tables with
+[roughness] film_transient = "correction" (transient film correction, docs/ehl_transient.md
+section 3) under both time reductions, (b) k_of_means (the table's) and (a) mean_of_k, as the
+JSON key "film_transient" (mean TVMS, build wall/CPU time, the correction's provenance).
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ TORQUES = (1000.0, 2000.0, 3000.0)   # N m (seed 000 Fig. 15 uses several torque
 SPEEDS = (1000.0, 2000.0, 4000.0)    # rpm (Fig. 14)
 
 
-def run(ppm: int, slices: int, out: Path, log=print, policies=()) -> dict:
+def run(ppm: int, slices: int, out: Path, log=print, policies=(), transient_levels=()) -> dict:
     from gearfmu.contact_models import RoughnessSpec, environment_from_scene
     from gearfmu.precompute import precompute_tables
     from gearfmu.scene import load_scene
@@ -42,20 +45,33 @@ def run(ppm: int, slices: int, out: Path, log=print, policies=()) -> dict:
               "torques_Nm": list(TORQUES), "mean_tvms_N_per_m": {}, "speed_rpm": {}, "notes": {}}
     curves = {}
 
-    def tables(model, level=None, speed_rpm=2000.0, torques=TORQUES, policy=None):
+    costs = {}
+
+    def tables(model, level=None, speed_rpm=2000.0, torques=TORQUES, policy=None, transient=None):
         sc = dataclasses.replace(base, operating=dataclasses.replace(base.operating,
                                                                      speed_rad_s=speed_rpm * math.pi / 30))
         opts = dataclasses.replace(sc.mesh, contact_model=model, slices=slices)
         sc = dataclasses.replace(sc, mesh=opts)
         kw = {"roughness": RoughnessSpec.from_level(level, **({"on_failure": policy} if policy else {}))} \
             if level else {}
+        if transient:   # time reduction of the transient film correction
+            kw["roughness"] = dataclasses.replace(kw["roughness"], film_transient="correction",
+                                                  film_transient_reduction=transient)
+        import resource
+        ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        c0 = time.process_time()
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             tab = precompute_tables(sc.pair, opts, points_per_mesh=ppm, torque_axis_Nm=list(torques),
                                     nominal_torque_Nm=2000.0, contact_env=environment_from_scene(sc, **kw))
+        ch1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        costs[(model, level, speed_rpm, policy, transient)] = {
+            "wall_s": round(time.perf_counter() - t0, 2),
+            "cpu_s": round(time.process_time() - c0 + (ch1.ru_utime + ch1.ru_stime) - (ch0.ru_utime + ch0.ru_stime), 2)}
         c = tab.provenance.get("contact", {})
-        log(f"{model} level={level} {speed_rpm:g} rpm: {time.perf_counter() - t0:.1f} s, "
+        log(f"{model} level={level} {speed_rpm:g} rpm{' transient ' + transient if transient else ''}: "
+            f"{time.perf_counter() - t0:.1f} s, "
             f"{c.get('solves', 0)} solves, {c.get('film_failures', 0)} film failures")
         return tab
 
@@ -75,6 +91,26 @@ def run(ppm: int, slices: int, out: Path, log=print, policies=()) -> dict:
                                      f" in the first 20); used there: {c.get('film_failures_by_use')} "
                                      f"(on_film_failure = {c['roughness']['on_failure']!r})")
         curves[name] = k
+    if transient_levels:
+        ft = result["film_transient"] = {"reductions": {"k_of_means": "(b) A B(<p_m>)/<h_m>, the table's",
+                                                        "mean_of_k": "(a) <A B(p_m)/h_m>"}, "levels": {}}
+        for lv in transient_levels:
+            row = ft["levels"][str(lv)] = {"off": result["mean_tvms_N_per_m"].get(f"rough_level_{lv}"),
+                                           "cost_off": costs.get(("rough_ehl", lv, 2000.0, None, None))}
+            for red in ("k_of_means", "mean_of_k"):
+                tab = tables("rough_ehl", lv, transient=red)
+                k = tab.k_N_per_m.sum(axis=1)
+                row[red] = {f"{t:g}": float(v) for t, v in zip(TORQUES, k.mean(axis=1))}
+                row[f"cost_{red}"] = costs[("rough_ehl", lv, 2000.0, None, red)]
+                c = tab.provenance.get("contact", {})
+                g = (c.get("film_grid") or {}).get("film_transient") or {}
+                row[f"correction_{red}"] = {q: g.get(q) for q in (
+                    "nodes", "transient_runs", "failed_nodes", "failed_nodes_by_status", "c_by_load_node",
+                    "worker_cpu_s", "steps_per_run_mean", "cycles_per_step_mean")}
+                row[f"film_failures_{red}"] = c.get("film_failures", 0)
+                curves[f"rough_level_{lv}+transient_{red}"] = k
+            if row["off"] is None:
+                del row["off"]
     for name, model, level in (("smooth", "smooth_ehl", None), ("rough_level_1", "rough_ehl", 1)):
         result["speed_rpm"][name] = {}
         for n in SPEEDS:
@@ -193,9 +229,13 @@ def main(argv=None) -> int:
     ap.add_argument("--also-policy", action="append", default=[], metavar="POLICY",
                     help="add levels 3-4 with this [roughness] on_film_failure (e.g. load_sharing) as "
                          "rows 'rough_level_N+POLICY'")
+    ap.add_argument("--transient-levels", type=int, nargs="+", default=[], metavar="LEVEL",
+                    help="add the tables with [roughness] film_transient = 'correction' of these levels, "
+                         "reductions (b) and (a), as the JSON key 'film_transient'")
     a = ap.parse_args(argv)
     log = (lambda *x: print(*x, file=sys.stderr, flush=True))
-    res = run(a.points_per_mesh, a.slices, Path(a.out), log, policies=tuple(a.also_policy))
+    res = run(a.points_per_mesh, a.slices, Path(a.out), log, policies=tuple(a.also_policy),
+              transient_levels=tuple(a.transient_levels))
     if a.json:
         print(json.dumps(res))
     else:
