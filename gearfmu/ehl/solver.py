@@ -169,6 +169,11 @@ def _flat_opts(opts):
 #: stalls of the (M, L) corner: those that the polish converges ended at
 #: 1.9e-6 .. 5e-6, those it does not at 2e-4 .. 7e-3.
 POLISH_BELOW_RESIDUAL = 1e-5
+#: a setting whose cycles stall (before its frozen-switch continuation) with a
+#: scaled residual below this value is polished first (state restored if the
+#: polish fails): Barus M = 100, L = 10 on 2048 intervals floats at 1e-5 ..
+#: 2e-5 on its first setting (docs/ehl.md "Speed")
+POLISH_EARLY_BELOW_RESIDUAL = 3e-5
 #: at most this many polish rounds; stop early when the scaled residual has
 #: not fallen 3x over the last POLISH_STALL_ROUNDS rounds (Barus M = 500,
 #: L = 15 needs 20 rounds, falling about 1.3x per round with dips)
@@ -444,6 +449,26 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
             # stopped by the caller's cycle limit, not stalled: no polish either
             hist["hit_max_cycles"] = [float(nc)]
         last_dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
+        last_res = h["reynolds_residual"][-1] if h["reynolds_residual"] else float("nan")
+        if (not converged and math.isfinite(last_res) and last_res < POLISH_EARLY_BELOW_RESIDUAL
+                and "hit_max_cycles" not in hist
+                and solver.opts.get("order2", 1) and not solver.opts.get("defect", 0)):
+            # stalled just above the tolerance: block-Newton polish first; if it
+            # fails, the state is restored and the path continues exactly as
+            # without it (frozen switch, docs/ehl.md)
+            saved = (solver.P.copy(), solver.H.copy(), solver.H0.copy(), solver.mode.copy())
+            ok, nr, ph = _polish(solver, tol_pressure, tol_load, tol_residual, tol_film,
+                                 max_cycles)
+            hist["newton_polish_early_rounds"] = [nr]
+            if ok:
+                converged = True
+                hist["newton_polish_from_cycle"] = [it]
+                hist["newton_polish_rounds"] = [nr]
+                it += nr
+                for k_ in _HIST_KEYS:
+                    hist[k_].extend(ph[k_])
+            else:
+                solver.P[:], solver.H[:], solver.H0[:], solver.mode[:] = saved
         if not converged and math.isfinite(last_dp) and last_dp < FREEZE_BELOW_PRESSURE_CHANGE:
             # limit cycle close to the solution: continue with the Gauss-Seidel /
             # Jacobi choice of every finest-grid node frozen (docs/ehl.md)
@@ -459,7 +484,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
                 hist[k_].extend(h[k_])
         last_res = hist["reynolds_residual"][-1] if hist["reynolds_residual"] else float("nan")
         if (not converged and math.isfinite(last_res) and last_res < POLISH_BELOW_RESIDUAL
-                and "hit_max_cycles" not in hist
+                and "hit_max_cycles" not in hist and "newton_polish_rounds" not in hist
                 and solver.opts.get("order2", 1) and not solver.opts.get("defect", 0)):
             # close to the solution but stalled on the spike region: block-Newton
             # polish (docs/ehl.md)
