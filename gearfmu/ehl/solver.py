@@ -485,6 +485,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         last_res = hist["reynolds_residual"][-1] if hist["reynolds_residual"] else float("nan")
         if (not converged and math.isfinite(last_res) and last_res < POLISH_BELOW_RESIDUAL
                 and "hit_max_cycles" not in hist and "newton_polish_rounds" not in hist
+                and "newton_polish_early_rounds" not in hist   # failed once on this setting
                 and solver.opts.get("order2", 1) and not solver.opts.get("defect", 0)):
             # close to the solution but stalled on the spike region: block-Newton
             # polish (docs/ehl.md)
@@ -748,8 +749,12 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     Gauss-Seidel/Jacobi switch frozen (``residuals["frozen_switch_from_cycle"]``);
     a smooth solve on an automatically chosen grid that fails on every
     setting is retried once on the grid of :func:`refined_grid_intervals`
-    (``residuals["grid_refined"]``).  Every converged result meets the
-    stated tolerances; otherwise :class:`EHLConvergenceError`.
+    (``residuals["grid_refined"]``).  A setting that stalls close to a
+    solution is continued by the block-Newton polish of the pressure-spike
+    region (:func:`block_newton`, :func:`_polish`; ``residuals["newton_polish_rounds"]``,
+    docs/ehl.md), and once every setting has failed on a grid the stalled
+    state with the lowest residual is polished.  Every converged result meets
+    the stated tolerances; otherwise :class:`EHLConvergenceError`.
     """
     t_start = time.perf_counter()
     dimensional = [R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv]
@@ -897,7 +902,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             # residual, not yet polished) for the block-Newton polish below
             rr = hist["reynolds_residual"]
             if (compiled and rr and math.isfinite(rr[-1]) and "newton_polish_rounds" not in hist
-                    and "hit_max_cycles" not in hist
+                    and "newton_polish_early_rounds" not in hist and "hit_max_cycles" not in hist
                     and rr[-1] < POLISH_BEST_BELOW_RESIDUAL
                     and solver_obj.opts.get("order2", 1) and not solver_obj.opts.get("defect", 0)
                     and (best is None or rr[-1] < best[0])):
