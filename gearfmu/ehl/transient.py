@@ -83,6 +83,10 @@ TRANSIENT_RELAXATION_SETTINGS = (
          stick=10.0),
 )
 
+#: sub-step rescue of a step that stalled on every relaxation setting: the step
+#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md 6.7)
+SUBSTEP_SPLITS = (2, 4)
+
 #: averaging window after the wash-out (dimensionless time, CHOICE of
 #: docs/ehl_transient.md section 2: two contact widths at u_s)
 T_AVERAGE = 4.0
@@ -236,6 +240,8 @@ class TransientLineContactResult:
     ramp_T: float = 0.0                #: ramp duration of the smooth start (dimensionless)
     B0_Pa: float = B0_DEFAULT_PA       #: Tait B0 used for k, Pa (seed 000 eq 9)
     B0_prime: float = B0_PRIME_DEFAULT  #: Tait B0' used for k
+    #: per step: 0, or the number of BDF2 sub-steps that rescued a stalled step
+    rescued: Optional[np.ndarray] = None
 
     @property
     def srr(self) -> float:
@@ -314,7 +320,8 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
                                  extrapolate: bool = True,
                                  relaxation_settings=None, start: str = "frozen",
                                  ramp_T: float = 1.0,
-                                 steady_options: Optional[dict] = None
+                                 steady_options: Optional[dict] = None,
+                                 substep_rescue: Union[bool, str] = True
                                  ) -> TransientLineContactResult:
     """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
 
@@ -349,7 +356,13 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     :class:`.errors.EHLConvergenceError`).  The averaging window then starts at
     ``ramp_T`` + T_wash (:attr:`TransientLineContactResult.T_settled`).
     ``relaxation_settings``: option dicts of :mod:`.mgcore` tried in turn per step
-    (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones)."""
+    (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones).
+    ``substep_rescue`` (default True): a step that stalls on every setting is
+    re-solved as 2, then 4 BDF2 sub-steps with the roughness at the sub-step
+    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md 6.7; only stalled
+    steps, so converging runs are unchanged); the steps rescued are
+    :attr:`TransientLineContactResult.rescued`; "always": every step is solved
+    as sub-steps (a verification mode of the rescue path)."""
     t_wall0 = time.perf_counter()
     model = _roughness_model(roughness)
     if speed_ratios is not None:
@@ -371,6 +384,8 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     mc = int(max_cycles_per_step)
     if mc < 1:
         raise EHLInputError(f"max_cycles_per_step={max_cycles_per_step!r}: must be >= 1")
+    if substep_rescue not in (True, False, "always"):
+        raise EHLInputError(f"substep_rescue={substep_rescue!r}: must be True, False or 'always'")
     steady_kw = dict(steady_options or {})
     for k in ("roughness_m", "M", "L", "n_nodes", "n_coarse", "x_in", "x_out", "compressible",
               "viscosity"):
@@ -451,6 +466,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     out = {k: np.empty(nT) for k in ("hc", "hmin", "hm", "pm", "k")}
     cycles = np.zeros(nT, dtype=np.int64)
     attempts = np.zeros(nT, dtype=np.int64)
+    rescued = np.zeros(nT, dtype=np.int64)
 
     def record(n):
         H = solver.level_H()
@@ -481,6 +497,89 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         if not order:
             raise EHLInputError("relaxation_settings: need at least one settings dict")
     cur = 0
+
+    def solve_step(ct, f_old, char, P_start, H0_start):
+        """One implicit time level: the relaxation settings in turn (the last
+        converged first), each with its frozen-switch continuation.  Returns
+        (converged, W-cycles, history of the last attempt)."""
+        nonlocal cur
+        ok = False
+        ncyc = 0
+        tried = [cur] + [k for k in range(len(order)) if k != cur]
+        for k in tried:
+            o = dict(OPT_DEFAULTS)
+            o.update(_flat_opts(order[k]))
+            solver.opts.clear()
+            solver.opts.update(o)
+            sl = solver._sl(top)
+            solver.P[sl] = P_start
+            solver.P[sl.start] = solver.P[sl.stop - 1] = 0.0
+            solver.tauH[:] = 0.0
+            solver.H0[top] = H0_start
+            solver.mode[:] = 0
+            solver.update_film(top)
+            solver.set_time_term(ct, f_old, characteristic=char)
+            ok, nc, h = solver.iterate(max_cycles=mc, min_cycles=1, tol_pressure=tol_pressure,
+                                       tol_load=tol_load, tol_residual=tol_residual,
+                                       stall_window=STALL_WINDOW)
+            ncyc += nc
+            dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
+            if not ok and math.isfinite(dp) and dp < FREEZE_BELOW_PRESSURE_CHANGE:
+                solver.opts["freeze"] = 1
+                ok, nc, h2 = solver.iterate(max_cycles=mc, min_cycles=1,
+                                            tol_pressure=tol_pressure, tol_load=tol_load,
+                                            tol_residual=tol_residual,
+                                            stall_window=FROZEN_STALL_WINDOW)
+                solver.opts["freeze"] = 0
+                ncyc += nc
+                if h2["pressure_change"]:
+                    h = h2
+            if ok:
+                cur = k
+                break
+        return ok, ncyc, h
+
+    def rescue_step(n, T):
+        """Sub-step rescue of a stalled step (docs/ehl_transient.md 6.7): the
+        interval [T - dT, T] in m = 2, then 4 equal BDF2 sub-steps (steady
+        wedge + time derivative, roughness at each sub-step time; the first
+        sub-step variable-step BDF2 on the levels T - dT, T - 2 dT, omega =
+        1/m, or BDF1 at the first step), each solved by :func:`solve_step`.
+        Returns (converged, W-cycles, history, m)."""
+        total = 0
+        h = {"pressure_change": [], "load_balance": [], "reynolds_residual": []}
+        for m in SUBSTEP_SPLITS:
+            hs = dT / m
+            P_a, H0_a, r_a = P_hist[-1], H0_hist[-1], rH[-1]      # level T - dT
+            ok = False
+            for q in range(1, m + 1):
+                set_base(T - dT + q * hs)
+                if q == 1:
+                    if len(rH) >= 2:
+                        w = 1.0 / m
+                        ct = (1.0 + 2.0 * w) / (1.0 + w) / hs
+                        f_old = (-(1.0 + w) * rH[-1] + w * w / (1.0 + w) * rH[-2]) / hs
+                        P_s = np.clip(P_hist[-1] + w * (P_hist[-1] - P_hist[-2]), 0.0, None)
+                        H0_s = H0_hist[-1] + w * (H0_hist[-1] - H0_hist[-2])
+                    else:
+                        ct, f_old = 1.0 / hs, -rH[-1] / hs
+                        P_s, H0_s = P_hist[-1], H0_hist[-1]
+                    r_b, P_b, H0_b = None, None, None
+                else:
+                    ct = 1.5 / hs
+                    f_old = (-2.0 * r_a + 0.5 * r_b) / hs
+                    P_s = np.clip(2.0 * P_a - P_b, 0.0, None)
+                    H0_s = 2.0 * H0_a - H0_b
+                ok, nc, h = solve_step(ct, f_old, False, P_s, H0_s)
+                total += nc
+                if not ok:
+                    break
+                r_b, P_b, H0_b = r_a, P_a, H0_a
+                r_a, P_a, H0_a = solver.rho_H(), solver.level_P().copy(), float(solver.H0[top])
+            if ok:
+                return True, total, h, m
+        set_base(T)
+        return False, total, h, 0
     P_hist = [solver.level_P().copy()]
     H0_hist = [float(solver.H0[top])]
     rH = [solver.rho_H()]
@@ -517,40 +616,16 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
             H0_start = 2.0 * H0_hist[-1] - H0_hist[-2]
         else:
             P_start, H0_start = P_hist[-1], H0_hist[-1]
-        ok = False
-        tried = [cur] + [k for k in range(len(order)) if k != cur]
-        for k in tried:
-            o = dict(OPT_DEFAULTS)
-            o.update(_flat_opts(order[k]))
-            solver.opts.clear()
-            solver.opts.update(o)
-            sl = solver._sl(top)
-            solver.P[sl] = P_start
-            solver.P[sl.start] = solver.P[sl.stop - 1] = 0.0
-            solver.tauH[:] = 0.0
-            solver.H0[top] = H0_start
-            solver.mode[:] = 0
-            solver.update_film(top)
-            solver.set_time_term(ct, f_old, characteristic=scheme == "characteristic")
-            ok, nc, h = solver.iterate(max_cycles=mc, min_cycles=1, tol_pressure=tol_pressure,
-                                       tol_load=tol_load, tol_residual=tol_residual,
-                                       stall_window=STALL_WINDOW)
-            ncyc = nc
-            dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
-            if not ok and math.isfinite(dp) and dp < FREEZE_BELOW_PRESSURE_CHANGE:
-                solver.opts["freeze"] = 1
-                ok, nc, h2 = solver.iterate(max_cycles=mc, min_cycles=1,
-                                            tol_pressure=tol_pressure, tol_load=tol_load,
-                                            tol_residual=tol_residual,
-                                            stall_window=FROZEN_STALL_WINDOW)
-                solver.opts["freeze"] = 0
-                ncyc += nc
-                if h2["pressure_change"]:
-                    h = h2
+        if substep_rescue == "always":
+            ok, ncyc, h = False, 0, {}
+        else:
+            ok, ncyc, h = solve_step(ct, f_old, scheme == "characteristic", P_start, H0_start)
+        cycles[n] += ncyc
+        if not ok and substep_rescue:
+            ok, ncyc, h, m_used = rescue_step(n, T)
             cycles[n] += ncyc
             if ok:
-                cur = k
-                break
+                rescued[n] = m_used
         if not ok:
             last = {q: (h[q][-1] if h[q] else float("nan"))
                     for q in ("pressure_change", "load_balance", "reynolds_residual")}
@@ -562,7 +637,9 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
                 name, val, tol = "load_balance", last["load_balance"], tol_load
             raise EHLConvergenceError(
                 f"transient step {n} of {n_steps} (T = {T:.4g}, t = {T * b_m / u_s:.4g} s) did "
-                f"not converge on any of {len(order)} relaxation settings: residual '{name}' "
+                f"not converge on any of {len(order)} relaxation settings"
+                f"{' (nor as ' + '/'.join(map(str, SUBSTEP_SPLITS)) + ' BDF2 sub-steps)' if substep_rescue else ''}"
+                f": residual '{name}' "
                 f"stalled at {val:.3e} (tolerance {tol:.1e}); reynolds_residual="
                 f"{last['reynolds_residual']:.3e}", residual_name=name, value=val, history=h)
         attempts[n] = cur
@@ -581,7 +658,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         M=steady.M, L=steady.L, steady=steady, cpu_time_s=cpu,
         wall_time_s=time.perf_counter() - t_wall0,
         settings=dict(order[cur]), B0_Pa=Bc[0], B0_prime=Bc[1], start=start_used,
-        ramp_T=float(ramp))
+        ramp_T=float(ramp), rescued=rescued)
     return res
 
 
