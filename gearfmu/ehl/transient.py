@@ -341,7 +341,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     Courant 1, second order after a first-order step: [1.5 (rho H)^n_i -
     2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2)]/dX, after Venner & Lubrecht 2000's
     transient chapters; needs dT = dX; a wave of the film moving at u_s is
-    shifted without numerical damping, docs/ehl_transient.md 6.7).  Per step: W-cycles until
+    shifted without numerical damping, docs/ehl_transient.md 6.2-6.3).  Per step: W-cycles until
     the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
     scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
     ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
