@@ -32,7 +32,10 @@ extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
 step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
 :data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
-setting raises :class:`.errors.EHLConvergenceError` naming the step and time.
+setting is re-solved as 2, then 4 BDF2 sub-steps (roughness at the sub-step
+times; rough flanks stall on limit cycles / residual floors at asperity
+pressure spikes, docs/ehl_transient.md 6.7), and only if that fails too raises
+:class:`.errors.EHLConvergenceError` naming the step and time.
 
 Roughness is evaluated from the surfaces' own profiles at every step (no
 band limit, unlike the steady solver's default 8 dX filter: CHOICE, the
