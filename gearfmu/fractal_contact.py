@@ -63,6 +63,7 @@ from typing import Optional, Tuple
 import numpy as np
 from scipy.optimize import brentq
 
+from .checks import finite_number
 from .ehl.lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa
 
 __all__ = [
@@ -103,13 +104,7 @@ class FullContactError(FractalInputError):
 
 
 def _pos(name: str, v, allow_zero: bool = False) -> float:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise FractalInputError(f"{name}: must be a number, got {v!r}") from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise FractalInputError(f"{name}: must be finite and {'>=' if allow_zero else '>'} 0, got {v!r}")
-    return v
+    return finite_number(name, v, positive=not allow_zero, nonneg=allow_zero, error=FractalInputError)
 
 
 @dataclass(frozen=True)

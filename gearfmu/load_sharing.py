@@ -52,6 +52,7 @@ from scipy.optimize import brentq
 from scipy.special import gamma as _gamma_fn
 from scipy.special import pbdv
 
+from .checks import finite_number
 from .ehl.fits import moes_central_film
 from .ehl.lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa
 from .roughness import SEED000_GAMMA, SEED000_SAMPLE_LENGTH_M, SEED000_SAMPLING_M
@@ -79,13 +80,7 @@ class LoadSharingInputError(ValueError):
 
 
 def _pos(name, v, zero=False) -> float:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise LoadSharingInputError(f"{name}: must be a number, got {v!r}") from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not zero):
-        raise LoadSharingInputError(f"{name}: must be finite and {'>=' if zero else '>'} 0, got {v!r}")
-    return v
+    return finite_number(name, v, positive=not zero, nonneg=zero, error=LoadSharingInputError)
 
 
 # ------------------------------------------------------------------ spectral moments

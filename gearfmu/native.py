@@ -982,18 +982,10 @@ def _check_tables(tables) -> MeshTables:
 def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
     """``value`` as a finite float (> 0 with ``positive``, >= 0 with ``nonneg``);
     otherwise ``error`` (default NativeInputError) naming ``name`` and the reason."""
-    error = NativeInputError if error is None else error
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise error(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise error(f"{name}: must be finite, got {value!r}")
-    if positive and v <= 0:
-        raise error(f"{name}: must be > 0, got {value!r}")
-    if nonneg and v < 0:
-        raise error(f"{name}: must be >= 0, got {value!r}")
-    return v
+    from .checks import finite_number
+
+    return finite_number(name, value, positive=positive, nonneg=nonneg,
+                         error=NativeInputError if error is None else error)
 
 
 def _n_steps(stop_time_s, comm_step_s) -> int:

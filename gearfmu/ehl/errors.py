@@ -36,3 +36,19 @@ class FilmCollapseError(EHLError):
         self.x_m = x_m
         self.film_parameter = film_parameter
         self.h_min_m = h_min_m
+
+
+RESIDUAL_NAMES = ("pressure_change", "load_balance", "reynolds_residual")
+
+
+def stalled_residual(history, tol_pressure: float, tol_residual: float, tol_load: float):
+    """Which residual stalled, for :class:`EHLConvergenceError`: from a history dict of
+    residual lists return (last values by name, name, its last value, its tolerance).
+    The pressure change is named first, then the scaled Reynolds residual, then the load
+    balance (a NaN counts as not converged)."""
+    last = {q: (history[q][-1] if history.get(q) else float("nan")) for q in RESIDUAL_NAMES}
+    if not last["pressure_change"] < tol_pressure:
+        return last, "pressure_change", last["pressure_change"], tol_pressure
+    if not last["reynolds_residual"] < tol_residual:
+        return last, "reynolds_residual", last["reynolds_residual"], tol_residual
+    return last, "load_balance", last["load_balance"], tol_load

@@ -35,7 +35,8 @@ from typing import Callable, Dict, List, Optional, Sequence, Union
 import numpy as np
 from numba import njit
 
-from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+from ..checks import finite_number
+from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
 from .fits import moes_central_film
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .multigrid import EHLParams, MultigridSolver
@@ -639,13 +640,7 @@ def refined_grid_intervals(prm, length: float, n_int: int) -> Optional[int]:
 
 
 def _finite_positive(name, v, allow_zero=False):
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise EHLInputError(f"{name} must be a number, got {v!r}") from None
-    if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
-        raise EHLInputError(f"{name} must be finite and {'>=' if allow_zero else '>'} 0, got {v!r}")
-    return v
+    return finite_number(name, v, positive=not allow_zero, nonneg=allow_zero, error=EHLInputError)
 
 
 def _roughness_function(roughness) -> Optional[Callable[[np.ndarray], np.ndarray]]:
@@ -955,14 +950,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             f"(sigma = {sigma_m:.3e} m); the full-film model (seed 000) does not hold",
             x_m=float(x_m[imin]), film_parameter=float(lam_f), h_min_m=float(h_m[imin]))
     if not converged:
-        last = {k_: (hist[k_][-1] if hist[k_] else float("nan"))
-                for k_ in ("pressure_change", "load_balance", "reynolds_residual")}
-        if not math.isfinite(last["pressure_change"]) or last["pressure_change"] >= tol_pressure:
-            name, val, tol = "pressure_change", last["pressure_change"], tol_pressure
-        elif not last["reynolds_residual"] < tol_residual:
-            name, val, tol = "reynolds_residual", last["reynolds_residual"], tol_residual
-        else:
-            name, val, tol = "load_balance", last["load_balance"], tol_load
+        last, name, val, tol = stalled_residual(hist, tol_pressure, tol_residual, tol_load)
         raise EHLConvergenceError(
             f"EHL multigrid did not converge in {it} W-cycles (M={M:.4g}, L={L:.4g}): "
             f"residual '{name}' stalled at {val:.3e} (tolerance {tol:.1e}); "

@@ -58,7 +58,7 @@ from typing import Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 
-from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
 from .film_stiffness import film_stiffness_N_per_m
 from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_ETA_INF,
                         ROELANDS_P0_PA)
@@ -630,14 +630,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
             if ok:
                 rescued[n] = m_used
         if not ok:
-            last = {q: (h[q][-1] if h[q] else float("nan"))
-                    for q in ("pressure_change", "load_balance", "reynolds_residual")}
-            if not last["pressure_change"] < tol_pressure:
-                name, val, tol = "pressure_change", last["pressure_change"], tol_pressure
-            elif not last["reynolds_residual"] < tol_residual:
-                name, val, tol = "reynolds_residual", last["reynolds_residual"], tol_residual
-            else:
-                name, val, tol = "load_balance", last["load_balance"], tol_load
+            last, name, val, tol = stalled_residual(h, tol_pressure, tol_residual, tol_load)
             raise EHLConvergenceError(
                 f"transient step {n} of {n_steps} (T = {T:.4g}, t = {T * b_m / u_s:.4g} s) did "
                 f"not converge on any of {len(order)} relaxation settings"
