@@ -42,6 +42,8 @@ import zipfile
 from pathlib import Path
 from typing import Dict, Mapping, Optional
 
+from .checks import finite_number
+
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -97,12 +99,7 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
             if p not in params:
                 raise SspError(f"variants.{name}.{p}: not a parameter of the FMU (parameters: {sorted(params)})")
             var = params[p]
-            try:
-                x = float(val)
-            except (TypeError, ValueError):
-                raise SspError(f"variants.{name}.{p}: not a number: {val!r}") from None
-            if not math.isfinite(x):
-                raise SspError(f"variants.{name}.{p}: must be finite, got {x!r}")
+            x = finite_number(f"variants.{name}.{p}", val, error=SspError)
             if var.min is not None and x < float(var.min) or var.max is not None and x > float(var.max):
                 raise SspError(f"variants.{name}.{p} = {x!r}: outside the FMU's range [{var.min}, {var.max}]")
             if var.type == "Integer":

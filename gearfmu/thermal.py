@@ -98,6 +98,7 @@ from typing import Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from .checks import finite_number
 from .gearpair import GearPairSpec, MeshModelOptions
 from .geometry import PairGeometry, pair_geometry
 
@@ -110,13 +111,7 @@ class ThermalError(ValueError):
 
 
 def _finite(name: str, v: float) -> float:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ThermalError(f"{name}: must be a number, got {v!r}") from None
-    if not math.isfinite(f):
-        raise ThermalError(f"{name}: must be finite, got {v!r}")
-    return f
+    return finite_number(name, v, error=ThermalError)
 
 
 def _temperature(name: str, t_C) -> np.ndarray:

@@ -246,18 +246,11 @@ def test_film_regime_thresholds():
 
 
 def test_fractal_mixed_is_registered_and_load_dependent():
-    from gearfmu.contact_models import CONTACT_MODELS, ContactEnvironment, RoughnessSpec
-    from gearfmu.gearpair import GearPairSpec, GearSpec
-    from gearfmu.geometry import pair_geometry
+    from gearfmu.contact_models import CONTACT_MODELS
 
     m = CONTACT_MODELS["fractal_mixed"]
     assert m.load_dependent and m.needs_lubricant
-    g = lambda z: GearSpec(teeth=z, module_m=6e-3, pressure_angle_rad=math.radians(20), face_width_m=44e-3)
-    pair = GearPairSpec(pinion=g(45), gear=g(34))
-    geom = pair_geometry(pair)
-    env = ContactEnvironment(pair=pair, geom=geom, omega1_rad_s=209.4, n_slices=4, width_m=11e-3,
-                             eta0_Pas=0.1, alpha_Pa_inv=2e-8, rho0_kg_m3=870.0,
-                             roughness=RoughnessSpec.from_level(2))
+    geom, env = _seed000_env(2)
     s_mid = 0.5 * (geom.s_start_m + geom.s_end_m)
     s = np.array([s_mid, s_mid, s_mid])
     res = m.fn(env, s, np.array([0, 1, 0]), np.array([1e5, 1e5, 4e5]))
@@ -379,19 +372,27 @@ def test_film_parameter_one_definition():
 def test_fractal_mixed_model_complete_contact_uses_hertz_and_says_so():
     """A slice load whose asperities would reach complete contact (level 4, 4 MN/m) takes the Hertz
     stiffness of the slice, recorded as 'complete_contact' (the rough-EHL policy's choice)."""
-    from gearfmu.contact_models import CONTACT_MODELS, ContactEnvironment, RoughnessSpec, hertz_stiffness_N_per_m
+    from gearfmu.contact_models import CONTACT_MODELS, hertz_stiffness_N_per_m
+
+    geom, env = _seed000_env(4)
+    s = np.full(2, geom.s_pitch_m)
+    res = CONTACT_MODELS["fractal_mixed"].fn(env, s, np.array([0, 1]), np.array([3e5, 4e6]))
+    assert res.k_N_per_m[1] == hertz_stiffness_N_per_m(env.pair, 11e-3)
+    assert res.k_N_per_m[0] != res.k_N_per_m[1] and res.fallbacks == 1
+    f = [x for x in res.failures if x["status"] == "complete_contact"]
+    assert len(f) == 1 and f[0]["w_N_per_m"] == pytest.approx(4e6) and "real_area_ratio" in f[0]["message"]
+
+
+def _seed000_env(level):
+    """Seed 000 Table 1 pair (45/34 teeth, m = 6 mm, 20 deg, 44 mm face) in 4 slices of 11 mm at
+    2000 rpm with the given Table 2 roughness level: (pair geometry, ContactEnvironment)."""
+    from gearfmu.contact_models import ContactEnvironment, RoughnessSpec
     from gearfmu.gearpair import GearPairSpec, GearSpec
     from gearfmu.geometry import pair_geometry
 
     g = lambda z: GearSpec(teeth=z, module_m=6e-3, pressure_angle_rad=math.radians(20), face_width_m=44e-3)
     pair = GearPairSpec(pinion=g(45), gear=g(34))
     geom = pair_geometry(pair)
-    env = ContactEnvironment(pair=pair, geom=geom, omega1_rad_s=209.4, n_slices=4, width_m=11e-3,
-                             eta0_Pas=0.1, alpha_Pa_inv=2e-8, rho0_kg_m3=870.0,
-                             roughness=RoughnessSpec.from_level(4))
-    s = np.full(2, geom.s_pitch_m)
-    res = CONTACT_MODELS["fractal_mixed"].fn(env, s, np.array([0, 1]), np.array([3e5, 4e6]))
-    assert res.k_N_per_m[1] == hertz_stiffness_N_per_m(pair, 11e-3)
-    assert res.k_N_per_m[0] != res.k_N_per_m[1] and res.fallbacks == 1
-    f = [x for x in res.failures if x["status"] == "complete_contact"]
-    assert len(f) == 1 and f[0]["w_N_per_m"] == pytest.approx(4e6) and "real_area_ratio" in f[0]["message"]
+    return geom, ContactEnvironment(pair=pair, geom=geom, omega1_rad_s=209.4, n_slices=4, width_m=11e-3,
+                                    eta0_Pas=0.1, alpha_Pa_inv=2e-8, rho0_kg_m3=870.0,
+                                    roughness=RoughnessSpec.from_level(level))
