@@ -81,9 +81,87 @@ def test_cached_grid_constants_equal_a_fresh_build():
     off = np.concatenate(([0], np.cumsum(ns)))
     ms = [int(a.iarr[4, l]) for l in range(4)]
     moff = np.concatenate(([0], np.cumsum(ms)))
-    toff = np.concatenate(([0], np.cumsum([m // 2 for m in ms])))
+    toff = np.concatenate(([0], np.cumsum(ms)))     # base table + stage table per level
     fresh = mgcore._grid_constants(ns, ms, off, moff, toff, -4.5, 1.5)
     for x, y in zip((a.dx, a.K, a.khr, a.khi, a.twr, a.twi), fresh[1:]):
         assert np.array_equal(x, y)
     for x, y in zip(a.X, fresh[0]):
         assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("setting,gamma,fmg", [(0, 2, False), (1, 2, False), (0, "F", False),
+                                               (0, 1, False), (0, 2, True)])
+def test_lean_cycle_is_bitwise_the_full_cycle(setting, gamma, fmg):
+    # The lean cycle (mgcore option lean=1, default; docs/ehl.md "Speed") only
+    # skips work whose result is never read or is already there (coefficients
+    # right after the restriction, the film after a post-sweep followed by a
+    # prolongation, the finest coefficients of the convergence test).
+    # Reference: the same cycles with every step computed (lean=0): P, H, H0
+    # and the per-cycle histories must agree bit for bit (a skipped step that
+    # was needed would change them at once).  Roelands + Dowson-Higginson,
+    # M = 100, L = 10 on 513 nodes (5 levels) and Barus M = 20, L = 10.
+    from gearfmu.ehl.solver import RELAXATION_SETTINGS
+    for M, L, z in ((100.0, 10.0, 0.6), (20.0, 10.0, -1.0)):
+        A = L * math.sqrt(M / (2.0 * math.pi)) if z < 0 else 8.0
+        prm = EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * M ** 2), A=A, z=z, php0=2.0, c1=0.3,
+                        compressible=z > 0, x_in=-4.5, x_out=1.5)
+        hc = 0.2 if M == 20.0 else 0.05
+        out = []
+        for lean in (1, 0):
+            o = dict(RELAXATION_SETTINGS[setting], gamma=gamma, lean=lean)
+            fm = mgcore.FlatMultigrid(prm, 5, 32, **o)
+            if fmg:
+                fm.fmg_start(hc)
+            else:
+                fm.hertz_start(hc)
+            ok, k, h = fm.iterate(max_cycles=6, min_cycles=6, tol_pressure=0.0, tol_load=0.0,
+                                  tol_residual=0.0)
+            out.append((fm.level_P().copy(), fm.level_H().copy(), fm.H0.copy(), h))
+        (Pa, Ha, H0a, ha), (Pb, Hb, H0b, hb) = out
+        assert np.all(np.isfinite(Pa)) and np.max(Pa) > 0.5
+        assert np.array_equal(Pa, Pb) and np.array_equal(Ha, Hb) and np.array_equal(H0a, H0b)
+        for key in ha:
+            assert np.array_equal(np.asarray(ha[key]), np.asarray(hb[key])), key
+
+
+def test_lean_cycle_with_the_time_term_is_bitwise_the_full_cycle():
+    # The transient solver's time term (c_t > 0, docs/ehl_transient.md) runs
+    # through the same lean cycle; reference: lean=0 (every step computed).
+    prm = EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * 400.0), A=8.0, z=0.6, php0=2.0, c1=0.3,
+                    compressible=True, x_in=-4.5, x_out=1.5)
+    out = []
+    for lean in (1, 0):
+        fm = mgcore.FlatMultigrid(prm, 4, 32, dist=1, lean=lean)
+        fm.hertz_start(0.2)
+        fm.iterate(max_cycles=4, min_cycles=4, tol_pressure=0.0, tol_load=0.0,
+                   tol_residual=0.0)
+        dT = 6.0 / 256
+        fm.set_time_term(1.5 / dT, -1.2 * fm.rho_H() / dT)
+        fm.iterate(max_cycles=3, min_cycles=3, tol_pressure=0.0, tol_load=0.0,
+                   tol_residual=0.0)
+        out.append((fm.level_P().copy(), fm.level_H().copy()))
+    assert np.all(np.isfinite(out[0][0]))
+    assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
+
+
+def test_stage_twiddle_fft_matches_the_direct_sum_and_numpy():
+    # The film FFT with per-stage twiddle tables (deformation.stage_twiddles).
+    # References: the O(N^2) direct sum of the deformation (1e-12 relative to
+    # its largest value) and numpy's FFT of the same complex sequence (1e-12).
+    from gearfmu.ehl.deformation import (DeformationOperator, deformation_direct, _cfft,
+                                         stage_twiddles)
+    rng = np.random.default_rng(7)
+    for n in (65, 129, 1025, 2049):
+        op = DeformationOperator(n, 6.0 / (n - 1))
+        P = rng.random(n)
+        ref = deformation_direct(P, op.K)
+        assert np.max(np.abs(op(P) - ref)) < 1e-12 * np.max(np.abs(ref))
+    for N in (2, 4, 16, 512):
+        m = 2 * N
+        ang = -2.0 * np.pi * np.arange(N) / m
+        sr, si = stage_twiddles(np.cos(ang), np.sin(ang), m)
+        z = rng.standard_normal(N) + 1j * rng.standard_normal(N)
+        for sign, ref in ((1.0, np.fft.fft(z)), (-1.0, np.fft.ifft(z) * N)):
+            re, im = z.real.copy(), z.imag.copy()
+            _cfft(re, im, N, sr, si, sign)
+            assert np.max(np.abs(re + 1j * im - ref)) < 1e-12 * np.max(np.abs(ref))

@@ -50,12 +50,33 @@ def kernel_coefficients(n_nodes: int, dX: float) -> np.ndarray:
     return f(a) - f(b)
 
 
+def stage_twiddles(twr: np.ndarray, twi: np.ndarray, m: int):
+    """Per-stage contiguous twiddle table of the length-m/2 complex FFT of
+    :func:`conv_real`: entry h + k (k < h, h = 1, 2, 4, .., m/4) is
+    exp(-2 pi i k / (2 h)), copied from the base table twr/twi[j] =
+    exp(-2 pi i j / m) at j = k m / (2 h) (same values bit for bit, so the FFT
+    result is unchanged; the butterfly loop then reads its twiddles
+    contiguously and vectorises: 1024 points 14.5 -> 11.1 us, docs/ehl.md
+    "Speed").  Entry 0 is unused."""
+    N = m // 2
+    sr = np.zeros(N)
+    si = np.zeros(N)
+    h = 1
+    while h < N:
+        j = np.arange(h) * (m // (2 * h))
+        sr[h:2 * h] = twr[j]
+        si[h:2 * h] = twi[j]
+        h *= 2
+    return sr, si
+
+
 @njit(cache=True, fastmath=True)
-def _cfft(re, im, N, twr, twi, ts, sign):
+def _cfft(re, im, N, sr, si, sign):
     """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
-    power of 2, no 1/N scaling); twiddles exp(-2 pi i k/N) = twr[k ts] +
-    i twi[k ts] (``ts``: stride into a longer table); ``sign`` = +1 forward,
-    -1 inverse.  Stage loops run block by block (contiguous memory)."""
+    power of 2, no 1/N scaling); twiddles of the stage of half length h at
+    sr/si[h:2h] (:func:`stage_twiddles`); ``sign`` = +1 forward, -1 inverse.
+    Stages with h >= 8 run block by block with the twiddle index innermost
+    (contiguous, vectorisable), shorter ones twiddle by twiddle."""
     j = 0
     for i in range(1, N):
         bit = N >> 1
@@ -82,19 +103,32 @@ def _cfft(re, im, N, twr, twi, ts, sign):
     length = 4
     while length <= N:
         half = length >> 1
-        step = (N // length) * ts
-        for s in range(0, N, length):
+        if half >= 8:
+            for s in range(0, N, length):
+                for k in range(half):
+                    wr = sr[half + k]
+                    wi = sign * si[half + k]
+                    i = s + k
+                    i2 = i + half
+                    vr = re[i2] * wr - im[i2] * wi
+                    vi = re[i2] * wi + im[i2] * wr
+                    re[i2] = re[i] - vr
+                    im[i2] = im[i] - vi
+                    re[i] += vr
+                    im[i] += vi
+        else:
             for k in range(half):
-                wr = twr[k * step]
-                wi = sign * twi[k * step]
-                i = s + k
-                i2 = i + half
-                vr = re[i2] * wr - im[i2] * wi
-                vi = re[i2] * wi + im[i2] * wr
-                re[i2] = re[i] - vr
-                im[i2] = im[i] - vi
-                re[i] += vr
-                im[i] += vi
+                wr = sr[half + k]
+                wi = sign * si[half + k]
+                for s in range(0, N, length):
+                    i = s + k
+                    i2 = i + half
+                    vr = re[i2] * wr - im[i2] * wi
+                    vi = re[i2] * wi + im[i2] * wr
+                    re[i2] = re[i] - vr
+                    im[i2] = im[i] - vi
+                    re[i] += vr
+                    im[i] += vi
         length <<= 1
 
 
@@ -109,14 +143,15 @@ def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
     sequence of length m/2 (even samples real, odd samples imaginary), so
     one complex FFT of length m/2 forward and one back replace two of length
     m (standard real-FFT packing, e.g. Press et al., Numerical Recipes
-    sec. 12.3).  Twiddles ``twr/twi[to:to+m/2]`` = exp(-2 pi i k/m).
+    sec. 12.3).  Twiddles ``twr/twi[to:to+m/2]`` = exp(-2 pi i k/m), followed
+    by the FFT's stage table (:func:`stage_twiddles`) at ``[to+m/2:to+m]``.
     Work buffers re, im, yr, yi need m/2 + 1 entries."""
     N = m // 2
     for k in range(N):
         a = 2 * k
         re[k] = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
         im[k] = P[o + a + 1] if a + 1 <= n - 2 else 0.0
-    _cfft(re, im, N, twr[to:], twi[to:], 2, 1.0)
+    _cfft(re, im, N, twr[to + N:], twi[to + N:], 1.0)
     for k in range(N + 1):
         kk = k if k < N else 0
         jj = (N - k) % N
@@ -149,7 +184,7 @@ def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
         wi = -twi[to + k]
         re[k] = 0.5 * (ar + cr) - (dr * wi + di * wr)
         im[k] = 0.5 * (ai + ci) + (dr * wr - di * wi)
-    _cfft(re, im, N, twr[to:], twi[to:], 2, -1.0)
+    _cfft(re, im, N, twr[to + N:], twi[to + N:], -1.0)
     inv = 1.0 / N
     p0 = P[o]
     p1 = P[o + n - 1]
@@ -193,8 +228,11 @@ class DeformationOperator:
         self.khr = np.ascontiguousarray(khat.real)
         self.khi = np.ascontiguousarray(khat.imag)
         ang = -2.0 * np.pi * np.arange(m // 2) / m
-        self.twr = np.cos(ang)
-        self.twi = np.sin(ang)
+        twr, twi = np.cos(ang), np.sin(ang)
+        sr, si = stage_twiddles(twr, twi, m)
+        # base table, then the FFT's stage table (conv_real's layout)
+        self.twr = np.concatenate((twr, sr))
+        self.twi = np.concatenate((twi, si))
 
     def __call__(self, P: np.ndarray) -> np.ndarray:
         """Return V_i = -(1/pi) sum_j K_|i-j| P_j for P on this grid."""
