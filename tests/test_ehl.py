@@ -98,14 +98,12 @@ def test_smooth_central_film_against_moes(M, L, measured):
                                           rel=1e-12)
 
 
-# Every (M, L) of the grid M = 5..1000 x L = 0..20 that converges (docs/ehl.md,
-# "Convergence over (M, L)"): 47 of 48 since the under-relaxed settings with the
-# wider trust region and the block-Newton polish ((1000, 20) and (500, 15) converge
-# since the polish); (500, 20) still raises EHLConvergenceError and is not listed.
-MOES_RANGE = [(M, L) for M in (5.0, 10.0, 20.0, 50.0, 100.0, 200.0)
-              for L in (0.0, 2.0, 5.0, 10.0, 15.0, 20.0)] + \
-             [(500.0, L) for L in (0.0, 2.0, 5.0, 10.0, 15.0)] + \
-             [(1000.0, L) for L in (0.0, 2.0, 5.0, 10.0, 15.0, 20.0)]
+# Every (M, L) of the grid M = 5..1000 x L = 0..20 (docs/ehl.md, "Convergence over
+# (M, L)"): all 48 converge since the coarse-grid retry ((500, 20) was the last
+# failure: every setting stalled on the default 128-interval coarsest grid; it
+# converges on the same 2048-interval finest grid with a 512-interval coarsest grid).
+MOES_RANGE = [(M, L) for M in (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
+              for L in (0.0, 2.0, 5.0, 10.0, 15.0, 20.0)]
 
 
 def test_smooth_central_film_against_moes_over_the_M_L_range():
@@ -114,8 +112,8 @@ def test_smooth_central_film_against_moes_over_the_M_L_range():
     # within 6 % and the mean |deviation| below 3 % (the issue's aim).
     # Measured: max 5.5 % (M = 1000, L = 0: the isoviscous-elastic asymptote
     # of the fit sits 4-5 % above grid-converged solutions, docs/ehl.md),
-    # mean 2.6 % over these 45 points (was 39; the six added points of the
-    # high-M corner are within 4.4 %).
+    # mean 2.4 % over these 48 points; the last point added, (500, 20), is
+    # -0.45 % (its neighbours (500, 15) +0.5 %, (1000, 20) -0.3 %, (200, 20) +2.3 %).
     devs = []
     for M, L in MOES_RANGE:
         r = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False)
@@ -130,6 +128,29 @@ def test_smooth_central_film_against_moes_over_the_M_L_range():
     worst = MOES_RANGE[int(np.argmax(devs))]
     assert devs.max() < 0.06, f"worst {worst}: {devs.max():.3f}"
     assert devs.mean() < 0.03
+
+
+@pytest.mark.parametrize("M,L,viscosity,n_coarse", [(500.0, 20.0, "barus", 512),
+                                                    (50.0, 20.0, "roelands", 64)])
+def test_last_M_L_failures_converge_on_the_coarse_grid_retry(M, L, viscosity, n_coarse):
+    # Barus (500, 20) and Roelands (50, 20) stalled on every relaxation setting on
+    # the default hierarchy (coarsest grid 128 resp. 32 intervals): the residual
+    # left is smooth over the Hertz zone (docs/ehl.md "Coarse-grid retry").  They
+    # converge on the same finest grid with a finer coarsest grid.  References:
+    # the discretised equations re-evaluated in numpy (dense deformation sum) and,
+    # for Barus, Moes' fit at the tolerance of the range test (6 %; measured
+    # -0.45 %); Roelands + Dowson-Higginson sits below the fit (measured -20.2 %,
+    # its neighbours (50, 15) -19.5 %, (100, 20) -22.3 %, docs/ehl.md).
+    comp = viscosity == "roelands"
+    r = solve_line_contact(M=M, L=L, viscosity=viscosity, compressible=comp)
+    assert r.converged and r.residuals["coarse_grid_retry"] == [float(n_coarse)]
+    gap_spread, load_err, scaled = _discrete_equations_check(r, viscosity, compressible=comp)
+    assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
+    dev = r.H_central_moes / moes_central_film(M, L) - 1.0
+    if comp:
+        assert -0.30 < dev < 0.05
+    else:
+        assert abs(dev) < 0.06
 
 
 def test_minimum_film_against_dowson_higginson():

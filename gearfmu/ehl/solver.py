@@ -615,6 +615,30 @@ REFINE_DX_ALPHA = 0.15
 REFINE_MAX_INTERVALS = 4096
 
 
+#: coarse-grid retry (docs/ehl.md "Coarse-grid retry"): a smooth solve whose
+#: settings all fail on the default hierarchy is retried on the same finest
+#: grid with the coarsest grid refined by these factors in turn (at least
+#: COARSE_RETRY_MIN_LEVELS levels left).  Measured: the stalls of Barus
+#: M = 500, L = 20 and Roelands M = 50, L = 20 are smooth errors over the whole
+#: Hertz zone that the coarse-grid correction does not remove when the
+#: coarsest grid is 128 (resp. 32) intervals; 512 (resp. 64) converge them.
+COARSE_RETRY_FACTORS = (2, 4)
+COARSE_RETRY_MIN_LEVELS = 3
+
+
+def coarse_retry_grids(n_int: int, n_coarse: int) -> List[int]:
+    """Coarsest-grid sizes (intervals) of the coarse-grid retry of a solve on
+    ``n_int`` finest intervals whose default coarsest grid has ``n_coarse``:
+    ``n_coarse`` times each of :data:`COARSE_RETRY_FACTORS` that leaves at
+    least :data:`COARSE_RETRY_MIN_LEVELS` levels."""
+    out = []
+    for f in COARSE_RETRY_FACTORS:
+        c = int(n_coarse) * int(f)
+        if c * 2 ** (COARSE_RETRY_MIN_LEVELS - 1) <= n_int:
+            out.append(c)
+    return out
+
+
 def effective_alpha(prm) -> float:
     """alpha_eff = d ln(eta)/dP at P = 1 (dimensionless, Hertzian pressure
     units): alpha p_h for Barus; A z (p_h/p0) (1 + p_h/p0)^(z-1) for Roelands
@@ -809,6 +833,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
 
     Hc_guess = math.pi * moes_central_film(M, L) / (8.0 * M)   # VL units
     user_grid = n_nodes is not None
+    user_coarse = n_coarse is not None
     n_nodes, n_coarse, n_levels = choose_grid(Hc_guess, x_out - x_in, n_nodes, n_coarse)
     roughness_ramp = tuple(float(a) for a in roughness_ramp)
     if not roughness_ramp or roughness_ramp[-1] != 1.0:
@@ -862,6 +887,11 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     # coefficient (see refined_grid_intervals)
     grids = [(n_nodes, n_coarse, n_levels)]
     compiled = solver == "compiled"
+    if compiled and not user_coarse and rfun is None:
+        # same finest grid, finer coarsest grid (docs/ehl.md "Coarse-grid retry")
+        grids += [choose_grid(Hc_guess, x_out - x_in, n_nodes, c)
+                  for c in coarse_retry_grids(n_nodes - 1, n_coarse)]
+    n_default = len(grids)
     if compiled and not user_grid and rfun is None:
         n_ref = refined_grid_intervals(prm, x_out - x_in, n_nodes - 1)
         if n_ref is not None:
@@ -922,8 +952,10 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             break
     if not converged and collapsed is not None:
         solver_obj, hist, opts, k_att, k_grid, it = collapsed
-    if len(grids) > 1:
-        hist["grid_refined"] = [float(k_grid)]
+    if len(grids) > n_default:
+        hist["grid_refined"] = [1.0 if k_grid >= n_default else 0.0]
+    if 0 < k_grid < n_default:
+        hist["coarse_grid_retry"] = [float(n_coarse)]
     hist["settings"] = opts
     hist["attempt"] = k_att
     if isinstance(solver_obj, FlatMultigrid):
