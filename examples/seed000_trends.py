@@ -4,6 +4,8 @@ the line of action and across the face (Fig. 9), TVMS curves (Figs. 12-15).
 
     python examples/seed000_trends.py [--json] [--points-per-mesh 4] [--slices 2] [--out DIR]
                                       [--also-policy load_sharing] [--transient-levels 1 2]
+                                      [--direct | --only-direct] [--direct-slices 2]
+                                      [--direct-nodes 257] [--direct-T-average 8]
 
 --json prints one JSON object (mean TVMS in N/m per contact model, speed and torque); PNG, CSV and
 JSON files go to examples/output/seed000_trends/.  Coarse defaults (4 points per mesh period,
@@ -13,6 +15,12 @@ in the notes (docs/ehl_mesh.md).  --transient-levels adds, per level, the tables
 [roughness] film_transient = "correction" (transient film correction, docs/ehl_transient.md
 section 3) under both time reductions, (b) k_of_means (the table's) and (a) mean_of_k, as the
 JSON key "film_transient" (mean TVMS, build wall/CPU time, the correction's provenance).
+--direct adds (--only-direct: only) the TVMS evaluated directly, without tables, at the pitch point
+(single-tooth contact) and the middle of the double-tooth zone, 2000 N m, 2000 rpm, perfect gears
+(gearfmu.ehl.direct_tvms: Hertz, smooth steady film, smooth transient, rough levels 1-2 steady
+and transient with reduction (b); levels 3-4 are reported with their film parameter, they have
+no full film) as the JSON key "direct_tvms" (N/m per model and position, relative to smooth, CPU)
+and the figure direct_tvms.png (about 1 min CPU with 2 slices and 257 nodes).
 """
 from __future__ import annotations
 
@@ -131,6 +139,113 @@ def run(ppm: int, slices: int, out: Path, log=print, policies=(), transient_leve
     return result
 
 
+#: (label, model, roughness level) of the direct TVMS (--direct)
+DIRECT_CASES = (("hertz", "hertz", None), ("smooth", "smooth_ehl", None),
+                ("smooth_transient", "smooth_transient", None),
+                ("rough_level_1_steady", "rough_steady", 1), ("rough_level_1", "rough_transient", 1),
+                ("rough_level_2_steady", "rough_steady", 2), ("rough_level_2", "rough_transient", 2))
+
+
+def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float = 8.0,
+               max_workers=None, log=print, torque_Nm: float = 2000.0) -> dict:
+    """Seed 000 Figs. 12-13 read at the TVMS level, without tables: TVMS (N/m) of every model of
+    DIRECT_CASES at the pitch point and the middle of the double-tooth zone
+    (gearfmu.ehl.direct_tvms.direct_mesh_stiffness); writes direct_tvms.json and direct_tvms.png."""
+    from gearfmu.contact_models import RoughnessSpec, environment_from_scene, film_parameter
+    from gearfmu.ehl.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
+                                         pair_positions_m)
+    from gearfmu.ehl.mesh_film import contact_kinematics
+    from gearfmu.geometry import pair_geometry
+    from gearfmu.scene import load_scene
+
+    base = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
+    sc = dataclasses.replace(base, mesh=dataclasses.replace(base.mesh, slices=slices))
+    g = pair_geometry(sc.pair)
+    s = np.array([g.s_pitch_m, g.s_start_m + 0.5 * (g.contact_ratio - 1.0) * g.base_pitch_m])
+    labels = ("pitch point (single-tooth contact)", "middle of the double-tooth zone")
+    sp = pair_positions_m(g, s)
+    env0 = environment_from_scene(sc, max_workers=1)
+    pos = []
+    for i, lab in enumerate(labels):
+        q = sp[np.isfinite(sp[:, i]), i]
+        R, u, sl = contact_kinematics(g, q, env0.omega1_rad_s)
+        pos.append({"label": lab, "s_m": float(s[i]), "pairs_from_A_mm": [float(x) for x in (q - g.s_start_m) * 1e3],
+                    "srr": [float(x) for x in sl / u]})
+    st = TransientFilmSettings(n_nodes=n_nodes, T_average=T_average)
+    res = {"scene": "examples/scenes/seed000_table1.toml", "torque_Nm": torque_Nm, "speed_rpm": 2000.0,
+           "slices": slices, "n_nodes": n_nodes, "T_average_b_per_u_s": T_average,
+           "reduction": st.reduction, "errors": "perfect gears (no deviations, no crowning)",
+           "positions": pos, "tvms_N_per_m": {}, "relative_to_smooth": {}, "cost": {}, "not_evaluated": {}}
+    from gearfmu.sweeps import make_executor
+
+    with make_executor(max_workers=max_workers) as ex:
+        for name, model, level in DIRECT_CASES:
+            env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level) if level else None,
+                                         max_workers=1)
+            try:
+                r = direct_mesh_stiffness(env, sc.mesh, s, torque_Nm, model, transient=st, executor=ex,
+                                          progress=False)
+            except DirectTVMSError as exc:      # e.g. a steady rough film that stalls
+                res["not_evaluated"][name] = {"reason": str(exc)}
+                log(f"direct {name}: not evaluated: {exc}")
+                continue
+            res["tvms_N_per_m"][name] = [float(x) for x in r.k_mesh_N_per_m]
+            res["cost"][name] = {"cpu_s": round(r.cpu_s, 2), "wall_s": round(r.wall_s, 2),
+                                 "film_evaluations": r.film_evaluations, "passes": r.passes,
+                                 "load_change_over_F_per_NS": r.load_change, "failures": r.failures}
+            if level:
+                res["cost"][name]["film_parameter_min"] = float(np.nanmin(r.film_parameter))
+            log(f"direct {name}: {r.k_mesh_N_per_m} N/m, {r.cpu_s:.1f} s CPU")
+    for level in (3, 4):
+        env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level), max_workers=1)
+        q = sp[np.isfinite(sp)]
+        lam = film_parameter(env, q, np.full(q.shape, torque_Nm / g.rb1_m / (env.width_m * slices)))
+        try:
+            direct_mesh_stiffness(env, sc.mesh, s, torque_Nm, "rough_transient", transient=st, max_workers=1)
+            why = "evaluated"
+        except DirectTVMSError as exc:
+            why = str(exc)
+        res["not_evaluated"][f"rough_level_{level}"] = {
+            "film_parameter_min": float(lam.min()), "film_parameter_max": float(lam.max()), "reason": why}
+    sm = np.array(res["tvms_N_per_m"]["smooth"])
+    res["relative_to_smooth"] = {k: [float(x) for x in np.array(v) / sm - 1.0] for k, v in res["tvms_N_per_m"].items()}
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "direct_tvms.json", "w") as fh:
+        json.dump(res, fh, indent=1)
+    _direct_figure(res, out / "direct_tvms.png")
+    return res
+
+
+def _direct_figure(res: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in ("hertz", "smooth", "rough_level_1", "rough_level_2") if n in res["relative_to_smooth"]]
+    tick = {"hertz": "Hertz", "smooth": "smooth", "rough_level_1": "rough 1", "rough_level_2": "rough 2"}
+    color = {"hertz": "0.5", "smooth": "k", "rough_level_1": "tab:blue", "rough_level_2": "tab:red"}
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for i, p in enumerate(res["positions"]):
+        rel = [res["relative_to_smooth"][n][i] for n in names]
+        a = ax[i]
+        a.bar(range(len(names)), [r * 1e3 for r in rel], color=[color[n] for n in names])
+        a.set_xticks(range(len(names)))
+        a.set_xticklabels([tick[n] for n in names])
+        a.set_ylabel("TVMS / smooth - 1 (per mille)")
+        a.set_yscale("symlog", linthresh=0.01)
+        a.set_title(f"{p['label']}\nsmooth {res['tvms_N_per_m']['smooth'][i] / 1e9:.5f} GN/m, SRR "
+                    + ", ".join(f"{x:+.2f}" for x in p["srr"]), fontsize=9)
+        for x, r in enumerate(rel):
+            if names[x] == "smooth":
+                continue
+            a.annotate(f"{r:+.2e}", (x, r * 1e3), ha="center", va="bottom" if r >= 0 else "top", fontsize=7)
+    fig.suptitle(f"Seed 000 Figs. 12-13, direct TVMS: {res['torque_Nm']:g} N m, 2000 rpm, {res['slices']} slices, "
+                 f"{res['n_nodes']} EHL nodes, transient reduction (b)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def _figures(base, curves, out: Path, slices: int) -> None:
     import matplotlib
     matplotlib.use("Agg")
@@ -232,10 +347,21 @@ def main(argv=None) -> int:
     ap.add_argument("--transient-levels", type=int, nargs="+", default=[], metavar="LEVEL",
                     help="add the tables with [roughness] film_transient = 'correction' of these levels, "
                          "reductions (b) and (a), as the JSON key 'film_transient'")
+    ap.add_argument("--direct", action="store_true",
+                    help="add the TVMS evaluated directly at two meshing positions (JSON key 'direct_tvms')")
+    ap.add_argument("--only-direct", action="store_true", help="only the direct TVMS (no tables)")
+    ap.add_argument("--direct-slices", type=int, default=2)
+    ap.add_argument("--direct-nodes", type=int, default=257, help="EHL grid nodes of the direct films")
+    ap.add_argument("--direct-T-average", type=float, default=8.0,
+                    help="transient averaging window after the wash-out (b/u_s)")
+    ap.add_argument("--workers", type=int, default=None, help="worker processes of the direct TVMS")
     a = ap.parse_args(argv)
     log = (lambda *x: print(*x, file=sys.stderr, flush=True))
-    res = run(a.points_per_mesh, a.slices, Path(a.out), log, policies=tuple(a.also_policy),
-              transient_levels=tuple(a.transient_levels))
+    res = {} if a.only_direct else run(a.points_per_mesh, a.slices, Path(a.out), log,
+                                       policies=tuple(a.also_policy), transient_levels=tuple(a.transient_levels))
+    if a.direct or a.only_direct:
+        res["direct_tvms"] = run_direct(Path(a.out), a.direct_slices, a.direct_nodes, a.direct_T_average,
+                                        a.workers, log)
     if a.json:
         print(json.dumps(res))
     else:

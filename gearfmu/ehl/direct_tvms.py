@@ -25,7 +25,8 @@ Contact models (:data:`DIRECT_MODELS`):
 * ``smooth_ehl``: steady smooth line-contact EHL (seed 000 eq 2-7), film stiffness seed 000
   eq 8-9 on the Hertz band (:func:`gearfmu.ehl.mesh_film.solve_slice_film`);
 * ``rough_steady``: the same with the slice's frozen W-M flank roughness at the contact
-  (seed 000 eq 1, 3; the steady rough film of the tables, sampled directly);
+  (seed 000 eq 1, 3; the steady rough film of the tables, sampled directly and solved as the
+  film grid solves it, warm-started from the smooth film, :func:`gearfmu.ehl.mesh_film.solve_node_films`);
 * ``smooth_transient`` / ``rough_transient``: the transient solver
   (:func:`gearfmu.ehl.transient.solve_line_contact_transient`, option A of docs/ehl_transient.md:
   R, u_s, SRR and w frozen at the request, the roughness of each flank moving with that flank at
@@ -169,7 +170,7 @@ def _film_chunk(_env, items):
     """Worker: film evaluations.  Item ('steady', fenv, R, u, w, profile|None) or ('transient',
     kwargs, T_average, reduction).  Returns dicts with k_N_per_m, status, message, cpu_s (and for
     transient runs the window means and steps)."""
-    from .mesh_film import solve_slice_film
+    from .mesh_film import solve_node_films, solve_slice_film
     from .transient import solve_line_contact_transient
 
     import os
@@ -179,7 +180,10 @@ def _film_chunk(_env, items):
         c0 = time.process_time()
         if it[0] == "steady":
             _, fenv, R, u, w, prof = it
-            o = solve_slice_film(fenv, R, u, w, prof)
+            if prof is None:
+                o = solve_slice_film(fenv, R, u, w, None)
+            else:   # the tables' rough solve: warm start from the smooth film, two relaxation settings
+                o = solve_node_films(fenv, R, u, w, [prof])[1][0]
             out.append(dict(k_N_per_m=float(o.k_N_per_m), status=o.status, message=o.message,
                             cpu_s=time.process_time() - c0, pid=os.getpid()))
             continue
