@@ -20,7 +20,7 @@ JSON key "film_transient" (mean TVMS, build wall/CPU time, the correction's prov
 (gearfmu.ehl.direct_tvms: Hertz, smooth steady film, smooth transient, rough levels 1-2 steady
 and transient with reduction (b); levels 3-4 are reported with their film parameter, they have
 no full film) as the JSON key "direct_tvms" (N/m per model and position, relative to smooth, CPU)
-and the figure direct_tvms.png (about 1 min CPU with 2 slices and 257 nodes).
+and the figure direct_tvms.png (about 35 s CPU with 2 slices and 257 nodes).
 """
 from __future__ import annotations
 
