@@ -15,6 +15,23 @@ machine.
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
                                    [--python-driver] [--no-fmg]
     python benchmarks/bench_ehl.py --ml-table barus|roelands   # convergence over (M, L)
+    python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error (issue 3)
+
+``--speed`` (issue 3's speed item: time per smooth solve over >= 4 grid sizes and
+its growth): for Roelands + Dowson-Higginson at M = 20, L = 10 and M = 100, L = 10
+(the team's target cases) and sizes 256 .. 4096 intervals, each solve timed with
+the default tolerances and stopped at about the discretisation accuracy
+(``tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4``): CPU ms per solve
+(median and minimum of ``--repeats``), per cycle, cycles, and the central film's
+error against the finest-grid answer (8192 intervals, converged to pressure
+change 1e-9) and against the same grid converged (the algebraic error the stop
+leaves); the discretisation error is the difference of the two converged
+answers.  Fitted exponents of CPU per solve and per cycle against N (an N log N
+cost gives about 1.1 over 256..4096).  Modes: ``default`` (default path and
+tolerances), ``discretisation`` (default path, the stop above),
+``speed_path`` (``gearfmu.ehl.mgcore.SPEED_SETTING``: F-cycles with a Newton
+solve of the coarsest grid, with the stop above) and
+``speed_path_default_tolerances``.
 
 Each case is timed with the default Hertzian start, with the full-multigrid
 start (``fmg_cycles=1``) and with the FMG start plus the stop at the estimated
@@ -145,6 +162,70 @@ def ml_table(viscosity, compressible, Ms=ML_TABLE_M, Ls=ML_TABLE_L):
     return rows
 
 
+#: stopping at about the discretisation accuracy (docs/ehl.md "Speed"; the same
+#: values as gearfmu.ehl.mgcore.DISC_TOLERANCES, repeated so that the benchmark
+#: also runs against code versions without them)
+DISC_TOLERANCES = dict(tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4)
+SPEED_CASES = ((20.0, 10.0), (100.0, 10.0))
+try:        # the opt-in speed path (F-cycles, Newton on the coarsest grid)
+    from gearfmu.ehl.mgcore import SPEED_SETTING
+except ImportError:     # older code versions (before/after comparisons)
+    SPEED_SETTING = None
+
+
+def _tight(M, L, n, **kw):
+    for tp, tr in ((1e-9, 1e-10), (1e-8, 1e-9), (1e-7, 1e-8)):
+        try:
+            return solve_line_contact(M=M, L=L, n_nodes=n + 1, tol_pressure=tp, tol_load=tr,
+                                      tol_residual=tr, max_cycles=400, **kw)
+        except Exception:       # stalled below the default tolerances: try looser
+            pass
+    return solve_line_contact(M=M, L=L, n_nodes=n + 1, **kw)
+
+
+def speed_table(sizes, repeats, finest=8192, cases=SPEED_CASES):
+    """Speed vs error (see the module doc, ``--speed``); returns a dict."""
+    out = dict(load_average_1min=os.getloadavg()[0], cpu_count=os.cpu_count(),
+               finest_reference_intervals=finest, disc_tolerances=DISC_TOLERANCES, cases=[])
+    for M, L in cases:
+        ref = _tight(M, L, finest)
+        hc_ref = ref.H_central_moes
+        case = dict(M=M, L=L, viscosity="roelands", compressible=True,
+                    H_central_moes_finest=hc_ref, modes={})
+        conv = {n: _tight(M, L, n).H_central_moes for n in sizes}
+        modes = [("default", {}), ("discretisation", DISC_TOLERANCES)]
+        if SPEED_SETTING is not None:
+            modes += [("speed_path", dict(SPEED_SETTING, **DISC_TOLERANCES)),
+                      ("speed_path_default_tolerances", dict(SPEED_SETTING))]
+        for mode, kw in modes:
+            rows = []
+            for n in sizes:
+                cpu = []
+                for _ in range(repeats):
+                    c = time.process_time()
+                    r = solve_line_contact(M=M, L=L, n_nodes=n + 1, **kw)
+                    cpu.append(time.process_time() - c)
+                hc = r.H_central_moes
+                rows.append(dict(
+                    n_intervals=n, levels=r.grid_levels, cycles=r.iterations,
+                    attempt=r.residuals["attempt"],
+                    cpu_ms_median=1e3 * float(np.median(cpu)), cpu_ms_min=1e3 * min(cpu),
+                    cpu_ms_per_cycle=1e3 * float(np.median(cpu)) / r.iterations,
+                    hc_rel_err_vs_finest=abs(hc / hc_ref - 1.0),
+                    hc_rel_err_vs_same_grid_converged=abs(hc / conv[n] - 1.0),
+                    discretisation_error_vs_finest=abs(conv[n] / hc_ref - 1.0)))
+            ns = [r_["n_intervals"] for r_ in rows]
+            case["modes"][mode] = dict(
+                rows=rows,
+                cost_exponent_per_solve=fitted_exponent(ns, [r_["cpu_ms_min"] for r_ in rows]),
+                cost_exponent_per_cycle=fitted_exponent(ns, [r_["cpu_ms_per_cycle"]
+                                                             for r_ in rows]),
+                n_log_n_exponent_reference=fitted_exponent(ns, [n * math.log2(n) for n in ns]))
+        out["cases"].append(case)
+    out["load_average_1min_end"] = os.getloadavg()[0]
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -157,7 +238,13 @@ def main(argv=None):
     ap.add_argument("--ml-table", choices=["barus", "roelands"],
                     help="only the convergence table over M 5-1000 x L 0-20 (Barus: "
                          "incompressible, Roelands: compressible), one JSON line per point")
+    ap.add_argument("--speed", action="store_true",
+                    help="only the speed-vs-error table (Roelands, M = 20 / 100, L = 10)")
     args = ap.parse_args(argv)
+    if args.speed:
+        solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
+        print(json.dumps(speed_table(args.sizes, args.repeats), indent=1))
+        return
     if args.ml_table:
         solve_line_contact(M=20.0, L=5.0, n_nodes=257)  # numba compilation
         rows = ml_table(args.ml_table, args.ml_table == "roelands")

@@ -165,3 +165,108 @@ def test_stage_twiddle_fft_matches_the_direct_sum_and_numpy():
             re, im = z.real.copy(), z.imag.copy()
             _cfft(re, im, N, sr, si, sign)
             assert np.max(np.abs(re + 1j * im - ref)) < 1e-12 * np.max(np.abs(ref))
+
+
+def _coarse_fas_state(M, L, z, compressible, order2=1):
+    """A FAS coarse-grid problem (level 0 of a 3-level hierarchy, 33 nodes) as
+    the cycle sets it up after a few cycles, with a generic right-hand side."""
+    A = L * math.sqrt(M / (2.0 * math.pi)) if z < 0 else 0.8 * L
+    prm = EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * M ** 2), A=A, z=z, php0=2.0, c1=0.3,
+                    compressible=compressible, x_in=-4.5, x_out=1.5)
+    fm = mgcore.FlatMultigrid(prm, 3, 32, load_mode=1, switch=0.3, omega_gs=0.6, omega_j=0.5,
+                              c_h0=0.1, stick=10.0, order2=order2)
+    fm.hertz_start(0.15)
+    fm.iterate(max_cycles=3, min_cycles=3, tol_pressure=0.0, tol_load=0.0, tol_residual=0.0,
+               stall_window=10 ** 6)
+    S = fm.state()
+    mgcore._down(2, S)
+    mgcore._down(1, S)
+    o, n = int(fm.iarr[0, 0]), int(fm.iarr[1, 0])
+    fm.f[o + 1:o + n - 1] += 1e-3 * np.random.default_rng(0).standard_normal(n - 2)
+    return fm, S, o, n
+
+
+@pytest.mark.parametrize("M,L,z,compressible,order2", [(20.0, 5.0, -1.0, False, 1),
+                                                       (20.0, 5.0, 0.6, True, 1),
+                                                       (100.0, 10.0, 0.6, True, 1),
+                                                       (20.0, 5.0, 0.6, True, 0)])
+def test_coarse_newton_jacobian_matches_finite_differences(M, L, z, compressible, order2):
+    # The Newton system of the coarsest-grid solve (mgcore._coarse_jacobian, the
+    # speed path's coarse solver).  Reference: central finite differences (step
+    # 1e-7) of the coarse residual f - L(P, H(P, H0)) and of the load equation
+    # g - dX sum P, evaluated by the cycle's own film/coefficient/residual
+    # kernels.  Measured: 3e-12 (Barus), 1.1e-7..2.9e-7 (Roelands + D-H: the
+    # finite difference straddles the P = 0 kink of the node next to the
+    # cavitated region); a missing or wrong term gives 1e-3 .. 1.
+    fm, S, o, n = _coarse_fas_state(M, L, z, compressible, order2)
+    P = fm.P
+    rho, eps, dle, drho, _, wrk = fm.work[:6]
+
+    def resid():
+        fm.update_film(0)
+        mgcore._coef(0, P, fm.H, rho, eps, dle, drho, fm.iarr, fm.prmv)
+        mgcore._residual(0, P, fm.H, fm.f, rho, eps, wrk, fm.iarr, fm.dx, order2 > 0, 0.0,
+                         False)
+        return wrk[o:o + n].copy(), fm.g[0] - fm.dx[0] * P[o:o + n].sum()
+
+    r0, _ = resid()
+    act = np.array([k for k in range(1, n - 1) if P[o + k] > 0 or P[o + k - 1] > 0
+                    or P[o + k + 1] > 0], dtype=np.int64)
+    buf = np.zeros(n, dtype=np.int64)
+    buf[:act.size] = act
+    J, b = mgcore._coarse_jacobian(S, buf, act.size, True)
+    assert J.shape == (act.size + 1, act.size + 1)
+    assert np.array_equal(b[:act.size], -r0[act])
+    Jfd = np.zeros_like(J)
+    step = 1e-7
+    for c, k in enumerate(list(act) + [None]):
+        if k is None:
+            fm.H0[0] += step
+            rp, lp = resid()
+            fm.H0[0] -= 2 * step
+            rm, lm = resid()
+            fm.H0[0] += step
+        else:
+            P[o + k] += step
+            rp, lp = resid()
+            P[o + k] -= 2 * step
+            rm, lm = resid()
+            P[o + k] += step
+        Jfd[:act.size, c] = (rp[act] - rm[act]) / (2 * step)
+        Jfd[act.size, c] = (lp - lm) / (2 * step)
+    assert np.max(np.abs(J - Jfd)) < 1e-5 * np.max(np.abs(Jfd))
+
+
+@pytest.mark.parametrize("M,L", [(20.0, 10.0), (100.0, 10.0)])
+def test_speed_path_reaches_the_same_converged_film(M, L):
+    # The speed path (mgcore.SPEED_SETTING: F-cycles, Newton on the coarsest
+    # grid) against the default path, both converged far below the default
+    # tolerances on 1024 intervals (Roelands + Dowson-Higginson).  References:
+    # the default path's H_c and H_min (1e-6 relative) and the discretised
+    # equations re-evaluated in numpy with a dense deformation sum (as the
+    # other Roelands tests: film 1e-9, load 1e-5, scaled residual 1e-5).
+    tight = dict(tol_pressure=1e-8, tol_load=1e-9, tol_residual=1e-9, max_cycles=200)
+    fast = solve_line_contact(M=M, L=L, n_nodes=1025, **mgcore.SPEED_SETTING, **tight)
+    ref = solve_line_contact(M=M, L=L, n_nodes=1025, **tight)
+    assert fast.converged and ref.converged
+    assert abs(fast.H_central_moes / ref.H_central_moes - 1.0) < 1e-6
+    assert abs(fast.H_min_moes / ref.H_min_moes - 1.0) < 1e-6
+    gap_spread, load_err, scaled = _discrete_equations_check(fast, "roelands", True)
+    assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
+
+
+@pytest.mark.parametrize("M,L", [(20.0, 10.0), (100.0, 10.0)])
+def test_speed_path_stops_inside_the_discretisation_error(M, L):
+    # The speed path stopped at mgcore.DISC_TOLERANCES leaves an algebraic error
+    # of H_c (against the same grid converged to pressure change 1e-8) below 0.3
+    # of the discretisation error.  Reference: Richardson's estimate of the
+    # discretisation error from the converged 512- and 1024-interval solutions
+    # (second order: |H(1024) - H(512)| / 3).  Measured: 0.01-0.1 of it.
+    tight = dict(tol_pressure=1e-8, tol_load=1e-9, tol_residual=1e-9, max_cycles=200)
+    h = {n: solve_line_contact(M=M, L=L, n_nodes=n + 1, **tight).H_central_moes
+         for n in (512, 1024)}
+    disc = abs(h[1024] - h[512]) / 3.0 / h[1024]
+    r = solve_line_contact(M=M, L=L, n_nodes=1025, **mgcore.SPEED_SETTING,
+                           **mgcore.DISC_TOLERANCES)
+    assert r.converged and r.iterations <= 6
+    assert abs(r.H_central_moes / h[1024] - 1.0) < 0.3 * disc
