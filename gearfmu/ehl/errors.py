@@ -15,14 +15,24 @@ class EHLConvergenceError(EHLError):
 
     ``residual_name`` is the residual that stalled ("pressure_change",
     "load_balance" or "reynolds_residual") and ``value`` its last value.
+    From the steady solver also: ``best_residual``, the lowest final scaled
+    Reynolds residual of any setting tried; ``attempts``, one
+    (finest-grid intervals, coarsest-grid intervals, attempt index -- the index
+    into the relaxation settings in the order tried --, final scaled residual) per
+    setting tried; ``skipped``, why settings or retry grids were
+    not tried (fail fast, docs/ehl.md).
     """
 
     def __init__(self, message: str, residual_name: str = "", value: float = float("nan"),
-                 history=None):
+                 history=None, best_residual: float = float("nan"), attempts=None,
+                 skipped=None):
         super().__init__(message)
         self.residual_name = residual_name
         self.value = value
         self.history = history
+        self.best_residual = best_residual
+        self.attempts = list(attempts or [])
+        self.skipped = list(skipped or [])
 
 
 class FilmCollapseError(EHLError):

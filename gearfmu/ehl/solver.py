@@ -626,6 +626,20 @@ COARSE_RETRY_FACTORS = (2, 4)
 COARSE_RETRY_MIN_LEVELS = 3
 
 
+#: Failing fast (docs/ehl.md "Failing fast"), rule 1: the retry grids
+#: (coarse-grid retry, refined grid) are tried only when some setting on the
+#: default grid stalled below this scaled Reynolds residual (the threshold of
+#: the best-state polish).  Measured: every solve that converged on a retry grid
+#: (the (M, L) tables, the margin points M = 2000-5000, L <= 30, M = 0.3-7.5,
+#: L = 5-40) had stalled below 6e-4 on its default grid.
+RETRY_BELOW_RESIDUAL = 1e-3
+#: rule 2: a second or later retry grid is tried only when the previous retry
+#: grid lowered the best stalled residual of the grids before it at least this
+#: factor (measured on the converging cases: 2.9x (Barus M = 5000, L = 30) to
+#: 200x; on the failures Barus M = 200 and 1000, L = 40: 1.0x and 0.3x)
+RETRY_PROGRESS_FACTOR = 2.0
+
+
 def coarse_retry_grids(n_int: int, n_coarse: int) -> List[int]:
     """Coarsest-grid sizes (intervals) of the coarse-grid retry of a solve on
     ``n_int`` finest intervals whose default coarsest grid has ``n_coarse``:
@@ -897,7 +911,24 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         if n_ref is not None:
             grids.append(choose_grid(Hc_guess, x_out - x_in, n_ref + 1, n_coarse))
     collapsed = None
+    tried = []          # (grid intervals, coarsest intervals, setting, final scaled residual)
+    skipped = []        # why settings or grids were skipped (fail fast)
     for k_grid, (n_nodes, n_coarse, n_levels) in enumerate(grids):
+        if k_grid > 0:
+            # fail fast (rules 1 and 2 above): best stalled residual per grid so far
+            per_grid = [min((t_[3] for t_ in tried if t_[:2] == (g[0] - 1, g[1])),
+                            default=math.inf) for g in grids[:k_grid]]
+            if not per_grid[0] < RETRY_BELOW_RESIDUAL:
+                skipped.append(f"retry grids not tried: best scaled residual on the default "
+                               f"grid {per_grid[0]:.1e} >= {RETRY_BELOW_RESIDUAL:.0e}")
+                break
+            if k_grid > 1 and not (per_grid[-1] * RETRY_PROGRESS_FACTOR
+                                   <= min(per_grid[:-1])):
+                skipped.append(f"{len(grids) - k_grid} further retry grid(s) not tried: the "
+                               f"last one ({grids[k_grid - 1][0] - 1}/{grids[k_grid - 1][1]}"
+                               f" intervals) reached {per_grid[-1]:.1e}, not "
+                               f"{RETRY_PROGRESS_FACTOR:g}x below {min(per_grid[:-1]):.1e}")
+                break
         best = []
         if initial is not None:
             Xg = np.linspace(x_in, x_out, n_nodes)
@@ -916,6 +947,9 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                     stop_at_discretisation=float(stop_at_discretisation))
             if converged:
                 break
+            rr = hist["reynolds_residual"]
+            tried.append((n_nodes - 1, n_coarse, k_att,
+                          float(rr[-1]) if rr and math.isfinite(rr[-1]) else math.inf))
             # remember the last attempt that ended with a collapsed film (h <= 0):
             # if no attempt converges, that is reported (FilmCollapseError) rather
             # than the stall of whichever setting happened to run last
@@ -983,11 +1017,19 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             x_m=float(x_m[imin]), film_parameter=float(lam_f), h_min_m=float(h_m[imin]))
     if not converged:
         last, name, val, tol = stalled_residual(hist, tol_pressure, tol_residual, tol_load)
+        fin = [t_ for t_ in tried if math.isfinite(t_[3])]
+        b_ = min(fin, key=lambda t_: t_[3]) if fin else None
+        best_txt = (f"; best stalled scaled residual {b_[3]:.2e} (attempt {b_[2]}, "
+                    f"{b_[0]}/{b_[1]} intervals)" if b_ else "")
         raise EHLConvergenceError(
             f"EHL multigrid did not converge in {it} W-cycles (M={M:.4g}, L={L:.4g}): "
             f"residual '{name}' stalled at {val:.3e} (tolerance {tol:.1e}); "
-            f"reynolds_residual={last['reynolds_residual']:.3e}",
-            residual_name=name, value=val, history=hist)
+            f"reynolds_residual={last['reynolds_residual']:.3e}{best_txt}; "
+            f"{len(tried)} setting(s) on {len({t_[:2] for t_ in tried})} grid(s) tried in "
+            f"{time.perf_counter() - t_start:.2f} s"
+            + "".join(f"; {x}" for x in skipped),
+            residual_name=name, value=val, history=hist,
+            best_residual=b_[3] if b_ else float("nan"), attempts=tried, skipped=skipped)
 
     # central film: linear interpolation at X = 0
     h_c = float(np.interp(0.0, X, h_m))
