@@ -449,8 +449,11 @@ def _coarse_jacobian(S, act, na, load_here):
     order2 = opt[3] > 0
     ipi = 1.0 / math.pi
     m = na + 1 if load_here else na
-    J = np.zeros((m, m))
+    J = np.empty((m, m))
     b = np.empty(m)
+    col = np.full(n, -1, dtype=np.int64)        # node -> column of the system
+    for c in range(na):
+        col[act[c]] = c
     for a in range(na):
         k = act[a]
         i = o + k
@@ -458,46 +461,39 @@ def _coarse_jacobian(S, act, na, load_here):
         ep = 0.5 * (eps[i] + eps[i + 1])
         cm = 0.5 * (P[i - 1] - P[i]) / h2
         cp = 0.5 * (P[i + 1] - P[i]) / h2
-        sec = order2 and k >= 2
+        if order2 and k >= 2:
+            w0, w1, w2 = 1.5 / dX, -2.0 / dX, 0.5 / dX
+        else:
+            w0, w1, w2 = 1.0 / dX, -1.0 / dX, 0.0
         b[a] = -wrk[i]
         # 3 eps_j / H_j for j = i-1, i, i+1 (0 where the film is closed)
         e3m = 3.0 * eps[i - 1] / H[i - 1] if H[i - 1] > 0.0 else 0.0
         e3 = 3.0 * eps[i] / H[i] if H[i] > 0.0 else 0.0
         e3p = 3.0 * eps[i + 1] / H[i + 1] if H[i + 1] > 0.0 else 0.0
+        # film part: dr_i/dP_kk = sum_j A_j dH_j/dP_kk, dH_j/dP_kk = -K_|j-kk|/pi
+        # (Poiseuille through eps_j ~ H_j^3 for j = i-1..i+1, wedge through
+        # rho_j H_j for j = i-2..i)
+        A0 = (-(cm + cp) * e3 + w0 * rho[i]) * ipi
+        A1 = (-cm * e3m + w1 * rho[i - 1]) * ipi
+        A2 = (w2 * rho[i - 2]) * ipi if k >= 2 else 0.0
+        Ap = (-cp * e3p) * ipi
         for c in range(na):
             kk = act[c]
-            # dH_j/dP_kk for j = i-2 .. i+1
-            gm2 = -K[ko + abs(k - 2 - kk)] * ipi if k >= 2 else 0.0
-            gm1 = -K[ko + abs(k - 1 - kk)] * ipi
-            g0 = -K[ko + abs(k - kk)] * ipi
-            gp1 = -K[ko + abs(k + 1 - kk)] * ipi
-            # d eps_j / dP_kk
-            dem1 = e3m * gm1 + (eps[i - 1] * dle[i - 1] if kk == k - 1 else 0.0)
-            de0 = e3 * g0 + (eps[i] * dle[i] if kk == k else 0.0)
-            dep1 = e3p * gp1 + (eps[i + 1] * dle[i + 1] if kk == k + 1 else 0.0)
-            dpoi = cm * (dem1 + de0) + cp * (de0 + dep1)
-            if kk == k - 1:
-                dpoi += em / h2
-            elif kk == k:
-                dpoi -= (em + ep) / h2
-            elif kk == k + 1:
-                dpoi += ep / h2
-            # d(rho_j H_j)/dP_kk
-            d0 = rho[i] * g0 + (drho[i] * H[i] if kk == k else 0.0)
-            dm1 = rho[i - 1] * gm1 + (drho[i - 1] * H[i - 1] if kk == k - 1 else 0.0)
-            if sec:
-                dm2 = rho[i - 2] * gm2 + (drho[i - 2] * H[i - 2] if kk == k - 2 else 0.0)
-                dw = (1.5 * d0 - 2.0 * dm1 + 0.5 * dm2) / dX
-            else:
-                dw = (d0 - dm1) / dX
-            J[a, c] = -dpoi + dw
+            J[a, c] = -(A2 * K[ko + abs(k - 2 - kk)] + A1 * K[ko + abs(k - 1 - kk)]
+                        + A0 * K[ko + abs(k - kk)] + Ap * K[ko + abs(k + 1 - kk)])
+        # local part: Poiseuille coefficients, d eps/dP and d rho/dP of the node
+        c = col[k]
+        J[a, c] += -(cm + cp) * eps[i] * dle[i] + (em + ep) / h2 + w0 * drho[i] * H[i]
+        if k - 1 >= 0 and col[k - 1] >= 0:
+            J[a, col[k - 1]] += -cm * eps[i - 1] * dle[i - 1] - em / h2 \
+                + w1 * drho[i - 1] * H[i - 1]
+        if k + 1 < n and col[k + 1] >= 0:
+            J[a, col[k + 1]] += -cp * eps[i + 1] * dle[i + 1] - ep / h2
+        if k - 2 >= 0 and col[k - 2] >= 0:
+            J[a, col[k - 2]] += w2 * drho[i - 2] * H[i - 2]
         if load_here:
-            dpoi = cm * (e3m + e3) + cp * (e3 + e3p)
-            if sec:
-                dw = (1.5 * rho[i] - 2.0 * rho[i - 1] + 0.5 * rho[i - 2]) / dX
-            else:
-                dw = (rho[i] - rho[i - 1]) / dX
-            J[a, na] = -dpoi + dw
+            J[a, na] = -(cm * (e3m + e3) + cp * (e3 + e3p)) + w0 * rho[i] + w1 * rho[i - 1] \
+                + (w2 * rho[i - 2] if k >= 2 else 0.0)
     if load_here:
         s = 0.0
         for k in range(n):
