@@ -78,11 +78,14 @@ STALL_FILL_MAX_SPAN = 3
 #: rough load nodes over a known load range (ContactEnvironment.film_load_range_N_per_m,
 #: set by the table builder: the load floor to the largest static slice load)
 FILM_LOAD_NODES = 3
-#: ``RoughnessSpec.film_transient`` values: "off" (steady frozen-roughness films only) or
+#: ``RoughnessSpec.film_transient`` values: "off" (steady frozen-roughness films only),
 #: "correction" (docs/ehl_transient.md section 3 "last row": per film-grid node, transient
 #: runs with the roughness moving with the flanks on :data:`FILM_TRANSIENT_SLICES` slices give
-#: c = <k_transient>/k_steady, which multiplies every slice's steady rough/smooth ratio)
-FILM_TRANSIENT_MODES = ("off", "correction")
+#: c = <k_transient>/k_steady, which multiplies every slice's steady rough/smooth ratio) or
+#: "film" (the rough film IS the transient film: per node, ratio = mean over those slices of
+#: k_transient/k_smooth, the same for every slice, no steady rough solve; start 'auto';
+#: docs/ehl_mesh.md "Transient films in the tables")
+FILM_TRANSIENT_MODES = ("off", "correction", "film")
 #: slices per film-grid node run in time for the transient correction (CHOICE of
 #: docs/ehl_transient.md section 3: 4, spread evenly over the face; all when fewer)
 FILM_TRANSIENT_SLICES = 4
@@ -90,6 +93,12 @@ FILM_TRANSIENT_SLICES = 4
 #: A B(<p_m>)/<h_m> (the table's CHOICE, seed 000's "central OFT" explanation) and (a)
 #: "mean_of_k" = <A B(p_m)/h_m>
 FILM_TRANSIENT_REDUCTIONS = ("k_of_means", "mean_of_k")
+#: start of the transient runs of ``film_transient = "film"`` (as gearfmu.ehl.direct_tvms):
+#: the steady frozen-roughness film, or -- where that solve stalls (most level 3-4 nodes) --
+#: the smooth film with the roughness ramped in over ramp_T = 1 b/u_s
+#: (:func:`gearfmu.ehl.transient.solve_line_contact_transient`); window: the solver's default,
+#: from ramp_T + T_wash over T_AVERAGE = 4 b/u_s
+FILM_TRANSIENT_START = "auto"
 
 
 @dataclass(frozen=True)
@@ -105,7 +114,12 @@ class RoughnessSpec:
     'correction' (transient film correction of the grid nodes, :data:`FILM_TRANSIENT_MODES`,
     docs/ehl_transient.md section 3; needs ``position_nodes`` >= 2), ``film_transient_reduction``:
     its time reduction, 'k_of_means' (b, default) | 'mean_of_k' (a)
-    (:data:`FILM_TRANSIENT_REDUCTIONS`; a study option, not a scene key)."""
+    (:data:`FILM_TRANSIENT_REDUCTIONS`; a study option, not a scene key);
+    'film': the node's rough film is the transient film (:meth:`RoughFilmGrid.ensure`), and
+    ``film_parameter_screen``: None (default: the mode decides -- the Lambda screen is on for
+    'off' / 'correction', off for 'film', where the transient solver decides whether a full
+    film exists, docs/ehl_mesh.md "Transient films in the tables"), True or False (a study
+    option, not a scene key)."""
 
     D: float
     G_m: float
@@ -117,6 +131,7 @@ class RoughnessSpec:
     position_nodes: int = DEFAULT_FILM_POSITION_NODES
     film_transient: str = "off"
     film_transient_reduction: str = FILM_TRANSIENT_REDUCTIONS[0]
+    film_parameter_screen: Optional[bool] = None
 
     def __post_init__(self):
         if self.on_failure not in FILM_FAILURE_POLICIES:
@@ -134,9 +149,23 @@ class RoughnessSpec:
         if self.film_transient_reduction not in FILM_TRANSIENT_REDUCTIONS:
             raise ContactModelError(f"film_transient_reduction={self.film_transient_reduction!r}: must be one "
                                     f"of {', '.join(repr(m) for m in FILM_TRANSIENT_REDUCTIONS)}")
+        if self.film_parameter_screen not in (None, True, False):
+            raise ContactModelError(f"film_parameter_screen={self.film_parameter_screen!r}: must be None "
+                                    "(the film_transient mode decides), True or False")
         if self.film_transient != "off" and k == 0:
-            raise ContactModelError(f"film_transient={self.film_transient!r}: the transient correction is "
+            raise ContactModelError(f"film_transient={self.film_transient!r}: the transient films are "
                                     "stored on the film grid; needs position_nodes >= 2 (got 0)")
+
+    @property
+    def screens_film_parameter(self) -> bool:
+        """Whether requests with Lambda < ``full_film_parameter`` go to the film-failure policy
+        before any solve: ``film_parameter_screen`` when set, else True except for
+        ``film_transient = 'film'`` (CHOICE, docs/ehl_mesh.md "Transient films in the tables":
+        seed 000 treats all four levels as full film, and the transient films exist at
+        Lambda 2-3; a film that collapses (h <= 0) still goes to the policy)."""
+        if self.film_parameter_screen is not None:
+            return bool(self.film_parameter_screen)
+        return self.film_transient != "film"
 
     @staticmethod
     def from_level(level: int, **kw) -> "RoughnessSpec":
@@ -378,6 +407,7 @@ class RoughFilmGrid:
         self.transient: Dict[int, dict] = {}        # j -> c per node, statuses, costs
         self.ratio_steady: Dict[int, np.ndarray] = {}
         self.status_steady: Dict[int, np.ndarray] = {}
+        self.film_parameter_screen = bool(getattr(env.roughness, "screens_film_parameter", True))
 
     def w_node(self, j) -> np.ndarray:
         return self.anchor * self.q ** np.asarray(j, dtype=float)
@@ -394,7 +424,8 @@ class RoughFilmGrid:
         smooth_new = sorted((set(int(j) for j in smooth_j) | set(rough_new)) - set(self.smooth))
         if not smooth_new and not rough_new:
             return
-        fl = env.flanks() if rough_new else None
+        film_mode = self.transient_mode == "film"   # no steady rough solve: the node's film is transient
+        fl = env.flanks() if rough_new and not film_mode else None
         R, u, _ = contact_kinematics(env.geom, self.s_nodes, env.omega1_rad_s)
         chunks, counts, where = [], [], []
         n_cpu = __import__("os").cpu_count() or 1
@@ -406,7 +437,7 @@ class RoughFilmGrid:
         for j in cols:
             wj = float(self.w_node(j))
             for k in range(self.K):
-                if j in rough_new:
+                if j in rough_new and not film_mode:
                     for n0 in range(0, self.NS, per):
                         sl = list(range(n0, min(self.NS, n0 + per)))
                         prof = [_rough_profile(env, fenv, fl, float(self.s_nodes[k]), n, wj, float(R[k])) for n in sl]
@@ -436,7 +467,11 @@ class RoughFilmGrid:
                 ok = o.status == "ok" and sm.status == "ok"
                 self.ratio[j][n, k] = o.k_N_per_m / sm.k_N_per_m if ok else np.nan
                 self.status[j][n, k] = o.status if sm.status == "ok" else f"smooth {sm.status}"
-        if rough_new and self.transient_mode != "off":
+        if rough_new and film_mode:
+            self._run_transients(env, fenv, rough_new)
+            for j in rough_new:
+                self._apply_transient(j)
+        elif rough_new and self.transient_mode != "off":
             self._run_transients(env, fenv, rough_new)
             for j in rough_new:
                 self.ratio_steady[j] = self.ratio[j].copy()
@@ -466,15 +501,20 @@ class RoughFilmGrid:
         from .ehl.mesh_film import map_chunks
         from .ehl.transient import flank_slice_case
 
+        film_mode = self.transient_mode == "film"
         chunks, where = [], []
         for j in cols:
             wj = float(self.w_node(j))
             for k in range(self.K):
+                if film_mode and not np.isfinite(self.smooth[j][k]):
+                    continue          # no smooth film at the node: no ratio (status 'smooth <status>')
                 cases = []
                 for n in self.transient_slices:
                     kw = flank_slice_case(env, float(self.s_nodes[k]), wj, int(n))
                     if fenv.n_nodes is not None:
                         kw["n_nodes"] = int(fenv.n_nodes)
+                    if film_mode:     # as gearfmu.ehl.direct_tvms: frozen start, smooth start + ramp if it stalls
+                        kw["start"] = FILM_TRANSIENT_START
                     cases.append(kw)
                 chunks.append(cases)
                 where.append((j, k))
@@ -485,9 +525,24 @@ class RoughFilmGrid:
             self.transient[j] = {red: np.full(self.K, np.nan) for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS}
             self.transient[j].update(status=[""] * self.K, message=[""] * self.K, cpu_s=0.0,
                                      steps=[], cycles_per_step=[])
+            if film_mode:
+                self.transient[j].update(slice_ratios={red: np.full((len(self.transient_slices), self.K), np.nan)
+                                                       for red in FILM_TRANSIENT_REDUCTIONS},
+                                         starts=[], rescued_steps=0)
+                for k in range(self.K):
+                    if not np.isfinite(self.smooth[j][k]):
+                        self.transient[j]["status"][k] = f"smooth {self.smooth_status[j][k]}"
+                        self.transient[j]["message"][k] = "smooth film failed; no transient run"
         for (j, k), r in zip(where, res):
             t = self.transient[j]
-            c = transient_node_correction(r["cases"])
+            if film_mode:
+                c = transient_node_film(r["cases"], float(self.smooth[j][k]))
+                for red in FILM_TRANSIENT_REDUCTIONS:
+                    t["slice_ratios"][red][:, k] = c["slice_ratios"][red]
+                t["starts"] += [q["start"] for q in r["cases"] if q["status"] == "ok"]
+                t["rescued_steps"] += sum(q["rescued_steps"] for q in r["cases"] if q["status"] == "ok")
+            else:
+                c = transient_node_correction(r["cases"])
             for red in FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS:
                 t[red][k] = c[red]
             t["status"][k] = c["status"]
@@ -497,11 +552,17 @@ class RoughFilmGrid:
             t["cycles_per_step"] += [q["cycles_per_step"] for q in r["cases"] if q["status"] == "ok"]
 
     def _apply_transient(self, j):
-        """ratio = steady ratio x c of the node (every slice); a node whose transient failed is a
-        failed node of every slice (status 'stall' -> the stall fill rule, else the policy)."""
+        """'correction': ratio = steady ratio x c of the node (every slice); 'film': ratio = the
+        node's transient ratio <k_transient>/k_smooth (every slice).  A node whose transient failed
+        is a failed node of every slice (status 'stall' -> the stall fill rule, else the policy)."""
         t = self.transient[j]
         c = t[self.transient_reduction]
         ok = np.array([st == "ok" for st in t["status"]])
+        if self.transient_mode == "film":
+            self.ratio[j] = np.where(ok[None, :], np.broadcast_to(c[None, :], (self.NS, self.K)), np.nan)
+            self.status[j] = np.broadcast_to(np.array(t["status"], dtype=object)[None, :],
+                                             (self.NS, self.K)).copy()
+            return
         self.ratio[j] = np.where(ok[None, :], self.ratio_steady[j] * c[None, :], np.nan)
         st = self.status_steady[j].copy()
         for k in np.nonzero(~ok)[0]:
@@ -669,6 +730,23 @@ class RoughFilmGrid:
                   for j in js for k in range(self.K) if t[j]["status"][k] != "ok"]
         steps = [x for j in js for x in t[j]["steps"]]
         cyc = [x for j in js for x in t[j]["cycles_per_step"]]
+        extra = {}
+        if self.transient_mode == "film":
+            sr = [t[j]["slice_ratios"][self.transient_reduction] for j in js]
+            spread = [float(np.ptp(a[:, k]) / np.mean(a[:, k])) for a in sr for k in range(a.shape[1])
+                      if np.all(np.isfinite(a[:, k]))]
+            starts = [x for j in js for x in t[j]["starts"]]
+            extra = {"runs_smooth_start": sum(1 for x in starts if x == "smooth"),
+                     "rescued_steps": int(sum(t[j]["rescued_steps"] for j in js)),
+                     "slice_spread_max": max(spread) if spread else None,
+                     "slice_spread_mean": float(np.mean(spread)) if spread else None,
+                     "film_parameter_screen": self.film_parameter_screen,
+                     "rule": "ratio = mean over the listed slices of k_transient/k_smooth (k_smooth: the grid's "
+                             "steady smooth film at the node), the same for every slice; start 'auto' (frozen, "
+                             "smooth + roughness ramp where the frozen start stalls); no steady rough solve; a "
+                             "node whose transient fails on any of its slices is a failed node (stall: fill rule, "
+                             "collapse: the film-failure policy); slice_spread = (max - min)/mean of the "
+                             "per-slice ratios of a node"}
         return {"mode": self.transient_mode, "reduction": self.transient_reduction,
                 "slices": [int(n) for n in self.transient_slices],
                 "nodes": len(js) * self.K, "transient_runs": len(steps),
@@ -685,7 +763,8 @@ class RoughFilmGrid:
                 "cycles_per_step_mean": float(np.mean(cyc)) if cyc else None,
                 "rule": "c = mean over the listed slices of k_transient/k_steady (k_steady: the run's own "
                         "steady frozen-roughness start); every slice's steady rough/smooth ratio x c; a node "
-                        "whose transient fails on any of its slices is a failed node (stall: fill rule)"}
+                        "whose transient fails on any of its slices is a failed node (stall: fill rule)",
+                **extra}
 
 
 def fill_stalled_ratio(s_nodes, ratio, stalled, max_span: int = STALL_FILL_MAX_SPAN):
@@ -764,7 +843,8 @@ def _transient_node_chunk(_env, cases):
                     "k_of_means": red["k_of_means_N_per_m"], "mean_of_k": red["k_mean_of_k_N_per_m"],
                     "steps": int(r.T.size - 1), "cycles_per_step": float(r.cycles[1:].mean()),
                     "h_central_ratio": red["h_central_mean_m"] / float(r.h_central_m[0]),
-                    "h_mean_ratio": red["h_mean_m"] / float(r.h_mean_m[0])})
+                    "h_mean_ratio": red["h_mean_m"] / float(r.h_mean_m[0]), "start": r.start,
+                    "rescued_steps": int(np.count_nonzero(r.rescued)) if r.rescued is not None else 0})
     return {"cases": out, "cpu_s": time.process_time() - t0}
 
 
@@ -783,6 +863,30 @@ def transient_node_correction(cases) -> dict:
                for red in FILM_TRANSIENT_REDUCTIONS},
             **{h: float(np.mean([q.get(h, np.nan) for q in cases])) for h in _FILM_RATIOS},
             "status": "ok", "message": ""}
+
+
+def transient_node_film(cases, k_smooth_N_per_m: float) -> dict:
+    """Film ratio of one grid node under ``film_transient = "film"`` from its transient runs
+    (outputs of :func:`_transient_node_chunk`, start 'auto'): per time reduction (b)
+    k_of_means = A B(<p_m>)/<h_m> and (a) mean_of_k = <A B(p_m)/h_m> (seed 000 eq 8 on the
+    window after ramp + wash-out, docs/ehl_transient.md section 3), ratio = mean over the run
+    slices of k_transient / ``k_smooth_N_per_m`` (the grid's steady smooth film at the same
+    node, same EHL grid).  CHOICE: one ratio for every slice of the node (the time-averaged
+    film varies little between slices: spread measured in docs/ehl_mesh.md "Transient films in
+    the tables"); ``slice_ratios`` keeps the per-slice values.  Any failed run fails the node
+    (status of the first failure, ratio NaN): a collapse (h <= 0) means no full film."""
+    names = FILM_TRANSIENT_REDUCTIONS + _FILM_RATIOS
+    bad = [q for q in cases if q["status"] != "ok"]
+    if not (math.isfinite(k_smooth_N_per_m) and k_smooth_N_per_m > 0):
+        bad = bad or [{"status": "smooth failed", "message": "no smooth film at the node"}]
+    if bad or not cases:
+        q = bad[0] if bad else {"status": "stall", "message": "no transient run"}
+        return {**{red: float("nan") for red in names}, "status": q["status"], "message": q["message"],
+                "slice_ratios": {red: np.full(len(cases), np.nan) for red in FILM_TRANSIENT_REDUCTIONS}}
+    per = {red: np.array([q[red] / k_smooth_N_per_m for q in cases]) for red in FILM_TRANSIENT_REDUCTIONS}
+    return {**{red: float(np.mean(per[red])) for red in FILM_TRANSIENT_REDUCTIONS},
+            **{h: float(np.mean([q.get(h, np.nan) for q in cases])) for h in _FILM_RATIOS},
+            "status": "ok", "message": "", "slice_ratios": per}
 
 
 #: film-thickness ratios (window mean over the steady start) reported with the correction:
@@ -917,7 +1021,7 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
         raise ContactModelError(f"on_failure={spec.on_failure!r}: must be one of {', '.join(FILM_FAILURE_POLICIES)}")
     fenv = env.film_environment()
     lam = film_parameter(env, s, w)
-    full = lam >= spec.full_film_parameter
+    full = lam >= spec.full_film_parameter if spec.screens_film_parameter else np.ones(s.shape, bool)
     k = np.full(s.shape, np.nan)
     status = np.full(s.shape, "low_film_parameter", dtype=object)
     solves = 0
@@ -953,6 +1057,8 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
     # the solver, not of the film: under 'fractal_mixed' the smooth film stands in there (the
     # roughness changes a converged film's stiffness by a few % at most, docs/ehl_mesh.md)
     sub = failed & full
+    if spec.film_transient == "film":   # the transient film collapsed (h <= 0): no full film -> policy
+        sub &= status != "collapse"
     if spec.on_failure in ("fractal_mixed", "load_sharing") and np.any(sub):
         ks = _smooth_film_k(env, fenv, s[sub], w[sub])
         k[sub] = ks

@@ -541,10 +541,12 @@ SCHEMA["roughness"] = (
        "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
     _i("film_position_nodes", 9, "contact positions along the path of contact at which the rough films "
        "are solved and interpolated (0 = every table position)", 0, 10000),
-    _e("film_transient", ("off", "correction"), "off", "off: steady films with the roughness frozen in the "
-       "contact; correction: at every film-grid node transient films with the roughness moving with the flanks on "
-       "4 slices give c = <k_transient>/k_steady, which multiplies every slice's rough/smooth ratio "
-       "(docs/ehl_transient.md section 3; needs film_position_nodes >= 2)"),
+    _e("film_transient", ("off", "correction", "film"), "off", "off: steady films with the roughness frozen in "
+       "the contact; correction: at every film-grid node transient films with the roughness moving with the flanks "
+       "on 4 slices give c = <k_transient>/k_steady, which multiplies every slice's rough/smooth ratio "
+       "(docs/ehl_transient.md section 3); film: the node's rough film is the transient film (start 'auto', no "
+       "steady rough solve), ratio <k_transient>/k_smooth for every slice, no film-parameter screen "
+       "(docs/ehl_mesh.md 'Transient films in the tables'); needs film_position_nodes >= 2"),
 )
 _SUBTABLES[""] = _SUBTABLES[""] + ("roughness",)
 
