@@ -119,10 +119,22 @@ class DirectTVMS:
     and ``k_contact_N_per_m`` (P, NS, N) slice mesh stiffness and the model's contact stiffness
     k_l; ``w_N_per_m`` (P, NS, N) static slice line loads (N/m) with the final stiffness (0 out of
     contact; the films were solved at loads within the iteration tolerance of these); ``film_parameter`` (P, N)
-    Lambda (NaN for smooth/Hertz); ``passes`` and ``load_change`` (max slice-load change of the
+    Lambda = h_min/sigma of the screen (Dowson-Higginson h_min of the smooth contact at the mean line load
+    F/b, undeformed composite sigma; NaN for smooth/Hertz); ``passes`` and ``load_change`` (max slice-load change of the
     last pass over F/NS) of the load iteration; ``film_evaluations``: film solves / runs done;
     ``failures``: dicts (s_m, pair, slice, w_N_per_m, status, message); ``cpu_s``: process CPU of
-    this process plus ``worker_cpu_s`` (film CPU spent in other processes); ``wall_s``."""
+    this process plus ``worker_cpu_s`` (film CPU spent in other processes); ``wall_s``.
+
+    Transient models only (NaN / empty otherwise), at the final slice loads: ``h_min_m`` (P, NS, N)
+    the minimum film of the run over the averaging window and over x (the solver's h_min per time
+    level, on the whole grid x_in..x_out); ``h_min_run_m`` (P, NS, N) the same over the whole run
+    from T = 0 (start, roughness ramp, wash-out included); ``h_min_over_sigma`` (P, NS, N)
+    ``h_min_m`` / ``sigma_composite_m`` (rough_transient; the film parameter of the SOLVED, deformed
+    rough film, to compare with the screen's ``film_parameter``); ``film_runs``: one dict per
+    evaluated request (s_m, pair, slice, w_N_per_m, start 'frozen' or 'smooth' (smooth start with
+    the roughness ramp), ramp_T, steps, rescued_steps (steps rescued by sub-steps), h_min_m,
+    h_min_run_m, h_min_over_sigma, h_central_ratio).  A transient film with h <= 0 anywhere at
+    any time level raises FilmCollapseError in the solver (a failure, never a k)."""
 
     model: str
     s_m: np.ndarray
@@ -141,6 +153,11 @@ class DirectTVMS:
     wall_s: float = 0.0
     torque_Nm: float = float("nan")
     worker_cpu_s: float = 0.0
+    h_min_m: Optional[np.ndarray] = None
+    h_min_run_m: Optional[np.ndarray] = None
+    h_min_over_sigma: Optional[np.ndarray] = None
+    sigma_composite_m: float = float("nan")
+    film_runs: List[dict] = field(default_factory=list)
 
 
 def pair_positions_m(geom, s_m) -> np.ndarray:
@@ -193,9 +210,12 @@ def _film_chunk(_env, items):
             T0 = r.T_settled
             q = r.film_stiffness_reductions(T0, T0 + T_avg)
             k = q["k_of_means_N_per_m"] if red == "k_of_means" else q["k_mean_of_k_N_per_m"]
+            m = r.window(T0, T0 + T_avg)
             out.append(dict(k_N_per_m=float(k), status="ok", message="", cpu_s=time.process_time() - c0,
-                            steps=int(r.T.size - 1), start=r.start,
+                            steps=int(r.T.size - 1), start=r.start, ramp_T=float(r.ramp_T),
                             h_central_ratio=q["h_central_mean_m"] / float(r.h_central_m[0]),
+                            h_min_window_m=float(np.min(r.h_min_m[m])), h_min_run_m=float(np.min(r.h_min_m)),
+                            h_mean_window_m=float(q["h_mean_m"]),
                             rescued=int(np.count_nonzero(r.rescued)) if r.rescued is not None else 0,
                             pid=os.getpid()))
         except (FilmCollapseError, EHLConvergenceError) as exc:
@@ -345,6 +365,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     R_all, u_all, _ = contact_kinematics(geom, np.where(np.isfinite(sp), sp, float(geom.s_pitch_m)),
                                          env.omega1_rad_s)
     kc = np.zeros((P, NS, N))
+    last_key = [None] * len(j)          # cache key of the film behind kc[j, n, i] (per zone entry)
     w_prev = np.full(j.shape, np.nan)
     change = float("nan")
     cache = {}
@@ -393,6 +414,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
             vals = np.empty(len(ridx))
             for m, (q, kk) in enumerate(zip(ridx, keys)):
                 r = cache[kk[:3]]
+                last_key[q] = kk
                 if r["status"] == "ok":
                     vals[m] = r["k_N_per_m"]
                     continue
@@ -426,7 +448,27 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     wl = np.where(zone, loads / width, 0.0)
     if model not in _ROUGH:
         lam[:] = np.nan
+    hmin, hrun, hsig = (np.full((P, NS, N), np.nan) for _ in range(3))
+    sigma = float("nan")
+    runs: List[dict] = []
+    if model in _TRANSIENT:
+        if model in _ROUGH:
+            from ..contact_models import composite_sigma_m
+
+            sigma = float(composite_sigma_m(env.roughness))
+        for q, kk in enumerate(last_key):
+            r = cache.get(kk[:3]) if kk is not None else None
+            if r is None or r["status"] != "ok":
+                continue
+            hmin[j[q], n[q], i[q]] = r["h_min_window_m"]
+            hrun[j[q], n[q], i[q]] = r["h_min_run_m"]
+            hsig[j[q], n[q], i[q]] = r["h_min_window_m"] / sigma
+            runs.append(dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], start=r["start"],
+                             ramp_T=r["ramp_T"], steps=r["steps"], rescued_steps=r["rescued"],
+                             h_min_m=r["h_min_window_m"], h_min_run_m=r["h_min_run_m"],
+                             h_min_over_sigma=r["h_min_window_m"] / sigma, h_central_ratio=r["h_central_ratio"]))
     return DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k, kc,
                       wl, lam, it, change, evaluations, failures,
                       cpu_s=time.process_time() - c_parent + worker_cpu, wall_s=time.perf_counter() - t_wall,
-                      torque_Nm=T, worker_cpu_s=worker_cpu)
+                      torque_Nm=T, worker_cpu_s=worker_cpu, h_min_m=hmin, h_min_run_m=hrun, h_min_over_sigma=hsig,
+                      sigma_composite_m=sigma, film_runs=runs)
