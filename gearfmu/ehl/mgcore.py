@@ -30,6 +30,13 @@ With c_t = 0 every branch of the steady code runs unchanged (bitwise).
 Load balance: ``load_mode = 0`` moves H0 on the finest grid after every cycle
 (adaptive gain), ``load_mode = 1`` moves H0 on the coarsest grid inside the
 cycle with the FAS load right-hand side (Venner & Lubrecht's arrangement).
+
+Speed (docs/ehl.md "Lean cycle, faster film FFT and the speed path"): option
+``lean`` (default 1) skips work whose result is never read (bitwise the same
+iterates); option ``coarse_newton`` = k > 0 solves the coarsest grid by k dense
+Newton steps (:func:`_coarse_newton`) instead of ``nu0`` sweeps;
+:data:`SPEED_SETTING` (F-cycles + one coarse Newton step) with
+:data:`DISC_TOLERANCES` is the opt-in speed path.
 """
 from __future__ import annotations
 
