@@ -18,9 +18,13 @@ JSON key "film_transient" (mean TVMS, build wall/CPU time, the correction's prov
 --direct adds (--only-direct: only) the TVMS evaluated directly, without tables, at the pitch point
 (single-tooth contact) and the middle of the double-tooth zone, 2000 N m, 2000 rpm, perfect gears
 (gearfmu.ehl.direct_tvms: Hertz, smooth steady film, smooth transient, rough levels 1-2 steady
-and transient with reduction (b); levels 3-4 are reported with their film parameter, they have
-no full film) as the JSON key "direct_tvms" (N/m per model and position, relative to smooth, CPU)
-and the figure direct_tvms.png (about 35 s CPU with 2 slices and 257 nodes).
+and transient with reduction (b); levels 3-4 transient under seed 000's full-film assumption:
+their screen Lambda = h_min/sigma is below 3, so they run with check_film_parameter=False, one call
+per position, flagged in the JSON key "full_film_assumption" with the screen's Lambda, the solved
+films' minimum h and h/sigma, smooth starts and rescued steps; a film that stalls leaves that
+position null) as the JSON key "direct_tvms" (N/m per model and position, relative to smooth, CPU,
+"films": minimum film of every transient rough case) and the figure direct_tvms.png (about
+2.5 min CPU with 2 slices and 257 nodes, most of it levels 3-4).
 """
 from __future__ import annotations
 
@@ -143,7 +147,12 @@ def run(ppm: int, slices: int, out: Path, log=print, policies=(), transient_leve
 DIRECT_CASES = (("hertz", "hertz", None), ("smooth", "smooth_ehl", None),
                 ("smooth_transient", "smooth_transient", None),
                 ("rough_level_1_steady", "rough_steady", 1), ("rough_level_1", "rough_transient", 1),
-                ("rough_level_2_steady", "rough_steady", 2), ("rough_level_2", "rough_transient", 2))
+                ("rough_level_2_steady", "rough_steady", 2), ("rough_level_2", "rough_transient", 2),
+                ("rough_level_3", "rough_transient", 3), ("rough_level_4", "rough_transient", 4))
+#: levels whose screen Lambda (Dowson-Higginson h_min / undeformed composite sigma) is below 3: evaluated
+#: under seed 000's full-film assumption (check_film_parameter=False), one call per position, flagged in
+#: the JSON key "full_film_assumption"
+DIRECT_FULL_FILM_ASSUMED = (3, 4)
 
 
 def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float = 8.0,
@@ -178,10 +187,16 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
            "positions": pos, "tvms_N_per_m": {}, "relative_to_smooth": {}, "cost": {}, "not_evaluated": {}}
     from gearfmu.sweeps import make_executor
 
+    res["full_film_assumption"] = {}
+    res["films"] = {}
     with make_executor(max_workers=max_workers) as ex:
         for name, model, level in DIRECT_CASES:
             env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level) if level else None,
                                          max_workers=1)
+            if level in DIRECT_FULL_FILM_ASSUMED:
+                res["tvms_N_per_m"][name], res["full_film_assumption"][name] = _direct_full_film(
+                    env, sc, s, torque_Nm, model, st, ex, log, name)
+                continue
             try:
                 r = direct_mesh_stiffness(env, sc.mesh, s, torque_Nm, model, transient=st, executor=ex,
                                           progress=False)
@@ -195,8 +210,10 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
                                  "load_change_over_F_per_NS": r.load_change, "failures": r.failures}
             if level:
                 res["cost"][name]["film_parameter_min"] = float(np.nanmin(r.film_parameter))
+            if model == "rough_transient":
+                res["films"][name] = _film_summary(r)
             log(f"direct {name}: {r.k_mesh_N_per_m} N/m, {r.cpu_s:.1f} s CPU")
-    for level in (3, 4):
+    for level in DIRECT_FULL_FILM_ASSUMED:   # the default screen's verdict, kept for the record
         env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level), max_workers=1)
         q = sp[np.isfinite(sp)]
         lam = film_parameter(env, q, np.full(q.shape, torque_Nm / g.rb1_m / (env.width_m * slices)))
@@ -205,10 +222,11 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
             why = "evaluated"
         except DirectTVMSError as exc:
             why = str(exc)
-        res["not_evaluated"][f"rough_level_{level}"] = {
-            "film_parameter_min": float(lam.min()), "film_parameter_max": float(lam.max()), "reason": why}
+        res["full_film_assumption"].setdefault(f"rough_level_{level}", {})["default_screen"] = {
+            "film_parameter_min": float(lam.min()), "film_parameter_max": float(lam.max()), "verdict": why}
     sm = np.array(res["tvms_N_per_m"]["smooth"])
-    res["relative_to_smooth"] = {k: [float(x) for x in np.array(v) / sm - 1.0] for k, v in res["tvms_N_per_m"].items()}
+    res["relative_to_smooth"] = {k: [None if x is None else float(x / sm[i] - 1.0) for i, x in enumerate(v)]
+                                 for k, v in res["tvms_N_per_m"].items()}
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "direct_tvms.json", "w") as fh:
         json.dump(res, fh, indent=1)
@@ -216,19 +234,71 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
     return res
 
 
+def _film_summary(r) -> dict:
+    """Per position: the solved transient films' minimum h (m) over the averaging window and x, the
+    minimum over the whole run, h_min / composite sigma, starts and rescued steps (DirectTVMS fields)."""
+    N = r.k_mesh_N_per_m.size
+    def per_pos(a, f):
+        return [None if not np.any(np.isfinite(a[..., i])) else float(f(a[..., i])) for i in range(N)]
+    return {"sigma_composite_m": r.sigma_composite_m,
+            "film_parameter_screen": per_pos(r.film_parameter, np.nanmin),
+            "h_min_m": per_pos(r.h_min_m, np.nanmin), "h_min_run_m": per_pos(r.h_min_run_m, np.nanmin),
+            "h_min_over_sigma": per_pos(r.h_min_over_sigma, np.nanmin),
+            "smooth_starts": sum(1 for q in r.film_runs if q["start"] == "smooth"),
+            "rescued_steps": sum(q["rescued_steps"] for q in r.film_runs), "runs": len(r.film_runs),
+            "cpu_s": round(r.cpu_s, 2), "passes": r.passes, "film_evaluations": r.film_evaluations}
+
+
+def _direct_full_film(env, sc, s, torque_Nm, model, st, ex, log, name):
+    """Levels of DIRECT_FULL_FILM_ASSUMED: one direct_mesh_stiffness call per position with
+    check_film_parameter=False (seed 000's full-film assumption), so that a film that stalls at one
+    position does not hide the other.  Returns (TVMS per position, None where the film failed;
+    the flagged record)."""
+    from gearfmu.ehl.direct_tvms import DirectTVMSError, direct_mesh_stiffness
+
+    k, rec = [], {"check_film_parameter": False,
+                  "assumption": "seed 000 section 5: full film at every roughness level of its Table 2; the default "
+                                "screen (Lambda = h_min/sigma < 3, Dowson-Higginson h_min, undeformed composite sigma) "
+                                "refuses this level", "positions": []}
+    for si in s:
+        try:
+            r = direct_mesh_stiffness(env, sc.mesh, [si], torque_Nm, model, transient=st, executor=ex,
+                                      progress=False, check_film_parameter=False)
+        except DirectTVMSError as exc:
+            k.append(None)
+            rec["positions"].append({"s_m": float(si), "status": "failed", "reason": str(exc)[:400]})
+            log(f"direct {name} at s = {si * 1e3:.4f} mm: failed: {exc}")
+            continue
+        k.append(float(r.k_mesh_N_per_m[0]))
+        q = {"s_m": float(si), "status": "ok", "failures": r.failures}
+        q.update({kk: (v[0] if isinstance(v, list) else v) for kk, v in _film_summary(r).items()})
+        rec["positions"].append(q)
+        log(f"direct {name} at s = {si * 1e3:.4f} mm: {k[-1]:.6e} N/m, h_min {q['h_min_m']:.3e} m "
+            f"(h_min/sigma {q['h_min_over_sigma']:.3f}, screen Lambda {q['film_parameter_screen']:.3f}), "
+            f"{r.cpu_s:.1f} s CPU")
+    return k, rec
+
+
 def _direct_figure(res: dict, path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    names = [n for n in ("hertz", "smooth", "rough_level_1", "rough_level_2") if n in res["relative_to_smooth"]]
-    tick = {"hertz": "Hertz", "smooth": "smooth", "rough_level_1": "rough 1", "rough_level_2": "rough 2"}
-    color = {"hertz": "0.5", "smooth": "k", "rough_level_1": "tab:blue", "rough_level_2": "tab:red"}
+    names = [n for n in ("hertz", "smooth", "rough_level_1", "rough_level_2", "rough_level_3", "rough_level_4")
+             if n in res["relative_to_smooth"]]
+    tick = {"hertz": "Hertz", "smooth": "smooth", "rough_level_1": "rough 1", "rough_level_2": "rough 2",
+            "rough_level_3": "rough 3*", "rough_level_4": "rough 4*"}
+    color = {"hertz": "0.5", "smooth": "k", "rough_level_1": "tab:blue", "rough_level_2": "tab:red",
+             "rough_level_3": "tab:orange", "rough_level_4": "tab:purple"}
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     for i, p in enumerate(res["positions"]):
         rel = [res["relative_to_smooth"][n][i] for n in names]
         a = ax[i]
-        a.bar(range(len(names)), [r * 1e3 for r in rel], color=[color[n] for n in names])
+        a.bar(range(len(names)), [0.0 if r is None else r * 1e3 for r in rel], color=[color[n] for n in names],
+              hatch=None)
+        for x, n in enumerate(names):
+            if rel[x] is None:
+                a.annotate("film\nfailed\n(stall)", (x, 0.0), ha="center", va="top", fontsize=7)
         a.set_xticks(range(len(names)))
         a.set_xticklabels([tick[n] for n in names])
         a.set_ylabel("TVMS / smooth - 1 (per mille)")
@@ -236,11 +306,12 @@ def _direct_figure(res: dict, path: Path) -> None:
         a.set_title(f"{p['label']}\nsmooth {res['tvms_N_per_m']['smooth'][i] / 1e9:.5f} GN/m, SRR "
                     + ", ".join(f"{x:+.2f}" for x in p["srr"]), fontsize=9)
         for x, r in enumerate(rel):
-            if names[x] == "smooth":
+            if names[x] == "smooth" or r is None:
                 continue
             a.annotate(f"{r:+.2e}", (x, r * 1e3), ha="center", va="bottom" if r >= 0 else "top", fontsize=7)
     fig.suptitle(f"Seed 000 Figs. 12-13, direct TVMS: {res['torque_Nm']:g} N m, 2000 rpm, {res['slices']} slices, "
-                 f"{res['n_nodes']} EHL nodes, transient reduction (b)", fontsize=9)
+                 f"{res['n_nodes']} EHL nodes, transient reduction (b)\n* levels 3-4 under seed 000's full-film "
+                 "assumption (screen Lambda = h_min/sigma < 3, check_film_parameter=False)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
