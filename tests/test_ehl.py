@@ -253,7 +253,8 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     # Failing fast (docs/ehl.md "Failing fast"), Barus outside Moes' range.
     # Reference: the two rules' definitions (counts of grids tried, thresholds),
     # not timings.  Measured CPU before -> after: 0.85 -> 0.06 s and 3.3 -> 1.2 s.
-    from gearfmu.ehl.solver import RETRY_BELOW_RESIDUAL, RETRY_PROGRESS_FACTOR
+    from gearfmu.ehl.solver import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL,
+                                    RETRY_PROGRESS_FACTOR)
     # M = 10, L = 40: no setting on the default grid stalls below 1e-3 (best
     # measured 2.1e-2) -> no retry grid (rule 1); all 9 settings were tried there
     with pytest.raises(EHLConvergenceError) as ei:
@@ -264,7 +265,8 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     assert any("retry grids not tried" in x for x in e.skipped)
     assert "best stalled scaled residual" in str(e) and e.residual_name in str(e)
     # M = 200, L = 40: the default grid (1024/64) reaches 9e-4, the first coarse
-    # retry (1024/128) no lower -> the second (1024/256) is not tried (rule 2)
+    # retry (1024/128) no lower and not below 1e-4 -> the second (1024/256) is not
+    # tried (rule 2)
     with pytest.raises(EHLConvergenceError) as ei:
         solve_line_contact(M=200.0, L=40.0, viscosity="barus", compressible=False)
     e = ei.value
@@ -275,6 +277,7 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     assert len(grids) == 2 and grids[1][1] == 2 * grids[0][1]
     best = [min(a[3] for a in e.attempts if a[:2] == g) for g in grids]
     assert best[0] < RETRY_BELOW_RESIDUAL and not best[1] * RETRY_PROGRESS_FACTOR <= best[0]
+    assert best[1] >= RETRY_CLOSE_RESIDUAL
     assert any("further retry grid" in x for x in e.skipped)
 
 

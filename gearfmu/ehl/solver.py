@@ -634,10 +634,13 @@ COARSE_RETRY_MIN_LEVELS = 3
 #: L = 5-40) had stalled below 6e-4 on its default grid.
 RETRY_BELOW_RESIDUAL = 1e-3
 #: rule 2: a second or later retry grid is tried only when the previous retry
-#: grid lowered the best stalled residual of the grids before it at least this
-#: factor (measured on the converging cases: 2.9x (Barus M = 5000, L = 30) to
-#: 200x; on the failures Barus M = 200 and 1000, L = 40: 1.0x and 0.3x)
+#: grid lowered the best stalled residual of the grids before it at least
+#: RETRY_PROGRESS_FACTOR times or stalled below RETRY_CLOSE_RESIDUAL (measured
+#: on the converging cases: 2.9x (Barus M = 5000, L = 30) to 200x, or 1.3x at
+#: 5.9e-6 (Barus M = 20000, L = 10); on the failures Barus M = 200 and 1000,
+#: L = 40: 1.0x at 9e-4 and 0.3x at 7e-4)
 RETRY_PROGRESS_FACTOR = 2.0
+RETRY_CLOSE_RESIDUAL = 1e-4
 
 
 def coarse_retry_grids(n_int: int, n_coarse: int) -> List[int]:
@@ -923,11 +926,13 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                                f"grid {per_grid[0]:.1e} >= {RETRY_BELOW_RESIDUAL:.0e}")
                 break
             if k_grid > 1 and not (per_grid[-1] * RETRY_PROGRESS_FACTOR
-                                   <= min(per_grid[:-1])):
+                                   <= min(per_grid[:-1])
+                                   or per_grid[-1] < RETRY_CLOSE_RESIDUAL):
                 skipped.append(f"{len(grids) - k_grid} further retry grid(s) not tried: the "
                                f"last one ({grids[k_grid - 1][0] - 1}/{grids[k_grid - 1][1]}"
-                               f" intervals) reached {per_grid[-1]:.1e}, not "
-                               f"{RETRY_PROGRESS_FACTOR:g}x below {min(per_grid[:-1]):.1e}")
+                               f" intervals) reached {per_grid[-1]:.1e}, neither "
+                               f"{RETRY_PROGRESS_FACTOR:g}x below {min(per_grid[:-1]):.1e} "
+                               f"nor below {RETRY_CLOSE_RESIDUAL:.0e}")
                 break
         best = []
         if initial is not None:
