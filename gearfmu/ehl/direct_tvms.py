@@ -52,7 +52,12 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
   (3) seed 000's full film does not exist and :class:`DirectTVMSError` is raised (names the
   position, pair and Lambda) unless ``check_film_parameter=False``.  A film that fails
   (stall, collapse) raises too (``on_film_failure='error'``), or takes the steady smooth film
-  (``'smooth'``; recorded in ``failures``).
+  (``'smooth'``; recorded in ``failures``).  The screen is a CHOICE, not a prediction of film
+  collapse: under seed 000's full-film assumption (``check_film_parameter=False``) the transient films
+  of the Table 1 pair at levels 3-4 (screen Lambda 2.1-2.9) exist with h > 0 everywhere, window
+  minimum down to 0.55 sigma (the roughness is flattened inside the contact; a Newtonian,
+  isothermal, elastic model result) -- recorded per request in ``h_min_m`` / ``h_min_over_sigma`` /
+  ``film_runs`` (docs/ehl_mesh.md "Direct TVMS").
 
 Work goes through a ``concurrent.futures``-style executor (``executor`` or a local pool of
 ``max_workers``; in-process for ``max_workers=1``), one film evaluation per task chunk, with a
