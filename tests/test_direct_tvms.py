@@ -115,8 +115,9 @@ def test_seed000_fig13_all_four_levels_under_the_full_film_assumption(figs12_13_
     # then exist: no time level collapses (the solver raises on h <= 0), every slice has a film over
     # the whole run; minimum film over the window and x 1.34 um / 0.95 um at the pitch point for
     # levels 3 / 4 (h_min/sigma 1.03 / 0.55: the roughness is flattened inside the contact), 1.07 um
-    # (0.82) at the double-tooth position for level 3; over the whole run 1.03 / 0.57 um (pitch, in the
-    # roughness ramp of the smooth start: the frozen start stalled on both slices).  Same settings as
+    # (0.82) at the double-tooth position for level 3; over the whole run (start, ramp, wash-out)
+    # 1.03 / 0.57 um at the pitch point (the frozen start stalled there on both slices at both levels:
+    # smooth start with the roughness ramp).  Same settings as
     # the test above (257 nodes, T_average 8, reduction (b), 2 slices of 22 mm, start 'auto').  A
     # model result (Newtonian, isothermal, no asperity plasticity), not an experiment.
     # NOT asserted: level 4 at the double-tooth position -- its first pair's slice 0 (4.8 mm from A,
