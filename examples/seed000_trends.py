@@ -6,6 +6,7 @@ the line of action and across the face (Fig. 9), TVMS curves (Figs. 12-15).
                                       [--also-policy load_sharing] [--transient-levels 1 2]
                                       [--direct | --only-direct] [--direct-slices 2]
                                       [--direct-nodes 257] [--direct-T-average 8]
+                                      [--direct-speed-torque | --only-direct-speed-torque]
 
 --json prints one JSON object (mean TVMS in N/m per contact model, speed and torque); PNG, CSV and
 JSON files go to examples/output/seed000_trends/.  Coarse defaults (4 points per mesh period,
@@ -25,6 +26,11 @@ films' minimum h and h/sigma, smooth starts and rescued steps; a film that stall
 position null) as the JSON key "direct_tvms" (N/m per model and position, relative to smooth, CPU,
 "films": minimum film of every transient rough case) and the figure direct_tvms.png (about
 2.5 min CPU with 2 slices and 257 nodes, most of it levels 3-4).
+--direct-speed-torque adds (--only-direct-speed-torque: only) seed 000 Figs. 14-15 at their roughness
+level 4: TVMS at the pitch point with the smooth steady film and the level-4 transient film (full
+film assumed, check_film_parameter=False) at 1000 / 2000 / 4000 rpm (2000 N m) and 1000 / 2000 /
+3000 N m (2000 rpm), JSON key "direct_tvms_speed_torque" (N/m, relative to smooth, the screen's
+Lambda and the solved films' minimum h per point) and direct_tvms_speed_torque.png (about 45 s CPU).
 """
 from __future__ import annotations
 
@@ -234,6 +240,93 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
     return res
 
 
+def run_direct_speed_torque(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float = 8.0,
+                            max_workers=None, log=print) -> dict:
+    """Seed 000 Figs. 14-15 at THEIR roughness level 4, without tables: TVMS (N/m) at the pitch point
+    with the smooth steady film and the level-4 transient rough film (reduction (b)) at
+    SPEEDS (rpm) x 2000 N m (Fig. 14) and TORQUES (N m) x 2000 rpm (Fig. 15), level 4 under seed 000's
+    full-film assumption (check_film_parameter=False; the screen's Lambda is recorded); writes
+    direct_tvms_speed_torque.json and direct_tvms_speed_torque.png.  A film that fails leaves
+    that point null with the reason (tests/test_direct_tvms_speed_torque.py asserts the orderings)."""
+    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
+    from gearfmu.ehl.direct_tvms import DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness
+    from gearfmu.geometry import pair_geometry
+    from gearfmu.scene import load_scene
+    from gearfmu.sweeps import make_executor
+
+    base = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
+    g = pair_geometry(base.pair)
+    st = TransientFilmSettings(n_nodes=n_nodes, T_average=T_average)
+    res = {"scene": "examples/scenes/seed000_table1.toml", "position": "pitch point (single-tooth contact, SRR 0)",
+           "s_m": float(g.s_pitch_m), "roughness_level": 4, "slices": slices, "n_nodes": n_nodes,
+           "T_average_b_per_u_s": T_average, "reduction": st.reduction, "check_film_parameter": False,
+           "errors": "perfect gears (no deviations, no crowning)", "points": []}
+    cases = [("fig14_speed", 2000.0, n) for n in SPEEDS] + [("fig15_torque", t, 2000.0) for t in TORQUES]
+    done = {}
+    with make_executor(max_workers=max_workers) as ex:
+        for fig, tq, rpm in cases:
+            if (tq, rpm) in done:
+                res["points"].append(dict(done[(tq, rpm)], figure=fig))
+                continue
+            op = dataclasses.replace(base.operating, torque_Nm=tq, speed_rad_s=rpm * math.pi / 30.0)
+            sc = dataclasses.replace(base, operating=op, mesh=dataclasses.replace(base.mesh, slices=slices))
+            p = {"figure": fig, "torque_Nm": tq, "speed_rpm": rpm}
+            sm = direct_mesh_stiffness(environment_from_scene(sc, max_workers=1), sc.mesh, [g.s_pitch_m], tq,
+                                       "smooth_ehl", executor=ex, progress=False)
+            p["smooth_N_per_m"] = float(sm.k_mesh_N_per_m[0])
+            env4 = environment_from_scene(sc, roughness=RoughnessSpec.from_level(4), max_workers=1)
+            try:
+                r = direct_mesh_stiffness(env4, sc.mesh, [g.s_pitch_m], tq, "rough_transient", transient=st,
+                                          executor=ex, progress=False, check_film_parameter=False)
+            except DirectTVMSError as exc:
+                p.update(rough_level_4_N_per_m=None, relative_to_smooth=None, status="failed", reason=str(exc)[:400])
+                log(f"direct L4 {tq:g} N m, {rpm:g} rpm: failed: {exc}")
+            else:
+                k4 = float(r.k_mesh_N_per_m[0])
+                p.update(rough_level_4_N_per_m=k4, relative_to_smooth=k4 / p["smooth_N_per_m"] - 1.0, status="ok",
+                         failures=r.failures, films=_film_summary(r))
+                p["films"] = {kk: (v[0] if isinstance(v, list) else v) for kk, v in p["films"].items()}
+                log(f"direct L4 {tq:g} N m, {rpm:g} rpm: {k4:.6e} N/m ({p['relative_to_smooth']:+.3e} of smooth), "
+                    f"screen Lambda {p['films']['film_parameter_screen']:.3f}, h_min {p['films']['h_min_m']:.3e} m, "
+                    f"{r.cpu_s:.1f} s CPU")
+            done[(tq, rpm)] = {k: v for k, v in p.items() if k != "figure"}
+            res["points"].append(p)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "direct_tvms_speed_torque.json", "w") as fh:
+        json.dump(res, fh, indent=1)
+    _speed_torque_figure(res, out / "direct_tvms_speed_torque.png")
+    return res
+
+
+def _speed_torque_figure(res: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for a, (key, xname, xlab) in zip(ax, (("fig14_speed", "speed_rpm", "pinion speed (rpm), 2000 N m"),
+                                          ("fig15_torque", "torque_Nm", "pinion torque (N m), 2000 rpm"))):
+        pts = [p for p in res["points"] if p["figure"] == key]
+        x = [p[xname] for p in pts]
+        a.plot(x, [p["smooth_N_per_m"] / 1e9 for p in pts], "k-o", label="smooth (steady film)")
+        ok = [p for p in pts if p["rough_level_4_N_per_m"] is not None]
+        a.plot([p[xname] for p in ok], [p["rough_level_4_N_per_m"] / 1e9 for p in ok], "-s", color="tab:purple",
+               label="rough level 4 (transient, full film assumed)")
+        for p in ok:
+            a.annotate(f"{p['relative_to_smooth']:+.1e}\nh_min {p['films']['h_min_m'] * 1e6:.2f} um",
+                       (p[xname], p["rough_level_4_N_per_m"] / 1e9), fontsize=7, ha="center", va="top",
+                       textcoords="offset points", xytext=(0, -4))
+        a.set_xlabel(xlab)
+        a.set_ylabel("TVMS at the pitch point (GN/m)")
+        a.legend(fontsize=8)
+    fig.suptitle(f"Seed 000 Figs. 14-15 (roughness level 4), direct TVMS at the pitch point: {res['slices']} slices, "
+                 f"{res['n_nodes']} EHL nodes, T_average {res['T_average_b_per_u_s']:g}, reduction (b); "
+                 "check_film_parameter=False", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def _film_summary(r) -> dict:
     """Per position: the solved transient films' minimum h (m) over the averaging window and x, the
     minimum over the whole run, h_min / composite sigma, starts and rescued steps (DirectTVMS fields)."""
@@ -426,13 +519,23 @@ def main(argv=None) -> int:
     ap.add_argument("--direct-T-average", type=float, default=8.0,
                     help="transient averaging window after the wash-out (b/u_s)")
     ap.add_argument("--workers", type=int, default=None, help="worker processes of the direct TVMS")
+    ap.add_argument("--direct-speed-torque", action="store_true",
+                    help="add seed 000 Figs. 14-15 at roughness level 4, direct TVMS at the pitch point "
+                         "(JSON key 'direct_tvms_speed_torque', about 45 s CPU more)")
+    ap.add_argument("--only-direct-speed-torque", action="store_true",
+                    help="only the level-4 speed/torque points of --direct-speed-torque (no tables)")
     a = ap.parse_args(argv)
     log = (lambda *x: print(*x, file=sys.stderr, flush=True))
+    if a.only_direct_speed_torque:
+        a.only_direct, a.direct = True, False
     res = {} if a.only_direct else run(a.points_per_mesh, a.slices, Path(a.out), log,
                                        policies=tuple(a.also_policy), transient_levels=tuple(a.transient_levels))
-    if a.direct or a.only_direct:
+    if a.direct or (a.only_direct and not a.only_direct_speed_torque):
         res["direct_tvms"] = run_direct(Path(a.out), a.direct_slices, a.direct_nodes, a.direct_T_average,
                                         a.workers, log)
+    if a.direct_speed_torque or a.only_direct_speed_torque:
+        res["direct_tvms_speed_torque"] = run_direct_speed_torque(Path(a.out), a.direct_slices, a.direct_nodes,
+                                                                  a.direct_T_average, a.workers, log)
     if a.json:
         print(json.dumps(res))
     else:
