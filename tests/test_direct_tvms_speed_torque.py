@@ -8,7 +8,9 @@ under the full-film assumption (conclusions).  Qualitative: no number is read of
 only the orderings are asserted.  The seed's text does not list the speeds and torques of the
 figures; we take 1000 / 2000 / 4000 rpm at 2000 N m (Fig. 14) and 1000 / 2000 / 3000 N m at
 2000 rpm (Fig. 15), the levels of the tables' trend test (tests/test_ehl_mesh.py
-test_seed000_trends_fig12_14_15), all five points of that grid.
+test_seed000_trends_fig12_14_15).  Level 4 is asserted for Fig. 15 (all three torques); for Fig. 14
+only the smooth film is asserted, because level 4 at 1000 and 4000 rpm collapses at 513 EHL nodes
+(measured, comment below): not grid-resolved.
 
 Level 4 has the screen's film parameter Lambda < 3 at four of the five points, so it runs with
 check_film_parameter=False (seed 000's full-film assumption; docs/ehl_mesh.md "Direct TVMS").
@@ -46,9 +48,11 @@ def _scene(torque_Nm: float, speed_rpm: float):
 
 @pytest.fixture(scope="module")
 def films():
-    """Smooth steady film and level-4 transient rough film (reduction (b)) at the pitch point for
-    every (torque, speed) of CASES; 2 slices of 22 mm (slices 0-1 of level 4's roughness), 257 EHL
-    nodes, T_average 8 b/u_s, start 'auto', 2 worker processes; computed once for the file."""
+    """Smooth steady film at every (torque, speed) of CASES and the level-4 transient rough film
+    (reduction (b)) at the Fig. 15 points (TORQUES_NM x 2000 rpm), pitch point, 2 slices of 22 mm
+    (slices 0-1 of level 4's roughness), 257 EHL nodes, T_average 8 b/u_s, start 'auto', 2 worker
+    processes; computed once for the file.  Level 4 at 1000 and 4000 rpm is not run: not resolved
+    (the comment below)."""
     from gearfmu.sweeps import make_executor
 
     s = [GEOM.s_pitch_m]
@@ -57,22 +61,33 @@ def films():
         for tq, rpm in CASES:
             sc = _scene(tq, rpm)
             sm = direct_mesh_stiffness(environment_from_scene(sc, max_workers=1), sc.mesh, s, tq, "smooth_ehl",
-                                       executor=pool, progress=False)
-            env4 = environment_from_scene(sc, roughness=RoughnessSpec.from_level(4), max_workers=1)
-            r4 = direct_mesh_stiffness(env4, sc.mesh, s, tq, "rough_transient", transient=ST_257_8, executor=pool,
-                                       progress=False, check_film_parameter=False)
+                                       transient=ST_257_8, executor=pool, progress=False)
+            r4 = None
+            if rpm == 2000.0:
+                env4 = environment_from_scene(sc, roughness=RoughnessSpec.from_level(4), max_workers=1)
+                r4 = direct_mesh_stiffness(env4, sc.mesh, s, tq, "rough_transient", transient=ST_257_8,
+                                           executor=pool, progress=False, check_film_parameter=False)
             out[(tq, rpm)] = (sm, r4)
     return out
 
 
-# Measured (one run each, 2026-11-22), pitch point, TVMS in N/m, L4 = level 4 transient (b):
-#   (N m, rpm)   smooth steady  L4 257/8      L4 513/16     L4/smooth-1 (257/8)  screen Lambda  min h (um, window)
-#   2000, 1000   8.56604e8      8.53342e8     see below     -3.81e-3             1.35           0.36
-#   2000, 2000   8.50898e8      8.48401e8                   -2.93e-3             2.19           0.95
-#   2000, 4000   8.42212e8      8.40395e8                   -2.16e-3             3.55           2.32
-#   1000, 2000   8.37710e8      8.32520e8                   -6.20e-3             2.39           0.61
-#   3000, 2000   8.55819e8      8.54117e8                   -1.99e-3             2.07           0.86
-# (513/16 column and the margins vs the grid/window change: filled in below)
+# Measured (one run each, 2026-11-22), pitch point, TVMS in N/m; L4 = level 4 transient (b) under the
+# full-film assumption; "513/16" = 513 EHL nodes and T_average 16 b/u_s (both changed at once):
+#   (N m, rpm)   smooth 257/8   smooth 513/16  L4 257/8     L4 513/16     L4/smooth-1 257/8 | 513/16  Lambda  min h window
+#   2000, 1000   8.56604e8      8.56559e8      8.53342e8    COLLAPSE      -3.81e-3 | --                1.35    0.36 um
+#   2000, 2000   8.50898e8      8.50834e8      8.48401e8    8.48250e8     -2.93e-3 | -3.04e-3          2.19    0.95 / 0.66 um
+#   2000, 4000   8.42212e8      8.42124e8      8.40395e8    COLLAPSE      -2.16e-3 | --                3.55    2.32 um
+#   1000, 2000   8.37710e8      8.37626e8      8.32520e8    8.32442e8     -6.20e-3 | -6.19e-3          2.39    0.61 / 0.65 um
+#   3000, 2000   8.55819e8      8.55767e8      8.54117e8    8.54183e8     -1.99e-3 | -1.85e-3          2.07    0.86 / 0.65 um
+# Fig. 15 (level 4): margins L4(2000) - L4(1000) = 1.588e7 / 1.581e7 N/m and L4(3000) - L4(2000) =
+# 5.72e6 / 5.93e6 N/m at 257/8 / 513/16: changes 7e4 and 2.2e5, 217x and 26x below the margins;
+# rough < smooth: margins 6.2e-3 / 2.9e-3 / 2.0e-3 of smooth, changes 5e-6 / 1.0e-4 / 1.4e-4 (1200x, 29x,
+# 14x).  Resolved: asserted.  Fig. 14 (smooth steady film): margins 5.7e6 / 8.7e6 N/m, changes <= 9e4
+# (> 60x): asserted.  Fig. 14 at level 4 is NOT asserted: at 257/8 the films exist and the ordering
+# holds (8.533e8 > 8.484e8 > 8.404e8, -3.8e-3 / -2.9e-3 / -2.2e-3 of smooth; also at 257/16:
+# 8.532e8 and 8.403e8 at 1000 / 4000 rpm), but at 513 nodes the level-4 film collapses at 1000 rpm
+# (h = -0.45 um, inlet X = -0.94, slice 0) and at 4000 rpm (h = -1.2 um, X = +0.41, slice 1)
+# (FilmCollapseError), so those two points are not grid-resolved (docs/ehl_mesh.md "Direct TVMS").
 
 
 def _check_films(r):
@@ -82,21 +97,20 @@ def _check_films(r):
     assert len(r.film_runs) == 2
 
 
-def test_seed000_fig14_level4_tvms_falls_as_speed_rises(films):
-    k4, h4 = [], []
-    for rpm in SPEEDS_RPM:
-        sm, r4 = films[(2000.0, rpm)]
-        _check_films(r4)
-        k4.append(r4.k_mesh_N_per_m[0])
-        h4.append(np.min(r4.h_min_m[0]))
-        assert r4.k_mesh_N_per_m[0] < sm.k_mesh_N_per_m[0], rpm      # Figs. 12-13: rough < smooth
-    assert k4[0] > k4[1] > k4[2], k4                                 # Fig. 14
-    assert h4[0] < h4[1] < h4[2], h4                                 # section 5.3: thicker film at higher speed
-    # the screen's Lambda: Dowson-Higginson h_min ~ u^0.70 at fixed load and radius (closed form),
-    # so Lambda(2 N) / Lambda(N) = 2^0.70 exactly
-    lam = [films[(2000.0, rpm)][1].film_parameter[0, 0] for rpm in SPEEDS_RPM]
+def test_seed000_fig14_tvms_falls_as_speed_rises(films):
+    # Smooth steady film (resolved); level 4 at 1000 / 4000 rpm is not grid-resolved (comment above).
+    k = [films[(2000.0, rpm)][0].k_mesh_N_per_m[0] for rpm in SPEEDS_RPM]
+    assert k[0] > k[1] > k[2], k                                     # Fig. 14
+    # the level-4 screen: Lambda = Dowson-Higginson h_min / sigma, h_min ~ u^0.70 at fixed load and
+    # radius (closed form), so Lambda(2 N) / Lambda(N) = 2^0.70 exactly (thicker film at higher speed)
+    from gearfmu.contact_models import film_parameter
+
+    w = [2000.0 / GEOM.rb1_m / SCENE.pair.pinion.face_width_m]
+    lam = [film_parameter(environment_from_scene(_scene(2000.0, rpm), roughness=RoughnessSpec.from_level(4),
+                                                 max_workers=1), [GEOM.s_pitch_m], w)[0] for rpm in SPEEDS_RPM]
     assert lam[1] / lam[0] == pytest.approx(2.0 ** 0.70, rel=1e-9)
     assert lam[2] / lam[1] == pytest.approx(2.0 ** 0.70, rel=1e-9)
+    assert lam[0] < 3.0 < lam[2]          # level 4 is refused by the default screen at 1000 rpm, not at 4000
 
 
 def test_seed000_fig15_level4_tvms_rises_with_torque(films):
@@ -110,6 +124,8 @@ def test_seed000_fig15_level4_tvms_rises_with_torque(films):
         w = r4.w_N_per_m[0, :, 0]
         assert np.sum(w) * SCENE.pair.pinion.face_width_m / 2 == pytest.approx(tq / GEOM.rb1_m, rel=1e-9)
     assert k4[0] < k4[1] < k4[2], k4                                 # Fig. 15
+    ks = [films[(tq, 2000.0)][0].k_mesh_N_per_m[0] for tq in TORQUES_NM]
+    assert ks[0] < ks[1] < ks[2], ks                                 # Fig. 15, smooth film
     # the screen's Lambda: Dowson-Higginson h_min ~ W^-0.13 (closed form; mean line load F/b ~ T)
     lam = [films[(tq, 2000.0)][1].film_parameter[0, 0] for tq in TORQUES_NM]
     assert lam[0] / lam[1] == pytest.approx(0.5 ** -0.13, rel=1e-9)
