@@ -30,7 +30,9 @@ position null) as the JSON key "direct_tvms" (N/m per model and position, relati
 level 4: TVMS at the pitch point with the smooth steady film and the level-4 transient film (full
 film assumed, check_film_parameter=False) at 1000 / 2000 / 4000 rpm (2000 N m) and 1000 / 2000 /
 3000 N m (2000 rpm), JSON key "direct_tvms_speed_torque" (N/m, relative to smooth, the screen's
-Lambda and the solved films' minimum h per point) and direct_tvms_speed_torque.png (about 45 s CPU).
+Lambda and the solved films' minimum h per point) and direct_tvms_speed_torque.png (about 45 s CPU;
+the level-4 point at 1000 rpm is not grid-resolved -- it collapses / stalls at 513 nodes --,
+docs/ehl_mesh.md "Direct TVMS").
 """
 from __future__ import annotations
 
