@@ -33,7 +33,6 @@ from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
-from numba import njit
 
 from ..checks import finite_number
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
@@ -41,6 +40,7 @@ from .fits import moes_central_film
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .multigrid import EHLParams, MultigridSolver
 from .mgcore import FlatMultigrid, OPT_KEYS, _coef, _residual, _scaled_residual
+from .mgcore import _lu_solve as _dense_solve   # dense Gaussian elimination, partial pivoting
 
 #: Reference dimensional case used when only Moes' M and L are given
 #: (Venner & Lubrecht 2000's standard mineral oil on steel): E' = 2.2e11 Pa,
@@ -188,44 +188,6 @@ POLISH_STALL_ROUNDS = 8
 POLISH_BEST_BELOW_RESIDUAL = 1e-3
 #: largest Newton block (nodes; dense solve ~ n^3 / 3: 400 nodes ~ 5 ms)
 POLISH_MAX_BLOCK = 400
-
-
-@njit(cache=True)
-def _dense_solve(A, b):
-    """x with A x = b by Gaussian elimination with partial pivoting (A and b
-    are overwritten); NaN where A is singular."""
-    n = b.size
-    for k in range(n):
-        p = k
-        amax = abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > amax:
-                amax = abs(A[i, k])
-                p = i
-        if amax == 0.0:
-            b[:] = np.nan
-            return b
-        if p != k:
-            for j in range(n):
-                t = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = t
-            t = b[k]
-            b[k] = b[p]
-            b[p] = t
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            m = A[i, k] * inv
-            if m != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= m * A[k, j]
-                b[i] -= m * b[k]
-    for k in range(n - 1, -1, -1):
-        s = b[k]
-        for j in range(k + 1, n):
-            s -= A[k, j] * b[j]
-        b[k] = s / A[k, k]
-    return b
 
 
 def _finest_terms(solver):
