@@ -103,6 +103,8 @@ def _cfft(re, im, N, sr, si, sign):
     length = 4
     while length <= N:
         half = length >> 1
+        # same butterflies in two loop orders: the inner loop runs over k (contiguous, vectorised)
+        # once a stage has >= 8 twiddles, over the blocks s for the short early stages
         if half >= 8:
             for s in range(0, N, length):
                 for k in range(half):
