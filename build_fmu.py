@@ -22,7 +22,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from gearfmu.cli import print_report
-    from gearfmu.compare import validate_fmu_against_native
+    from gearfmu.fmu.compare import validate_fmu_against_native
     from gearfmu.pipeline import build, gear_torque_for, load, max_step_for
 
     try:

@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _scene(slices, model="rough_ehl"):
-    from gearfmu.scene import load_scene
+    from gearfmu.scene.reader import load_scene
 
     sc = load_scene(None)
     opts = dataclasses.replace(sc.mesh, contact_model=model, slices=slices)
@@ -45,8 +45,8 @@ def _scene(slices, model="rough_ehl"):
 
 
 def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"):
-    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
-    from gearfmu.precompute import precompute_tables
+    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.tables.precompute import precompute_tables
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=K,
                                                                         film_transient=transient),
@@ -66,7 +66,7 @@ def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"
 
 def _cold_solve_time(sc, level, n=12):
     """Mean CPU time (s) of one cold rough solve (old path) at table positions, in-process."""
-    from gearfmu.contact_models import RoughnessSpec, _rough_profile, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec, _rough_profile, environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level))
@@ -84,8 +84,8 @@ def _cold_solve_time(sc, level, n=12):
 
 def _film_error(level, K_list, slices=4, ppm=16):
     """Grid against direct rough solves at every table position (loads 0.5/0.8/1.2 x nominal)."""
-    from gearfmu.contact_models import RoughnessSpec, environment_from_scene, get_contact_model
-    from gearfmu.stiffness import slot_stiffness
+    from gearfmu.contact.models import RoughnessSpec, environment_from_scene, get_contact_model
+    from gearfmu.gear.stiffness import slot_stiffness
 
     sc = _scene(slices)
     env0 = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=0,
@@ -102,7 +102,7 @@ def _film_error(level, K_list, slices=4, ppm=16):
     ref = model(env0, S, N, W)
     t_ref = time.perf_counter() - t0
     bad_ref = {(x["s_m"], x["slice"], x["w_N_per_m"]) for x in ref.failures}
-    from gearfmu.contact_models import _key
+    from gearfmu.contact.models import _key
     ok_ref = np.array([(_key(a), int(b), _key(c)) not in bad_ref for a, b, c in zip(S, N, W)])
     out = {"level": level, "slices": slices, "positions": int(s.size), "requests": int(S.size),
            "direct_solves": ref.solves, "direct_failures": len(ref.failures), "direct_wall_s": round(t_ref, 2),
@@ -168,7 +168,7 @@ def main(argv=None) -> int:
                          "the correction's provenance")
     a = ap.parse_args(argv)
 
-    from gearfmu.contact_models import DEFAULT_FILM_POSITION_NODES
+    from gearfmu.contact.models import DEFAULT_FILM_POSITION_NODES
 
     K = DEFAULT_FILM_POSITION_NODES if a.position_nodes is None else a.position_nodes
     out = {"benchmark": "rough-EHL tables, default scene", "cpu_count": os.cpu_count()}
@@ -181,7 +181,7 @@ def main(argv=None) -> int:
         tab, wall, cpu = _tables(sc, a.level, K, a.points_per_mesh, a.torques, a.workers, a.progress)
         c = tab.provenance["contact"]
         rows = c["load_iteration"]["rows"]
-        from gearfmu.stiffness import slot_stiffness
+        from gearfmu.gear.stiffness import slot_stiffness
         ss = slot_stiffness(sc.pair, tab_geom(sc), sc.mesh, None, a.points_per_mesh)
         n_pos = int(np.unique(np.round(ss.s_m[np.isfinite(ss.s_m)], 12)).size)
         t_solve = _cold_solve_time(sc, a.level)
@@ -274,7 +274,7 @@ def _transient_row(level, K, a):
 
 
 def tab_geom(sc):
-    from gearfmu.geometry import pair_geometry
+    from gearfmu.gear.geometry import pair_geometry
 
     return pair_geometry(sc.pair)
 

@@ -49,7 +49,7 @@ def _failed_nodes(env, grid_row) -> list:
     ``failed_nodes_first``): s (m, line of action from N1; and relative to the pitch point), load
     (N/m), status, film parameter Lambda there (Dowson-Higginson, composite sigma) and the
     solver's message (step, time and x where h reached 0)."""
-    from gearfmu.contact_models import film_parameter
+    from gearfmu.contact.models import film_parameter
 
     rows = []
     for f in grid_row.get("failed_nodes_first") or []:
@@ -62,9 +62,9 @@ def _failed_nodes(env, grid_row) -> list:
 
 
 def main(argv=None) -> int:
-    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
-    from gearfmu.precompute import precompute_tables
-    from gearfmu.scene import load_scene
+    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.scene.reader import load_scene
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3, 4])

@@ -68,7 +68,7 @@ def main(argv=None):
     import fmpy
     from fmpy import extract, read_model_description
 
-    from gearfmu.native import simulate, substeps
+    from gearfmu.dynamics.native import simulate, substeps
     from gearfmu.pipeline import build, gear_torque_for, load
 
     scene = load(args.scene)

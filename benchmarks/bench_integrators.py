@@ -20,9 +20,9 @@ import time
 
 import numpy as np
 
-from gearfmu.fmubuild import compile_kernel
-from gearfmu.native import simulate
-from gearfmu.synthetic import rectangular_wave_tables
+from gearfmu.fmu.pythonfmu_build import compile_kernel
+from gearfmu.dynamics.native import simulate
+from gearfmu.tables.synthetic import rectangular_wave_tables
 
 
 def case():

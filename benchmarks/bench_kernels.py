@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Benchmark: per-internal-step cost of the C kernel (gearkernel.c, the FMUs'
-kernel) against the numba native kernel (gearfmu.native), measured in one run.
+kernel) against the numba native kernel (gearfmu.dynamics.native), measured in one run.
 
 Both integrate the same tables with the same substeps, once per integrator
 ('rk4' and 'rk4_kink', docs/model.md; the integrator code is set in the C model
@@ -8,7 +8,7 @@ with ``gk_set_integrator``): a communication step spans ``--substeps`` internal
 steps, so per-call overhead (ctypes for C, the Python wrapper for numba) is
 spread thin.  For 'rk4_kink' a "step" is a nominal substep, events included.  C: ``gk_do_step`` called via
 ctypes on the kernel compiled exactly as the FMUs compile it; numba:
-``gearfmu.native.simulate`` (its ``wall_s`` excludes JIT compilation).  Two
+``gearfmu.dynamics.native.simulate`` (its ``wall_s`` excludes JIT compilation).  Two
 cases: the default scene's tables and a hard case with contact loss and
 impacts (rectangular-wave tables with backlash, light load).
 
@@ -37,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 
 def _c_kernel(tmp):
-    from gearfmu.fmubuild import compile_kernel
+    from gearfmu.fmu.pythonfmu_build import compile_kernel
 
     lib = ctypes.CDLL(str(compile_kernel(tmp)))
     c_int, c_double, c_void_p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
@@ -76,9 +76,9 @@ def _run_c(lib, t, case, n_comm, H, hmax, icode):
 
 
 def _cases():
-    from gearfmu.native import choose_max_step_s
+    from gearfmu.dynamics.native import choose_max_step_s
     from gearfmu.pipeline import compute_tables, gear_torque_for, load
-    from gearfmu.synthetic import rectangular_wave_tables
+    from gearfmu.tables.synthetic import rectangular_wave_tables
 
     scene = load(None)
     td = compute_tables(scene)
@@ -101,7 +101,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--integrators", default="rk4,rk4_kink", help="comma-separated integrator names")
     a = ap.parse_args(argv)
-    from gearfmu.native import INTEGRATORS, simulate
+    from gearfmu.dynamics.native import INTEGRATORS, simulate
 
     report = {"benchmark": "bench_kernels", "python": sys.version.split()[0], "machine": platform.machine(),
               "sim_time_s": a.sim_time, "substeps_per_comm_step": a.substeps, "repeat": a.repeat, "cases": {}}

@@ -43,8 +43,8 @@ def main(argv=None) -> int:
     import fmpy
     from fmpy.fmi2 import FMU2Slave
 
-    from gearfmu.fmubuild import build_fmu
-    from gearfmu.synthetic import rectangular_wave_tables
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.tables.synthetic import rectangular_wave_tables
 
     hmax = 1e-5
     H = hmax * a.substeps

@@ -4,7 +4,7 @@
 For every case of gearfmu.bench.HARD_CASES (1 heavy load, 2 single-sided impacts,
 3 double-sided impacts, 4 zeta = 0.01 near resonance, 5 HCR eps 2.4 with five slots,
 6 Omega_h = 2, 7 torque steps, and the default scene's computed tables) this runs
-the reference (gearfmu.reference: scipy DOP853, rtol 1e-10, restarted at every
+the reference (gearfmu.dynamics.reference: scipy DOP853, rtol 1e-10, restarted at every
 table kink and contact change), the native solver with 'rk4_kink' (the default)
 and with 'rk4' at the same internal step (``--substeps`` per communication step,
 H = mesh period/4), and plots DTE and total mesh force against time with the
@@ -101,10 +101,10 @@ def _case8(out: Path, summary: dict) -> None:
     import matplotlib.pyplot as plt
 
     from gearfmu.bench import hard_case
-    from gearfmu.compare import output_names, run_fmu
-    from gearfmu.fmubuild import build_fmu
-    from gearfmu.native import simulate
-    from gearfmu.reference import simulate_reference
+    from gearfmu.fmu.compare import output_names, run_fmu
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.dynamics.reference import simulate_reference
 
     tables, kw = hard_case("single_sided_impacts")
     Tm = 4 * kw["comm_step_s"]
@@ -153,8 +153,8 @@ def main(argv=None) -> int:
     if a.substeps < 1:
         ap.error("--substeps: must be >= 1")
     from gearfmu.bench import HARD_CASES, hard_case, rel_errors
-    from gearfmu.native import simulate
-    from gearfmu.reference import simulate_reference
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.dynamics.reference import simulate_reference
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -26,10 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gearfmu.gearpair import MeshModelOptions
-from gearfmu.geometry import pair_geometry, transverse_equivalent
-from gearfmu.scene import load_scene
-from gearfmu.stiffness import slot_stiffness
+from gearfmu.gear.gearpair import MeshModelOptions
+from gearfmu.gear.geometry import pair_geometry, transverse_equivalent
+from gearfmu.scene.reader import load_scene
+from gearfmu.gear.stiffness import slot_stiffness
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "build" / "helical"
@@ -108,7 +108,7 @@ def fmu_part():
     """Seed 001 pair with fractal mixed contact per slice: tables, FMU, fmpy run, native check."""
     import fmpy
 
-    from gearfmu.compare import validate_fmu_against_native
+    from gearfmu.fmu.compare import validate_fmu_against_native
     from gearfmu.pipeline import build, compute_tables, gear_torque_for
 
     FMU_OUT.mkdir(parents=True, exist_ok=True)

@@ -24,7 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from gearfmu.plan import format_report, plan_scene  # noqa: E402
-from gearfmu.scene import dumps_toml, load_scene  # noqa: E402
+from gearfmu.scene.reader import dumps_toml, load_scene  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "output"

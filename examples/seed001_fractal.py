@@ -30,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gearfmu import fractal_contact as fc  # noqa: E402
+from gearfmu.contact import fractal as fc  # noqa: E402
 
 
 def _write_csv(path, header, rows):
@@ -137,11 +137,11 @@ def fig8(out: Path) -> dict:
 
 def slicing(out: Path) -> dict:
     """Seed 000 Table 1 pitch point: K per unit width for several face slicings (issue 9)."""
-    from gearfmu.contact import reduced_modulus_Pa
-    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
+    from gearfmu.gear.hertz import reduced_modulus_Pa
+    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics
-    from gearfmu.geometry import pair_geometry
-    from gearfmu.scene import load_scene
+    from gearfmu.gear.geometry import pair_geometry
+    from gearfmu.scene.reader import load_scene
 
     sc = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
     g = pair_geometry(sc.pair)

@@ -7,9 +7,9 @@ zeta = 0.02, T = 340 N*m, no meshing error (e = 0), damping model 'seed003'
 (eq 8-9: constant damping per pair, rho = 2 in the double-tooth zone), the
 dimensionless form of eq 7-9 with q = x/l, l = 1 um.  An up-sweep and a
 down-sweep in Omega_h, each point continuing from the previous point's state,
-transients dropped; A_r and A_rms from eq 10-11 (gearfmu.harmonics, RMS
+transients dropped; A_r and A_rms from eq 10-11 (gearfmu.dynamics.harmonics, RMS
 normalisation, BW = 2 shaft orders).  The two sweeps run in parallel through
-gearfmu.sweeps (local process pool, or a Dask cluster with --scheduler).
+gearfmu.dynamics.sweeps (local process pool, or a Dask cluster with --scheduler).
 
     python examples/seed003_arms.py [--json] [--quick] [--out DIR] [--scheduler tcp://HOST:PORT]
 
@@ -71,7 +71,7 @@ def compare_with_seed(jumps, features, seed=SEED_JUMPS, max_distance=0.06):
 
 def run(args) -> dict:
     from gearfmu import pipeline
-    from gearfmu.sweeps import PointSettings, SweepJob, find_jumps, run_jobs
+    from gearfmu.dynamics.sweeps import PointSettings, SweepJob, find_jumps, run_jobs
 
     t0 = time.perf_counter()
     scene = pipeline.load(str(SCENE))

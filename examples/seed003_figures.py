@@ -11,7 +11,7 @@ pair (epsilon = 1.75, the pair the paper specifies).  Dynamics: time-indexed
 SDOF of eq 3-6 in the dimensionless form of eq 7-9 (q = x / 1 um), damping
 model 'seed003' (eq 8-9), defaults zeta = 0.04, T1 = 500 N*m, Omega_h = 0.6 as in
 seed 003 section 3-4.  Independent cases run in parallel through
-gearfmu.sweeps.run_jobs (local processes, or Dask with --scheduler).
+gearfmu.dynamics.sweeps.run_jobs (local processes, or Dask with --scheduler).
 
     python examples/seed003_figures.py [--quick] [--out DIR] [--scheduler ADDR] [--json]
 
@@ -44,7 +44,7 @@ def _log(msg):
 def seed003_tables(ffa_um=0.0, fha_um=0.0, torque_Nm=500.0, addendum=1.0, form_periods=2.0):
     """Tables of the seed 003 Table 1 pair with eq 15 deviations on every pinion tooth."""
     from gearfmu import pipeline
-    from gearfmu.scene import load_scene
+    from gearfmu.scene.reader import load_scene
 
     d = tomllib.loads(SCENE.read_text())
     d["deviations"]["pinion"] = {"profile_form_um": float(ffa_um), "profile_slope_um": float(fha_um),
@@ -60,7 +60,7 @@ def adjusted_tables(tables, bump_m=5e-6):
     the comprehensive error in the double-tooth zone (it gets a half-sine bump of
     +bump_m over each stretch where it lies above the envelope), so the comprehensive
     error -- and the traditional model -- stay the same while the pairs differ."""
-    from gearfmu.synthetic import tables_from_arrays
+    from gearfmu.tables.synthetic import tables_from_arrays
 
     k = tables.k_N_per_m.copy()
     e = tables.e_m.copy()
@@ -319,7 +319,7 @@ def main(argv=None):
     ap.add_argument("--no-fig30", action="store_true", help="skip the A_rms sweeps of Fig. 30")
     args = ap.parse_args(argv)
 
-    from gearfmu.sweeps import PointSettings, SweepJob, run_jobs
+    from gearfmu.dynamics.sweeps import PointSettings, SweepJob, run_jobs
 
     t0 = time.perf_counter()
     out = Path(args.out)

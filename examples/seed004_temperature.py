@@ -35,9 +35,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gearfmu import thermal as th  # noqa: E402
-from gearfmu.geometry import pair_geometry  # noqa: E402
-from gearfmu.scene import load_scene  # noqa: E402
+from gearfmu.gear import thermal as th  # noqa: E402
+from gearfmu.gear.geometry import pair_geometry  # noqa: E402
+from gearfmu.scene.reader import load_scene  # noqa: E402
 
 #: seed 004 Table 2 (single tooth, 1e8 N/m): pinion in/pitch/out, gear in/pitch/out
 SEED_TABLE2 = {
@@ -288,7 +288,7 @@ def oil(out: Path, plt, use_solver: bool):
         if use_solver:  # the slice film of the tables' contact models at eta0(T) (docs/ehl_mesh.md)
             import dataclasses
 
-            from gearfmu.contact_models import environment_from_scene
+            from gearfmu.contact.models import environment_from_scene
             from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 
             env = dataclasses.replace(environment_from_scene(sc, max_workers=1), eta0_Pas=float(e))

@@ -1,16 +1,16 @@
 """Hard cases of the dynamic model and the speed-against-error benchmark.
 
-``hard_case(name)`` returns ``(tables, kwargs)`` for :func:`gearfmu.native.simulate`
-(and :func:`gearfmu.reference.simulate_reference`, which takes the same
+``hard_case(name)`` returns ``(tables, kwargs)`` for :func:`gearfmu.dynamics.native.simulate`
+(and :func:`gearfmu.dynamics.reference.simulate_reference`, which takes the same
 arguments): the cases of issue 5 built from textbook tables (the
-rectangular-wave TVMS of :mod:`gearfmu.synthetic`, seed 003 Table 1 gear data)
+rectangular-wave TVMS of :mod:`gearfmu.tables.synthetic`, seed 003 Table 1 gear data)
 and from a computed scene.  Inputs only -- no results are stored here.
 
 ``accuracy_benchmark()`` runs, on one case and in one process, every
-integrator that :func:`gearfmu.native.simulate` offers (read from its
+integrator that :func:`gearfmu.dynamics.native.simulate` offers (read from its
 signature at run time) at several internal steps, the FMU (fmpy) at several
 communication steps, and scipy ``solve_ivp`` DOP853 and Radau (event-located,
-:mod:`gearfmu.reference`) at several tolerances, and reports wall time and
+:mod:`gearfmu.dynamics.reference`) at several tolerances, and reports wall time and
 error against the tight reference: ``gearfmu bench accuracy --json [--png P]``.
 
 Errors are relative: RMS (or max) over the communication instants of
@@ -36,7 +36,7 @@ __all__ = ["HARD_CASES", "hard_case", "rel_errors", "accuracy_benchmark", "plot_
 def _kb(**kw):
     """Rectangular-wave TVMS on the seed 003 Table 1 gears (50/50 teeth, eps 1.7547),
     every engaged pair 2.5e8 N/m (k_double = 2 k_single), half backlash 68 um."""
-    from .synthetic import KB_BACKLASH_HALF_M, rectangular_wave_tables
+    from .tables.synthetic import KB_BACKLASH_HALF_M, rectangular_wave_tables
 
     args = dict(k_single_N_per_m=2.5e8, backlash_half_m=KB_BACKLASH_HALF_M)
     args.update(kw)
@@ -158,10 +158,10 @@ def rel_errors(res, ref) -> dict:
 
 
 def native_integrators():
-    """Integrator names :func:`gearfmu.native.simulate` offers, read from its signature
+    """Integrator names :func:`gearfmu.dynamics.native.simulate` offers, read from its signature
     (a parameter ``integrator`` or ``method`` with a default; its allowed values from
     ``native.INTEGRATORS`` when present).  ["rk4"] when it has no such parameter."""
-    from . import native
+    from .dynamics import native
 
     sig = inspect.signature(native.simulate)
     for pname in ("integrator", "method"):
@@ -174,7 +174,7 @@ def native_integrators():
 
 
 def _fmu_build(tables, kw, max_step_s, workdir, integrator):
-    from .fmubuild import build_fmu
+    from .fmu.pythonfmu_build import build_fmu
 
     return build_fmu(tables, Path(workdir) / "bench.fmu", model_name="bench", damping_ratio=kw["damping_ratio"],
                      integrator=integrator,
@@ -190,8 +190,8 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
                        progress: bool = True) -> dict:
     """Speed against error on one hard case (see module docstring); returns a dict with
     ``rows`` (method, setting, wall_s, errors) and the reference's settings."""
-    from .native import simulate
-    from .reference import simulate_reference
+    from .dynamics.native import simulate
+    from .dynamics.reference import simulate_reference
 
     def say(msg):
         if progress:
@@ -220,12 +220,12 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
             rows.append(dict(method=f"native-{integ}", setting=f"h=H/{n}", step_s=H / n, wall_s=best,
                              **rel_errors(res, ref)))
             say(f"native {integ} H/{n}: {rows[-1]['dte_rel_rms_err']:.2e}")
-    from .compare import output_names, run_fmu
+    from .fmu.compare import output_names, run_fmu
 
     with tempfile.TemporaryDirectory() as wd:
         hmax = H / fmu_substeps
         say("building the FMU (C kernel, once; the communication step is the master's choice)")
-        from .native import DEFAULT_INTEGRATOR
+        from .dynamics.native import DEFAULT_INTEGRATOR
 
         fmu = _fmu_build(tables, kw, hmax, wd, DEFAULT_INTEGRATOR)  # the FMU as built by default
         for m in fmu_comm_mesh_periods:
@@ -251,7 +251,7 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
                              **rel_errors(res, ref)))
             say(f"{method} rtol {rt:g}: {rows[-1]['dte_rel_rms_err']:.2e}, {wall:.2f} s")
     return {"case": case, "comm_step_s": H, "stop_time_s": kw["stop_time_s"],
-            "reference": {"method": "DOP853 event-located (gearfmu.reference)", "rtol": ref_rtol,
+            "reference": {"method": "DOP853 event-located (gearfmu.dynamics.reference)", "rtol": ref_rtol,
                           "steps_per_period": 128, "wall_s": ref_wall, "segments": ref.info["segments"],
                           "events": ref.info["events"]},
             "integrator_parameter": pname, "rows": rows}

@@ -53,7 +53,7 @@ def cmd_build(args) -> int:
     out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
     tables = None
     if getattr(args, "tables", None):  # imported tables instead of the scene's physics
-        from .table_import import load_tables_file
+        from .tables.table_import import load_tables_file
 
         if not Path(args.tables).exists():
             raise CliError(f"--tables: file not found: {args.tables}")
@@ -121,7 +121,7 @@ def _tables_csv(tables, path, torque_index: int = 0):
 def cmd_simulate(args) -> int:
     import numpy as np
 
-    from .compare import native_columns, output_names, run_fmu
+    from .fmu.compare import native_columns, output_names, run_fmu
     from .pipeline import compute_tables, simulate_native
     from .plots import plot_simulation
 
@@ -168,7 +168,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    from .compare import validate_fmu_against_native
+    from .fmu.compare import validate_fmu_against_native
     from .pipeline import build, compute_tables, gear_torque_for, max_step_for
 
     scene = _scene(args.scene)

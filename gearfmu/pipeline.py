@@ -17,7 +17,7 @@ from . import __version__
 
 def load(scene_path: Optional[str] = None):
     """Load a scene file (None: the default scene)."""
-    from .scene import default_scene_path, load_scene
+    from .scene.reader import default_scene_path, load_scene
 
     return load_scene(scene_path if scene_path is not None else default_scene_path())
 
@@ -30,7 +30,7 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
 
 def compute_tables(scene, *, progress: bool = False):
     """Precompute the tooth-pair tables of a scene (timed)."""
-    from .precompute import precompute_tables
+    from .tables.precompute import precompute_tables
 
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
@@ -55,17 +55,17 @@ def compute_tables(scene, *, progress: bool = False):
 
 
 def _contact_kw(scene, progress: bool) -> dict:
-    """``contact_env`` for the EHL contact models (gearfmu/contact_models.py); {} for Hertz."""
+    """``contact_env`` for the EHL contact models (gearfmu/contact/models.py); {} for Hertz."""
     if scene.mesh.contact_model == "hertz":
         return {}
-    from .contact_models import environment_from_scene
+    from .contact.models import environment_from_scene
 
     return {"contact_env": environment_from_scene(scene, progress=progress)}
 
 
 def max_step_for(scene, tables) -> float:
     """The internal step bound: the scene's ``solver.max_step_s`` or the automatic choice."""
-    from .native import choose_max_step_s
+    from .dynamics.native import choose_max_step_s
 
     if scene.solver.max_step_s is not None:
         return float(scene.solver.max_step_s)
@@ -96,12 +96,12 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
     "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
-    gearfmu.table_import); the scene then only gives the FMU and operating settings."""
-    from .fmubuild import build_fmu
+    gearfmu.tables.table_import); the scene then only gives the FMU and operating settings."""
+    from .fmu.pythonfmu_build import build_fmu
 
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
     if runtime == "standalone":
-        from .standalone_build import build_standalone_fmu as build_fmu  # same arguments
+        from .fmu.standalone_build import build_standalone_fmu as build_fmu  # same arguments
     elif runtime != "pythonfmu":
         raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
 
@@ -151,7 +151,7 @@ def _integrator_kw(builder, scene) -> dict:
 def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
                     damping_ratio=None, pinion_torque_Nm=None, gear_torque_Nm=None):
     """Run the native (numba) solver on a scene's tables with the scene's settings."""
-    from .native import simulate
+    from .dynamics.native import simulate
 
     t1_Nm = scene.operating.torque_Nm if pinion_torque_Nm is None else pinion_torque_Nm
     return simulate(

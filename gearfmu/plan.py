@@ -1,16 +1,16 @@
 """Fidelity planner: only what a scene needs (docs/plan.md).
 
 Given a scene, its operating envelope and its accuracy target
-(:mod:`gearfmu.envelope`), :func:`plan_scene` estimates what every modelling
+(:mod:`gearfmu.scene.envelope`), :func:`plan_scene` estimates what every modelling
 choice contributes to the TVMS and to the DTE and mesh force over the
 envelope, keeps what the target needs, drops the rest and measures the cost
 of the chosen model against the full one.  :func:`planned_scene` turns a plan
 into the scene that ``gearfmu build`` builds.
 
-Choices (``gearfmu.envelope.PLAN_CHOICES``) and their levels, cheapest first,
+Choices (``gearfmu.scene.envelope.PLAN_CHOICES``) and their levels, cheapest first,
 the last one being the full-fidelity level:
 
-* ``contact_model`` -- the contact models :mod:`gearfmu.contact_models` offers
+* ``contact_model`` -- the contact models :mod:`gearfmu.contact.models` offers
   (when present; ``hertz`` alone otherwise), ordered hertz < smooth_ehl <
   rough_ehl; lubricated ones only with a ``[lubricant]``.
 * ``thermal`` -- seed 004 temperature stiffness on/off (only with an envelope
@@ -25,7 +25,7 @@ the last one being the full-fidelity level:
   the envelope torque range (full: max(9, scene)).
 * ``slots`` -- ceil(contact ratio), or the scene's larger count.
 * ``integrator`` -- rk4, rk4_kink (full).
-* ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.native.choose_max_step_s`
+* ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.dynamics.native.choose_max_step_s`
   of the full tables at the top envelope speed (full: h0/4).
 
 Error measure (docs/plan.md): for every envelope point (torque low / nominal /
@@ -60,7 +60,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
+from .scene.envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
@@ -114,13 +114,13 @@ class Choice:
 
 def _available_contact_models() -> Tuple[str, ...]:
     """Contact models the table builder offers: the registry
-    ``gearfmu.contact_models.CONTACT_MODELS`` when that module exists and the
+    ``gearfmu.contact.models.CONTACT_MODELS`` when that module exists and the
     table builder takes a contact environment, else hertz alone."""
     import inspect
 
-    from .precompute import precompute_tables
+    from .tables.precompute import precompute_tables
     try:
-        from . import contact_models  # type: ignore[attr-defined]
+        from .contact import models as contact_models  # type: ignore[attr-defined]
     except ImportError:
         return ("hertz",)
     if "contact_env" not in inspect.signature(precompute_tables).parameters:
@@ -130,14 +130,14 @@ def _available_contact_models() -> Tuple[str, ...]:
 
 
 def _p_min(scene) -> int:
-    from .geometry import pair_geometry
-    from .precompute import default_slots
+    from .gear.geometry import pair_geometry
+    from .tables.precompute import default_slots
 
     return default_slots(float(pair_geometry(scene.pair).contact_ratio))
 
 
 def _teeth_differ(scene, slots: int) -> bool:
-    from .meshing_errors import pair_table_mesh_count
+    from .gear.meshing_errors import pair_table_mesh_count
 
     return pair_table_mesh_count(scene.pair, slots) > slots
 
@@ -207,7 +207,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
 
 def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     """The ``[thermal]`` options of the kept thermal level: the scene's section (a
-    default :class:`gearfmu.scene.ThermalOptions` when it has none) whose temperature
+    default :class:`gearfmu.scene.reader.ThermalOptions` when it has none) whose temperature
     axis is the scene's ``temperature_axis_C`` or, when that is empty and the envelope
     has a temperature range, ``_THERMAL_AXIS_POINTS`` equally spaced points over the
     range (CHOICE, docs/plan.md).  Raises :class:`PlanError` when the scene's axis does
@@ -217,13 +217,13 @@ def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     (``axis_quantity`` "oil" / "bulk_and_oil", docs/thermal.md) acts through eta0 of a
     lubricated model; when the plan chooses a model without a lubricant (hertz) the oil
     part has nothing to act on, so "oil" loses its axis and "bulk_and_oil" becomes "bulk"."""
-    from .scene import ThermalOptions
+    from .scene.reader import ThermalOptions
 
     th = getattr(scene, "thermal", None)
     th = th if th is not None else ThermalOptions()
     q = getattr(th, "axis_quantity", "bulk")
     if contact_model is not None and q != "bulk":
-        from .contact_models import get_contact_model
+        from .contact.models import get_contact_model
 
         if not get_contact_model(contact_model).needs_lubricant:
             th = (replace(th, temperature_axis_C=(), axis_quantity="bulk") if q == "oil"
@@ -268,7 +268,7 @@ class _Evaluator:
                 cfg["torque_points"], cfg["slots"], bool(cfg["thermal"]))
 
     def pair(self, tooth_specific: bool):
-        from .gearpair import GearDeviations
+        from .gear.gearpair import GearDeviations
 
         p = self.scene.pair
         if tooth_specific:
@@ -288,7 +288,7 @@ class _Evaluator:
 
     def tables(self, cfg: dict):
         """(MeshTables, build wall time in s) of a configuration (cached)."""
-        from .precompute import precompute_tables
+        from .tables.precompute import precompute_tables
 
         key = self.table_key(cfg)
         if key not in self._tables:
@@ -298,7 +298,7 @@ class _Evaluator:
         return self._tables[key]
 
     def table_args(self, cfg: dict) -> dict:
-        """Arguments of :func:`gearfmu.precompute.precompute_tables` for a configuration."""
+        """Arguments of :func:`gearfmu.tables.precompute.precompute_tables` for a configuration."""
         opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
         pair = self.pair(cfg["tooth_specific_errors"])
         kw = dict(pair=pair, opts=opts, points_per_mesh=int(cfg["points_per_mesh"]),
@@ -307,14 +307,14 @@ class _Evaluator:
         if cfg["thermal"]:  # the table builder's own temperature axis (docs/plan.md "Thermal estimate")
             kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
-            from .contact_models import environment_from_scene
+            from .contact.models import environment_from_scene
 
             kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
         return kw
 
     def tables_at(self, cfg: dict, temperature_C: Optional[float]):
         """The configuration's tables at a bulk temperature (degC): the table builder's
-        temperature axis interpolated by :meth:`gearfmu.tables.MeshTables.at_temperature`
+        temperature axis interpolated by :meth:`gearfmu.tables.mesh_tables.MeshTables.at_temperature`
         (the rule of the FMU kernel, bitwise at the nodes); None = the tables' default
         temperature.  Tables without a temperature axis are returned as they are."""
         tb, _ = self.tables(cfg)
@@ -371,7 +371,7 @@ class _Evaluator:
 
     def run(self, cfg: dict, point) -> dict:
         """Native run at one envelope point: dte, mesh_force (arrays), wall_s and simulated time."""
-        from .native import simulate
+        from .dynamics.native import simulate
 
         key = self.table_key(cfg) + (cfg["thermal"], cfg["integrator"], self.step(cfg), point)
         if key in self._runs:
@@ -565,7 +565,7 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     ev = _Evaluator(scene, env, acc, progress)
     full = {n: c.full for n, c in choices.items()}
     tb_full, _ = ev.tables(full)
-    from .native import choose_max_step_s
+    from .dynamics.native import choose_max_step_s
 
     w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
     if tb_full.has_temperature_axis:  # the smallest automatic step over the axis nodes
@@ -665,7 +665,7 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
 
 def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
     """Fresh measurement of one configuration's costs (tables rebuilt, runs at every envelope point)."""
-    from .precompute import precompute_tables
+    from .tables.precompute import precompute_tables
 
     tb, first_s = ev.tables(cfg)
     if first_s < _REBUILD_BELOW_S:  # cheap: rebuild for a timing free of first-call (compile, cache) costs
@@ -948,7 +948,7 @@ def planned_scene(scene, plan: Plan, which: str = "chosen"):
     the full-fidelity) configuration written into the scene's mesh, table, solver,
     operating, deviation and thermal settings.  Its ``accuracy`` is None (a planned
     scene is not planned again); ``text`` stays the original scene source."""
-    from .gearpair import GearDeviations
+    from .gear.gearpair import GearDeviations
 
     cfg = plan.chosen if which == "chosen" else plan.full
     env = plan.envelope

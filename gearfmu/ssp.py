@@ -42,7 +42,7 @@ import zipfile
 from pathlib import Path
 from typing import Dict, Mapping, Optional
 
-from .checks import finite_number
+from .common.checks import finite_number
 
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",

@@ -48,8 +48,8 @@ def build_fuzz_fmu(directory) -> Path:
     torque axis [50, 150] N.m, max_step 1e-5 s."""
     import numpy as np
 
-    from gearfmu.fmubuild import build_fmu
-    from gearfmu.synthetic import rectangular_wave_tables
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.tables.synthetic import rectangular_wave_tables
 
     t = rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=32, backlash_half_m=1e-5)
     t = replace(t, torque_Nm=np.array([50.0, 150.0]), k_N_per_m=np.concatenate([t.k_N_per_m, 1.1 * t.k_N_per_m]),

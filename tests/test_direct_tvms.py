@@ -1,4 +1,4 @@
-"""Direct TVMS (gearfmu.ehl.direct_tvms): seed 000 Figs. 12-13 at the mesh-stiffness level.
+"""Direct TVMS (gearfmu.tables.direct_tvms): seed 000 Figs. 12-13 at the mesh-stiffness level.
 
 Reference of the ordering test: seed 000 (Zhao et al. 2022) section 5.1-5.2, Figs. 12-13 and their
 text -- the TVMS with Hertz contact is the lowest, the lubricated TVMS of rough flanks lies below
@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact_models import RoughnessSpec, environment_from_scene
-from gearfmu.ehl.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
+from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+from gearfmu.tables.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
                                      pair_positions_m)
-from gearfmu.geometry import pair_geometry
-from gearfmu.scene import load_scene
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.scene.reader import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")   # 2000 N m, 2000 rpm
@@ -56,7 +56,7 @@ ST_257_8 = TransientFilmSettings(n_nodes=257, T_average=8.0)
 def pool():
     """Two worker processes for the film runs of the Figs. 12-13 tests (the same results as
     in-process: the runs are deterministic; halves the wall time on two cores)."""
-    from gearfmu.sweeps import make_executor
+    from gearfmu.dynamics.sweeps import make_executor
 
     with make_executor(max_workers=2) as ex:
         yield ex

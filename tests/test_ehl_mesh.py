@@ -13,15 +13,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact import reduced_modulus_Pa
-from gearfmu.contact_models import (CONTACT_MODELS, ContactModelError, RoughnessSpec, environment_from_scene,
+from gearfmu.gear.hertz import reduced_modulus_Pa
+from gearfmu.contact.models import (CONTACT_MODELS, ContactModelError, RoughnessSpec, environment_from_scene,
                                     get_contact_model, sliced_mesh_stiffness, tooth_compliances)
 from gearfmu.ehl.fits import dowson_higginson_min_film
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
-from gearfmu.geometry import pair_geometry
-from gearfmu.precompute import precompute_tables
-from gearfmu.scene import SceneError, load_scene
-from gearfmu.stiffness import slot_stiffness
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.tables.precompute import precompute_tables
+from gearfmu.scene.reader import SceneError, load_scene
+from gearfmu.gear.stiffness import slot_stiffness
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
@@ -82,7 +82,7 @@ def test_hertz_model_is_yang_sun():
 
 def test_sliced_stiffness_with_hertz_equals_tvms_path():
     """The per-slice contact path with the Hertz value reproduces the existing TVMS
-    (seed 000 eq 13 with k_l = k_h) of gearfmu.stiffness.slot_stiffness."""
+    (seed 000 eq 13 with k_l = k_h) of gearfmu.gear.stiffness.slot_stiffness."""
     opts = dataclasses.replace(SCENE.mesh, slices=3)
     ss = slot_stiffness(SCENE.pair, GEOM, opts, None, 16)
     ct, fp, fg = tooth_compliances(SCENE.pair, GEOM, ss.s_m, ss.slice_width_m)
@@ -156,7 +156,7 @@ def _hand_film_parameter(level: int, w: float) -> float:
     Dowson & Higginson (1966) formula h_min/R = 2.65 U^0.70 G^0.54 W^-0.13; sigma of each flank the
     RMS of the full W-M sum, G^(D-1) L_s^(2-D) sqrt(1/(2 (1 - gamma^(-2(2-D))))) (L_s = 0.5 mm,
     gamma = 1.5: the docs/ehl.md convention), composite sigma = sqrt(2) x that."""
-    from gearfmu.roughness import SEED000_LEVELS
+    from gearfmu.contact.roughness import SEED000_LEVELS
 
     lv = SEED000_LEVELS[level]
     sa = math.sin(GEOM.alpha_w_rad)
@@ -174,7 +174,7 @@ def test_film_parameter_against_hand_value_and_the_switch():
     """Lambda = h_min/sigma (Dowson-Higginson, composite W-M sigma) equals the hand value at the
     pitch point; level 1 (Lambda ~ 22) keeps the film, level 4 (Lambda ~ 2.2 < 3, the mixed range
     of Tallian 1967) switches to the policy without a film solve, recorded with its Lambda."""
-    from gearfmu.contact_models import film_parameter
+    from gearfmu.contact.models import film_parameter
 
     s, w = _pitch_request()
     for level in (1, 4):
@@ -214,7 +214,7 @@ def test_mixed_stiffness_lies_between_solid_part_and_solid_plus_whole_band_film(
     part K_s alone (seed 001 eq 16-25 at the same load, evaluated separately) and below K_s plus an
     oil film over the whole Hertz band, B(p_m) 2b width / h_c (seed 000 eq 8-9, B by hand with
     B0 = 1.83 GPa, B0' = 11, h_c Pan & Hamrock 1989): the asperity area only removes film."""
-    from gearfmu import fractal_contact as fc
+    from gearfmu.contact import fractal as fc
     from gearfmu.ehl.fits import pan_hamrock_films
 
     s, w = _pitch_request()
@@ -228,7 +228,7 @@ def test_mixed_stiffness_lies_between_solid_part_and_solid_plus_whole_band_film(
     A0 = 2 * b * env.width_m
     lv = RoughnessSpec.from_level(4)
     mo = fc.FractalMeshOptions()
-    from gearfmu.roughness import wm_sigma_m
+    from gearfmu.contact.roughness import wm_sigma_m
     lam_c = fc.contact_correction_coefficient(R, w[0], Es, wm_sigma_m(lv.D, lv.G_m, mo.L_s_m), mo.L_s_m)
     opts = fc.FractalOptions(lateral=mo.options.lateral, interaction=mo.options.interaction, lambda_c=lam_c)
     Ks = fc.solid_contact_at_load(fc.FractalSurface(lv.D, lv.G_m), fc.FractalMaterial(Es, mo.H_Pa,
@@ -270,7 +270,7 @@ def test_tiny_rough_scene_mixes_film_and_mixed_model_and_the_fmu_runs(tmp_path):
     that part of the path switches): the tables build, record the switch (count, Lambda range, one
     warning), and the FMU runs with a finite mesh force whose mean over whole mesh periods equals
     the applied load T1/Rb1 within 2 % (seed 003, below eq 2: balanced torques)."""
-    from gearfmu.compare import output_names, run_fmu
+    from gearfmu.fmu.compare import output_names, run_fmu
     from gearfmu.pipeline import build
 
     base = (ROOT / "examples" / "scenes" / "seed000_table1.toml").read_text()
@@ -331,7 +331,7 @@ def test_stalled_grid_node_takes_the_linear_trend_of_its_converged_neighbours():
     gets exactly 1.02 - 3 s_k; an end node the value of its converged neighbour; a run of
     stalled nodes wider than 3 spacings, a collapse (not a solver limit) and an end node whose
     neighbour also failed stay NaN (the policy's smooth film then applies)."""
-    from gearfmu.contact_models import fill_stalled_ratio
+    from gearfmu.contact.models import fill_stalled_ratio
 
     s = np.linspace(0.01, 0.02, 11)                       # spacing 1 mm
     r = 1.02 - 3.0 * s

@@ -1,6 +1,6 @@
 """[roughness] film_transient = "film" with on_film_failure = "load_sharing": a film-grid node
 whose transient film collapses (h <= 0, FilmCollapseError) takes the Johnson-Greenwood-Poon
-load-sharing stiffness (gearfmu/load_sharing.py, docs/load_sharing.md), not the smooth film and
+load-sharing stiffness (gearfmu/contact/load_sharing.py, docs/load_sharing.md), not the smooth film and
 not seed 001's fractal K_n (docs/ehl_mesh.md "Transient films in the tables").
 
 The collapse is forced (every transient run raises FilmCollapseError, as
@@ -16,7 +16,7 @@ References (none produced by the code under test):
 * continuity (docs/load_sharing.md): at seed 000 level 4 (Lambda ~ 2) the film still carries most of
   the load, so Hertz (Yang & Sun, the dry limit) < k < k_smooth and k/k_smooth > 0.9 (the
   measured table of docs/load_sharing.md: 0.981 at the pitch point, 2000 N m); the asperity
-  share is > 0 and the value equals gearfmu.load_sharing.load_sharing evaluated here on the
+  share is > 0 and the value equals gearfmu.contact.load_sharing.load_sharing evaluated here on the
   independent smooth film (1e-9);
 * 'hertz' policy at the same collapsed node: the Hertz stiffness exactly.
 """
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact_models import RoughnessSpec, environment_from_scene, film_grid, rough_ehl_model
+from gearfmu.contact.models import RoughnessSpec, environment_from_scene, film_grid, rough_ehl_model
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "examples" / "scenes" / "seed000_table1.toml"
@@ -46,7 +46,7 @@ _SCENE = []
 
 
 def load_scene_cached():
-    from gearfmu.scene import load_scene
+    from gearfmu.scene.reader import load_scene
 
     if not _SCENE:
         _SCENE.append(load_scene(SCENE))
@@ -92,9 +92,9 @@ def _collapsed_request(level, on_failure):
 
 
 def test_collapsed_node_takes_load_sharing_between_hertz_and_smooth(collapse_everywhere):
-    from gearfmu.contact import hertz_stiffness_N_per_m
-    from gearfmu.contact_models import film_parameter
-    from gearfmu.load_sharing import LineContactState, asperity_parameters, load_sharing, wm_spectral_moments
+    from gearfmu.gear.hertz import hertz_stiffness_N_per_m
+    from gearfmu.contact.models import film_parameter
+    from gearfmu.contact.load_sharing import LineContactState, asperity_parameters, load_sharing, wm_spectral_moments
 
     env, g, s, w, out = _collapsed_request(4, "load_sharing")
     assert collapse_everywhere, "the forced collapse must have been reached through the transient runs"
@@ -126,7 +126,7 @@ def test_collapsed_node_takes_load_sharing_between_hertz_and_smooth(collapse_eve
 
 
 def test_collapsed_node_at_large_film_parameter_is_the_smooth_film(collapse_everywhere):
-    from gearfmu.contact_models import film_parameter
+    from gearfmu.contact.models import film_parameter
 
     # JGP limit: asperity share -> 0 as Lambda grows; level 1 (Lambda ~ 20) -> the smooth film itself
     env, g, s, w, out = _collapsed_request(1, "load_sharing")

@@ -1,5 +1,5 @@
 """[roughness] film_transient: the transient film correction of the rough-EHL film grid
-(docs/ehl_transient.md section 3 "last row", gearfmu/contact_models.py RoughFilmGrid).
+(docs/ehl_transient.md section 3 "last row", gearfmu/contact/models.py RoughFilmGrid).
 
 References:
 * "off": the grid's rough/smooth ratios equal, bit for bit, direct steady solves of the same
@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact_models import (ContactModelError, RoughFilmGrid, RoughnessSpec,
+from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec,
                                     environment_from_scene, transient_node_correction,
                                     transient_slices)
-from gearfmu.scene import SceneError, load_scene
+from gearfmu.scene.reader import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "examples" / "scenes" / "seed000_table1.toml"

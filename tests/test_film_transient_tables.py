@@ -1,5 +1,5 @@
 """[roughness] film_transient = "film": the rough film of every film-grid node is the transient
-film (gearfmu/contact_models.py RoughFilmGrid, docs/ehl_mesh.md "Transient films in the tables").
+film (gearfmu/contact/models.py RoughFilmGrid, docs/ehl_mesh.md "Transient films in the tables").
 
 References (none produced by the code under test):
 * a node's ratio equals an independent evaluation: the smooth film by solve_line_contact +
@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact_models import (ContactModelError, RoughFilmGrid, RoughnessSpec, environment_from_scene,
+from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec, environment_from_scene,
                                     rough_ehl_model, transient_node_film)
-from gearfmu.scene import SceneError, load_scene
+from gearfmu.scene.reader import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "examples" / "scenes" / "seed000_table1.toml"
@@ -138,7 +138,7 @@ def test_failed_nodes_stall_fill_and_collapse_policy(monkeypatch):
     env._grid = g
     w0 = float(g.w_node(0))
     out = rough_ehl_model(env, [float(s3[0]), float(s3[2])], [0, 0], [w0, w0])
-    from gearfmu.contact import hertz_stiffness_N_per_m
+    from gearfmu.gear.hertz import hertz_stiffness_N_per_m
 
     assert out.k_N_per_m[1] == hertz_stiffness_N_per_m(env.pair, env.width_m)
     assert [f["status"] for f in out.failures] == ["collapse"]

@@ -1,4 +1,4 @@
-"""The FMU built by gearfmu.fmubuild, driven by fmpy (an independent FMI master).
+"""The FMU built by gearfmu.fmu.pythonfmu_build, driven by fmpy (an independent FMI master).
 
 References: fmpy.validation (the FMI 2.0 schema and rules as fmpy checks
 them); the interface table of /work/shared/DESIGN.md (names, causality,
@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 from fmpy.fmi2 import FMU2Slave
 
-from gearfmu.fmubuild import FmuBuildError, build_fmu
-from gearfmu.modeldesc import SpecError, expand_variables, load_spec
-from gearfmu.tables import MeshTables
+from gearfmu.fmu.pythonfmu_build import FmuBuildError, build_fmu
+from gearfmu.fmu.modeldesc import SpecError, expand_variables, load_spec
+from gearfmu.tables.mesh_tables import MeshTables
 
 RB1, RB2 = 0.05, 0.075
 
@@ -298,7 +298,7 @@ def test_spec_errors(tmp_path):
 def test_fmu_agrees_with_native_solver(tmp_path, damping_model, slots, eps, backlash, torque):
     """Two independent implementations of docs/model.md (C kernel in the FMU via
     fmpy, numba native solver): every output agrees to 1e-9 of its range."""
-    from gearfmu import native
+    from gearfmu.dynamics import native
 
     t = make_tables(P=slots, eps=eps, b=backlash, torque=torque)
     if len(torque) > 1:  # make the torque axis matter

@@ -1,4 +1,4 @@
-"""Fractal mixed-lubrication contact stiffness (seed 001), gearfmu/fractal_contact.py.
+"""Fractal mixed-lubrication contact stiffness (seed 001), gearfmu/contact/fractal.py.
 
 References: closed forms of Majumdar & Bhushan (1991) and Jiang et al. (2010,
 J. Tribol. 132, 011401) for the elastic stage; Kogut & Etsion (2002) stage fits
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from gearfmu import fractal_contact as fc
+from gearfmu.contact import fractal as fc
 
 E = 2.26e11          # seed 001 Table 1 effective modulus (Pa)
 H = 6.4e9            # Pa
@@ -246,7 +246,7 @@ def test_film_regime_thresholds():
 
 
 def test_fractal_mixed_is_registered_and_load_dependent():
-    from gearfmu.contact_models import CONTACT_MODELS
+    from gearfmu.contact.models import CONTACT_MODELS
 
     m = CONTACT_MODELS["fractal_mixed"]
     assert m.load_dependent and m.needs_lubricant
@@ -265,10 +265,10 @@ def _seed000_pitch():
     """Seed 000 Table 1 pair at its pitch point and nominal line load w = T/(r_b1 b)."""
     from pathlib import Path
 
-    from gearfmu.contact import reduced_modulus_Pa
+    from gearfmu.gear.hertz import reduced_modulus_Pa
     from gearfmu.ehl.mesh_film import contact_kinematics
-    from gearfmu.geometry import pair_geometry
-    from gearfmu.scene import load_scene
+    from gearfmu.gear.geometry import pair_geometry
+    from gearfmu.scene.reader import load_scene
 
     sc = load_scene(Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed000_table1.toml")
     g = pair_geometry(sc.pair)
@@ -278,7 +278,7 @@ def _seed000_pitch():
 
 
 def _eta_alpha(sc):
-    from gearfmu.contact_models import environment_from_scene
+    from gearfmu.contact.models import environment_from_scene
 
     env = environment_from_scene(sc, max_workers=1)
     return env.eta0_Pas, env.alpha_Pa_inv
@@ -292,7 +292,7 @@ def test_slice_stiffness_per_unit_width_does_not_depend_on_the_slicing(level):
     face is a property of the face (and the 1 mm + 43 mm cut adds up to the whole face).  The old
     per-slice nominal area gave A_r/A0 = 0.68 (1 mm) against 1.44 (22 mm) at level 4.  Tolerance
     rel 1e-9: only the root finder's (1e-12) and rounding errors may differ."""
-    from gearfmu.contact_models import RoughnessSpec
+    from gearfmu.contact.models import RoughnessSpec
 
     sc, _, R, u, w, Es = _seed000_pitch()
     sp = RoughnessSpec.from_level(level)
@@ -350,10 +350,10 @@ def test_film_parameter_one_definition():
     """Lambda = h_min / sqrt(sigma1^2 + sigma2^2) (Tallian 1967; Johnson 1985; ISO/TR 15144-1), with
     h_min of Dowson & Higginson (h_min/R = 2.65 U^0.70 G^0.54 W^-0.13, written out here) and both
     flanks' W-M sigma: the mixed model's Lambda equals the rough-EHL switch's
-    (gearfmu.contact_models.film_parameter) at the seed 000 pitch point, levels 1-4."""
-    from gearfmu.contact_models import RoughnessSpec, environment_from_scene
-    from gearfmu.contact_models import film_parameter as switch_lambda
-    from gearfmu.roughness import wm_sigma_m
+    (gearfmu.contact.models.film_parameter) at the seed 000 pitch point, levels 1-4."""
+    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import film_parameter as switch_lambda
+    from gearfmu.contact.roughness import wm_sigma_m
 
     assert fc.film_parameter(5e-7, 3e-7, 4e-7) == pytest.approx(1.0, rel=1e-15)
     sc, g, R, u, w, Es = _seed000_pitch()
@@ -372,7 +372,7 @@ def test_film_parameter_one_definition():
 def test_fractal_mixed_model_complete_contact_uses_hertz_and_says_so():
     """A slice load whose asperities would reach complete contact (level 4, 4 MN/m) takes the Hertz
     stiffness of the slice, recorded as 'complete_contact' (the rough-EHL policy's choice)."""
-    from gearfmu.contact_models import CONTACT_MODELS, hertz_stiffness_N_per_m
+    from gearfmu.contact.models import CONTACT_MODELS, hertz_stiffness_N_per_m
 
     geom, env = _seed000_env(4)
     s = np.full(2, geom.s_pitch_m)
@@ -386,9 +386,9 @@ def test_fractal_mixed_model_complete_contact_uses_hertz_and_says_so():
 def _seed000_env(level):
     """Seed 000 Table 1 pair (45/34 teeth, m = 6 mm, 20 deg, 44 mm face) in 4 slices of 11 mm at
     2000 rpm with the given Table 2 roughness level: (pair geometry, ContactEnvironment)."""
-    from gearfmu.contact_models import ContactEnvironment, RoughnessSpec
-    from gearfmu.gearpair import GearPairSpec, GearSpec
-    from gearfmu.geometry import pair_geometry
+    from gearfmu.contact.models import ContactEnvironment, RoughnessSpec
+    from gearfmu.gear.gearpair import GearPairSpec, GearSpec
+    from gearfmu.gear.geometry import pair_geometry
 
     g = lambda z: GearSpec(teeth=z, module_m=6e-3, pressure_angle_rad=math.radians(20), face_width_m=44e-3)
     pair = GearPairSpec(pinion=g(45), gear=g(34))

@@ -13,8 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from gearfmu.gearpair import GearPairSpec, GearSpec
-from gearfmu.geometry import (GeometryError, inverse_involute, involute, pair_geometry,
+from gearfmu.gear.gearpair import GearPairSpec, GearSpec
+from gearfmu.gear.geometry import (GeometryError, inverse_involute, involute, pair_geometry,
                               undercut_limit_radius)
 
 DEG20 = math.radians(20.0)
@@ -208,7 +208,7 @@ def _brute_force_undercut_ratio(z, x, alpha=DEG20):
     polar angle reached by any position.  Where that lies inside the involute, the involute
     is undercut.  Returns the largest such radius / r (0 if none).
     """
-    from gearfmu.geometry import half_tooth_angle_at_base
+    from gearfmu.gear.geometry import half_tooth_angle_at_base
     r = z / 2.0
     rb = r * math.cos(alpha)
     d = 1.0 - x

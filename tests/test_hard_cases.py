@@ -1,7 +1,7 @@
 """Hard cases of the dynamic model (issue 5): the native RK4 solver (``integrator="rk4"``,
 passed explicitly: the default is rk4_kink, whose hard-case checks are in
 tests/test_integrators.py) and the FMU
-against the event-located scipy reference (gearfmu.reference, checked against
+against the event-located scipy reference (gearfmu.dynamics.reference, checked against
 closed forms in tests/test_reference.py), never NaN.
 
 Each case's tables and inputs are built in gearfmu/bench.py (textbook
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from gearfmu.bench import hard_case, rel_errors, speed_for, tent_error, _kb
-from gearfmu.native import simulate
-from gearfmu.reference import simulate_reference
+from gearfmu.dynamics.native import simulate
+from gearfmu.dynamics.reference import simulate_reference
 
 #: case -> (RK4 substeps per communication step, tolerance on the max relative error)
 STEPS = {
@@ -146,13 +146,13 @@ def test_4_low_damping_up_and_down_sweep_land_on_different_branches():
 
 
 def test_8_fmu_long_communication_steps_match_native(tmp_path):
-    """A rectangular-wave table written as CSV and read back (gearfmu.table_import) drives
+    """A rectangular-wave table written as CSV and read back (gearfmu.tables.table_import) drives
     the native solver and the FMU (fmpy, C kernel); with communication steps of 1/4, 1, 5
     and 10 mesh periods and the same internal steps the FMU gives the native answer to
     round-off, and both meet the reference's tolerance."""
-    from gearfmu.compare import output_names, run_fmu
-    from gearfmu.fmubuild import build_fmu
-    from gearfmu.table_import import load_tables_csv, tables_to_csv
+    from gearfmu.fmu.compare import output_names, run_fmu
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.tables.table_import import load_tables_csv, tables_to_csv
 
     tables0, kw = hard_case("single_sided_impacts")
     csv, meta = tables_to_csv(tables0, tmp_path / "rect.csv")

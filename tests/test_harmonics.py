@@ -1,4 +1,4 @@
-"""gearfmu.harmonics: A_r and A_rms of seed 003 eq 10-11.
+"""gearfmu.dynamics.harmonics: A_r and A_rms of seed 003 eq 10-11.
 
 References: closed forms of the DFT of sums of sinusoids over whole periods
 (a sinusoid of amplitude a has RMS a/sqrt(2)), Parseval's theorem, and
@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.signal import periodogram
 
-from gearfmu.harmonics import HarmonicsInputError, autopower_one_sided, mesh_harmonics
+from gearfmu.dynamics.harmonics import HarmonicsInputError, autopower_one_sided, mesh_harmonics
 
 N_TEETH = 50
 

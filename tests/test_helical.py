@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
-from gearfmu.geometry import GeometryError, involute, pair_geometry, transverse_equivalent
-from gearfmu.meshing_errors import slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m
-from gearfmu.precompute import precompute_tables
-from gearfmu.scene import SceneError, load_scene
-from gearfmu.stiffness import (StiffnessError, helical_slot_stiffness, required_slots,
+from gearfmu.gear.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
+from gearfmu.gear.geometry import GeometryError, involute, pair_geometry, transverse_equivalent
+from gearfmu.gear.meshing_errors import slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m
+from gearfmu.tables.precompute import precompute_tables
+from gearfmu.scene.reader import SceneError, load_scene
+from gearfmu.gear.stiffness import (StiffnessError, helical_slot_stiffness, required_slots,
                                slice_lag_mesh_periods, slot_stiffness)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -207,7 +207,7 @@ def test_slots_from_total_contact_ratio():
 # ------------------------------------------------------------------ errors
 def test_slices_see_their_own_roll_position_in_the_pair_error():
     # pinion profile slope deviation f_Ha = 10 um (seed 003 eq 15, linear in roll length over s_A..s_E)
-    from gearfmu.gearpair import GearDeviations, ToothDeviation
+    from gearfmu.gear.gearpair import GearDeviations, ToothDeviation
     pair = helical()
     pair = replace(pair, pinion=replace(pair.pinion, deviations=GearDeviations(ToothDeviation(profile_slope_m=10e-6))))
     g = pair_geometry(pair)
@@ -232,7 +232,7 @@ def test_slices_see_their_own_roll_position_in_the_pair_error():
 
 # ------------------------------------------------------------------ tables and FMU
 def test_seed001_scene_tables_and_fmu_agree_with_native(tmp_path):
-    from gearfmu.compare import output_names, validate_fmu_against_native
+    from gearfmu.fmu.compare import output_names, validate_fmu_against_native
     from gearfmu.pipeline import build, gear_torque_for
 
     scene = load_scene(SEED001)

@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.gearpair import MeshModelOptions
-from gearfmu.geometry import pair_geometry, transverse_equivalent
-from gearfmu.precompute import precompute_tables
-from gearfmu.scene import load_scene
-from gearfmu.stiffness import helical_slot_stiffness, slot_stiffness
+from gearfmu.gear.gearpair import MeshModelOptions
+from gearfmu.gear.geometry import pair_geometry, transverse_equivalent
+from gearfmu.tables.precompute import precompute_tables
+from gearfmu.scene.reader import load_scene
+from gearfmu.gear.stiffness import helical_slot_stiffness, slot_stiffness
 
 from test_helical import SEED001, helical, iso_c_gamma_alpha
 
@@ -47,7 +47,7 @@ temperature_C = 60.0
 def _contact_tables(pair, model, slices, ppm, torques=(600.0, 1200.0), roughness=None):
     """Tables of ``pair`` with a load-dependent contact model: SCH632 at 60 degC, 1000 rpm
     (seed 001 Table 1 speed), EHL grid of 129 nodes, one process."""
-    from gearfmu.contact_models import ContactEnvironment
+    from gearfmu.contact.models import ContactEnvironment
 
     g = pair_geometry(pair)
     b = min(pair.pinion.face_width_m, pair.gear.face_width_m)
@@ -70,9 +70,9 @@ def test_helical_contact_requests_with_hertz_reproduce_the_helical_slices():
     # the per-slice request path of the load-dependent models (normal-section contact line w/cos(beta_b),
     # rho_n = rho_t/cos(beta_b), u_n = u_t cos(beta_b), k_t = k_n cos^2(beta_b)) fed with the Hertz model
     # must give helical_slot_stiffness's slices (the independent Hertz path) to round-off
-    from gearfmu.contact_models import ContactEnvironment, get_contact_model
+    from gearfmu.contact.models import ContactEnvironment, get_contact_model
     from gearfmu.ehl.mesh_film import contact_kinematics
-    from gearfmu.precompute import _HelicalContactView
+    from gearfmu.tables.precompute import _HelicalContactView
 
     pair = helical()
     g = pair_geometry(pair)
@@ -151,8 +151,8 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
     import zipfile
 
     from gearfmu.cli import main
-    from gearfmu.contact_models import environment_from_scene
-    from gearfmu.tables import load_tables
+    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.tables.mesh_tables import load_tables
 
     text = (SEED001.read_text().replace('contact_model = "hertz"', 'contact_model = "fractal_mixed"')
             .replace("slices = 60 ", "slices = 2 ").replace("points_per_mesh = 64", "points_per_mesh = 8")
@@ -187,7 +187,7 @@ def test_helical_rough_ehl_level1_is_the_smooth_film_limit():
     roughness hardly changes the band-mean film (docs/ehl_mesh.md: level 1 equals smooth to
     1e-4 on the spur pair), so the helical rough tables must equal the helical smooth ones
     within 1 %; and ISO 6336-1 c_gamma_alpha within 25 % as for the other models."""
-    from gearfmu.contact_models import RoughnessSpec
+    from gearfmu.contact.models import RoughnessSpec
 
     pair = helical()
     g = pair_geometry(pair)

@@ -12,7 +12,7 @@ References (none produced by gearfmu code):
   Solving ODEs I, sec. II.3); p = 4 for classical RK4 on a smooth right-hand
   side, and RK4 falls to first order when the right-hand side jumps inside
   steps (ibid. sec. II.6, discontinuous equations);
-* the C kernel (gearfmu/kernel/gearkernel.c) through ctypes, a second,
+* the C kernel (gearfmu/fmu/kernel/gearkernel.c) through ctypes, a second,
   independent implementation of docs/model.md.
 """
 import ctypes
@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gearfmu.fmubuild import FmuBuildError, build_fmu, compile_kernel
-from gearfmu.native import NativeInputError, simulate, simulate_sdof
-from gearfmu.synthetic import rectangular_wave_tables
+from gearfmu.fmu.pythonfmu_build import FmuBuildError, build_fmu, compile_kernel
+from gearfmu.dynamics.native import NativeInputError, simulate, simulate_sdof
+from gearfmu.tables.synthetic import rectangular_wave_tables
 
 ATOL = [1e-14, 1e-10, 1e-17, 1e-12]   # theta1 rad, omega1 rad/s, x m, v m/s
 
@@ -362,7 +362,7 @@ def test_bad_integrator_names_the_field(tmp_path):
 # ------------------------------------------------- hard cases and the default
 #: hard case (gearfmu.bench.HARD_CASES) -> tolerance on the max relative error of dte and
 #: mesh force of rk4_kink at 64 substeps per communication step (H = mesh period/4), about
-#: 3x the error measured on this machine against gearfmu.reference (event-located DOP853,
+#: 3x the error measured on this machine against gearfmu.dynamics.reference (event-located DOP853,
 #: rtol 1e-10, closed-form checks in tests/test_reference.py).  tests/test_hard_cases.py
 #: holds rk4 to 3e-5 .. 1.2e-3 at 1024 substeps on the same cases.
 KINK_HARD = {
@@ -383,7 +383,7 @@ def test_rk4_kink_hard_cases_against_reference(name):
     communication step within the tolerance above of the event-located reference;
     every output finite."""
     from gearfmu.bench import hard_case, rel_errors
-    from gearfmu.reference import simulate_reference
+    from gearfmu.dynamics.reference import simulate_reference
 
     tables, kw = hard_case(name)
     ref = simulate_reference(tables, **kw)
@@ -403,9 +403,9 @@ def test_default_integrator_is_rk4_kink_everywhere(tmp_path):
     import xml.etree.ElementTree as ET
     import zipfile
 
-    from gearfmu import native
-    from gearfmu.scene import load_scene
-    from gearfmu.standalone_build import build_standalone_fmu
+    from gearfmu.dynamics import native
+    from gearfmu.scene.reader import load_scene
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
 
     assert inspect.signature(simulate).parameters["integrator"].default == "rk4_kink"
     assert inspect.signature(simulate_sdof).parameters["integrator"].default == "rk4_kink"
@@ -429,8 +429,8 @@ def test_fmu_default_long_communication_steps_match_native_rk4_kink(tmp_path):
     step in both; fmpy's step sizes differ from H in the last bits), and meets the
     reference to 5e-7 (measured 9.2e-8) at h = Tm/256."""
     from gearfmu.bench import hard_case
-    from gearfmu.compare import output_names, run_fmu
-    from gearfmu.reference import simulate_reference
+    from gearfmu.fmu.compare import output_names, run_fmu
+    from gearfmu.dynamics.reference import simulate_reference
 
     tables, kw = hard_case("single_sided_impacts")
     Tm = 4 * kw["comm_step_s"]

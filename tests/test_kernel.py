@@ -1,4 +1,4 @@
-"""The C kernel (gearfmu/kernel/gearkernel.c) called directly through ctypes.
+"""The C kernel (gearfmu/fmu/kernel/gearkernel.c) called directly through ctypes.
 
 References (none produced by gearfmu code):
 * the linear oscillator m_e x'' + c x' + k x = m_e a0 in closed form
@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from gearfmu.fmubuild import compile_kernel
+from gearfmu.fmu.pythonfmu_build import compile_kernel
 
 RB1, RB2, I1, I2 = 0.05, 0.075, 0.002, 0.006
 ME = I1 * I2 / (I1 * RB2 ** 2 + I2 * RB1 ** 2)  # seed 003: equivalent mass

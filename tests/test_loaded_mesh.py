@@ -1,4 +1,4 @@
-"""Tests of gearfmu.loaded_mesh against closed forms (springs in parallel), a
+"""Tests of gearfmu.gear.loaded_mesh against closed forms (springs in parallel), a
 hand-solved two-pair piecewise-linear balance, seed 000 eq (16) for one crowned
 pair, and scipy.optimize.brentq as an independent root finder."""
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.optimize import brentq
 
-from gearfmu.loaded_mesh import (LoadedMeshInputError, loaded_static_mesh, pair_force_N,
+from gearfmu.gear.loaded_mesh import (LoadedMeshInputError, loaded_static_mesh, pair_force_N,
                                  static_deflection_m)
 
 UM = 1e-6

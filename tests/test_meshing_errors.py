@@ -1,4 +1,4 @@
-"""Tests of gearfmu.meshing_errors against hand calculations of seed 003 eq (15),
+"""Tests of gearfmu.gear.meshing_errors against hand calculations of seed 003 eq (15),
 ISO 1328-1 cumulative pitch deviation, the lcm hunting-tooth rule and seed 000
 eq (16) lead crowning.  Every expected number below is worked out by hand in the
 comment next to it (no number was produced by the code under test)."""
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from gearfmu.gearpair import GearDeviations, GearPairSpec, GearSpec, ToothDeviation
-from gearfmu.meshing_errors import (EvaluationRanges, MeshingErrorInputError, comprehensive_error_m,
+from gearfmu.gear.gearpair import GearDeviations, GearPairSpec, GearSpec, ToothDeviation
+from gearfmu.gear.meshing_errors import (EvaluationRanges, MeshingErrorInputError, comprehensive_error_m,
                                     gear_teeth_differ, lead_crowning_m, pair_error_m,
                                     pair_lead_crowning_m, pitch_position_errors_m,
                                     profile_deviation_m, slot_mesh_numbers, table_mesh_count,
@@ -179,8 +179,8 @@ def test_evaluation_ranges_seed003_table1_geometry():
     # seed 003 Table 1: z = 50/50, m = 3 mm, 20 deg, outer diameter 156 mm, centre distance 150 mm.
     # hand: rb = 75 cos 20 = 70.4769 mm; N1N2 = 150 sin 20 = 51.3030 mm;
     # tip roll length sqrt(78^2 - 70.4769^2) = 33.4215 mm; s_A = 51.3030 - 33.4215 = 17.8815 mm
-    from gearfmu.geometry import pair_geometry
-    from gearfmu.meshing_errors import evaluation_ranges
+    from gearfmu.gear.geometry import pair_geometry
+    from gearfmu.gear.meshing_errors import evaluation_ranges
     g = GearSpec(teeth=50, module_m=3e-3, pressure_angle_rad=math.radians(20), face_width_m=20e-3)
     r = evaluation_ranges(pair_geometry(GearPairSpec(pinion=g, gear=g)))
     assert abs(r.n1n2_m - 51.3030e-3) < 1e-7

@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gearfmu.native import (
+from gearfmu.dynamics.native import (
     NativeInputError, choose_max_step_s, dimensionless, equilibrium_dte_m, simulate,
     simulate_sdof, substeps,
 )
-from gearfmu.synthetic import (
+from gearfmu.tables.synthetic import (
     SyntheticTableError, rectangular_wave_tables, tables_from_arrays,
 )
 

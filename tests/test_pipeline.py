@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.compare import output_names, run_fmu, validate_fmu_against_native
+from gearfmu.fmu.compare import output_names, run_fmu, validate_fmu_against_native
 from gearfmu.pipeline import build, gear_torque_for, load
 
 REPO = Path(__file__).resolve().parents[1]
@@ -118,7 +118,7 @@ def test_build_fmu_script_reports(tmp_path):
 
 
 def test_cli_bad_scene_names_the_key(tmp_path):
-    bad = (REPO / "gearfmu" / "data" / "default_scene.toml").read_text().replace("teeth = 45", "teeth = 3")
+    bad = (REPO / "gearfmu" / "scene" / "data" / "default_scene.toml").read_text().replace("teeth = 45", "teeth = 3")
     (tmp_path / "bad.toml").write_text(bad)
     r = _run(["-m", "gearfmu.cli", "build", "bad.toml", "-o", "bad.fmu"], tmp_path)
     assert r.returncode == 2

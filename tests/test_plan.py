@@ -1,4 +1,4 @@
-"""Fidelity planner (gearfmu.plan, gearfmu.envelope; docs/plan.md).
+"""Fidelity planner (gearfmu.plan, gearfmu.scene.envelope; docs/plan.md).
 
 References:
 * The accuracy target is the user's number: the planned model (FMU and native)
@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from gearfmu.cli import main
-from gearfmu.envelope import envelope_of
+from gearfmu.scene.envelope import envelope_of
 from gearfmu.plan import format_report, full_scene, plan_scene, planned_scene, relative_rms
-from gearfmu.scene import SceneError, load_scene
+from gearfmu.scene.reader import SceneError, load_scene
 
 RPM = 2 * math.pi / 60
 
@@ -244,7 +244,7 @@ def test_thermal_choice_and_temperature_axis(tmp_path):
 
 # ------------------------------------------------------------------ verification: FMU and native
 def _fmu_run(path, scene, tables, stop, step):
-    from gearfmu.compare import run_fmu
+    from gearfmu.fmu.compare import run_fmu
 
     return run_fmu(path, stop_time_s=stop, comm_step_s=step, names=["dte", "mesh_force"]).columns
 
@@ -270,7 +270,7 @@ def test_steady_point_planned_fmu_within_target(small):
 
 
 def test_run_up_over_speed_range_within_target(small):
-    from gearfmu.native import simulate
+    from gearfmu.dynamics.native import simulate
     from gearfmu.pipeline import compute_tables
 
     scene, plan, _ = small
@@ -459,8 +459,8 @@ temperature_C = 60.0
 def test_contact_model_levels_follow_what_the_scene_states(tmp_path):
     """hertz only without a lubricant; the film models with one; rough_ehl only when the
     scene states a roughness (docs/plan.md "Choices and levels")."""
-    from gearfmu.contact_models import CONTACT_MODELS
-    from gearfmu.envelope import accuracy_of
+    from gearfmu.contact.models import CONTACT_MODELS
+    from gearfmu.scene.envelope import accuracy_of
     from gearfmu.plan import _choices
 
     assert {"hertz", "smooth_ehl", "rough_ehl"} <= set(CONTACT_MODELS)
@@ -500,7 +500,7 @@ def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
     from pathlib import Path
 
     from gearfmu.plan import _thermal_options
-    from gearfmu.precompute import precompute_tables
+    from gearfmu.tables.precompute import precompute_tables
 
     text = ((Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed004_pair1.toml").read_text()
             .replace('contact_model = "hertz"', 'contact_model = "smooth_ehl"').replace("slices = 25", "slices = 1")

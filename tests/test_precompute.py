@@ -1,4 +1,4 @@
-"""Tests of gearfmu.precompute.precompute_tables on the seed 003 Table 1 gear pair
+"""Tests of gearfmu.tables.precompute.precompute_tables on the seed 003 Table 1 gear pair
 (50/50 teeth, m = 3 mm, alpha = 20 deg, b = 20 mm, contact ratio 1.7547) with the
 real geometry and stiffness modules.  References: seed 003 Table 1 (contact ratio,
 inertia), seed 003 eq 15 evaluated by hand, the lcm hunting-tooth rule, springs in
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from gearfmu import stiffness
-from gearfmu.gearpair import GearDeviations, GearPairSpec, GearSpec, MeshModelOptions, ToothDeviation
-from gearfmu.geometry import pair_geometry
-from gearfmu.precompute import PrecomputeInputError, default_slots, disc_inertia_kgm2, precompute_tables
-from gearfmu.tables import load_tables
+from gearfmu.gear import stiffness
+from gearfmu.gear.gearpair import GearDeviations, GearPairSpec, GearSpec, MeshModelOptions, ToothDeviation
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.tables.precompute import PrecomputeInputError, default_slots, disc_inertia_kgm2, precompute_tables
+from gearfmu.tables.mesh_tables import load_tables
 
 UM = 1e-6
 PPM = 32  # points per mesh period in these tests (speed)

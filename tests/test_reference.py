@@ -1,4 +1,4 @@
-"""The event-located reference integrator (gearfmu.reference) against closed forms.
+"""The event-located reference integrator (gearfmu.dynamics.reference) against closed forms.
 
 References: the damped linear oscillator m x'' + c x' + k x = 0 (textbook closed
 form, e.g. Meirovitch, Elements of Vibration Analysis, ch. 1); the undamped
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from gearfmu.bench import hard_case
-from gearfmu.reference import ReferenceInputError, equilibrium_dte_exact_m, simulate_reference
-from gearfmu.synthetic import tables_from_arrays
+from gearfmu.dynamics.reference import ReferenceInputError, equilibrium_dte_exact_m, simulate_reference
+from gearfmu.tables.synthetic import tables_from_arrays
 
 RB1, RB2, I1, I2 = 0.05, 0.08, 0.002, 0.009
 ME = I1 * I2 / (I1 * RB2 ** 2 + I2 * RB1 ** 2)  # seed 003 below eq 2

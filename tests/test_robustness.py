@@ -7,7 +7,7 @@ References: docs/tables.md (supported versions); SHA-256 (hashlib, FIPS
 clamping policy, checked against the FMU run with the torque held at the end
 of the axis (the tables are constant beyond the axis ends, so the two runs must
 be bit-identical); the exit code of a fresh process for host crashes; scene
-validity from gearfmu.scene's own schema (the accepted half of the
+validity from gearfmu.scene.reader's own schema (the accepted half of the
 property-based scene tests in tests/test_scene.py).
 """
 import json
@@ -23,9 +23,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gearfmu.fmubuild import build_fmu
-from gearfmu.scene import default_scene_path, load_scene
-from gearfmu.tables import MeshTables, TableError, load_tables
+from gearfmu.fmu.pythonfmu_build import build_fmu
+from gearfmu.scene.reader import default_scene_path, load_scene
+from gearfmu.tables.mesh_tables import MeshTables, TableError, load_tables
 
 from test_fmu import make_tables
 from test_state import Inst
@@ -207,7 +207,7 @@ def test_valid_scene_perturbations_build_or_fail_naming_a_key(tmp_path_factory, 
     data.setdefault("fmu", {})["damping_ratio"] = zeta
     data.setdefault("solver", {})["damping_model"] = model
     data["deviations"] = {}
-    from gearfmu.scene import SceneError, dumps_toml
+    from gearfmu.scene.reader import SceneError, dumps_toml
     try:
         scene = load_scene(dumps_toml(data))
     except SceneError as exc:  # invalid gear pair (undercut, pointed tip, ...): rejected with key paths

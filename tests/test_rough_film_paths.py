@@ -22,14 +22,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact_models import (RoughnessSpec, _rough_profile, _smooth_film_k, environment_from_scene,
+from gearfmu.contact.models import (RoughnessSpec, _rough_profile, _smooth_film_k, environment_from_scene,
                                     film_grid, rough_ehl_model)
 from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
 from gearfmu.ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_node_films
 from gearfmu.ehl.solver import solve_line_contact
 from gearfmu.ehl.transient import flank_slice_case, solve_line_contact_transient
-from gearfmu.geometry import pair_geometry
-from gearfmu.scene import load_scene
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.scene.reader import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed000_table1.toml"
 N_NODES = 257

@@ -1,4 +1,4 @@
-"""Tests of gearfmu.roughness (W-M fractal flanks, seed 000 eq 1 and Table 2).
+"""Tests of gearfmu.contact.roughness (W-M fractal flanks, seed 000 eq 1 and Table 2).
 
 References (none produced by code here):
 * seed 000 Table 2 (Zhao et al., Machines 2022): Ra of four roughness levels;
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from gearfmu import roughness as R
+from gearfmu.contact import roughness as R
 
 
 @pytest.mark.parametrize("level", [1, 2, 3, 4])

@@ -1,4 +1,4 @@
-"""Tests of the scene file format (gearfmu.scene).
+"""Tests of the scene file format (gearfmu.scene.reader).
 
 References (no number below was produced by gearfmu):
 * seed 000 Table 1, seed 003 Table 1, seed 004 Tables 1, 4 and 5 (/work/shared/seeds);
@@ -22,8 +22,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from gearfmu.gearpair import GearDeviations, ToothDeviation
-from gearfmu.scene import (SCHEMA, Scene, SceneError, default_scene_path, dumps_toml, load_scene,
+from gearfmu.gear.gearpair import GearDeviations, ToothDeviation
+from gearfmu.scene.reader import (SCHEMA, Scene, SceneError, default_scene_path, dumps_toml, load_scene,
                            walther_kinematic_viscosity_cSt)
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from pyssp_standard import SSP, SSV
 
-from gearfmu.fmubuild import build_fmu
+from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.ssp import SspError, build_ssp, check_variants, parse_variant
 
 from test_fmu import make_tables

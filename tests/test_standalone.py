@@ -1,4 +1,4 @@
-"""The standalone FMU (FMI layer in C, gearfmu/standalone/fmi2_gear.c) against
+"""The standalone FMU (FMI layer in C, gearfmu/fmu/standalone/fmi2_gear.c) against
 independent references and masters.
 
 References (none produced by gearfmu code paths under test):
@@ -32,12 +32,12 @@ import numpy as np
 import pytest
 from fmpy.fmi2 import FMU2Slave
 
-from gearfmu.compare import native_columns, output_names
-from gearfmu.fmubuild import build_fmu
-from gearfmu.native import simulate
+from gearfmu.fmu.compare import native_columns, output_names
+from gearfmu.fmu.pythonfmu_build import build_fmu
+from gearfmu.dynamics.native import simulate
 from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
-from gearfmu.standalone_build import build_standalone_fmu, fmi2_header_dir
-from gearfmu.synthetic import rectangular_wave_tables
+from gearfmu.fmu.standalone_build import build_standalone_fmu, fmi2_header_dir
+from gearfmu.tables.synthetic import rectangular_wave_tables
 
 HERE = Path(__file__).resolve().parent
 TOL = 1e-9  # of each signal's range

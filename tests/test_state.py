@@ -14,7 +14,7 @@ import pytest
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
 
-from gearfmu.fmubuild import build_fmu
+from gearfmu.fmu.pythonfmu_build import build_fmu
 
 from test_fmu import make_tables
 

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from gearfmu.contact import hertz_stiffness_N_per_m
-from gearfmu.foundation import sainsot_coefficients
-from gearfmu.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
-from gearfmu.geometry import pair_geometry
-from gearfmu.stiffness import (StiffnessError, cantilever_compliance_m_per_N, combine_pairs,
+from gearfmu.gear.hertz import hertz_stiffness_N_per_m
+from gearfmu.gear.foundation import sainsot_coefficients
+from gearfmu.gear.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.gear.stiffness import (StiffnessError, cantilever_compliance_m_per_N, combine_pairs,
                                mean_mesh_stiffness_N_per_m, pair_stiffness_at_N_per_m,
                                slot_stiffness, tooth_compliance_m_per_N)
 

@@ -1,4 +1,4 @@
-"""gearfmu.sweeps: steady-state sweeps, continuation, executors, and seed 003 statements.
+"""gearfmu.dynamics.sweeps: steady-state sweeps, continuation, executors, and seed 003 statements.
 
 References (no number here comes from this project's code):
 * the steady-state response of a linear SDOF oscillator m x'' + c x' + k x =
@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 from gearfmu import pipeline
-from gearfmu.scene import load_scene
-from gearfmu.synthetic import tables_from_arrays
-from gearfmu.sweeps import (PointSettings, SweepInputError, SweepJob, find_jumps,
+from gearfmu.scene.reader import load_scene
+from gearfmu.tables.synthetic import tables_from_arrays
+from gearfmu.dynamics.sweeps import (PointSettings, SweepInputError, SweepJob, find_jumps,
                             pinion_speed_for_omega_h, run_jobs, run_sweep)
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed003_table1.toml"

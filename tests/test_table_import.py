@@ -1,9 +1,9 @@
-"""CSV import of tooth-pair tables (gearfmu.table_import, docs/tables.md 'CSV import').
+"""CSV import of tooth-pair tables (gearfmu.tables.table_import, docs/tables.md 'CSV import').
 
 References: the computed table itself (a CSV export must read back to identical
 arrays, bit for bit); the rectangular-wave TVMS of a single pair of constant
 stiffness expanded by the slot rule (pair n engaged for phi - n*T in
-[0, eps*T), seed 003 Fig. 2) -- the same wave gearfmu.synthetic builds from its
+[0, eps*T), seed 003 Fig. 2) -- the same wave gearfmu.tables.synthetic builds from its
 definition; hand-made bad files for the error messages.
 """
 import subprocess
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from gearfmu.pipeline import compute_tables, load
-from gearfmu.synthetic import KB_BASE_RADIUS_M, rectangular_wave_tables
-from gearfmu.table_import import TableImportError, load_tables_csv, load_tables_file, tables_to_csv
+from gearfmu.tables.synthetic import KB_BASE_RADIUS_M, rectangular_wave_tables
+from gearfmu.tables.table_import import TableImportError, load_tables_csv, load_tables_file, tables_to_csv
 
 META = dict(teeth_pinion=50, teeth_gear=50, base_radius_pinion_m=KB_BASE_RADIUS_M,
             base_radius_gear_m=KB_BASE_RADIUS_M, inertia_pinion_kgm2=0.0074, inertia_gear_kgm2=0.0074)
@@ -40,7 +40,7 @@ def test_computed_table_round_trips_identically(computed, tmp_path):
 
 def test_torque_axis_round_trips(tmp_path):
     k = np.stack([np.full((2, 16), 1e8), np.full((2, 16), 1.2e8)])
-    from gearfmu.synthetic import tables_from_arrays
+    from gearfmu.tables.synthetic import tables_from_arrays
 
     t = tables_from_arrays(k_N_per_m=k, e_m=np.random.default_rng(1).normal(0, 1e-6, k.shape), backlash_half_m=3e-5,
                            torque_Nm=[100.0, 500.0], teeth_pinion=20, teeth_gear=31)

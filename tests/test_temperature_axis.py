@@ -29,15 +29,15 @@ from fmpy.fmi1 import FMICallException
 import numpy as np
 import pytest
 
-from gearfmu.compare import native_columns, output_names
-from gearfmu.fmubuild import build_fmu, compile_kernel
-from gearfmu.modeldesc import expand_variables, load_spec
-from gearfmu.native import NativeInputError, simulate
+from gearfmu.fmu.compare import native_columns, output_names
+from gearfmu.fmu.pythonfmu_build import build_fmu, compile_kernel
+from gearfmu.fmu.modeldesc import expand_variables, load_spec
+from gearfmu.dynamics.native import NativeInputError, simulate
 from gearfmu.pipeline import compute_tables
-from gearfmu.scene import load_scene
+from gearfmu.scene.reader import load_scene
 from gearfmu.ssp import build_ssp, default_variants
-from gearfmu.standalone_build import build_standalone_fmu
-from gearfmu.tables import TableError, TemperatureRangeError, load_tables, stack_temperatures
+from gearfmu.fmu.standalone_build import build_standalone_fmu
+from gearfmu.tables.mesh_tables import TableError, TemperatureRangeError, load_tables, stack_temperatures
 
 from test_fmu import make_tables
 from test_standalone import _callbacks
@@ -406,8 +406,8 @@ OIL_TEXT = ((REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
 
 
 def _oil_tables(text):
-    from gearfmu.contact_models import environment_from_scene
-    from gearfmu.precompute import precompute_tables
+    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.tables.precompute import precompute_tables
 
     sc = load_scene(text)
     return sc, precompute_tables(sc.pair, sc.mesh, points_per_mesh=sc.tables.points_per_mesh,
@@ -434,10 +434,10 @@ def test_oil_axis_film_thickness_follows_dowson_higginson_and_moes(oil):
     within 3 %; h_min itself within 15 % of Dowson-Higginson (seed 000 test tolerance)."""
     import dataclasses
 
-    from gearfmu.contact_models import environment_from_scene
+    from gearfmu.contact.models import environment_from_scene
     from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film, moes_parameters
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
-    from gearfmu.geometry import pair_geometry
+    from gearfmu.gear.geometry import pair_geometry
 
     sc, tab, _ = oil
     eta = tab.provenance["thermal"]["oil"]["eta0_Pas"]
@@ -562,8 +562,8 @@ def test_bulk_and_oil_axis_is_gears_and_oil_at_one_temperature(oil):
 
 def test_oil_axis_refused_without_a_lubricated_contact_model():
     """Hertz contact uses no lubricant: the scene reader and the table builder refuse an oil axis."""
-    from gearfmu.precompute import PrecomputeInputError, precompute_tables
-    from gearfmu.scene import SceneError
+    from gearfmu.tables.precompute import PrecomputeInputError, precompute_tables
+    from gearfmu.scene.reader import SceneError
 
     hertz = (REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
     with pytest.raises(SceneError, match=r"thermal\.axis_quantity: 'oil'.*uses no lubricant"):
@@ -582,7 +582,7 @@ def test_oil_axis_refused_without_a_lubricated_contact_model():
 def test_automatic_max_step_of_a_temperature_axis_scene(seed004):
     """solver.max_step_s = "auto" with a temperature axis (gearfmu build of such a scene): the
     bound of the stiffest slice, i.e. the smallest of choose_max_step_s over the axis slices."""
-    from gearfmu.native import choose_max_step_s
+    from gearfmu.dynamics.native import choose_max_step_s
     from gearfmu.pipeline import max_step_for
 
     _, hot = seed004

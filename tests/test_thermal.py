@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from gearfmu import thermal as th
-from gearfmu.geometry import pair_geometry
-from gearfmu.scene import SceneError, load_scene
+from gearfmu.gear import thermal as th
+from gearfmu.gear.geometry import pair_geometry
+from gearfmu.scene.reader import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = {"I": ROOT / "examples" / "scenes" / "seed004_pair1.toml",
@@ -311,7 +311,7 @@ def test_thermal_slot_stiffness_axis():
     single = np.flatnonzero(inc.sum(axis=0) == 1)
     j = int(single[len(single) // 2])
     slot = int(np.flatnonzero(inc[:, j])[0])
-    from gearfmu.stiffness import slot_stiffness
+    from gearfmu.gear.stiffness import slot_stiffness
     ss = slot_stiffness(sc.pair, g, sc.mesh, None, 32)
     sK = ss.s_m[slot, j]
     k = r.k_standard_N_per_m[slot, j]
@@ -377,7 +377,7 @@ def test_scene_to_thermal_state():
 # ------------------------------------------------- one temperature without an axis (scene -> tables)
 def _slot_positions(scene, tables):
     """LOA position (m from N1) of every slot and table angle, NaN out of contact."""
-    from gearfmu.stiffness import slot_stiffness
+    from gearfmu.gear.stiffness import slot_stiffness
 
     g = pair_geometry(scene.pair)
     ss = slot_stiffness(scene.pair, g, scene.mesh, tables.slots, scene.tables.points_per_mesh)

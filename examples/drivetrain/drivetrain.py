@@ -40,10 +40,10 @@ def build_all(out: Path):
     """The motor and load FMUs (pythonfmu) and the gear FMU of the default scene in both runtimes."""
     from pythonfmu import FmuBuilder
 
-    from gearfmu.fmubuild import build_fmu
-    from gearfmu.native import choose_max_step_s
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.dynamics.native import choose_max_step_s
     from gearfmu.pipeline import compute_tables, load
-    from gearfmu.standalone_build import build_standalone_fmu
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
 
     out.mkdir(parents=True, exist_ok=True)
     fmus = {}

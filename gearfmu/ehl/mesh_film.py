@@ -124,10 +124,10 @@ def make_flank_roughness(geom, D: float, G_m: float, n_slices: int, seed: int, *
                          step_m: Optional[float] = None) -> FlankRoughness:
     """W-M roughness of the active pinion and gear flanks (seed 000 eq 1, per slice).
 
-    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.roughness.SEED000_LEVELS`);
+    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.contact.roughness.SEED000_LEVELS`);
     the profiles cover the active flank arc length plus ``margin_m`` on both
     sides, sampled at ``step_m`` (default a tenth of the shortest wavelength)."""
-    from ..roughness import RoughnessInputError, wm_profile_m
+    from ..contact.roughness import RoughnessInputError, wm_profile_m
 
     if int(n_slices) != n_slices or n_slices < 1:
         raise MeshFilmInputError(f"n_slices={n_slices!r}: must be an integer >= 1")
@@ -353,7 +353,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     Returns the workers' results in chunk order."""
     from concurrent.futures import as_completed
 
-    from ..sweeps import make_executor
+    from ..dynamics.sweeps import make_executor
 
     if not chunks:
         return []
@@ -364,7 +364,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
         ctx = make_executor(max_workers=nw)
     else:
-        from ..sweeps import _ManagedExecutor
+        from ..dynamics.sweeps import _ManagedExecutor
         ctx = _ManagedExecutor(executor, None, own=False)
     try:
         with ctx as ex:

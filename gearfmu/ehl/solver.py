@@ -34,7 +34,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
-from ..checks import finite_number
+from ..common.checks import finite_number
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
 from .fits import moes_central_film
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA

@@ -732,7 +732,7 @@ def flank_slice_case(env, s_m: float, w_N_per_m: float, slice_index: Optional[in
     a gear contact at LOA position ``s_m`` (m from N1) and line load
     ``w_N_per_m`` (option A of docs/ehl_transient.md: R, u_s, SRR and w frozen
     at the node, only the roughness moves).  ``env`` is a
-    :class:`gearfmu.contact_models.ContactEnvironment`; R, u_s and the sliding
+    :class:`gearfmu.contact.models.ContactEnvironment`; R, u_s and the sliding
     speed from :func:`.mesh_film.contact_kinematics`, srr = (u1 - u2)/u_s, the
     flank arc lengths a_i = rho_i^2/(2 r_bi) at the contact (t = 0);
     ``slice_index`` None: smooth."""

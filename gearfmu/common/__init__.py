@@ -1,0 +1,1 @@
+"""Words and checks every layer shares."""

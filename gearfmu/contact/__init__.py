@@ -1,0 +1,1 @@
+"""Contact models: the registry, fractal contact, asperity load sharing, roughness."""

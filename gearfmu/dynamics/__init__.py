@@ -1,0 +1,1 @@
+"""The gear-pair dynamics on the tables: native solver, reference, sweeps, harmonics."""

@@ -1,0 +1,621 @@
+"""Event-located reference integrator of the dynamic model (tests and benchmarks only).
+
+What it solves
+--------------
+The two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6, the
+contract of the native solver and the FMU kernel), written here again in plain
+Python from that page -- it does not call :mod:`gearfmu.dynamics.native`'s kernel --
+and integrated with scipy's ``solve_ivp`` (DOP853 by default, rtol 1e-10) so
+that no integrator setting of this project is tuned against it.
+
+Why it is tight
+---------------
+The right-hand side of docs/model.md is smooth only piecewise:
+
+* every tooth pair j switches between back flank, separated and drive flank
+  where its deflection ``d_j = x - e_j`` crosses ``-b_j`` and ``+b_j``
+  (seed 003 eq 6, the dead-zone kinks);
+* the ``elastobacklash`` damping law switches branch where the damping force
+  ``fd`` crosses ``+fc`` and ``-fc`` (the clamp of docs/model.md);
+* the tables are piecewise-linear in the pinion angle: k, e, b have kinks at
+  grid nodes and the meshing-error rate ``de/dt = (de/dphi) omega1`` jumps there;
+* the inputs change at communication-step boundaries.
+
+Inside one *segment* (fixed table piece between two kink nodes, fixed contact
+state and damping branch of every pair, fixed inputs) the right-hand side is a
+polynomial in the state, so DOP853 keeps its order.  Each segment integrates
+that smooth field and stops at the first switch, located as a terminal
+``solve_ivp`` event (scipy's ``brentq`` on the dense output, xtol 4 eps); the
+next segment starts there with the new state of the switching pair.  Table
+nodes where the interpolant has no kink (collinear neighbours, e.g. the flat
+parts of a rectangular wave) are not restarts.
+
+Choices (not in the papers)
+---------------------------
+* Mode after a switch: the indicator that fired takes the side it crossed to;
+  all other indicators are read at ``y + delta*f(y)`` (delta = 1e-9 of the
+  shortest natural period), so simultaneous switches are all taken at once and
+  a pair starting exactly on a boundary gets the side it is moving to.
+* A kink node is a node whose second difference of k, e or b exceeds 1e-13 of
+  that array's largest magnitude (any slot); collinear nodes are merged.
+* Initial ``x(0)``: the *leftmost* root of the monotone piecewise-linear
+  ``g(x) = sum_j fc_j(x) - F_m`` (the point docs/model.md's 200 bisections
+  converge to), found exactly from the breakpoints ``e_j +- b_j``.
+* ``atol`` per state: rtol times a scale -- pinion angle: one mesh period;
+  pinion speed: |start speed| (at least 1 rad/s); x: the largest of the static
+  deflection F_m/k_mean, the backlash and the error range (at least 1e-9 m);
+  v: that times omega_n = sqrt(k_mean/m_e).
+* The pinion angle is integrated relative to the segment start (its base is a
+  Python float), so its absolute precision does not decay with the angle turned.
+
+Public API
+----------
+``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
+takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``)
+plus ``rtol``, ``atol_scale``, ``method``, and returns a
+:class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants;
+``step_s`` is 0, ``substeps`` the number of segments, ``info`` counts segments,
+events and right-hand-side calls).
+"""
+from __future__ import annotations
+
+import bisect
+import math
+import sys
+import time as _time
+from typing import Callable, Optional, Union
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..tables.mesh_tables import MeshTables
+
+__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
+
+InputLike = Union[float, np.ndarray, Callable[[float], float]]
+DAMPING_MODELS = ("elastobacklash", "seed003")
+KINK_REL_TOL = 1e-13
+
+
+class ReferenceInputError(ValueError):
+    """Bad argument to the reference integrator; the message names the argument."""
+
+
+# ----------------------------------------------------------------- helpers
+def _num(name, value, *, positive=False, nonneg=False) -> float:
+    from .native import _finite
+
+    return _finite(name, value, positive=positive, nonneg=nonneg, error=ReferenceInputError)
+
+
+def _series(name, value, n_steps, H) -> np.ndarray:
+    """Input value held over [t_k, t_k + H), k = 0..n_steps (same convention as
+    gearfmu.dynamics.native.simulate: number, n or n+1 values, or a callable of t_k)."""
+    if callable(value):
+        out = np.array([float(value(k * H)) for k in range(n_steps + 1)])
+    else:
+        a = np.asarray(value, dtype=float)
+        if a.ndim == 0:
+            out = np.full(n_steps + 1, float(a))
+        elif a.ndim == 1 and len(a) == n_steps + 1:
+            out = a.copy()
+        elif a.ndim == 1 and len(a) == n_steps:
+            out = np.append(a, a[-1])
+        else:
+            raise ReferenceInputError(f"{name}: expected a number, a callable, or {n_steps} or "
+                                      f"{n_steps + 1} values, got shape {a.shape}")
+    if not np.all(np.isfinite(out)):
+        raise ReferenceInputError(f"{name}: contains NaN or infinite values")
+    return out
+
+
+class _Rows:
+    """Tables at one pinion torque: K, E, B (P, N) on the phi grid, and the kink nodes."""
+
+    def __init__(self, tables: MeshTables, t1: float):
+        tq = np.asarray(tables.torque_Nm, dtype=float)
+        k = np.asarray(tables.k_N_per_m, dtype=float)
+        e = np.asarray(tables.e_m, dtype=float)
+        if len(tq) == 1:
+            self.K, self.E = k[0].copy(), e[0].copy()
+        else:  # docs/model.md: Tq = clamp(T1), linear between bracketing rows
+            q = min(max(t1, tq[0]), tq[-1])
+            i = int(np.searchsorted(tq, q, side="right") - 1)
+            i = min(max(i, 0), len(tq) - 2)
+            w = (q - tq[i]) / (tq[i + 1] - tq[i])
+            self.K = k[i] + w * (k[i + 1] - k[i])
+            self.E = e[i] + w * (e[i + 1] - e[i])
+        self.B = np.asarray(tables.backlash_half_m, dtype=float).copy()
+        self.P, self.N = self.K.shape
+        self.dphi = float(tables.phi_period_rad) / self.N
+        self.kinks = kink_nodes(self.K, self.E, self.B)
+        self.key = (float(self.K.sum()), float(self.E.sum()))
+
+    def piece_of(self, theta: float, omega: float):
+        """(m_lo, m_hi) unwrapped kink nodes bracketing theta (None if no kinks)."""
+        ks = self.kinks
+        if len(ks) == 0:
+            return None
+        N = self.N
+        u = theta / self.dphi
+        m = math.floor(u)
+        if abs(u - round(u)) < 1e-9:  # on a node: take the side we move to
+            m = int(round(u)) if omega >= 0 else int(round(u)) - 1
+        q, r = divmod(m, N)
+        i = bisect.bisect_right(ks, r) - 1
+        if i < 0:
+            lo = (q - 1) * N + ks[-1]
+        else:
+            lo = q * N + ks[i]
+        return lo, self.next_kink(lo)
+
+    def next_kink(self, m: int) -> int:
+        ks, N = self.kinks, self.N
+        q, r = divmod(m, N)
+        i = bisect.bisect_right(ks, r)
+        return q * N + ks[i] if i < len(ks) else (q + 1) * N + ks[0]
+
+    def prev_kink(self, m: int) -> int:
+        ks, N = self.kinks, self.N
+        q, r = divmod(m, N)
+        i = bisect.bisect_left(ks, r) - 1
+        return q * N + ks[i] if i >= 0 else (q - 1) * N + ks[-1]
+
+
+def kink_nodes(K, E, B) -> list:
+    """Grid nodes where the periodic piecewise-linear interpolant of any of
+    k, e, b (arrays (P, N)) changes slope, as a sorted list of node indices.
+
+    A node is a kink when the second difference of an array at that node
+    exceeds 1e-13 of the array's largest magnitude (choice; collinear nodes
+    are merged into one linear piece)."""
+    mask = np.zeros(np.shape(K)[1], dtype=bool)
+    for A in (K, E, B):
+        A = np.asarray(A, dtype=float)
+        scale = float(np.max(np.abs(A))) if A.size else 0.0
+        if scale == 0.0:
+            continue
+        d2 = np.roll(A, -1, axis=1) - 2.0 * A + np.roll(A, 1, axis=1)
+        mask |= np.any(np.abs(d2) > KINK_REL_TOL * scale, axis=0)
+    return [int(i) for i in np.nonzero(mask)[0]]
+
+
+def equilibrium_dte_exact_m(K, E, B, fm: float) -> float:
+    """Leftmost root of g(x) = sum_{k_j>0} fc_j(x) - F_m for one angle (arrays (P,)).
+
+    g is piecewise linear and non-decreasing with breakpoints e_j +- b_j; the
+    root is found exactly from the breakpoints (no iteration).  Returns nan when
+    no slot has k > 0."""
+    K = np.asarray(K, float)
+    sel = K > 0
+    if not np.any(sel):
+        return float("nan")
+    k, e, b = K[sel], np.asarray(E, float)[sel], np.asarray(B, float)[sel]
+
+    def g(x):
+        d = x - e
+        fc = np.where(d > b, k * (d - b), np.where(d < -b, k * (d + b), 0.0))
+        return float(fc.sum()) - fm
+
+    S = float(k.sum())
+    pts = np.unique(np.concatenate([e - b, e + b]))
+    gv = [g(p) for p in pts]
+    if gv[0] >= 0.0:
+        return float(pts[0] - gv[0] / S)  # left ray: every pair on the back flank, slope S
+    for i in range(1, len(pts)):
+        if gv[i] >= 0.0:
+            g0, g1 = gv[i - 1], gv[i]
+            return float(pts[i - 1] + (0.0 - g0) * (pts[i] - pts[i - 1]) / (g1 - g0))
+    return float(pts[-1] - gv[-1] / S)  # right ray: every pair on the drive flank
+
+
+def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
+    """Per-pair forces (N), contact states and stiffnesses at one state, by the
+    literal formulas of docs/model.md (lookup, force law): used for outputs."""
+    N, dphi = rows.N, rows.dphi
+    Phi = N * dphi
+    phim = theta - Phi * math.floor(theta / Phi)
+    s = phim / dphi
+    i0 = int(math.floor(s))
+    i0 = min(max(i0, 0), N - 1)
+    w = s - i0
+    i1 = 0 if i0 + 1 == N else i0 + 1
+    F = np.zeros(rows.P)
+    st = np.zeros(rows.P, dtype=int)
+    kk = np.zeros(rows.P)
+    for j in range(rows.P):
+        k = rows.K[j, i0] + w * (rows.K[j, i1] - rows.K[j, i0])
+        e = rows.E[j, i0] + w * (rows.E[j, i1] - rows.E[j, i0])
+        b = rows.B[j, i0] + w * (rows.B[j, i1] - rows.B[j, i0])
+        de = (rows.E[j, i1] - rows.E[j, i0]) / dphi * omega
+        d = x - e
+        if d > b:
+            fc, s_ = k * (d - b), 1
+        elif d < -b:
+            fc, s_ = k * (d + b), -1
+        else:
+            fc, s_ = 0.0, 0
+        fd = c * (v - de)
+        if model == "elastobacklash":
+            if s_ == 1:
+                f = max(0.0, fc + min(fc, fd))
+            elif s_ == -1:
+                f = min(0.0, fc + max(fc, fd))
+            else:
+                f = 0.0
+        else:
+            f = fc + fd if k > 0.0 else 0.0
+        F[j], st[j], kk[j] = f, s_, k
+    return F, st, kk
+
+
+# -------------------------------------------------------------- segments
+class _Segment:
+    """One table piece: linear k, e, b per active pair in theta (relative to the
+    piece start), the mode of every active pair, the smooth RHS and the events."""
+
+    def __init__(self, rows: _Rows, piece, theta_base, T1, T2, par):
+        self.rows, self.piece, self.theta_base = rows, piece, theta_base
+        self.T1, self.T2 = T1, T2
+        self.rb1, self.rb2, self.i1, self.i2, self.c, self.model = par
+        if piece is None:
+            ia, ib, theta_a = 0, 0, 0.0
+            slope_ok = False
+        else:
+            ia, ib = piece[0] % rows.N, piece[1] % rows.N
+            theta_a = piece[0] * rows.dphi
+            slope_ok = True
+        self.off = theta_base - theta_a  # theta - theta_a = off + theta_rel
+        ia1 = (ia + 1) % rows.N
+        pairs = []
+        for j in range(rows.P):
+            k0, e0, b0 = rows.K[j, ia], rows.E[j, ia], rows.B[j, ia]
+            if slope_ok:
+                ks = (rows.K[j, ia1] - k0) / rows.dphi
+                es = (rows.E[j, ia1] - e0) / rows.dphi
+                bs = (rows.B[j, ia1] - b0) / rows.dphi
+            else:
+                ks = es = bs = 0.0
+            if max(k0, rows.K[j, ib]) > 0.0:  # k = 0 over the whole piece: no force at all
+                pairs.append((j, k0, ks, e0, es, b0, bs))
+        self.pairs = pairs
+        if piece is None:
+            self.node_lo = self.node_hi = None
+        else:
+            self.node_lo = piece[0] * rows.dphi - theta_base
+            self.node_hi = piece[1] * rows.dphi - theta_base
+        self.nfev = 0
+
+    # state of pair p at (theta_rel, omega, x, v)
+    def _pair(self, p, th, om, x, v):
+        j, k0, ks, e0, es, b0, bs = p
+        u = self.off + th
+        k = k0 + ks * u
+        e = e0 + es * u
+        b = b0 + bs * u
+        d = x - e
+        fd = self.c * (v - es * om)
+        return k, d, b, fd
+
+    def indicators(self, p, th, om, x, v, side):
+        """h_hi = d - b, h_lo = d + b, u1 = fd - fc, u2 = fd + fc (fc on `side`)."""
+        k, d, b, fd = self._pair(p, th, om, x, v)
+        fc = k * (d - b) if side > 0 else (k * (d + b) if side < 0 else 0.0)
+        return d - b, d + b, fd - fc, fd + fc
+
+    def mode_from(self, y, forced=None):
+        """Per active pair (side, alpha, beta): F_j = alpha*fc_j + beta*fd_j.
+
+        ``forced`` = (pair position, indicator index, sign) overrides one sign."""
+        th, om, x, v = y
+        modes = []
+        for ip, p in enumerate(self.pairs):
+            hh, hl, _, _ = self.indicators(p, th, om, x, v, 0)
+            sg = [hh, hl]
+            if forced is not None and forced[0] == ip and forced[1] < 2:
+                sg[forced[1]] = forced[2]
+            side = 1 if sg[0] > 0 else (-1 if sg[1] < 0 else 0)
+            if self.model == "seed003":
+                modes.append((side, 1 if side != 0 else 0, 1))
+                continue
+            if side == 0:
+                modes.append((0, 0, 0))
+                continue
+            _, _, u1, u2 = self.indicators(p, th, om, x, v, side)
+            if forced is not None and forced[0] == ip and forced[1] >= 2:
+                if forced[1] == 2:
+                    u1 = forced[2]
+                else:
+                    u2 = forced[2]
+            if side > 0:
+                a = (side, 2, 0) if u1 >= 0 else ((side, 1, 1) if u2 >= 0 else (side, 0, 0))
+            else:
+                a = (side, 2, 0) if u1 <= 0 else ((side, 1, 1) if u2 <= 0 else (side, 0, 0))
+            modes.append(a)
+        return modes
+
+    def force(self, y, modes):
+        th, om, x, v = y
+        F = 0.0
+        for p, (side, al, be) in zip(self.pairs, modes):
+            if al == 0 and be == 0:
+                continue
+            k, d, b, fd = self._pair(p, th, om, x, v)
+            fc = k * (d - side * b) if side != 0 else 0.0
+            F += al * fc + be * fd
+        return F
+
+    def force_general(self, y):
+        """docs/model.md force law on this piece's linear tables (mode found on the fly)."""
+        th, om, x, v = y
+        F = 0.0
+        for p in self.pairs:
+            k, d, b, fd = self._pair(p, th, om, x, v)
+            if d > b:
+                fc, s = k * (d - b), 1
+            elif d < -b:
+                fc, s = k * (d + b), -1
+            else:
+                fc, s = 0.0, 0
+            if self.model == "elastobacklash":
+                F += max(0.0, fc + min(fc, fd)) if s == 1 else (min(0.0, fc + max(fc, fd)) if s == -1 else 0.0)
+            else:
+                F += fc + fd if (p[1] + p[2] * (self.off + th)) > 0.0 else 0.0
+        return F
+
+    def deriv(self, y, F):
+        T1, T2 = self.T1, self.T2
+        acc1 = (T1 - self.rb1 * F) / self.i1
+        return np.array([y[1], acc1, y[3], self.rb1 * acc1 - self.rb2 * (self.rb2 * F - T2) / self.i2])
+
+    def rhs_factory(self, modes):
+        def rhs(t, y):
+            self.nfev += 1
+            return self.deriv(y, self.force(y, modes))
+        return rhs
+
+    def events(self, modes):
+        """Terminal events leaving the current mode: (callable, tag) list."""
+        evs = []
+
+        def make(fn, direction, tag):
+            fn.terminal = True
+            fn.direction = direction
+            evs.append((fn, tag))
+
+        if self.node_hi is not None:
+            nh, nl = self.node_hi, self.node_lo
+            make(lambda t, y: y[0] - nh, 1.0, ("node", +1))
+            make(lambda t, y: y[0] - nl, -1.0, ("node", -1))
+        for ip, (p, (side, al, be)) in enumerate(zip(self.pairs, modes)):
+            def ind(idx, p=p, side=side):
+                return lambda t, y: self.indicators(p, y[0], y[1], y[2], y[3], side)[idx]
+            if side == 0:
+                make(ind(0), 1.0, ("pair", ip, 0, +1))
+                make(ind(1), -1.0, ("pair", ip, 1, -1))
+                continue
+            if side > 0:
+                make(ind(0), -1.0, ("pair", ip, 0, -1))
+            else:
+                make(ind(1), 1.0, ("pair", ip, 1, +1))
+            if self.model == "seed003":
+                continue
+            if (al, be) == (2, 0):
+                d = -1.0 if side > 0 else 1.0
+                make(ind(2), d, ("pair", ip, 2, int(d)))
+            elif (al, be) == (1, 1):
+                d = 1.0 if side > 0 else -1.0
+                make(ind(2), d, ("pair", ip, 2, int(d)))
+                make(ind(3), -d, ("pair", ip, 3, int(-d)))
+            else:
+                d = 1.0 if side > 0 else -1.0
+                make(ind(3), d, ("pair", ip, 3, int(d)))
+        return evs
+
+
+# ------------------------------------------------------------------- main
+def simulate_reference(
+    tables: MeshTables,
+    *,
+    stop_time_s: float,
+    comm_step_s: float,
+    pinion_torque_Nm: InputLike,
+    gear_torque_Nm: Optional[InputLike] = None,
+    pinion_speed_start_rad_s: float,
+    damping_ratio: float,
+    damping_model: str = "elastobacklash",
+    pinion_angle_start_rad: float = 0.0,
+    dte_start_m: Optional[float] = None,
+    dte_rate_start_m_s: float = 0.0,
+    rtol: float = 1e-10,
+    atol_scale: float = 1.0,
+    method: str = "DOP853",
+    steps_per_period: float = 64.0,
+    max_segments: int = 5_000_000,
+    progress: bool = False,
+    max_step_s: Optional[float] = None,
+):
+    """Event-located solve_ivp reference of docs/model.md (two-inertia form).
+
+    Same arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
+    (torques in N*m held over each communication step; ``gear_torque_Nm``
+    None = T1*Rb2/Rb1), plus ``rtol`` (solve_ivp rtol), ``atol_scale``
+    (multiplies the per-state absolute tolerances rtol*scale, see module
+    docstring), ``method`` ("DOP853" or "Radau", "RK45", ...) and
+    ``steps_per_period`` (the largest step is the shortest natural period
+    2 pi/sqrt(max k_total/m_e) over this number, so that no contact or clamp
+    indicator crosses and returns inside one step unseen).
+    ``max_step_s`` is accepted and ignored (the reference chooses its steps).
+    Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
+    """
+    from .native import SimResult  # the result container only; no kernel is called
+
+    if not isinstance(tables, MeshTables):
+        raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
+    tables.validate()
+    stop = _num("stop_time_s", stop_time_s, positive=True)
+    H = _num("comm_step_s", comm_step_s, positive=True)
+    nf = stop / H
+    n_steps = int(round(nf))
+    if n_steps < 1 or abs(nf - n_steps) > 1e-6 * max(1.0, nf):
+        raise ReferenceInputError(f"stop_time_s: {stop!r} is not a whole number of comm_step_s={H!r}")
+    zeta = _num("damping_ratio", damping_ratio, nonneg=True)
+    if damping_model not in DAMPING_MODELS:
+        raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {DAMPING_MODELS}")
+    rtol = _num("rtol", rtol, positive=True)
+    w0 = _num("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
+    th0 = _num("pinion_angle_start_rad", pinion_angle_start_rad)
+    v0 = _num("dte_rate_start_m_s", dte_rate_start_m_s)
+    t1s = _series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
+    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+    I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
+    t2s = t1s * rb2 / rb1 if gear_torque_Nm is None else _series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
+    me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
+    km = float(tables.k_mean_N_per_m)
+    c = 2.0 * zeta * math.sqrt(km * me)  # docs/model.md, seed 003 eq 7-9
+    wn = math.sqrt(km / me)
+    par = (rb1, rb2, I1, I2, c, damping_model)
+
+    rows_cache = {}
+
+    def rows_for(t1):
+        key = float(t1) if tables.n_torque > 1 else 0.0
+        if key not in rows_cache:
+            rows_cache[key] = _Rows(tables, key)
+        return rows_cache[key]
+
+    r0 = rows_for(t1s[0])
+    if dte_start_m is None:
+        Phi = r0.N * r0.dphi
+        phim = th0 - Phi * math.floor(th0 / Phi)
+        s = phim / r0.dphi
+        i0 = min(max(int(math.floor(s)), 0), r0.N - 1)
+        w = s - i0
+        i1 = (i0 + 1) % r0.N
+        lerp = lambda A: A[:, i0] + w * (A[:, i1] - A[:, i0])
+        x0 = equilibrium_dte_exact_m(lerp(r0.K), lerp(r0.E), lerp(r0.B), t1s[0] / rb1)
+        if not math.isfinite(x0):
+            raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
+    else:
+        x0 = _num("dte_start_m", dte_start_m)
+
+    # absolute tolerances (module docstring)
+    xs = max(abs(t1s).max() / rb1 / km, float(np.max(tables.backlash_half_m)),
+             float(np.ptp(tables.e_m)), abs(x0), 1e-9)
+    scale = np.array([tables.mesh_period_rad, max(abs(w0), 1.0), xs, xs * wn])
+    atol = rtol * atol_scale * scale
+    delta = 1e-9 * min(2 * math.pi / wn, tables.mesh_period_rad / max(abs(w0), 1.0))
+    # largest step: 1/steps_per_period of the shortest natural period (stiffest mesh), so an
+    # indicator cannot cross a boundary and come back inside one step unseen (events are
+    # detected by sign changes between steps)
+    wmax = math.sqrt(float(np.max(tables.k_N_per_m.sum(axis=1))) / me)
+    h_cap = 2.0 * math.pi / max(wmax, wn) / float(steps_per_period)
+
+    def seg_cap(seg, omega):
+        # and at most 1/(steps_per_period/16) of the time to cross the table piece, so short
+        # pieces (one-node ramps of k and e, where de/dt is large) are resolved too
+        if seg.node_hi is None or omega == 0.0:
+            return h_cap
+        dur = (seg.node_hi - seg.node_lo) / abs(omega)
+        return min(h_cap, dur * 16.0 / float(steps_per_period))
+
+    state = np.full((n_steps + 1, 4), np.nan)
+    pair = np.full((n_steps + 1, tables.slots), np.nan)
+    force = np.full(n_steps + 1, np.nan)
+    stiff = np.full(n_steps + 1, np.nan)
+
+    def out_row(i, y, rows):
+        F, st, kk = _forces_model(y[0], y[1], y[2], y[3], rows, c, damping_model)
+        state[i] = y
+        pair[i] = F
+        force[i] = F.sum()
+        stiff[i] = kk[st != 0].sum()
+
+    out_row(0, (th0, w0, x0, v0), r0)
+    theta, y_rest = th0, np.array([w0, x0, v0])
+    n_seg = n_ev = nfev = 0
+    first_step = None
+    piece = None
+    prev_rows = None
+    forced = None
+    t_wall = _time.perf_counter()
+    last_print = t_wall
+    diverged = None
+    for k in range(n_steps):
+        rows = rows_for(t1s[k])
+        if rows is not prev_rows or piece is None:
+            piece = rows.piece_of(theta, y_rest[0])
+            prev_rows = rows
+        t, t_end = k * H, (k + 1) * H
+        forced = None
+        zero_len = 0
+        while t < t_end:
+            seg = _Segment(rows, piece, theta, t1s[k], t2s[k], par)
+            y = np.array([0.0, y_rest[0], y_rest[1], y_rest[2]])
+            # modes: indicators read a little ahead along the true field (choice, docstring)
+            ya = y + delta * seg.deriv(y, seg.force_general(y))
+            modes = seg.mode_from(ya, forced)
+            evs = seg.events(modes)
+            sol = solve_ivp(seg.rhs_factory(modes), (t, t_end), y, method=method, rtol=rtol, atol=atol,
+                            events=[e for e, _ in evs] or None, max_step=seg_cap(seg, y_rest[0]),
+                            first_step=None if not first_step else min(first_step, t_end - t))
+            n_seg += 1
+            nfev += seg.nfev
+            if sol.status == -1:
+                diverged = k
+                break
+            if len(sol.t) >= 3:
+                first_step = float(sol.t[-2] - sol.t[-3])
+            t_new = float(sol.t[-1])
+            yn = sol.y[:, -1]
+            forced = None
+            if sol.status == 1:  # an event: which one fired first
+                n_ev += 1
+                hit = [i for i, te in enumerate(sol.t_events) if len(te)]
+                i = min(hit, key=lambda i: sol.t_events[i][0])
+                tag = evs[i][1]
+                t_new = float(sol.t_events[i][0])
+                yn = sol.y_events[i][0]
+                if tag[0] == "node":
+                    if tag[1] > 0:
+                        node, piece = piece[1], (piece[1], rows.next_kink(piece[1]))
+                    else:
+                        node, piece = piece[0], (rows.prev_kink(piece[0]), piece[0])
+                    theta = node * rows.dphi  # snap onto the node
+                else:
+                    theta = theta + float(yn[0])
+                    forced = (tag[1], tag[2], tag[3])
+                zero_len = zero_len + 1 if t_new <= t else 0
+                if zero_len > 50:
+                    raise RuntimeError(f"reference: no progress at t = {t!r} s (mode chattering)")
+            else:
+                theta = theta + float(yn[0])
+            y_rest = np.array(yn[1:4], dtype=float)
+            t = t_new if sol.status == 1 else t_end
+            if not np.all(np.isfinite(y_rest)) or not math.isfinite(theta):
+                diverged = k
+                break
+            if n_seg > max_segments:
+                raise RuntimeError(f"reference: more than max_segments={max_segments} segments")
+        if diverged is not None:
+            break
+        out_row(k + 1, (theta, y_rest[0], y_rest[1], y_rest[2]), rows)
+        if progress and _time.perf_counter() - last_print > 2.0:
+            last_print = _time.perf_counter()
+            print(f"reference: step {k + 1}/{n_steps}, {n_seg} segments, {n_ev} events", file=sys.stderr)
+    wall = _time.perf_counter() - t_wall
+
+    th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ls = np.where(force[:, None] != 0.0, pair / np.where(force[:, None] != 0.0, force[:, None], 1.0), 0.0)
+    info = {"form": "two-inertia (docs/model.md), event-located solve_ivp reference",
+            "method": method, "rtol": rtol, "max_step_s": h_cap, "atol": atol.tolist(), "segments": n_seg, "events": n_ev,
+            "rhs_calls": nfev, "equivalent_mass_kg": me}
+    if diverged is not None:
+        info["diverged_at_step"] = int(diverged)
+    return SimResult(
+        time_s=np.arange(n_steps + 1) * H, pinion_speed=om.copy(), gear_speed=(om * rb1 - v) / rb2,
+        pinion_angle=th.copy(), gear_angle=(th * rb1 - x) / rb2, dte=x.copy(), dte_rate=v.copy(),
+        mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
+        pinion_torque=t1s, gear_torque=t2s, step_s=0.0, substeps=n_seg, damping_Ns_per_m=c,
+        damping_model=damping_model, wall_s=wall, info=info)

@@ -1,0 +1,1 @@
+"""FMUs: model description, builders per runtime, runtime template, C sources."""

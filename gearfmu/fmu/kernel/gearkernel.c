@@ -1,0 +1,725 @@
+/*
+ * gearkernel.c -- C99 implementation of docs/model.md (the contract shared
+ * with the numba native solver gearfmu/dynamics/native.py).
+ *
+ * Physics: seed 003 (Xu et al., Appl. Sci. 2022) eq 1-6: per tooth-pair slot j
+ * the deflection d = x - e_j (eq 6), the piecewise-linear backlash force with
+ * half backlash b_j, a viscous damping c = 2 zeta sqrt(k_mean m_e) (eq 7-9);
+ * two inertias (eq 1-2) written in the pinion angle and the dynamic
+ * transmission error x.  The default damping rule is Modelica's ElastoBacklash
+ * (damping force never exceeds the spring force, the pair never pulls).
+ *
+ * Build: gcc -O2 -fPIC -shared -ffp-contract=off -std=c99 gearkernel.c -lm
+ * (-ffp-contract=off: no fused multiply-add, so the arithmetic is the one
+ * written here, the same as the native solver's).
+ *
+ * No globals, no allocation, no abort: every function returns a status.
+ */
+#include "gearkernel.h"
+
+#include <math.h>
+#include <stddef.h>
+
+int gk_abi_version(void) { return GK_ABI_VERSION; }
+int gk_sizeof_model(void) { return (int)sizeof(gk_model); }
+int gk_sizeof_state(void) { return (int)sizeof(gk_state); }
+int gk_n_outputs(int P) { return GK_OUT_PAIR_FORCE + 2 * P; }
+
+static int finite_pos(double v) { return isfinite(v) && v > 0.0; }
+
+int gk_init(gk_model *m, int P, int n_phi, int n_torque,
+            const double *torque_Nm, const double *k_N_per_m,
+            const double *e_m, const double *backlash_half_m,
+            double phi_period_rad, double Rb1_m, double Rb2_m,
+            double I1_kgm2, double I2_kgm2, double k_mean_N_per_m)
+{
+    int i;
+    if (m == NULL || torque_Nm == NULL || k_N_per_m == NULL || e_m == NULL || backlash_half_m == NULL)
+        return GK_ERR_MODEL;
+    if (P < 1 || n_phi < 2 || n_torque < 1)
+        return GK_ERR_MODEL;
+    if (!finite_pos(phi_period_rad) || !finite_pos(Rb1_m) || !finite_pos(Rb2_m) ||
+        !finite_pos(I1_kgm2) || !finite_pos(I2_kgm2) || !finite_pos(k_mean_N_per_m))
+        return GK_ERR_MODEL;
+    for (i = 0; i < n_torque; ++i) {
+        if (!isfinite(torque_Nm[i])) return GK_ERR_MODEL;
+        if (i > 0 && !(torque_Nm[i] > torque_Nm[i - 1])) return GK_ERR_MODEL;
+    }
+    m->P = P;
+    m->n_phi = n_phi;
+    m->n_torque = n_torque;
+    m->torque_Nm = torque_Nm;
+    m->k_N_per_m = k_N_per_m;
+    m->e_m = e_m;
+    m->backlash_half_m = backlash_half_m;
+    m->phi_period_rad = phi_period_rad;
+    m->dphi_rad = phi_period_rad / n_phi;
+    m->Rb1_m = Rb1_m;
+    m->Rb2_m = Rb2_m;
+    m->I1_kgm2 = I1_kgm2;
+    m->I2_kgm2 = I2_kgm2;
+    m->k_mean_N_per_m = k_mean_N_per_m;
+    /* m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2), seed 003 below eq 2 */
+    m->m_e_kg = I1_kgm2 * I2_kgm2 / (I1_kgm2 * Rb2_m * Rb2_m + I2_kgm2 * Rb1_m * Rb1_m);
+    m->damping_ratio = 0.0;
+    m->c_Ns_per_m = 0.0;
+    m->damping_model = GK_DAMPING_ELASTOBACKLASH;
+    m->integrator = GK_INTEGRATOR_RK4;
+    m->n_temp = 1;
+    m->temperature_C = NULL;
+    m->temp_ia = 0;
+    m->temp_two = 0;
+    m->temp_w = 0.0;
+    m->temperature_now_C = 0.0;
+    return GK_OK;
+}
+
+int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C)
+{
+    int i;
+    if (m == NULL || temperature_C == NULL || n_temp < 1) return GK_ERR_MODEL;
+    for (i = 0; i < n_temp; ++i) {
+        if (!isfinite(temperature_C[i])) return GK_ERR_MODEL;
+        if (i > 0 && !(temperature_C[i] > temperature_C[i - 1])) return GK_ERR_MODEL;
+    }
+    m->n_temp = n_temp;
+    m->temperature_C = temperature_C;
+    m->temp_ia = 0;
+    m->temp_two = 0;
+    m->temp_w = 0.0;
+    m->temperature_now_C = temperature_C[0];
+    return GK_OK;
+}
+
+int gk_set_temperature(gk_model *m, double T)
+{
+    int ia = 0, nt;
+    if (m == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T)) return GK_ERR_INPUT;
+    nt = m->n_temp;
+    if (m->temperature_C == NULL) return GK_ERR_INPUT; /* no axis: nothing to select */
+    if (T < m->temperature_C[0] || T > m->temperature_C[nt - 1]) return GK_ERR_INPUT;
+    while (ia < nt - 1 && m->temperature_C[ia + 1] <= T) ia++;
+    m->temp_ia = ia;
+    if (m->temperature_C[ia] == T) {
+        m->temp_two = 0;
+        m->temp_w = 0.0;
+    } else {
+        m->temp_two = 1;
+        m->temp_w = (T - m->temperature_C[ia]) / (m->temperature_C[ia + 1] - m->temperature_C[ia]);
+    }
+    m->temperature_now_C = T;
+    return GK_OK;
+}
+
+int gk_set_integrator(gk_model *m, int integrator)
+{
+    if (m == NULL) return GK_ERR_MODEL;
+    if (integrator == GK_INTEGRATOR_RK4) {
+        m->integrator = integrator;
+        return GK_OK;
+    }
+    if (integrator == GK_INTEGRATOR_RK4_KINK && m->P <= GK_KINK_MAX_SLOTS) {
+        m->integrator = integrator;
+        return GK_OK;
+    }
+    return GK_ERR_PARAM;
+}
+
+int gk_set_damping(gk_model *m, double damping_ratio, int damping_model)
+{
+    if (m == NULL) return GK_ERR_MODEL;
+    if (!isfinite(damping_ratio) || damping_ratio < 0.0) return GK_ERR_PARAM;
+    if (damping_model != GK_DAMPING_ELASTOBACKLASH && damping_model != GK_DAMPING_SEED003)
+        return GK_ERR_PARAM;
+    m->damping_ratio = damping_ratio;
+    m->c_Ns_per_m = 2.0 * damping_ratio * sqrt(m->k_mean_N_per_m * m->m_e_kg);
+    m->damping_model = damping_model;
+    return GK_OK;
+}
+
+/* ---------------------------------------------------------------- lookup */
+
+/* torque row bracket: rows it, it+1 and weight wT (docs/model.md "Torque axis") */
+typedef struct {
+    int it;
+    int two_rows;
+    double wT;
+} gk_tq;
+
+static gk_tq torque_bracket(const gk_model *m, double T1)
+{
+    gk_tq t;
+    int nt = m->n_torque;
+    double Tq;
+    t.it = 0;
+    t.two_rows = 0;
+    t.wT = 0.0;
+    if (nt == 1) return t;
+    Tq = T1;
+    if (Tq < m->torque_Nm[0]) Tq = m->torque_Nm[0];
+    if (Tq > m->torque_Nm[nt - 1]) Tq = m->torque_Nm[nt - 1];
+    while (t.it < nt - 2 && m->torque_Nm[t.it + 1] <= Tq) t.it++;
+    t.two_rows = 1;
+    t.wT = (Tq - m->torque_Nm[t.it]) / (m->torque_Nm[t.it + 1] - m->torque_Nm[t.it]);
+    return t;
+}
+
+/* angle cell: indices i0, i1 (periodic) and weight w (docs/model.md "Table lookup") */
+typedef struct {
+    int i0, i1;
+    double w;
+} gk_ph;
+
+static gk_ph phi_cell(const gk_model *m, double theta1)
+{
+    gk_ph c;
+    double Phi = m->phi_period_rad;
+    int N = m->n_phi;
+    double phim = theta1 - Phi * floor(theta1 / Phi);
+    double s = phim / m->dphi_rad;
+    double fs = floor(s);
+    if (fs >= (double)N) c.i0 = N - 1;
+    else if (!(fs >= 0.0)) c.i0 = 0; /* also NaN (a non-finite substep): never index out of bounds */
+    else c.i0 = (int)fs;
+    c.w = s - c.i0;
+    c.i1 = c.i0 + 1;
+    if (c.i1 == N) c.i1 = 0;
+    return c;
+}
+
+/* value and phi-slope of one row of array A at the cell */
+static void row_interp(const double *A, const gk_ph *c, double dphi, double *val, double *slope)
+{
+    double a0 = A[c->i0], a1 = A[c->i1];
+    *val = a0 + c->w * (a1 - a0);
+    if (slope != NULL) *slope = (a1 - a0) / dphi;
+}
+
+/* row_interp on the nodes of the selected temperature: with two slices each node
+ * is A[i] + wT*(B[i] - A[i]) first (docs/model.md "Temperature axis"); B is the
+ * next temperature slice of the same torque row */
+static void row_interp_t(const gk_model *m, const double *A, const gk_ph *c, double *val, double *slope)
+{
+    double a0, a1;
+    const double *B;
+    if (!m->temp_two) {
+        row_interp(A, c, m->dphi_rad, val, slope);
+        return;
+    }
+    B = A + (size_t)m->P * m->n_phi;
+    a0 = A[c->i0];
+    a1 = A[c->i1];
+    a0 = a0 + m->temp_w * (B[c->i0] - a0);
+    a1 = a1 + m->temp_w * (B[c->i1] - a1);
+    *val = a0 + c->w * (a1 - a0);
+    if (slope != NULL) *slope = (a1 - a0) / m->dphi_rad;
+}
+
+/* k, e, de/dphi, b of slot j */
+static void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j,
+                        double *k, double *e, double *de_dphi, double *b)
+{
+    int P = m->P, N = m->n_phi;
+    size_t row = (((size_t)t->it * m->n_temp + m->temp_ia) * P + j) * N;  /* [it][ia][j][:] */
+    size_t next_torque = (size_t)m->n_temp * P * N;
+    const double *ka = m->k_N_per_m + row;
+    const double *ea = m->e_m + row;
+    double kv, ev, es;
+    row_interp_t(m, ka, c, &kv, NULL);
+    row_interp_t(m, ea, c, &ev, &es);
+    if (t->two_rows) {
+        double kv2, ev2, es2;
+        row_interp_t(m, ka + next_torque, c, &kv2, NULL);
+        row_interp_t(m, ea + next_torque, c, &ev2, &es2);
+        kv = kv + t->wT * (kv2 - kv);
+        ev = ev + t->wT * (ev2 - ev);
+        es = es + t->wT * (es2 - es);
+    }
+    *k = kv;
+    *e = ev;
+    if (de_dphi != NULL) *de_dphi = es;
+    if (b != NULL) row_interp(m->backlash_half_m + (size_t)j * N, c, m->dphi_rad, b, NULL);
+}
+
+/* ----------------------------------------------------------------- forces */
+
+/* Total mesh force F at (theta1, omega1, x, v); optionally per-pair forces
+ * (pf[P]) and the stiffness of the pairs in contact (*kmesh). */
+static double mesh_force(const gk_model *m, const gk_tq *t, double theta1, double omega1,
+                         double x, double v, double *pf, double *kmesh)
+{
+    gk_ph c = phi_cell(m, theta1);
+    double F = 0.0, ks = 0.0;
+    int j;
+    for (j = 0; j < m->P; ++j) {
+        double k, e, es, b, d, fc, fd, Fj;
+        int region;
+        slot_tables(m, t, &c, j, &k, &e, &es, &b);
+        d = x - e;                             /* seed 003 eq 6 */
+        if (d > b) { fc = k * (d - b); region = 1; }
+        else if (d < -b) { fc = k * (d + b); region = -1; }
+        else { fc = 0.0; region = 0; }
+        fd = m->c_Ns_per_m * (v - es * omega1);
+        if (m->damping_model == GK_DAMPING_SEED003) {
+            Fj = (k > 0.0) ? fc + fd : 0.0;
+        } else if (region == 1) {
+            double a = fc + ((fc < fd) ? fc : fd);
+            Fj = (a > 0.0) ? a : 0.0;
+        } else if (region == -1) {
+            double a = fc + ((fc > fd) ? fc : fd);
+            Fj = (a < 0.0) ? a : 0.0;
+        } else {
+            Fj = 0.0;
+        }
+        if (region != 0) ks += k;
+        if (pf != NULL) pf[j] = Fj;
+        F += Fj;
+    }
+    if (kmesh != NULL) *kmesh = ks;
+    return F;
+}
+
+static void deriv(const gk_model *m, const gk_tq *t, double T1, double T2,
+                  const double *y, double *dy)
+{
+    double F = mesh_force(m, t, y[0], y[1], y[2], y[3], NULL, NULL);
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    dy[0] = y[1];
+    dy[1] = (T1 - Rb1 * F) / m->I1_kgm2;
+    dy[2] = y[3];
+    dy[3] = Rb1 * (T1 - Rb1 * F) / m->I1_kgm2 - Rb2 * (Rb2 * F - T2) / m->I2_kgm2;
+}
+
+
+/* --------------------------------------------------------------- rk4_kink
+ * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
+ * elastobacklash sub-mode sub, seed003 flag kpos) is held during each RK4
+ * step; guards (>= 0 while the mode holds) are tested at the step end, the
+ * earliest zero is located on the cubic Hermite interpolant of the step, the
+ * step is retaken exactly to it and the mode switched there.  Same arithmetic
+ * as gearfmu/dynamics/native.py (_kink_substep and friends). */
+
+#define KINK_TOL_S 1e-12
+#define KINK_MAX_IT 60
+
+typedef struct {
+    double nd;                       /* global cell index (integer value) */
+    int i0, i1;
+    int reg[GK_KINK_MAX_SLOTS];      /* 1 drive, -1 back, 0 separated */
+    int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
+    int kpos[GK_KINK_MAX_SLOTS];     /* seed003: k > 0 inside the cell */
+} gk_mode;
+
+static void cell_nodes(gk_mode *md, int N)
+{
+    double r = md->nd - (double)N * floor(md->nd / (double)N);
+    int i0 = (int)r;
+    if (i0 < 0) i0 = 0;
+    if (i0 >= N) i0 = N - 1;
+    md->i0 = i0;
+    md->i1 = (i0 + 1 == N) ? 0 : i0 + 1;
+}
+
+/* k, e, de/dphi, b of slot j at angle th with the cell held */
+static void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, double th, int j,
+                          double *k, double *e, double *es, double *b)
+{
+    gk_ph c;
+    c.i0 = md->i0;
+    c.i1 = md->i1;
+    c.w = (th - md->nd * m->dphi_rad) / m->dphi_rad;
+    slot_tables(m, t, &c, j, k, e, es, b);
+}
+
+static double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
+                                double om, double c, int model, int reg, int sub, int kpos)
+{
+    double de = es * om, d = x - ev, fc, fd;
+    if (reg == 1) fc = kv * (d - bv);
+    else if (reg == -1) fc = kv * (d + bv);
+    else fc = 0.0;
+    fd = c * (v - de);
+    if (model == GK_DAMPING_ELASTOBACKLASH) {
+        if (reg == 0 || sub == 2) return 0.0;
+        if (sub == 0) return fc + fc;
+        return fc + fd;
+    }
+    if (kpos != 0) return fc + fd;
+    return 0.0;
+}
+
+static double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
+                         double om, double c, int model, int reg, int sub)
+{
+    double d = x - ev, fc, fd;
+    if (reg == 0) {
+        if (q == 0) return bv - d;
+        if (q == 1) return d + bv;
+        return 1.0;
+    }
+    if (q == 0) {
+        if (reg == 1) return d - bv;
+        return -(d + bv);
+    }
+    if (model != GK_DAMPING_ELASTOBACKLASH) return 1.0;
+    if (reg == 1) fc = kv * (d - bv);
+    else fc = kv * (d + bv);
+    fd = c * (v - es * om);
+    if (reg == 1) {
+        if (sub == 0) return (q == 1) ? fd - fc : 1.0;
+        if (sub == 1) return (q == 1) ? fc - fd : fc + fd;
+        return (q == 1) ? -(fc + fd) : 1.0;
+    }
+    if (sub == 0) return (q == 1) ? fc - fd : 1.0;
+    if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
+    return (q == 1) ? fc + fd : 1.0;
+}
+
+static int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
+                      double om, double c)
+{
+    double d, fd, fc;
+    if (reg == 0) return 0;
+    d = x - ev;
+    fd = c * (v - es * om);
+    if (reg == 1) {
+        fc = kv * (d - bv);
+        if (fc < fd) return 0;
+        if (fc + fd < 0.0) return 2;
+        return 1;
+    }
+    fc = kv * (d + bv);
+    if (fc > fd) return 0;
+    if (fc + fd > 0.0) return 2;
+    return 1;
+}
+
+static void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                         const double *y, double *dy)
+{
+    double f = 0.0, Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    int j;
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv;
+        locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+        f += pair_force_locked(kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model,
+                               md->reg[j], md->sub[j], md->kpos[j]);
+    }
+    dy[0] = y[1];
+    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[2] = y[3];
+    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+}
+
+/* classical RK4 of length h from y with first stage f0 given, mode held */
+static void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                       const double *y, const double *f0, double h, double *yn)
+{
+    double h2 = h / 2.0, h6, k[4], sum[4], yt[4];
+    int q, stage;
+    for (q = 0; q < 4; ++q) {
+        k[q] = f0[q];
+        sum[q] = f0[q];
+    }
+    for (stage = 1; stage < 4; ++stage) {
+        for (q = 0; q < 4; ++q) yt[q] = (stage == 3) ? y[q] + h * k[q] : y[q] + h2 * k[q];
+        deriv_locked(m, t, md, T1, T2, yt, k);
+        for (q = 0; q < 4; ++q) sum[q] = (stage == 3) ? sum[q] + k[q] : sum[q] + 2.0 * k[q];
+    }
+    h6 = h / 6.0;
+    for (q = 0; q < 4; ++q) yn[q] = y[q] + h6 * sum[q];
+}
+
+/* guard gi at state y: 0 cell start, 1 cell end, 2 + 3 j + q guard q of pair j */
+static double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y)
+{
+    int j, q;
+    double kv, ev, es, bv;
+    if (gi == 0) return y[0] - md->nd * m->dphi_rad;
+    if (gi == 1) return (md->nd + 1.0) * m->dphi_rad - y[0];
+    j = (gi - 2) / 3;
+    q = (gi - 2) - 3 * j;
+    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+    return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model,
+                      md->reg[j], md->sub[j]);
+}
+
+static double hermite_guard(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
+                            const double *y0, const double *f0, const double *y1, const double *f1,
+                            double tau)
+{
+    double u = 1.0 - s, yy[4];
+    double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
+    double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
+    int q;
+    for (q = 0; q < 4; ++q)
+        yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
+    return guard_at(m, t, md, gi, yy);
+}
+
+/* fraction s in [0, 1] of the guard's zero on the Hermite interpolant (Illinois) */
+static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
+                         const double *y0, const double *f0, const double *y1, const double *f1,
+                         double tau)
+{
+    double ga = guard_at(m, t, md, gi, y0), gb = g_end, a = 0.0, b = 1.0, s, gs;
+    int side = 0, it;
+    if (!(ga > 0.0)) return 0.0;
+    for (it = 0; it < KINK_MAX_IT; ++it) {
+        s = (a * gb - b * ga) / (gb - ga);
+        if (!(s > a && s < b)) s = 0.5 * (a + b);
+        gs = hermite_guard(m, t, md, gi, s, y0, f0, y1, f1, tau);
+        if (gs < 0.0) {
+            b = s;
+            gb = gs;
+            if (side == -1) ga = 0.5 * ga;
+            side = -1;
+        } else if (gs == 0.0) {
+            b = s;
+            break;
+        } else {
+            a = s;
+            ga = gs;
+            if (side == 1) gb = 0.5 * gb;
+            side = 1;
+        }
+        if (b - a <= KINK_TOL_S) break;
+    }
+    return b;
+}
+
+/* kpos of every pair for the held cell and the sub-modes of pairs in contact;
+ * with from_state also the regions */
+static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y, int from_state)
+{
+    int j;
+    gk_ph half;
+    half.i0 = md->i0;
+    half.i1 = md->i1;
+    half.w = 0.5;
+    for (j = 0; j < m->P; ++j) {
+        double km, em, esm, bm, kv, ev, es, bv;
+        slot_tables(m, t, &half, j, &km, &em, &esm, &bm);
+        md->kpos[j] = (km > 0.0) ? 1 : 0;
+        locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+        if (from_state) {
+            double d = y[2] - ev;
+            if (d > bv) md->reg[j] = 1;
+            else if (d < -bv) md->reg[j] = -1;
+            else md->reg[j] = 0;
+        }
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+            md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+        else
+            md->sub[j] = 0;
+    }
+}
+
+static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y)
+{
+    md->nd = floor(y[0] / m->dphi_rad);
+    cell_nodes(md, m->n_phi);
+    mode_sync(m, t, md, y, 1);
+}
+
+static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2,
+                         double *y, double h)
+{
+    double rem = h, f0[4], y1[4], f1[4];
+    int nev = 0, n_guard = 2 + 3 * m->P, q;
+    for (;;) {
+        double best = 2.0;
+        int best_gi = -1, have_f1 = 0, gi, any_neg;
+        deriv_locked(m, t, md, T1, T2, y, f0);
+        rk4_locked(m, t, md, T1, T2, y, f0, rem, y1);
+        if (nev >= GK_KINK_MAX_EVENTS) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            mode_from_state(m, t, md, y);
+            break;
+        }
+        any_neg = 0;
+        for (gi = 0; gi < n_guard && !any_neg; ++gi)
+            if (guard_at(m, t, md, gi, y1) < 0.0) any_neg = 1;
+        for (gi = 0; any_neg && gi < n_guard; ++gi) {
+            double g = guard_at(m, t, md, gi, y1), s;
+            if (!(g < 0.0)) continue;
+            if (!have_f1) {
+                deriv_locked(m, t, md, T1, T2, y1, f1);
+                have_f1 = 1;
+            }
+            s = guard_root(m, t, md, gi, g, y, f0, y1, f1, rem);
+            if (s < best) {
+                best = s;
+                best_gi = gi;
+            }
+        }
+        if (best_gi < 0) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            break;
+        }
+        if (best >= 1.0) {
+            for (q = 0; q < 4; ++q) y[q] = y1[q];
+            rem = 0.0;
+        } else if (best > 0.0) {
+            double tau = best * rem, ye[4];
+            rk4_locked(m, t, md, T1, T2, y, f0, tau, ye);
+            for (q = 0; q < 4; ++q) y[q] = ye[q];
+            rem = rem - tau;
+        }
+        nev += 1;
+        if (best_gi < 2) {
+            md->nd = (best_gi == 0) ? md->nd - 1.0 : md->nd + 1.0;
+            cell_nodes(md, m->n_phi);
+            mode_sync(m, t, md, y, 0);
+        } else {
+            int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
+            if (md->reg[j] == 0) {
+                md->reg[j] = (qq == 0) ? 1 : -1;
+                if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+                    double kv, ev, es, bv;
+                    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+                    md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+                }
+            } else if (qq == 0) {
+                md->reg[j] = 0;
+                md->sub[j] = 0;
+            } else if (md->sub[j] == 1) {
+                md->sub[j] = (qq == 1) ? 0 : 2;
+            } else {
+                md->sub[j] = 1;
+            }
+        }
+        if (!(rem > 0.0)) break;
+    }
+}
+
+/* ------------------------------------------------------------ public API */
+
+int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
+                  double omega1_0_rad_s, double T1_Nm)
+{
+    gk_tq t;
+    gk_ph c;
+    double Fm, S = 0.0, lo = 0.0, hi = 0.0;
+    int j, it, any = 0;
+    if (m == NULL || s == NULL) return GK_ERR_MODEL;
+    if (!isfinite(theta1_0_rad) || !isfinite(omega1_0_rad_s) || !isfinite(T1_Nm))
+        return GK_ERR_INPUT;
+    t = torque_bracket(m, T1_Nm);
+    c = phi_cell(m, theta1_0_rad);
+    Fm = T1_Nm / m->Rb1_m;
+    for (j = 0; j < m->P; ++j) {
+        double k, e, b;
+        slot_tables(m, &t, &c, j, &k, &e, NULL, &b);
+        S += k;
+        if (k > 0.0) {
+            if (!any || e - b < lo) lo = e - b;
+            if (!any || e + b > hi) hi = e + b;
+            any = 1;
+        }
+    }
+    if (!any || !(S > 0.0)) return GK_ERR_NOCONTACT;
+    lo = lo - fabs(Fm) / S - 1e-12;
+    hi = hi + fabs(Fm) / S + 1e-12;
+    for (it = 0; it < 200; ++it) {
+        double mid = 0.5 * (lo + hi), g = 0.0;
+        for (j = 0; j < m->P; ++j) {
+            double k, e, b, d;
+            slot_tables(m, &t, &c, j, &k, &e, NULL, &b);
+            if (!(k > 0.0)) continue;
+            d = mid - e;
+            if (d > b) g += k * (d - b);
+            else if (d < -b) g += k * (d + b);
+        }
+        g = g - Fm;
+        if (g < 0.0) lo = mid;
+        else hi = mid;
+    }
+    s->theta1_rad = theta1_0_rad;
+    s->omega1_rad_s = omega1_0_rad_s;
+    s->x_m = 0.5 * (lo + hi);
+    s->v_m_s = 0.0;
+    return GK_OK;
+}
+
+double gk_substeps(double H_s, double h_max_s)
+{
+    double n;
+    if (!finite_pos(H_s) || !finite_pos(h_max_s)) return 0.0;
+    n = ceil(H_s / h_max_s * (1.0 - 1e-12));
+    if (n < 1.0) n = 1.0;
+    if (!(n <= GK_MAX_SUBSTEPS)) return 0.0;
+    return n;
+}
+
+int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out)
+{
+    gk_tq t;
+    double F, km;
+    int j, P;
+    if (m == NULL || s == NULL || out == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm)) return GK_ERR_INPUT;
+    P = m->P;
+    t = torque_bracket(m, T1_Nm);
+    F = mesh_force(m, &t, s->theta1_rad, s->omega1_rad_s, s->x_m, s->v_m_s,
+                   out + GK_OUT_PAIR_FORCE, &km);
+    /* docs/model.md: mesh_force is the sum of pair_force */
+    out[GK_OUT_PINION_ANGLE] = s->theta1_rad;
+    out[GK_OUT_PINION_SPEED] = s->omega1_rad_s;
+    out[GK_OUT_GEAR_ANGLE] = (s->theta1_rad * m->Rb1_m - s->x_m) / m->Rb2_m;
+    out[GK_OUT_GEAR_SPEED] = (s->omega1_rad_s * m->Rb1_m - s->v_m_s) / m->Rb2_m;
+    out[GK_OUT_DTE] = s->x_m;
+    out[GK_OUT_MESH_FORCE] = F;
+    out[GK_OUT_MESH_STIFFNESS] = km;
+    for (j = 0; j < P; ++j)
+        out[GK_OUT_PAIR_FORCE + P + j] = (F != 0.0) ? out[GK_OUT_PAIR_FORCE + j] / F : 0.0;
+    return GK_OK;
+}
+
+int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
+               double H_s, double h_max_s, double *out)
+{
+    gk_tq t;
+    double y[4], k1[4], k2[4], k3[4], k4[4], yt[4];
+    double n, h;
+    long i, nsub;
+    int q;
+    if (m == NULL || s == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    n = gk_substeps(H_s, h_max_s);
+    if (n == 0.0) return GK_ERR_STEP;
+    nsub = (long)n;
+    h = H_s / n;
+    t = torque_bracket(m, T1_Nm);
+    y[0] = s->theta1_rad;
+    y[1] = s->omega1_rad_s;
+    y[2] = s->x_m;
+    y[3] = s->v_m_s;
+    if (m->integrator == GK_INTEGRATOR_RK4_KINK) {
+        gk_mode md;
+        if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+        mode_from_state(m, &t, &md, y);
+        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h);
+        nsub = 0;
+    }
+    for (i = 0; i < nsub; ++i) {
+        deriv(m, &t, T1_Nm, T2_Nm, y, k1);
+        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k1[q];
+        deriv(m, &t, T1_Nm, T2_Nm, yt, k2);
+        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k2[q];
+        deriv(m, &t, T1_Nm, T2_Nm, yt, k3);
+        for (q = 0; q < 4; ++q) yt[q] = y[q] + h * k3[q];
+        deriv(m, &t, T1_Nm, T2_Nm, yt, k4);
+        for (q = 0; q < 4; ++q)
+            y[q] = y[q] + h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q]);
+    }
+    for (q = 0; q < 4; ++q)
+        if (!isfinite(y[q])) return GK_ERR_NONFINITE;
+    s->theta1_rad = y[0];
+    s->omega1_rad_s = y[1];
+    s->x_m = y[2];
+    s->v_m_s = y[3];
+    if (out != NULL) return gk_outputs(m, s, T1_Nm, out);
+    return GK_OK;
+}

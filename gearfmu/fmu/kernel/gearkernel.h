@@ -1,0 +1,148 @@
+/*
+ * gearkernel.h -- the dynamic model of docs/model.md in C99.
+ *
+ * A two-inertia torsional spur gear pair indexed by the pinion angle, with P
+ * tooth-pair slots whose stiffness k (N/m), meshing error e (m) and half
+ * backlash b (m) come from the tables of gearfmu/tables/mesh_tables.py (seed 003 eq 1-6).
+ *
+ * Rules: no global or static mutable data (every bit of state lives in the
+ * structs below, owned by the caller), no allocation anywhere, never abort:
+ * every entry point returns a status code (GK_OK = 0 on success).
+ *
+ * Units: SI throughout (rad, rad/s, m, m/s, N, N/m, N*m, kg*m^2, s).
+ */
+#ifndef GEARKERNEL_H
+#define GEARKERNEL_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define GK_ABI_VERSION 2
+
+/* status codes */
+#define GK_OK 0
+#define GK_ERR_MODEL 1      /* bad table dimensions, pointers or scalars */
+#define GK_ERR_INPUT 2      /* non-finite torque or initial value */
+#define GK_ERR_STEP 3       /* communication step H or h_max not finite and > 0, or too many substeps */
+#define GK_ERR_NONFINITE 4  /* the state became non-finite; the state was left unchanged */
+#define GK_ERR_NOCONTACT 5  /* no slot has k > 0 at the initial angle: no equilibrium */
+#define GK_ERR_PARAM 6      /* damping ratio or damping model out of range */
+
+/* damping models (docs/model.md "Per-pair force") */
+#define GK_DAMPING_ELASTOBACKLASH 0
+#define GK_DAMPING_SEED003 1
+
+/* integrators (docs/model.md "Integration"): fixed-step classical RK4, and
+ * RK4 that steps exactly to every table node and contact-mode change */
+#define GK_INTEGRATOR_RK4 0
+#define GK_INTEGRATOR_RK4_KINK 1
+/* rk4_kink: most slots it accepts, and events located per substep before the
+ * rest of the substep is taken without detection */
+#define GK_KINK_MAX_SLOTS 32
+#define GK_KINK_MAX_EVENTS 1000
+
+/* layout of the output vector written by gk_do_step / gk_outputs
+ * (length gk_n_outputs(P) = GK_OUT_PAIR_FORCE + 2*P) */
+#define GK_OUT_PINION_ANGLE 0   /* rad */
+#define GK_OUT_PINION_SPEED 1   /* rad/s */
+#define GK_OUT_GEAR_ANGLE 2     /* rad */
+#define GK_OUT_GEAR_SPEED 3     /* rad/s */
+#define GK_OUT_DTE 4            /* m */
+#define GK_OUT_MESH_FORCE 5     /* N */
+#define GK_OUT_MESH_STIFFNESS 6 /* N/m */
+#define GK_OUT_PAIR_FORCE 7     /* P values, N; then P values load_sharing (1) */
+
+/* upper bound on the substeps of one communication step (guards a hang) */
+#define GK_MAX_SUBSTEPS 100000000.0
+
+typedef struct gk_model {
+    int P;                 /* slots */
+    int n_phi;             /* angle points per period */
+    int n_torque;          /* torque rows (>= 1) */
+    const double *torque_Nm;        /* [n_torque], strictly ascending */
+    const double *k_N_per_m;        /* [n_torque][n_temp][P][n_phi] */
+    const double *e_m;              /* [n_torque][n_temp][P][n_phi] */
+    const double *backlash_half_m;  /* [P][n_phi] */
+    double phi_period_rad;
+    double dphi_rad;                /* phi_period_rad / n_phi */
+    double Rb1_m, Rb2_m;            /* base radii */
+    double I1_kgm2, I2_kgm2;        /* inertias */
+    double k_mean_N_per_m;
+    double m_e_kg;                  /* I1 I2 / (I1 Rb2^2 + I2 Rb1^2) */
+    double damping_ratio;           /* zeta (1) */
+    double c_Ns_per_m;              /* 2 zeta sqrt(k_mean m_e) */
+    int damping_model;              /* GK_DAMPING_* */
+    int integrator;                 /* GK_INTEGRATOR_* (gk_init: RK4) */
+    /* temperature axis (docs/model.md "Temperature axis"; gk_init: none, n_temp = 1) */
+    int n_temp;                     /* temperature slices (>= 1) */
+    const double *temperature_C;    /* [n_temp], strictly ascending, degC (NULL when n_temp = 1 without axis) */
+    int temp_ia;                    /* selected slice */
+    int temp_two;                   /* 1: blend slices temp_ia, temp_ia + 1 with temp_w */
+    double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
+    double temperature_now_C;       /* the temperature selected last (degC) */
+} gk_model;
+
+typedef struct gk_state {
+    double theta1_rad;
+    double omega1_rad_s;
+    double x_m;     /* dynamic transmission error theta1*Rb1 - theta2*Rb2 */
+    double v_m_s;   /* dx/dt */
+} gk_state;
+
+/* size of the structs, so that a caller without the header (ctypes) can own them */
+int gk_abi_version(void);
+int gk_sizeof_model(void);
+int gk_sizeof_state(void);
+int gk_n_outputs(int P);
+
+/* Fill *m.  The arrays are borrowed (not copied): they must outlive m.
+ * Checks dimensions, finiteness and signs of the scalars; damping_ratio is
+ * set to 0 (call gk_set_damping). */
+int gk_init(gk_model *m, int P, int n_phi, int n_torque,
+            const double *torque_Nm, const double *k_N_per_m,
+            const double *e_m, const double *backlash_half_m,
+            double phi_period_rad, double Rb1_m, double Rb2_m,
+            double I1_kgm2, double I2_kgm2, double k_mean_N_per_m);
+
+/* Declare a temperature axis (call after gk_init): k and e are then laid out
+ * [n_torque][n_temp][P][n_phi].  temperature_C (degC, borrowed) finite and
+ * strictly ascending, n_temp >= 1.  Selects the first slice.  GK_ERR_MODEL otherwise. */
+int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C);
+
+/* Select the bulk temperature (degC) for the following steps and outputs:
+ * docs/model.md "Temperature axis" (node-wise linear blend of the bracketing
+ * slices; exactly one slice at a node).  Non-finite or outside
+ * [axis[0], axis[n_temp-1]] (no clamping): GK_ERR_INPUT, selection unchanged. */
+int gk_set_temperature(gk_model *m, double temperature_C);
+
+/* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_SEED003 */
+int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
+
+/* GK_INTEGRATOR_RK4 or GK_INTEGRATOR_RK4_KINK (the latter needs P <= GK_KINK_MAX_SLOTS);
+ * GK_ERR_PARAM otherwise. */
+int gk_set_integrator(gk_model *m, int integrator);
+
+/* Initial state of docs/model.md: theta1 = theta1_0, omega1 = omega1_0, v = 0,
+ * x by exactly 200 bisections of the quasi-static balance under F_m = T1/Rb1. */
+int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
+                  double omega1_0_rad_s, double T1_Nm);
+
+/* One communication step of length H_s with constant inputs T1, T2:
+ * n = max(1, ceil(H/h_max*(1 - 1e-12))) substeps of the model's integrator
+ * (classical RK4, or rk4_kink: docs/model.md).  On success
+ * writes the outputs (may be NULL) and returns GK_OK; on any error the state
+ * is left unchanged and the outputs are not written. */
+int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
+               double H_s, double h_max_s, double *out);
+
+/* Outputs at state s with pinion torque T1 (selects the torque row). */
+int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out);
+
+/* Number of substeps gk_do_step takes for (H, h_max); 0 if invalid. */
+double gk_substeps(double H_s, double h_max_s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GEARKERNEL_H */

@@ -1,0 +1,564 @@
+"""gearfmu FMU runtime: a thin pythonfmu Fmi2Slave over the compiled C kernel.
+
+TEMPLATE.  gearfmu.fmu.pythonfmu_build copies this file into every FMU under a unique
+module name and replaces the class name ``GearFmuSlave`` by a unique one
+(pythonfmu FMUs in one process share one interpreter and module cache).
+
+This file must import neither gearfmu nor numba: the host needs Python with
+numpy and the pythonfmu wrapper only.  Everything it needs sits in the FMU's
+``resources/``:
+
+* ``gearfmu_runtime.json`` -- variables (names, value references, start
+  values, kernel output positions; produced from modeldescription/variables.toml),
+  the kernel file name and the SHA-256 of every resource file;
+* ``tables.json`` + ``tables.bin`` -- the tooth-pair tables (format:
+  gearfmu/tables/mesh_tables.py, docs/tables.md), checked against their SHA-256 sums;
+* the kernel shared library (gearfmu/fmu/kernel/gearkernel.c), loaded with ctypes.
+
+The model is docs/model.md; the FMU behaviour is docs/fmu.md.
+"""
+import ctypes
+import hashlib
+import json
+import math
+import os
+import struct
+
+import numpy as np
+from pythonfmu import Fmi2Slave
+from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
+from pythonfmu.variables import Integer, Real
+
+RUNTIME_FILE = "gearfmu_runtime.json"
+TABLE_VERSIONS = (1, 2)  # docs/tables.md (2: operating axes with a temperature axis)
+TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects a bulk temperature axis (docs/model.md)
+#: inputs that may select the temperature axis, by what the axis is (docs/thermal.md); the
+#: variable table holds exactly one of them when the tables have a temperature axis
+TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
+
+# Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian
+# header, the raw bytes of the kernel's gk_state, the output vector, the values
+# of all non-output variables, a few runtime scalars, then the SHA-256 of all
+# that.  No pickle: plain bytes of POD data.
+STATE_MAGIC = b"GEARFMUS"
+STATE_VERSION = 1
+_STATE_HEAD = struct.Struct("<8sHHI32sIII")  # magic, version, flags, reserved, fingerprint, n_state, n_out, n_values
+_STATE_TAIL = struct.Struct("<ddQ")          # zeta applied (NaN = none), start time, accepted steps
+_FLAG_INITIALIZED, _FLAG_WARNED_RANGE, _FLAG_TERMINATED = 1, 2, 4
+
+_KERNEL_ERRORS = {
+    1: "bad table dimensions or scalars",
+    2: "non-finite input",
+    3: "communication step or max_step not finite and > 0 (or more than 1e8 substeps)",
+    4: "the state became non-finite (step too large for the stiffness? lower max_step)",
+    5: "no tooth pair in contact at the initial angle (tables have k = 0 there)",
+    6: "damping_ratio or damping_model out of range",
+}
+
+
+class GearFmuResourceError(ValueError):
+    """A resource file of the FMU is missing, corrupted or inconsistent."""
+
+
+def _sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _read_config(res):
+    cfg_path = os.path.join(res, RUNTIME_FILE)
+    try:
+        with open(cfg_path, "rb") as f:
+            return json.loads(f.read().decode("utf-8"))
+    except (OSError, ValueError) as exc:
+        raise GearFmuResourceError(f"resources/{RUNTIME_FILE}: cannot read ({exc})") from None
+
+
+def _load_resources(res, cfg):
+    """Verify every resource against its SHA-256; return (tables meta, arrays)."""
+    for fname, digest in cfg["sha256"].items():
+        p = os.path.join(res, fname)
+        if not os.path.isfile(p):
+            raise GearFmuResourceError(f"resources/{fname}: missing from the FMU")
+        if _sha256(p) != digest:
+            raise GearFmuResourceError(
+                f"resources/{fname}: SHA-256 checksum mismatch (file corrupted or tampered with); refusing to run")
+    with open(os.path.join(res, "tables.json"), "rb") as f:
+        meta = json.loads(f.read().decode("utf-8"))
+    if meta.get("version") not in TABLE_VERSIONS:
+        raise GearFmuResourceError(f"resources/tables.json: table format version {meta.get('version')!r} found; "
+                                   f"this runtime reads versions {list(TABLE_VERSIONS)}")
+    with open(os.path.join(res, "tables.bin"), "rb") as f:
+        binary = f.read()
+    if hashlib.sha256(binary).hexdigest() != meta.get("bin_sha256"):
+        raise GearFmuResourceError("resources/tables.bin: checksum differs from tables.json bin_sha256; refusing to run")
+    arrays = {}
+    for name, ent in meta["arrays"].items():
+        raw = binary[ent["offset"]: ent["offset"] + ent["nbytes"]]
+        if hashlib.sha256(raw).hexdigest() != ent["sha256"]:
+            raise GearFmuResourceError(f"resources/tables.bin: checksum mismatch in array {name!r}; refusing to run")
+        arrays[name] = np.ascontiguousarray(np.frombuffer(raw, dtype="<f8").reshape(ent["shape"]), dtype=np.float64)
+    return meta, arrays
+
+
+def _bind(lib):
+    c_int, c_double, c_void_p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
+    sigs = {
+        "gk_abi_version": ([], c_int),
+        "gk_sizeof_model": ([], c_int),
+        "gk_sizeof_state": ([], c_int),
+        "gk_n_outputs": ([c_int], c_int),
+        "gk_init": ([c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6, c_int),
+        "gk_set_damping": ([c_void_p, c_double, c_int], c_int),
+        "gk_set_integrator": ([c_void_p, c_int], c_int),
+        "gk_set_temperature_axis": ([c_void_p, c_int, c_void_p], c_int),
+        "gk_set_temperature": ([c_void_p, c_double], c_int),
+        "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
+        "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
+        "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
+    }
+    for name, (args, res) in sigs.items():
+        fn = getattr(lib, name)
+        fn.argtypes = args
+        fn.restype = res
+    return lib
+
+
+def _pin_wrapper_state(resources, cfg):
+    """Work around pythonfmu 0.7.0's exit crash (docs/fmu.md, gearfmu.fmu.pythonfmu_build.wrapper_exit_fix):
+    add one reference to the wrapper's static shared_ptr<PyState> so that its
+    two releases at process exit no longer write into freed memory.  Applied
+    at most once per loaded wrapper library, only to the exact wrapper binary
+    the offsets were taken from (checked by SHA-256), only on Linux."""
+    fix = cfg.get("wrapper_exit_fix")
+    if not fix or not hasattr(os, "RTLD_NOLOAD") or os.environ.get("GEARFMU_NO_WRAPPER_FIX"):
+        return "skipped"
+    wrapper = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "linux64",
+                           cfg["model_identifier"] + ".so")
+    if not os.path.isfile(wrapper) or _sha256(wrapper) != fix["binary_sha256"]:
+        return "skipped"
+    import sys
+    pinned = sys.__dict__.setdefault("_gearfmu_pinned_wrappers", set())
+    try:
+        lib = ctypes.CDLL(wrapper, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # holds the library loaded
+    except OSError:
+        return "skipped"
+    base = ctypes.cast(lib.fmi2Instantiate, ctypes.c_void_p).value
+    addr = base + int(fix["pystate_minus_fmi2Instantiate"])
+    if addr in pinned:
+        return "pinned"
+    ctrl = ctypes.c_void_p.from_address(addr + 8).value  # shared_ptr = {T*, control block*}
+    if not ctrl:
+        return "skipped"
+    use = ctypes.c_int.from_address(ctrl + 8)  # _Sp_counted_base: vptr, use count, weak count
+    if use.value < 1:
+        return "skipped"
+    use.value += 1
+    pinned.add(addr)
+    sys.__dict__.setdefault("_gearfmu_pinned_libs", []).append(lib)
+    return "pinned"
+
+
+class GearFmuSlave(Fmi2Slave):
+    """Two-inertia spur gear pair (docs/model.md) over the C kernel."""
+
+    author = "gearfmu"
+    description = "Spur gear pair, per-tooth-pair dynamic model (seed 003 eq 1-6)"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        res = self.resources
+        if res is None:
+            raise GearFmuResourceError("resources: the host gave no resource location")
+        cfg = _read_config(res)
+        try:  # first, so that even a refused instantiation cannot crash the host at exit
+            self._wrapper_fix = _pin_wrapper_state(res, cfg)
+        except Exception as exc:  # noqa: BLE001 - a workaround must never stop the FMU
+            self._wrapper_fix = f"failed: {exc!r}"
+        try:
+            meta, arr = _load_resources(res, cfg)
+        except GearFmuResourceError as exc:
+            self.log(str(exc), Fmi2Status.fatal)
+            raise
+        self.modelName = cfg["model_identifier"]
+        self._cfg = cfg
+        self._lib = _bind(ctypes.CDLL(os.path.join(res, cfg["kernel_file"])))
+        lib = self._lib
+        if lib.gk_abi_version() != cfg["kernel_abi_version"]:
+            raise GearFmuResourceError(f"resources/{cfg['kernel_file']}: kernel ABI version mismatch")
+        P, n_phi, nt = int(meta["slots"]), int(meta["n_phi"]), int(meta["n_torque"])
+        sc = meta["scalars"]
+        # keep every array referenced by self: the kernel borrows their memory
+        self._torque = arr["torque_Nm"]
+        self._k = arr["k_N_per_m"]
+        self._e = arr["e_m"]
+        self._b = arr["backlash_half_m"]
+        self._model = np.zeros(lib.gk_sizeof_model() // 8 + 2)
+        self._state = np.zeros(lib.gk_sizeof_state() // 8 + 1)
+        self._out = np.zeros(lib.gk_n_outputs(P))
+        self._pm = self._model.ctypes.data
+        self._ps = self._state.ctypes.data
+        self._po = self._out.ctypes.data
+        st = lib.gk_init(self._pm, P, n_phi, nt, self._torque.ctypes.data, self._k.ctypes.data,
+                         self._e.ctypes.data, self._b.ctypes.data, sc["phi_period_rad"],
+                         sc["base_radius_pinion_m"], sc["base_radius_gear_m"], sc["inertia_pinion_kgm2"],
+                         sc["inertia_gear_kgm2"], sc["k_mean_N_per_m"])
+        if st != 0:
+            msg = f"resources/tables.json: kernel rejects the tables ({_KERNEL_ERRORS.get(st, st)})"
+            self.log(msg, Fmi2Status.fatal)
+            raise GearFmuResourceError(msg)
+        self._temperature_range = None
+        if "temperature_C" in arr:  # version 2 tables with a temperature axis (docs/tables.md)
+            self._tax = arr["temperature_C"]
+            st = lib.gk_set_temperature_axis(self._pm, int(self._tax.size), self._tax.ctypes.data)
+            names = [n for n in TEMPERATURE_INPUTS if n in [v["name"] for v in cfg["variables"]]]
+            self._temp_name = names[0] if len(names) == 1 else TEMPERATURE_INPUT
+            if st != 0 or len(names) != 1:
+                msg = (f"resources/tables.json: temperature axis rejected by the kernel or not exactly one "
+                       f"of {list(TEMPERATURE_INPUTS)} inputs in the variable table")
+                self.log(msg, Fmi2Status.fatal)
+                raise GearFmuResourceError(msg)
+            self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
+        self._slots = P
+        self._torque_range = (float(self._torque[0]), float(self._torque[-1])) if nt > 1 else None
+        self._initialized = False
+        self._zeta_applied = None
+        self._warned_range = False
+        self._terminated = False
+        self._n_steps = 0  # accepted communication steps (part of the FMU state)
+        self._t0 = 0.0
+        self._fingerprint = hashlib.sha256(json.dumps(
+            [cfg["sha256"], lib.gk_abi_version(), lib.gk_sizeof_model(), lib.gk_sizeof_state(),
+             [v["name"] for v in cfg["variables"]]]).encode("utf-8")).digest()
+        self._v = {}
+        self._limits = {}
+        for ent in cfg["variables"]:
+            self._register(ent)
+
+    # ------------------------------------------------------------ variables
+    def _register(self, ent):
+        name = ent["name"]
+        causality = getattr(Fmi2Causality, ent["causality"])
+        variability = getattr(Fmi2Variability, ent["variability"])
+        initial = getattr(Fmi2Initial, ent["initial"]) if ent.get("initial") else None
+        cls = Integer if ent["type"] == "Integer" else Real
+        if ent["causality"] == "output":
+            idx = int(ent["output_index"])
+            out = self._out
+            getter = (lambda i=idx: out[i])
+            setter = None
+        else:
+            self._v[name] = ent["start"]
+            self._limits[name] = (ent.get("min"), ent.get("max"))
+            values = self._v
+            getter = (lambda n=name: values[n])
+            setter = (lambda x, n=name: values.__setitem__(n, x))
+        var = cls(name, causality=causality, variability=variability, initial=initial,
+                  description=ent.get("description"), getter=getter, setter=setter)
+        self.register_variable(var, nested=False)
+        if var.value_reference != ent["vr"]:
+            raise GearFmuResourceError(f"resources/{RUNTIME_FILE}: {name} registered with value reference "
+                                       f"{var.value_reference}, expected {ent['vr']}")
+
+    # --------------------------------------------------------------- checks
+    def _bad_value(self, name, t=None):
+        """A message if variable `name` is non-finite or outside its min/max, else None."""
+        val = self._v[name]
+        at = "" if t is None else f" at t = {t!r} s"
+        try:
+            fval = float(val)
+        except (TypeError, ValueError):
+            return f"{name} = {val!r}{at}: not a number"
+        if not math.isfinite(fval):
+            return f"{name} = {fval!r}{at}: not finite"
+        lo, hi = self._limits.get(name, (None, None))
+        if lo is not None and fval < lo:
+            return f"{name} = {fval!r}{at}: below its minimum {lo!r}"
+        if hi is not None and fval > hi:
+            return f"{name} = {fval!r}{at}: above its maximum {hi!r}"
+        return None
+
+    def _check_parameters(self):
+        msgs = [m for m in (self._bad_value(n) for n in ("damping_ratio", "pinion_speed_start",
+                                                          "pinion_angle_start", "max_step", "damping_model"))
+                if m]
+        if not msgs and not float(self._v["max_step"]) > 0.0:
+            msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
+        if not msgs and int(self._v["damping_model"]) not in (0, 1):
+            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (seed003)")
+        if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1):
+            msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4) or 1 (rk4_kink)")
+        return msgs
+
+    def _apply_damping(self):
+        zeta = self._v["damping_ratio"]
+        if zeta == self._zeta_applied:
+            return True
+        msg = self._bad_value("damping_ratio")
+        if msg is None:
+            st = self._lib.gk_set_damping(self._pm, float(zeta), int(self._v["damping_model"]))
+            if st != 0:
+                msg = f"damping_ratio = {zeta!r}: {_KERNEL_ERRORS.get(st, st)}"
+        if msg is not None:
+            self.log(msg + "; rejected", Fmi2Status.error)
+            return False
+        self._zeta_applied = zeta
+        return True
+
+    def _apply_temperature(self, t):
+        """Select the temperature (bulk, oil or gearbox) in the kernel; a message if it is NaN/inf or
+        outside the temperature axis (policy: reject, no clamping; docs/fmu.md)."""
+        if self._temperature_range is None:
+            return None
+        val = self._v[self._temp_name]
+        lo, hi = self._temperature_range
+        try:
+            T = float(val)
+        except (TypeError, ValueError):
+            return f"{self._temp_name} = {val!r} at t = {t!r} s: not a number"
+        if not math.isfinite(T) or not lo <= T <= hi:
+            return (f"{self._temp_name} = {T!r} degC at t = {t!r} s outside the table range "
+                    f"[{lo!r}, {hi!r}] degC")
+        st = self._lib.gk_set_temperature(self._pm, T)
+        if st != 0:
+            return f"{self._temp_name} = {T!r} degC at t = {t!r} s: {_KERNEL_ERRORS.get(st, st)}"
+        return None
+
+    def _check_torque_range(self, T1, t):
+        if self._torque_range is None:
+            return
+        lo, hi = self._torque_range
+        if T1 < lo or T1 > hi:
+            if not self._warned_range:
+                self.log(f"pinion_torque = {T1!r} N.m at t = {t!r} s is outside the tables' torque axis "
+                         f"[{lo!r}, {hi!r}] N.m; the tables are used at the nearest end (docs/model.md)",
+                         Fmi2Status.warning)
+                self._warned_range = True
+        else:
+            self._warned_range = False
+
+    # ---------------------------------------------------------------- FMI
+    def _init_state(self, t):
+        msgs = self._check_parameters()
+        msg = self._bad_value("pinion_torque", t)
+        if msg:
+            msgs.append(msg)
+        if msgs:
+            for m in msgs:
+                self.log(m + "; cannot compute the initial state", Fmi2Status.error)
+            return False
+        self._zeta_applied = None
+        if not self._apply_damping():
+            return False
+        if "integrator" in self._v:  # docs/model.md "Integration"
+            st = self._lib.gk_set_integrator(self._pm, int(self._v["integrator"]))
+            if st != 0:
+                self.log(f"integrator = {self._v['integrator']!r}: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
+                return False
+        msg = self._apply_temperature(t)
+        if msg:
+            self.log(msg + "; cannot compute the initial state", Fmi2Status.error)
+            return False
+        T1 = float(self._v["pinion_torque"])
+        st = self._lib.gk_initialize(self._pm, self._ps, float(self._v["pinion_angle_start"]),
+                                     float(self._v["pinion_speed_start"]), T1)
+        if st == 0:
+            st = self._lib.gk_outputs(self._pm, self._ps, T1, self._po)
+        if st != 0:
+            self.log(f"initial state: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
+            return False
+        self._check_torque_range(T1, t)
+        self._initialized = True
+        return True
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._t0 = start_time
+
+    def exit_initialization_mode(self):
+        # never raise here: a failure is logged and reported by the first do_step
+        try:
+            self._init_state(getattr(self, "_t0", 0.0))
+        except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
+            self.log(f"initialisation failed: {exc!r}", Fmi2Status.error)
+            self._initialized = False
+
+    def terminate(self):
+        self._terminated = True
+
+    def do_step(self, current_time, step_size):
+        try:
+            if self._terminated:
+                self.log(f"do_step at t = {current_time!r} s after fmi2Terminate: refused (only fmi2Reset or "
+                         f"fmi2FreeInstance may follow); state unchanged", Fmi2Status.error)
+                return False
+            if not self._initialized and not self._init_state(current_time):
+                return False
+            msgs = [m for m in (self._bad_value("pinion_torque", current_time),
+                                self._bad_value("gear_torque", current_time)) if m]
+            if not msgs:
+                msg = self._apply_temperature(current_time)
+                if msg:
+                    msgs.append(msg)
+            if not (isinstance(step_size, float) and math.isfinite(step_size) and step_size > 0.0):
+                msgs.append(f"communication step size {step_size!r} at t = {current_time!r} s: must be finite and > 0")
+            if msgs:
+                for m in msgs:
+                    self.log(m + "; step rejected, state unchanged", Fmi2Status.discard)
+                return False
+            if not self._apply_damping():
+                return False
+            T1 = float(self._v["pinion_torque"])
+            self._check_torque_range(T1, current_time)
+            st = self._lib.gk_do_step(self._pm, self._ps, T1, float(self._v["gear_torque"]),
+                                      float(step_size), float(self._v["max_step"]), self._po)
+            if st != 0:
+                self.log(f"step at t = {current_time!r} s, H = {step_size!r} s rejected: "
+                         f"{_KERNEL_ERRORS.get(st, st)}; state unchanged", Fmi2Status.discard)
+                return False
+            self._n_steps += 1
+            return True
+        except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
+            self.log(f"do_step failed: {exc!r}", Fmi2Status.error)
+            return False
+
+    # ------------------------------------------------- get/set, never raising
+    # pythonfmu 0.7.0's wrapper turns any Python exception into fmi2Fatal and
+    # then releases the slave object while keeping the dangling pointer (a
+    # later call or fmi2FreeInstance touches freed memory).  So nothing below
+    # raises: a bad call is logged with its reason (status error) and ignored;
+    # a getter returns NaN / 0 for value references it cannot serve.
+    def _guarded_get(self, kind, vrs, fill):
+        try:
+            return getattr(super(), "get_" + kind)(vrs)
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2Get{kind.capitalize()}({list(vrs)!r}) refused: {exc}; returned {fill!r}",
+                     Fmi2Status.error)
+            return [fill] * len(vrs)
+
+    def _guarded_set(self, kind, vrs, values):
+        try:
+            if self._terminated:
+                self.log(f"fmi2Set{kind.capitalize()}({list(vrs)!r}) after fmi2Terminate: ignored",
+                         Fmi2Status.error)
+                return
+            getattr(super(), "set_" + kind)(vrs, values)
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2Set{kind.capitalize()}({list(vrs)!r}) refused: {exc}", Fmi2Status.error)
+
+    def get_real(self, vrs):
+        return self._guarded_get("real", vrs, float("nan"))
+
+    def get_integer(self, vrs):
+        return self._guarded_get("integer", vrs, 0)
+
+    def get_boolean(self, vrs):
+        return self._guarded_get("boolean", vrs, False)
+
+    def get_string(self, vrs):
+        return self._guarded_get("string", vrs, "")
+
+    def set_real(self, vrs, values):
+        self._guarded_set("real", vrs, values)
+
+    def set_integer(self, vrs, values):
+        self._guarded_set("integer", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._guarded_set("boolean", vrs, values)
+
+    def set_string(self, vrs, values):
+        self._guarded_set("string", vrs, values)
+
+    # ------------------------------------------------------------ FMU state
+    # The wrapper keeps whatever _get_fmu_state returns as the fmi2FMUstate and
+    # hands it to _set_fmu_state and to the static _fmu_state_to_bytes.  Our
+    # state object is already the serialized bytes (immutable, so a stored
+    # state can be set any number of times).
+    def _state_values(self):
+        return [ent["name"] for ent in self._cfg["variables"] if ent["causality"] != "output"]
+
+    def _get_fmu_state(self):
+        try:
+            names = self._state_values()
+            flags = ((_FLAG_INITIALIZED if self._initialized else 0) | (_FLAG_WARNED_RANGE if self._warned_range else 0)
+                     | (_FLAG_TERMINATED if self._terminated else 0))
+            state = self._state.tobytes()
+            body = b"".join([
+                _STATE_HEAD.pack(STATE_MAGIC, STATE_VERSION, flags, 0, self._fingerprint, len(state),
+                                 self._out.size, len(names)),
+                state, self._out.astype("<f8").tobytes(),
+                np.array([float(self._v[n]) for n in names], dtype="<f8").tobytes(),
+                _STATE_TAIL.pack(float("nan") if self._zeta_applied is None else float(self._zeta_applied),
+                                 float(self._t0), int(self._n_steps)),
+            ])
+            return body + hashlib.sha256(body).digest()
+        except Exception as exc:  # noqa: BLE001
+            self.log(f"fmi2GetFMUstate failed: {exc!r}; the state returned cannot be set", Fmi2Status.error)
+            return b""
+
+    def _set_fmu_state(self, state):
+        try:
+            msg = self._restore(state)
+        except Exception as exc:  # noqa: BLE001
+            msg = repr(exc)
+        if msg:
+            self.log(f"fmi2SetFMUstate refused: {msg}; instance state unchanged", Fmi2Status.error)
+
+    def _restore(self, state):
+        if not isinstance(state, (bytes, bytearray)):
+            return f"not a gearfmu state (a {type(state).__name__})"
+        state = bytes(state)
+        hs, ts = _STATE_HEAD.size, _STATE_TAIL.size
+        if len(state) < hs + ts + 32 or state[:8] != STATE_MAGIC:
+            return "not a gearfmu state (bad magic or too short)"
+        magic, version, flags, _, fp, n_state, n_out, n_values = _STATE_HEAD.unpack_from(state, 0)
+        if version != STATE_VERSION:
+            return f"state format version {version} found; this runtime reads version {STATE_VERSION}"
+        if hashlib.sha256(state[:-32]).digest() != state[-32:]:
+            return "state checksum mismatch (bytes corrupted)"
+        if fp != self._fingerprint:
+            return "the state belongs to a different FMU (tables, kernel or variables differ)"
+        names = self._state_values()
+        if (n_state != self._state.nbytes or n_out != self._out.size or n_values != len(names)
+                or len(state) != hs + n_state + 8 * (n_out + n_values) + ts + 32):
+            return "state sizes do not match this FMU"
+        o = hs
+        kernel_state = np.frombuffer(state, dtype=np.float64, count=n_state // 8, offset=o)
+        o += n_state
+        out = np.frombuffer(state, dtype="<f8", count=n_out, offset=o)
+        o += 8 * n_out
+        values = np.frombuffer(state, dtype="<f8", count=n_values, offset=o)
+        o += 8 * n_values
+        zeta, t0, n_steps = _STATE_TAIL.unpack_from(state, o)
+        if math.isfinite(zeta):
+            st = self._lib.gk_set_damping(self._pm, zeta, int(values[names.index("damping_model")]))
+            if st != 0:
+                return f"damping_ratio = {zeta!r} in the state: {_KERNEL_ERRORS.get(st, st)}"
+        if flags & _FLAG_INITIALIZED and "integrator" in names:  # a model setting applied at initialisation
+            st = self._lib.gk_set_integrator(self._pm, int(values[names.index("integrator")]))
+            if st != 0:
+                return f"integrator in the state: {_KERNEL_ERRORS.get(st, st)}"
+        # from here on nothing can fail: copy everything in place
+        self._zeta_applied = zeta if math.isfinite(zeta) else None
+        self._state[:] = kernel_state
+        self._out[:] = out
+        types = {ent["name"]: ent["type"] for ent in self._cfg["variables"]}
+        for n, val in zip(names, values.tolist()):
+            self._v[n] = int(val) if types[n] == "Integer" else val
+        self._initialized = bool(flags & _FLAG_INITIALIZED)
+        self._warned_range = bool(flags & _FLAG_WARNED_RANGE)
+        self._terminated = bool(flags & _FLAG_TERMINATED)
+        self._t0 = t0
+        self._n_steps = n_steps
+        return None
+
+    @staticmethod
+    def _fmu_state_to_bytes(state):
+        return state if isinstance(state, bytes) else b""
+
+    @staticmethod
+    def _fmu_state_from_bytes(state):
+        return bytes(state)  # checked by _set_fmu_state

@@ -1,0 +1,393 @@
+"""Build the *standalone* gearfmu FMU: FMI 2.0 Co-Simulation in C, no Python.
+
+The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` and the C kernel
+``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
+into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
+sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
+2.0 headers (copied from fmpy's ``c-code`` folder), so any other platform can
+compile it.  The tables sit in ``resources/`` as in the pythonfmu FMU; because
+C has no JSON parser the builder also writes ``resources/gearfmu_standalone.txt``
+(key=value lines: GUID, table dimensions and byte offsets, scalars as C99
+hexadecimal floats -- exact --, the SHA-256 of tables.bin, and the variable
+table with the value references of modeldescription/variables.toml).
+
+FMU layout (docs/standalone.md)::
+
+    modelDescription.xml                 from the spec (gearfmu.fmu.modeldesc), CoSimulation
+                                         needsExecutionTool=false, FMU state supported, SourceFiles
+    binaries/linux64/<id>.so             fmi2_gear.c + gearkernel.c, gcc -O2 -ffp-contract=off
+    sources/                             fmi2_gear.c gearkernel.c gearkernel.h fmi2*.h BUILD.txt CMakeLists.txt
+    resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
+    resources/gearfmu_standalone.txt     what the C layer reads at instantiation
+    resources/provenance.json            who/what/when built this FMU
+    resources/scene.toml                 the scene (when given)
+    resources/validation/                the validation record (:func:`validation_record`)
+
+:func:`validation_record` is shared with the pythonfmu builder
+(:func:`gearfmu.fmu.pythonfmu_build.build_fmu`): every FMU carries its scene, package and
+dependency versions, table checksums and a reference result CSV of the native
+solver over the FMU's DefaultExperiment -- the way the Modelica Reference-FMUs
+carry their reference results.
+"""
+from __future__ import annotations
+
+import csv
+import datetime
+import hashlib
+import importlib.metadata
+import io
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import uuid
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+from typing import Dict, Optional, Union
+
+from .. import __version__
+from .pythonfmu_build import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
+                       _compiler_version, _integrator_code, _platform_dir, INTEGRATORS,
+                       check_build_arguments, check_output_arguments,
+                       find_c_compiler, temperature_input)
+from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
+                        model_description_xml)
+from ..tables.mesh_tables import MeshTables
+
+HERE = Path(__file__).resolve().parent
+LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
+FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+CONFIG_FILE = "gearfmu_standalone.txt"
+CONFIG_FORMAT = "gearfmu-standalone"
+CONFIG_VERSION = 1
+#: compile flags of the standalone binary: the kernel's, plus hidden visibility so
+#: only the fmi2* functions are exported (two gear FMUs in one process never
+#: interpose each other's kernel symbols)
+STANDALONE_CFLAGS = (*CFLAGS, "-fvisibility=hidden")
+VALIDATION_DIR = "resources/validation"
+#: packages whose versions the validation record names
+RECORD_PACKAGES = ("numpy", "scipy", "numba", "fmpy", "pythonfmu", "libcosimpy")
+
+
+def fmi2_header_dir() -> Path:
+    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
+    import fmpy
+
+    d = Path(fmpy.__file__).resolve().parent / "c-code"
+    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
+    if missing:
+        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
+    return d
+
+
+def copy_sources(dest_dir) -> Path:
+    """Copy every source the standalone binary needs into ``dest_dir``."""
+    dest = Path(dest_dir)
+    dest.mkdir(parents=True, exist_ok=True)
+    for src in (LAYER_SOURCE, KERNEL_SOURCE, KERNEL_HEADER):
+        shutil.copy2(src, dest / src.name)
+    hdr = fmi2_header_dir()
+    for h in FMI2_HEADERS:
+        shutil.copy2(hdr / h, dest / h)
+    return dest
+
+
+def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None) -> list:
+    """Compile the FMU binary from ``sources_dir``; return the command used.
+
+    ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
+    -o <lib> fmi2_gear.c gearkernel.c -lm``
+    """
+    cc = cc or find_c_compiler()
+    src = Path(sources_dir)
+    out_lib = Path(out_lib)
+    out_lib.parent.mkdir(parents=True, exist_ok=True)
+    cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib), str(src / LAYER_SOURCE.name),
+           str(src / KERNEL_SOURCE.name), "-lm"]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    except OSError as exc:
+        raise CompilerNotFoundError(f"C compiler {cc!r}: cannot run ({exc})") from None
+    if proc.returncode != 0:
+        raise FmuBuildError(f"standalone binary: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+    return cmd
+
+
+def _hexf(v) -> str:
+    """A float as a C99 hexadecimal literal (exact; strtod reads it)."""
+    return float(v).hex()
+
+
+def _cfg_num(v, typ: str) -> str:
+    if v is None:
+        return ""
+    return str(int(v)) if typ == "Integer" else _hexf(v)
+
+
+def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
+                meta_bytes: bytes, bin_bytes: bytes) -> str:
+    """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md)."""
+    meta = json.loads(meta_bytes.decode("utf-8"))
+    sc = meta["scalars"]
+    lines = [
+        "# gearfmu standalone runtime configuration (written by gearfmu.fmu.standalone_build; read by fmi2_gear.c)",
+        "# floats are C99 hexadecimal literals (exact); var = vr|causality|variability|type|output_index|start|min|max|name",
+        f"format={CONFIG_FORMAT}", f"version={CONFIG_VERSION}",
+        f"model_identifier={model_identifier}", f"guid={guid}",
+        f"slots={int(meta['slots'])}", f"n_phi={int(meta['n_phi'])}", f"n_torque={int(meta['n_torque'])}",
+        f"tables_bytes={len(bin_bytes)}", f"tables_sha256={hashlib.sha256(bin_bytes).hexdigest()}",
+    ]
+    for name in ("torque_Nm", "k_N_per_m", "e_m", "backlash_half_m"):
+        lines.append(f"offset.{name}={int(meta['arrays'][name]['offset'])}")
+    if "temperature_C" in meta["arrays"]:  # version 2 temperature axis (docs/tables.md)
+        lines.append(f"n_temperature={int(meta['n_temperature'])}")
+        lines.append(f"offset.temperature_C={int(meta['arrays']['temperature_C']['offset'])}")
+    for name in ("phi_period_rad", "base_radius_pinion_m", "base_radius_gear_m", "inertia_pinion_kgm2",
+                 "inertia_gear_kgm2", "k_mean_N_per_m"):
+        lines.append(f"{name}={_hexf(sc[name])}")
+    lines.append(f"n_vars={len(variables)}")
+    for v in variables:
+        if "|" in v.name:
+            raise FmuBuildError(f"variable {v.name!r}: '|' not allowed in names")
+        oi = "" if v.output_index is None else str(int(v.output_index))
+        lines.append("var=" + "|".join([str(v.value_reference), v.causality, v.variability, v.type, oi,
+                                        _cfg_num(v.start, v.type), _cfg_num(v.min, v.type),
+                                        _cfg_num(v.max, v.type), v.name]))
+    return "\n".join(lines) + "\n"
+
+
+def standalone_model_description(xml: bytes, source_files) -> bytes:
+    """Turn the spec's model description into the standalone one: no execution
+    tool needed, FMU state get/set/serialize offered, ``<SourceFiles>`` listed."""
+    root = ET.fromstring(xml)
+    cs = root.find("CoSimulation")
+    if cs is None:
+        raise FmuBuildError("modelDescription.xml: no CoSimulation element")
+    cs.set("needsExecutionTool", "false")
+    cs.set("canGetAndSetFMUstate", "true")
+    cs.set("canSerializeFMUstate", "true")
+    for child in list(cs):
+        cs.remove(child)
+    sf = ET.SubElement(cs, "SourceFiles")
+    for name in source_files:
+        ET.SubElement(sf, "File", {"name": name})
+    ET.indent(root, space="  ")
+    return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
+
+
+# ------------------------------------------------------------ validation record
+def _versions() -> Dict[str, Optional[str]]:
+    out = {"gearfmu": __version__, "python": sys.version.split()[0]}
+    for pkg in RECORD_PACKAGES:
+        try:
+            out[pkg] = importlib.metadata.version(pkg)
+        except importlib.metadata.PackageNotFoundError:
+            out[pkg] = None
+    return out
+
+
+def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str, parameters: dict,
+                      stop_time_s: float, output_interval_s: float, scene_text: Optional[str] = None,
+                      compiler: Optional[str] = None) -> Dict[str, bytes]:
+    """The validation record every gearfmu FMU carries (both runtimes), as
+    ``{path inside the FMU: bytes}`` under ``resources/validation/``.
+
+    Files: ``record.json`` (runtime, package and dependency versions, platform,
+    compiler, parameters, table checksums -- tables.bin and every array --,
+    the experiment, the reference file's SHA-256 and the agreement criterion),
+    ``reference_result.csv`` (the native numba solver, :func:`gearfmu.dynamics.native.simulate`,
+    over the FMU's DefaultExperiment with the FMU's start values: communication
+    step = stepSize, same max_step, so the FMU reproduces it to round-off when
+    a master steps it at stepSize) and ``scene.toml`` when a scene was given.
+    ``parameters`` keys: damping_ratio, pinion_speed_start_rad_s,
+    pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
+    max_step_s, damping_model (0/1), optionally integrator (0/1).  The pattern follows the Modelica
+    Reference-FMUs, which carry their reference result CSV inside the FMU.
+    """
+    from .compare import native_columns, output_names
+    from ..dynamics.native import DAMPING_MODELS, simulate
+
+    import inspect
+
+    names_by_code = {v: k for k, v in DAMPING_MODELS.items()}
+    p = dict(parameters)
+    extra = {}
+    if int(p.get("integrator", 0)) != 0 or "integrator" in inspect.signature(simulate).parameters:
+        extra["integrator"] = {v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))]
+    if p.get("bulk_temperature_start_C") is not None:
+        extra["bulk_temperature_C"] = float(p["bulk_temperature_start_C"])
+    res = simulate(tables, **extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s,
+                   max_step_s=p["max_step_s"], pinion_torque_Nm=p["pinion_torque_start_Nm"],
+                   gear_torque_Nm=p["gear_torque_start_Nm"],
+                   pinion_speed_start_rad_s=p["pinion_speed_start_rad_s"], damping_ratio=p["damping_ratio"],
+                   damping_model=names_by_code[int(p["damping_model"])],
+                   pinion_angle_start_rad=p.get("pinion_angle_start_rad", 0.0))
+    cols = native_columns(res, tables.slots)
+    names = output_names(tables.slots)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", *names])
+    for i in range(len(res.time_s)):
+        w.writerow([repr(float(res.time_s[i]))] + [repr(float(cols[n][i])) for n in names])
+    ref = buf.getvalue().encode("utf-8")
+    meta_bytes, bin_bytes = tables.to_bytes()
+    meta = json.loads(meta_bytes.decode("utf-8"))
+    record = {
+        "format": "gearfmu-validation-record", "version": 1,
+        "runtime": runtime, "model_identifier": model_identifier,
+        "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "versions": _versions(), "platform": platform.platform(), "machine": platform.machine(),
+        "compiler": compiler,
+        "parameters": p,
+        "tables": {"tables_bin_sha256": hashlib.sha256(bin_bytes).hexdigest(),
+                   "tables_json_sha256": hashlib.sha256(meta_bytes).hexdigest(),
+                   "arrays_sha256": {k: v["sha256"] for k, v in meta["arrays"].items()},
+                   "slots": tables.slots, "n_phi": tables.n_phi, "n_torque": tables.n_torque},
+        "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+        "reference": {
+            "file": "reference_result.csv", "sha256": hashlib.sha256(ref).hexdigest(),
+            "solver": "gearfmu.dynamics.native.simulate (numba, docs/model.md RK4)",
+            "start_time_s": 0.0, "stop_time_s": stop_time_s, "output_interval_s": output_interval_s,
+            "substeps_per_interval": int(res.substeps), "rows": int(len(res.time_s)),
+            "criterion": "every output within 1e-9 of its range in this file when a master steps the FMU "
+                         "with communication step = output_interval_s and the start values above",
+            "native_wall_s": res.wall_s,
+        },
+    }
+    out = {f"{VALIDATION_DIR}/record.json": json.dumps(record, indent=1, default=str).encode("utf-8"),
+           f"{VALIDATION_DIR}/reference_result.csv": ref}
+    if scene_text is not None:
+        out[f"{VALIDATION_DIR}/scene.toml"] = scene_text.encode("utf-8")
+    return out
+
+
+# --------------------------------------------------------------------- build
+def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair",
+                         damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
+                         pinion_torque_start_Nm: float = 100.0, gear_torque_start_Nm: Optional[float] = None,
+                         max_step_s: float = 1e-5, damping_model: Union[int, str] = 0,
+                         stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
+                         scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
+                         spec_path=None, cc: Optional[str] = None, validation: bool = True,
+                         integrator: Union[int, str] = 1) -> Path:
+    """Build the standalone FMI 2.0 CS FMU of ``tables``; return its path.
+
+    Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
+    ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
+    0/"rk4" or 1/"rk4_kink" (default), the FMU parameter ``integrator``); ``validation``
+    False skips the validation record (and its native run).  Written under a
+    temporary name beside ``out_path`` and renamed at the end.
+    """
+    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
+        tables, model_name=model_name, damping_ratio=damping_ratio,
+        pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
+        pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+        max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+        damping_model=damping_model)
+    ig = _integrator_code(integrator, tables.slots)
+    out_path = check_output_arguments(out_path, scene_text)
+    plat = _platform_dir()  # the binary folder is named after the build machine's platform
+    ext = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
+
+    spec = load_spec(spec_path)
+    variables = expand_variables(spec, tables.slots, features_of(tables))
+    starts = {"pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
+              "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm}
+    if any(v.name == "integrator" for v in variables):
+        starts["integrator"] = ig
+    elif ig != 0:
+        raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")
+    variables = apply_start_values(variables, starts)
+    variables, temp0 = temperature_input(variables, tables)
+
+    meta_bytes, bin_bytes = tables.to_bytes()
+    digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
+    identifier = f"gearfmu_sa_{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
+    guid = "{" + str(uuid.uuid4()) + "}"
+    cc = cc or find_c_compiler()
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    params = {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
+              "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
+              "damping_model": dm, "integrator": ig}
+    if temp0 is not None:
+        params["bulk_temperature_start_C"] = temp0
+
+    with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
+        root = Path(tmpd) / "fmu"
+        src = copy_sources(root / "sources")
+        lib = root / "binaries" / plat / (identifier + ext)
+        cmd = compile_standalone(src, lib, cc=cc)
+        build_line = (f"{Path(cc).name} {' '.join(STANDALONE_CFLAGS)} -I. -o {identifier}{ext} "
+                      f"{LAYER_SOURCE.name} {KERNEL_SOURCE.name} -lm")
+        (src / "BUILD.txt").write_text(
+            "Build the binary of this FMU from these sources (C99, FMI 2.0 headers included):\n"
+            f"  {build_line}\n"
+            f"and place it as binaries/<platform>/{identifier}{ext} (Windows: .dll; the fmi2* functions are\n"
+            "exported unprefixed). -ffp-contract=off keeps the arithmetic bit-identical to the native solver.\n",
+            encoding="utf-8")
+        (src / "CMakeLists.txt").write_text(
+            "cmake_minimum_required(VERSION 3.10)\n"
+            f"project({identifier} C)\n"
+            f"add_library({identifier} SHARED fmi2_gear.c gearkernel.c)\n"
+            f"set_target_properties({identifier} PROPERTIES PREFIX \"\" C_STANDARD 99 C_VISIBILITY_PRESET hidden)\n"
+            f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}})\n"
+            "if(NOT MSVC)\n"
+            f"  target_compile_options({identifier} PRIVATE -ffp-contract=off)\n"
+            f"  target_link_libraries({identifier} m)\n"
+            "endif()\n", encoding="utf-8")
+        res = root / "resources"
+        res.mkdir()
+        (res / "tables.json").write_bytes(meta_bytes)
+        (res / "tables.bin").write_bytes(bin_bytes)
+        (res / CONFIG_FILE).write_text(config_text(tables, variables, guid=guid, model_identifier=identifier,
+                                                   meta_bytes=meta_bytes, bin_bytes=bin_bytes), encoding="utf-8")
+        if scene_text is not None:
+            (res / "scene.toml").write_text(scene_text, encoding="utf-8")
+        compiler = _compiler_version(cc)
+        provenance = {
+            "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone",
+            "model_name": model_name, "model_identifier": identifier, "guid": guid,
+            "parameters": dict(params, stop_time_s=tstop, output_interval_s=dt),
+            "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(), "tables_provenance": tables.provenance,
+            "binary": {"file": lib.name, "sha256": hashlib.sha256(lib.read_bytes()).hexdigest(),
+                       "compiler": compiler, "flags": list(STANDALONE_CFLAGS), "command": build_line,
+                       "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                                          for p in sorted(src.iterdir())}},
+            "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+            "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(spec.path).name,
+        }
+        (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
+        if validation:
+            for rel, data in validation_record(tables, runtime="standalone", model_identifier=identifier,
+                                               parameters=params, stop_time_s=tstop, output_interval_s=dt,
+                                               scene_text=scene_text, compiler=compiler).items():
+                p = root / rel
+                p.parent.mkdir(parents=True, exist_ok=True)
+                p.write_bytes(data)
+        xml = model_description_xml(spec, variables, model_name=model_name, model_identifier=identifier,
+                                    guid=guid, stop_time_s=tstop, step_size_s=dt,
+                                    generation_tool=f"gearfmu {__version__} (standalone runtime)",
+                                    generation_date=now, version=__version__)
+        check_model_description(xml, variables)
+        xml = standalone_model_description(xml, [LAYER_SOURCE.name, KERNEL_SOURCE.name])
+        check_model_description(xml, variables)
+        (root / "modelDescription.xml").write_bytes(xml)
+
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
+        try:
+            with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as zout:
+                zout.write(root / "modelDescription.xml", "modelDescription.xml")
+                for p in sorted(root.rglob("*")):
+                    rel = p.relative_to(root).as_posix()
+                    if p.is_file() and rel != "modelDescription.xml":
+                        zout.write(p, rel)
+            os.replace(part, out_path)
+        finally:
+            if part.exists():
+                part.unlink()
+    return out_path

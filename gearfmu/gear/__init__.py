@@ -1,0 +1,1 @@
+"""The gear pair: specs, geometry, stiffness, deviations, loaded mesh, thermal state."""

@@ -1,0 +1,1 @@
+"""The scene: TOML reader and its [envelope]/[accuracy] sections."""

@@ -1,0 +1,1 @@
+"""Mesh tables: the format, the precompute, CSV import, synthetic shapes."""

@@ -1,0 +1,479 @@
+"""Mesh stiffness of a spur pair evaluated DIRECTLY at given meshing positions (issue 3).
+
+No table, no film grid, no interpolation: at every requested meshing position every tooth
+pair in contact and every face-width slice gets its own contact stiffness k_l from the chosen
+model, solved at that pair's contact position and that slice's load, and the slices are
+combined with the tooth and foundation compliances exactly as the tables combine them:
+
+    k_tooth^i = 1 / (1/k_l + 1/k_tp + 1/k_tg)           (seed 000 eq 13; bending, shear,
+                                                          axial of both teeth eq 14-15)
+    foundation per pair (Sainsot; eq 12, or eq 11 with the shared-foundation correction)
+    slice loads F_jn = k_jn max(0, x_s - e_j - E_n), sum F_jn = F = T1/r_b1   (eq 16)
+    TVMS = sum over pairs j and slices n of k_jn                              (eq 10)
+
+(:func:`gearfmu.contact.models.tooth_compliances`, :func:`gearfmu.contact.models.sliced_mesh_stiffness`,
+:func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`).  The load of each slice is iterated with the
+load-dependent contact stiffness by the table builder's rule (``gearfmu.tables.precompute``:
+start from the Hertz slice loads, load floor 0.5 F/b, a request is re-solved when its load
+moved by more than 1e-4 of itself, stop when no slice load changes by more than
+``LOAD_ITERATION_TOL`` = 1e-3 of F/NS, at most ``LOAD_ITERATION_MAX`` passes).
+
+Contact models (:data:`DIRECT_MODELS`):
+
+* ``hertz``: Yang & Sun line-contact stiffness pi E* w / 2 (load-independent; seed 000's
+  reference case in Fig. 12);
+* ``smooth_ehl``: steady smooth line-contact EHL (seed 000 eq 2-7), film stiffness seed 000
+  eq 8-9 on the Hertz band (:func:`gearfmu.ehl.mesh_film.solve_slice_film`);
+* ``rough_steady``: the same with the slice's frozen W-M flank roughness at the contact
+  (seed 000 eq 1, 3; the steady rough film of the tables, sampled directly and solved as the
+  film grid solves it, warm-started from the smooth film, :func:`gearfmu.ehl.mesh_film.solve_node_films`);
+* ``smooth_transient`` / ``rough_transient``: the transient solver
+  (:func:`gearfmu.ehl.transient.solve_line_contact_transient`, option A of docs/ehl_transient.md:
+  R, u_s, SRR and w frozen at the request, the roughness of each flank moving with that flank at
+  u1, u2, :func:`gearfmu.ehl.transient.flank_slice_case`), start 'auto', run through the wash-out
+  and ``T_average`` more (b/u_s units); film stiffness by reduction (b) = seed 000 eq 8 on the
+  window means A B(<p_m>)/<h_m> (default; (a) <A B(p_m)/h_m> selectable) -- the quantity of
+  tests/test_ehl_transient.py's Fig. 13 test and of the tables' transient correction.
+
+CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
+
+* Meshing position = LOA position ``s_m`` (m from N1) of one contact; the other pairs in contact
+  are at s + k p_b inside [s_A, s_E] (:func:`pair_positions_m`).
+* Errors: perfect gears by default (``e_pair_m`` = 0, no crowning), the case of seed 000
+  section 5; the table's per-pair meshing errors and crowning can be passed.
+* Load iteration of the film models that need a film per slice (``rough_steady``,
+  ``smooth_transient``, ``rough_transient``): the iteration starts from the slice loads
+  converged with ``smooth_ehl`` (steady smooth films, ~50 ms each) instead of the Hertz loads --
+  the same fixed point (same rule and tolerance), a better first guess, so that an expensive
+  transient run is repeated only if the roughness itself moves a slice load by more than the
+  tolerance.
+* Film parameter: the rough models screen every request with Lambda = h_min/sigma
+  (:func:`gearfmu.contact.models.film_parameter`); below ``RoughnessSpec.full_film_parameter``
+  (3) seed 000's full film does not exist and :class:`DirectTVMSError` is raised (names the
+  position, pair and Lambda) unless ``check_film_parameter=False``.  A film that fails
+  (stall, collapse) raises too (``on_film_failure='error'``), or takes the steady smooth film
+  (``'smooth'``; recorded in ``failures``).  The screen is a CHOICE, not a prediction of film
+  collapse: under seed 000's full-film assumption (``check_film_parameter=False``) the transient films
+  of the Table 1 pair at levels 3-4 (screen Lambda 2.1-2.9) exist with h > 0 everywhere, window
+  minimum down to 0.55 sigma (the roughness is flattened inside the contact; a Newtonian,
+  isothermal, elastic model result) -- recorded per request in ``h_min_m`` / ``h_min_over_sigma`` /
+  ``film_runs`` (docs/ehl_mesh.md "Direct TVMS").
+
+Work goes through a ``concurrent.futures``-style executor (``executor`` or a local pool of
+``max_workers``; in-process for ``max_workers=1``), one film evaluation per task chunk, with a
+progress line per ~5 % (:func:`gearfmu.ehl.mesh_film.map_chunks`).  SI units throughout.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import List, Optional
+
+import numpy as np
+
+from ..ehl.errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+
+#: contact models of :func:`direct_mesh_stiffness`
+DIRECT_MODELS = ("hertz", "smooth_ehl", "rough_steady", "smooth_transient", "rough_transient")
+_ROUGH = ("rough_steady", "rough_transient")
+_TRANSIENT = ("smooth_transient", "rough_transient")
+#: film-failure handling of :func:`direct_mesh_stiffness`
+DIRECT_FAILURE_POLICIES = ("error", "smooth")
+
+
+class DirectTVMSError(EHLInputError):
+    """Bad input to :func:`direct_mesh_stiffness`, a request outside the full film, or a failed
+    film under ``on_film_failure='error'`` (names the field or the request and the reason)."""
+
+
+@dataclass(frozen=True)
+class TransientFilmSettings:
+    """Settings of the transient film runs (models ``*_transient``).
+
+    ``n_nodes``: EHL grid nodes (257 = 256 intervals, as the tables' transient correction);
+    ``T_average``: averaging window after the wash-out, in b/u_s (CHOICE: 8, the Fig. 13 test's
+    window; the solver's default 4 is the tables'); ``reduction``: 'k_of_means' (b, default) or
+    'mean_of_k' (a) (docs/ehl_transient.md section 3); ``start``, ``ramp_T``: the solver's start
+    ('auto': frozen steady start, smooth start with a roughness ramp of ``ramp_T`` if that
+    stalls); ``substep_rescue``: the solver's stalled-step rescue."""
+
+    n_nodes: int = 257
+    T_average: float = 8.0
+    reduction: str = "k_of_means"
+    start: str = "auto"
+    ramp_T: float = 1.0
+    substep_rescue: bool = True
+
+    def check(self) -> "TransientFilmSettings":
+        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 33 or (self.n_nodes - 1) & (self.n_nodes - 2):
+            raise DirectTVMSError(f"transient.n_nodes={self.n_nodes!r}: must be 2^k + 1 >= 33")
+        if not (isinstance(self.T_average, (int, float)) and math.isfinite(self.T_average) and self.T_average > 0):
+            raise DirectTVMSError(f"transient.T_average={self.T_average!r}: must be finite and > 0 (b/u_s)")
+        if self.reduction not in ("k_of_means", "mean_of_k"):
+            raise DirectTVMSError(f"transient.reduction={self.reduction!r}: must be 'k_of_means' or 'mean_of_k'")
+        return self
+
+
+@dataclass
+class DirectTVMS:
+    """Result of :func:`direct_mesh_stiffness` (SI).
+
+    ``s_m`` (N,) requested positions; ``s_pair_m`` (P, N) contact position of each pair (NaN: not
+    in contact); ``k_mesh_N_per_m`` (N,) the TVMS; ``k_pair_N_per_m`` (P, N); ``k_slice_N_per_m``
+    and ``k_contact_N_per_m`` (P, NS, N) slice mesh stiffness and the model's contact stiffness
+    k_l; ``w_N_per_m`` (P, NS, N) static slice line loads (N/m) with the final stiffness (0 out of
+    contact; the films were solved at loads within the iteration tolerance of these); ``film_parameter`` (P, N)
+    Lambda = h_min/sigma of the screen (Dowson-Higginson h_min of the smooth contact at the mean line load
+    F/b, undeformed composite sigma; NaN for smooth/Hertz); ``passes`` and ``load_change`` (max slice-load change of the
+    last pass over F/NS) of the load iteration; ``film_evaluations``: film solves / runs done;
+    ``failures``: dicts (s_m, pair, slice, w_N_per_m, status, message); ``cpu_s``: process CPU of
+    this process plus ``worker_cpu_s`` (film CPU spent in other processes); ``wall_s``.
+
+    Transient models only (NaN / empty otherwise), at the final slice loads: ``h_min_m`` (P, NS, N)
+    the minimum film of the run over the averaging window and over x (the solver's h_min per time
+    level, on the whole grid x_in..x_out); ``h_min_run_m`` (P, NS, N) the same over the whole run
+    from T = 0 (start, roughness ramp, wash-out included); ``h_min_over_sigma`` (P, NS, N)
+    ``h_min_m`` / ``sigma_composite_m`` (rough_transient; the film parameter of the SOLVED, deformed
+    rough film, to compare with the screen's ``film_parameter``); ``film_runs``: one dict per
+    evaluated request (s_m, pair, slice, w_N_per_m, start 'frozen' or 'smooth' (smooth start with
+    the roughness ramp), ramp_T, steps, rescued_steps (steps rescued by sub-steps), h_min_m,
+    h_min_run_m, h_min_over_sigma, h_central_ratio).  A transient film with h <= 0 anywhere at
+    any time level raises FilmCollapseError in the solver (a failure, never a k)."""
+
+    model: str
+    s_m: np.ndarray
+    s_pair_m: np.ndarray
+    k_mesh_N_per_m: np.ndarray
+    k_pair_N_per_m: np.ndarray
+    k_slice_N_per_m: np.ndarray
+    k_contact_N_per_m: np.ndarray
+    w_N_per_m: np.ndarray
+    film_parameter: np.ndarray
+    passes: int
+    load_change: float
+    film_evaluations: int
+    failures: List[dict] = field(default_factory=list)
+    cpu_s: float = 0.0
+    wall_s: float = 0.0
+    torque_Nm: float = float("nan")
+    worker_cpu_s: float = 0.0
+    h_min_m: Optional[np.ndarray] = None
+    h_min_run_m: Optional[np.ndarray] = None
+    h_min_over_sigma: Optional[np.ndarray] = None
+    sigma_composite_m: float = float("nan")
+    film_runs: List[dict] = field(default_factory=list)
+
+
+def pair_positions_m(geom, s_m) -> np.ndarray:
+    """(P, N) LOA positions (m from N1) of every pair in contact when one contact is at ``s_m``
+    (N,): s + k p_b (k integer) inside [s_A, s_E], sorted along the LOA; NaN for the slots not in
+    contact (P = ceil(contact ratio)).  Involute kinematics: consecutive pairs are one base pitch
+    apart on the line of action."""
+    s = np.atleast_1d(np.asarray(s_m, dtype=float))
+    if s.ndim != 1 or s.size == 0 or not np.all(np.isfinite(s)):
+        raise DirectTVMSError("s_m: meshing positions must be a non-empty 1-D array of finite LOA positions (m)")
+    lo, hi, pb = float(geom.s_start_m), float(geom.s_end_m), float(geom.base_pitch_m)
+    tol = 1e-12 * max(hi, 1.0)
+    if np.any(s < lo - tol) or np.any(s > hi + tol):
+        raise DirectTVMSError(f"s_m: positions must lie on the path of contact [{lo * 1e3:.4f}, {hi * 1e3:.4f}] mm "
+                              "(LOA from N1)")
+    P = int(math.ceil(float(geom.contact_ratio) - 1e-12))
+    out = np.full((P, s.size), np.nan)
+    for i, si in enumerate(s):
+        pos = sorted(p for p in (si + k * pb for k in range(-P - 1, P + 2)) if lo - tol <= p <= hi + tol)
+        for j, p in enumerate(pos[:P]):
+            out[j, i] = min(max(p, lo), hi)
+    return out
+
+
+# ------------------------------------------------------------------------------ workers
+def _film_chunk(_env, items):
+    """Worker: film evaluations.  Item ('steady', fenv, R, u, w, profile|None) or ('transient',
+    kwargs, T_average, reduction).  Returns dicts with k_N_per_m, status, message, cpu_s (and for
+    transient runs the window means and steps)."""
+    from ..ehl.mesh_film import solve_node_films, solve_slice_film
+    from ..ehl.transient import solve_line_contact_transient
+
+    import os
+
+    out = []
+    for it in items:
+        c0 = time.process_time()
+        if it[0] == "steady":
+            _, fenv, R, u, w, prof = it
+            if prof is None:
+                o = solve_slice_film(fenv, R, u, w, None)
+            else:   # the tables' rough solve: warm start from the smooth film, two relaxation settings
+                o = solve_node_films(fenv, R, u, w, [prof])[1][0]
+            out.append(dict(k_N_per_m=float(o.k_N_per_m), status=o.status, message=o.message,
+                            cpu_s=time.process_time() - c0, pid=os.getpid()))
+            continue
+        _, kw, T_avg, red = it
+        try:
+            r = solve_line_contact_transient(**kw)
+            T0 = r.T_settled
+            q = r.film_stiffness_reductions(T0, T0 + T_avg)
+            k = q["k_of_means_N_per_m"] if red == "k_of_means" else q["k_mean_of_k_N_per_m"]
+            m = r.window(T0, T0 + T_avg)
+            out.append(dict(k_N_per_m=float(k), status="ok", message="", cpu_s=time.process_time() - c0,
+                            steps=int(r.T.size - 1), start=r.start, ramp_T=float(r.ramp_T),
+                            h_central_ratio=q["h_central_mean_m"] / float(r.h_central_m[0]),
+                            h_min_window_m=float(np.min(r.h_min_m[m])), h_min_run_m=float(np.min(r.h_min_m)),
+                            h_mean_window_m=float(q["h_mean_m"]),
+                            rescued=int(np.count_nonzero(r.rescued)) if r.rescued is not None else 0,
+                            pid=os.getpid()))
+        except (FilmCollapseError, EHLConvergenceError) as exc:
+            out.append(dict(k_N_per_m=float("nan"), status="collapse" if isinstance(exc, FilmCollapseError)
+                            else "stall", message=str(exc)[:300], cpu_s=time.process_time() - c0,
+                            pid=os.getpid()))
+    return out
+
+
+def _transient_kwargs(env, s: float, w: float, slice_index, st: TransientFilmSettings) -> dict:
+    from ..ehl.transient import flank_slice_case
+
+    kw = flank_slice_case(env, s, w, slice_index)
+    srr = float(kw["srr"])
+    dX = 6.0 / (st.n_nodes - 1)              # x_in = -4.5, x_out = 1.5 (the solver's defaults)
+    T_wash = 6.0 / min(1.0 + 0.5 * srr, 1.0 - 0.5 * srr)
+    kw.update(n_nodes=int(st.n_nodes), start=st.start, ramp_T=float(st.ramp_T),
+              substep_rescue=st.substep_rescue,
+              n_steps=int(math.ceil((float(st.ramp_T) + T_wash + float(st.T_average)) / dX)))
+    return kw
+
+
+def _refuse_low_film(model, env, s, lam, where) -> None:
+    """DirectTVMSError for the first request with Lambda below the full-film limit."""
+    bad = np.asarray(lam) < env.roughness.full_film_parameter
+    if not np.any(bad):
+        return
+    q = int(np.argmax(bad))
+    at = "" if where is None else f", pair {int(where[0][q])}, slice {int(where[1][q])}"
+    raise DirectTVMSError(
+        f"{model}: no full film at s = {float(s[q]) * 1e3:.4f} mm (LOA from N1){at}: film parameter "
+        f"lambda = h_min/sigma = {float(lam[q]):.3g} below the full-film limit "
+        f"{env.roughness.full_film_parameter:g} (roughness level {env.roughness.level}); seed 000 assumes "
+        "a full film; pass check_film_parameter=False to run the film anyway")
+
+
+def _key(x: float) -> float:
+    return float(f"{x:.10g}")
+
+
+# ------------------------------------------------------------------------------ main
+def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pair_m=None, crowning_m=None,
+                          transient: Optional[TransientFilmSettings] = None, executor=None,
+                          max_workers: Optional[int] = None, progress: bool = False,
+                          check_film_parameter: bool = True, on_film_failure: str = "error",
+                          initial_loads_N=None) -> DirectTVMS:
+    """TVMS (N/m) of the pair at the meshing positions ``s_m`` (m from N1), evaluated directly
+    (seed 000 eq 10-16 with the contact stiffness of ``model``; module doc).
+
+    ``env``: :class:`gearfmu.contact.models.ContactEnvironment` (pair, geometry, pinion speed,
+    lubricant, ``n_slices`` and slice ``width_m``, ``roughness`` for the rough models; its
+    ``ehl_nodes`` set the steady films' grid, default ``transient.n_nodes``); ``opts``:
+    :class:`gearfmu.gear.gearpair.MeshModelOptions` (foundation choices; ``opts.slices`` must equal
+    ``env.n_slices``); ``torque_Nm`` (> 0): pinion torque, F = T/r_b1; ``model``: one of
+    :data:`DIRECT_MODELS`; ``e_pair_m`` (P, N) meshing error per pair (default 0), ``crowning_m``
+    (NS,) lead crowning per slice (default 0); ``transient``: :class:`TransientFilmSettings`;
+    ``executor`` / ``max_workers`` / ``progress``: as :func:`gearfmu.ehl.mesh_film.solve_films`;
+    ``initial_loads_N``: (P, NS, N) slice loads to start the iteration from (default: Hertz loads,
+    or for the per-slice film models the loads converged with ``smooth_ehl``)."""
+    from ..gear.hertz import hertz_stiffness_N_per_m
+    from ..contact.models import film_parameter, sliced_mesh_stiffness, tooth_compliances
+    from .precompute import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE,
+                              _slice_loads_N)
+    from ..ehl.mesh_film import contact_kinematics, map_chunks
+
+    import os
+
+    t_wall, c_parent = time.perf_counter(), time.process_time()
+    if model not in DIRECT_MODELS:
+        raise DirectTVMSError(f"model={model!r}: must be one of {', '.join(DIRECT_MODELS)}")
+    if on_film_failure not in DIRECT_FAILURE_POLICIES:
+        raise DirectTVMSError(f"on_film_failure={on_film_failure!r}: must be one of "
+                              f"{', '.join(DIRECT_FAILURE_POLICIES)}")
+    try:
+        T = float(torque_Nm)
+    except (TypeError, ValueError):
+        raise DirectTVMSError(f"torque_Nm={torque_Nm!r}: must be a number (N m)") from None
+    if not (math.isfinite(T) and T > 0):
+        raise DirectTVMSError(f"torque_Nm={torque_Nm!r}: must be finite and > 0 (N m)")
+    NS = int(env.n_slices)
+    if int(opts.slices) != NS:
+        raise DirectTVMSError(f"opts.slices={opts.slices!r}: must equal env.n_slices={NS} (one slice width)")
+    if getattr(env.geom, "helix_angle_rad", 0.0) != 0.0:
+        raise DirectTVMSError("env.geom: the direct TVMS is for spur pairs (helix angle 0)")
+    if model in _ROUGH and env.roughness is None:
+        raise DirectTVMSError(f"env.roughness: model {model!r} needs a RoughnessSpec")
+    st = (transient or TransientFilmSettings()).check()
+    geom, pair = env.geom, env.pair
+    sp = pair_positions_m(geom, s_m)                                    # (P, N)
+    P, N = sp.shape
+    e = np.zeros((P, N)) if e_pair_m is None else np.asarray(e_pair_m, dtype=float)
+    E = np.zeros(NS) if crowning_m is None else np.asarray(crowning_m, dtype=float)
+    if e.shape != (P, N) or not np.all(np.isfinite(e)):
+        raise DirectTVMSError(f"e_pair_m: must be a finite array of shape {(P, N)} (m)")
+    if E.shape != (NS,) or not np.all(np.isfinite(E)) or np.any(E < 0):
+        raise DirectTVMSError(f"crowning_m: must be a finite array >= 0 of shape {(NS,)} (m)")
+    width = float(env.width_m)
+    face = width * NS
+    F = T / float(geom.rb1_m)
+    floor = UNLOADED_SLICE_LOAD_SHARE * F / face
+    ct, fp, fg = tooth_compliances(pair, geom, sp, width)
+    kh = hertz_stiffness_N_per_m(pair, width)
+    zone = np.broadcast_to(np.isfinite(sp)[:, None, :], (P, NS, N))
+    idx = np.nonzero(zone)
+    j, n, i = idx
+    kc_h = np.where(zone, kh, 0.0)
+    k = sliced_mesh_stiffness(ct, fp, fg, kc_h, opts)
+    fenv = None
+    if model != "hertz":
+        import dataclasses
+
+        fenv = env.film_environment()
+        if fenv.n_nodes is None:
+            fenv = dataclasses.replace(fenv, n_nodes=int(st.n_nodes))
+    worker_cpu = 0.0
+    evaluations = 0
+    failures: List[dict] = []
+    lam = np.full((P, N), np.nan)
+
+    if model == "hertz":
+        loads = _slice_loads_N(k, e, E, F)
+        res = DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k,
+                         kc_h, loads / width, lam, 1, 0.0, 0, [], 0.0, 0.0, T)
+        res.cpu_s, res.wall_s = time.process_time() - c_parent, time.perf_counter() - t_wall
+        return res
+
+    if model in _ROUGH:
+        pos = sp[np.isfinite(sp)]
+        lam_f = film_parameter(env, pos, np.full(pos.shape, F / face))
+        lam[np.isfinite(sp)] = lam_f
+        if check_film_parameter:      # screen at the mean line load F/b first (before any solve)
+            _refuse_low_film(model, env, pos, lam_f, None)
+    if initial_loads_N is not None:
+        loads = np.asarray(initial_loads_N, dtype=float)
+        if loads.shape != (P, NS, N):
+            raise DirectTVMSError(f"initial_loads_N: expected shape {(P, NS, N)}, got {loads.shape}")
+    elif model in ("rough_steady",) + _TRANSIENT:
+        pre = direct_mesh_stiffness(env, opts, s_m, T, "smooth_ehl", e_pair_m=e, crowning_m=E, transient=st,
+                                    executor=executor, max_workers=max_workers, progress=progress,
+                                    on_film_failure=on_film_failure)
+        worker_cpu += pre.worker_cpu_s
+        evaluations += pre.film_evaluations
+        loads = pre.w_N_per_m * width
+    else:
+        loads = _slice_loads_N(k, e, E, F)
+
+    R_all, u_all, _ = contact_kinematics(geom, np.where(np.isfinite(sp), sp, float(geom.s_pitch_m)),
+                                         env.omega1_rad_s)
+    kc = np.zeros((P, NS, N))
+    last_key = [None] * len(j)          # cache key of the film behind kc[j, n, i] (per zone entry)
+    w_prev = np.full(j.shape, np.nan)
+    change = float("nan")
+    cache = {}
+    smooth_cache = {}
+    it = 0
+    for it in range(1, LOAD_ITERATION_MAX + 1):
+        w = np.maximum(loads[idx] / width, floor)
+        redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev)
+        if np.any(redo):
+            ridx = np.nonzero(redo)[0]
+            if model in _ROUGH and check_film_parameter:
+                lam_r = film_parameter(env, sp[j[ridx], i[ridx]], w[ridx])
+                _refuse_low_film(model, env, sp[j[ridx], i[ridx]], lam_r, (j[ridx], n[ridx]))
+            # one evaluation per distinct (position, slice for rough films, load)
+            keys = []
+            for q in ridx:
+                sl = int(n[q]) if model in _ROUGH else -1
+                keys.append((_key(sp[j[q], i[q]]), sl, _key(w[q]), int(j[q]), int(i[q])))
+            uniq = {}
+            for kk in keys:
+                uniq.setdefault(kk[:3], kk)
+            todo = [kk for kk in uniq.values() if kk[:3] not in cache]
+            items = []
+            for (s_k, sl, w_k, jj, ii) in todo:
+                R, u = float(R_all[jj, ii]), float(u_all[jj, ii])
+                if model in _TRANSIENT:
+                    kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
+                    items.append(("transient", kw, float(st.T_average), st.reduction))
+                elif model == "rough_steady":
+                    from ..contact.models import _rough_profile
+
+                    prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
+                    items.append(("steady", fenv, R, u, w_k, prof))
+                else:
+                    items.append(("steady", fenv, R, u, w_k, None))
+            if items:
+                res_chunks = map_chunks(_film_chunk, None, [[x] for x in items], [1] * len(items),
+                                        executor=executor, max_workers=max_workers, progress=progress,
+                                        label=f"direct TVMS {model} pass {it}")
+                for kk, r in zip(todo, res_chunks):
+                    r = r[0]
+                    if r["pid"] != os.getpid():      # run in another process: its CPU is not ours
+                        worker_cpu += r["cpu_s"]
+                    evaluations += 1
+                    cache[kk[:3]] = r
+            vals = np.empty(len(ridx))
+            for m, (q, kk) in enumerate(zip(ridx, keys)):
+                r = cache[kk[:3]]
+                last_key[q] = kk
+                if r["status"] == "ok":
+                    vals[m] = r["k_N_per_m"]
+                    continue
+                f = dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], status=r["status"],
+                         message=r["message"])
+                if on_film_failure == "error":
+                    raise DirectTVMSError(f"{model}: film {r['status']} at s = {kk[0] * 1e3:.4f} mm (LOA from N1), "
+                                          f"pair {kk[3]}, slice {int(n[q])}, w = {kk[2]:.4g} N/m: {r['message']}")
+                sk = (kk[0], kk[2])
+                if sk not in smooth_cache:
+                    o = _film_chunk(None, [("steady", fenv, float(R_all[kk[3], kk[4]]), float(u_all[kk[3], kk[4]]),
+                                            kk[2], None)])[0]
+                    evaluations += 1
+                    smooth_cache[sk] = o
+                vals[m] = smooth_cache[sk]["k_N_per_m"]
+                f["used"] = "smooth_ehl"
+                failures.append(f)
+            kc[j[ridx], n[ridx], i[ridx]] = vals
+            w_prev = np.where(redo, w, w_prev)
+        k = sliced_mesh_stiffness(ct, fp, fg, kc, opts)
+        new = _slice_loads_N(k, e, E, F)
+        change = float(np.max(np.abs(new - loads)) / (F / NS))
+        loads = new
+        if change < LOAD_ITERATION_TOL:
+            break
+    else:
+        import warnings
+
+        warnings.warn(f"direct TVMS {model}: load sharing not converged after {LOAD_ITERATION_MAX} passes "
+                      f"(max slice-load change {change:.2e} of F/NS)")
+    wl = np.where(zone, loads / width, 0.0)
+    if model not in _ROUGH:
+        lam[:] = np.nan
+    hmin, hrun, hsig = (np.full((P, NS, N), np.nan) for _ in range(3))
+    sigma = float("nan")
+    runs: List[dict] = []
+    if model in _TRANSIENT:
+        if model in _ROUGH:
+            from ..contact.models import composite_sigma_m
+
+            sigma = float(composite_sigma_m(env.roughness))
+        for q, kk in enumerate(last_key):
+            r = cache.get(kk[:3]) if kk is not None else None
+            if r is None or r["status"] != "ok":
+                continue
+            hmin[j[q], n[q], i[q]] = r["h_min_window_m"]
+            hrun[j[q], n[q], i[q]] = r["h_min_run_m"]
+            hsig[j[q], n[q], i[q]] = r["h_min_window_m"] / sigma
+            runs.append(dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], start=r["start"],
+                             ramp_T=r["ramp_T"], steps=r["steps"], rescued_steps=r["rescued"],
+                             h_min_m=r["h_min_window_m"], h_min_run_m=r["h_min_run_m"],
+                             h_min_over_sigma=r["h_min_window_m"] / sigma, h_central_ratio=r["h_central_ratio"]))
+    return DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k, kc,
+                      wl, lam, it, change, evaluations, failures,
+                      cpu_s=time.process_time() - c_parent + worker_cpu, wall_s=time.perf_counter() - t_wall,
+                      torque_Nm=T, worker_cpu_s=worker_cpu, h_min_m=hmin, h_min_run_m=hrun, h_min_over_sigma=hsig,
+                      sigma_composite_m=sigma, film_runs=runs)

@@ -1,0 +1,835 @@
+"""Table precomputation: gear pair -> :class:`gearfmu.tables.mesh_tables.MeshTables` (SI units).
+
+Chain: geometry (:func:`gearfmu.gear.geometry.pair_geometry`) -> per-slot sliced
+stiffness (:func:`gearfmu.gear.stiffness.slot_stiffness`) -> per-pair meshing
+errors (:mod:`gearfmu.gear.meshing_errors`) -> loaded static mesh with lead
+crowning (:mod:`gearfmu.gear.loaded_mesh`, seed 000 eq 16) -> tables.
+Choices are documented in docs/physics_errors.md.
+"""
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import replace
+import sys
+import time
+from typing import Optional, Sequence
+
+import numpy as np
+
+from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
+from ..gear.loaded_mesh import loaded_static_mesh
+from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
+                             slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
+from .mesh_tables import MeshTables
+
+#: default torque axis with lead crowning, as multiples of the nominal torque
+DEFAULT_TORQUE_FACTORS = (0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
+
+
+class PrecomputeInputError(ValueError):
+    """Bad input to the table precomputation (names the field and the reason)."""
+
+
+def default_slots(contact_ratio: float) -> int:
+    """Slot count P = ceil(contact ratio), at least 1 (eps = 1.0001 -> 2)."""
+    if not math.isfinite(contact_ratio) or contact_ratio <= 0:
+        raise PrecomputeInputError(f"contact_ratio: must be finite and > 0, got {contact_ratio!r}")
+    return max(1, int(math.ceil(contact_ratio - 1e-12)))
+
+
+def disc_inertia_kgm2(gear: GearSpec) -> float:
+    """Rotary inertia (kg m^2) of a gear: ``gear.inertia_kgm2`` or, when None, a
+    solid disc of the gear's material between the hub bore and the reference
+    pitch radius r = m z / 2: I = rho pi b (r^4 - r_hub^4) / 2 (solid cylinder,
+    e.g. any statics/dynamics textbook).  For seed 003 Table 1 (z = 50,
+    m = 3 mm, b = 20 mm, steel 7850 kg/m^3, no bore) this gives 0.00780 kg m^2
+    against the table's 0.0074 kg m^2 (+5.5 %)."""
+    if gear.inertia_kgm2 is not None:
+        if not math.isfinite(gear.inertia_kgm2) or gear.inertia_kgm2 <= 0:
+            raise PrecomputeInputError(f"inertia_kgm2: must be finite and > 0, got {gear.inertia_kgm2!r}")
+        return float(gear.inertia_kgm2)
+    r = 0.5 * gear.module_m * gear.teeth
+    rh = 0.0 if gear.hub_radius_m is None else float(gear.hub_radius_m)
+    rho = gear.material.density_kg_m3
+    if not math.isfinite(rho) or rho <= 0:
+        raise PrecomputeInputError(f"density_kg_m3: must be finite and > 0, got {rho!r}")
+    if not 0 <= rh < r:
+        raise PrecomputeInputError(f"hub_radius_m: must be in [0, pitch radius {r!r}), got {rh!r}")
+    return rho * math.pi * gear.face_width_m * (r ** 4 - rh ** 4) / 2.0
+
+
+class _Progress:
+    def __init__(self, enabled: bool, total: int, label: str):
+        self.enabled, self.total, self.label, self.done = enabled, total, label, 0
+        self.t0 = time.perf_counter()
+        self._bar = None
+        if enabled:
+            try:  # optional
+                from tqdm import tqdm  # type: ignore
+                self._bar = tqdm(total=total, desc=label)
+            except ImportError:
+                self._bar = None
+
+    def step(self, what: str) -> None:
+        if not self.enabled:
+            return
+        self.done += 1
+        if self._bar is not None:
+            self._bar.set_postfix_str(what)
+            self._bar.update(1)
+        else:
+            print(f"{self.label}: {self.done}/{self.total} {what} "
+                  f"({time.perf_counter() - self.t0:.1f} s)", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def _torque_axis(torque_axis_Nm, nominal_torque_Nm: float, crowned: bool) -> np.ndarray:
+    if not math.isfinite(nominal_torque_Nm) or nominal_torque_Nm <= 0:
+        raise PrecomputeInputError(f"nominal_torque_Nm: must be finite and > 0, got {nominal_torque_Nm!r}")
+    if torque_axis_Nm is None:
+        if crowned:
+            return nominal_torque_Nm * np.asarray(DEFAULT_TORQUE_FACTORS, dtype=float)
+        return np.array([float(nominal_torque_Nm)])
+    t = np.atleast_1d(np.asarray(torque_axis_Nm, dtype=float))
+    if t.ndim != 1 or t.size < 1:
+        raise PrecomputeInputError(f"torque_axis_Nm: expected a 1-D sequence, got shape {t.shape}")
+    if not np.all(np.isfinite(t)) or np.any(t < 0):
+        raise PrecomputeInputError("torque_axis_Nm: values must be finite and >= 0")
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        raise PrecomputeInputError("torque_axis_Nm: must be strictly ascending")
+    return t
+
+
+def _slot_stiffness(pair, geom, opts, slots, points_per_mesh, torque_Nm):
+    from ..gear.stiffness import slot_stiffness
+
+    try:
+        params = inspect.signature(slot_stiffness).parameters
+    except (TypeError, ValueError):
+        params = {}
+    if "torque_Nm" in params:
+        return slot_stiffness(pair, geom, opts, slots, points_per_mesh, torque_Nm=torque_Nm)
+    return slot_stiffness(pair, geom, opts, slots, points_per_mesh)
+
+
+def _stiffness_depends_on_load() -> bool:
+    from ..gear.stiffness import slot_stiffness
+
+    try:
+        return "torque_Nm" in inspect.signature(slot_stiffness).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(k total (P, N), k per slice (P, NS, N)) tiled over the table period."""
+    k = np.asarray(ss.k_N_per_m, dtype=float)
+    k_tile = np.tile(k, (1, reps))
+    ks = getattr(ss, "k_per_slice_N_per_m", None)
+    ks = None if ks is None else np.asarray(ks, dtype=float)
+    if ks is not None and ks.ndim == 3:  # slices differ (e.g. rough surfaces)
+        k_slice = np.tile(ks, (1, 1, reps))
+    else:  # equal slices: split the pair stiffness evenly so totals match exactly
+        k_slice = np.repeat((k_tile / slices)[:, None, :], slices, axis=1)
+    return k_tile, k_slice
+
+
+#: torque axis (multiples of the nominal torque) given to the tables of a load-dependent
+#: contact model (EHL film) when no axis with at least two torques is asked for
+LOAD_DEPENDENT_TORQUE_FACTORS = (0.5, 1.0, 1.5)
+#: load-sharing iteration with a load-dependent contact stiffness: largest change of a
+#: slice load between passes, relative to the mean slice load F/NS, and the pass limit
+LOAD_ITERATION_TOL = 1e-3
+LOAD_ITERATION_MAX = 8
+#: load floor of every slice in the contact zone (light or no static load), a share
+#: of the mean line load F/b): its film is evaluated there (docs/ehl_mesh.md)
+UNLOADED_SLICE_LOAD_SHARE = 0.5
+
+
+def _slice_loads_N(k_slice, e_pair, crowning, force_N):
+    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (seed 000 eq 16)."""
+    lm = loaded_static_mesh(k_slice, e_pair, crowning, force_N)
+    gap = e_pair[:, None, :] + crowning[None, :, None]
+    return k_slice * np.maximum(0.0, lm.static_te_m[None, None, :] - gap)
+
+
+class _ContactIteration:
+    """Slice stiffness with a load-dependent contact model, iterated with the
+    loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
+
+    def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
+        from ..contact.models import get_contact_model, tooth_compliances
+        from ..gear.stiffness import slot_stiffness
+
+        self.model = get_contact_model(opts.contact_model)
+        self.env, self.opts, self.e, self.E = env, opts, e_slot, E
+        ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
+        self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
+        self.NS = int(opts.slices)
+        self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
+        self.helical = None
+        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:  # per-slice normal-section requests (docs/helical.md)
+            self.helical = _HelicalContactView(pair, geom, env, ss, reps)
+            self.env = self.helical.env
+            self.s_req = self.helical.s_req                                  # (P, NS, N)
+        else:
+            ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
+            self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
+            self.s_req = np.broadcast_to(self.s[:, None, :], self.k_hertz.shape)
+        self.width = ss.slice_width_m
+        self.face = ss.slice_width_m * self.NS
+        self.nominal_F = nominal_F
+        self.zone = np.isfinite(self.s_req)
+        self.solves = 0
+        self.records = []
+        self._pool = None
+
+    def __enter__(self):
+        """Open one local process pool for all passes and rows (unless the
+        environment brings an executor or asks for max_workers = 1)."""
+        env = self.env
+        if env.executor is None and (env.max_workers is None or env.max_workers > 1):
+            from ..dynamics.sweeps import make_executor
+
+            self._pool = make_executor(max_workers=env.max_workers)
+            self.env = replace(env, executor=self._pool.__enter__())
+        return self
+
+    def __exit__(self, *exc):
+        if self._pool is not None:
+            self._pool.__exit__(*exc)
+            self.env = replace(self.env, executor=None)
+            self._pool = None
+        return False
+
+    def set_load_range(self, torques, rb1: float) -> None:
+        """Tell the contact model which slice loads (N/m) the rows will ask for: the load floor
+        of the lightest row to 1.1 x the largest Hertz static slice load of the heaviest, so that
+        a film grid can place its load nodes (contact_models.RoughFilmGrid, docs/ehl_mesh.md)."""
+        F = [float(t) / rb1 for t in torques]
+        lo = UNLOADED_SLICE_LOAD_SHARE * min(f if f > 0 else self.nominal_F for f in F) / self.face
+        hi = max([float(np.max(_slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
+                  for f in F if f > 0] + [0.0]) / self.width
+        self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
+
+    def k_slice(self, torque_Nm: float, rb1: float):
+        from ..contact.models import sliced_mesh_stiffness
+
+        F = torque_Nm / rb1
+        F_eval = F if F > 0 else self.nominal_F
+        floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
+        k = self.k_hertz
+        loads = _slice_loads_N(k, self.e, self.E, F)
+        idx = np.nonzero(self.zone)
+        j, n, i = idx
+        kc = np.zeros(k.shape)
+        w_prev = np.full(j.shape, np.nan)
+        failed = np.zeros(j.shape, dtype=bool)
+        failures = {}
+        change = float("nan")
+        for it in range(1, LOAD_ITERATION_MAX + 1):
+            w = np.maximum(loads[idx] / self.width, floor)
+            # a (position, slice) whose film failed keeps its fallback in later passes
+            # (re-trying it at a slightly different load would let the sharing oscillate)
+            redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
+            if np.any(redo):
+                res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
+                self.solves += res.solves
+                kc[j[redo], n[redo], i[redo]] = res.k_N_per_m
+                w_prev = np.where(redo, w, w_prev)
+                for f in res.failures:
+                    failures[(f["s_m"], f["slice"])] = f
+                if res.failures:
+                    bad = {(f["s_m"], f["slice"]) for f in res.failures}
+                    sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
+                    failed |= np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
+            k = (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
+                 else self.helical.mesh_stiffness(kc, self.opts))
+            new = _slice_loads_N(k, self.e, self.E, F)
+            change = float(np.max(np.abs(new - loads)) / max(F / self.NS, 1e-300)) if F > 0 else 0.0
+            loads = new
+            if change < LOAD_ITERATION_TOL:
+                break
+        else:
+            import warnings
+            warnings.warn(f"{self.model.name}: load sharing not converged at torque {torque_Nm:g} N m after "
+                          f"{LOAD_ITERATION_MAX} passes (max slice-load change {change:.2e} of F/NS)")
+        self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
+                                 failures=len(failures), failure_list=list(failures.values())))
+        return k
+
+
+class _HelicalContactView:
+    """Contact-model requests of a helical pair, slice by slice (docs/helical.md,
+    "Load-dependent contact models").
+
+    Each slice is a thin spur gear of the transverse section whose stiffness is taken on the
+    normal section (:func:`gearfmu.gear.stiffness.helical_slot_stiffness`).  The contact model sees
+    the slice as a line contact of length w / cos(beta_b) (the slice's piece of the inclined
+    contact line) at the slice's own transverse LOA position ``s_slice_m`` and load:
+
+    * radius of curvature in the normal section rho_n = rho_t / cos(beta_b) (ISO 6336-2
+      Z_H / Z_beta derivation; Niemann/Winter, Maschinenelemente II, ch. 21): the model's
+      geometry is the transverse one with every LOA length (N1N2, A, C, E, the request
+      positions) divided by cos(beta_b), so R = s1 s2/(s1 + s2) becomes rho_n;
+    * entrainment speed normal to the contact line u_n = u_t cos(beta_b) (CHOICE: the flank
+      velocities lie in the transverse plane, the contact line is inclined at beta_b on the
+      plane of action, and only the component normal to a line contact enters the 1-D
+      Reynolds equation, Johnson 1985, Contact Mechanics, ch. 13): the model's pinion speed is
+      omega1 cos^2(beta_b) (with the lengths scaled by 1/cos(beta_b)); sliding likewise;
+    * load per unit length of contact line w_n = (F_t / cos beta_b)/(w / cos beta_b) = F_t / w,
+      the transverse slice load per face width unchanged (ISO 6336-2: F_bn/l_b);
+    * the model's normal stiffness k_n (N/m per contact-line length w/cos(beta_b)) goes in
+      series with the normal-section tooth compliances of the slice (virtual spur gear,
+      :func:`gearfmu.gear.stiffness.virtual_normal_section`, same strip length) and the result is
+      turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz slice of
+      :func:`gearfmu.gear.stiffness.helical_slot_stiffness` (with the 'hertz' model this reproduces
+      that function's slice stiffness to round-off).
+    """
+
+    def __init__(self, pair, geom, env, ss, reps):
+        from ..gear.stiffness import _normal_roll_m, tooth_compliance_m_per_N, virtual_normal_section
+
+        if ss.s_slice_m is None:
+            raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
+        c = math.cos(geom.base_helix_angle_rad)
+        self.cos_beta_b = c
+        self.t = c * c
+        self.omega1_rad_s = float(env.omega1_rad_s)
+        self.width_transverse_m = float(env.width_m)
+        s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
+        self.geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
+                              s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
+        self.env = replace(env, geom=self.geom_n, omega1_rad_s=env.omega1_rad_s * c * c,
+                           width_m=env.width_m / c, _flanks=None)
+        self.s_req = np.tile(s_t / c, (1, 1, reps))                                  # (P, NS, N)
+        vpair, vgeom = virtual_normal_section(pair, geom)
+        wn = ss.slice_width_m / c
+        on = np.isfinite(s_t)
+        ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
+        if np.any(on):
+            u1 = _normal_roll_m(geom, vgeom, 1, s_t[on])
+            u2 = _normal_roll_m(geom, vgeom, 2, s_t[on])
+            cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
+            cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
+            ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
+            fp[on], fg[on] = cp["foundation"], cg["foundation"]
+        self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
+
+    def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
+        """(P, NS, N) transverse slice stiffness from the models' normal contact stiffness:
+        k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
+        :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
+        combine_pairs is homogeneous, so scaling after it equals scaling before)."""
+        from ..contact.models import sliced_mesh_stiffness
+
+        kc = np.asarray(kc_normal_N_per_m, dtype=float)
+        P, NS, N = kc.shape
+        flat = (P, NS * N)
+        k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
+                                  kc.reshape(P, 1, NS * N), opts)
+        return self.t * k.reshape(P, NS, N)
+
+    def provenance(self) -> dict:
+        """The request mapping, for the tables' provenance ('contact')."""
+        return {"speed_rad_s": self.omega1_rad_s,
+                "helical_normal_section": {
+                    "base_helix_angle_rad": math.acos(self.cos_beta_b),
+                    "radius_of_curvature": "rho_t / cos(beta_b)",
+                    "entrainment_speed": "u_t cos(beta_b)",
+                    "load_per_contact_line_length": "F_t / w (slice face width w)",
+                    "contact_line_length_per_slice_m": self.width_transverse_m / self.cos_beta_b,
+                    "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
+
+
+def _contact_provenance(ci, axis_note) -> dict:
+    """Provenance of a contact-model run: settings, passes, solves, film failures."""
+    import warnings
+
+    env = ci.env
+    fails = [f for r in ci.records for f in r["failure_list"]]
+    out = {
+        "model": ci.model.name, "load_dependent": ci.model.load_dependent,
+        "speed_rad_s": env.omega1_rad_s, "eta0_Pas": env.eta0_Pas, "alpha_Pa_inv": env.alpha_Pa_inv,
+        "rho0_kg_m3": env.rho0_kg_m3, "ehl_nodes": env.ehl_nodes,
+        "load_iteration": {"tol_slice_load_over_F_per_NS": LOAD_ITERATION_TOL, "max_passes": LOAD_ITERATION_MAX,
+                           "unloaded_slice_load_share": UNLOADED_SLICE_LOAD_SHARE,
+                           "rows": [{k: v for k, v in r.items() if k != "failure_list"} for r in ci.records]},
+        "solves": ci.solves,
+    }
+    if axis_note:
+        out["torque_axis_note"] = axis_note
+    r = env.roughness
+    if r is not None and ci.model.name == "rough_ehl":
+        from ..contact.models import composite_sigma_m
+
+        out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
+                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
+                            "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
+                            "composite_sigma_m": composite_sigma_m(r)}
+        if getattr(env, "_grid", None) is not None:
+            out["film_grid"] = env._grid.summary()
+        out["film_failures"] = len(fails)
+        out["film_failures_by_status"] = {st: sum(1 for f in fails if f["status"] == st)
+                                          for st in sorted({f["status"] for f in fails})}
+        out["film_failures_first"] = [
+            {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
+        if fails:
+            lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
+            names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
+                     "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
+                     "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
+            uses = {}
+            for f in fails:
+                uses[f.get("used", r.on_failure)] = uses.get(f.get("used", r.on_failure), 0) + 1
+            out["film_failures_by_use"] = uses
+            rng = f" (lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g})" if lam else ""
+            msg = (f"rough_ehl: film parameter below {r.full_film_parameter:g} or rough film failed at "
+                   f"{len(fails)} (position, slice, torque) points{rng}; used there: "
+                   + ", ".join(f"{names.get(k, k)} at {v}" for k, v in sorted(uses.items()))
+                   + " (tables' provenance 'contact.film_failures_first')")
+            out["warning"] = msg
+            warnings.warn(msg)
+    return out
+
+
+def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS, reps, e_slot, E,
+                  rb1, crowned, torques, nominal_torque_Nm, bar):
+    """Stiffness and error rows of the tables, one per torque of ``rows``."""
+    k_rows, e_rows, te_rows = [], [], []
+    k_nominal = None
+    for T in rows:
+        if contact_it is not None:
+            k_slice = contact_it.k_slice(T, rb1)
+            k_tile = k_slice.sum(axis=1)
+        else:
+            ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
+            k_tile, k_slice = _per_slice(ss, NS, reps)
+        lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
+        if crowned:
+            k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
+        else:
+            k_row, e_row = k_tile, e_slot + E[0]
+        if T == nominal_torque_Nm:
+            k_nominal = k_row
+        if len(k_rows) < len(torques):
+            k_rows.append(k_row)
+            e_rows.append(e_row)
+            te_rows.append(lm.static_te_m)
+        bar.step(f"torque {T:g} N m")
+    return k_rows, e_rows, te_rows, k_nominal
+
+
+def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_mesh: int = 64,
+                      torque_axis_Nm: Optional[Sequence[float]] = None, nominal_torque_Nm: float,
+                      slots: Optional[int] = None, progress: bool = False,
+                      provenance: Optional[dict] = None, contact_env=None, thermal=None) -> MeshTables:
+    """Precompute the tooth-pair tables of a gear pair.
+
+    ``points_per_mesh``: angle points per mesh period 2 pi/z1; ``torque_axis_Nm``:
+    pinion torques (N m) of the table rows (None: one row at the nominal torque,
+    or with lead crowning ``DEFAULT_TORQUE_FACTORS`` x nominal);
+    ``nominal_torque_Nm`` (N m, > 0): sets ``k_mean_N_per_m``; ``slots``: P
+    (None: ceil(contact ratio)); ``progress``: print progress to stderr (tqdm
+    when installed).  Without lead crowning k is load-independent and the error
+    tables are the meshing errors; with crowning every torque row holds the
+    secant stiffness and effective error of :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`
+    (they reproduce the loaded static TE of that row exactly).  Lead crowning
+    only acts with ``opts.slices`` > 1 (one slice sits at the face centre).
+
+    Load-dependent contact models (``opts.contact_model`` 'smooth_ehl',
+    'rough_ehl', :mod:`gearfmu.contact.models`) need ``contact_env`` (a
+    :class:`gearfmu.contact.models.ContactEnvironment`, e.g. from
+    :func:`gearfmu.contact.models.environment_from_scene`); every torque row
+    then holds the slice stiffness with the contact stiffness at that row's
+    slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
+    torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
+    x nominal (docs/ehl_mesh.md).
+    """
+    from ..gear.geometry import pair_geometry
+
+    if int(points_per_mesh) != points_per_mesh or points_per_mesh < 4:
+        raise PrecomputeInputError(f"points_per_mesh: must be an integer >= 4, got {points_per_mesh!r}")
+    points_per_mesh = int(points_per_mesh)
+    if int(opts.slices) != opts.slices or opts.slices < 1:
+        raise PrecomputeInputError(f"slices: must be a positive integer, got {opts.slices!r}")
+    if not math.isfinite(pair.backlash_m) or pair.backlash_m < 0:
+        raise PrecomputeInputError(f"backlash_m: must be finite and >= 0, got {pair.backlash_m!r}")
+    t_start = time.perf_counter()
+    geom = pair_geometry(pair)
+    eps = float(geom.contact_ratio)
+    p_min = default_slots(eps)
+    helical = geom.helix_angle_rad != 0.0
+    if helical:  # docs/helical.md: slots from the total contact ratio eps_gamma
+        from ..gear.stiffness import required_slots
+        eps = float(geom.total_contact_ratio)
+        p_min = required_slots(geom)
+    if slots is None:
+        slots = p_min
+    if int(slots) != slots or slots < p_min:
+        raise PrecomputeInputError(
+            f"slots: must be an integer >= ceil(contact ratio {eps:.4f}) = {p_min}, got {slots!r}")
+    slots = int(slots)
+    NS = int(opts.slices)
+    E = pair_lead_crowning_m(pair, NS)
+    crowned = bool(np.any(E != E[0]))
+    torques = _torque_axis(torque_axis_Nm, nominal_torque_Nm, crowned)
+    load_dep_k = _stiffness_depends_on_load()
+    contact_it = None
+    axis_note = None
+    if opts.contact_model != "hertz":
+        from ..contact.models import get_contact_model
+
+        cm = get_contact_model(opts.contact_model)
+        if cm.load_dependent or cm.needs_lubricant:
+            if contact_env is None:
+                raise PrecomputeInputError(f"contact_env: contact_model {opts.contact_model!r} needs a "
+                                           "ContactEnvironment (lubricant, speed, roughness)")
+            if cm.load_dependent and torques.size < 2:
+                torques = nominal_torque_Nm * np.asarray(LOAD_DEPENDENT_TORQUE_FACTORS, dtype=float)
+                axis_note = (f"torque axis {list(LOAD_DEPENDENT_TORQUE_FACTORS)} x nominal added: "
+                             f"contact model {opts.contact_model!r} is load-dependent")
+            load_dep_k = True
+    n_mesh = pair_table_mesh_count(pair, slots)
+    reps = n_mesh // slots
+    N = n_mesh * points_per_mesh
+    rb1 = float(geom.rb1_m)
+    nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
+    rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
+    bar = _Progress(progress, 1 + len(rows), "gearfmu tables")
+
+    e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
+    if opts.contact_model != "hertz":
+        contact_it = _ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
+                                       nominal_torque_Nm / rb1)
+        contact_it.set_load_range(rows, rb1)
+    ss_cache = None
+    if contact_it is not None:
+        pass
+    elif not load_dep_k:
+        ss_cache = _slot_stiffness(pair, geom, opts, slots, points_per_mesh, None)
+    if helical:  # slices see different roll positions: stiffness-weighted pair error
+        ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
+                                                                     float(nominal_torque_Nm))
+        e_slot = stiffness_weighted_pair_error_m(
+            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
+        if contact_it is not None:  # the load iteration uses the pair error of the helical pair
+            contact_it.e = e_slot
+    bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
+
+    if contact_it is not None:
+        contact_it.__enter__()
+    try:
+        _rows_loop = _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS,
+                                   reps, e_slot, E, rb1, crowned, torques, nominal_torque_Nm, bar)
+    finally:
+        if contact_it is not None:
+            contact_it.__exit__(None, None, None)
+    k_rows, e_rows, te_rows, k_nominal = _rows_loop
+    bar.close()
+
+    k_arr = np.ascontiguousarray(np.stack(k_rows))
+    e_arr = np.ascontiguousarray(np.stack(e_rows))
+    e_comp = np.ascontiguousarray(comprehensive_error_m(e_arr, k_arr > 0))
+    prov = dict(provenance or {})
+    prov.setdefault("precompute", {
+        "slots": slots, "points_per_mesh": points_per_mesh, "table_mesh_periods": n_mesh,
+        "slices": NS, "lead_crowning_total_m": float(E.max()) if crowned else 0.0,
+        "contact_model": opts.contact_model, "foundation": bool(opts.foundation),
+        "shared_foundation_correction": bool(opts.shared_foundation_correction),
+        "torque_rows": "secant stiffness + effective error (seed 000 eq 16)" if crowned
+        else ("load-dependent stiffness" if load_dep_k else "load-independent stiffness"),
+        "wall_s": round(time.perf_counter() - t_start, 3),
+    })
+    if contact_it is not None:
+        prov["contact"] = _contact_provenance(contact_it, axis_note)
+        if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
+            prov["contact"].update(contact_it.helical.provenance())
+    tables = MeshTables(
+        torque_Nm=np.ascontiguousarray(torques, dtype=float),
+        k_N_per_m=k_arr,
+        e_m=e_arr,
+        backlash_half_m=np.full((slots, N), 0.5 * float(pair.backlash_m)),
+        phi_period_rad=n_mesh * float(geom.mesh_period_rad),
+        mesh_period_rad=float(geom.mesh_period_rad),
+        base_radius_pinion_m=rb1,
+        base_radius_gear_m=float(geom.rb2_m),
+        inertia_pinion_kgm2=disc_inertia_kgm2(pair.pinion),
+        inertia_gear_kgm2=disc_inertia_kgm2(pair.gear),
+        teeth_pinion=int(pair.pinion.teeth),
+        teeth_gear=int(pair.gear.teeth),
+        contact_ratio=eps,
+        k_mean_N_per_m=float(k_nominal.sum(axis=0).mean()),
+        e_comprehensive_m=e_comp,
+        static_te_m=np.ascontiguousarray(np.stack(te_rows)),
+        provenance=prov,
+    )
+    if thermal is not None:
+        # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
+        tables = _apply_thermal(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,
+                                ss_cache=ss_cache, slots=slots, points_per_mesh=points_per_mesh, reps=reps,
+                                progress=progress, contact_env=contact_env, nominal_torque_Nm=nominal_torque_Nm)
+    return tables.validate()
+
+
+def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
+                   points_per_mesh, reps, progress, contact_env, nominal_torque_Nm) -> MeshTables:
+    """The ``[thermal]`` options (:class:`gearfmu.scene.reader.ThermalOptions`) applied to
+    single-temperature tables: a temperature axis whose meaning is
+    ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
+    "bulk_and_oil": :func:`_add_oil_temperature_axis`), else the gears' thermal
+    state alone (:func:`_apply_thermal_state`; unchanged at the standard temperature)."""
+    from ..gear.thermal import thermal_state_from_scene
+
+    quantity = getattr(thermal, "axis_quantity", "bulk")
+    has_axis = len(getattr(thermal, "temperature_axis_C", ()) or ()) > 0
+    kw = dict(e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
+              points_per_mesh=points_per_mesh, reps=reps, progress=progress)
+    if has_axis and quantity in ("oil", "bulk_and_oil"):
+        return _add_oil_temperature_axis(tables, pair, opts, thermal, contact_env=contact_env, slots=slots,
+                                         points_per_mesh=points_per_mesh, nominal_torque_Nm=nominal_torque_Nm,
+                                         progress=progress)
+    if has_axis:
+        if quantity != "bulk":
+            raise PrecomputeInputError(f"axis_quantity: must be one of ('bulk', 'oil', 'bulk_and_oil'), got {quantity!r}")
+        return _add_temperature_axis(tables, pair, opts, geom, thermal, **kw)
+    state = thermal_state_from_scene(thermal)
+    if _is_standard_state(state):
+        return tables
+    return _apply_thermal_state(tables, pair, opts, geom, state, getattr(thermal, "flank_law", "radial_tangential"),
+                                **kw)
+
+
+def _is_standard_state(state) -> bool:
+    """Both gears uniformly at the standard temperature (no thermal compliance)."""
+    t0 = float(state.standard_temperature_C)
+    return all(not hasattr(t, "at_gamma") and float(t) == t0 for t in (state.pinion, state.gear))
+
+
+def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_slot, E, crowned, ss_cache, slots,
+                  points_per_mesh, reps, progress=False, label="gearfmu temperature axis"):
+    """Per torque row T (N m, > 0) and thermal state (:class:`gearfmu.gear.thermal.ThermalState`):
+    (k, e, static TE) arrays of shape (NT, NStates, P, n) / (NT, NStates, n).
+
+    The ratio r = k_T/k of :func:`gearfmu.gear.thermal.thermal_slot_stiffness` (seed 004
+    eq 5-28 at the state, load share of CHOICE 4), per slot and angle.  Without
+    lead crowning the row's stiffness is r*k and its error unchanged; with
+    crowning every slice stiffness is scaled by r (the thermal compliance is a
+    series spring of the pair shared by its slices in proportion to their
+    stiffness -- CHOICE, docs/tables.md) and the loaded mesh gives the row's
+    secant stiffness and effective error.  At the standard state r = 1 exactly
+    and the row equals the single-temperature row bit for bit."""
+    from ..gear.thermal import thermal_slot_stiffness
+
+    torques = np.asarray(tables.torque_Nm, dtype=float)
+    if np.any(torques <= 0):
+        raise PrecomputeInputError(
+            f"torque_axis_Nm: a non-standard temperature needs torques > 0 (seed 004 stiffness is a secant "
+            f"stiffness under load), got {torques.tolist()!r}")
+    rb1 = float(geom.rb1_m)
+    bar = _Progress(progress, len(torques), label)
+    k4, e4, te4 = [], [], []
+    for it, T in enumerate(torques):
+        ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
+        k_tile, k_slice = _per_slice(ss, int(opts.slices), reps)
+        th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), states=states,
+                                    standard_temperature_C=t0, slots=slots, n_per_mesh=points_per_mesh,
+                                    law=law, geom=geom)
+        kstd = np.asarray(th.k_standard_N_per_m, dtype=float)
+        if kstd.shape[-1] * reps != tables.n_phi or kstd.shape[0] != tables.slots:
+            raise PrecomputeInputError(f"temperature axis: thermal grid {kstd.shape} does not tile the table "
+                                       f"grid ({tables.slots}, {tables.n_phi})")
+        k_row, e_row, te_row = [], [], []
+        for a in range(len(states)):
+            kt = np.asarray(th.k_N_per_m[a], dtype=float)
+            ratio = np.tile(np.where(kstd > 0, kt / np.where(kstd > 0, kstd, 1.0), 0.0), (1, reps))
+            lm = loaded_static_mesh(k_slice * ratio[:, None, :], e_slot, E, float(T) / rb1)
+            if crowned:
+                k_row.append(lm.k_secant_N_per_m)
+                e_row.append(lm.e_effective_m)
+            else:
+                k_row.append(tables.k_N_per_m[it] * ratio)
+                e_row.append(tables.e_m[it])
+            te_row.append(lm.static_te_m)
+        k4.append(np.stack(k_row))
+        e4.append(np.stack(e_row))
+        te4.append(np.stack(te_row))
+        bar.step(f"torque {float(T):g} N m, {len(states)} thermal states")
+    bar.close()
+    return np.ascontiguousarray(np.stack(k4)), np.ascontiguousarray(np.stack(e4)), np.stack(te4)
+
+
+def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
+                          points_per_mesh, reps, progress=False) -> MeshTables:
+    """Tables with the temperature axis ``thermal.temperature_axis_C`` (degC; uniform
+    bulk temperature of both gears, the FMU input ``bulk_temperature``;
+    docs/tables.md "Operating axes", docs/thermal.md): :func:`_thermal_rows` at
+    the states (t, t) of the axis, standard temperature
+    ``thermal.standard_temperature_C``, ``thermal.flank_law``.
+    Meshing errors and backlash do not depend on temperature (seed 004 models
+    no thermal profile distortion); ``k_mean_N_per_m`` (the damping) stays the
+    standard one.
+    """
+    from ..gear.thermal import ThermalState
+
+    axis = np.asarray(thermal.temperature_axis_C, dtype=float)
+    t0 = float(thermal.standard_temperature_C)
+    states = [ThermalState(float(t), float(t), t0) for t in axis]
+    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, states, thermal.flank_law, t0, e_slot=e_slot, E=E,
+                                     crowned=crowned, ss_cache=ss_cache, slots=slots,
+                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress)
+    e_comp = np.ascontiguousarray(np.stack([comprehensive_error_m(e_arr[:, a], k_arr[:, a] > 0)
+                                            for a in range(axis.size)], axis=1))
+    prov = dict(tables.provenance)
+    prov["thermal"] = {"temperature_axis_C": axis.tolist(), "standard_temperature_C": t0,
+                       "flank_law": thermal.flank_law, "axis_quantity": "bulk", "input": "bulk_temperature",
+                       "model": "seed 004 eq 5-28 (gearfmu.gear.thermal.thermal_slot_stiffness), k scaled by k_T/k"}
+    return replace(tables, k_N_per_m=k_arr, e_m=e_arr, e_comprehensive_m=e_comp,
+                   static_te_m=np.ascontiguousarray(te), provenance=prov,
+                   temperature_C=np.ascontiguousarray(axis), temperature_reference_C=t0).validate()
+
+
+def _state_description(state) -> dict:
+    def one(t):
+        if hasattr(t, "at_gamma"):
+            return {"profile_gamma": list(t.gamma), "profile_C": list(t.temperature_C)}
+        return float(t)
+    return {"pinion_C": one(state.pinion), "gear_C": one(state.gear)}
+
+
+def _apply_thermal_state(tables: MeshTables, pair, opts, geom, state, law, *, e_slot, E, crowned, ss_cache, slots,
+                         points_per_mesh, reps, progress=False) -> MeshTables:
+    """Single-temperature tables at a non-standard thermal state of the gears
+    (``[thermal]`` pinion/gear temperatures or profiles without an axis): seed 004
+    eq 27-28 at that state applied to every torque row by :func:`_thermal_rows`
+    (docs/thermal.md "One temperature without an axis")."""
+    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, [state], law, float(state.standard_temperature_C),
+                                     e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
+                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress,
+                                     label="gearfmu thermal state")
+    k_arr, e_arr = np.ascontiguousarray(k_arr[:, 0]), np.ascontiguousarray(e_arr[:, 0])
+    prov = dict(tables.provenance)
+    prov["thermal"] = {"state": _state_description(state),
+                       "standard_temperature_C": float(state.standard_temperature_C), "flank_law": law,
+                       "model": "seed 004 eq 5-28 (gearfmu.gear.thermal.thermal_slot_stiffness), k scaled by k_T/k"}
+    return replace(tables, k_N_per_m=k_arr, e_m=e_arr,
+                   e_comprehensive_m=np.ascontiguousarray(comprehensive_error_m(e_arr, k_arr > 0)),
+                   static_te_m=np.ascontiguousarray(te[:, 0]), provenance=prov).validate()
+
+
+def oil_axis_eta0_Pas(lubricant, temperatures_C) -> np.ndarray:
+    """eta0 (Pa s) at each oil temperature (degC) of an oil temperature axis: the
+    lubricant's Walther / ASTM D341 law times its (constant) density,
+    :func:`gearfmu.gear.thermal.oil_dynamic_viscosity_Pas`.  ``lubricant``: a
+    :class:`gearfmu.scene.reader.Lubricant` with both kinematic viscosities."""
+    from ..gear.thermal import ThermalError, oil_dynamic_viscosity_Pas
+
+    if lubricant is None:
+        raise PrecomputeInputError("lubricant: an oil temperature axis needs the lubricant's viscosity-temperature "
+                                   "law (thermal.lubricant, set by the scene reader from [lubricant])")
+    nu40 = getattr(lubricant, "kinematic_viscosity_40C_m2_s", None)
+    nu100 = getattr(lubricant, "kinematic_viscosity_100C_m2_s", None)
+    if nu40 is None or nu100 is None:
+        raise PrecomputeInputError("lubricant.eta0_Pas: an oil temperature axis needs a viscosity-temperature law "
+                                   "(kinematic_viscosity_40C_cSt and kinematic_viscosity_100C_cSt)")
+    try:
+        eta = np.atleast_1d(oil_dynamic_viscosity_Pas(nu40, nu100, lubricant.density_kg_m3, temperatures_C))
+    except (ThermalError, ValueError, OverflowError) as exc:
+        raise PrecomputeInputError(f"temperature_axis_C: {exc}") from None
+    if not np.all(np.isfinite(eta) & (eta > 0)):
+        raise PrecomputeInputError(f"temperature_axis_C: the viscosity law gives no usable eta0 at "
+                                   f"{list(np.asarray(temperatures_C, float))!r} degC")
+    return eta
+
+
+def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contact_env, slots, points_per_mesh,
+                              nominal_torque_Nm, progress=False) -> MeshTables:
+    """Tables with an oil temperature axis (``thermal.axis_quantity`` "oil": FMU input
+    ``oil_temperature``; "bulk_and_oil": gears and oil at one temperature, input
+    ``gearbox_temperature``; docs/thermal.md "Oil temperature axis").
+
+    Each slice t is the whole table build of :func:`precompute_tables` with the
+    contact environment's eta0 replaced by eta0(t) of :func:`oil_axis_eta0_Pas`
+    (the lubricated contact model's film / contact stiffness rebuilt at that
+    viscosity, load sharing iterated again); alpha follows ``thermal.oil_alpha``:
+    "roelands" (default) alpha(t) = alpha_ref (ln eta0(t) + 9.67)/(ln eta0_ref + 9.67)
+    with Roelands' Z constant (Roelands 1966;
+    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`, the scene's
+    alpha holding at the lubricant temperature), "constant" the scene's alpha at
+    every t; the density is kept (CHOICE, docs/thermal.md).  The gears' state: for "oil" the ``[thermal]``
+    pinion/gear temperatures or profiles (standard when absent) at every node;
+    for "bulk_and_oil" both gears uniformly at t (seed 004 eq 27-28).  The
+    slice at the lubricant's own temperature is the scene's table bit for bit;
+    ``k_mean_N_per_m`` (the damping) is the scene's (``tables``, built at the
+    lubricant temperature); the FMU input starts at the lubricant temperature
+    clamped into the axis."""
+    from .mesh_tables import TEMPERATURE_INPUTS, stack_temperatures
+    from ..gear.thermal import thermal_state_from_scene
+
+    quantity = thermal.axis_quantity
+    if opts.contact_model == "hertz" or contact_env is None:
+        raise PrecomputeInputError(
+            f"axis_quantity: {quantity!r} acts through eta0 of a lubricated contact model, but contact_model = "
+            f"{opts.contact_model!r}" + (" uses no lubricant" if opts.contact_model == "hertz"
+                                         else " got no contact_env"))
+    from ..contact.models import get_contact_model
+
+    if not get_contact_model(opts.contact_model).needs_lubricant:
+        raise PrecomputeInputError(f"axis_quantity: {quantity!r} needs a contact model that uses the lubricant; "
+                                   f"{opts.contact_model!r} does not")
+    lub = getattr(thermal, "lubricant", None)
+    axis = np.asarray(thermal.temperature_axis_C, dtype=float)
+    eta = oil_axis_eta0_Pas(lub, axis)
+    if getattr(thermal, "oil_alpha", "roelands") == "roelands":
+        from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
+
+        alpha = np.asarray(roelands_alpha_at_viscosity_Pa_inv(contact_env.alpha_Pa_inv, contact_env.eta0_Pas, eta),
+                           dtype=float) * np.ones_like(eta)
+        alpha[eta == contact_env.eta0_Pas] = contact_env.alpha_Pa_inv   # the lubricant's own temperature: exact
+    else:
+        alpha = np.full_like(eta, contact_env.alpha_Pa_inv)
+    t0 = float(thermal.standard_temperature_C)
+    if quantity == "oil":  # the gears keep the scene's state at every oil temperature
+        gear_thermal = replace(thermal, temperature_axis_C=(), axis_quantity="bulk", lubricant=None)
+    slices, contact = [], []
+    for a, t in enumerate(axis):
+        if quantity == "bulk_and_oil":
+            gear_thermal = replace(thermal, temperature_axis_C=(), axis_quantity="bulk", lubricant=None,
+                                   pinion_temperature_C=float(t), gear_temperature_C=float(t),
+                                   pinion_profile_gamma=(), pinion_profile_C=(), gear_profile_gamma=(),
+                                   gear_profile_C=())
+        if float(eta[a]) == contact_env.eta0_Pas and _is_standard_state(thermal_state_from_scene(gear_thermal)):
+            tab = tables  # the scene's own oil temperature, gears standard: the table just built
+        else:
+            tab = precompute_tables(pair, opts, points_per_mesh=points_per_mesh, torque_axis_Nm=tables.torque_Nm,
+                                    nominal_torque_Nm=nominal_torque_Nm, slots=slots, progress=progress,
+                                    contact_env=replace(contact_env, eta0_Pas=float(eta[a]),
+                                                        alpha_Pa_inv=float(alpha[a])),
+                                    thermal=gear_thermal)
+        if not np.array_equal(tab.torque_Nm, tables.torque_Nm):
+            raise PrecomputeInputError(f"temperature axis: the torque axis at {t:g} degC differs")
+        c = tab.provenance.get("contact", {})
+        contact.append({"temperature_C": float(t), "eta0_Pas": float(eta[a]), "alpha_Pa_inv": float(alpha[a]),
+                        "solves": c.get("solves"),
+                        "film_failures": c.get("film_failures", 0)})
+        slices.append(replace(tab, provenance={}))
+    out = stack_temperatures(slices, axis, temperature_reference_C=float(lub.temperature_C))
+    prov = dict(tables.provenance)
+    prov["thermal"] = {
+        "temperature_axis_C": axis.tolist(), "axis_quantity": quantity, "input": TEMPERATURE_INPUTS[quantity],
+        "standard_temperature_C": t0, "flank_law": thermal.flank_law,
+        "oil": {"law": "Walther (ASTM D341) through kinematic_viscosity_40C/100C, eta0 = rho nu, rho constant",
+                "eta0_Pas": eta.tolist(), "alpha_Pa_inv": alpha.tolist(),
+                "alpha": ("Roelands 1966, Z constant: alpha_ref (ln eta0 + 9.67)/(ln eta0_ref + 9.67)"
+                          if getattr(thermal, "oil_alpha", "roelands") == "roelands"
+                          else "constant: the [lubricant] value (CHOICE)"),
+                "reference_temperature_C": float(lub.temperature_C), "slices": contact},
+        "gears": ("both at the axis temperature (seed 004 eq 5-28)" if quantity == "bulk_and_oil"
+                  else _state_description(thermal_state_from_scene(thermal))),
+        "model": "each slice rebuilt by precompute_tables with eta0(t); k_mean from the lubricant temperature",
+    }
+    return replace(out, k_mean_N_per_m=tables.k_mean_N_per_m, provenance=prov).validate()
