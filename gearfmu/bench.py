@@ -30,14 +30,20 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from .dynamics import native
+from .dynamics.native import simulate, DEFAULT_INTEGRATOR
+from .dynamics.reference import simulate_reference
+from .fmu.compare import output_names, run_fmu
+from .fmu.pythonfmu_build import build_fmu
+from .pipeline import compute_tables, load
+from .tables.synthetic import KB_BACKLASH_HALF_M, rectangular_wave_tables
+
 __all__ = ["HARD_CASES", "hard_case", "rel_errors", "accuracy_benchmark", "plot_pareto", "native_integrators"]
 
 
 def _kb(**kw):
     """Rectangular-wave TVMS on the seed 003 Table 1 gears (50/50 teeth, eps 1.7547),
     every engaged pair 2.5e8 N/m (k_double = 2 k_single), half backlash 68 um."""
-    from .tables.synthetic import KB_BACKLASH_HALF_M, rectangular_wave_tables
-
     args = dict(k_single_N_per_m=2.5e8, backlash_half_m=KB_BACKLASH_HALF_M)
     args.update(kw)
     return rectangular_wave_tables(**args)
@@ -111,8 +117,6 @@ def _torque_steps():
 
 def _computed():
     """The default scene's computed tables (seed 000 Table 1 pair) at its operating point."""
-    from .pipeline import compute_tables, load
-
     scene = load(None)
     t = compute_tables(scene)
     w1 = scene.operating.speed_rad_s
@@ -161,8 +165,6 @@ def native_integrators():
     """Integrator names :func:`gearfmu.dynamics.native.simulate` offers, read from its signature
     (a parameter ``integrator`` or ``method`` with a default; its allowed values from
     ``native.INTEGRATORS`` when present).  ["rk4"] when it has no such parameter."""
-    from .dynamics import native
-
     sig = inspect.signature(native.simulate)
     for pname in ("integrator", "method"):
         if pname in sig.parameters:
@@ -174,8 +176,6 @@ def native_integrators():
 
 
 def _fmu_build(tables, kw, max_step_s, workdir, integrator):
-    from .fmu.pythonfmu_build import build_fmu
-
     return build_fmu(tables, Path(workdir) / "bench.fmu", model_name="bench", damping_ratio=kw["damping_ratio"],
                      integrator=integrator,
                      pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
@@ -190,9 +190,6 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
                        progress: bool = True) -> dict:
     """Speed against error on one hard case (see module docstring); returns a dict with
     ``rows`` (method, setting, wall_s, errors) and the reference's settings."""
-    from .dynamics.native import simulate
-    from .dynamics.reference import simulate_reference
-
     def say(msg):
         if progress:
             print(f"bench: {msg}", file=sys.stderr, flush=True)
@@ -220,12 +217,10 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
             rows.append(dict(method=f"native-{integ}", setting=f"h=H/{n}", step_s=H / n, wall_s=best,
                              **rel_errors(res, ref)))
             say(f"native {integ} H/{n}: {rows[-1]['dte_rel_rms_err']:.2e}")
-    from .fmu.compare import output_names, run_fmu
 
     with tempfile.TemporaryDirectory() as wd:
         hmax = H / fmu_substeps
         say("building the FMU (C kernel, once; the communication step is the master's choice)")
-        from .dynamics.native import DEFAULT_INTEGRATOR
 
         fmu = _fmu_build(tables, kw, hmax, wd, DEFAULT_INTEGRATOR)  # the FMU as built by default
         for m in fmu_comm_mesh_periods:
@@ -259,10 +254,10 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
 
 def plot_pareto(report: dict, png_path) -> Path:
     """Wall time against dte RMS error, one marker series per method (log-log)."""
-    import matplotlib
+    import matplotlib  # matplotlib: only for the optional accuracy plot
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only for the optional accuracy plot
 
     fig, ax = plt.subplots(figsize=(7, 5))
     methods = []

@@ -21,14 +21,21 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
+from .common.vocabulary import RUNTIMES
+from .fmu.compare import native_columns, output_names, run_fmu, validate_fmu_against_native
+from .pipeline import load, build, compute_tables, simulate_native, gear_torque_for, max_step_for
+from .plan import format_report, plan_scene
+from .ssp import parse_variant, ssp_from_scene
+from .tables.table_import import load_tables_file
+
 
 class CliError(Exception):
     pass
 
 
 def _scene(path):
-    from .pipeline import load
-
     if path is not None and not Path(path).exists():
         raise CliError(f"SCENE: file not found: {path}")
     return load(path)
@@ -47,13 +54,10 @@ def _positive(name):
 
 
 def cmd_build(args) -> int:
-    from .pipeline import build
-
     scene = _scene(args.scene)
     out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
     tables = None
     if getattr(args, "tables", None):  # imported tables instead of the scene's physics
-        from .tables.table_import import load_tables_file
 
         if not Path(args.tables).exists():
             raise CliError(f"--tables: file not found: {args.tables}")
@@ -80,8 +84,7 @@ def _print_contact(tables) -> None:
 
 
 def cmd_tables(args) -> int:
-    from .pipeline import compute_tables
-    from .plots import plot_tables
+    from .plots import plot_tables  # matplotlib: loaded only by the plotting commands
 
     scene = _scene(args.scene)
     t0 = time.perf_counter()
@@ -100,8 +103,6 @@ def cmd_tables(args) -> int:
 
 
 def _tables_csv(tables, path, torque_index: int = 0):
-    import numpy as np
-
     cols = [np.degrees(tables.phi_rad)]
     head = ["pinion_angle_deg"]
     for j in range(tables.slots):
@@ -119,11 +120,7 @@ def _tables_csv(tables, path, torque_index: int = 0):
 
 
 def cmd_simulate(args) -> int:
-    import numpy as np
-
-    from .fmu.compare import native_columns, output_names, run_fmu
-    from .pipeline import compute_tables, simulate_native
-    from .plots import plot_simulation
+    from .plots import plot_simulation  # matplotlib: loaded only by the plotting commands
 
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
@@ -140,7 +137,7 @@ def cmd_simulate(args) -> int:
             raise CliError("--fmu: required with --backend fmu")
         if not Path(args.fmu).exists():
             raise CliError(f"--fmu: file not found: {args.fmu}")
-        from fmpy import read_model_description
+        from fmpy import read_model_description  # fmpy: only when an FMU is inspected
 
         md = read_model_description(args.fmu)
         slots = sum(1 for v in md.modelVariables if v.name.startswith("pair_force["))
@@ -168,9 +165,6 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    from .fmu.compare import validate_fmu_against_native
-    from .pipeline import build, compute_tables, gear_torque_for, max_step_for
-
     scene = _scene(args.scene)
     if args.fmu:
         if not Path(args.fmu).exists():
@@ -211,8 +205,6 @@ def print_report(rep: dict) -> None:
 
 
 def cmd_ssp(args) -> int:
-    from .ssp import parse_variant, ssp_from_scene
-
     scene = _scene(args.scene)
     out = Path(args.output or f"build/{scene.fmu.model_name}.ssp")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
@@ -222,8 +214,6 @@ def cmd_ssp(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from .plan import format_report, plan_scene
-
     scene = _scene(args.scene)
     plan = plan_scene(scene, progress=not args.quiet and not args.json, measure_fmu=args.fmu,
                       fmu_dir=args.output)
@@ -239,7 +229,7 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
-    b.add_argument("--runtime", choices=("pythonfmu", "standalone"),
+    b.add_argument("--runtime", choices=RUNTIMES,
                    help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")

@@ -1,94 +1,19 @@
-"""The main job on a scene: scene -> tables -> FMU, and the native run beside it.
+"""The main job on a scene: scene -> (plan) -> tables -> FMU, and the native run beside it.
 
-This module only wires the stages together; each stage lives in its own
-module (scene, precompute, fmubuild, native, compare).
+The public entry points.  The stages themselves are wired in :mod:`gearfmu.stages`
+(re-exported here); :func:`build` adds the planner (:mod:`gearfmu.plan`) in front when
+the scene has an ``[accuracy]`` section.
 """
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Optional
 
-import numpy as np
+from .plan import plan_scene, planned_scene
+from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
+                     max_step_for, simulate_native)
 
-from . import __version__
-
-
-def load(scene_path: Optional[str] = None):
-    """Load a scene file (None: the default scene)."""
-    from .scene.reader import default_scene_path, load_scene
-
-    return load_scene(scene_path if scene_path is not None else default_scene_path())
-
-
-def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
-    """Load torque on the gear that balances a pinion torque in steady state,
-    T2 = T1 * Rb2 / Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2)."""
-    return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
-
-
-def compute_tables(scene, *, progress: bool = False):
-    """Precompute the tooth-pair tables of a scene (timed)."""
-    from .tables.precompute import precompute_tables
-
-    torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
-    prov = {
-        "scene_name": scene.name,
-        "scene_toml": scene.text,
-        "gearfmu_version": __version__,
-        "numpy_version": np.__version__,
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "contact_model": scene.mesh.contact_model,
-    }
-    return precompute_tables(
-        scene.pair, scene.mesh,
-        points_per_mesh=scene.tables.points_per_mesh,
-        torque_axis_Nm=torque_axis,
-        nominal_torque_Nm=scene.operating.torque_Nm,
-        slots=scene.tables.slots,
-        progress=progress,
-        provenance=prov,
-        **_contact_kw(scene, progress),
-        thermal=getattr(scene, "thermal", None),
-    )
-
-
-def _contact_kw(scene, progress: bool) -> dict:
-    """``contact_env`` for the EHL contact models (gearfmu/contact/models.py); {} for Hertz."""
-    if scene.mesh.contact_model == "hertz":
-        return {}
-    from .contact.models import environment_from_scene
-
-    return {"contact_env": environment_from_scene(scene, progress=progress)}
-
-
-def max_step_for(scene, tables) -> float:
-    """The internal step bound: the scene's ``solver.max_step_s`` or the automatic choice."""
-    from .dynamics.native import choose_max_step_s
-
-    if scene.solver.max_step_s is not None:
-        return float(scene.solver.max_step_s)
-    vmax = scene.operating.speed_rad_s
-    rng = getattr(scene.operating, "speed_range_rad_s", None)
-    if rng:
-        vmax = max(abs(v) for v in rng)
-    if getattr(tables, "has_temperature_axis", False):  # the bound of the stiffest temperature slice
-        return min(choose_max_step_s(tables.at_temperature(float(t)), abs(vmax)) for t in tables.temperature_C)
-    return choose_max_step_s(tables, abs(vmax))
-
-
-DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
-
-
-@dataclass
-class BuildResult:
-    fmu_path: Path
-    tables: object
-    tables_wall_s: float
-    build_wall_s: float
-    max_step_s: float
-    plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
+__all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for",
+           "simulate_native"]
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
@@ -96,73 +21,13 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
     "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
-    gearfmu.tables.table_import); the scene then only gives the FMU and operating settings."""
-    from .fmu.pythonfmu_build import build_fmu
-
+    gearfmu.tables.table_import); the scene then only gives the FMU and operating settings.
+    A scene with ``[accuracy]`` (and no ``tables``) is planned first (docs/plan.md) and the
+    planned scene is built; the plan is in the result."""
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
-    if runtime == "standalone":
-        from .fmu.standalone_build import build_standalone_fmu as build_fmu  # same arguments
-    elif runtime != "pythonfmu":
-        raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
-
+    fmu_builder(runtime)  # an unknown runtime fails before any planning
     plan = None
     if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
-        from .plan import plan_scene, planned_scene
-
         plan = plan_scene(scene, progress=progress)
         scene = planned_scene(scene, plan)
-    t0 = time.perf_counter()
-    if tables is None:
-        tables = compute_tables(scene, progress=progress)
-    t1 = time.perf_counter()
-    h_max = max_step_for(scene, tables)
-    t1_Nm = scene.operating.torque_Nm
-    path = build_fmu(
-        tables, out_path,
-        model_name=scene.fmu.model_name,
-        damping_ratio=scene.fmu.damping_ratio,
-        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        pinion_torque_start_Nm=t1_Nm,
-        gear_torque_start_Nm=gear_torque_for(tables, t1_Nm),
-        max_step_s=h_max,
-        damping_model=scene.solver.damping_model,
-        stop_time_s=scene.fmu.stop_time_s,
-        output_interval_s=scene.fmu.output_interval_s,
-        scene_text=scene.text,
-        **_integrator_kw(build_fmu, scene),
-    )
-    t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
-
-
-def _integrator_kw(builder, scene) -> dict:
-    """{'integrator': scene.solver.integrator} for a builder that takes it; a builder
-    without the argument gets nothing for 'rk4' (its kernel default) and an error otherwise."""
-    import inspect
-
-    name = getattr(scene.solver, "integrator", "rk4")
-    if "integrator" in inspect.signature(builder).parameters:
-        return {"integrator": name}
-    if name != "rk4":
-        raise ValueError(f"solver.integrator: {name!r} is not supported by this FMU runtime's builder")
-    return {}
-
-
-def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
-                    damping_ratio=None, pinion_torque_Nm=None, gear_torque_Nm=None):
-    """Run the native (numba) solver on a scene's tables with the scene's settings."""
-    from .dynamics.native import simulate
-
-    t1_Nm = scene.operating.torque_Nm if pinion_torque_Nm is None else pinion_torque_Nm
-    return simulate(
-        tables,
-        stop_time_s=scene.fmu.stop_time_s if stop_time_s is None else stop_time_s,
-        comm_step_s=scene.fmu.output_interval_s if comm_step_s is None else comm_step_s,
-        max_step_s=max_step_for(scene, tables) if max_step_s is None else max_step_s,
-        pinion_torque_Nm=t1_Nm,
-        gear_torque_Nm=gear_torque_for(tables, t1_Nm) if gear_torque_Nm is None else gear_torque_Nm,
-        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        damping_ratio=scene.fmu.damping_ratio if damping_ratio is None else damping_ratio,
-        damping_model=scene.solver.damping_model,
-        integrator=getattr(scene.solver, "integrator", "rk4"),
-    )
+    return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan)

@@ -51,6 +51,7 @@ reported per case.
 from __future__ import annotations
 
 import math
+import shutil
 import sys
 import tempfile
 import time
@@ -60,7 +61,16 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .common.vocabulary import LUBRICATED_CONTACT_MODELS
 from .scene.envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
+from .contact.models import CONTACT_MODELS, environment_from_scene, get_contact_model
+from .dynamics.native import choose_max_step_s, simulate
+from .gear.gearpair import GearDeviations
+from .gear.geometry import pair_geometry
+from .gear.meshing_errors import pair_table_mesh_count
+from .scene.reader import ThermalOptions
+from .stages import build_fmu_from_scene
+from .tables.precompute import precompute_tables, default_slots
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
@@ -68,7 +78,6 @@ __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "fo
 
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
-_LUBRICATED = ("smooth_ehl", "rough_ehl")
 _PPM_LEVELS = (16, 32, 64, 128, 256)
 _TORQUE_LEVELS = (1, 2, 3, 5, 9)
 _STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
@@ -114,31 +123,15 @@ class Choice:
 
 def _available_contact_models() -> Tuple[str, ...]:
     """Contact models the table builder offers: the registry
-    ``gearfmu.contact.models.CONTACT_MODELS`` when that module exists and the
-    table builder takes a contact environment, else hertz alone."""
-    import inspect
-
-    from .tables.precompute import precompute_tables
-    try:
-        from .contact import models as contact_models  # type: ignore[attr-defined]
-    except ImportError:
-        return ("hertz",)
-    if "contact_env" not in inspect.signature(precompute_tables).parameters:
-        return ("hertz",)
-    names = getattr(contact_models, "CONTACT_MODELS", None) or {"hertz": None}
-    return tuple(n for n in names if isinstance(n, str))
+    ``gearfmu.contact.models.CONTACT_MODELS``."""
+    return tuple(n for n in CONTACT_MODELS if isinstance(n, str))
 
 
 def _p_min(scene) -> int:
-    from .gear.geometry import pair_geometry
-    from .tables.precompute import default_slots
-
     return default_slots(float(pair_geometry(scene.pair).contact_ratio))
 
 
 def _teeth_differ(scene, slots: int) -> bool:
-    from .gear.meshing_errors import pair_table_mesh_count
-
     return pair_table_mesh_count(scene.pair, slots) > slots
 
 
@@ -168,7 +161,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     # CHOICE: rough_ehl only when the scene describes its roughness ([roughness]) or asks for it: the
     # planner does not invent a flank surface the scene does not state
     rough_ok = scene.mesh.contact_model == "rough_ehl" or _scene_roughness(scene) is not None
-    cm = [m for m in CONTACT_ORDER if m in avail and (m not in _LUBRICATED or scene.lubricant is not None)
+    cm = [m for m in CONTACT_ORDER if m in avail and (m not in LUBRICATED_CONTACT_MODELS or scene.lubricant is not None)
           and (m != "rough_ehl" or rough_ok)]
     if scene.mesh.contact_model not in cm:
         cm.append(scene.mesh.contact_model)
@@ -217,14 +210,10 @@ def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     (``axis_quantity`` "oil" / "bulk_and_oil", docs/thermal.md) acts through eta0 of a
     lubricated model; when the plan chooses a model without a lubricant (hertz) the oil
     part has nothing to act on, so "oil" loses its axis and "bulk_and_oil" becomes "bulk"."""
-    from .scene.reader import ThermalOptions
-
     th = getattr(scene, "thermal", None)
     th = th if th is not None else ThermalOptions()
     q = getattr(th, "axis_quantity", "bulk")
     if contact_model is not None and q != "bulk":
-        from .contact.models import get_contact_model
-
         if not get_contact_model(contact_model).needs_lubricant:
             th = (replace(th, temperature_axis_C=(), axis_quantity="bulk") if q == "oil"
                   else replace(th, axis_quantity="bulk"))
@@ -268,8 +257,6 @@ class _Evaluator:
                 cfg["torque_points"], cfg["slots"], bool(cfg["thermal"]))
 
     def pair(self, tooth_specific: bool):
-        from .gear.gearpair import GearDeviations
-
         p = self.scene.pair
         if tooth_specific:
             return p
@@ -288,8 +275,6 @@ class _Evaluator:
 
     def tables(self, cfg: dict):
         """(MeshTables, build wall time in s) of a configuration (cached)."""
-        from .tables.precompute import precompute_tables
-
         key = self.table_key(cfg)
         if key not in self._tables:
             t0 = time.perf_counter()
@@ -307,7 +292,6 @@ class _Evaluator:
         if cfg["thermal"]:  # the table builder's own temperature axis (docs/plan.md "Thermal estimate")
             kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
-            from .contact.models import environment_from_scene
 
             kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
         return kw
@@ -371,8 +355,6 @@ class _Evaluator:
 
     def run(self, cfg: dict, point) -> dict:
         """Native run at one envelope point: dte, mesh_force (arrays), wall_s and simulated time."""
-        from .dynamics.native import simulate
-
         key = self.table_key(cfg) + (cfg["thermal"], cfg["integrator"], self.step(cfg), point)
         if key in self._runs:
             return self._runs[key]
@@ -565,7 +547,6 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     ev = _Evaluator(scene, env, acc, progress)
     full = {n: c.full for n, c in choices.items()}
     tb_full, _ = ev.tables(full)
-    from .dynamics.native import choose_max_step_s
 
     w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
     if tb_full.has_temperature_axis:  # the smallest automatic step over the axis nodes
@@ -665,8 +646,6 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
 
 def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
     """Fresh measurement of one configuration's costs (tables rebuilt, runs at every envelope point)."""
-    from .tables.precompute import precompute_tables
-
     tb, first_s = ev.tables(cfg)
     if first_s < _REBUILD_BELOW_S:  # cheap: rebuild for a timing free of first-call (compile, cache) costs
         t0 = time.perf_counter()
@@ -827,10 +806,8 @@ def run_fmu_drive(fmu_path, case: DriveCase, names=("dte", "mesh_force", "pinion
     time and the CPU time of this thread spent in the stepping loop (the FMU runs in this
     process: pythonfmu wrapper, its Python slave and the C kernel; both FMUs pay the same
     per-step host overhead), and whether the FMU had a temperature input."""
-    import shutil
-
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy import extract, read_model_description  # fmpy: heavy, only to drive the FMUs
+    from fmpy.fmi2 import FMU2Slave  # fmpy: heavy, only to drive the FMUs
 
     md = read_model_description(str(fmu_path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -877,7 +854,7 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
                 runtime: Optional[str] = None) -> dict:
     """The planned FMU against the full-fidelity FMU over the scene's envelope (issue 8).
 
-    Builds both with :func:`gearfmu.pipeline.build` from :func:`planned_scene` (chosen)
+    Builds both with :func:`gearfmu.stages.build_fmu_from_scene` from :func:`planned_scene` (chosen)
     and :func:`full_scene` (their tables computed from the scene, timed), drives both
     through the same cases (:func:`verification_cases`, or ``cases``) with
     :func:`run_fmu_drive` and returns, as JSON-ready data: per FMU its size, table build
@@ -886,15 +863,13 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
     measure), whether both are within the target, the FMUs' wall and CPU time per
     simulated second and their ratio, and how far the full FMU's pinion turned from the
     drive's rigid-body target (|angle - integral of w_target dt| / that integral)."""
-    from .pipeline import build
-
     d = Path(fmu_dir) if fmu_dir else Path(tempfile.mkdtemp(prefix="gearfmu_plan_"))
     d.mkdir(parents=True, exist_ok=True)
     fmus, built = {}, {}
     for which in ("full", "chosen"):
         sc = planned_scene(scene, plan, which=which)
         _say(progress, f"building the {which} FMU", plan.log)
-        res = build(sc, d / f"{scene.fmu.model_name}_{which}.fmu", runtime=runtime)
+        res = build_fmu_from_scene(sc, d / f"{scene.fmu.model_name}_{which}.fmu", runtime=runtime)
         built[which] = res
         fmus[which] = {"fmu_path": str(res.fmu_path), "fmu_bytes": res.fmu_path.stat().st_size,
                        "table_build_s": res.tables_wall_s, "fmu_build_s": res.build_wall_s,
@@ -948,8 +923,6 @@ def planned_scene(scene, plan: Plan, which: str = "chosen"):
     the full-fidelity) configuration written into the scene's mesh, table, solver,
     operating, deviation and thermal settings.  Its ``accuracy`` is None (a planned
     scene is not planned again); ``text`` stays the original scene source."""
-    from .gear.gearpair import GearDeviations
-
     cfg = plan.chosen if which == "chosen" else plan.full
     env = plan.envelope
     mesh = replace(scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))

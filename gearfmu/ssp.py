@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Dict, Mapping, Optional
 
 from .common.checks import finite_number
+from .pipeline import build
 
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -69,7 +70,7 @@ def _q(prefix: str, tag: str) -> str:
 
 def _fmu_interface(fmu_path: Path):
     """(model description, units {name: base exponents}) of an FMU."""
-    import fmpy
+    import fmpy  # fmpy: heavy, only to read the FMU
 
     md = fmpy.read_model_description(str(fmu_path))
     units = {}
@@ -164,7 +165,7 @@ def _ssd_xml(system_name: str, fmu_rel: str, ssv_rel: str, md, units, stop_time_
 def validate_ssp_dir(directory) -> None:
     """Schema-validate every .ssd and .ssv under ``directory`` with pyssp-standard
     (SSP 1.0 XSD); raise SspError naming the file on the first failure."""
-    from pyssp_standard import SSD, SSV
+    from pyssp_standard import SSD, SSV  # pyssp-standard: heavy schema validation, only when asked
 
     d = Path(directory)
     files = sorted(d.glob("*.ssd")) + sorted((d / "resources").glob("*.ssv"))
@@ -264,8 +265,6 @@ def parse_variant(text: str):
 def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[str, float]]] = None,
                    progress: bool = False) -> Path:
     """Scene -> tables -> FMU -> SSP archive at ``out_path``."""
-    from .pipeline import build
-
     out_path = Path(out_path)
     if out_path.suffix != ".ssp":
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")

@@ -65,6 +65,8 @@ from scipy.optimize import brentq
 
 from ..common.checks import finite_number
 from ..ehl.lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa
+from .roughness import wm_sigma_m
+from ..ehl.fits import dowson_higginson_min_film, pan_hamrock_films
 
 __all__ = [
     "FractalInputError", "FractalSurface", "FractalMaterial", "LateralContact",
@@ -74,7 +76,7 @@ __all__ = [
     "normal_contact_stiffness", "contact_correction_coefficient", "hertz_half_width_m",
     "line_contact_gap_m", "brinell_to_hardness_Pa", "dimensionless",
     "KE_STAGE1", "KE_STAGE2", "K_HY_DEFAULT", "film_regime", "FractalMeshOptions",
-    "slice_contact_stiffness", "fractal_mixed_model", "FULL_FILM_LAMBDA", "BOUNDARY_LAMBDA",
+    "slice_contact_stiffness", "FULL_FILM_LAMBDA", "BOUNDARY_LAMBDA",
     "FullContactError", "solid_contact_extensive", "composite_sigma_m", "film_parameter",
 ]
 
@@ -597,9 +599,6 @@ def slice_contact_stiffness(D: float, G_m: float, rho_m: float, u_m_s: float, w_
     Returns K_n, K_s, K_l, lambda_c, film parameter and its regime, A_r/A0, A0.
     No lubricant (eta0 None): K_l = 0.  Raises :class:`FullContactError` where the
     asperities cannot carry the load below complete contact (A_r >= A0)."""
-    from ..ehl.fits import dowson_higginson_min_film, pan_hamrock_films
-    from .roughness import wm_sigma_m
-
     mo = mesh_options
     surf = FractalSurface(D, G_m)
     mat = FractalMaterial(E_star_Pa, mo.H_Pa, friction=mo.friction)
@@ -628,45 +627,3 @@ def slice_contact_stiffness(D: float, G_m: float, rho_m: float, u_m_s: float, w_
             "K_l_N_per_m": Kl, "lambda_c": lam_c, "film_parameter": lam,
             "regime": film_regime(lam) if math.isfinite(lam) else "dry", "h_c_m": h_c, "h_min_m": h_min,
             "real_area_ratio": sol.real_area_m2 / A0, "A0_m2": A0}
-
-
-def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
-    """Contact model 'fractal_mixed' (registry signature of :mod:`gearfmu.contact.models`):
-    K_n = K_s + K_l of seed 001 per (position, slice load) in place of Hertz.
-    Roughness from ``env.roughness`` (D, G_m; default seed 000 Table 2 level 1),
-    settings from ``env.fractal`` (a :class:`FractalMeshOptions`) when present.
-    Requests whose film parameter lies in the full-film range are recorded in
-    ``failures`` with status 'full_film' (the build reports them).  Requests whose
-    asperities would reach complete contact (A_r >= A0, :class:`FullContactError`) use the
-    Hertz stiffness, recorded with status 'complete_contact' and counted in ``fallbacks``
-    (the policy of gearfmu.contact.models for the rough-EHL switch)."""
-    from ..gear.hertz import reduced_modulus_Pa
-    from .models import ContactStiffness, RoughnessSpec, _check, _key, hertz_stiffness_N_per_m
-    from ..ehl.mesh_film import contact_kinematics
-
-    s, n, w = _check(env, s_m, slice_index, w_N_per_m)
-    spec = env.roughness if env.roughness is not None else RoughnessSpec.from_level(1)
-    mo = getattr(env, "fractal", None) or FractalMeshOptions()
-    Es = reduced_modulus_Pa(env.pair)
-    keys = [(_key(a), _key(c)) for a, c in zip(s, w)]  # slices share D, G: same answer
-    uniq = list(dict.fromkeys(keys))
-    R, u, _ = contact_kinematics(env.geom, np.array([k[0] for k in uniq]), env.omega1_rad_s)
-    kmap, notes, full = {}, [], set()
-    for i, (sk, wk) in enumerate(uniq):
-        try:
-            r = slice_contact_stiffness(spec.D, spec.G_m, float(R[i]), float(u[i]), wk, env.width_m, Es,
-                                        env.eta0_Pas, env.alpha_Pa_inv, mo)
-        except FullContactError as e:
-            kmap[(sk, wk)] = hertz_stiffness_N_per_m(env.pair, env.width_m)
-            full.add((sk, wk))
-            notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="complete_contact",
-                              film_parameter=float("nan"), used="hertz",
-                              message=f"real contact area would reach the nominal area (Hertz used): {e}"))
-            continue
-        kmap[(sk, wk)] = r["K_n_N_per_m"]
-        if r["regime"] == "full_film":
-            notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="full_film",
-                              film_parameter=r["film_parameter"],
-                              message="film parameter >= 3: full film, the mixed model overstates contact"))
-    return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq), failures=notes,
-                            fallbacks=sum(k in full for k in keys))

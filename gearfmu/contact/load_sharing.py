@@ -51,11 +51,13 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import gamma as _gamma_fn
 from scipy.special import pbdv
+from scipy.integrate import quad
 
 from ..common.checks import finite_number
 from ..ehl.fits import moes_central_film
 from ..ehl.lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa
-from .roughness import SEED000_GAMMA, SEED000_SAMPLE_LENGTH_M, SEED000_SAMPLING_M
+from .roughness import (SEED000_GAMMA, SEED000_SAMPLE_LENGTH_M, SEED000_SAMPLING_M, RoughnessInputError,
+                        wm_frequencies_per_m)
 
 __all__ = [
     "LoadSharingInputError", "ASPERITY_F_MAX_PER_M", "NAYAK_SIGMA_S_COEFF", "SpectralMoments",
@@ -107,8 +109,6 @@ def wm_spectral_moments(D: float, G_m: float, f_max_per_m: float = ASPERITY_F_MA
     a_n = G^(D-1) f_n^(D-2); a line a cos(2 pi f x + phi) contributes a^2/2 (2 pi f)^k to
     m_k.  ``flanks`` independent flanks with the same (D, G) add their moments (the
     equivalent surface of two rough surfaces, McCool 1986)."""
-    from .roughness import RoughnessInputError, wm_frequencies_per_m
-
     if int(flanks) != flanks or flanks < 1:
         raise LoadSharingInputError(f"flanks={flanks!r}: must be an integer >= 1")
     try:
@@ -211,8 +211,6 @@ def gw_integral(n: float, t, distribution: str = "gaussian"):
         return out[()] if out.ndim else float(out)
     if distribution == "exponential":
         if np.any(t < 0):
-            from scipy.integrate import quad
-
             f = np.vectorize(lambda tt: _gamma_fn(n + 1.0) * math.exp(-tt) if tt >= 0 else
                              quad(lambda s: (s - tt) ** n * math.exp(-s), 0.0, np.inf)[0])
             return f(t)[()]

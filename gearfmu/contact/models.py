@@ -49,18 +49,29 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional
+import time
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
+from ..common.vocabulary import FILM_FAILURE_POLICIES, FILM_TRANSIENT_MODES
 from ..gear.hertz import hertz_stiffness_N_per_m, reduced_modulus_Pa
+from .fractal import FractalInputError, slice_contact_stiffness, FractalMeshOptions, FullContactError
+from .load_sharing import LineContactState, asperity_parameters, load_sharing, wm_spectral_moments
+from .roughness import wm_sigma_m, SEED000_LEVELS, make_flank_roughness
+from ..ehl.errors import EHLConvergenceError, FilmCollapseError
+from ..ehl.fits import dowson_higginson_min_film
+from ..ehl.mesh_film import (contact_kinematics, solve_films, involute_arc_length_m, FilmEnvironment,
+                             _solve_node_chunk, map_chunks)
+from ..ehl.transient import solve_line_contact_transient, flank_slice_case
+from ..gear.geometry import pair_geometry
+from ..gear.stiffness import tooth_compliance_m_per_N, combine_pairs
 
 
 class ContactModelError(ValueError):
     """Bad contact-model input, or a film failure under ``on_failure = "error"``."""
 
 
-#: what a rough-EHL request uses where the full film does not hold (RoughnessSpec.on_failure)
-FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error", "load_sharing")
 #: full-film limit of the film parameter Lambda = h_min/sigma (Tallian 1967; Johnson,
 #: Greenwood & Poon 1972; gearfmu.contact.fractal.FULL_FILM_LAMBDA)
 FULL_FILM_PARAMETER = 3.0
@@ -78,14 +89,6 @@ STALL_FILL_MAX_SPAN = 3
 #: rough load nodes over a known load range (ContactEnvironment.film_load_range_N_per_m,
 #: set by the table builder: the load floor to the largest static slice load)
 FILM_LOAD_NODES = 3
-#: ``RoughnessSpec.film_transient`` values: "off" (steady frozen-roughness films only),
-#: "correction" (docs/ehl_transient.md section 3 "last row": per film-grid node, transient
-#: runs with the roughness moving with the flanks on :data:`FILM_TRANSIENT_SLICES` slices give
-#: c = <k_transient>/k_steady, which multiplies every slice's steady rough/smooth ratio) or
-#: "film" (the rough film IS the transient film: per node, ratio = mean over those slices of
-#: k_transient/k_smooth, the same for every slice, no steady rough solve; start 'auto';
-#: docs/ehl_mesh.md "Transient films in the tables")
-FILM_TRANSIENT_MODES = ("off", "correction", "film")
 #: slices per film-grid node run in time for the transient correction (CHOICE of
 #: docs/ehl_transient.md section 3: 4, spread evenly over the face; all when fewer)
 FILM_TRANSIENT_SLICES = 4
@@ -170,8 +173,6 @@ class RoughnessSpec:
     @staticmethod
     def from_level(level: int, **kw) -> "RoughnessSpec":
         """Seed 000 Table 2 level 1-4 (:data:`gearfmu.contact.roughness.SEED000_LEVELS`)."""
-        from .roughness import SEED000_LEVELS
-
         if level not in SEED000_LEVELS:
             raise ContactModelError(f"level={level!r}: seed 000 Table 2 has levels 1-4")
         lv = SEED000_LEVELS[level]
@@ -209,8 +210,6 @@ class ContactEnvironment:
     _grid: object = field(default=None, repr=False)
 
     def film_environment(self):
-        from ..ehl.mesh_film import FilmEnvironment
-
         for name in ("eta0_Pas", "alpha_Pa_inv", "rho0_kg_m3"):
             v = getattr(self, name)
             if v is None or not math.isfinite(v) or v < 0 or (v == 0 and name != "alpha_Pa_inv"):
@@ -223,8 +222,6 @@ class ContactEnvironment:
     def flanks(self):
         """The sampled flank roughness (made once, cached)."""
         if self._flanks is None:
-            from ..ehl.mesh_film import make_flank_roughness
-
             r = self.roughness
             if r is None:
                 raise ContactModelError("roughness: 'rough_ehl' needs a RoughnessSpec")
@@ -285,8 +282,6 @@ def _key(x: float) -> float:
 
 def smooth_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> ContactStiffness:
     """Smooth-film stiffness (seed 000 eq 2-9) per request; one solve per distinct (s, w)."""
-    from ..ehl.mesh_film import contact_kinematics, solve_films
-
     s, n, w = _check(env, s_m, slice_index, w_N_per_m)
     fenv = env.film_environment()
     keys = [(_key(a), _key(b)) for a, b in zip(s, w)]
@@ -312,8 +307,6 @@ def composite_sigma_m(spec: RoughnessSpec) -> float:
     (:func:`gearfmu.contact.roughness.wm_sigma_m`, the convention that reproduces seed 000
     Table 2's Ra; CHOICE: the full band, not the band-limited profile the solver sees, since
     Lambda describes the real surfaces)."""
-    from .roughness import wm_sigma_m
-
     return math.sqrt(2.0) * wm_sigma_m(spec.D, spec.G_m)
 
 
@@ -325,9 +318,6 @@ def film_parameter(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndarray:
     with R, u_s of the position (:func:`gearfmu.ehl.mesh_film.contact_kinematics`),
     W = w/(E' R), U = eta0 u_s/(E' R), G = alpha E'; sigma: :func:`composite_sigma_m`
     (Lambda as defined by Tallian 1967; full film above 3)."""
-    from ..ehl.fits import dowson_higginson_min_film
-    from ..ehl.mesh_film import contact_kinematics
-
     if env.roughness is None:
         raise ContactModelError("roughness: the film parameter needs a RoughnessSpec")
     a = env.alpha_Pa_inv
@@ -345,8 +335,6 @@ def film_parameter(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndarray:
 def _rough_profile(env, fenv, fl, s: float, slice_index: int, w: float, R: float):
     """Composite roughness (x, wm(x)) of one slice at LOA position ``s`` for the load ``w``
     (sampled on [-5b, 2b], b the Hertz half-width; module doc of gearfmu.ehl.mesh_film)."""
-    from ..ehl.mesh_film import involute_arc_length_m
-
     a1 = float(involute_arc_length_m(env.geom.roll_length_at(1, s), env.geom.rb1_m))
     a2 = float(involute_arc_length_m(env.geom.roll_length_at(2, s), env.geom.rb2_m))
     b = math.sqrt(8.0 * w * R / (math.pi * fenv.E_prime_Pa))
@@ -418,8 +406,6 @@ class RoughFilmGrid:
     # ----------------------------------------------------------- solving
     def ensure(self, env, fenv, smooth_j, rough_j):
         """Solve the missing smooth columns ``smooth_j`` and rough columns ``rough_j``."""
-        from ..ehl.mesh_film import _solve_node_chunk, contact_kinematics, map_chunks
-
         rough_new = sorted(set(int(j) for j in rough_j) - set(self.ratio))
         smooth_new = sorted((set(int(j) for j in smooth_j) | set(rough_new)) - set(self.smooth))
         if not smooth_new and not rough_new:
@@ -498,9 +484,6 @@ class RoughFilmGrid:
         moving at u1, u2) on :attr:`transient_slices` at every node of the rough columns ``cols``,
         through the grid's executor; stores per node c = mean over those slices of
         k_transient/k_steady for both time reductions (:func:`transient_node_correction`)."""
-        from ..ehl.mesh_film import map_chunks
-        from ..ehl.transient import flank_slice_case
-
         film_mode = self.transient_mode == "film"
         chunks, where = [], []
         for j in cols:
@@ -586,9 +569,6 @@ class RoughFilmGrid:
 
     def ensure_mixed(self, env, js):
         """Seed 001 K_n at the grid nodes of the columns ``js`` (in-process)."""
-        from .fractal import FractalMeshOptions, slice_contact_stiffness
-        from ..ehl.mesh_film import contact_kinematics
-
         new = sorted(set(int(j) for j in js) - set(self.mixed))
         if not new:
             return
@@ -622,8 +602,6 @@ class RoughFilmGrid:
     def _log_cubic(self, table: Dict[int, np.ndarray], s, w):
         """exp of: cubic spline in s of log(table[j]) at the 4 load nodes around w, then
         cubic Lagrange in log w (NaN where a node used is NaN)."""
-        from scipy.interpolate import CubicSpline
-
         jp = self._jpos(w)
         j0 = np.floor(jp).astype(int)
         out = np.full(jp.shape, np.nan)
@@ -682,8 +660,6 @@ class RoughFilmGrid:
     def mixed_k(self, env, s, w):
         """Seed 001 K_n (N/m): log K_n cubic spline in s, linear in log w between the two
         load nodes around w (NaN where a node has no solution)."""
-        from scipy.interpolate import CubicSpline
-
         s = np.asarray(s, float)
         _, cols = self.columns_for(w, cubic=False)
         self.ensure_mixed(env, cols)
@@ -822,10 +798,6 @@ def _transient_node_chunk(_env, cases):
     status 'ok' | 'stall' | 'collapse', k_steady (the run's steady frozen-roughness start,
     seed 000 eq 8 on |x| <= b) and the time reductions (a) and (b) of docs/ehl_transient.md
     section 3 over the default window (after the wash-out)."""
-    import time
-
-    from ..ehl.errors import EHLConvergenceError, FilmCollapseError
-    from ..ehl.transient import solve_line_contact_transient
 
     t0 = time.process_time()
     out = []
@@ -898,8 +870,6 @@ _FILM_RATIOS = ("h_central_ratio", "h_mean_ratio")
 def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:
     """Seed 001 K_n of one slice, NaN where the asperities cannot carry the load on the
     Hertz band (FractalInputError, or a real contact area A_r >= A0)."""
-    from .fractal import FractalInputError, slice_contact_stiffness
-
     try:
         r = slice_contact_stiffness(spec.D, spec.G_m, R, u, w, env.width_m, Es, env.eta0_Pas, env.alpha_Pa_inv, mo)
     except FractalInputError:
@@ -935,7 +905,7 @@ def film_grid(env: "ContactEnvironment") -> RoughFilmGrid:
 def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_m) -> np.ndarray:
     """Contact stiffness (N/m) where the full film does not hold, per ``env.roughness.on_failure``:
     'fractal_mixed' seed 001 K_n = K_s + K_l (on the film grid when ``position_nodes`` > 0,
-    else :func:`gearfmu.contact.fractal.fractal_mixed_model` per request), 'hertz' the Yang &
+    else :func:`gearfmu.contact.models.fractal_mixed_model` per request), 'hertz' the Yang &
     Sun Hertz stiffness.  ('error' is raised by the model before this is called.)"""
     s = np.asarray(s_m, float)
     w = np.asarray(w_N_per_m, float)
@@ -948,8 +918,6 @@ def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_
         return load_sharing_stiffness(env, s, w)
     if pol != "fractal_mixed":
         raise ContactModelError(f"on_failure={pol!r}: no fallback stiffness")
-    from ..ehl.mesh_film import contact_kinematics
-    from .fractal import FractalMeshOptions
 
     k = film_grid(env).mixed_k(env, s, w) if env.roughness.position_nodes else np.full(s.shape, np.nan)
     bad = ~np.isfinite(k)
@@ -978,9 +946,6 @@ def load_sharing_stiffness(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndar
     share of the load; where the smooth film failed, eq 8 with Moes' film alone.  Summit
     statistics from the W-M moments of both flanks (:func:`gearfmu.contact.load_sharing.wm_spectral_moments`).
     One evaluation per distinct (position, load): the slices share D, G and width."""
-    from ..ehl.mesh_film import contact_kinematics
-    from .load_sharing import LineContactState, asperity_parameters, load_sharing, wm_spectral_moments
-
     s = np.asarray(s_m, float).ravel()
     w = np.asarray(w_N_per_m, float).ravel()
     if s.size == 0:
@@ -1011,8 +976,6 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
     and requests whose rough film fails follow ``env.roughness.on_failure``
     (module doc); they are returned in ``failures`` (s_m, slice, w_N_per_m, status
     'low_film_parameter' | 'stall' | 'collapse' | ..., film_parameter, used, message)."""
-    from ..ehl.mesh_film import contact_kinematics, solve_films
-
     s, n, w = _check(env, s_m, slice_index, w_N_per_m)
     spec = env.roughness
     if spec is None:
@@ -1088,8 +1051,6 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
 def _smooth_film_k(env, fenv, s, w) -> np.ndarray:
     """Smooth-film stiffness (N/m; NaN where it fails): from the film grid when it exists,
     else one smooth solve per distinct request."""
-    from ..ehl.mesh_film import contact_kinematics, solve_films
-
     if env.roughness.position_nodes and env._grid is not None:
         g = film_grid(env)
         sj, _ = g.columns_for(w, cubic=True)
@@ -1126,10 +1087,46 @@ register_contact_model("rough_ehl", rough_ehl_model, load_dependent=True, needs_
                        doc="seed 000 eq 8-9 film stiffness with W-M roughness per slice")
 
 
-def _fractal_mixed(env, s_m, slice_index, w_N_per_m):
-    """Seed 001 K_n = K_s + K_l (:func:`gearfmu.contact.fractal.fractal_mixed_model`)."""
-    from .fractal import fractal_mixed_model
+def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
+    """Contact model 'fractal_mixed' (registry signature of this module):
+    K_n = K_s + K_l of seed 001 per (position, slice load) in place of Hertz.
+    Roughness from ``env.roughness`` (D, G_m; default seed 000 Table 2 level 1),
+    settings from ``env.fractal`` (a :class:`FractalMeshOptions`) when present.
+    Requests whose film parameter lies in the full-film range are recorded in
+    ``failures`` with status 'full_film' (the build reports them).  Requests whose
+    asperities would reach complete contact (A_r >= A0, :class:`FullContactError`) use the
+    Hertz stiffness, recorded with status 'complete_contact' and counted in ``fallbacks``
+    (the policy of gearfmu.contact.models for the rough-EHL switch)."""
+    s, n, w = _check(env, s_m, slice_index, w_N_per_m)
+    spec = env.roughness if env.roughness is not None else RoughnessSpec.from_level(1)
+    mo = getattr(env, "fractal", None) or FractalMeshOptions()
+    Es = reduced_modulus_Pa(env.pair)
+    keys = [(_key(a), _key(c)) for a, c in zip(s, w)]  # slices share D, G: same answer
+    uniq = list(dict.fromkeys(keys))
+    R, u, _ = contact_kinematics(env.geom, np.array([k[0] for k in uniq]), env.omega1_rad_s)
+    kmap, notes, full = {}, [], set()
+    for i, (sk, wk) in enumerate(uniq):
+        try:
+            r = slice_contact_stiffness(spec.D, spec.G_m, float(R[i]), float(u[i]), wk, env.width_m, Es,
+                                        env.eta0_Pas, env.alpha_Pa_inv, mo)
+        except FullContactError as e:
+            kmap[(sk, wk)] = hertz_stiffness_N_per_m(env.pair, env.width_m)
+            full.add((sk, wk))
+            notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="complete_contact",
+                              film_parameter=float("nan"), used="hertz",
+                              message=f"real contact area would reach the nominal area (Hertz used): {e}"))
+            continue
+        kmap[(sk, wk)] = r["K_n_N_per_m"]
+        if r["regime"] == "full_film":
+            notes.append(dict(s_m=sk, slice=-1, w_N_per_m=wk, status="full_film",
+                              film_parameter=r["film_parameter"],
+                              message="film parameter >= 3: full film, the mixed model overstates contact"))
+    return ContactStiffness(np.array([kmap[k] for k in keys]), solves=len(uniq), failures=notes,
+                            fallbacks=sum(k in full for k in keys))
 
+
+def _fractal_mixed(env, s_m, slice_index, w_N_per_m):
+    """Seed 001 K_n = K_s + K_l (:func:`fractal_mixed_model`)."""
     return fractal_mixed_model(env, s_m, slice_index, w_N_per_m)
 
 
@@ -1149,8 +1146,6 @@ def get_contact_model(name: str) -> ContactModel:
 def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
     """A :class:`ContactEnvironment` from a scene (lubricant at its temperature,
     the scene's pinion speed, slices and ``[roughness]``); ``kw`` overrides fields."""
-    from ..gear.geometry import pair_geometry
-
     geom = pair_geometry(scene.pair) if geom is None else geom
     pair = scene.pair
     ns = int(scene.mesh.slices)
@@ -1184,8 +1179,6 @@ def tooth_compliances(pair, geom, s_m, width_m: float):
     c_teeth = 1/k_tp + 1/k_tg (bending, shear, axial of both teeth, seed 000
     eq 14-15) and the Sainsot foundation compliances (eq 12), from
     :func:`gearfmu.gear.stiffness.tooth_compliance_m_per_N`.  NaN entries give NaN."""
-    from ..gear.stiffness import tooth_compliance_m_per_N
-
     s = np.asarray(s_m, dtype=float)
     flat = s.ravel()
     ok = np.isfinite(flat)
@@ -1210,8 +1203,6 @@ def sliced_mesh_stiffness(c_teeth_m_per_N, cf_pinion_m_per_N, cf_gear_m_per_N, k
     (the film stiffness in place of Hertz).  k_tooth^i = 1/(1/k_l + c_teeth)
     (eq 13), then the foundation per :func:`gearfmu.gear.stiffness.combine_pairs`
     (independent per pair by default, or seed 000 eq 11), slice by slice."""
-    from ..gear.stiffness import combine_pairs
-
     kc = np.asarray(k_contact_N_per_m, dtype=float)
     ct = np.asarray(c_teeth_m_per_N, dtype=float)
     P, NS, N = kc.shape

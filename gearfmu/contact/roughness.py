@@ -41,6 +41,8 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
+from ..ehl.mesh_film import FlankRoughness, MeshFilmInputError, involute_arc_length_m
+
 #: W-M frequency ratio gamma of seed 000 eq 1.
 SEED000_GAMMA = 1.5
 #: Lowest-frequency wavelength L_s of the convention above (m).
@@ -291,3 +293,36 @@ def load_profile_csv(path, x_unit_m: float = 1.0, z_unit_m: float = 1.0
             xs.append(xv)
             zs.append(zv)
     return np.asarray(xs) * x_unit_m, np.asarray(zs) * z_unit_m
+
+
+# ---------------------------------------------------------------- flank roughness for the film solves
+def make_flank_roughness(geom, D: float, G_m: float, n_slices: int, seed: int, *,
+                         f_max_per_m: float = 1e4, margin_m: float = 3e-3,
+                         step_m: Optional[float] = None) -> FlankRoughness:
+    """W-M roughness of the active pinion and gear flanks (seed 000 eq 1, per slice).
+
+    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.contact.roughness.SEED000_LEVELS`);
+    the profiles cover the active flank arc length plus ``margin_m`` on both
+    sides, sampled at ``step_m`` (default a tenth of the shortest wavelength)."""
+    if int(n_slices) != n_slices or n_slices < 1:
+        raise MeshFilmInputError(f"n_slices={n_slices!r}: must be an integer >= 1")
+    if not (math.isfinite(f_max_per_m) and f_max_per_m > 0):
+        raise MeshFilmInputError(f"f_max_per_m={f_max_per_m!r}: must be finite and > 0 (1/m)")
+    step = 0.1 / f_max_per_m if step_m is None else float(step_m)
+    children = np.random.SeedSequence(int(seed)).spawn(2)
+    grids, heights = [], []
+    for which, ch in ((1, children[0]), (2, children[1])):
+        lo_roll, hi_roll = geom.active_roll1_m if which == 1 else geom.active_roll2_m
+        rb = geom.rb1_m if which == 1 else geom.rb2_m
+        a_lo = float(involute_arc_length_m(max(lo_roll, 0.0), rb)) - margin_m
+        a_hi = float(involute_arc_length_m(hi_roll, rb)) + margin_m
+        a = np.arange(a_lo, a_hi + step, step)
+        try:
+            z = np.stack([wm_profile_m(a, D, G_m, rng=np.random.default_rng(c), f_max_per_m=f_max_per_m)
+                          for c in ch.spawn(int(n_slices))])
+        except RoughnessInputError as exc:
+            raise MeshFilmInputError(f"roughness: {exc}") from None
+        grids.append(a)
+        heights.append(z)
+    return FlankRoughness(grids[0], heights[0], grids[1], heights[1], float(D), float(G_m), int(seed),
+                          float(f_max_per_m))

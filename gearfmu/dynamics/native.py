@@ -33,7 +33,9 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-from ..tables.mesh_tables import MeshTables
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..tables.mesh_tables import MeshTables, TemperatureRangeError
+from ..common.checks import finite_number
 
 __all__ = [
     "NativeInputError",
@@ -50,11 +52,6 @@ __all__ = [
     "substeps",
 ]
 
-#: damping-model names -> kernel code (docs/model.md "Per-pair force")
-DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
-#: integrator names -> kernel code (docs/model.md "Integration"); the FMU
-#: parameter ``integrator`` takes the code
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
 #: the setting on the speed-against-error front below ~5e-4 relative error
 #: (benchmarks/bench_integrators.py, ``gearfmu bench accuracy``, docs/dynamics_validation.md);
 #: the default of :func:`simulate`, :func:`simulate_sdof`, the scene, the FMU builders
@@ -982,8 +979,6 @@ def _check_tables(tables) -> MeshTables:
 def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
     """``value`` as a finite float (> 0 with ``positive``, >= 0 with ``nonneg``);
     otherwise ``error`` (default NativeInputError) naming ``name`` and the reason."""
-    from ..common.checks import finite_number
-
     return finite_number(name, value, positive=positive, nonneg=nonneg,
                          error=NativeInputError if error is None else error)
 
@@ -1354,8 +1349,6 @@ def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) 
 
 # ------------------------------------------------- temperature axis (docs/model.md)
 def _at_temperature(tables: MeshTables, temperature_C) -> MeshTables:
-    from ..tables.mesh_tables import TemperatureRangeError
-
     try:
         return tables.at_temperature(float(temperature_C))
     except (TypeError, ValueError) as exc:

@@ -68,12 +68,13 @@ from typing import Callable, Optional, Union
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..common.vocabulary import DAMPING_MODELS
 from ..tables.mesh_tables import MeshTables
+from .native import _finite, SimResult
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
 
 InputLike = Union[float, np.ndarray, Callable[[float], float]]
-DAMPING_MODELS = ("elastobacklash", "seed003")
 KINK_REL_TOL = 1e-13
 
 
@@ -83,8 +84,6 @@ class ReferenceInputError(ValueError):
 
 # ----------------------------------------------------------------- helpers
 def _num(name, value, *, positive=False, nonneg=False) -> float:
-    from .native import _finite
-
     return _finite(name, value, positive=positive, nonneg=nonneg, error=ReferenceInputError)
 
 
@@ -448,8 +447,6 @@ def simulate_reference(
     ``max_step_s`` is accepted and ignored (the reference chooses its steps).
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
-    from .native import SimResult  # the result container only; no kernel is called
-
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
     tables.validate()
@@ -461,7 +458,7 @@ def simulate_reference(
         raise ReferenceInputError(f"stop_time_s: {stop!r} is not a whole number of comm_step_s={H!r}")
     zeta = _num("damping_ratio", damping_ratio, nonneg=True)
     if damping_model not in DAMPING_MODELS:
-        raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {DAMPING_MODELS}")
+        raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {tuple(DAMPING_MODELS)}")
     rtol = _num("rtol", rtol, positive=True)
     w0 = _num("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
     th0 = _num("pinion_angle_start_rad", pinion_angle_start_rad)

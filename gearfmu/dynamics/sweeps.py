@@ -37,14 +37,17 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field, replace
 from typing import List, Optional, Sequence
 
 import numpy as np
+from scipy.signal import find_peaks
 
+from ..common.executors import SweepInputError, _ManagedExecutor, make_executor
 from .harmonics import DEFAULT_BANDWIDTH_ORDERS, mesh_harmonics
 from ..tables.mesh_tables import MeshTables
+from .native import choose_max_step_s, simulate_sdof
 
 __all__ = [
     "SweepInputError",
@@ -63,10 +66,6 @@ __all__ = [
 
 #: default nominal length l of seed 003 eq 7 (m): q = x/l in micrometres (choice, docs/seed003.md)
 DEFAULT_LENGTH_SCALE_M = 1e-6
-
-
-class SweepInputError(ValueError):
-    """Bad sweep argument; the message names the field and the reason."""
 
 
 @dataclass(frozen=True)
@@ -283,8 +282,6 @@ def pair_values_at(tables: MeshTables, theta1_rad, pinion_torque_Nm: float):
 
 
 def _run_point(job: SweepJob, omega_h: float, state, rec_meshes: int):
-    from .native import choose_max_step_s, simulate_sdof
-
     t = job.tables
     st = job.settings
     om1 = pinion_speed_for_omega_h(t, omega_h)
@@ -373,70 +370,6 @@ def run_sweep(job: SweepJob) -> SweepResult:
         length_scale_m=job.settings.length_scale_m, wall_s=wall)
 
 
-# ----------------------------------------------------------------- executors
-class _InProcessExecutor(Executor):
-    """Runs each submission at once in the calling process (max_workers = 1)."""
-
-    def submit(self, fn, *args, **kwargs):
-        from concurrent.futures import Future
-
-        f = Future()
-        try:
-            f.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # noqa: BLE001 -- handed to the caller via the future
-            f.set_exception(exc)
-        return f
-
-
-class _ManagedExecutor:
-    """Context manager owning an executor (and a Dask client when it made one)."""
-
-    def __init__(self, executor, client=None, own=True):
-        self.executor = executor
-        self.client = client
-        self.own = own
-
-    def __enter__(self):
-        return self.executor
-
-    def __exit__(self, *exc):
-        if self.own:
-            self.executor.shutdown(wait=True)
-            if self.client is not None:
-                self.client.close()
-        return False
-
-
-def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int] = None, client=None):
-    """A context manager yielding a ``concurrent.futures``-style executor.
-
-    * ``client``: a ``distributed.Client`` -> its executor (``pure=False``); the
-      client is left open.
-    * ``scheduler``: a Dask scheduler address such as ``"tcp://127.0.0.1:8786"``
-      -> a new Client on it (closed on exit).
-    * otherwise ``max_workers`` <= 1 -> in-process (no parallelism); else a
-      local process pool of ``max_workers`` (default: the CPU count) with the
-      ``spawn`` start method.
-    """
-    if client is not None:
-        return _ManagedExecutor(client.get_executor(pure=False), None, own=False)
-    if scheduler is not None:
-        if not isinstance(scheduler, str) or "://" not in scheduler:
-            raise SweepInputError(f"scheduler: expected an address such as 'tcp://127.0.0.1:8786', got {scheduler!r}")
-        try:
-            from distributed import Client
-        except ImportError:  # pragma: no cover - depends on the environment
-            raise SweepInputError("scheduler: needs dask.distributed (pip install 'gearfmu[cluster]')") from None
-        cl = Client(scheduler)
-        return _ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
-    n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
-    if n <= 1:
-        return _ManagedExecutor(_InProcessExecutor(), None, own=True)
-    import multiprocessing as mp
-
-    return _ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn")), None, own=True)
-
-
 def run_jobs(jobs: Sequence[SweepJob], *, executor=None, scheduler: Optional[str] = None,
              client=None, max_workers: Optional[int] = None, progress: bool = False) -> List[SweepResult]:
     """Run independent sweep jobs concurrently; results in the order of ``jobs``.
@@ -496,8 +429,6 @@ def find_jumps(omega_h, curves: Sequence, *, jump_ratio: float = 1.25, min_promi
     Omega_h of the jumps, inflections and shoulders (merged within
     ``merge_within``), "peaks": [...], "hysteresis": [[lo, hi], ...]}.
     """
-    from scipy.signal import find_peaks
-
     om = np.asarray(omega_h, dtype=float)
     if om.ndim != 1 or om.size < 3 or not np.all(np.diff(om) > 0):
         raise SweepInputError("omega_h: expected an ascending 1-D grid of at least 3 points")

@@ -250,3 +250,19 @@ def roelands_alpha_at_viscosity_Pa_inv(alpha_ref_Pa_inv: float, eta0_ref_Pas: fl
     the oil temperature axis would use (docs/thermal.md, "What is left")."""
     z = roelands_z(eta0_ref_Pas, alpha_ref_Pa_inv)
     return roelands_alpha_Pa_inv(eta0_Pas, z)
+
+
+def walther_kinematic_viscosity_cSt(nu40_cSt: float, nu100_cSt: float, temperature_C: float) -> float:
+    """Kinematic viscosity (cSt = mm^2/s) at ``temperature_C`` (degC) from the
+    values at 40 and 100 degC by the Walther equation of ASTM D341:
+    ``log10(log10(nu + 0.7)) = A - B*log10(T)`` with T in K.  The 0.7 constant
+    is the D341 form valid for nu >= 2 cSt (the later D341 editions add
+    correction terms below that, not needed for gear oils)."""
+    if not (nu40_cSt > nu100_cSt > 0.3):
+        raise ValueError("walther: need nu40_cSt > nu100_cSt > 0.3 cSt")
+    t40, t100, t = 313.15, 373.15, temperature_C + 273.15
+    y40 = math.log10(math.log10(nu40_cSt + 0.7))
+    y100 = math.log10(math.log10(nu100_cSt + 0.7))
+    b = (y40 - y100) / (math.log10(t100) - math.log10(t40))
+    a = y40 + b * math.log10(t40)
+    return 10.0 ** (10.0 ** (a - b * math.log10(t))) - 0.7

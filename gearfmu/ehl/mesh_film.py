@@ -53,12 +53,15 @@ import sys
 import time
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
+from concurrent.futures import as_completed
 
 import numpy as np
 
 from .errors import EHLConvergenceError, EHLError, EHLInputError, FilmCollapseError
 from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
+from .solver import solve_line_contact
+from ..common.executors import make_executor, _ManagedExecutor
 
 
 class MeshFilmInputError(EHLInputError):
@@ -117,40 +120,6 @@ class FlankRoughness:
         x = np.asarray(x_m, dtype=float)
         return (np.interp(a1_m - x, self.a1_m, self.z1_m[slice_index])
                 + np.interp(a2_m + x, self.a2_m, self.z2_m[slice_index]))
-
-
-def make_flank_roughness(geom, D: float, G_m: float, n_slices: int, seed: int, *,
-                         f_max_per_m: float = 1e4, margin_m: float = 3e-3,
-                         step_m: Optional[float] = None) -> FlankRoughness:
-    """W-M roughness of the active pinion and gear flanks (seed 000 eq 1, per slice).
-
-    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.contact.roughness.SEED000_LEVELS`);
-    the profiles cover the active flank arc length plus ``margin_m`` on both
-    sides, sampled at ``step_m`` (default a tenth of the shortest wavelength)."""
-    from ..contact.roughness import RoughnessInputError, wm_profile_m
-
-    if int(n_slices) != n_slices or n_slices < 1:
-        raise MeshFilmInputError(f"n_slices={n_slices!r}: must be an integer >= 1")
-    if not (math.isfinite(f_max_per_m) and f_max_per_m > 0):
-        raise MeshFilmInputError(f"f_max_per_m={f_max_per_m!r}: must be finite and > 0 (1/m)")
-    step = 0.1 / f_max_per_m if step_m is None else float(step_m)
-    children = np.random.SeedSequence(int(seed)).spawn(2)
-    grids, heights = [], []
-    for which, ch in ((1, children[0]), (2, children[1])):
-        lo_roll, hi_roll = geom.active_roll1_m if which == 1 else geom.active_roll2_m
-        rb = geom.rb1_m if which == 1 else geom.rb2_m
-        a_lo = float(involute_arc_length_m(max(lo_roll, 0.0), rb)) - margin_m
-        a_hi = float(involute_arc_length_m(hi_roll, rb)) + margin_m
-        a = np.arange(a_lo, a_hi + step, step)
-        try:
-            z = np.stack([wm_profile_m(a, D, G_m, rng=np.random.default_rng(c), f_max_per_m=f_max_per_m)
-                          for c in ch.spawn(int(n_slices))])
-        except RoughnessInputError as exc:
-            raise MeshFilmInputError(f"roughness: {exc}") from None
-        grids.append(a)
-        heights.append(z)
-    return FlankRoughness(grids[0], heights[0], grids[1], heights[1], float(D), float(G_m), int(seed),
-                          float(f_max_per_m))
 
 
 # ---------------------------------------------------------------- one solve
@@ -213,8 +182,6 @@ def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: 
     warm-started from ``initial``); the film stalls when all stall.
     Returns a :class:`FilmOutcome` (and the LineContactResult when
     ``return_result``; None when the solve failed)."""
-    from .solver import solve_line_contact
-
     res = None
     sigma = 0.0 if roughness is None else float(np.std(roughness[1]))
     try:
@@ -303,7 +270,7 @@ class _Progress:
         self._next = 0
         if enabled:
             try:
-                from tqdm import tqdm  # type: ignore
+                from tqdm import tqdm  # type: ignore  # optional progress bar
                 self._bar = tqdm(total=total, desc=label)
             except ImportError:
                 self._bar = None
@@ -351,9 +318,6 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     """Run ``worker(env, chunk)`` for every chunk through an executor (see
     :func:`solve_films`); ``counts``: film solves per chunk for the progress bar.
     Returns the workers' results in chunk order."""
-    from concurrent.futures import as_completed
-
-    from ..dynamics.sweeps import make_executor
 
     if not chunks:
         return []
@@ -364,7 +328,6 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
         ctx = make_executor(max_workers=nw)
     else:
-        from ..dynamics.sweeps import _ManagedExecutor
         ctx = _ManagedExecutor(executor, None, own=False)
     try:
         with ctx as ex:

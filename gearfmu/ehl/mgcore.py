@@ -44,8 +44,10 @@ import math
 
 import numpy as np
 from numba import njit
+from scipy import fft as _fft
 
-from .deformation import conv_real
+from .deformation import conv_real, kernel_coefficients, stage_twiddles
+from .errors import EHLInputError
 
 #: levels with at most this many nodes use the direct O(n^2) deformation sum
 N_DIRECT = 64
@@ -768,7 +770,6 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
         ops.append(-k)
 
     if gamma not in (1, 2, "F"):
-        from .errors import EHLInputError
         raise EHLInputError(f"gamma={gamma!r}: must be 1 (V-cycle), 2 (W-cycle) or 'F'")
     cyc(n_levels - 1, gamma)
     return np.array(ops, dtype=np.int64)
@@ -812,8 +813,6 @@ _GRID_CACHE_SIZE = 64
 def _grid_constants(ns, ms, off, moff, toff, x_in, x_out):
     """(X per level, dX per level, kernel coefficients, kernel spectrum real/imag,
     twiddles cos/sin) of the level hierarchy with ``ns`` nodes per level."""
-    from .deformation import kernel_coefficients, stage_twiddles
-    from scipy import fft as _fft
     X = [np.linspace(x_in, x_out, n) for n in ns]
     dx = np.array([x[1] - x[0] for x in X])
     K = np.concatenate([kernel_coefficients(n, d) for n, d in zip(ns, dx)])
@@ -852,7 +851,6 @@ class FlatMultigrid:
     def __init__(self, prm, n_levels: int, n_coarse: int, rough_fn=None, **opts):
         bad = set(opts) - set(OPT_KEYS) - {"gamma"}
         if bad:
-            from .errors import EHLInputError
             raise EHLInputError(f"unknown multigrid option(s) {sorted(bad)!r}; "
                                 f"known: {list(OPT_KEYS) + ['gamma']}")
         self.prm = prm
@@ -963,7 +961,6 @@ class FlatMultigrid:
         c_t = 1.5/dX, f = (-2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2))/dX)."""
         c_t = float(c_t)
         if not math.isfinite(c_t) or c_t < 0.0:
-            from .errors import EHLInputError
             raise EHLInputError(f"c_t={c_t!r}: must be finite and >= 0")
         self.opts["c_t"] = c_t
         self.optv[OPT_KEYS.index("c_t")] = c_t
@@ -975,7 +972,6 @@ class FlatMultigrid:
         else:
             f_top = np.asarray(f_top, float)
             if f_top.shape != (sl.stop - sl.start,):
-                from .errors import EHLInputError
                 raise EHLInputError(f"f_top: need {sl.stop - sl.start} finest-grid values, "
                                     f"got shape {f_top.shape}")
             self.f[sl] = f_top

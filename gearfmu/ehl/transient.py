@@ -64,8 +64,9 @@ from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_E
                         ROELANDS_P0_PA)
 from .mgcore import OPT_DEFAULTS, FlatMultigrid
 from .multigrid import EHLParams
-from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS,
-                     STALL_WINDOW, LineContactResult, _flat_opts, solve_line_contact)
+from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS, STALL_WINDOW,
+                     LineContactResult, _flat_opts, solve_line_contact, solve_line_contact as _steady)
+from .mesh_film import contact_kinematics, involute_arc_length_m
 
 #: Relaxation settings of the time steps, tried in this order (the one that
 #: converged last is tried first at the next step), then the steady
@@ -684,7 +685,6 @@ def waviness_amplitude_ratio(M: float, L: float, wavelength_b: float,
     CHOICE: Venner et al.'s "amplitude at X = 0").  Returns A_d/A_i, nabla,
     the periodicity defect (max |h_c(T) - h_c(T - period)| / h_c over the last
     period), the mean cycles per step and the CPU time of the time loop."""
-    from .solver import solve_line_contact as _steady
     M = _finite("M", M, 0.0, True)
     L = _finite("L", L, 0.0, True)
     wavelength_b = _finite("wavelength_b", wavelength_b, 0.0, True)
@@ -736,8 +736,6 @@ def flank_slice_case(env, s_m: float, w_N_per_m: float, slice_index: Optional[in
     speed from :func:`.mesh_film.contact_kinematics`, srr = (u1 - u2)/u_s, the
     flank arc lengths a_i = rho_i^2/(2 r_bi) at the contact (t = 0);
     ``slice_index`` None: smooth."""
-    from .mesh_film import contact_kinematics, involute_arc_length_m
-
     fenv = env.film_environment()
     R, u_s, slide = (float(np.asarray(v).ravel()[0]) for v in
                      contact_kinematics(env.geom, np.array([s_m], float), env.omega1_rad_s))

@@ -13,6 +13,9 @@ from typing import Dict, List
 
 import numpy as np
 
+from ..common.vocabulary import INTEGRATORS
+from ..dynamics.native import simulate
+
 SCALAR_OUTPUTS = ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "dte",
                   "mesh_force", "mesh_stiffness")
 
@@ -46,7 +49,7 @@ class FmuRun:
 def run_fmu(fmu_path, *, stop_time_s: float, comm_step_s: float, start_values=None,
             names=None) -> FmuRun:
     """Simulate an FMU with fmpy at a fixed communication step."""
-    import fmpy
+    import fmpy  # fmpy: heavy, only to run an FMU
 
     t0 = time.perf_counter()
     res = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time_s, output_interval=comm_step_s,
@@ -81,9 +84,8 @@ def fmu_integrator(fmu_path, start_values=None):
     """Name of the integrator an FMU runs with ('rk4', 'rk4_kink'): its parameter
     ``integrator`` (docs/model.md; code 0/1) from ``start_values`` or else the start
     value in its modelDescription.xml; None if the FMU has no such parameter."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: heavy, only to read an FMU
 
-    from ..dynamics.native import INTEGRATORS
 
     if start_values and "integrator" in start_values:
         code = int(start_values["integrator"])
@@ -101,9 +103,8 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
     """The report of ``gearfmu validate``: fmpy validation problems, per-output
     differences (FMU minus native), wall time of each.  Without ``integrator`` in
     ``native_kwargs`` the native run uses the FMU's own (:func:`fmu_integrator`)."""
-    from fmpy.validation import validate_fmu
+    from fmpy.validation import validate_fmu  # fmpy: heavy, only to validate an FMU
 
-    from ..dynamics.native import simulate
 
     problems = [str(p) for p in validate_fmu(str(fmu_path))]
     if "integrator" not in native_kwargs:

@@ -36,12 +36,15 @@ import uuid
 import zipfile
 from pathlib import Path
 from typing import Optional, Union
+from dataclasses import replace
 
 from .. import __version__
 from .modeldesc import (apply_start_values, check_model_description, check_registered,
                         expand_variables, features_of, load_spec, model_description_xml,
                         runtime_variable_table)
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..tables.mesh_tables import MeshTables
+from .validation import validation_record
 
 HERE = Path(__file__).resolve().parent
 KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
@@ -51,9 +54,6 @@ TEMPLATE_CLASS = "GearFmuSlave"
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
 KERNEL_ABI_VERSION = 2  # gearkernel.h GK_ABI_VERSION (2: temperature axis)
-DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
-#: integrator names -> kernel code (gearkernel.h GK_INTEGRATOR_*, gearfmu.dynamics.native.INTEGRATORS)
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
 #: gearkernel.h GK_KINK_MAX_SLOTS
 KINK_MAX_SLOTS = 32
 
@@ -171,7 +171,6 @@ def temperature_input(variables, tables: MeshTables):
     ends (degC).  Returns (variables, start or None)."""
     if not tables.has_temperature_axis:
         return list(variables), None
-    from dataclasses import replace
 
     name = tables.temperature_input
     lo, hi = tables.temperature_range_C
@@ -279,7 +278,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         (src_dir / "BUILD.txt").write_text(
             f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c -lm\n", encoding="utf-8")
         sha = {name: _sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
-        from pythonfmu.builder import HERE as _pythonfmu_dir
+        from pythonfmu.builder import HERE as _pythonfmu_dir  # pythonfmu: heavy, only while building
         wrapper = _pythonfmu_dir / "resources" / "binaries" / "linux64" / "libpythonfmu-export.so"
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
@@ -320,8 +319,6 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         raw_fmu = tmp / "raw" / f"{identifier}.fmu"
         raw_fmu.parent.mkdir()
         _pythonfmu_build(script, raw_fmu, [*files, src_dir])
-        from .standalone_build import validation_record  # shared with the standalone runtime
-
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
             parameters={k: v for k, v in provenance["parameters"].items() if k not in ("stop_time_s", "output_interval_s")},
@@ -403,7 +400,7 @@ def _platform_dir() -> str:
 def _pythonfmu_build(script: Path, dest: Path, project_files) -> None:
     """Run pythonfmu's FmuBuilder and undo its side effects on this process
     (it imports the script as a module and puts its folder on sys.path)."""
-    from pythonfmu import FmuBuilder
+    from pythonfmu import FmuBuilder  # pythonfmu: heavy, only while building
 
     module = script.stem
     path_before = list(sys.path)

@@ -44,6 +44,7 @@ from typing import Tuple
 import numpy as np
 
 from .gearpair import GearDeviations, GearPairSpec, ToothDeviation
+from .stiffness import slice_lag_mesh_periods
 
 
 class MeshingErrorInputError(ValueError):
@@ -250,8 +251,6 @@ def slot_slice_errors_m(pair: GearPairSpec, geom, slots: int, n_mesh: int, point
     (clamped to [s_A, s_E] like :func:`slot_errors_m`); pitch deviations are the
     same for every slice.  Spur pairs: every slice equals :func:`slot_errors_m`.
     """
-    from .stiffness import slice_lag_mesh_periods
-
     ranges = evaluation_ranges(geom)
     n, local = slot_mesh_numbers(slots, n_mesh, points_per_mesh)
     dphi = geom.mesh_period_rad / points_per_mesh

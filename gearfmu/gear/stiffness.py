@@ -68,7 +68,7 @@ import numpy as np
 from .hertz import hertz_stiffness_N_per_m
 from .foundation import sainsot_compliance_m_per_N
 from .gearpair import GearPairSpec, GearSpec, MeshModelOptions
-from .geometry import PairGeometry, half_tooth_angle_at_base, involute, pair_geometry
+from .geometry import PairGeometry, half_tooth_angle_at_base, involute, pair_geometry, transverse_equivalent
 
 
 class StiffnessError(ValueError):
@@ -439,8 +439,6 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
     Slot rule: :func:`required_slots`.  Stiffness is along the transverse line
     of action, so the dynamic model (x = theta1 rb1 - theta2 rb2) is unchanged.
     """
-    from .geometry import transverse_equivalent
-
     need = required_slots(geom)
     if slots is None:
         slots = need

@@ -73,7 +73,7 @@ CHOICES where the seed leaves gaps (also in docs/thermal.md):
 
 Viscosity (:func:`oil_dynamic_viscosity_Pas`): Walther's equation of ASTM D341,
 log10 log10(nu + 0.7) = A - B log10(T/K), through two kinematic viscosities
-(:func:`gearfmu.scene.reader.walther_kinematic_viscosity_cSt`), times the density;
+(:func:`gearfmu.ehl.lubricant.walther_kinematic_viscosity_cSt`), times the density;
 CHOICE: the oil density is held at its scene value (its thermal expansion,
 about 0.07 %/K, is left out: it changes eta0 by less than 3 % over 40 K, against
 a factor 8 in the kinematic viscosity between 40 and 100 degC).  CHOICE: the
@@ -99,11 +99,12 @@ from typing import Optional, Sequence, Tuple, Union
 import numpy as np
 
 from ..common.checks import finite_number
+from ..common.vocabulary import FLANK_LAWS
 from .gearpair import GearPairSpec, MeshModelOptions
 from .geometry import PairGeometry, pair_geometry
+from .stiffness import tooth_compliance_m_per_N, pair_stiffness_at_N_per_m, slot_stiffness
+from ..ehl.lubricant import walther_kinematic_viscosity_cSt
 
-#: free-flank deformation laws of :func:`free_flank_deformation_m`
-FLANK_LAWS = ("radial_tangential", "homogeneous")
 
 
 class ThermalError(ValueError):
@@ -289,7 +290,6 @@ def single_tooth_stiffness_N_per_m(pair: GearPairSpec, geom: PairGeometry, which
     ``s_m``: bending + shear + axial compression (+ Sainsot fillet foundation) of
     :func:`gearfmu.gear.stiffness.tooth_compliance_m_per_N`, over ``width_m`` (default
     the face width)."""
-    from .stiffness import tooth_compliance_m_per_N
     b = min(pair.pinion.face_width_m, pair.gear.face_width_m) if width_m is None else width_m
     gear = pair.pinion if which == 1 else pair.gear
     c = tooth_compliance_m_per_N(gear, geom, which, np.atleast_1d(np.asarray(s_m, float)), b)
@@ -334,7 +334,6 @@ def key_point_stiffness(pair: GearPairSpec, state: ThermalState, normal_load_N: 
     :func:`gearfmu.gear.stiffness.pair_stiffness_at_N_per_m` (with Hertz when
     ``hertz``, else the series sum of the two teeth as in the seed).
     """
-    from .stiffness import pair_stiffness_at_N_per_m
     geom = pair_geometry(pair) if geom is None else geom
     s = np.atleast_1d(np.asarray(s_m, dtype=float))
     if standard is None:
@@ -384,7 +383,6 @@ def thermal_slot_stiffness(pair: GearPairSpec, opts: Optional[MeshModelOptions] 
     (``opts``, ``slots``, ``n_per_mesh`` as there); each contact point adds the
     thermal compliance of :func:`temperature_stiffness` in series.
     """
-    from .stiffness import slot_stiffness
     geom = pair_geometry(pair) if geom is None else geom
     T = _finite("torque_Nm", torque_Nm)
     if T <= 0:
@@ -428,8 +426,7 @@ def thermal_slot_stiffness(pair: GearPairSpec, opts: Optional[MeshModelOptions] 
 def oil_kinematic_viscosity_m2_s(nu40_m2_s: float, nu100_m2_s: float, temperature_C) -> np.ndarray:
     """Kinematic viscosity (m^2/s) at ``temperature_C`` (degC) from the values at
     40 and 100 degC by Walther's equation (ASTM D341),
-    :func:`gearfmu.scene.reader.walther_kinematic_viscosity_cSt`."""
-    from ..scene.reader import walther_kinematic_viscosity_cSt
+    :func:`gearfmu.ehl.lubricant.walther_kinematic_viscosity_cSt`."""
     n40 = _finite("nu40_m2_s", nu40_m2_s)
     n100 = _finite("nu100_m2_s", nu100_m2_s)
     if not (n40 > n100 > 0):

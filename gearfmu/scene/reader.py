@@ -39,8 +39,15 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as _toml  # type: ignore[no-redef]
 
+from ..common.vocabulary import (CONTACT_MODELS, DAMPING_MODELS, FILM_FAILURE_POLICIES, FILM_TRANSIENT_MODES,
+                                 FLANK_LAWS, INTEGRATORS, LUBRICATED_CONTACT_MODELS, RUNTIMES,
+                                 THERMAL_AXIS_QUANTITIES)
+from ..ehl.lubricant import walther_kinematic_viscosity_cSt
 from ..gear.gearpair import (GearDeviations, GearPairSpec, GearSpec, Material,
                        MeshModelOptions, ToothDeviation)
+from .envelope import read_envelope_sections
+from ..contact.roughness import SEED000_LEVELS
+from ..gear import geometry
 
 __all__ = [
     "SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions",
@@ -49,15 +56,6 @@ __all__ = [
     "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
 ]
 
-#: contact models a scene may name (the table builder says which are available)
-CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
-#: contact models that need a [lubricant] section
-LUBRICATED_CONTACT_MODELS = ("smooth_ehl", "rough_ehl", "fractal_mixed")
-#: [thermal] axis_quantity -> the FMU input that selects the temperature axis (docs/thermal.md)
-THERMAL_AXIS_QUANTITIES = ("bulk", "oil", "bulk_and_oil")
-DAMPING_MODELS = ("elastobacklash", "seed003")
-INTEGRATORS = ("rk4", "rk4_kink")
-RUNTIMES = ("pythonfmu", "standalone")
 
 _RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
@@ -274,23 +272,6 @@ class Scene:
         return _roughness_from_text(self.text)
 
 
-# ============================================================== viscosity law
-def walther_kinematic_viscosity_cSt(nu40_cSt: float, nu100_cSt: float, temperature_C: float) -> float:
-    """Kinematic viscosity (cSt = mm^2/s) at ``temperature_C`` (degC) from the
-    values at 40 and 100 degC by the Walther equation of ASTM D341:
-    ``log10(log10(nu + 0.7)) = A - B*log10(T)`` with T in K.  The 0.7 constant
-    is the D341 form valid for nu >= 2 cSt (the later D341 editions add
-    correction terms below that, not needed for gear oils)."""
-    if not (nu40_cSt > nu100_cSt > 0.3):
-        raise ValueError("walther: need nu40_cSt > nu100_cSt > 0.3 cSt")
-    t40, t100, t = 313.15, 373.15, temperature_C + 273.15
-    y40 = math.log10(math.log10(nu40_cSt + 0.7))
-    y100 = math.log10(math.log10(nu100_cSt + 0.7))
-    b = (y40 - y100) / (math.log10(t100) - math.log10(t40))
-    a = y40 + b * math.log10(t40)
-    return 10.0 ** (10.0 ** (a - b * math.log10(t))) - 0.7
-
-
 # ============================================================== schema
 _REQUIRED = object()
 _AUTO = "auto"
@@ -478,7 +459,7 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            kind="float_list"),
         _f("temperature_axis_C", "degC", (), "tables' temperature axis (uniform bulk temperature of both "
            "gears), ascending; empty = none", -200.0, 500.0, kind="float_list"),
-        _e("flank_law", ("radial_tangential", "homogeneous"), "radial_tangential",
+        _e("flank_law", FLANK_LAWS, "radial_tangential",
            "free thermal deformation of a flank (docs/thermal.md)"),
         _e("axis_quantity", THERMAL_AXIS_QUANTITIES, "bulk", "what temperature_axis_C is: bulk temperature "
            "of both gears (FMU input bulk_temperature), oil temperature (eta0 of a lubricated contact model; "
@@ -533,7 +514,7 @@ SCHEMA["roughness"] = (
     _i("seed", 2022, "seed of the random phases (per flank and slice; reproducible)", 0, 2 ** 63 - 1),
     _f("max_frequency_per_mm", "1/mm", 10.0, "band limit of the roughness (highest W-M frequency)",
        0.0, 1e4, lo_open=True, scale=1e3),
-    _e("on_film_failure", ("fractal_mixed", "hertz", "error", "load_sharing"), "fractal_mixed", "where the film "
+    _e("on_film_failure", FILM_FAILURE_POLICIES, "fractal_mixed", "where the film "
        "parameter h_min/sigma is below full_film_parameter or the rough film collapses or does not converge: seed 001 "
        "fractal mixed-lubrication stiffness, Hertz stiffness (both recorded), stop with an error, or film-asperity "
        "load sharing (Johnson, Greenwood & Poon 1972; docs/load_sharing.md)"),
@@ -541,7 +522,7 @@ SCHEMA["roughness"] = (
        "composite W-M sigma) below which the full-film model is not used", 0.0, 100.0),
     _i("film_position_nodes", 9, "contact positions along the path of contact at which the rough films "
        "are solved and interpolated (0 = every table position)", 0, 10000),
-    _e("film_transient", ("off", "correction", "film"), "off", "off: steady films with the roughness frozen in "
+    _e("film_transient", FILM_TRANSIENT_MODES, "off", "off: steady films with the roughness frozen in "
        "the contact; correction: at every film-grid node transient films with the roughness moving with the flanks "
        "on 4 slices give c = <k_transient>/k_steady, which multiplies every slice's rough/smooth ratio "
        "(docs/ehl_transient.md section 3); film: the node's rough film is the transient film (start 'auto', no "
@@ -592,7 +573,6 @@ def _roughness(r: "_Reader", data: Any) -> Optional[RoughnessOptions]:
                                         "from seed 000 Table 2)")
         if len(r.problems) > n0:
             return None
-        from ..contact.roughness import SEED000_LEVELS
         D, G = SEED000_LEVELS[level].D, SEED000_LEVELS[level].G_m
     if ro["film_position_nodes"] == 1:
         r.add("roughness.film_position_nodes", "must be 0 (every table position) or >= 2 (interpolation nodes)")
@@ -1158,7 +1138,6 @@ def _geometry_problem(exc: BaseException) -> Tuple[str, str]:
 def _check_geometry(pair: GearPairSpec) -> Optional[Tuple[str, str]]:
     """Run the geometry module's checks (contact ratio, pointed tip, undercut,
     interference); return ``(key_path, reason)`` or None."""
-    from ..gear import geometry  # gearfmu/gear/geometry.py
     try:
         geometry.pair_geometry(pair)
     except (ValueError, ArithmeticError) as exc:  # GeometryError is a ValueError
@@ -1197,7 +1176,6 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
     _roughness(r, data)  # validated here; Scene.roughness reads it
     lub = _lubricant(r, data)
     thermal = _thermal(r, data)
-    from .envelope import read_envelope_sections  # [envelope] / [accuracy], docs/plan.md
     envelope, accuracy = read_envelope_sections(r, data, op, source_path)
 
     # ---------------- cross-key checks (only on values that passed their own checks)

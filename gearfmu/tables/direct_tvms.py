@@ -69,10 +69,19 @@ import math
 import time
 from dataclasses import dataclass, field
 from typing import List, Optional
+import warnings
+import dataclasses
+import os
 
 import numpy as np
 
 from ..ehl.errors import EHLConvergenceError, EHLInputError, FilmCollapseError
+from .precompute import LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE, _slice_loads_N
+from ..contact.models import (film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m,
+                              _rough_profile)
+from ..ehl.mesh_film import solve_node_films, solve_slice_film, contact_kinematics, map_chunks
+from ..ehl.transient import solve_line_contact_transient, flank_slice_case
+from ..gear.hertz import hertz_stiffness_N_per_m
 
 #: contact models of :func:`direct_mesh_stiffness`
 DIRECT_MODELS = ("hertz", "smooth_ehl", "rough_steady", "smooth_transient", "rough_transient")
@@ -192,10 +201,6 @@ def _film_chunk(_env, items):
     """Worker: film evaluations.  Item ('steady', fenv, R, u, w, profile|None) or ('transient',
     kwargs, T_average, reduction).  Returns dicts with k_N_per_m, status, message, cpu_s (and for
     transient runs the window means and steps)."""
-    from ..ehl.mesh_film import solve_node_films, solve_slice_film
-    from ..ehl.transient import solve_line_contact_transient
-
-    import os
 
     out = []
     for it in items:
@@ -231,8 +236,6 @@ def _film_chunk(_env, items):
 
 
 def _transient_kwargs(env, s: float, w: float, slice_index, st: TransientFilmSettings) -> dict:
-    from ..ehl.transient import flank_slice_case
-
     kw = flank_slice_case(env, s, w, slice_index)
     srr = float(kw["srr"])
     dX = 6.0 / (st.n_nodes - 1)              # x_in = -4.5, x_out = 1.5 (the solver's defaults)
@@ -280,13 +283,6 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     ``executor`` / ``max_workers`` / ``progress``: as :func:`gearfmu.ehl.mesh_film.solve_films`;
     ``initial_loads_N``: (P, NS, N) slice loads to start the iteration from (default: Hertz loads,
     or for the per-slice film models the loads converged with ``smooth_ehl``)."""
-    from ..gear.hertz import hertz_stiffness_N_per_m
-    from ..contact.models import film_parameter, sliced_mesh_stiffness, tooth_compliances
-    from .precompute import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE,
-                              _slice_loads_N)
-    from ..ehl.mesh_film import contact_kinematics, map_chunks
-
-    import os
 
     t_wall, c_parent = time.perf_counter(), time.process_time()
     if model not in DIRECT_MODELS:
@@ -330,8 +326,6 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     k = sliced_mesh_stiffness(ct, fp, fg, kc_h, opts)
     fenv = None
     if model != "hertz":
-        import dataclasses
-
         fenv = env.film_environment()
         if fenv.n_nodes is None:
             fenv = dataclasses.replace(fenv, n_nodes=int(st.n_nodes))
@@ -400,8 +394,6 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
                     kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
                     items.append(("transient", kw, float(st.T_average), st.reduction))
                 elif model == "rough_steady":
-                    from ..contact.models import _rough_profile
-
                     prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
                     items.append(("steady", fenv, R, u, w_k, prof))
                 else:
@@ -446,8 +438,6 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
         if change < LOAD_ITERATION_TOL:
             break
     else:
-        import warnings
-
         warnings.warn(f"direct TVMS {model}: load sharing not converged after {LOAD_ITERATION_MAX} passes "
                       f"(max slice-load change {change:.2e} of F/NS)")
     wl = np.where(zone, loads / width, 0.0)
@@ -458,8 +448,6 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     runs: List[dict] = []
     if model in _TRANSIENT:
         if model in _ROUGH:
-            from ..contact.models import composite_sigma_m
-
             sigma = float(composite_sigma_m(env.roughness))
         for q, kk in enumerate(last_key):
             r = cache.get(kk[:3]) if kk is not None else None

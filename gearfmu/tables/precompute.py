@@ -14,6 +14,7 @@ from dataclasses import replace
 import sys
 import time
 from typing import Optional, Sequence
+import warnings
 
 import numpy as np
 
@@ -21,7 +22,15 @@ from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from ..gear.loaded_mesh import loaded_static_mesh
 from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
-from .mesh_tables import MeshTables
+from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
+from ..common.executors import make_executor
+from ..contact.models import composite_sigma_m, get_contact_model, tooth_compliances, sliced_mesh_stiffness
+from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
+from ..gear.geometry import pair_geometry
+from ..gear.stiffness import (slot_stiffness, required_slots, _normal_roll_m, tooth_compliance_m_per_N,
+                              virtual_normal_section)
+from ..gear.thermal import (thermal_state_from_scene, thermal_slot_stiffness, ThermalState, ThermalError,
+                            oil_dynamic_viscosity_Pas)
 
 #: default torque axis with lead crowning, as multiples of the nominal torque
 DEFAULT_TORQUE_FACTORS = (0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
@@ -66,7 +75,7 @@ class _Progress:
         self._bar = None
         if enabled:
             try:  # optional
-                from tqdm import tqdm  # type: ignore
+                from tqdm import tqdm  # type: ignore  # optional progress bar
                 self._bar = tqdm(total=total, desc=label)
             except ImportError:
                 self._bar = None
@@ -105,8 +114,6 @@ def _torque_axis(torque_axis_Nm, nominal_torque_Nm: float, crowned: bool) -> np.
 
 
 def _slot_stiffness(pair, geom, opts, slots, points_per_mesh, torque_Nm):
-    from ..gear.stiffness import slot_stiffness
-
     try:
         params = inspect.signature(slot_stiffness).parameters
     except (TypeError, ValueError):
@@ -117,8 +124,6 @@ def _slot_stiffness(pair, geom, opts, slots, points_per_mesh, torque_Nm):
 
 
 def _stiffness_depends_on_load() -> bool:
-    from ..gear.stiffness import slot_stiffness
-
     try:
         return "torque_Nm" in inspect.signature(slot_stiffness).parameters
     except (TypeError, ValueError):
@@ -162,9 +167,6 @@ class _ContactIteration:
     loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
 
     def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
-        from ..contact.models import get_contact_model, tooth_compliances
-        from ..gear.stiffness import slot_stiffness
-
         self.model = get_contact_model(opts.contact_model)
         self.env, self.opts, self.e, self.E = env, opts, e_slot, E
         ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
@@ -193,8 +195,6 @@ class _ContactIteration:
         environment brings an executor or asks for max_workers = 1)."""
         env = self.env
         if env.executor is None and (env.max_workers is None or env.max_workers > 1):
-            from ..dynamics.sweeps import make_executor
-
             self._pool = make_executor(max_workers=env.max_workers)
             self.env = replace(env, executor=self._pool.__enter__())
         return self
@@ -217,8 +217,6 @@ class _ContactIteration:
         self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
 
     def k_slice(self, torque_Nm: float, rb1: float):
-        from ..contact.models import sliced_mesh_stiffness
-
         F = torque_Nm / rb1
         F_eval = F if F > 0 else self.nominal_F
         floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
@@ -255,7 +253,6 @@ class _ContactIteration:
             if change < LOAD_ITERATION_TOL:
                 break
         else:
-            import warnings
             warnings.warn(f"{self.model.name}: load sharing not converged at torque {torque_Nm:g} N m after "
                           f"{LOAD_ITERATION_MAX} passes (max slice-load change {change:.2e} of F/NS)")
         self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
@@ -292,8 +289,6 @@ class _HelicalContactView:
     """
 
     def __init__(self, pair, geom, env, ss, reps):
-        from ..gear.stiffness import _normal_roll_m, tooth_compliance_m_per_N, virtual_normal_section
-
         if ss.s_slice_m is None:
             raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
         c = math.cos(geom.base_helix_angle_rad)
@@ -325,8 +320,6 @@ class _HelicalContactView:
         k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
         :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
         combine_pairs is homogeneous, so scaling after it equals scaling before)."""
-        from ..contact.models import sliced_mesh_stiffness
-
         kc = np.asarray(kc_normal_N_per_m, dtype=float)
         P, NS, N = kc.shape
         flat = (P, NS * N)
@@ -348,8 +341,6 @@ class _HelicalContactView:
 
 def _contact_provenance(ci, axis_note) -> dict:
     """Provenance of a contact-model run: settings, passes, solves, film failures."""
-    import warnings
-
     env = ci.env
     fails = [f for r in ci.records for f in r["failure_list"]]
     out = {
@@ -365,8 +356,6 @@ def _contact_provenance(ci, axis_note) -> dict:
         out["torque_axis_note"] = axis_note
     r = env.roughness
     if r is not None and ci.model.name == "rough_ehl":
-        from ..contact.models import composite_sigma_m
-
         out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
                             "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
                             "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
@@ -450,8 +439,6 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
     x nominal (docs/ehl_mesh.md).
     """
-    from ..gear.geometry import pair_geometry
-
     if int(points_per_mesh) != points_per_mesh or points_per_mesh < 4:
         raise PrecomputeInputError(f"points_per_mesh: must be an integer >= 4, got {points_per_mesh!r}")
     points_per_mesh = int(points_per_mesh)
@@ -465,7 +452,6 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     p_min = default_slots(eps)
     helical = geom.helix_angle_rad != 0.0
     if helical:  # docs/helical.md: slots from the total contact ratio eps_gamma
-        from ..gear.stiffness import required_slots
         eps = float(geom.total_contact_ratio)
         p_min = required_slots(geom)
     if slots is None:
@@ -482,8 +468,6 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     contact_it = None
     axis_note = None
     if opts.contact_model != "hertz":
-        from ..contact.models import get_contact_model
-
         cm = get_contact_model(opts.contact_model)
         if cm.load_dependent or cm.needs_lubricant:
             if contact_env is None:
@@ -583,8 +567,6 @@ def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, 
     ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
     "bulk_and_oil": :func:`_add_oil_temperature_axis`), else the gears' thermal
     state alone (:func:`_apply_thermal_state`; unchanged at the standard temperature)."""
-    from ..gear.thermal import thermal_state_from_scene
-
     quantity = getattr(thermal, "axis_quantity", "bulk")
     has_axis = len(getattr(thermal, "temperature_axis_C", ()) or ()) > 0
     kw = dict(e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
@@ -623,8 +605,6 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
     stiffness -- CHOICE, docs/tables.md) and the loaded mesh gives the row's
     secant stiffness and effective error.  At the standard state r = 1 exactly
     and the row equals the single-temperature row bit for bit."""
-    from ..gear.thermal import thermal_slot_stiffness
-
     torques = np.asarray(tables.torque_Nm, dtype=float)
     if np.any(torques <= 0):
         raise PrecomputeInputError(
@@ -674,8 +654,6 @@ def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_sl
     no thermal profile distortion); ``k_mean_N_per_m`` (the damping) stays the
     standard one.
     """
-    from ..gear.thermal import ThermalState
-
     axis = np.asarray(thermal.temperature_axis_C, dtype=float)
     t0 = float(thermal.standard_temperature_C)
     states = [ThermalState(float(t), float(t), t0) for t in axis]
@@ -726,8 +704,6 @@ def oil_axis_eta0_Pas(lubricant, temperatures_C) -> np.ndarray:
     lubricant's Walther / ASTM D341 law times its (constant) density,
     :func:`gearfmu.gear.thermal.oil_dynamic_viscosity_Pas`.  ``lubricant``: a
     :class:`gearfmu.scene.reader.Lubricant` with both kinematic viscosities."""
-    from ..gear.thermal import ThermalError, oil_dynamic_viscosity_Pas
-
     if lubricant is None:
         raise PrecomputeInputError("lubricant: an oil temperature axis needs the lubricant's viscosity-temperature "
                                    "law (thermal.lubricant, set by the scene reader from [lubricant])")
@@ -767,16 +743,12 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
     ``k_mean_N_per_m`` (the damping) is the scene's (``tables``, built at the
     lubricant temperature); the FMU input starts at the lubricant temperature
     clamped into the axis."""
-    from .mesh_tables import TEMPERATURE_INPUTS, stack_temperatures
-    from ..gear.thermal import thermal_state_from_scene
-
     quantity = thermal.axis_quantity
     if opts.contact_model == "hertz" or contact_env is None:
         raise PrecomputeInputError(
             f"axis_quantity: {quantity!r} acts through eta0 of a lubricated contact model, but contact_model = "
             f"{opts.contact_model!r}" + (" uses no lubricant" if opts.contact_model == "hertz"
                                          else " got no contact_env"))
-    from ..contact.models import get_contact_model
 
     if not get_contact_model(opts.contact_model).needs_lubricant:
         raise PrecomputeInputError(f"axis_quantity: {quantity!r} needs a contact model that uses the lubricant; "
@@ -785,8 +757,6 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
     axis = np.asarray(thermal.temperature_axis_C, dtype=float)
     eta = oil_axis_eta0_Pas(lub, axis)
     if getattr(thermal, "oil_alpha", "roelands") == "roelands":
-        from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
-
         alpha = np.asarray(roelands_alpha_at_viscosity_Pa_inv(contact_env.alpha_Pa_inv, contact_env.eta0_Pas, eta),
                            dtype=float) * np.ones_like(eta)
         alpha[eta == contact_env.eta0_Pas] = contact_env.alpha_Pa_inv   # the lubricant's own temperature: exact

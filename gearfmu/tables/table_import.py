@@ -35,6 +35,7 @@ from typing import Optional
 import numpy as np
 
 from .mesh_tables import MeshTables, TableError, load_tables
+from .synthetic import tables_from_arrays
 
 try:  # Python 3.11+
     import tomllib
@@ -317,8 +318,6 @@ def _load_slots(header, data, lines, src, meta, mp, prov):
 
 
 def _make(k, e, b, tq, period, mp, meta, prov, **opt):
-    from .synthetic import tables_from_arrays
-
     return tables_from_arrays(
         phi_period_rad=period, mesh_period_rad=mp, k_N_per_m=k, e_m=e, backlash_half_m=b,
         base_radius_pinion_m=meta["base_radius_pinion_m"], base_radius_gear_m=meta["base_radius_gear_m"],

@@ -1,0 +1,110 @@
+"""The validation record every gearfmu FMU carries (both runtimes): ``resources/validation/``.
+
+Shared by the pythonfmu builder (:mod:`gearfmu.fmu.pythonfmu_build`) and the standalone
+builder (:mod:`gearfmu.fmu.standalone_build`): the native solver's reference result over the
+FMU's DefaultExperiment, table checksums, versions and the agreement criterion.
+"""
+from __future__ import annotations
+
+import csv
+import datetime
+import hashlib
+import importlib.metadata
+import inspect
+import io
+import json
+import platform
+import sys
+from typing import Dict, Optional
+
+from .. import __version__
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..dynamics.native import simulate
+from ..tables.mesh_tables import MeshTables
+from .compare import native_columns, output_names
+
+__all__ = ["validation_record", "VALIDATION_DIR", "RECORD_PACKAGES"]
+
+VALIDATION_DIR = "resources/validation"
+#: packages whose versions the validation record names
+RECORD_PACKAGES = ("numpy", "scipy", "numba", "fmpy", "pythonfmu", "libcosimpy")
+
+
+def _versions() -> Dict[str, Optional[str]]:
+    out = {"gearfmu": __version__, "python": sys.version.split()[0]}
+    for pkg in RECORD_PACKAGES:
+        try:
+            out[pkg] = importlib.metadata.version(pkg)
+        except importlib.metadata.PackageNotFoundError:
+            out[pkg] = None
+    return out
+
+
+def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str, parameters: dict,
+                      stop_time_s: float, output_interval_s: float, scene_text: Optional[str] = None,
+                      compiler: Optional[str] = None) -> Dict[str, bytes]:
+    """The validation record every gearfmu FMU carries (both runtimes), as
+    ``{path inside the FMU: bytes}`` under ``resources/validation/``.
+
+    Files: ``record.json`` (runtime, package and dependency versions, platform,
+    compiler, parameters, table checksums -- tables.bin and every array --,
+    the experiment, the reference file's SHA-256 and the agreement criterion),
+    ``reference_result.csv`` (the native numba solver, :func:`gearfmu.dynamics.native.simulate`,
+    over the FMU's DefaultExperiment with the FMU's start values: communication
+    step = stepSize, same max_step, so the FMU reproduces it to round-off when
+    a master steps it at stepSize) and ``scene.toml`` when a scene was given.
+    ``parameters`` keys: damping_ratio, pinion_speed_start_rad_s,
+    pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
+    max_step_s, damping_model (0/1), optionally integrator (0/1).  The pattern follows the Modelica
+    Reference-FMUs, which carry their reference result CSV inside the FMU.
+    """
+    names_by_code = {v: k for k, v in DAMPING_MODELS.items()}
+    p = dict(parameters)
+    extra = {}
+    if int(p.get("integrator", 0)) != 0 or "integrator" in inspect.signature(simulate).parameters:
+        extra["integrator"] = {v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))]
+    if p.get("bulk_temperature_start_C") is not None:
+        extra["bulk_temperature_C"] = float(p["bulk_temperature_start_C"])
+    res = simulate(tables, **extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s,
+                   max_step_s=p["max_step_s"], pinion_torque_Nm=p["pinion_torque_start_Nm"],
+                   gear_torque_Nm=p["gear_torque_start_Nm"],
+                   pinion_speed_start_rad_s=p["pinion_speed_start_rad_s"], damping_ratio=p["damping_ratio"],
+                   damping_model=names_by_code[int(p["damping_model"])],
+                   pinion_angle_start_rad=p.get("pinion_angle_start_rad", 0.0))
+    cols = native_columns(res, tables.slots)
+    names = output_names(tables.slots)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", *names])
+    for i in range(len(res.time_s)):
+        w.writerow([repr(float(res.time_s[i]))] + [repr(float(cols[n][i])) for n in names])
+    ref = buf.getvalue().encode("utf-8")
+    meta_bytes, bin_bytes = tables.to_bytes()
+    meta = json.loads(meta_bytes.decode("utf-8"))
+    record = {
+        "format": "gearfmu-validation-record", "version": 1,
+        "runtime": runtime, "model_identifier": model_identifier,
+        "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "versions": _versions(), "platform": platform.platform(), "machine": platform.machine(),
+        "compiler": compiler,
+        "parameters": p,
+        "tables": {"tables_bin_sha256": hashlib.sha256(bin_bytes).hexdigest(),
+                   "tables_json_sha256": hashlib.sha256(meta_bytes).hexdigest(),
+                   "arrays_sha256": {k: v["sha256"] for k, v in meta["arrays"].items()},
+                   "slots": tables.slots, "n_phi": tables.n_phi, "n_torque": tables.n_torque},
+        "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+        "reference": {
+            "file": "reference_result.csv", "sha256": hashlib.sha256(ref).hexdigest(),
+            "solver": "gearfmu.dynamics.native.simulate (numba, docs/model.md RK4)",
+            "start_time_s": 0.0, "stop_time_s": stop_time_s, "output_interval_s": output_interval_s,
+            "substeps_per_interval": int(res.substeps), "rows": int(len(res.time_s)),
+            "criterion": "every output within 1e-9 of its range in this file when a master steps the FMU "
+                         "with communication step = output_interval_s and the start values above",
+            "native_wall_s": res.wall_s,
+        },
+    }
+    out = {f"{VALIDATION_DIR}/record.json": json.dumps(record, indent=1, default=str).encode("utf-8"),
+           f"{VALIDATION_DIR}/reference_result.csv": ref}
+    if scene_text is not None:
+        out[f"{VALIDATION_DIR}/scene.toml"] = scene_text.encode("utf-8")
+    return out

@@ -1,0 +1,161 @@
+"""The stages of the main job on a scene: scene -> tables -> FMU, and the native run beside it.
+
+Only wiring; each stage lives in its own package (scene, tables, fmu, dynamics).  The
+planner (:mod:`gearfmu.plan`) builds its planned scenes with :func:`build_fmu_from_scene`;
+:func:`gearfmu.pipeline.build` runs the planner first when a scene asks for it.
+"""
+from __future__ import annotations
+
+import inspect
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from . import __version__
+from .common.vocabulary import RUNTIMES
+from .contact.models import environment_from_scene
+from .dynamics.native import choose_max_step_s, simulate
+from .fmu.pythonfmu_build import build_fmu
+from .fmu.standalone_build import build_standalone_fmu
+from .scene.reader import default_scene_path, load_scene
+from .tables.precompute import precompute_tables
+
+
+def load(scene_path: Optional[str] = None):
+    """Load a scene file (None: the default scene)."""
+    return load_scene(scene_path if scene_path is not None else default_scene_path())
+
+
+def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
+    """Load torque on the gear that balances a pinion torque in steady state,
+    T2 = T1 * Rb2 / Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2)."""
+    return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
+
+
+def compute_tables(scene, *, progress: bool = False):
+    """Precompute the tooth-pair tables of a scene (timed)."""
+    torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
+    prov = {
+        "scene_name": scene.name,
+        "scene_toml": scene.text,
+        "gearfmu_version": __version__,
+        "numpy_version": np.__version__,
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "contact_model": scene.mesh.contact_model,
+    }
+    return precompute_tables(
+        scene.pair, scene.mesh,
+        points_per_mesh=scene.tables.points_per_mesh,
+        torque_axis_Nm=torque_axis,
+        nominal_torque_Nm=scene.operating.torque_Nm,
+        slots=scene.tables.slots,
+        progress=progress,
+        provenance=prov,
+        **_contact_kw(scene, progress),
+        thermal=getattr(scene, "thermal", None),
+    )
+
+
+def _contact_kw(scene, progress: bool) -> dict:
+    """``contact_env`` for the EHL contact models (gearfmu/contact/models.py); {} for Hertz."""
+    if scene.mesh.contact_model == "hertz":
+        return {}
+    return {"contact_env": environment_from_scene(scene, progress=progress)}
+
+
+def max_step_for(scene, tables) -> float:
+    """The internal step bound: the scene's ``solver.max_step_s`` or the automatic choice."""
+    if scene.solver.max_step_s is not None:
+        return float(scene.solver.max_step_s)
+    vmax = scene.operating.speed_rad_s
+    rng = getattr(scene.operating, "speed_range_rad_s", None)
+    if rng:
+        vmax = max(abs(v) for v in rng)
+    if getattr(tables, "has_temperature_axis", False):  # the bound of the stiffest temperature slice
+        return min(choose_max_step_s(tables.at_temperature(float(t)), abs(vmax)) for t in tables.temperature_C)
+    return choose_max_step_s(tables, abs(vmax))
+
+
+@dataclass
+class BuildResult:
+    fmu_path: Path
+    tables: object
+    tables_wall_s: float
+    build_wall_s: float
+    max_step_s: float
+    plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
+
+
+def fmu_builder(runtime: str):
+    """The FMU builder of a runtime: "pythonfmu" or "standalone" (FMI layer in C,
+    docs/standalone.md); both take the same arguments."""
+    if runtime == "standalone":
+        return build_standalone_fmu
+    if runtime != "pythonfmu":
+        raise ValueError(f"runtime: {runtime!r} not one of {RUNTIMES}")
+    return build_fmu
+
+
+def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
+                         tables=None, plan=None) -> BuildResult:
+    """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
+    :func:`gearfmu.pipeline.build`).  ``runtime``: "pythonfmu" or "standalone";
+    None: the scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the
+    scene's physics (e.g. imported from CSV, gearfmu.tables.table_import); the scene then
+    only gives the FMU and operating settings.  ``plan``: the plan the scene came from,
+    kept in the result."""
+    builder = fmu_builder(runtime or getattr(scene.fmu, "runtime", "pythonfmu"))
+    t0 = time.perf_counter()
+    if tables is None:
+        tables = compute_tables(scene, progress=progress)
+    t1 = time.perf_counter()
+    h_max = max_step_for(scene, tables)
+    t1_Nm = scene.operating.torque_Nm
+    path = builder(
+        tables, out_path,
+        model_name=scene.fmu.model_name,
+        damping_ratio=scene.fmu.damping_ratio,
+        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
+        pinion_torque_start_Nm=t1_Nm,
+        gear_torque_start_Nm=gear_torque_for(tables, t1_Nm),
+        max_step_s=h_max,
+        damping_model=scene.solver.damping_model,
+        stop_time_s=scene.fmu.stop_time_s,
+        output_interval_s=scene.fmu.output_interval_s,
+        scene_text=scene.text,
+        **_integrator_kw(builder, scene),
+    )
+    t2 = time.perf_counter()
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
+
+
+def _integrator_kw(builder, scene) -> dict:
+    """{'integrator': scene.solver.integrator} for a builder that takes it; a builder
+    without the argument gets nothing for 'rk4' (its kernel default) and an error otherwise."""
+    name = getattr(scene.solver, "integrator", "rk4")
+    if "integrator" in inspect.signature(builder).parameters:
+        return {"integrator": name}
+    if name != "rk4":
+        raise ValueError(f"solver.integrator: {name!r} is not supported by this FMU runtime's builder")
+    return {}
+
+
+def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
+                    damping_ratio=None, pinion_torque_Nm=None, gear_torque_Nm=None):
+    """Run the native (numba) solver on a scene's tables with the scene's settings."""
+    t1_Nm = scene.operating.torque_Nm if pinion_torque_Nm is None else pinion_torque_Nm
+    return simulate(
+        tables,
+        stop_time_s=scene.fmu.stop_time_s if stop_time_s is None else stop_time_s,
+        comm_step_s=scene.fmu.output_interval_s if comm_step_s is None else comm_step_s,
+        max_step_s=max_step_for(scene, tables) if max_step_s is None else max_step_s,
+        pinion_torque_Nm=t1_Nm,
+        gear_torque_Nm=gear_torque_for(tables, t1_Nm) if gear_torque_Nm is None else gear_torque_Nm,
+        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
+        damping_ratio=scene.fmu.damping_ratio if damping_ratio is None else damping_ratio,
+        damping_model=scene.solver.damping_model,
+        integrator=getattr(scene.solver, "integrator", "rk4"),
+    )
