@@ -1,0 +1,151 @@
+"""The package's architecture (README "Architecture"), checked with import-linter.
+
+The contracts live in pyproject.toml ``[tool.importlinter]``: the layers (each stage imports
+only the stages below it, every top-level module or package placed), no import cycles
+between sibling modules or packages, and the FMU runtime template importing nothing from
+gearfmu.  import-linter builds the import graph with grimp, which also sees imports inside
+functions.  The checks are shown to fail on a copy of the package with an upward import or
+a cycle written into it.
+"""
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from gearfmu.common import vocabulary
+from gearfmu.contact.models import CONTACT_MODELS as REGISTRY
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGE = REPO / "gearfmu"
+
+#: packages that may be imported inside a function (heavy and needed only by some calls);
+#: gearfmu.plots loads matplotlib
+LAZY_OK = {"fmpy", "matplotlib", "distributed", "dask", "tqdm", "pythonfmu", "pyssp_standard", "libcosimpy",
+           "plots", "gearfmu.plots"}
+#: the FMU runtime template runs inside the FMU, not as part of the package
+NOT_PACKAGE_CODE = {PACKAGE / "fmu" / "runtime" / "gearfmu_slave.py"}
+
+_LINT = ("import sys; sys.path.insert(0, sys.argv[1]); "
+         "from importlinter.cli import lint_imports; "
+         "sys.exit(lint_imports(config_filename=sys.argv[2], no_cache=True, no_logo=True))")
+
+
+def _lint(root: Path):
+    """Run import-linter on the gearfmu package under ``root`` (a fresh interpreter, so the
+    graph is built from that copy); returns (exit code, report)."""
+    res = subprocess.run([sys.executable, "-c", _LINT, str(root), str(REPO / "pyproject.toml")],
+                         cwd=root, capture_output=True, text=True, timeout=300)
+    return res.returncode, res.stdout + res.stderr
+
+
+def _copy(tmp_path: Path) -> Path:
+    shutil.copytree(PACKAGE, tmp_path / "gearfmu", ignore=shutil.ignore_patterns("__pycache__"))
+    return tmp_path
+
+
+def test_import_contracts_hold():
+    code, report = _lint(REPO)
+    assert code == 0, report
+    assert "3 kept, 0 broken" in report, report
+
+
+def test_contracts_fail_on_an_upward_import_and_on_a_cycle(tmp_path):
+    root = _copy(tmp_path)
+    code, report = _lint(root)
+    assert code == 0, report  # the copy itself is clean
+    assert str(root) in _graph_origin(root)  # and it is the copy that is analysed
+
+    # upward: the EHL numerics importing the native solver
+    (root / "gearfmu" / "ehl" / "_offender.py").write_text("from gearfmu.dynamics import native\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "Layers: every stage imports only the stages below it BROKEN" in report, report
+    assert "gearfmu.ehl._offender -> gearfmu.dynamics.native" in report, report
+    (root / "gearfmu" / "ehl" / "_offender.py").unlink()
+
+    # a cycle inside one layer: hertz <- stiffness already; hertz -> stiffness closes it
+    hertz = root / "gearfmu" / "gear" / "hertz.py"
+    hertz.write_text(hertz.read_text() + "\n\ndef _late():\n    from gearfmu.gear import stiffness\n"
+                     "    return stiffness\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "No import cycles between sibling modules or packages BROKEN" in report, report
+    assert "Layers: every stage imports only the stages below it KEPT" in report, report
+    assert "No cycles are allowed in gearfmu.gear." in report, report
+
+
+def test_contracts_fail_when_the_fmu_runtime_imports_the_package(tmp_path):
+    root = _copy(tmp_path)
+    slave = root / "gearfmu" / "fmu" / "runtime" / "gearfmu_slave.py"
+    slave.write_text(slave.read_text() + "\nfrom gearfmu.tables.mesh_tables import MeshTables  # noqa\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The FMU runtime imports nothing from gearfmu BROKEN" in report, report
+
+
+def test_a_new_top_level_module_must_be_placed_in_a_layer(tmp_path):
+    root = _copy(tmp_path)
+    (root / "gearfmu" / "unplaced.py").write_text('"""A module no layer names."""\n')
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "gearfmu.unplaced" in report, report
+
+
+def _graph_origin(root: Path) -> str:
+    res = subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv[1]); import gearfmu; "
+                          "print(gearfmu.__file__)", str(root)], capture_output=True, text=True, timeout=120)
+    return res.stdout
+
+
+def _function_level_imports(path: Path):
+    tree = ast.parse(path.read_text())
+    for fn in ast.walk(tree):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.ImportFrom):
+                    yield node, (node.module or "") if not node.level else (node.module or ".")
+                elif isinstance(node, ast.Import):
+                    for a in node.names:
+                        yield node, a.name
+
+
+def test_imports_inside_functions_only_for_heavy_optional_packages_with_a_reason():
+    bad = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path in NOT_PACKAGE_CODE:
+            continue
+        lines = path.read_text().splitlines()
+        for node, module in _function_level_imports(path):
+            root = module if module in LAZY_OK else module.split(".")[0]
+            where = f"{path.relative_to(REPO)}:{node.lineno}"
+            if root not in LAZY_OK:
+                bad.append(f"{where}: import of {module!r} inside a function")
+            elif "#" not in lines[node.lineno - 1]:
+                bad.append(f"{where}: function-level import of {module!r} without its reason in a comment")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_contact_model_registry_implements_exactly_the_vocabulary():
+    assert tuple(REGISTRY) == vocabulary.CONTACT_MODELS
+    lubricated = tuple(name for name, m in REGISTRY.items() if m.needs_lubricant)
+    assert lubricated == vocabulary.LUBRICATED_CONTACT_MODELS
+
+
+def test_every_vocabulary_is_defined_once():
+    """No module but common/vocabulary.py assigns a vocabulary name at module level."""
+    names = set(vocabulary.__all__)
+    bad = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path == PACKAGE / "common" / "vocabulary.py":
+            continue
+        for node in ast.parse(path.read_text()).body:
+            targets = node.targets if isinstance(node, ast.Assign) else (
+                [node.target] if isinstance(node, ast.AnnAssign) else [])
+            for t in targets:
+                registry = getattr(t, "id", None) == "CONTACT_MODELS" and path == PACKAGE / "contact" / "models.py"  # the implementations
+                if isinstance(t, ast.Name) and t.id in names and not registry:
+                    bad.append(f"{path.relative_to(REPO)}:{node.lineno}: {t.id}")
+    assert not bad, "\n".join(bad)
