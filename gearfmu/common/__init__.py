@@ -1,1 +1,10 @@
-"""Words and checks every layer shares."""
+"""Shared by every layer; imports nothing from gearfmu (the bottom layer).
+
+============  ===============================================================================
+Module        Contents
+============  ===============================================================================
+vocabulary    every option string: contact models, damping models, integrators, runtimes, ...
+checks        finite_number: the one input check of the physics and the solvers
+executors     make_executor: in-process, process pool or Dask cluster
+============  ===============================================================================
+"""

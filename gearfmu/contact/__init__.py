@@ -1,1 +1,13 @@
-"""Contact models: the registry, fractal contact, asperity load sharing, roughness."""
+"""Contact stiffness of a tooth pair: the model registry and its models.
+
+Imports :mod:`gearfmu.gear`, :mod:`gearfmu.ehl`, :mod:`gearfmu.common`.
+
+==============  ===============================================================================
+Module          Contents
+==============  ===============================================================================
+models          the registry (hertz, smooth_ehl, rough_ehl, fractal_mixed), contact environment
+fractal         fractal mixed-lubrication stiffness (seed 001)
+load_sharing    film-asperity load sharing in a rough EHL line contact
+roughness       Weierstrass-Mandelbrot flank roughness (seed 000 eq 1, Table 2)
+==============  ===============================================================================
+"""

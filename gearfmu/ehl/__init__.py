@@ -4,6 +4,23 @@ Public API: :func:`solve_line_contact`, :class:`LineContactResult`, the transien
 solver :func:`solve_line_contact_transient` (docs/ehl_transient.md) and the
 errors :class:`EHLInputError`, :class:`EHLConvergenceError`,
 :class:`FilmCollapseError` (all ValueError subclasses).
+
+Self-contained numerics: imports nothing from gearfmu but :mod:`gearfmu.common`.
+
+================  =================================================================
+Module            Contents
+================  =================================================================
+solver            steady line-contact solver (seed 000 eq 2-7, Algorithm 1)
+transient         transient solver, roughness moving with the surfaces
+mesh_film         films along the line of action: kinematics, node solves
+multigrid         multilevel solution of the dimensionless problem
+mgcore            compiled FAS multigrid core (numba)
+deformation       elastic deformation (seed 000 eq 4), FFT convolution
+lubricant         viscosity/density laws: Roelands, Dowson-Higginson, Tait, Walther
+film_stiffness    oil-film normal stiffness (seed 000 eq 8-10)
+fits              closed-form film-thickness fits
+errors            EHLInputError, EHLConvergenceError, FilmCollapseError
+================  =================================================================
 """
 from .errors import EHLConvergenceError, EHLError, EHLInputError, FilmCollapseError
 from .solver import LineContactResult, solve_line_contact, REFERENCE_CASE

@@ -1,1 +1,18 @@
-"""FMUs: model description, builders per runtime, runtime template, C sources."""
+"""FMUs from tables: model description, one builder per runtime, runtime, C sources.
+
+Imports :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics` (validation record) and
+:mod:`gearfmu.common`; :mod:`gearfmu.fmu.runtime` imports nothing from gearfmu.
+
+==================  =========================================================
+Module              Contents
+==================  =========================================================
+modeldesc           modelDescription.xml from modeldescription/variables.toml
+pythonfmu_build     build_fmu: the pythonfmu runtime; compile flags, kernel
+standalone_build    build_standalone_fmu: FMI 2.0 in C, no Python
+validation          the validation record every FMU carries
+compare             FMU against the native solver (fmpy)
+runtime/            gearfmu_slave.py: the pythonfmu slave template
+kernel/             gearkernel.c/.h: the C kernel of both runtimes
+standalone/         fmi2_gear.c: the FMI 2.0 layer in C
+==================  =========================================================
+"""

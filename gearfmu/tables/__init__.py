@@ -1,1 +1,14 @@
-"""Mesh tables: the format, the precompute, CSV import, synthetic shapes."""
+"""Tooth-pair tables: the interface between the physics and the dynamics.
+
+Imports the physics (:mod:`gearfmu.gear`, :mod:`gearfmu.contact`, :mod:`gearfmu.ehl`).
+
+==============  ============================================================
+Module          Contents
+==============  ============================================================
+mesh_tables     MeshTables: the format (JSON + binary), temperature axis
+precompute      precompute_tables: gear pair -> tables, the load iteration
+direct_tvms     mesh stiffness evaluated directly at given positions (films)
+table_import    tables from CSV files, and back
+synthetic       tables from textbook shapes (rectangular wave, ...)
+==============  ============================================================
+"""
