@@ -63,7 +63,8 @@ from ..ehl.errors import EHLConvergenceError, FilmCollapseError
 from ..ehl.fits import dowson_higginson_min_film
 from ..ehl.mesh_film import (contact_kinematics, solve_films, involute_arc_length_m, FilmEnvironment,
                              _solve_node_chunk, map_chunks)
-from ..ehl.transient import solve_line_contact_transient, flank_slice_case
+from ..ehl import transient as ehl_transient
+from ..ehl.transient import flank_slice_case
 from ..gear.geometry import pair_geometry
 from ..gear.stiffness import tooth_compliance_m_per_N, combine_pairs
 
@@ -803,7 +804,8 @@ def _transient_node_chunk(_env, cases):
     out = []
     for kw in cases:
         try:
-            r = solve_line_contact_transient(**kw)
+            # looked up at call time, so a substitute set on the module is used
+            r = ehl_transient.solve_line_contact_transient(**kw)
         except FilmCollapseError as exc:
             out.append({"status": "collapse", "message": str(exc)[:300]})
             continue

@@ -80,7 +80,8 @@ from .precompute import LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_L
 from ..contact.models import (film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m,
                               _rough_profile)
 from ..ehl.mesh_film import solve_node_films, solve_slice_film, contact_kinematics, map_chunks
-from ..ehl.transient import solve_line_contact_transient, flank_slice_case
+from ..ehl import transient as ehl_transient
+from ..ehl.transient import flank_slice_case
 from ..gear.hertz import hertz_stiffness_N_per_m
 
 #: contact models of :func:`direct_mesh_stiffness`
@@ -216,7 +217,8 @@ def _film_chunk(_env, items):
             continue
         _, kw, T_avg, red = it
         try:
-            r = solve_line_contact_transient(**kw)
+            # looked up at call time, so a substitute set on the module is used
+            r = ehl_transient.solve_line_contact_transient(**kw)
             T0 = r.T_settled
             q = r.film_stiffness_reductions(T0, T0 + T_avg)
             k = q["k_of_means_N_per_m"] if red == "k_of_means" else q["k_mean_of_k_N_per_m"]
