@@ -265,7 +265,7 @@ def oil(out: Path, plt, use_solver: bool):
     temps = np.arange(30.0, 110.0, 10.0)
     eta = th.oil_dynamic_viscosity_Pas(lub.kinematic_viscosity_40C_m2_s, lub.kinematic_viscosity_100C_m2_s,
                                        lub.density_kg_m3, temps)
-    # pitch-point line contact of pair I (Moes / Venner-Lubrecht definitions, REFERENCES.md)
+    # pitch-point line contact of pair I (Moes 1992 and Venner & Lubrecht 2000 definitions, docs/ehl.md)
     R1, R2 = geom.s_pitch_m, geom.loa_length_m - geom.s_pitch_m
     R = R1 * R2 / (R1 + R2)
     E = sc.pair.pinion.material.youngs_modulus_Pa / (1.0 - sc.pair.pinion.material.poisson_ratio ** 2)

@@ -1,7 +1,7 @@
 """Tests of the line-contact EHL solver gearfmu.ehl (seed 000 eq 2-7).
 
 Every reference below comes from outside this code base:
-* the exact Hertzian deformation identity (REFERENCES.md; Johnson 1985):
+* the exact Hertzian deformation identity (Johnson, Contact Mechanics, 1985, ch. 5):
   int_{-1}^{1} ln|x - t| sqrt(1 - t^2) dt = (pi/2)(x^2 - 1/2 - ln 2), |x| <= 1;
 * Moes' (1992) central film fit (as quoted by Venner & Lubrecht 2000), whose
   groups M, L contain only alpha: it describes the Barus viscosity law and an

@@ -1,8 +1,8 @@
 """The FMU built by gearfmu.fmu.pythonfmu_build, driven by fmpy (an independent FMI master).
 
 References: fmpy.validation (the FMI 2.0 schema and rules as fmpy checks
-them); the interface table of /work/shared/DESIGN.md (names, causality,
-units); the closed-form static balance of a gear pair at rest (mesh force
+them); the interface contract of README.md "The FMU's variables" (names,
+causality, units); the closed-form static balance of a gear pair at rest (mesh force
 F = T1/Rb1 = T2/Rb2, speed constant); "the same FMU run alone" for the
 isolation tests; exit codes of fresh processes for host crashes.
 """
@@ -67,7 +67,7 @@ def test_validate_fmu_passes(fmus):
 
 
 def test_interface_matches_design_contract(fmus):
-    """Names, causality and units of /work/shared/DESIGN.md "The FMU"."""
+    """Names, causality and units of the interface contract (README "The FMU's variables")."""
     md = fmpy.read_model_description(str(fmus["b"]))
     v = {x.name: x for x in md.modelVariables}
     want = {"pinion_torque": ("input", "N.m"), "gear_torque": ("input", "N.m"),

@@ -5,7 +5,7 @@ References (none produced by gearfmu):
   m_t = m_n/cos(beta), tan(alpha_t) = tan(alpha_n)/cos(beta), tan(beta_b) = tan(beta) cos(alpha_t)
   and independently sin(beta_b) = sin(beta) cos(alpha_n), eps_beta = b sin(beta)/(pi m_n),
   eps_alpha from the tip radii r + m_n, p_bn = p_bt cos(beta_b), the inv(alpha_wt) meshing equation;
-* ISO 6336-1 method B (REFERENCES.md): q' with the virtual tooth numbers z_n = z/(cos^2 beta_b cos beta),
+* ISO 6336-1:2019 method B (clause 9): q' with the virtual tooth numbers z_n = z/(cos^2 beta_b cos beta),
   c' = C_M C_R C_B cos(beta)/q', c_gamma_alpha = c'(0.75 eps_alpha + 0.25);
 * the classical result that the total contact-line length of a helical pair, hence (slices in
   parallel) its mesh stiffness, is constant when eps_beta is an integer, and that the overlap
@@ -113,7 +113,7 @@ def test_bad_helical_input_names_the_field():
 
 # ------------------------------------------------------------------ stiffness
 def iso_c_gamma_alpha(g, dedendum_coeff=1.25):
-    """ISO 6336-1 method B c_gamma_alpha in N/(mm um) for x = 0 (REFERENCES.md), virtual z_n."""
+    """ISO 6336-1 method B c_gamma_alpha in N/(mm um) for x = 0 (ISO 6336-1:2019 clause 9), virtual z_n."""
     C = [0.04723, 0.15551, 0.25791]
     zf = math.cos(g.base_helix_angle_rad) ** 2 * math.cos(g.helix_angle_rad)
     q = C[0] + C[1] / (g.z1 / zf) + C[2] / (g.z2 / zf)

@@ -7,7 +7,7 @@ References (none produced by gearfmu):
   the Hertz model, to round-off;
 * the normal-section relations rho_n = rho_t/cos(beta_b) (ISO 6336-2), entrainment u_t cos(beta_b)
   normal to the contact line (Johnson 1985, ch. 13), evaluated by hand from the LOA positions;
-* ISO 6336-1 method B c_gamma_alpha (REFERENCES.md), +-25 % as in docs/helical.md;
+* ISO 6336-1 method B c_gamma_alpha (ISO 6336-1:2019 clause 9), +-25 % as in docs/helical.md;
 * the spur pair of the same transverse section with the same contact model (the classical
   overlap smoothing, Niemann/Winter ch. 21) and, for beta -> 0, the spur path of the same model
   (_ContactIteration without slice stagger) -- the limit the helical path must reach;

@@ -1,7 +1,7 @@
 """Tests of the scene file format (gearfmu.scene.reader).
 
 References (no number below was produced by gearfmu):
-* seed 000 Table 1, seed 003 Table 1, seed 004 Tables 1, 4 and 5 (/work/shared/seeds);
+* seed 000 Table 1, seed 003 Table 1, seed 004 Tables 1, 4 and 5 (cited in full in docs/references.md);
 * textbook involute relations (ISO 21771: r = m z/2, rb = r cos(alpha),
   ra = r + m (ha* + x - k), rf = r - m (ha* + c* - x), inv(alpha_w) equation,
   contact ratio from the tip radii), solved here with scipy.optimize.brentq;

@@ -24,7 +24,7 @@ from test_fmu import make_tables
 
 VARIANTS = {"nominal": {"damping_ratio": 0.05}, "damping_low": {"damping_ratio": 0.01},
             "damping_high": {"damping_ratio": 0.3, "damping_model": 1}}
-H_NS = 100_000  # 1e-4 s in integer nanoseconds (libcosimpy takes ns, REFERENCES.md)
+H_NS = 100_000  # 1e-4 s in integer nanoseconds (libcosimpy's CosimExecution.from_step_size takes integer ns)
 STOP_NS = 3_000_000
 
 

@@ -5,7 +5,7 @@ References used (none produced by this code):
 * scipy.integrate.quad (adaptive, tight tolerance) on the potential-energy
   integrals of seed 000 eq (15) written out independently in this file;
 * the Yang & Sun (1985) Hertz formula pi E L / (4 (1 - nu^2)) evaluated by hand;
-* Sainsot et al. (2004) coefficient table (REFERENCES.md) evaluated by hand;
+* Sainsot et al. (2004) coefficient table (Sainsot, Velex & Duverger 2004, J. Mech. Des. 126, Table 1) evaluated by hand;
 * seed 004 (He & Yang) Table 3: standard meshing stiffness of gear pair I;
 * ISO 6336-1 method B: c' and c_gamma_alpha (empirical band).
 """
@@ -172,7 +172,7 @@ def test_seed004_pair_I_key_points():
 
 
 def iso_6336_c_prime_and_c_gamma(z1, z2, x1, x2, eps, dedendum_coeff=1.25):
-    """ISO 6336-1 method B (REFERENCES.md): q', c' = C_M C_R C_B / q', c_ga = c'(0.75 eps + 0.25).
+    """ISO 6336-1:2019 method B (clause 9): q', c' = C_M C_R C_B / q', c_ga = c'(0.75 eps + 0.25).
 
     C_M = 0.8, C_R = 1 (solid blank), C_B = 1 + 0.5 (1.2 - h_fP/m) for alpha = 20 deg
     (= 0.975 for h_fP = 1.25 m).  Result in N/(mm um) = 1e9 N/m^2.

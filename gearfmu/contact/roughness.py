@@ -29,7 +29,7 @@ chosen here (documented in docs/ehl.md):
 
 The highest frequency is the Nyquist frequency of the sampling unless given.
 Identification of D and G from a measured profile uses the band-averaged
-power spectrum (REFERENCES.md: the W-M spectrum is
+power spectrum (Majumdar & Bhushan 1990, J. Tribol. 112, 205-216: the W-M spectrum is
 S(f) = G^(2(D-1)) / (2 ln gamma) * f^-(5-2D)), see :func:`identify_fractal`.
 """
 from __future__ import annotations
@@ -211,7 +211,7 @@ def identify_fractal(x_m, z_m, gamma: float = SEED000_GAMMA, band_ratio: float =
     """Identify D and G of a profile from its band-averaged power spectrum.
 
     The W-M spectrum S(f) = G^(2(D-1)) / (2 ln gamma) f^-(5-2D) (Majumdar &
-    Bhushan 1990; REFERENCES.md) integrates over a band [f, r f] to
+    Bhushan 1990, J. Tribol. 112, 205-216) integrates over a band [f, r f] to
     P_b = G^(2(D-1)) f^-(4-2D) (1 - r^-(4-2D)) / (2 ln gamma (4-2D)), so the
     slope s of log P_b against log f gives D = 2 + s/2 and the intercept
     gives G.  Bands of ratio ``band_ratio`` (one W-M line per band when it

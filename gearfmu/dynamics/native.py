@@ -67,7 +67,7 @@ class NativeInputError(ValueError):
 
 
 # ---------------------------------------------------------------- kernels
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _phi_index(theta1, phi_period, n_phi, dphi):
     """docs/model.md 'Table lookup': (i0, i1, w) at pinion angle theta1 (rad)."""
     phim = theta1 - phi_period * np.floor(theta1 / phi_period)
@@ -84,7 +84,7 @@ def _phi_index(theta1, phi_period, n_phi, dphi):
     return i0, i1, w
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _torque_index(t1, torque):
     """Bracketing torque row it and weight wt for Tq = clamp(T1, torque[0], torque[-1]).
 
@@ -106,7 +106,7 @@ def _torque_index(t1, torque):
     return it, wt
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rows(k, e, it):
     """Views of the torque rows it and it+1 (it again when NT == 1)."""
     if k.shape[0] > 1:
@@ -114,7 +114,7 @@ def _rows(k, e, it):
     return k[it], e[it], k[it], e[it], False
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
     """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j.
 
@@ -145,7 +145,7 @@ def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
     return kv, ev, es, bv
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
     """Force of one pair (N) and its contact state (1 drive, -1 back, 0 separated)."""
     de = es * omega1
@@ -179,7 +179,7 @@ def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
     return f, state
 
 
-@njit(cache=False, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _mesh_force(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
     """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1."""
     n_phi = k0.shape[1]
@@ -192,7 +192,7 @@ def _mesh_force(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, 
     return f
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
                  pair_out, row):
     """Write pair forces of one output row; return (mesh_force, mesh_stiffness)."""
@@ -210,7 +210,7 @@ def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period,
     return ftot, ks
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
     """docs/model.md 'Initial state': x (m) of the quasi-static equilibrium at theta1
     under F_m = T1/Rb1, by exactly 200 bisections.  Returns nan if no slot has k > 0."""
@@ -259,7 +259,7 @@ def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
     return 0.5 * (lo + hi)
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, wt, b,
               phi_period, dphi, c, model):
     """One classical RK4 step of the two-inertia model (docs/model.md).
@@ -316,7 +316,7 @@ def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, 
     return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torque,
               phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
     """Loop over communication steps (rows 1..n of the outputs; row 0 by caller)."""
@@ -342,7 +342,7 @@ def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torqu
     return n_steps
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
     """One RK4 step of the time-indexed SDOF (theta1 = th0 + om*t prescribed),
     same stage and accumulation order as :func:`_rk4_step`; stage times t,
@@ -381,7 +381,7 @@ def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, ph
     return x + h6 * sc, v + h6 * sd
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _run_sdof(th0, om, x, v, t1s, H, n_sub, h, rb1, me, k, e, b, torque,
               phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
     n_steps = out_state.shape[0] - 1
@@ -447,7 +447,7 @@ def _ptr(typingctx, arr):
     return sig, codegen
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cell_nodes(nd, n_phi):
     """(i0, i1) of global cell nd (float holding an integer): i0 = nd mod N."""
     r = nd - n_phi * np.floor(nd / n_phi)
@@ -462,7 +462,7 @@ def _cell_nodes(nd, n_phi):
     return i0, i1
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
@@ -487,7 +487,7 @@ def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     return 0.0
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
     """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
     1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
@@ -522,7 +522,7 @@ def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
     return fc + fd if q == 1 else 1.0
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     """Sub-mode of the elastobacklash law at the state (docs/model.md 'Per-pair force')."""
     if reg == 0:
@@ -544,7 +544,7 @@ def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     return 1
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _kvals(tab, j, i0, i1, w):
     """k_j, e_j, de_j/dphi, b_j of slot j at cell nodes (i0, i1) and weight w; the
     arithmetic of :func:`_pair_values` on the pointers of ``tab``."""
@@ -574,7 +574,7 @@ def _kvals(tab, j, i0, i1, w):
     return kv, ev, es, bv
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
     Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
@@ -594,7 +594,7 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
     """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
     the arithmetic of :func:`_rk4_step` (stages unrolled)."""
@@ -621,7 +621,7 @@ def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
     return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
     """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
     2 + 3*j + q guard q of pair j."""
@@ -638,7 +638,7 @@ def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
     return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
     """Guard gi on the cubic Hermite interpolant of the step (wk: y0, f0, y1, f1)
     at fraction s in [0, 1]."""
@@ -654,7 +654,7 @@ def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
     return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1)
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
     """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
     (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
@@ -690,7 +690,7 @@ def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
     return bb
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
     """Set kpos of every pair for cell nd and the sub-modes of pairs in contact;
     with from_state also the regions (the start of a communication step)."""
@@ -717,7 +717,7 @@ def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
             md[p + j] = 0
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
     Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place."""
@@ -821,7 +821,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     return th, om, x, v, nd, nev
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k, e, b, torque,
               phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
     """rk4_kink loop over communication steps (two-inertia or, with sdof, the
@@ -869,7 +869,7 @@ def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k,
     return n_steps
 
 
-@njit(cache=False, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _row0(th, om, x, v, t1, k, e, b, torque, phi_period, dphi, c, model,
           out_state, out_pair, out_force, out_stiff):
     it, wt = _torque_index(t1, torque)

@@ -7,7 +7,7 @@ deflections - a new bidimensional analytical formula", J. Mech. Des. 126
     1/k_f = cos^2(alpha_m)/(E W) * { L* (u_f/S_f)^2 + M* (u_f/S_f) + P* (1 + Q* tan^2(alpha_m)) }
 
 with each coefficient X* = A/theta_f^2 + B h_f^2 + C h_f/theta_f + D/theta_f + E h_f + F
-(table below, Sainsot Table 1 as transcribed in /work/shared/REFERENCES.md), where
+(table below, Sainsot et al. 2004 Table 1), where
 
 * h_f = r_f / r_int: root radius over bore (hub) radius;
 * theta_f: half angle, seen from the gear centre, of the tooth root on the

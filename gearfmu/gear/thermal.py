@@ -61,7 +61,7 @@ CHOICES where the seed leaves gaps (also in docs/thermal.md):
    * ``"homogeneous"``: a free body heated uniformly is scaled about its centre by
      (1 + alpha dT); the involute flank then moves along its normal by
      alpha dT (r_K . n) = alpha dT r_b tan a_K, the distance N_iK from the base
-     tangent point (derived here; REFERENCES.md "Thermal").
+     tangent point (derived here from the uniform scaling of a free body).
 4. *Load on a pair in multi-pair contact* (:func:`thermal_slot_stiffness`): the
    quasi-static share F_n k_slot / sum k_slot of the total normal load
    T_1/r_b1 (the seed loads one pair with the whole F_n at every key point; so

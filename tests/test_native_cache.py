@@ -1,0 +1,40 @@
+"""The native solver's compiled code is cached on disk, so a second process does not compile again.
+
+Reference: numba's own dispatcher statistics (``Dispatcher.stats.cache_hits`` /
+``cache_misses``): a process that runs the default scene after another process already ran it
+must load every compiled driver from the cache (hits, no misses), whatever the wall time.
+"""
+import json
+import subprocess
+import sys
+import textwrap
+
+CHILD = textwrap.dedent("""
+    import json, gearfmu.dynamics.native as nat
+    from gearfmu.pipeline import compute_tables
+    from gearfmu.scene.reader import load_scene
+    tables = compute_tables(load_scene())
+    kw = dict(stop_time_s=2e-3, comm_step_s=1e-4, pinion_torque_Nm=2000.0,
+              pinion_speed_start_rad_s=209.4, damping_ratio=0.05)
+    nat.simulate(tables, **kw)
+    nat.simulate(tables, integrator="rk4", **kw)
+    stats = {}
+    for name in ("_run_2dof", "_run_kink", "_row0"):
+        st = getattr(nat, name).stats
+        stats[name] = [sum(st.cache_hits.values()), sum(st.cache_misses.values())]
+    print(json.dumps(stats))
+""")
+
+
+def _run(tmp_path):
+    out = subprocess.run([sys.executable, "-c", CHILD], capture_output=True, text=True, timeout=600,
+                         env={**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    assert out.returncode == 0, out.stderr[-2000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_second_process_loads_the_native_solver_from_the_cache(tmp_path):
+    first = _run(tmp_path)
+    second = _run(tmp_path)
+    for name, (hits, misses) in second.items():
+        assert misses == 0 and hits >= 1, f"{name}: second process {hits} cache hits, {misses} misses (first: {first[name]})"
