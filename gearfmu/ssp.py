@@ -7,18 +7,23 @@ variant), further ``.ssd`` files (other variants, SSP 1.0 section 3), and
 5 and 6).  :func:`build_ssp` writes
 
 ```
-SystemStructure.ssd            variant = the first parameter set (e.g. nominal)
-<variant>.ssd                  one per further parameter set, same system, its own binding
+SystemStructure.ssd            the system with the first parameter set (e.g. nominal)
+<variant>.ssd                  the same system with the variant's parameter set
+<variant>_closed.ssd           the component alone with the variant's values (no system connectors)
 resources/<model>.fmu          the gear FMU
-resources/<variant>.ssv        one ParameterSet per variant
+resources/<variant>.ssv        one ParameterSet per variant, names gear.<variable>
 ```
 
-The system holds one component (the gear FMU) with every FMU variable as a
-connector (inputs, outputs, parameters; SI units from
-``modeldescription/variables.toml``) and one ``ParameterBinding`` to its
-variant's ``.ssv``.  Every XML file is checked against the SSP 1.0 XSD shipped
-with pyssp-standard before the archive is written; a package that fails the
-check is never written.
+The system ``drivetrain`` holds one component ``gear`` (the FMU, every input,
+output and parameter as a connector; SI units from the FMU's UnitDefinitions)
+and exposes every FMU input and output as a system connector of the same full
+name, wired to the component; the system's inputs get start values by an
+inline binding and the variant's ``.ssv`` is bound at the system level.  Why
+one .ssd per variant, the qualified names and the closed files (masters that
+cannot connect system connectors): docs/robustness.md "SSP packages".  Every
+XML file is checked against the SSP 1.0 XSD shipped with pyssp-standard
+before the archive is written; a package that fails the check is never
+written.
 
 Variants are named sets of parameter values of the FMU (for example two
 damping ratios).  Choices (docs/robustness.md "SSP"): with no explicit
