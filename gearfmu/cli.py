@@ -71,6 +71,9 @@ def _print_accuracy(ve) -> None:
     """One line on the built model's error against full fidelity over the envelope (docs/plan.md)."""
     if not ve:
         return
+    if ve.get("error"):
+        print(f"accuracy: no estimate of the error against full fidelity ({ve['error']})")
+        return
     w = ve.get("worst_at") or {}
     label = ("ESTIMATE (cheap search) of the scene as written" if ve["kind"] == "as-written estimate"
              else "fidelity plan, verified")

@@ -129,7 +129,10 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     elif tables is None and estimate_accuracy:
         from .plan import estimate_as_written
 
-        verified = estimate_as_written(scene, progress=progress)
+        try:
+            verified = estimate_as_written(scene, progress=progress)
+        except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing
+            verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
     else:
         verified = None
     t0 = time.perf_counter()

@@ -10,9 +10,9 @@ into the scene that ``gearfmu build`` builds.
 Choices (``gearfmu.envelope.PLAN_CHOICES``) and their levels, cheapest first,
 the last one being the full-fidelity level:
 
-* ``contact_model`` -- the contact models :mod:`gearfmu.contact_models` offers
-  (when present; ``hertz`` alone otherwise), ordered hertz < smooth_ehl <
-  rough_ehl; lubricated ones only with a ``[lubricant]``.
+* ``contact_model`` -- the scene's own (the full-fidelity reference keeps it); the
+  other models :mod:`gearfmu.contact_models` offers are what-if rows
+  (:func:`_what_if_contact`), measured only on request.
 * ``thermal`` -- seed 004 temperature stiffness on/off (only with an envelope
   temperature range).  Kept, the FMU gets a temperature axis over the range;
   dropped, it gets none (no temperature input).
@@ -28,22 +28,25 @@ the last one being the full-fidelity level:
 * ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.native.choose_max_step_s`
   of the full tables at the top envelope speed (full: h0/4).
 
-Error measure (docs/plan.md): for every envelope point (torque low / nominal /
-high x speed low / nominal / high x temperature corners) a native run of
-``run_mesh_periods`` mesh periods from the quasi-static start with balanced
-torques; the relative RMS difference rms(y - y_full)/rms(y_full) of the DTE
-and of the total mesh force, worst over the points.  The TVMS measure is the
-relative RMS difference of the total mesh stiffness over the table period at
-the envelope torques and temperatures; configurations with thermal on are
-built with the table builder's temperature axis and read at each temperature
-with ``MeshTables.at_temperature`` (the FMU kernel's rule).  The budget rule
-(greedy by cost saved per error added, with a verification run of the
-combined choice) is in :func:`plan_scene`.
+Error measure (docs/plan.md "Error measure", :data:`gearfmu.plan_verify.ERROR_DEFINITION`):
+per comparison run (a steady point of ``run_mesh_periods`` mesh periods from the
+quasi-static start, or a segment of a transient) rms(y - y_full)/rms(y_full) of the DTE
+and of the total mesh force; max|y - y_full|/range(y_full) reported beside it.  The
+per-choice estimates use the envelope points (torque low / nominal / high x speed low /
+nominal / high x temperature corners); the TVMS measure is the relative RMS difference
+of the total mesh stiffness over the table period at the envelope torques and
+temperatures (thermal configurations read at each temperature with
+``MeshTables.at_temperature``, the FMU kernel's rule).  The greedy budget rule picks the
+choices; :func:`_verify_and_revise` then searches the envelope for the worst point of the
+COMBINED choice (:class:`gearfmu.plan_verify.Search`), raises the responsible choice
+while a point is above ``safety_factor`` x target, and refuses the plan when the budget of
+native runs is spent first.  ``Plan.verified_envelope`` records what was verified.
 
-Verification through the FMUs (:func:`verify_fmus`, ``gearfmu plan --fmu``):
+Confirmation through the FMUs (:func:`verify_fmus`, ``gearfmu plan --fmu``):
 the planned and the full-fidelity FMU are built and driven with fmpy through
-the same cases -- steady point, run-up over the speed range, warm-up over the
-temperature range, the envelope's duty cycle (:func:`verification_cases`;
+the same cases -- steady point, run-up and run-down over the speed range, the
+search's worst steady point, warm-up over the temperature range, the envelope's
+duty cycle (:func:`verification_cases`;
 speed profiles through the load torque by rigid-body inverse dynamics,
 :func:`drive_case`) -- and the DTE / mesh-force errors and the gains are
 reported per case.
@@ -966,7 +969,7 @@ def drive_case(name: str, tables, *, stop_time_s: float, comm_step_s: float, tor
 
 
 def verification_cases(scene, plan: Plan, tables) -> List[DriveCase]:
-    """The verification drives of a plan's envelope (docs/plan.md "Verification through
+    """The confirmation drives of a plan's envelope (docs/plan.md "Confirmation through
     the FMUs"); ``tables``: the full tables (inertias, base radii, mesh period).
 
     * ``steady``: nominal torque and speed, balanced load, middle of the temperature range;
@@ -1221,7 +1224,7 @@ def format_report(plan: Plan) -> str:
              f"envelope: torque {d['envelope']['torque_range_Nm']} N*m, speed "
              f"[{d['envelope']['speed_range_rpm'][0]:.6g}, {d['envelope']['speed_range_rpm'][1]:.6g}] rpm, "
              f"temperature {d['envelope']['temperature_range_C']} degC; "
-             f"{d['verification']['points']} envelope points", ""]
+             f"{d['verification']['points']} search probes", ""]
     lines.append(f"{'choice':<22}{'full':>12}{'chosen':>12}{'status':>9}{'TVMS':>10}{'DTE':>10}{'force':>10}")
     for r in d["choices"]:
         c = r["contribution"]
