@@ -77,7 +77,7 @@ _PPM_LEVELS = (16, 32, 64, 128, 256)
 _TORQUE_LEVELS = (1, 2, 3, 5, 9)
 _STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
 _THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a scene axis (CHOICE)
-DEFAULT_BUDGET_RUNS = 1000  # native runs the envelope search and its revisions may take (CHOICE, docs/plan.md)
+DEFAULT_BUDGET_RUNS = 2000  # native runs the envelope search and its revisions may take (CHOICE, docs/plan.md)
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
 
 

@@ -36,6 +36,7 @@ ERROR_DEFINITION = (
 
 _SEGMENT_SAMPLES_PER_RUN_PERIOD = 16  # communication steps per mesh period at a case's top speed (CHOICE)
 _SWEEP_RUN_LENGTHS = 12               # a sweep lasts 12 x run_mesh_periods mesh periods at its mean speed
+_MAX_MIDS = 4                         # mid-way points per axis in the steady grid (CHOICE)
 _RESONANCE_SPEEDS = 3                 # resonance speeds taken from the sweeps into the steady grid (CHOICE)
 
 
@@ -219,7 +220,10 @@ class Search:
         n = int(cfg["torque_points"])
         if hi > lo and n >= 2:  # mid-way between the configuration's torque rows
             rows = [lo + (hi - lo) * i / (n - 1) for i in range(n)]
-            vals |= {0.5 * (a + b) for a, b in zip(rows[:-1], rows[1:])}
+            mids = [0.5 * (a + b) for a, b in zip(rows[:-1], rows[1:])]
+            if len(mids) > _MAX_MIDS:  # fine axes: a spread of their mid-way points (both ends kept)
+                mids = [mids[int(round(i))] for i in np.linspace(0, len(mids) - 1, _MAX_MIDS)]
+            vals |= set(mids)
         elif hi > lo:
             vals.add(0.5 * (lo + hi))
         return sorted(v for v in vals if v > 0) or [self.env.nominal_torque_Nm]
@@ -233,8 +237,10 @@ class Search:
         nodes = list(self._axis(cfg))
         nodes = [x for x in nodes if lo <= x <= hi] or [lo, hi]
         nodes = sorted(set(nodes) | {lo, hi})
-        vals |= {0.5 * (a + b) for a, b in zip(nodes[:-1], nodes[1:])}
-        return sorted(vals)
+        mids = [0.5 * (a + b) for a, b in zip(nodes[:-1], nodes[1:])]
+        if len(mids) > _MAX_MIDS:
+            mids = [mids[int(round(i))] for i in np.linspace(0, len(mids) - 1, _MAX_MIDS)]
+        return sorted(vals | set(mids))
 
     def _axis(self, cfg: dict) -> Tuple[float, ...]:
         if not cfg["thermal"]:

@@ -244,3 +244,32 @@ def test_build_as_written_states_its_estimated_error(tmp_path, capsys):
     _print_accuracy(ve)
     assert "ESTIMATE" in capsys.readouterr().out
     assert res.max_step_s == pytest.approx(max_step_for(load_scene(SCENES / "seed003_table1.toml"), res.tables))
+
+
+def test_error_measure_closed_form():
+    """The one error measure (docs/plan.md "Error measure") on hand-made signals: y = 1.1 sin against
+    y_full = sin over whole periods has rms(diff)/rms(full) = 0.1 exactly and max|diff|/range(full)
+    = 0.1 / 2 = 0.05; the DTE and the force are measured independently."""
+    from gearfmu.plan_verify import budget_use, run_errors
+
+    t = np.arange(1000) / 1000
+    y = np.sin(2 * np.pi * t)
+    e = run_errors(1.1 * y, y + 0.5 * y, y, y)
+    assert e["dte_rel"] == pytest.approx(0.1, rel=1e-12) and e["dte_max_rel"] == pytest.approx(0.05, rel=1e-12)
+    assert e["mesh_force_rel"] == pytest.approx(0.5, rel=1e-12)
+    assert budget_use(e, 0.2, 0.25) == pytest.approx(2.0, rel=1e-12)
+    assert run_errors(y * np.nan, y, y, y)["dte_rel"] == math.inf
+
+
+def test_failed_fmu_confirmation_is_not_within_target(seed003_plan):
+    """A plan whose envelope search passed but whose FMU confirmation has a case above the target is
+    not within target, and its report says so."""
+    import dataclasses
+
+    _, plan = seed003_plan
+    if not plan.verification["within_target"]:
+        pytest.fail("the seed 003 plan was refused: " + str(plan.verification.get("refused")))
+    assert plan.within_target
+    bad = dataclasses.replace(plan, fmu_verification={"cases": {"run_down": {}}, "within_target": False})
+    assert not bad.within_target
+    assert bad.to_dict()["within_target"] is False
