@@ -11,7 +11,7 @@ the full-fidelity configuration by the native solver over the whole envelope:
   configuration) and the resonance speeds the full model's sweeps show (peaks of the
   DTE fluctuation, largest run-up/run-down difference);
 * an adaptive refinement around the worst steady point, coordinate by coordinate
-  (torque, speed, temperature), halving the step towards the better neighbour.
+  (torque, speed, temperature), halving the step towards the worse neighbour.
 
 All within a budget of native runs.  :data:`ERROR_DEFINITION` is the one error
 measure of the planner; :func:`run_errors` computes it.
@@ -326,7 +326,7 @@ class Search:
                 break
         # adaptive refinement around the worst steady point, coordinate by coordinate
         axes = [(0, Ts), (1, ws)] + ([(2, ths)] if ths != [None] else [])
-        for _ in range(2):
+        for rnd in range(2):  # the second round starts from the new worst with half the first steps
             steady = [(m["u"], p) for p, m in seen.items() if p.kind == "steady"]
             if not steady or exhausted:
                 break
@@ -346,6 +346,7 @@ class Search:
                     step = 0.5 * (above[0] - x[j])
                 elif below:
                     step = 0.5 * (x[j] - below[-1])
+                step *= 0.5 ** rnd
                 for _ in range(3):
                     cands = []
                     for s in (-step, step):
