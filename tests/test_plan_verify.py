@@ -273,3 +273,22 @@ def test_failed_fmu_confirmation_is_not_within_target(seed003_plan):
     bad = dataclasses.replace(plan, fmu_verification={"cases": {"run_down": {}}, "within_target": False})
     assert not bad.within_target
     assert bad.to_dict()["within_target"] is False
+
+
+def test_build_refuses_a_plan_that_is_not_within_target(tmp_path, monkeypatch, capsys):
+    """`gearfmu build` of a scene with [accuracy] follows its plan; a plan that is not within its
+    target (here: refused, its search budget too small) is not built -- a one-line error, status 2."""
+    import gearfmu.plan as plan_mod
+    from gearfmu.pipeline import build
+    from gearfmu.plan import PlanError
+
+    monkeypatch.setattr(plan_mod, "DEFAULT_BUDGET_RUNS", 3)
+    scene = _seed003(run_mesh_periods=10)
+    with pytest.raises(PlanError, match="not within its target"):
+        build(scene, tmp_path / "x.fmu")
+    assert not (tmp_path / "x.fmu").exists()
+    p = tmp_path / "s.toml"
+    p.write_text(scene.text, encoding="utf-8")
+    assert main(["build", str(p), "-o", str(tmp_path / "y.fmu"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "accuracy: the fidelity plan" in err
