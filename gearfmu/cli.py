@@ -58,11 +58,32 @@ def cmd_build(args) -> int:
         if not Path(args.tables).exists():
             raise CliError(f"--tables: file not found: {args.tables}")
         tables = load_tables_file(args.tables, args.tables_meta)
-    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables)
+    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
+                estimate_accuracy=not args.no_estimate)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
+
+
+def _print_accuracy(ve) -> None:
+    """One line on the built model's error against full fidelity over the envelope (docs/plan.md)."""
+    if not ve:
+        return
+    if ve.get("error"):
+        print(f"accuracy: no estimate of the error against full fidelity ({ve['error']})")
+        return
+    w = ve.get("worst_at") or {}
+    label = ("ESTIMATE (cheap search) of the scene as written" if ve["kind"] == "as-written estimate"
+             else "fidelity plan, verified")
+    print(f"accuracy, {label} against full fidelity over the envelope: worst DTE {ve['worst_dte_rel']:.3g}, "
+          f"mesh force {ve['worst_mesh_force_rel']:.3g} (rms(diff)/rms(full); max/range "
+          f"{ve['worst_dte_max_rel']:.3g} / {ve['worst_mesh_force_max_rel']:.3g}) at {w.get('case')}, "
+          f"{w.get('torque_Nm', float('nan')):.4g} N*m, {w.get('speed_rpm', float('nan')):.5g} rpm; "
+          f"{'within' if ve['within_target'] else 'ABOVE'} the target {ve['dte_target_rel']:g} / "
+          f"{ve['mesh_force_target_rel']:g}" + ("" if ve["kind"] != "as-written estimate" else
+                                                 " (add [accuracy] to build the planned model instead)"))
 
 
 def _print_contact(tables) -> None:
@@ -225,9 +246,13 @@ def cmd_plan(args) -> int:
     from .plan import format_report, plan_scene
 
     scene = _scene(args.scene)
-    plan = plan_scene(scene, progress=not args.quiet and not args.json, measure_fmu=args.fmu,
-                      fmu_dir=args.output)
+    plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
+                      budget_runs=args.budget_runs, what_if=args.what_if)
     print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
+    if not plan.within_target:  # a refused plan or a failed FMU confirmation is not a success
+        print(f"gearfmu: plan of {scene.name} is not within its accuracy target over the envelope "
+              f"(worst: {plan.verification.get('worst')}); see the report", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -243,6 +268,9 @@ def make_parser() -> argparse.ArgumentParser:
                    help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")
+    b.add_argument("--no-estimate", action="store_true",
+                   help="skip the estimate of the as-written scene's error against full fidelity (scenes "
+                        "without [accuracy]; docs/plan.md)")
     b.set_defaults(func=cmd_build)
 
     be = sub.add_parser("bench", help="benchmarks: `bench accuracy` = speed against error (gearfmu.bench)")
@@ -289,7 +317,15 @@ def make_parser() -> argparse.ArgumentParser:
                                      "kept/dropped, cost (docs/plan.md)")
     pl.add_argument("scene", nargs="?")
     pl.add_argument("--json", action="store_true", help="print the report as JSON")
-    pl.add_argument("--fmu", action="store_true", help="also build the chosen and the full FMU to measure their sizes")
+    pl.add_argument("--fmu", action="store_true",
+                    help="also build the planned and the full-fidelity FMU (sizes, build times) and confirm the "
+                         "plan through them with fmpy: steady, run-up, run-down, the search's worst point, "
+                         "warm-up, duty cycle; a case above the target fails the plan (exit 1)")
+    pl.add_argument("--budget-runs", type=int, default=None,
+                    help="native runs the envelope search and its revisions may take (default "
+                         "gearfmu.plan.DEFAULT_BUDGET_RUNS); when spent before a plan passes, the plan is refused")
+    pl.add_argument("--what-if", action="store_true",
+                    help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
     pl.set_defaults(func=cmd_plan)

@@ -89,14 +89,21 @@ class BuildResult:
     build_wall_s: float
     max_step_s: float
     plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
+    #: gearfmu.envelope.VerifiedEnvelope as a dict: the plan's verified envelope, or the as-written
+    #: estimate (estimate_accuracy=True, no [accuracy]); None otherwise (docs/plan.md "Verified envelope")
+    verified_envelope: Optional[dict] = None
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None) -> BuildResult:
+          tables=None, estimate_accuracy: bool = False) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
     "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
-    gearfmu.table_import); the scene then only gives the FMU and operating settings."""
+    gearfmu.table_import); the scene then only gives the FMU and operating settings.
+    A scene with ``[accuracy]`` is built as its fidelity plan says (gearfmu.plan; a plan that is
+    not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
+    is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
+    full-fidelity model over the envelope (``BuildResult.verified_envelope``)."""
     from .fmubuild import build_fmu
 
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
@@ -110,7 +117,24 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         from .plan import plan_scene, planned_scene
 
         plan = plan_scene(scene, progress=progress)
+        if not plan.within_target:
+            from .plan import PlanError
+
+            v = plan.verification
+            raise PlanError(f"accuracy: the fidelity plan of scene {scene.name!r} is not within its target over "
+                            f"the envelope ({v.get('refused') or 'worst: ' + str(v.get('worst'))}); "
+                            f"see `gearfmu plan`")
+        verified = plan.verified_envelope
         scene = planned_scene(scene, plan)
+    elif tables is None and estimate_accuracy:
+        from .plan import estimate_as_written
+
+        try:
+            verified = estimate_as_written(scene, progress=progress)
+        except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing
+            verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
+    else:
+        verified = None
     t0 = time.perf_counter()
     if tables is None:
         tables = compute_tables(scene, progress=progress)
@@ -132,7 +156,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         **_integrator_kw(build_fmu, scene),
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified)
 
 
 def _integrator_kw(builder, scene) -> dict:

@@ -503,7 +503,8 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            lo_open=True),
         _f("mesh_force_rel_error", "1", 0.02, "largest acceptable relative RMS error of the mesh force",
            0.0, 1.0, lo_open=True),
-        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates may use",
+        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates, and the "
+           "envelope search's worst point, may use",
            0.0, 1.0, lo_open=True),
         _i("run_mesh_periods", 40, "mesh periods of each dynamic comparison run", 5, 100000),
         Key("pin", "str_list", "-", (), "choices taken from the scene as written, not planned"),
