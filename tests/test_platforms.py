@@ -324,3 +324,15 @@ def test_platform_names():
     assert crossbuild.parse_platforms("win64,darwin64") == ("x86_64-windows", "x86_64-darwin", "aarch64-darwin")
     with pytest.raises(ValueError, match="--platforms: unknown platform 'win32'"):
         crossbuild.parse_platforms("linux64,win32")
+
+
+def test_cli_platforms_errors(capsys):
+    """`gearfmu build --platforms`: an unknown name, or a runtime that has no cross build, is a one-line error."""
+    from gearfmu.cli import main
+
+    assert main(["build", "--runtime", "standalone", "--platforms", "win32", "-o", "x.fmu"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("gearfmu: --platforms: unknown platform 'win32'") and "\n" not in err
+    assert main(["build", "--runtime", "pythonfmu", "--platforms", "win64", "-o", "x.fmu"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("gearfmu: --platforms: only the standalone runtime") and "\n" not in err
