@@ -30,11 +30,13 @@ importer on either Mac loads the same file (:func:`write_fat_macho`).  glibc
 from __future__ import annotations
 
 import importlib.util
+import os
 import shutil
 import struct
 import subprocess
 import sys
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -183,24 +185,28 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     zver = zig_version(zig) if zig else None
     darwin: Dict[str, bytes] = {}
     with tempfile.TemporaryDirectory(prefix="gearfmu_xbuild_") as tmp:
-        for key in keys:
-            t = TARGETS[key]
-            out = Path(binaries_dir) / t.folder / (identifier + t.ext)
-            if key.endswith("-darwin"):
-                out = Path(tmp) / key / (identifier + t.ext)
-            if key == hk and host_compile is not None and (zig is None or host_cc_first):
-                cmd, compiler = host_compile(out)
-                report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": compiler,
-                               "command": _portable(cmd, src, None)}
-            elif zig is not None:
-                cmd = zig_compile(zig, key, cflags, sources, src, out)
+        outs, jobs = {}, {}
+        with ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
+            for key in keys:  # the zig compilations run side by side (one process each)
+                t = TARGETS[key]
+                outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") else
+                                   Path(binaries_dir) / t.folder) / (identifier + t.ext)
+                if key == hk and host_compile is not None and (zig is None or host_cc_first):
+                    cmd, compiler = host_compile(out)
+                    report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": compiler,
+                                   "command": _portable(cmd, src, None)}
+                elif zig is not None:
+                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
+                    report[key] = {}
+                else:
+                    report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
+            for key, job in jobs.items():
+                t = TARGETS[key]
                 report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": zver,
-                               "command": _portable(cmd, src, zig)}
-            else:
-                report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
-                continue
-            if key.endswith("-darwin"):
-                darwin[key] = out.read_bytes()
+                               "command": _portable(job.result(), src, zig)}
+        for key in keys:
+            if key.endswith("-darwin") and "missing" not in report[key]:
+                darwin[key] = outs[key].read_bytes()
         if darwin:
             fat = Path(binaries_dir) / "darwin64" / (identifier + ".dylib")
             write_fat_macho([darwin[k] for k in sorted(darwin)], fat)
