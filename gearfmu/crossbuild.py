@@ -111,15 +111,17 @@ def zig_version(zig: Sequence[str]) -> str:
 
 def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include: Path,
                 out_lib: Path) -> List[str]:
-    """``zig cc -target <t> <cflags> -g0 -I<include> -o <lib> <sources> -lm``; return the command.
+    """``zig cc -target <t> <cflags> -g0 -I<include> -o <lib> <sources> -lm`` (macOS: plus
+    ``-Wl,-install_name,@rpath/<lib>``, a link option); return the command.
     Runs in a scratch folder (the Windows linker writes an import library and a .pdb beside its output)."""
     t = TARGETS[key]
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="gearfmu_zig_") as tmp:
-        tmp_out = Path(tmp) / ("lib" + t.ext)
+        tmp_out = Path(tmp) / out_lib.name  # the library's own name (ELF soname, Mach-O id, DLL name)
+        link = [f"-Wl,-install_name,@rpath/{out_lib.name}"] if key.endswith("-darwin") else []
         cmd = [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
-               *(str(s) for s in sources), "-lm"]
+               *(str(s) for s in sources), "-lm", *link]
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=1800, cwd=tmp)
         except (OSError, subprocess.SubprocessError) as exc:

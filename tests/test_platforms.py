@@ -229,12 +229,15 @@ def _fat_slices(data):
 def _macho_exports(m):
     """mach-o/loader.h + nlist.h: 64-bit header (magic 0xFEEDFACF, cputype, cpusubtype, filetype, ncmds,
     sizeofcmds, flags, reserved), LC_SYMTAB (0x2) -> nlist_64 {n_strx, n_type, n_sect, n_desc, n_value};
-    exported = N_EXT (0x01) with type N_SECT (0x0e)."""
+    exported = N_EXT (0x01) with type N_SECT (0x0e); LC_ID_DYLIB (0xd) -> the library's install name."""
     magic, cpu, _, filetype, ncmds = struct.unpack_from("<IiiII", m, 0)
     assert magic == 0xFEEDFACF
-    off, names = 32, set()
+    off, names, ident = 32, set(), None
     for _ in range(ncmds):
         cmd, size = struct.unpack_from("<II", m, off)
+        if cmd == 0xD:
+            name_at = off + struct.unpack_from("<I", m, off + 8)[0]
+            ident = m[name_at:m.index(b"\0", name_at)].decode()
         if cmd == 0x2:
             symoff, nsyms, stroff, _ = struct.unpack_from("<IIII", m, off + 8)
             for i in range(nsyms):
@@ -242,13 +245,14 @@ def _macho_exports(m):
                 if ntype & 0x01 and ntype & 0x0E == 0x0E:
                     names.add(m[stroff + strx:m.index(b"\0", stroff + strx)].decode())
         off += size
-    return cpu, filetype, names
+    return cpu, filetype, names, ident
 
 
 def test_darwin64_universal_binary(fmus):
     """Cannot run here: checked by format. darwin64 holds one fat file with an x86_64 (0x01000007) and
     an arm64 (0x0100000C) dylib (MH_DYLIB = 6), each at an offset aligned to 2**align, each exporting
-    every fmi2 function of the standard's header and none of the kernel's (hidden visibility)."""
+    every fmi2 function of the standard's header and none of the kernel's (hidden visibility), with the
+    install name @rpath/<id>.dylib (no build-machine path)."""
     c = fmus["impacts"]
     data = (c["dir"] / "binaries/darwin64" / f"{c['id']}.dylib").read_bytes()
     header = (fmi2_header_dir() / "fmi2Functions.h").read_text()
@@ -262,8 +266,8 @@ def test_darwin64_universal_binary(fmus):
     cpus = set()
     for cpu, sub, offset, size, align in _fat_slices(data):
         assert offset % (1 << align) == 0 and offset + size <= len(data)
-        cpu2, filetype, names = _macho_exports(data[offset:offset + size])
-        assert cpu2 == cpu and filetype == 6
+        cpu2, filetype, names, ident = _macho_exports(data[offset:offset + size])
+        assert cpu2 == cpu and filetype == 6 and ident == f"@rpath/{c['id']}.dylib"
         assert {"_" + f for f in fmi2} <= names, sorted({"_" + f for f in fmi2} - names)
         assert not [n for n in names if n.startswith("_gk_")]
         cpus.add(cpu)
