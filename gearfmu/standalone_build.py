@@ -144,8 +144,8 @@ def build_recipe_files(identifier: str) -> Dict[str, str]:
         "format=gearfmu-buildflags", "version=1", f"model_identifier={identifier}",
         "language=C99", f"sources={srcs}", "include_dirs=.", f"cflags={flags}", "ldflags=-lm",
         "optimization=-O2", "fp_contract=off", "fast_math=off", "visibility=hidden",
-        "# MSVC (CMakeLists.txt): /O2 /fp:precise; /fp:precise does not contract into FMA unless /fp:contract is given",
-        "msvc_cflags=/O2 /fp:precise",
+        "# MSVC (CMakeLists.txt): /fp:strict never contracts into FMA (/fp:precise does in MSVC before 2022)",
+        "msvc_cflags=/O2 /fp:strict",
     ]
     cmake = (
         "# Build the FMU binary from these sources with the flags of buildflags.txt:\n"
@@ -157,7 +157,7 @@ def build_recipe_files(identifier: str) -> Dict[str, str]:
         "                      C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden POSITION_INDEPENDENT_CODE ON)\n"
         f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}})\n"
         "if(MSVC)\n"
-        f"  target_compile_options({identifier} PRIVATE /O2 /fp:precise)\n"
+        f"  target_compile_options({identifier} PRIVATE /O2 /fp:strict)\n"
         "else()\n"
         f"  target_compile_options({identifier} PRIVATE -O2 -ffp-contract=off -fno-fast-math)\n"
         f"  target_link_libraries({identifier} m)\n"
