@@ -58,10 +58,16 @@ def cmd_build(args) -> int:
         if not Path(args.tables).exists():
             raise CliError(f"--tables: file not found: {args.tables}")
         tables = load_tables_file(args.tables, args.tables_meta)
+    platforms = None
+    if getattr(args, "platforms", None) is not None:
+        from .crossbuild import parse_platforms
+
+        platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
-                estimate_accuracy=not args.no_estimate)
+                estimate_accuracy=not args.no_estimate, platforms=platforms)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    _print_platforms(res.fmu_path)
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
@@ -84,6 +90,15 @@ def _print_accuracy(ve) -> None:
           f"{'within' if ve['within_target'] else 'ABOVE'} the target {ve['dte_target_rel']:g} / "
           f"{ve['mesh_force_target_rel']:g}" + ("" if ve["kind"] != "as-written estimate" else
                                                  " (add [accuracy] to build the planned model instead)"))
+
+
+def _print_platforms(fmu_path) -> None:
+    """The standalone FMU's platform line (documentation/platforms.txt): built and missing binaries."""
+    import zipfile
+
+    with zipfile.ZipFile(fmu_path) as z:
+        if "documentation/platforms.txt" in z.namelist():
+            print(z.read("documentation/platforms.txt").decode("utf-8").rstrip())
 
 
 def _print_contact(tables) -> None:
@@ -266,6 +281,10 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("-q", "--quiet", action="store_true")
     b.add_argument("--runtime", choices=("pythonfmu", "standalone"),
                    help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
+    b.add_argument("--platforms", metavar="LIST",
+                   help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
+                        "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
+                        "all that the installed compilers can build; docs/standalone.md 'Platforms')")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")
     b.add_argument("--no-estimate", action="store_true",

@@ -95,7 +95,7 @@ class BuildResult:
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None, estimate_accuracy: bool = False) -> BuildResult:
+          tables=None, estimate_accuracy: bool = False, platforms=None) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
     "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
@@ -103,7 +103,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     A scene with ``[accuracy]`` is built as its fidelity plan says (gearfmu.plan; a plan that is
     not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
-    full-fidelity model over the envelope (``BuildResult.verified_envelope``)."""
+    full-fidelity model over the envelope (``BuildResult.verified_envelope``).
+    ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available)."""
     from .fmubuild import build_fmu
 
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
@@ -111,6 +112,12 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         from .standalone_build import build_standalone_fmu as build_fmu  # same arguments
     elif runtime != "pythonfmu":
         raise ValueError(f"runtime: {runtime!r} not one of ('pythonfmu', 'standalone')")
+    extra = {}
+    if platforms is not None:
+        if runtime != "standalone":
+            raise ValueError("--platforms: only the standalone runtime builds binaries for other platforms "
+                             "(use --runtime standalone)")
+        extra["platforms"] = tuple(platforms)
 
     plan = None
     if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
@@ -153,7 +160,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
-        **_integrator_kw(build_fmu, scene),
+        **_integrator_kw(build_fmu, scene), **extra,
     )
     t2 = time.perf_counter()
     return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified)
