@@ -93,13 +93,15 @@ class BuildResult:
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
           tables=None) -> BuildResult:
-    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
-    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
+    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
+    docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
     gearfmu.table_import); the scene then only gives the FMU and operating settings."""
     from .fmubuild import build_fmu
 
-    runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
+    from .scene import DEFAULT_RUNTIME
+
+    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
     if runtime == "standalone":
         from .standalone_build import build_standalone_fmu as build_fmu  # same arguments
     elif runtime != "pythonfmu":
