@@ -316,6 +316,14 @@ static void sha_final_hex(gf_sha256 *s, char hex[65])
 }
 
 /* ----------------------------------------------------------- utilities */
+/* a stored Integer value as int; a value no int holds (only from a foreign or
+ * corrupted FMU state) becomes -1, which every integer parameter here rejects
+ * (a plain cast would be undefined behaviour) */
+static int as_int(double x)
+{
+    return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
+}
+
 static void copy_str(char *dst, size_t cap, const char *src)
 {
     size_t n = strlen(src);
@@ -648,7 +656,7 @@ static int apply_damping(gf_inst *c)
         gf_log(c, fmi2Error, "logStatusError", "%s; rejected", buf);
         return 0;
     }
-    st = gk_set_damping(c->model, zeta, (int)c->values[c->vr_dm]);
+    st = gk_set_damping(c->model, zeta, as_int(c->values[c->vr_dm]));
     if (st != GK_OK) {
         gf_log(c, fmi2Error, "logStatusError", "damping_ratio = %.17g: %s; rejected", zeta, kernel_error(st));
         return 0;
@@ -716,7 +724,7 @@ static int init_state(gf_inst *c)
     }
 #ifdef GK_INTEGRATOR_RK4 /* the kernel has the integrator choice (gk_set_integrator) */
     if (ok && c->vr_integrator >= 0) {
-        st = gk_set_integrator(c->model, (int)c->values[c->vr_integrator]);
+        st = gk_set_integrator(c->model, as_int(c->values[c->vr_integrator]));
         if (st != GK_OK) {
             gf_log(c, fmi2Error, "logStatusError", "integrator = %g: %s", c->values[c->vr_integrator],
                    kernel_error(st));
@@ -1047,7 +1055,7 @@ FMI2_Export fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReferen
     for (i = 0; i < nvr; ++i)
         if (!check_vr(c, "fmi2GetInteger", vr[i], 1)) return fmi2Error;
     if (!refresh_outputs(c, "fmi2GetInteger", vr, nvr)) return fmi2Error;
-    for (i = 0; i < nvr; ++i) value[i] = (fmi2Integer)get_value(c, vr[i]);
+    for (i = 0; i < nvr; ++i) value[i] = (fmi2Integer)as_int(get_value(c, vr[i]));
     return fmi2OK;
 }
 
@@ -1172,7 +1180,7 @@ static int snap_read(gf_inst *c, const unsigned char *p, size_t size, const char
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
     /* the kernel model's integrator and damping are derived from the restored values */
 #ifdef GK_INTEGRATOR_RK4
-    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, (int)c->values[c->vr_integrator]) != GK_OK) {
+    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, as_int(c->values[c->vr_integrator])) != GK_OK) {
         gf_log(c, fmi2Error, "logStatusError", "%s: integrator %g of the state is invalid", fn,
                c->values[c->vr_integrator]);
         return 0;
