@@ -1,6 +1,6 @@
 """The ``gearfmu`` command line.
 
-    gearfmu build    [SCENE] -o OUT.fmu [--runtime pythonfmu|standalone]  scene -> tables -> FMU
+    gearfmu build    [SCENE] -o OUT.fmu [--runtime standalone|pythonfmu]  scene -> tables -> FMU
     gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
     gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
     gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
@@ -280,7 +280,8 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
     b.add_argument("--runtime", choices=("pythonfmu", "standalone"),
-                   help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
+                   help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
+                        "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
     b.add_argument("--platforms", metavar="LIST",
                    help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
                         "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "

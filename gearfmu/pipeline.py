@@ -96,8 +96,8 @@ class BuildResult:
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
           tables=None, estimate_accuracy: bool = False, platforms=None) -> BuildResult:
-    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
-    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
+    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
+    docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
     gearfmu.table_import); the scene then only gives the FMU and operating settings.
     A scene with ``[accuracy]`` is built as its fidelity plan says (gearfmu.plan; a plan that is
@@ -107,7 +107,9 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available)."""
     from .fmubuild import build_fmu
 
-    runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
+    from .scene import DEFAULT_RUNTIME
+
+    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
     if runtime == "standalone":
         from .standalone_build import build_standalone_fmu as build_fmu  # same arguments
     elif runtime != "pythonfmu":

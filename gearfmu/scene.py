@@ -46,7 +46,7 @@ __all__ = [
     "SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions",
     "FmuOptions", "Lubricant", "ThermalOptions", "load_scene", "default_scene_path",
     "dumps_toml", "walther_kinematic_viscosity_cSt", "SCHEMA", "CONTACT_MODELS",
-    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
+    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES", "DEFAULT_RUNTIME",
 ]
 
 #: contact models a scene may name (the table builder says which are available)
@@ -58,6 +58,8 @@ THERMAL_AXIS_QUANTITIES = ("bulk", "oil", "bulk_and_oil")
 DAMPING_MODELS = ("elastobacklash", "seed003")
 INTEGRATORS = ("rk4", "rk4_kink")
 RUNTIMES = ("pythonfmu", "standalone")
+#: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
+DEFAULT_RUNTIME = "standalone"
 
 _RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
@@ -150,13 +152,13 @@ class FmuOptions:
 
     ``model_name``: the FMU's model name / identifier (a C identifier);
     ``damping_ratio``: mesh damping ratio zeta (dimensionless, default 0.05,
-    see docs/scene.md for why); ``runtime``: 'pythonfmu' or 'standalone';
+    see docs/scene.md for why); ``runtime``: 'standalone' (default, all-C) or 'pythonfmu';
     ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s).
     """
 
     model_name: str
     damping_ratio: float = 0.05
-    runtime: str = "pythonfmu"
+    runtime: str = DEFAULT_RUNTIME
     stop_time_s: float = 0.05
     output_interval_s: float = 1e-4
 
@@ -444,7 +446,7 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         Key("model_name", "identifier", "-", None, "FMU model name / identifier (C identifier; none = "
             "from scene.name)"),
         _f("damping_ratio", "1", 0.05, "mesh damping ratio zeta (tunable FMU parameter)", 0.0, 1.0),
-        _e("runtime", RUNTIMES, "pythonfmu", "FMU runtime"),
+        _e("runtime", RUNTIMES, DEFAULT_RUNTIME, "FMU runtime"),
         _f("stop_time_s", "s", 0.05, "DefaultExperiment stop time", 0.0, 1e6, lo_open=True),
         _f("output_interval_s", "s", 1e-4, "DefaultExperiment output (communication) interval", 0.0, 1e3,
            lo_open=True),
