@@ -511,7 +511,7 @@ def _cell_nodes(nd, n_phi):
     return i0, i1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
@@ -593,7 +593,7 @@ def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     return 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _kvals(tab, j, i0, i1, w):
     """k_j, e_j, de_j/dphi, b_j of slot j at cell nodes (i0, i1) and weight w; the
     arithmetic of :func:`_pair_values` on the pointers of ``tab``."""
@@ -638,7 +638,7 @@ def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
     return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
     Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,

@@ -16,8 +16,8 @@
  * floating-point result as long as fast-math stays off (no -Ofast, -ffast-math
  * or -fassociative-math), so -O2 and -O3 give the same doubles; -O2 is the
  * level gcc, clang and MSVC (/O2) all treat alike, and the hot path does not
- * depend on -O3's inlining heuristics because it is inlined explicitly
- * (GK_INLINE).  Identical results on every platform further need IEEE double
+ * depend on -O3's inlining and loop peeling because it is inlined explicitly
+ * (GK_INLINE) and the RK4 combinations are written per component.  Identical results on every platform further need IEEE double
  * arithmetic (SSE2 on x86; the x87 unit of 32-bit x86 rounds to 80 bits) and
  * a correctly rounded sqrt (IEEE 754; used once, for c).  The table lookup
  * multiplies by the precomputed 1/dphi and takes floor by an integer
@@ -363,6 +363,26 @@ GK_INLINE void deriv(const gk_model *m, const gk_tq *t, gk_ph *c, double T1, dou
 }
 
 
+/* RK4 stage input out = y + a*k and the update y + h/6.0*(((k1 + 2k2) + 2k3) + k4),
+ * written out per component so that the state stays in registers at -O2 */
+GK_INLINE void axpy4(const double *y, double a, const double *k, double *out)
+{
+    out[0] = y[0] + a * k[0];
+    out[1] = y[1] + a * k[1];
+    out[2] = y[2] + a * k[2];
+    out[3] = y[3] + a * k[3];
+}
+
+GK_INLINE void rk4_update(double *y, double h, const double *k1, const double *k2, const double *k3,
+                          const double *k4)
+{
+    double h6 = h / 6.0;
+    y[0] = y[0] + h6 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
+    y[1] = y[1] + h6 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+    y[2] = y[2] + h6 * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]);
+    y[3] = y[3] + h6 * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]);
+}
+
 /* --------------------------------------------------------------- rk4_kink
  * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
  * elastobacklash sub-mode sub, seed003 flag kpos) is held during each RK4
@@ -489,18 +509,17 @@ GK_INLINE void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, 
                        const double *y, const double *f0, double h, double *yn)
 {
     double h2 = h / 2.0, h6, k[4], sum[4], yt[4];
-    int q, stage;
-    for (q = 0; q < 4; ++q) {
-        k[q] = f0[q];
-        sum[q] = f0[q];
-    }
-    for (stage = 1; stage < 4; ++stage) {
-        for (q = 0; q < 4; ++q) yt[q] = (stage == 3) ? y[q] + h * k[q] : y[q] + h2 * k[q];
-        deriv_locked(m, t, md, T1, T2, yt, k);
-        for (q = 0; q < 4; ++q) sum[q] = (stage == 3) ? sum[q] + k[q] : sum[q] + 2.0 * k[q];
-    }
+    axpy4(y, h2, f0, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(f0, 2.0, k, sum);                 /* k1 + 2 k2 */
+    axpy4(y, h2, k, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(sum, 2.0, k, sum);                /* + 2 k3 */
+    axpy4(y, h, k, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(sum, 1.0, k, sum);                /* + k4 */
     h6 = h / 6.0;
-    for (q = 0; q < 4; ++q) yn[q] = y[q] + h6 * sum[q];
+    axpy4(y, h6, sum, yn);
 }
 
 /* guard gi at state y: 0 cell start, 1 cell end, 2 + 3 j + q guard q of pair j */
@@ -780,14 +799,13 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     }
     for (i = 0; i < nsub; ++i) {
         deriv(m, &t, &c, T1_Nm, T2_Nm, y, k1);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k1[q];
+        axpy4(y, 0.5 * h, k1, yt);
         deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k2);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k2[q];
+        axpy4(y, 0.5 * h, k2, yt);
         deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k3);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + h * k3[q];
+        axpy4(y, h, k3, yt);
         deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k4);
-        for (q = 0; q < 4; ++q)
-            y[q] = y[q] + h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q]);
+        rk4_update(y, h, k1, k2, k3, k4);
     }
     for (q = 0; q < 4; ++q)
         if (!isfinite(y[q])) return GK_ERR_NONFINITE;
