@@ -28,10 +28,15 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 
-def compute_tables(scene, *, progress: bool = False):
-    """Precompute the tooth-pair tables of a scene (timed)."""
+def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
+    """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
+    :class:`gearfmu.estimate.BuildTooLargeError` naming the scene keys when the estimated
+    tables, FMU or build time exceed the limits of :mod:`gearfmu.estimate`, unless
+    ``allow_large``."""
+    from .estimate import check_build_cost
     from .precompute import precompute_tables
 
+    check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
         "scene_name": scene.name,
@@ -89,14 +94,17 @@ class BuildResult:
     build_wall_s: float
     max_step_s: float
     plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
+    estimate: object = None  # gearfmu.estimate.BuildEstimate of the scene that was built
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None) -> BuildResult:
+          tables=None, allow_large: bool = False) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
     "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
-    gearfmu.table_import); the scene then only gives the FMU and operating settings."""
+    gearfmu.table_import); the scene then only gives the FMU and operating settings.
+    ``allow_large``: build even when the estimate (gearfmu.estimate) exceeds the limits."""
+    from .estimate import estimate_build
     from .fmubuild import build_fmu
 
     runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
@@ -111,9 +119,10 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
 
         plan = plan_scene(scene, progress=progress)
         scene = planned_scene(scene, plan)
+    est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:
-        tables = compute_tables(scene, progress=progress)
+        tables = compute_tables(scene, progress=progress, allow_large=allow_large)
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
@@ -132,7 +141,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         **_integrator_kw(build_fmu, scene),
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, est)
 
 
 def _integrator_kw(builder, scene) -> dict:

@@ -432,6 +432,7 @@ class Plan:
     cost: dict
     log: List[str] = field(default_factory=list)
     fmu_verification: dict = field(default_factory=dict)  # verify_fmus() when measured (plan --fmu)
+    estimate: dict = field(default_factory=dict)  # gearfmu.estimate of the scene as written / chosen / full
 
     def max_step_s(self, which: str = "chosen") -> float:
         """Largest internal step (s) of the chosen or the full configuration."""
@@ -485,6 +486,7 @@ class Plan:
             "verification": {k: jv(v) for k, v in self.verification.items()},
             "cost": self.cost,
             "fmu_verification": _json_clean(self.fmu_verification),
+            "estimate": self.estimate,
             "log": self.log,
         }
 
@@ -652,6 +654,10 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     cost = {"full": _cost_entry(ev, full), "chosen": _cost_entry(ev, chosen)}
     plan = Plan(scene_name=scene.name, envelope=env, target=acc, choices=choices, full=full, chosen=chosen,
                 h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log)
+    from .estimate import estimate_build
+
+    plan.estimate = {"scene": estimate_build(scene).to_dict(),
+                     **{w: estimate_build(planned_scene(scene, plan, w)).to_dict() for w in ("chosen", "full")}}
     if measure_fmu:
         _measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
     g = {}
@@ -1015,6 +1021,11 @@ def format_report(plan: Plan) -> str:
                      ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
         if k in cf and k in cc:
             lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
+    if d.get("estimate"):  # gearfmu.estimate (the model behind the build guard)
+        from .estimate import BuildEstimate
+
+        lines += ["", "estimate before computing (gearfmu.estimate):"]
+        lines += [f"  {w:<7}{BuildEstimate(**e).summary()}" for w, e in d["estimate"].items()]
     fv = d.get("fmu_verification") or {}
     if fv.get("cases"):
         ff, fc = fv["fmus"]["full"], fv["fmus"]["chosen"]
