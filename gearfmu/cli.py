@@ -64,9 +64,11 @@ def cmd_build(args) -> int:
 
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
-                estimate_accuracy=not args.no_estimate, platforms=platforms)
+                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    if res.estimate is not None:
+        print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
     _print_platforms(res.fmu_path)
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
@@ -121,7 +123,7 @@ def cmd_tables(args) -> int:
 
     scene = _scene(args.scene)
     t0 = time.perf_counter()
-    tables = compute_tables(scene, progress=not args.quiet)
+    tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
     out = Path(args.output or f"build/{scene.fmu.model_name}.gtab")
     tables.save(out)
@@ -167,7 +169,7 @@ def cmd_simulate(args) -> int:
     out = Path(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv")
     out.parent.mkdir(parents=True, exist_ok=True)
     if args.backend == "native":
-        tables = compute_tables(scene, progress=not args.quiet)
+        tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -212,9 +214,9 @@ def cmd_validate(args) -> int:
         if not Path(args.fmu).exists():
             raise CliError(f"--fmu: file not found: {args.fmu}")
         fmu_path = Path(args.fmu)
-        tables = compute_tables(scene, progress=False)
+        tables = compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
-        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False)
+        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False, allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
@@ -271,6 +273,11 @@ def cmd_plan(args) -> int:
     return 0
 
 
+def _allow_large(parser) -> None:
+    parser.add_argument("--allow-large", action="store_true",
+                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.estimate)")
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gearfmu", description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -291,6 +298,7 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--no-estimate", action="store_true",
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
+    _allow_large(b)
     b.set_defaults(func=cmd_build)
 
     be = sub.add_parser("bench", help="benchmarks: `bench accuracy` = speed against error (gearfmu.bench)")
@@ -304,6 +312,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("scene", nargs="?")
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(t)
     t.set_defaults(func=cmd_tables)
 
     s = sub.add_parser("simulate", help="simulate with the native solver or an FMU; CSV and PNG out")
@@ -315,6 +324,7 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("--damping-ratio", type=_positive("--damping-ratio"), help="1")
     s.add_argument("-o", "--output", help="CSV path")
     s.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(s)
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
@@ -323,6 +333,7 @@ def make_parser() -> argparse.ArgumentParser:
     v.add_argument("--stop-time", type=_positive("--stop-time"))
     v.add_argument("--output-interval", type=_positive("--output-interval"))
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    _allow_large(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")

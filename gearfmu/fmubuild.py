@@ -218,6 +218,10 @@ def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_sta
     T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
     hmax = _check_positive("max_step_s", max_step_s)
     tstop = _check_positive("stop_time_s", stop_time_s)
+    if output_interval_s is None:  # the scene's rule (gearfmu.scene.default_output_interval_s)
+        from .scene import default_output_interval_s
+
+        output_interval_s = min(default_output_interval_s(w0, tables.teeth_pinion), tstop)
     dt = _check_positive("output_interval_s", output_interval_s)
     return zeta, w0, th0, T1, T2, hmax, tstop, dt, _damping_model_code(damping_model)
 
@@ -225,8 +229,8 @@ def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_sta
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
               pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
-              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
-              scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
+              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
+              output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
               spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
@@ -236,7 +240,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     "elastobacklash", 1 or "seed003" (docs/model.md).  ``integrator``: 0 or
     "rk4", 1 or "rk4_kink" (default; docs/model.md "Integration", docs/dynamics_validation.md;
     FMU parameter ``integrator``).  ``stop_time_s`` and
-    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize).
+    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
+    None = :func:`gearfmu.scene.default_output_interval_s` at the start speed.
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
     final name.

@@ -28,10 +28,15 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 
-def compute_tables(scene, *, progress: bool = False):
-    """Precompute the tooth-pair tables of a scene (timed)."""
+def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
+    """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
+    :class:`gearfmu.estimate.BuildTooLargeError` naming the scene keys when the estimated
+    tables, FMU or build time exceed the limits of :mod:`gearfmu.estimate`, unless
+    ``allow_large``."""
+    from .estimate import check_build_cost
     from .precompute import precompute_tables
 
+    check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
         "scene_name": scene.name,
@@ -92,10 +97,11 @@ class BuildResult:
     #: gearfmu.envelope.VerifiedEnvelope as a dict: the plan's verified envelope, or the as-written
     #: estimate (estimate_accuracy=True, no [accuracy]); None otherwise (docs/plan.md "Verified envelope")
     verified_envelope: Optional[dict] = None
+    estimate: object = None  # gearfmu.estimate.BuildEstimate of the scene that was built
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None, estimate_accuracy: bool = False, platforms=None) -> BuildResult:
+          tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
     docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
@@ -104,7 +110,9 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
     full-fidelity model over the envelope (``BuildResult.verified_envelope``).
-    ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available)."""
+    ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available).
+    ``allow_large``: build even when the estimate (gearfmu.estimate) exceeds the limits."""
+    from .estimate import check_build_cost, estimate_build
     from .fmubuild import build_fmu
 
     from .scene import DEFAULT_RUNTIME
@@ -121,6 +129,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
                              "(use --runtime standalone)")
         extra["platforms"] = tuple(platforms)
 
+    if tables is None:  # refuse an oversized scene before planning or estimating anything
+        check_build_cost(scene, allow_large=allow_large)
     plan = None
     if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
         from .plan import plan_scene, planned_scene
@@ -144,9 +154,10 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
             verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
     else:
         verified = None
+    est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:
-        tables = compute_tables(scene, progress=progress)
+        tables = compute_tables(scene, progress=progress, allow_large=allow_large)
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
@@ -165,7 +176,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         **_integrator_kw(build_fmu, scene), **extra,
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified, est)
 
 
 def _integrator_kw(builder, scene) -> dict:

@@ -484,6 +484,7 @@ class Plan:
         fv = self.fmu_verification or {}
         return bool(self.verification.get("within_target")) and (not fv.get("cases") or
                                                                  bool(fv.get("within_target")))
+    estimate: dict = field(default_factory=dict)  # gearfmu.estimate of the scene as written / chosen / full
 
     def max_step_s(self, which: str = "chosen") -> float:
         """Largest internal step (s) of the chosen or the full configuration."""
@@ -540,6 +541,7 @@ class Plan:
             "what_if": _json_clean(self.what_if),
             "cost": self.cost,
             "fmu_verification": _json_clean(self.fmu_verification),
+            "estimate": self.estimate,
             "log": self.log,
         }
 
@@ -709,6 +711,10 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
                 h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log,
                 what_if=what_if)
     plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
+    from .estimate import estimate_build
+
+    plan.estimate = {"scene": estimate_build(scene).to_dict(),
+                     **{w: estimate_build(planned_scene(scene, plan, w)).to_dict() for w in ("chosen", "full")}}
     if measure_fmu:
         _measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
         plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
@@ -1267,6 +1273,11 @@ def format_report(plan: Plan) -> str:
                      ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
         if k in cf and k in cc:
             lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
+    if d.get("estimate"):  # gearfmu.estimate (the model behind the build guard)
+        from .estimate import BuildEstimate
+
+        lines += ["", "estimate before computing (gearfmu.estimate):"]
+        lines += [f"  {w:<7}{BuildEstimate(**e).summary()}" for w, e in d["estimate"].items()]
     fv = d.get("fmu_verification") or {}
     if fv.get("cases"):
         ff, fc = fv["fmus"]["full"], fv["fmus"]["chosen"]

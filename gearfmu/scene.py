@@ -46,7 +46,8 @@ __all__ = [
     "SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions",
     "FmuOptions", "Lubricant", "ThermalOptions", "load_scene", "default_scene_path",
     "dumps_toml", "walther_kinematic_viscosity_cSt", "SCHEMA", "CONTACT_MODELS",
-    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES", "DEFAULT_RUNTIME",
+    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES", "DEFAULT_RUNTIME", "default_output_interval_s",
+    "OUTPUT_SAMPLES_PER_MESH",
 ]
 
 #: contact models a scene may name (the table builder says which are available)
@@ -153,7 +154,9 @@ class FmuOptions:
     ``model_name``: the FMU's model name / identifier (a C identifier);
     ``damping_ratio``: mesh damping ratio zeta (dimensionless, default 0.05,
     see docs/scene.md for why); ``runtime``: 'standalone' (default, all-C) or 'pythonfmu';
-    ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s).
+    ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s);
+    ``output_interval_auto``: True when the scene left ``output_interval_s`` unset (or
+    "auto") and it was resolved by :func:`default_output_interval_s`.
     """
 
     model_name: str
@@ -161,6 +164,7 @@ class FmuOptions:
     runtime: str = DEFAULT_RUNTIME
     stop_time_s: float = 0.05
     output_interval_s: float = 1e-4
+    output_interval_auto: bool = False
 
 
 @dataclass(frozen=True)
@@ -291,6 +295,28 @@ def walther_kinematic_viscosity_cSt(nu40_cSt: float, nu100_cSt: float, temperatu
     b = (y40 - y100) / (math.log10(t100) - math.log10(t40))
     a = y40 + b * math.log10(t40)
     return 10.0 ** (10.0 ** (a - b * math.log10(t))) - 0.7
+
+
+# ============================================================== defaults that depend on the scene
+#: samples per mesh period of a defaulted output (communication) interval
+OUTPUT_SAMPLES_PER_MESH = 20
+
+
+def default_output_interval_s(pinion_speed_rad_s: float, pinion_teeth: int,
+                              samples_per_mesh: int = OUTPUT_SAMPLES_PER_MESH) -> float:
+    """The output (communication) interval, s, used wherever the user gives none.
+
+    At least ``samples_per_mesh`` samples per mesh period 2*pi / (z1 |omega1|) at the
+    pinion speed ``pinion_speed_rad_s`` (rad/s), rounded down to 1, 2 or 5 x 10^n s so
+    that the DefaultExperiment reads well (so 20 to 50 samples per mesh period).  A fixed
+    interval aliases the mesh frequency: 1e-4 s is 6 samples per mesh period at 1667 Hz.
+    A zero speed falls back to the mesh period at 1 rad/s.
+    """
+    w = abs(float(pinion_speed_rad_s)) or 1.0
+    h = 2.0 * math.pi / (int(pinion_teeth) * w) / int(samples_per_mesh)
+    e = math.floor(math.log10(h))
+    m = h / 10.0 ** e
+    return float(max(c for c in (1.0, 2.0, 5.0, 10.0) if c <= m * (1 + 1e-12)) * 10.0 ** e)
 
 
 # ============================================================== schema
@@ -448,8 +474,9 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _f("damping_ratio", "1", 0.05, "mesh damping ratio zeta (tunable FMU parameter)", 0.0, 1.0),
         _e("runtime", RUNTIMES, DEFAULT_RUNTIME, "FMU runtime"),
         _f("stop_time_s", "s", 0.05, "DefaultExperiment stop time", 0.0, 1e6, lo_open=True),
-        _f("output_interval_s", "s", 1e-4, "DefaultExperiment output (communication) interval", 0.0, 1e3,
-           lo_open=True),
+        _f("output_interval_s", "s", _AUTO, "DefaultExperiment output (communication) interval, or \"auto\" "
+           f"(>= {OUTPUT_SAMPLES_PER_MESH} samples per mesh period at the nominal speed)", 0.0, 1e3,
+           lo_open=True, kind="float_or_auto"),
     ),
     "lubricant": (
         Key("name", "str", "-", "oil", "lubricant name"),
@@ -1244,9 +1271,12 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                           slots=tab["slots"])
     solver = SolverOptions(integrator=sol["integrator"], max_step_s=sol["max_step_s"],
                            damping_model=sol["damping_model"])
+    dt_auto = fmu["output_interval_s"] is None
+    dt = (min(default_output_interval_s(operating.speed_rad_s, pair.pinion.teeth), fmu["stop_time_s"])
+          if dt_auto else fmu["output_interval_s"])
     fmu_o = FmuOptions(model_name=fmu["model_name"] or _model_name(name), damping_ratio=fmu["damping_ratio"],
                        runtime=fmu["runtime"], stop_time_s=fmu["stop_time_s"],
-                       output_interval_s=fmu["output_interval_s"])
+                       output_interval_s=dt, output_interval_auto=dt_auto)
     return Scene(name=name, description=sc["description"], text=text, pair=pair, mesh=mesh,
                  operating=operating, tables=tables, solver=solver, fmu=fmu_o, lubricant=lub,
                  source_path=source_path, thermal=thermal, envelope=envelope, accuracy=accuracy)

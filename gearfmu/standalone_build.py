@@ -344,7 +344,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
                          pinion_torque_start_Nm: float = 100.0, gear_torque_start_Nm: Optional[float] = None,
                          max_step_s: float = 1e-5, damping_model: Union[int, str] = 0,
-                         stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
+                         stop_time_s: float = 0.1, output_interval_s: Optional[float] = None,
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
                          integrator: Union[int, str] = 1,
