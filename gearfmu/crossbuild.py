@@ -29,6 +29,8 @@ importer on either Mac loads the same file (:func:`write_fat_macho`).  glibc
 """
 from __future__ import annotations
 
+import functools
+import hashlib
 import importlib.util
 import os
 import shutil
@@ -102,6 +104,12 @@ def zig_command() -> Optional[List[str]]:
 
 
 def zig_version(zig: Sequence[str]) -> str:
+    """``zig <version>`` of the compiler command (asked once per process)."""
+    return _zig_version(tuple(zig))
+
+
+@functools.lru_cache(maxsize=None)
+def _zig_version(zig: Tuple[str, ...]) -> str:
     try:
         return "zig " + subprocess.run([*zig, "version"], capture_output=True, text=True,
                                        timeout=120).stdout.strip()
@@ -109,27 +117,80 @@ def zig_version(zig: Sequence[str]) -> str:
         return "zig (version unknown)"
 
 
+def object_cache_dir() -> Path:
+    """Where compiled object files are kept between builds: ``$GEARFMU_CACHE_DIR/objects``, else
+    ``$XDG_CACHE_HOME/gearfmu/objects``, else ``~/.cache/gearfmu/objects``."""
+    root = os.environ.get("GEARFMU_CACHE_DIR")
+    if root:
+        return Path(root) / "objects"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "gearfmu" / "objects"
+
+
+def _compile_flags(cflags: Sequence[str]) -> List[str]:
+    """The flags of a compile-only step: the link-only ``-shared`` dropped."""
+    return [f for f in cflags if f != "-shared"]
+
+
+def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include: Path, tmp: Path) -> Path:
+    """The object file of ``source`` for target ``key``, compiled once and kept in
+    :func:`object_cache_dir` under a name that hashes everything the object depends on (zig's
+    version, target, flags, the source and every header of ``include``); a later build with the
+    same inputs links the kept object instead of compiling again."""
+    t = TARGETS[key]
+    h = hashlib.sha256()
+    for part in (zig_version(zig), t.zig, " ".join(_compile_flags(cflags)), source.name):
+        h.update(part.encode() + b"\0")
+    h.update(source.read_bytes())
+    for hdr in sorted(Path(include).glob("*.h")):
+        h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
+    cache = object_cache_dir()
+    obj = cache / f"{source.stem}-{key}-{h.hexdigest()[:24]}.o"
+    if obj.is_file():
+        return obj
+    out = tmp / obj.name
+    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", f"-I{include}", "-c", "-o", str(out),
+           str(source)]
+    _run(cmd, key, "compilation", tmp)
+    try:  # atomic publish: a concurrent build sees either no file or the whole object
+        cache.mkdir(parents=True, exist_ok=True)
+        part = cache / (obj.name + f".{os.getpid()}.part")
+        shutil.copyfile(out, part)
+        os.replace(part, obj)
+    except OSError:
+        return out  # an unwritable cache only costs the next build a compilation
+    return obj
+
+
+def _run(cmd: Sequence[str], key: str, what: str, cwd: Path) -> None:
+    try:
+        p = subprocess.run(list(cmd), capture_output=True, text=True, timeout=1800, cwd=cwd)
+    except (OSError, subprocess.SubprocessError) as exc:
+        raise CrossBuildError(f"platform {key}: zig cc cannot run ({exc})") from None
+    if p.returncode != 0:
+        raise CrossBuildError(f"platform {key}: {what} failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
+
+
 def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include: Path,
                 out_lib: Path) -> List[str]:
-    """``zig cc -target <t> <cflags> -g0 -I<include> -o <lib> <sources> -lm`` (macOS: plus
-    ``-Wl,-install_name,@rpath/<lib>``, a link option); return the command.
-    Runs in a scratch folder (the Windows linker writes an import library and a .pdb beside its output)."""
+    """Build ``out_lib`` for target ``key``: each source compiled to an object
+    (:func:`_object`, kept between builds), then linked with ``zig cc -target <t> <cflags> -g0
+    -o <lib> <objects> -lm`` (macOS: plus ``-Wl,-install_name,@rpath/<lib>``, a link option).
+    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include> -o <lib>
+    <sources> -lm`` (what the FMU's build recipe records).  Runs in a scratch folder (the Windows
+    linker writes an import library and a .pdb beside its output)."""
     t = TARGETS[key]
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="gearfmu_zig_") as tmp:
-        tmp_out = Path(tmp) / out_lib.name  # the library's own name (ELF soname, Mach-O id, DLL name)
+        tmp = Path(tmp)
+        tmp_out = tmp / out_lib.name  # the library's own name (ELF soname, Mach-O id, DLL name)
         link = [f"-Wl,-install_name,@rpath/{out_lib.name}"] if key.endswith("-darwin") else []
-        cmd = [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
-               *(str(s) for s in sources), "-lm", *link]
-        try:
-            p = subprocess.run(cmd, capture_output=True, text=True, timeout=1800, cwd=tmp)
-        except (OSError, subprocess.SubprocessError) as exc:
-            raise CrossBuildError(f"platform {key}: zig cc cannot run ({exc})") from None
-        if p.returncode != 0:
-            raise CrossBuildError(f"platform {key}: compilation failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
+        objects = [_object(zig, key, cflags, Path(s), include, tmp) for s in sources]
+        _run([*zig, "cc", "-target", t.zig, *cflags, "-g0", "-o", str(tmp_out), *(str(o) for o in objects),
+              "-lm", *link], key, "link", tmp)
         shutil.copyfile(tmp_out, out_lib)
-    return cmd
+    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
+            *(str(s) for s in sources), "-lm", *link]
 
 
 # ------------------------------------------------------------- Mach-O fat files
