@@ -127,41 +127,6 @@ def _bind(lib):
     return lib
 
 
-def _pin_wrapper_state(resources, cfg):
-    """Work around pythonfmu 0.7.0's exit crash (docs/fmu.md, gearfmu.fmubuild.wrapper_exit_fix):
-    add one reference to the wrapper's static shared_ptr<PyState> so that its
-    two releases at process exit no longer write into freed memory.  Applied
-    at most once per loaded wrapper library, only to the exact wrapper binary
-    the offsets were taken from (checked by SHA-256), only on Linux."""
-    fix = cfg.get("wrapper_exit_fix")
-    if not fix or not hasattr(os, "RTLD_NOLOAD") or os.environ.get("GEARFMU_NO_WRAPPER_FIX"):
-        return "skipped"
-    wrapper = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "linux64",
-                           cfg["model_identifier"] + ".so")
-    if not os.path.isfile(wrapper) or _sha256(wrapper) != fix["binary_sha256"]:
-        return "skipped"
-    import sys
-    pinned = sys.__dict__.setdefault("_gearfmu_pinned_wrappers", set())
-    try:
-        lib = ctypes.CDLL(wrapper, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # holds the library loaded
-    except OSError:
-        return "skipped"
-    base = ctypes.cast(lib.fmi2Instantiate, ctypes.c_void_p).value
-    addr = base + int(fix["pystate_minus_fmi2Instantiate"])
-    if addr in pinned:
-        return "pinned"
-    ctrl = ctypes.c_void_p.from_address(addr + 8).value  # shared_ptr = {T*, control block*}
-    if not ctrl:
-        return "skipped"
-    use = ctypes.c_int.from_address(ctrl + 8)  # _Sp_counted_base: vptr, use count, weak count
-    if use.value < 1:
-        return "skipped"
-    use.value += 1
-    pinned.add(addr)
-    sys.__dict__.setdefault("_gearfmu_pinned_libs", []).append(lib)
-    return "pinned"
-
-
 class GearFmuSlave(Fmi2Slave):
     """Two-inertia spur gear pair (docs/model.md) over the C kernel."""
 
@@ -174,10 +139,6 @@ class GearFmuSlave(Fmi2Slave):
         if res is None:
             raise GearFmuResourceError("resources: the host gave no resource location")
         cfg = _read_config(res)
-        try:  # first, so that even a refused instantiation cannot crash the host at exit
-            self._wrapper_fix = _pin_wrapper_state(res, cfg)
-        except Exception as exc:  # noqa: BLE001 - a workaround must never stop the FMU
-            self._wrapper_fix = f"failed: {exc!r}"
         try:
             meta, arr = _load_resources(res, cfg)
         except GearFmuResourceError as exc:
