@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Build a gear FMU from a scene, run it through fmpy and the native solver, report.
 
-    python build_fmu.py                      # the default scene -> build/<model>.fmu
+    python build_fmu.py                      # the default scene -> build/<model>.fmu (all-C runtime)
     python build_fmu.py SCENE.toml -o OUT.fmu
+    python build_fmu.py --runtime pythonfmu  # the Python runtime over the same C kernel
 
 The report: fmpy validation problems, the largest and RMS difference per
 output between the FMU and the native solver on the same inputs and steps,
@@ -18,6 +19,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scene", nargs="?", help="scene TOML (default: gearfmu's default scene)")
     ap.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
+    ap.add_argument("--runtime", choices=("standalone", "pythonfmu"),
+                    help="FMU runtime (default: the scene's fmu.runtime, standalone unless set)")
     ap.add_argument("--json", action="store_true", help="print the report as JSON")
     args = ap.parse_args(argv)
 
@@ -30,7 +33,7 @@ def main(argv=None) -> int:
             raise ValueError(f"SCENE: file not found: {args.scene}")
         scene = load(args.scene)
         out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
-        res = build(scene, out, progress=not args.json)
+        res = build(scene, out, progress=not args.json, runtime=args.runtime)
     except ValueError as exc:
         print(f"build_fmu: {exc}", file=sys.stderr)
         return 2

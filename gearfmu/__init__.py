@@ -1,4 +1,4 @@
-"""gearfmu: spur gear mesh physics packaged as FMI 2.0 Co-Simulation FMUs.
+"""gearfmu: spur and helical gear mesh physics packaged as FMI 2.0 Co-Simulation FMUs.
 
 Data flows one way: scene -> physics (geometry, stiffness, errors, loaded mesh, contact
 models, EHL) -> tables -> native solver / FMU (README "Architecture").  Layers, top to
@@ -11,6 +11,7 @@ cli                  the ``gearfmu`` command line
 ssp, bench, plots    SSP packages; hard cases and benchmarks; PNG plots
 pipeline             the public entry points: load, compute_tables, build (with plan)
 plan                 fidelity planner ([accuracy])
+plan_verify          the planner's envelope search and verification drives
 stages               the stages wired without the planner
 fmu/                 model description, FMU builders, runtime, C sources
 dynamics/            native solver, reference integrator, sweeps, harmonics

@@ -1,6 +1,6 @@
 """The ``gearfmu`` command line.
 
-    gearfmu build    [SCENE] -o OUT.fmu [--runtime pythonfmu|standalone]  scene -> tables -> FMU
+    gearfmu build    [SCENE] -o OUT.fmu [--runtime standalone|pythonfmu]  scene -> tables -> FMU
     gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
     gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
     gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
@@ -20,6 +20,7 @@ import json
 import sys
 import time
 from pathlib import Path
+import zipfile
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from .pipeline import load, build, compute_tables, simulate_native, gear_torque_
 from .plan import format_report, plan_scene
 from .ssp import parse_variant, ssp_from_scene
 from .tables.table_import import load_tables_file
+from .fmu.crossbuild import parse_platforms
 
 
 class CliError(Exception):
@@ -62,11 +64,45 @@ def cmd_build(args) -> int:
         if not Path(args.tables).exists():
             raise CliError(f"--tables: file not found: {args.tables}")
         tables = load_tables_file(args.tables, args.tables_meta)
-    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables)
+    platforms = None
+    if getattr(args, "platforms", None) is not None:
+        platforms = parse_platforms(args.platforms)
+    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
+                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
+    if res.estimate is not None:
+        print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
+    _print_platforms(res.fmu_path)
+    _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
+
+
+def _print_accuracy(ve) -> None:
+    """One line on the built model's error against full fidelity over the envelope (docs/plan.md)."""
+    if not ve:
+        return
+    if ve.get("error"):
+        print(f"accuracy: no estimate of the error against full fidelity ({ve['error']})")
+        return
+    w = ve.get("worst_at") or {}
+    label = ("ESTIMATE (cheap search) of the scene as written" if ve["kind"] == "as-written estimate"
+             else "fidelity plan, verified")
+    print(f"accuracy, {label} against full fidelity over the envelope: worst DTE {ve['worst_dte_rel']:.3g}, "
+          f"mesh force {ve['worst_mesh_force_rel']:.3g} (rms(diff)/rms(full); max/range "
+          f"{ve['worst_dte_max_rel']:.3g} / {ve['worst_mesh_force_max_rel']:.3g}) at {w.get('case')}, "
+          f"{w.get('torque_Nm', float('nan')):.4g} N*m, {w.get('speed_rpm', float('nan')):.5g} rpm; "
+          f"{'within' if ve['within_target'] else 'ABOVE'} the target {ve['dte_target_rel']:g} / "
+          f"{ve['mesh_force_target_rel']:g}" + ("" if ve["kind"] != "as-written estimate" else
+                                                 " (add [accuracy] to build the planned model instead)"))
+
+
+def _print_platforms(fmu_path) -> None:
+    """The standalone FMU's platform line (documentation/platforms.txt): built and missing binaries."""
+    with zipfile.ZipFile(fmu_path) as z:
+        if "documentation/platforms.txt" in z.namelist():
+            print(z.read("documentation/platforms.txt").decode("utf-8").rstrip())
 
 
 def _print_contact(tables) -> None:
@@ -88,7 +124,7 @@ def cmd_tables(args) -> int:
 
     scene = _scene(args.scene)
     t0 = time.perf_counter()
-    tables = compute_tables(scene, progress=not args.quiet)
+    tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
     out = Path(args.output or f"build/{scene.fmu.model_name}.gtab")
     tables.save(out)
@@ -128,7 +164,7 @@ def cmd_simulate(args) -> int:
     out = Path(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv")
     out.parent.mkdir(parents=True, exist_ok=True)
     if args.backend == "native":
-        tables = compute_tables(scene, progress=not args.quiet)
+        tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -170,9 +206,9 @@ def cmd_validate(args) -> int:
         if not Path(args.fmu).exists():
             raise CliError(f"--fmu: file not found: {args.fmu}")
         fmu_path = Path(args.fmu)
-        tables = compute_tables(scene, progress=False)
+        tables = compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
-        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False)
+        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False, allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
@@ -215,10 +251,19 @@ def cmd_ssp(args) -> int:
 
 def cmd_plan(args) -> int:
     scene = _scene(args.scene)
-    plan = plan_scene(scene, progress=not args.quiet and not args.json, measure_fmu=args.fmu,
-                      fmu_dir=args.output)
+    plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
+                      budget_runs=args.budget_runs, what_if=args.what_if)
     print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
+    if not plan.within_target:  # a refused plan or a failed FMU confirmation is not a success
+        print(f"gearfmu: plan of {scene.name} is not within its accuracy target over the envelope "
+              f"(worst: {plan.verification.get('worst')}); see the report", file=sys.stderr)
+        return 1
     return 0
+
+
+def _allow_large(parser) -> None:
+    parser.add_argument("--allow-large", action="store_true",
+                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
 
 
 def make_parser() -> argparse.ArgumentParser:
@@ -230,9 +275,18 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
     b.add_argument("--runtime", choices=RUNTIMES,
-                   help="FMU runtime (default: the scene's fmu.runtime); standalone = FMI layer in C, no Python")
+                   help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
+                        "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
+    b.add_argument("--platforms", metavar="LIST",
+                   help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
+                        "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
+                        "all that the installed compilers can build; docs/standalone.md 'Platforms')")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")
+    b.add_argument("--no-estimate", action="store_true",
+                   help="skip the estimate of the as-written scene's error against full fidelity (scenes "
+                        "without [accuracy]; docs/plan.md)")
+    _allow_large(b)
     b.set_defaults(func=cmd_build)
 
     be = sub.add_parser("bench", help="benchmarks: `bench accuracy` = speed against error (gearfmu.bench)")
@@ -246,6 +300,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("scene", nargs="?")
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(t)
     t.set_defaults(func=cmd_tables)
 
     s = sub.add_parser("simulate", help="simulate with the native solver or an FMU; CSV and PNG out")
@@ -257,6 +312,7 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("--damping-ratio", type=_positive("--damping-ratio"), help="1")
     s.add_argument("-o", "--output", help="CSV path")
     s.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(s)
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
@@ -265,6 +321,7 @@ def make_parser() -> argparse.ArgumentParser:
     v.add_argument("--stop-time", type=_positive("--stop-time"))
     v.add_argument("--output-interval", type=_positive("--output-interval"))
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    _allow_large(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
@@ -279,7 +336,15 @@ def make_parser() -> argparse.ArgumentParser:
                                      "kept/dropped, cost (docs/plan.md)")
     pl.add_argument("scene", nargs="?")
     pl.add_argument("--json", action="store_true", help="print the report as JSON")
-    pl.add_argument("--fmu", action="store_true", help="also build the chosen and the full FMU to measure their sizes")
+    pl.add_argument("--fmu", action="store_true",
+                    help="also build the planned and the full-fidelity FMU (sizes, build times) and confirm the "
+                         "plan through them with fmpy: steady, run-up, run-down, the search's worst point, "
+                         "warm-up, duty cycle; a case above the target fails the plan (exit 1)")
+    pl.add_argument("--budget-runs", type=int, default=None,
+                    help="native runs the envelope search and its revisions may take (default "
+                         "gearfmu.plan.DEFAULT_BUDGET_RUNS); when spent before a plan passes, the plan is refused")
+    pl.add_argument("--what-if", action="store_true",
+                    help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
     pl.set_defaults(func=cmd_plan)

@@ -8,26 +8,49 @@ from __future__ import annotations
 
 from typing import Optional
 
-from .plan import plan_scene, planned_scene
+from .common.vocabulary import DEFAULT_RUNTIME
+from .plan import PlanError, estimate_as_written, plan_scene, planned_scene
 from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
-                     max_step_for, simulate_native)
+                     max_step_for, platform_kw, simulate_native)
+from .tables.estimate import check_build_cost
 
 __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for",
            "simulate_native"]
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None) -> BuildResult:
-    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "pythonfmu" or
-    "standalone" (FMI layer in C, docs/standalone.md); None: the scene's ``fmu.runtime``.
+          tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False) -> BuildResult:
+    """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
+    docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
     gearfmu.tables.table_import); the scene then only gives the FMU and operating settings.
-    A scene with ``[accuracy]`` (and no ``tables``) is planned first (docs/plan.md) and the
-    planned scene is built; the plan is in the result."""
-    runtime = runtime or getattr(scene.fmu, "runtime", "pythonfmu")
-    fmu_builder(runtime)  # an unknown runtime fails before any planning
+    A scene with ``[accuracy]`` is built as its fidelity plan says (gearfmu.plan; a plan that is
+    not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
+    is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
+    full-fidelity model over the envelope (``BuildResult.verified_envelope``).
+    ``platforms``: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys; None: all available).
+    ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits."""
+    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
+    fmu_builder(runtime)  # an unknown runtime fails before anything is computed
+    platform_kw(runtime, platforms)
+    if tables is None:  # refuse an oversized scene before planning or estimating anything
+        check_build_cost(scene, allow_large=allow_large)
     plan = None
     if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
         plan = plan_scene(scene, progress=progress)
+        if not plan.within_target:
+            v = plan.verification
+            raise PlanError(f"accuracy: the fidelity plan of scene {scene.name!r} is not within its target over "
+                            f"the envelope ({v.get('refused') or 'worst: ' + str(v.get('worst'))}); "
+                            f"see `gearfmu plan`")
+        verified = plan.verified_envelope
         scene = planned_scene(scene, plan)
-    return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan)
+    elif tables is None and estimate_accuracy:
+        try:
+            verified = estimate_as_written(scene, progress=progress)
+        except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing
+            verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
+    else:
+        verified = None
+    return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
+                                verified_envelope=verified, platforms=platforms, allow_large=allow_large)

@@ -10,9 +10,9 @@ into the scene that ``gearfmu build`` builds.
 Choices (``gearfmu.scene.envelope.PLAN_CHOICES``) and their levels, cheapest first,
 the last one being the full-fidelity level:
 
-* ``contact_model`` -- the contact models :mod:`gearfmu.contact.models` offers
-  (when present; ``hertz`` alone otherwise), ordered hertz < smooth_ehl <
-  rough_ehl; lubricated ones only with a ``[lubricant]``.
+* ``contact_model`` -- the scene's own (the full-fidelity reference keeps it); the
+  other models :mod:`gearfmu.contact.models` offers are what-if rows
+  (:func:`_what_if_contact`), measured only on request.
 * ``thermal`` -- seed 004 temperature stiffness on/off (only with an envelope
   temperature range).  Kept, the FMU gets a temperature axis over the range;
   dropped, it gets none (no temperature input).
@@ -28,22 +28,25 @@ the last one being the full-fidelity level:
 * ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.dynamics.native.choose_max_step_s`
   of the full tables at the top envelope speed (full: h0/4).
 
-Error measure (docs/plan.md): for every envelope point (torque low / nominal /
-high x speed low / nominal / high x temperature corners) a native run of
-``run_mesh_periods`` mesh periods from the quasi-static start with balanced
-torques; the relative RMS difference rms(y - y_full)/rms(y_full) of the DTE
-and of the total mesh force, worst over the points.  The TVMS measure is the
-relative RMS difference of the total mesh stiffness over the table period at
-the envelope torques and temperatures; configurations with thermal on are
-built with the table builder's temperature axis and read at each temperature
-with ``MeshTables.at_temperature`` (the FMU kernel's rule).  The budget rule
-(greedy by cost saved per error added, with a verification run of the
-combined choice) is in :func:`plan_scene`.
+Error measure (docs/plan.md "Error measure", :data:`gearfmu.plan_verify.ERROR_DEFINITION`):
+per comparison run (a steady point of ``run_mesh_periods`` mesh periods from the
+quasi-static start, or a segment of a transient) rms(y - y_full)/rms(y_full) of the DTE
+and of the total mesh force; max|y - y_full|/range(y_full) reported beside it.  The
+per-choice estimates use the envelope points (torque low / nominal / high x speed low /
+nominal / high x temperature corners); the TVMS measure is the relative RMS difference
+of the total mesh stiffness over the table period at the envelope torques and
+temperatures (thermal configurations read at each temperature with
+``MeshTables.at_temperature``, the FMU kernel's rule).  The greedy budget rule picks the
+choices; :func:`_verify_and_revise` then searches the envelope for the worst point of the
+COMBINED choice (:class:`gearfmu.plan_verify.Search`), raises the responsible choice
+while a point is above ``safety_factor`` x target, and refuses the plan when the budget of
+native runs is spent first.  ``Plan.verified_envelope`` records what was verified.
 
-Verification through the FMUs (:func:`verify_fmus`, ``gearfmu plan --fmu``):
+Confirmation through the FMUs (:func:`verify_fmus`, ``gearfmu plan --fmu``):
 the planned and the full-fidelity FMU are built and driven with fmpy through
-the same cases -- steady point, run-up over the speed range, warm-up over the
-temperature range, the envelope's duty cycle (:func:`verification_cases`;
+the same cases -- steady point, run-up and run-down over the speed range, the
+search's worst steady point, warm-up over the temperature range, the envelope's
+duty cycle (:func:`verification_cases`;
 speed profiles through the load torque by rigid-body inverse dynamics,
 :func:`drive_case`) -- and the DTE / mesh-force errors and the gains are
 reported per case.
@@ -62,19 +65,22 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from .common.vocabulary import LUBRICATED_CONTACT_MODELS
-from .scene.envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of
+from .scene.envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of, VerifiedEnvelope
 from .contact.models import CONTACT_MODELS, environment_from_scene, get_contact_model
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .gear.geometry import pair_geometry
 from .gear.meshing_errors import pair_table_mesh_count
 from .scene.reader import ThermalOptions
+from .plan_verify import DriveCase, drive_case, ERROR_DEFINITION, Search
 from .stages import build_fmu_from_scene
 from .tables.precompute import precompute_tables, default_slots
+from .tables.estimate import estimate_build, BuildEstimate
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
-           "verify_fmus", "TEMPERATURE_INPUTS"]
+           "verify_fmus", "TEMPERATURE_INPUTS", "estimate_as_written", "verified_envelope_of",
+           "DEFAULT_BUDGET_RUNS"]
 
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
@@ -82,6 +88,7 @@ _PPM_LEVELS = (16, 32, 64, 128, 256)
 _TORQUE_LEVELS = (1, 2, 3, 5, 9)
 _STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
 _THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a scene axis (CHOICE)
+DEFAULT_BUDGET_RUNS = 2000  # native runs the envelope search and its revisions may take (CHOICE, docs/plan.md)
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
 
 
@@ -157,16 +164,10 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
         else:
             ch[name] = Choice(name, list(levels), note=note if len(levels) > 1 else (note or "no alternative"))
 
-    avail = _available_contact_models()
-    # CHOICE: rough_ehl only when the scene describes its roughness ([roughness]) or asks for it: the
-    # planner does not invent a flank surface the scene does not state
-    rough_ok = scene.mesh.contact_model == "rough_ehl" or _scene_roughness(scene) is not None
-    cm = [m for m in CONTACT_ORDER if m in avail and (m not in LUBRICATED_CONTACT_MODELS or scene.lubricant is not None)
-          and (m != "rough_ehl" or rough_ok)]
-    if scene.mesh.contact_model not in cm:
-        cm.append(scene.mesh.contact_model)
-    add("contact_model", cm, scene.mesh.contact_model,
-        "" if len(cm) > 1 else "the table builder offers hertz only")
+    # the full-fidelity reference keeps the scene's own contact model; the others are what-if rows
+    # (_what_if_contact), never a reduction of the scene
+    add("contact_model", [scene.mesh.contact_model], scene.mesh.contact_model,
+        "the scene's own contact model (others: what-if rows)")
     if env.temperature_range_C is not None:
         add("thermal", [False, True], _scene_has_thermal(scene))
     else:  # no temperature variation to plan for: the scene's [thermal] as written
@@ -196,6 +197,28 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,
         "levels are multiples of h0")
     return ch
+
+
+def _what_if_contact(scene) -> List[dict]:
+    """The contact models other than the scene's: each a what-if row with the reason it is
+    skipped (not offered, no ``[lubricant]``, no ``[roughness]``) or None when it can be
+    measured (``plan_scene(..., what_if=True)``)."""
+    avail = _available_contact_models()
+    # CHOICE: rough_ehl only when the scene describes its roughness ([roughness]): the planner does
+    # not invent a flank surface the scene does not state
+    rows = []
+    for m in CONTACT_ORDER:
+        if m == scene.mesh.contact_model:
+            continue
+        why = None
+        if m not in avail:
+            why = "not offered by the table builder"
+        elif m in LUBRICATED_CONTACT_MODELS and scene.lubricant is None:
+            why = "the scene has no [lubricant]"
+        elif m == "rough_ehl" and _scene_roughness(scene) is None:
+            why = "the scene has no [roughness]"
+        rows.append({"contact_model": m, "skipped": why})
+    return rows
 
 
 def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
@@ -248,6 +271,7 @@ class _Evaluator:
         self._tables: Dict[tuple, tuple] = {}
         self._factors: Dict[tuple, object] = {}  # (table key, degC) -> tables at that temperature
         self._runs: Dict[tuple, dict] = {}
+        self.native_runs = 0  # native solver runs made (cached runs not counted)
         self.h0: Optional[float] = None
         self.t0_C = scene.thermal.standard_temperature_C if getattr(scene, "thermal", None) else 30.0
 
@@ -360,6 +384,7 @@ class _Evaluator:
             return self._runs[key]
         T, w, temp = point
         tb = self.tables_at(cfg, temp)
+        self.native_runs += 1
         mesh_s = tb.mesh_period_rad / w
         n = int(self.acc.run_mesh_periods)
         res = simulate(tb, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
@@ -367,6 +392,24 @@ class _Evaluator:
                        damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
                        integrator=cfg["integrator"])
         out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s}
+        self._runs[key] = out
+        return out
+
+    def run_drive(self, cfg: dict, case) -> dict:
+        """Native run of a transient drive (:class:`DriveCase`): dte and mesh_force per
+        communication step (row 0 = the start), cached per configuration and case name."""
+        key = self.table_key(cfg) + (cfg["integrator"], self.step(cfg), "drive", case.name)
+        if key in self._runs:
+            return self._runs[key]
+        tb, _ = self.tables(cfg)
+        temp = case.temperature_C if (tb.has_temperature_axis and case.temperature_C is not None) else None
+        self.native_runs += 1
+        res = simulate(tb, stop_time_s=case.stop_time_s, comm_step_s=case.comm_step_s, max_step_s=self.step(cfg),
+                       pinion_torque_Nm=case.pinion_torque_Nm, gear_torque_Nm=case.gear_torque_Nm,
+                       pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
+                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
+                       integrator=cfg["integrator"], bulk_temperature_C=temp)
+        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": case.stop_time_s}
         self._runs[key] = out
         return out
 
@@ -414,6 +457,16 @@ class Plan:
     cost: dict
     log: List[str] = field(default_factory=list)
     fmu_verification: dict = field(default_factory=dict)  # verify_fmus() when measured (plan --fmu)
+    what_if: List[dict] = field(default_factory=list)  # other contact models: measured or skipped, never "full"
+    verified_envelope: dict = field(default_factory=dict)  # gearfmu.scene.envelope.VerifiedEnvelope.to_dict()
+
+    @property
+    def within_target(self) -> bool:
+        """True only when the envelope search passed and, when it ran, the FMU confirmation too."""
+        fv = self.fmu_verification or {}
+        return bool(self.verification.get("within_target")) and (not fv.get("cases") or
+                                                                 bool(fv.get("within_target")))
+    estimate: dict = field(default_factory=dict)  # gearfmu.tables.estimate of the scene as written / chosen / full
 
     def max_step_s(self, which: str = "chosen") -> float:
         """Largest internal step (s) of the chosen or the full configuration."""
@@ -464,9 +517,13 @@ class Plan:
             "choices": rows,
             "chosen": dict(self.chosen, max_step_s=self.max_step_s("chosen")),
             "full": dict(self.full, max_step_s=self.max_step_s("full")),
-            "verification": {k: jv(v) for k, v in self.verification.items()},
+            "verification": _json_clean(self.verification),
+            "within_target": self.within_target,
+            "verified_envelope": _json_clean(self.verified_envelope),
+            "what_if": _json_clean(self.what_if),
             "cost": self.cost,
             "fmu_verification": _json_clean(self.fmu_verification),
+            "estimate": self.estimate,
             "log": self.log,
         }
 
@@ -485,6 +542,7 @@ def _json_clean(v):
 
 
 def _say(progress: bool, msg: str, log: List[str]) -> None:
+    """Log a step of the plan; with ``progress`` also one line on stderr (also in --json mode)."""
     log.append(msg)
     if progress:
         print(f"gearfmu plan: {msg}", file=sys.stderr, flush=True)
@@ -513,7 +571,8 @@ def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) ->
 
 
 def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
-               fmu_dir: Optional[str] = None, fmu_runtime: Optional[str] = None) -> Plan:
+               fmu_dir: Optional[str] = None, fmu_runtime: Optional[str] = None,
+               budget_runs: Optional[int] = None, what_if: bool = False) -> Plan:
     """Plan the fidelity of a scene (docs/plan.md).
 
     1. Levels of every choice (:func:`_choices`; pinned ones are fixed).
@@ -536,6 +595,9 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
        "standalone", None = the scene's) and driven through the verification
        cases (:func:`verify_fmus`, stored in ``Plan.fmu_verification``).
     """
+    budget_runs = DEFAULT_BUDGET_RUNS if budget_runs is None else int(budget_runs)
+    if budget_runs < 1:
+        raise PlanError(f"budget_runs: must be a positive number of native runs, got {budget_runs}")
     env, acc = envelope_of(scene), accuracy_of(scene)
     if env.temperature_range_C is not None:
         _thermal_options(scene, env)  # the scene's temperature axis must cover the envelope (PlanError)
@@ -547,12 +609,7 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     ev = _Evaluator(scene, env, acc, progress)
     full = {n: c.full for n, c in choices.items()}
     tb_full, _ = ev.tables(full)
-
-    w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
-    if tb_full.has_temperature_axis:  # the smallest automatic step over the axis nodes
-        ev.h0 = min(choose_max_step_s(tb_full.at_temperature(float(t)), w_top) for t in tb_full.temperature_C)
-    else:
-        ev.h0 = choose_max_step_s(tb_full, w_top)
+    ev.h0 = _h0(ev, full, env)
     full = {n: c.full for n, c in choices.items()}
     npts = len(ev.points())
     _say(progress, f"{npts} envelope points, full tables {tb_full.slots} slots x {tb_full.n_phi} angles x "
@@ -573,6 +630,22 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
             m = c.measured[i]
             _say(progress, f"{name} = {lv}: TVMS {m['tvms_rel']:.2e}, DTE {m['dte_rel']:.2e}, "
                            f"force {m['mesh_force_rel']:.2e}", log)
+
+    what_if_rows = _what_if_contact(scene)
+    for r in what_if_rows:
+        if r["skipped"] is None and not what_if:
+            r["skipped"] = (f"not measured: the scene asks for {scene.mesh.contact_model} "
+                            f"(plan_scene(..., what_if=True) measures it; film tables take minutes)")
+        if r["skipped"] is None:
+            try:
+                m = ev.measure(dict(full, contact_model=r["contact_model"]), full)
+                r.update({k: m[k] for k in ("tvms_rel", "dte_rel", "mesh_force_rel", "table_build_s")})
+            except (ValueError, ArithmeticError) as exc:
+                r["skipped"] = f"tables failed: {exc}"
+        _say(progress, f"what-if contact_model = {r['contact_model']}: " +
+             (f"skipped ({r['skipped']})" if r["skipped"] else
+              f"TVMS {r['tvms_rel']:.2e}, DTE {r['dte_rel']:.2e}, force {r['mesh_force_rel']:.2e}"), log)
+    what_if = what_if_rows
 
     # ---------------------------------------------------------- greedy
     level = {n: len(c.levels) - 1 for n, c in choices.items()}
@@ -609,32 +682,23 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
     def cfg_of(lv):
         return {n: choices[n].levels[i] for n, i in lv.items()}
 
-    for _ in range(4 * len(choices)):
-        chosen = cfg_of(level)
-        ver = ev.dynamic_error(chosen, full)
-        ver["tvms_rel"] = ev.tvms_error(chosen, full)
-        ok = ver["dte_rel"] <= acc.dte_rel and ver["mesh_force_rel"] <= acc.mesh_force_rel
-        _say(progress, f"verify: DTE {ver['dte_rel']:.2e}, force {ver['mesh_force_rel']:.2e} "
-                       f"({'within' if ok else 'above'} target)", log)
-        if ok:
-            break
-        worst = max((n for n in choices if level[n] < len(choices[n].levels) - 1), key=lambda n: use[n],
-                    default=None)
-        if worst is None:
-            break
-        level[worst] += 1
-        use[worst] = _budget_use(choices[worst].measured[level[worst]], acc)
-        _say(progress, f"back off {worst} to {choices[worst].levels[level[worst]]}", log)
-    chosen = cfg_of(level)
-    ver["within_target"] = bool(ver["dte_rel"] <= acc.dte_rel and ver["mesh_force_rel"] <= acc.mesh_force_rel)
-    ver["points"] = npts
+    chosen, ver = _verify_and_revise(ev, choices, level, full, acc, budget_runs,
+                                     lambda msg: _say(progress, msg, log), progress)
+    ver["tvms_rel"] = ev.tvms_error(chosen, full)
+    ver["points"] = ver["probes"]
 
     # ---------------------------------------------------------- costs
     cost = {"full": _cost_entry(ev, full), "chosen": _cost_entry(ev, chosen)}
     plan = Plan(scene_name=scene.name, envelope=env, target=acc, choices=choices, full=full, chosen=chosen,
-                h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log)
+                h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log,
+                what_if=what_if)
+    plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
+
+    plan.estimate = {"scene": estimate_build(scene).to_dict(),
+                     **{w: estimate_build(planned_scene(scene, plan, w)).to_dict() for w in ("chosen", "full")}}
     if measure_fmu:
         _measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
+        plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
     g = {}
     for k in ("table_build_s", "table_bytes", "wall_per_sim_s", "fmu_bytes"):
         a, b = cost["full"].get(k), cost["chosen"].get(k)
@@ -642,6 +706,153 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
             g[k] = a / b
     cost["gain_full_over_chosen"] = g
     return plan
+
+
+def _verify_and_revise(ev: _Evaluator, choices: Dict[str, Choice], level: Dict[str, int], full: dict,
+                       acc: AccuracyTarget, budget_runs: int, say, progress: bool = False) -> Tuple[dict, dict]:
+    """Verify the combined configuration of ``level`` over the envelope
+    (:class:`gearfmu.plan_verify.Search`); while the worst point found is above the
+    target, find the responsible choice (each reduced choice restored to full alone at
+    that point: the one whose restoration lowers the error most), raise it to its
+    cheapest level that brings that point within ``safety_factor`` x target (else to
+    full) and verify again.  Stops when a search passes, or refuses when the budget of
+    native runs is spent.  Returns (chosen configuration, verification dict); a refused
+    plan's chosen configuration is the best one reached."""
+    def cfg_of(lv):
+        return {n: choices[n].levels[i] for n, i in lv.items()}
+
+    search = Search(ev, full, say=say, progress=progress)
+    start = ev.native_runs
+    attempts: List[dict] = []
+    best = None
+    refused = None
+    while True:
+        chosen = cfg_of(level)
+        res = search.verify(chosen, budget_runs - (ev.native_runs - start), margin=acc.safety_factor)
+        w = res["worst"]
+        att = {"chosen": dict(chosen), "worst": {k: v for k, v in w.items()},
+               "within_target": res["within_target"], "native_runs": res["native_runs"],
+               "probes": len(res["probes"])}
+        attempts.append(att)
+        say(f"verify ({len(res['probes'])} probes, {res['native_runs']} native runs): worst {w['probe']}: "
+            f"DTE {w['dte_rel']:.2e}, force {w['mesh_force_rel']:.2e} "
+            f"({'within' if res['within_target'] else 'ABOVE'} target)")
+        if not res["exhausted"] and (best is None or w["u"] < best[0]["worst"]["u"]):
+            best = (att, res)
+        if res["within_target"]:
+            break
+        if res["exhausted"]:
+            refused = (f"the budget of {budget_runs} native runs was spent before a configuration passed the "
+                       f"envelope search")
+            break
+        reduced = [n for n in choices if level[n] < len(choices[n].levels) - 1]
+        if not reduced:  # pragma: no cover - the full model against itself has no error
+            refused = "the full-fidelity configuration itself fails the search (planner bug)"
+            break
+        probe = res["worst_probe"]
+        trial = {n: search.evaluate(dict(chosen, **{n: full[n]}), probe)["u"] for n in reduced}
+        resp = min(trial, key=lambda n: trial[n])
+        say("at the worst point, each choice restored to full alone: " +
+            ", ".join(f"{n} -> u {trial[n]:.2f}" for n in reduced) + f"; refining {resp}")
+        new = len(choices[resp].levels) - 1
+        for i in range(level[resp] + 1, len(choices[resp].levels) - 1):
+            if search.evaluate(dict(chosen, **{resp: choices[resp].levels[i]}), probe)["u"] <= acc.safety_factor:
+                new = i
+                break
+        level[resp] = new
+        say(f"revise: {resp} = {choices[resp].levels[new]}")
+    att, res = best if (refused and best is not None) else (attempts[-1], res)
+    w = att["worst"]
+    ver = {"dte_rel": w["dte_rel"], "mesh_force_rel": w["mesh_force_rel"], "dte_max_rel": w["dte_max_rel"],
+           "mesh_force_max_rel": w["mesh_force_max_rel"], "worst": w["probe"], "worst_at": w["where"],
+           "within_target": bool(att["within_target"]) and refused is None, "refused": refused,
+           "native_runs": ev.native_runs - start, "budget_runs": budget_runs, "probes": att["probes"],
+           "attempts": attempts, "error_definition": ERROR_DEFINITION,
+           "probe_errors": [{k: p[k] for k in ("probe", "dte_rel", "mesh_force_rel", "dte_max_rel",
+                                                 "mesh_force_max_rel")} for p in res["probes"]]}
+    return dict(att["chosen"]), ver
+
+
+def verified_envelope_of(plan, kind: str) -> dict:
+    """The verified envelope of a plan as plain data (:class:`gearfmu.scene.envelope.VerifiedEnvelope`
+    as a dict) for an FMU's validation record and model description."""
+    v, env, acc = plan.verification, plan.envelope, plan.target
+    fv = plan.fmu_verification or {}
+    ve = VerifiedEnvelope(
+        kind=kind, torque_range_Nm=tuple(env.torque_range_Nm),
+        speed_range_rpm=tuple(w * 30 / math.pi for w in env.speed_range_rad_s),
+        temperature_range_C=None if env.temperature_range_C is None else tuple(env.temperature_range_C),
+        dte_target_rel=acc.dte_rel, mesh_force_target_rel=acc.mesh_force_rel, error_definition=ERROR_DEFINITION,
+        within_target=bool(v.get("within_target")),
+        worst_dte_rel=float(v["dte_rel"]), worst_mesh_force_rel=float(v["mesh_force_rel"]),
+        worst_dte_max_rel=float(v.get("dte_max_rel", math.nan)),
+        worst_mesh_force_max_rel=float(v.get("mesh_force_max_rel", math.nan)),
+        worst_at=dict(v.get("worst_at") or {}), native_runs=int(v.get("native_runs", 0)),
+        probes=int(v.get("probes", 0)),
+        fmu_confirmed=None if not fv.get("cases") else bool(fv.get("within_target")))
+    return ve.to_dict()
+
+
+ESTIMATE_BUDGET_RUNS = 80      # native runs of the as-written estimate of `gearfmu build` (CHOICE)
+_ESTIMATE_RUN_MESH_PERIODS = 20  # its run length in mesh periods (CHOICE: a cheap estimate)
+
+
+def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = ESTIMATE_BUDGET_RUNS) -> dict:
+    """Cheap estimate of the error of a scene AS WRITTEN against its full-fidelity model
+    (the planner's full levels, the scene's own contact model) over the scene's envelope:
+    one envelope search (:class:`gearfmu.plan_verify.Search`) with runs of
+    ``_ESTIMATE_RUN_MESH_PERIODS`` mesh periods and at most ``budget_runs`` native runs.
+    Returns :class:`gearfmu.scene.envelope.VerifiedEnvelope` as a dict with kind
+    "as-written estimate" and the default (or the scene's) target."""
+    env = envelope_of(scene)
+    acc = replace(accuracy_of(scene), pin=(), run_mesh_periods=min(accuracy_of(scene).run_mesh_periods,
+                                                                      _ESTIMATE_RUN_MESH_PERIODS))
+    log: List[str] = []
+    choices = _choices(scene, env, acc)
+    full = {n: c.full for n, c in choices.items()}
+    ev = _Evaluator(scene, env, acc, progress)
+    ev.h0 = _h0(ev, full, env)
+    written = {"contact_model": scene.mesh.contact_model, "thermal": _scene_has_thermal(scene),
+               "tooth_specific_errors": True, "slices": int(scene.mesh.slices),
+               "points_per_mesh": int(scene.tables.points_per_mesh),
+               "torque_points": int(scene.tables.torque_points) if full["torque_points"] > 1 else 1,
+               "slots": int(scene.tables.slots or _p_min(scene)), "integrator": scene.solver.integrator}
+    if scene.solver.max_step_s is not None:
+        step_s = float(scene.solver.max_step_s)
+    else:
+        tb, _ = ev.tables(dict(written, max_step=1.0))
+        w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
+        step_s = (min(choose_max_step_s(tb.at_temperature(float(t)), w_top) for t in tb.temperature_C)
+                  if tb.has_temperature_axis else choose_max_step_s(tb, w_top))
+    written["max_step"] = step_s / ev.h0
+    _say(progress, f"as-written estimate: the scene as written against its full-fidelity model "
+                   f"(budget {budget_runs} native runs of {acc.run_mesh_periods} mesh periods)", log)
+    res = Search(ev, full, say=lambda m: _say(progress, m, log), progress=progress).verify(written, budget_runs)
+    w = res["worst"]
+    ve = VerifiedEnvelope(
+        kind="as-written estimate", torque_range_Nm=tuple(env.torque_range_Nm),
+        speed_range_rpm=tuple(x * 30 / math.pi for x in env.speed_range_rad_s),
+        temperature_range_C=None if env.temperature_range_C is None else tuple(env.temperature_range_C),
+        dte_target_rel=acc.dte_rel, mesh_force_target_rel=acc.mesh_force_rel, error_definition=ERROR_DEFINITION,
+        within_target=bool(w["dte_rel"] <= acc.dte_rel and w["mesh_force_rel"] <= acc.mesh_force_rel),
+        worst_dte_rel=float(w["dte_rel"]), worst_mesh_force_rel=float(w["mesh_force_rel"]),
+        worst_dte_max_rel=float(w["dte_max_rel"]), worst_mesh_force_max_rel=float(w["mesh_force_max_rel"]),
+        worst_at=dict(w["where"]), native_runs=int(res["native_runs"]), probes=len(res["probes"]))
+    d = ve.to_dict()
+    d["search_complete"] = not res["exhausted"]
+    d["full_fidelity"] = dict(full, max_step_s=full["max_step"] * ev.h0)
+    d["as_written"] = dict(written, max_step_s=step_s)
+    return d
+
+
+def _h0(ev: "_Evaluator", full: dict, env: Envelope) -> float:
+    """h0: :func:`gearfmu.dynamics.native.choose_max_step_s` of the full tables at the top envelope
+    speed (the smallest over a temperature axis's nodes)."""
+    tb_full, _ = ev.tables(full)
+    w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
+    if tb_full.has_temperature_axis:
+        return min(choose_max_step_s(tb_full.at_temperature(float(t)), w_top) for t in tb_full.temperature_C)
+    return choose_max_step_s(tb_full, w_top)
 
 
 def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
@@ -679,60 +890,8 @@ _CASE_MESH_PERIODS = 3      # a case lasts 3 x accuracy.run_mesh_periods mesh pe
 _RUN_UP_LOAD_SHARE = 0.1    # run-up: acceleration torque <= 10 % of the nominal torque (CHOICE)
 
 
-@dataclass(frozen=True)
-class DriveCase:
-    """One verification drive, the same for both FMUs (docs/plan.md "Verification
-    through the FMUs"): communication step ``comm_step_s`` (s); per step the held
-    (zero-order hold) inputs ``pinion_torque_Nm`` and ``gear_torque_Nm`` (N*m) and the
-    bulk temperature ``temperature_C`` (degC, None = the FMU's start value; an FMU
-    without a temperature input gets none); ``pinion_speed_start_rad_s`` (rad/s); and
-    ``speed_profile_rad_s``, the rigid-body pinion speed at the end of each step that the
-    torques were computed for (the drive's target speed)."""
-
-    name: str
-    comm_step_s: float
-    pinion_torque_Nm: np.ndarray
-    gear_torque_Nm: np.ndarray
-    temperature_C: Optional[np.ndarray]
-    pinion_speed_start_rad_s: float
-    speed_profile_rad_s: np.ndarray
-    note: str = ""
-
-    @property
-    def stop_time_s(self) -> float:
-        return self.comm_step_s * len(self.pinion_torque_Nm)
-
-
-def drive_case(name: str, tables, *, stop_time_s: float, comm_step_s: float, torque_Nm, speed_rad_s,
-               temperature_C=None, note: str = "") -> DriveCase:
-    """A drive that makes the pinion follow a speed profile under a pinion torque profile.
-
-    ``torque_Nm(t)``, ``speed_rad_s(t)``, ``temperature_C(t)`` (or None): callables of
-    time arrays (s).  The communication step is shortened so that a whole number of
-    steps fills ``stop_time_s``.  Per step [t_i, t_i+1] the pinion torque and the
-    temperature are their values at the step's midpoint, and the gear (load) torque is
-    the rigid-body inverse dynamics of the pinion-referred pair,
-    T2 = (T1 - I_red * a) * Rb2 / Rb1 with I_red = I1 + I2 (Rb1/Rb2)^2 and
-    a = (w(t_i+1) - w(t_i)) / H (seed 003's two-inertia model with a rigid mesh), so a
-    rigid pair under these held torques reaches w(t_i+1) exactly at every step end.
-    """
-    n = max(int(math.ceil(stop_time_s / comm_step_s - 1e-9)), 1)
-    h = stop_time_s / n
-    t = np.arange(n + 1) * h
-    tm = t[:-1] + 0.5 * h
-    w = np.asarray(speed_rad_s(t), dtype=float)
-    T1 = np.asarray(torque_Nm(tm), dtype=float) * np.ones(n)
-    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
-    i_red = float(tables.inertia_pinion_kgm2) + float(tables.inertia_gear_kgm2) * (rb1 / rb2) ** 2
-    acc = np.diff(w) / h
-    T2 = (T1 - i_red * acc) * rb2 / rb1
-    temp = None if temperature_C is None else np.asarray(temperature_C(tm), dtype=float) * np.ones(n)
-    return DriveCase(name=name, comm_step_s=h, pinion_torque_Nm=T1, gear_torque_Nm=T2, temperature_C=temp,
-                     pinion_speed_start_rad_s=float(w[0]), speed_profile_rad_s=w[1:], note=note)
-
-
 def verification_cases(scene, plan: Plan, tables) -> List[DriveCase]:
-    """The verification drives of a plan's envelope (docs/plan.md "Verification through
+    """The confirmation drives of a plan's envelope (docs/plan.md "Confirmation through
     the FMUs"); ``tables``: the full tables (inertias, base radii, mesh period).
 
     * ``steady``: nominal torque and speed, balanced load, middle of the temperature range;
@@ -776,6 +935,18 @@ def verification_cases(scene, plan: Plan, tables) -> List[DriveCase]:
                                 speed_rad_s=lambda t: w0 + (w1 - w0) * np.asarray(t) / t_run,
                                 temperature_C=const(t_mid),
                                 note=f"{w0 * 30 / math.pi:.6g} -> {w1 * 30 / math.pi:.6g} rpm in {t_run:.3g} s"))
+        cases.append(drive_case("run_down", tables, stop_time_s=t_run, comm_step_s=comm(w1), torque_Nm=const(T_nom),
+                                speed_rad_s=lambda t: w1 - (w1 - w0) * np.asarray(t) / t_run,
+                                temperature_C=const(t_mid),
+                                note=f"{w1 * 30 / math.pi:.6g} -> {w0 * 30 / math.pi:.6g} rpm in {t_run:.3g} s"))
+    wa = (plan.verification or {}).get("worst_at") or {}
+    if wa.get("case") == "steady":  # the envelope search's worst steady point, confirmed through the FMUs
+        w_w = wa["speed_rpm"] * math.pi / 30
+        cases.append(drive_case("worst_point", tables, stop_time_s=n_mesh * mesh_rad / w_w, comm_step_s=comm(w_w),
+                                torque_Nm=const(wa["torque_Nm"]), speed_rad_s=const(w_w),
+                                temperature_C=const(wa.get("temperature_C")),
+                                note=f"search's worst: {wa['torque_Nm']:.5g} N*m, {wa['speed_rpm']:.5g} rpm" +
+                                ("" if wa.get("temperature_C") is None else f", {wa['temperature_C']:.4g} degC")))
     if temp_rng is not None and temp_rng[1] > temp_rng[0]:
         lo, hi = temp_rng
         t_run = n_mesh * mesh_rad / w_nom
@@ -969,7 +1140,7 @@ def format_report(plan: Plan) -> str:
              f"envelope: torque {d['envelope']['torque_range_Nm']} N*m, speed "
              f"[{d['envelope']['speed_range_rpm'][0]:.6g}, {d['envelope']['speed_range_rpm'][1]:.6g}] rpm, "
              f"temperature {d['envelope']['temperature_range_C']} degC; "
-             f"{d['verification']['points']} envelope points", ""]
+             f"{d['verification']['points']} search probes", ""]
     lines.append(f"{'choice':<22}{'full':>12}{'chosen':>12}{'status':>9}{'TVMS':>10}{'DTE':>10}{'force':>10}")
     for r in d["choices"]:
         c = r["contribution"]
@@ -978,16 +1149,44 @@ def format_report(plan: Plan) -> str:
             full, chosen = f"{d['full']['max_step_s']:.2g}s", f"{d['chosen']['max_step_s']:.2g}s"
         lines.append(f"{r['choice']:<22}{_fmt(full):>12}{_fmt(chosen):>12}{r['status']:>9}"
                      f"{_fmt(c['tvms_rel']):>10}{_fmt(c['dte_rel']):>10}{_fmt(c['mesh_force_rel']):>10}")
+    for r in d.get("what_if") or []:
+        lines.append(f"{'what-if contact_model':<22}{r['contact_model']:>12}  " +
+                     (f"skipped: {r['skipped']}" if r.get("skipped") else
+                      f"TVMS {_fmt(r['tvms_rel'])}, DTE {_fmt(r['dte_rel'])}, force {_fmt(r['mesh_force_rel'])}"))
     v = d["verification"]
-    lines += ["", f"chosen model against the full one: DTE {_fmt(v['dte_rel'])}, mesh force "
-                  f"{_fmt(v['mesh_force_rel'])}, TVMS {_fmt(v['tvms_rel'])} -> "
-                  f"{'within' if v['within_target'] else 'ABOVE'} target", ""]
+    wa = v.get("worst_at") or {}
+    lines += ["", f"envelope search of the combined chosen model against the full one ({v.get('probes')} probes, "
+                  f"{v.get('native_runs')} native runs of a budget of {v.get('budget_runs')}, "
+                  f"{len(v.get('attempts') or [])} configuration(s) tried):",
+              f"  worst: {v.get('worst')}: DTE {_fmt(v['dte_rel'])} (max/range {_fmt(v.get('dte_max_rel'))}), "
+              f"mesh force {_fmt(v['mesh_force_rel'])} (max/range {_fmt(v.get('mesh_force_max_rel'))})"
+              + (f" at t {_fmt(wa['time_s'][0])}..{_fmt(wa['time_s'][1])} s, {_fmt(wa.get('speed_rpm'))} rpm"
+                 if wa.get("time_s") else ""),
+              f"  error = rms(diff)/rms(full) of DTE and mesh force per run (docs/plan.md 'Error measure'); "
+              f"TVMS {_fmt(v.get('tvms_rel'))}"]
+    fv0 = d.get("fmu_verification") or {}
+    fmu_bad = bool(fv0.get("cases")) and not fv0.get("within_target")
+    if d["within_target"]:
+        lines.append(f"  -> within target over the envelope (a plan passes when the worst found is <= "
+                     f"{t['safety_factor']:g} x target)" +
+                     (" (FMU confirmation within target too)" if fv0.get("cases") else ""))
+    elif v.get("refused"):
+        lines.append(f"  -> NOT within target: plan refused ({v['refused']}); shown: the best configuration reached")
+    elif fmu_bad:
+        lines.append("  -> NOT within target: the FMU confirmation has a case ABOVE the target (table below)")
+    else:
+        lines.append("  -> NOT within target")
+    lines.append("")
     lines.append(f"{'cost':<26}{'full':>14}{'chosen':>14}{'full/chosen':>13}")
     cf, cc, g = d["cost"]["full"], d["cost"]["chosen"], d["cost"]["gain_full_over_chosen"]
     for k, label in (("table_build_s", "table build time (s)"), ("table_bytes", "table size (bytes)"),
                      ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
         if k in cf and k in cc:
             lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
+    if d.get("estimate"):  # gearfmu.tables.estimate (the model behind the build guard)
+
+        lines += ["", "estimate before computing (gearfmu.tables.estimate):"]
+        lines += [f"  {w:<7}{BuildEstimate(**e).summary()}" for w, e in d["estimate"].items()]
     fv = d.get("fmu_verification") or {}
     if fv.get("cases"):
         ff, fc = fv["fmus"]["full"], fv["fmus"]["chosen"]

@@ -7,18 +7,23 @@ variant), further ``.ssd`` files (other variants, SSP 1.0 section 3), and
 5 and 6).  :func:`build_ssp` writes
 
 ```
-SystemStructure.ssd            variant = the first parameter set (e.g. nominal)
-<variant>.ssd                  one per further parameter set, same system, its own binding
+SystemStructure.ssd            the system with the first parameter set (e.g. nominal)
+<variant>.ssd                  the same system with the variant's parameter set
+<variant>_closed.ssd           the component alone with the variant's values (no system connectors)
 resources/<model>.fmu          the gear FMU
-resources/<variant>.ssv        one ParameterSet per variant
+resources/<variant>.ssv        one ParameterSet per variant, names gear.<variable>
 ```
 
-The system holds one component (the gear FMU) with every FMU variable as a
-connector (inputs, outputs, parameters; SI units from
-``modeldescription/variables.toml``) and one ``ParameterBinding`` to its
-variant's ``.ssv``.  Every XML file is checked against the SSP 1.0 XSD shipped
-with pyssp-standard before the archive is written; a package that fails the
-check is never written.
+The system ``drivetrain`` holds one component ``gear`` (the FMU, every input,
+output and parameter as a connector; SI units from the FMU's UnitDefinitions)
+and exposes every FMU input and output as a system connector of the same full
+name, wired to the component; the system's inputs get start values by an
+inline binding and the variant's ``.ssv`` is bound at the system level.  Why
+one .ssd per variant, the qualified names and the closed files (masters that
+cannot connect system connectors): docs/robustness.md "SSP packages".  Every
+XML file is checked against the SSP 1.0 XSD shipped with pyssp-standard
+before the archive is written; a package that fails the check is never
+written.
 
 Variants are named sets of parameter values of the FMU (for example two
 damping ratios).  Choices (docs/robustness.md "SSP"): with no explicit
@@ -56,6 +61,11 @@ for _p, _u in NS.items():
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
 
 
+#: names of the system and of its one component (the gear FMU) in every .ssd
+SYSTEM, COMPONENT = "drivetrain", "gear"
+#: file-name suffix of the closed system of a variant (``<variant>_closed.ssd``)
+CLOSED = "_closed"
+
 #: inputs a variant may set (their start value), besides parameters
 VARIANT_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
@@ -90,9 +100,10 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
     params.update({v.name: v for v in md.modelVariables if v.causality == "input" and v.name in VARIANT_INPUTS})
     out = {}
     for name, values in variants.items():
-        if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure":
+        if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure" \
+                or name.endswith(CLOSED):
             raise SspError(f"variants: name {name!r} must be a letter then letters, digits or _ (max 64), "
-                           f"and not 'SystemStructure'")
+                           f"not 'SystemStructure' and not ending in {CLOSED!r}")
         if not values:
             raise SspError(f"variants.{name}: no parameter values")
         checked = {}
@@ -112,47 +123,98 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
     return out
 
 
-def _ssv_xml(name: str, values: Mapping[str, float], md) -> bytes:
-    vtype = {v.name: v.type for v in md.modelVariables}
-    vunit = {v.name: v.unit for v in md.modelVariables}
-    root = ET.Element(_q("ssv", "ParameterSet"), {"version": "1.0", "name": name})
+def _value_element(parent, prefix: str, var, x) -> None:
+    """``<prefix:Real value unit>`` / ``<prefix:Integer value>`` of a parameter value."""
+    if var.type == "Integer":
+        ET.SubElement(parent, _q(prefix, "Integer"), {"value": str(int(x))})
+    else:
+        attrs = {"value": repr(float(x))}
+        if var.unit:
+            attrs["unit"] = var.unit
+        ET.SubElement(parent, _q(prefix, "Real"), attrs)
+
+
+def _parameter_set(parent, name: str, values: Mapping[str, float], md, prefix: str = "") -> ET.Element:
+    """``ssv:ParameterSet`` under ``parent`` (None: a root element); parameter names ``prefix + name``."""
+    attrs = {"version": "1.0", "name": name}
+    root = ET.Element(_q("ssv", "ParameterSet"), attrs) if parent is None else \
+        ET.SubElement(parent, _q("ssv", "ParameterSet"), attrs)
     params = ET.SubElement(root, _q("ssv", "Parameters"))
+    var = {v.name: v for v in md.modelVariables}
     for p, x in values.items():
-        pe = ET.SubElement(params, _q("ssv", "Parameter"), {"name": p})
-        if vtype[p] == "Integer":
-            ET.SubElement(pe, _q("ssv", "Integer"), {"value": str(int(x))})
-        else:
-            attrs = {"value": repr(float(x))}
-            if vunit.get(p):
-                attrs["unit"] = vunit[p]
-            ET.SubElement(pe, _q("ssv", "Real"), attrs)
+        _value_element(ET.SubElement(params, _q("ssv", "Parameter"), {"name": prefix + p}), "ssv", var[p], x)
+    return root
+
+
+def _ssv_xml(name: str, values: Mapping[str, float], md) -> bytes:
+    """The variant's .ssv: names are the system-level hierarchical names ``gear.<variable>``
+    (SSP 1.0 ParameterBinding: element name, a dot, the variable name), so that the set
+    reaches the component from the system of any of the package's .ssd files."""
+    root = _parameter_set(None, name, values, md, prefix=COMPONENT + ".")
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)
 
 
-def _ssd_xml(system_name: str, fmu_rel: str, ssv_rel: str, md, units, stop_time_s: float,
-             description: str) -> bytes:
+def _connector(parent, var, kind: str, used_units: set) -> None:
+    c = ET.SubElement(parent, _q("ssd", "Connector"), {"name": var.name, "kind": kind})
+    if var.type == "Integer":
+        ET.SubElement(c, _q("ssc", "Integer"))
+    else:
+        ET.SubElement(c, _q("ssc", "Real"), {"unit": var.unit} if var.unit else {})
+        if var.unit:
+            used_units.add(var.unit)
+
+
+def _inline_binding(parent, name: str, values: Mapping[str, float], md) -> None:
+    b = ET.SubElement(parent, _q("ssd", "ParameterBinding"))
+    _parameter_set(ET.SubElement(b, _q("ssd", "ParameterValues")), name, values, md)
+
+
+def _ssd_xml(ssd_name: str, variant: str, values: Mapping[str, float], fmu_rel: str, ssv_rel: str, md, units,
+             stop_time_s: float, description: str, *, closed: bool) -> bytes:
+    """One .ssd of the package.
+
+    Open (``closed=False``): the system ``drivetrain`` has one connector per FMU
+    input and output (same full name, type and unit), each wired to the
+    component's connector of that name; the system's inputs get start values
+    (the FMU's, or the variant's for a variant input) by an inline binding,
+    and the variant's .ssv is bound at the system level (names ``gear.<v>``).
+    Closed: no system connectors (the FMU's inputs keep their start values),
+    the variant's values bound inline on the component with the FMU's names
+    -- for masters that cannot connect system connectors (docs/robustness.md).
+    """
     root = ET.Element(_q("ssd", "SystemStructureDescription"),
-                      {"version": "1.0", "name": system_name, "generationTool": "gearfmu",
+                      {"version": "1.0", "name": ssd_name, "generationTool": "gearfmu",
                        "description": description})
-    system = ET.SubElement(root, _q("ssd", "System"), {"name": "drivetrain"})
+    system = ET.SubElement(root, _q("ssd", "System"), {"name": SYSTEM})
+    used_units: set = set()
+    io = [v for v in md.modelVariables if v.causality in ("input", "output")]
+    if not closed:
+        sconns = ET.SubElement(system, _q("ssd", "Connectors"))
+        for v in io:
+            _connector(sconns, v, v.causality, used_units)
+        binds = ET.SubElement(system, _q("ssd", "ParameterBindings"))
+        starts = {v.name: values.get(v.name, float(v.start) if v.type != "Integer" else int(v.start))
+                  for v in io if v.causality == "input" and v.start is not None}
+        if starts:
+            _inline_binding(binds, f"{variant}_inputs", starts, md)
+        ET.SubElement(binds, _q("ssd", "ParameterBinding"), {"source": ssv_rel})
     elements = ET.SubElement(system, _q("ssd", "Elements"))
     comp = ET.SubElement(elements, _q("ssd", "Component"),
-                         {"name": "gear", "type": "application/x-fmu-sharedlibrary", "source": fmu_rel})
+                         {"name": COMPONENT, "type": "application/x-fmu-sharedlibrary", "source": fmu_rel})
     conns = ET.SubElement(comp, _q("ssd", "Connectors"))
-    used_units = set()
     for v in md.modelVariables:
-        kind = {"input": "input", "output": "output", "parameter": "parameter"}.get(v.causality)
-        if kind is None:
-            continue
-        c = ET.SubElement(conns, _q("ssd", "Connector"), {"name": v.name, "kind": kind})
-        if v.type == "Integer":
-            ET.SubElement(c, _q("ssc", "Integer"))
-        else:
-            ET.SubElement(c, _q("ssc", "Real"), {"unit": v.unit} if v.unit else {})
-            if v.unit:
-                used_units.add(v.unit)
-    binds = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
-    ET.SubElement(binds, _q("ssd", "ParameterBinding"), {"source": ssv_rel})
+        if v.causality in ("input", "output", "parameter"):
+            _connector(conns, v, v.causality, used_units)
+    if closed:
+        _inline_binding(ET.SubElement(comp, _q("ssd", "ParameterBindings")), variant, values, md)
+    else:
+        wires = ET.SubElement(system, _q("ssd", "Connections"))
+        for v in io:
+            if v.causality == "input":
+                attrs = {"startConnector": v.name, "endElement": COMPONENT, "endConnector": v.name}
+            else:
+                attrs = {"startElement": COMPONENT, "startConnector": v.name, "endConnector": v.name}
+            ET.SubElement(wires, _q("ssd", "Connection"), attrs)
     if used_units:
         ue = ET.SubElement(root, _q("ssd", "Units"))
         for u in sorted(used_units):
@@ -207,10 +269,14 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
             (stage / ssv_rel).write_bytes(_ssv_xml(name, values, md))
             desc = (f"gear pair {md.modelName}, parameter set {name!r}: "
                     + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
-            ssd = _ssd_xml(f"{system_name}_{name}", fmu_rel, ssv_rel, md, units, stop_time_s, desc)
+            ssd = _ssd_xml(f"{system_name}_{name}", name, values, fmu_rel, ssv_rel, md, units, stop_time_s, desc,
+                           closed=False)
             (stage / f"{name}.ssd").write_bytes(ssd)
             if i == 0:
                 (stage / "SystemStructure.ssd").write_bytes(ssd)
+            closed = _ssd_xml(f"{system_name}_{name}{CLOSED}", name, values, fmu_rel, ssv_rel, md, units,
+                              stop_time_s, desc + " (closed system: no system connectors)", closed=True)
+            (stage / f"{name}{CLOSED}.ssd").write_bytes(closed)
         validate_ssp_dir(stage)
         out_path.parent.mkdir(parents=True, exist_ok=True)
         part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
@@ -263,13 +329,15 @@ def parse_variant(text: str):
 
 
 def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[str, float]]] = None,
-                   progress: bool = False) -> Path:
-    """Scene -> tables -> FMU -> SSP archive at ``out_path``."""
+                   progress: bool = False, tables=None) -> Path:
+    """Scene -> tables -> FMU -> SSP archive at ``out_path``.  The FMU's runtime is the
+    scene's ``fmu.runtime``; ``tables``: MeshTables to use instead of the scene's physics
+    (as :func:`gearfmu.pipeline.build`)."""
     out_path = Path(out_path)
     if out_path.suffix != ".ssp":
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
-        res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress)
+        res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress, tables=tables)
         trange = getattr(res.tables, "temperature_range_C", None)
         tin = getattr(res.tables, "temperature_input", None) or "bulk_temperature"
         return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),

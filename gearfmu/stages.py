@@ -15,12 +15,13 @@ from typing import Optional
 import numpy as np
 
 from . import __version__
-from .common.vocabulary import RUNTIMES
+from .common.vocabulary import DEFAULT_RUNTIME, RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .scene.reader import default_scene_path, load_scene
+from .tables.estimate import check_build_cost, estimate_build
 from .tables.precompute import precompute_tables
 
 
@@ -35,8 +36,12 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 
-def compute_tables(scene, *, progress: bool = False):
-    """Precompute the tooth-pair tables of a scene (timed)."""
+def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
+    """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
+    :class:`gearfmu.tables.estimate.BuildTooLargeError` naming the scene keys when the estimated
+    tables, FMU or build time exceed the limits of :mod:`gearfmu.tables.estimate`, unless
+    ``allow_large``."""
+    check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
         "scene_name": scene.name,
@@ -87,11 +92,15 @@ class BuildResult:
     build_wall_s: float
     max_step_s: float
     plan: object = None  # gearfmu.plan.Plan when the scene's [accuracy] made build follow a plan
+    #: gearfmu.scene.envelope.VerifiedEnvelope as a dict: the plan's verified envelope, or the as-written
+    #: estimate (estimate_accuracy=True, no [accuracy]); None otherwise (docs/plan.md "Verified envelope")
+    verified_envelope: Optional[dict] = None
+    estimate: object = None  # gearfmu.tables.estimate.BuildEstimate of the scene that was built
 
 
 def fmu_builder(runtime: str):
-    """The FMU builder of a runtime: "pythonfmu" or "standalone" (FMI layer in C,
-    docs/standalone.md); both take the same arguments."""
+    """The FMU builder of a runtime: "standalone" (FMI layer in C, docs/standalone.md) or
+    "pythonfmu"; both take the same arguments."""
     if runtime == "standalone":
         return build_standalone_fmu
     if runtime != "pythonfmu":
@@ -99,18 +108,34 @@ def fmu_builder(runtime: str):
     return build_fmu
 
 
+def platform_kw(runtime: str, platforms) -> dict:
+    """``platforms`` for the builder: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys;
+    None: all available)."""
+    if platforms is None:
+        return {}
+    if runtime != "standalone":
+        raise ValueError("--platforms: only the standalone runtime builds binaries for other platforms "
+                         "(use --runtime standalone)")
+    return {"platforms": tuple(platforms)}
+
+
 def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-                         tables=None, plan=None) -> BuildResult:
+                         tables=None, plan=None, verified_envelope: Optional[dict] = None, platforms=None,
+                         allow_large: bool = False) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
-    :func:`gearfmu.pipeline.build`).  ``runtime``: "pythonfmu" or "standalone";
-    None: the scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the
-    scene's physics (e.g. imported from CSV, gearfmu.tables.table_import); the scene then
-    only gives the FMU and operating settings.  ``plan``: the plan the scene came from,
-    kept in the result."""
-    builder = fmu_builder(runtime or getattr(scene.fmu, "runtime", "pythonfmu"))
+    :func:`gearfmu.pipeline.build`).  ``runtime``: "standalone" or "pythonfmu"; None: the
+    scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the scene's physics
+    (e.g. imported from CSV, gearfmu.tables.table_import); the scene then only gives the FMU
+    and operating settings.  ``plan``, ``verified_envelope``: kept in the result.
+    ``platforms``: binaries of a standalone FMU.  ``allow_large``: build even when the
+    estimate (gearfmu.tables.estimate) exceeds the limits."""
+    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
+    builder = fmu_builder(runtime)
+    extra = platform_kw(runtime, platforms)
+    est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:
-        tables = compute_tables(scene, progress=progress)
+        tables = compute_tables(scene, progress=progress, allow_large=allow_large)
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
@@ -126,10 +151,10 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
-        **_integrator_kw(builder, scene),
+        **_integrator_kw(builder, scene), **extra,
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified_envelope, est)
 
 
 def _integrator_kw(builder, scene) -> dict:

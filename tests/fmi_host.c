@@ -13,8 +13,34 @@
  * of the run, serializes and de-serializes it, runs to the end, restores it,
  * runs the second half again and prints "state-check ok" if both halves agree
  * bit for bit.  Exit code 0 only if every FMI call returned fmi2OK.
+ *
+ * The binary loaded is binaries/<platform>/<id>.<ext> for the platform this
+ * host is compiled for: linux64 (x86_64 Linux), aarch64-linux, win64 (.dll,
+ * LoadLibrary; <unzipped FMU dir> is a Windows path, e.g. Z:/tmp/fmu under
+ * Wine), darwin64 (.dylib).
  */
+#ifdef _WIN32
+#define __USE_MINGW_ANSI_STDIO 1 /* correctly rounded %.17g with any C runtime */
+#include <windows.h>
+#define FMU_BIN "win64"
+#define FMU_EXT ".dll"
+typedef HMODULE lib_t;
+#define LIB_SYM(lib, name) ((void *)GetProcAddress((lib), (name)))
+#else
 #include <dlfcn.h>
+#if defined(__APPLE__)
+#define FMU_BIN "darwin64"
+#define FMU_EXT ".dylib"
+#elif defined(__aarch64__)
+#define FMU_BIN "aarch64-linux"
+#define FMU_EXT ".so"
+#else
+#define FMU_BIN "linux64"
+#define FMU_EXT ".so"
+#endif
+typedef void *lib_t;
+#define LIB_SYM(lib, name) dlsym((lib), (name))
+#endif
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,7 +61,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 }
 
 #define LOAD(T, name)                                                         \
-    T name = (T)dlsym(lib, #name);                                            \
+    T name = (T)LIB_SYM(lib, #name);                                            \
     if (name == NULL) {                                                       \
         fprintf(stderr, "missing symbol %s\n", #name);                        \
         return 2;                                                             \
@@ -53,7 +79,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 int main(int argc, char **argv)
 {
     char path[4096], uri[4200];
-    void *lib;
+    lib_t lib;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c;
     fmi2ValueReference outs[256];
@@ -65,19 +91,36 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: %s dir id guid stop step vrs [--state-check] [vr=value ...]\n", argv[0]);
         return 1;
     }
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", argv[1], argv[2]);
+    snprintf(path, sizeof path, "%s/binaries/" FMU_BIN "/%s" FMU_EXT, argv[1], argv[2]);
+#ifdef _WIN32
+    /* file:///C:/dir/resources (RFC 8089); LoadLibrary gets backslashes */
+    snprintf(uri, sizeof uri, "file:///%s/resources", argv[1]);
+    for (p = uri; *p != '\0'; ++p)
+        if (*p == '\\') *p = '/';
+    for (p = path; *p != '\0'; ++p)
+        if (*p == '/') *p = '\\';
+#else
     snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
+#endif
     stop = atof(argv[4]);
     step = atof(argv[5]);
     for (p = argv[6]; *p != '\0' && nout < 256;) {
         outs[nout++] = (fmi2ValueReference)strtoul(p, &p, 10);
         if (*p == ',') p++;
     }
+#ifdef _WIN32
+    lib = LoadLibraryA(path);
+    if (lib == NULL) {
+        fprintf(stderr, "LoadLibrary %s: error %lu\n", path, (unsigned long)GetLastError());
+        return 2;
+    }
+#else
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (lib == NULL) {
         fprintf(stderr, "dlopen: %s\n", dlerror());
         return 2;
     }
+#endif
     {
         LOAD(fmi2InstantiateTYPE *, fmi2Instantiate)
         LOAD(fmi2FreeInstanceTYPE *, fmi2FreeInstance)
@@ -162,6 +205,10 @@ int main(int argc, char **argv)
     }
     if (state_check) printf("state-check ok\n");
     free(rows);
+#ifdef _WIN32
+    FreeLibrary(lib);
+#else
     dlclose(lib);
+#endif
     return 0;
 }

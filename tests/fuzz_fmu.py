@@ -13,12 +13,21 @@ the fuzzer.  Every call that returns a status other than fmi2OK/fmi2Warning
 must have logged at least one message during that call (its reason);
 ``unlogged_refusals`` counts those that did not.
 
+The standalone (all-C) runtime is fuzzed by a C host, tests/fmi_fuzz.c,
+which runs thousands of sequences per process (no Python per call): random
+orders of every fmi2 function of Co-Simulation, the same kinds of values, NULL
+arrays, truncated and corrupted serialized states.  It counts, besides crashes
+and unlogged refusals, the calls the FMU refused as an illegal call sequence
+(its state table) and the sequences that broke the order at least once.
+
 Usage::
 
     python tests/fuzz_fmu.py --sequences 10000 --json [--batch 50] [--seed 0] [--jobs 2]
+    python tests/fuzz_fmu.py --runtime standalone --sequences 10000 --json [--batch 2500]
 
 prints ``{"sequences", "host_crashes", "fmi_errors", "fmi_fatal", ...}``.
-Importable: :func:`run_fuzz` (used by tests/test_fuzz.py), :func:`build_fuzz_fmu`.
+Importable: :func:`run_fuzz` and :func:`run_c_fuzz` (used by tests/test_fuzz.py),
+:func:`build_fuzz_fmu`.
 A sequence is reproducible from its seed: ``--first-seed S --sequences 1``.
 """
 from __future__ import annotations
@@ -43,13 +52,21 @@ NASTY_REALS = [float("nan"), float("inf"), -float("inf"), 1e308, -1e308, 1e-308,
 NASTY_STEPS = [0.0, -1e-4, float("nan"), float("inf"), -float("inf"), 1e6, 1e-300, 5e-324, 1e308]
 
 
-def build_fuzz_fmu(directory) -> Path:
+def build_fuzz_fmu(directory, runtime: str = "pythonfmu") -> Path:
     """A small FMU for fuzzing: synthetic rectangular-wave tables (P = 2),
-    torque axis [50, 150] N.m, max_step 1e-5 s."""
+    torque axis [50, 150] N.m, max_step 1e-5 s; ``runtime`` "pythonfmu" or "standalone"."""
     import numpy as np
 
-    from gearfmu.fmu.pythonfmu_build import build_fmu
     from gearfmu.tables.synthetic import rectangular_wave_tables
+
+    if runtime == "standalone":
+        from functools import partial
+
+        from gearfmu.fmu.standalone_build import build_standalone_fmu
+
+        build_fmu = partial(build_standalone_fmu, validation=False)
+    else:
+        from gearfmu.fmu.pythonfmu_build import build_fmu
 
     t = rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=32, backlash_half_m=1e-5)
     t = replace(t, torque_Nm=np.array([50.0, 150.0]), k_N_per_m=np.concatenate([t.k_N_per_m, 1.1 * t.k_N_per_m]),
@@ -273,24 +290,104 @@ def run_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 50, 
     return totals
 
 
+# ------------------------------------------------------- the C host (standalone)
+C_FUZZER = Path(__file__).resolve().parent / "fmi_fuzz.c"
+
+
+def build_c_fuzzer(directory) -> Path:
+    """Compile tests/fmi_fuzz.c (the C host) into ``directory``."""
+    import shutil
+
+    from gearfmu.fmu.standalone_build import fmi2_header_dir
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    exe = Path(directory) / "fmi_fuzz"
+    subprocess.run([cc, "-O2", "-std=c99", f"-I{fmi2_header_dir()}", "-o", str(exe), str(C_FUZZER), "-ldl", "-lm"],
+                   check=True, capture_output=True, text=True)
+    return exe
+
+
+def run_c_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 2500, jobs: int = 2,
+               timeout_s: float = 600.0, progress: bool = False) -> dict:
+    """Run ``sequences`` sequences (seeds first_seed ...) of tests/fmi_fuzz.c against a standalone
+    FMU, ``batch`` sequences per child process, ``jobs`` processes at a time; a child that dies
+    (signal, non-zero exit) is a host crash, and the rest of its batch runs again."""
+    import fmpy
+
+    keys = ("sequences", "sequences_breaking_order", "calls", "refused", "unlogged", "illegal_sequence_refusals",
+            "bad_status", "discards", "errors", "fatals", "warnings", "instantiate_refused")
+    totals = {k: 0 for k in keys}
+    totals.update(host_crashes=0, crashes=[], unlogged_examples=[])
+    t0 = time.time()
+    with tempfile.TemporaryDirectory(prefix="gearfmu_cfuzz_") as d:
+        exe = build_c_fuzzer(d)
+        md = fmpy.read_model_description(str(fmu_path))
+        unzip = fmpy.extract(str(fmu_path), unzipdir=os.path.join(d, "fmu"))
+        args = [str(exe), unzip, md.coSimulation.modelIdentifier, md.guid, str(len(md.modelVariables))]
+        pending = [(s, min(batch, first_seed + sequences - s)) for s in range(first_seed, first_seed + sequences, batch)]
+        running = []
+        while pending or running:
+            while pending and len(running) < jobs:
+                s0, n = pending.pop(0)
+                p = subprocess.Popen(args + [str(s0), str(n)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True)
+                running.append((p, s0, n, time.time()))
+            time.sleep(0.02)
+            for item in list(running):
+                p, s0, n, started = item
+                if p.poll() is None and time.time() - started < timeout_s:
+                    continue
+                if p.poll() is None:
+                    p.kill()
+                out, err = p.communicate()
+                running.remove(item)
+                lines = out.splitlines()
+                done = sum(1 for x in lines if x.startswith("done "))
+                summary = next((json.loads(x) for x in reversed(lines) if x.startswith("{")), None)
+                if p.returncode == 0 and summary is not None:
+                    for k in keys:
+                        totals[k] += summary[k]
+                    if summary["unlogged_example"] and len(totals["unlogged_examples"]) < 5:
+                        totals["unlogged_examples"].append(summary["unlogged_example"])
+                else:
+                    totals["host_crashes"] += 1
+                    totals["sequences"] += done + 1  # the finished ones and the crashed one
+                    totals["crashes"].append({"seed": s0 + done, "returncode": p.returncode, "stderr": err[-300:]})
+                    if done + 1 < n:
+                        pending.append((s0 + done + 1, n - done - 1))
+                if progress:
+                    print(f"c fuzz: {totals['sequences']}/{sequences} sequences, {totals['host_crashes']} crashes, "
+                          f"{time.time() - t0:.0f} s", file=sys.stderr, flush=True)
+    totals["unlogged_refusals"] = totals.pop("unlogged")
+    totals["wall_s"] = round(time.time() - t0, 2)
+    return totals
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sequences", type=int, default=1000)
     ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--batch", type=int, default=50, help="sequences per child process")
+    ap.add_argument("--batch", type=int, help="sequences per child process (default 50; standalone: 2500)")
     ap.add_argument("--jobs", type=int, default=2, help="child processes at a time")
     ap.add_argument("--fmu", help="FMU to fuzz (default: build a small one)")
+    ap.add_argument("--runtime", choices=("pythonfmu", "standalone"), default="pythonfmu",
+                    help="standalone: fuzz the all-C FMU with the C host tests/fmi_fuzz.c (--batch default 2500)")
     ap.add_argument("--json", action="store_true", help="print the summary as JSON")
     ap.add_argument("--child", nargs=2, metavar=("FMU", "SEEDS"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
         _child(a.child[0], [int(s) for s in a.child[1].split(",")])
         return 0
+    if a.batch is None:
+        a.batch = 2500 if a.runtime == "standalone" else 50
     if a.sequences < 1 or a.batch < 1 or a.jobs < 1:
         ap.error("--sequences, --batch and --jobs must be >= 1")
     with tempfile.TemporaryDirectory(prefix="gearfmu_fuzz_") as d:
-        fmu = a.fmu or str(build_fuzz_fmu(d))
-        res = run_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
+        fmu = a.fmu or str(build_fuzz_fmu(d, a.runtime))
+        if a.runtime == "standalone":
+            res = run_c_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
+        else:
+            res = run_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
     if a.json:
         print(json.dumps(res))
     else:

@@ -30,3 +30,50 @@ def test_fuzzer_counts_a_crash_instead_of_dying(tmp_path):
     bad.write_bytes(b"garbage")
     res = fuzz_fmu.run_fuzz(bad, 4, batch=2, jobs=2)
     assert res["host_crashes"] >= 2 and len(res["crashes"]) == res["host_crashes"]
+
+
+# ------------------------------------------ the standalone (all-C) runtime, C host
+def test_c_fuzz_standalone_no_crash_every_refusal_logged(tmp_path):
+    """tests/fmi_fuzz.c drives the all-C FMU with 2000 random call sequences (every one
+    starts with a call the instantiated state forbids), in child processes: no host crash,
+    every status other than fmi2OK/fmi2Warning logged a message, every status a valid
+    fmi2Status, and the state table refused out-of-order calls as such (logged
+    "illegal call sequence").  The long run is ``python tests/fuzz_fmu.py --runtime
+    standalone --sequences 10600 --json`` (docs/robustness.md)."""
+    fmu = fuzz_fmu.build_fuzz_fmu(tmp_path, "standalone")
+    res = fuzz_fmu.run_c_fuzz(fmu, 2000, first_seed=20261125, batch=1000, jobs=2)
+    assert res["sequences"] == 2000
+    assert res["host_crashes"] == 0, res["crashes"]
+    assert res["unlogged_refusals"] == 0, res["unlogged_examples"]
+    assert res["bad_status"] == 0
+    # every sequence that got an instance broke the order, and was told so
+    assert res["sequences_breaking_order"] == res["sequences"] - res["instantiate_refused"]
+    assert res["illegal_sequence_refusals"] > 2000 and res["discards"] > 500
+    assert res["calls"] > 2000 * 20
+
+
+def test_c_fuzzer_counts_a_crash_instead_of_dying(tmp_path):
+    """A binary whose every fmi2 function aborts: each child dies, and each is counted as a
+    host crash (with its seed) while the fuzzer goes on."""
+    import re
+    import shutil
+    import subprocess
+    import zipfile
+
+    fmu = fuzz_fmu.build_fuzz_fmu(tmp_path, "standalone")
+    with zipfile.ZipFile(fmu) as z:
+        names = z.namelist()
+        so = next(n for n in names if n.startswith("binaries/linux64/") and n.endswith(".so"))
+        files = {n: z.read(n) for n in names if n != so}
+    src = tmp_path / "abort.c"
+    funcs = set(re.findall(r"LOAD\((\w+)\)", fuzz_fmu.C_FUZZER.read_text())) - {"name"}
+    src.write_text("#include <stdlib.h>\n" + "".join(f"void *fmi2{f}(void) {{ abort(); }}\n" for f in funcs))
+    lib = tmp_path / "abort.so"
+    subprocess.run([shutil.which("gcc") or "cc", "-shared", "-fPIC", "-o", str(lib), str(src)], check=True)
+    bad = tmp_path / "aborting.fmu"
+    with zipfile.ZipFile(bad, "w") as z:
+        for n, data in files.items():
+            z.writestr(n, data)
+        z.write(lib, so)
+    res = fuzz_fmu.run_c_fuzz(bad, 3, batch=10, jobs=1)
+    assert res["host_crashes"] == 3 and [c["seed"] for c in res["crashes"]] == [0, 1, 2]

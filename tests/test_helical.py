@@ -146,7 +146,7 @@ def test_helical_fluctuates_far_less_than_spur_of_same_transverse_geometry():
     kh = slot_stiffness(pair, g, MeshModelOptions(slices=60), None, 128).k_total_N_per_m
     f_spur = (ks.max() - ks.min()) / ks.mean()
     f_hel = (kh.max() - kh.min()) / kh.mean()
-    # measured: spur 0.676 (single/double contact jumps, eps_alpha = 1.237), helical (60 slices) 0.078
+    # measured: spur 0.676 (single/double contact jumps, eps_alpha = 1.237), helical (60 slices) 0.060
     assert f_spur > 0.3
     assert f_hel < 0.2 * f_spur, (f_spur, f_hel)
 
@@ -161,12 +161,14 @@ def test_integer_overlap_ratio_nearly_removes_the_fluctuation():
         for ns in (20, 40):
             k = slot_stiffness(pair, g, MeshModelOptions(slices=ns), None, 128).k_total_N_per_m
             fl[eb, ns] = (k.max() - k.min()) / k.mean()
-    # eps_beta = 2: constant in the continuum limit; the slice sum leaves a residue ~1/slices
-    # (measured 0.0625 at 20 slices, 0.0314 at 40: halves with the slice width)
-    assert fl[2.0, 40] < 0.04
-    assert fl[2.0, 20] / fl[2.0, 40] == pytest.approx(2.0, rel=0.1)
-    # eps_beta = 2.5: a real fluctuation that does not vanish with finer slices (measured 0.085 at 40)
-    assert fl[2.5, 40] > 2.0 * fl[2.0, 40]
+    # eps_beta = 2: constant in the continuum limit; partly engaged slices (docs/helical.md "Slice
+    # sawtooth") leave a residue of second order or better in the slice width (measured 1.2e-5 at
+    # 20 slices, 9.6e-7 at 40; whole slices entering and leaving left 0.0625 and 0.0314)
+    assert fl[2.0, 40] < 1e-4
+    assert fl[2.0, 20] / fl[2.0, 40] >= 3.5
+    # eps_beta = 2.5: a real fluctuation that does not vanish with finer slices (measured 0.049 at 40)
+    assert fl[2.5, 40] > 100.0 * fl[2.0, 40]
+    assert fl[2.5, 20] == pytest.approx(fl[2.5, 40], rel=0.01)
 
 
 def test_slice_stagger_and_time_in_contact():
@@ -176,12 +178,14 @@ def test_slice_stagger_and_time_in_contact():
     st = helical_slot_stiffness(pair, g, MeshModelOptions(slices=ns), None, n)
     s = st.s_slice_m
     w = g.face_width_m / ns
-    # adjacent slices of one pair, both in contact: w tan(beta_b) apart along the line of action
-    both = np.isfinite(s[:, :-1, :]) & np.isfinite(s[:, 1:, :]) & (s[:, :-1, :] < g.s_end_m)
+    # adjacent slices of one pair, both wholly in contact: w tan(beta_b) apart along the line of action
+    f = st.slice_contact_fraction
+    both = (f[:, :-1, :] == 1.0) & (f[:, 1:, :] == 1.0)
     d = (s[:, :-1, :] - s[:, 1:, :])[both]
     np.testing.assert_allclose(d, w * math.tan(g.base_helix_angle_rad), rtol=1e-9)
-    # every slice is engaged eps_alpha mesh periods per mesh period on average
-    engaged = np.isfinite(s).sum(axis=(0, 2)) / s.shape[2]   # engaged grid points / grid points
+    # every slice is engaged eps_alpha mesh periods per mesh period on average (partly engaged
+    # slices count with their engaged share)
+    engaged = f.sum(axis=(0, 2)) / s.shape[2]
     np.testing.assert_allclose(engaged, g.contact_ratio, atol=2.0 / n)
     assert np.all((st.k_per_slice_N_per_m > 0) == np.isfinite(s))
     np.testing.assert_allclose(st.k_N_per_m, st.k_per_slice_N_per_m.sum(axis=1), rtol=1e-12)

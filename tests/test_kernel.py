@@ -155,7 +155,8 @@ def test_table_lookup_against_numpy_interp(lib):
     torque = np.array([50.0, 250.0])
     K = Kernel(lib, rows, np.zeros((2, 1, n)), np.zeros((1, n)), torque=torque, k_mean=2e8)
     grid = np.arange(n) * PHI / n
-    for theta in (-1.234, 0.0, 0.07, 0.5 * PHI, 3.0 * PHI + 0.011, PHI - 1e-13):
+    for theta in (-1.234, 0.0, 0.07, 0.5 * PHI, 3.0 * PHI + 0.011, PHI - 1e-13, -1e-300, -PHI,
+                  -3.0 * PHI - 0.011):
         for T1 in (0.0, 50.0, 120.0, 250.0, 400.0):
             K.s[:] = (theta, 0.0, 1e-3, 0.0)  # deep in contact
             got = K.outputs(T1)[6]
@@ -199,3 +200,20 @@ def test_invalid_inputs_return_codes_and_keep_state(lib):
     assert lib.gk_substeps(1e-4, 1e-5) == 10.0
     assert lib.gk_substeps(1e-4, 3e-5) == 4.0
     assert lib.gk_substeps(1e-6, 1e-5) == 1.0
+
+
+def test_lookup_at_huge_and_non_finite_angles_stays_on_the_table(lib):
+    """Beyond 2^52 table cells an angle is an integer number of cells, so the
+    lookup must return a stored node value (docs/model.md "Table lookup"), never
+    an extrapolation; a non-finite angle must not crash (the lookup reads node 0
+    with weight NaN).  Reference: the set of stored values."""
+    n = 24
+    rows = np.random.default_rng(7).uniform(1e8, 3e8, size=(1, 1, n))
+    K = Kernel(lib, rows, np.zeros((1, 1, n)), np.zeros((1, n)), k_mean=2e8)
+    for theta in (1e300, -1e300, 3.0e17, -7.7e15 * PHI):
+        K.s[:] = (theta, 0.0, 1e-3, 0.0)
+        got = K.outputs(100.0)[6]
+        assert got in set(rows.ravel()), theta
+    for theta in (float("nan"), float("inf"), -float("inf")):
+        K.s[:] = (theta, 0.0, 1e-3, 0.0)
+        assert lib.gk_outputs(K.m.ctypes.data, K.s.ctypes.data, 100.0, K.out.ctypes.data) == 0

@@ -350,7 +350,10 @@ def test_drive_case_rigid_body_inverse_dynamics(tmp_path):
     i_red = i1 + i2 * (rb1 / rb2) ** 2
     assert np.allclose(c.gear_torque_Nm, (150.0 - i_red * 2000.0) * rb2 / rb1, rtol=1e-12)
     cases = {k.name: k for k in verification_cases(s, plan, tb)}
-    assert list(cases) == ["steady", "run_up", "warm_up", "duty_cycle"]
+    assert [n for n in cases if n != "worst_point"] == ["steady", "run_up", "run_down", "warm_up", "duty_cycle"]
+    rd = cases["run_down"]  # the run-up reversed: from the top of the speed range to its bottom
+    assert rd.pinion_speed_start_rad_s == pytest.approx(2000 * RPM, rel=1e-14)
+    assert rd.speed_profile_rad_s[-1] == pytest.approx(1000 * RPM, rel=1e-12)
     st = cases["steady"]
     assert np.allclose(st.gear_torque_Nm, 200.0 * rb2 / rb1, rtol=1e-12)
     assert np.all(st.temperature_C == 55.0)  # middle of the envelope's 20..90 degC
@@ -379,7 +382,8 @@ def compute_tables_for(scene):
 def _check_fmu_verification(plan, fv, target):
     """The cases of verify_fmus: errors within the target, the rigid-body speed reached."""
     cases = fv["cases"]
-    assert set(cases) == {"steady", "run_up", "warm_up", "duty_cycle"}
+    assert {"steady", "run_up", "run_down", "warm_up", "duty_cycle"} <= set(cases) <= \
+        {"steady", "run_up", "run_down", "worst_point", "warm_up", "duty_cycle"}
     for name, c in cases.items():
         print(f"{name}: DTE {c['dte_rel']:.3e}, force {c['mesh_force_rel']:.3e}, CPU s/s full "
               f"{c['cpu_per_sim_s']['full']:.3g} chosen {c['cpu_per_sim_s']['chosen']:.3g}, "
@@ -456,24 +460,26 @@ temperature_C = 60.0
 """
 
 
-def test_contact_model_levels_follow_what_the_scene_states(tmp_path):
-    """hertz only without a lubricant; the film models with one; rough_ehl only when the
-    scene states a roughness (docs/plan.md "Choices and levels")."""
+def test_contact_model_what_if_rows_follow_what_the_scene_states(tmp_path):
+    """The full reference is the scene's own contact model; the others are what-if rows, skipped
+    without a lubricant (film models) or without a stated roughness (rough_ehl) (docs/plan.md
+    "Choices and levels")."""
     from gearfmu.contact.models import CONTACT_MODELS
     from gearfmu.scene.envelope import accuracy_of
-    from gearfmu.plan import _choices
+    from gearfmu.plan import _choices, _what_if_contact
 
     assert {"hertz", "smooth_ehl", "rough_ehl"} <= set(CONTACT_MODELS)
 
-    def levels(text):
+    def rows(text):
         s = _scene(tmp_path, text, "c.toml")
-        return _choices(s, envelope_of(s), accuracy_of(s))["contact_model"].levels
+        assert _choices(s, envelope_of(s), accuracy_of(s))["contact_model"].levels == [s.mesh.contact_model]
+        return {r["contact_model"]: r["skipped"] for r in _what_if_contact(s)}
 
-    assert levels(PLAIN) == ["hertz"]
-    assert levels(PLAIN + LUBRICANT) == ["hertz", "smooth_ehl"]
-    assert levels(PLAIN + LUBRICANT + "\n[roughness]\nlevel = 1\n") == ["hertz", "smooth_ehl", "rough_ehl"]
-    assert levels(PLAIN.replace("slices = 4", 'slices = 4\ncontact_model = "rough_ehl"') + LUBRICANT) == \
-        ["hertz", "smooth_ehl", "rough_ehl"]
+    assert rows(PLAIN) == {"smooth_ehl": "the scene has no [lubricant]", "rough_ehl": "the scene has no [lubricant]"}
+    assert rows(PLAIN + LUBRICANT) == {"smooth_ehl": None, "rough_ehl": "the scene has no [roughness]"}
+    assert rows(PLAIN + LUBRICANT + "\n[roughness]\nlevel = 1\n") == {"smooth_ehl": None, "rough_ehl": None}
+    assert rows(PLAIN.replace("slices = 4", 'slices = 4\ncontact_model = "rough_ehl"') + LUBRICANT) == \
+        {"hertz": None, "smooth_ehl": None}
 
 
 def test_temperature_axis_must_cover_the_envelope(tmp_path):

@@ -410,6 +410,20 @@ def test_mapping_source_and_toml_writer_round_trip():
     assert s.text == text and s.pair.pinion.deviations.tooth(1).profile_form_m == 2.5e-6
 
 
+def test_default_runtime_is_the_all_c_one_defined_once():
+    """The default FMU runtime is the standalone (all-C) one; the default scene leaves it to
+    the one definition (gearfmu.common.vocabulary.DEFAULT_RUNTIME), which FmuOptions and the [fmu] key share."""
+    from gearfmu.scene.reader import DEFAULT_RUNTIME, FmuOptions
+
+    assert DEFAULT_RUNTIME == "standalone"
+    assert "runtime" not in tomllib.loads(DEFAULT_TEXT)["fmu"]
+    assert load_scene(DEFAULT_TEXT).fmu.runtime == DEFAULT_RUNTIME == FmuOptions(model_name="x").runtime
+    assert next(k for k in SCHEMA["fmu"] if k.name == "runtime").default == DEFAULT_RUNTIME
+    data = tomllib.loads(DEFAULT_TEXT)
+    data["fmu"]["runtime"] = "pythonfmu"
+    assert load_scene(dumps_toml(data)).fmu.runtime == "pythonfmu"
+
+
 def test_docs_document_every_key():
     doc = (ROOT / "docs" / "scene.md").read_text(encoding="utf-8")
     for table, keys in SCHEMA.items():

@@ -477,12 +477,12 @@ def test_sources_in_fmu_compile_to_same_results(built, host, tmp_path):
     assert ref.stdout == again.stdout
 
 
-def test_cli_runtime_standalone(tmp_path):
-    """`gearfmu build --runtime standalone` writes a standalone FMU of the default scene."""
+def test_cli_default_runtime_is_standalone(tmp_path):
+    """`gearfmu build` (no --runtime) writes the all-C FMU of the default scene."""
     from gearfmu.cli import main
 
     out = tmp_path / "cli.fmu"
-    assert main(["build", "--runtime", "standalone", "-o", str(out), "-q"]) == 0
+    assert main(["build", "-o", str(out), "-q"]) == 0
     md = fmpy.read_model_description(str(out))
     assert md.coSimulation.needsExecutionTool is False and md.buildConfigurations
     assert fmpy.validation.validate_fmu(str(out)) == []

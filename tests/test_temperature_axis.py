@@ -353,7 +353,10 @@ def test_ssp_temperature_variants(fmus, tmp_path):
     p = build_ssp(fmus["pythonfmu"], tmp_path / "t.ssp", var, stop_time_s=N_STEPS * H)
     with zipfile.ZipFile(p) as z:
         ssv = z.read("resources/temperature_high.ssv").decode()
-    assert 'name="bulk_temperature"' in ssv and 'value="70.0"' in ssv and 'unit="degC"' in ssv
+        ssd = z.read("temperature_high.ssd").decode()
+    # the .ssv targets the component by name; the system's input connector starts at the variant's value
+    assert 'name="gear.bulk_temperature"' in ssv and 'value="70.0"' in ssv and 'unit="degC"' in ssv
+    assert '<ssv:Parameter name="bulk_temperature"><ssv:Real value="70.0" unit="degC" />' in ssd
 
 
 # --------------------------------------------------- scene -> tables (seed 004)

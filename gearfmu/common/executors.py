@@ -6,9 +6,13 @@ film solutions along the mesh (:mod:`gearfmu.ehl.mesh_film`).
 from __future__ import annotations
 
 import os
+import re
+import sys
 from concurrent.futures import Executor, ProcessPoolExecutor, Future
 from typing import Optional
 import multiprocessing as mp
+import warnings
+import threading
 
 __all__ = ["SweepInputError", "make_executor"]
 
@@ -57,7 +61,8 @@ def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int]
       -> a new Client on it (closed on exit).
     * otherwise ``max_workers`` <= 1 -> in-process (no parallelism); else a
       local process pool of ``max_workers`` (default: the CPU count) with the
-      ``spawn`` start method.
+      ``spawn`` start method, or 'fork' when the main module is a script without
+      an ``if __name__ == "__main__":`` guard (:func:`_start_method`).
     """
     if client is not None:
         return _ManagedExecutor(client.get_executor(pure=False), None, own=False)
@@ -71,7 +76,46 @@ def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int]
         cl = Client(scheduler)
         return _ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
     n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
-    if n <= 1:
+    method = _start_method() if n > 1 else None
+    if method is None:
         return _ManagedExecutor(_InProcessExecutor(), None, own=True)
 
-    return _ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn")), None, own=True)
+    return _ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context(method)), None, own=True)
+
+
+_MAIN_GUARD = re.compile(r"""^\s*if\s+(__name__\s*==\s*['"]__main__['"]|['"]__main__['"]\s*==\s*__name__)""",
+                         re.M)
+_warned_in_process = False
+
+
+def _start_method() -> Optional[str]:
+    """The start method of the local process pool, or None for in-process work.
+
+    'spawn' (safe in threaded hosts) re-runs the main module in every worker, so it is
+    used only when that is harmless: no main script (interactive, notebook, embedded) or
+    one with an ``if __name__ == "__main__":`` guard.  A plain script without the guard
+    would start the computation again inside each worker; for it the pool forks
+    (the workers run pure numpy/numba functions) where 'fork' exists and the process
+    runs one Python thread, else the work stays in this process with one warning.
+    """
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if mp.parent_process() is not None or not path:
+        return "spawn" if mp.parent_process() is None else None
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            guarded = bool(_MAIN_GUARD.search(fh.read()))
+    except OSError:
+        guarded = False
+    if guarded:
+        return "spawn"
+    if "fork" in mp.get_all_start_methods() and threading.active_count() == 1:
+        return "fork"
+    global _warned_in_process
+    if not _warned_in_process:
+        _warned_in_process = True
+
+        warnings.warn(f"gearfmu: {path} has no 'if __name__ == \"__main__\":' guard, so the work runs in one "
+                      "process; put the script's top-level code under that guard to get the worker processes "
+                      "back", RuntimeWarning, stacklevel=3)
+    return None

@@ -7,7 +7,8 @@ kernel (gearkernel.h) use.
 """
 
 __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES", "FILM_TRANSIENT_MODES",
-           "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES"]
+           "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
+           "DEFAULT_RUNTIME"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -34,3 +35,5 @@ DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
 INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
+#: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
+DEFAULT_RUNTIME = "standalone"

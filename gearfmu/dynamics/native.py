@@ -67,21 +67,56 @@ class NativeInputError(ValueError):
 
 
 # ---------------------------------------------------------------- kernels
+#: no carried cell (_phi_cell): more than one cell away from every global cell index
+_CELL_NONE = -(1 << 62)
+#: 2^52: below it the global cell index and s - nd are exact in doubles
+_CELL_LIMIT = 4503599627370496.0
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def _phi_index(theta1, phi_period, n_phi, dphi):
-    """docs/model.md 'Table lookup': (i0, i1, w) at pinion angle theta1 (rad)."""
-    phim = theta1 - phi_period * np.floor(theta1 / phi_period)
-    s = phim / dphi
-    i0 = int(np.floor(s))
-    if i0 >= n_phi:
-        i0 = n_phi - 1
-    if i0 < 0:
-        i0 = 0
-    w = s - i0
+def _phi_cell(theta1, inv_dphi, n_phi, nd_prev, i0_prev):
+    """docs/model.md 'Table lookup': (nd, i0, i1, w) at pinion angle theta1 (rad),
+    s = theta1*inv_dphi, global cell nd = floor(s), nodes i0 = nd mod N and i1,
+    weight w = s - nd.  (nd_prev, i0_prev) is the cell of the previous evaluation
+    (_CELL_NONE: none): when nd moved by 0 or +-1, i0 follows without an integer
+    division.  The result does not depend on it (the arithmetic of gearkernel.c
+    phi_cell)."""
+    s = theta1 * inv_dphi
+    if not (s > -_CELL_LIMIT and s < _CELL_LIMIT):
+        # 2^52 cells or more: an integer number of cells (w = 0); non-finite:
+        # node 0, w = nan (the state is non-finite); never out of bounds
+        if math.isfinite(s):
+            r = np.fmod(s, float(n_phi))
+            if r < 0.0:
+                r += float(n_phi)
+            i0 = int(r)
+            w = 0.0
+        else:
+            i0 = 0
+            w = s - s
+        i1 = i0 + 1
+        if i1 == n_phi:
+            i1 = 0
+        return _CELL_NONE, i0, i1, w
+    nd = int(s)             # toward zero ...
+    if nd > s:              # ... so floor(s)
+        nd -= 1
+    dn = nd - nd_prev
+    if dn == 0:
+        i0 = i0_prev
+    elif dn == 1:
+        i0 = i0_prev + 1
+        if i0 == n_phi:
+            i0 = 0
+    elif dn == -1:
+        i0 = n_phi - 1 if i0_prev == 0 else i0_prev - 1
+    else:
+        i0 = nd % n_phi     # floor modulo: in [0, N)
     i1 = i0 + 1
     if i1 == n_phi:
         i1 = 0
-    return i0, i1, w
+    w = s - nd
+    return nd, i0, i1, w
 
 
 @njit(cache=True, error_model="numpy")
@@ -115,7 +150,7 @@ def _rows(k, e, it):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
+def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi):
     """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j.
 
     k0, e0 are the (P, n_phi) rows of torque index it, k1, e1 those of it+1
@@ -127,7 +162,7 @@ def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
     ea = e0[j, i0]
     eb = e0[j, i1]
     ev = ea + w * (eb - ea)
-    es = (eb - ea) / dphi
+    es = (eb - ea) * inv_dphi
     if rows2:
         ka2 = k1[j, i0]
         kb2 = k1[j, i1]
@@ -135,7 +170,7 @@ def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi):
         ea2 = e1[j, i0]
         eb2 = e1[j, i1]
         ev2 = ea2 + w * (eb2 - ea2)
-        es2 = (eb2 - ea2) / dphi
+        es2 = (eb2 - ea2) * inv_dphi
         kv = kv + wt * (kv2 - kv)
         ev = ev + wt * (ev2 - ev)
         es = es + wt * (es2 - es)
@@ -180,28 +215,31 @@ def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mesh_force(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
-    """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1."""
-    n_phi = k0.shape[1]
-    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+def _mesh_force(tab, theta1, omega1, x, v, nd, i0):
+    """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1, and the cell
+    (nd, i0) of theta1 (carried in from the previous evaluation, see _phi_cell).
+    ``tab``: the table pointers and scalars of :func:`_kvals` (no array argument
+    in the step loop, see the rk4_kink section)."""
+    n_phi = tab[7]
+    nd, i0, i1, w = _phi_cell(theta1, tab[12], n_phi, nd, i0)
     f = 0.0
-    for j in range(k0.shape[0]):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
-        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, c, model)
+    for j in range(tab[8]):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, tab[10], tab[11])
         f += fj
-    return f
+    return f, nd, i0
 
 
 @njit(cache=True, error_model="numpy")
-def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
                  pair_out, row):
     """Write pair forces of one output row; return (mesh_force, mesh_stiffness)."""
     n_phi = k0.shape[1]
-    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
     ftot = 0.0
     ks = 0.0
     for j in range(k0.shape[0]):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi)
         fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, c, model)
         pair_out[row, j] = fj
         ftot += fj
@@ -211,14 +249,14 @@ def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period,
 
 
 @njit(cache=True, error_model="numpy")
-def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
+def _equilibrium(theta1, t1, rb1, k, e, b, torque, inv_dphi):
     """docs/model.md 'Initial state': x (m) of the quasi-static equilibrium at theta1
     under F_m = T1/Rb1, by exactly 200 bisections.  Returns nan if no slot has k > 0."""
     it, wt = _torque_index(t1, torque)
     k0, e0, k1, e1, rows2 = _rows(k, e, it)
     n_phi = k.shape[2]
     p = k.shape[1]
-    i0, i1, w = _phi_index(theta1, phi_period, n_phi, dphi)
+    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
     fm = t1 / rb1
     kk = np.empty(p)
     ee = np.empty(p)
@@ -227,7 +265,7 @@ def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
     lo_e = np.inf
     hi_e = -np.inf
     for j in range(p):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, dphi)
+        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi)
         kk[j] = kv
         ee[j] = ev
         bb[j] = bv
@@ -259,14 +297,14 @@ def _equilibrium(theta1, t1, rb1, k, e, b, torque, phi_period, dphi):
     return 0.5 * (lo + hi)
 
 
-@njit(cache=True, error_model="numpy")
-def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, wt, b,
-              phi_period, dphi, c, model):
+@njit(cache=True, error_model="numpy", inline="always")
+def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, tab, nd, i0):
     """One classical RK4 step of the two-inertia model (docs/model.md).
 
     Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed
     as h/2.0); the increments are accumulated left to right,
-    acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc."""
+    acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc.  The table
+    cell (nd, i0) is carried from stage to stage and returned."""
     h2 = h / 2.0
     ka = 0.0
     kb = 0.0
@@ -292,7 +330,7 @@ def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, 
             yb = om + h2 * kb
             yc = x + h2 * kc
             yd = v + h2 * kd
-        f = _mesh_force(ya, yb, yc, yd, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model)
+        f, nd, i0 = _mesh_force(tab, ya, yb, yc, yd, nd, i0)
         ka = yb
         kb = (t1 - rb1 * f) / i1
         kc = yd
@@ -313,27 +351,32 @@ def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, 
             sc = sc + 2.0 * kc
             sd = sd + 2.0 * kd
     h6 = h / 6.0
-    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
+    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd, nd, i0
 
 
 @njit(cache=True, error_model="numpy")
 def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torque,
-              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
-    """Loop over communication steps (rows 1..n of the outputs; row 0 by caller)."""
+              inv_dphi, c, model, out_state, out_pair, out_force, out_stiff):
+    """Loop over communication steps (rows 1..n of the outputs; row 0 by caller).
+    k, e (NT, P, N) and b (P, N) must be C-contiguous (the step reads their data
+    pointers)."""
     n_steps = out_state.shape[0] - 1
+    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
+    nd = _CELL_NONE
+    i0 = 0
     for s in range(n_steps):
         t1 = t1s[s]
         t2 = t2s[s]
         it, wt = _torque_index(t1, torque)
         k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, np.nan, c, model, inv_dphi)  # dphi: rk4_kink only
         for _ in range(n_sub):
-            th, om, x, v = _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, k0, e0, k1, e1, rows2, wt, b,
-                                     phi_period, dphi, c, model)
+            th, om, x, v, nd, i0 = _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, tab, nd, i0)
         out_state[s + 1, 0] = th
         out_state[s + 1, 1] = om
         out_state[s + 1, 2] = x
         out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
                                 out_pair, s + 1)
         out_force[s + 1] = ftot
         out_stiff[s + 1] = ks
@@ -343,10 +386,10 @@ def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torqu
 
 
 @njit(cache=True, error_model="numpy")
-def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model):
+def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, tab, nd, i0):
     """One RK4 step of the time-indexed SDOF (theta1 = th0 + om*t prescribed),
     same stage and accumulation order as :func:`_rk4_step`; stage times t,
-    t + h/2, t + h/2, t + h."""
+    t + h/2, t + h/2, t + h; the table cell (nd, i0) carried as there."""
     h2 = h / 2.0
     kc = 0.0
     kd = 0.0
@@ -365,7 +408,7 @@ def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, ph
             ts = t + h2
             yc = x + h2 * kc
             yd = v + h2 * kd
-        f = _mesh_force(th0 + om * ts, om, yc, yd, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model)
+        f, nd, i0 = _mesh_force(tab, th0 + om * ts, om, yc, yd, nd, i0)
         kc = yd
         kd = (fm - f) / me
         if stage == 0:
@@ -378,28 +421,31 @@ def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b, ph
             sc = sc + 2.0 * kc
             sd = sd + 2.0 * kd
     h6 = h / 6.0
-    return x + h6 * sc, v + h6 * sd
+    return x + h6 * sc, v + h6 * sd, nd, i0
 
 
 @njit(cache=True, error_model="numpy")
 def _run_sdof(th0, om, x, v, t1s, H, n_sub, h, rb1, me, k, e, b, torque,
-              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff):
+              inv_dphi, c, model, out_state, out_pair, out_force, out_stiff):
     n_steps = out_state.shape[0] - 1
+    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
+    nd = _CELL_NONE
+    i0 = 0
     for s in range(n_steps):
         t1 = t1s[s]
         fm = t1 / rb1
         it, wt = _torque_index(t1, torque)
         k0, e0, k1, e1, rows2 = _rows(k, e, it)
+        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, np.nan, c, model, inv_dphi)  # dphi: rk4_kink only
         t0 = s * H
         for i in range(n_sub):
-            x, v = _rk4_step_sdof(t0 + i * h, x, v, h, th0, om, fm, me, k0, e0, k1, e1, rows2, wt, b,
-                                  phi_period, dphi, c, model)
+            x, v, nd, i0 = _rk4_step_sdof(t0 + i * h, x, v, h, th0, om, fm, me, tab, nd, i0)
         th = th0 + om * ((s + 1) * H)
         out_state[s + 1, 0] = th
         out_state[s + 1, 1] = om
         out_state[s + 1, 2] = x
         out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
                                 out_pair, s + 1)
         out_force[s + 1] = ftot
         out_stiff[s + 1] = ks
@@ -462,7 +508,7 @@ def _cell_nodes(nd, n_phi):
     return i0, i1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
@@ -544,11 +590,11 @@ def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
     return 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _kvals(tab, j, i0, i1, w):
     """k_j, e_j, de_j/dphi, b_j of slot j at cell nodes (i0, i1) and weight w; the
     arithmetic of :func:`_pair_values` on the pointers of ``tab``."""
-    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model = tab
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi = tab
     r = j * n_phi
     ka = kp[o0 + r + i0]
     kb = kp[o0 + r + i1]
@@ -556,7 +602,7 @@ def _kvals(tab, j, i0, i1, w):
     ea = ep[o0 + r + i0]
     eb = ep[o0 + r + i1]
     ev = ea + w * (eb - ea)
-    es = (eb - ea) / dphi
+    es = (eb - ea) * inv_dphi
     if rows2:
         ka2 = kp[o1 + r + i0]
         kb2 = kp[o1 + r + i1]
@@ -564,7 +610,7 @@ def _kvals(tab, j, i0, i1, w):
         ea2 = ep[o1 + r + i0]
         eb2 = ep[o1 + r + i1]
         ev2 = ea2 + w * (eb2 - ea2)
-        es2 = (eb2 - ea2) / dphi
+        es2 = (eb2 - ea2) * inv_dphi
         kv = kv + wt * (kv2 - kv)
         ev = ev + wt * (ev2 - ev)
         es = es + wt * (es2 - es)
@@ -574,7 +620,22 @@ def _kvals(tab, j, i0, i1, w):
     return kv, ev, es, bv
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
+def _table_pointers(k, e, b):
+    """(data pointers of k, e (NT, P, N) and b (P, N), P, N); the arrays must be
+    C-contiguous and outlive the pointers' use."""
+    return _ptr(k), _ptr(e), _ptr(b), k.shape[1], k.shape[2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
+    """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2)."""
+    o0 = it * p * n_phi
+    o1 = (it + 1) * p * n_phi if rows2 else o0
+    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
     Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
@@ -584,7 +645,7 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     model = tab[11]
     p = tab[8]
     sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
-    w = (th - nd * dphi) / dphi
+    w = (th - nd * dphi) * tab[12]
     f = 0.0
     for j in range(p):
         kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
@@ -633,7 +694,7 @@ def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
     p = tab[8]
     j = (gi - 2) // 3
     q = (gi - 2) - 3 * j
-    w = (th - nd * dphi) / dphi
+    w = (th - nd * dphi) * tab[12]
     kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
     return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
 
@@ -698,7 +759,7 @@ def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
     c = tab[10]
     model = tab[11]
     p = tab[8]
-    w = (th - nd * dphi) / dphi
+    w = (th - nd * dphi) * tab[12]
     for j in range(p):
         km, em, esm, bm = _kvals(tab, j, i0, i1, 0.5)
         md[2 * p + j] = 1 if km > 0.0 else 0
@@ -735,14 +796,14 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
         ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
         if nev >= KINK_MAX_EVENTS:
             th, om, x, v = ta, tb, tc, td
-            nd = np.floor(th / dphi)
+            nd = np.floor(th * tab[12])
             i0, i1 = _cell_nodes(nd, n_phi)
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
         # scan the guards at the trial end: cheap test first (one lookup per pair)
         any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
         if not any_neg:
-            w = (ta - nd * dphi) / dphi
+            w = (ta - nd * dphi) * tab[12]
             for j in range(p):
                 kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
                 rj = md[j]
@@ -806,7 +867,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             if md[j] == 0:
                 md[j] = 1 if q == 0 else -1
                 if model == 0:
-                    w = (th - nd * dphi) / dphi
+                    w = (th - nd * dphi) * tab[12]
                     kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
                     md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
             elif q == 0:
@@ -823,7 +884,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
 
 @njit(cache=True, error_model="numpy")
 def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k, e, b, torque,
-              phi_period, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
+              inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
     """rk4_kink loop over communication steps (two-inertia or, with sdof, the
     time-indexed SDOF at constant omega1); the mode is set from the state at the
     start of every communication step.  k, e (NT, P, N) and b (P, N) must be
@@ -846,9 +907,9 @@ def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k,
         k0, e0, k1, e1, rows2 = _rows(k, e, it)
         o0 = it * p * n_phi
         o1 = (it + 1) * p * n_phi if rows2 else o0
-        tab = (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model)
+        tab = (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
         dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
-        nd = np.floor(th / dphi)
+        nd = np.floor(th * inv_dphi)
         i0, i1 = _cell_nodes(nd, n_phi)
         _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
         nev = 0
@@ -860,7 +921,7 @@ def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k,
         out_state[s + 1, 1] = om
         out_state[s + 1, 2] = x
         out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model,
+        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
                                 out_pair, s + 1)
         out_force[s + 1] = ftot
         out_stiff[s + 1] = ks
@@ -870,7 +931,7 @@ def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k,
 
 
 @njit(cache=True, error_model="numpy")
-def _row0(th, om, x, v, t1, k, e, b, torque, phi_period, dphi, c, model,
+def _row0(th, om, x, v, t1, k, e, b, torque, inv_dphi, c, model,
           out_state, out_pair, out_force, out_stiff):
     it, wt = _torque_index(t1, torque)
     k0, e0, k1, e1, rows2 = _rows(k, e, it)
@@ -878,7 +939,7 @@ def _row0(th, om, x, v, t1, k, e, b, torque, phi_period, dphi, c, model,
     out_state[0, 1] = om
     out_state[0, 2] = x
     out_state[0, 3] = v
-    ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, phi_period, dphi, c, model, out_pair, 0)
+    ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model, out_pair, 0)
     out_force[0] = ftot
     out_stiff[0] = ks
 
@@ -1027,7 +1088,8 @@ def _arrays(tables: MeshTables):
     tq = np.ascontiguousarray(tables.torque_Nm, dtype=np.float64)
     phi_period = float(tables.phi_period_rad)
     dphi = phi_period / tables.n_phi
-    return k, e, b, tq, phi_period, dphi
+    inv_dphi = tables.n_phi / phi_period  # docs/model.md 'Table lookup': N/Phi, one rounding
+    return k, e, b, tq, inv_dphi, dphi
 
 
 def _damping(tables: MeshTables, damping_ratio) -> float:
@@ -1044,10 +1106,10 @@ def equilibrium_dte_m(tables: MeshTables, pinion_torque_Nm: float, pinion_angle_
     """Quasi-static equilibrium x (m) at the pinion angle under F_m = T1/Rb1, by the
     200-step bisection of docs/model.md 'Initial state'."""
     t = _check_tables(tables)
-    k, e, b, tq, phi_period, dphi = _arrays(t)
+    k, e, b, tq, inv_dphi, dphi = _arrays(t)
     x = _equilibrium(_finite("pinion_angle_rad", pinion_angle_rad),
                      _finite("pinion_torque_Nm", pinion_torque_Nm),
-                     float(t.base_radius_pinion_m), k, e, b, tq, phi_period, dphi)
+                     float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
     if not math.isfinite(x):
         raise NativeInputError(
             f"pinion_angle_rad: no tooth pair in the contact zone (all k = 0) at {pinion_angle_rad!r}; "
@@ -1097,7 +1159,7 @@ def _warmup(kink: bool = False) -> None:
             ev = np.zeros(2, dtype=np.int64)
             for sdof in (False, True):
                 _run_kink(0.0, 1.0, 0.0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0, sdof,
-                          k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks, ev)
+                          k, e, b, tq, 4.0, 0.25, 1.0, model, st, pf, fo, ks, ev)
         _COMPILED_KINK = True
     if _COMPILED:
         return
@@ -1110,12 +1172,12 @@ def _warmup(kink: bool = False) -> None:
         pf = np.zeros((2, 1))
         fo = np.zeros(2)
         ks = np.zeros(2)
-        x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 1.0, 0.25)
-        _row0(0.0, 1.0, x0, 0.0, 1.0, k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks)
+        x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 4.0)
+        _row0(0.0, 1.0, x0, 0.0, 1.0, k, e, b, tq, 4.0, 1.0, model, st, pf, fo, ks)
         _run_2dof(0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0,
-                  k, e, b, tq, 1.0, 0.25, 1.0, model, st, pf, fo, ks)
+                  k, e, b, tq, 4.0, 1.0, model, st, pf, fo, ks)
         _run_sdof(0.0, 1.0, x0, 0.0, np.ones(2), 1e-6, 1, 1e-6, 0.1, 1.0, k, e, b, tq,
-                  1.0, 0.25, 1.0, model, st, pf, fo, ks)
+                  4.0, 1.0, model, st, pf, fo, ks)
     _COMPILED = True
 
 
@@ -1143,10 +1205,10 @@ def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping
     return t, stop, H, n_steps, n_sub, h, c, me, DAMPING_MODELS[damping_model]
 
 
-def _initial_x(t, k, e, b, tq, phi_period, dphi, theta1, t1, dte_start_m):
+def _initial_x(t, k, e, b, tq, inv_dphi, theta1, t1, dte_start_m):
     if dte_start_m is not None:
         return _finite("dte_start_m", dte_start_m)
-    x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, phi_period, dphi)
+    x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
     if not math.isfinite(x0):
         raise NativeInputError(
             f"pinion_angle_start_rad: no tooth pair in the contact zone (all k = 0) at {theta1!r}; "
@@ -1230,25 +1292,25 @@ def simulate(
     else:
         t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
     th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    k, e, b, tq, phi_period, dphi = _arrays(t)
-    x0 = _initial_x(t, k, e, b, tq, phi_period, dphi, th0, t1s[0], dte_start_m)
+    k, e, b, tq, inv_dphi, dphi = _arrays(t)
+    x0 = _initial_x(t, k, e, b, tq, inv_dphi, th0, t1s[0], dte_start_m)
     state = np.full((n_steps + 1, 4), np.nan)
     pair = np.full((n_steps + 1, t.slots), np.nan)
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
     _warmup(kink=icode == 1)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    _row0(th0, w0, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    _row0(th0, w0, x0, v0, t1s[0], k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
     events = np.zeros(n_steps + 1, dtype=np.int64)
     t_start = _time.perf_counter()
     if icode == 0:
         done = _run_2dof(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
                          float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
-                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+                         k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
     else:
         done = _run_kink(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
                          float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, False,
-                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff, events)
+                         k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n_steps + 1) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
@@ -1300,24 +1362,24 @@ def simulate_sdof(
     t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
     t2s = t1s * float(t.base_radius_gear_m) / rb1
     th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    k, e, b, tq, phi_period, dphi = _arrays(t)
-    x0 = _initial_x(t, k, e, b, tq, phi_period, dphi, th0, t1s[0], dte_start_m)
+    k, e, b, tq, inv_dphi, dphi = _arrays(t)
+    x0 = _initial_x(t, k, e, b, tq, inv_dphi, th0, t1s[0], dte_start_m)
     state = np.full((n_steps + 1, 4), np.nan)
     pair = np.full((n_steps + 1, t.slots), np.nan)
     force = np.full(n_steps + 1, np.nan)
     stiff = np.full(n_steps + 1, np.nan)
     _warmup(kink=icode == 1)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    _row0(th0, om, x0, v0, t1s[0], k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff)
+    _row0(th0, om, x0, v0, t1s[0], k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
     events = np.zeros(n_steps + 1, dtype=np.int64)
     t_start = _time.perf_counter()
     if icode == 0:
         done = _run_sdof(th0, om, x0, v0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
-                         phi_period, dphi, c, model, state, pair, force, stiff)
+                         inv_dphi, c, model, state, pair, force, stiff)
     else:
         done = _run_kink(th0, om, x0, v0, t1s, t2s, n_sub, h, rb1, float(t.base_radius_gear_m),
                          float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, True,
-                         k, e, b, tq, phi_period, dphi, c, model, state, pair, force, stiff, events)
+                         k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n_steps + 1) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,

@@ -19,7 +19,8 @@ record to the mesh-harmonic amplitudes A_r / A_rms of seed 003 eq 10-11
 Independent jobs -- an up- and a down-sweep, several loads, damping ratios or
 deviation levels -- run through :func:`run_jobs` on a ``concurrent.futures``
 style executor: a local process pool by default (``spawn`` start method, so it
-is safe in threaded hosts; every worker compiles the numba kernels once), a
+is safe in threaded hosts; every worker compiles the numba kernels once; ``fork`` for
+a main script without a ``__main__`` guard, see :func:`make_executor`), a
 Dask distributed cluster when a scheduler address is given (``scheduler=
 "tcp://host:8786"``; needs the ``cluster`` extra), or any executor passed in.
 Jobs and results are dataclasses of numpy arrays; they cross processes in

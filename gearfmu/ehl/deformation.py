@@ -70,7 +70,7 @@ def stage_twiddles(twr: np.ndarray, twi: np.ndarray, m: int):
     return sr, si
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def _cfft(re, im, N, sr, si, sign):
     """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
     power of 2, no 1/N scaling); twiddles of the stage of half length h at
@@ -134,7 +134,7 @@ def _cfft(re, im, N, sr, si, sign):
         length <<= 1
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
     """V_i = -(1/pi) sum_j K_|i-j| P_{o+j} (i, j < n) by FFT.
 

@@ -298,7 +298,7 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
 
     ``executor``: any ``concurrent.futures``-style object with ``submit`` (e.g.
     ``distributed.Client(...).get_executor()``; left open); None: a local
-    process pool (``spawn``, min(CPU count, chunks) workers; in-process for a
+    process pool (``gearfmu.common.executors.make_executor``, min(CPU count, chunks) workers; in-process for a
     single chunk or ``max_workers`` = 1).  Results in request order."""
     reqs = list(requests)
     if not reqs:

@@ -9,9 +9,10 @@ Module              Contents
 modeldesc           modelDescription.xml from modeldescription/variables.toml
 pythonfmu_build     build_fmu: the pythonfmu runtime; compile flags, kernel
 standalone_build    build_standalone_fmu: FMI 2.0 in C, no Python
+crossbuild          standalone binaries for every desktop platform (zig cc)
 validation          the validation record every FMU carries
 compare             FMU against the native solver (fmpy)
-runtime/            gearfmu_slave.py: the pythonfmu slave template
+runtime/            gearfmu_slave.py (slave template), pyshim.c (C loader)
 kernel/             gearkernel.c/.h: the C kernel of both runtimes
 standalone/         fmi2_gear.c: the FMI 2.0 layer in C
 ==================  =========================================================

@@ -29,7 +29,7 @@ import tomllib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 SPEC_FORMAT = "gearfmu-variables"
 SPEC_VERSIONS = (1,)
@@ -110,6 +110,8 @@ class Variable:
     max: Optional[Union[float, int]]
     output_index: Optional[int]  # position in the C kernel's output vector
     build_override: bool = False
+    #: names of the inputs/parameters its Initialization-Mode value depends on (None: not declared)
+    initial_dependencies: Optional[Tuple[str, ...]] = None
 
 
 # ------------------------------------------------------------------ the spec
@@ -168,6 +170,17 @@ def load_spec(path=None) -> Spec:
             raise SpecError(f"{where}: description must be a string")
         if "requires" in ent and ent["requires"] not in FEATURES:
             raise SpecError(f"{where}: requires {ent['requires']!r} not one of {FEATURES}")
+    knowns = {e["name"] for e in entries if e["causality"] in ("input", "parameter")}
+    for i, ent in enumerate(entries):
+        if "initial_dependencies" not in ent:
+            continue
+        where = f"{p}: variable #{i + 1} ({ent['name']!r})"
+        deps = ent["initial_dependencies"]
+        if ent["causality"] != "output" or ent.get("initial") not in ("approx", "calculated"):
+            raise SpecError(f"{where}: initial_dependencies: only for outputs with initial = calculated/approx")
+        if not isinstance(deps, list) or any(d not in knowns for d in deps) or len(set(deps)) != len(deps):
+            raise SpecError(f"{where}: initial_dependencies must list distinct input/parameter names "
+                            f"of the spec, got {deps!r}")
     de = data.get("default_experiment", {})
     for k in ("start_time_s", "stop_time_s", "step_size_s"):
         if k in de and not (isinstance(de[k], (int, float)) and math.isfinite(de[k])):
@@ -208,9 +221,13 @@ def expand_variables(spec: Spec, slots: int, features: Iterable[str] = ()) -> Li
         if f not in FEATURES:
             raise SpecError(f"features: {f!r} not one of {FEATURES}")
     out: List[Variable] = []
+    present = {e["name"] for e in spec.entries if "requires" not in e or e["requires"] in features}
     for ent in spec.entries:
         if "requires" in ent and ent["requires"] not in features:
             continue
+        deps = ent.get("initial_dependencies")
+        if deps is not None:  # conditional variables this FMU does not carry drop out
+            deps = tuple(d for d in deps if d in present)
         per_slot = bool(ent.get("per_slot", False))
         for i in range(slots if per_slot else 1):
             name = f"{ent['name']}[{i + 1}]" if per_slot else ent["name"]
@@ -231,6 +248,7 @@ def expand_variables(spec: Spec, slots: int, features: Iterable[str] = ()) -> Li
                 variability=ent["variability"], initial=initial, unit=ent.get("unit"),
                 description=desc, start=start, min=ent.get("min"), max=ent.get("max"),
                 output_index=oi, build_override=bool(ent.get("build_override", False)),
+                initial_dependencies=deps,
             ))
     return out
 
@@ -355,9 +373,21 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
     if iu:
         ie = ET.SubElement(ms, "InitialUnknowns")
         for idx in iu:
-            ET.SubElement(ie, "Unknown", {"index": str(idx)})
+            ua = {"index": str(idx)}
+            deps = initial_dependency_indices(variables, variables[idx - 1])
+            if deps is not None:  # FMI 2.0 section 2.2.8: absent = depends on all knowns
+                ua["dependencies"] = " ".join(str(d) for d in deps)
+            ET.SubElement(ie, "Unknown", ua)
     ET.indent(root, space="  ")
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
+
+
+def initial_dependency_indices(variables: Sequence[Variable], v: Variable) -> Optional[List[int]]:
+    """The 1-based, ascending ScalarVariable indices of ``v.initial_dependencies`` (None: undeclared)."""
+    if v.initial_dependencies is None:
+        return None
+    index = {x.name: i + 1 for i, x in enumerate(variables)}
+    return sorted(index[n] for n in v.initial_dependencies)
 
 
 # ------------------------------------------------------------------ checks
@@ -422,6 +452,12 @@ def check_model_description(xml_bytes: bytes, variables: Sequence[Variable]) -> 
                or v.causality == "calculatedParameter"]
     if iu != want_iu:
         problems.append(f"ModelStructure/InitialUnknowns {iu} != {want_iu}")
+    for u in (iu_el if iu_el is not None else []):
+        v = variables[int(u.get("index")) - 1]
+        want = initial_dependency_indices(variables, v)
+        got = None if u.get("dependencies") is None else [int(x) for x in u.get("dependencies").split()]
+        if got != want:
+            problems.append(f"ModelStructure/InitialUnknowns {v.name}: dependencies {got} != {want}")
     if problems:
         raise ModelDescriptionError("; ".join(problems))
 

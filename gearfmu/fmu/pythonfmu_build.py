@@ -10,13 +10,16 @@ checked against what the slave registers, and replaces pythonfmu's.
 FMU layout (docs/fmu.md)::
 
     modelDescription.xml                 from the spec
-    binaries/<platform>/<id>.so          pythonfmu's FMI wrapper
+    binaries/linux64/<id>.so             the loader (gearfmu/fmu/runtime/pyshim.c) in front of
+    binaries/linux64/<id>.pythonfmu.so   pythonfmu's FMI wrapper
     resources/<id>.py                    the slave (unique module and class name)
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearkernel.so              the compiled kernel
     resources/kernel_src/gearkernel.c|h  its sources and the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
+    resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
+    resources/pyshim_src/                the loader's source and its compile command
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
 """
@@ -37,6 +40,7 @@ import zipfile
 from pathlib import Path
 from typing import Optional, Union
 from dataclasses import replace
+import sysconfig
 
 from .. import __version__
 from .modeldesc import (apply_start_values, check_model_description, check_registered,
@@ -45,11 +49,16 @@ from .modeldesc import (apply_start_values, check_model_description, check_regis
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
+from ..scene.reader import default_output_interval_s
 
 HERE = Path(__file__).resolve().parent
 KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
 KERNEL_HEADER = HERE / "kernel" / "gearkernel.h"
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
+PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
+PYSHIM_CONFIG = "gearfmu_pyshim.txt"
+#: the loader's compile flags (docs/fmu.md "The binary"); it links no Python
+PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
@@ -60,6 +69,21 @@ KINK_MAX_SLOTS = 32
 
 class FmuBuildError(ValueError):
     """The FMU cannot be built from these arguments; the message names the field."""
+
+
+#: the FMI 2.0 standard headers the C layers are compiled against
+FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+
+
+def fmi2_header_dir() -> Path:
+    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
+    import fmpy  # fmpy: only for its FMI 2 headers
+
+    d = Path(fmpy.__file__).resolve().parent / "c-code"
+    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
+    if missing:
+        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
+    return d
 
 
 class CompilerNotFoundError(FmuBuildError):
@@ -217,6 +241,9 @@ def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_sta
     T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
     hmax = _check_positive("max_step_s", max_step_s)
     tstop = _check_positive("stop_time_s", stop_time_s)
+    if output_interval_s is None:  # the scene's rule (gearfmu.scene.reader.default_output_interval_s)
+
+        output_interval_s = min(default_output_interval_s(w0, tables.teeth_pinion), tstop)
     dt = _check_positive("output_interval_s", output_interval_s)
     return zeta, w0, th0, T1, T2, hmax, tstop, dt, _damping_model_code(damping_model)
 
@@ -224,8 +251,8 @@ def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_sta
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
               pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
-              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
-              scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
+              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
+              output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
               spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
@@ -235,7 +262,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     "elastobacklash", 1 or "seed003" (docs/model.md).  ``integrator``: 0 or
     "rk4", 1 or "rk4_kink" (default; docs/model.md "Integration", docs/dynamics_validation.md;
     FMU parameter ``integrator``).  ``stop_time_s`` and
-    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize).
+    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
+    None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
@@ -278,17 +306,23 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         (src_dir / "BUILD.txt").write_text(
             f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c -lm\n", encoding="utf-8")
         sha = {name: _sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
-        from pythonfmu.builder import HERE as _pythonfmu_dir  # pythonfmu: heavy, only while building
-        wrapper = _pythonfmu_dir / "resources" / "binaries" / "linux64" / "libpythonfmu-export.so"
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
             "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION, "slots": tables.slots,
             "sha256": sha, "variables": runtime_variable_table(variables),
-            "wrapper_exit_fix": wrapper_exit_fix(wrapper) if wrapper.is_file() else None,
         }
         (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-        files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json")]
+        shim = compile_pyshim(tmp / "shim", identifier, cc=cc)
+        (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so"), encoding="utf-8")
+        shim_src = stage / "pyshim_src"
+        shim_src.mkdir()
+        shutil.copy2(PYSHIM_SOURCE, shim_src / PYSHIM_SOURCE.name)
+        (shim_src / "BUILD.txt").write_text(
+            f"{Path(cc).name} {' '.join(PYSHIM_CFLAGS)} -I<FMI 2.0 headers> -o <modelIdentifier>.so "
+            f"pyshim.c -ldl -lpthread\n", encoding="utf-8")
+        files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json",
+                                     PYSHIM_CONFIG)]
         if scene_text is not None:
             (stage / "scene.toml").write_text(scene_text, encoding="utf-8")
             files.append(stage / "scene.toml")
@@ -318,7 +352,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                           encoding="utf-8")
         raw_fmu = tmp / "raw" / f"{identifier}.fmu"
         raw_fmu.parent.mkdir()
-        _pythonfmu_build(script, raw_fmu, [*files, src_dir])
+        _pythonfmu_build(script, raw_fmu, [*files, src_dir, shim_src])
+
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
             parameters={k: v for k, v in provenance["parameters"].items() if k not in ("stop_time_s", "output_interval_s")},
@@ -344,6 +379,10 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                             continue
                         if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
                             continue  # the kernel is compiled for this platform only
+                        if shim is not None and n == f"binaries/{plat}/{identifier}.so":  # behind the loader
+                            zout.writestr(f"binaries/{plat}/{identifier}.pythonfmu.so", zin.read(n))
+                            zout.write(shim, n)
+                            continue
                         zout.writestr(info, zin.read(n))
                     for rel, data in record.items():  # resources/validation/ (docs/standalone.md)
                         zout.writestr(rel, data)
@@ -354,42 +393,43 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     return out_path
 
 
-PYSTATE_SYMBOL = "_ZN12_GLOBAL__N_17pyStateE"
+def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:
+    """Compile the loader ``gearfmu/fmu/runtime/pyshim.c`` as ``<identifier>.so`` in ``dest_dir``.
 
-
-def wrapper_exit_fix(wrapper: Path) -> Optional[dict]:
-    """Locate the static ``std::shared_ptr<PyState> pyState`` of pythonfmu's FMI
-    wrapper, for the runtime's exit-crash workaround (docs/fmu.md).
-
-    pythonfmu 0.7.0's wrapper releases that shared_ptr twice at process exit:
-    once by its C++ static destructor (an exit handler, which frees the
-    control block) and again in its ELF destructor ``finalizePythonInterpreter``
-    (run later by ``_dl_fini``), which decrements the use count inside the
-    freed block.  When the freed chunk sits in a glibc small bin that write
-    corrupts the bin's links ("corrupted double-linked list", SIGABRT, exit
-    code 134) -- intermittently, depending on the heap layout (measured:
-    valgrind, "Invalid read ... finalizePythonInterpreter ... block free'd by
-    __run_exit_handlers").  The runtime adds one reference so that the first
-    release does not free the block.  Returns the symbol offsets relative to
-    the exported ``fmi2Instantiate`` (or None if ``nm`` or the symbols are
-    missing: then the runtime skips the workaround).
+    It becomes the FMU's binary and loads libpython and pythonfmu's wrapper on
+    the first ``fmi2Instantiate`` (docs/fmu.md "The binary").  Linux only: on
+    other systems returns None and the FMU keeps pythonfmu's wrapper as its binary.
     """
-    nm = shutil.which("nm")
-    if nm is None:
-        return None
+    if platform.system() != "Linux":
+        return None  # elsewhere pythonfmu's wrapper stays the FMU's binary
+    cc = cc or find_c_compiler()
+    dest = Path(dest_dir)
+    dest.mkdir(parents=True, exist_ok=True)
+    lib = dest / f"{identifier}.so"
+    cmd = [cc, *PYSHIM_CFLAGS, f"-I{fmi2_header_dir()}", "-o", str(lib), str(PYSHIM_SOURCE), "-ldl", "-lpthread"]
     try:
-        text = subprocess.run([nm, str(wrapper)], capture_output=True, text=True, timeout=60).stdout
-    except (OSError, subprocess.SubprocessError):
-        return None
-    syms = {}
-    for line in text.splitlines():
-        parts = line.split()
-        if len(parts) == 3 and parts[2] in (PYSTATE_SYMBOL, "fmi2Instantiate"):
-            syms[parts[2]] = int(parts[0], 16)
-    if len(syms) != 2:
-        return None
-    return {"binary_sha256": _sha256_file(wrapper),
-            "pystate_minus_fmi2Instantiate": syms[PYSTATE_SYMBOL] - syms["fmi2Instantiate"]}
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    except OSError as exc:
+        raise CompilerNotFoundError(f"C compiler {cc!r}: cannot run ({exc})") from None
+    if proc.returncode != 0:
+        raise FmuBuildError(f"pyshim: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+    return lib
+
+
+def pyshim_config(wrapper_name: str) -> str:
+    """``resources/gearfmu_pyshim.txt``: the Python of this build (version, shared
+    library, executable, whose environment provides numpy) and the wrapper's
+    file name, one ``key=value`` a line."""
+    ver = f"{sys.version_info.major}.{sys.version_info.minor}"
+    soname = sysconfig.get_config_var("INSTSONAME") or f"libpython{ver}.so.1.0"
+    libdir = sysconfig.get_config_var("LIBDIR") or ""
+    path = os.path.join(libdir, soname) if sysconfig.get_config_var("Py_ENABLE_SHARED") else ""
+    if path and not os.path.isfile(path):
+        path = ""
+    if not soname.endswith(".so") and ".so." not in soname:  # a static libpython: ask the loader by name
+        soname = f"libpython{ver}.so.1.0"
+    return (f"python_version={ver}\nlibpython={path}\nlibpython_soname={soname}\n"
+            f"python_executable={sys.executable}\nwrapper={wrapper_name}\n")
 
 
 def _platform_dir() -> str:

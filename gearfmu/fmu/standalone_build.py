@@ -15,8 +15,11 @@ FMU layout (docs/standalone.md)::
 
     modelDescription.xml                 from the spec (gearfmu.fmu.modeldesc), CoSimulation
                                          needsExecutionTool=false, FMU state supported, SourceFiles
-    binaries/linux64/<id>.so             fmi2_gear.c + gearkernel.c, gcc -O2 -ffp-contract=off
+    binaries/<folder>/<id>.<so|dll|dylib>  fmi2_gear.c + gearkernel.c for linux64, aarch64-linux, win64 and
+                                         darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
     sources/                             fmi2_gear.c gearkernel.c gearkernel.h fmi2*.h BUILD.txt CMakeLists.txt
+                                         buildflags.txt
+    documentation/platforms.txt          which platforms carry a binary, which not and why
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearfmu_standalone.txt     what the C layer reads at instantiation
     resources/provenance.json            who/what/when built this FMU
@@ -44,12 +47,13 @@ import uuid
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-from typing import Optional, Union
+from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
+from . import crossbuild
 from .pythonfmu_build import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
-                       _compiler_version, _integrator_code, _platform_dir,
-                       check_build_arguments, check_output_arguments,
+                       _compiler_version, _integrator_code,
+                       FMI2_HEADERS, check_build_arguments, check_output_arguments, fmi2_header_dir,
                        find_c_compiler, temperature_input)
 from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
@@ -58,25 +62,16 @@ from .validation import validation_record
 
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
-FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 CONFIG_FILE = "gearfmu_standalone.txt"
 CONFIG_FORMAT = "gearfmu-standalone"
 CONFIG_VERSION = 1
-#: compile flags of the standalone binary: the kernel's, plus hidden visibility so
+#: compile flags of the standalone binary, the same for every platform: the kernel's
+#: (-O2, no FMA contraction), no fast-math spelled out, plus hidden visibility so
 #: only the fmi2* functions are exported (two gear FMUs in one process never
 #: interpose each other's kernel symbols)
-STANDALONE_CFLAGS = (*CFLAGS, "-fvisibility=hidden")
-
-
-def fmi2_header_dir() -> Path:
-    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
-    import fmpy  # fmpy: only for its FMI 2 headers
-
-    d = Path(fmpy.__file__).resolve().parent / "c-code"
-    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
-    if missing:
-        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
-    return d
+STANDALONE_CFLAGS = (*CFLAGS, "-fno-fast-math", "-fvisibility=hidden")
+#: the machine-readable build recipe in the FMU's sources/ (key=value lines)
+BUILDFLAGS_FILE = "buildflags.txt"
 
 
 def copy_sources(dest_dir) -> Path:
@@ -110,6 +105,70 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None) -> lis
     if proc.returncode != 0:
         raise FmuBuildError(f"standalone binary: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
     return cmd
+
+
+def build_recipe_files(identifier: str) -> Dict[str, str]:
+    """``sources/`` build files: BUILD.txt (prose), buildflags.txt (key=value, what a tool
+    reads) and CMakeLists.txt (``cmake -S sources -B b && cmake --build b``), all with the
+    flags of :data:`STANDALONE_CFLAGS`."""
+    flags = " ".join(STANDALONE_CFLAGS)
+    srcs = f"{LAYER_SOURCE.name} {KERNEL_SOURCE.name}"
+    build_txt = (
+        "Build the binary of this FMU from these sources (C99, FMI 2.0 headers included):\n"
+        f"  cc {flags} -I. -o {identifier}.so {srcs} -lm\n"
+        f"and place it as binaries/<platform>/{identifier}.so (Windows: .dll, macOS: .dylib; the fmi2*\n"
+        "functions are exported unprefixed), or: cmake -S sources -B build && cmake --build build\n"
+        "(CMakeLists.txt, same flags). buildflags.txt lists the flags as key=value lines.\n"
+        "The numbers are the same on every platform by construction: -ffp-contract=off (no fused\n"
+        "multiply-add), no fast-math, IEEE double arithmetic in source order; the kernel calls only\n"
+        "sqrt, floor, ceil and fabs, which IEEE 754 defines exactly.\n")
+    kv = [
+        "# gearfmu standalone FMU build recipe (key=value; written by gearfmu.fmu.standalone_build)",
+        "format=gearfmu-buildflags", "version=1", f"model_identifier={identifier}",
+        "language=C99", f"sources={srcs}", "include_dirs=.", f"cflags={flags}", "ldflags=-lm",
+        "optimization=-O2", "fp_contract=off", "fast_math=off", "visibility=hidden",
+        "# MSVC (CMakeLists.txt): /fp:strict never contracts into FMA (/fp:precise does in MSVC before 2022)",
+        "msvc_cflags=/O2 /fp:strict",
+    ]
+    cmake = (
+        "# Build the FMU binary from these sources with the flags of buildflags.txt:\n"
+        "#   cmake -S sources -B build && cmake --build build --config Release\n"
+        "cmake_minimum_required(VERSION 3.10)\n"
+        f"project({identifier} C)\n"
+        f"add_library({identifier} SHARED {srcs})\n"
+        f"set_target_properties({identifier} PROPERTIES PREFIX \"\" C_STANDARD 99 C_STANDARD_REQUIRED ON\n"
+        "                      C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden POSITION_INDEPENDENT_CODE ON)\n"
+        f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}})\n"
+        "if(MSVC)\n"
+        f"  target_compile_options({identifier} PRIVATE /O2 /fp:strict)\n"
+        "else()\n"
+        f"  target_compile_options({identifier} PRIVATE -O2 -ffp-contract=off -fno-fast-math)\n"
+        f"  target_link_libraries({identifier} m)\n"
+        "endif()\n")
+    return {"BUILD.txt": build_txt, BUILDFLAGS_FILE: "\n".join(kv) + "\n", "CMakeLists.txt": cmake}
+
+
+def read_build_flags(text: str) -> Dict[str, str]:
+    """Parse a ``buildflags.txt`` (key=value lines, '#' comments)."""
+    out = {}
+    for line in text.splitlines():
+        if line.strip() and not line.startswith("#") and "=" in line:
+            k, v = line.split("=", 1)
+            out[k.strip()] = v.strip()
+    return out
+
+
+def platforms_text(report: Dict[str, dict]) -> str:
+    """``documentation/platforms.txt``: the binaries this FMU carries and the ones it lacks."""
+    lines = ["Platforms of this FMU (FMI 2.0 Co-Simulation, standalone gearfmu runtime)", ""]
+    for key, r in report.items():
+        if "missing" in r:
+            lines.append(f"{key:16s} NOT BUILT: {r['missing']}; compile sources/ (sources/BUILD.txt)")
+        else:
+            fat = f" (universal Mach-O with {' + '.join(r['fat_slices'])})" if r.get("fat_slices") else ""
+            lines.append(f"{key:16s} binaries/{r['folder']}/{r['file']}{fat}; {r['compiler']}")
+    lines += ["", f"Compile flags (every platform): {' '.join(STANDALONE_CFLAGS)} (sources/buildflags.txt)."]
+    return "\n".join(lines) + "\n"
 
 
 def _hexf(v) -> str:
@@ -155,10 +214,13 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
     return "\n".join(lines) + "\n"
 
 
-def standalone_model_description(xml: bytes, source_files) -> bytes:
+def standalone_model_description(xml: bytes, source_files, platforms_note: Optional[str] = None) -> bytes:
     """Turn the spec's model description into the standalone one: no execution
-    tool needed, FMU state get/set/serialize offered, ``<SourceFiles>`` listed."""
+    tool needed, FMU state get/set/serialize offered, ``<SourceFiles>`` listed,
+    ``platforms_note`` (which binaries the FMU carries) appended to the description."""
     root = ET.fromstring(xml)
+    if platforms_note:
+        root.set("description", (root.get("description", "").rstrip() + " [" + platforms_note + "]").lstrip())
     cs = root.find("CoSimulation")
     if cs is None:
         raise FmuBuildError("modelDescription.xml: no CoSimulation element")
@@ -180,17 +242,23 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
                          pinion_torque_start_Nm: float = 100.0, gear_torque_start_Nm: Optional[float] = None,
                          max_step_s: float = 1e-5, damping_model: Union[int, str] = 0,
-                         stop_time_s: float = 0.1, output_interval_s: float = 1e-4,
+                         stop_time_s: float = 0.1, output_interval_s: Optional[float] = None,
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
-                         integrator: Union[int, str] = 1) -> Path:
+                         integrator: Union[int, str] = 1,
+                         platforms: Optional[Sequence[str]] = None) -> Path:
     """Build the standalone FMI 2.0 CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
     ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
     0/"rk4" or 1/"rk4_kink" (default), the FMU parameter ``integrator``); ``validation``
-    False skips the validation record (and its native run).  Written under a
-    temporary name beside ``out_path`` and renamed at the end.
+    False skips the validation record (and its native run).  ``platforms``:
+    keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default: all); without the zig
+    compiler only the build machine's platform is compiled (with ``cc`` or the
+    host C compiler), and documentation/platforms.txt and the model description
+    say which platforms are missing.  ``cc`` given: the build machine's platform
+    is compiled with it.  Written under a temporary name beside ``out_path`` and
+    renamed at the end.
     """
     zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
         tables, model_name=model_name, damping_ratio=damping_ratio,
@@ -200,8 +268,10 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         damping_model=damping_model)
     ig = _integrator_code(integrator, tables.slots)
     out_path = check_output_arguments(out_path, scene_text)
-    plat = _platform_dir()  # the binary folder is named after the build machine's platform
-    ext = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
+    keys = crossbuild.parse_platforms(None) if platforms is None else tuple(platforms)
+    unknown = [k for k in keys if k not in crossbuild.TARGETS]
+    if unknown or not keys:
+        raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
 
     spec = load_spec(spec_path)
     variables = expand_variables(spec, tables.slots, features_of(tables))
@@ -218,7 +288,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
     identifier = f"gearfmu_sa_{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
     guid = "{" + str(uuid.uuid4()) + "}"
-    cc = cc or find_c_compiler()
+    cc_given = cc is not None
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     params = {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
               "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
@@ -229,26 +299,27 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"
         src = copy_sources(root / "sources")
-        lib = root / "binaries" / plat / (identifier + ext)
-        cmd = compile_standalone(src, lib, cc=cc)
-        build_line = (f"{Path(cc).name} {' '.join(STANDALONE_CFLAGS)} -I. -o {identifier}{ext} "
-                      f"{LAYER_SOURCE.name} {KERNEL_SOURCE.name} -lm")
-        (src / "BUILD.txt").write_text(
-            "Build the binary of this FMU from these sources (C99, FMI 2.0 headers included):\n"
-            f"  {build_line}\n"
-            f"and place it as binaries/<platform>/{identifier}{ext} (Windows: .dll; the fmi2* functions are\n"
-            "exported unprefixed). -ffp-contract=off keeps the arithmetic bit-identical to the native solver.\n",
-            encoding="utf-8")
-        (src / "CMakeLists.txt").write_text(
-            "cmake_minimum_required(VERSION 3.10)\n"
-            f"project({identifier} C)\n"
-            f"add_library({identifier} SHARED fmi2_gear.c gearkernel.c)\n"
-            f"set_target_properties({identifier} PROPERTIES PREFIX \"\" C_STANDARD 99 C_VISIBILITY_PRESET hidden)\n"
-            f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}})\n"
-            "if(NOT MSVC)\n"
-            f"  target_compile_options({identifier} PRIVATE -ffp-contract=off)\n"
-            f"  target_link_libraries({identifier} m)\n"
-            "endif()\n", encoding="utf-8")
+        host_cc = {}
+
+        def host_compile(out_lib):
+            host_cc["cc"] = cc or find_c_compiler()
+            return compile_standalone(src, out_lib, cc=host_cc["cc"]), _compiler_version(host_cc["cc"])
+
+        try:
+            binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
+                                                 cflags=STANDALONE_CFLAGS, layer_source=LAYER_SOURCE.name,
+                                                 kernel_source=KERNEL_SOURCE.name, host_compile=host_compile,
+                                                 host_cc_first=cc_given)
+        except crossbuild.CrossBuildError as exc:
+            raise FmuBuildError(str(exc)) from None
+        for name, text in build_recipe_files(identifier).items():
+            (src / name).write_text(text, encoding="utf-8")
+        (root / "documentation").mkdir()
+        (root / "documentation" / "platforms.txt").write_text(platforms_text(binaries), encoding="utf-8")
+        built = {k: r for k, r in binaries.items() if "missing" not in r}
+        for r in built.values():
+            r["sha256"] = hashlib.sha256((root / "binaries" / r["folder"] / r["file"]).read_bytes()).hexdigest()
+        build_line = "; ".join(sorted({r["command"] for r in built.values()}))
         res = root / "resources"
         res.mkdir()
         (res / "tables.json").write_bytes(meta_bytes)
@@ -257,14 +328,14 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                                                    meta_bytes=meta_bytes, bin_bytes=bin_bytes), encoding="utf-8")
         if scene_text is not None:
             (res / "scene.toml").write_text(scene_text, encoding="utf-8")
-        compiler = _compiler_version(cc)
+        compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
         provenance = {
             "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone",
             "model_name": model_name, "model_identifier": identifier, "guid": guid,
             "parameters": dict(params, stop_time_s=tstop, output_interval_s=dt),
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(), "tables_provenance": tables.provenance,
-            "binary": {"file": lib.name, "sha256": hashlib.sha256(lib.read_bytes()).hexdigest(),
-                       "compiler": compiler, "flags": list(STANDALONE_CFLAGS), "command": build_line,
+            "binary": {"compiler": compiler, "flags": list(STANDALONE_CFLAGS), "command": build_line,
+                       "platforms": binaries,
                        "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
                                           for p in sorted(src.iterdir())}},
             "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
@@ -283,7 +354,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                                     generation_tool=f"gearfmu {__version__} (standalone runtime)",
                                     generation_date=now, version=__version__)
         check_model_description(xml, variables)
-        xml = standalone_model_description(xml, [LAYER_SOURCE.name, KERNEL_SOURCE.name])
+        xml = standalone_model_description(xml, [LAYER_SOURCE.name, KERNEL_SOURCE.name],
+                                           platforms_note=crossbuild.platform_summary(binaries))
         check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
 

@@ -44,7 +44,7 @@ from typing import Tuple
 import numpy as np
 
 from .gearpair import GearDeviations, GearPairSpec, ToothDeviation
-from .stiffness import slice_lag_mesh_periods
+from .stiffness import engaged_slice_part, slice_lag_mesh_periods
 
 
 class MeshingErrorInputError(ValueError):
@@ -248,7 +248,9 @@ def slot_slice_errors_m(pair: GearPairSpec, geom, slots: int, n_mesh: int, point
     lag_n = y_n tan(beta_b)/p_bt mesh periods after the leading face end
     (:func:`gearfmu.gear.stiffness.slice_lag_mesh_periods`), so at a given pinion angle
     it sees the profile deviation at s = s_A + rb1 (phi - phi_entry) - lag_n p_bt
-    (clamped to [s_A, s_E] like :func:`slot_errors_m`); pitch deviations are the
+    (clamped to [s_A, s_E] like :func:`slot_errors_m`); a slice crossing the entry or
+    exit line sees it at the middle of its engaged part, as its stiffness does
+    (:func:`gearfmu.gear.stiffness.engaged_slice_part`); pitch deviations are the
     same for every slice.  Spur pairs: every slice equals :func:`slot_errors_m`.
     """
     ranges = evaluation_ranges(geom)
@@ -256,6 +258,9 @@ def slot_slice_errors_m(pair: GearPairSpec, geom, slots: int, n_mesh: int, point
     dphi = geom.mesh_period_rad / points_per_mesh
     lag = slice_lag_mesh_periods(geom, slices) if geom.helix_angle_rad != 0.0 else np.zeros(int(slices))
     s = geom.s_start_m + geom.rb1_m * local[:, None, :] * dphi - lag[None, :, None] * geom.base_pitch_m
+    if geom.helix_angle_rad != 0.0:  # partly engaged slices: the middle of the engaged part
+        frac, mid = engaged_slice_part(geom, slices, (s - geom.s_start_m) / geom.base_pitch_m)
+        s = np.where(frac > 1e-12, geom.s_start_m + mid * geom.base_pitch_m, s)
     s = np.clip(s, geom.s_start_m, geom.s_end_m)
     nn = np.broadcast_to(n[:, None, :], s.shape)
     return pair_error_m(pair, ranges, nn, s)

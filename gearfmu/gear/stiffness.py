@@ -223,6 +223,9 @@ class SlotStiffness:
     #: helical pairs only (docs/helical.md): (slots, slices, n) LOA position of each slice's
     #: contact point, NaN out of contact; None for spur pairs (every slice at ``s_m``)
     s_slice_m: Optional[np.ndarray] = None
+    #: helical pairs only: (slots, slices, n) share of each slice's width in contact (0 ... 1; a
+    #: slice crossing the entry or exit line is partly engaged); None for spur pairs
+    slice_contact_fraction: Optional[np.ndarray] = None
 
     @property
     def k_total_N_per_m(self) -> np.ndarray:
@@ -353,6 +356,19 @@ def slice_lag_mesh_periods(geom: PairGeometry, slices: int) -> np.ndarray:
     return y * math.tan(geom.base_helix_angle_rad) / geom.base_pitch_m
 
 
+def engaged_slice_part(geom: PairGeometry, slices: int, tau_n):
+    """(share of the width in contact, its middle) of helical slices whose centres are
+    ``tau_n`` mesh periods past the entry line (array): slice n spans the lags
+    lag_n +- d/2, d = (b/slices) tan(beta_b)/p_bt, and is in contact where
+    0 <= tau - lag <= eps_alpha, so the engaged part is
+    [max(tau_n - d/2, 0), min(tau_n + d/2, eps_alpha)] (docs/helical.md, "Slice sawtooth")."""
+    d = (geom.face_width_m / int(slices)) * math.tan(geom.base_helix_angle_rad) / geom.base_pitch_m
+    t = np.asarray(tau_n, dtype=float)
+    lo = np.maximum(t - 0.5 * d, 0.0)
+    hi = np.minimum(t + 0.5 * d, geom.contact_ratio)
+    return np.clip((hi - lo) / d, 0.0, 1.0), 0.5 * (lo + hi)
+
+
 def virtual_normal_section(pair: GearPairSpec, geom: PairGeometry) -> Tuple[GearPairSpec, PairGeometry]:
     """Virtual spur pair of the NORMAL section of a helical pair (ISO 6336-1 method B, ISO 21771).
 
@@ -418,7 +434,7 @@ def _helical_slice_components(pair: GearPairSpec, geom: PairGeometry, s_m: np.nd
 def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshModelOptions,
                            slots: Optional[int] = None, n_per_mesh: int = 128, *,
                            foundation_lambda: Tuple[float, float] = (1.0, 1.0),
-                           section: str = "normal") -> SlotStiffness:
+                           section: str = "normal", partial_slices: bool = True) -> SlotStiffness:
     """Per-slot TVMS of a perfect helical pair by staggered face-width slices (docs/helical.md).
 
     Each of the ``opts.slices`` slices (width w = b/slices) is a thin spur gear
@@ -438,6 +454,18 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
     slices in contact.  The foundation options act per slice across the pairs.
     Slot rule: :func:`required_slots`.  Stiffness is along the transverse line
     of action, so the dynamic model (x = theta1 rb1 - theta2 rb2) is unchanged.
+
+    Partial slices (``partial_slices``, default): slice n spans the lags
+    lag_n +- d/2, d = w tan(beta_b)/p_bt, so while the entry line (tau - lag = 0) or the
+    exit line (tau - lag = eps_alpha) crosses it, only the share f of its width between
+    them is in contact.  That share is a strip of width f w at the middle of its engaged
+    part; every component of the slice (Hertz, tooth and foundation terms) is
+    proportional to the strip width, so the slice gets k_tooth f and compliances / f.
+    The engaged face width of a pair is then exactly that of the continuous face (the
+    contact-line length of a helical pair), and the all-or-nothing steps of whole slices
+    entering and leaving (a sawtooth of about 1/(NS eps_alpha) of the mean stiffness,
+    docs/helical.md) are gone.  ``partial_slices=False`` keeps the all-or-nothing rule
+    for comparison.
     """
     need = required_slots(geom)
     if slots is None:
@@ -463,7 +491,13 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
     phi = j * (mp / n_per_mesh)
     tau = ((j[None, :] - np.arange(slots)[:, None] * n_per_mesh) % n) / n_per_mesh      # (P, n)
     tau_n = tau[:, None, :] - slice_lag_mesh_periods(geom, NS)[None, :, None]           # (P, NS, n)
-    in_contact = (tau_n >= 0.0) & (tau_n <= eps * (1.0 + 1e-12))
+    if partial_slices:  # engaged share of each slice's lag span [tau_n - d/2, tau_n + d/2]
+        frac, tau_mid = engaged_slice_part(geom, NS, tau_n)
+        in_contact = frac > 1e-12
+        tau_n = np.where(in_contact, tau_mid, tau_n)
+    else:
+        in_contact = (tau_n >= 0.0) & (tau_n <= eps * (1.0 + 1e-12))
+        frac = in_contact.astype(float)
     s = np.where(in_contact, geom.s_start_m + tau_n * geom.base_pitch_m, np.nan)
     s = np.minimum(s, geom.s_end_m)
     kt = np.zeros_like(s)
@@ -475,7 +509,8 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
         else:
             k1, f1, f2 = _pair_components(transverse_equivalent(pair), geom, s[in_contact], w,
                                           contact_factor=math.cos(geom.base_helix_angle_rad))
-        kt[in_contact], cfp[in_contact], cfg[in_contact] = k1, f1, f2
+        f = frac[in_contact]  # strip width f w: stiffness x f, compliances / f
+        kt[in_contact], cfp[in_contact], cfg[in_contact] = k1 * f, f1 / f, f2 / f
     shape = (slots, NS * n)
     k_slice = combine_pairs(kt.reshape(shape), cfp.reshape(shape), cfg.reshape(shape), opts,
                             foundation_lambda).reshape(slots, NS, n)
@@ -484,7 +519,8 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
     s_sum = np.where(in_contact, s, 0.0).sum(axis=1)
     s_mean = np.where(cnt > 0, s_sum / np.maximum(cnt, 1), np.nan)   # mean over slices in contact
     return SlotStiffness(phi_rad=phi, k_N_per_m=k_pair, s_m=s_mean, k_per_slice_N_per_m=k_slice,
-                         slices=NS, slice_width_m=w, mesh_period_rad=mp, s_slice_m=s)
+                         slices=NS, slice_width_m=w, mesh_period_rad=mp, s_slice_m=s,
+                         slice_contact_fraction=np.where(in_contact, frac, 0.0))
 
 
 def pair_stiffness_at_N_per_m(pair: GearPairSpec, geom: PairGeometry, s_m, width_m: Optional[float] = None,

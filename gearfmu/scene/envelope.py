@@ -29,14 +29,15 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Optional, Tuple
 
 import numpy as np
 
 __all__ = ["EnvelopeError", "DutyCycle", "Envelope", "AccuracyTarget", "load_duty_cycle_csv",
-           "read_envelope_sections", "envelope_of", "accuracy_of", "check_target", "PLAN_CHOICES"]
+           "read_envelope_sections", "envelope_of", "accuracy_of", "check_target", "PLAN_CHOICES",
+           "VerifiedEnvelope"]
 
 _RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
@@ -107,6 +108,52 @@ class AccuracyTarget:
     safety_factor: float = 0.8
     run_mesh_periods: int = 40
     pin: Tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class VerifiedEnvelope:
+    """What was verified about a model over its envelope, as plain data (docs/plan.md
+    "Verified envelope"), for an FMU's validation record and model description.
+
+    ``kind``: "plan verification" (the planner's envelope search of the planned model) or
+    "as-written estimate" (``gearfmu build`` of a scene without ``[accuracy]``: a cheap
+    search of the scene as written).  Ranges: pinion torque (N*m), pinion speed (rpm),
+    bulk temperature (degC, None = no variation).  Targets and worst errors are
+    dimensionless, measured as ``error_definition`` says (relative RMS; ``*_max_rel`` =
+    max|diff| / range of the full-fidelity signal) against the full-fidelity model;
+    ``worst_at``: where the worst error was found (case; torque, speed, temperature; the
+    time window of a transient).  ``within_target``: the search found no point above the
+    target; ``fmu_confirmed``: None when the FMUs were not run, else whether the FMU
+    cases stayed within the target.  ``native_runs`` / ``probes``: the search's size."""
+
+    kind: str
+    torque_range_Nm: Tuple[float, float]
+    speed_range_rpm: Tuple[float, float]
+    temperature_range_C: Optional[Tuple[float, float]]
+    dte_target_rel: float
+    mesh_force_target_rel: float
+    error_definition: str
+    within_target: bool
+    worst_dte_rel: float
+    worst_mesh_force_rel: float
+    worst_dte_max_rel: float
+    worst_mesh_force_max_rel: float
+    worst_at: dict = field(default_factory=dict)
+    native_runs: int = 0
+    probes: int = 0
+    fmu_confirmed: Optional[bool] = None
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (tuples as lists, non-finite numbers as None)."""
+        def clean(v):
+            if isinstance(v, dict):
+                return {k: clean(x) for k, x in v.items()}
+            if isinstance(v, (list, tuple)):
+                return [clean(x) for x in v]
+            if isinstance(v, float) and not math.isfinite(v):
+                return None
+            return v
+        return clean(asdict(self))
 
 
 def _levels(rng, nominal, positive):

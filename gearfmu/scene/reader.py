@@ -40,7 +40,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as _toml  # type: ignore[no-redef]
 
 from ..common.vocabulary import (CONTACT_MODELS, DAMPING_MODELS, FILM_FAILURE_POLICIES, FILM_TRANSIENT_MODES,
-                                 FLANK_LAWS, INTEGRATORS, LUBRICATED_CONTACT_MODELS, RUNTIMES,
+                                 DEFAULT_RUNTIME, FLANK_LAWS, INTEGRATORS, LUBRICATED_CONTACT_MODELS, RUNTIMES,
                                  THERMAL_AXIS_QUANTITIES)
 from ..ehl.lubricant import walther_kinematic_viscosity_cSt
 from ..gear.gearpair import (GearDeviations, GearPairSpec, GearSpec, Material,
@@ -53,7 +53,8 @@ __all__ = [
     "SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions",
     "FmuOptions", "Lubricant", "ThermalOptions", "load_scene", "default_scene_path",
     "dumps_toml", "walther_kinematic_viscosity_cSt", "SCHEMA", "CONTACT_MODELS",
-    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
+    "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES", "DEFAULT_RUNTIME", "default_output_interval_s",
+    "OUTPUT_SAMPLES_PER_MESH",
 ]
 
 
@@ -148,15 +149,18 @@ class FmuOptions:
 
     ``model_name``: the FMU's model name / identifier (a C identifier);
     ``damping_ratio``: mesh damping ratio zeta (dimensionless, default 0.05,
-    see docs/scene.md for why); ``runtime``: 'pythonfmu' or 'standalone';
-    ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s).
+    see docs/scene.md for why); ``runtime``: 'standalone' (default, all-C) or 'pythonfmu';
+    ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s);
+    ``output_interval_auto``: True when the scene left ``output_interval_s`` unset (or
+    "auto") and it was resolved by :func:`default_output_interval_s`.
     """
 
     model_name: str
     damping_ratio: float = 0.05
-    runtime: str = "pythonfmu"
+    runtime: str = DEFAULT_RUNTIME
     stop_time_s: float = 0.05
     output_interval_s: float = 1e-4
+    output_interval_auto: bool = False
 
 
 @dataclass(frozen=True)
@@ -270,6 +274,28 @@ class Scene:
         """The ``[roughness]`` table (:class:`RoughnessOptions`, SI) or None when absent
         (read from :attr:`text`, validated by :func:`load_scene`)."""
         return _roughness_from_text(self.text)
+
+
+# ============================================================== defaults that depend on the scene
+#: samples per mesh period of a defaulted output (communication) interval
+OUTPUT_SAMPLES_PER_MESH = 20
+
+
+def default_output_interval_s(pinion_speed_rad_s: float, pinion_teeth: int,
+                              samples_per_mesh: int = OUTPUT_SAMPLES_PER_MESH) -> float:
+    """The output (communication) interval, s, used wherever the user gives none.
+
+    At least ``samples_per_mesh`` samples per mesh period 2*pi / (z1 |omega1|) at the
+    pinion speed ``pinion_speed_rad_s`` (rad/s), rounded down to 1, 2 or 5 x 10^n s so
+    that the DefaultExperiment reads well (so 20 to 50 samples per mesh period).  A fixed
+    interval aliases the mesh frequency: 1e-4 s is 6 samples per mesh period at 1667 Hz.
+    A zero speed falls back to the mesh period at 1 rad/s.
+    """
+    w = abs(float(pinion_speed_rad_s)) or 1.0
+    h = 2.0 * math.pi / (int(pinion_teeth) * w) / int(samples_per_mesh)
+    e = math.floor(math.log10(h))
+    m = h / 10.0 ** e
+    return float(max(c for c in (1.0, 2.0, 5.0, 10.0) if c <= m * (1 + 1e-12)) * 10.0 ** e)
 
 
 # ============================================================== schema
@@ -425,10 +451,11 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
         Key("model_name", "identifier", "-", None, "FMU model name / identifier (C identifier; none = "
             "from scene.name)"),
         _f("damping_ratio", "1", 0.05, "mesh damping ratio zeta (tunable FMU parameter)", 0.0, 1.0),
-        _e("runtime", RUNTIMES, "pythonfmu", "FMU runtime"),
+        _e("runtime", RUNTIMES, DEFAULT_RUNTIME, "FMU runtime"),
         _f("stop_time_s", "s", 0.05, "DefaultExperiment stop time", 0.0, 1e6, lo_open=True),
-        _f("output_interval_s", "s", 1e-4, "DefaultExperiment output (communication) interval", 0.0, 1e3,
-           lo_open=True),
+        _f("output_interval_s", "s", _AUTO, "DefaultExperiment output (communication) interval, or \"auto\" "
+           f"(>= {OUTPUT_SAMPLES_PER_MESH} samples per mesh period at the nominal speed)", 0.0, 1e3,
+           lo_open=True, kind="float_or_auto"),
     ),
     "lubricant": (
         Key("name", "str", "-", "oil", "lubricant name"),
@@ -484,7 +511,8 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            lo_open=True),
         _f("mesh_force_rel_error", "1", 0.02, "largest acceptable relative RMS error of the mesh force",
            0.0, 1.0, lo_open=True),
-        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates may use",
+        _f("safety_factor", "1", 0.8, "share of the target the summed single-choice estimates, and the "
+           "envelope search's worst point, may use",
            0.0, 1.0, lo_open=True),
         _i("run_mesh_periods", 40, "mesh periods of each dynamic comparison run", 5, 100000),
         Key("pin", "str_list", "-", (), "choices taken from the scene as written, not planned"),
@@ -1219,9 +1247,12 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
                           slots=tab["slots"])
     solver = SolverOptions(integrator=sol["integrator"], max_step_s=sol["max_step_s"],
                            damping_model=sol["damping_model"])
+    dt_auto = fmu["output_interval_s"] is None
+    dt = (min(default_output_interval_s(operating.speed_rad_s, pair.pinion.teeth), fmu["stop_time_s"])
+          if dt_auto else fmu["output_interval_s"])
     fmu_o = FmuOptions(model_name=fmu["model_name"] or _model_name(name), damping_ratio=fmu["damping_ratio"],
                        runtime=fmu["runtime"], stop_time_s=fmu["stop_time_s"],
-                       output_interval_s=fmu["output_interval_s"])
+                       output_interval_s=dt, output_interval_auto=dt_auto)
     return Scene(name=name, description=sc["description"], text=text, pair=pair, mesh=mesh,
                  operating=operating, tables=tables, solver=solver, fmu=fmu_o, lubricant=lub,
                  source_path=source_path, thermal=thermal, envelope=envelope, accuracy=accuracy)

@@ -6,6 +6,7 @@ Imports the physics (:mod:`gearfmu.gear`, :mod:`gearfmu.contact`, :mod:`gearfmu.
 Module          Contents
 ==============  ============================================================
 mesh_tables     MeshTables: the format (JSON + binary), temperature axis
+estimate        cost estimate of tables, FMU and build time; the size guard
 precompute      precompute_tables: gear pair -> tables, the load iteration
 direct_tvms     mesh stiffness evaluated directly at given positions (films)
 table_import    tables from CSV files, and back

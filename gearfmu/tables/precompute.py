@@ -230,7 +230,8 @@ class _ContactIteration:
         failures = {}
         change = float("nan")
         for it in range(1, LOAD_ITERATION_MAX + 1):
-            w = np.maximum(loads[idx] / self.width, floor)
+            w = np.maximum(loads[idx] / (self.width if self.helical is None
+                                         else self.width * self.helical.frac[idx]), floor)
             # a (position, slice) whose film failed keeps its fallback in later passes
             # (re-trying it at a slightly different load would let the sharing oscillate)
             redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
@@ -313,6 +314,12 @@ class _HelicalContactView:
             cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
             ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
             fp[on], fg[on] = cp["foundation"], cg["foundation"]
+        # a partly engaged slice (stiffness.helical_slot_stiffness) is a strip of f w: compliances / f,
+        # the model's contact stiffness x f, its load per unit length = slice load / (f w)
+        fr = getattr(ss, "slice_contact_fraction", None)
+        fr = np.ones(s_t.shape) if fr is None else np.where(on, np.asarray(fr, dtype=float), 1.0)
+        ct, fp, fg = ct / fr, fp / fr, fg / fr
+        self.frac = np.tile(fr, (1, 1, reps))
         self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
 
     def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
@@ -324,7 +331,7 @@ class _HelicalContactView:
         P, NS, N = kc.shape
         flat = (P, NS * N)
         k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
-                                  kc.reshape(P, 1, NS * N), opts)
+                                  (kc * self.frac).reshape(P, 1, NS * N), opts)
         return self.t * k.reshape(P, NS, N)
 
     def provenance(self) -> dict:

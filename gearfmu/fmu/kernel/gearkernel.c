@@ -10,8 +10,19 @@
  * (damping force never exceeds the spring force, the pair never pulls).
  *
  * Build: gcc -O2 -fPIC -shared -ffp-contract=off -std=c99 gearkernel.c -lm
- * (-ffp-contract=off: no fused multiply-add, so the arithmetic is the one
- * written here, the same as the native solver's).
+ * (the flags are gearfmu.fmu.pythonfmu_build.CFLAGS).  -ffp-contract=off: no fused
+ * multiply-add, so the arithmetic is the one written here, the same as the
+ * native solver's.  -O2 rather than -O3: no optimisation level changes a
+ * floating-point result as long as fast-math stays off (no -Ofast, -ffast-math
+ * or -fassociative-math), so -O2 and -O3 give the same doubles; -O2 is the
+ * level gcc, clang and MSVC (/O2) all treat alike, and the hot path does not
+ * depend on -O3's inlining and loop peeling because it is inlined explicitly
+ * (GK_INLINE) and the RK4 combinations are written per component.  Identical results on every platform further need IEEE double
+ * arithmetic (SSE2 on x86; the x87 unit of 32-bit x86 rounds to 80 bits) and
+ * a correctly rounded sqrt (IEEE 754; used once, for c).  The table lookup
+ * multiplies by the precomputed 1/dphi and takes floor by an integer
+ * conversion (docs/model.md "Table lookup"), so the RK4 loop calls no libm
+ * function.
  *
  * No globals, no allocation, no abort: every function returns a status.
  */
@@ -20,12 +31,22 @@
 #include <math.h>
 #include <stddef.h>
 
+/* the right-hand side and its lookups are inlined into the integrator loops
+ * (inlining changes no result: every operation stays as written) */
+#if defined(__GNUC__) || defined(__clang__)
+#define GK_INLINE static inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define GK_INLINE static __forceinline
+#else
+#define GK_INLINE static inline
+#endif
+
 int gk_abi_version(void) { return GK_ABI_VERSION; }
 int gk_sizeof_model(void) { return (int)sizeof(gk_model); }
 int gk_sizeof_state(void) { return (int)sizeof(gk_state); }
 int gk_n_outputs(int P) { return GK_OUT_PAIR_FORCE + 2 * P; }
 
-static int finite_pos(double v) { return isfinite(v) && v > 0.0; }
+static inline int finite_pos(double v) { return isfinite(v) && v > 0.0; }
 
 int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *torque_Nm, const double *k_N_per_m,
@@ -54,6 +75,7 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->backlash_half_m = backlash_half_m;
     m->phi_period_rad = phi_period_rad;
     m->dphi_rad = phi_period_rad / n_phi;
+    m->inv_dphi = (double)n_phi / phi_period_rad;
     m->Rb1_m = Rb1_m;
     m->Rb2_m = Rb2_m;
     m->I1_kgm2 = I1_kgm2;
@@ -140,98 +162,146 @@ int gk_set_damping(gk_model *m, double damping_ratio, int damping_model)
 
 /* ---------------------------------------------------------------- lookup */
 
-/* torque row bracket: rows it, it+1 and weight wT (docs/model.md "Torque axis") */
+/* torque row bracket: rows it, it+1 and weight wT (docs/model.md "Torque axis"),
+ * with the table rows of the selected temperature slice resolved once per step:
+ * k0, e0 point at slot 0 of row it (slice temp_ia); the same slot of row it+1 is
+ * next_torque further, of slice temp_ia+1 next_temp further */
 typedef struct {
     int it;
     int two_rows;
     double wT;
+    const double *k0, *e0;
+    size_t next_torque, next_temp;
 } gk_tq;
 
 static gk_tq torque_bracket(const gk_model *m, double T1)
 {
     gk_tq t;
     int nt = m->n_torque;
-    double Tq;
+    size_t row;
     t.it = 0;
     t.two_rows = 0;
     t.wT = 0.0;
-    if (nt == 1) return t;
-    Tq = T1;
-    if (Tq < m->torque_Nm[0]) Tq = m->torque_Nm[0];
-    if (Tq > m->torque_Nm[nt - 1]) Tq = m->torque_Nm[nt - 1];
-    while (t.it < nt - 2 && m->torque_Nm[t.it + 1] <= Tq) t.it++;
-    t.two_rows = 1;
-    t.wT = (Tq - m->torque_Nm[t.it]) / (m->torque_Nm[t.it + 1] - m->torque_Nm[t.it]);
+    if (nt > 1) {
+        double Tq = T1;
+        if (Tq < m->torque_Nm[0]) Tq = m->torque_Nm[0];
+        if (Tq > m->torque_Nm[nt - 1]) Tq = m->torque_Nm[nt - 1];
+        while (t.it < nt - 2 && m->torque_Nm[t.it + 1] <= Tq) t.it++;
+        t.two_rows = 1;
+        t.wT = (Tq - m->torque_Nm[t.it]) / (m->torque_Nm[t.it + 1] - m->torque_Nm[t.it]);
+    }
+    row = ((size_t)t.it * m->n_temp + m->temp_ia) * m->P * m->n_phi;  /* [it][ia][0][:] */
+    t.k0 = m->k_N_per_m + row;
+    t.e0 = m->e_m + row;
+    t.next_temp = (size_t)m->P * m->n_phi;
+    t.next_torque = (size_t)m->n_temp * t.next_temp;
     return t;
 }
 
-/* angle cell: indices i0, i1 (periodic) and weight w (docs/model.md "Table lookup") */
+/* angle cell (docs/model.md "Table lookup"): global cell nd = floor(theta1/dphi),
+ * nodes i0 = nd mod N, i1 (periodic) and weight w.  The cell is carried from
+ * one evaluation to the next: when nd moved by 0 or +-1 (always, within an RK4
+ * step of a resolved angle grid) i0 follows without an integer division.  The
+ * value does not depend on the carried cell, only the work does. */
 typedef struct {
+    long long nd;
     int i0, i1;
     double w;
 } gk_ph;
 
-static gk_ph phi_cell(const gk_model *m, double theta1)
+/* no carried cell: more than one cell away from every nd that occurs */
+#define GK_CELL_NONE (-(1LL << 62))
+/* |s| below 2^52: nd and s - nd are exact in doubles and fit a long long */
+#define GK_CELL_LIMIT 4503599627370496.0
+
+#define GK_PH_NONE {GK_CELL_NONE, 0, 1, 0.0}
+
+GK_INLINE void phi_cell(const gk_model *m, double theta1, gk_ph *c)
 {
-    gk_ph c;
-    double Phi = m->phi_period_rad;
-    int N = m->n_phi;
-    double phim = theta1 - Phi * floor(theta1 / Phi);
-    double s = phim / m->dphi_rad;
-    double fs = floor(s);
-    if (fs >= (double)N) c.i0 = N - 1;
-    else if (!(fs >= 0.0)) c.i0 = 0; /* also NaN (a non-finite substep): never index out of bounds */
-    else c.i0 = (int)fs;
-    c.w = s - c.i0;
-    c.i1 = c.i0 + 1;
-    if (c.i1 == N) c.i1 = 0;
-    return c;
+    int N = m->n_phi, i0;
+    double s = theta1 * m->inv_dphi;
+    long long nd, dn;
+    if (!(s > -GK_CELL_LIMIT && s < GK_CELL_LIMIT)) {
+        /* an angle of 2^52 cells or more is an integer number of cells (w = 0);
+         * non-finite: node 0 and w = NaN (the state is non-finite, gk_do_step
+         * reports it); never index out of bounds */
+        if (isfinite(s)) {
+            double r = fmod(s, (double)N);
+            if (r < 0.0) r += (double)N;
+            i0 = (int)r;
+            c->w = 0.0;
+        } else {
+            i0 = 0;
+            c->w = s - s;
+        }
+        c->nd = GK_CELL_NONE;
+        c->i0 = i0;
+        c->i1 = (i0 + 1 == N) ? 0 : i0 + 1;
+        return;
+    }
+    nd = (long long)s;               /* toward zero ... */
+    if ((double)nd > s) nd -= 1;     /* ... so floor(s) */
+    dn = nd - c->nd;
+    if (dn == 0) {
+        i0 = c->i0;
+    } else if (dn == 1) {
+        i0 = (c->i0 + 1 == N) ? 0 : c->i0 + 1;
+    } else if (dn == -1) {
+        i0 = (c->i0 == 0) ? N - 1 : c->i0 - 1;
+    } else {
+        long long r = nd % N;
+        if (r < 0) r += N;
+        i0 = (int)r;
+    }
+    c->nd = nd;
+    c->i0 = i0;
+    c->i1 = (i0 + 1 == N) ? 0 : i0 + 1;
+    c->w = s - (double)nd;
 }
 
 /* value and phi-slope of one row of array A at the cell */
-static void row_interp(const double *A, const gk_ph *c, double dphi, double *val, double *slope)
+GK_INLINE void row_interp(const double *A, const gk_ph *c, double inv_dphi, double *val, double *slope)
 {
     double a0 = A[c->i0], a1 = A[c->i1];
     *val = a0 + c->w * (a1 - a0);
-    if (slope != NULL) *slope = (a1 - a0) / dphi;
+    if (slope != NULL) *slope = (a1 - a0) * inv_dphi;
 }
 
 /* row_interp on the nodes of the selected temperature: with two slices each node
  * is A[i] + wT*(B[i] - A[i]) first (docs/model.md "Temperature axis"); B is the
  * next temperature slice of the same torque row */
-static void row_interp_t(const gk_model *m, const double *A, const gk_ph *c, double *val, double *slope)
+GK_INLINE void row_interp_t(const gk_model *m, const gk_tq *t, const double *A, const gk_ph *c,
+                                double *val, double *slope)
 {
     double a0, a1;
     const double *B;
     if (!m->temp_two) {
-        row_interp(A, c, m->dphi_rad, val, slope);
+        row_interp(A, c, m->inv_dphi, val, slope);
         return;
     }
-    B = A + (size_t)m->P * m->n_phi;
+    B = A + t->next_temp;
     a0 = A[c->i0];
     a1 = A[c->i1];
     a0 = a0 + m->temp_w * (B[c->i0] - a0);
     a1 = a1 + m->temp_w * (B[c->i1] - a1);
     *val = a0 + c->w * (a1 - a0);
-    if (slope != NULL) *slope = (a1 - a0) / m->dphi_rad;
+    if (slope != NULL) *slope = (a1 - a0) * m->inv_dphi;
 }
 
 /* k, e, de/dphi, b of slot j */
-static void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j,
-                        double *k, double *e, double *de_dphi, double *b)
+GK_INLINE void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j,
+                               double *k, double *e, double *de_dphi, double *b)
 {
-    int P = m->P, N = m->n_phi;
-    size_t row = (((size_t)t->it * m->n_temp + m->temp_ia) * P + j) * N;  /* [it][ia][j][:] */
-    size_t next_torque = (size_t)m->n_temp * P * N;
-    const double *ka = m->k_N_per_m + row;
-    const double *ea = m->e_m + row;
+    size_t off = (size_t)j * m->n_phi;
+    const double *ka = t->k0 + off;
+    const double *ea = t->e0 + off;
     double kv, ev, es;
-    row_interp_t(m, ka, c, &kv, NULL);
-    row_interp_t(m, ea, c, &ev, &es);
+    row_interp_t(m, t, ka, c, &kv, NULL);
+    row_interp_t(m, t, ea, c, &ev, &es);
     if (t->two_rows) {
         double kv2, ev2, es2;
-        row_interp_t(m, ka + next_torque, c, &kv2, NULL);
-        row_interp_t(m, ea + next_torque, c, &ev2, &es2);
+        row_interp_t(m, t, ka + t->next_torque, c, &kv2, NULL);
+        row_interp_t(m, t, ea + t->next_torque, c, &ev2, &es2);
         kv = kv + t->wT * (kv2 - kv);
         ev = ev + t->wT * (ev2 - ev);
         es = es + t->wT * (es2 - es);
@@ -239,23 +309,24 @@ static void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j
     *k = kv;
     *e = ev;
     if (de_dphi != NULL) *de_dphi = es;
-    if (b != NULL) row_interp(m->backlash_half_m + (size_t)j * N, c, m->dphi_rad, b, NULL);
+    if (b != NULL) row_interp(m->backlash_half_m + off, c, m->inv_dphi, b, NULL);
 }
 
 /* ----------------------------------------------------------------- forces */
 
-/* Total mesh force F at (theta1, omega1, x, v); optionally per-pair forces
- * (pf[P]) and the stiffness of the pairs in contact (*kmesh). */
-static double mesh_force(const gk_model *m, const gk_tq *t, double theta1, double omega1,
-                         double x, double v, double *pf, double *kmesh)
+/* Total mesh force F at (theta1, omega1, x, v) in cell c (updated to theta1);
+ * optionally per-pair forces (pf[P]) and the stiffness of the pairs in contact
+ * (*kmesh). */
+GK_INLINE double mesh_force(const gk_model *m, const gk_tq *t, gk_ph *c, double theta1, double omega1,
+                                double x, double v, double *pf, double *kmesh)
 {
-    gk_ph c = phi_cell(m, theta1);
     double F = 0.0, ks = 0.0;
     int j;
+    phi_cell(m, theta1, c);
     for (j = 0; j < m->P; ++j) {
         double k, e, es, b, d, fc, fd, Fj;
         int region;
-        slot_tables(m, t, &c, j, &k, &e, &es, &b);
+        slot_tables(m, t, c, j, &k, &e, &es, &b);
         d = x - e;                             /* seed 003 eq 6 */
         if (d > b) { fc = k * (d - b); region = 1; }
         else if (d < -b) { fc = k * (d + b); region = -1; }
@@ -280,10 +351,10 @@ static double mesh_force(const gk_model *m, const gk_tq *t, double theta1, doubl
     return F;
 }
 
-static void deriv(const gk_model *m, const gk_tq *t, double T1, double T2,
-                  const double *y, double *dy)
+GK_INLINE void deriv(const gk_model *m, const gk_tq *t, gk_ph *c, double T1, double T2,
+                         const double *y, double *dy)
 {
-    double F = mesh_force(m, t, y[0], y[1], y[2], y[3], NULL, NULL);
+    double F = mesh_force(m, t, c, y[0], y[1], y[2], y[3], NULL, NULL);
     double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
     dy[0] = y[1];
     dy[1] = (T1 - Rb1 * F) / m->I1_kgm2;
@@ -291,6 +362,26 @@ static void deriv(const gk_model *m, const gk_tq *t, double T1, double T2,
     dy[3] = Rb1 * (T1 - Rb1 * F) / m->I1_kgm2 - Rb2 * (Rb2 * F - T2) / m->I2_kgm2;
 }
 
+
+/* RK4 stage input out = y + a*k and the update y + h/6.0*(((k1 + 2k2) + 2k3) + k4),
+ * written out per component so that the state stays in registers at -O2 */
+GK_INLINE void axpy4(const double *y, double a, const double *k, double *out)
+{
+    out[0] = y[0] + a * k[0];
+    out[1] = y[1] + a * k[1];
+    out[2] = y[2] + a * k[2];
+    out[3] = y[3] + a * k[3];
+}
+
+GK_INLINE void rk4_update(double *y, double h, const double *k1, const double *k2, const double *k3,
+                          const double *k4)
+{
+    double h6 = h / 6.0;
+    y[0] = y[0] + h6 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
+    y[1] = y[1] + h6 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+    y[2] = y[2] + h6 * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]);
+    y[3] = y[3] + h6 * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]);
+}
 
 /* --------------------------------------------------------------- rk4_kink
  * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
@@ -311,7 +402,7 @@ typedef struct {
     int kpos[GK_KINK_MAX_SLOTS];     /* seed003: k > 0 inside the cell */
 } gk_mode;
 
-static void cell_nodes(gk_mode *md, int N)
+GK_INLINE void cell_nodes(gk_mode *md, int N)
 {
     double r = md->nd - (double)N * floor(md->nd / (double)N);
     int i0 = (int)r;
@@ -322,17 +413,18 @@ static void cell_nodes(gk_mode *md, int N)
 }
 
 /* k, e, de/dphi, b of slot j at angle th with the cell held */
-static void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, double th, int j,
+GK_INLINE void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, double th, int j,
                           double *k, double *e, double *es, double *b)
 {
     gk_ph c;
+    c.nd = GK_CELL_NONE;
     c.i0 = md->i0;
     c.i1 = md->i1;
-    c.w = (th - md->nd * m->dphi_rad) / m->dphi_rad;
+    c.w = (th - md->nd * m->dphi_rad) * m->inv_dphi;
     slot_tables(m, t, &c, j, k, e, es, b);
 }
 
-static double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
+GK_INLINE double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
                                 double om, double c, int model, int reg, int sub, int kpos)
 {
     double de = es * om, d = x - ev, fc, fd;
@@ -349,7 +441,7 @@ static double pair_force_locked(double kv, double ev, double es, double bv, doub
     return 0.0;
 }
 
-static double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
+GK_INLINE double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
                          double om, double c, int model, int reg, int sub)
 {
     double d = x - ev, fc, fd;
@@ -376,7 +468,7 @@ static double pair_guard(int q, double kv, double ev, double es, double bv, doub
     return (q == 1) ? fc + fd : 1.0;
 }
 
-static int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
+GK_INLINE int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
                       double om, double c)
 {
     double d, fd, fc;
@@ -395,7 +487,7 @@ static int decide_sub(int reg, double kv, double ev, double es, double bv, doubl
     return 1;
 }
 
-static void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+GK_INLINE void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
                          const double *y, double *dy)
 {
     double f = 0.0, Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
@@ -413,26 +505,25 @@ static void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, d
 }
 
 /* classical RK4 of length h from y with first stage f0 given, mode held */
-static void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+GK_INLINE void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
                        const double *y, const double *f0, double h, double *yn)
 {
     double h2 = h / 2.0, h6, k[4], sum[4], yt[4];
-    int q, stage;
-    for (q = 0; q < 4; ++q) {
-        k[q] = f0[q];
-        sum[q] = f0[q];
-    }
-    for (stage = 1; stage < 4; ++stage) {
-        for (q = 0; q < 4; ++q) yt[q] = (stage == 3) ? y[q] + h * k[q] : y[q] + h2 * k[q];
-        deriv_locked(m, t, md, T1, T2, yt, k);
-        for (q = 0; q < 4; ++q) sum[q] = (stage == 3) ? sum[q] + k[q] : sum[q] + 2.0 * k[q];
-    }
+    axpy4(y, h2, f0, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(f0, 2.0, k, sum);                 /* k1 + 2 k2 */
+    axpy4(y, h2, k, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(sum, 2.0, k, sum);                /* + 2 k3 */
+    axpy4(y, h, k, yt);
+    deriv_locked(m, t, md, T1, T2, yt, k);
+    axpy4(sum, 1.0, k, sum);                /* + k4 */
     h6 = h / 6.0;
-    for (q = 0; q < 4; ++q) yn[q] = y[q] + h6 * sum[q];
+    axpy4(y, h6, sum, yn);
 }
 
 /* guard gi at state y: 0 cell start, 1 cell end, 2 + 3 j + q guard q of pair j */
-static double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y)
+GK_INLINE double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y)
 {
     int j, q;
     double kv, ev, es, bv;
@@ -445,7 +536,7 @@ static double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int
                       md->reg[j], md->sub[j]);
 }
 
-static double hermite_guard(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
+GK_INLINE double hermite_guard(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
                             const double *y0, const double *f0, const double *y1, const double *f1,
                             double tau)
 {
@@ -495,6 +586,7 @@ static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const doub
 {
     int j;
     gk_ph half;
+    half.nd = GK_CELL_NONE;
     half.i0 = md->i0;
     half.i1 = md->i1;
     half.w = 0.5;
@@ -518,7 +610,7 @@ static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const doub
 
 static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y)
 {
-    md->nd = floor(y[0] / m->dphi_rad);
+    md->nd = floor(y[0] * m->inv_dphi);
     cell_nodes(md, m->n_phi);
     mode_sync(m, t, md, y, 1);
 }
@@ -600,14 +692,14 @@ int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
                   double omega1_0_rad_s, double T1_Nm)
 {
     gk_tq t;
-    gk_ph c;
+    gk_ph c = GK_PH_NONE;
     double Fm, S = 0.0, lo = 0.0, hi = 0.0;
     int j, it, any = 0;
     if (m == NULL || s == NULL) return GK_ERR_MODEL;
     if (!isfinite(theta1_0_rad) || !isfinite(omega1_0_rad_s) || !isfinite(T1_Nm))
         return GK_ERR_INPUT;
     t = torque_bracket(m, T1_Nm);
-    c = phi_cell(m, theta1_0_rad);
+    phi_cell(m, theta1_0_rad, &c);
     Fm = T1_Nm / m->Rb1_m;
     for (j = 0; j < m->P; ++j) {
         double k, e, b;
@@ -656,13 +748,14 @@ double gk_substeps(double H_s, double h_max_s)
 int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out)
 {
     gk_tq t;
+    gk_ph c = GK_PH_NONE;
     double F, km;
     int j, P;
     if (m == NULL || s == NULL || out == NULL) return GK_ERR_MODEL;
     if (!isfinite(T1_Nm)) return GK_ERR_INPUT;
     P = m->P;
     t = torque_bracket(m, T1_Nm);
-    F = mesh_force(m, &t, s->theta1_rad, s->omega1_rad_s, s->x_m, s->v_m_s,
+    F = mesh_force(m, &t, &c, s->theta1_rad, s->omega1_rad_s, s->x_m, s->v_m_s,
                    out + GK_OUT_PAIR_FORCE, &km);
     /* docs/model.md: mesh_force is the sum of pair_force */
     out[GK_OUT_PINION_ANGLE] = s->theta1_rad;
@@ -681,6 +774,7 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
                double H_s, double h_max_s, double *out)
 {
     gk_tq t;
+    gk_ph c = GK_PH_NONE;
     double y[4], k1[4], k2[4], k3[4], k4[4], yt[4];
     double n, h;
     long i, nsub;
@@ -704,15 +798,14 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
         nsub = 0;
     }
     for (i = 0; i < nsub; ++i) {
-        deriv(m, &t, T1_Nm, T2_Nm, y, k1);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k1[q];
-        deriv(m, &t, T1_Nm, T2_Nm, yt, k2);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + 0.5 * h * k2[q];
-        deriv(m, &t, T1_Nm, T2_Nm, yt, k3);
-        for (q = 0; q < 4; ++q) yt[q] = y[q] + h * k3[q];
-        deriv(m, &t, T1_Nm, T2_Nm, yt, k4);
-        for (q = 0; q < 4; ++q)
-            y[q] = y[q] + h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q]);
+        deriv(m, &t, &c, T1_Nm, T2_Nm, y, k1);
+        axpy4(y, 0.5 * h, k1, yt);
+        deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k2);
+        axpy4(y, 0.5 * h, k2, yt);
+        deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k3);
+        axpy4(y, h, k3, yt);
+        deriv(m, &t, &c, T1_Nm, T2_Nm, yt, k4);
+        rk4_update(y, h, k1, k2, k3, k4);
     }
     for (q = 0; q < 4; ++q)
         if (!isfinite(y[q])) return GK_ERR_NONFINITE;

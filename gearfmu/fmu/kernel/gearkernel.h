@@ -66,6 +66,7 @@ typedef struct gk_model {
     const double *backlash_half_m;  /* [P][n_phi] */
     double phi_period_rad;
     double dphi_rad;                /* phi_period_rad / n_phi */
+    double inv_dphi;                /* n_phi / phi_period_rad (1/rad): the lookup multiplies by it */
     double Rb1_m, Rb2_m;            /* base radii */
     double I1_kgm2, I2_kgm2;        /* inertias */
     double k_mean_N_per_m;

@@ -44,7 +44,7 @@ STATE_MAGIC = b"GEARFMUS"
 STATE_VERSION = 1
 _STATE_HEAD = struct.Struct("<8sHHI32sIII")  # magic, version, flags, reserved, fingerprint, n_state, n_out, n_values
 _STATE_TAIL = struct.Struct("<ddQ")          # zeta applied (NaN = none), start time, accepted steps
-_FLAG_INITIALIZED, _FLAG_WARNED_RANGE, _FLAG_TERMINATED = 1, 2, 4
+_FLAG_INITIALIZED, _FLAG_WARNED_RANGE, _FLAG_TERMINATED, _FLAG_INIT_MODE = 1, 2, 4, 8
 
 _KERNEL_ERRORS = {
     1: "bad table dimensions or scalars",
@@ -127,41 +127,6 @@ def _bind(lib):
     return lib
 
 
-def _pin_wrapper_state(resources, cfg):
-    """Work around pythonfmu 0.7.0's exit crash (docs/fmu.md, gearfmu.fmu.pythonfmu_build.wrapper_exit_fix):
-    add one reference to the wrapper's static shared_ptr<PyState> so that its
-    two releases at process exit no longer write into freed memory.  Applied
-    at most once per loaded wrapper library, only to the exact wrapper binary
-    the offsets were taken from (checked by SHA-256), only on Linux."""
-    fix = cfg.get("wrapper_exit_fix")
-    if not fix or not hasattr(os, "RTLD_NOLOAD") or os.environ.get("GEARFMU_NO_WRAPPER_FIX"):
-        return "skipped"
-    wrapper = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "linux64",
-                           cfg["model_identifier"] + ".so")
-    if not os.path.isfile(wrapper) or _sha256(wrapper) != fix["binary_sha256"]:
-        return "skipped"
-    import sys
-    pinned = sys.__dict__.setdefault("_gearfmu_pinned_wrappers", set())
-    try:
-        lib = ctypes.CDLL(wrapper, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # holds the library loaded
-    except OSError:
-        return "skipped"
-    base = ctypes.cast(lib.fmi2Instantiate, ctypes.c_void_p).value
-    addr = base + int(fix["pystate_minus_fmi2Instantiate"])
-    if addr in pinned:
-        return "pinned"
-    ctrl = ctypes.c_void_p.from_address(addr + 8).value  # shared_ptr = {T*, control block*}
-    if not ctrl:
-        return "skipped"
-    use = ctypes.c_int.from_address(ctrl + 8)  # _Sp_counted_base: vptr, use count, weak count
-    if use.value < 1:
-        return "skipped"
-    use.value += 1
-    pinned.add(addr)
-    sys.__dict__.setdefault("_gearfmu_pinned_libs", []).append(lib)
-    return "pinned"
-
-
 class GearFmuSlave(Fmi2Slave):
     """Two-inertia spur gear pair (docs/model.md) over the C kernel."""
 
@@ -174,10 +139,6 @@ class GearFmuSlave(Fmi2Slave):
         if res is None:
             raise GearFmuResourceError("resources: the host gave no resource location")
         cfg = _read_config(res)
-        try:  # first, so that even a refused instantiation cannot crash the host at exit
-            self._wrapper_fix = _pin_wrapper_state(res, cfg)
-        except Exception as exc:  # noqa: BLE001 - a workaround must never stop the FMU
-            self._wrapper_fix = f"failed: {exc!r}"
         try:
             meta, arr = _load_resources(res, cfg)
         except GearFmuResourceError as exc:
@@ -225,6 +186,8 @@ class GearFmuSlave(Fmi2Slave):
         self._slots = P
         self._torque_range = (float(self._torque[0]), float(self._torque[-1])) if nt > 1 else None
         self._initialized = False
+        self._in_init = False  # between fmi2EnterInitializationMode and fmi2ExitInitializationMode
+        self._dirty = True     # a value was set since the outputs were last computed
         self._zeta_applied = None
         self._warned_range = False
         self._terminated = False
@@ -235,6 +198,7 @@ class GearFmuSlave(Fmi2Slave):
              [v["name"] for v in cfg["variables"]]]).encode("utf-8")).digest()
         self._v = {}
         self._limits = {}
+        self._output_vrs = {int(ent["vr"]) for ent in cfg["variables"] if ent["causality"] == "output"}
         for ent in cfg["variables"]:
             self._register(ent)
 
@@ -377,10 +341,38 @@ class GearFmuSlave(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._t0 = start_time
 
-    def exit_initialization_mode(self):
-        # never raise here: a failure is logged and reported by the first do_step
+    # Initialization Mode (FMI 2.0 section 4.2.4): from enter on, every output is
+    # the initial one computed from the values set so far, by the same _init_state
+    # that exit uses; a value set in this mode marks the outputs dirty and the next
+    # get of an output recomputes them.
+    def enter_initialization_mode(self):
+        self._in_init = True
+        self._dirty = True
+
+    def _refresh_initial_outputs(self, vrs):
+        if not (self._in_init and self._dirty) or not any(int(vr) in self._output_vrs for vr in vrs):
+            return
         try:
-            self._init_state(getattr(self, "_t0", 0.0))
+            ok = self._init_state(self._t0)
+        except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
+            self.log(f"initialisation failed: {exc!r}", Fmi2Status.error)
+            ok = False
+        if ok:
+            self._dirty = False
+        else:
+            self._out[:] = float("nan")
+            self.log("the initial outputs cannot be computed from the values set (reasons above); "
+                     "outputs are NaN", Fmi2Status.error)
+
+    def exit_initialization_mode(self):
+        # never raise here (pythonfmu 0.7.0 would turn it into fmi2Fatal and free the slave):
+        # a failure is logged and reported by the first do_step
+        self._in_init = False
+        if not self._dirty and self._initialized:
+            return
+        try:
+            if self._init_state(self._t0):
+                self._dirty = False
         except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
             self.log(f"initialisation failed: {exc!r}", Fmi2Status.error)
             self._initialized = False
@@ -432,6 +424,7 @@ class GearFmuSlave(Fmi2Slave):
     # a getter returns NaN / 0 for value references it cannot serve.
     def _guarded_get(self, kind, vrs, fill):
         try:
+            self._refresh_initial_outputs(vrs)
             return getattr(super(), "get_" + kind)(vrs)
         except Exception as exc:  # noqa: BLE001
             self.log(f"fmi2Get{kind.capitalize()}({list(vrs)!r}) refused: {exc}; returned {fill!r}",
@@ -445,6 +438,7 @@ class GearFmuSlave(Fmi2Slave):
                          Fmi2Status.error)
                 return
             getattr(super(), "set_" + kind)(vrs, values)
+            self._dirty = True
         except Exception as exc:  # noqa: BLE001
             self.log(f"fmi2Set{kind.capitalize()}({list(vrs)!r}) refused: {exc}", Fmi2Status.error)
 
@@ -484,7 +478,7 @@ class GearFmuSlave(Fmi2Slave):
         try:
             names = self._state_values()
             flags = ((_FLAG_INITIALIZED if self._initialized else 0) | (_FLAG_WARNED_RANGE if self._warned_range else 0)
-                     | (_FLAG_TERMINATED if self._terminated else 0))
+                     | (_FLAG_TERMINATED if self._terminated else 0) | (_FLAG_INIT_MODE if self._in_init else 0))
             state = self._state.tobytes()
             body = b"".join([
                 _STATE_HEAD.pack(STATE_MAGIC, STATE_VERSION, flags, 0, self._fingerprint, len(state),
@@ -551,6 +545,8 @@ class GearFmuSlave(Fmi2Slave):
         self._initialized = bool(flags & _FLAG_INITIALIZED)
         self._warned_range = bool(flags & _FLAG_WARNED_RANGE)
         self._terminated = bool(flags & _FLAG_TERMINATED)
+        self._in_init = bool(flags & _FLAG_INIT_MODE)
+        self._dirty = self._in_init or not self._initialized
         self._t0 = t0
         self._n_steps = n_steps
         return None

@@ -43,11 +43,16 @@
 #define GF_MAX_LINE 4096
 #define GF_MAX_NAME 128
 #define GF_SNAPSHOT_MAGIC 0x47464d55u /* "GFMU" */
-#define GF_SNAPSHOT_VERSION 1u
+#define GF_SNAPSHOT_VERSION 2u /* 2: mode is a GF_* state bit */
 
 enum { GF_PARAMETER = 0, GF_INPUT = 1, GF_OUTPUT = 2, GF_OTHER = 3 };
 enum { GF_FIXED = 0, GF_TUNABLE = 1, GF_CONTINUOUS = 2, GF_OTHER_VAR = 3 };
-enum { GF_INSTANTIATED = 0, GF_INIT_MODE = 1, GF_STEP_MODE = 2, GF_TERMINATED = 3, GF_BROKEN = 4 };
+/* FMI 2.0 Co-Simulation states (standard section 4.2.4, figure 2 and the table
+ * of allowed calls), one bit each so that a set of states is a mask.  A
+ * discarded doStep leaves the state unchanged (nothing was integrated), so the
+ * instance stays in GF_STEP_MODE (stepComplete) and may step again. */
+enum { GF_INSTANTIATED = 1, GF_INIT_MODE = 2, GF_STEP_MODE = 4, GF_TERMINATED = 8, GF_ERROR = 16 };
+#define GF_ANY_STATE (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR)
 
 typedef struct {
     int causality;
@@ -96,6 +101,7 @@ typedef struct {
     double temp_lo, temp_hi;
     int mode;
     int initialized;
+    int dirty;            /* a value changed since the outputs were last computed (initialization mode) */
     int warned_range;
     int zeta_valid;
     double zeta_applied;
@@ -117,6 +123,100 @@ static void gf_log(gf_inst *c, fmi2Status status, const char *category, const ch
     va_end(ap);
     c->cb.logger(c->cb.componentEnvironment, c->instance_name, status, category, "%s", msg);
 }
+
+/* ------------------------------------------------------ state machine */
+/* Which fmi2 function may be called in which state: one table, checked at the
+ * entry of every function (FMI 2.0 standard section 4.2.4, the table of
+ * allowed calls for Co-Simulation; the same scheme as the Modelica
+ * Reference-FMUs' fmi2Functions.c).  A call outside its states is refused
+ * with fmi2Error and a log message naming the function and the state; the
+ * instance is left as it was. */
+typedef enum {
+    F_SetDebugLogging, F_SetupExperiment, F_EnterInitializationMode, F_ExitInitializationMode,
+    F_Terminate, F_Reset, F_FreeInstance,
+    F_GetReal, F_GetInteger, F_GetBoolean, F_GetString,
+    F_SetReal, F_SetInteger, F_SetBoolean, F_SetString,
+    F_GetFMUstate, F_SetFMUstate, F_FreeFMUstate, F_SerializedFMUstateSize, F_SerializeFMUstate,
+    F_DeSerializeFMUstate, F_GetDirectionalDerivative,
+    F_SetRealInputDerivatives, F_GetRealOutputDerivatives, F_DoStep, F_CancelStep,
+    F_GetStatus, F_GetRealStatus, F_GetIntegerStatus, F_GetBooleanStatus, F_GetStringStatus,
+    F_COUNT
+} gf_fn;
+
+#define GF_GETTERS (GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR)
+#define GF_SETTERS (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE)
+#define GF_STATUS (GF_STEP_MODE | GF_TERMINATED)
+
+static const struct {
+    const char *name;
+    int allowed; /* mask of GF_* states; 0: never (stepInProgress does not exist here) */
+} GF_CALLS[F_COUNT] = {
+    {"fmi2SetDebugLogging", GF_ANY_STATE},
+    {"fmi2SetupExperiment", GF_INSTANTIATED},
+    {"fmi2EnterInitializationMode", GF_INSTANTIATED},
+    {"fmi2ExitInitializationMode", GF_INIT_MODE},
+    {"fmi2Terminate", GF_STEP_MODE},
+    {"fmi2Reset", GF_ANY_STATE},
+    {"fmi2FreeInstance", GF_ANY_STATE},
+    {"fmi2GetReal", GF_GETTERS},
+    {"fmi2GetInteger", GF_GETTERS},
+    {"fmi2GetBoolean", GF_GETTERS},
+    {"fmi2GetString", GF_GETTERS},
+    {"fmi2SetReal", GF_SETTERS},
+    {"fmi2SetInteger", GF_SETTERS},
+    {"fmi2SetBoolean", GF_SETTERS},
+    {"fmi2SetString", GF_SETTERS},
+    {"fmi2GetFMUstate", GF_ANY_STATE},
+    {"fmi2SetFMUstate", GF_ANY_STATE},
+    {"fmi2FreeFMUstate", GF_ANY_STATE},
+    {"fmi2SerializedFMUstateSize", GF_ANY_STATE},
+    {"fmi2SerializeFMUstate", GF_ANY_STATE},
+    {"fmi2DeSerializeFMUstate", GF_ANY_STATE},
+    {"fmi2GetDirectionalDerivative", GF_GETTERS},
+    {"fmi2SetRealInputDerivatives", GF_SETTERS},
+    {"fmi2GetRealOutputDerivatives", GF_STEP_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi2DoStep", GF_STEP_MODE},
+    {"fmi2CancelStep", 0},
+    {"fmi2GetStatus", GF_STATUS},
+    {"fmi2GetRealStatus", GF_STATUS},
+    {"fmi2GetIntegerStatus", GF_STATUS},
+    {"fmi2GetBooleanStatus", GF_STATUS},
+    {"fmi2GetStringStatus", GF_STATUS},
+};
+
+static const char *state_name(int mode)
+{
+    switch (mode) {
+    case GF_INSTANTIATED: return "instantiated";
+    case GF_INIT_MODE: return "initializationMode";
+    case GF_STEP_MODE: return "stepComplete";
+    case GF_TERMINATED: return "terminated";
+    case GF_ERROR: return "error";
+    default: return "unknown";
+    }
+}
+
+/* 1 if fn may be called now, else logs why and returns 0 (the caller returns fmi2Error) */
+static int allowed(gf_inst *c, gf_fn fn)
+{
+    char states[160];
+    int bit;
+    size_t n = 0;
+    if (c == NULL) return 0; /* no instance: nothing to log to */
+    if (c->mode & GF_CALLS[fn].allowed) return 1;
+    states[0] = '\0';
+    for (bit = GF_INSTANTIATED; bit <= GF_ERROR; bit <<= 1)
+        if (GF_CALLS[fn].allowed & bit) n += (size_t)snprintf(states + n, sizeof states - n, "%s%s",
+                                                              n ? ", " : "", state_name(bit));
+    gf_log(c, fmi2Error, "logStatusError", "%s: illegal call sequence: not allowed in state %s (allowed in: %s)",
+           GF_CALLS[fn].name, state_name(c->mode),
+           n ? states : "stepInProgress, which the synchronous fmi2DoStep never enters");
+    return 0;
+}
+
+#define GF_GUARD(comp, fn)                                                     \
+    gf_inst *c = (gf_inst *)(comp);                                            \
+    if (!allowed(c, fn)) return fmi2Error
 
 static const char *kernel_error(int st)
 {
@@ -216,6 +316,14 @@ static void sha_final_hex(gf_sha256 *s, char hex[65])
 }
 
 /* ----------------------------------------------------------- utilities */
+/* a stored Integer value as int; a value no int holds (only from a foreign or
+ * corrupted FMU state) becomes -1, which every integer parameter here rejects
+ * (a plain cast would be undefined behaviour) */
+static int as_int(double x)
+{
+    return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
+}
+
 static void copy_str(char *dst, size_t cap, const char *src)
 {
     size_t n = strlen(src);
@@ -548,7 +656,7 @@ static int apply_damping(gf_inst *c)
         gf_log(c, fmi2Error, "logStatusError", "%s; rejected", buf);
         return 0;
     }
-    st = gk_set_damping(c->model, zeta, (int)c->values[c->vr_dm]);
+    st = gk_set_damping(c->model, zeta, as_int(c->values[c->vr_dm]));
     if (st != GK_OK) {
         gf_log(c, fmi2Error, "logStatusError", "damping_ratio = %.17g: %s; rejected", zeta, kernel_error(st));
         return 0;
@@ -598,6 +706,7 @@ static int init_state(gf_inst *c)
     double T1;
     names[0] = c->vr_zeta; names[1] = c->vr_w0; names[2] = c->vr_th0;
     names[3] = c->vr_hmax; names[4] = c->vr_dm; names[5] = c->vr_T1;
+    c->initialized = 0;
     for (i = 0; i < 6; ++i)
         if (bad_value(c, names[i], buf, sizeof buf) != NULL) {
             gf_log(c, fmi2Error, "logStatusError", "%s; cannot compute the initial state", buf);
@@ -615,7 +724,7 @@ static int init_state(gf_inst *c)
     }
 #ifdef GK_INTEGRATOR_RK4 /* the kernel has the integrator choice (gk_set_integrator) */
     if (ok && c->vr_integrator >= 0) {
-        st = gk_set_integrator(c->model, (int)c->values[c->vr_integrator]);
+        st = gk_set_integrator(c->model, as_int(c->values[c->vr_integrator]));
         if (st != GK_OK) {
             gf_log(c, fmi2Error, "logStatusError", "integrator = %g: %s", c->values[c->vr_integrator],
                    kernel_error(st));
@@ -649,6 +758,7 @@ static void reset_values(gf_inst *c)
     for (i = 0; i < c->n_out; ++i) c->out[i] = 0.0;
     memset(&c->state, 0, sizeof c->state);
     c->initialized = 0;
+    c->dirty = 1;
     c->warned_range = 0;
     c->zeta_valid = 0;
     c->zeta_applied = 0.0;
@@ -663,10 +773,9 @@ FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
 FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn, size_t nCategories,
                                            const fmi2String categories[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_SetDebugLogging);
     (void)nCategories;
     (void)categories;
-    if (c == NULL) return fmi2Error;
     c->logging_on = loggingOn ? 1 : 0;
     return fmi2OK;
 }
@@ -810,9 +919,8 @@ FMI2_Export void fmi2FreeInstance(fmi2Component comp) { free_inst((gf_inst *)com
 FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                            fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_SetupExperiment);
     (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
-    if (c == NULL) return fmi2Error;
     if (!isfinite(startTime)) {
         gf_log(c, fmi2Error, "logStatusError", "fmi2SetupExperiment: startTime not finite");
         return fmi2Error;
@@ -821,41 +929,59 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toler
     return fmi2OK;
 }
 
+/* Initialization Mode (FMI 2.0 section 3.2.3 / 4.2.4): from here on every
+ * output is the initial one computed from the values set so far -- the same
+ * init_state (gk_initialize + gk_outputs) that exit uses; a value set in this
+ * mode marks the outputs dirty and the next get of an output recomputes them. */
 FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL) return fmi2Error;
+    GF_GUARD(comp, F_EnterInitializationMode);
     c->mode = GF_INIT_MODE;
+    c->dirty = 1;
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL) return fmi2Error;
+    GF_GUARD(comp, F_ExitInitializationMode);
+    if (c->dirty || !c->initialized) {
+        if (!init_state(c)) {
+            c->mode = GF_ERROR;
+            gf_log(c, fmi2Error, "logStatusError",
+                   "fmi2ExitInitializationMode: no initial state from the values set (reasons above); "
+                   "the instance is in state error (fmi2Reset or fmi2FreeInstance)");
+            return fmi2Error;
+        }
+        c->dirty = 0;
+    }
     c->mode = GF_STEP_MODE;
-    /* as the pythonfmu runtime: a failure is logged and retried by the first doStep */
-    init_state(c);
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2Terminate(fmi2Component comp)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL) return fmi2Error;
+    GF_GUARD(comp, F_Terminate);
     c->mode = GF_TERMINATED;
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2Reset(fmi2Component comp)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL) return fmi2Error;
+    GF_GUARD(comp, F_Reset);
     reset_values(c);
     return fmi2OK;
 }
 
 /* ------------------------------------------------------- FMI: get / set */
+static int null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const void *value)
+{
+    if (nvr > 0 && (vr == NULL || value == NULL)) {
+        gf_log(c, fmi2Error, "logStatusError", "%s: vr[] or value[] is NULL with nvr = %lu", fn, (unsigned long)nvr);
+        return 1;
+    }
+    return 0;
+}
+
 static int check_vr(gf_inst *c, const char *fn, fmi2ValueReference vr, int want_integer)
 {
     if ((long)vr >= (long)c->n_vars) {
@@ -890,88 +1016,113 @@ static int settable(gf_inst *c, const char *fn, fmi2ValueReference vr)
     return 0;
 }
 
+/* In initialization mode, bring the outputs up to date with the values set
+ * (only when an output is asked for); 0 if they cannot be computed (logged). */
+static int refresh_outputs(gf_inst *c, const char *fn, const fmi2ValueReference vr[], size_t nvr)
+{
+    size_t i;
+    int want = 0;
+    if (c->mode != GF_INIT_MODE || !c->dirty) return 1;
+    for (i = 0; i < nvr && !want; ++i) want = c->vars[vr[i]].causality == GF_OUTPUT;
+    if (!want) return 1;
+    if (!init_state(c)) {
+        gf_log(c, fmi2Error, "logStatusError", "%s: the initial outputs cannot be computed from the values set "
+               "(reasons above)", fn);
+        return 0;
+    }
+    c->dirty = 0;
+    return 1;
+}
+
 FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
 {
-    gf_inst *c = (gf_inst *)comp;
     size_t i;
-    if (c == NULL || (nvr > 0 && (vr == NULL || value == NULL))) return fmi2Error;
-    for (i = 0; i < nvr; ++i) {
+    GF_GUARD(comp, F_GetReal);
+    if (null_args(c, "fmi2GetReal", nvr, vr, value)) return fmi2Error;
+    for (i = 0; i < nvr; ++i)
         if (!check_vr(c, "fmi2GetReal", vr[i], 0)) return fmi2Error;
-        value[i] = get_value(c, vr[i]);
-    }
+    if (!refresh_outputs(c, "fmi2GetReal", vr, nvr)) return fmi2Error;
+    for (i = 0; i < nvr; ++i) value[i] = get_value(c, vr[i]);
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                       fmi2Integer value[])
 {
-    gf_inst *c = (gf_inst *)comp;
     size_t i;
-    if (c == NULL || (nvr > 0 && (vr == NULL || value == NULL))) return fmi2Error;
-    for (i = 0; i < nvr; ++i) {
+    GF_GUARD(comp, F_GetInteger);
+    if (null_args(c, "fmi2GetInteger", nvr, vr, value)) return fmi2Error;
+    for (i = 0; i < nvr; ++i)
         if (!check_vr(c, "fmi2GetInteger", vr[i], 1)) return fmi2Error;
-        value[i] = (fmi2Integer)get_value(c, vr[i]);
-    }
+    if (!refresh_outputs(c, "fmi2GetInteger", vr, nvr)) return fmi2Error;
+    for (i = 0; i < nvr; ++i) value[i] = (fmi2Integer)as_int(get_value(c, vr[i]));
     return fmi2OK;
+}
+
+static fmi2Status no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr)
+{
+    if (nvr == 0) return fmi2OK;
+    gf_log(c, fmi2Error, "logStatusError", "%s: this FMU has no %s variables", fn, type);
+    return fmi2Error;
 }
 
 FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                       fmi2Boolean value[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_GetBoolean);
     (void)vr; (void)value;
-    if (c == NULL) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
-    gf_log(c, fmi2Error, "logStatusError", "fmi2GetBoolean: this FMU has no Boolean variables");
-    return fmi2Error;
+    return no_variables_of(c, "fmi2GetBoolean", "Boolean", nvr);
 }
 
 FMI2_Export fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                      fmi2String value[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_GetString);
     (void)vr; (void)value;
-    if (c == NULL) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
-    gf_log(c, fmi2Error, "logStatusError", "fmi2GetString: this FMU has no String variables");
-    return fmi2Error;
+    return no_variables_of(c, "fmi2GetString", "String", nvr);
 }
 
 FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                    const fmi2Real value[])
 {
-    gf_inst *c = (gf_inst *)comp;
     size_t i;
-    if (c == NULL || (nvr > 0 && (vr == NULL || value == NULL))) return fmi2Error;
+    GF_GUARD(comp, F_SetReal);
+    if (null_args(c, "fmi2SetReal", nvr, vr, value)) return fmi2Error;
     for (i = 0; i < nvr; ++i)
         if (!check_vr(c, "fmi2SetReal", vr[i], 0) || !settable(c, "fmi2SetReal", vr[i])) return fmi2Error;
-    /* values are stored as given (NaN included); doStep checks them and discards */
+    /* values are stored as given (NaN included); doStep / the initial state check them */
     for (i = 0; i < nvr; ++i) c->values[vr[i]] = value[i];
+    if (nvr > 0) c->dirty = 1;
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                       const fmi2Integer value[])
 {
-    gf_inst *c = (gf_inst *)comp;
     size_t i;
-    if (c == NULL || (nvr > 0 && (vr == NULL || value == NULL))) return fmi2Error;
+    GF_GUARD(comp, F_SetInteger);
+    if (null_args(c, "fmi2SetInteger", nvr, vr, value)) return fmi2Error;
     for (i = 0; i < nvr; ++i)
         if (!check_vr(c, "fmi2SetInteger", vr[i], 1) || !settable(c, "fmi2SetInteger", vr[i])) return fmi2Error;
     for (i = 0; i < nvr; ++i) c->values[vr[i]] = (double)value[i];
+    if (nvr > 0) c->dirty = 1;
     return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                       const fmi2Boolean value[])
 {
-    return fmi2GetBoolean(comp, vr, nvr, (fmi2Boolean *)value);
+    GF_GUARD(comp, F_SetBoolean);
+    (void)vr; (void)value;
+    return no_variables_of(c, "fmi2SetBoolean", "Boolean", nvr);
 }
 
 FMI2_Export fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                      const fmi2String value[])
 {
-    return fmi2GetString(comp, vr, nvr, (fmi2String *)value);
+    GF_GUARD(comp, F_SetString);
+    (void)vr; (void)value;
+    return no_variables_of(c, "fmi2SetString", "String", nvr);
 }
 
 /* ------------------------------------------------------ FMI: FMU state */
@@ -1015,7 +1166,12 @@ static int snap_read(gf_inst *c, const unsigned char *p, size_t size, const char
         gf_log(c, fmi2Error, "logStatusError", "%s: not a state of this FMU (header mismatch)", fn);
         return 0;
     }
+    if ((h.mode & GF_ANY_STATE) == 0 || (h.mode & (h.mode - 1)) != 0 || (h.initialized & ~1) != 0) {
+        gf_log(c, fmi2Error, "logStatusError", "%s: state has an invalid FMI state %d", fn, (int)h.mode);
+        return 0;
+    }
     c->mode = h.mode;
+    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
     c->initialized = h.initialized;
     c->warned_range = h.warned_range;
     c->time = h.time;
@@ -1024,7 +1180,7 @@ static int snap_read(gf_inst *c, const unsigned char *p, size_t size, const char
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
     /* the kernel model's integrator and damping are derived from the restored values */
 #ifdef GK_INTEGRATOR_RK4
-    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, (int)c->values[c->vr_integrator]) != GK_OK) {
+    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, as_int(c->values[c->vr_integrator])) != GK_OK) {
         gf_log(c, fmi2Error, "logStatusError", "%s: integrator %g of the state is invalid", fn,
                c->values[c->vr_integrator]);
         return 0;
@@ -1042,10 +1198,13 @@ typedef struct {
 
 FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
 {
-    gf_inst *c = (gf_inst *)comp;
     gf_state_box *box;
     size_t n;
-    if (c == NULL || FMUstate == NULL) return fmi2Error;
+    GF_GUARD(comp, F_GetFMUstate);
+    if (FMUstate == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2GetFMUstate: FMUstate is NULL");
+        return fmi2Error;
+    }
     n = snap_size(c);
     box = (gf_state_box *)*FMUstate;
     if (box == NULL || box->size != n) {
@@ -1065,15 +1224,19 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstat
 
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate)
 {
-    gf_inst *c = (gf_inst *)comp;
     gf_state_box *box = (gf_state_box *)FMUstate;
-    if (c == NULL || box == NULL) return fmi2Error;
+    GF_GUARD(comp, F_SetFMUstate);
+    if (box == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2SetFMUstate: FMUstate is NULL");
+        return fmi2Error;
+    }
     return snap_read(c, (const unsigned char *)(box + 1), box->size, "fmi2SetFMUstate") ? fmi2OK : fmi2Error;
 }
 
 FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
 {
-    (void)comp;
+    GF_GUARD(comp, F_FreeFMUstate);
+    (void)c;
     if (FMUstate == NULL) return fmi2OK;
     free(*FMUstate);
     *FMUstate = NULL;
@@ -1082,9 +1245,12 @@ FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUsta
 
 FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate, size_t *size)
 {
-    gf_inst *c = (gf_inst *)comp;
     gf_state_box *box = (gf_state_box *)FMUstate;
-    if (c == NULL || box == NULL || size == NULL) return fmi2Error;
+    GF_GUARD(comp, F_SerializedFMUstateSize);
+    if (box == NULL || size == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2SerializedFMUstateSize: FMUstate or size is NULL");
+        return fmi2Error;
+    }
     *size = box->size;
     return fmi2OK;
 }
@@ -1092,9 +1258,12 @@ FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUsta
 FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
                                              size_t size)
 {
-    gf_inst *c = (gf_inst *)comp;
     gf_state_box *box = (gf_state_box *)FMUstate;
-    if (c == NULL || box == NULL || serializedState == NULL) return fmi2Error;
+    GF_GUARD(comp, F_SerializeFMUstate);
+    if (box == NULL || serializedState == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
+        return fmi2Error;
+    }
     if (size < box->size) {
         gf_log(c, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: buffer of %lu bytes, need %lu",
                (unsigned long)size, (unsigned long)box->size);
@@ -1107,10 +1276,13 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FM
 FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serializedState[], size_t size,
                                                fmi2FMUstate *FMUstate)
 {
-    gf_inst *c = (gf_inst *)comp;
     gf_state_box *box;
     gf_snap_header h;
-    if (c == NULL || serializedState == NULL || FMUstate == NULL) return fmi2Error;
+    GF_GUARD(comp, F_DeSerializeFMUstate);
+    if (serializedState == NULL || FMUstate == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2DeSerializeFMUstate: serializedState or FMUstate is NULL");
+        return fmi2Error;
+    }
     if (size != snap_size(c)) {
         gf_log(c, fmi2Error, "logStatusError", "fmi2DeSerializeFMUstate: %lu bytes, this FMU's state has %lu",
                (unsigned long)size, (unsigned long)snap_size(c));
@@ -1122,7 +1294,10 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byt
         return fmi2Error;
     }
     box = (gf_state_box *)malloc(sizeof(gf_state_box) + size);
-    if (box == NULL) return fmi2Error;
+    if (box == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2DeSerializeFMUstate: out of memory");
+        return fmi2Error;
+    }
     box->size = size;
     memcpy(box + 1, serializedState, size);
     free(*FMUstate);
@@ -1134,7 +1309,7 @@ FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fm
                                                     size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                                     size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_GetDirectionalDerivative);
     (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
     gf_log(c, fmi2Error, "logStatusError", "fmi2GetDirectionalDerivative: not provided");
     return fmi2Error;
@@ -1144,7 +1319,7 @@ FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fm
 FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                                    const fmi2Integer order[], const fmi2Real value[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_SetRealInputDerivatives);
     (void)vr; (void)order; (void)value;
     if (nvr == 0) return fmi2OK;
     gf_log(c, fmi2Error, "logStatusError", "fmi2SetRealInputDerivatives: canInterpolateInputs is false");
@@ -1154,7 +1329,7 @@ FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi
 FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                                     const fmi2Integer order[], fmi2Real value[])
 {
-    gf_inst *c = (gf_inst *)comp;
+    GF_GUARD(comp, F_GetRealOutputDerivatives);
     (void)vr; (void)order; (void)value;
     if (nvr == 0) return fmi2OK;
     gf_log(c, fmi2Error, "logStatusError", "fmi2GetRealOutputDerivatives: maxOutputDerivativeOrder is 0");
@@ -1164,16 +1339,11 @@ FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fm
 FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
                                   fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    gf_inst *c = (gf_inst *)comp;
     char buf[512];
     double T1, T2, H = communicationStepSize;
     int st, bad = 0;
+    GF_GUARD(comp, F_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (c == NULL) return fmi2Error;
-    if (c->mode != GF_STEP_MODE) {
-        gf_log(c, fmi2Error, "logStatusError", "fmi2DoStep: not in step mode (call fmi2ExitInitializationMode)");
-        return fmi2Error;
-    }
     if (isfinite(currentCommunicationPoint)) c->time = currentCommunicationPoint;
     if (!c->initialized && !init_state(c)) return fmi2Discard;
     if (bad_value(c, c->vr_T1, buf, sizeof buf) != NULL) {
@@ -1211,47 +1381,65 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
 
 FMI2_Export fmi2Status fmi2CancelStep(fmi2Component comp)
 {
-    gf_inst *c = (gf_inst *)comp;
-    gf_log(c, fmi2Error, "logStatusError", "fmi2CancelStep: doStep is synchronous, nothing to cancel");
+    allowed((gf_inst *)comp, F_CancelStep); /* never allowed: logs why */
     return fmi2Error;
+}
+
+/* fmi2Get*Status: this FMU's doStep is synchronous (never fmi2Pending), so only
+ * fmi2LastSuccessfulTime and fmi2Terminated have an answer; any other kind is
+ * fmi2Discard with a log message (FMI 2.0 section 4.2.3). */
+static fmi2Status no_status(gf_inst *c, const char *fn, int kind)
+{
+    gf_log(c, fmi2Discard, "logStatusDiscard", "%s: status kind %d not provided (fmi2DoStep is synchronous and "
+           "never returns fmi2Pending)", fn, kind);
+    return fmi2Discard;
 }
 
 FMI2_Export fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status *value)
 {
-    (void)comp; (void)s; (void)value;
-    return fmi2Discard;
+    GF_GUARD(comp, F_GetStatus);
+    (void)value;
+    return no_status(c, "fmi2GetStatus", (int)s);
 }
 
 FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real *value)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL || value == NULL) return fmi2Error;
+    GF_GUARD(comp, F_GetRealStatus);
+    if (value == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2GetRealStatus: value is NULL");
+        return fmi2Error;
+    }
     if (s == fmi2LastSuccessfulTime) {
         *value = c->time;
         return fmi2OK;
     }
-    return fmi2Discard;
+    return no_status(c, "fmi2GetRealStatus", (int)s);
 }
 
 FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer *value)
 {
-    (void)comp; (void)s; (void)value;
-    return fmi2Discard;
+    GF_GUARD(comp, F_GetIntegerStatus);
+    (void)value;
+    return no_status(c, "fmi2GetIntegerStatus", (int)s);
 }
 
 FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    gf_inst *c = (gf_inst *)comp;
-    if (c == NULL || value == NULL) return fmi2Error;
+    GF_GUARD(comp, F_GetBooleanStatus);
+    if (value == NULL) {
+        gf_log(c, fmi2Error, "logStatusError", "fmi2GetBooleanStatus: value is NULL");
+        return fmi2Error;
+    }
     if (s == fmi2Terminated) {
         *value = fmi2False;
         return fmi2OK;
     }
-    return fmi2Discard;
+    return no_status(c, "fmi2GetBooleanStatus", (int)s);
 }
 
 FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String *value)
 {
-    (void)comp; (void)s; (void)value;
-    return fmi2Discard;
+    GF_GUARD(comp, F_GetStringStatus);
+    (void)value;
+    return no_status(c, "fmi2GetStringStatus", (int)s);
 }

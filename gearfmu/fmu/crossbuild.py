@@ -1,0 +1,307 @@
+"""Binaries of the standalone FMU for every desktop platform (docs/standalone.md "Platforms").
+
+One compiler for all targets: zig's bundled clang (the ``ziglang`` package,
+``python -m ziglang cc``; the optional extra ``gearfmu[cross]``), with the same
+flags for every target (:data:`gearfmu.fmu.standalone_build.STANDALONE_CFLAGS`:
+``-O2``, ``-ffp-contract=off``, ``-fno-fast-math``, C99, hidden visibility).
+Without zig only the build machine's own platform is compiled, with the host C
+compiler; the FMU then says which platforms it lacks.
+
+Platform keys are the FMI 3 platform tuples; the folder is FMI 2's name where
+FMI 2 has one:
+
+==============  ===================  =============================  ========
+key             zig target           FMU folder (FMI 2)             file
+==============  ===================  =============================  ========
+x86_64-linux    x86_64-linux-gnu.2.17  binaries/linux64             .so
+aarch64-linux   aarch64-linux-gnu.2.17 binaries/aarch64-linux       .so
+x86_64-windows  x86_64-windows-gnu   binaries/win64                 .dll
+x86_64-darwin   x86_64-macos.11.0    binaries/darwin64 (fat)        .dylib
+aarch64-darwin  aarch64-macos.11.0   binaries/darwin64 (fat)        .dylib
+==============  ===================  =============================  ========
+
+FMI 2.0 names no folder for 64-bit ARM Linux (its platform names are
+win32/win64/linux32/linux64/darwin32/darwin64); ``aarch64-linux`` is the FMI 3
+tuple, which fmpy's ``supported_platforms`` and the FMI 3 loaders read.  The two
+macOS binaries are joined into one universal ("fat") Mach-O in darwin64, so an
+importer on either Mac loads the same file (:func:`write_fat_macho`).  glibc
+2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.util
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import platform as _platform
+
+
+@dataclass(frozen=True)
+class Target:
+    key: str          # FMI 3 platform tuple
+    zig: str          # zig -target
+    folder: str       # binaries/<folder> in an FMI 2 FMU
+    ext: str          # shared library suffix
+
+
+TARGETS: Dict[str, Target] = {t.key: t for t in (
+    Target("x86_64-linux", "x86_64-linux-gnu.2.17", "linux64", ".so"),
+    Target("aarch64-linux", "aarch64-linux-gnu.2.17", "aarch64-linux", ".so"),
+    Target("x86_64-windows", "x86_64-windows-gnu", "win64", ".dll"),
+    Target("x86_64-darwin", "x86_64-macos.11.0", "darwin64", ".dylib"),
+    Target("aarch64-darwin", "aarch64-macos.11.0", "darwin64", ".dylib"),
+)}
+#: Mach-O CPU types (mach/machine.h) of the darwin64 slices
+MACHO_CPU = {"x86_64-darwin": 0x01000007, "aarch64-darwin": 0x0100000C}
+#: alignment (log2) of each slice inside a fat file: the page size of that CPU (4 KiB x86_64, 16 KiB arm64)
+MACHO_ALIGN = {0x01000007: 12, 0x0100000C: 14}
+
+
+class CrossBuildError(ValueError):
+    """A platform could not be compiled; the message names it."""
+
+
+def parse_platforms(text: Optional[str]) -> Tuple[str, ...]:
+    """``"all"``/None -> every key; else a comma-separated list of keys (or FMI 2 folder names:
+    linux64, win64, darwin64 = both Mac CPUs).  Unknown names raise a one-line ValueError."""
+    if text is None or text.strip() in ("", "all"):
+        return tuple(TARGETS)
+    out: List[str] = []
+    for name in (s.strip() for s in text.split(",")):
+        keys = [name] if name in TARGETS else [k for k, t in TARGETS.items() if t.folder == name]
+        if not keys:
+            raise ValueError(f"--platforms: unknown platform {name!r} (known: all, {', '.join(TARGETS)}, "
+                             "linux64, win64, darwin64)")
+        out += [k for k in keys if k not in out]
+    return tuple(out)
+
+
+def host_key() -> Optional[str]:
+    """This machine's platform key (None if not one of :data:`TARGETS`)."""
+    sysname = {"Linux": "linux", "Windows": "windows", "Darwin": "darwin"}.get(_platform.system())
+    mach = {"amd64": "x86_64", "x86_64": "x86_64", "arm64": "aarch64", "aarch64": "aarch64"}.get(
+        _platform.machine().lower())
+    key = f"{mach}-{sysname}"
+    return key if key in TARGETS and sys.maxsize > 2 ** 32 else None
+
+
+def zig_command() -> Optional[List[str]]:
+    """The zig C compiler driver: ``python -m ziglang`` when the package is installed, else a ``zig`` on PATH."""
+    if importlib.util.find_spec("ziglang") is not None:
+        return [sys.executable, "-m", "ziglang"]
+    z = shutil.which("zig")
+    return [z] if z else None
+
+
+def zig_version(zig: Sequence[str]) -> str:
+    """``zig <version>`` of the compiler command (asked once per process)."""
+    return _zig_version(tuple(zig))
+
+
+@functools.lru_cache(maxsize=None)
+def _zig_version(zig: Tuple[str, ...]) -> str:
+    try:
+        return "zig " + subprocess.run([*zig, "version"], capture_output=True, text=True,
+                                       timeout=120).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "zig (version unknown)"
+
+
+def object_cache_dir() -> Path:
+    """Where compiled object files are kept between builds: ``$GEARFMU_CACHE_DIR/objects``, else
+    ``$XDG_CACHE_HOME/gearfmu/objects``, else ``~/.cache/gearfmu/objects``."""
+    root = os.environ.get("GEARFMU_CACHE_DIR")
+    if root:
+        return Path(root) / "objects"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "gearfmu" / "objects"
+
+
+def _compile_flags(cflags: Sequence[str]) -> List[str]:
+    """The flags of a compile-only step: the link-only ``-shared`` dropped."""
+    return [f for f in cflags if f != "-shared"]
+
+
+def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include: Path, tmp: Path) -> Path:
+    """The object file of ``source`` for target ``key``, compiled once and kept in
+    :func:`object_cache_dir` under a name that hashes everything the object depends on (zig's
+    version, target, flags, the source and every header of ``include``); a later build with the
+    same inputs links the kept object instead of compiling again."""
+    t = TARGETS[key]
+    h = hashlib.sha256()
+    for part in (zig_version(zig), t.zig, " ".join(_compile_flags(cflags)), source.name):
+        h.update(part.encode() + b"\0")
+    h.update(source.read_bytes())
+    for hdr in sorted(Path(include).glob("*.h")):
+        h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
+    cache = object_cache_dir()
+    obj = cache / f"{source.stem}-{key}-{h.hexdigest()[:24]}.o"
+    if obj.is_file():
+        return obj
+    out = tmp / obj.name
+    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", f"-I{include}", "-c", "-o", str(out),
+           str(source)]
+    _run(cmd, key, "compilation", tmp)
+    try:  # atomic publish: a concurrent build sees either no file or the whole object
+        cache.mkdir(parents=True, exist_ok=True)
+        part = cache / (obj.name + f".{os.getpid()}.part")
+        shutil.copyfile(out, part)
+        os.replace(part, obj)
+    except OSError:
+        return out  # an unwritable cache only costs the next build a compilation
+    return obj
+
+
+def _run(cmd: Sequence[str], key: str, what: str, cwd: Path) -> None:
+    try:
+        p = subprocess.run(list(cmd), capture_output=True, text=True, timeout=1800, cwd=cwd)
+    except (OSError, subprocess.SubprocessError) as exc:
+        raise CrossBuildError(f"platform {key}: zig cc cannot run ({exc})") from None
+    if p.returncode != 0:
+        raise CrossBuildError(f"platform {key}: {what} failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
+
+
+def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include: Path,
+                out_lib: Path) -> List[str]:
+    """Build ``out_lib`` for target ``key``: each source compiled to an object
+    (:func:`_object`, kept between builds), then linked with ``zig cc -target <t> <cflags> -g0
+    -o <lib> <objects> -lm`` (macOS: plus ``-Wl,-install_name,@rpath/<lib>``, a link option).
+    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include> -o <lib>
+    <sources> -lm`` (what the FMU's build recipe records).  Runs in a scratch folder (the Windows
+    linker writes an import library and a .pdb beside its output)."""
+    t = TARGETS[key]
+    out_lib = Path(out_lib)
+    out_lib.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="gearfmu_zig_") as tmp:
+        tmp = Path(tmp)
+        tmp_out = tmp / out_lib.name  # the library's own name (ELF soname, Mach-O id, DLL name)
+        link = [f"-Wl,-install_name,@rpath/{out_lib.name}"] if key.endswith("-darwin") else []
+        objects = [_object(zig, key, cflags, Path(s), include, tmp) for s in sources]
+        _run([*zig, "cc", "-target", t.zig, *cflags, "-g0", "-o", str(tmp_out), *(str(o) for o in objects),
+              "-lm", *link], key, "link", tmp)
+        shutil.copyfile(tmp_out, out_lib)
+    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
+            *(str(s) for s in sources), "-lm", *link]
+
+
+# ------------------------------------------------------------- Mach-O fat files
+def macho_cpu(data: bytes) -> Tuple[int, int]:
+    """(cputype, cpusubtype) of a thin 64-bit little-endian Mach-O (magic 0xFEEDFACF)."""
+    if len(data) < 12 or struct.unpack_from("<I", data, 0)[0] != 0xFEEDFACF:
+        raise CrossBuildError("not a 64-bit little-endian Mach-O file")
+    return struct.unpack_from("<ii", data, 4)
+
+
+def write_fat_macho(slices: Sequence[bytes], out_path) -> Path:
+    """Join thin Mach-O files into one universal file (the format ``lipo -create`` writes).
+
+    Format (mach-o/fat.h; all fields big-endian uint32): ``fat_header`` =
+    magic 0xCAFEBABE, nfat_arch; then one ``fat_arch`` per slice = cputype,
+    cpusubtype (copied from the slice's own header), offset, size, align
+    (log2); then the slices, each at an offset that is a multiple of
+    2**align (4 KiB for x86_64, 16 KiB for arm64)."""
+    heads, body, offset = [], [], 8 + 20 * len(slices)
+    for data in slices:
+        cpu, sub = macho_cpu(data)
+        align = MACHO_ALIGN.get(cpu, 14)
+        offset = -(-offset // (1 << align)) * (1 << align)
+        heads.append(struct.pack(">iiIII", cpu, sub, offset, len(data), align))
+        body.append((offset, data))
+        offset += len(data)
+    buf = bytearray(offset)
+    buf[0:8] = struct.pack(">II", 0xCAFEBABE, len(slices))
+    for i, h in enumerate(heads):
+        buf[8 + 20 * i:28 + 20 * i] = h
+    for off, data in body:
+        buf[off:off + len(data)] = data
+    out_path = Path(out_path)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    out_path.write_bytes(bytes(buf))
+    return out_path
+
+
+# ------------------------------------------------------------------ the build
+def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
+                   cflags: Sequence[str], layer_source: str, kernel_source: str,
+                   host_compile=None, host_cc_first: bool = False) -> Dict[str, dict]:
+    """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``.
+
+    Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
+    platform and ``{key: {"missing": reason}}`` for each that could not be built
+    (no zig).  ``host_compile(out_lib) -> (command, compiler)`` compiles the
+    build machine's platform when zig is absent, or always with ``host_cc_first``
+    (the caller named its own C compiler)."""
+    zig = zig_command()
+    src = Path(sources_dir)
+    sources = [src / layer_source, src / kernel_source]
+    report: Dict[str, dict] = {}
+    hk = host_key()
+    zver = zig_version(zig) if zig else None
+    darwin: Dict[str, bytes] = {}
+    with tempfile.TemporaryDirectory(prefix="gearfmu_xbuild_") as tmp:
+        outs, jobs = {}, {}
+        with ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
+            for key in keys:  # the zig compilations run side by side (one process each)
+                t = TARGETS[key]
+                outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") else
+                                   Path(binaries_dir) / t.folder) / (identifier + t.ext)
+                if key == hk and host_compile is not None and (zig is None or host_cc_first):
+                    cmd, compiler = host_compile(out)
+                    report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": compiler,
+                                   "command": _portable(cmd, src, None)}
+                elif zig is not None:
+                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
+                    report[key] = {}
+                else:
+                    report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
+            for key, job in jobs.items():
+                t = TARGETS[key]
+                report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": zver,
+                               "command": _portable(job.result(), src, zig)}
+        for key in keys:
+            if key.endswith("-darwin") and "missing" not in report[key]:
+                darwin[key] = outs[key].read_bytes()
+        if darwin:
+            fat = Path(binaries_dir) / "darwin64" / (identifier + ".dylib")
+            write_fat_macho([darwin[k] for k in sorted(darwin)], fat)
+            for k in darwin:
+                report[k]["fat_slices"] = sorted(darwin)
+    return report
+
+
+def _portable(cmd: Sequence[str], src: Path, zig) -> str:
+    """The command with the scratch paths replaced by names relative to sources/."""
+    out = []
+    skip = len(zig) if zig else 0
+    words = (["zig"] if zig else []) + list(cmd[skip:])
+    for i, w in enumerate(words):
+        if i > 0 and words[i - 1] == "-o":
+            w = "<lib>"
+        elif w.startswith("-I"):
+            w = "-I."
+        elif w.startswith(str(src)):
+            w = Path(w).name
+        elif i == 0 and not zig:
+            w = Path(w).name
+        out.append(w)
+    return " ".join(out)
+
+
+def platform_summary(report: Dict[str, dict]) -> str:
+    """One line: which platforms the FMU carries and which it lacks (and why)."""
+    have = [k for k, r in report.items() if "missing" not in r]
+    lacks = [k for k, r in report.items() if "missing" in r]
+    line = "binaries: " + (", ".join(f"{k} (binaries/{report[k]['folder']})" for k in have) or "none")
+    if lacks:
+        line += "; not built: " + ", ".join(lacks) + " -- " + report[lacks[0]]["missing"] + \
+                "; those platforms compile sources/ (sources/BUILD.txt)"
+    return line

@@ -1,0 +1,55 @@
+"""Cross-compiled objects are kept between builds: a second build links, it does not compile.
+
+Reference: the compiler's own invocations.  The first build of a platform must call zig with
+``-c`` once per source; a second build from the same sources and flags must not call it with
+``-c`` again, and its library must behave as the first one (same bytes: the inputs are the
+same).  A changed source must be compiled again (the cache key covers the source text).
+"""
+import subprocess
+
+import pytest
+
+from gearfmu.fmu import crossbuild
+from gearfmu.fmu.standalone_build import KERNEL_SOURCE, LAYER_SOURCE, STANDALONE_CFLAGS, copy_sources
+
+
+@pytest.fixture
+def counted_compiles(monkeypatch, tmp_path):
+    if crossbuild.zig_command() is None:
+        pytest.fail("zig C compiler missing: pip install 'gearfmu[cross]'")
+    monkeypatch.setenv("GEARFMU_CACHE_DIR", str(tmp_path / "cache"))
+    calls = []
+    real = subprocess.run
+
+    def run(cmd, *a, **k):
+        if "cc" in cmd:
+            calls.append(list(cmd))
+        return real(cmd, *a, **k)
+
+    monkeypatch.setattr(crossbuild.subprocess, "run", run)
+    return calls
+
+
+def _build(src, out, identifier):
+    return crossbuild.build_binaries(["x86_64-linux"], src, out, identifier, cflags=STANDALONE_CFLAGS,
+                                     layer_source=LAYER_SOURCE.name, kernel_source=KERNEL_SOURCE.name)
+
+
+def test_second_build_links_kept_objects(counted_compiles, tmp_path):
+    src = copy_sources(tmp_path / "src")
+    _build(src, tmp_path / "a", "gear_a")
+    compiles = [c for c in counted_compiles if "-c" in c]
+    assert len(compiles) == 2, compiles                      # one per source
+    counted_compiles.clear()
+    _build(src, tmp_path / "b", "gear_a")
+    assert not [c for c in counted_compiles if "-c" in c], "the second build compiled again"
+    assert len(counted_compiles) == 1                         # the link
+    lib_a = (tmp_path / "a" / "linux64" / "gear_a.so").read_bytes()
+    lib_b = (tmp_path / "b" / "linux64" / "gear_a.so").read_bytes()
+    assert lib_a == lib_b
+
+    counted_compiles.clear()
+    kernel = src / KERNEL_SOURCE.name
+    kernel.write_text(kernel.read_text() + "\n/* changed */\n")
+    _build(src, tmp_path / "c", "gear_a")
+    assert len([c for c in counted_compiles if "-c" in c]) == 1   # only the changed source
