@@ -171,12 +171,12 @@ def cmd_tables(args) -> int:
     tables = compute_tables(scene, progress=not args.quiet)
     wall = time.perf_counter() - t0
     tables.save(out)
-    png = plot_tables(tables, out.with_suffix(".png"))
-    csv_tables, note = tables, ""
-    if tables.has_temperature_axis:  # the CSV form has no temperature axis (docs/tables.md 'CSV import')
-        csv_tables = tables.at_temperature(tables.default_temperature_C)
+    flat, note = tables, ""
+    if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
+        flat = tables.at_temperature(tables.default_temperature_C)
         note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
-    csv, meta = tables_to_csv(csv_tables, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
+    png = plot_tables(flat, out.with_suffix(".png"))
+    csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
           f"{wall:.2f} s); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")

@@ -250,3 +250,23 @@ def test_spur_wording_is_gone_and_integrator_is_documented(csv_fmu):
     assert "spur gear pair into" not in readme
     assert re.search(r"(?m)^\| `integrator` \| parameter", readme)
     assert re.search(r"(?m)^\| integrator \| parameter", (REPO / "docs" / "fmu.md").read_text(encoding="utf-8"))
+
+
+def test_tables_with_a_temperature_axis_plot_and_export_the_standard_temperature(tmp_path, monkeypatch):
+    """The plot and the CSV form have no temperature axis: `gearfmu tables` writes them at the
+    standard temperature, a node of the axis, where the tables are the stored slice bit for bit
+    (docs/model.md "Temperature axis"); the reference is that slice as it went into the stack."""
+    import numpy as np
+
+    import gearfmu.pipeline as pipeline
+    from gearfmu.table_import import load_tables_csv
+    from test_temperature_axis import AXIS, temp_tables
+
+    stacked, slices = temp_tables()
+    monkeypatch.setattr(pipeline, "compute_tables", lambda scene, progress=False: stacked)
+    rc, out, err = _cli("tables", "-q", "-o", tmp_path / "t.gtab")
+    assert rc == 0, err
+    assert (tmp_path / "t.png").stat().st_size > 0
+    back = load_tables_csv(tmp_path / "t.csv", tmp_path / "t.meta.toml")
+    ref = slices[list(AXIS).index(stacked.default_temperature_C)]
+    assert np.array_equal(back.k_N_per_m, ref.k_N_per_m) and np.array_equal(back.e_m, ref.e_m)
