@@ -238,16 +238,25 @@ def cmd_validate(args) -> int:
     from .pipeline import build, compute_tables, gear_torque_for, max_step_for
 
     scene = _scene(args.scene)
+    text = scene.text
     if args.fmu:
         from .compare import check_fmu_matches
 
         fmu = _fmu(args.fmu)
-        check_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
+        check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
         fmu_path = fmu.path
+        if getattr(scene, "accuracy", None) is not None:  # build followed the scene's plan: so does the check
+            from .plan import plan_scene, planned_scene
+
+            scene = planned_scene(scene, plan_scene(scene))
         tables = compute_tables(scene, progress=False)
     else:
         res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False)
         fmu_path, tables = res.fmu_path, res.tables
+        if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
+            from .plan import planned_scene
+
+            scene = planned_scene(scene, res.plan)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
     t1 = scene.operating.torque_Nm
@@ -256,7 +265,7 @@ def cmd_validate(args) -> int:
         gear_torque_Nm=gear_torque_for(tables, t1), pinion_speed_start_rad_s=scene.operating.speed_rad_s,
         damping_ratio=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model)
     rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
-                                      comm_step_s=step, tolerance=args.tolerance, scene_text=scene.text)
+                                      comm_step_s=step, tolerance=args.tolerance, scene_text=text)
     rep["scene"] = scene.name
     if args.json:
         print(json.dumps(rep, indent=1))

@@ -270,3 +270,16 @@ def test_tables_with_a_temperature_axis_plot_and_export_the_standard_temperature
     back = load_tables_csv(tmp_path / "t.csv", tmp_path / "t.meta.toml")
     ref = slices[list(AXIS).index(stacked.default_temperature_C)]
     assert np.array_equal(back.k_N_per_m, ref.k_N_per_m) and np.array_equal(back.e_m, ref.e_m)
+
+
+def test_validate_of_a_planned_scene_compares_like_with_like(tmp_path, monkeypatch):
+    """A scene with [accuracy] builds its FMU from the plan (tables, step bound, integrator);
+    validate runs the native solver with the same plan, so the two agree to round-off (the
+    reference of the module docstring), within the default tolerance."""
+    from test_plan import SMALL
+
+    (tmp_path / "small.toml").write_text(SMALL, encoding="utf-8")
+    monkeypatch.chdir(tmp_path)  # validate builds into build/ of the working folder
+    rc, out, err = _cli("validate", tmp_path / "small.toml", "--stop-time", "0.005")
+    assert rc == 0, out + err
+    assert "PASSED" in out
