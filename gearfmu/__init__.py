@@ -1,4 +1,4 @@
-"""gearfmu: spur gear mesh physics packaged as FMI 2.0 Co-Simulation FMUs.
+"""gearfmu: spur and helical gear mesh physics packaged as FMI 2.0 Co-Simulation FMUs.
 
 Data flows one way: scene -> physics (geometry, stiffness, errors, loaded
 mesh) -> tables (:mod:`gearfmu.tables`) -> native solver / FMU.
