@@ -263,7 +263,7 @@ def test_tables_with_a_temperature_axis_plot_and_export_the_standard_temperature
     from test_temperature_axis import AXIS, temp_tables
 
     stacked, slices = temp_tables()
-    monkeypatch.setattr(pipeline, "compute_tables", lambda scene, progress=False: stacked)
+    monkeypatch.setattr(pipeline, "compute_tables", lambda scene, progress=False, allow_large=False: stacked)
     rc, out, err = _cli("tables", "-q", "-o", tmp_path / "t.gtab")
     assert rc == 0, err
     assert (tmp_path / "t.png").stat().st_size > 0
