@@ -54,7 +54,7 @@ def main(argv=None) -> int:
         print(json.dumps(rep, indent=1))
     else:
         print_report(rep)
-    return 0 if not rep["fmpy_problems"] else 1
+    return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
 
 
 if __name__ == "__main__":

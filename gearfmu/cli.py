@@ -1,23 +1,28 @@
-"""The ``gearfmu`` command line.
+"""The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
 
-    gearfmu build    [SCENE] -o OUT.fmu [--runtime standalone|pythonfmu]  scene -> tables -> FMU
-    gearfmu tables   [SCENE] -o OUT.gtab       compute, save and plot TVMS and error tables
-    gearfmu simulate [SCENE] [--fmu F]         native solver (default) or an FMU; CSV + PNG
-    gearfmu validate [SCENE] [--fmu F] --json  FMU against the native solver
-    gearfmu build [SCENE] --tables T.csv --tables-meta M.toml   imported tables -> FMU
-    gearfmu bench accuracy [--json] [--png P]  speed against error (gearfmu.bench)
-    gearfmu ssp      [SCENE] -o OUT.ssp [--variant NAME:PARAM=VALUE]  SSP package with variants
-    gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
+  gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST]
+                                             scene -> tables -> FMU
+  gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
+  gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
+  gearfmu simulate [SCENE] [--backend native|fmu --fmu F] [--stop-time S] [--output-interval S]
+                                             native solver (default) or an FMU; CSV + PNG
+  gearfmu validate [SCENE] [--fmu F] [--stop-time S] [--output-interval S] [--tolerance R] [--json]
+                                             an FMU against the native solver
+  gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
+  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE]   SSP package with variants
+  gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
-bad input (an invalid scene, a missing file, a bad option value).
+bad input (an invalid scene, a missing or unusable file, a bad option value,
+an output path that cannot be written).
 """
 from __future__ import annotations
 
 import argparse
 import json
 import sys
+import tempfile
 import time
 from pathlib import Path
 import zipfile
@@ -25,45 +30,99 @@ import zipfile
 import numpy as np
 
 from .common.vocabulary import RUNTIMES
-from .fmu.compare import native_columns, output_names, run_fmu, validate_fmu_against_native
+from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
+                          FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from .pipeline import load, build, compute_tables, simulate_native, gear_torque_for, max_step_for
-from .plan import format_report, plan_scene
+from .plan import format_report, plan_scene, planned_scene
 from .ssp import parse_variant, ssp_from_scene
-from .tables.table_import import load_tables_file
+from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
+from .bench import main_accuracy
 
 
 class CliError(Exception):
     pass
 
 
+def _input_file(path, what: str) -> Path:
+    """``path`` as an existing regular file (CliError naming ``what`` and the file otherwise)."""
+    p = Path(path)
+    if not p.exists():
+        raise CliError(f"{what}: file not found: {p}")
+    if not p.is_file():
+        raise CliError(f"{what}: {p} is a directory, not a file")
+    return p
+
+
+def _output_file(path, what: str) -> Path:
+    """``path`` as a file that can be written: its folder is created when missing; CliError
+    naming ``what`` and the path when it is a directory or its folder cannot be written.
+    Checked before any work, so a bad output path never costs a computation."""
+    p = Path(path)
+    if p.is_dir():
+        raise CliError(f"{what}: {p} is a directory; give a file path")
+    for a in p.parents:
+        if a.exists():
+            if not a.is_dir():
+                raise CliError(f"{what}: cannot write {p}: {a} is a file, not a folder")
+            break
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=p.parent):
+            pass
+    except OSError as exc:
+        raise CliError(f"{what}: cannot write {p}: folder {p.parent}: {exc.strerror or exc}") from None
+    return p
+
+
 def _scene(path):
-    if path is not None and not Path(path).exists():
-        raise CliError(f"SCENE: file not found: {path}")
+    if path is not None:
+        p = _input_file(path, "SCENE")
+        if not p.read_bytes().strip():
+            raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
     return load(path)
 
 
 def _positive(name):
+    """argparse type: a positive finite float.  The messages leave out ``name``: argparse
+    already starts them with "argument <option>:"."""
     def conv(text):
         try:
             v = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{name}: not a number: {text!r}")
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}")
         if not (v > 0 and v < float("inf")):
-            raise argparse.ArgumentTypeError(f"{name}: must be a positive finite number, got {text}")
+            raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
         return v
     return conv
 
 
+def _tolerance(text):
+    """argparse type of ``--tolerance``: a finite float >= 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}")
+    if not (v >= 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return v
+
+
+def _fmu(path):
+    """The FMU of ``--fmu``, opened (CliError naming the file and what is wrong otherwise)."""
+    try:
+        return open_fmu(path)
+    except FmuMismatchError as exc:
+        raise CliError(f"--fmu: {exc}") from None
+
+
 def cmd_build(args) -> int:
     scene = _scene(args.scene)
-    out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
+    out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
     if getattr(args, "tables", None):  # imported tables instead of the scene's physics
 
-        if not Path(args.tables).exists():
-            raise CliError(f"--tables: file not found: {args.tables}")
-        tables = load_tables_file(args.tables, args.tables_meta)
+        tables = load_tables_file(*_tables_args(args.tables, args.tables_meta))
     platforms = None
     if getattr(args, "platforms", None) is not None:
         platforms = parse_platforms(args.platforms)
@@ -105,6 +164,24 @@ def _print_platforms(fmu_path) -> None:
             print(z.read("documentation/platforms.txt").decode("utf-8").rstrip())
 
 
+def _tables_args(tables, meta):
+    """(tables path, sidecar path or None) of ``build --tables T [--tables-meta M]``: a CSV's
+    sidecar defaults to the one ``gearfmu tables`` writes beside it (T.meta.toml)."""
+    t = Path(tables)
+    if not t.exists():
+        raise CliError(f"--tables: file not found: {t}")
+    if t.suffix.lower() != ".csv":
+        return t, meta
+    _input_file(t, "--tables")
+    if meta is not None:
+        return t, _input_file(meta, "--tables-meta")
+    found = sidecar_path(t)
+    if not found.is_file():
+        raise CliError(f"--tables {t}: no sidecar {found.name} beside it; give --tables-meta M.toml, a TOML "
+                       f"file with {', '.join(REQUIRED)} (docs/tables.md 'CSV import')")
+    return t, found
+
+
 def _print_contact(tables) -> None:
     """One line on the contact model the tables were computed with, from their provenance: the
     environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model."""
@@ -122,37 +199,26 @@ def _print_contact(tables) -> None:
 def cmd_tables(args) -> int:
     from .plots import plot_tables  # matplotlib: loaded only by the plotting commands
 
+
     scene = _scene(args.scene)
+    out = _output_file(args.output or f"build/{scene.fmu.model_name}.gtab", "--output")
+    for extra in (".png", ".csv"):
+        _output_file(out.with_suffix(extra), "--output")
     t0 = time.perf_counter()
     tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
-    out = Path(args.output or f"build/{scene.fmu.model_name}.gtab")
     tables.save(out)
-    png = plot_tables(tables, out.with_suffix(".png"))
-    csv = out.with_suffix(".csv")
-    _tables_csv(tables, csv)
+    flat, note = tables, ""
+    if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
+        flat = tables.at_temperature(tables.default_temperature_C)
+        note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
+    png = plot_tables(flat, out.with_suffix(".png"))
+    csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
-          f"{wall:.2f} s); plot {png}; csv {csv}")
+          f"{wall:.2f} s); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
     _print_contact(tables)
     return 0
-
-
-def _tables_csv(tables, path, torque_index: int = 0):
-    cols = [np.degrees(tables.phi_rad)]
-    head = ["pinion_angle_deg"]
-    for j in range(tables.slots):
-        cols.append(tables.k_N_per_m[torque_index, j])
-        head.append(f"k_slot{j + 1}_N_per_m")
-    for j in range(tables.slots):
-        cols.append(tables.e_m[torque_index, j])
-        head.append(f"e_slot{j + 1}_m")
-    cols.append(tables.k_total_N_per_m()[torque_index])
-    head.append("k_total_N_per_m")
-    if tables.static_te_m is not None:
-        cols.append(tables.static_te_m[torque_index])
-        head.append("static_te_m")
-    np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(head), comments="")
 
 
 def cmd_simulate(args) -> int:
@@ -161,22 +227,22 @@ def cmd_simulate(args) -> int:
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
-    out = Path(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.backend == "fmu":
+        if not args.fmu:
+            raise CliError("--fmu: required with --backend fmu")
+        fmu = _fmu(args.fmu)
+    out = _output_file(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv", "--output")
+    _output_file(out.with_suffix(".png"), "--output")
     if args.backend == "native":
         tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
     else:
-        if not args.fmu:
-            raise CliError("--fmu: required with --backend fmu")
-        if not Path(args.fmu).exists():
-            raise CliError(f"--fmu: file not found: {args.fmu}")
-        from fmpy import read_model_description  # fmpy: only when an FMU is inspected
-
-        md = read_model_description(args.fmu)
-        slots = sum(1 for v in md.modelVariables if v.name.startswith("pair_force["))
+        slots = sum(1 for n in fmu.variable_names if n.startswith("pair_force["))
+        missing = [n for n in output_names(slots) if n not in fmu.variable_names]
+        if not slots or missing:
+            raise CliError(f"--fmu: {args.fmu}: not a gearfmu FMU (no outputs {', '.join(missing[:3]) or 'pair_force[1]'})")
         sv = {} if args.damping_ratio is None else {"damping_ratio": args.damping_ratio}
         run = run_fmu(args.fmu, stop_time_s=stop, comm_step_s=step, start_values=sv,
                       names=output_names(slots))
@@ -202,14 +268,20 @@ def cmd_simulate(args) -> int:
 
 def cmd_validate(args) -> int:
     scene = _scene(args.scene)
+    text = scene.text
     if args.fmu:
-        if not Path(args.fmu).exists():
-            raise CliError(f"--fmu: file not found: {args.fmu}")
-        fmu_path = Path(args.fmu)
+        fmu = _fmu(args.fmu)
+        check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
+        fmu_path = fmu.path
+        if getattr(scene, "accuracy", None) is not None:  # build followed the scene's plan: so does the check
+            scene = planned_scene(scene, plan_scene(scene))
         tables = compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
-        res = build(scene, Path(f"build/{scene.fmu.model_name}.fmu"), progress=False, allow_large=args.allow_large)
+        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False,
+                    allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
+        if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
+            scene = planned_scene(scene, res.plan)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
     t1 = scene.operating.torque_Nm
@@ -218,13 +290,17 @@ def cmd_validate(args) -> int:
         gear_torque_Nm=gear_torque_for(tables, t1), pinion_speed_start_rad_s=scene.operating.speed_rad_s,
         damping_ratio=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model)
     rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
-                                      comm_step_s=step)
+                                      comm_step_s=step, tolerance=args.tolerance, scene_text=text)
     rep["scene"] = scene.name
     if args.json:
         print(json.dumps(rep, indent=1))
     else:
         print_report(rep)
-    return 0 if not rep["fmpy_problems"] else 1
+    for name, rel in rep["failed"].items():
+        v = rep["outputs"][name]
+        print(f"gearfmu: validate: {name} differs by {v['max_abs_diff']:.3e} = {rel:.3e} of its range "
+              f"{v['range']:.4g} (tolerance {rep['tolerance']:g})", file=sys.stderr)
+    return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
 
 
 def print_report(rep: dict) -> None:
@@ -238,11 +314,16 @@ def print_report(rep: dict) -> None:
         print(f"{name:<18}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}{v['range']:>14.4g}"
               f"{v['rel_max_diff']:>12.2e}")
     print(f"wall time: native {rep['native_wall_s']:.4f} s, FMU (fmpy) {rep['fmu_wall_s']:.4f} s")
+    if "failed" in rep:
+        tol = rep.get("tolerance")
+        print(f"FAILED: {len(rep['failed'])} output(s) beyond {tol:g} of their range: "
+              + ", ".join(f"{k} {v:.3e}" for k, v in rep["failed"].items()) if rep["failed"]
+              else f"PASSED: every output within {tol:g} of its range")
 
 
 def cmd_ssp(args) -> int:
     scene = _scene(args.scene)
-    out = Path(args.output or f"build/{scene.fmu.model_name}.ssp")
+    out = _output_file(args.output or f"build/{scene.fmu.model_name}.ssp", "--output")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
     path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet)
     print(f"wrote {path}")
@@ -251,6 +332,11 @@ def cmd_ssp(args) -> int:
 
 def cmd_plan(args) -> int:
     scene = _scene(args.scene)
+    if args.output is not None:
+        d = Path(args.output)
+        if d.exists() and not d.is_dir():
+            raise CliError(f"--output: {d} is a file; give a folder for the FMUs of --fmu")
+        _output_file(d / "probe", "--output")
     plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
                       budget_runs=args.budget_runs, what_if=args.what_if)
     print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
@@ -266,8 +352,15 @@ def _allow_large(parser) -> None:
                         help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
 
 
+def cmd_bench(args) -> int:
+    if args.png:
+        _output_file(args.png, "--png")
+    return main_accuracy(args)
+
+
 def make_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="gearfmu", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="gearfmu", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
 
     b = sub.add_parser("build", help="build an FMU from a scene")
@@ -282,29 +375,31 @@ def make_parser() -> argparse.ArgumentParser:
                         "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
                         "all that the installed compilers can build; docs/standalone.md 'Platforms')")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
-    b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV")
+    b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
+                                         "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
     b.add_argument("--no-estimate", action="store_true",
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
     _allow_large(b)
     b.set_defaults(func=cmd_build)
 
-    be = sub.add_parser("bench", help="benchmarks: `bench accuracy` = speed against error (gearfmu.bench)")
+    be = sub.add_parser("bench", help="benchmarks: 'bench accuracy' = speed against error (gearfmu.bench)")
     be.add_argument("what", choices=("accuracy",))
     be.add_argument("--case", default="single_sided_impacts", help="hard case (gearfmu.bench.HARD_CASES)")
     be.add_argument("--json", action="store_true", help="print the report as JSON")
     be.add_argument("--png", help="write the Pareto plot (wall time against error) here")
-    be.set_defaults(func=lambda a: __import__("gearfmu.bench", fromlist=["main_accuracy"]).main_accuracy(a))
+    be.set_defaults(func=cmd_bench)
 
-    t = sub.add_parser("tables", help="compute, save (.gtab, .csv) and plot (.png) the tooth-pair tables")
-    t.add_argument("scene", nargs="?")
+    t = sub.add_parser("tables", help="compute, save (.gtab; .csv + .meta.toml for build --tables) and plot "
+                                      "(.png) the tooth-pair tables")
+    t.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
     _allow_large(t)
     t.set_defaults(func=cmd_tables)
 
     s = sub.add_parser("simulate", help="simulate with the native solver or an FMU; CSV and PNG out")
-    s.add_argument("scene", nargs="?")
+    s.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     s.add_argument("--backend", choices=("native", "fmu"), default="native")
     s.add_argument("--fmu", help="FMU to run with --backend fmu")
     s.add_argument("--stop-time", type=_positive("--stop-time"), help="s")
@@ -316,16 +411,19 @@ def make_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
-    v.add_argument("scene", nargs="?")
+    v.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     v.add_argument("--fmu", help="an FMU built from SCENE (default: build one)")
     v.add_argument("--stop-time", type=_positive("--stop-time"))
     v.add_argument("--output-interval", type=_positive("--output-interval"))
+    v.add_argument("--tolerance", type=_tolerance, default=DEFAULT_TOLERANCE,
+                   help=f"largest |FMU - native| allowed, relative to each output's range (default "
+                        f"{DEFAULT_TOLERANCE:g}); exit status 1 beyond it")
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
     _allow_large(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
-    x.add_argument("scene", nargs="?")
+    x.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
@@ -334,7 +432,7 @@ def make_parser() -> argparse.ArgumentParser:
 
     pl = sub.add_parser("plan", help="fidelity plan: each modelling choice's error over the envelope, "
                                      "kept/dropped, cost (docs/plan.md)")
-    pl.add_argument("scene", nargs="?")
+    pl.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     pl.add_argument("--json", action="store_true", help="print the report as JSON")
     pl.add_argument("--fmu", action="store_true",
                     help="also build the planned and the full-fidelity FMU (sizes, build times) and confirm the "
@@ -351,15 +449,20 @@ def make_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _one_line(exc: BaseException) -> str:
+    """The message of a user-facing error: CliError and the project's ValueErrors (SceneError,
+    TableError, FmuMismatchError, ...) name the field or file; an OSError names its file."""
+    if isinstance(exc, OSError) and getattr(exc, "filename", None):
+        return f"{exc.filename}: {exc.strerror or exc}"
+    return str(exc)
+
+
 def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
         return args.func(args)
-    except CliError as exc:
-        print(f"gearfmu: {exc}", file=sys.stderr)
-        return 2
-    except ValueError as exc:  # SceneError, GeometryError, TableError are ValueErrors naming the field
-        print(f"gearfmu: {exc}", file=sys.stderr)
+    except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
+        print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)
         return 2
 
 

@@ -23,7 +23,8 @@ the last one being the full-fidelity level:
 * ``points_per_mesh`` -- 16, 32, 64, 128, 256 (the full level is max(256, scene)).
 * ``torque_points`` -- 1 (nominal torque only), 2, 3, 5, 9 equally spaced over
   the envelope torque range (full: max(9, scene)).
-* ``slots`` -- ceil(contact ratio), or the scene's larger count.
+* ``slots`` -- the pair's minimum (:func:`gearfmu.gear.stiffness.required_slots`: ceil of the
+  total contact ratio), or the scene's larger count.
 * ``integrator`` -- rk4, rk4_kink (full).
 * ``max_step`` -- 4, 2, 1, 1/2, 1/4 times h0 = :func:`gearfmu.dynamics.native.choose_max_step_s`
   of the full tables at the top envelope speed (full: h0/4).
@@ -74,8 +75,9 @@ from .gear.meshing_errors import pair_table_mesh_count
 from .scene.reader import ThermalOptions
 from .plan_verify import DriveCase, drive_case, ERROR_DEFINITION, Search
 from .stages import build_fmu_from_scene
-from .tables.precompute import precompute_tables, default_slots
+from .tables.precompute import precompute_tables
 from .tables.estimate import estimate_build, BuildEstimate
+from .gear.stiffness import required_slots
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
@@ -135,7 +137,7 @@ def _available_contact_models() -> Tuple[str, ...]:
 
 
 def _p_min(scene) -> int:
-    return default_slots(float(pair_geometry(scene.pair).contact_ratio))
+    return required_slots(pair_geometry(scene.pair))
 
 
 def _teeth_differ(scene, slots: int) -> bool:

@@ -49,11 +49,14 @@ def test_torque_axis_round_trips(tmp_path):
     assert np.array_equal(back.torque_Nm, t.torque_Nm)
 
 
-def test_gearfmu_tables_csv_with_degrees_reads_back(computed, tmp_path):
-    """The CSV `gearfmu tables` writes (degrees, k_total column) is accepted too."""
-    from gearfmu.cli import _tables_csv
-
-    _tables_csv(computed, tmp_path / "cli.csv")
+def test_csv_with_degrees_and_k_total_reads_back(computed, tmp_path):
+    """A slots-form CSV in degrees with a k_total column (one torque row) is accepted too."""
+    t = computed
+    cols = [np.degrees(t.phi_rad)] + [t.k_N_per_m[0, j] for j in range(t.slots)]
+    cols += [t.e_m[0, j] for j in range(t.slots)] + [t.k_total_N_per_m()[0]]
+    head = (["pinion_angle_deg"] + [f"k_slot{j + 1}_N_per_m" for j in range(t.slots)]
+            + [f"e_slot{j + 1}_m" for j in range(t.slots)] + ["k_total_N_per_m"])
+    np.savetxt(tmp_path / "cli.csv", np.column_stack(cols), delimiter=",", header=",".join(head), comments="")
     _, meta = tables_to_csv(computed, tmp_path / "x.csv")
     back = load_tables_csv(tmp_path / "cli.csv", meta)
     assert np.array_equal(back.k_N_per_m, computed.k_N_per_m) and np.array_equal(back.e_m, computed.e_m)

@@ -7,14 +7,34 @@ take identical RK4 substeps and should agree to round-off.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import time
+import zipfile
 from dataclasses import dataclass
-from typing import Dict, List
+from pathlib import Path
+from typing import Dict, List, Optional
 
 import numpy as np
 
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import simulate
+from .modeldesc import expand_variables, features_of, load_spec
+
+#: default agreement criterion of ``gearfmu validate``: largest |FMU - native| of every output
+#: relative to the native signal's range (the FMU and the native solver take the same RK4 substeps)
+DEFAULT_TOLERANCE = 1e-9
+
+
+class FmuMismatchError(ValueError):
+    """The FMU cannot be compared with the scene: not an FMU, built from another scene or other
+    tables, or another slot count / variable set.  The message names the file and the reason."""
+
 
 SCALAR_OUTPUTS = ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "dte",
                   "mesh_force", "mesh_stiffness")
@@ -39,6 +59,103 @@ def native_columns(result, slots: int) -> Dict[str, np.ndarray]:
     return cols
 
 
+#: where an FMU carries its validation record (gearfmu.fmu.standalone_build.validation_record)
+_RECORD = "resources/validation/record.json"
+_RECORD_SCENE = "resources/validation/scene.toml"
+
+
+@dataclass
+class FmuFile:
+    """An FMU file opened for reading: its model description (fmpy), its validation
+    record (None when it carries none) and the scene text it was built from (or None)."""
+    path: Path
+    model_description: object
+    record: Optional[dict]
+    scene_text: Optional[str]
+
+    @property
+    def variable_names(self) -> List[str]:
+        return [v.name for v in self.model_description.modelVariables]
+
+
+def open_fmu(path) -> FmuFile:
+    """Open ``path`` as an FMU; FmuMismatchError naming the file and what is wrong when it is
+    not one (missing, a directory, not a zip archive, no or unreadable modelDescription.xml)."""
+    from fmpy import read_model_description  # fmpy: heavy, only to read an FMU
+
+    p = Path(path)
+    if not p.exists():
+        raise FmuMismatchError(f"{p}: file not found")
+    if not p.is_file():
+        raise FmuMismatchError(f"{p}: not an FMU (a directory, not a file)")
+    if not zipfile.is_zipfile(p):
+        raise FmuMismatchError(f"{p}: not an FMU (not a zip archive)")
+    try:
+        with zipfile.ZipFile(p) as z:
+            names = set(z.namelist())
+            if "modelDescription.xml" not in names:
+                raise FmuMismatchError(f"{p}: not an FMU (no modelDescription.xml in the archive)")
+            record = json.loads(z.read(_RECORD).decode("utf-8")) if _RECORD in names else None
+            scene = z.read(_RECORD_SCENE).decode("utf-8") if _RECORD_SCENE in names else None
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        if isinstance(exc, FmuMismatchError):
+            raise
+        raise FmuMismatchError(f"{p}: damaged FMU archive ({exc})") from None
+    try:
+        md = read_model_description(str(p))
+    except Exception as exc:  # noqa: BLE001 - fmpy raises plain exceptions for invalid XML
+        raise FmuMismatchError(f"{p}: modelDescription.xml cannot be read ({str(exc).splitlines()[0]})") from None
+    if getattr(md, "coSimulation", None) is None:
+        raise FmuMismatchError(f"{p}: not a Co-Simulation FMU (no <CoSimulation> in modelDescription.xml)")
+    return FmuFile(p, md, record if isinstance(record, dict) else None, scene)
+
+
+def _scene_name(text: Optional[str]) -> str:
+    try:
+        return repr(str(tomllib.loads(text or "")["scene"]["name"]))
+    except Exception:  # noqa: BLE001 - a scene without a readable name
+        return "(unnamed)"
+
+
+def check_fmu_matches(fmu: FmuFile, *, scene_text: Optional[str] = None, scene_label: str = "SCENE",
+                      tables=None) -> None:
+    """Refuse (FmuMismatchError, naming both) an FMU whose validation record names another scene
+    than ``scene_text`` or other tables than ``tables`` (SHA-256 of the table arrays), or whose
+    variables are not those of ``tables`` (slot count, temperature input).  Checks only what is
+    given; nothing is simulated."""
+    rec = fmu.record or {}
+    want_sha = rec.get("scene_sha256")
+    if scene_text is not None and want_sha is not None:
+        have_sha = hashlib.sha256(scene_text.encode()).hexdigest()
+        if have_sha != want_sha:
+            built, given = _scene_name(fmu.scene_text), _scene_name(scene_text)
+            same = " (the same name, other contents: the scene changed since the build)" if built == given else ""
+            raise FmuMismatchError(
+                f"{fmu.path} was built from scene {built} (sha256 {want_sha[:12]}), not from {scene_label} "
+                f"{given} (sha256 {have_sha[:12]}){same}; give the scene the FMU was built from "
+                "or build the FMU from this scene")
+    if tables is None:
+        return
+    tsha = (rec.get("tables") or {}).get("tables_bin_sha256")
+    if tsha is not None:
+        have = hashlib.sha256(tables.to_bytes()[1]).hexdigest()
+        if have != tsha:
+            raise FmuMismatchError(
+                f"{fmu.path} carries other tables (sha256 {tsha[:12]}) than {scene_label} gives "
+                f"(sha256 {have[:12]}); it was built from other tables (e.g. build --tables) or another "
+                "version of gearfmu")
+
+    want = [v.name for v in expand_variables(load_spec(), tables.slots, features_of(tables))]
+    have = fmu.variable_names
+    if set(want) != set(have):
+        fmu_slots = sum(1 for n in have if n.startswith("pair_force["))
+        extra, missing = sorted(set(have) - set(want)), sorted(set(want) - set(have))
+        raise FmuMismatchError(
+            f"{fmu.path} has {fmu_slots} pair slots and other variables than {scene_label}'s tables "
+            f"({tables.slots} slots): only in the FMU {extra[:6]}{' ...' if len(extra) > 6 else ''}, "
+            f"missing from it {missing[:6]}{' ...' if len(missing) > 6 else ''}")
+
+
 @dataclass
 class FmuRun:
     time_s: np.ndarray
@@ -61,13 +178,18 @@ def run_fmu(fmu_path, *, stop_time_s: float, comm_step_s: float, start_values=No
 
 def diff_report(ref: Dict[str, np.ndarray], other: Dict[str, np.ndarray]) -> Dict[str, dict]:
     """Per output: largest and RMS absolute difference, the reference's range,
-    and the largest difference relative to that range."""
+    and the largest difference relative to that range.  Both must hold the same
+    outputs with the same number of samples (FmuMismatchError otherwise: never a
+    partial comparison)."""
+    if set(ref) != set(other):
+        raise FmuMismatchError(f"outputs differ: only in the reference {sorted(set(ref) - set(other))}, "
+                               f"only in the other run {sorted(set(other) - set(ref))}")
     out = {}
     for name, a in ref.items():
-        if name not in other:
-            continue
         b = other[name]
-        n = min(len(a), len(b))
+        if len(a) != len(b):
+            raise FmuMismatchError(f"{name}: {len(a)} samples in the reference, {len(b)} in the other run")
+        n = len(a)
         d = np.abs(a[:n] - b[:n])
         rng = float(np.ptp(a[:n])) if n else 0.0
         scale = rng if rng > 0 else max(float(np.max(np.abs(a[:n]))) if n else 0.0, 1e-300)
@@ -99,13 +221,21 @@ def fmu_integrator(fmu_path, start_values=None):
 
 
 def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_time_s: float,
-                                comm_step_s: float, start_values=None) -> dict:
+                                comm_step_s: float, start_values=None, tolerance: float = DEFAULT_TOLERANCE,
+                                scene_text: Optional[str] = None) -> dict:
     """The report of ``gearfmu validate``: fmpy validation problems, per-output
-    differences (FMU minus native), wall time of each.  Without ``integrator`` in
-    ``native_kwargs`` the native run uses the FMU's own (:func:`fmu_integrator`)."""
+    differences (FMU minus native), wall time of each, and ``failed``: the outputs
+    whose largest difference exceeds ``tolerance`` (1) of the native signal's range.
+    Without ``integrator`` in ``native_kwargs`` the native run uses the FMU's own
+    (:func:`fmu_integrator`).  Before anything runs, :func:`check_fmu_matches` refuses
+    an FMU of another scene (``scene_text`` when given), other tables or another
+    slot count / variable set (FmuMismatchError)."""
     from fmpy.validation import validate_fmu  # fmpy: heavy, only to validate an FMU
 
 
+    if not (tolerance >= 0 and tolerance < float("inf")):
+        raise FmuMismatchError(f"tolerance: must be finite and >= 0, got {tolerance!r}")
+    check_fmu_matches(open_fmu(fmu_path), scene_text=scene_text, tables=tables)
     problems = [str(p) for p in validate_fmu(str(fmu_path))]
     if "integrator" not in native_kwargs:
         integ = fmu_integrator(fmu_path, start_values)
@@ -131,6 +261,8 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
         "max_abs_diff": {k: v["max_abs_diff"] for k, v in per.items()},
         "rms_diff": {k: v["rms_diff"] for k, v in per.items()},
         "max_rel_diff": max((v["rel_max_diff"] for v in per.values()), default=0.0),
+        "tolerance": tolerance,
+        "failed": {k: v["rel_max_diff"] for k, v in per.items() if not v["rel_max_diff"] <= tolerance},
         "native_wall_s": native_wall,
         "fmu_wall_s": fmu.wall_s,
     }

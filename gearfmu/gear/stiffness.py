@@ -290,7 +290,7 @@ def slot_stiffness(pair: GearPairSpec, geom: Optional[PairGeometry] = None,
         return helical_slot_stiffness(pair, geom, opts, slots, n_per_mesh,
                                       foundation_lambda=foundation_lambda)
     eps = geom.contact_ratio
-    min_slots = int(math.ceil(eps - 1e-12))
+    min_slots = required_slots(geom)
     if slots is None:
         slots = min_slots
     if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < min_slots:

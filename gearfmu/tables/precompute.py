@@ -41,7 +41,8 @@ class PrecomputeInputError(ValueError):
 
 
 def default_slots(contact_ratio: float) -> int:
-    """Slot count P = ceil(contact ratio), at least 1 (eps = 1.0001 -> 2)."""
+    """Slot count P = ceil(contact ratio), at least 1 (eps = 1.0001 -> 2), for a scalar
+    contact ratio; the slot count of a gear pair is :func:`gearfmu.gear.stiffness.required_slots`."""
     if not math.isfinite(contact_ratio) or contact_ratio <= 0:
         raise PrecomputeInputError(f"contact_ratio: must be finite and > 0, got {contact_ratio!r}")
     return max(1, int(math.ceil(contact_ratio - 1e-12)))
@@ -455,12 +456,10 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         raise PrecomputeInputError(f"backlash_m: must be finite and >= 0, got {pair.backlash_m!r}")
     t_start = time.perf_counter()
     geom = pair_geometry(pair)
-    eps = float(geom.contact_ratio)
-    p_min = default_slots(eps)
+
+    eps = float(geom.total_contact_ratio)  # spur: eps_alpha; helical: eps_gamma (docs/helical.md)
+    p_min = required_slots(geom)
     helical = geom.helix_angle_rad != 0.0
-    if helical:  # docs/helical.md: slots from the total contact ratio eps_gamma
-        eps = float(geom.total_contact_ratio)
-        p_min = required_slots(geom)
     if slots is None:
         slots = p_min
     if int(slots) != slots or slots < p_min:

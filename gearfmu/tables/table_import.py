@@ -43,7 +43,7 @@ except ModuleNotFoundError:  # pragma: no cover - 3.10
     import tomli as tomllib
 
 __all__ = ["TableImportError", "META_KEYS", "read_meta", "load_tables_csv", "load_tables_file",
-           "tables_to_csv"]
+           "tables_to_csv", "sidecar_path"]
 
 
 class TableImportError(TableError):
@@ -71,6 +71,13 @@ META_KEYS = {
 }
 REQUIRED = ("teeth_pinion", "teeth_gear", "base_radius_pinion_m", "base_radius_gear_m",
             "inertia_pinion_kgm2", "inertia_gear_kgm2")
+
+
+def sidecar_path(csv_path) -> Path:
+    """The sidecar that belongs to a CSV by name: ``T.csv`` -> ``T.meta.toml`` (what
+    :func:`tables_to_csv` and ``gearfmu tables`` write, and ``build --tables`` looks for)."""
+    p = Path(csv_path)
+    return p.with_name(p.stem + ".meta.toml")
 
 
 def read_meta(path) -> dict:
@@ -418,10 +425,10 @@ def _toml_value(v) -> str:
 def tables_to_csv(tables: MeshTables, csv_path, meta_path=None):
     """Write ``tables`` in the slots form (every torque row, every slot; angles in rad,
     17 significant digits, so a read gives identical arrays) and its TOML sidecar
-    (default: the CSV path with suffix ``.toml``).  Returns (csv path, sidecar path)."""
+    (default: :func:`sidecar_path`, ``T.meta.toml`` beside ``T.csv``).  Returns (csv path, sidecar path)."""
     tables.validate()
     csv_path = Path(csv_path)
-    meta_path = Path(meta_path) if meta_path is not None else csv_path.with_suffix(".toml")
+    meta_path = Path(meta_path) if meta_path is not None else sidecar_path(csv_path)
     P, N, NT = tables.slots, tables.n_phi, tables.n_torque
     head = ["pinion_angle_rad", "torque_Nm"]
     head += [f"k_slot{j + 1}_N_per_m" for j in range(P)] + [f"e_slot{j + 1}_m" for j in range(P)]

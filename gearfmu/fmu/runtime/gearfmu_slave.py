@@ -128,10 +128,10 @@ def _bind(lib):
 
 
 class GearFmuSlave(Fmi2Slave):
-    """Two-inertia spur gear pair (docs/model.md) over the C kernel."""
+    """Two-inertia spur or helical gear pair (docs/model.md) over the C kernel."""
 
     author = "gearfmu"
-    description = "Spur gear pair, per-tooth-pair dynamic model (seed 003 eq 1-6)"
+    description = "Spur or helical gear pair, per-tooth-pair dynamic model (seed 003 eq 1-6)"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
