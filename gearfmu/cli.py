@@ -32,7 +32,8 @@ import numpy as np
 from .common.vocabulary import RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
-from .pipeline import load, build, compute_tables, simulate_native, gear_torque_for, max_step_for
+from . import pipeline
+from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .plan import format_report, plan_scene, planned_scene
 from .ssp import parse_variant, ssp_from_scene
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
@@ -205,7 +206,7 @@ def cmd_tables(args) -> int:
     for extra in (".png", ".csv"):
         _output_file(out.with_suffix(extra), "--output")
     t0 = time.perf_counter()
-    tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+    tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
     tables.save(out)
     flat, note = tables, ""
@@ -234,7 +235,7 @@ def cmd_simulate(args) -> int:
     out = _output_file(args.output or f"out/{scene.fmu.model_name}_{args.backend}.csv", "--output")
     _output_file(out.with_suffix(".png"), "--output")
     if args.backend == "native":
-        tables = compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -275,7 +276,7 @@ def cmd_validate(args) -> int:
         fmu_path = fmu.path
         if getattr(scene, "accuracy", None) is not None:  # build followed the scene's plan: so does the check
             scene = planned_scene(scene, plan_scene(scene))
-        tables = compute_tables(scene, progress=False, allow_large=args.allow_large)
+        tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
         res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False,
                     allow_large=args.allow_large)

@@ -22,7 +22,7 @@ from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .scene.reader import default_scene_path, load_scene
 from .tables.estimate import check_build_cost, estimate_build
-from .tables.precompute import precompute_tables
+from .tables import precompute
 
 
 def load(scene_path: Optional[str] = None):
@@ -51,7 +51,8 @@ def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "contact_model": scene.mesh.contact_model,
     }
-    return precompute_tables(
+    # looked up at call time, so a substitute set on the module is used
+    return precompute.precompute_tables(
         scene.pair, scene.mesh,
         points_per_mesh=scene.tables.points_per_mesh,
         torque_axis_Nm=torque_axis,
