@@ -104,9 +104,11 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
     full-fidelity model over the envelope (``BuildResult.verified_envelope``).
-    ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available)."""
+    ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available).
+    The FMU records and checks its envelope (:func:`gearfmu.envelope.fmu_envelope_record`: the verified
+    envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
+    from .envelope import fmu_envelope_record
     from .fmubuild import build_fmu
-
     from .scene import DEFAULT_RUNTIME
 
     runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
@@ -162,6 +164,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
+        envelope=fmu_envelope_record(tables, verified,
+                                     speed_range_rad_s=getattr(scene.operating, "speed_range_rad_s", None)),
         **_integrator_kw(build_fmu, scene), **extra,
     )
     t2 = time.perf_counter()
