@@ -70,12 +70,15 @@ def _drive(path, schedule):
 
 
 def _both(fmus, schedule):
-    """Warnings of both runtimes for one schedule; they must be the same messages."""
+    """Envelope warnings of both runtimes for one schedule; they must be the same messages
+    (the tables' own torque-axis warning, worded by each runtime, is not one of them)."""
     got = {k: _drive(p, schedule) for k, p in fmus.items()}
-    assert got["standalone"][0] == got["pythonfmu"][0], got
+    env = {k: [w for w in g[0] if w.endswith("(one warning per input; resources/envelope.json)")]
+           for k, g in got.items()}
+    assert env["standalone"] == env["pythonfmu"], got
     for _, statuses in got.values():
         assert statuses == [0] * len(schedule)  # fmi2OK: the FMU keeps running
-    return got["standalone"][0]
+    return env["standalone"]
 
 
 def _record(path):
