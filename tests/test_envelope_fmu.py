@@ -161,3 +161,18 @@ def test_temperature_input_leaving_the_envelope_warns_once(tmp_path):
         "temperature [20, 50] degC" in warns[0], warns
     env, _, _ = _record(fmus["standalone"])
     assert env["temperature_range_C"] == [20.0, 50.0]
+
+
+def test_record_without_a_usable_plan_is_the_tables_range():
+    """A failed estimate (``error``) or no record: "not verified", the tables' torque rows and the
+    scene's speed range (rad/s and rpm, 2 pi / 60); a plan record: its own ranges."""
+    t = make_tables(torque=(50.0, 100.0, 150.0))
+    failed = {"kind": "as-written estimate", "error": "ValueError: no contact"}
+    for v in (None, failed):
+        rec = fmu_envelope_record(t, v, speed_range_rad_s=(50.0, 200.0))
+        assert rec["status"] == "not verified" and rec["pinion_torque_range_Nm"] == [50.0, 150.0]
+        assert rec["pinion_speed_range_rpm"] == pytest.approx([50.0 * RPM, 200.0 * RPM], rel=1e-12)
+        assert rec["temperature_range_C"] is None and "worst_dte_rel" not in rec
+    rec = fmu_envelope_record(t, _verified((60.0, 90.0), (10.0, 20.0)), speed_range_rad_s=(50.0, 200.0))
+    assert rec["status"] == "verified" and rec["pinion_torque_range_Nm"] == [60.0, 90.0]
+    assert rec["pinion_speed_range_rad_s"] == pytest.approx([10.0, 20.0], rel=1e-12)
