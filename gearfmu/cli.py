@@ -203,7 +203,26 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _logs_to_stderr(json_mode: bool):
+    """With --json, whatever fmpy prints while running FMUs (their log messages, e.g. the one
+    warning per input outside the verified envelope, docs/fmu.md) goes to stderr, so that stdout
+    is the JSON report alone."""
+    import contextlib
+
+    return contextlib.redirect_stdout(sys.stderr) if json_mode else contextlib.nullcontext()
+
+
 def cmd_validate(args) -> int:
+    with _logs_to_stderr(args.json):
+        rep = _validate(args)
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print_report(rep)
+    return 0 if not rep["fmpy_problems"] else 1
+
+
+def _validate(args) -> dict:
     from .compare import validate_fmu_against_native
     from .pipeline import build, compute_tables, gear_torque_for, max_step_for
 
@@ -226,11 +245,7 @@ def cmd_validate(args) -> int:
     rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
                                       comm_step_s=step)
     rep["scene"] = scene.name
-    if args.json:
-        print(json.dumps(rep, indent=1))
-    else:
-        print_report(rep)
-    return 0 if not rep["fmpy_problems"] else 1
+    return rep
 
 
 def print_report(rep: dict) -> None:
@@ -261,8 +276,9 @@ def cmd_plan(args) -> int:
     from .plan import format_report, plan_scene
 
     scene = _scene(args.scene)
-    plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
-                      budget_runs=args.budget_runs, what_if=args.what_if)
+    with _logs_to_stderr(args.json):
+        plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
+                          budget_runs=args.budget_runs, what_if=args.what_if)
     print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
     if not plan.within_target:  # a refused plan or a failed FMU confirmation is not a success
         print(f"gearfmu: plan of {scene.name} is not within its accuracy target over the envelope "

@@ -176,3 +176,21 @@ def test_record_without_a_usable_plan_is_the_tables_range():
     rec = fmu_envelope_record(t, _verified((60.0, 90.0), (10.0, 20.0)), speed_range_rad_s=(50.0, 200.0))
     assert rec["status"] == "verified" and rec["pinion_torque_range_Nm"] == [60.0, 90.0]
     assert rec["pinion_speed_range_rad_s"] == pytest.approx([10.0, 20.0], rel=1e-12)
+
+
+def test_validate_json_stays_json_when_the_fmu_warns(tmp_path, capsys):
+    """`gearfmu validate --json` of an FMU run outside its envelope (the default scene's tables,
+    verified only over 1-2 N.m): fmpy prints the FMU's warning, on stderr, and stdout is the JSON
+    report alone."""
+    from gearfmu.cli import main
+    from gearfmu.pipeline import compute_tables, load
+
+    scene = load(None)
+    t = compute_tables(scene)
+    p = build_standalone_fmu(t, tmp_path / "v.fmu", platforms=(host_key(),), validation=False,
+                             pinion_torque_start_Nm=scene.operating.torque_Nm,
+                             envelope=fmu_envelope_record(t, _verified((1.0, 2.0), (1.0, 2.0))))
+    assert main(["validate", "--fmu", str(p), "--stop-time", "0.001", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["fmpy_problems"] == []
+    assert "pinion_torque = " in err and "[1, 2] N.m" in err
