@@ -182,9 +182,21 @@ def test_validate_json_stays_json_when_the_fmu_warns(tmp_path, capsys):
     """`gearfmu validate --json` of an FMU run outside its envelope (the default scene's tables,
     verified only over 1-2 N.m): fmpy prints the FMU's warning, on stderr, and stdout is the JSON
     report alone."""
+    from ctypes import byref
+
+    from fmpy.fmi1 import printLogMessage
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.logging import addLoggerProxy
+
     from gearfmu.cli import main
     from gearfmu.pipeline import compute_tables, load
+    from test_standalone import _KEPT_CALLBACKS
 
+    # fmpy's default logger prints (what a fresh process does; earlier tests re-pointed its one slot)
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+    addLoggerProxy(byref(cb))
+    _KEPT_CALLBACKS.append(cb)
     scene = load(None)
     t = compute_tables(scene)
     p = build_standalone_fmu(t, tmp_path / "v.fmu", platforms=(host_key(),), validation=False,
