@@ -230,7 +230,7 @@ def envelope_note(rec: dict) -> str:
         return "n/a" if x is None else f"{x:.3g}"
 
     def rng(r, unit):
-        return "n/a" if r is None else f"[{r[0]:.6g}, {r[1]:.6g}] {unit}"
+        return "not checked" if r is None else f"[{r[0]:.6g}, {r[1]:.6g}] {unit}"
     where = (f"pinion torque {rng(rec['pinion_torque_range_Nm'], 'N.m')}, pinion speed "
              f"{rng(rec['pinion_speed_range_rpm'], 'rpm')}, temperature {rng(rec['temperature_range_C'], 'degC')}")
     if rec["status"] == "not verified":

@@ -289,6 +289,16 @@ def _num(v, typ: str) -> str:
     return str(int(v)) if typ == "Integer" else repr(float(v))
 
 
+def _with_note(text: str, note: Optional[str]) -> str:
+    """``text`` with the sentence ``note`` appended (a full stop between them)."""
+    text = text.strip()
+    if not note:
+        return text
+    if text and not text.endswith((".", "!", "?")):
+        text += "."
+    return f"{text} {note}".strip()
+
+
 def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
                           model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                           step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
@@ -298,7 +308,7 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
     ``description_note`` is appended to the spec's description (the verified envelope)."""
     attrib = {
         "fmiVersion": "2.0", "modelName": model_name, "guid": guid,
-        "description": " ".join(x for x in (str(spec.model.get("description", "")).strip(), description_note) if x),
+        "description": _with_note(str(spec.model.get("description", "")), description_note),
         "generationTool": generation_tool, "variableNamingConvention": "structured",
         "numberOfEventIndicators": "0",
     }
