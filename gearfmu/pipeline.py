@@ -111,10 +111,12 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
     full-fidelity model over the envelope (``BuildResult.verified_envelope``).
     ``platforms``: binaries of a standalone FMU (gearfmu.crossbuild keys; None: all available).
-    ``allow_large``: build even when the estimate (gearfmu.estimate) exceeds the limits."""
+    ``allow_large``: build even when the estimate (gearfmu.estimate) exceeds the limits.
+    The FMU records and checks its envelope (:func:`gearfmu.envelope.fmu_envelope_record`: the verified
+    envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
+    from .envelope import fmu_envelope_record
     from .estimate import check_build_cost, estimate_build
     from .fmubuild import build_fmu
-
     from .scene import DEFAULT_RUNTIME
 
     runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
@@ -173,6 +175,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
+        envelope=fmu_envelope_record(tables, verified,
+                                     speed_range_rad_s=getattr(scene.operating, "speed_range_rad_s", None)),
         **_integrator_kw(build_fmu, scene), **extra,
     )
     t2 = time.perf_counter()
