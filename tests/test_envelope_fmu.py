@@ -199,8 +199,15 @@ def test_validate_json_stays_json_when_the_fmu_warns(tmp_path, capsys):
     _KEPT_CALLBACKS.append(cb)
     scene = load(None)
     t = compute_tables(scene)
+    from gearfmu.pipeline import gear_torque_for, max_step_for
+
+    # the scene's own settings (validate compares with the native run of the scene, to 1e-9 of range)
+    t1 = scene.operating.torque_Nm
     p = build_standalone_fmu(t, tmp_path / "v.fmu", platforms=(host_key(),), validation=False,
-                             pinion_torque_start_Nm=scene.operating.torque_Nm,
+                             model_name=scene.fmu.model_name, damping_ratio=scene.fmu.damping_ratio,
+                             pinion_speed_start_rad_s=scene.operating.speed_rad_s, pinion_torque_start_Nm=t1,
+                             gear_torque_start_Nm=gear_torque_for(t, t1), max_step_s=max_step_for(scene, t),
+                             damping_model=scene.solver.damping_model, scene_text=scene.text,
                              envelope=fmu_envelope_record(t, _verified((1.0, 2.0), (1.0, 2.0))))
     assert main(["validate", "--fmu", str(p), "--stop-time", "0.001", "--json"]) == 0
     out, err = capsys.readouterr()
