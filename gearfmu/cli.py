@@ -26,6 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 import zipfile
+import contextlib
 
 import numpy as np
 
@@ -267,7 +268,28 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _logs_to_stderr(json_mode: bool):
+    """With --json, whatever fmpy prints while running FMUs (their log messages, e.g. the one
+    warning per input outside the verified envelope, docs/fmu.md) goes to stderr, so that stdout
+    is the JSON report alone."""
+    return contextlib.redirect_stdout(sys.stderr) if json_mode else contextlib.nullcontext()
+
+
 def cmd_validate(args) -> int:
+    with _logs_to_stderr(args.json):
+        rep = _validate(args)
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print_report(rep)
+    for name, rel in rep["failed"].items():
+        v = rep["outputs"][name]
+        print(f"gearfmu: validate: {name} differs by {v['max_abs_diff']:.3e} = {rel:.3e} of its range "
+              f"{v['range']:.4g} (tolerance {rep['tolerance']:g})", file=sys.stderr)
+    return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
+
+
+def _validate(args) -> dict:
     scene = _scene(args.scene)
     text = scene.text
     if args.fmu:
@@ -293,15 +315,7 @@ def cmd_validate(args) -> int:
     rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
                                       comm_step_s=step, tolerance=args.tolerance, scene_text=text)
     rep["scene"] = scene.name
-    if args.json:
-        print(json.dumps(rep, indent=1))
-    else:
-        print_report(rep)
-    for name, rel in rep["failed"].items():
-        v = rep["outputs"][name]
-        print(f"gearfmu: validate: {name} differs by {v['max_abs_diff']:.3e} = {rel:.3e} of its range "
-              f"{v['range']:.4g} (tolerance {rep['tolerance']:g})", file=sys.stderr)
-    return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
+    return rep
 
 
 def print_report(rep: dict) -> None:
@@ -338,8 +352,9 @@ def cmd_plan(args) -> int:
         if d.exists() and not d.is_dir():
             raise CliError(f"--output: {d} is a file; give a folder for the FMUs of --fmu")
         _output_file(d / "probe", "--output")
-    plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
-                      budget_runs=args.budget_runs, what_if=args.what_if)
+    with _logs_to_stderr(args.json):
+        plan = plan_scene(scene, progress=not args.quiet, measure_fmu=args.fmu, fmu_dir=args.output,
+                          budget_runs=args.budget_runs, what_if=args.what_if)
     print(json.dumps(plan.to_dict(), indent=1) if args.json else format_report(plan))
     if not plan.within_target:  # a refused plan or a failed FMU confirmation is not a success
         print(f"gearfmu: plan of {scene.name} is not within its accuracy target over the envelope "

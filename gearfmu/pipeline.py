@@ -29,7 +29,9 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
     full-fidelity model over the envelope (``BuildResult.verified_envelope``).
     ``platforms``: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys; None: all available).
-    ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits."""
+    ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
+    The FMU records and checks its envelope (:func:`gearfmu.scene.envelope.fmu_envelope_record`: the verified
+    envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
     platform_kw(runtime, platforms)

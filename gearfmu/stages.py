@@ -20,6 +20,7 @@ from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
+from .scene.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
 from .tables.estimate import check_build_cost, estimate_build
 from .tables import precompute
@@ -152,6 +153,8 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
         stop_time_s=scene.fmu.stop_time_s,
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
+        envelope=fmu_envelope_record(tables, verified_envelope,
+                                     speed_range_rad_s=getattr(scene.operating, "speed_range_rad_s", None)),
         **_integrator_kw(builder, scene), **extra,
     )
     t2 = time.perf_counter()

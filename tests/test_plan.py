@@ -296,6 +296,44 @@ def test_run_up_over_speed_range_within_target(small):
     assert e_dte <= 0.05 and e_f <= 0.05
 
 
+def test_planned_fmu_states_and_checks_its_verified_envelope(small, monkeypatch):
+    """`gearfmu build` of a scene with [accuracy] (the module's plan, not a second search): both
+    runtimes carry the plan's verified envelope (resources/envelope.json, the validation record,
+    the model description); driven inside the verified torque range [80, 200] N*m they log no
+    warning, at 260 N*m exactly one envelope warning naming the input, its value and the range,
+    and the steps stay fmi2OK (docs/fmu.md "Verified envelope")."""
+    import gearfmu.plan
+    from gearfmu.fmu.crossbuild import host_key
+    from gearfmu.pipeline import build, gear_torque_for
+
+    from test_envelope_fmu import _both, _record
+
+    scene, plan, d = small
+    monkeypatch.setattr(gearfmu.plan, "plan_scene", lambda s, progress=False: plan)
+    res = {"standalone": build(scene, d / "env_sa.fmu", runtime="standalone", platforms=[host_key()]),
+           "pythonfmu": build(scene, d / "env_py.fmu", runtime="pythonfmu")}
+    fmus = {k: r.fmu_path for k, r in res.items()}
+    for r in res.values():
+        env, rec, desc = _record(r.fmu_path)
+        assert env["status"] == "verified" and env["verified_envelope"] == r.verified_envelope == \
+            json.loads(json.dumps(plan.verified_envelope))
+        assert env["pinion_torque_range_Nm"] == [80.0, 200.0]
+        assert env["pinion_speed_range_rpm"] == pytest.approx([1000.0, 2000.0], rel=1e-12)
+        assert rec["envelope"] == env
+        assert "Accuracy verified by the fidelity plan over pinion torque [80, 200] N.m, pinion speed " \
+               "[1000, 2000] rpm" in desc
+    tb = res["standalone"].tables
+
+    def sched(T):
+        return [{"pinion_torque": T, "gear_torque": gear_torque_for(tb, T)}] * 30
+
+    assert _both(fmus, sched(150.0)) == [] and _both(fmus, sched(200.0)) == []
+    warns = _both(fmus, sched(260.0))
+    assert len(warns) == 1, warns
+    assert warns[0].startswith("pinion_torque = 260 N.m at t = 0 s is outside the envelope over which this "
+                               "FMU's accuracy was verified (fidelity plan): pinion torque [80, 200] N.m"), warns
+
+
 def test_cli_plan_json(tmp_path, capsys):
     p = tmp_path / "plain.toml"
     p.write_text(PLAIN, encoding="utf-8")

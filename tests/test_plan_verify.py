@@ -239,6 +239,11 @@ def test_build_as_written_states_its_estimated_error(tmp_path, capsys):
     assert ve["kind"] == "as-written estimate" and ve["as_written"]["points_per_mesh"] == 64
     assert ve["full_fidelity"]["points_per_mesh"] == 256 and ve["full_fidelity"]["contact_model"] == "hertz"
     assert ve["worst_mesh_force_rel"] > 0.02 and ve["within_target"] is False
+    import zipfile
+
+    with zipfile.ZipFile(res.fmu_path) as z:  # the FMU states it (docs/fmu.md "Verified envelope")
+        env = json.loads(z.read("resources/envelope.json"))
+    assert env["status"] == "estimated" and env["verified_envelope"] == json.loads(json.dumps(ve))
     from gearfmu.cli import _print_accuracy
 
     _print_accuracy(ve)

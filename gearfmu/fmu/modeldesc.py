@@ -289,14 +289,26 @@ def _num(v, typ: str) -> str:
     return str(int(v)) if typ == "Integer" else repr(float(v))
 
 
+def _with_note(text: str, note: Optional[str]) -> str:
+    """``text`` with the sentence ``note`` appended (a full stop between them)."""
+    text = text.strip()
+    if not note:
+        return text
+    if text and not text.endswith((".", "!", "?")):
+        text += "."
+    return f"{text} {note}".strip()
+
+
 def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
                           model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                           step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
-                          generation_date: Optional[str] = None, version: Optional[str] = None) -> bytes:
-    """The FMI 2.0 CS ``modelDescription.xml`` (UTF-8 bytes) for ``variables``."""
+                          generation_date: Optional[str] = None, version: Optional[str] = None,
+                          description_note: Optional[str] = None) -> bytes:
+    """The FMI 2.0 CS ``modelDescription.xml`` (UTF-8 bytes) for ``variables``;
+    ``description_note`` is appended to the spec's description (the verified envelope)."""
     attrib = {
         "fmiVersion": "2.0", "modelName": model_name, "guid": guid,
-        "description": str(spec.model.get("description", "")),
+        "description": _with_note(str(spec.model.get("description", "")), description_note),
         "generationTool": generation_tool, "variableNamingConvention": "structured",
         "numberOfEventIndicators": "0",
     }

@@ -50,6 +50,7 @@ from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
 from ..scene.reader import default_output_interval_s
+from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
 KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
@@ -62,7 +63,7 @@ PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 2  # gearkernel.h GK_ABI_VERSION (2: temperature axis)
+KERNEL_ABI_VERSION = 3  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check)
 #: gearkernel.h GK_KINK_MAX_SLOTS
 KINK_MAX_SLOTS = 32
 
@@ -253,7 +254,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
               damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
               output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1) -> Path:
+              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1,
+              envelope: Optional[dict] = None) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
     Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
@@ -264,6 +266,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     FMU parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
     None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
+    ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,
+    "not verified"), checked at run time and recorded (docs/fmu.md "Verified envelope").
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
@@ -284,6 +288,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm, "integrator": ig})
     variables, temp0 = temperature_input(variables, tables)
 
+
+    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
     digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
     suffix = f"{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
@@ -310,6 +316,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
             "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION, "slots": tables.slots,
             "sha256": sha, "variables": runtime_variable_table(variables),
+            "envelope": runtime_envelope(env_rec),
         }
         (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
@@ -357,7 +364,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
             parameters={k: v for k, v in provenance["parameters"].items() if k not in ("stop_time_s", "output_interval_s")},
-            scene_text=scene_text, compiler=provenance["kernel"]["compiler"])
+            scene_text=scene_text, compiler=provenance["kernel"]["compiler"], envelope=env_rec)
+        record[ENVELOPE_FILE] = json.dumps(env_rec, indent=1).encode("utf-8")
 
         with zipfile.ZipFile(raw_fmu) as zin:
             registered = zin.read("modelDescription.xml")
@@ -365,7 +373,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             xml = model_description_xml(spec, variables, model_name=model_name, model_identifier=identifier,
                                         guid=guid, stop_time_s=tstop, step_size_s=dt,
                                         generation_tool=f"gearfmu {__version__}", generation_date=now,
-                                        version=__version__)
+                                        version=__version__, description_note=envelope_note(env_rec))
             check_model_description(xml, variables)
             out_path.parent.mkdir(parents=True, exist_ok=True)
             part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
@@ -384,7 +392,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                             zout.write(shim, n)
                             continue
                         zout.writestr(info, zin.read(n))
-                    for rel, data in record.items():  # resources/validation/ (docs/standalone.md)
+                    for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
                         zout.writestr(rel, data)
                 os.replace(part, out_path)
             finally:

@@ -25,6 +25,7 @@ FMU layout (docs/standalone.md)::
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
     resources/validation/                the validation record (:func:`validation_record`)
+    resources/envelope.json              the verified envelope (gearfmu.scene.envelope.fmu_envelope_record)
 
 :func:`validation_record` is shared with the pythonfmu builder
 (:func:`gearfmu.fmu.pythonfmu_build.build_fmu`): every FMU carries its scene, package and
@@ -55,6 +56,7 @@ from .pythonfmu_build import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotF
                        _compiler_version, _integrator_code,
                        FMI2_HEADERS, check_build_arguments, check_output_arguments, fmi2_header_dir,
                        find_c_compiler, temperature_input)
+from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
                         model_description_xml)
 from ..tables.mesh_tables import MeshTables
@@ -183,8 +185,10 @@ def _cfg_num(v, typ: str) -> str:
 
 
 def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
-                meta_bytes: bytes, bin_bytes: bytes) -> str:
-    """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md)."""
+                meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None) -> str:
+    """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md).
+    ``envelope``: :func:`gearfmu.scene.envelope.runtime_envelope` (``envelope.kind`` and
+    ``envelope.<quantity>=low|high`` lines; none: nothing is checked)."""
     meta = json.loads(meta_bytes.decode("utf-8"))
     sc = meta["scalars"]
     lines = [
@@ -203,6 +207,11 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
     for name in ("phi_period_rad", "base_radius_pinion_m", "base_radius_gear_m", "inertia_pinion_kgm2",
                  "inertia_gear_kgm2", "k_mean_N_per_m"):
         lines.append(f"{name}={_hexf(sc[name])}")
+    if envelope is not None:  # docs/fmu.md "Verified envelope"
+        lines.append(f"envelope.kind={int(envelope['kind'])}")
+        for q in ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"):
+            if envelope.get(q) is not None:
+                lines.append(f"envelope.{q}={_hexf(envelope[q][0])}|{_hexf(envelope[q][1])}")
     lines.append(f"n_vars={len(variables)}")
     for v in variables:
         if "|" in v.name:
@@ -246,7 +255,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
                          integrator: Union[int, str] = 1,
-                         platforms: Optional[Sequence[str]] = None) -> Path:
+                         platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None) -> Path:
     """Build the standalone FMI 2.0 CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
@@ -257,7 +266,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     compiler only the build machine's platform is compiled (with ``cc`` or the
     host C compiler), and documentation/platforms.txt and the model description
     say which platforms are missing.  ``cc`` given: the build machine's platform
-    is compiled with it.  Written under a temporary name beside ``out_path`` and
+    is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
+    tables' own range, "not verified").  Written under a temporary name beside ``out_path`` and
     renamed at the end.
     """
     zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
@@ -284,6 +294,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     variables = apply_start_values(variables, starts)
     variables, temp0 = temperature_input(variables, tables)
 
+    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
     digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
     identifier = f"gearfmu_sa_{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
@@ -325,7 +336,9 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         (res / "tables.json").write_bytes(meta_bytes)
         (res / "tables.bin").write_bytes(bin_bytes)
         (res / CONFIG_FILE).write_text(config_text(tables, variables, guid=guid, model_identifier=identifier,
-                                                   meta_bytes=meta_bytes, bin_bytes=bin_bytes), encoding="utf-8")
+                                                   meta_bytes=meta_bytes, bin_bytes=bin_bytes,
+                                                   envelope=runtime_envelope(env_rec)), encoding="utf-8")
+        (root / ENVELOPE_FILE).write_text(json.dumps(env_rec, indent=1), encoding="utf-8")
         if scene_text is not None:
             (res / "scene.toml").write_text(scene_text, encoding="utf-8")
         compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
@@ -345,14 +358,16 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         if validation:
             for rel, data in validation_record(tables, runtime="standalone", model_identifier=identifier,
                                                parameters=params, stop_time_s=tstop, output_interval_s=dt,
-                                               scene_text=scene_text, compiler=compiler).items():
+                                               scene_text=scene_text, compiler=compiler,
+                                               envelope=env_rec).items():
                 p = root / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_bytes(data)
         xml = model_description_xml(spec, variables, model_name=model_name, model_identifier=identifier,
                                     guid=guid, stop_time_s=tstop, step_size_s=dt,
                                     generation_tool=f"gearfmu {__version__} (standalone runtime)",
-                                    generation_date=now, version=__version__)
+                                    generation_date=now, version=__version__,
+                                    description_note=envelope_note(env_rec))
         check_model_description(xml, variables)
         xml = standalone_model_description(xml, [LAYER_SOURCE.name, KERNEL_SOURCE.name],
                                            platforms_note=crossbuild.platform_summary(binaries))

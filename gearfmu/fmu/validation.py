@@ -42,7 +42,7 @@ def _versions() -> Dict[str, Optional[str]]:
 
 def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str, parameters: dict,
                       stop_time_s: float, output_interval_s: float, scene_text: Optional[str] = None,
-                      compiler: Optional[str] = None) -> Dict[str, bytes]:
+                      compiler: Optional[str] = None, envelope: Optional[dict] = None) -> Dict[str, bytes]:
     """The validation record every gearfmu FMU carries (both runtimes), as
     ``{path inside the FMU: bytes}`` under ``resources/validation/``.
 
@@ -52,7 +52,9 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
     ``reference_result.csv`` (the native numba solver, :func:`gearfmu.dynamics.native.simulate`,
     over the FMU's DefaultExperiment with the FMU's start values: communication
     step = stepSize, same max_step, so the FMU reproduces it to round-off when
-    a master steps it at stepSize) and ``scene.toml`` when a scene was given.
+    a master steps it at stepSize) and ``scene.toml`` when a scene was given;
+    ``envelope`` (:func:`gearfmu.scene.envelope.fmu_envelope_record`, the FMU's
+    ``resources/envelope.json``) goes into record.json as ``envelope``.
     ``parameters`` keys: damping_ratio, pinion_speed_start_rad_s,
     pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
     max_step_s, damping_model (0/1), optionally integrator (0/1).  The pattern follows the Modelica
@@ -93,6 +95,7 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
                    "arrays_sha256": {k: v["sha256"] for k, v in meta["arrays"].items()},
                    "slots": tables.slots, "n_phi": tables.n_phi, "n_torque": tables.n_torque},
         "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+        "envelope": envelope,
         "reference": {
             "file": "reference_result.csv", "sha256": hashlib.sha256(ref).hexdigest(),
             "solver": "gearfmu.dynamics.native.simulate (numba, docs/model.md RK4)",

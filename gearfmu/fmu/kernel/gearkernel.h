@@ -18,7 +18,7 @@
 extern "C" {
 #endif
 
-#define GK_ABI_VERSION 2
+#define GK_ABI_VERSION 3  /* 3: verified envelope check (gk_envelope) */
 
 /* status codes */
 #define GK_OK 0
@@ -142,6 +142,49 @@ int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out);
 
 /* Number of substeps gk_do_step takes for (H, h_max); 0 if invalid. */
 double gk_substeps(double H_s, double h_max_s);
+
+/* ------------------------------------------------------------------------
+ * Verified envelope (docs/fmu.md "Verified envelope"): the input ranges over
+ * which the FMU's accuracy was verified (or estimated, or -- without a record --
+ * the tables' own range).  Both FMU runtimes call gk_envelope_check with every
+ * applied input; the first time a quantity is outside its range it returns 1
+ * and the one warning message, later calls for that quantity return 0 (one
+ * warning per quantity until gk_envelope_rearm).  The model is not touched:
+ * the FMU keeps running. */
+#define GK_ENV_PINION_TORQUE 0  /* pinion_torque input, N*m */
+#define GK_ENV_PINION_SPEED 1   /* pinion speed (the state), rad/s */
+#define GK_ENV_TEMPERATURE 2    /* the temperature input, degC */
+#define GK_ENV_N 3
+/* what the envelope is */
+#define GK_ENV_VERIFIED 0       /* verified by the fidelity plan */
+#define GK_ENV_ESTIMATED 1      /* the as-written estimate of `gearfmu build` */
+#define GK_ENV_NOT_VERIFIED 2   /* no record: the tables' own range, accuracy not assessed */
+/* the speed is compared with its range widened by this share of each end: the
+ * pinion speed carries the torsional vibration, which the verified runs had too */
+#define GK_ENV_SPEED_MARGIN 0.1
+
+typedef struct gk_envelope {
+    double lo[GK_ENV_N], hi[GK_ENV_N];  /* range of each quantity (SI as above) */
+    int active[GK_ENV_N];               /* 1: the quantity has a range and is checked */
+    int warned[GK_ENV_N];               /* 1: its warning was given */
+    int kind;                           /* GK_ENV_VERIFIED, _ESTIMATED or _NOT_VERIFIED */
+} gk_envelope;
+
+int gk_sizeof_envelope(void);
+
+/* Empty envelope of the given kind (nothing checked, nothing warned); GK_ERR_PARAM for a bad kind. */
+int gk_envelope_init(gk_envelope *e, int kind);
+
+/* Range of quantity q: finite lo <= hi, else GK_ERR_PARAM (and q stays unchecked). */
+int gk_envelope_set(gk_envelope *e, int q, double lo_SI, double hi_SI);
+
+/* Forget the warnings given (fmi2Reset). */
+void gk_envelope_rearm(gk_envelope *e);
+
+/* Compare `value` (SI) of quantity q, the FMU variable `name`, at time t_s with
+ * its range.  Returns 1 the first time it is outside (a NaN is not compared:
+ * the runtimes reject it elsewhere) and writes the warning into msg[cap]; else 0. */
+int gk_envelope_check(gk_envelope *e, int q, const char *name, double value, double t_s, char *msg, int cap);
 
 #ifdef __cplusplus
 }

@@ -15,6 +15,9 @@ numpy and the pythonfmu wrapper only.  Everything it needs sits in the FMU's
   gearfmu/tables/mesh_tables.py, docs/tables.md), checked against their SHA-256 sums;
 * the kernel shared library (gearfmu/fmu/kernel/gearkernel.c), loaded with ctypes.
 
+The verified envelope (``envelope`` in ``gearfmu_runtime.json``) is checked by the
+kernel's ``gk_envelope_check``, the rule and message the standalone runtime uses too.
+
 The model is docs/model.md; the FMU behaviour is docs/fmu.md.
 """
 import ctypes
@@ -119,6 +122,10 @@ def _bind(lib):
         "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
         "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
         "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
+        "gk_sizeof_envelope": ([], c_int),
+        "gk_envelope_init": ([c_void_p, c_int], c_int),
+        "gk_envelope_set": ([c_void_p, c_int, c_double, c_double], c_int),
+        "gk_envelope_check": ([c_void_p, c_int, ctypes.c_char_p, c_double, c_double, c_void_p, c_int], c_int),
     }
     for name, (args, res) in sigs.items():
         fn = getattr(lib, name)
@@ -183,6 +190,7 @@ class GearFmuSlave(Fmi2Slave):
                 self.log(msg, Fmi2Status.fatal)
                 raise GearFmuResourceError(msg)
             self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
+        self._init_envelope(cfg.get("envelope"))
         self._slots = P
         self._torque_range = (float(self._torque[0]), float(self._torque[-1])) if nt > 1 else None
         self._initialized = False
@@ -228,6 +236,33 @@ class GearFmuSlave(Fmi2Slave):
                                        f"{var.value_reference}, expected {ent['vr']}")
 
     # --------------------------------------------------------------- checks
+    _ENV_QUANTITIES = ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C")  # GK_ENV_* order
+
+    def _init_envelope(self, env):
+        """The kernel's envelope check (docs/fmu.md "Verified envelope"); kept by self."""
+        self._env = np.zeros(self._lib.gk_sizeof_envelope() // 8 + 1)
+        self._pe = self._env.ctypes.data
+        self._env_msg = ctypes.create_string_buffer(900)
+        env = env or {}
+        self._lib.gk_envelope_init(self._pe, int(env.get("kind", 2)))
+        for q, key in enumerate(self._ENV_QUANTITIES):
+            if env.get(key) is not None:
+                self._lib.gk_envelope_set(self._pe, q, float(env[key][0]), float(env[key][1]))
+
+    def _check_envelope(self, t, speed=True, torque=True):
+        """One warning per input the first time it leaves the envelope (the kernel decides and words it)."""
+        checks = []
+        if torque:
+            checks.append((0, "pinion_torque", float(self._v["pinion_torque"])))
+            if self._temperature_range is not None:
+                checks.append((2, self._temp_name, float(self._v[self._temp_name])))
+        if speed:
+            checks.append((1, "pinion_speed", float(self._state[1])))  # gk_state.omega1_rad_s
+        for q, name, value in checks:
+            if self._lib.gk_envelope_check(self._pe, q, name.encode(), value, float(t), self._env_msg,
+                                           len(self._env_msg)):
+                self.log(self._env_msg.value.decode("utf-8", "replace"), Fmi2Status.warning)
+
     def _bad_value(self, name, t=None):
         """A message if variable `name` is non-finite or outside its min/max, else None."""
         val = self._v[name]
@@ -335,6 +370,7 @@ class GearFmuSlave(Fmi2Slave):
             self.log(f"initial state: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
             return False
         self._check_torque_range(T1, t)
+        self._check_envelope(t)
         self._initialized = True
         return True
 
@@ -404,12 +440,14 @@ class GearFmuSlave(Fmi2Slave):
                 return False
             T1 = float(self._v["pinion_torque"])
             self._check_torque_range(T1, current_time)
+            self._check_envelope(current_time, speed=False)
             st = self._lib.gk_do_step(self._pm, self._ps, T1, float(self._v["gear_torque"]),
                                       float(step_size), float(self._v["max_step"]), self._po)
             if st != 0:
                 self.log(f"step at t = {current_time!r} s, H = {step_size!r} s rejected: "
                          f"{_KERNEL_ERRORS.get(st, st)}; state unchanged", Fmi2Status.discard)
                 return False
+            self._check_envelope(current_time + step_size, torque=False)
             self._n_steps += 1
             return True
         except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host

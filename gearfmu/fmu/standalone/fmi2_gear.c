@@ -109,6 +109,7 @@ typedef struct {
     double torque_lo, torque_hi;
     int has_torque_range;
     uint64_t tables_tag;
+    gk_envelope env;      /* the verified envelope (docs/fmu.md "Verified envelope"), one warning per input */
 } gf_inst;
 
 /* ------------------------------------------------------------- logging */
@@ -441,6 +442,9 @@ typedef struct {
     long n_temp, off_temp;  /* optional: temperature axis (n_temp = 0: none) */
     double phi_period, Rb1, Rb2, I1, I2, k_mean;
     int have_mask;
+    /* optional: the verified envelope (envelope.kind, envelope.<quantity>=lo|hi) */
+    int env_kind, env_have[GK_ENV_N];
+    double env_lo[GK_ENV_N], env_hi[GK_ENV_N];
 } gf_config;
 
 enum {
@@ -488,6 +492,7 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
     const char *p = text;
     int nvar_seen = 0, lineno = 0;
     memset(cfg, 0, sizeof *cfg);
+    cfg->env_kind = GK_ENV_NOT_VERIFIED;
     while (*p != '\0') {
         size_t n = strcspn(p, "\n");
         char *eq, *key, *val;
@@ -571,6 +576,28 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
             if (c->vars == NULL || !parse_var(c, val, &nvar_seen)) {
                 snprintf(err, errcap, "line %d: bad variable entry (n_vars first, then vr 0, 1, ... in order)", lineno);
                 return err;
+            }
+        }
+        else if (strcmp(key, "envelope.kind") == 0) {
+            long kind;
+            if (!parse_long(val, &kind) || kind < GK_ENV_VERIFIED || kind > GK_ENV_NOT_VERIFIED) {
+                snprintf(err, errcap, "envelope.kind: bad value '%s'", val);
+                return err;
+            }
+            cfg->env_kind = (int)kind;
+        } else if (strncmp(key, "envelope.", 9) == 0) {
+            static const char *const env_keys[GK_ENV_N] = {"pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"};
+            char *f[2];
+            int q;
+            for (q = 0; q < GK_ENV_N; ++q)
+                if (strcmp(key + 9, env_keys[q]) == 0) break;
+            if (q < GK_ENV_N) { /* lo|hi, finite, lo <= hi */
+                if (split_fields(val, f, 2) != 2 || !parse_double(f[0], &cfg->env_lo[q]) ||
+                    !parse_double(f[1], &cfg->env_hi[q]) || !(cfg->env_lo[q] <= cfg->env_hi[q])) {
+                    snprintf(err, errcap, "%s: need low|high numbers with low <= high", key);
+                    return err;
+                }
+                cfg->env_have[q] = 1;
             }
         }
         /* unknown keys are ignored (forward compatible) */
@@ -666,6 +693,23 @@ static int apply_damping(gf_inst *c)
     return 1;
 }
 
+/* Compare an applied input or the pinion speed with the verified envelope: the kernel's
+ * rule and message (gk_envelope_check), logged as the one fmi2Warning for that input. */
+static void check_envelope(gf_inst *c, int q, const char *name, double value)
+{
+    char msg[900];
+    if (gk_envelope_check(&c->env, q, name, value, c->time, msg, (int)sizeof msg))
+        gf_log(c, fmi2Warning, "logStatusWarning", "%s", msg);
+}
+
+/* the applied inputs (torque, temperature) and the pinion speed of the current state */
+static void check_inputs_envelope(gf_inst *c, int speed)
+{
+    check_envelope(c, GK_ENV_PINION_TORQUE, "pinion_torque", c->values[c->vr_T1]);
+    if (c->vr_temp >= 0) check_envelope(c, GK_ENV_TEMPERATURE, c->temp_name, c->values[c->vr_temp]);
+    if (speed) check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
+}
+
 static void check_torque_range(gf_inst *c, double T1)
 {
     if (!c->has_torque_range) return;
@@ -747,6 +791,7 @@ static int init_state(gf_inst *c)
         return 0;
     }
     check_torque_range(c, T1);
+    check_inputs_envelope(c, 1);
     c->initialized = 1;
     return 1;
 }
@@ -760,6 +805,7 @@ static void reset_values(gf_inst *c)
     c->initialized = 0;
     c->dirty = 1;
     c->warned_range = 0;
+    gk_envelope_rearm(&c->env);
     c->zeta_valid = 0;
     c->zeta_applied = 0.0;
     c->time = 0.0;
@@ -877,6 +923,9 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
             c->temp_hi = c->arr_temp[NTemp - 1];
         }
         c->has_torque_range = NT > 1;
+        gk_envelope_init(&c->env, cfg.env_kind);
+        for (i = 0; i < GK_ENV_N; ++i)
+            if (cfg.env_have[i]) gk_envelope_set(&c->env, i, cfg.env_lo[i], cfg.env_hi[i]);
         c->torque_lo = c->arr_torque[0];
         c->torque_hi = c->arr_torque[NT - 1];
     }
@@ -1369,6 +1418,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
     T1 = c->values[c->vr_T1];
     T2 = c->values[c->vr_T2];
     check_torque_range(c, T1);
+    check_inputs_envelope(c, 0);
     st = gk_do_step(c->model, &c->state, T1, T2, H, c->values[c->vr_hmax], c->out);
     if (st != GK_OK) {
         gf_log(c, fmi2Discard, "logStatusDiscard", "step at t = %.17g s, H = %.17g s rejected: %s; state unchanged",
@@ -1376,6 +1426,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
         return fmi2Discard;
     }
     c->time = c->time + H;
+    check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
     return fmi2OK;
 }
 
