@@ -3,7 +3,7 @@
 Reference: the project's rule "no timings, dates, machine loads or issue numbers in code
 comments, docstrings or docs; history lives in git".  The check looks for the marks a diary
 leaves -- "issue 3", a calendar date such as 2026-11-22, "load average", "Earlier measurements",
-a "Left:" to-do line -- in README.md, docs/*.md and every source file of the package (comments
+a "Left:" to-do line or heading -- in README.md, docs/*.md and every source file of the package (comments
 and docstrings included).  Measured numbers belong in the generated validation report
 (docs/validation.md, written by benchmarks/report.py from benchmark JSON).
 
@@ -22,6 +22,7 @@ DIARY = [
     (re.compile(r"load average", re.IGNORECASE), "machine load"),
     (re.compile(r"earlier measurements", re.IGNORECASE), "'Earlier measurements'"),
     (re.compile(r"\bLeft:"), "'Left:' to-do list"),
+    (re.compile(r"^#+\s*(What is left|Left open|Left|To do)\s*$", re.IGNORECASE), "to-do list heading"),
 ]
 
 # Files still carrying diary marks while their owners rewrite them; must shrink to empty.
@@ -30,6 +31,7 @@ KNOWN_DIARY = {
     "docs/ehl_mesh.md",
     "docs/ehl_transient.md",
     "docs/native.md",
+    "docs/plan.md",
     "gearfmu/ehl/transient.py",
     "gearfmu/plan.py",
     "gearfmu/tables/direct_tvms.py",
@@ -59,6 +61,7 @@ def test_the_patterns_find_diary_lines():
     assert [w for _, w, _ in diary_marks("(load average 7.8)")] == ["machine load"]
     assert [w for _, w, _ in diary_marks("## Earlier measurements")] == ["'Earlier measurements'"]
     assert [w for _, w, _ in diary_marks("Left: the stalls at level 4")] == ["'Left:' to-do list"]
+    assert [w for _, w, _ in diary_marks("## What is left")] == ["to-do list heading"]
     # reference text that must not trigger
     assert diary_marks("M = 2000-5000, ISO 6336-1:2019, Sainsot et al. 2004, the left flank") == []
 
