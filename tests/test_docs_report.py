@@ -59,7 +59,8 @@ def test_report_from_saved_json(tmp_path):
     assert "(4 s for both pairs and all states)" in page          # cost from runs.json
     # integrators: the rows as given, and the summary picks rk4_kink's smallest error
     assert "| native-rk4_kink | h=H/64 | 0.0018 | 1.60e-08 | 8.20e-08 | 1.80e-08 |" in page
-    assert "rk4_kink 1.60e-08 of the range at h=H/64" in page
+    assert "DTE RMS error at h=H/64: rk4_kink 1.60e-08" in page
+    assert "pair I: within 0.009" in page                           # |0.75 - 0.7586|
     # EHL: the finest Barus grid against Moes' fit in the summary
     assert "M=20, L=5: +0.6 % (512 intervals)" in page
     # FMU speed, in the page and between the README markers (old content replaced)
