@@ -411,14 +411,16 @@ def speed_table(d: dict) -> str:
 
 
 COVERED_BY_TESTS = [
-    ("meshing errors and the loaded static mesh", "closed forms (seed 003 eq 15, seed 000 eq 16, a root "
-     "finder)", "tests/test_meshing_errors.py, tests/test_loaded_mesh.py"),
-    ("contact models and roughness (fractal, load sharing, W-M)", "seed 001 Figs. 7-10, Johnson-Greenwood-"
-     "Poon, Majumdar-Bhushan spectra", "tests/test_fractal_contact.py, tests/test_load_sharing.py, "
-     "tests/test_roughness.py"),
+    ("meshing errors and the loaded static mesh", "hand values of seed 003 eq 15 and of the pitch "
+     "closure, seed 000 eq 16, scipy's brentq on the load balance", "tests/test_meshing_errors.py, "
+     "tests/test_loaded_mesh.py"),
+    ("contact models and roughness (fractal, load sharing, W-M)", "seed 001 Figs. 7-12 statements, "
+     "quadrature of the asperity integrals, seed 000 Table 2 Ra, the W-M closed-form RMS",
+     "tests/test_fractal_contact.py, tests/test_load_sharing.py, tests/test_roughness.py"),
     ("rough EHL in the mesh, transient films", "seed 000 Figs. 12-15 trends, Venner et al. waviness "
      "reduction", "tests/test_ehl_mesh.py, tests/test_ehl_transient.py"),
-    ("helical slicing", "ISO 6336-1 contact ratios, continuous face-width limit", "tests/test_helical.py"),
+    ("helical geometry and slicing", "hand formulas for ε_α, ε_β and the centre distance; the "
+     "continuous face-width limit", "tests/test_helical.py, tests/test_helical_sawtooth.py"),
 ]
 
 
