@@ -37,7 +37,13 @@ def _fixture(d: pathlib.Path):
     ehl = {"cases": [{"M": 20.0, "L": 5.0, "options": {"viscosity": "barus", "compressible": False},
                       "rows": [{"n_intervals": 512, "H_central_moes": 3.487, "rel_dev_from_moes": 0.0061,
                                 "discretisation_error_estimate": 4.3e-3, "cycles": 12, "cpu_time_ms": 10.5}]}]}
-    for name, data in (("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl)):
+    trends = {"points_per_mesh": 4, "slices": 2, "torques_Nm": [1000.0, 2000.0],
+              "mean_tvms_N_per_m": {"hertz": {"1000": 1.0e9, "2000": 1.0e9},
+                                    "smooth": {"1000": 1.2e9, "2000": 1.25e9},
+                                    "rough_level_4": {"1000": 1.26e9, "2000": 1.2e9}},
+              "speed_rpm": {"smooth": {"1000": 1.3e9, "2000": 1.25e9, "4000": 1.28e9}}}
+    for name, data in (("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+                       ("trends", trends)):
         (d / f"{name}.json").write_text(json.dumps(data))
     (d / "runs.json").write_text(json.dumps({"seed004": {"ok": True, "wall_s": 4.0, "command": "x"}}))
 
@@ -63,6 +69,11 @@ def test_report_from_saved_json(tmp_path):
     assert "pair I: within 0.009" in page                           # |0.75 - 0.7586|
     # EHL: the finest Barus grid against Moes' fit in the summary
     assert "M=20, L=5: +0.6 % (512 intervals)" in page
+    # seed 000 trends: values against smooth, and each stated direction judged on the numbers
+    assert "| rough level 4 | 1.26000 (+5.000 %) | 1.20000 (-4.000 %) |" in page
+    assert "| Fig. 15: TVMS rises with torque | smooth film | yes |" in page
+    assert "| Fig. 14: TVMS falls as speed rises | smooth film, 1000, 2000, 4000 rpm | no |" in page
+    assert "| Fig. 13: rough level 4 below smooth | tables, every torque | 1 of 2 torques |" in page
     # FMU speed, in the page and between the README markers (old content replaced)
     assert "| internal step, native (numba) | 251 ns |" in page
     text = readme.read_text()
