@@ -299,6 +299,31 @@ def _with_note(text: str, note: Optional[str]) -> str:
     return f"{text} {note}".strip()
 
 
+def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s) -> None:
+    """UnitDefinitions (``units``), LogCategories and DefaultExperiment: the same elements in FMI 2.0
+    and FMI 3.0 model descriptions."""
+    if units:
+        ud = ET.SubElement(root, "UnitDefinitions")
+        for u in sorted(units):
+            ue = ET.SubElement(ud, "Unit", {"name": u})
+            exps = spec.units[u]
+            if exps:
+                ET.SubElement(ue, "BaseUnit", {b: (repr(float(e)) if b in UNIT_SCALING else str(e))
+                                               for b, e in exps.items()})
+    cats = ET.SubElement(root, "LogCategories")
+    for c, d in LOG_CATEGORIES.items():
+        ET.SubElement(cats, "Category", {"name": c, "description": d})
+    de = dict(spec.default_experiment)
+    if stop_time_s is not None:
+        de["stop_time_s"] = stop_time_s
+    if step_size_s is not None:
+        de["step_size_s"] = step_size_s
+    dea = {xml_key: repr(float(de[key])) for key, xml_key in
+           (("start_time_s", "startTime"), ("stop_time_s", "stopTime"), ("step_size_s", "stepSize")) if key in de}
+    if dea:
+        ET.SubElement(root, "DefaultExperiment", dea)
+
+
 def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
                           model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                           step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
@@ -331,29 +356,7 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         "canGetAndSetFMUstate": "true",
         "canSerializeFMUstate": "true",
     })
-    used_units = sorted({v.unit for v in variables if v.unit is not None})
-    if used_units:
-        ud = ET.SubElement(root, "UnitDefinitions")
-        for u in used_units:
-            ue = ET.SubElement(ud, "Unit", {"name": u})
-            exps = spec.units[u]
-            if exps:
-                ET.SubElement(ue, "BaseUnit", {b: (repr(float(e)) if b in UNIT_SCALING else str(e))
-                                               for b, e in exps.items()})
-    cats = ET.SubElement(root, "LogCategories")
-    for c, d in LOG_CATEGORIES.items():
-        ET.SubElement(cats, "Category", {"name": c, "description": d})
-    de = dict(spec.default_experiment)
-    if stop_time_s is not None:
-        de["stop_time_s"] = stop_time_s
-    if step_size_s is not None:
-        de["step_size_s"] = step_size_s
-    dea = {}
-    for key, xml_key in (("start_time_s", "startTime"), ("stop_time_s", "stopTime"), ("step_size_s", "stepSize")):
-        if key in de:
-            dea[xml_key] = repr(float(de[key]))
-    if dea:
-        ET.SubElement(root, "DefaultExperiment", dea)
+    _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None}, stop_time_s, step_size_s)
     mv = ET.SubElement(root, "ModelVariables")
     for i, v in enumerate(variables):
         if v.value_reference != i:
@@ -465,26 +468,8 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
         "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
         "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
         "hasEventMode": "false", "providesIntermediateUpdate": "false"})
-    used_units = sorted({v.unit for v in variables if v.unit is not None} | {"s"})
-    ud = ET.SubElement(root, "UnitDefinitions")
-    for u in used_units:
-        ue = ET.SubElement(ud, "Unit", {"name": u})
-        exps = spec.units[u]
-        if exps:
-            ET.SubElement(ue, "BaseUnit", {b: (repr(float(e)) if b in UNIT_SCALING else str(e))
-                                           for b, e in exps.items()})
-    cats = ET.SubElement(root, "LogCategories")
-    for c, d in LOG_CATEGORIES.items():
-        ET.SubElement(cats, "Category", {"name": c, "description": d})
-    de = dict(spec.default_experiment)
-    if stop_time_s is not None:
-        de["stop_time_s"] = stop_time_s
-    if step_size_s is not None:
-        de["step_size_s"] = step_size_s
-    dea = {xml_key: repr(float(de[key])) for key, xml_key in
-           (("start_time_s", "startTime"), ("stop_time_s", "stopTime"), ("step_size_s", "stepSize")) if key in de}
-    if dea:
-        ET.SubElement(root, "DefaultExperiment", dea)
+    _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None} | {"s"}, stop_time_s,
+                           step_size_s)
     mv = ET.SubElement(root, "ModelVariables")
     ET.SubElement(mv, "Float64", {"name": "time", "valueReference": str(fmi3_time_vr(variables)),
                                   "causality": "independent", "variability": "continuous", "unit": "s",

@@ -1,6 +1,7 @@
-"""Build the *standalone* gearfmu FMU: FMI 2.0 Co-Simulation in C, no Python.
+"""Build the *standalone* gearfmu FMU: FMI 2.0 (or 3.0) Co-Simulation in C, no Python.
 
-The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` and the C kernel
+The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` (FMI 3: ``fmi3_gear.c``) with the
+plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``) and the C kernel
 ``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
 into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
 sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
@@ -15,9 +16,10 @@ FMU layout (docs/standalone.md)::
 
     modelDescription.xml                 from the spec (gearfmu.fmu.modeldesc), CoSimulation
                                          needsExecutionTool=false, FMU state supported, SourceFiles
-    binaries/<folder>/<id>.<so|dll|dylib>  fmi2_gear.c + gearkernel.c for linux64, aarch64-linux, win64 and
+    binaries/<folder>/<id>.<so|dll|dylib>  the C files + gearkernel.c for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c gearkernel.c gearkernel.h fmi2*.h BUILD.txt CMakeLists.txt
+    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gearkernel.[ch] fmi2*.h BUILD.txt
+                                         CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
                                          buildflags.txt
     documentation/platforms.txt          which platforms carry a binary, which not and why
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
