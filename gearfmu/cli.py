@@ -9,7 +9,7 @@
   gearfmu validate [SCENE] [--fmu F] [--stop-time S] [--output-interval S] [--tolerance R] [--json]
                                              an FMU against the native solver
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
-  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE]   SSP package with variants
+  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--fmi-version 2|3]   SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every

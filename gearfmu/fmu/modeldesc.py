@@ -299,6 +299,19 @@ def _with_note(text: str, note: Optional[str]) -> str:
     return f"{text} {note}".strip()
 
 
+def _root_element(spec: Spec, attrib: dict, version: Optional[str], generation_date: Optional[str]):
+    """``<fmiModelDescription>`` with ``attrib`` plus the spec's author/license, version and date."""
+    attrib = dict(attrib)
+    for key in ("author", "license"):
+        if spec.model.get(key):
+            attrib[key] = str(spec.model[key])
+    if version:
+        attrib["version"] = version
+    if generation_date:
+        attrib["generationDateAndTime"] = generation_date
+    return ET.Element("fmiModelDescription", attrib)
+
+
 def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s) -> None:
     """UnitDefinitions (``units``), LogCategories and DefaultExperiment: the same elements in FMI 2.0
     and FMI 3.0 model descriptions."""
@@ -337,14 +350,7 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         "generationTool": generation_tool, "variableNamingConvention": "structured",
         "numberOfEventIndicators": "0",
     }
-    for key in ("author", "license"):
-        if spec.model.get(key):
-            attrib[key] = str(spec.model[key])
-    if version:
-        attrib["version"] = version
-    if generation_date:
-        attrib["generationDateAndTime"] = generation_date
-    root = ET.Element("fmiModelDescription", attrib)
+    root = _root_element(spec, attrib, version, generation_date)
     ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": model_identifier,
         "needsExecutionTool": "true",  # the pythonfmu runtime needs a Python interpreter
@@ -455,14 +461,7 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
         desc = (desc.rstrip() + " [" + platforms_note + "]").lstrip()
     attrib = {"fmiVersion": "3.0", "modelName": model_name, "instantiationToken": guid, "description": desc,
               "generationTool": generation_tool, "variableNamingConvention": "structured"}
-    for key in ("author", "license"):
-        if spec.model.get(key):
-            attrib[key] = str(spec.model[key])
-    if version:
-        attrib["version"] = version
-    if generation_date:
-        attrib["generationDateAndTime"] = generation_date
-    root = ET.Element("fmiModelDescription", attrib)
+    root = _root_element(spec, attrib, version, generation_date)
     ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": model_identifier, "needsExecutionTool": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
