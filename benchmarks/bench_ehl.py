@@ -29,7 +29,7 @@ leaves); the discretisation error is the difference of the two converged
 answers.  Fitted exponents of CPU per solve and per cycle against N (an N log N
 cost gives about 1.1 over 256..4096).  Modes: ``default`` (default path and
 tolerances), ``discretisation`` (default path, the stop above),
-``speed_path`` (``gearfmu.ehl.mgcore.SPEED_SETTING``: F-cycles with a Newton
+``speed_path`` (``gearfmu.ehl.multigrid.SPEED_SETTING``: F-cycles with a Newton
 solve of the coarsest grid, with the stop above) and
 ``speed_path_default_tolerances``.
 
@@ -163,12 +163,12 @@ def ml_table(viscosity, compressible, Ms=ML_TABLE_M, Ls=ML_TABLE_L):
 
 
 #: stopping at about the discretisation accuracy (docs/ehl.md "Speed"; the same
-#: values as gearfmu.ehl.mgcore.DISC_TOLERANCES, repeated so that the benchmark
+#: values as gearfmu.ehl.multigrid.DISC_TOLERANCES, repeated so that the benchmark
 #: also runs against code versions without them)
 DISC_TOLERANCES = dict(tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4)
 SPEED_CASES = ((20.0, 10.0), (100.0, 10.0))
 try:        # the opt-in speed path (F-cycles, Newton on the coarsest grid)
-    from gearfmu.ehl.mgcore import SPEED_SETTING
+    from gearfmu.ehl.multigrid import SPEED_SETTING
 except ImportError:     # older code versions (before/after comparisons)
     SPEED_SETTING = None
 

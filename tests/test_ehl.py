@@ -253,7 +253,7 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     # Failing fast (docs/ehl.md "Failing fast"), Barus outside Moes' range.
     # Reference: the two rules' definitions (counts of grids tried, thresholds),
     # not timings.  Measured CPU before -> after: 0.85 -> 0.06 s and 3.3 -> 1.2 s.
-    from gearfmu.ehl.solver import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL,
+    from gearfmu.ehl.grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL,
                                     RETRY_PROGRESS_FACTOR)
     # M = 10, L = 40: no setting on the default grid stalls below 1e-3 (best
     # measured 2.1e-2) -> no retry grid (rule 1); all 9 settings were tried there
@@ -410,7 +410,7 @@ def test_roughness_band_limit_removes_only_unresolved_wavelengths():
     # Reference: closed-form cosines with a whole number of half periods over
     # the profile (so the even extension is exactly periodic): a component of
     # wavelength 64 samples passes unchanged, one of 4 samples is removed.
-    from gearfmu.ehl.solver import band_limit
+    from gearfmu.ehl.roughness import band_limit
     n = 513
     j = np.arange(n)
     keep = np.cos(np.pi * 16 * j / (n - 1))          # wavelength 2(n-1)/16 = 64 samples
@@ -444,7 +444,7 @@ def test_cycle_schedules_visit_the_coarsest_grid_as_defined():
     # 2001, sec. 2.4): with l levels a V-cycle visits the coarsest grid once,
     # a W-cycle 2^(l-2) times (one visit from level 1), an F-cycle l - 1 times;
     # every descent from level k is matched by an ascent to k.
-    from gearfmu.ehl.mgcore import w_schedule
+    from gearfmu.ehl.mgcycle import w_schedule
     for nl in (2, 3, 5, 7):
         for gamma, visits in ((1, 1), (2, 2 ** (nl - 2)), ("F", nl - 1)):
             s = w_schedule(nl, gamma)

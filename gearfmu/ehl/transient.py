@@ -26,7 +26,7 @@ BDF2, d(rho H)/dT ~ [3 (rho H)^n - 4 (rho H)^(n-1) + (rho H)^(n-2)]/(2 dT), afte
 BDF1 (implicit Euler) first step, with the steady wedge term (the design note's
 first choice; it damps waves with fewer than ~40 nodes per wavelength, measured).
 The implicit part c_t (rho H)^n is in the compiled multigrid operator
-(:mod:`.mgcore`, options ``c_t``, ``c_char``), the old levels are its
+(:mod:`.mgkernels`, options ``c_t``, ``c_char``), the old levels are its
 finest-grid right-hand side.  Each step: warm start from the previous step (P and H0 linearly
 extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
@@ -62,8 +62,10 @@ from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stall
 from .film_stiffness import film_stiffness_N_per_m
 from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_ETA_INF,
                         ROELANDS_P0_PA)
-from .mgcore import OPT_DEFAULTS, FlatMultigrid
-from .multigrid import EHLParams
+from .mgcycle import OPT_DEFAULTS
+from .transient_inputs import (TransientLubricant, TransientNumerics, TransientOperating,
+                               _transient_inputs)
+from .multigrid import EHLParams, FlatMultigrid
 from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS, STALL_WINDOW,
                      LineContactResult, _flat_opts, solve_line_contact, solve_line_contact as _steady)
 from .mesh_film import contact_kinematics, involute_arc_length_m
@@ -306,30 +308,17 @@ def _finite(name, v, lo=None, lo_open=False):
     return v
 
 
-def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
-                                 w_N_per_m: float = None, u_m_s: float = None,
-                                 eta0_Pas: float = None, alpha_Pa_inv: float = None,
-                                 rho0_kg_m3: float = 870.0, *, M: float = None, L: float = None,
-                                 roughness: RoughnessInput = None, srr: float = 0.0,
-                                 speed_ratios: Optional[Tuple[float, float]] = None,
-                                 n_steps: Optional[int] = None, dT: Optional[float] = None,
-                                 scheme: Optional[str] = None, n_nodes: Optional[int] = None,
-                                 n_coarse: Optional[int] = None, x_in: float = -4.5,
-                                 x_out: float = 1.5, compressible: bool = True,
-                                 viscosity: str = "roelands", tol_pressure: float = 1e-5,
-                                 tol_load: float = 1e-6, tol_residual: float = 1e-6,
-                                 max_cycles_per_step: int = 40, width_m: float = 1.0,
-                                 B0_Pa: float = B0_DEFAULT_PA,
-                                 B0_prime: float = B0_PRIME_DEFAULT,
-                                 extrapolate: bool = True,
-                                 relaxation_settings=None, start: str = "frozen",
-                                 ramp_T: float = 1.0,
-                                 steady_options: Optional[dict] = None,
-                                 substep_rescue: Union[bool, str] = True
-                                 ) -> TransientLineContactResult:
+def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
+                                 lubricant: Optional[TransientLubricant] = None,
+                                 numerics: Optional[TransientNumerics] = None, *,
+                                 roughness: RoughnessInput = None, width_m: float = 1.0,
+                                 **fields) -> TransientLineContactResult:
     """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
 
-    Inputs as :func:`.solver.solve_line_contact`: the dimensional ``R_m``,
+    Inputs in three groups, :class:`TransientOperating`, :class:`TransientLubricant`
+    and :class:`TransientNumerics`; each of their fields may also be given as a
+    keyword (``solve_line_contact_transient(M=20, L=10, n_steps=50)``), which
+    overrides the group's value.  Fields as :func:`.solver.solve_line_contact`: the dimensional ``R_m``,
     ``E_Pa``, ``w_N_per_m``, ``u_m_s`` (entrainment speed u_s), ``eta0_Pas``,
     ``alpha_Pa_inv`` or Moes' ``M``, ``L``; the load is constant in time.
     ``roughness``: None (smooth), :class:`HarmonicWaviness`,
@@ -359,7 +348,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     "auto" ("frozen", and "smooth" if the frozen steady solve raises
     :class:`.errors.EHLConvergenceError`).  The averaging window then starts at
     ``ramp_T`` + T_wash (:attr:`TransientLineContactResult.T_settled`).
-    ``relaxation_settings``: option dicts of :mod:`.mgcore` tried in turn per step
+    ``relaxation_settings``: option dicts of :mod:`.multigrid` tried in turn per step
     (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones).
     ``substep_rescue`` (default True): a step that stalls on every setting is
     re-solved as 2, then 4 BDF2 sub-steps with the roughness at the sub-step
@@ -368,6 +357,20 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     :attr:`TransientLineContactResult.rescued`; "always": every step is solved
     as sub-steps (a verification mode of the rescue path)."""
     t_wall0 = time.perf_counter()
+    op, lub, num = _transient_inputs((operating, lubricant, numerics), fields)
+    R_m, E_Pa, w_N_per_m, u_m_s, M, L = op.R_m, op.E_Pa, op.w_N_per_m, op.u_m_s, op.M, op.L
+    srr, speed_ratios = op.srr, op.speed_ratios
+    eta0_Pas, alpha_Pa_inv, rho0_kg_m3 = lub.eta0_Pas, lub.alpha_Pa_inv, lub.rho0_kg_m3
+    compressible, viscosity, B0_Pa, B0_prime = (lub.compressible, lub.viscosity, lub.B0_Pa,
+                                                lub.B0_prime)
+    n_steps, dT, scheme, n_nodes, n_coarse = num.n_steps, num.dT, num.scheme, num.n_nodes, \
+        num.n_coarse
+    x_in, x_out, tol_pressure, tol_load, tol_residual = (num.x_in, num.x_out, num.tol_pressure,
+                                                         num.tol_load, num.tol_residual)
+    max_cycles_per_step, extrapolate, relaxation_settings = (
+        num.max_cycles_per_step, num.extrapolate, num.relaxation_settings)
+    start, ramp_T, steady_options, substep_rescue = (num.start, num.ramp_T, num.steady_options,
+                                                     num.substep_rescue)
     model = _roughness_model(roughness)
     if speed_ratios is not None:
         if np.ndim(speed_ratios) != 1 or len(speed_ratios) != 2:
