@@ -7,24 +7,41 @@ from typing import List, Optional
 from .errors import EHLInputError
 
 
-def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None):
+#: piezoviscous coarsest-grid rule of :func:`choose_grid`: dX_coarse <=
+#: COARSE_DX_ALPHA / alpha_eff, at most a coarsest grid 8 times coarser than
+#: the finest.  Where the film rule dX^2 <= Hc leaves alpha_eff dX_coarse well
+#: above 1 (high M with high L) the coarse-grid correction misses the smooth
+#: error over the Hertz zone and every relaxation setting stalls on the
+#: default hierarchy (benchmarks/bench_ehl_corners.py).
+COARSE_DX_ALPHA = 2.0
+
+
+def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None,
+                alpha_eff: float = 0.0):
     """Grid sizes (n_nodes, n_coarse, n_levels) for a film of about ``Hc_VL``
     (Venner-Lubrecht units) on a domain ``length`` half-widths long.
 
-    The coarsest grid must resolve the film (dX^2 <= Hc, found by experiment:
-    coarser grids make the FAS correction diverge at high M); the default
-    finest grid has dX^2 <= Hc/480, which gave a 1 % discretisation error
-    of the central film at M = 100, L = 10 (see docs/ehl.md).
-    Defaults are clipped to 256..16384 intervals.
+    The coarsest grid must resolve the film (dX^2 <= Hc: coarser grids make
+    the FAS correction diverge at high M) and, for a piezoviscous lubricant
+    with ``alpha_eff`` = d ln(eta)/dP at P = 1 (:func:`effective_alpha`), the
+    viscosity change across one coarse cell (dX <= :data:`COARSE_DX_ALPHA` /
+    alpha_eff, but at least 3 levels); the default finest grid has
+    dX^2 <= Hc/480, which gives about 1 % discretisation error of the central
+    film at M = 100, L = 10 (docs/ehl.md).  Defaults are clipped to
+    256..16384 intervals.
     """
     def pow2_at_least(x):
         return 1 << max(0, int(math.ceil(math.log2(max(x, 1.0)))))
-    if n_coarse is None:
+    auto_coarse = n_coarse is None
+    if auto_coarse:
         n_coarse = min(max(32, pow2_at_least(length / math.sqrt(Hc_VL))), 1024)
     if n_nodes is None:
         n_int = min(max(256, pow2_at_least(length * math.sqrt(480.0 / Hc_VL))), 16384)
         n_int = max(n_int, n_coarse)
         n_nodes = n_int + 1
+    if auto_coarse and alpha_eff > 0.0:
+        c_alpha = pow2_at_least(length * alpha_eff / COARSE_DX_ALPHA)
+        n_coarse = max(n_coarse, min(c_alpha, (int(n_nodes) - 1) // 8))
     n_nodes = int(n_nodes)
     n_coarse = int(n_coarse)
     k = n_nodes - 1

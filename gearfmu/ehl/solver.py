@@ -38,7 +38,7 @@ from ..common.checks import finite_number
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
 from .fits import moes_central_film
 from .grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL, RETRY_PROGRESS_FACTOR,
-                    choose_grid, coarse_retry_grids, refined_grid_intervals)
+                    choose_grid, coarse_retry_grids, effective_alpha, refined_grid_intervals)
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .multigrid import EHLParams, FlatMultigrid
 from .polish import (POLISH_BELOW_RESIDUAL, POLISH_BEST_BELOW_RESIDUAL,
@@ -405,7 +405,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     Hc_guess = math.pi * moes_central_film(M, L) / (8.0 * M)   # VL units
     user_grid = n_nodes is not None
     user_coarse = n_coarse is not None
-    n_nodes, n_coarse, n_levels = choose_grid(Hc_guess, x_out - x_in, n_nodes, n_coarse)
+    n_nodes, n_coarse, n_levels = choose_grid(Hc_guess, x_out - x_in, n_nodes, n_coarse,
+                                              effective_alpha(prm))
     roughness_ramp = tuple(float(a) for a in roughness_ramp)
     if not roughness_ramp or roughness_ramp[-1] != 1.0:
         raise EHLInputError(f"roughness_ramp={roughness_ramp!r}: must end with 1.0")
