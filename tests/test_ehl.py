@@ -129,7 +129,7 @@ def test_smooth_central_film_against_moes_over_the_M_L_range():
 
 
 @pytest.mark.parametrize("M,L,viscosity,n_coarse", [(500.0, 20.0, "barus", 512),
-                                                    (50.0, 20.0, "roelands", 64)])
+                                                    (50.0, 20.0, "roelands", 128)])
 def test_last_M_L_failures_converge_on_a_finer_coarsest_grid(M, L, viscosity, n_coarse):
     # Barus (500, 20) and Roelands (50, 20) stalled on every relaxation setting on
     # the film-rule hierarchy (coarsest grid 128 resp. 32 intervals): the residual
@@ -264,9 +264,9 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     assert e.best_residual == min(a[3] for a in e.attempts) >= RETRY_BELOW_RESIDUAL
     assert any("retry grids not tried" in x for x in e.skipped)
     assert "best stalled scaled residual" in str(e) and e.residual_name in str(e)
-    # M = 200, L = 40: the default grid (1024/64) reaches 9e-4, the first coarse
-    # retry (1024/128) no lower and not below 1e-4 -> the second (1024/256) is not
-    # tried (rule 2)
+    # M = 200, L = 40: the default grid reaches 8e-4 < 1e-3 -> retry grids are
+    # tried (rule 1); a retry grid after the first only when its predecessor made
+    # progress (rule 2)
     with pytest.raises(EHLConvergenceError) as ei:
         solve_line_contact(M=200.0, L=40.0, viscosity="barus", compressible=False)
     e = ei.value
@@ -274,11 +274,12 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     for a in e.attempts:
         if a[:2] not in grids:
             grids.append(a[:2])
-    assert len(grids) == 2 and grids[1][1] == 2 * grids[0][1]
+    assert len(grids) >= 2 and grids[1][1] == 2 * grids[0][1]
     best = [min(a[3] for a in e.attempts if a[:2] == g) for g in grids]
-    assert best[0] < RETRY_BELOW_RESIDUAL and not best[1] * RETRY_PROGRESS_FACTOR <= best[0]
-    assert best[1] >= RETRY_CLOSE_RESIDUAL
-    assert any("further retry grid" in x for x in e.skipped)
+    assert best[0] < RETRY_BELOW_RESIDUAL
+    for k in range(2, len(grids)):
+        assert (best[k - 1] * RETRY_PROGRESS_FACTOR <= min(best[:k - 1])
+                or best[k - 1] < RETRY_CLOSE_RESIDUAL)
 
 
 # --------------------------------------------------------------------------- film stiffness
@@ -508,12 +509,12 @@ def test_fmg_start_solution_satisfies_the_discrete_equations_and_is_at_discretis
 
 @pytest.mark.parametrize("M,L,viscosity", [(500.0, 10.0, "barus"), (200.0, 20.0, "barus"),
                                            (200.0, 20.0, "roelands"), (500.0, 20.0, "roelands")])
-def test_high_M_piezoviscous_corner_converges_with_under_relaxed_settings(M, L, viscosity):
+def test_high_M_piezoviscous_corner_converges(M, L, viscosity):
     # Cases of the (M, L) tables that raised EHLConvergenceError before the
-    # under-relaxed settings with the wider trust region (docs/ehl.md).
+    # under-relaxed settings and the piezoviscous coarsest-grid rule (docs/ehl.md).
     # Reference: the discretised equations re-evaluated in numpy.
     comp = viscosity == "roelands"
     r = solve_line_contact(M=M, L=L, viscosity=viscosity, compressible=comp)
-    assert r.residuals["settings"]["dmax"] == 3.0
+    assert r.converged
     gap_spread, load_err, scaled = _discrete_equations_check(r, viscosity, compressible=comp)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
