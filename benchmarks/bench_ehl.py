@@ -13,7 +13,7 @@ other jobs inflate wall time; CPU time is the fairer number on a shared
 machine.
 
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
-                                   [--python-driver] [--no-fmg]
+                                   [--no-fmg]
     python benchmarks/bench_ehl.py --ml-table barus|roelands   # convergence over (M, L)
     python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error (issue 3)
 
@@ -239,8 +239,6 @@ def main(argv=None):
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024, 2048, 4096])
-    ap.add_argument("--python-driver", action="store_true",
-                    help="also time the previous Python-driven W-cycle (slow)")
     ap.add_argument("--no-fmg", action="store_true",
                     help="skip the rows with the full-multigrid start (fmg_cycles=1)")
     ap.add_argument("--ml-table", choices=["barus", "roelands"],
@@ -271,10 +269,6 @@ def main(argv=None):
     cases = [(20.0, 5.0, dict(viscosity="barus", compressible=False)),
              (100.0, 10.0, dict(viscosity="barus", compressible=False)),
              (100.0, 10.0, dict(viscosity="roelands", compressible=True))]
-    if args.python_driver:
-        solve_line_contact(M=20.0, L=5.0, n_nodes=257, solver="python")
-        cases.append((100.0, 10.0, dict(viscosity="roelands", compressible=True,
-                                        solver="python")))
     if not args.no_fmg:
         cases = [c for case in cases for c in
                  (case, (case[0], case[1], dict(case[2], fmg_cycles=1)),

@@ -15,7 +15,7 @@ from numba import njit
 from .mgkernels import _coef, _film, _residual
 
 #: the coarsest-grid Newton solve (option ``coarse_newton``) is used only up to
-#: this many coarsest nodes (dense LU, O(n^3): 65 nodes ~0.1 ms per step);
+#: this many coarsest nodes (dense LU, O(n^3));
 #: larger coarsest grids keep the point sweeps
 COARSE_NEWTON_MAX_NODES = 129
 
@@ -147,7 +147,7 @@ def _coarse_newton(steps, load_here, S, coef_valid=False):
     updated.  A singular or non-finite system leaves the state unchanged.
     Venner & Lubrecht 2000 solve the coarsest grid "exactly" with many
     relaxations; a Newton solve of 33-65 unknowns is the direct form of it
-    (docs/ehl.md "Speed")."""
+    (docs/ehl.md)."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     o = iarr[0, 0]

@@ -69,7 +69,7 @@ REFINE_DX_ALPHA = 0.15
 REFINE_MAX_INTERVALS = 4096
 
 
-#: coarse-grid retry (docs/ehl.md "Coarse-grid retry"): a smooth solve whose
+#: coarse-grid retry (docs/ehl.md): a smooth solve whose
 #: settings all fail on the default hierarchy is retried on the same finest
 #: grid with the coarsest grid refined by these factors in turn (at least
 #: COARSE_RETRY_MIN_LEVELS levels left).  Measured: the stalls of Barus
@@ -80,7 +80,7 @@ COARSE_RETRY_FACTORS = (2, 4)
 COARSE_RETRY_MIN_LEVELS = 3
 
 
-#: Failing fast (docs/ehl.md "Failing fast"), rule 1: the retry grids
+#: Failing fast (docs/ehl.md), rule 1: the retry grids
 #: (coarse-grid retry, refined grid) are tried only when some setting on the
 #: default grid stalled below this scaled Reynolds residual (the threshold of
 #: the best-state polish).  Measured: every solve that converged on a retry grid

@@ -30,7 +30,7 @@ def _run_schedule(sched, S, top_coef_valid=False):
     computed them), (ii) the film after the post-sweep of level k when the
     next step prolongs to level k+1 (only P of level k is read there; the next
     restriction to level k recomputes its film).  Bitwise the same iterates
-    (tested); ~10 % less CPU per cycle (docs/ehl.md "Speed")."""
+    (tested); ~10 % less CPU per cycle (docs/ehl.md)."""
     opt = S[25]
     lean = opt[17] > 0.5
     ns = sched.shape[0]

@@ -278,7 +278,7 @@ def _relax(l, sweeps, load_here, S, coef_valid=False, last_film=True):
     P and H (the first sweep does not recompute them); ``last_film`` = False:
     the film after the last sweep is not computed (the caller never reads it).
     Both only skip work whose result is not used or already there, so the
-    iterates are bitwise the same (``lean`` option, docs/ehl.md "Speed")."""
+    iterates are bitwise the same (``lean`` option, docs/ehl.md)."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     o = iarr[0, l]

@@ -36,27 +36,26 @@ class EHLParams:
     x_out: float
 
 
-#: Speed path (docs/ehl.md "Speed"; opt-in, pass as multigrid options:
+#: Speed path (docs/ehl.md; opt-in, pass as multigrid options:
 #: ``solve_line_contact(..., **SPEED_SETTING)``): the first relaxation setting of
 #: :data:`.solver.RELAXATION_SETTINGS` with F-cycles and the coarsest grid solved
 #: by one Newton step (:func:`_coarse_newton`) instead of 10 point sweeps.
-#: Measured at 1024 intervals (Roelands, M = 20 / 100, L = 10): 3 cycles to
-#: 0.1 of the discretisation error of H_c instead of 4-6 W-cycles, ~1.2 ms per
-#: cycle instead of ~1.6-1.9.  Without the fallback settings of the default
-#: path (passing options disables them), so not the default.
+#: Fewer and cheaper cycles than the default W-cycles (benchmarks/bench_ehl.py
+#: --speed), but without the fallback settings of the default path (passing
+#: options disables them), so not the default.
 SPEED_SETTING = dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1,
                      c_h0=0.1, stick=10.0, gamma="F", coarse_newton=1)
 
-#: stopping at about the discretisation accuracy of the default grids (docs/ehl.md
-#: "Speed"): with :data:`SPEED_SETTING` the algebraic error of H_c left is below
-#: ~0.3 of the discretisation error at 256-4096 intervals (measured)
+#: stopping at about the discretisation accuracy of the default grids (docs/ehl.md):
+#: with :data:`SPEED_SETTING` the algebraic error of H_c left stays below the
+#: discretisation error (benchmarks/bench_ehl.py --speed)
 DISC_TOLERANCES = dict(tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4)
 
 
 #: grid constants (node positions, kernel coefficients, kernel spectra, FFT
 #: twiddles) per grid hierarchy, shared by every :class:`FlatMultigrid` on the
-#: same grid: building them cost 0.6 ms per solve at 1025 nodes / 6 levels
-#: (measured, docs/ehl.md "Speed"); read-only after construction
+#: same grid (building them is a noticeable part of a small solve);
+#: read-only after construction
 _GRID_CACHE: dict = {}
 _GRID_CACHE_SIZE = 64
 

@@ -19,7 +19,7 @@ from .mgcycle import _scaled_residual
 from .mgkernels import _coef, _residual
 
 
-#: Block-Newton polish (docs/ehl.md "Newton polish of the spike region"): a
+#: Block-Newton polish (docs/ehl.md): a
 #: setting that stalls (after its frozen-switch continuation) with a scaled
 #: Reynolds residual below this value is continued by rounds of
 #: (block Newton on the finest grid, one multigrid cycle).  Chosen from the
@@ -29,7 +29,7 @@ POLISH_BELOW_RESIDUAL = 1e-5
 #: a setting whose cycles stall (before its frozen-switch continuation) with a
 #: scaled residual below this value is polished first (state restored if the
 #: polish fails): Barus M = 100, L = 10 on 2048 intervals floats at 1e-5 ..
-#: 2e-5 on its first setting (docs/ehl.md "Speed")
+#: 2e-5 on its first setting (docs/ehl.md)
 POLISH_EARLY_BELOW_RESIDUAL = 3e-5
 #: at most this many polish rounds; stop early when the scaled residual has
 #: not fallen 3x over the last POLISH_STALL_ROUNDS rounds (Barus M = 500,
@@ -42,7 +42,7 @@ POLISH_STALL_ROUNDS = 8
 #: stall at 2.6e-4 with the residual spread over the whole Hertz zone
 #: (Roelands M = 50, L = 20), or oscillate at 1e-4..3e-4 (Barus M = 500, L = 20))
 POLISH_BEST_BELOW_RESIDUAL = 1e-3
-#: largest Newton block (nodes; dense solve ~ n^3 / 3: 400 nodes ~ 5 ms)
+#: largest Newton block (nodes; dense solve ~ n^3 / 3)
 POLISH_MAX_BLOCK = 400
 
 
@@ -139,8 +139,8 @@ def block_newton(solver, steps: int = 2, frac: float = 0.05, margin: int = 8,
             J += c[:, None] * (3.0 * eps[k] / np.maximum(H[k], 1e-300))[:, None] * dH[R0 + off]
             m = (ia + off >= 0) & (ia + off < nb)
             J[ia[m], ia[m] + off] += (c * eps[k] * dle[k])[m]
-        # single-threaded compiled LU: the threaded LAPACK solves (numpy, scipy)
-        # took 0.1-0.3 s for 186 nodes on this shared 2-core machine (0.3 ms idle)
+        # single-threaded compiled LU (the threaded LAPACK solves of numpy/scipy
+        # compete for the cores with the worker processes)
         d = _dense_solve(np.ascontiguousarray(J), r[B].copy())
         if not np.all(np.isfinite(d)):
             break

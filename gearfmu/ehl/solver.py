@@ -455,7 +455,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     # coefficient (see refined_grid_intervals)
     grids = [(n_nodes, n_coarse, n_levels)]
     if not user_coarse and rfun is None:
-        # same finest grid, finer coarsest grid (docs/ehl.md "Coarse-grid retry")
+        # same finest grid, finer coarsest grid (docs/ehl.md)
         grids += [choose_grid(Hc_guess, x_out - x_in, n_nodes, c)
                   for c in coarse_retry_grids(n_nodes - 1, n_coarse)]
     n_default = len(grids)
@@ -516,8 +516,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                     ):
                 best.append((rr[-1], k_att, solver_obj, hist, opts, it))
         # every setting failed on this grid: polish the stalled states, lowest
-        # residual first, until one converges (docs/ehl.md "Newton polish of the
-        # spike region": Barus M = 500, L = 15 converges only from setting 5's
+        # residual first, until one converges (docs/ehl.md: Barus M = 500, L = 15 converges only from setting 5's
         # state, whose residual is not the lowest)
         for _, b_att, b_obj, b_hist, b_opts, b_it in sorted(best, key=lambda t: t[:2]):
             if converged:

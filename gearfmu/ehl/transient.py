@@ -1,4 +1,4 @@
-"""Transient line-contact EHL with roughness moving with the surfaces (issue 3).
+"""Transient line-contact EHL with roughness moving with the surfaces.
 
 Equations (seed 000 eq 2-3 keeping the squeeze term; docs/ehl_transient.md
 section 1), Venner & Lubrecht 2000 scaling X = x/b, P = p/p_h, H = h R/b^2
@@ -16,7 +16,7 @@ For a gear flank slice (:class:`FlankSliceRoughness`) this is wm(x, t) =
 z1(a1(t) - x) + z2(a2(t) + x) with da1/dt = u1, da2/dt = -u2 (involute arc
 length a = rho^2/(2 r_b), docs/ehl_transient.md).
 
-Time discretisation (CHOICE, docs/ehl_transient.md sections 2 and 6.2): dT = dX
+Time discretisation (choice, docs/ehl_transient.md): dT = dX
 by default (Courant number 1 on u_s) with the convective and time derivatives
 taken together along the characteristic,
 d(rho H)/dX + d(rho H)/dT ~ [1.5 (rho H)^n_i - 2 (rho H)^(n-1)_(i-1)
@@ -34,11 +34,11 @@ step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
 :data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
 setting is re-solved as 2, then 4 BDF2 sub-steps (roughness at the sub-step
 times; rough flanks stall on limit cycles / residual floors at asperity
-pressure spikes, docs/ehl_transient.md 6.7), and only if that fails too raises
+pressure spikes, docs/ehl_transient.md), and only if that fails too raises
 :class:`.errors.EHLConvergenceError` naming the step and time.
 
 Roughness is evaluated from the surfaces' own profiles at every step (no
-band limit, unlike the steady solver's default 8 dX filter: CHOICE, the
+band limit, unlike the steady solver's default 8 dX filter: choice, the
 flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
 256-interval seed grid, docs/ehl_transient.md).  Cavitation stays P = max(P, 0)
 (not mass conserving at internal cavities: risk R2 of the design note).
@@ -46,7 +46,7 @@ flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
 Outputs per step on the Hertz band |x| <= b: central and minimum film, mean
 film and mean pressure, and the film stiffness k(t) = A B(p_m)/h_m of seed 000
 eq 8 (:func:`.film_stiffness.film_stiffness_N_per_m`, ``method="seed"``:
-A = 2 b width); the two time reductions of docs/ehl_transient.md section 3
+A = 2 b width); the two time reductions of docs/ehl_transient.md
 are :meth:`TransientLineContactResult.film_stiffness_reductions`.
 """
 from __future__ import annotations
@@ -72,8 +72,8 @@ from .mesh_film import contact_kinematics, involute_arc_length_m
 
 #: Relaxation settings of the time steps, tried in this order (the one that
 #: converged last is tried first at the next step), then the steady
-#: :data:`.solver.RELAXATION_SETTINGS`.  Measured (docs/ehl_transient.md
-#: "Status", M = 20, L = 10, 256 intervals, waviness 0.1 H_c, lambda = 0.5 b):
+#: :data:`.solver.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
+#: waviness 0.1 H_c, lambda = 0.5 b (docs/ehl_transient.md):
 #: the steady default (dipole distribution ``dist=0``) diverges within 2-5
 #: steps once c_t > 0 (the time term sees the dipole's 1/r far field) and the
 #: fallback omega_j = 0.1 needs ~14 cycles/step; the symmetric distribution
@@ -90,11 +90,11 @@ TRANSIENT_RELAXATION_SETTINGS = (
 )
 
 #: sub-step rescue of a step that stalled on every relaxation setting: the step
-#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md 6.7)
+#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md)
 SUBSTEP_SPLITS = (2, 4)
 
 #: averaging window after the wash-out (dimensionless time, CHOICE of
-#: docs/ehl_transient.md section 2: two contact widths at u_s)
+#: docs/ehl_transient.md: two contact widths at u_s)
 T_AVERAGE = 4.0
 
 
@@ -278,7 +278,7 @@ class TransientLineContactResult:
         return m
 
     def film_stiffness_reductions(self, T_start=None, T_end=None) -> Dict[str, float]:
-        """docs/ehl_transient.md section 3: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
+        """docs/ehl_transient.md: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
         (b) ``k_of_means_N_per_m`` = A B(<p_m>)/<h_m> (seed 000 eq 8 on time means),
         plus the window means of h_m, p_m and h_central."""
         m = self.window(T_start, T_end)
@@ -334,7 +334,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     Courant 1, second order after a first-order step: [1.5 (rho H)^n_i -
     2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2)]/dX, after Venner & Lubrecht 2000's
     transient chapters; needs dT = dX; a wave of the film moving at u_s is
-    shifted without numerical damping, docs/ehl_transient.md 6.2-6.3).  Per step: W-cycles until
+    shifted without numerical damping, docs/ehl_transient.md).  Per step: W-cycles until
     the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
     scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
     ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
@@ -342,7 +342,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     ``extrapolate``: linear extrapolation of P, H0 from the last two steps as
     the warm start (False: the last step's P, H0).
     ``start``: "frozen" (default; T = 0 is the steady frozen-roughness film,
-    docs/ehl_transient.md section 2), "smooth" (T = 0 is the smooth steady film
+    docs/ehl_transient.md), "smooth" (T = 0 is the smooth steady film
     and the roughness amplitude is ramped linearly from 0 to 1 over ``ramp_T``;
     CHOICE for rough films whose steady frozen solve stalls, e.g. level 2) or
     "auto" ("frozen", and "smooth" if the frozen steady solve raises
@@ -352,7 +352,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones).
     ``substep_rescue`` (default True): a step that stalls on every setting is
     re-solved as 2, then 4 BDF2 sub-steps with the roughness at the sub-step
-    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md 6.7; only stalled
+    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md; only stalled
     steps, so converging runs are unchanged); the steps rescued are
     :attr:`TransientLineContactResult.rescued`; "always": every step is solved
     as sub-steps (a verification mode of the rescue path)."""
@@ -547,7 +547,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
         return ok, ncyc, h
 
     def rescue_step(n, T):
-        """Sub-step rescue of a stalled step (docs/ehl_transient.md 6.7): the
+        """Sub-step rescue of a stalled step (docs/ehl_transient.md): the
         interval [T - dT, T] in m = 2, then 4 equal BDF2 sub-steps (steady
         wedge + time derivative, roughness at each sub-step time; the first
         sub-step variable-step BDF2 on the levels T - dT, T - 2 dT, omega =
@@ -665,7 +665,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
 # --------------------------------------------------------------------------- amplitude reduction
 def waviness_nabla(wavelength_b: float, M: float, L: float) -> float:
     """Venner, Couhier, Lubrecht & Greenwood (1997) line-contact wavelength
-    parameter nabla = (lambda/b) M^(3/4) / L^(1/2) (docs/ehl_transient.md section 4)."""
+    parameter nabla = (lambda/b) M^(3/4) / L^(1/2) (docs/ehl_transient.md)."""
     return float(wavelength_b) * float(M) ** 0.75 / math.sqrt(float(L))
 
 
