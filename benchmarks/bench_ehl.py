@@ -15,9 +15,9 @@ machine.
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
                                    [--no-fmg]
     python benchmarks/bench_ehl.py --ml-table barus|roelands   # convergence over (M, L)
-    python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error (issue 3)
+    python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error
 
-``--speed`` (issue 3's speed item: time per smooth solve over >= 4 grid sizes and
+``--speed`` (time per smooth solve over >= 4 grid sizes and
 its growth): for Roelands + Dowson-Higginson at M = 20, L = 10 and M = 100, L = 10
 (the team's target cases) and sizes 256 .. 4096 intervals, each solve timed with
 the default tolerances and stopped at about the discretisation accuracy
