@@ -13,11 +13,11 @@ other jobs inflate wall time; CPU time is the fairer number on a shared
 machine.
 
     python benchmarks/bench_ehl.py [--repeats 3] [--sizes 256 512 1024 2048 4096]
-                                   [--python-driver] [--no-fmg]
+                                   [--no-fmg]
     python benchmarks/bench_ehl.py --ml-table barus|roelands   # convergence over (M, L)
-    python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error (issue 3)
+    python benchmarks/bench_ehl.py --speed [--repeats 7]       # speed vs error
 
-``--speed`` (issue 3's speed item: time per smooth solve over >= 4 grid sizes and
+``--speed`` (time per smooth solve over >= 4 grid sizes and
 its growth): for Roelands + Dowson-Higginson at M = 20, L = 10 and M = 100, L = 10
 (the team's target cases) and sizes 256 .. 4096 intervals, each solve timed with
 the default tolerances and stopped at about the discretisation accuracy
@@ -29,7 +29,7 @@ leaves); the discretisation error is the difference of the two converged
 answers.  Fitted exponents of CPU per solve and per cycle against N (an N log N
 cost gives about 1.1 over 256..4096).  Modes: ``default`` (default path and
 tolerances), ``discretisation`` (default path, the stop above),
-``speed_path`` (``gearfmu.ehl.mgcore.SPEED_SETTING``: F-cycles with a Newton
+``speed_path`` (``gearfmu.ehl.multigrid.SPEED_SETTING``: F-cycles with a Newton
 solve of the coarsest grid, with the stop above) and
 ``speed_path_default_tolerances``.
 
@@ -163,12 +163,12 @@ def ml_table(viscosity, compressible, Ms=ML_TABLE_M, Ls=ML_TABLE_L):
 
 
 #: stopping at about the discretisation accuracy (docs/ehl.md "Speed"; the same
-#: values as gearfmu.ehl.mgcore.DISC_TOLERANCES, repeated so that the benchmark
+#: values as gearfmu.ehl.multigrid.DISC_TOLERANCES, repeated so that the benchmark
 #: also runs against code versions without them)
 DISC_TOLERANCES = dict(tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4)
 SPEED_CASES = ((20.0, 10.0), (100.0, 10.0))
 try:        # the opt-in speed path (F-cycles, Newton on the coarsest grid)
-    from gearfmu.ehl.mgcore import SPEED_SETTING
+    from gearfmu.ehl.multigrid import SPEED_SETTING
 except ImportError:     # older code versions (before/after comparisons)
     SPEED_SETTING = None
 
@@ -239,8 +239,6 @@ def main(argv=None):
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024, 2048, 4096])
-    ap.add_argument("--python-driver", action="store_true",
-                    help="also time the previous Python-driven W-cycle (slow)")
     ap.add_argument("--no-fmg", action="store_true",
                     help="skip the rows with the full-multigrid start (fmg_cycles=1)")
     ap.add_argument("--ml-table", choices=["barus", "roelands"],
@@ -271,10 +269,6 @@ def main(argv=None):
     cases = [(20.0, 5.0, dict(viscosity="barus", compressible=False)),
              (100.0, 10.0, dict(viscosity="barus", compressible=False)),
              (100.0, 10.0, dict(viscosity="roelands", compressible=True))]
-    if args.python_driver:
-        solve_line_contact(M=20.0, L=5.0, n_nodes=257, solver="python")
-        cases.append((100.0, 10.0, dict(viscosity="roelands", compressible=True,
-                                        solver="python")))
     if not args.no_fmg:
         cases = [c for case in cases for c in
                  (case, (case[0], case[1], dict(case[2], fmg_cycles=1)),

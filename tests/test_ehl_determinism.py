@@ -19,10 +19,10 @@ CHILD = textwrap.dedent("""
     import hashlib, sys
     import numpy as np
     junk = [np.ones(int(sys.argv[1]) + k) for k in range(5)]   # a different heap layout per run
-    from gearfmu.ehl import mgcore
+    from gearfmu.ehl import multigrid
     from gearfmu.ehl.multigrid import EHLParams
     prm = EHLParams(lam=0.17, A=7.5, z=0.52, php0=4.7, c1=0.64, compressible=True, x_in=-4.5, x_out=1.5)
-    fm = mgcore.FlatMultigrid(prm, 4, 32)          # finest level 257 nodes: FFT deformation
+    fm = multigrid.FlatMultigrid(prm, 4, 32)          # finest level 257 nodes: FFT deformation
     fm.hertz_start(0.78)
     print(hashlib.sha256(fm.level_H().tobytes()).hexdigest())
 """)

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 from gearfmu.ehl import solve_line_contact
-from gearfmu.ehl import mgcore
+from gearfmu.ehl import coarse_newton, mgkernels, multigrid
 from gearfmu.ehl.multigrid import EHLParams
-from gearfmu.ehl.solver import _dense_solve, effective_alpha, refined_grid_intervals
+from gearfmu.ehl.coarse_newton import _lu_solve as _dense_solve
+from gearfmu.ehl.grids import effective_alpha, refined_grid_intervals
 
 from test_ehl import _discrete_equations_check
 
@@ -75,15 +76,15 @@ def test_cached_grid_constants_equal_a_fresh_build():
     # Reference: the constants of the same hierarchy computed without the cache
     prm = EHLParams(lam=0.1, A=2.0, z=-1.0, php0=1.0, c1=1.0, compressible=False,
                     x_in=-4.5, x_out=1.5)
-    a = mgcore.FlatMultigrid(prm, 4, 32)
-    b = mgcore.FlatMultigrid(prm, 4, 32)
+    a = multigrid.FlatMultigrid(prm, 4, 32)
+    b = multigrid.FlatMultigrid(prm, 4, 32)
     assert a.K is b.K and a.khr is b.khr                # shared, not rebuilt
     ns = [32 * 2 ** k + 1 for k in range(4)]
     off = np.concatenate(([0], np.cumsum(ns)))
     ms = [int(a.iarr[4, l]) for l in range(4)]
     moff = np.concatenate(([0], np.cumsum(ms)))
     toff = np.concatenate(([0], np.cumsum(ms)))     # base table + stage table per level
-    fresh = mgcore._grid_constants(ns, ms, off, moff, toff, -4.5, 1.5)
+    fresh = multigrid._grid_constants(ns, ms, off, moff, toff, -4.5, 1.5)
     for x, y in zip((a.dx, a.K, a.khr, a.khi, a.twr, a.twi), fresh[1:]):
         assert np.array_equal(x, y)
     for x, y in zip(a.X, fresh[0]):
@@ -93,7 +94,7 @@ def test_cached_grid_constants_equal_a_fresh_build():
 @pytest.mark.parametrize("setting,gamma,fmg", [(0, 2, False), (1, 2, False), (0, "F", False),
                                                (0, 1, False), (0, 2, True)])
 def test_lean_cycle_is_bitwise_the_full_cycle(setting, gamma, fmg):
-    # The lean cycle (mgcore option lean=1, default; docs/ehl.md "Speed") only
+    # The lean cycle (multigrid option lean=1, default; docs/ehl.md "Speed") only
     # skips work whose result is never read or is already there (coefficients
     # right after the restriction, the film after a post-sweep followed by a
     # prolongation, the finest coefficients of the convergence test).
@@ -110,7 +111,7 @@ def test_lean_cycle_is_bitwise_the_full_cycle(setting, gamma, fmg):
         out = []
         for lean in (1, 0):
             o = dict(RELAXATION_SETTINGS[setting], gamma=gamma, lean=lean)
-            fm = mgcore.FlatMultigrid(prm, 5, 32, **o)
+            fm = multigrid.FlatMultigrid(prm, 5, 32, **o)
             if fmg:
                 fm.fmg_start(hc)
             else:
@@ -132,7 +133,7 @@ def test_lean_cycle_with_the_time_term_is_bitwise_the_full_cycle():
                     compressible=True, x_in=-4.5, x_out=1.5)
     out = []
     for lean in (1, 0):
-        fm = mgcore.FlatMultigrid(prm, 4, 32, dist=1, lean=lean)
+        fm = multigrid.FlatMultigrid(prm, 4, 32, dist=1, lean=lean)
         fm.hertz_start(0.2)
         fm.iterate(max_cycles=4, min_cycles=4, tol_pressure=0.0, tol_load=0.0,
                    tol_residual=0.0)
@@ -174,14 +175,14 @@ def _coarse_fas_state(M, L, z, compressible, order2=1):
     A = L * math.sqrt(M / (2.0 * math.pi)) if z < 0 else 0.8 * L
     prm = EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * M ** 2), A=A, z=z, php0=2.0, c1=0.3,
                     compressible=compressible, x_in=-4.5, x_out=1.5)
-    fm = mgcore.FlatMultigrid(prm, 3, 32, load_mode=1, switch=0.3, omega_gs=0.6, omega_j=0.5,
+    fm = multigrid.FlatMultigrid(prm, 3, 32, load_mode=1, switch=0.3, omega_gs=0.6, omega_j=0.5,
                               c_h0=0.1, stick=10.0, order2=order2)
     fm.hertz_start(0.15)
     fm.iterate(max_cycles=3, min_cycles=3, tol_pressure=0.0, tol_load=0.0, tol_residual=0.0,
                stall_window=10 ** 6)
     S = fm.state()
-    mgcore._down(2, S)
-    mgcore._down(1, S)
+    mgkernels._down(2, S)
+    mgkernels._down(1, S)
     o, n = int(fm.iarr[0, 0]), int(fm.iarr[1, 0])
     fm.f[o + 1:o + n - 1] += 1e-3 * np.random.default_rng(0).standard_normal(n - 2)
     return fm, S, o, n
@@ -192,7 +193,7 @@ def _coarse_fas_state(M, L, z, compressible, order2=1):
                                                        (100.0, 10.0, 0.6, True, 1),
                                                        (20.0, 5.0, 0.6, True, 0)])
 def test_coarse_newton_jacobian_matches_finite_differences(M, L, z, compressible, order2):
-    # The Newton system of the coarsest-grid solve (mgcore._coarse_jacobian, the
+    # The Newton system of the coarsest-grid solve (coarse_newton._coarse_jacobian, the
     # speed path's coarse solver).  Reference: central finite differences (step
     # 1e-7) of the coarse residual f - L(P, H(P, H0)) and of the load equation
     # g - dX sum P, evaluated by the cycle's own film/coefficient/residual
@@ -205,8 +206,8 @@ def test_coarse_newton_jacobian_matches_finite_differences(M, L, z, compressible
 
     def resid():
         fm.update_film(0)
-        mgcore._coef(0, P, fm.H, rho, eps, dle, drho, fm.iarr, fm.prmv)
-        mgcore._residual(0, P, fm.H, fm.f, rho, eps, wrk, fm.iarr, fm.dx, order2 > 0, 0.0,
+        mgkernels._coef(0, P, fm.H, rho, eps, dle, drho, fm.iarr, fm.prmv)
+        mgkernels._residual(0, P, fm.H, fm.f, rho, eps, wrk, fm.iarr, fm.dx, order2 > 0, 0.0,
                          False)
         return wrk[o:o + n].copy(), fm.g[0] - fm.dx[0] * P[o:o + n].sum()
 
@@ -215,7 +216,7 @@ def test_coarse_newton_jacobian_matches_finite_differences(M, L, z, compressible
                     or P[o + k + 1] > 0], dtype=np.int64)
     buf = np.zeros(n, dtype=np.int64)
     buf[:act.size] = act
-    J, b = mgcore._coarse_jacobian(S, buf, act.size, True)
+    J, b = coarse_newton._coarse_jacobian(S, buf, act.size, True)
     assert J.shape == (act.size + 1, act.size + 1)
     assert np.array_equal(b[:act.size], -r0[act])
     Jfd = np.zeros_like(J)
@@ -240,14 +241,14 @@ def test_coarse_newton_jacobian_matches_finite_differences(M, L, z, compressible
 
 @pytest.mark.parametrize("M,L", [(20.0, 10.0), (100.0, 10.0)])
 def test_speed_path_reaches_the_same_converged_film(M, L):
-    # The speed path (mgcore.SPEED_SETTING: F-cycles, Newton on the coarsest
+    # The speed path (multigrid.SPEED_SETTING: F-cycles, Newton on the coarsest
     # grid) against the default path, both converged far below the default
     # tolerances on 1024 intervals (Roelands + Dowson-Higginson).  References:
     # the default path's H_c and H_min (1e-6 relative) and the discretised
     # equations re-evaluated in numpy with a dense deformation sum (as the
     # other Roelands tests: film 1e-9, load 1e-5, scaled residual 1e-5).
     tight = dict(tol_pressure=1e-8, tol_load=1e-9, tol_residual=1e-9, max_cycles=200)
-    fast = solve_line_contact(M=M, L=L, n_nodes=1025, **mgcore.SPEED_SETTING, **tight)
+    fast = solve_line_contact(M=M, L=L, n_nodes=1025, **multigrid.SPEED_SETTING, **tight)
     ref = solve_line_contact(M=M, L=L, n_nodes=1025, **tight)
     assert fast.converged and ref.converged
     assert abs(fast.H_central_moes / ref.H_central_moes - 1.0) < 1e-6
@@ -258,7 +259,7 @@ def test_speed_path_reaches_the_same_converged_film(M, L):
 
 @pytest.mark.parametrize("M,L", [(20.0, 10.0), (100.0, 10.0)])
 def test_speed_path_stops_inside_the_discretisation_error(M, L):
-    # The speed path stopped at mgcore.DISC_TOLERANCES leaves an algebraic error
+    # The speed path stopped at multigrid.DISC_TOLERANCES leaves an algebraic error
     # of H_c (against the same grid converged to pressure change 1e-8) below 0.3
     # of the discretisation error.  Reference: Richardson's estimate of the
     # discretisation error from the converged 512- and 1024-interval solutions
@@ -267,7 +268,7 @@ def test_speed_path_stops_inside_the_discretisation_error(M, L):
     h = {n: solve_line_contact(M=M, L=L, n_nodes=n + 1, **tight).H_central_moes
          for n in (512, 1024)}
     disc = abs(h[1024] - h[512]) / 3.0 / h[1024]
-    r = solve_line_contact(M=M, L=L, n_nodes=1025, **mgcore.SPEED_SETTING,
-                           **mgcore.DISC_TOLERANCES)
+    r = solve_line_contact(M=M, L=L, n_nodes=1025, **multigrid.SPEED_SETTING,
+                           **multigrid.DISC_TOLERANCES)
     assert r.converged and r.iterations <= 6
     assert abs(r.H_central_moes / h[1024] - 1.0) < 0.3 * disc

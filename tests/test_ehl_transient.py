@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from gearfmu.ehl import solve_line_contact
-from gearfmu.ehl.mgcore import FlatMultigrid, _coef, _residual
+from gearfmu.ehl.mgkernels import _coef, _residual
+from gearfmu.ehl.multigrid import FlatMultigrid
 from gearfmu.ehl.solver import _flat_opts
 
 

@@ -10,11 +10,17 @@ Self-contained numerics: imports nothing from gearfmu but :mod:`gearfmu.common`.
 ================  =================================================================
 Module            Contents
 ================  =================================================================
-solver            steady line-contact solver (seed 000 eq 2-7, Algorithm 1)
+solver            steady line-contact solver (seed 000 eq 2-7): inputs, settings, retries
 transient         transient solver, roughness moving with the surfaces
+transient_inputs  input groups of the transient solver (operating, lubricant, numerics)
 mesh_film         films along the line of action: kinematics, node solves
-multigrid         multilevel solution of the dimensionless problem
-mgcore            compiled FAS multigrid core (numba)
+multigrid         the multigrid core: EHLParams, FlatMultigrid (levels, starts, iteration)
+mgcycle           compiled cycles: schedules, convergence loop, option vector
+mgkernels         compiled grid operators: film, coefficients, residual, relaxation, transfers
+coarse_newton     coarsest-grid Newton solve, dense LU
+polish            block-Newton polish of the pressure-spike region
+grids             grid choice: default grid, coarse-grid and refined retries
+roughness         roughness input: normalisation, band limit
 deformation       elastic deformation (seed 000 eq 4), FFT convolution
 lubricant         viscosity/density laws: Roelands, Dowson-Higginson, Tait, Walther
 film_stiffness    oil-film normal stiffness (seed 000 eq 8-10)
@@ -26,8 +32,10 @@ from .errors import EHLConvergenceError, EHLError, EHLInputError, FilmCollapseEr
 from .solver import LineContactResult, solve_line_contact, REFERENCE_CASE
 from .transient import (FlankSliceRoughness, HarmonicWaviness, TransientLineContactResult,
                         solve_line_contact_transient)
+from .transient_inputs import TransientLubricant, TransientNumerics, TransientOperating
 
 __all__ = ["solve_line_contact", "LineContactResult", "REFERENCE_CASE", "EHLError",
            "EHLInputError", "EHLConvergenceError", "FilmCollapseError",
            "solve_line_contact_transient", "TransientLineContactResult", "HarmonicWaviness",
-           "FlankSliceRoughness"]
+           "FlankSliceRoughness", "TransientOperating", "TransientLubricant",
+           "TransientNumerics"]

@@ -71,6 +71,18 @@ def stage_twiddles(twr: np.ndarray, twi: np.ndarray, m: int):
 
 
 @njit(cache=True)
+def _butterfly(re, im, i, half, wr, wi):
+    """Radix-2 butterfly of entries i and i + half with the twiddle wr + i wi."""
+    i2 = i + half
+    vr = re[i2] * wr - im[i2] * wi
+    vi = re[i2] * wi + im[i2] * wr
+    re[i2] = re[i] - vr
+    im[i2] = im[i] - vi
+    re[i] += vr
+    im[i] += vi
+
+
+@njit(cache=True)
 def _cfft(re, im, N, sr, si, sign):
     """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
     power of 2, no 1/N scaling); twiddles of the stage of half length h at
@@ -108,29 +120,13 @@ def _cfft(re, im, N, sr, si, sign):
         if half >= 8:
             for s in range(0, N, length):
                 for k in range(half):
-                    wr = sr[half + k]
-                    wi = sign * si[half + k]
-                    i = s + k
-                    i2 = i + half
-                    vr = re[i2] * wr - im[i2] * wi
-                    vi = re[i2] * wi + im[i2] * wr
-                    re[i2] = re[i] - vr
-                    im[i2] = im[i] - vi
-                    re[i] += vr
-                    im[i] += vi
+                    _butterfly(re, im, s + k, half, sr[half + k], sign * si[half + k])
         else:
             for k in range(half):
                 wr = sr[half + k]
                 wi = sign * si[half + k]
                 for s in range(0, N, length):
-                    i = s + k
-                    i2 = i + half
-                    vr = re[i2] * wr - im[i2] * wi
-                    vi = re[i2] * wi + im[i2] * wr
-                    re[i2] = re[i] - vr
-                    im[i2] = im[i] - vi
-                    re[i] += vr
-                    im[i] += vi
+                    _butterfly(re, im, s + k, half, wr, wi)
         length <<= 1
 
 

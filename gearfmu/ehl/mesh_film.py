@@ -229,10 +229,8 @@ def solve_node_films(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: 
                      roughness_list: Sequence) -> Tuple[FilmOutcome, List[FilmOutcome]]:
     """Smooth film at one (position, load) node, then the rough film of every
     profile in ``roughness_list`` (one per slice) warm-started from it
-    (``initial=``; measured 16 ms against 52 ms cold at the seed 000 pitch
-    point, 257 nodes; a cold retry of stalled ones was tried: it recovered 3 of the 172
-    stalling level-2 nodes of the default scene at twice the cost of a stall, so it is not
-    done).  Each rough solve tries two relaxation settings, both warm: first
+    (``initial=``, about 3x fewer cycles than a cold start; stalled warm starts are
+    not retried cold: that rarely recovers them and doubles the cost of a stall).  Each rough solve tries two relaxation settings, both warm: first
     :data:`ROUGH_WARM_SETTINGS`, then the smooth film's own setting (``relaxation=`` of
     :func:`solve_slice_film`; a stall then costs two settings, not the solver's whole
     sequence with cold restarts).  Where the smooth film fails the rough films are not

@@ -1,4 +1,4 @@
-"""Transient line-contact EHL with roughness moving with the surfaces (issue 3).
+"""Transient line-contact EHL with roughness moving with the surfaces.
 
 Equations (seed 000 eq 2-3 keeping the squeeze term; docs/ehl_transient.md
 section 1), Venner & Lubrecht 2000 scaling X = x/b, P = p/p_h, H = h R/b^2
@@ -16,7 +16,7 @@ For a gear flank slice (:class:`FlankSliceRoughness`) this is wm(x, t) =
 z1(a1(t) - x) + z2(a2(t) + x) with da1/dt = u1, da2/dt = -u2 (involute arc
 length a = rho^2/(2 r_b), docs/ehl_transient.md).
 
-Time discretisation (CHOICE, docs/ehl_transient.md sections 2 and 6.2): dT = dX
+Time discretisation (choice, docs/ehl_transient.md): dT = dX
 by default (Courant number 1 on u_s) with the convective and time derivatives
 taken together along the characteristic,
 d(rho H)/dX + d(rho H)/dT ~ [1.5 (rho H)^n_i - 2 (rho H)^(n-1)_(i-1)
@@ -26,7 +26,7 @@ BDF2, d(rho H)/dT ~ [3 (rho H)^n - 4 (rho H)^(n-1) + (rho H)^(n-2)]/(2 dT), afte
 BDF1 (implicit Euler) first step, with the steady wedge term (the design note's
 first choice; it damps waves with fewer than ~40 nodes per wavelength, measured).
 The implicit part c_t (rho H)^n is in the compiled multigrid operator
-(:mod:`.mgcore`, options ``c_t``, ``c_char``), the old levels are its
+(:mod:`.mgkernels`, options ``c_t``, ``c_char``), the old levels are its
 finest-grid right-hand side.  Each step: warm start from the previous step (P and H0 linearly
 extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
@@ -34,11 +34,11 @@ step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
 :data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
 setting is re-solved as 2, then 4 BDF2 sub-steps (roughness at the sub-step
 times; rough flanks stall on limit cycles / residual floors at asperity
-pressure spikes, docs/ehl_transient.md 6.7), and only if that fails too raises
+pressure spikes, docs/ehl_transient.md), and only if that fails too raises
 :class:`.errors.EHLConvergenceError` naming the step and time.
 
 Roughness is evaluated from the surfaces' own profiles at every step (no
-band limit, unlike the steady solver's default 8 dX filter: CHOICE, the
+band limit, unlike the steady solver's default 8 dX filter: choice, the
 flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
 256-interval seed grid, docs/ehl_transient.md).  Cavitation stays P = max(P, 0)
 (not mass conserving at internal cavities: risk R2 of the design note).
@@ -46,7 +46,7 @@ flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
 Outputs per step on the Hertz band |x| <= b: central and minimum film, mean
 film and mean pressure, and the film stiffness k(t) = A B(p_m)/h_m of seed 000
 eq 8 (:func:`.film_stiffness.film_stiffness_N_per_m`, ``method="seed"``:
-A = 2 b width); the two time reductions of docs/ehl_transient.md section 3
+A = 2 b width); the two time reductions of docs/ehl_transient.md
 are :meth:`TransientLineContactResult.film_stiffness_reductions`.
 """
 from __future__ import annotations
@@ -62,16 +62,18 @@ from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stall
 from .film_stiffness import film_stiffness_N_per_m
 from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_ETA_INF,
                         ROELANDS_P0_PA)
-from .mgcore import OPT_DEFAULTS, FlatMultigrid
-from .multigrid import EHLParams
+from .mgcycle import OPT_DEFAULTS
+from .transient_inputs import (TransientLubricant, TransientNumerics, TransientOperating,
+                               _transient_inputs)
+from .multigrid import EHLParams, FlatMultigrid
 from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS, STALL_WINDOW,
                      LineContactResult, _flat_opts, solve_line_contact, solve_line_contact as _steady)
 from .mesh_film import contact_kinematics, involute_arc_length_m
 
 #: Relaxation settings of the time steps, tried in this order (the one that
 #: converged last is tried first at the next step), then the steady
-#: :data:`.solver.RELAXATION_SETTINGS`.  Measured (docs/ehl_transient.md
-#: "Status", M = 20, L = 10, 256 intervals, waviness 0.1 H_c, lambda = 0.5 b):
+#: :data:`.solver.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
+#: waviness 0.1 H_c, lambda = 0.5 b (docs/ehl_transient.md):
 #: the steady default (dipole distribution ``dist=0``) diverges within 2-5
 #: steps once c_t > 0 (the time term sees the dipole's 1/r far field) and the
 #: fallback omega_j = 0.1 needs ~14 cycles/step; the symmetric distribution
@@ -88,11 +90,11 @@ TRANSIENT_RELAXATION_SETTINGS = (
 )
 
 #: sub-step rescue of a step that stalled on every relaxation setting: the step
-#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md 6.7)
+#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md)
 SUBSTEP_SPLITS = (2, 4)
 
 #: averaging window after the wash-out (dimensionless time, CHOICE of
-#: docs/ehl_transient.md section 2: two contact widths at u_s)
+#: docs/ehl_transient.md: two contact widths at u_s)
 T_AVERAGE = 4.0
 
 
@@ -276,7 +278,7 @@ class TransientLineContactResult:
         return m
 
     def film_stiffness_reductions(self, T_start=None, T_end=None) -> Dict[str, float]:
-        """docs/ehl_transient.md section 3: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
+        """docs/ehl_transient.md: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
         (b) ``k_of_means_N_per_m`` = A B(<p_m>)/<h_m> (seed 000 eq 8 on time means),
         plus the window means of h_m, p_m and h_central."""
         m = self.window(T_start, T_end)
@@ -306,30 +308,17 @@ def _finite(name, v, lo=None, lo_open=False):
     return v
 
 
-def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
-                                 w_N_per_m: float = None, u_m_s: float = None,
-                                 eta0_Pas: float = None, alpha_Pa_inv: float = None,
-                                 rho0_kg_m3: float = 870.0, *, M: float = None, L: float = None,
-                                 roughness: RoughnessInput = None, srr: float = 0.0,
-                                 speed_ratios: Optional[Tuple[float, float]] = None,
-                                 n_steps: Optional[int] = None, dT: Optional[float] = None,
-                                 scheme: Optional[str] = None, n_nodes: Optional[int] = None,
-                                 n_coarse: Optional[int] = None, x_in: float = -4.5,
-                                 x_out: float = 1.5, compressible: bool = True,
-                                 viscosity: str = "roelands", tol_pressure: float = 1e-5,
-                                 tol_load: float = 1e-6, tol_residual: float = 1e-6,
-                                 max_cycles_per_step: int = 40, width_m: float = 1.0,
-                                 B0_Pa: float = B0_DEFAULT_PA,
-                                 B0_prime: float = B0_PRIME_DEFAULT,
-                                 extrapolate: bool = True,
-                                 relaxation_settings=None, start: str = "frozen",
-                                 ramp_T: float = 1.0,
-                                 steady_options: Optional[dict] = None,
-                                 substep_rescue: Union[bool, str] = True
-                                 ) -> TransientLineContactResult:
+def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
+                                 lubricant: Optional[TransientLubricant] = None,
+                                 numerics: Optional[TransientNumerics] = None, *,
+                                 roughness: RoughnessInput = None, width_m: float = 1.0,
+                                 **fields) -> TransientLineContactResult:
     """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
 
-    Inputs as :func:`.solver.solve_line_contact`: the dimensional ``R_m``,
+    Inputs in three groups, :class:`TransientOperating`, :class:`TransientLubricant`
+    and :class:`TransientNumerics`; each of their fields may also be given as a
+    keyword (``solve_line_contact_transient(M=20, L=10, n_steps=50)``), which
+    overrides the group's value.  Fields as :func:`.solver.solve_line_contact`: the dimensional ``R_m``,
     ``E_Pa``, ``w_N_per_m``, ``u_m_s`` (entrainment speed u_s), ``eta0_Pas``,
     ``alpha_Pa_inv`` or Moes' ``M``, ``L``; the load is constant in time.
     ``roughness``: None (smooth), :class:`HarmonicWaviness`,
@@ -345,7 +334,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     Courant 1, second order after a first-order step: [1.5 (rho H)^n_i -
     2 (rho H)^(n-1)_(i-1) + 0.5 (rho H)^(n-2)_(i-2)]/dX, after Venner & Lubrecht 2000's
     transient chapters; needs dT = dX; a wave of the film moving at u_s is
-    shifted without numerical damping, docs/ehl_transient.md 6.2-6.3).  Per step: W-cycles until
+    shifted without numerical damping, docs/ehl_transient.md).  Per step: W-cycles until
     the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
     scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
     ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
@@ -353,21 +342,35 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
     ``extrapolate``: linear extrapolation of P, H0 from the last two steps as
     the warm start (False: the last step's P, H0).
     ``start``: "frozen" (default; T = 0 is the steady frozen-roughness film,
-    docs/ehl_transient.md section 2), "smooth" (T = 0 is the smooth steady film
+    docs/ehl_transient.md), "smooth" (T = 0 is the smooth steady film
     and the roughness amplitude is ramped linearly from 0 to 1 over ``ramp_T``;
     CHOICE for rough films whose steady frozen solve stalls, e.g. level 2) or
     "auto" ("frozen", and "smooth" if the frozen steady solve raises
     :class:`.errors.EHLConvergenceError`).  The averaging window then starts at
     ``ramp_T`` + T_wash (:attr:`TransientLineContactResult.T_settled`).
-    ``relaxation_settings``: option dicts of :mod:`.mgcore` tried in turn per step
+    ``relaxation_settings``: option dicts of :mod:`.multigrid` tried in turn per step
     (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones).
     ``substep_rescue`` (default True): a step that stalls on every setting is
     re-solved as 2, then 4 BDF2 sub-steps with the roughness at the sub-step
-    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md 6.7; only stalled
+    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md; only stalled
     steps, so converging runs are unchanged); the steps rescued are
     :attr:`TransientLineContactResult.rescued`; "always": every step is solved
     as sub-steps (a verification mode of the rescue path)."""
     t_wall0 = time.perf_counter()
+    op, lub, num = _transient_inputs((operating, lubricant, numerics), fields)
+    R_m, E_Pa, w_N_per_m, u_m_s, M, L = op.R_m, op.E_Pa, op.w_N_per_m, op.u_m_s, op.M, op.L
+    srr, speed_ratios = op.srr, op.speed_ratios
+    eta0_Pas, alpha_Pa_inv, rho0_kg_m3 = lub.eta0_Pas, lub.alpha_Pa_inv, lub.rho0_kg_m3
+    compressible, viscosity, B0_Pa, B0_prime = (lub.compressible, lub.viscosity, lub.B0_Pa,
+                                                lub.B0_prime)
+    n_steps, dT, scheme, n_nodes, n_coarse = num.n_steps, num.dT, num.scheme, num.n_nodes, \
+        num.n_coarse
+    x_in, x_out, tol_pressure, tol_load, tol_residual = (num.x_in, num.x_out, num.tol_pressure,
+                                                         num.tol_load, num.tol_residual)
+    max_cycles_per_step, extrapolate, relaxation_settings = (
+        num.max_cycles_per_step, num.extrapolate, num.relaxation_settings)
+    start, ramp_T, steady_options, substep_rescue = (num.start, num.ramp_T, num.steady_options,
+                                                     num.substep_rescue)
     model = _roughness_model(roughness)
     if speed_ratios is not None:
         if np.ndim(speed_ratios) != 1 or len(speed_ratios) != 2:
@@ -544,7 +547,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
         return ok, ncyc, h
 
     def rescue_step(n, T):
-        """Sub-step rescue of a stalled step (docs/ehl_transient.md 6.7): the
+        """Sub-step rescue of a stalled step (docs/ehl_transient.md): the
         interval [T - dT, T] in m = 2, then 4 equal BDF2 sub-steps (steady
         wedge + time derivative, roughness at each sub-step time; the first
         sub-step variable-step BDF2 on the levels T - dT, T - 2 dT, omega =
@@ -662,7 +665,7 @@ def solve_line_contact_transient(R_m: float = None, E_Pa: float = None,
 # --------------------------------------------------------------------------- amplitude reduction
 def waviness_nabla(wavelength_b: float, M: float, L: float) -> float:
     """Venner, Couhier, Lubrecht & Greenwood (1997) line-contact wavelength
-    parameter nabla = (lambda/b) M^(3/4) / L^(1/2) (docs/ehl_transient.md section 4)."""
+    parameter nabla = (lambda/b) M^(3/4) / L^(1/2) (docs/ehl_transient.md)."""
     return float(wavelength_b) * float(M) ** 0.75 / math.sqrt(float(L))
 
 

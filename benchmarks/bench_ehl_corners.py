@@ -1,0 +1,85 @@
+"""Time and accuracy of one smooth EHL solve per point of Moes' (M, L) range (prints JSON).
+
+For every (M, L) of the grid below (Barus viscosity, incompressible: the
+assumptions of Moes' fit) one default ``solve_line_contact(M=M, L=L)`` is
+timed (CPU time of the process, numba compilation excluded) and its central
+film compared with Moes' (1992) fit as quoted by Venner & Lubrecht 2000
+(:func:`gearfmu.ehl.fits.moes_central_film`), the reference of
+tests/test_ehl.py.  Output: ``{"rows": [...], "worst": {...}, "summary": {...}}``,
+one flat row per point with ``M``, ``L``, ``cpu_s``, ``cycles``,
+``n_intervals``, ``coarse_intervals``, ``attempt``, ``H_central_moes``,
+``H_central_fit``, ``dev_vs_moes`` (relative); ``worst`` is the slowest row,
+``summary`` the median and maximum CPU time and the mean and maximum
+|dev_vs_moes|.  The rows with ``case`` = "default_1025" time the default
+1025-node solve of the Roelands / Dowson-Higginson reference oil at M = 20
+and 100, L = 10 (minimum of ``--repeats``).
+
+    python benchmarks/bench_ehl_corners.py [--M 5 10 ...] [--L 0 2 ...] [--repeats 5]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+
+from gearfmu.ehl import EHLError, solve_line_contact
+from gearfmu.ehl.fits import moes_central_film
+
+M_GRID = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 600.0, 1000.0)
+L_GRID = (0.0, 2.0, 5.0, 10.0, 15.0, 18.0, 20.0)
+
+
+def point(M, L):
+    t = time.process_time()
+    try:
+        r = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False)
+    except EHLError as e:
+        return dict(case="moes_range", M=M, L=L, cpu_s=time.process_time() - t, converged=False,
+                    error=str(e).split(":")[0])
+    cpu = time.process_time() - t
+    fit = moes_central_film(M, L)
+    n = r.X.size - 1
+    return dict(case="moes_range", M=M, L=L, cpu_s=round(cpu, 4), converged=True,
+                cycles=r.iterations, n_intervals=n,
+                coarse_intervals=n // 2 ** (r.grid_levels - 1),
+                attempt=int(r.residuals["attempt"]), H_central_moes=r.H_central_moes,
+                H_central_fit=fit, dev_vs_moes=r.H_central_moes / fit - 1.0)
+
+
+def default_1025(M, L, repeats):
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.process_time()
+        r = solve_line_contact(M=M, L=L, n_nodes=1025)
+        best = min(best, time.process_time() - t)
+    return dict(case="default_1025", M=M, L=L, cpu_s=round(best, 5), converged=True,
+                cycles=r.iterations, n_intervals=1024, H_central_moes=r.H_central_moes)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--M", type=float, nargs="+", default=list(M_GRID))
+    ap.add_argument("--L", type=float, nargs="+", default=list(L_GRID))
+    ap.add_argument("--repeats", type=int, default=5)
+    a = ap.parse_args(argv)
+    solve_line_contact(M=20.0, L=5.0, viscosity="barus", compressible=False)   # compile
+    solve_line_contact(M=20.0, L=10.0, n_nodes=1025)
+    rows = [default_1025(M, 10.0, a.repeats) for M in (20.0, 100.0)]
+    grid = [point(M, L) for M in a.M for L in a.L]
+    rows += grid
+    cpu = [r["cpu_s"] for r in grid]
+    devs = [abs(r["dev_vs_moes"]) for r in grid if r["converged"]]
+    out = dict(rows=rows, worst=max(grid, key=lambda r: r["cpu_s"]),
+               summary=dict(points=len(grid), converged=len(devs),
+                            median_cpu_s=statistics.median(cpu), max_cpu_s=max(cpu),
+                            mean_abs_dev_vs_moes=sum(devs) / max(len(devs), 1),
+                            max_abs_dev_vs_moes=max(devs, default=float("nan"))))
+    json.dump(out, sys.stdout, indent=1)
+    print()
+
+
+if __name__ == "__main__":
+    main()

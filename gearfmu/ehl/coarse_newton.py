@@ -1,0 +1,189 @@
+"""Coarsest-grid Newton solve of the EHL multigrid (option ``coarse_newton``).
+
+Venner & Lubrecht 2000 solve the coarsest grid "exactly" by many relaxation
+sweeps; a dense Newton solve of the 33-129 coarsest-grid unknowns is the
+direct form of it.  :func:`_lu_solve` is the dense Gaussian elimination also
+used by the block-Newton polish (:mod:`.polish`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .mgkernels import _coef, _film, _residual
+
+#: the coarsest-grid Newton solve (option ``coarse_newton``) is used only up to
+#: this many coarsest nodes (dense LU, O(n^3));
+#: larger coarsest grids keep the point sweeps
+COARSE_NEWTON_MAX_NODES = 129
+
+
+@njit(cache=True)
+def _lu_solve(A, b):
+    """x with A x = b, Gaussian elimination with partial pivoting (A, b
+    overwritten); NaN where A is singular."""
+    n = b.size
+    for k in range(n):
+        p = k
+        amax = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > amax:
+                amax = abs(A[i, k])
+                p = i
+        if amax == 0.0:
+            b[:] = np.nan
+            return b
+        if p != k:
+            for j in range(n):
+                t = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = t
+            t = b[k]
+            b[k] = b[p]
+            b[p] = t
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            m = A[i, k] * inv
+            if m != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= m * A[k, j]
+                b[i] -= m * b[k]
+    for k in range(n - 1, -1, -1):
+        s = b[k]
+        for j in range(k + 1, n):
+            s -= A[k, j] * b[j]
+        b[k] = s / A[k, k]
+    return b
+
+
+@njit(cache=True)
+def _coarse_jacobian(S, act, na, load_here):
+    """Newton system of :func:`_coarse_newton` on level 0: J (dense, unknowns
+    P of the nodes ``act[:na]`` then H0 if ``load_here``) and b = -residual,
+    with the coefficients (``_coef``) and the residual r = f - L (``wrk``,
+    ``_residual``) of the current state already computed."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, 0]
+    n = iarr[1, 0]
+    ko = iarr[2, 0]
+    dX = dx[0]
+    h2 = dX * dX
+    order2 = opt[3] > 0
+    ipi = 1.0 / math.pi
+    m = na + 1 if load_here else na
+    J = np.empty((m, m))
+    b = np.empty(m)
+    col = np.full(n, -1, dtype=np.int64)        # node -> column of the system
+    for c in range(na):
+        col[act[c]] = c
+    for a in range(na):
+        k = act[a]
+        i = o + k
+        em = 0.5 * (eps[i - 1] + eps[i])
+        ep = 0.5 * (eps[i] + eps[i + 1])
+        cm = 0.5 * (P[i - 1] - P[i]) / h2
+        cp = 0.5 * (P[i + 1] - P[i]) / h2
+        if order2 and k >= 2:
+            w0, w1, w2 = 1.5 / dX, -2.0 / dX, 0.5 / dX
+        else:
+            w0, w1, w2 = 1.0 / dX, -1.0 / dX, 0.0
+        b[a] = -wrk[i]
+        # 3 eps_j / H_j for j = i-1, i, i+1 (0 where the film is closed)
+        e3m = 3.0 * eps[i - 1] / H[i - 1] if H[i - 1] > 0.0 else 0.0
+        e3 = 3.0 * eps[i] / H[i] if H[i] > 0.0 else 0.0
+        e3p = 3.0 * eps[i + 1] / H[i + 1] if H[i + 1] > 0.0 else 0.0
+        # film part: dr_i/dP_kk = sum_j A_j dH_j/dP_kk, dH_j/dP_kk = -K_|j-kk|/pi
+        # (Poiseuille through eps_j ~ H_j^3 for j = i-1..i+1, wedge through
+        # rho_j H_j for j = i-2..i)
+        A0 = (-(cm + cp) * e3 + w0 * rho[i]) * ipi
+        A1 = (-cm * e3m + w1 * rho[i - 1]) * ipi
+        A2 = (w2 * rho[i - 2]) * ipi if k >= 2 else 0.0
+        Ap = (-cp * e3p) * ipi
+        for c in range(na):
+            kk = act[c]
+            J[a, c] = -(A2 * K[ko + abs(k - 2 - kk)] + A1 * K[ko + abs(k - 1 - kk)]
+                        + A0 * K[ko + abs(k - kk)] + Ap * K[ko + abs(k + 1 - kk)])
+        # local part: Poiseuille coefficients, d eps/dP and d rho/dP of the node
+        c = col[k]
+        J[a, c] += -(cm + cp) * eps[i] * dle[i] + (em + ep) / h2 + w0 * drho[i] * H[i]
+        if k - 1 >= 0 and col[k - 1] >= 0:
+            J[a, col[k - 1]] += -cm * eps[i - 1] * dle[i - 1] - em / h2 \
+                + w1 * drho[i - 1] * H[i - 1]
+        if k + 1 < n and col[k + 1] >= 0:
+            J[a, col[k + 1]] += -cp * eps[i + 1] * dle[i + 1] - ep / h2
+        if k - 2 >= 0 and col[k - 2] >= 0:
+            J[a, col[k - 2]] += w2 * drho[i - 2] * H[i - 2]
+        if load_here:
+            J[a, na] = -(cm * (e3m + e3) + cp * (e3 + e3p)) + w0 * rho[i] + w1 * rho[i - 1] \
+                + (w2 * rho[i - 2] if k >= 2 else 0.0)
+    if load_here:
+        s = 0.0
+        for k in range(n):
+            s += P[o + k]
+        b[na] = -(g[0] - dX * s)
+        for c in range(na):
+            J[na, c] = -dX
+        J[na, na] = 0.0
+    return J, b
+
+
+@njit(cache=True)
+def _coarse_newton(steps, load_here, S, coef_valid=False):
+    """Coarsest-grid solve by Newton steps on the whole (FAS) coarse problem
+    instead of point sweeps (option ``coarse_newton`` = steps; steady only).
+
+    Unknowns: the pressure of every interior node that is pressurised or next
+    to a pressurised node, and H0 when the load balance is done on this grid
+    (``load_here``; equation g - dX sum P = 0).  Dense Jacobian of
+    r_i = f_i - (Poiseuille_i - wedge_i) exactly as :func:`_residual`
+    discretises it: the film through the deformation kernel
+    (dH_j/dP_k = -K_|j-k|/pi, dH_j/dH0 = 1), eps = rho H^3/(eta lambda) through
+    P (d ln eps/dP) and H, the wedge term through rho and H.  Each step is
+    scaled so that no pressure changes ln(eps) by more than 1 (trust region,
+    as the sweeps' ``dmax``), P is clipped at 0 (cavitation), and the film is
+    updated.  A singular or non-finite system leaves the state unchanged.
+    Venner & Lubrecht 2000 solve the coarsest grid "exactly" with many
+    relaxations; a Newton solve of 33-65 unknowns is the direct form of it
+    (docs/ehl.md)."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, 0]
+    n = iarr[1, 0]
+    order2 = opt[3] > 0
+    act = np.empty(n, dtype=np.int64)
+    for st in range(steps):
+        if st > 0 or not coef_valid:
+            _coef(0, P, H, rho, eps, dle, drho, iarr, prm)
+        _residual(0, P, H, f, rho, eps, wrk, iarr, dx, order2, 0.0, False)
+        na = 0
+        for k in range(1, n - 1):
+            i = o + k
+            if P[i] > 0.0 or P[i - 1] > 0.0 or P[i + 1] > 0.0:
+                act[na] = k
+                na += 1
+        if na == 0:
+            return
+        J, b = _coarse_jacobian(S, act, na, load_here)
+        d = _lu_solve(J, b)
+        ok = True
+        big = 0.0
+        for a in range(d.size):
+            if not math.isfinite(d[a]):
+                ok = False
+        if not ok:
+            return
+        for a in range(na):
+            v = abs(d[a] * dle[o + act[a]])
+            if v > big:
+                big = v
+        sc = 1.0 if big <= 1.0 else 1.0 / big
+        for a in range(na):
+            i = o + act[a]
+            v = P[i] + sc * d[a]
+            P[i] = v if v > 0.0 else 0.0
+        if load_here:
+            H0[0] += sc * d[na]
+        _film(0, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
