@@ -261,6 +261,18 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
 def _finite_positive(name, v, allow_zero=False):
     return finite_number(name, v, positive=not allow_zero, nonneg=allow_zero, error=EHLInputError)
 
+def retry_made_progress(per_grid) -> bool:
+    """Fail-fast rule 2: is a further retry grid worth trying?
+
+    ``per_grid`` holds the best stalled scaled residual of each grid tried so far, in order.
+    The next grid is tried only when the last one lowered the best residual of the grids
+    before it ``RETRY_PROGRESS_FACTOR`` times, or stalled below ``RETRY_CLOSE_RESIDUAL``
+    (close enough to convergence that a finer coarsest grid may finish it).
+    """
+    last = per_grid[-1]
+    return last * RETRY_PROGRESS_FACTOR <= min(per_grid[:-1]) or last < RETRY_CLOSE_RESIDUAL
+
+
 def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float = None,
                        u_m_s: float = None, eta0_Pas: float = None,
                        alpha_Pa_inv: float = None, rho0_kg_m3: float = 870.0, *,
@@ -475,9 +487,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                 skipped.append(f"retry grids not tried: best scaled residual on the default "
                                f"grid {per_grid[0]:.1e} >= {RETRY_BELOW_RESIDUAL:.0e}")
                 break
-            if k_grid > 1 and not (per_grid[-1] * RETRY_PROGRESS_FACTOR
-                                   <= min(per_grid[:-1])
-                                   or per_grid[-1] < RETRY_CLOSE_RESIDUAL):
+            if k_grid > 1 and not retry_made_progress(per_grid):
                 skipped.append(f"{len(grids) - k_grid} further retry grid(s) not tried: the "
                                f"last one ({grids[k_grid - 1][0] - 1}/{grids[k_grid - 1][1]}"
                                f" intervals) reached {per_grid[-1]:.1e}, neither "
