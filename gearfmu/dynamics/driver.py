@@ -77,10 +77,13 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
             out_events[s + 1] = nev
         else:
             t0 = s * H
-            for i in range(n_sub):
-                th, om, x, v, nd, i0 = _rk4_step(tab, dyn, th0, t0 + i * h, th, om, x, v, h, nd, i0)
             if sdof:
+                for i in range(n_sub):
+                    th, om, x, v, nd, i0 = _rk4_step(tab, dyn, True, th0, t0 + i * h, th, om, x, v, h, nd, i0)
                 th = th0 + om * ((s + 1) * H)
+            else:
+                for i in range(n_sub):
+                    th, om, x, v, nd, i0 = _rk4_step(tab, dyn, False, th0, t0, th, om, x, v, h, nd, i0)
         _write_row(tab, s + 1, th, om, x, v, out_state, out_pair, out_force, out_stiff)
         finite = math.isfinite(x) and math.isfinite(v)
         if icode == 1 or not sdof:  # rk4 SDOF: theta1, omega1 follow from the time

@@ -23,27 +23,33 @@ from .model_rhs import (
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _rk4_step(tab, dyn, th0, t, th, om, x, v, h, nd, i0):
+def _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd):
+    """RK4 increment sum after stage ``stage`` (0..3) with stage slope k: k1 at
+    stage 0, then + 2*k2, + 2*k3, + k4, left to right."""
+    if stage == 0:
+        return ka, kb, kc, kd
+    if stage == 3:
+        return sa + ka, sb + kb, sc + kc, sd + kd
+    return sa + 2.0 * ka, sb + 2.0 * kb, sc + 2.0 * kc, sd + 2.0 * kd
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
     """One classical RK4 step of length h (docs/model.md 'Integration').
 
-    Two-inertia form (dyn[0] False): state (theta1, omega1, x, v).  Time-indexed
-    SDOF (dyn[0] True, seed 003 eq 3-6): theta1 = th0 + omega1*t_s prescribed at
+    Two-inertia form (sdof False): state (theta1, omega1, x, v).  Time-indexed
+    SDOF (sdof True, seed 003 eq 3-6): theta1 = th0 + omega1*t_s prescribed at
     the stage times t_s = t, t + h/2, t + h/2, t + h, omega1 constant, states
     (x, v) with m_e v' = F_m - F; theta1 and omega1 are returned unchanged.
     Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed
     as h/2.0); the increments are accumulated left to right,
     acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc.  The table
-    cell (nd, i0) is carried from stage to stage and returned."""
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    cell (nd, i0) is carried from stage to stage and returned.  The caller passes
+    ``sdof`` as a constant, so that the inlined step has no branch on it."""
+    _, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
     h2 = h / 2.0
-    ka = 0.0
-    kb = 0.0
-    kc = 0.0
-    kd = 0.0
-    sa = 0.0
-    sb = 0.0
-    sc = 0.0
-    sd = 0.0
+    ka, kb, kc, kd = 0.0, 0.0, 0.0, 0.0
+    sa, sb, sc, sd = 0.0, 0.0, 0.0, 0.0
     for stage in range(4):
         if stage == 0:
             ts = t
@@ -74,21 +80,7 @@ def _rk4_step(tab, dyn, th0, t, th, om, x, v, h, nd, i0):
             ka = yb
             kb = (t1 - rb1 * f) / in1
             kd = rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
-        if stage == 0:
-            sa = ka
-            sb = kb
-            sc = kc
-            sd = kd
-        elif stage == 3:
-            sa = sa + ka
-            sb = sb + kb
-            sc = sc + kc
-            sd = sd + kd
-        else:
-            sa = sa + 2.0 * ka
-            sb = sb + 2.0 * kb
-            sc = sc + 2.0 * kc
-            sd = sd + 2.0 * kd
+        sa, sb, sc, sd = _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd)
     h6 = h / 6.0
     if sdof:
         return th, om, x + h6 * sc, v + h6 * sd, nd, i0
@@ -116,26 +108,18 @@ _KINK_MAX_IT = 60       # Illinois iterations per root
 @njit(cache=True, error_model="numpy")
 def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
     """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
-    the arithmetic of :func:`_rk4_step` (stages unrolled)."""
+    the arithmetic of :func:`_rk4_step`: stages at y + (h/2)*k1, y + (h/2)*k2,
+    y + h*k3, acc = ((k1 + 2*k2) + 2*k3) + k4."""
     h2 = h / 2.0
     ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * fa, om + h2 * fb, x + h2 * fc, v + h2 * fd,
                                    nd, i0, i1)
-    sa = fa + 2.0 * ka
-    sb = fb + 2.0 * kb
-    sc = fc + 2.0 * kc
-    sd = fd + 2.0 * kd
+    sa, sb, sc, sd = _rk4_accumulate(1, fa, fb, fc, fd, ka, kb, kc, kd)
     ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * ka, om + h2 * kb, x + h2 * kc, v + h2 * kd,
                                    nd, i0, i1)
-    sa = sa + 2.0 * ka
-    sb = sb + 2.0 * kb
-    sc = sc + 2.0 * kc
-    sd = sd + 2.0 * kd
+    sa, sb, sc, sd = _rk4_accumulate(2, sa, sb, sc, sd, ka, kb, kc, kd)
     ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h * ka, om + h * kb, x + h * kc, v + h * kd,
                                    nd, i0, i1)
-    sa = sa + ka
-    sb = sb + kb
-    sc = sc + kc
-    sd = sd + kd
+    sa, sb, sc, sd = _rk4_accumulate(3, sa, sb, sc, sd, ka, kb, kc, kd)
     h6 = h / 6.0
     return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
 
@@ -236,6 +220,15 @@ def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
             md[p + j] = 0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _put4(wk, o, a, b, c, d):
+    """wk[o:o+4] = (a, b, c, d) (one 4-vector of the Hermite data)."""
+    wk[o] = a
+    wk[o + 1] = b
+    wk[o + 2] = c
+    wk[o + 3] = d
+
+
 @njit(cache=True, error_model="numpy")
 def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
@@ -281,23 +274,11 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1)
             if g < 0.0:
                 if not have_f1:
-                    wk[0] = th
-                    wk[1] = om
-                    wk[2] = x
-                    wk[3] = v
-                    wk[4] = fa
-                    wk[5] = fb
-                    wk[6] = fc
-                    wk[7] = fd
-                    wk[8] = ta
-                    wk[9] = tb
-                    wk[10] = tc
-                    wk[11] = td
+                    _put4(wk, 0, th, om, x, v)
+                    _put4(wk, 4, fa, fb, fc, fd)
+                    _put4(wk, 8, ta, tb, tc, td)
                     ga_, gb_, gc_, gd_ = _deriv_locked(tab, dyn, md, ta, tb, tc, td, nd, i0, i1)
-                    wk[12] = ga_
-                    wk[13] = gb_
-                    wk[14] = gc_
-                    wk[15] = gd_
+                    _put4(wk, 12, ga_, gb_, gc_, gd_)
                     have_f1 = True
                 s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
                 if s < best:

@@ -146,6 +146,20 @@ def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _row_values(kp, ep, o, i0, i1, w, inv_dphi):
+    """k (N/m), e (m) and de/dphi (m/rad) of the slot row starting at offset o of
+    the k, e pointers, interpolated at nodes (i0, i1) with weight w."""
+    ka = kp[o + i0]
+    kb = kp[o + i1]
+    kv = ka + w * (kb - ka)
+    ea = ep[o + i0]
+    eb = ep[o + i1]
+    ev = ea + w * (eb - ea)
+    es = (eb - ea) * inv_dphi
+    return kv, ev, es
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _kvals(tab, j, i0, i1, w):
     """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j at cell nodes
     (i0, i1) and weight w (docs/model.md 'Table lookup'): phi interpolation in
@@ -153,21 +167,9 @@ def _kvals(tab, j, i0, i1, w):
     interpolation between the two rows with weight wt."""
     kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi = tab
     r = j * n_phi
-    ka = kp[o0 + r + i0]
-    kb = kp[o0 + r + i1]
-    kv = ka + w * (kb - ka)
-    ea = ep[o0 + r + i0]
-    eb = ep[o0 + r + i1]
-    ev = ea + w * (eb - ea)
-    es = (eb - ea) * inv_dphi
+    kv, ev, es = _row_values(kp, ep, o0 + r, i0, i1, w, inv_dphi)
     if rows2:
-        ka2 = kp[o1 + r + i0]
-        kb2 = kp[o1 + r + i1]
-        kv2 = ka2 + w * (kb2 - ka2)
-        ea2 = ep[o1 + r + i0]
-        eb2 = ep[o1 + r + i1]
-        ev2 = ea2 + w * (eb2 - ea2)
-        es2 = (eb2 - ea2) * inv_dphi
+        kv2, ev2, es2 = _row_values(kp, ep, o1 + r, i0, i1, w, inv_dphi)
         kv = kv + wt * (kv2 - kv)
         ev = ev + wt * (ev2 - ev)
         es = es + wt * (es2 - es)
