@@ -9,7 +9,11 @@ solve_ivp to the reference's own 1e-9 level).  Errors: RMS and maximum of
 |dte - dte_ref| and |mesh_force - F_ref| over the communication points,
 relative to the reference's range.  Times: best of `--repeat` runs of the
 compiled loop (native ``wall_s``; the C kernel through ctypes, one call per
-communication step).  Usage: python benchmarks/bench_integrators.py [--repeat 3]
+communication step).  ``event_cost``: where rk4_kink's time goes -- its events
+(table nodes and contact-mode changes it steps to), the net table-node crossings
+among them (cell changes of theta1 between communication points) and the cost
+of one event, (rk4_kink wall - rk4 wall at the same h)/events.
+Usage: python benchmarks/bench_integrators.py [--repeat 3]
 """
 import argparse
 import ctypes
@@ -106,11 +110,21 @@ def main():
         steps = n * div
         per_step.append({"method": integ, "substeps": steps, "numba_ns_per_substep": wn / steps * 1e9,
                          "c_ns_per_substep": wc / steps * 1e9, "numba_over_c": wn / wc})
+    dphi = tb.phi_period_rad / tb.n_phi
+    nodes = int(np.sum(np.abs(np.diff(np.floor(ref.pinion_angle / dphi)))))
+    walls = {(r["method"], r["setting"]): r for r in rows}
+    event_cost = []
+    for div in (4, 16, 64, 256):
+        kink, rk4 = walls[("rk4_kink", f"h=H/{div}")], walls[("rk4", f"h=H/{div}")]
+        event_cost.append({"setting": f"h=H/{div}", "substeps": n * div, "events": kink["events"],
+                           "table_node_crossings": nodes,
+                           "ns_per_event": (kink["wall_s"] - rk4["wall_s"]) / max(kink["events"], 1) * 1e9,
+                           "rk4_ns_per_substep": rk4["wall_s"] / (n * div) * 1e9})
     front = [r for r in rows if r["on_front"]]
     print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
                       "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
                       "front": [(r["method"], r["setting"]) for r in front],
-                      "per_step": per_step}, indent=1))
+                      "per_step": per_step, "event_cost": event_cost}, indent=1))
 
 
 if __name__ == "__main__":

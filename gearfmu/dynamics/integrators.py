@@ -22,7 +22,7 @@ from .model_rhs import (
 )
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd):
     """RK4 increment sum after stage ``stage`` (0..3) with stage slope k: k1 at
     stage 0, then + 2*k2, + 2*k3, + k4, left to right."""
@@ -220,7 +220,7 @@ def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
             md[p + j] = 0
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _put4(wk, o, a, b, c, d):
     """wk[o:o+4] = (a, b, c, d) (one 4-vector of the Hermite data)."""
     wk[o] = a

@@ -145,7 +145,7 @@ def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
     return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _row_values(kp, ep, o, i0, i1, w, inv_dphi):
     """k (N/m), e (m) and de/dphi (m/rad) of the slot row starting at offset o of
     the k, e pointers, interpolated at nodes (i0, i1) with weight w."""
