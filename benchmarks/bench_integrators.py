@@ -12,7 +12,8 @@ compiled loop (native ``wall_s``; the C kernel through ctypes, one call per
 communication step).  ``event_cost``: where rk4_kink's time goes -- its events
 (table nodes and contact-mode changes it steps to), the net table-node crossings
 among them (cell changes of theta1 between communication points) and the cost
-of one event, (rk4_kink wall - rk4 wall at the same h)/events.
+per substep and per event (least squares wall = a*substeps + b*events over the
+rows of one integrator).
 Usage: python benchmarks/bench_integrators.py [--repeat 3]
 """
 import argparse
@@ -112,14 +113,17 @@ def main():
                          "c_ns_per_substep": wc / steps * 1e9, "numba_over_c": wn / wc})
     dphi = tb.phi_period_rad / tb.n_phi
     nodes = int(np.sum(np.abs(np.diff(np.floor(ref.pinion_angle / dphi)))))
-    walls = {(r["method"], r["setting"]): r for r in rows}
-    event_cost = []
-    for div in (4, 16, 64, 256):
-        kink, rk4 = walls[("rk4_kink", f"h=H/{div}")], walls[("rk4", f"h=H/{div}")]
-        event_cost.append({"setting": f"h=H/{div}", "substeps": n * div, "events": kink["events"],
-                           "table_node_crossings": nodes,
-                           "ns_per_event": (kink["wall_s"] - rk4["wall_s"]) / max(kink["events"], 1) * 1e9,
-                           "rk4_ns_per_substep": rk4["wall_s"] / (n * div) * 1e9})
+    # least squares wall = a*substeps + b*events over the rows of each integrator
+    event_cost = {"events": [r["events"] for r in rows if r["method"] == "rk4_kink"],
+                  "table_node_crossings": nodes}
+    for integ in ("rk4", "rk4_kink"):
+        sel = [r for r in rows if r["method"] == integ]
+        a = np.array([[n * int(r["setting"].split("/")[1]), r["events"]] for r in sel], dtype=float)
+        w = np.array([r["wall_s"] for r in sel])
+        coef = np.linalg.lstsq(a if integ == "rk4_kink" else a[:, :1], w, rcond=None)[0]
+        event_cost[f"{integ}_ns_per_substep"] = float(coef[0] * 1e9)
+        if integ == "rk4_kink":
+            event_cost["rk4_kink_ns_per_event"] = float(coef[1] * 1e9)
     front = [r for r in rows if r["on_front"]]
     print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
                       "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
