@@ -9,7 +9,12 @@ solve_ivp to the reference's own 1e-9 level).  Errors: RMS and maximum of
 |dte - dte_ref| and |mesh_force - F_ref| over the communication points,
 relative to the reference's range.  Times: best of `--repeat` runs of the
 compiled loop (native ``wall_s``; the C kernel through ctypes, one call per
-communication step).  Usage: python benchmarks/bench_integrators.py [--repeat 3]
+communication step).  ``event_cost``: where rk4_kink's time goes -- its events
+(table nodes and contact-mode changes it steps to), the net table-node crossings
+among them (cell changes of theta1 between communication points) and the cost
+per substep and per event (least squares wall = a*substeps + b*events over the
+rows of one integrator).
+Usage: python benchmarks/bench_integrators.py [--repeat 3]
 """
 import argparse
 import ctypes
@@ -106,11 +111,24 @@ def main():
         steps = n * div
         per_step.append({"method": integ, "substeps": steps, "numba_ns_per_substep": wn / steps * 1e9,
                          "c_ns_per_substep": wc / steps * 1e9, "numba_over_c": wn / wc})
+    dphi = tb.phi_period_rad / tb.n_phi
+    nodes = int(np.sum(np.abs(np.diff(np.floor(ref.pinion_angle / dphi)))))
+    # least squares wall = a*substeps + b*events over the rows of each integrator
+    event_cost = {"events": [r["events"] for r in rows if r["method"] == "rk4_kink"],
+                  "table_node_crossings": nodes}
+    for integ in ("rk4", "rk4_kink"):
+        sel = [r for r in rows if r["method"] == integ]
+        a = np.array([[n * int(r["setting"].split("/")[1]), r["events"]] for r in sel], dtype=float)
+        w = np.array([r["wall_s"] for r in sel])
+        coef = np.linalg.lstsq(a if integ == "rk4_kink" else a[:, :1], w, rcond=None)[0]
+        event_cost[f"{integ}_ns_per_substep"] = float(coef[0] * 1e9)
+        if integ == "rk4_kink":
+            event_cost["rk4_kink_ns_per_event"] = float(coef[1] * 1e9)
     front = [r for r in rows if r["on_front"]]
     print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
                       "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
                       "front": [(r["method"], r["setting"]) for r in front],
-                      "per_step": per_step}, indent=1))
+                      "per_step": per_step, "event_cost": event_cost}, indent=1))
 
 
 if __name__ == "__main__":

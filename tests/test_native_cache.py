@@ -11,6 +11,7 @@ import textwrap
 
 CHILD = textwrap.dedent("""
     import json, gearfmu.dynamics.native as nat
+    import gearfmu.dynamics.driver as driver
     from gearfmu.pipeline import compute_tables
     from gearfmu.scene.reader import load_scene
     tables = compute_tables(load_scene())
@@ -19,8 +20,8 @@ CHILD = textwrap.dedent("""
     nat.simulate(tables, **kw)
     nat.simulate(tables, integrator="rk4", **kw)
     stats = {}
-    for name in ("_run_2dof", "_run_kink", "_row0"):
-        st = getattr(nat, name).stats
+    for name in ("_run", "_equilibrium"):
+        st = getattr(driver, name).stats
         stats[name] = [sum(st.cache_hits.values()), sum(st.cache_misses.values())]
     print(json.dumps(stats))
 """)

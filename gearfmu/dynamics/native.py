@@ -11,6 +11,11 @@ per-pair stiffness k_j, damping c, meshing error e_j and half backlash b_j),
 indexed by the pinion angle; state y = [theta1 (rad), omega1 (rad/s),
 x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
 
+The compiled parts live in gearfmu.dynamics.model_rhs (table lookup, force
+laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink') and
+gearfmu.dynamics.driver (the one loop over communication steps); this module
+checks the arguments, prepares the tables and inputs and wraps the results.
+
 Public API
 ----------
 * :func:`simulate` -- the FMU model, outputs named as the FMU outputs.
@@ -30,12 +35,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional, Union
 
 import numpy as np
-from numba import njit, types
-from numba.extending import intrinsic
 
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..common.checks import finite_number
+from .driver import _run, _warmup
+from .integrators import KINK_MAX_SLOTS
+from .model_rhs import _equilibrium
 
 __all__ = [
     "NativeInputError",
@@ -64,884 +70,6 @@ InputLike = Union[float, np.ndarray, Callable[[float], float]]
 
 class NativeInputError(ValueError):
     """Bad argument to the native solver; the message names the argument."""
-
-
-# ---------------------------------------------------------------- kernels
-#: no carried cell (_phi_cell): more than one cell away from every global cell index
-_CELL_NONE = -(1 << 62)
-#: 2^52: below it the global cell index and s - nd are exact in doubles
-_CELL_LIMIT = 4503599627370496.0
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _phi_cell(theta1, inv_dphi, n_phi, nd_prev, i0_prev):
-    """docs/model.md 'Table lookup': (nd, i0, i1, w) at pinion angle theta1 (rad),
-    s = theta1*inv_dphi, global cell nd = floor(s), nodes i0 = nd mod N and i1,
-    weight w = s - nd.  (nd_prev, i0_prev) is the cell of the previous evaluation
-    (_CELL_NONE: none): when nd moved by 0 or +-1, i0 follows without an integer
-    division.  The result does not depend on it (the arithmetic of gearkernel.c
-    phi_cell)."""
-    s = theta1 * inv_dphi
-    if not (s > -_CELL_LIMIT and s < _CELL_LIMIT):
-        # 2^52 cells or more: an integer number of cells (w = 0); non-finite:
-        # node 0, w = nan (the state is non-finite); never out of bounds
-        if math.isfinite(s):
-            r = np.fmod(s, float(n_phi))
-            if r < 0.0:
-                r += float(n_phi)
-            i0 = int(r)
-            w = 0.0
-        else:
-            i0 = 0
-            w = s - s
-        i1 = i0 + 1
-        if i1 == n_phi:
-            i1 = 0
-        return _CELL_NONE, i0, i1, w
-    nd = int(s)             # toward zero ...
-    if nd > s:              # ... so floor(s)
-        nd -= 1
-    dn = nd - nd_prev
-    if dn == 0:
-        i0 = i0_prev
-    elif dn == 1:
-        i0 = i0_prev + 1
-        if i0 == n_phi:
-            i0 = 0
-    elif dn == -1:
-        i0 = n_phi - 1 if i0_prev == 0 else i0_prev - 1
-    else:
-        i0 = nd % n_phi     # floor modulo: in [0, N)
-    i1 = i0 + 1
-    if i1 == n_phi:
-        i1 = 0
-    w = s - nd
-    return nd, i0, i1, w
-
-
-@njit(cache=True, error_model="numpy")
-def _torque_index(t1, torque):
-    """Bracketing torque row it and weight wt for Tq = clamp(T1, torque[0], torque[-1]).
-
-    it is the largest index in [0, NT-2] with torque[it] <= Tq,
-    wt = (Tq - torque[it])/(torque[it+1] - torque[it]).  NT == 1: (0, 0.0).
-    """
-    nt = torque.shape[0]
-    if nt == 1:
-        return 0, 0.0
-    tq = t1
-    if tq < torque[0]:
-        tq = torque[0]
-    if tq > torque[nt - 1]:
-        tq = torque[nt - 1]
-    it = 0
-    while it < nt - 2 and torque[it + 1] <= tq:
-        it += 1
-    wt = (tq - torque[it]) / (torque[it + 1] - torque[it])
-    return it, wt
-
-
-@njit(cache=True, error_model="numpy")
-def _rows(k, e, it):
-    """Views of the torque rows it and it+1 (it again when NT == 1)."""
-    if k.shape[0] > 1:
-        return k[it], e[it], k[it + 1], e[it + 1], True
-    return k[it], e[it], k[it], e[it], False
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi):
-    """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j.
-
-    k0, e0 are the (P, n_phi) rows of torque index it, k1, e1 those of it+1
-    (used only when rows2, i.e. NT > 1): phi interpolation per torque row,
-    then linear interpolation between the two rows with weight wt."""
-    ka = k0[j, i0]
-    kb = k0[j, i1]
-    kv = ka + w * (kb - ka)
-    ea = e0[j, i0]
-    eb = e0[j, i1]
-    ev = ea + w * (eb - ea)
-    es = (eb - ea) * inv_dphi
-    if rows2:
-        ka2 = k1[j, i0]
-        kb2 = k1[j, i1]
-        kv2 = ka2 + w * (kb2 - ka2)
-        ea2 = e1[j, i0]
-        eb2 = e1[j, i1]
-        ev2 = ea2 + w * (eb2 - ea2)
-        es2 = (eb2 - ea2) * inv_dphi
-        kv = kv + wt * (kv2 - kv)
-        ev = ev + wt * (ev2 - ev)
-        es = es + wt * (es2 - es)
-    ba = b[j, i0]
-    bb = b[j, i1]
-    bv = ba + w * (bb - ba)
-    return kv, ev, es, bv
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
-    """Force of one pair (N) and its contact state (1 drive, -1 back, 0 separated)."""
-    de = es * omega1
-    d = x - ev
-    if d > bv:
-        fc = kv * (d - bv)
-        state = 1
-    elif d < -bv:
-        fc = kv * (d + bv)
-        state = -1
-    else:
-        fc = 0.0
-        state = 0
-    fd = c * (v - de)
-    if model == 0:  # elastobacklash
-        if state == 1:
-            f = fc + min(fc, fd)
-            if f < 0.0:
-                f = 0.0
-        elif state == -1:
-            f = fc + max(fc, fd)
-            if f > 0.0:
-                f = 0.0
-        else:
-            f = 0.0
-    else:  # seed003
-        if kv > 0.0:
-            f = fc + fd
-        else:
-            f = 0.0
-    return f, state
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _mesh_force(tab, theta1, omega1, x, v, nd, i0):
-    """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1, and the cell
-    (nd, i0) of theta1 (carried in from the previous evaluation, see _phi_cell).
-    ``tab``: the table pointers and scalars of :func:`_kvals` (no array argument
-    in the step loop, see the rk4_kink section)."""
-    n_phi = tab[7]
-    nd, i0, i1, w = _phi_cell(theta1, tab[12], n_phi, nd, i0)
-    f = 0.0
-    for j in range(tab[8]):
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, tab[10], tab[11])
-        f += fj
-    return f, nd, i0
-
-
-@njit(cache=True, error_model="numpy")
-def _outputs_row(theta1, omega1, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
-                 pair_out, row):
-    """Write pair forces of one output row; return (mesh_force, mesh_stiffness)."""
-    n_phi = k0.shape[1]
-    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
-    ftot = 0.0
-    ks = 0.0
-    for j in range(k0.shape[0]):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi)
-        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, c, model)
-        pair_out[row, j] = fj
-        ftot += fj
-        if st != 0:
-            ks += kv
-    return ftot, ks
-
-
-@njit(cache=True, error_model="numpy")
-def _equilibrium(theta1, t1, rb1, k, e, b, torque, inv_dphi):
-    """docs/model.md 'Initial state': x (m) of the quasi-static equilibrium at theta1
-    under F_m = T1/Rb1, by exactly 200 bisections.  Returns nan if no slot has k > 0."""
-    it, wt = _torque_index(t1, torque)
-    k0, e0, k1, e1, rows2 = _rows(k, e, it)
-    n_phi = k.shape[2]
-    p = k.shape[1]
-    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
-    fm = t1 / rb1
-    kk = np.empty(p)
-    ee = np.empty(p)
-    bb = np.empty(p)
-    s = 0.0
-    lo_e = np.inf
-    hi_e = -np.inf
-    for j in range(p):
-        kv, ev, es, bv = _pair_values(k0, e0, k1, e1, rows2, wt, b, j, i0, i1, w, inv_dphi)
-        kk[j] = kv
-        ee[j] = ev
-        bb[j] = bv
-        if kv > 0.0:
-            s += kv
-            if ev - bv < lo_e:
-                lo_e = ev - bv
-            if ev + bv > hi_e:
-                hi_e = ev + bv
-    if not s > 0.0:
-        return np.nan
-    lo = lo_e - abs(fm) / s - 1e-12
-    hi = hi_e + abs(fm) / s + 1e-12
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        g = 0.0
-        for j in range(p):
-            if kk[j] > 0.0:
-                d = mid - ee[j]
-                if d > bb[j]:
-                    g += kk[j] * (d - bb[j])
-                elif d < -bb[j]:
-                    g += kk[j] * (d + bb[j])
-        g = g - fm
-        if g < 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, tab, nd, i0):
-    """One classical RK4 step of the two-inertia model (docs/model.md).
-
-    Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed
-    as h/2.0); the increments are accumulated left to right,
-    acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc.  The table
-    cell (nd, i0) is carried from stage to stage and returned."""
-    h2 = h / 2.0
-    ka = 0.0
-    kb = 0.0
-    kc = 0.0
-    kd = 0.0
-    sa = 0.0
-    sb = 0.0
-    sc = 0.0
-    sd = 0.0
-    for stage in range(4):
-        if stage == 0:
-            ya = th
-            yb = om
-            yc = x
-            yd = v
-        elif stage == 3:
-            ya = th + h * ka
-            yb = om + h * kb
-            yc = x + h * kc
-            yd = v + h * kd
-        else:
-            ya = th + h2 * ka
-            yb = om + h2 * kb
-            yc = x + h2 * kc
-            yd = v + h2 * kd
-        f, nd, i0 = _mesh_force(tab, ya, yb, yc, yd, nd, i0)
-        ka = yb
-        kb = (t1 - rb1 * f) / i1
-        kc = yd
-        kd = rb1 * (t1 - rb1 * f) / i1 - rb2 * (rb2 * f - t2) / i2
-        if stage == 0:
-            sa = ka
-            sb = kb
-            sc = kc
-            sd = kd
-        elif stage == 3:
-            sa = sa + ka
-            sb = sb + kb
-            sc = sc + kc
-            sd = sd + kd
-        else:
-            sa = sa + 2.0 * ka
-            sb = sb + 2.0 * kb
-            sc = sc + 2.0 * kc
-            sd = sd + 2.0 * kd
-    h6 = h / 6.0
-    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd, nd, i0
-
-
-@njit(cache=True, error_model="numpy")
-def _run_2dof(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, i1, i2, k, e, b, torque,
-              inv_dphi, c, model, out_state, out_pair, out_force, out_stiff):
-    """Loop over communication steps (rows 1..n of the outputs; row 0 by caller).
-    k, e (NT, P, N) and b (P, N) must be C-contiguous (the step reads their data
-    pointers)."""
-    n_steps = out_state.shape[0] - 1
-    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
-    nd = _CELL_NONE
-    i0 = 0
-    for s in range(n_steps):
-        t1 = t1s[s]
-        t2 = t2s[s]
-        it, wt = _torque_index(t1, torque)
-        k0, e0, k1, e1, rows2 = _rows(k, e, it)
-        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, np.nan, c, model, inv_dphi)  # dphi: rk4_kink only
-        for _ in range(n_sub):
-            th, om, x, v, nd, i0 = _rk4_step(th, om, x, v, h, t1, t2, rb1, rb2, i1, i2, tab, nd, i0)
-        out_state[s + 1, 0] = th
-        out_state[s + 1, 1] = om
-        out_state[s + 1, 2] = x
-        out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
-                                out_pair, s + 1)
-        out_force[s + 1] = ftot
-        out_stiff[s + 1] = ks
-        if not (math.isfinite(th) and math.isfinite(om) and math.isfinite(x) and math.isfinite(v)):
-            return s + 1
-    return n_steps
-
-
-@njit(cache=True, error_model="numpy")
-def _rk4_step_sdof(t, x, v, h, th0, om, fm, me, tab, nd, i0):
-    """One RK4 step of the time-indexed SDOF (theta1 = th0 + om*t prescribed),
-    same stage and accumulation order as :func:`_rk4_step`; stage times t,
-    t + h/2, t + h/2, t + h; the table cell (nd, i0) carried as there."""
-    h2 = h / 2.0
-    kc = 0.0
-    kd = 0.0
-    sc = 0.0
-    sd = 0.0
-    for stage in range(4):
-        if stage == 0:
-            ts = t
-            yc = x
-            yd = v
-        elif stage == 3:
-            ts = t + h
-            yc = x + h * kc
-            yd = v + h * kd
-        else:
-            ts = t + h2
-            yc = x + h2 * kc
-            yd = v + h2 * kd
-        f, nd, i0 = _mesh_force(tab, th0 + om * ts, om, yc, yd, nd, i0)
-        kc = yd
-        kd = (fm - f) / me
-        if stage == 0:
-            sc = kc
-            sd = kd
-        elif stage == 3:
-            sc = sc + kc
-            sd = sd + kd
-        else:
-            sc = sc + 2.0 * kc
-            sd = sd + 2.0 * kd
-    h6 = h / 6.0
-    return x + h6 * sc, v + h6 * sd, nd, i0
-
-
-@njit(cache=True, error_model="numpy")
-def _run_sdof(th0, om, x, v, t1s, H, n_sub, h, rb1, me, k, e, b, torque,
-              inv_dphi, c, model, out_state, out_pair, out_force, out_stiff):
-    n_steps = out_state.shape[0] - 1
-    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
-    nd = _CELL_NONE
-    i0 = 0
-    for s in range(n_steps):
-        t1 = t1s[s]
-        fm = t1 / rb1
-        it, wt = _torque_index(t1, torque)
-        k0, e0, k1, e1, rows2 = _rows(k, e, it)
-        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, np.nan, c, model, inv_dphi)  # dphi: rk4_kink only
-        t0 = s * H
-        for i in range(n_sub):
-            x, v, nd, i0 = _rk4_step_sdof(t0 + i * h, x, v, h, th0, om, fm, me, tab, nd, i0)
-        th = th0 + om * ((s + 1) * H)
-        out_state[s + 1, 0] = th
-        out_state[s + 1, 1] = om
-        out_state[s + 1, 2] = x
-        out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
-                                out_pair, s + 1)
-        out_force[s + 1] = ftot
-        out_stiff[s + 1] = ks
-        if not (math.isfinite(x) and math.isfinite(v)):
-            return s + 1
-    return n_steps
-
-
-# ------------------------------------------------------ rk4_kink (docs/model.md)
-#: events (mode switches) located per substep before the rest of the substep is
-#: taken without detection (guards a grazing ping-pong); docs/model.md "rk4_kink"
-KINK_MAX_EVENTS = 1000
-#: largest slot count the rk4_kink integrator accepts (fixed arrays in the C kernel)
-KINK_MAX_SLOTS = 32
-_KINK_TOL_S = 1e-12     # root bracket width in the unit substep fraction s
-_KINK_MAX_IT = 60       # Illinois iterations per root
-
-# Speed (docs/native.md "rk4_kink speed"): the rk4_kink helpers below never take
-# a numpy array.  Every numba call with an array argument increfs/decrefs the
-# array's memory block (atomic operations the refcount pruner cannot remove
-# across calls, loops and branches), and the locked right-hand side, the guards
-# and the root finder call each other ~20 times per substep.  So _run_kink
-# takes raw data pointers once (_ptr) and hands the helpers one struct-like
-# tuple ``tab`` of pointers and scalars, the inputs as a tuple ``dyn``, the
-# mode as an int64 pointer ``md`` (reg[j] = md[j], sub[j] = md[P + j],
-# kpos[j] = md[2P + j]) and the Hermite data as a float64 pointer ``wk``
-# (y0 = wk[0:4], f0 = wk[4:8], y1 = wk[8:12], f1 = wk[12:16]).  LLVM then
-# inlines the whole substep; no allocation or slicing happens in the loop.
-# The arithmetic is unchanged operation by operation (bitwise agreement with
-# gearkernel.c).
-
-
-@intrinsic
-def _ptr(typingctx, arr):
-    """Data pointer (CPointer) of a C-contiguous array, no reference counting.
-    Valid while the array is alive; the caller (_run_kink) owns the arrays."""
-    if not isinstance(arr, types.Array):
-        return None
-    sig = types.CPointer(arr.dtype)(arr)
-
-    def codegen(context, builder, signature, args):
-        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
-        return ary.data
-
-    return sig, codegen
-
-
-@njit(cache=True, error_model="numpy")
-def _cell_nodes(nd, n_phi):
-    """(i0, i1) of global cell nd (float holding an integer): i0 = nd mod N."""
-    r = nd - n_phi * np.floor(nd / n_phi)
-    i0 = int(r)
-    if i0 < 0:
-        i0 = 0
-    if i0 >= n_phi:
-        i0 = n_phi - 1
-    i1 = i0 + 1
-    if i1 == n_phi:
-        i1 = 0
-    return i0, i1
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
-    """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
-    separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
-    kpos (seed003) the pair is in the contact zone in this cell."""
-    de = es * omega1
-    d = x - ev
-    if reg == 1:
-        fc = kv * (d - bv)
-    elif reg == -1:
-        fc = kv * (d + bv)
-    else:
-        fc = 0.0
-    fd = c * (v - de)
-    if model == 0:
-        if reg == 0 or sub == 2:
-            return 0.0
-        if sub == 0:
-            return fc + fc
-        return fc + fd
-    if kpos != 0:
-        return fc + fd
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy")
-def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
-    """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
-    1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
-    d = x - ev
-    if reg == 0:
-        if q == 0:
-            return bv - d
-        if q == 1:
-            return d + bv
-        return 1.0
-    if q == 0:
-        if reg == 1:
-            return d - bv
-        return -(d + bv)
-    if model != 0:
-        return 1.0
-    if reg == 1:
-        fc = kv * (d - bv)
-    else:
-        fc = kv * (d + bv)
-    fd = c * (v - es * omega1)
-    if reg == 1:
-        if sub == 0:
-            return fd - fc if q == 1 else 1.0
-        if sub == 1:
-            return fc - fd if q == 1 else fc + fd
-        return -(fc + fd) if q == 1 else 1.0
-    if sub == 0:
-        return fc - fd if q == 1 else 1.0
-    if sub == 1:
-        return fd - fc if q == 1 else -(fc + fd)
-    return fc + fd if q == 1 else 1.0
-
-
-@njit(cache=True, error_model="numpy")
-def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
-    """Sub-mode of the elastobacklash law at the state (docs/model.md 'Per-pair force')."""
-    if reg == 0:
-        return 0
-    d = x - ev
-    fd = c * (v - es * omega1)
-    if reg == 1:
-        fc = kv * (d - bv)
-        if fc < fd:
-            return 0
-        if fc + fd < 0.0:
-            return 2
-        return 1
-    fc = kv * (d + bv)
-    if fc > fd:
-        return 0
-    if fc + fd > 0.0:
-        return 2
-    return 1
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _kvals(tab, j, i0, i1, w):
-    """k_j, e_j, de_j/dphi, b_j of slot j at cell nodes (i0, i1) and weight w; the
-    arithmetic of :func:`_pair_values` on the pointers of ``tab``."""
-    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi = tab
-    r = j * n_phi
-    ka = kp[o0 + r + i0]
-    kb = kp[o0 + r + i1]
-    kv = ka + w * (kb - ka)
-    ea = ep[o0 + r + i0]
-    eb = ep[o0 + r + i1]
-    ev = ea + w * (eb - ea)
-    es = (eb - ea) * inv_dphi
-    if rows2:
-        ka2 = kp[o1 + r + i0]
-        kb2 = kp[o1 + r + i1]
-        kv2 = ka2 + w * (kb2 - ka2)
-        ea2 = ep[o1 + r + i0]
-        eb2 = ep[o1 + r + i1]
-        ev2 = ea2 + w * (eb2 - ea2)
-        es2 = (eb2 - ea2) * inv_dphi
-        kv = kv + wt * (kv2 - kv)
-        ev = ev + wt * (ev2 - ev)
-        es = es + wt * (es2 - es)
-    ba = bp[r + i0]
-    bb = bp[r + i1]
-    bv = ba + w * (bb - ba)
-    return kv, ev, es, bv
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _table_pointers(k, e, b):
-    """(data pointers of k, e (NT, P, N) and b (P, N), P, N); the arrays must be
-    C-contiguous and outlive the pointers' use."""
-    return _ptr(k), _ptr(e), _ptr(b), k.shape[1], k.shape[2]
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
-    """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2)."""
-    o0 = it * p * n_phi
-    o1 = (it + 1) * p * n_phi if rows2 else o0
-    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
-    """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
-    Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
-    omega1' = 0, m_e v' = F_m - F)."""
-    dphi = tab[9]
-    c = tab[10]
-    model = tab[11]
-    p = tab[8]
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
-    w = (th - nd * dphi) * tab[12]
-    f = 0.0
-    for j in range(p):
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-        f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
-    if sdof:
-        return om, 0.0, v, (fm - f) / me
-    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
-
-
-@njit(cache=True, error_model="numpy")
-def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
-    """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
-    the arithmetic of :func:`_rk4_step` (stages unrolled)."""
-    h2 = h / 2.0
-    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * fa, om + h2 * fb, x + h2 * fc, v + h2 * fd,
-                                   nd, i0, i1)
-    sa = fa + 2.0 * ka
-    sb = fb + 2.0 * kb
-    sc = fc + 2.0 * kc
-    sd = fd + 2.0 * kd
-    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * ka, om + h2 * kb, x + h2 * kc, v + h2 * kd,
-                                   nd, i0, i1)
-    sa = sa + 2.0 * ka
-    sb = sb + 2.0 * kb
-    sc = sc + 2.0 * kc
-    sd = sd + 2.0 * kd
-    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h * ka, om + h * kb, x + h * kc, v + h * kd,
-                                   nd, i0, i1)
-    sa = sa + ka
-    sb = sb + kb
-    sc = sc + kc
-    sd = sd + kd
-    h6 = h / 6.0
-    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
-
-
-@njit(cache=True, error_model="numpy")
-def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
-    """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
-    2 + 3*j + q guard q of pair j."""
-    dphi = tab[9]
-    if gi == 0:
-        return th - nd * dphi
-    if gi == 1:
-        return (nd + 1.0) * dphi - th
-    p = tab[8]
-    j = (gi - 2) // 3
-    q = (gi - 2) - 3 * j
-    w = (th - nd * dphi) * tab[12]
-    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
-
-
-@njit(cache=True, error_model="numpy")
-def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
-    """Guard gi on the cubic Hermite interpolant of the step (wk: y0, f0, y1, f1)
-    at fraction s in [0, 1]."""
-    u = 1.0 - s
-    h00 = (1.0 + 2.0 * s) * u * u
-    h10 = s * u * u
-    h01 = s * s * (3.0 - 2.0 * s)
-    h11 = s * s * (s - 1.0)
-    ya = ((h00 * wk[0] + h10 * (tau * wk[4])) + h01 * wk[8]) + h11 * (tau * wk[12])
-    yb = ((h00 * wk[1] + h10 * (tau * wk[5])) + h01 * wk[9]) + h11 * (tau * wk[13])
-    yc = ((h00 * wk[2] + h10 * (tau * wk[6])) + h01 * wk[10]) + h11 * (tau * wk[14])
-    yd = ((h00 * wk[3] + h10 * (tau * wk[7])) + h01 * wk[11]) + h11 * (tau * wk[15])
-    return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1)
-
-
-@njit(cache=True, error_model="numpy")
-def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
-    """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
-    (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
-    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1)
-    if not ga > 0.0:
-        return 0.0
-    a = 0.0
-    bb = 1.0
-    gb = g_end
-    side = 0
-    for _ in range(_KINK_MAX_IT):
-        s = (a * gb - bb * ga) / (gb - ga)
-        if not (s > a and s < bb):
-            s = 0.5 * (a + bb)
-        gs = _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1)
-        if gs < 0.0:
-            bb = s
-            gb = gs
-            if side == -1:
-                ga = 0.5 * ga
-            side = -1
-        elif gs == 0.0:
-            bb = s
-            break
-        else:
-            a = s
-            ga = gs
-            if side == 1:
-                gb = 0.5 * gb
-            side = 1
-        if bb - a <= _KINK_TOL_S:
-            break
-    return bb
-
-
-@njit(cache=True, error_model="numpy")
-def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
-    """Set kpos of every pair for cell nd and the sub-modes of pairs in contact;
-    with from_state also the regions (the start of a communication step)."""
-    dphi = tab[9]
-    c = tab[10]
-    model = tab[11]
-    p = tab[8]
-    w = (th - nd * dphi) * tab[12]
-    for j in range(p):
-        km, em, esm, bm = _kvals(tab, j, i0, i1, 0.5)
-        md[2 * p + j] = 1 if km > 0.0 else 0
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-        if from_state:
-            d = x - ev
-            if d > bv:
-                md[j] = 1
-            elif d < -bv:
-                md[j] = -1
-            else:
-                md[j] = 0
-        if model == 0:
-            md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
-        else:
-            md[p + j] = 0
-
-
-@njit(cache=True, error_model="numpy")
-def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
-    """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
-    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place."""
-    n_phi = tab[7]
-    p = tab[8]
-    dphi = tab[9]
-    c = tab[10]
-    model = tab[11]
-    n_guard = 2 + 3 * p
-    i0, i1 = _cell_nodes(nd, n_phi)
-    rem = h
-    nev = 0
-    while True:
-        fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
-        ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
-        if nev >= KINK_MAX_EVENTS:
-            th, om, x, v = ta, tb, tc, td
-            nd = np.floor(th * tab[12])
-            i0, i1 = _cell_nodes(nd, n_phi)
-            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
-            break
-        # scan the guards at the trial end: cheap test first (one lookup per pair)
-        any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
-        if not any_neg:
-            w = (ta - nd * dphi) * tab[12]
-            for j in range(p):
-                kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-                rj = md[j]
-                sj = md[p + j]
-                if (_pair_guard(0, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
-                        or _pair_guard(1, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
-                        or _pair_guard(2, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0):
-                    any_neg = True
-                    break
-        if not any_neg:
-            th, om, x, v = ta, tb, tc, td
-            break
-        best = 2.0
-        best_gi = -1
-        have_f1 = False
-        for gi in range(n_guard):
-            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1)
-            if g < 0.0:
-                if not have_f1:
-                    wk[0] = th
-                    wk[1] = om
-                    wk[2] = x
-                    wk[3] = v
-                    wk[4] = fa
-                    wk[5] = fb
-                    wk[6] = fc
-                    wk[7] = fd
-                    wk[8] = ta
-                    wk[9] = tb
-                    wk[10] = tc
-                    wk[11] = td
-                    ga_, gb_, gc_, gd_ = _deriv_locked(tab, dyn, md, ta, tb, tc, td, nd, i0, i1)
-                    wk[12] = ga_
-                    wk[13] = gb_
-                    wk[14] = gc_
-                    wk[15] = gd_
-                    have_f1 = True
-                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
-                if s < best:
-                    best = s
-                    best_gi = gi
-        if best_gi < 0:
-            th, om, x, v = ta, tb, tc, td
-            break
-        # step exactly to the event, then switch the mode
-        if best >= 1.0:
-            th, om, x, v = ta, tb, tc, td
-            rem = 0.0
-        elif best > 0.0:
-            tau = best * rem
-            th, om, x, v = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
-            rem = rem - tau
-        nev += 1
-        if best_gi < 2:
-            nd = nd - 1.0 if best_gi == 0 else nd + 1.0
-            i0, i1 = _cell_nodes(nd, n_phi)
-            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
-        else:
-            j = (best_gi - 2) // 3
-            q = (best_gi - 2) - 3 * j
-            if md[j] == 0:
-                md[j] = 1 if q == 0 else -1
-                if model == 0:
-                    w = (th - nd * dphi) * tab[12]
-                    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
-                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
-            elif q == 0:
-                md[j] = 0
-                md[p + j] = 0
-            elif md[p + j] == 1:
-                md[p + j] = 0 if q == 1 else 2
-            else:
-                md[p + j] = 1
-        if not rem > 0.0:
-            break
-    return th, om, x, v, nd, nev
-
-
-@njit(cache=True, error_model="numpy")
-def _run_kink(th, om, x, v, t1s, t2s, n_sub, h, rb1, rb2, in1, in2, me, sdof, k, e, b, torque,
-              inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
-    """rk4_kink loop over communication steps (two-inertia or, with sdof, the
-    time-indexed SDOF at constant omega1); the mode is set from the state at the
-    start of every communication step.  k, e (NT, P, N) and b (P, N) must be
-    C-contiguous (the helpers index their data pointers)."""
-    n_steps = out_state.shape[0] - 1
-    p = k.shape[1]
-    n_phi = k.shape[2]
-    mode = np.zeros(3 * p, dtype=np.int64)
-    work = np.zeros(16)
-    md = _ptr(mode)
-    wk = _ptr(work)
-    kp = _ptr(k)
-    ep = _ptr(e)
-    bp = _ptr(b)
-    for s in range(n_steps):
-        t1 = t1s[s]
-        t2 = t2s[s]
-        fm = t1 / rb1
-        it, wt = _torque_index(t1, torque)
-        k0, e0, k1, e1, rows2 = _rows(k, e, it)
-        o0 = it * p * n_phi
-        o1 = (it + 1) * p * n_phi if rows2 else o0
-        tab = (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
-        dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
-        nd = np.floor(th * inv_dphi)
-        i0, i1 = _cell_nodes(nd, n_phi)
-        _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
-        nev = 0
-        for _ in range(n_sub):
-            th, om, x, v, nd, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd)
-            nev += ne
-        out_events[s + 1] = nev
-        out_state[s + 1, 0] = th
-        out_state[s + 1, 1] = om
-        out_state[s + 1, 2] = x
-        out_state[s + 1, 3] = v
-        ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model,
-                                out_pair, s + 1)
-        out_force[s + 1] = ftot
-        out_stiff[s + 1] = ks
-        if not (math.isfinite(th) and math.isfinite(om) and math.isfinite(x) and math.isfinite(v)):
-            return s + 1
-    return n_steps
-
-
-@njit(cache=True, error_model="numpy")
-def _row0(th, om, x, v, t1, k, e, b, torque, inv_dphi, c, model,
-          out_state, out_pair, out_force, out_stiff):
-    it, wt = _torque_index(t1, torque)
-    k0, e0, k1, e1, rows2 = _rows(k, e, it)
-    out_state[0, 0] = th
-    out_state[0, 1] = om
-    out_state[0, 2] = x
-    out_state[0, 3] = v
-    ftot, ks = _outputs_row(th, om, x, v, k0, e0, k1, e1, rows2, wt, b, inv_dphi, c, model, out_pair, 0)
-    out_force[0] = ftot
-    out_stiff[0] = ks
 
 
 # ------------------------------------------------------------ python layer
@@ -1044,18 +172,21 @@ def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
                          error=NativeInputError if error is None else error)
 
 
-def _n_steps(stop_time_s, comm_step_s) -> int:
+def _n_steps(stop_time_s, comm_step_s, error=NativeInputError) -> int:
+    """Number of communication steps in the run; ``error`` (naming stop_time_s)
+    when the stop time is not a whole number of them."""
     n = stop_time_s / comm_step_s
     nr = int(round(n))
     if nr < 1 or abs(n - nr) > 1e-6 * max(1.0, n):
-        raise NativeInputError(
+        raise error(
             f"stop_time_s: {stop_time_s!r} is not a whole number of communication steps "
             f"comm_step_s={comm_step_s!r} ({n:.9g})")
     return nr
 
 
-def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float) -> np.ndarray:
-    """Input sampled at t_k = k*comm_step_s, k = 0..n_steps (the value held over step k)."""
+def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float, error=NativeInputError) -> np.ndarray:
+    """Input sampled at t_k = k*comm_step_s, k = 0..n_steps (the value held over step k);
+    ``error`` naming ``name`` for a value of the wrong shape or not finite."""
     if callable(value):
         arr = np.array([float(value(k * comm_step_s)) for k in range(n_steps + 1)])
     else:
@@ -1068,11 +199,11 @@ def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float) -> n
             if a.shape[0] == n_steps:
                 arr[n_steps] = a[-1]
         else:
-            raise NativeInputError(
+            raise error(
                 f"{name}: expected a number, a callable of time, or an array of {n_steps} "
                 f"or {n_steps + 1} values (one per communication step), got shape {a.shape}")
     if not np.all(np.isfinite(arr)):
-        raise NativeInputError(f"{name}: contains NaN or infinite values")
+        raise error(f"{name}: contains NaN or infinite values")
     return np.ascontiguousarray(arr)
 
 
@@ -1138,49 +269,6 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
     return period / ppp
 
 
-_COMPILED = False
-_COMPILED_KINK = False
-
-
-def _warmup(kink: bool = False) -> None:
-    """Compile the kernels on a tiny problem so wall_s excludes JIT time
-    (the rk4_kink kernels only when first used)."""
-    global _COMPILED, _COMPILED_KINK
-    if kink and not _COMPILED_KINK:
-        k = np.ones((2, 1, 4)) * 1e8
-        e = np.zeros((2, 1, 4))
-        b = np.zeros((1, 4))
-        tq = np.array([0.0, 1.0])
-        for model in (0, 1):
-            st = np.zeros((2, 4))
-            pf = np.zeros((2, 1))
-            fo = np.zeros(2)
-            ks = np.zeros(2)
-            ev = np.zeros(2, dtype=np.int64)
-            for sdof in (False, True):
-                _run_kink(0.0, 1.0, 0.0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0, sdof,
-                          k, e, b, tq, 4.0, 0.25, 1.0, model, st, pf, fo, ks, ev)
-        _COMPILED_KINK = True
-    if _COMPILED:
-        return
-    k = np.ones((2, 1, 4)) * 1e8
-    e = np.zeros((2, 1, 4))
-    b = np.zeros((1, 4))
-    tq = np.array([0.0, 1.0])
-    for model in (0, 1):
-        st = np.zeros((2, 4))
-        pf = np.zeros((2, 1))
-        fo = np.zeros(2)
-        ks = np.zeros(2)
-        x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 4.0)
-        _row0(0.0, 1.0, x0, 0.0, 1.0, k, e, b, tq, 4.0, 1.0, model, st, pf, fo, ks)
-        _run_2dof(0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1, 1e-6, 0.1, 0.1, 1.0, 1.0,
-                  k, e, b, tq, 4.0, 1.0, model, st, pf, fo, ks)
-        _run_sdof(0.0, 1.0, x0, 0.0, np.ones(2), 1e-6, 1, 1e-6, 0.1, 1.0, k, e, b, tq,
-                  4.0, 1.0, model, st, pf, fo, ks)
-    _COMPILED = True
-
-
 def _integrator_code(integrator, slots) -> int:
     if integrator not in INTEGRATORS:
         raise NativeInputError(f"integrator: {integrator!r} unknown; choose one of {sorted(INTEGRATORS)}")
@@ -1205,9 +293,10 @@ def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping
     return t, stop, H, n_steps, n_sub, h, c, me, DAMPING_MODELS[damping_model]
 
 
-def _initial_x(t, k, e, b, tq, inv_dphi, theta1, t1, dte_start_m):
+def _initial_x(t, arrays, theta1, t1, dte_start_m):
     if dte_start_m is not None:
         return _finite("dte_start_m", dte_start_m)
+    k, e, b, tq, inv_dphi, dphi = arrays
     x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
     if not math.isfinite(x0):
         raise NativeInputError(
@@ -1230,6 +319,29 @@ def _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping
         mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
         pinion_torque=t1s, gear_torque=t2s, step_s=h, substeps=n_sub, damping_Ns_per_m=c,
         damping_model=damping_model, wall_s=wall, info=info)
+
+
+def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
+               info):
+    """Run the compiled driver (gearfmu.dynamics.driver) on the tables' ``arrays``
+    (:func:`_arrays`) from the initial state (theta1, omega1, x, v) =
+    (th0, w0, x0, v0) and wrap its arrays in a SimResult."""
+    n_steps = t1s.shape[0] - 1
+    k, e, b, tq, inv_dphi, dphi = arrays
+    state = np.full((n_steps + 1, 4), np.nan)
+    pair = np.full((n_steps + 1, t.slots), np.nan)
+    force = np.full(n_steps + 1, np.nan)
+    stiff = np.full(n_steps + 1, np.nan)
+    events = np.zeros(n_steps + 1, dtype=np.int64)
+    _warmup()
+    t_start = _time.perf_counter()
+    done = _run(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
+                float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me,
+                k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
+    wall = _time.perf_counter() - t_start
+    time_s = np.arange(n_steps + 1) * H
+    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
+                   done, dict(info, events=int(events.sum())))
 
 
 def simulate(
@@ -1292,30 +404,11 @@ def simulate(
     else:
         t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
     th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    k, e, b, tq, inv_dphi, dphi = _arrays(t)
-    x0 = _initial_x(t, k, e, b, tq, inv_dphi, th0, t1s[0], dte_start_m)
-    state = np.full((n_steps + 1, 4), np.nan)
-    pair = np.full((n_steps + 1, t.slots), np.nan)
-    force = np.full(n_steps + 1, np.nan)
-    stiff = np.full(n_steps + 1, np.nan)
-    _warmup(kink=icode == 1)
+    arrays = _arrays(t)
+    x0 = _initial_x(t, arrays, th0, t1s[0], dte_start_m)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    _row0(th0, w0, x0, v0, t1s[0], k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
-    events = np.zeros(n_steps + 1, dtype=np.int64)
-    t_start = _time.perf_counter()
-    if icode == 0:
-        done = _run_2dof(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
-                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
-                         k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
-    else:
-        done = _run_kink(th0, w0, x0, v0, t1s, t2s, n_sub, h, rb1, rb2,
-                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, False,
-                         k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
-    wall = _time.perf_counter() - t_start
-    time_s = np.arange(n_steps + 1) * H
-    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
-                   done, {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me,
-                          "integrator": integrator, "events": int(events.sum())})
+    return _integrate(t, arrays, icode, False, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
+                      {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me, "integrator": integrator})
 
 
 def simulate_sdof(
@@ -1362,29 +455,12 @@ def simulate_sdof(
     t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
     t2s = t1s * float(t.base_radius_gear_m) / rb1
     th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    k, e, b, tq, inv_dphi, dphi = _arrays(t)
-    x0 = _initial_x(t, k, e, b, tq, inv_dphi, th0, t1s[0], dte_start_m)
-    state = np.full((n_steps + 1, 4), np.nan)
-    pair = np.full((n_steps + 1, t.slots), np.nan)
-    force = np.full(n_steps + 1, np.nan)
-    stiff = np.full(n_steps + 1, np.nan)
-    _warmup(kink=icode == 1)
+    arrays = _arrays(t)
+    x0 = _initial_x(t, arrays, th0, t1s[0], dte_start_m)
     v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    _row0(th0, om, x0, v0, t1s[0], k, e, b, tq, inv_dphi, c, model, state, pair, force, stiff)
-    events = np.zeros(n_steps + 1, dtype=np.int64)
-    t_start = _time.perf_counter()
-    if icode == 0:
-        done = _run_sdof(th0, om, x0, v0, t1s, H, n_sub, h, rb1, me, k, e, b, tq,
-                         inv_dphi, c, model, state, pair, force, stiff)
-    else:
-        done = _run_kink(th0, om, x0, v0, t1s, t2s, n_sub, h, rb1, float(t.base_radius_gear_m),
-                         float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me, True,
-                         k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
-    wall = _time.perf_counter() - t_start
-    time_s = np.arange(n_steps + 1) * H
-    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
-                   done, {"form": "time-indexed SDOF (seed 003 eq 3-6)", "equivalent_mass_kg": me,
-                          "omega1_rad_s": om, "integrator": integrator, "events": int(events.sum())})
+    return _integrate(t, arrays, icode, True, th0, om, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
+                      {"form": "time-indexed SDOF (seed 003 eq 3-6)", "equivalent_mass_kg": me,
+                       "omega1_rad_s": om, "integrator": integrator})
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:

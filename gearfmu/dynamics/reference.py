@@ -70,7 +70,7 @@ from scipy.integrate import solve_ivp
 
 from ..common.vocabulary import DAMPING_MODELS
 from ..tables.mesh_tables import MeshTables
-from .native import _finite, SimResult
+from .native import _finite, _input_series, _n_steps, SimResult
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
 
@@ -88,24 +88,9 @@ def _num(name, value, *, positive=False, nonneg=False) -> float:
 
 
 def _series(name, value, n_steps, H) -> np.ndarray:
-    """Input value held over [t_k, t_k + H), k = 0..n_steps (same convention as
+    """Input value held over [t_k, t_k + H), k = 0..n_steps (the convention of
     gearfmu.dynamics.native.simulate: number, n or n+1 values, or a callable of t_k)."""
-    if callable(value):
-        out = np.array([float(value(k * H)) for k in range(n_steps + 1)])
-    else:
-        a = np.asarray(value, dtype=float)
-        if a.ndim == 0:
-            out = np.full(n_steps + 1, float(a))
-        elif a.ndim == 1 and len(a) == n_steps + 1:
-            out = a.copy()
-        elif a.ndim == 1 and len(a) == n_steps:
-            out = np.append(a, a[-1])
-        else:
-            raise ReferenceInputError(f"{name}: expected a number, a callable, or {n_steps} or "
-                                      f"{n_steps + 1} values, got shape {a.shape}")
-    if not np.all(np.isfinite(out)):
-        raise ReferenceInputError(f"{name}: contains NaN or infinite values")
-    return out
+    return _input_series(name, value, n_steps, H, error=ReferenceInputError)
 
 
 class _Rows:
@@ -452,10 +437,7 @@ def simulate_reference(
     tables.validate()
     stop = _num("stop_time_s", stop_time_s, positive=True)
     H = _num("comm_step_s", comm_step_s, positive=True)
-    nf = stop / H
-    n_steps = int(round(nf))
-    if n_steps < 1 or abs(nf - n_steps) > 1e-6 * max(1.0, nf):
-        raise ReferenceInputError(f"stop_time_s: {stop!r} is not a whole number of comm_step_s={H!r}")
+    n_steps = _n_steps(stop, H, error=ReferenceInputError)
     zeta = _num("damping_ratio", damping_ratio, nonneg=True)
     if damping_model not in DAMPING_MODELS:
         raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {tuple(DAMPING_MODELS)}")

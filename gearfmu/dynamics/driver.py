@@ -1,0 +1,113 @@
+"""The one loop over communication steps of the native solver (numba, SI units).
+
+:func:`_run` writes output row 0 (the initial state with the inputs of step 0)
+and advances the state over every communication step with the chosen
+integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink',
+gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
+seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
+vary; the inputs held over the step, the table row blend and the outputs are
+shared.  The per-step order of operations is that of gearkernel.c
+(docs/model.md 'Integration', 'Outputs'), so the two agree bit for bit.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .integrators import _kink_substep, _mode_sync, _rk4_step
+from .model_rhs import (
+    _CELL_NONE, _cell_nodes, _equilibrium, _outputs_row, _ptr, _tab, _table_pointers, _torque_index,
+)
+
+
+@njit(cache=True, error_model="numpy")
+def _write_row(tab, row, th, om, x, v, out_state, out_pair, out_force, out_stiff):
+    """Output row ``row``: the state, the pair forces, the mesh force and stiffness."""
+    out_state[row, 0] = th
+    out_state[row, 1] = om
+    out_state[row, 2] = x
+    out_state[row, 3] = v
+    ftot, ks = _outputs_row(tab, th, om, x, v, out_pair, row)
+    out_force[row] = ftot
+    out_stiff[row] = ks
+
+
+@njit(cache=True, error_model="numpy")
+def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+         inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
+    """Rows 0..n of the outputs; returns the number of completed steps (fewer than
+    n when the state turned non-finite).
+
+    Step s holds T1 = t1s[s], T2 = t2s[s] (N*m) and takes n_sub substeps of h (s).
+    'rk4' carries the table cell across steps; in the SDOF form theta1 is
+    th0 + omega1*t with t = s*H + i*h at substep i.  'rk4_kink' sets the contact
+    mode from the state at the start of every step and counts the located events
+    per step in out_events; in the SDOF form it integrates theta1 as a state
+    with omega1' = 0.  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
+    kernels read their data pointers, see gearfmu.dynamics.model_rhs)."""
+    n_steps = out_state.shape[0] - 1
+    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
+    rows2 = k.shape[0] > 1
+    mode = np.zeros(3 * p, dtype=np.int64)
+    work = np.zeros(16)
+    md = _ptr(mode)
+    wk = _ptr(work)
+    th0 = th
+    nd = _CELL_NONE
+    i0 = 0
+    for s in range(n_steps):
+        t1 = t1s[s]
+        t2 = t2s[s]
+        fm = t1 / rb1
+        it, wt = _torque_index(t1, torque)
+        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
+        dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
+        if s == 0:
+            _write_row(tab, 0, th, om, x, v, out_state, out_pair, out_force, out_stiff)
+        if icode == 1:
+            ndk = np.floor(th * inv_dphi)
+            ik0, ik1 = _cell_nodes(ndk, n_phi)
+            _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
+            nev = 0
+            for _ in range(n_sub):
+                th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
+                nev += ne
+            out_events[s + 1] = nev
+        else:
+            t0 = s * H
+            if sdof:
+                for i in range(n_sub):
+                    th, om, x, v, nd, i0 = _rk4_step(tab, dyn, True, th0, t0 + i * h, th, om, x, v, h, nd, i0)
+                th = th0 + om * ((s + 1) * H)
+            else:
+                for i in range(n_sub):
+                    th, om, x, v, nd, i0 = _rk4_step(tab, dyn, False, th0, t0, th, om, x, v, h, nd, i0)
+        _write_row(tab, s + 1, th, om, x, v, out_state, out_pair, out_force, out_stiff)
+        finite = math.isfinite(x) and math.isfinite(v)
+        if icode == 1 or not sdof:  # rk4 SDOF: theta1, omega1 follow from the time
+            finite = finite and math.isfinite(th) and math.isfinite(om)
+        if not finite:
+            return s + 1
+    return n_steps
+
+
+_COMPILED = False
+
+
+def _warmup() -> None:
+    """Compile (or load from the cache) the kernels on a tiny problem, so that a
+    run's ``wall_s`` excludes the compilation; argument types as simulate passes them."""
+    global _COMPILED
+    if _COMPILED:
+        return
+    k = np.ones((2, 1, 4)) * 1e8
+    e = np.zeros((2, 1, 4))
+    b = np.zeros((1, 4))
+    tq = np.array([0.0, 1.0])
+    x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 4.0)
+    _run(0, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
+         k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
+         np.zeros(2, dtype=np.int64))
+    _COMPILED = True

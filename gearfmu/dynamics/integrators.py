@@ -1,0 +1,321 @@
+"""Integrators of the gear dynamic model (numba kernels, SI units; docs/model.md 'Integration').
+
+* :func:`_rk4_step` -- one classical RK4 step ('rk4'), two-inertia form
+  (seed 003 eq 1-2) or time-indexed SDOF (seed 003 eq 3-6).
+* :func:`_kink_substep` -- one substep of 'rk4_kink': RK4 with the contact mode
+  and the table cell held, stepping exactly to every table node and contact
+  mode change located on the step's cubic Hermite interpolant.
+
+Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
+(bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
+:mod:`gearfmu.dynamics.model_rhs` and the inputs as the tuple
+``dyn`` = (sdof, T1 (N*m), T2 (N*m), Rb1 (m), Rb2 (m), I1 (kg*m^2),
+I2 (kg*m^2), F_m = T1/Rb1 (N), m_e (kg)).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .model_rhs import (
+    _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
+)
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd):
+    """RK4 increment sum after stage ``stage`` (0..3) with stage slope k: k1 at
+    stage 0, then + 2*k2, + 2*k3, + k4, left to right."""
+    if stage == 0:
+        return ka, kb, kc, kd
+    if stage == 3:
+        return sa + ka, sb + kb, sc + kc, sd + kd
+    return sa + 2.0 * ka, sb + 2.0 * kb, sc + 2.0 * kc, sd + 2.0 * kd
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
+    """One classical RK4 step of length h (docs/model.md 'Integration').
+
+    Two-inertia form (sdof False): state (theta1, omega1, x, v).  Time-indexed
+    SDOF (sdof True, seed 003 eq 3-6): theta1 = th0 + omega1*t_s prescribed at
+    the stage times t_s = t, t + h/2, t + h/2, t + h, omega1 constant, states
+    (x, v) with m_e v' = F_m - F; theta1 and omega1 are returned unchanged.
+    Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed
+    as h/2.0); the increments are accumulated left to right,
+    acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc.  The table
+    cell (nd, i0) is carried from stage to stage and returned.  The caller passes
+    ``sdof`` as a constant, so that the inlined step has no branch on it."""
+    _, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    h2 = h / 2.0
+    ka, kb, kc, kd = 0.0, 0.0, 0.0, 0.0
+    sa, sb, sc, sd = 0.0, 0.0, 0.0, 0.0
+    for stage in range(4):
+        if stage == 0:
+            ts = t
+            ya = th
+            yb = om
+            yc = x
+            yd = v
+        elif stage == 3:
+            ts = t + h
+            ya = th + h * ka
+            yb = om + h * kb
+            yc = x + h * kc
+            yd = v + h * kd
+        else:
+            ts = t + h2
+            ya = th + h2 * ka
+            yb = om + h2 * kb
+            yc = x + h2 * kc
+            yd = v + h2 * kd
+        if sdof:
+            ya = th0 + om * ts
+            yb = om
+        f, nd, i0 = _mesh_force(tab, ya, yb, yc, yd, nd, i0)
+        kc = yd
+        if sdof:
+            kd = (fm - f) / me
+        else:
+            ka = yb
+            kb = (t1 - rb1 * f) / in1
+            kd = rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
+        sa, sb, sc, sd = _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd)
+    h6 = h / 6.0
+    if sdof:
+        return th, om, x + h6 * sc, v + h6 * sd, nd, i0
+    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd, nd, i0
+
+
+#: events (mode switches) located per substep before the rest of the substep is
+#: taken without detection (guards a grazing ping-pong); docs/model.md "rk4_kink"
+KINK_MAX_EVENTS = 1000
+#: largest slot count the rk4_kink integrator accepts (fixed arrays in the C kernel)
+KINK_MAX_SLOTS = 32
+_KINK_TOL_S = 1e-12     # root bracket width in the unit substep fraction s
+_KINK_MAX_IT = 60       # Illinois iterations per root
+
+# Speed (docs/native.md "rk4_kink speed"): the rk4_kink kernels below never take
+# a numpy array (see gearfmu.dynamics.model_rhs on reference counting): the
+# locked right-hand side, the guards and the root finder call each other many
+# times per substep.  The driver hands them the tables as ``tab``, the inputs as
+# ``dyn``, the mode as an int64 pointer ``md`` (reg[j] = md[j], sub[j] = md[P + j],
+# kpos[j] = md[2P + j]) and the Hermite data as a float64 pointer ``wk``
+# (y0 = wk[0:4], f0 = wk[4:8], y1 = wk[8:12], f1 = wk[12:16]).  LLVM then
+# inlines the whole substep; no allocation or slicing happens in the loop.
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
+    """One classical RK4 step of length h, first stage (fa..fd) given, mode held;
+    the arithmetic of :func:`_rk4_step`: stages at y + (h/2)*k1, y + (h/2)*k2,
+    y + h*k3, acc = ((k1 + 2*k2) + 2*k3) + k4."""
+    h2 = h / 2.0
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * fa, om + h2 * fb, x + h2 * fc, v + h2 * fd,
+                                   nd, i0, i1)
+    sa, sb, sc, sd = _rk4_accumulate(1, fa, fb, fc, fd, ka, kb, kc, kd)
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h2 * ka, om + h2 * kb, x + h2 * kc, v + h2 * kd,
+                                   nd, i0, i1)
+    sa, sb, sc, sd = _rk4_accumulate(2, sa, sb, sc, sd, ka, kb, kc, kd)
+    ka, kb, kc, kd = _deriv_locked(tab, dyn, md, th + h * ka, om + h * kb, x + h * kc, v + h * kd,
+                                   nd, i0, i1)
+    sa, sb, sc, sd = _rk4_accumulate(3, sa, sb, sc, sd, ka, kb, kc, kd)
+    h6 = h / 6.0
+    return th + h6 * sa, om + h6 * sb, x + h6 * sc, v + h6 * sd
+
+
+@njit(cache=True, error_model="numpy")
+def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
+    """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
+    2 + 3*j + q guard q of pair j."""
+    dphi = tab[9]
+    if gi == 0:
+        return th - nd * dphi
+    if gi == 1:
+        return (nd + 1.0) * dphi - th
+    p = tab[8]
+    j = (gi - 2) // 3
+    q = (gi - 2) - 3 * j
+    w = (th - nd * dphi) * tab[12]
+    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
+
+
+@njit(cache=True, error_model="numpy")
+def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
+    """Guard gi on the cubic Hermite interpolant of the step (wk: y0, f0, y1, f1)
+    at fraction s in [0, 1]."""
+    u = 1.0 - s
+    h00 = (1.0 + 2.0 * s) * u * u
+    h10 = s * u * u
+    h01 = s * s * (3.0 - 2.0 * s)
+    h11 = s * s * (s - 1.0)
+    ya = ((h00 * wk[0] + h10 * (tau * wk[4])) + h01 * wk[8]) + h11 * (tau * wk[12])
+    yb = ((h00 * wk[1] + h10 * (tau * wk[5])) + h01 * wk[9]) + h11 * (tau * wk[13])
+    yc = ((h00 * wk[2] + h10 * (tau * wk[6])) + h01 * wk[10]) + h11 * (tau * wk[14])
+    yd = ((h00 * wk[3] + h10 * (tau * wk[7])) + h01 * wk[11]) + h11 * (tau * wk[15])
+    return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1)
+
+
+@njit(cache=True, error_model="numpy")
+def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
+    """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
+    (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
+    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1)
+    if not ga > 0.0:
+        return 0.0
+    a = 0.0
+    bb = 1.0
+    gb = g_end
+    side = 0
+    for _ in range(_KINK_MAX_IT):
+        s = (a * gb - bb * ga) / (gb - ga)
+        if not (s > a and s < bb):
+            s = 0.5 * (a + bb)
+        gs = _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1)
+        if gs < 0.0:
+            bb = s
+            gb = gs
+            if side == -1:
+                ga = 0.5 * ga
+            side = -1
+        elif gs == 0.0:
+            bb = s
+            break
+        else:
+            a = s
+            ga = gs
+            if side == 1:
+                gb = 0.5 * gb
+            side = 1
+        if bb - a <= _KINK_TOL_S:
+            break
+    return bb
+
+
+@njit(cache=True, error_model="numpy")
+def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
+    """Set kpos of every pair for cell nd and the sub-modes of pairs in contact;
+    with from_state also the regions (the start of a communication step)."""
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    p = tab[8]
+    w = (th - nd * dphi) * tab[12]
+    for j in range(p):
+        km, em, esm, bm = _kvals(tab, j, i0, i1, 0.5)
+        md[2 * p + j] = 1 if km > 0.0 else 0
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        if from_state:
+            d = x - ev
+            if d > bv:
+                md[j] = 1
+            elif d < -bv:
+                md[j] = -1
+            else:
+                md[j] = 0
+        if model == 0:
+            md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
+        else:
+            md[p + j] = 0
+
+
+@njit(cache=True, error_model="numpy")
+def _put4(wk, o, a, b, c, d):
+    """wk[o:o+4] = (a, b, c, d) (one 4-vector of the Hermite data)."""
+    wk[o] = a
+    wk[o + 1] = b
+    wk[o + 2] = c
+    wk[o + 3] = d
+
+
+@njit(cache=True, error_model="numpy")
+def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
+    """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
+    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place."""
+    n_phi = tab[7]
+    p = tab[8]
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    n_guard = 2 + 3 * p
+    i0, i1 = _cell_nodes(nd, n_phi)
+    rem = h
+    nev = 0
+    while True:
+        fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
+        ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
+        if nev >= KINK_MAX_EVENTS:
+            th, om, x, v = ta, tb, tc, td
+            nd = np.floor(th * tab[12])
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
+            break
+        # scan the guards at the trial end: cheap test first (one lookup per pair)
+        any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
+        if not any_neg:
+            w = (ta - nd * dphi) * tab[12]
+            for j in range(p):
+                kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                rj = md[j]
+                sj = md[p + j]
+                if (_pair_guard(0, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
+                        or _pair_guard(1, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
+                        or _pair_guard(2, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0):
+                    any_neg = True
+                    break
+        if not any_neg:
+            th, om, x, v = ta, tb, tc, td
+            break
+        best = 2.0
+        best_gi = -1
+        have_f1 = False
+        for gi in range(n_guard):
+            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1)
+            if g < 0.0:
+                if not have_f1:
+                    _put4(wk, 0, th, om, x, v)
+                    _put4(wk, 4, fa, fb, fc, fd)
+                    _put4(wk, 8, ta, tb, tc, td)
+                    ga_, gb_, gc_, gd_ = _deriv_locked(tab, dyn, md, ta, tb, tc, td, nd, i0, i1)
+                    _put4(wk, 12, ga_, gb_, gc_, gd_)
+                    have_f1 = True
+                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
+                if s < best:
+                    best = s
+                    best_gi = gi
+        if best_gi < 0:
+            th, om, x, v = ta, tb, tc, td
+            break
+        # step exactly to the event, then switch the mode
+        if best >= 1.0:
+            th, om, x, v = ta, tb, tc, td
+            rem = 0.0
+        elif best > 0.0:
+            tau = best * rem
+            th, om, x, v = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
+            rem = rem - tau
+        nev += 1
+        if best_gi < 2:
+            nd = nd - 1.0 if best_gi == 0 else nd + 1.0
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
+        else:
+            j = (best_gi - 2) // 3
+            q = (best_gi - 2) - 3 * j
+            if md[j] == 0:
+                md[j] = 1 if q == 0 else -1
+                if model == 0:
+                    w = (th - nd * dphi) * tab[12]
+                    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
+            elif q == 0:
+                md[j] = 0
+                md[p + j] = 0
+            elif md[p + j] == 1:
+                md[p + j] = 0 if q == 1 else 2
+            else:
+                md[p + j] = 1
+        if not rem > 0.0:
+            break
+    return th, om, x, v, nd, nev

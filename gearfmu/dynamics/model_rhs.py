@@ -1,0 +1,397 @@
+"""Right-hand side of the multi-pair gear dynamic model (numba kernels, SI units).
+
+The table lookup, the per-pair force laws and the quasi-static equilibrium of
+docs/model.md, written operation by operation as gearfmu/fmu/kernel/gearkernel.c
+so that the numba solver and the C kernel agree bit for bit (no fastmath: it
+would reorder the arithmetic).  Model: seed 003 eq (1)-(6), P tooth-pair slots
+with stiffness k_j (N/m), meshing error e_j (m), half backlash b_j (m) and
+damping c (N*s/m), indexed by the pinion angle theta1 (rad).
+
+The kernels take the tables as raw data pointers packed with the scalars in one
+tuple ``tab`` (:func:`_tab`): a numba call with an array argument increfs and
+decrefs the array's memory block (atomic operations the refcount pruner cannot
+remove across calls, loops and branches), and the integrators call these
+kernels many times per substep.  ``tab`` = (kp, ep, bp, o0, o1, rows2, wt,
+n_phi, P, dphi, c, model, inv_dphi): pointers of k, e (NT, P, N) and b (P, N),
+the offsets of torque rows it and it+1, whether a second row is blended
+(NT > 1), its weight, the node count N, the slot count P, the cell width
+(rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 seed003) and
+the reciprocal cell width N/Phi (1/rad).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, types
+from numba.extending import intrinsic
+
+#: no carried cell (_phi_cell): more than one cell away from every global cell index
+_CELL_NONE = -(1 << 62)
+#: 2^52: below it the global cell index and s - nd are exact in doubles
+_CELL_LIMIT = 4503599627370496.0
+
+
+@intrinsic
+def _ptr(typingctx, arr):
+    """Data pointer (CPointer) of a C-contiguous array, no reference counting.
+    Valid while the array is alive; the caller owns the arrays."""
+    if not isinstance(arr, types.Array):
+        return None
+    sig = types.CPointer(arr.dtype)(arr)
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
+        return ary.data
+
+    return sig, codegen
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _phi_cell(theta1, inv_dphi, n_phi, nd_prev, i0_prev):
+    """docs/model.md 'Table lookup': (nd, i0, i1, w) at pinion angle theta1 (rad),
+    s = theta1*inv_dphi, global cell nd = floor(s), nodes i0 = nd mod N and i1,
+    weight w = s - nd.  (nd_prev, i0_prev) is the cell of the previous evaluation
+    (_CELL_NONE: none): when nd moved by 0 or +-1, i0 follows without an integer
+    division.  The result does not depend on it (the arithmetic of gearkernel.c
+    phi_cell)."""
+    s = theta1 * inv_dphi
+    if not (s > -_CELL_LIMIT and s < _CELL_LIMIT):
+        # 2^52 cells or more: an integer number of cells (w = 0); non-finite:
+        # node 0, w = nan (the state is non-finite); never out of bounds
+        if math.isfinite(s):
+            r = np.fmod(s, float(n_phi))
+            if r < 0.0:
+                r += float(n_phi)
+            i0 = int(r)
+            w = 0.0
+        else:
+            i0 = 0
+            w = s - s
+        i1 = i0 + 1
+        if i1 == n_phi:
+            i1 = 0
+        return _CELL_NONE, i0, i1, w
+    nd = int(s)             # toward zero ...
+    if nd > s:              # ... so floor(s)
+        nd -= 1
+    dn = nd - nd_prev
+    if dn == 0:
+        i0 = i0_prev
+    elif dn == 1:
+        i0 = i0_prev + 1
+        if i0 == n_phi:
+            i0 = 0
+    elif dn == -1:
+        i0 = n_phi - 1 if i0_prev == 0 else i0_prev - 1
+    else:
+        i0 = nd % n_phi     # floor modulo: in [0, N)
+    i1 = i0 + 1
+    if i1 == n_phi:
+        i1 = 0
+    w = s - nd
+    return nd, i0, i1, w
+
+
+@njit(cache=True, error_model="numpy")
+def _cell_nodes(nd, n_phi):
+    """(i0, i1) of global cell nd (float holding an integer): i0 = nd mod N."""
+    r = nd - n_phi * np.floor(nd / n_phi)
+    i0 = int(r)
+    if i0 < 0:
+        i0 = 0
+    if i0 >= n_phi:
+        i0 = n_phi - 1
+    i1 = i0 + 1
+    if i1 == n_phi:
+        i1 = 0
+    return i0, i1
+
+
+@njit(cache=True, error_model="numpy")
+def _torque_index(t1, torque):
+    """Bracketing torque row it and weight wt for Tq = clamp(T1, torque[0], torque[-1]).
+
+    it is the largest index in [0, NT-2] with torque[it] <= Tq,
+    wt = (Tq - torque[it])/(torque[it+1] - torque[it]).  NT == 1: (0, 0.0).
+    """
+    nt = torque.shape[0]
+    if nt == 1:
+        return 0, 0.0
+    tq = t1
+    if tq < torque[0]:
+        tq = torque[0]
+    if tq > torque[nt - 1]:
+        tq = torque[nt - 1]
+    it = 0
+    while it < nt - 2 and torque[it + 1] <= tq:
+        it += 1
+    wt = (tq - torque[it]) / (torque[it + 1] - torque[it])
+    return it, wt
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _table_pointers(k, e, b):
+    """(data pointers of k, e (NT, P, N) and b (P, N), P, N); the arrays must be
+    C-contiguous and outlive the pointers' use."""
+    return _ptr(k), _ptr(e), _ptr(b), k.shape[1], k.shape[2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
+    """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2)."""
+    o0 = it * p * n_phi
+    o1 = (it + 1) * p * n_phi if rows2 else o0
+    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
+
+
+@njit(cache=True, error_model="numpy")
+def _row_values(kp, ep, o, i0, i1, w, inv_dphi):
+    """k (N/m), e (m) and de/dphi (m/rad) of the slot row starting at offset o of
+    the k, e pointers, interpolated at nodes (i0, i1) with weight w."""
+    ka = kp[o + i0]
+    kb = kp[o + i1]
+    kv = ka + w * (kb - ka)
+    ea = ep[o + i0]
+    eb = ep[o + i1]
+    ev = ea + w * (eb - ea)
+    es = (eb - ea) * inv_dphi
+    return kv, ev, es
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _kvals(tab, j, i0, i1, w):
+    """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j at cell nodes
+    (i0, i1) and weight w (docs/model.md 'Table lookup'): phi interpolation in
+    torque row it, and when rows2 (NT > 1) also in row it+1, then linear
+    interpolation between the two rows with weight wt."""
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi = tab
+    r = j * n_phi
+    kv, ev, es = _row_values(kp, ep, o0 + r, i0, i1, w, inv_dphi)
+    if rows2:
+        kv2, ev2, es2 = _row_values(kp, ep, o1 + r, i0, i1, w, inv_dphi)
+        kv = kv + wt * (kv2 - kv)
+        ev = ev + wt * (ev2 - ev)
+        es = es + wt * (es2 - es)
+    ba = bp[r + i0]
+    bb = bp[r + i1]
+    bv = ba + w * (bb - ba)
+    return kv, ev, es, bv
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
+    """Force of one pair (N) and its contact state (1 drive, -1 back, 0 separated)."""
+    de = es * omega1
+    d = x - ev
+    if d > bv:
+        fc = kv * (d - bv)
+        state = 1
+    elif d < -bv:
+        fc = kv * (d + bv)
+        state = -1
+    else:
+        fc = 0.0
+        state = 0
+    fd = c * (v - de)
+    if model == 0:  # elastobacklash
+        if state == 1:
+            f = fc + min(fc, fd)
+            if f < 0.0:
+                f = 0.0
+        elif state == -1:
+            f = fc + max(fc, fd)
+            if f > 0.0:
+                f = 0.0
+        else:
+            f = 0.0
+    else:  # seed003
+        if kv > 0.0:
+            f = fc + fd
+        else:
+            f = 0.0
+    return f, state
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
+    """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
+    separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
+    kpos (seed003) the pair is in the contact zone in this cell."""
+    de = es * omega1
+    d = x - ev
+    if reg == 1:
+        fc = kv * (d - bv)
+    elif reg == -1:
+        fc = kv * (d + bv)
+    else:
+        fc = 0.0
+    fd = c * (v - de)
+    if model == 0:
+        if reg == 0 or sub == 2:
+            return 0.0
+        if sub == 0:
+            return fc + fc
+        return fc + fd
+    if kpos != 0:
+        return fc + fd
+    return 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
+    """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
+    1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
+    d = x - ev
+    if reg == 0:
+        if q == 0:
+            return bv - d
+        if q == 1:
+            return d + bv
+        return 1.0
+    if q == 0:
+        if reg == 1:
+            return d - bv
+        return -(d + bv)
+    if model != 0:
+        return 1.0
+    if reg == 1:
+        fc = kv * (d - bv)
+    else:
+        fc = kv * (d + bv)
+    fd = c * (v - es * omega1)
+    if reg == 1:
+        if sub == 0:
+            return fd - fc if q == 1 else 1.0
+        if sub == 1:
+            return fc - fd if q == 1 else fc + fd
+        return -(fc + fd) if q == 1 else 1.0
+    if sub == 0:
+        return fc - fd if q == 1 else 1.0
+    if sub == 1:
+        return fd - fc if q == 1 else -(fc + fd)
+    return fc + fd if q == 1 else 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _decide_sub(reg, kv, ev, es, bv, x, v, omega1, c):
+    """Sub-mode of the elastobacklash law at the state (docs/model.md 'Per-pair force')."""
+    if reg == 0:
+        return 0
+    d = x - ev
+    fd = c * (v - es * omega1)
+    if reg == 1:
+        fc = kv * (d - bv)
+        if fc < fd:
+            return 0
+        if fc + fd < 0.0:
+            return 2
+        return 1
+    fc = kv * (d + bv)
+    if fc > fd:
+        return 0
+    if fc + fd > 0.0:
+        return 2
+    return 1
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mesh_force(tab, theta1, omega1, x, v, nd, i0):
+    """Total dynamic mesh force F = sum_j F_j (N), summed j = 0..P-1, and the cell
+    (nd, i0) of theta1 (carried in from the previous evaluation, see _phi_cell).
+    ``tab``: the table tuple of the module docstring."""
+    n_phi = tab[7]
+    nd, i0, i1, w = _phi_cell(theta1, tab[12], n_phi, nd, i0)
+    f = 0.0
+    for j in range(tab[8]):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, tab[10], tab[11])
+        f += fj
+    return f, nd, i0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
+    """Right-hand side with the mode (cell nd, per-pair reg/sub/kpos) held.
+    Two-inertia form (sdof = False) or time-indexed SDOF (theta1' = omega1,
+    omega1' = 0, m_e v' = F_m - F)."""
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    p = tab[8]
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    w = (th - nd * dphi) * tab[12]
+    f = 0.0
+    for j in range(p):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
+    if sdof:
+        return om, 0.0, v, (fm - f) / me
+    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
+
+
+@njit(cache=True, error_model="numpy")
+def _outputs_row(tab, theta1, omega1, x, v, pair_out, row):
+    """Write the pair forces F_j (N) of output row ``row``; return (mesh force
+    F = sum_j F_j (N), mesh stiffness (N/m): the sum of k_j over the pairs in
+    contact), docs/model.md 'Outputs'."""
+    nd, i0, i1, w = _phi_cell(theta1, tab[12], tab[7], _CELL_NONE, 0)
+    ftot = 0.0
+    ks = 0.0
+    for j in range(tab[8]):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        fj, st = _pair_force(kv, ev, es, bv, x, v, omega1, tab[10], tab[11])
+        pair_out[row, j] = fj
+        ftot += fj
+        if st != 0:
+            ks += kv
+    return ftot, ks
+
+
+@njit(cache=True, error_model="numpy")
+def _equilibrium(theta1, t1, rb1, k, e, b, torque, inv_dphi):
+    """docs/model.md 'Initial state': x (m) of the quasi-static equilibrium at theta1
+    under F_m = T1/Rb1, by exactly 200 bisections.  Returns nan if no slot has k > 0.
+    k, e (NT, P, N) and b (P, N) must be C-contiguous."""
+    it, wt = _torque_index(t1, torque)
+    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
+    tab = _tab(kp, ep, bp, it, k.shape[0] > 1, wt, n_phi, p, np.nan, 0.0, 0, inv_dphi)
+    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
+    fm = t1 / rb1
+    kk = np.empty(p)
+    ee = np.empty(p)
+    bb = np.empty(p)
+    s = 0.0
+    lo_e = np.inf
+    hi_e = -np.inf
+    for j in range(p):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        kk[j] = kv
+        ee[j] = ev
+        bb[j] = bv
+        if kv > 0.0:
+            s += kv
+            if ev - bv < lo_e:
+                lo_e = ev - bv
+            if ev + bv > hi_e:
+                hi_e = ev + bv
+    if not s > 0.0:
+        return np.nan
+    lo = lo_e - abs(fm) / s - 1e-12
+    hi = hi_e + abs(fm) / s + 1e-12
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        g = 0.0
+        for j in range(p):
+            if kk[j] > 0.0:
+                d = mid - ee[j]
+                if d > bb[j]:
+                    g += kk[j] * (d - bb[j])
+                elif d < -bb[j]:
+                    g += kk[j] * (d + bb[j])
+        g = g - fm
+        if g < 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
