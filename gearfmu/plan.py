@@ -25,8 +25,9 @@ from dataclasses import replace
 from typing import Dict, List, Optional, Tuple
 
 from .dynamics.native import choose_max_step_s
-from .plan_choices import (CONTACT_ORDER, PLAN_TABLES_WALL_S, Choice, PlanError, _choices, _p_min, _scene_has_thermal,
-                           _step_absolute, _thermal_options, _what_if_contact, skipped_choices)
+from .plan_choices import (CONTACT_ORDER, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, _choices, _p_min, _scene_has_thermal,
+                           _step_absolute, _thermal_options, _what_if_contact, reference_is_expensive,
+                           skipped_choices, table_work)
 from .plan_evaluator import _Evaluator, _cost_entry, _h0, relative_rms
 from .plan_fmu import (TEMPERATURE_INPUTS, _measure_fmus, full_scene, planned_scene, run_fmu_drive,
                        verification_cases, verify_fmus)
@@ -114,26 +115,30 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
 
 
 def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc: AccuracyTarget, base: dict,
-                    progress: bool, log: List[str]) -> None:
+                    progress: bool, log: List[str], work_budget: float = math.inf) -> None:
     """Step 2 of the budget rule: every non-full level measured alone against the full model,
     cheapest first.  A choice stops at the first level whose budget use is negligible
-    (:data:`_NEGLIGIBLE_USE`); a level whose tables are still to be built once the plan-time
-    table budget (:data:`gearfmu.plan_choices.PLAN_TABLES_WALL_S`) is spent is not measured.
-    Both are recorded in ``Choice.skipped_levels``."""
+    (:data:`_NEGLIGIBLE_USE`); a level whose tables are still to be built and would take the
+    table work of the levels (:func:`gearfmu.plan_choices.table_work`) above ``work_budget``
+    is not measured.  Both are recorded in ``Choice.skipped_levels``."""
     for c in choices.values():
         c.measured[len(c.levels) - 1] = dict(base)
     total = sum(len(c.levels) - 1 for c in choices.values())
+    work = 0.0
     with ProgressBar(progress, total, "levels") as bar:
         for name, c in choices.items():
             n = len(c.levels) - 1
             for i, lv in enumerate(c.levels[:-1]):
                 cfg = dict(full, **{name: lv})
-                if ev.table_wall_s > PLAN_TABLES_WALL_S and not ev.tables_ready(cfg):
-                    c.skipped_levels[i] = (f"not measured: the plan-time table budget of {PLAN_TABLES_WALL_S:g} s "
-                                           f"was spent ({ev.table_wall_s:.3g} s of table builds)")
-                    say(progress, f"{name} = {lv}: {c.skipped_levels[i]}", log)
-                    bar.update(note=f"{name} = {lv}")
-                    continue
+                if not ev.tables_ready(cfg):
+                    if work + table_work(cfg) > work_budget:
+                        c.skipped_levels[i] = (
+                            f"not measured: plan-time table budget (the full-fidelity {cfg['contact_model']} tables "
+                            f"are expensive; the levels may build {PLAN_LEVEL_TABLE_WORK:g} x their table work)")
+                        say(progress, f"{name} = {lv}: {c.skipped_levels[i]}", log)
+                        bar.update(note=f"{name} = {lv}")
+                        continue
+                    work += table_work(cfg)
                 try:
                     c.measured[i] = ev.measure(cfg, full)
                 except (ValueError, ArithmeticError) as exc:  # a level the physics rejects is not offered
@@ -164,7 +169,8 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
     say(progress, f"{npts} envelope points, full tables {tb_full.slots} slots x {tb_full.n_phi} angles x "
                   f"{tb_full.n_torque} torques, h0 = {ev.h0:.3g} s", log)
     base = ev.measure(full, full)
-    _measure_levels(ev, choices, full, acc, base, progress, log)
+    budget = PLAN_LEVEL_TABLE_WORK * table_work(full) if reference_is_expensive(scene, full) else math.inf
+    _measure_levels(ev, choices, full, acc, base, progress, log, budget)
 
     what_if_rows = _what_if_contact(scene)
     for r in what_if_rows:

@@ -30,9 +30,10 @@ _THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a 
 #: plan-time budget of one reference table build, in s of gearfmu.tables.estimate's model (CHOICE):
 #: the full-fidelity points per mesh are the finest level whose estimate fits, never below the scene's
 PLAN_TABLE_BUILD_S = 60.0
-#: plan-time budget of all table builds of the per-choice measurements, wall s (CHOICE): a level whose
-#: tables are still to be built when it is spent is skipped and listed with this reason
-PLAN_TABLES_WALL_S = 150.0
+#: when the reference build is above PLAN_TABLE_BUILD_S: the table work (slices x angles x torque rows x
+#: slots x temperatures) that the per-choice levels may build, as a share of the reference build's (CHOICE);
+#: a level whose tables would exceed it is not measured and is listed with this reason
+PLAN_LEVEL_TABLE_WORK = 0.5
 
 
 class PlanError(ValueError):
@@ -161,6 +162,24 @@ def _reference_points_per_mesh(scene) -> Tuple[int, str]:
                        f"{estimate_build(replace(scene, tables=replace(scene.tables, points_per_mesh=top))).build_s:.3g} s, "
                        f"above the plan-time budget of {PLAN_TABLE_BUILD_S:g} s per table build")
     return ppm, ""  # pragma: no cover - the scene's own level always ends the loop
+
+
+def table_work(cfg: dict) -> float:
+    """Relative work of building a configuration's tables: slices x points per mesh x torque
+    rows x slots x temperatures (3 with thermal), the cells the sliced stiffness and the
+    load-iterated contact models compute (the mesh periods of the table are left out: they
+    only shrink for uniform teeth, so the work is not under-estimated)."""
+    return (float(cfg["slices"]) * float(cfg["points_per_mesh"]) * max(float(cfg["torque_points"]), 1.0)
+            * float(cfg["slots"]) * (_THERMAL_AXIS_POINTS if cfg["thermal"] else 1.0))
+
+
+def reference_is_expensive(scene, full: dict) -> bool:
+    """True when the full-fidelity reference tables are estimated above :data:`PLAN_TABLE_BUILD_S`
+    (:func:`gearfmu.tables.estimate.estimate_build`): then the per-choice levels get a table budget."""
+    from .tables.estimate import estimate_build  # the cost model of the build guard
+    sc = replace(scene, mesh=replace(scene.mesh, slices=int(full["slices"])),
+                 tables=replace(scene.tables, points_per_mesh=int(full["points_per_mesh"])))
+    return estimate_build(sc).build_s > PLAN_TABLE_BUILD_S
 
 
 def skipped_choices(choices: Dict[str, Choice], what_if_rows: List[dict]) -> List[dict]:
