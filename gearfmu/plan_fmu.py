@@ -162,7 +162,7 @@ def run_fmu_drive(fmu_path, case: DriveCase, names=("dte", "mesh_force", "pinion
 
 def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, cases=None,
                 runtime: Optional[str] = None) -> dict:
-    """The planned FMU against the full-fidelity FMU over the scene's envelope (issue 8).
+    """The planned FMU against the full-fidelity FMU over the scene's envelope.
 
     Builds both with :func:`gearfmu.stages.build_fmu_from_scene` from :func:`planned_scene` (chosen)
     and :func:`full_scene` (their tables computed from the scene, timed), drives both
