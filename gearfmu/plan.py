@@ -25,9 +25,9 @@ from dataclasses import replace
 from typing import Dict, List, Optional, Tuple
 
 from .dynamics.native import choose_max_step_s
-from .plan_choices import (CONTACT_ORDER, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, _choices, _p_min, _scene_has_thermal,
-                           _step_absolute, _thermal_options, _what_if_contact, reference_is_expensive,
-                           skipped_choices, table_work)
+from .plan_choices import (CONTACT_ORDER, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, _choices, _p_min,
+                           _scene_has_thermal, _step_absolute, _thermal_options, _what_if_contact,
+                           reference_is_expensive, skipped_choices, table_work)
 from .plan_evaluator import _Evaluator, _cost_entry, _h0, relative_rms
 from .plan_fmu import (TEMPERATURE_INPUTS, _measure_fmus, full_scene, planned_scene, run_fmu_drive,
                        verification_cases, verify_fmus)

@@ -20,6 +20,7 @@ from .gear.meshing_errors import pair_table_mesh_count
 from .gear.stiffness import required_slots
 from .scene.envelope import AccuracyTarget, Envelope
 from .scene.reader import ThermalOptions
+from .tables.estimate import estimate_build
 
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
@@ -148,19 +149,18 @@ def _reference_points_per_mesh(scene) -> Tuple[int, str]:
     cost model of :func:`gearfmu.tables.estimate.estimate_build` puts within
     :data:`PLAN_TABLE_BUILD_S` (the scene's own when none does): the film and fractal contact
     models solve per angle and torque row, so their fine tables take minutes to hours."""
-    from .tables.estimate import estimate_build  # the cost model of the build guard
     ppm = int(scene.tables.points_per_mesh)
     top = max(256, ppm)
-    cands = sorted({p for p in _PPM_LEVELS if ppm < p < top} | {ppm, top}, reverse=True)
-    for p in cands:
-        est = estimate_build(replace(scene, tables=replace(scene.tables, points_per_mesh=p))).build_s
-        if est <= PLAN_TABLE_BUILD_S or p == ppm:
+
+    def est(p):
+        return estimate_build(replace(scene, tables=replace(scene.tables, points_per_mesh=p))).build_s
+    for p in sorted({p for p in _PPM_LEVELS if ppm < p < top} | {ppm, top}, reverse=True):
+        if est(p) <= PLAN_TABLE_BUILD_S or p == ppm:
             if p == top:
                 return p, ""
             return p, (f"full-fidelity reference at {p} points per mesh, not {top}: the {scene.mesh.contact_model} "
-                       f"tables at {top} are estimated at "
-                       f"{estimate_build(replace(scene, tables=replace(scene.tables, points_per_mesh=top))).build_s:.3g} s, "
-                       f"above the plan-time budget of {PLAN_TABLE_BUILD_S:g} s per table build")
+                       f"tables at {top} are estimated at {est(top):.3g} s, above the plan-time budget of "
+                       f"{PLAN_TABLE_BUILD_S:g} s per table build")
     return ppm, ""  # pragma: no cover - the scene's own level always ends the loop
 
 
@@ -176,7 +176,6 @@ def table_work(cfg: dict) -> float:
 def reference_is_expensive(scene, full: dict) -> bool:
     """True when the full-fidelity reference tables are estimated above :data:`PLAN_TABLE_BUILD_S`
     (:func:`gearfmu.tables.estimate.estimate_build`): then the per-choice levels get a table budget."""
-    from .tables.estimate import estimate_build  # the cost model of the build guard
     sc = replace(scene, mesh=replace(scene.mesh, slices=int(full["slices"])),
                  tables=replace(scene.tables, points_per_mesh=int(full["points_per_mesh"])))
     return estimate_build(sc).build_s > PLAN_TABLE_BUILD_S

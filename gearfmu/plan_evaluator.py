@@ -15,7 +15,9 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .common.executors import make_executor
 from .contact.models import environment_from_scene
+from .dynamics import native
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .plan_choices import _step_absolute, _thermal_options
@@ -40,7 +42,6 @@ def relative_rms(y, y_ref) -> float:
 def _kernels_cached() -> bool:
     """True when the native solver's compiled kernels are in numba's cache on disk (or the
     cache cannot be inspected: then no compilation is started aside)."""
-    from .dynamics import native
     try:
         return os.path.exists(native._run_2dof._cache._cache_file._index_path)
     except Exception:  # noqa: BLE001 - numba internals: without them no head start
@@ -54,8 +55,6 @@ def _compile_kernels_aside():
     the time of the longer one instead of their sum.  Returns (executor context, future) or None."""
     if _kernels_cached() or (os.cpu_count() or 1) < 2:
         return None
-    from .common.executors import make_executor
-    from .dynamics import native
     managed = make_executor(max_workers=2)
     return managed, managed.__enter__().submit(native._warmup, False)
 

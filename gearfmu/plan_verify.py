@@ -167,7 +167,7 @@ class Probe:
 class Search:
     """Adaptive worst-case search of one configuration against the full one.
 
-    ``ev``: the planner's evaluator (``gearfmu.plan._Evaluator``: tables, cached native
+    ``ev``: the planner's evaluator (``gearfmu.plan_evaluator._Evaluator``: tables, cached native
     runs, ``native_runs`` counter); ``budget_runs``: the largest number of native runs
     (both configurations counted; cached runs are free) one :meth:`verify` may add."""
 
