@@ -51,7 +51,7 @@ def _plan(scene: str, timeout_s: float, env: dict) -> dict:
     out.update(chosen=d["chosen"], full=d["full"], within_target=d["within_target"],
                dte_rel=v["dte_rel"], mesh_force_rel=v["mesh_force_rel"], worst=v.get("worst"),
                native_runs=v.get("native_runs"), probes=v.get("probes"),
-               skipped=[{"choice": r["choice"], "levels": r["levels"], "reason": r["reason"]} for r in d["skipped"]])
+               skipped=[{"choice": r["choice"], "levels": r["levels"], "reason": r["reason"]} for r in d.get("skipped", [])])
     return out
 
 
