@@ -75,20 +75,20 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
                budget_runs: Optional[int] = None, what_if: bool = False) -> Plan:
     """Plan the fidelity of a scene (docs/plan.md).
 
-    1. Levels of every choice (:func:`_choices`; pinned ones are fixed).
+    1. Levels of every choice (:func:`_choices`; pinned ones are fixed, choices the envelope
+       cannot need have one level and are listed in ``Plan.skipped``).
     2. Each non-full level is measured alone against the full model (all other
-       choices full): TVMS, DTE and mesh-force relative RMS errors over the
-       envelope points, table build time, table size and native time per
-       simulated second.
+       choices full), cheapest first (:func:`_measure_levels`): TVMS, DTE and mesh-force
+       relative RMS errors over the envelope points, table build time, table size and
+       native time per simulated second.
     3. Greedy rule: starting from the full model, repeatedly take the level
        change that saves the most estimated cost per unit of added budget use
        (budget use of a level = max(DTE error / DTE target, force error / force
        target)) while the summed budget use of all choices stays <= the safety
        factor (by the triangle inequality the combined error is about at most
        the sum of the single-choice errors).
-    4. Verification: the combined chosen model is run against the full one at
-       every envelope point; while its error exceeds the target, the choice with
-       the largest budget use goes back one level towards full.
+    4. Verification: the combined chosen model is searched over the envelope against the
+       full one and revised while a point is above the target (:func:`_verify_and_revise`).
     5. Costs of the chosen and the full model: table build time, table size and
        time per simulated second, and with ``measure_fmu`` both FMUs built (in
        ``fmu_dir`` or a temporary directory; ``fmu_runtime``: "pythonfmu" or
