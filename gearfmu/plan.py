@@ -107,11 +107,8 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
         if name not in choices:
             raise PlanError(f"{name}: no levels (planner bug)")  # pragma: no cover
     ev = _Evaluator(scene, env, acc, progress)
-    try:
-        return _plan(scene, env, acc, choices, ev, log, progress=progress, measure_fmu=measure_fmu, fmu_dir=fmu_dir,
-                     fmu_runtime=fmu_runtime, budget_runs=budget_runs, what_if=what_if)
-    finally:
-        ev.close()
+    return _plan(scene, env, acc, choices, ev, log, progress=progress, measure_fmu=measure_fmu, fmu_dir=fmu_dir,
+                 fmu_runtime=fmu_runtime, budget_runs=budget_runs, what_if=what_if)
 
 
 def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc: AccuracyTarget, base: dict,
@@ -161,7 +158,7 @@ def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc:
 
 def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Evaluator, log: List[str], *,
           progress: bool, measure_fmu: bool, fmu_dir, fmu_runtime, budget_runs: int, what_if: bool) -> Plan:
-    """:func:`plan_scene` after its input checks (``ev``: the evaluator it closes)."""
+    """:func:`plan_scene` after its input checks (``ev``: its evaluator)."""
     full = {n: c.full for n, c in choices.items()}
     tb_full, _ = ev.tables(full, progress=progress)
     ev.h0 = _h0(ev, full, env)
@@ -331,26 +328,23 @@ def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = EST
     choices = _choices(scene, env, acc)
     full = {n: c.full for n, c in choices.items()}
     ev = _Evaluator(scene, env, acc, progress)
-    try:
-        ev.h0 = _h0(ev, full, env)
-        written = {"contact_model": scene.mesh.contact_model, "thermal": _scene_has_thermal(scene),
-                   "tooth_specific_errors": True, "slices": int(scene.mesh.slices),
-                   "points_per_mesh": int(scene.tables.points_per_mesh),
-                   "torque_points": int(scene.tables.torque_points) if full["torque_points"] > 1 else 1,
-                   "slots": int(scene.tables.slots or _p_min(scene)), "integrator": scene.solver.integrator}
-        if scene.solver.max_step_s is not None:
-            step_s = float(scene.solver.max_step_s)
-        else:
-            tb, _ = ev.tables(dict(written, max_step=1.0))
-            w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
-            step_s = (min(choose_max_step_s(tb.at_temperature(float(t)), w_top) for t in tb.temperature_C)
-                      if tb.has_temperature_axis else choose_max_step_s(tb, w_top))
-        written["max_step"] = step_s / ev.h0
-        say(progress, f"as-written estimate: the scene as written against its full-fidelity model "
-                       f"(budget {budget_runs} native runs of {acc.run_mesh_periods} mesh periods)", log)
-        res = Search(ev, full, say=lambda m: say(progress, m, log), progress=progress).verify(written, budget_runs)
-    finally:
-        ev.close()
+    ev.h0 = _h0(ev, full, env)
+    written = {"contact_model": scene.mesh.contact_model, "thermal": _scene_has_thermal(scene),
+               "tooth_specific_errors": True, "slices": int(scene.mesh.slices),
+               "points_per_mesh": int(scene.tables.points_per_mesh),
+               "torque_points": int(scene.tables.torque_points) if full["torque_points"] > 1 else 1,
+               "slots": int(scene.tables.slots or _p_min(scene)), "integrator": scene.solver.integrator}
+    if scene.solver.max_step_s is not None:
+        step_s = float(scene.solver.max_step_s)
+    else:
+        tb, _ = ev.tables(dict(written, max_step=1.0))
+        w_top = max(env.speed_range_rad_s[1], env.nominal_speed_rad_s)
+        step_s = (min(choose_max_step_s(tb.at_temperature(float(t)), w_top) for t in tb.temperature_C)
+                  if tb.has_temperature_axis else choose_max_step_s(tb, w_top))
+    written["max_step"] = step_s / ev.h0
+    say(progress, f"as-written estimate: the scene as written against its full-fidelity model "
+                   f"(budget {budget_runs} native runs of {acc.run_mesh_periods} mesh periods)", log)
+    res = Search(ev, full, say=lambda m: say(progress, m, log), progress=progress).verify(written, budget_runs)
     w = res["worst"]
     ve = VerifiedEnvelope(
         kind="as-written estimate", torque_range_Nm=tuple(env.torque_range_Nm),

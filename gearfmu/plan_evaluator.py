@@ -8,16 +8,13 @@ force errors, table build time and size, native time per simulated second).
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import replace
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .common.executors import make_executor
 from .contact.models import environment_from_scene
-from .dynamics import native
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .plan_choices import _step_absolute, _thermal_options
@@ -39,26 +36,6 @@ def relative_rms(y, y_ref) -> float:
 
 
 
-def _kernels_cached() -> bool:
-    """True when the native solver's compiled kernels are in numba's cache on disk (or the
-    cache cannot be inspected: then no compilation is started aside)."""
-    try:
-        return os.path.exists(native._run_2dof._cache._cache_file._index_path)
-    except Exception:  # noqa: BLE001 - numba internals: without them no head start
-        return True
-
-
-def _compile_kernels_aside():
-    """Without compiled kernels in numba's cache, compile the plain rk4 kernels in a second
-    process (it writes the cache) while this one builds tables and compiles the rk4_kink
-    kernels, which the full-fidelity reference runs first; the two compilations then take
-    the time of the longer one instead of their sum.  Returns (executor context, future) or None."""
-    if _kernels_cached() or (os.cpu_count() or 1) < 2:
-        return None
-    managed = make_executor(max_workers=2)
-    return managed, managed.__enter__().submit(native._warmup, False)
-
-
 # ============================================================== model evaluation
 class _Evaluator:
     """Builds tables and runs the native solver for configurations (dicts choice -> level value)."""
@@ -73,7 +50,6 @@ class _Evaluator:
         self.t0_C = scene.thermal.standard_temperature_C if scene.thermal is not None else 30.0
         self.table_wall_s = 0.0  # wall time spent building tables (derived tables cost nothing)
         self.derived: set = set()  # table keys whose tables were taken from a finer grid
-        self._compiling = _compile_kernels_aside()
 
     # -------------------------------------------------------- tables
     def table_key(self, cfg: dict) -> tuple:
@@ -159,17 +135,6 @@ class _Evaluator:
                       e_comprehensive_m=sub(tb.e_comprehensive_m), static_te_m=sub(tb.static_te_m),
                       k_mean_N_per_m=float(k[int(nominal[0])].sum(axis=0).mean()), provenance=prov)
         return out.validate(), dt / s
-
-    def close(self) -> None:
-        """Wait for the kernel compilation started aside (if any) and end its process."""
-        if self._compiling is not None:
-            managed, fut = self._compiling
-            try:
-                fut.result()
-            except Exception:  # noqa: BLE001 - the compilation aside is only a head start
-                pass
-            managed.__exit__(None, None, None)
-            self._compiling = None
 
     def table_args(self, cfg: dict) -> dict:
         """Arguments of :func:`gearfmu.tables.precompute.precompute_tables` for a configuration."""

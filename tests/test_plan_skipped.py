@@ -144,18 +144,15 @@ def test_coarser_points_per_mesh_taken_from_the_finer_grid_equal_a_build(hertz):
     ch = _choices(scene, env, acc)
     full = {n: c.full for n, c in ch.items()}
     ev = _Evaluator(scene, env, acc, False)
-    try:
-        ev.tables(full)
-        for ppm in (32, 64):
-            cfg = dict(full, points_per_mesh=ppm)
-            tb, _ = ev.tables(cfg)
-            assert ev.table_key(cfg) in ev.derived
-            ref = precompute_tables(**dict(ev.table_args(cfg)))
-            for name in ("k_N_per_m", "e_m", "backlash_half_m", "e_comprehensive_m", "static_te_m", "torque_Nm"):
-                assert np.array_equal(getattr(tb, name), getattr(ref, name)), name
-            assert tb.k_mean_N_per_m == ref.k_mean_N_per_m
-    finally:
-        ev.close()
+    ev.tables(full)
+    for ppm in (32, 64):
+        cfg = dict(full, points_per_mesh=ppm)
+        tb, _ = ev.tables(cfg)
+        assert ev.table_key(cfg) in ev.derived
+        ref = precompute_tables(**ev.table_args(cfg))
+        for name in ("k_N_per_m", "e_m", "backlash_half_m", "e_comprehensive_m", "static_te_m", "torque_Nm"):
+            assert np.array_equal(getattr(tb, name), getattr(ref, name)), name
+        assert tb.k_mean_N_per_m == ref.k_mean_N_per_m
 
 
 def test_expensive_contact_reference_capped_and_listed():
