@@ -10,8 +10,12 @@ Module / package     Contents
 cli                  the ``gearfmu`` command line
 ssp, bench, plots    SSP packages; hard cases and benchmarks; PNG plots
 pipeline             the public entry points: load, compute_tables, build (with plan)
-plan                 fidelity planner ([accuracy])
-plan_verify          the planner's envelope search and verification drives
+plan                 fidelity planner ([accuracy]): the budget rule, revisions, estimate
+plan_fmu             the planned / full scenes and their confirmation through the FMUs
+plan_report,         the plan and its report;
+plan_evaluator       tables and native runs of configurations
+plan_verify,         the planner's envelope search and verification drives;
+plan_choices         the choices, their levels and what is skipped
 stages               the stages wired without the planner
 fmu/                 model description, FMU builders, runtime, C sources
 dynamics/            native solver, reference integrator, sweeps, harmonics

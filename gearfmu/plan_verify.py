@@ -25,7 +25,8 @@ import sys
 
 import numpy as np
 
-__all__ = ["ERROR_DEFINITION", "run_errors", "Probe", "Search", "budget_use"]
+__all__ = ["ERROR_DEFINITION", "run_errors", "Probe", "Search", "budget_use", "say", "ProgressBar",
+           "DriveCase", "drive_case", "constant", "speed_sweeps"]
 
 #: the planner's error measure, word for word (docs/plan.md "Error measure")
 ERROR_DEFINITION = (
@@ -63,25 +64,79 @@ def run_errors(dte, force, dte_full, force_full) -> dict:
     return out
 
 
-def _progress_iter(items, progress: bool, what: str):
-    """``items`` with a progress display on stderr: a tqdm bar when tqdm is installed, else a
-    plain line every tenth of the way."""
-    if not progress or len(items) < 20:
-        yield from items
-        return
+def _tqdm():
+    """tqdm's bar class, or None when tqdm is not installed."""
     try:
         from tqdm import tqdm  # optional progress bar
     except ImportError:
-        tqdm = None
-    if tqdm is not None:
-        yield from tqdm(items, desc=f"gearfmu plan: {what}", file=sys.stderr, leave=False)
+        return None
+    return tqdm
+
+
+_BAR = None  # the progress bar on stderr while one is shown (say() writes above it)
+
+
+def say(progress: bool, msg: str, log: List[str]) -> None:
+    """Log a step of the plan; with ``progress`` also one line on stderr (also in --json
+    mode), written above the progress bar while one is shown."""
+    log.append(msg)
+    if not progress:
         return
-    n = len(items)
-    every = max(n // 10, 1)
-    for i, x in enumerate(items):
-        if i and i % every == 0:
-            print(f"gearfmu plan: {what} {i}/{n}", file=sys.stderr, flush=True)
-        yield x
+    line = f"gearfmu plan: {msg}"
+    if _BAR is not None:
+        _BAR.write(line, file=sys.stderr)
+    else:
+        print(line, file=sys.stderr, flush=True)
+
+
+class ProgressBar:
+    """Progress of ``total`` steps of the plan on stderr: a tqdm bar when tqdm is installed,
+    else a plain line "gearfmu plan: <what> i/total" every tenth of the way.  A context
+    manager; :meth:`update` advances it, ``note`` names the step that has just finished."""
+
+    def __init__(self, progress: bool, total: int, what: str):
+        self.progress, self.total, self.what = progress, max(int(total), 1), what
+        self.done = 0
+        self._bar = None
+        self._every = max(self.total // 10, 1)
+
+    def __enter__(self):
+        global _BAR
+        if _BAR is not None:  # inside another bar: that one shows the progress
+            self.progress = False
+        tqdm = _tqdm() if self.progress else None
+        if tqdm is not None and _BAR is None:
+            self._bar = tqdm(total=self.total, desc=f"gearfmu plan: {self.what}", file=sys.stderr, leave=False)
+            _BAR = self._bar
+        return self
+
+    def update(self, n: int = 1, note: str = "") -> None:
+        self.done += n
+        if self._bar is not None:
+            if note:
+                self._bar.set_postfix_str(note, refresh=False)
+            self._bar.update(n)
+        elif self.progress and (self.done % self._every == 0 or self.done >= self.total):
+            print(f"gearfmu plan: {self.what} {min(self.done, self.total)}/{self.total}", file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc):
+        global _BAR
+        if self._bar is not None:
+            self._bar.close()
+            if _BAR is self._bar:
+                _BAR = None
+        return False
+
+
+def _progress_iter(items, progress: bool, what: str):
+    """``items`` with a progress display on stderr (:class:`ProgressBar`)."""
+    if not progress or len(items) < 20:
+        yield from items
+        return
+    with ProgressBar(progress, len(items), what) as bar:
+        for x in items:
+            yield x
+            bar.update()
 
 
 def budget_use(m: dict, dte_target: float, force_target: float) -> float:
@@ -112,7 +167,7 @@ class Probe:
 class Search:
     """Adaptive worst-case search of one configuration against the full one.
 
-    ``ev``: the planner's evaluator (``gearfmu.plan._Evaluator``: tables, cached native
+    ``ev``: the planner's evaluator (``gearfmu.plan_evaluator._Evaluator``: tables, cached native
     runs, ``native_runs`` counter); ``budget_runs``: the largest number of native runs
     (both configurations counted; cached runs are free) one :meth:`verify` may add."""
 
@@ -136,22 +191,16 @@ class Search:
             tr = env.temperature_range_C
             t_mid = None if tr is None else 0.5 * (tr[0] + tr[1])
 
-            def const(v):
-                return None if v is None else (lambda t: np.full(np.shape(t), float(v)))
+            const = constant
 
             def comm(w_top):
                 return mesh_rad / w_top / _SEGMENT_SAMPLES_PER_RUN_PERIOD
 
             cases = {}
             if w1 > w0:
-                rb1, rb2 = float(tb.base_radius_pinion_m), float(tb.base_radius_gear_m)
-                i_red = float(tb.inertia_pinion_kgm2) + float(tb.inertia_gear_kgm2) * (rb1 / rb2) ** 2
-                t_run = max(_SWEEP_RUN_LENGTHS * n_run * mesh_rad / (0.5 * (w0 + w1)),
-                            i_red * (w1 - w0) / (0.1 * T_nom))
-                for name, a, b in (("run_up", w0, w1), ("run_down", w1, w0)):
-                    cases[name] = drive_case(name, tb, stop_time_s=t_run, comm_step_s=comm(w1),
-                                             torque_Nm=const(T_nom), temperature_C=const(t_mid),
-                                             speed_rad_s=lambda t, a=a, b=b: a + (b - a) * np.asarray(t) / t_run)
+                for c in speed_sweeps(tb, speed_range_rad_s=(w0, w1), torque_Nm=T_nom, temperature_C=t_mid,
+                                      mesh_periods=_SWEEP_RUN_LENGTHS * n_run, comm_step_s=comm(w1)):
+                    cases[c.name] = c
             if T1 > T0:
                 t_run = 3 * n_run * mesh_rad / w_nom
 
@@ -243,7 +292,7 @@ class Search:
         if not cfg["thermal"]:
             return ()
         tb = self.ev.tables(cfg)[0]
-        t = getattr(tb, "temperature_C", None)
+        t = tb.temperature_C
         return () if t is None else tuple(float(x) for x in np.atleast_1d(t))
 
     def _speeds(self) -> List[float]:
@@ -421,3 +470,28 @@ def drive_case(name: str, tables, *, stop_time_s: float, comm_step_s: float, tor
     temp = None if temperature_C is None else np.asarray(temperature_C(tm), dtype=float) * np.ones(n)
     return DriveCase(name=name, comm_step_s=h, pinion_torque_Nm=T1, gear_torque_Nm=T2, temperature_C=temp,
                      pinion_speed_start_rad_s=float(w[0]), speed_profile_rad_s=w[1:], note=note)
+
+
+def constant(v):
+    """A drive input held at ``v`` (a callable of time arrays), or None when ``v`` is None."""
+    return None if v is None else (lambda t: np.full(np.shape(t), float(v)))
+
+
+def speed_sweeps(tables, *, speed_range_rad_s, torque_Nm: float, temperature_C: Optional[float],
+                 mesh_periods: float, comm_step_s: float, load_share: float = 0.1) -> List[DriveCase]:
+    """Run-up and run-down drives (:func:`drive_case`) over ``speed_range_rad_s`` (rad/s) at a
+    constant pinion torque (N*m) and temperature (degC or None): each lasts ``mesh_periods``
+    mesh periods at the mean speed, and at least I_red (w1 - w0) / (``load_share`` x torque), so
+    that the acceleration torque of the rigid pair stays within that share of the torque."""
+    w0, w1 = speed_range_rad_s
+    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+    i_red = float(tables.inertia_pinion_kgm2) + float(tables.inertia_gear_kgm2) * (rb1 / rb2) ** 2
+    t_run = max(mesh_periods * float(tables.mesh_period_rad) / (0.5 * (w0 + w1)),
+                i_red * (w1 - w0) / (load_share * torque_Nm))
+    out = []
+    for name, a, b in (("run_up", w0, w1), ("run_down", w1, w0)):
+        out.append(drive_case(name, tables, stop_time_s=t_run, comm_step_s=comm_step_s, torque_Nm=constant(torque_Nm),
+                              speed_rad_s=lambda t, a=a, b=b: a + (b - a) * np.asarray(t) / t_run,
+                              temperature_C=constant(temperature_C),
+                              note=f"{a * 30 / math.pi:.6g} -> {b * 30 / math.pi:.6g} rpm in {t_run:.3g} s"))
+    return out
