@@ -74,7 +74,7 @@ def _progress_iter(items, progress: bool, what: str):
     except ImportError:
         tqdm = None
     if tqdm is not None:
-        yield from tqdm(items, desc=f"gearfmu plan: {what}", file=sys.stderr, leave=False)
+        yield from progress_bar(items, f"gearfmu plan: {what}", leave=False)
         return
     n = len(items)
     every = max(n // 10, 1)

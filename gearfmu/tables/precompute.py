@@ -11,7 +11,6 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import replace
-import sys
 import time
 from typing import Optional, Sequence
 import warnings
@@ -22,8 +21,11 @@ from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from ..gear.loaded_mesh import loaded_static_mesh
 from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
+from .load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE,
+                             iterate_load_sharing, slice_loads_N)
 from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
 from ..common.executors import make_executor
+from ..common.progress import progress_bar
 from ..contact.models import composite_sigma_m, get_contact_model, tooth_compliances, sliced_mesh_stiffness
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
 from ..gear.geometry import pair_geometry
@@ -69,32 +71,10 @@ def disc_inertia_kgm2(gear: GearSpec) -> float:
     return rho * math.pi * gear.face_width_m * (r ** 4 - rh ** 4) / 2.0
 
 
-class _Progress:
-    def __init__(self, enabled: bool, total: int, label: str):
-        self.enabled, self.total, self.label, self.done = enabled, total, label, 0
-        self.t0 = time.perf_counter()
-        self._bar = None
-        if enabled:
-            try:  # optional
-                from tqdm import tqdm  # type: ignore  # optional progress bar
-                self._bar = tqdm(total=total, desc=label)
-            except ImportError:
-                self._bar = None
-
-    def step(self, what: str) -> None:
-        if not self.enabled:
-            return
-        self.done += 1
-        if self._bar is not None:
-            self._bar.set_postfix_str(what)
-            self._bar.update(1)
-        else:
-            print(f"{self.label}: {self.done}/{self.total} {what} "
-                  f"({time.perf_counter() - self.t0:.1f} s)", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
+def _step(bar, what: str) -> None:
+    """One step of a table progress bar, ``what`` shown beside it."""
+    bar.set_postfix_str(what, refresh=False)
+    bar.update(1)
 
 
 def _torque_axis(torque_axis_Nm, nominal_torque_Nm: float, crowned: bool) -> np.ndarray:
@@ -147,22 +127,6 @@ def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
 #: torque axis (multiples of the nominal torque) given to the tables of a load-dependent
 #: contact model (EHL film) when no axis with at least two torques is asked for
 LOAD_DEPENDENT_TORQUE_FACTORS = (0.5, 1.0, 1.5)
-#: load-sharing iteration with a load-dependent contact stiffness: largest change of a
-#: slice load between passes, relative to the mean slice load F/NS, and the pass limit
-LOAD_ITERATION_TOL = 1e-3
-LOAD_ITERATION_MAX = 8
-#: load floor of every slice in the contact zone (light or no static load), a share
-#: of the mean line load F/b): its film is evaluated there (docs/ehl_mesh.md)
-UNLOADED_SLICE_LOAD_SHARE = 0.5
-
-
-def _slice_loads_N(k_slice, e_pair, crowning, force_N):
-    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (seed 000 eq 16)."""
-    lm = loaded_static_mesh(k_slice, e_pair, crowning, force_N)
-    gap = e_pair[:, None, :] + crowning[None, :, None]
-    return k_slice * np.maximum(0.0, lm.static_te_m[None, None, :] - gap)
-
-
 class _ContactIteration:
     """Slice stiffness with a load-dependent contact model, iterated with the
     loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
@@ -213,53 +177,42 @@ class _ContactIteration:
         a film grid can place its load nodes (contact_models.RoughFilmGrid, docs/ehl_mesh.md)."""
         F = [float(t) / rb1 for t in torques]
         lo = UNLOADED_SLICE_LOAD_SHARE * min(f if f > 0 else self.nominal_F for f in F) / self.face
-        hi = max([float(np.max(_slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
+        hi = max([float(np.max(slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
                   for f in F if f > 0] + [0.0]) / self.width
         self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
 
     def k_slice(self, torque_Nm: float, rb1: float):
+        """(P, NS, N) slice stiffness of the torque row ``torque_Nm`` (N m): the load-sharing
+        iteration (:func:`gearfmu.tables.load_iteration.iterate_load_sharing`) from the Hertz
+        slice loads, the films of the row's slice loads from the contact model."""
         F = torque_Nm / rb1
         F_eval = F if F > 0 else self.nominal_F
         floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
-        k = self.k_hertz
-        loads = _slice_loads_N(k, self.e, self.E, F)
         idx = np.nonzero(self.zone)
         j, n, i = idx
-        kc = np.zeros(k.shape)
-        w_prev = np.full(j.shape, np.nan)
-        failed = np.zeros(j.shape, dtype=bool)
         failures = {}
-        change = float("nan")
-        for it in range(1, LOAD_ITERATION_MAX + 1):
-            w = np.maximum(loads[idx] / (self.width if self.helical is None
-                                         else self.width * self.helical.frac[idx]), floor)
-            # a (position, slice) whose film failed keeps its fallback in later passes
-            # (re-trying it at a slightly different load would let the sharing oscillate)
-            redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
-            if np.any(redo):
-                res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
-                self.solves += res.solves
-                kc[j[redo], n[redo], i[redo]] = res.k_N_per_m
-                w_prev = np.where(redo, w, w_prev)
-                for f in res.failures:
-                    failures[(f["s_m"], f["slice"])] = f
-                if res.failures:
-                    bad = {(f["s_m"], f["slice"]) for f in res.failures}
-                    sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
-                    failed |= np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
-            k = (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
-                 else self.helical.mesh_stiffness(kc, self.opts))
-            new = _slice_loads_N(k, self.e, self.E, F)
-            change = float(np.max(np.abs(new - loads)) / max(F / self.NS, 1e-300)) if F > 0 else 0.0
-            loads = new
-            if change < LOAD_ITERATION_TOL:
-                break
-        else:
-            warnings.warn(f"{self.model.name}: load sharing not converged at torque {torque_Nm:g} N m after "
-                          f"{LOAD_ITERATION_MAX} passes (max slice-load change {change:.2e} of F/NS)")
-        self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
+
+        def solve(w, redo, _pass):
+            res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
+            self.solves += res.solves
+            for f in res.failures:
+                failures[(f["s_m"], f["slice"])] = f
+            if not res.failures:
+                return res.k_N_per_m, None
+            bad = {(f["s_m"], f["slice"]) for f in res.failures}
+            sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
+            return res.k_N_per_m, np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
+
+        def mesh_stiffness(kc):
+            return (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
+                    else self.helical.mesh_stiffness(kc, self.opts))
+
+        width = self.width if self.helical is None else self.width * self.helical.frac[idx]
+        ls = iterate_load_sharing(slice_loads_N(self.k_hertz, self.e, self.E, F), self.e, self.E, F, idx, width,
+                                  floor, solve, mesh_stiffness, what=f"{self.model.name} at torque {torque_Nm:g} N m")
+        self.records.append(dict(torque_Nm=float(torque_Nm), passes=ls.passes, load_change=ls.load_change,
                                  failures=len(failures), failure_list=list(failures.values())))
-        return k
+        return ls.k_slice_N_per_m
 
 
 class _HelicalContactView:
@@ -417,7 +370,7 @@ def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_pe
             k_rows.append(k_row)
             e_rows.append(e_row)
             te_rows.append(lm.static_te_m)
-        bar.step(f"torque {T:g} N m")
+        _step(bar, f"torque {T:g} N m")
     return k_rows, e_rows, te_rows, k_nominal
 
 
@@ -431,9 +384,9 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     pinion torques (N m) of the table rows (None: one row at the nominal torque,
     or with lead crowning ``DEFAULT_TORQUE_FACTORS`` x nominal);
     ``nominal_torque_Nm`` (N m, > 0): sets ``k_mean_N_per_m``; ``slots``: P
-    (None: ceil(contact ratio)); ``progress``: print progress to stderr (tqdm
-    when installed).  Without lead crowning k is load-independent and the error
-    tables are the meshing errors; with crowning every torque row holds the
+    (None: ceil(contact ratio)); ``progress``: progress bars on stderr
+    (:func:`gearfmu.common.progress.progress_bar`).  Without lead crowning k is
+    load-independent and the error tables are the meshing errors; with crowning every torque row holds the
     secant stiffness and effective error of :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`
     (they reproduce the loaded static TE of that row exactly).  Lead crowning
     only acts with ``opts.slices`` > 1 (one slice sits at the face centre).
@@ -490,7 +443,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     rb1 = float(geom.rb1_m)
     nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
     rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
-    bar = _Progress(progress, 1 + len(rows), "gearfmu tables")
+    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step")
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
     if opts.contact_model != "hertz":
@@ -509,7 +462,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
             slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
         if contact_it is not None:  # the load iteration uses the pair error of the helical pair
             contact_it.e = e_slot
-    bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
+    _step(bar, f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
 
     if contact_it is not None:
         contact_it.__enter__()
@@ -617,7 +570,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
             f"torque_axis_Nm: a non-standard temperature needs torques > 0 (seed 004 stiffness is a secant "
             f"stiffness under load), got {torques.tolist()!r}")
     rb1 = float(geom.rb1_m)
-    bar = _Progress(progress, len(torques), label)
+    bar = progress_bar(desc=label, enabled=progress, total=len(torques), unit="row")
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
         ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
@@ -644,7 +597,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
         k4.append(np.stack(k_row))
         e4.append(np.stack(e_row))
         te4.append(np.stack(te_row))
-        bar.step(f"torque {float(T):g} N m, {len(states)} thermal states")
+        _step(bar, f"torque {float(T):g} N m, {len(states)} thermal states")
     bar.close()
     return np.ascontiguousarray(np.stack(k4)), np.ascontiguousarray(np.stack(e4)), np.stack(te4)
 
