@@ -290,7 +290,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     if not chunks:
         return []
     n_cpu = os.cpu_count() or 1
-    bar = progress_bar(desc=label, enabled=progress, total=int(sum(counts)), unit="film")
+    bar = progress_bar(desc=label, enabled=progress, total=int(sum(counts)), unit="film", leave=False)
     out: List[Optional[list]] = [None] * len(chunks)
     if executor is None:
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
