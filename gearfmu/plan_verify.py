@@ -21,9 +21,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple
-import sys
 
 import numpy as np
+
+from .common.progress import progress_bar
 
 __all__ = ["ERROR_DEFINITION", "run_errors", "Probe", "Search", "budget_use"]
 
@@ -64,24 +65,8 @@ def run_errors(dte, force, dte_full, force_full) -> dict:
 
 
 def _progress_iter(items, progress: bool, what: str):
-    """``items`` with a progress display on stderr: a tqdm bar when tqdm is installed, else a
-    plain line every tenth of the way."""
-    if not progress or len(items) < 20:
-        yield from items
-        return
-    try:
-        from tqdm import tqdm  # optional progress bar
-    except ImportError:
-        tqdm = None
-    if tqdm is not None:
-        yield from progress_bar(items, f"gearfmu plan: {what}", leave=False)
-        return
-    n = len(items)
-    every = max(n // 10, 1)
-    for i, x in enumerate(items):
-        if i and i % every == 0:
-            print(f"gearfmu plan: {what} {i}/{n}", file=sys.stderr, flush=True)
-        yield x
+    """``items`` with a progress bar on stderr (:func:`gearfmu.common.progress.progress_bar`)."""
+    return progress_bar(items, f"gearfmu plan: {what}", progress and len(items) >= 20, leave=False)
 
 
 def budget_use(m: dict, dte_target: float, force_target: float) -> float:
