@@ -14,10 +14,18 @@ from tqdm import tqdm
 __all__ = ["progress_bar"]
 
 
+class _Bar(tqdm):
+    """tqdm without its monitor thread: every tqdm instance, even a disabled one, would
+    otherwise start that thread, and a second thread in the process stops the local process
+    pool from forking (gearfmu.common.executors._start_method)."""
+
+    monitor_interval = 0
+
+
 def progress_bar(iterable: Optional[Iterable] = None, desc: str = "", enabled: bool = True, *,
                  total: Optional[int] = None, unit: str = "it", leave: bool = True) -> tqdm:
     """A tqdm bar on stderr over ``iterable`` (or, with ``iterable`` None, a bar of ``total``
     steps advanced by ``update(n)``); ``desc`` names the work; ``enabled`` False gives a bar
     that prints nothing (it still iterates, counts and closes)."""
-    return tqdm(iterable, desc=desc, total=total, unit=unit, leave=leave, file=sys.stderr,
+    return _Bar(iterable, desc=desc, total=total, unit=unit, leave=leave, file=sys.stderr,
                 disable=not enabled, dynamic_ncols=True)
