@@ -1,4 +1,4 @@
-"""Mesh stiffness of a spur pair evaluated DIRECTLY at given meshing positions (issue 3).
+"""Mesh stiffness of a spur pair evaluated DIRECTLY at given meshing positions.
 
 No table, no film grid, no interpolation: at every requested meshing position every tooth
 pair in contact and every face-width slice gets its own contact stiffness k_l from the chosen
@@ -44,7 +44,7 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
   section 5; the table's per-pair meshing errors and crowning can be passed.
 * Load iteration of the film models that need a film per slice (``rough_steady``,
   ``smooth_transient``, ``rough_transient``): the iteration starts from the slice loads
-  converged with ``smooth_ehl`` (steady smooth films, ~50 ms each) instead of the Hertz loads --
+  converged with ``smooth_ehl`` (steady smooth films, cheap) instead of the Hertz loads --
   the same fixed point (same rule and tolerance), a better first guess, so that an expensive
   transient run is repeated only if the roughness itself moves a slice load by more than the
   tolerance.
