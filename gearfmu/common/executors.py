@@ -141,7 +141,7 @@ def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT", type=address, default=None,
                         help="run the parallel work (EHL film grids and film solves of the tables, sweeps) on the "
-                             "Dask cluster of this scheduler (docs/tables.md 'Running on a Dask cluster')")
+                             "Dask cluster of this scheduler (docs/tables.md 'Progress and a Dask cluster')")
 
 
 _MAIN_GUARD = re.compile(r"""^\s*if\s+(__name__\s*==\s*['"]__main__['"]|['"]__main__['"]\s*==\s*__name__)""",
