@@ -21,6 +21,8 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     ap.add_argument("--runtime", choices=("standalone", "pythonfmu"),
                     help="FMU runtime (default: the scene's fmu.runtime, standalone unless set)")
+    ap.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                    help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
     ap.add_argument("--json", action="store_true", help="print the report as JSON")
     args = ap.parse_args(argv)
 
@@ -33,7 +35,7 @@ def main(argv=None) -> int:
             raise ValueError(f"SCENE: file not found: {args.scene}")
         scene = load(args.scene)
         out = Path(args.output or f"build/{scene.fmu.model_name}.fmu")
-        res = build(scene, out, progress=not args.json, runtime=args.runtime)
+        res = build(scene, out, progress=not args.json, runtime=args.runtime, fmi_version=args.fmi_version)
     except ValueError as exc:
         print(f"build_fmu: {exc}", file=sys.stderr)
         return 2

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The hard cases of issue 5: native solver against the event-located reference, as PNGs.
+"""The hard cases of the dynamic model: native solver against the event-located reference, as PNGs.
 
 For every case of gearfmu.bench.HARD_CASES (1 heavy load, 2 single-sided impacts,
 3 double-sided impacts, 4 zeta = 0.01 near resonance, 5 HCR eps 2.4 with five slots,

@@ -13,7 +13,7 @@ Writes to DIR (default examples/output/seed001_fractal):
   fig8.png / fig8.csv     lambda_c against the curvature radius and the line load (cf. Fig. 8)
   slicing.csv             K_n, K_s, K_l per unit face width and A_r/A0 of the seed 000 Table 1 pair
                           at its pitch point (2000 N m, 2000 rpm, roughness levels 1-4) for 1, 2, 4,
-                          11 and 44 face-width slices: the same for every slicing (issue 9)
+                          11 and 44 face-width slices: the same for every slicing
   summary.json            the settings and a few numbers
 """
 from __future__ import annotations
@@ -136,7 +136,7 @@ def fig8(out: Path) -> dict:
 
 
 def slicing(out: Path) -> dict:
-    """Seed 000 Table 1 pitch point: K per unit width for several face slicings (issue 9)."""
+    """Seed 000 Table 1 pitch point: K per unit width for several face slicings."""
     from gearfmu.gear.hertz import reduced_modulus_Pa
     from gearfmu.contact.models import RoughnessSpec, environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics

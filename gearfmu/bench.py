@@ -2,7 +2,7 @@
 
 ``hard_case(name)`` returns ``(tables, kwargs)`` for :func:`gearfmu.dynamics.native.simulate`
 (and :func:`gearfmu.dynamics.reference.simulate_reference`, which takes the same
-arguments): the cases of issue 5 built from textbook tables (the
+arguments): the hard cases of the dynamic model, built from textbook tables (the
 rectangular-wave TVMS of :mod:`gearfmu.tables.synthetic`, seed 003 Table 1 gear data)
 and from a computed scene.  Inputs only -- no results are stored here.
 

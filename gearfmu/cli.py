@@ -1,6 +1,6 @@
 """The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
 
-  gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST]
+  gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
                                              scene -> tables -> FMU
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
@@ -9,7 +9,7 @@
   gearfmu validate [SCENE] [--fmu F] [--stop-time S] [--output-interval S] [--tolerance R] [--json]
                                              an FMU against the native solver
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
-  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE]   SSP package with variants
+  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--fmi-version 2|3]   SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
@@ -130,7 +130,8 @@ def cmd_build(args) -> int:
     if getattr(args, "platforms", None) is not None:
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
-                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large)
+                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
+                fmi_version=args.fmi_version)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
@@ -341,7 +342,7 @@ def cmd_ssp(args) -> int:
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.ssp", "--output")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
-    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet)
+    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet, fmi_version=args.fmi_version)
     print(f"wrote {path}")
     return 0
 
@@ -391,6 +392,8 @@ def make_parser() -> argparse.ArgumentParser:
                    help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
                         "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
                         "all that the installed compilers can build; docs/standalone.md 'Platforms')")
+    b.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
                                          "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
@@ -443,6 +446,7 @@ def make_parser() -> argparse.ArgumentParser:
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
     x.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
+    x.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the packaged FMU")
     x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")

@@ -19,7 +19,8 @@ __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", 
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
-          tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False) -> BuildResult:
+          tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False,
+          fmi_version: int = 2) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
     docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
@@ -34,7 +35,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
-    platform_kw(runtime, platforms)
+    platform_kw(runtime, platforms, fmi_version)
     if tables is None:  # refuse an oversized scene before planning or estimating anything
         check_build_cost(scene, allow_large=allow_large)
     plan = None
@@ -55,4 +56,5 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     else:
         verified = None
     return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
-                                verified_envelope=verified, platforms=platforms, allow_large=allow_large)
+                                verified_envelope=verified, platforms=platforms, allow_large=allow_large,
+                                fmi_version=fmi_version)

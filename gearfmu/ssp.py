@@ -74,6 +74,12 @@ class SspError(ValueError):
     """Bad SSP input (variant name, parameter name or value); the message names it."""
 
 
+def _is_integer(var) -> bool:
+    """An FMI 2 Integer or an FMI 3 Int32 (an SSP 1.0 ``Integer`` connector); every other is ``Real``.
+    An FMI 3 array variable (``pair_force``) is one connector of its name: SSP 1.0 has no array type."""
+    return var.type in ("Integer", "Int32")
+
+
 def _q(prefix: str, tag: str) -> str:
     return f"{{{NS[prefix]}}}{tag}"
 
@@ -114,7 +120,7 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
             x = finite_number(f"variants.{name}.{p}", val, error=SspError)
             if var.min is not None and x < float(var.min) or var.max is not None and x > float(var.max):
                 raise SspError(f"variants.{name}.{p} = {x!r}: outside the FMU's range [{var.min}, {var.max}]")
-            if var.type == "Integer":
+            if _is_integer(var):
                 if x != int(x):
                     raise SspError(f"variants.{name}.{p}: Integer parameter, got {x!r}")
                 x = int(x)
@@ -125,7 +131,7 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
 
 def _value_element(parent, prefix: str, var, x) -> None:
     """``<prefix:Real value unit>`` / ``<prefix:Integer value>`` of a parameter value."""
-    if var.type == "Integer":
+    if _is_integer(var):
         ET.SubElement(parent, _q(prefix, "Integer"), {"value": str(int(x))})
     else:
         attrs = {"value": repr(float(x))}
@@ -156,7 +162,7 @@ def _ssv_xml(name: str, values: Mapping[str, float], md) -> bytes:
 
 def _connector(parent, var, kind: str, used_units: set) -> None:
     c = ET.SubElement(parent, _q("ssd", "Connector"), {"name": var.name, "kind": kind})
-    if var.type == "Integer":
+    if _is_integer(var):
         ET.SubElement(c, _q("ssc", "Integer"))
     else:
         ET.SubElement(c, _q("ssc", "Real"), {"unit": var.unit} if var.unit else {})
@@ -193,7 +199,7 @@ def _ssd_xml(ssd_name: str, variant: str, values: Mapping[str, float], fmu_rel: 
         for v in io:
             _connector(sconns, v, v.causality, used_units)
         binds = ET.SubElement(system, _q("ssd", "ParameterBindings"))
-        starts = {v.name: values.get(v.name, float(v.start) if v.type != "Integer" else int(v.start))
+        starts = {v.name: values.get(v.name, float(v.start) if not _is_integer(v) else int(v.start))
                   for v in io if v.causality == "input" and v.start is not None}
         if starts:
             _inline_binding(binds, f"{variant}_inputs", starts, md)
@@ -329,15 +335,16 @@ def parse_variant(text: str):
 
 
 def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[str, float]]] = None,
-                   progress: bool = False, tables=None) -> Path:
+                   progress: bool = False, tables=None, fmi_version: int = 2) -> Path:
     """Scene -> tables -> FMU -> SSP archive at ``out_path``.  The FMU's runtime is the
     scene's ``fmu.runtime``; ``tables``: MeshTables to use instead of the scene's physics
-    (as :func:`gearfmu.pipeline.build`)."""
+    (as :func:`gearfmu.pipeline.build`); ``fmi_version`` 3: an FMI 3.0 FMU (standalone runtime)."""
     out_path = Path(out_path)
     if out_path.suffix != ".ssp":
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
-        res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress, tables=tables)
+        res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress, tables=tables,
+                    fmi_version=fmi_version)
         trange = getattr(res.tables, "temperature_range_C", None)
         tin = getattr(res.tables, "temperature_input", None) or "bulk_temperature"
         return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),

@@ -110,20 +110,22 @@ def fmu_builder(runtime: str):
     return build_fmu
 
 
-def platform_kw(runtime: str, platforms) -> dict:
+def platform_kw(runtime: str, platforms, fmi_version: int = 2) -> dict:
     """``platforms`` for the builder: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys;
-    None: all available)."""
+    None: all available); ``fmi_version`` 3: the standalone FMI 3.0 FMU."""
+    if fmi_version not in (2, 3) or (fmi_version == 3 and runtime != "standalone"):
+        raise ValueError(f"--fmi-version: {fmi_version} needs 2, or 3 with the standalone runtime")
     if platforms is None:
-        return {}
+        return {"fmi_version": 3} if fmi_version == 3 else {}
     if runtime != "standalone":
         raise ValueError("--platforms: only the standalone runtime builds binaries for other platforms "
                          "(use --runtime standalone)")
-    return {"platforms": tuple(platforms)}
+    return {"platforms": tuple(platforms), **({"fmi_version": 3} if fmi_version == 3 else {})}
 
 
 def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
                          tables=None, plan=None, verified_envelope: Optional[dict] = None, platforms=None,
-                         allow_large: bool = False) -> BuildResult:
+                         allow_large: bool = False, fmi_version: int = 2) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
     :func:`gearfmu.pipeline.build`).  ``runtime``: "standalone" or "pythonfmu"; None: the
     scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the scene's physics
@@ -133,7 +135,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     estimate (gearfmu.tables.estimate) exceeds the limits."""
     runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
     builder = fmu_builder(runtime)
-    extra = platform_kw(runtime, platforms)
+    extra = platform_kw(runtime, platforms, fmi_version)
     est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:

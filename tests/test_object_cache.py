@@ -10,7 +10,7 @@ import subprocess
 import pytest
 
 from gearfmu.fmu import crossbuild
-from gearfmu.fmu.standalone_build import KERNEL_SOURCE, LAYER_SOURCE, STANDALONE_CFLAGS, copy_sources
+from gearfmu.fmu.standalone_build import KERNEL_SOURCE, LAYER_SOURCES, STANDALONE_CFLAGS, copy_sources
 
 
 @pytest.fixture
@@ -32,14 +32,14 @@ def counted_compiles(monkeypatch, tmp_path):
 
 def _build(src, out, identifier):
     return crossbuild.build_binaries(["x86_64-linux"], src, out, identifier, cflags=STANDALONE_CFLAGS,
-                                     layer_source=LAYER_SOURCE.name, kernel_source=KERNEL_SOURCE.name)
+                                     layer_source=LAYER_SOURCES, kernel_source=KERNEL_SOURCE.name)
 
 
 def test_second_build_links_kept_objects(counted_compiles, tmp_path):
     src = copy_sources(tmp_path / "src")
     _build(src, tmp_path / "a", "gear_a")
     compiles = [c for c in counted_compiles if "-c" in c]
-    assert len(compiles) == 2, compiles                      # one per source
+    assert len(compiles) == len(LAYER_SOURCES) + 1, compiles  # one per source
     counted_compiles.clear()
     _build(src, tmp_path / "b", "gear_a")
     assert not [c for c in counted_compiles if "-c" in c], "the second build compiled again"

@@ -39,7 +39,7 @@ Rebuilt equations with their sources: docs/fractal_contact.md.  In short:
 * Contact-surface correction coefficient lambda_c for curved flanks: the
   seed's formula (eq 19) is dimensionally inconsistent as published; we
   rebuild it from its stated meaning and limits (contact_correction_coefficient).
-* Nominal area (issue 9): the MB model ties the largest spot a_l to the real
+* Nominal area: the MB model ties the largest spot a_l to the real
   area, so at equal nominal pressure A_r/A0 grows with A0 (P ~ A_r^((3-D)/2)):
   a result on the whole slice depends on the slice width.  The mesh evaluates
   one reference element of the W-M sample size L_s x L_s (the surface's longest

@@ -75,7 +75,15 @@ class FmuFile:
 
     @property
     def variable_names(self) -> List[str]:
-        return [v.name for v in self.model_description.modelVariables]
+        """The variables by their FMI 2 names: an FMI 3 array ``pair_force`` of P elements is
+        ``pair_force[1]`` .. ``pair_force[P]``; FMI 3's independent ``time`` is left out."""
+        out = []
+        for v in self.model_description.modelVariables:
+            if v.causality == "independent":
+                continue
+            shape = getattr(v, "shape", None)
+            out += [f"{v.name}[{i + 1}]" for i in range(int(shape[0]))] if shape else [v.name]
+        return out
 
 
 def open_fmu(path) -> FmuFile:
@@ -168,11 +176,20 @@ def run_fmu(fmu_path, *, stop_time_s: float, comm_step_s: float, start_values=No
     """Simulate an FMU with fmpy at a fixed communication step."""
     import fmpy  # fmpy: heavy, only to run an FMU
 
+    fmi3 = fmpy.read_model_description(str(fmu_path)).fmiVersion.startswith("3")
+    if fmi3 and names is not None:  # FMI 3: the elements pair_force[i] are the array pair_force
+        names = list(dict.fromkeys(n.split("[", 1)[0] for n in names))
     t0 = time.perf_counter()
     res = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time_s, output_interval=comm_step_s,
                             start_values=dict(start_values or {}), output=names)
     wall = time.perf_counter() - t0
-    cols = {n: np.asarray(res[n], dtype=float) for n in res.dtype.names if n != "time"}
+    cols = {}
+    for n in res.dtype.names:
+        a = np.asarray(res[n], dtype=float)
+        if a.ndim == 2:  # an FMI 3 array: one column per element, named as in FMI 2
+            cols.update({f"{n}[{i + 1}]": a[:, i] for i in range(a.shape[1])})
+        elif n != "time":
+            cols[n] = a
     return FmuRun(np.asarray(res["time"], dtype=float), cols, wall)
 
 

@@ -24,7 +24,9 @@ FMI 2.0 names no folder for 64-bit ARM Linux (its platform names are
 win32/win64/linux32/linux64/darwin32/darwin64); ``aarch64-linux`` is the FMI 3
 tuple, which fmpy's ``supported_platforms`` and the FMI 3 loaders read.  The two
 macOS binaries are joined into one universal ("fat") Mach-O in darwin64, so an
-importer on either Mac loads the same file (:func:`write_fat_macho`).  glibc
+importer on either Mac loads the same file (:func:`write_fat_macho`).  An FMI 3
+FMU puts every binary under its platform tuple, ``binaries/<key>/`` (FMI 3.0
+section 2.5.1.1), one thin Mach-O per Mac CPU, no universal file.  glibc
 2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
 """
 from __future__ import annotations
@@ -230,10 +232,16 @@ def write_fat_macho(slices: Sequence[bytes], out_path) -> Path:
 
 
 # ------------------------------------------------------------------ the build
+def folder(key: str, fmi_version: int = 2) -> str:
+    """The binaries/ folder of platform ``key``: FMI 2's name, or FMI 3's tuple (the key itself)."""
+    return key if fmi_version == 3 else TARGETS[key].folder
+
+
 def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
-                   cflags: Sequence[str], layer_source: str, kernel_source: str,
-                   host_compile=None, host_cc_first: bool = False) -> Dict[str, dict]:
-    """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``.
+                   cflags: Sequence[str], layer_source, kernel_source: str,
+                   host_compile=None, host_cc_first: bool = False, fmi_version: int = 2) -> Dict[str, dict]:
+    """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``
+    (:func:`folder`; ``layer_source``: one C file or a sequence of them, compiled before the kernel).
 
     Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
     platform and ``{key: {"missing": reason}}`` for each that could not be built
@@ -242,7 +250,9 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     (the caller named its own C compiler)."""
     zig = zig_command()
     src = Path(sources_dir)
-    sources = [src / layer_source, src / kernel_source]
+    layer = [layer_source] if isinstance(layer_source, str) else list(layer_source)
+    sources = [*(src / n for n in layer), src / kernel_source]
+    fat_mac = fmi_version != 3
     report: Dict[str, dict] = {}
     hk = host_key()
     zver = zig_version(zig) if zig else None
@@ -252,11 +262,12 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
         with ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
             for key in keys:  # the zig compilations run side by side (one process each)
                 t = TARGETS[key]
-                outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") else
-                                   Path(binaries_dir) / t.folder) / (identifier + t.ext)
+                outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") and fat_mac else
+                                   Path(binaries_dir) / folder(key, fmi_version)) / (identifier + t.ext)
                 if key == hk and host_compile is not None and (zig is None or host_cc_first):
                     cmd, compiler = host_compile(out)
-                    report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": compiler,
+                    report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext,
+                                   "compiler": compiler,
                                    "command": _portable(cmd, src, None)}
                 elif zig is not None:
                     jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
@@ -265,10 +276,10 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
                     report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
             for key, job in jobs.items():
                 t = TARGETS[key]
-                report[key] = {"folder": t.folder, "file": identifier + t.ext, "compiler": zver,
+                report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext, "compiler": zver,
                                "command": _portable(job.result(), src, zig)}
         for key in keys:
-            if key.endswith("-darwin") and "missing" not in report[key]:
+            if fat_mac and key.endswith("-darwin") and "missing" not in report[key]:
                 darwin[key] = outs[key].read_bytes()
         if darwin:
             fat = Path(binaries_dir) / "darwin64" / (identifier + ".dylib")

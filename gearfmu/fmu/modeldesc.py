@@ -299,19 +299,9 @@ def _with_note(text: str, note: Optional[str]) -> str:
     return f"{text} {note}".strip()
 
 
-def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
-                          model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
-                          step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
-                          generation_date: Optional[str] = None, version: Optional[str] = None,
-                          description_note: Optional[str] = None) -> bytes:
-    """The FMI 2.0 CS ``modelDescription.xml`` (UTF-8 bytes) for ``variables``;
-    ``description_note`` is appended to the spec's description (the verified envelope)."""
-    attrib = {
-        "fmiVersion": "2.0", "modelName": model_name, "guid": guid,
-        "description": _with_note(str(spec.model.get("description", "")), description_note),
-        "generationTool": generation_tool, "variableNamingConvention": "structured",
-        "numberOfEventIndicators": "0",
-    }
+def _root_element(spec: Spec, attrib: dict, version: Optional[str], generation_date: Optional[str]):
+    """``<fmiModelDescription>`` with ``attrib`` plus the spec's author/license, version and date."""
+    attrib = dict(attrib)
     for key in ("author", "license"):
         if spec.model.get(key):
             attrib[key] = str(spec.model[key])
@@ -319,22 +309,15 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         attrib["version"] = version
     if generation_date:
         attrib["generationDateAndTime"] = generation_date
-    root = ET.Element("fmiModelDescription", attrib)
-    ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": model_identifier,
-        "needsExecutionTool": "true",  # the pythonfmu runtime needs a Python interpreter
-        "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false",
-        "canNotUseMemoryManagementFunctions": "true",
-        # the runtime saves its whole internal state (docs/robustness.md "FMU state")
-        "canGetAndSetFMUstate": "true",
-        "canSerializeFMUstate": "true",
-    })
-    used_units = sorted({v.unit for v in variables if v.unit is not None})
-    if used_units:
+    return ET.Element("fmiModelDescription", attrib)
+
+
+def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s) -> None:
+    """UnitDefinitions (``units``), LogCategories and DefaultExperiment: the same elements in FMI 2.0
+    and FMI 3.0 model descriptions."""
+    if units:
         ud = ET.SubElement(root, "UnitDefinitions")
-        for u in used_units:
+        for u in sorted(units):
             ue = ET.SubElement(ud, "Unit", {"name": u})
             exps = spec.units[u]
             if exps:
@@ -348,12 +331,38 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         de["stop_time_s"] = stop_time_s
     if step_size_s is not None:
         de["step_size_s"] = step_size_s
-    dea = {}
-    for key, xml_key in (("start_time_s", "startTime"), ("stop_time_s", "stopTime"), ("step_size_s", "stepSize")):
-        if key in de:
-            dea[xml_key] = repr(float(de[key]))
+    dea = {xml_key: repr(float(de[key])) for key, xml_key in
+           (("start_time_s", "startTime"), ("stop_time_s", "stopTime"), ("step_size_s", "stepSize")) if key in de}
     if dea:
         ET.SubElement(root, "DefaultExperiment", dea)
+
+
+def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
+                          model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
+                          step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
+                          generation_date: Optional[str] = None, version: Optional[str] = None,
+                          description_note: Optional[str] = None) -> bytes:
+    """The FMI 2.0 CS ``modelDescription.xml`` (UTF-8 bytes) for ``variables``;
+    ``description_note`` is appended to the spec's description (the verified envelope)."""
+    attrib = {
+        "fmiVersion": "2.0", "modelName": model_name, "guid": guid,
+        "description": _with_note(str(spec.model.get("description", "")), description_note),
+        "generationTool": generation_tool, "variableNamingConvention": "structured",
+        "numberOfEventIndicators": "0",
+    }
+    root = _root_element(spec, attrib, version, generation_date)
+    ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": model_identifier,
+        "needsExecutionTool": "true",  # the pythonfmu runtime needs a Python interpreter
+        "canHandleVariableCommunicationStepSize": "true",
+        "canInterpolateInputs": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canNotUseMemoryManagementFunctions": "true",
+        # the runtime saves its whole internal state (docs/robustness.md "FMU state")
+        "canGetAndSetFMUstate": "true",
+        "canSerializeFMUstate": "true",
+    })
+    _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None}, stop_time_s, step_size_s)
     mv = ET.SubElement(root, "ModelVariables")
     for i, v in enumerate(variables):
         if v.value_reference != i:
@@ -392,6 +401,129 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
             ET.SubElement(ie, "Unknown", ua)
     ET.indent(root, space="  ")
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
+
+
+# ------------------------------------------------------------- FMI 3.0 XML
+#: FMI 3.0 type of each spec type
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
+
+
+@dataclass(frozen=True)
+class Variable3:
+    """One FMI 3 variable: a scalar of the spec, or the array ``name`` of the per-slot
+    elements ``name[1] .. name[n]`` (value reference = that of ``name[1]``)."""
+    name: str
+    value_reference: int
+    size: Optional[int]          # None: a scalar; else the array length (<Dimension start=...>)
+    first: Variable              # the (first) element: type, causality, unit, start, ...
+
+
+def fmi3_variables(variables: Sequence[Variable]) -> List[Variable3]:
+    """Group the expanded variables into FMI 3 variables: ``name[1] .. name[P]`` (consecutive value
+    references, the per-slot entries of the spec) become one array ``name`` -- the same grouping the
+    C layer makes (gear_model.c mark_arrays)."""
+    out: List[Variable3] = []
+    i = 0
+    while i < len(variables):
+        v = variables[i]
+        if v.name.endswith("[1]"):
+            base, n = v.name[:-3], 1
+            while i + n < len(variables) and variables[i + n].name == f"{base}[{n + 1}]":
+                n += 1
+            out.append(Variable3(base, v.value_reference, n, v))
+            i += n
+        else:
+            out.append(Variable3(v.name, v.value_reference, None, v))
+            i += 1
+    return out
+
+
+def fmi3_time_vr(variables: Sequence[Variable]) -> int:
+    """Value reference of the FMI 3 independent variable ``time``: after every spec variable
+    (the C layer: n_vars)."""
+    return len(variables)
+
+
+def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_name: str,
+                           model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
+                           step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
+                           generation_date: Optional[str] = None, version: Optional[str] = None,
+                           description_note: Optional[str] = None,
+                           platforms_note: Optional[str] = None) -> bytes:
+    """The FMI 3.0 Co-Simulation ``modelDescription.xml`` of the standalone runtime (FMI 3.0
+    standard section 2.4: ModelVariables 2.4.7 with arrays (``<Dimension start=P>``, the slot
+    count fixed at build), ModelStructure 2.4.8 by value reference).  The same variables, names and
+    value references as the FMI 2 FMU (:func:`model_description_xml`) except that the per-slot
+    elements ``name[i]`` are the array ``name`` (:func:`fmi3_variables`), plus the independent
+    variable ``time`` (:func:`fmi3_time_vr`)."""
+    desc = _with_note(str(spec.model.get("description", "")).replace("FMI 2.0", "FMI 3.0"), description_note)
+    if platforms_note:
+        desc = (desc.rstrip() + " [" + platforms_note + "]").lstrip()
+    attrib = {"fmiVersion": "3.0", "modelName": model_name, "instantiationToken": guid, "description": desc,
+              "generationTool": generation_tool, "variableNamingConvention": "structured"}
+    root = _root_element(spec, attrib, version, generation_date)
+    ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": model_identifier, "needsExecutionTool": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
+        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
+        "hasEventMode": "false", "providesIntermediateUpdate": "false"})
+    _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None} | {"s"}, stop_time_s,
+                           step_size_s)
+    mv = ET.SubElement(root, "ModelVariables")
+    ET.SubElement(mv, "Float64", {"name": "time", "valueReference": str(fmi3_time_vr(variables)),
+                                  "causality": "independent", "variability": "continuous", "unit": "s",
+                                  "description": "Simulation time"})
+    vars3 = fmi3_variables(variables)
+    vr_of = {}
+    for v3 in vars3:
+        for k in range(v3.size or 1):
+            vr_of[variables[v3.first.value_reference + k].name] = v3.value_reference
+    for v3 in vars3:
+        v = v3.first
+        desc = v.description.replace("slot 1", "slot i") if v3.size else v.description
+        va = {"name": v3.name, "valueReference": str(v3.value_reference), "description": desc,
+              "causality": v.causality, "variability": v.variability}
+        if v.initial is not None:
+            va["initial"] = v.initial
+        if v.unit is not None:
+            va["unit"] = v.unit
+        for key in ("min", "max", "start"):
+            val = getattr(v, key)
+            if val is not None:
+                va[key] = " ".join([_num(val, v.type)] * (v3.size or 1))
+        el = ET.SubElement(mv, FMI3_TYPES[v.type], va)
+        if v3.size:
+            ET.SubElement(el, "Dimension", {"start": str(v3.size)})
+    ms = ET.SubElement(root, "ModelStructure")
+    for v3 in vars3:
+        if v3.first.causality == "output":
+            ET.SubElement(ms, "Output", {"valueReference": str(v3.value_reference)})
+    for v3 in vars3:
+        v = v3.first
+        if (v.causality == "output" and v.initial in ("approx", "calculated")) or v.causality == "calculatedParameter":
+            ua = {"valueReference": str(v3.value_reference)}
+            if v.initial_dependencies is not None:
+                ua["dependencies"] = " ".join(str(r) for r in sorted({vr_of[n] for n in v.initial_dependencies}))
+            ET.SubElement(ms, "InitialUnknown", ua)
+    ET.indent(root, space="  ")
+    return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
+
+
+def check_model_description3(xml_bytes: bytes, variables: Sequence[Variable]) -> None:
+    """Check an FMI 3 model description against ``variables``: every spec variable is there under its
+    FMI 3 name (arrays with their length) with its value reference, type and causality, plus ``time``."""
+    root = ET.fromstring(xml_bytes)
+    got = {}
+    for el in root.find("ModelVariables"):
+        dim = el.find("Dimension")
+        got[el.get("name")] = (el.tag, int(el.get("valueReference")), el.get("causality"),
+                               None if dim is None else int(dim.get("start")))
+    want = {v3.name: (FMI3_TYPES[v3.first.type], v3.value_reference, v3.first.causality, v3.size)
+            for v3 in fmi3_variables(variables)}
+    want["time"] = ("Float64", fmi3_time_vr(variables), "independent", None)
+    if got != want:
+        diff = sorted(set(got.items()) ^ set(want.items()))
+        raise ModelDescriptionError(f"FMI 3 model description and spec disagree: {diff}")
 
 
 def initial_dependency_indices(variables: Sequence[Variable], v: Variable) -> Optional[List[int]]:

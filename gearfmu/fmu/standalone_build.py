@@ -1,6 +1,7 @@
-"""Build the *standalone* gearfmu FMU: FMI 2.0 Co-Simulation in C, no Python.
+"""Build the *standalone* gearfmu FMU: FMI 2.0 (or 3.0) Co-Simulation in C, no Python.
 
-The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` and the C kernel
+The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` (FMI 3: ``fmi3_gear.c``) with the
+plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``) and the C kernel
 ``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
 into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
 sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
@@ -15,9 +16,10 @@ FMU layout (docs/standalone.md)::
 
     modelDescription.xml                 from the spec (gearfmu.fmu.modeldesc), CoSimulation
                                          needsExecutionTool=false, FMU state supported, SourceFiles
-    binaries/<folder>/<id>.<so|dll|dylib>  fmi2_gear.c + gearkernel.c for linux64, aarch64-linux, win64 and
+    binaries/<folder>/<id>.<so|dll|dylib>  the C files + gearkernel.c for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c gearkernel.c gearkernel.h fmi2*.h BUILD.txt CMakeLists.txt
+    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gearkernel.[ch] fmi2*.h BUILD.txt
+                                         CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
                                          buildflags.txt
     documentation/platforms.txt          which platforms carry a binary, which not and why
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
@@ -57,13 +59,22 @@ from .pythonfmu_build import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotF
                        FMI2_HEADERS, check_build_arguments, check_output_arguments, fmi2_header_dir,
                        find_c_compiler, temperature_input)
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
-from .modeldesc import (apply_start_values, check_model_description, expand_variables, features_of, load_spec,
-                        model_description_xml)
+from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
+                        features_of, load_spec, model_description_xml, model_description_xml3)
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
 
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
+FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
+#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split)
+SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c")
+SHARED_HEADER = HERE / "standalone" / "gear_model.h"
+#: the C files of the FMI 2 binary besides the kernel, in compile order
+LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
+FMI3_LAYER_SOURCES = (FMI3_LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
+FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+FMI_VERSIONS = (2, 3)
 CONFIG_FILE = "gearfmu_standalone.txt"
 CONFIG_FORMAT = "gearfmu-standalone"
 CONFIG_VERSION = 1
@@ -76,30 +87,36 @@ STANDALONE_CFLAGS = (*CFLAGS, "-fno-fast-math", "-fvisibility=hidden")
 BUILDFLAGS_FILE = "buildflags.txt"
 
 
-def copy_sources(dest_dir) -> Path:
-    """Copy every source the standalone binary needs into ``dest_dir``."""
+def layer_sources(fmi_version: int = 2) -> tuple:
+    """The C files of the binary besides the kernel: the FMI layer of ``fmi_version``, the plumbing, the glue."""
+    return FMI3_LAYER_SOURCES if fmi_version == 3 else LAYER_SOURCES
+
+
+def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
+    """Copy every source the standalone binary of ``fmi_version`` needs into ``dest_dir``."""
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
-    for src in (LAYER_SOURCE, KERNEL_SOURCE, KERNEL_HEADER):
+    layer = FMI3_LAYER_SOURCE if fmi_version == 3 else LAYER_SOURCE
+    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
         shutil.copy2(src, dest / src.name)
     hdr = fmi2_header_dir()
-    for h in FMI2_HEADERS:
+    for h in (FMI3_HEADERS if fmi_version == 3 else FMI2_HEADERS):
         shutil.copy2(hdr / h, dest / h)
     return dest
 
 
-def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None) -> list:
+def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_version: int = 2) -> list:
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
     ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
-    -o <lib> fmi2_gear.c gearkernel.c -lm``
+    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib), str(src / LAYER_SOURCE.name),
-           str(src / KERNEL_SOURCE.name), "-lm"]
+    cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib),
+           *(str(src / n) for n in layer_sources(fmi_version)), str(src / KERNEL_SOURCE.name), "-lm"]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     except OSError as exc:
@@ -109,16 +126,16 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None) -> lis
     return cmd
 
 
-def build_recipe_files(identifier: str) -> Dict[str, str]:
+def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
     """``sources/`` build files: BUILD.txt (prose), buildflags.txt (key=value, what a tool
     reads) and CMakeLists.txt (``cmake -S sources -B b && cmake --build b``), all with the
-    flags of :data:`STANDALONE_CFLAGS`."""
+    flags of :data:`STANDALONE_CFLAGS`; FMI 3 also buildDescription.xml (:func:`build_description_xml`)."""
     flags = " ".join(STANDALONE_CFLAGS)
-    srcs = f"{LAYER_SOURCE.name} {KERNEL_SOURCE.name}"
+    srcs = " ".join((*layer_sources(fmi_version), KERNEL_SOURCE.name))
     build_txt = (
-        "Build the binary of this FMU from these sources (C99, FMI 2.0 headers included):\n"
+        f"Build the binary of this FMU from these sources (C99, FMI {fmi_version}.0 headers included):\n"
         f"  cc {flags} -I. -o {identifier}.so {srcs} -lm\n"
-        f"and place it as binaries/<platform>/{identifier}.so (Windows: .dll, macOS: .dylib; the fmi2*\n"
+        f"and place it as binaries/<platform>/{identifier}.so (Windows: .dll, macOS: .dylib; the fmi{fmi_version}*\n"
         "functions are exported unprefixed), or: cmake -S sources -B build && cmake --build build\n"
         "(CMakeLists.txt, same flags). buildflags.txt lists the flags as key=value lines.\n"
         "The numbers are the same on every platform by construction: -ffp-contract=off (no fused\n"
@@ -147,7 +164,46 @@ def build_recipe_files(identifier: str) -> Dict[str, str]:
         f"  target_compile_options({identifier} PRIVATE -O2 -ffp-contract=off -fno-fast-math)\n"
         f"  target_link_libraries({identifier} m)\n"
         "endif()\n")
-    return {"BUILD.txt": build_txt, BUILDFLAGS_FILE: "\n".join(kv) + "\n", "CMakeLists.txt": cmake}
+    files = {"BUILD.txt": build_txt, BUILDFLAGS_FILE: "\n".join(kv) + "\n", "CMakeLists.txt": cmake}
+    if fmi_version == 3:
+        files[BUILD_DESCRIPTION_FILE] = build_description_xml(identifier)
+    return files
+
+
+#: the FMI 3.0 build description in an FMI 3 FMU's sources/ (FMI 3.0 section 2.5.1.2)
+BUILD_DESCRIPTION_FILE = "buildDescription.xml"
+
+
+def build_description_xml(identifier: str) -> str:
+    """``sources/buildDescription.xml`` of an FMI 3 FMU (the standard's fmi3BuildDescription
+    format): one C99 source file set (the FMI 3 layer, plumbing, glue, kernel), include directory
+    ``.``, the reproducibility flags of :data:`STANDALONE_CFLAGS` as ``compilerOptions``
+    (``-ffp-contract=off``, ``-fno-fast-math``) and the C math library."""
+    root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
+    bc = ET.SubElement(root, "BuildConfiguration", {
+        "modelIdentifier": identifier,
+        "description": "every platform: the same flags; no fused multiply-add (-ffp-contract=off) and no "
+                       "fast-math, so every platform computes the same numbers (MSVC: /O2 /fp:strict)"})
+    sfs = ET.SubElement(bc, "SourceFileSet", {"language": "C99", "compilerOptions": " ".join(
+        f for f in STANDALONE_CFLAGS if f not in ("-shared",))})
+    for name in (*FMI3_LAYER_SOURCES, KERNEL_SOURCE.name):
+        ET.SubElement(sfs, "SourceFile", {"name": name})
+    ET.SubElement(sfs, "IncludeDirectory", {"name": "."})
+    ET.SubElement(bc, "Library", {"name": "m", "external": "true", "description": "C math library (-lm)"})
+    ET.indent(root, space="  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def build_description_flags(xml_text: str) -> Dict[str, object]:
+    """What a tool reads from a ``buildDescription.xml``: sources, include dirs, compiler options, libraries."""
+    root = ET.fromstring(xml_text)
+    bc = root.find("BuildConfiguration")
+    sfs = bc.find("SourceFileSet")
+    return {"model_identifier": bc.get("modelIdentifier"), "language": sfs.get("language"),
+            "sources": [e.get("name") for e in sfs.findall("SourceFile")],
+            "include_dirs": [e.get("name") for e in sfs.findall("IncludeDirectory")],
+            "cflags": (sfs.get("compilerOptions") or "").split(),
+            "libraries": [e.get("name") for e in bc.findall("Library")]}
 
 
 def read_build_flags(text: str) -> Dict[str, str]:
@@ -160,9 +216,9 @@ def read_build_flags(text: str) -> Dict[str, str]:
     return out
 
 
-def platforms_text(report: Dict[str, dict]) -> str:
+def platforms_text(report: Dict[str, dict], fmi_version: int = 2) -> str:
     """``documentation/platforms.txt``: the binaries this FMU carries and the ones it lacks."""
-    lines = ["Platforms of this FMU (FMI 2.0 Co-Simulation, standalone gearfmu runtime)", ""]
+    lines = [f"Platforms of this FMU (FMI {fmi_version}.0 Co-Simulation, standalone gearfmu runtime)", ""]
     for key, r in report.items():
         if "missing" in r:
             lines.append(f"{key:16s} NOT BUILT: {r['missing']}; compile sources/ (sources/BUILD.txt)")
@@ -192,7 +248,7 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
     meta = json.loads(meta_bytes.decode("utf-8"))
     sc = meta["scalars"]
     lines = [
-        "# gearfmu standalone runtime configuration (written by gearfmu.fmu.standalone_build; read by fmi2_gear.c)",
+        "# gearfmu standalone runtime configuration (written by gearfmu.fmu.standalone_build; read by gear_model.c)",
         "# floats are C99 hexadecimal literals (exact); var = vr|causality|variability|type|output_index|start|min|max|name",
         f"format={CONFIG_FORMAT}", f"version={CONFIG_VERSION}",
         f"model_identifier={model_identifier}", f"guid={guid}",
@@ -255,8 +311,9 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
                          integrator: Union[int, str] = 1,
-                         platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None) -> Path:
-    """Build the standalone FMI 2.0 CS FMU of ``tables``; return its path.
+                         platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
+                         fmi_version: int = 2) -> Path:
+    """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
     ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
@@ -267,9 +324,13 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     host C compiler), and documentation/platforms.txt and the model description
     say which platforms are missing.  ``cc`` given: the build machine's platform
     is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
-    tables' own range, "not verified").  Written under a temporary name beside ``out_path`` and
-    renamed at the end.
+    tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
+    layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
+    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0").  Written under a
+    temporary name beside ``out_path`` and renamed at the end.
     """
+    if fmi_version not in FMI_VERSIONS:
+        raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
     zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
         tables, model_name=model_name, damping_ratio=damping_ratio,
         pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
@@ -309,24 +370,26 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
 
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"
-        src = copy_sources(root / "sources")
+        src = copy_sources(root / "sources", fmi_version)
         host_cc = {}
 
         def host_compile(out_lib):
             host_cc["cc"] = cc or find_c_compiler()
-            return compile_standalone(src, out_lib, cc=host_cc["cc"]), _compiler_version(host_cc["cc"])
+            return (compile_standalone(src, out_lib, cc=host_cc["cc"], fmi_version=fmi_version),
+                    _compiler_version(host_cc["cc"]))
 
         try:
             binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
-                                                 cflags=STANDALONE_CFLAGS, layer_source=LAYER_SOURCE.name,
+                                                 cflags=STANDALONE_CFLAGS, layer_source=layer_sources(fmi_version),
                                                  kernel_source=KERNEL_SOURCE.name, host_compile=host_compile,
-                                                 host_cc_first=cc_given)
+                                                 host_cc_first=cc_given, fmi_version=fmi_version)
         except crossbuild.CrossBuildError as exc:
             raise FmuBuildError(str(exc)) from None
-        for name, text in build_recipe_files(identifier).items():
+        for name, text in build_recipe_files(identifier, fmi_version).items():
             (src / name).write_text(text, encoding="utf-8")
         (root / "documentation").mkdir()
-        (root / "documentation" / "platforms.txt").write_text(platforms_text(binaries), encoding="utf-8")
+        (root / "documentation" / "platforms.txt").write_text(platforms_text(binaries, fmi_version),
+                                                              encoding="utf-8")
         built = {k: r for k, r in binaries.items() if "missing" not in r}
         for r in built.values():
             r["sha256"] = hashlib.sha256((root / "binaries" / r["folder"] / r["file"]).read_bytes()).hexdigest()
@@ -343,7 +406,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
             (res / "scene.toml").write_text(scene_text, encoding="utf-8")
         compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
         provenance = {
-            "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone",
+            "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone", "fmi_version": fmi_version,
             "model_name": model_name, "model_identifier": identifier, "guid": guid,
             "parameters": dict(params, stop_time_s=tstop, output_interval_s=dt),
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(), "tables_provenance": tables.provenance,
@@ -363,15 +426,19 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                 p = root / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_bytes(data)
-        xml = model_description_xml(spec, variables, model_name=model_name, model_identifier=identifier,
-                                    guid=guid, stop_time_s=tstop, step_size_s=dt,
-                                    generation_tool=f"gearfmu {__version__} (standalone runtime)",
-                                    generation_date=now, version=__version__,
-                                    description_note=envelope_note(env_rec))
-        check_model_description(xml, variables)
-        xml = standalone_model_description(xml, [LAYER_SOURCE.name, KERNEL_SOURCE.name],
-                                           platforms_note=crossbuild.platform_summary(binaries))
-        check_model_description(xml, variables)
+        md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid, stop_time_s=tstop,
+                       step_size_s=dt, generation_tool=f"gearfmu {__version__} (standalone runtime)",
+                       generation_date=now, version=__version__, description_note=envelope_note(env_rec))
+        if fmi_version == 3:
+            xml = model_description_xml3(spec, variables, platforms_note=crossbuild.platform_summary(binaries),
+                                         **md_args)
+            check_model_description3(xml, variables)
+        else:
+            xml = model_description_xml(spec, variables, **md_args)
+            check_model_description(xml, variables)
+            xml = standalone_model_description(xml, [*LAYER_SOURCES, KERNEL_SOURCE.name],
+                                               platforms_note=crossbuild.platform_summary(binaries))
+            check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
 
         out_path.parent.mkdir(parents=True, exist_ok=True)

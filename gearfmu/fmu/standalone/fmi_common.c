@@ -1,0 +1,283 @@
+/*
+ * fmi_common.c -- the generic FMI plumbing of the standalone gearfmu runtime,
+ * shared by fmi2_gear.c (FMI 2.0) and fmi3_gear.c (FMI 3.0): logging, the
+ * state-machine check of every call, get/set dispatch over the variable table
+ * and the FMU state box.  Nothing here knows gears (gear_model.h).
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gear_model.h"
+
+/* ------------------------------------------------------------- logging */
+void gf_log(gf_inst *c, int status, const char *category, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    if (c == NULL || c->log == NULL || c->host_logger == NULL) return;
+    if (status == GF_OK && !c->logging_on) return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    c->log(c, status, category, msg);
+}
+
+gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_log_fn log, void *host_env,
+                void (*host_logger)(void), const char *never_why)
+{
+    gf_inst *c = (gf_inst *)calloc(1, sizeof(gf_inst));
+    if (c == NULL) return NULL;
+    c->fmi_version = fmi_version;
+    c->log = log;
+    c->host_env = host_env;
+    c->host_logger = host_logger;
+    snprintf(c->instance_name, sizeof c->instance_name, "%s", instance_name ? instance_name : "gearfmu");
+    c->logging_on = logging_on ? 1 : 0;
+    c->never_why = never_why;
+    return c;
+}
+
+gf_inst *gf_instantiate_error(gf_inst *c, const char *fn, const char *msg)
+{
+    gf_log(c, GF_ERROR_STATUS, "logStatusFatal", "%s: %s; refusing to instantiate", fn, msg);
+    gm_free(c);
+    return NULL;
+}
+
+/* ------------------------------------------------------ state machine */
+static const char *state_name(const gf_inst *c, int mode)
+{
+    switch (mode) {
+    case GF_INSTANTIATED: return c->fmi_version == 3 ? "Instantiated" : "instantiated";
+    case GF_INIT_MODE: return c->fmi_version == 3 ? "InitializationMode" : "initializationMode";
+    case GF_STEP_MODE: return c->fmi_version == 3 ? "StepMode" : "stepComplete";
+    case GF_TERMINATED: return c->fmi_version == 3 ? "Terminated" : "terminated";
+    case GF_ERROR: return c->fmi_version == 3 ? "error" : "error";
+    default: return "unknown";
+    }
+}
+
+/* Which function may be called in which state: one table per FMI version (the
+ * layer's), checked at the entry of every function, as in the Modelica
+ * Reference-FMUs.  A call outside its states is refused with Error and a log
+ * message naming the function and the state; the instance is left as it was. */
+int gf_allowed(gf_inst *c, const gf_call *call)
+{
+    char states[160];
+    int bit;
+    size_t n = 0;
+    if (c == NULL) return 0; /* no instance: nothing to log to */
+    if (c->mode & call->allowed) return 1;
+    states[0] = '\0';
+    for (bit = GF_INSTANTIATED; bit <= GF_ERROR; bit <<= 1)
+        if (call->allowed & bit) n += (size_t)snprintf(states + n, sizeof states - n, "%s%s",
+                                                       n ? ", " : "", state_name(c, bit));
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: illegal call sequence: not allowed in state %s (allowed in: %s)",
+           call->name, state_name(c, c->mode), n ? states : c->never_why);
+    return 0;
+}
+
+/* ------------------------------------------------------------ get / set */
+int gf_null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const void *value)
+{
+    if (nvr > 0 && (vr == NULL || value == NULL)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: vr[] or value[] is NULL with nvr = %lu", fn,
+               (unsigned long)nvr);
+        return 1;
+    }
+    return 0;
+}
+
+/* the number of values reference r brings (0: bad, logged) */
+static size_t check_vr(gf_inst *c, const char *fn, unsigned int r, int want_integer, int arrays, long time_vr)
+{
+    const char *tname = c->fmi_version == 3 ? (want_integer ? "Int32" : "Float64") : (want_integer ? "Integer" : "Real");
+    if (time_vr >= 0 && (long)r == time_vr) {
+        if (want_integer) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: time is not of type %s", fn, tname);
+            return 0;
+        }
+        return 1;
+    }
+    if ((long)r >= (long)c->n_vars || (arrays && c->vars[r].array_len == 0)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: no variable with value reference %u", fn, r);
+        return 0;
+    }
+    if (c->vars[r].is_integer != want_integer) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s is not of type %s", fn, c->vars[r].name, tname);
+        return 0;
+    }
+    return arrays ? (size_t)c->vars[r].array_len : 1;
+}
+
+/* the total number of values of vr[] (0 with a bad reference or a wrong n_values, logged); ok set to 1 if valid */
+static int check_refs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int want_integer, int arrays,
+                      long time_vr, size_t n_values, int set)
+{
+    size_t i, total = 0, n;
+    for (i = 0; i < nvr; ++i) {
+        if ((n = check_vr(c, fn, vr[i], want_integer, arrays, time_vr)) == 0) return 0;
+        if (set && (time_vr < 0 || (long)vr[i] != time_vr)) {
+            size_t k;
+            for (k = 0; k < n; ++k)
+                if (!gm_settable(c, fn, (int)vr[i] + (int)k)) return 0;
+        } else if (set) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: time (the independent variable) cannot be set", fn);
+            return 0;
+        }
+        total += n;
+    }
+    if (arrays && total != n_values) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the value references have %lu values, nValues is %lu", fn,
+               (unsigned long)total, (unsigned long)n_values);
+        return 0;
+    }
+    return 1;
+}
+
+int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
+                  double real[], int integer[], size_t n_values)
+{
+    size_t i, j = 0;
+    int want_integer = integer != NULL;
+    if (gf_null_args(c, fn, nvr, vr, want_integer ? (const void *)integer : (const void *)real)) return GF_ERROR_STATUS;
+    if (!check_refs(c, fn, vr, nvr, want_integer, arrays, time_vr, n_values, 0)) return GF_ERROR_STATUS;
+    if (!gm_refresh_outputs(c, fn, vr, nvr)) return GF_ERROR_STATUS;
+    for (i = 0; i < nvr; ++i) {
+        size_t k, n = (time_vr >= 0 && (long)vr[i] == time_vr) ? 1 : (arrays ? (size_t)c->vars[vr[i]].array_len : 1);
+        for (k = 0; k < n; ++k, ++j) {
+            double x = (time_vr >= 0 && (long)vr[i] == time_vr) ? c->time : gm_value(c, (int)(vr[i] + k));
+            if (want_integer) integer[j] = gm_as_int(x);
+            else real[j] = x;
+        }
+    }
+    return GF_OK;
+}
+
+int gf_set_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
+                  const double real[], const int integer[], size_t n_values)
+{
+    size_t i, j = 0;
+    int want_integer = integer != NULL;
+    if (gf_null_args(c, fn, nvr, vr, want_integer ? (const void *)integer : (const void *)real)) return GF_ERROR_STATUS;
+    if (!check_refs(c, fn, vr, nvr, want_integer, arrays, time_vr, n_values, 1)) return GF_ERROR_STATUS;
+    /* values are stored as given (NaN included); doStep / the initial state check them */
+    for (i = 0; i < nvr; ++i) {
+        size_t k, n = arrays ? (size_t)c->vars[vr[i]].array_len : 1;
+        for (k = 0; k < n; ++k, ++j) c->values[vr[i] + k] = want_integer ? (double)integer[j] : real[j];
+    }
+    if (nvr > 0) c->dirty = 1;
+    return GF_OK;
+}
+
+int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr)
+{
+    if (nvr == 0) return GF_OK;
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: this FMU has no %s variables", fn, type);
+    return GF_ERROR_STATUS;
+}
+
+/* ------------------------------------------------------------ FMU state */
+typedef struct {
+    size_t size;
+    /* followed by the bytes */
+} gf_state_box;
+
+int gf_get_state(gf_inst *c, const char *fn, void **state)
+{
+    gf_state_box *box;
+    size_t n;
+    if (state == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: FMUstate is NULL", fn);
+        return GF_ERROR_STATUS;
+    }
+    n = gm_snap_size(c);
+    box = (gf_state_box *)*state;
+    if (box == NULL || box->size != n) {
+        free(box);
+        box = (gf_state_box *)malloc(sizeof(gf_state_box) + n);
+        if (box == NULL) {
+            *state = NULL;
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: out of memory", fn);
+            return GF_ERROR_STATUS;
+        }
+        box->size = n;
+    }
+    gm_snap_write(c, (unsigned char *)(box + 1));
+    *state = box;
+    return GF_OK;
+}
+
+int gf_set_state(gf_inst *c, const char *fn, void *state)
+{
+    gf_state_box *box = (gf_state_box *)state;
+    if (box == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: FMUstate is NULL", fn);
+        return GF_ERROR_STATUS;
+    }
+    return gm_snap_read(c, (const unsigned char *)(box + 1), box->size, fn) ? GF_OK : GF_ERROR_STATUS;
+}
+
+void gf_free_state(void **state)
+{
+    if (state == NULL) return;
+    free(*state);
+    *state = NULL;
+}
+
+int gf_state_size(gf_inst *c, const char *fn, void *state, size_t *size)
+{
+    gf_state_box *box = (gf_state_box *)state;
+    if (box == NULL || size == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: FMUstate or size is NULL", fn);
+        return GF_ERROR_STATUS;
+    }
+    *size = box->size;
+    return GF_OK;
+}
+
+int gf_serialize_state(gf_inst *c, const char *fn, void *state, unsigned char *buf, size_t size)
+{
+    gf_state_box *box = (gf_state_box *)state;
+    if (box == NULL || buf == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: FMUstate or serializedState is NULL", fn);
+        return GF_ERROR_STATUS;
+    }
+    if (size < box->size) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: buffer of %lu bytes, need %lu", fn, (unsigned long)size,
+               (unsigned long)box->size);
+        return GF_ERROR_STATUS;
+    }
+    memcpy(buf, box + 1, box->size);
+    return GF_OK;
+}
+
+int gf_deserialize_state(gf_inst *c, const char *fn, const unsigned char *buf, size_t size, void **state)
+{
+    gf_state_box *box;
+    if (buf == NULL || state == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: serializedState or FMUstate is NULL", fn);
+        return GF_ERROR_STATUS;
+    }
+    if (size != gm_snap_size(c)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %lu bytes, this FMU's state has %lu", fn,
+               (unsigned long)size, (unsigned long)gm_snap_size(c));
+        return GF_ERROR_STATUS;
+    }
+    if (!gm_snap_is_ours(c, buf, size)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: not a state of this FMU", fn);
+        return GF_ERROR_STATUS;
+    }
+    box = (gf_state_box *)malloc(sizeof(gf_state_box) + size);
+    if (box == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: out of memory", fn);
+        return GF_ERROR_STATUS;
+    }
+    box->size = size;
+    memcpy(box + 1, buf, size);
+    free(*state);
+    *state = box;
+    return GF_OK;
+}

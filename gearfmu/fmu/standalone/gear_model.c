@@ -1,0 +1,975 @@
+/*
+ * gear_model.c -- the gear glue of the standalone gearfmu runtime, one
+ * definition for its FMI 2.0 layer (fmi2_gear.c) and its FMI 3.0 layer
+ * (fmi3_gear.c); gear_model.h says how the layers and this file split the work.
+ *
+ * What instantiation reads (from the resource folder the layer resolves: FMI 2
+ * gives a file:// URI, FMI 3 a native path):
+ *   gearfmu_standalone.txt  key=value lines written by
+ *       gearfmu/fmu/standalone_build.py: GUID (FMI 3: instantiation token),
+ *       table dimensions and byte offsets, scalars as C99 hexadecimal floats
+ *       (exact), the SHA-256 of tables.bin and the variable table (value
+ *       reference, causality, variability, type, kernel output index, start,
+ *       min, max, name) -- the same value references as
+ *       modeldescription/variables.toml via gearfmu/fmu/modeldesc.py.
+ *   tables.bin  the tables (little-endian float64 arrays,
+ *       gearfmu/tables/mesh_tables.py format); its SHA-256 (FIPS 180-4, computed here)
+ *       must equal the recorded one, else instantiation is refused.
+ *
+ * Behaviour (same as the pythonfmu runtime, docs/fmu.md): non-finite or
+ * out-of-range inputs, a bad communication step or a kernel failure -> a log
+ * message and Discard with the state unchanged; nothing here ever aborts
+ * or calls exit.  The FMU state is a plain struct (the kernel state), copied
+ * with the variable values into one flat block (gm_snap_*).
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gear_model.h"
+
+#define GF_CONFIG_FILE "gearfmu_standalone.txt"
+#define GF_CONFIG_FORMAT "gearfmu-standalone"
+#define GF_CONFIG_VERSION 1
+#define GF_MAX_LINE 4096
+#define GF_SNAPSHOT_MAGIC 0x47464d55u /* "GFMU" */
+#define GF_SNAPSHOT_VERSION 2u /* 2: mode is a GF_* state bit */
+
+/* The FMU state block (flat, no pointers): header, kernel state, values, outputs. */
+typedef struct {
+    uint32_t magic;
+    uint32_t version;
+    uint32_t n_vars;
+    uint32_t n_out;
+    uint64_t tables_tag;  /* first 8 bytes of the tables' SHA-256: a state fits one FMU only */
+    int32_t mode;
+    int32_t initialized;
+    int32_t warned_range;
+    int32_t zeta_valid;
+    double time;
+    double zeta_applied;
+    gk_state state;
+    /* followed by double values[n_vars], double out[n_out] */
+} gf_snap_header;
+
+static const char *kernel_error(int st)
+{
+    switch (st) {
+    case GK_ERR_MODEL: return "bad table dimensions or scalars";
+    case GK_ERR_INPUT: return "non-finite input";
+    case GK_ERR_STEP: return "communication step or max_step not finite and > 0 (or more than 1e8 substeps)";
+    case GK_ERR_NONFINITE: return "the state became non-finite (step too large for the stiffness? lower max_step)";
+    case GK_ERR_NOCONTACT: return "no tooth pair in contact at the initial angle (tables have k = 0 there)";
+    case GK_ERR_PARAM: return "damping_ratio, damping_model or integrator out of range";
+    default: return "kernel error";
+    }
+}
+
+/* ------------------------------------------------------------- SHA-256 */
+/* FIPS 180-4 section 6.2 (SHA-256), written from the standard's text. */
+typedef struct {
+    uint32_t h[8];
+    uint64_t len;
+    unsigned char buf[64];
+    size_t nbuf;
+} gf_sha256;
+
+static const uint32_t SHA_K[64] = {
+    0x428a2f98u, 0x71374491u, 0xb5c0fbcfu, 0xe9b5dba5u, 0x3956c25bu, 0x59f111f1u, 0x923f82a4u, 0xab1c5ed5u,
+    0xd807aa98u, 0x12835b01u, 0x243185beu, 0x550c7dc3u, 0x72be5d74u, 0x80deb1feu, 0x9bdc06a7u, 0xc19bf174u,
+    0xe49b69c1u, 0xefbe4786u, 0x0fc19dc6u, 0x240ca1ccu, 0x2de92c6fu, 0x4a7484aau, 0x5cb0a9dcu, 0x76f988dau,
+    0x983e5152u, 0xa831c66du, 0xb00327c8u, 0xbf597fc7u, 0xc6e00bf3u, 0xd5a79147u, 0x06ca6351u, 0x14292967u,
+    0x27b70a85u, 0x2e1b2138u, 0x4d2c6dfcu, 0x53380d13u, 0x650a7354u, 0x766a0abbu, 0x81c2c92eu, 0x92722c85u,
+    0xa2bfe8a1u, 0xa81a664bu, 0xc24b8b70u, 0xc76c51a3u, 0xd192e819u, 0xd6990624u, 0xf40e3585u, 0x106aa070u,
+    0x19a4c116u, 0x1e376c08u, 0x2748774cu, 0x34b0bcb5u, 0x391c0cb3u, 0x4ed8aa4au, 0x5b9cca4fu, 0x682e6ff3u,
+    0x748f82eeu, 0x78a5636fu, 0x84c87814u, 0x8cc70208u, 0x90befffau, 0xa4506cebu, 0xbef9a3f7u, 0xc67178f2u};
+
+#define ROTR(x, n) (((x) >> (n)) | ((x) << (32 - (n))))
+
+static void sha_block(gf_sha256 *s, const unsigned char *p)
+{
+    uint32_t w[64], a, b, c, d, e, f, g, h, t1, t2;
+    int i;
+    for (i = 0; i < 16; ++i)
+        w[i] = ((uint32_t)p[4 * i] << 24) | ((uint32_t)p[4 * i + 1] << 16) | ((uint32_t)p[4 * i + 2] << 8) |
+               (uint32_t)p[4 * i + 3];
+    for (i = 16; i < 64; ++i) {
+        uint32_t s0 = ROTR(w[i - 15], 7) ^ ROTR(w[i - 15], 18) ^ (w[i - 15] >> 3);
+        uint32_t s1 = ROTR(w[i - 2], 17) ^ ROTR(w[i - 2], 19) ^ (w[i - 2] >> 10);
+        w[i] = w[i - 16] + s0 + w[i - 7] + s1;
+    }
+    a = s->h[0]; b = s->h[1]; c = s->h[2]; d = s->h[3];
+    e = s->h[4]; f = s->h[5]; g = s->h[6]; h = s->h[7];
+    for (i = 0; i < 64; ++i) {
+        t1 = h + (ROTR(e, 6) ^ ROTR(e, 11) ^ ROTR(e, 25)) + ((e & f) ^ (~e & g)) + SHA_K[i] + w[i];
+        t2 = (ROTR(a, 2) ^ ROTR(a, 13) ^ ROTR(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
+        h = g; g = f; f = e; e = d + t1;
+        d = c; c = b; b = a; a = t1 + t2;
+    }
+    s->h[0] += a; s->h[1] += b; s->h[2] += c; s->h[3] += d;
+    s->h[4] += e; s->h[5] += f; s->h[6] += g; s->h[7] += h;
+}
+
+static void sha_init(gf_sha256 *s)
+{
+    static const uint32_t H0[8] = {0x6a09e667u, 0xbb67ae85u, 0x3c6ef372u, 0xa54ff53au,
+                                   0x510e527fu, 0x9b05688cu, 0x1f83d9abu, 0x5be0cd19u};
+    memcpy(s->h, H0, sizeof H0);
+    s->len = 0;
+    s->nbuf = 0;
+}
+
+static void sha_update(gf_sha256 *s, const unsigned char *p, size_t n)
+{
+    s->len += (uint64_t)n;
+    while (n > 0) {
+        size_t take = 64 - s->nbuf;
+        if (take > n) take = n;
+        memcpy(s->buf + s->nbuf, p, take);
+        s->nbuf += take;
+        p += take;
+        n -= take;
+        if (s->nbuf == 64) {
+            sha_block(s, s->buf);
+            s->nbuf = 0;
+        }
+    }
+}
+
+static void sha_final_hex(gf_sha256 *s, char hex[65])
+{
+    uint64_t bits = s->len * 8u;
+    unsigned char pad = 0x80, zero = 0, lenb[8];
+    int i;
+    sha_update(s, &pad, 1);
+    while (s->nbuf != 56) sha_update(s, &zero, 1);
+    for (i = 0; i < 8; ++i) lenb[i] = (unsigned char)(bits >> (56 - 8 * i));
+    sha_update(s, lenb, 8);
+    for (i = 0; i < 8; ++i) sprintf(hex + 8 * i, "%08x", (unsigned)s->h[i]);
+    hex[64] = '\0';
+}
+
+/* ----------------------------------------------------------- utilities */
+/* a stored Integer value as int; a value no int holds (only from a foreign or
+ * corrupted FMU state) becomes -1, which every integer parameter here rejects
+ * (a plain cast would be undefined behaviour) */
+int gm_as_int(double x)
+{
+    return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
+}
+
+static void copy_str(char *dst, size_t cap, const char *src)
+{
+    size_t n = strlen(src);
+    if (n >= cap) n = cap - 1;
+    memcpy(dst, src, n);
+    dst[n] = '\0';
+}
+
+static int hexval(int ch)
+{
+    if (ch >= '0' && ch <= '9') return ch - '0';
+    if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
+    if (ch >= 'A' && ch <= 'F') return ch - 'A' + 10;
+    return -1;
+}
+
+/* file:// URI of the resources folder -> local folder path ending in '/' (percent-decoded).
+ * Accepts file:///abs, file://localhost/abs and file:/abs (RFC 8089). */
+int gm_uri_to_dir(const char *uri, char *out, size_t cap)
+{
+    const char *p;
+    size_t n = 0;
+    if (uri == NULL) return 0;
+    if (strncmp(uri, "file://localhost/", 17) == 0) p = uri + 16;
+    else if (strncmp(uri, "file:///", 8) == 0) p = uri + 7;
+    else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
+    else return 0;
+#ifdef _WIN32
+    if (p[0] == '/' && p[1] != '\0' && p[2] == ':') p++; /* /C:/... */
+#endif
+    while (*p != '\0') {
+        int ch = (unsigned char)*p;
+        if (ch == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
+            ch = hexval(p[1]) * 16 + hexval(p[2]);
+            p += 3;
+        } else {
+            p++;
+        }
+        if (n + 1 >= cap) return 0;
+        out[n++] = (char)ch;
+    }
+    if (n > 0 && out[n - 1] != '/') {
+        if (n + 1 >= cap) return 0;
+        out[n++] = '/';
+    }
+    if (n >= cap) return 0;
+    out[n] = '\0';
+    return 1;
+}
+
+/* folder (ending in a separator, else one is added) + fname */
+static int join_path(const char *dir, const char *fname, char *out, size_t cap)
+{
+    size_t n = strlen(dir);
+    int sep = n > 0 && dir[n - 1] != '/' && dir[n - 1] != '\\';
+    if (n + (size_t)sep + strlen(fname) + 1 > cap) return 0;
+    memcpy(out, dir, n);
+    if (sep) out[n++] = '/';
+    memcpy(out + n, fname, strlen(fname) + 1);
+    return 1;
+}
+
+static unsigned char *read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf;
+    long len;
+    if (f == NULL) return NULL;
+    if (fseek(f, 0, SEEK_END) != 0 || (len = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        fclose(f);
+        return NULL;
+    }
+    buf = (unsigned char *)malloc((size_t)len + 1);
+    if (buf == NULL) {
+        fclose(f);
+        return NULL;
+    }
+    if (len > 0 && fread(buf, 1, (size_t)len, f) != (size_t)len) {
+        free(buf);
+        fclose(f);
+        return NULL;
+    }
+    fclose(f);
+    buf[len] = 0;
+    *size = (size_t)len;
+    return buf;
+}
+
+static int parse_double(const char *s, double *v)
+{
+    char *end;
+    if (s == NULL || *s == '\0') return 0;
+    *v = strtod(s, &end);
+    return *end == '\0';
+}
+
+static int parse_long(const char *s, long *v)
+{
+    char *end;
+    if (s == NULL || *s == '\0') return 0;
+    *v = strtol(s, &end, 10);
+    return *end == '\0';
+}
+
+/* split s at '|' into at most nmax fields (in place) */
+static int split_fields(char *s, char **fields, int nmax)
+{
+    int n = 0;
+    fields[n++] = s;
+    while (*s != '\0') {
+        if (*s == '|') {
+            *s = '\0';
+            if (n == nmax) return -1;
+            fields[n++] = s + 1;
+        }
+        s++;
+    }
+    return n;
+}
+
+/* ------------------------------------------------------------- config */
+typedef struct {
+    char guid[GF_MAX_NAME];
+    char sha[65];
+    long P, n_phi, n_torque, bin_size;
+    long off_torque, off_k, off_e, off_b;
+    long n_temp, off_temp;  /* optional: temperature axis (n_temp = 0: none) */
+    double phi_period, Rb1, Rb2, I1, I2, k_mean;
+    int have_mask;
+    /* optional: the verified envelope (envelope.kind, envelope.<quantity>=lo|hi) */
+    int env_kind, env_have[GK_ENV_N];
+    double env_lo[GK_ENV_N], env_hi[GK_ENV_N];
+} gf_config;
+
+enum {
+    HAVE_GUID = 1 << 0, HAVE_SHA = 1 << 1, HAVE_P = 1 << 2, HAVE_NPHI = 1 << 3, HAVE_NT = 1 << 4,
+    HAVE_SIZE = 1 << 5, HAVE_OT = 1 << 6, HAVE_OK = 1 << 7, HAVE_OE = 1 << 8, HAVE_OB = 1 << 9,
+    HAVE_PHI = 1 << 10, HAVE_RB1 = 1 << 11, HAVE_RB2 = 1 << 12, HAVE_I1 = 1 << 13, HAVE_I2 = 1 << 14,
+    HAVE_KM = 1 << 15, HAVE_FORMAT = 1 << 16, HAVE_NVARS = 1 << 17, HAVE_ALL = (1 << 18) - 1
+};
+
+static int parse_var(gf_inst *c, char *val, int *count)
+{
+    char *f[9];
+    long vr, oi;
+    gf_var *v;
+    if (split_fields(val, f, 9) != 9) return 0;
+    if (!parse_long(f[0], &vr) || vr != *count || vr >= c->n_vars) return 0;
+    v = &c->vars[vr];
+    if (strcmp(f[1], "parameter") == 0) v->causality = GF_PARAMETER;
+    else if (strcmp(f[1], "input") == 0) v->causality = GF_INPUT;
+    else if (strcmp(f[1], "output") == 0) v->causality = GF_OUTPUT;
+    else v->causality = GF_OTHER;
+    if (strcmp(f[2], "fixed") == 0) v->variability = GF_FIXED;
+    else if (strcmp(f[2], "tunable") == 0) v->variability = GF_TUNABLE;
+    else if (strcmp(f[2], "continuous") == 0) v->variability = GF_CONTINUOUS;
+    else v->variability = GF_OTHER_VAR;
+    if (strcmp(f[3], "Integer") == 0) v->is_integer = 1;
+    else if (strcmp(f[3], "Real") == 0) v->is_integer = 0;
+    else return 0;
+    if (f[4][0] == '\0') v->out_index = -1;
+    else if (!parse_long(f[4], &oi)) return 0;
+    else v->out_index = (int)oi;
+    v->has_start = parse_double(f[5], &v->start);
+    v->has_min = parse_double(f[6], &v->min);
+    v->has_max = parse_double(f[7], &v->max);
+    if ((f[5][0] && !v->has_start) || (f[6][0] && !v->has_min) || (f[7][0] && !v->has_max)) return 0;
+    copy_str(v->name, sizeof v->name, f[8]);
+    (*count)++;
+    return 1;
+}
+
+/* returns NULL on success, else a message (written into err) */
+static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, char *err, size_t errcap)
+{
+    char line[GF_MAX_LINE];
+    const char *p = text;
+    int nvar_seen = 0, lineno = 0;
+    memset(cfg, 0, sizeof *cfg);
+    cfg->env_kind = GK_ENV_NOT_VERIFIED;
+    while (*p != '\0') {
+        size_t n = strcspn(p, "\n");
+        char *eq, *key, *val;
+        lineno++;
+        if (n >= sizeof line) {
+            snprintf(err, errcap, "line %d too long", lineno);
+            return err;
+        }
+        memcpy(line, p, n);
+        line[n] = '\0';
+        if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
+        p += n;
+        if (*p == '\n') p++;
+        if (line[0] == '\0' || line[0] == '#') continue;
+        eq = strchr(line, '=');
+        if (eq == NULL) {
+            snprintf(err, errcap, "line %d: no '='", lineno);
+            return err;
+        }
+        *eq = '\0';
+        key = line;
+        val = eq + 1;
+#define GF_D(name, field, bit)                                                                   \
+    else if (strcmp(key, name) == 0) {                                                           \
+        if (!parse_double(val, &cfg->field)) { snprintf(err, errcap, "%s: bad number", name); return err; } \
+        cfg->have_mask |= bit;                                                                   \
+    }
+#define GF_L(name, field, bit)                                                                   \
+    else if (strcmp(key, name) == 0) {                                                           \
+        if (!parse_long(val, &cfg->field)) { snprintf(err, errcap, "%s: bad integer", name); return err; } \
+        cfg->have_mask |= bit;                                                                   \
+    }
+        if (strcmp(key, "format") == 0) {
+            if (strcmp(val, GF_CONFIG_FORMAT) != 0) {
+                snprintf(err, errcap, "format is '%s', expected '%s'", val, GF_CONFIG_FORMAT);
+                return err;
+            }
+            cfg->have_mask |= HAVE_FORMAT;
+        } else if (strcmp(key, "version") == 0) {
+            long ver;
+            if (!parse_long(val, &ver) || ver != GF_CONFIG_VERSION) {
+                snprintf(err, errcap, "version '%s' unsupported (this runtime reads %d)", val, GF_CONFIG_VERSION);
+                return err;
+            }
+        } else if (strcmp(key, "guid") == 0) {
+            copy_str(cfg->guid, sizeof cfg->guid, val);
+            cfg->have_mask |= HAVE_GUID;
+        } else if (strcmp(key, "tables_sha256") == 0) {
+            if (strlen(val) != 64) { snprintf(err, errcap, "tables_sha256: need 64 hex digits"); return err; }
+            copy_str(cfg->sha, sizeof cfg->sha, val);
+            cfg->have_mask |= HAVE_SHA;
+        }
+        GF_L("slots", P, HAVE_P)
+        GF_L("n_phi", n_phi, HAVE_NPHI)
+        GF_L("n_torque", n_torque, HAVE_NT)
+        GF_L("tables_bytes", bin_size, HAVE_SIZE)
+        GF_L("offset.torque_Nm", off_torque, HAVE_OT)
+        GF_L("offset.k_N_per_m", off_k, HAVE_OK)
+        GF_L("offset.e_m", off_e, HAVE_OE)
+        GF_L("offset.backlash_half_m", off_b, HAVE_OB)
+        GF_L("n_temperature", n_temp, 0)
+        GF_L("offset.temperature_C", off_temp, 0)
+        GF_D("phi_period_rad", phi_period, HAVE_PHI)
+        GF_D("base_radius_pinion_m", Rb1, HAVE_RB1)
+        GF_D("base_radius_gear_m", Rb2, HAVE_RB2)
+        GF_D("inertia_pinion_kgm2", I1, HAVE_I1)
+        GF_D("inertia_gear_kgm2", I2, HAVE_I2)
+        GF_D("k_mean_N_per_m", k_mean, HAVE_KM)
+        else if (strcmp(key, "n_vars") == 0) {
+            long nv;
+            if (!parse_long(val, &nv) || nv < 1 || nv > 100000 || c->vars != NULL) {
+                snprintf(err, errcap, "n_vars: bad value '%s'", val);
+                return err;
+            }
+            c->n_vars = (int)nv;
+            c->vars = (gf_var *)calloc((size_t)nv, sizeof(gf_var));
+            c->values = (double *)calloc((size_t)nv, sizeof(double));
+            if (c->vars == NULL || c->values == NULL) { snprintf(err, errcap, "out of memory"); return err; }
+            cfg->have_mask |= HAVE_NVARS;
+        } else if (strcmp(key, "var") == 0) {
+            if (c->vars == NULL || !parse_var(c, val, &nvar_seen)) {
+                snprintf(err, errcap, "line %d: bad variable entry (n_vars first, then vr 0, 1, ... in order)", lineno);
+                return err;
+            }
+        }
+        else if (strcmp(key, "envelope.kind") == 0) {
+            long kind;
+            if (!parse_long(val, &kind) || kind < GK_ENV_VERIFIED || kind > GK_ENV_NOT_VERIFIED) {
+                snprintf(err, errcap, "envelope.kind: bad value '%s'", val);
+                return err;
+            }
+            cfg->env_kind = (int)kind;
+        } else if (strncmp(key, "envelope.", 9) == 0) {
+            static const char *const env_keys[GK_ENV_N] = {"pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"};
+            char *f[2];
+            int q;
+            for (q = 0; q < GK_ENV_N; ++q)
+                if (strcmp(key + 9, env_keys[q]) == 0) break;
+            if (q < GK_ENV_N) { /* lo|hi, finite, lo <= hi */
+                if (split_fields(val, f, 2) != 2 || !parse_double(f[0], &cfg->env_lo[q]) ||
+                    !parse_double(f[1], &cfg->env_hi[q]) || !(cfg->env_lo[q] <= cfg->env_hi[q])) {
+                    snprintf(err, errcap, "%s: need low|high numbers with low <= high", key);
+                    return err;
+                }
+                cfg->env_have[q] = 1;
+            }
+        }
+        /* unknown keys are ignored (forward compatible) */
+#undef GF_D
+#undef GF_L
+    }
+    if ((cfg->have_mask & HAVE_ALL) != HAVE_ALL) {
+        snprintf(err, errcap, "missing keys (mask 0x%x of 0x%x)", (unsigned)cfg->have_mask, (unsigned)HAVE_ALL);
+        return err;
+    }
+    if (nvar_seen != c->n_vars) {
+        snprintf(err, errcap, "n_vars = %d but %d var lines", c->n_vars, nvar_seen);
+        return err;
+    }
+    return NULL;
+}
+
+static int find_var(const gf_inst *c, const char *name)
+{
+    int i;
+    for (i = 0; i < c->n_vars; ++i)
+        if (strcmp(c->vars[i].name, name) == 0) return i;
+    return -1;
+}
+
+static int host_little_endian(void)
+{
+    const uint16_t one = 1;
+    return *(const unsigned char *)&one == 1;
+}
+
+static void swap8(unsigned char *p, size_t n_doubles)
+{
+    size_t i;
+    int k;
+    for (i = 0; i < n_doubles; ++i, p += 8)
+        for (k = 0; k < 4; ++k) {
+            unsigned char t = p[k];
+            p[k] = p[7 - k];
+            p[7 - k] = t;
+        }
+}
+
+/* ------------------------------------------------------------ checks */
+/* NULL if value i is acceptable, else writes a message into buf */
+static const char *bad_value(const gf_inst *c, int i, char *buf, size_t cap)
+{
+    const gf_var *v = &c->vars[i];
+    double x = c->values[i];
+    if (!isfinite(x)) {
+        snprintf(buf, cap, "%s = %g at t = %.17g s: not finite", v->name, x, c->time);
+        return buf;
+    }
+    if (v->has_min && x < v->min) {
+        snprintf(buf, cap, "%s = %.17g at t = %.17g s: below its minimum %.17g", v->name, x, c->time, v->min);
+        return buf;
+    }
+    if (v->has_max && x > v->max) {
+        snprintf(buf, cap, "%s = %.17g at t = %.17g s: above its maximum %.17g", v->name, x, c->time, v->max);
+        return buf;
+    }
+    return NULL;
+}
+
+static int apply_damping(gf_inst *c)
+{
+    char buf[512];
+    double zeta = c->values[c->vr_zeta];
+    int st;
+    if (c->zeta_valid && zeta == c->zeta_applied) return 1;
+    if (bad_value(c, c->vr_zeta, buf, sizeof buf) != NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; rejected", buf);
+        return 0;
+    }
+    st = gk_set_damping(c->model, zeta, gm_as_int(c->values[c->vr_dm]));
+    if (st != GK_OK) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_ratio = %.17g: %s; rejected", zeta, kernel_error(st));
+        return 0;
+    }
+    c->zeta_applied = zeta;
+    c->zeta_valid = 1;
+    return 1;
+}
+
+/* Compare an applied input or the pinion speed with the verified envelope: the kernel's
+ * rule and message (gk_envelope_check), logged as the one GF_WARNING for that input. */
+static void check_envelope(gf_inst *c, int q, const char *name, double value)
+{
+    char msg[900];
+    if (gk_envelope_check(&c->env, q, name, value, c->time, msg, (int)sizeof msg))
+        gf_log(c, GF_WARNING, "logStatusWarning", "%s", msg);
+}
+
+/* the applied inputs (torque, temperature) and the pinion speed of the current state */
+static void check_inputs_envelope(gf_inst *c, int speed)
+{
+    check_envelope(c, GK_ENV_PINION_TORQUE, "pinion_torque", c->values[c->vr_T1]);
+    if (c->vr_temp >= 0) check_envelope(c, GK_ENV_TEMPERATURE, c->temp_name, c->values[c->vr_temp]);
+    if (speed) check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
+}
+
+static void check_torque_range(gf_inst *c, double T1)
+{
+    if (!c->has_torque_range) return;
+    if (T1 < c->torque_lo || T1 > c->torque_hi) {
+        if (!c->warned_range)
+            gf_log(c, GF_WARNING, "logStatusWarning",
+                   "pinion_torque = %.17g N.m at t = %.17g s is outside the tables' torque axis [%.17g, %.17g] N.m; "
+                   "the tables are used at the nearest end (docs/model.md)", T1, c->time, c->torque_lo, c->torque_hi);
+        c->warned_range = 1;
+    } else {
+        c->warned_range = 0;
+    }
+}
+
+/* Select the bulk temperature in the kernel (docs/model.md "Temperature axis");
+ * NULL if fine, else a message in buf (NaN/inf or outside the axis: rejected, no clamping) */
+static const char *apply_temperature(gf_inst *c, char *buf, size_t cap)
+{
+    double T;
+    if (c->vr_temp < 0) return NULL;
+    T = c->values[c->vr_temp];
+    if (!isfinite(T) || T < c->temp_lo || T > c->temp_hi) {
+        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s outside the table range [%.17g, %.17g] degC",
+                 c->temp_name, T, c->time, c->temp_lo, c->temp_hi);
+        return buf;
+    }
+    if (gk_set_temperature(c->model, T) != GK_OK) {
+        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s: rejected by the kernel", c->temp_name, T, c->time);
+        return buf;
+    }
+    return NULL;
+}
+
+static int init_state(gf_inst *c)
+{
+    char buf[512];
+    int names[6], i, ok = 1, st;
+    double T1;
+    names[0] = c->vr_zeta; names[1] = c->vr_w0; names[2] = c->vr_th0;
+    names[3] = c->vr_hmax; names[4] = c->vr_dm; names[5] = c->vr_T1;
+    c->initialized = 0;
+    for (i = 0; i < 6; ++i)
+        if (bad_value(c, names[i], buf, sizeof buf) != NULL) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; cannot compute the initial state", buf);
+            ok = 0;
+        }
+    if (ok && !(c->values[c->vr_hmax] > 0.0)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "max_step = %.17g: must be > 0; cannot compute the initial state",
+               c->values[c->vr_hmax]);
+        ok = 0;
+    }
+    if (ok && c->values[c->vr_dm] != 0.0 && c->values[c->vr_dm] != 1.0) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (seed003)",
+               c->values[c->vr_dm]);
+        ok = 0;
+    }
+#ifdef GK_INTEGRATOR_RK4 /* the kernel has the integrator choice (gk_set_integrator) */
+    if (ok && c->vr_integrator >= 0) {
+        st = gk_set_integrator(c->model, gm_as_int(c->values[c->vr_integrator]));
+        if (st != GK_OK) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "integrator = %g: %s", c->values[c->vr_integrator],
+                   kernel_error(st));
+            ok = 0;
+        }
+    }
+#endif
+    if (ok && apply_temperature(c, buf, sizeof buf) != NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; cannot compute the initial state", buf);
+        ok = 0;
+    }
+    if (!ok) return 0;
+    c->zeta_valid = 0;
+    if (!apply_damping(c)) return 0;
+    T1 = c->values[c->vr_T1];
+    st = gk_initialize(c->model, &c->state, c->values[c->vr_th0], c->values[c->vr_w0], T1);
+    if (st == GK_OK) st = gk_outputs(c->model, &c->state, T1, c->out);
+    if (st != GK_OK) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "initial state: %s", kernel_error(st));
+        return 0;
+    }
+    check_torque_range(c, T1);
+    check_inputs_envelope(c, 1);
+    c->initialized = 1;
+    return 1;
+}
+
+void gm_reset(gf_inst *c)
+{
+    int i;
+    for (i = 0; i < c->n_vars; ++i) c->values[i] = c->vars[i].has_start ? c->vars[i].start : 0.0;
+    for (i = 0; i < c->n_out; ++i) c->out[i] = 0.0;
+    memset(&c->state, 0, sizeof c->state);
+    c->initialized = 0;
+    c->dirty = 1;
+    c->warned_range = 0;
+    gk_envelope_rearm(&c->env);
+    c->zeta_valid = 0;
+    c->zeta_applied = 0.0;
+    c->time = 0.0;
+    c->mode = GF_INSTANTIATED;
+}
+
+
+void gm_free(gf_inst *c)
+{
+    if (c == NULL) return;
+    free(c->vars);
+    free(c->values);
+    free(c->blob);
+    free(c->model);
+    free(c->out);
+    free(c);
+}
+
+/* name[1], name[2], ... name[n] in a row: element 1 carries n (FMI 3 arrays, docs/fmu.md) */
+static void mark_arrays(gf_inst *c)
+{
+    int i = 0;
+    while (i < c->n_vars) {
+        const char *nm = c->vars[i].name;
+        size_t len = strlen(nm);
+        int n = 1;
+        c->vars[i].array_len = 1;
+        if (len > 3 && strcmp(nm + len - 3, "[1]") == 0) {
+            char want[GF_MAX_NAME + 16];
+            size_t base = len - 3;
+            for (;;) {
+                if (i + n >= c->n_vars) break;
+                snprintf(want, sizeof want, "%.*s[%d]", (int)base, nm, n + 1);
+                if (strcmp(c->vars[i + n].name, want) != 0) break;
+                c->vars[i + n].array_len = 0;
+                n++;
+            }
+            c->vars[i].array_len = n;
+        }
+        i += n;
+    }
+}
+
+const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap)
+{
+    gf_config cfg;
+    char path[4096], hex[65];
+    unsigned char *text;
+    size_t size = 0;
+    int st, i;
+    gf_sha256 sha;
+    c->vr_integrator = -1;
+    c->vr_temp = -1;
+    c->temp_name = "bulk_temperature";
+    if (!join_path(res_dir, GF_CONFIG_FILE, path, sizeof path)) return "resource location too long";
+    text = read_file(path, &size);
+    if (text == NULL) {
+        snprintf(err, errcap, "cannot read resources/%s", GF_CONFIG_FILE);
+        return err;
+    }
+    {
+        char e2[512];
+        const char *e = read_config(c, (const char *)text, &cfg, e2, sizeof e2);
+        free(text);
+        if (e != NULL) {
+            snprintf(err, errcap, "resources/%s: %s", GF_CONFIG_FILE, e);
+            return err;
+        }
+    }
+    if (token == NULL || strcmp(token, cfg.guid) != 0) return "GUID differs from the one this FMU was built with";
+    /* tables.bin: size and SHA-256 */
+    if (!join_path(res_dir, "tables.bin", path, sizeof path)) return "resource location too long";
+    c->blob = read_file(path, &size);
+    if (c->blob == NULL) return "cannot read resources/tables.bin";
+    if ((long)size != cfg.bin_size) return "resources/tables.bin: wrong size (file corrupted)";
+    sha_init(&sha);
+    sha_update(&sha, c->blob, size);
+    sha_final_hex(&sha, hex);
+    if (strcmp(hex, cfg.sha) != 0)
+        return "resources/tables.bin: SHA-256 checksum mismatch (file corrupted or tampered with)";
+    c->tables_tag = 0;
+    for (i = 0; i < 16; ++i) c->tables_tag = (c->tables_tag << 4) | (uint64_t)hexval(cfg.sha[i]);
+    {
+        long P = cfg.P, N = cfg.n_phi, NT = cfg.n_torque, NTemp = cfg.n_temp > 0 ? cfg.n_temp : 1;
+        long need[5], offs[5];
+        int n_arr = cfg.n_temp > 0 ? 5 : 4;
+        if (P < 1 || N < 2 || NT < 1 || P > 1000 || N > 100000000L / P || NT > 10000 || NTemp > 10000 ||
+            NT * NTemp > 10000)
+            return "table dimensions out of range";
+        need[0] = NT; need[1] = NT * NTemp * P * N; need[2] = NT * NTemp * P * N; need[3] = P * N; need[4] = NTemp;
+        offs[0] = cfg.off_torque; offs[1] = cfg.off_k; offs[2] = cfg.off_e; offs[3] = cfg.off_b;
+        offs[4] = cfg.off_temp;
+        for (i = 0; i < n_arr; ++i)
+            if (offs[i] < 0 || offs[i] % 8 != 0 || offs[i] + 8 * need[i] > (long)size)
+                return "table array offsets outside resources/tables.bin";
+        if (!host_little_endian()) swap8(c->blob, size / 8); /* stored little-endian (docs/tables.md) */
+        c->arr_torque = (double *)(void *)(c->blob + cfg.off_torque);
+        c->arr_k = (double *)(void *)(c->blob + cfg.off_k);
+        c->arr_e = (double *)(void *)(c->blob + cfg.off_e);
+        c->arr_b = (double *)(void *)(c->blob + cfg.off_b);
+        c->arr_temp = (double *)(void *)(c->blob + cfg.off_temp);
+        c->P = (int)P;
+        c->model = (gk_model *)calloc(1, (size_t)gk_sizeof_model());
+        c->n_out = gk_n_outputs(c->P);
+        c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
+        if (c->model == NULL || c->out == NULL) return "out of memory";
+        st = gk_init(c->model, c->P, (int)N, (int)NT, c->arr_torque, c->arr_k, c->arr_e, c->arr_b,
+                     cfg.phi_period, cfg.Rb1, cfg.Rb2, cfg.I1, cfg.I2, cfg.k_mean);
+        if (st != GK_OK) {
+            snprintf(err, errcap, "kernel rejects the tables (%s)", kernel_error(st));
+            return err;
+        }
+        if (cfg.n_temp > 0) { /* temperature axis: k, e are [NT][NTemp][P][N] */
+            if (gk_set_temperature_axis(c->model, (int)NTemp, c->arr_temp) != GK_OK)
+                return "kernel rejects the temperature axis (not finite and ascending)";
+            c->temp_lo = c->arr_temp[0];
+            c->temp_hi = c->arr_temp[NTemp - 1];
+        }
+        c->has_torque_range = NT > 1;
+        gk_envelope_init(&c->env, cfg.env_kind);
+        for (i = 0; i < GK_ENV_N; ++i)
+            if (cfg.env_have[i]) gk_envelope_set(&c->env, i, cfg.env_lo[i], cfg.env_hi[i]);
+        c->torque_lo = c->arr_torque[0];
+        c->torque_hi = c->arr_torque[NT - 1];
+    }
+    /* the variables the layer drives, by name (the spec's contract) */
+    c->vr_T1 = find_var(c, "pinion_torque");
+    c->vr_T2 = find_var(c, "gear_torque");
+    c->vr_zeta = find_var(c, "damping_ratio");
+    c->vr_w0 = find_var(c, "pinion_speed_start");
+    c->vr_th0 = find_var(c, "pinion_angle_start");
+    c->vr_hmax = find_var(c, "max_step");
+    c->vr_dm = find_var(c, "damping_model");
+    c->vr_integrator = find_var(c, "integrator");
+    if (cfg.n_temp > 0) {
+        /* the one temperature input the interface declares (docs/thermal.md: what the axis is) */
+        static const char *const temp_names[3] = {"bulk_temperature", "oil_temperature", "gearbox_temperature"};
+        int ti, found = 0;
+        for (ti = 0; ti < 3; ti++) {
+            int vr = find_var(c, temp_names[ti]);
+            if (vr >= 0) { c->vr_temp = vr; c->temp_name = temp_names[ti]; found++; }
+        }
+        if (found != 1)
+            return "tables have a temperature axis but not exactly one bulk_temperature, "
+                   "oil_temperature or gearbox_temperature input";
+    }
+    if (c->vr_T1 < 0 || c->vr_T2 < 0 || c->vr_zeta < 0 || c->vr_w0 < 0 || c->vr_th0 < 0 || c->vr_hmax < 0 ||
+        c->vr_dm < 0)
+        return "variable table lacks one of pinion_torque, gear_torque, damping_ratio, "
+               "pinion_speed_start, pinion_angle_start, max_step, damping_model";
+    for (i = 0; i < c->n_vars; ++i)
+        if (c->vars[i].causality == GF_OUTPUT && (c->vars[i].out_index < 0 || c->vars[i].out_index >= c->n_out))
+            return "an output's kernel index is outside the output vector";
+    mark_arrays(c);
+    gm_reset(c);
+    gf_log(c, GF_OK, "logAll", "instantiated: %d slots, %ld angle points, %ld torque rows, tables SHA-256 ok",
+           c->P, cfg.n_phi, cfg.n_torque);
+    return NULL;
+}
+
+/* Initialization Mode (FMI 2.0 section 3.2.3 / 4.2.4, FMI 3.0 section 4.2.3): from here on every
+ * output is the initial one computed from the values set so far -- the same
+ * init_state (gk_initialize + gk_outputs) that exit uses; a value set in this
+ * mode marks the outputs dirty and the next get of an output recomputes them. */
+void gm_enter_init(gf_inst *c)
+{
+    c->mode = GF_INIT_MODE;
+    c->dirty = 1;
+}
+
+int gm_exit_init(gf_inst *c)
+{
+    if (c->dirty || !c->initialized) {
+        if (!init_state(c)) return 0;
+        c->dirty = 0;
+    }
+    return 1;
+}
+
+double gm_value(const gf_inst *c, int i)
+{
+    const gf_var *v = &c->vars[i];
+    if (v->causality == GF_OUTPUT) return c->out[v->out_index];
+    return c->values[i];
+}
+
+int gm_settable(gf_inst *c, const char *fn, int i)
+{
+    const gf_var *v = &c->vars[i];
+    if (v->causality == GF_INPUT) return 1;
+    if (v->causality == GF_PARAMETER && v->variability == GF_TUNABLE) return 1;
+    if (v->causality == GF_PARAMETER && v->variability == GF_FIXED &&
+        (c->mode == GF_INSTANTIATED || c->mode == GF_INIT_MODE))
+        return 1;
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s cannot be set now (causality/variability forbid it)", fn,
+           v->name);
+    return 0;
+}
+
+/* In initialization mode, bring the outputs up to date with the values set
+ * (only when an output is asked for); 0 if they cannot be computed (logged). */
+int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr)
+{
+    size_t i;
+    int want = 0;
+    if (c->mode != GF_INIT_MODE || !c->dirty) return 1;
+    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].causality == GF_OUTPUT;
+    if (!want) return 1;
+    if (!init_state(c)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial outputs cannot be computed from the values set "
+               "(reasons above)", fn);
+        return 0;
+    }
+    c->dirty = 0;
+    return 1;
+}
+
+int gm_do_step(gf_inst *c, double t, double H)
+{
+    char buf[512];
+    double T1, T2;
+    int st, bad = 0;
+    if (isfinite(t)) c->time = t;
+    if (!c->initialized && !init_state(c)) return GF_DISCARD;
+    if (bad_value(c, c->vr_T1, buf, sizeof buf) != NULL) {
+        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
+        bad = 1;
+    }
+    if (bad_value(c, c->vr_T2, buf, sizeof buf) != NULL) {
+        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
+        bad = 1;
+    }
+    if (!(isfinite(H) && H > 0.0)) {
+        gf_log(c, GF_DISCARD, "logStatusDiscard",
+               "communication step size %g at t = %.17g s: must be finite and > 0; step rejected, state unchanged",
+               H, c->time);
+        bad = 1;
+    }
+    if (!bad && apply_temperature(c, buf, sizeof buf) != NULL) {
+        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
+        bad = 1;
+    }
+    if (bad) return GF_DISCARD;
+    if (!apply_damping(c)) return GF_DISCARD;
+    T1 = c->values[c->vr_T1];
+    T2 = c->values[c->vr_T2];
+    check_torque_range(c, T1);
+    check_inputs_envelope(c, 0);
+    st = gk_do_step(c->model, &c->state, T1, T2, H, c->values[c->vr_hmax], c->out);
+    if (st != GK_OK) {
+        gf_log(c, GF_DISCARD, "logStatusDiscard", "step at t = %.17g s, H = %.17g s rejected: %s; state unchanged",
+               c->time, H, kernel_error(st));
+        return GF_DISCARD;
+    }
+    c->time = c->time + H;
+    check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
+    return GF_OK;
+}
+
+/* ------------------------------------------------------------ FMU state */
+size_t gm_snap_size(const gf_inst *c)
+{
+    return sizeof(gf_snap_header) + sizeof(double) * ((size_t)c->n_vars + (size_t)c->n_out);
+}
+
+void gm_snap_write(const gf_inst *c, unsigned char *p)
+{
+    gf_snap_header h;
+    memset(&h, 0, sizeof h);
+    h.magic = GF_SNAPSHOT_MAGIC;
+    h.version = GF_SNAPSHOT_VERSION;
+    h.n_vars = (uint32_t)c->n_vars;
+    h.n_out = (uint32_t)c->n_out;
+    h.tables_tag = c->tables_tag;
+    h.mode = c->mode;
+    h.initialized = c->initialized;
+    h.warned_range = c->warned_range;
+    h.zeta_valid = c->zeta_valid;
+    h.time = c->time;
+    h.zeta_applied = c->zeta_applied;
+    h.state = c->state;
+    memcpy(p, &h, sizeof h);
+    memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
+    memcpy(p + sizeof h + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
+}
+
+int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size)
+{
+    gf_snap_header h;
+    if (size < sizeof h) return 0;
+    memcpy(&h, p, sizeof h);
+    return h.magic == GF_SNAPSHOT_MAGIC && h.version == GF_SNAPSHOT_VERSION && h.tables_tag == c->tables_tag;
+}
+
+int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn)
+{
+    gf_snap_header h;
+    if (size != gm_snap_size(c)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has %lu bytes, this FMU's has %lu", fn,
+               (unsigned long)size, (unsigned long)gm_snap_size(c));
+        return 0;
+    }
+    memcpy(&h, p, sizeof h);
+    if (!gm_snap_is_ours(c, p, size) || h.n_vars != (uint32_t)c->n_vars || h.n_out != (uint32_t)c->n_out) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: not a state of this FMU (header mismatch)", fn);
+        return 0;
+    }
+    if ((h.mode & GF_ANY_STATE) == 0 || (h.mode & (h.mode - 1)) != 0 || (h.initialized & ~1) != 0) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has an invalid FMI state %d", fn, (int)h.mode);
+        return 0;
+    }
+    c->mode = h.mode;
+    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
+    c->initialized = h.initialized;
+    c->warned_range = h.warned_range;
+    c->time = h.time;
+    c->state = h.state;
+    memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
+    memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
+    /* the kernel model's integrator and damping are derived from the restored values */
+#ifdef GK_INTEGRATOR_RK4
+    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, gm_as_int(c->values[c->vr_integrator])) != GK_OK) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: integrator %g of the state is invalid", fn,
+               c->values[c->vr_integrator]);
+        return 0;
+    }
+#endif
+    c->zeta_valid = 0;
+    if (h.zeta_valid && !apply_damping(c)) return 0;
+    return 1;
+}
