@@ -34,7 +34,6 @@ KNOWN_DIARY = {
     "docs/plan.md",
     "gearfmu/ehl/transient.py",
     "gearfmu/plan.py",
-    "gearfmu/tables/direct_tvms.py",
 }
 
 
