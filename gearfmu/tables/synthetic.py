@@ -31,6 +31,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from ..common.checks import finite_number
 from .mesh_tables import MeshTables, TableError
 
 __all__ = [
@@ -67,13 +68,8 @@ class SyntheticTableError(TableError):
 
 
 def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise SyntheticTableError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0.0:
-        raise SyntheticTableError(f"{name}: must be finite and > 0, got {value!r}")
-    return v
+    """``value`` as a finite float > 0 (SyntheticTableError naming ``name`` otherwise)."""
+    return finite_number(name, value, positive=True, error=SyntheticTableError)
 
 
 def comprehensive_error_m(k_N_per_m: np.ndarray, e_m: np.ndarray) -> np.ndarray:
