@@ -66,6 +66,8 @@ def test_cluster_block_replaces_only_the_local_pool(dask_cluster):
     with cluster(client=client):
         with make_executor(max_workers=2) as ex:
             assert ex.submit(sum, [1, 2]).result() == 3 and type(ex).__module__.startswith("distributed")
+        with make_executor() as ex:                         # default size: the cluster, not this machine's CPUs
+            assert type(ex).__module__.startswith("distributed")
         with make_executor(max_workers=1) as ex:            # explicitly in-process stays in-process
             assert not type(ex).__module__.startswith("distributed")
     with make_executor(max_workers=2) as ex:                # after the block: the local pool again

@@ -78,9 +78,10 @@ def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int]
     if scheduler is not None:
         cl = _connect(scheduler)
         return _ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
-    n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
-    if n > 1 and _cluster_client is not None:  # inside cluster(): the cluster instead of a local pool
+    if _cluster_client is not None and (max_workers is None or int(max_workers) > 1):
+        # inside cluster(): the cluster instead of a local pool (whatever this machine's CPU count)
         return _ManagedExecutor(_cluster_client.get_executor(pure=False), None, own=False)
+    n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
     method = _start_method() if n > 1 else None
     if method is None:
         return _ManagedExecutor(_InProcessExecutor(), None, own=True)
