@@ -44,7 +44,8 @@ def parse_args(argv=None):
     ap.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
     ap.add_argument("--quick", action="store_true", help="coarse, short sweep (seconds)")
     ap.add_argument("--out", default="build/seed003", help="output directory (PNG, CSV, JSON)")
-    ap.add_argument("--scheduler", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
+    from gearfmu.common.executors import add_scheduler_option  # the one --scheduler option
+    add_scheduler_option(ap)
     ap.add_argument("--workers", type=int, default=None, help="local worker processes (default 2)")
     ap.add_argument("--omega-min", type=float, default=0.15)
     ap.add_argument("--omega-max", type=float, default=1.0)

@@ -313,7 +313,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default="build/seed003")
-    ap.add_argument("--scheduler", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
+    from gearfmu.common.executors import add_scheduler_option  # the one --scheduler option
+    add_scheduler_option(ap)
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--json", action="store_true", help="print the summary JSON on stdout")
     ap.add_argument("--no-fig30", action="store_true", help="skip the A_rms sweeps of Fig. 30")

@@ -30,6 +30,7 @@ import contextlib
 
 import numpy as np
 
+from .common.executors import add_scheduler_option, cluster
 from .common.vocabulary import RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
@@ -400,6 +401,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
     _allow_large(b)
+    add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
 
     be = sub.add_parser("bench", help="benchmarks: 'bench accuracy' = speed against error (gearfmu.bench)")
@@ -415,6 +417,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
     _allow_large(t)
+    add_scheduler_option(t)
     t.set_defaults(func=cmd_tables)
 
     s = sub.add_parser("simulate", help="simulate with the native solver or an FMU; CSV and PNG out")
@@ -465,6 +468,7 @@ def make_parser() -> argparse.ArgumentParser:
                     help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
+    add_scheduler_option(pl)
     pl.set_defaults(func=cmd_plan)
     return p
 
@@ -480,7 +484,8 @@ def _one_line(exc: BaseException) -> str:
 def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
-        return args.func(args)
+        with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
+            return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)
         return 2

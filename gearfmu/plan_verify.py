@@ -19,11 +19,13 @@ measure of the planner; :func:`run_errors` computes it.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple
-import sys
 
 import numpy as np
+
+from .common.progress import progress_bar
 
 __all__ = ["ERROR_DEFINITION", "run_errors", "Probe", "Search", "budget_use", "say", "ProgressBar",
            "DriveCase", "drive_case", "constant", "speed_sweeps"]
@@ -64,15 +66,6 @@ def run_errors(dte, force, dte_full, force_full) -> dict:
     return out
 
 
-def _tqdm():
-    """tqdm's bar class, or None when tqdm is not installed."""
-    try:
-        from tqdm import tqdm  # optional progress bar
-    except ImportError:
-        return None
-    return tqdm
-
-
 _BAR = None  # the progress bar on stderr while one is shown (say() writes above it)
 
 
@@ -90,34 +83,29 @@ def say(progress: bool, msg: str, log: List[str]) -> None:
 
 
 class ProgressBar:
-    """Progress of ``total`` steps of the plan on stderr: a tqdm bar when tqdm is installed,
-    else a plain line "gearfmu plan: <what> i/total" every tenth of the way.  A context
-    manager; :meth:`update` advances it, ``note`` names the step that has just finished."""
+    """Progress of ``total`` steps of the plan on stderr (a bar of
+    :func:`gearfmu.common.progress.progress_bar`; one bar at a time, inner ones stay silent).
+    A context manager; :meth:`update` advances it, ``note`` names the step that has just
+    finished."""
 
     def __init__(self, progress: bool, total: int, what: str):
         self.progress, self.total, self.what = progress, max(int(total), 1), what
-        self.done = 0
         self._bar = None
-        self._every = max(self.total // 10, 1)
 
     def __enter__(self):
         global _BAR
         if _BAR is not None:  # inside another bar: that one shows the progress
             self.progress = False
-        tqdm = _tqdm() if self.progress else None
-        if tqdm is not None and _BAR is None:
-            self._bar = tqdm(total=self.total, desc=f"gearfmu plan: {self.what}", file=sys.stderr, leave=False)
+        if self.progress:
+            self._bar = progress_bar(None, f"gearfmu plan: {self.what}", total=self.total, leave=False)
             _BAR = self._bar
         return self
 
     def update(self, n: int = 1, note: str = "") -> None:
-        self.done += n
         if self._bar is not None:
             if note:
                 self._bar.set_postfix_str(note, refresh=False)
             self._bar.update(n)
-        elif self.progress and (self.done % self._every == 0 or self.done >= self.total):
-            print(f"gearfmu plan: {self.what} {min(self.done, self.total)}/{self.total}", file=sys.stderr, flush=True)
 
     def __exit__(self, *exc):
         global _BAR

@@ -83,7 +83,7 @@ def test_seed000_figs12_13_direct_tvms_ordering_at_two_positions(figs12_13_level
     # (b) (seed 000 eq 8 on the window means).  Positions: the pitch point (single-tooth contact,
     # SRR 0) and the middle of the double-tooth zone (pairs at 4.8 and 22.5 mm from A, SRR -0.39
     # and +0.39: the two pairs run at different SRR).
-    # Measured (one run each, 2026-11-22), margins relative to the smooth TVMS, pitch / double:
+    # Measured (one run each), margins relative to the smooth TVMS, pitch / double:
     #                       smooth - L1        L1 - L2            L2 - Hertz
     #   257 nodes, T_avg 8  2.331e-5/5.347e-5  6.241e-4/9.653e-4  8.30e-2/5.81e-2   (this test)
     #   513 nodes, T_avg 8  2.325e-5/5.392e-5  6.161e-4/9.784e-4  8.29e-2/5.80e-2
@@ -122,7 +122,7 @@ def test_seed000_fig13_all_four_levels_under_the_full_film_assumption(figs12_13_
     # model result (Newtonian, isothermal, no asperity plasticity), not an experiment.
     # NOT asserted: level 4 at the double-tooth position -- its first pair's slice 0 (4.8 mm from A,
     # SRR -0.39) stalls at step 154 of 703 on every relaxation setting and as 2/4 sub-steps.
-    # Measured (one run each, 2026-11-22), TVMS / smooth - 1 and margins (of the smooth TVMS of the
+    # Measured (one run each), TVMS / smooth - 1 and margins (of the smooth TVMS of the
     # same grid), pitch / double:
     #                       L3                 L4 (pitch)  margin L2 - L3     margin L3 - L4 (pitch)
     #   257 nodes, T_avg 8  -1.678e-3/-2.564e-3  -2.935e-3  1.031e-3/1.546e-3  1.257e-3   (this test)

@@ -71,7 +71,7 @@ def films():
     return out
 
 
-# Measured (one run each, 2026-11-22), pitch point, TVMS in N/m; L4 = level 4 transient (b) under the
+# Measured (one run each), pitch point, TVMS in N/m; L4 = level 4 transient (b) under the
 # full-film assumption; "513/16" = 513 EHL nodes and T_average 16 b/u_s (both changed at once):
 #   (N m, rpm)   smooth 257/8   smooth 513/16  L4 257/8     L4 513/16     L4/smooth-1 257/8 | 513/16  Lambda  min h window
 #   2000, 1000   8.56604e8      8.56559e8      8.53342e8    COLLAPSE      -3.81e-3 | --                1.35    0.36 um

@@ -174,3 +174,39 @@ def test_gear_only_pitch_deviation_period_and_offset():
     np.testing.assert_allclose(d, 6 * UM * 46 / 47, rtol=1e-12)
     # mesh 52 uses gear tooth 52 mod 47 = 5 again: same error as mesh 5
     np.testing.assert_array_equal(t.e_m[0, 0, 52 * PPM + j], t.e_m[0, 1, 5 * PPM + j])
+
+
+def test_load_iteration_reaches_the_fixed_point_of_a_power_law_contact():
+    """gearfmu.tables.load_iteration.iterate_load_sharing (the one load-sharing iteration of the
+    table builder and the direct TVMS) on one pair of two crowned slices whose contact stiffness
+    is a power law of the slice line load, k(w) = c (w / w0)^p.  Reference: the fixed point solved
+    independently -- slice n carries F_n = k(F_n / b) (x - E_n) (seed 000 eq 16), so
+    F_n^(1-p) = c (x - E_n) / (b w0)^p, and the approach x follows from F_0 + F_1 = F (scipy
+    brentq).  The iteration stops when a pass moves no slice load by more than
+    LOAD_ITERATION_TOL F/NS; with p = 0.2 a pass shrinks the error about fivefold, so the loads
+    are within that tolerance of the fixed point."""
+    from scipy.optimize import brentq
+
+    from gearfmu.tables.load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, iterate_load_sharing,
+                                               slice_loads_N)
+
+    c, w0, p, b, d, F = 2e9, 1e5, 0.2, 0.01, 0.5e-6, 5e3     # N/m, N/m, 1, m, m (crowning), N
+
+    def k_of(w):
+        return c * (np.asarray(w) / w0) ** p
+
+    e, E = np.zeros((1, 1)), np.array([0.0, d])
+    zone = np.nonzero(np.ones((1, 2, 1), dtype=bool))
+    start = slice_loads_N(np.full((1, 2, 1), float(k_of(F / (2 * b)))), e, E, F)
+    res = iterate_load_sharing(start, e, E, F, zone, b, 0.0, lambda w, redo, _it: (k_of(w[redo]), None),
+                               lambda kc: kc, what="power-law contact")
+
+    def load(x, En):
+        return 0.0 if x <= En else (c * (x - En) / (b * w0) ** p) ** (1.0 / (1.0 - p))
+
+    x = brentq(lambda x: load(x, 0.0) + load(x, d) - F, 0.0, 1e-3, xtol=1e-20, rtol=1e-15)
+    ref = np.array([load(x, 0.0), load(x, d)])
+    assert ref[1] > 0.2 * ref[0]                       # both slices carry load: the sharing matters
+    assert 1 < res.passes < LOAD_ITERATION_MAX
+    np.testing.assert_allclose(res.loads_N[0, :, 0], ref, rtol=0, atol=LOAD_ITERATION_TOL * F / 2)
+    assert res.loads_N.sum() == pytest.approx(F, rel=1e-12)

@@ -49,3 +49,18 @@ def test_unguarded_script_computes_lubricated_tables(tmp_path):
     for name in ("torque_Nm", "k_N_per_m", "e_m", "static_te_m", "backlash_half_m"):
         a, b = getattr(got, name), getattr(ref, name)
         assert a.shape == b.shape and np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(b)), name
+
+
+def test_progress_bars_start_no_thread(capsys):
+    """A progress bar (shown or not) must not start a thread: the local pool forks for an unguarded
+    script only while the process runs one Python thread (gearfmu.common.executors._start_method),
+    and tqdm's own monitor thread would otherwise stay alive after the bar."""
+    import threading
+
+    from gearfmu.common.progress import progress_bar
+
+    before = {t.ident for t in threading.enumerate()}
+    for enabled in (False, True):
+        assert sum(progress_bar(range(5), "test bar", enabled)) == 10
+    assert {t.ident for t in threading.enumerate()} == before
+    assert "test bar" in capsys.readouterr().err

@@ -5,6 +5,7 @@ Module        Contents
 ============  ===============================================================================
 vocabulary    every option string: contact models, damping models, integrators, runtimes, ...
 checks        finite_number: the one input check of the physics and the solvers
-executors     make_executor: in-process, process pool or Dask cluster
+executors     make_executor: in-process, process pool or Dask cluster; cluster(), --scheduler
+progress      progress_bar: the one progress reporter (tqdm on stderr)
 ============  ===============================================================================
 """

@@ -1,10 +1,15 @@
 """Executors for independent work items: in-process, a local process pool, or a Dask cluster.
 
 Shared by the sweeps (:mod:`gearfmu.dynamics.sweeps`), the table precompute and the
-film solutions along the mesh (:mod:`gearfmu.ehl.mesh_film`).
+film solutions along the mesh (:mod:`gearfmu.ehl.mesh_film`).  Inside a :func:`cluster`
+block every local process pool that :func:`make_executor` would open is replaced by the
+block's Dask cluster, so a whole command (``gearfmu tables``, ``build``, ``plan`` with
+``--scheduler``) runs its parallel work there without passing an executor down every call.
 """
 from __future__ import annotations
 
+import argparse
+import contextlib
 import os
 import re
 import sys
@@ -14,7 +19,10 @@ import multiprocessing as mp
 import warnings
 import threading
 
-__all__ = ["SweepInputError", "make_executor"]
+__all__ = ["SweepInputError", "make_executor", "cluster", "add_scheduler_option"]
+
+#: the Dask client of the innermost active :func:`cluster` block, or None
+_cluster_client = None
 
 
 class SweepInputError(ValueError):
@@ -62,25 +70,79 @@ def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int]
     * otherwise ``max_workers`` <= 1 -> in-process (no parallelism); else a
       local process pool of ``max_workers`` (default: the CPU count) with the
       ``spawn`` start method, or 'fork' when the main module is a script without
-      an ``if __name__ == "__main__":`` guard (:func:`_start_method`).
+      an ``if __name__ == "__main__":`` guard (:func:`_start_method`); inside a
+      :func:`cluster` block the cluster's executor instead of that pool.
     """
     if client is not None:
         return _ManagedExecutor(client.get_executor(pure=False), None, own=False)
     if scheduler is not None:
-        if not isinstance(scheduler, str) or "://" not in scheduler:
-            raise SweepInputError(f"scheduler: expected an address such as 'tcp://127.0.0.1:8786', got {scheduler!r}")
-        try:
-            from distributed import Client  # optional: the 'cluster' extra
-        except ImportError:  # pragma: no cover - depends on the environment
-            raise SweepInputError("scheduler: needs dask.distributed (pip install 'gearfmu[cluster]')") from None
-        cl = Client(scheduler)
+        cl = _connect(scheduler)
         return _ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
+    if _cluster_client is not None and (max_workers is None or int(max_workers) > 1):
+        # inside cluster(): the cluster instead of a local pool (whatever this machine's CPU count)
+        return _ManagedExecutor(_cluster_client.get_executor(pure=False), None, own=False)
     n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
     method = _start_method() if n > 1 else None
     if method is None:
         return _ManagedExecutor(_InProcessExecutor(), None, own=True)
 
     return _ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context(method)), None, own=True)
+
+
+def _scheduler_address(value) -> str:
+    """``value`` as a Dask scheduler address (SweepInputError naming the field otherwise)."""
+    if not isinstance(value, str) or "://" not in value:
+        raise SweepInputError(f"scheduler: expected an address such as 'tcp://127.0.0.1:8786', got {value!r}")
+    return value
+
+
+def _connect(scheduler: str):
+    """A new ``distributed.Client`` on ``scheduler``; a bad or unreachable address is a
+    SweepInputError naming the address and the reason."""
+    _scheduler_address(scheduler)
+    try:
+        from distributed import Client  # optional: the 'cluster' extra
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise SweepInputError("scheduler: needs dask.distributed (pip install 'gearfmu[cluster]')") from None
+    try:
+        return Client(scheduler)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SweepInputError(f"scheduler: cannot connect to {scheduler}: {exc}") from None
+
+
+@contextlib.contextmanager
+def cluster(scheduler: Optional[str] = None, *, client=None):
+    """Run the parallel work of the block on a Dask cluster: every :func:`make_executor`
+    call that would open a local process pool (film grids, film batches, sweeps) gets the
+    executor of one client on ``scheduler`` (an address such as ``"tcp://127.0.0.1:8786"``;
+    closed at the end of the block) or of ``client`` (left open).  With neither, the block
+    runs as without it.  The workers need gearfmu installed (same version)."""
+    global _cluster_client
+    if scheduler is None and client is None:
+        yield None
+        return
+    cl = client if client is not None else _connect(scheduler)
+    prev, _cluster_client = _cluster_client, cl
+    try:
+        yield cl
+    finally:
+        _cluster_client = prev
+        if client is None:
+            cl.close()
+
+
+def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
+    """The ``--scheduler tcp://HOST:PORT`` option of the commands that can run on a Dask
+    cluster (the value for :func:`cluster`)."""
+    def address(value):
+        try:
+            return _scheduler_address(value)
+        except SweepInputError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT", type=address, default=None,
+                        help="run the parallel work (EHL film grids and film solves of the tables, sweeps) on the "
+                             "Dask cluster of this scheduler (docs/tables.md 'Progress and a Dask cluster')")
 
 
 _MAIN_GUARD = re.compile(r"""^\s*if\s+(__name__\s*==\s*['"]__main__['"]|['"]__main__['"]\s*==\s*__name__)""",

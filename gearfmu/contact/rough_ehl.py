@@ -623,7 +623,7 @@ def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_
     bad = ~np.isfinite(k)
     if np.any(bad):  # per request (no grid, or a grid node without a solution)
         # K_n depends on (position, load) only (same D, G and width on every slice): one
-        # evaluation per distinct pair (level 4 of the default scene: 4779 requests, ~50 s)
+        # evaluation per distinct pair (level 4 of the default scene: 4779 requests)
         keys = np.array([_key(a) for a in s[bad]]), np.array([_key(b) for b in w[bad]])
         pairs, inv = np.unique(np.stack(keys, axis=1), axis=0, return_inverse=True)
         R, u, _ = contact_kinematics(env.geom, pairs[:, 0], env.omega1_rad_s)

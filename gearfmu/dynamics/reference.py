@@ -61,13 +61,13 @@ from __future__ import annotations
 
 import bisect
 import math
-import sys
 import time as _time
 from typing import Callable, Optional, Union
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..common.progress import progress_bar
 from ..common.vocabulary import DAMPING_MODELS
 from ..tables.mesh_tables import MeshTables
 from .native import _finite, _input_series, _n_steps, SimResult
@@ -518,9 +518,8 @@ def simulate_reference(
     prev_rows = None
     forced = None
     t_wall = _time.perf_counter()
-    last_print = t_wall
     diverged = None
-    for k in range(n_steps):
+    for k in progress_bar(range(n_steps), "reference", progress, unit="step"):
         rows = rows_for(t1s[k])
         if rows is not prev_rows or piece is None:
             piece = rows.piece_of(theta, y_rest[0])
@@ -579,9 +578,6 @@ def simulate_reference(
         if diverged is not None:
             break
         out_row(k + 1, (theta, y_rest[0], y_rest[1], y_rest[2]), rows)
-        if progress and _time.perf_counter() - last_print > 2.0:
-            last_print = _time.perf_counter()
-            print(f"reference: step {k + 1}/{n_steps}, {n_seg} segments, {n_ev} events", file=sys.stderr)
     wall = _time.perf_counter() - t_wall
 
     th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]

@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from concurrent.futures import as_completed
 from dataclasses import dataclass, field, replace
@@ -46,6 +45,7 @@ import numpy as np
 from scipy.signal import find_peaks
 
 from ..common.executors import SweepInputError, _ManagedExecutor, make_executor
+from ..common.progress import progress_bar
 from .harmonics import DEFAULT_BANDWIDTH_ORDERS, mesh_harmonics
 from ..tables.mesh_tables import MeshTables
 from .native import choose_max_step_s, simulate_sdof
@@ -378,7 +378,7 @@ def run_jobs(jobs: Sequence[SweepJob], *, executor=None, scheduler: Optional[str
     ``executor``: any object with ``submit(fn, *args) -> future`` (left open);
     else :func:`make_executor` (``client``, ``scheduler``, ``max_workers``;
     default a local process pool with min(len(jobs), CPU count) workers).
-    ``progress`` prints one line per finished job to stderr.
+    ``progress``: a progress bar of the finished jobs on stderr.
     """
     jobs = [j.validate() for j in jobs]
     if not jobs:
@@ -389,17 +389,12 @@ def run_jobs(jobs: Sequence[SweepJob], *, executor=None, scheduler: Optional[str
         if max_workers is None and scheduler is None and client is None:
             max_workers = min(len(jobs), os.cpu_count() or 1)
         ctx = make_executor(scheduler=scheduler, max_workers=max_workers, client=client)
-    t0 = time.perf_counter()
     out: List[Optional[SweepResult]] = [None] * len(jobs)
     with ctx as ex:
         futs = {ex.submit(run_sweep, j): i for i, j in enumerate(jobs)}
-        for done, f in enumerate(as_completed(futs), 1):
+        for f in progress_bar(as_completed(futs), "gearfmu sweeps", progress, total=len(jobs), unit="job"):
             i = futs[f]
             out[i] = f.result()
-            if progress:
-                print(f"[sweeps] {done}/{len(jobs)} done: {jobs[i].label or i} "
-                      f"({len(jobs[i].omega_h)} points, {time.perf_counter() - t0:.1f} s)",
-                      file=sys.stderr, flush=True)
     return out  # type: ignore[return-value]
 
 

@@ -49,8 +49,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
-import time
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 from concurrent.futures import as_completed
@@ -62,6 +60,7 @@ from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
 from .solver import solve_line_contact
 from ..common.executors import make_executor, _ManagedExecutor
+from ..common.progress import progress_bar
 
 
 class MeshFilmInputError(EHLInputError):
@@ -258,37 +257,6 @@ def _solve_node_chunk(env: FilmEnvironment, items):
 
 
 # ---------------------------------------------------------------- batches
-class _Progress:
-    """tqdm when installed, else one stderr line per ~5 % (and at the end)."""
-
-    def __init__(self, enabled: bool, total: int, label: str):
-        self.enabled, self.total, self.label, self.done = enabled, total, label, 0
-        self.t0 = time.perf_counter()
-        self._bar = None
-        self._next = 0
-        if enabled:
-            try:
-                from tqdm import tqdm  # type: ignore  # optional progress bar
-                self._bar = tqdm(total=total, desc=label)
-            except ImportError:
-                self._bar = None
-
-    def update(self, n: int) -> None:
-        if not self.enabled:
-            return
-        self.done += n
-        if self._bar is not None:
-            self._bar.update(n)
-        elif self.done >= self._next or self.done >= self.total:
-            self._next = self.done + max(1, self.total // 20)
-            print(f"{self.label}: {self.done}/{self.total} film solves "
-                  f"({time.perf_counter() - self.t0:.1f} s)", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-
-
 def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=None,
                 max_workers: Optional[int] = None, chunk_size: Optional[int] = None,
                 progress: bool = False, label: str = "EHL films") -> List[FilmOutcome]:
@@ -320,7 +288,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     if not chunks:
         return []
     n_cpu = os.cpu_count() or 1
-    bar = _Progress(progress, int(sum(counts)), label)
+    bar = progress_bar(desc=label, enabled=progress, total=int(sum(counts)), unit="film", leave=False)
     out: List[Optional[list]] = [None] * len(chunks)
     if executor is None:
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))

@@ -1,4 +1,4 @@
-"""Mesh stiffness of a spur pair evaluated DIRECTLY at given meshing positions (issue 3).
+"""Mesh stiffness of a spur pair evaluated DIRECTLY at given meshing positions.
 
 No table, no film grid, no interpolation: at every requested meshing position every tooth
 pair in contact and every face-width slice gets its own contact stiffness k_l from the chosen
@@ -13,10 +13,11 @@ combined with the tooth and foundation compliances exactly as the tables combine
 
 (:func:`gearfmu.contact.models.tooth_compliances`, :func:`gearfmu.contact.models.sliced_mesh_stiffness`,
 :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`).  The load of each slice is iterated with the
-load-dependent contact stiffness by the table builder's rule (``gearfmu.tables.precompute``:
-start from the Hertz slice loads, load floor 0.5 F/b, a request is re-solved when its load
-moved by more than 1e-4 of itself, stop when no slice load changes by more than
-``LOAD_ITERATION_TOL`` = 1e-3 of F/NS, at most ``LOAD_ITERATION_MAX`` passes).
+load-dependent contact stiffness by the table builder's iteration
+(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`: start from the Hertz slice loads,
+load floor 0.5 F/b, a request is re-solved when its load moved by more than 1e-4 of itself,
+stop when no slice load changes by more than ``LOAD_ITERATION_TOL`` = 1e-3 of F/NS, at most
+``LOAD_ITERATION_MAX`` passes).
 
 Contact models (:data:`DIRECT_MODELS`):
 
@@ -43,7 +44,7 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
   section 5; the table's per-pair meshing errors and crowning can be passed.
 * Load iteration of the film models that need a film per slice (``rough_steady``,
   ``smooth_transient``, ``rough_transient``): the iteration starts from the slice loads
-  converged with ``smooth_ehl`` (steady smooth films, ~50 ms each) instead of the Hertz loads --
+  converged with ``smooth_ehl`` (steady smooth films, cheap) instead of the Hertz loads --
   the same fixed point (same rule and tolerance), a better first guess, so that an expensive
   transient run is repeated only if the roughness itself moves a slice load by more than the
   tolerance.
@@ -61,7 +62,7 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
 
 Work goes through a ``concurrent.futures``-style executor (``executor`` or a local pool of
 ``max_workers``; in-process for ``max_workers=1``), one film evaluation per task chunk, with a
-progress line per ~5 % (:func:`gearfmu.ehl.mesh_film.map_chunks`).  SI units throughout.
+progress bar when asked for (:func:`gearfmu.ehl.mesh_film.map_chunks`).  SI units throughout.
 """
 from __future__ import annotations
 
@@ -69,14 +70,13 @@ import math
 import time
 from dataclasses import dataclass, field
 from typing import List, Optional
-import warnings
 import dataclasses
 import os
 
 import numpy as np
 
 from ..ehl.errors import EHLConvergenceError, EHLInputError, FilmCollapseError
-from .precompute import LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE, _slice_loads_N
+from .load_iteration import UNLOADED_SLICE_LOAD_SHARE, iterate_load_sharing, slice_loads_N
 from ..contact.models import (film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m,
                               _rough_profile)
 from ..ehl.mesh_film import solve_node_films, solve_slice_film, contact_kinematics, map_chunks
@@ -337,7 +337,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     lam = np.full((P, N), np.nan)
 
     if model == "hertz":
-        loads = _slice_loads_N(k, e, E, F)
+        loads = slice_loads_N(k, e, E, F)
         res = DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k,
                          kc_h, loads / width, lam, 1, 0.0, 0, [], 0.0, 0.0, T)
         res.cpu_s, res.wall_s = time.process_time() - c_parent, time.perf_counter() - t_wall
@@ -361,87 +361,76 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
         evaluations += pre.film_evaluations
         loads = pre.w_N_per_m * width
     else:
-        loads = _slice_loads_N(k, e, E, F)
+        loads = slice_loads_N(k, e, E, F)
 
     R_all, u_all, _ = contact_kinematics(geom, np.where(np.isfinite(sp), sp, float(geom.s_pitch_m)),
                                          env.omega1_rad_s)
-    kc = np.zeros((P, NS, N))
     last_key = [None] * len(j)          # cache key of the film behind kc[j, n, i] (per zone entry)
-    w_prev = np.full(j.shape, np.nan)
-    change = float("nan")
     cache = {}
     smooth_cache = {}
-    it = 0
-    for it in range(1, LOAD_ITERATION_MAX + 1):
-        w = np.maximum(loads[idx] / width, floor)
-        redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev)
-        if np.any(redo):
-            ridx = np.nonzero(redo)[0]
-            if model in _ROUGH and check_film_parameter:
-                lam_r = film_parameter(env, sp[j[ridx], i[ridx]], w[ridx])
-                _refuse_low_film(model, env, sp[j[ridx], i[ridx]], lam_r, (j[ridx], n[ridx]))
-            # one evaluation per distinct (position, slice for rough films, load)
-            keys = []
-            for q in ridx:
-                sl = int(n[q]) if model in _ROUGH else -1
-                keys.append((_key(sp[j[q], i[q]]), sl, _key(w[q]), int(j[q]), int(i[q])))
-            uniq = {}
-            for kk in keys:
-                uniq.setdefault(kk[:3], kk)
-            todo = [kk for kk in uniq.values() if kk[:3] not in cache]
-            items = []
-            for (s_k, sl, w_k, jj, ii) in todo:
-                R, u = float(R_all[jj, ii]), float(u_all[jj, ii])
-                if model in _TRANSIENT:
-                    kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
-                    items.append(("transient", kw, float(st.T_average), st.reduction))
-                elif model == "rough_steady":
-                    prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
-                    items.append(("steady", fenv, R, u, w_k, prof))
-                else:
-                    items.append(("steady", fenv, R, u, w_k, None))
-            if items:
-                res_chunks = map_chunks(_film_chunk, None, [[x] for x in items], [1] * len(items),
-                                        executor=executor, max_workers=max_workers, progress=progress,
-                                        label=f"direct TVMS {model} pass {it}")
-                for kk, r in zip(todo, res_chunks):
-                    r = r[0]
-                    if r["pid"] != os.getpid():      # run in another process: its CPU is not ours
-                        worker_cpu += r["cpu_s"]
-                    evaluations += 1
-                    cache[kk[:3]] = r
-            vals = np.empty(len(ridx))
-            for m, (q, kk) in enumerate(zip(ridx, keys)):
-                r = cache[kk[:3]]
-                last_key[q] = kk
-                if r["status"] == "ok":
-                    vals[m] = r["k_N_per_m"]
-                    continue
-                f = dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], status=r["status"],
-                         message=r["message"])
-                if on_film_failure == "error":
-                    raise DirectTVMSError(f"{model}: film {r['status']} at s = {kk[0] * 1e3:.4f} mm (LOA from N1), "
-                                          f"pair {kk[3]}, slice {int(n[q])}, w = {kk[2]:.4g} N/m: {r['message']}")
-                sk = (kk[0], kk[2])
-                if sk not in smooth_cache:
-                    o = _film_chunk(None, [("steady", fenv, float(R_all[kk[3], kk[4]]), float(u_all[kk[3], kk[4]]),
-                                            kk[2], None)])[0]
-                    evaluations += 1
-                    smooth_cache[sk] = o
-                vals[m] = smooth_cache[sk]["k_N_per_m"]
-                f["used"] = "smooth_ehl"
-                failures.append(f)
-            kc[j[ridx], n[ridx], i[ridx]] = vals
-            w_prev = np.where(redo, w, w_prev)
-        k = sliced_mesh_stiffness(ct, fp, fg, kc, opts)
-        new = _slice_loads_N(k, e, E, F)
-        change = float(np.max(np.abs(new - loads)) / (F / NS))
-        loads = new
-        if change < LOAD_ITERATION_TOL:
-            break
-    else:
-        warnings.warn(f"direct TVMS {model}: load sharing not converged after {LOAD_ITERATION_MAX} passes "
-                      f"(max slice-load change {change:.2e} of F/NS)")
+
+    def solve(w, redo, it):
+        nonlocal worker_cpu, evaluations
+        ridx = np.nonzero(redo)[0]
+        if model in _ROUGH and check_film_parameter:
+            lam_r = film_parameter(env, sp[j[ridx], i[ridx]], w[ridx])
+            _refuse_low_film(model, env, sp[j[ridx], i[ridx]], lam_r, (j[ridx], n[ridx]))
+        # one evaluation per distinct (position, slice for rough films, load)
+        keys = []
+        for q in ridx:
+            sl = int(n[q]) if model in _ROUGH else -1
+            keys.append((_key(sp[j[q], i[q]]), sl, _key(w[q]), int(j[q]), int(i[q])))
+        uniq = {}
+        for kk in keys:
+            uniq.setdefault(kk[:3], kk)
+        todo = [kk for kk in uniq.values() if kk[:3] not in cache]
+        items = []
+        for (s_k, sl, w_k, jj, ii) in todo:
+            R, u = float(R_all[jj, ii]), float(u_all[jj, ii])
+            if model in _TRANSIENT:
+                kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
+                items.append(("transient", kw, float(st.T_average), st.reduction))
+            elif model == "rough_steady":
+                prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
+                items.append(("steady", fenv, R, u, w_k, prof))
+            else:
+                items.append(("steady", fenv, R, u, w_k, None))
+        if items:
+            res_chunks = map_chunks(_film_chunk, None, [[x] for x in items], [1] * len(items),
+                                    executor=executor, max_workers=max_workers, progress=progress,
+                                    label=f"direct TVMS {model} pass {it}")
+            for kk, r in zip(todo, res_chunks):
+                r = r[0]
+                if r["pid"] != os.getpid():      # run in another process: its CPU is not ours
+                    worker_cpu += r["cpu_s"]
+                evaluations += 1
+                cache[kk[:3]] = r
+        vals = np.empty(len(ridx))
+        for m, (q, kk) in enumerate(zip(ridx, keys)):
+            r = cache[kk[:3]]
+            last_key[q] = kk
+            if r["status"] == "ok":
+                vals[m] = r["k_N_per_m"]
+                continue
+            f = dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], status=r["status"],
+                     message=r["message"])
+            if on_film_failure == "error":
+                raise DirectTVMSError(f"{model}: film {r['status']} at s = {kk[0] * 1e3:.4f} mm (LOA from N1), "
+                                      f"pair {kk[3]}, slice {int(n[q])}, w = {kk[2]:.4g} N/m: {r['message']}")
+            sk = (kk[0], kk[2])
+            if sk not in smooth_cache:
+                o = _film_chunk(None, [("steady", fenv, float(R_all[kk[3], kk[4]]), float(u_all[kk[3], kk[4]]),
+                                        kk[2], None)])[0]
+                evaluations += 1
+                smooth_cache[sk] = o
+            vals[m] = smooth_cache[sk]["k_N_per_m"]
+            f["used"] = "smooth_ehl"
+            failures.append(f)
+        return vals, None
+
+    ls = iterate_load_sharing(loads, e, E, F, idx, width, floor, solve,
+                              lambda kc: sliced_mesh_stiffness(ct, fp, fg, kc, opts), what=f"direct TVMS {model}")
+    k, kc, loads, it, change = ls.k_slice_N_per_m, ls.k_contact_N_per_m, ls.loads_N, ls.passes, ls.load_change
     wl = np.where(zone, loads / width, 0.0)
     if model not in _ROUGH:
         lam[:] = np.nan

@@ -1,6 +1,6 @@
 """Cost estimate of a scene's tables and FMU before anything is computed, and the size guard.
 
-:func:`estimate_build` reads only the scene and the pair geometry (microseconds), so a scene
+:func:`estimate_build` reads only the scene and the pair geometry (no physics), so a scene
 that would take hours or gigabytes is refused before the first table row
 (:func:`check_build_cost`; override with ``allow_large=True`` in the Python API or
 ``--allow-large`` on the command line).  docs/tables.md "Cost estimate" describes the model.

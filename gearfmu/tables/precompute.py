@@ -11,10 +11,8 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import replace
-import sys
 import time
 from typing import Optional, Sequence
-import warnings
 
 import numpy as np
 
@@ -22,22 +20,19 @@ from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from ..gear.loaded_mesh import loaded_static_mesh
 from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
+from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
+from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
 from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
-from ..common.executors import make_executor
-from ..contact.models import composite_sigma_m, get_contact_model, tooth_compliances, sliced_mesh_stiffness
+from ..common.progress import progress_bar
+from ..contact.models import get_contact_model
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
 from ..gear.geometry import pair_geometry
-from ..gear.stiffness import (slot_stiffness, required_slots, _normal_roll_m, tooth_compliance_m_per_N,
-                              virtual_normal_section)
+from ..gear.stiffness import slot_stiffness, required_slots
 from ..gear.thermal import (thermal_state_from_scene, thermal_slot_stiffness, ThermalState, ThermalError,
                             oil_dynamic_viscosity_Pas)
 
 #: default torque axis with lead crowning, as multiples of the nominal torque
 DEFAULT_TORQUE_FACTORS = (0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
-
-
-class PrecomputeInputError(ValueError):
-    """Bad input to the table precomputation (names the field and the reason)."""
 
 
 def default_slots(contact_ratio: float) -> int:
@@ -69,32 +64,10 @@ def disc_inertia_kgm2(gear: GearSpec) -> float:
     return rho * math.pi * gear.face_width_m * (r ** 4 - rh ** 4) / 2.0
 
 
-class _Progress:
-    def __init__(self, enabled: bool, total: int, label: str):
-        self.enabled, self.total, self.label, self.done = enabled, total, label, 0
-        self.t0 = time.perf_counter()
-        self._bar = None
-        if enabled:
-            try:  # optional
-                from tqdm import tqdm  # type: ignore  # optional progress bar
-                self._bar = tqdm(total=total, desc=label)
-            except ImportError:
-                self._bar = None
-
-    def step(self, what: str) -> None:
-        if not self.enabled:
-            return
-        self.done += 1
-        if self._bar is not None:
-            self._bar.set_postfix_str(what)
-            self._bar.update(1)
-        else:
-            print(f"{self.label}: {self.done}/{self.total} {what} "
-                  f"({time.perf_counter() - self.t0:.1f} s)", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
+def _step(bar, what: str) -> None:
+    """One step of a table progress bar, ``what`` shown beside it."""
+    bar.set_postfix_str(what, refresh=False)
+    bar.update(1)
 
 
 def _torque_axis(torque_axis_Nm, nominal_torque_Nm: float, crowned: bool) -> np.ndarray:
@@ -131,267 +104,9 @@ def _stiffness_depends_on_load() -> bool:
         return False
 
 
-def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
-    """(k total (P, N), k per slice (P, NS, N)) tiled over the table period."""
-    k = np.asarray(ss.k_N_per_m, dtype=float)
-    k_tile = np.tile(k, (1, reps))
-    ks = getattr(ss, "k_per_slice_N_per_m", None)
-    ks = None if ks is None else np.asarray(ks, dtype=float)
-    if ks is not None and ks.ndim == 3:  # slices differ (e.g. rough surfaces)
-        k_slice = np.tile(ks, (1, 1, reps))
-    else:  # equal slices: split the pair stiffness evenly so totals match exactly
-        k_slice = np.repeat((k_tile / slices)[:, None, :], slices, axis=1)
-    return k_tile, k_slice
-
-
 #: torque axis (multiples of the nominal torque) given to the tables of a load-dependent
 #: contact model (EHL film) when no axis with at least two torques is asked for
 LOAD_DEPENDENT_TORQUE_FACTORS = (0.5, 1.0, 1.5)
-#: load-sharing iteration with a load-dependent contact stiffness: largest change of a
-#: slice load between passes, relative to the mean slice load F/NS, and the pass limit
-LOAD_ITERATION_TOL = 1e-3
-LOAD_ITERATION_MAX = 8
-#: load floor of every slice in the contact zone (light or no static load), a share
-#: of the mean line load F/b): its film is evaluated there (docs/ehl_mesh.md)
-UNLOADED_SLICE_LOAD_SHARE = 0.5
-
-
-def _slice_loads_N(k_slice, e_pair, crowning, force_N):
-    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (seed 000 eq 16)."""
-    lm = loaded_static_mesh(k_slice, e_pair, crowning, force_N)
-    gap = e_pair[:, None, :] + crowning[None, :, None]
-    return k_slice * np.maximum(0.0, lm.static_te_m[None, None, :] - gap)
-
-
-class _ContactIteration:
-    """Slice stiffness with a load-dependent contact model, iterated with the
-    loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
-
-    def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
-        self.model = get_contact_model(opts.contact_model)
-        self.env, self.opts, self.e, self.E = env, opts, e_slot, E
-        ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
-        self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
-        self.NS = int(opts.slices)
-        self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
-        self.helical = None
-        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:  # per-slice normal-section requests (docs/helical.md)
-            self.helical = _HelicalContactView(pair, geom, env, ss, reps)
-            self.env = self.helical.env
-            self.s_req = self.helical.s_req                                  # (P, NS, N)
-        else:
-            ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
-            self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
-            self.s_req = np.broadcast_to(self.s[:, None, :], self.k_hertz.shape)
-        self.width = ss.slice_width_m
-        self.face = ss.slice_width_m * self.NS
-        self.nominal_F = nominal_F
-        self.zone = np.isfinite(self.s_req)
-        self.solves = 0
-        self.records = []
-        self._pool = None
-
-    def __enter__(self):
-        """Open one local process pool for all passes and rows (unless the
-        environment brings an executor or asks for max_workers = 1)."""
-        env = self.env
-        if env.executor is None and (env.max_workers is None or env.max_workers > 1):
-            self._pool = make_executor(max_workers=env.max_workers)
-            self.env = replace(env, executor=self._pool.__enter__())
-        return self
-
-    def __exit__(self, *exc):
-        if self._pool is not None:
-            self._pool.__exit__(*exc)
-            self.env = replace(self.env, executor=None)
-            self._pool = None
-        return False
-
-    def set_load_range(self, torques, rb1: float) -> None:
-        """Tell the contact model which slice loads (N/m) the rows will ask for: the load floor
-        of the lightest row to 1.1 x the largest Hertz static slice load of the heaviest, so that
-        a film grid can place its load nodes (contact_models.RoughFilmGrid, docs/ehl_mesh.md)."""
-        F = [float(t) / rb1 for t in torques]
-        lo = UNLOADED_SLICE_LOAD_SHARE * min(f if f > 0 else self.nominal_F for f in F) / self.face
-        hi = max([float(np.max(_slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
-                  for f in F if f > 0] + [0.0]) / self.width
-        self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
-
-    def k_slice(self, torque_Nm: float, rb1: float):
-        F = torque_Nm / rb1
-        F_eval = F if F > 0 else self.nominal_F
-        floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
-        k = self.k_hertz
-        loads = _slice_loads_N(k, self.e, self.E, F)
-        idx = np.nonzero(self.zone)
-        j, n, i = idx
-        kc = np.zeros(k.shape)
-        w_prev = np.full(j.shape, np.nan)
-        failed = np.zeros(j.shape, dtype=bool)
-        failures = {}
-        change = float("nan")
-        for it in range(1, LOAD_ITERATION_MAX + 1):
-            w = np.maximum(loads[idx] / (self.width if self.helical is None
-                                         else self.width * self.helical.frac[idx]), floor)
-            # a (position, slice) whose film failed keeps its fallback in later passes
-            # (re-trying it at a slightly different load would let the sharing oscillate)
-            redo = ~(np.abs(w - w_prev) <= 0.1 * LOAD_ITERATION_TOL * w_prev) & ~failed
-            if np.any(redo):
-                res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
-                self.solves += res.solves
-                kc[j[redo], n[redo], i[redo]] = res.k_N_per_m
-                w_prev = np.where(redo, w, w_prev)
-                for f in res.failures:
-                    failures[(f["s_m"], f["slice"])] = f
-                if res.failures:
-                    bad = {(f["s_m"], f["slice"]) for f in res.failures}
-                    sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
-                    failed |= np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
-            k = (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
-                 else self.helical.mesh_stiffness(kc, self.opts))
-            new = _slice_loads_N(k, self.e, self.E, F)
-            change = float(np.max(np.abs(new - loads)) / max(F / self.NS, 1e-300)) if F > 0 else 0.0
-            loads = new
-            if change < LOAD_ITERATION_TOL:
-                break
-        else:
-            warnings.warn(f"{self.model.name}: load sharing not converged at torque {torque_Nm:g} N m after "
-                          f"{LOAD_ITERATION_MAX} passes (max slice-load change {change:.2e} of F/NS)")
-        self.records.append(dict(torque_Nm=float(torque_Nm), passes=it, load_change=change,
-                                 failures=len(failures), failure_list=list(failures.values())))
-        return k
-
-
-class _HelicalContactView:
-    """Contact-model requests of a helical pair, slice by slice (docs/helical.md,
-    "Load-dependent contact models").
-
-    Each slice is a thin spur gear of the transverse section whose stiffness is taken on the
-    normal section (:func:`gearfmu.gear.stiffness.helical_slot_stiffness`).  The contact model sees
-    the slice as a line contact of length w / cos(beta_b) (the slice's piece of the inclined
-    contact line) at the slice's own transverse LOA position ``s_slice_m`` and load:
-
-    * radius of curvature in the normal section rho_n = rho_t / cos(beta_b) (ISO 6336-2
-      Z_H / Z_beta derivation; Niemann/Winter, Maschinenelemente II, ch. 21): the model's
-      geometry is the transverse one with every LOA length (N1N2, A, C, E, the request
-      positions) divided by cos(beta_b), so R = s1 s2/(s1 + s2) becomes rho_n;
-    * entrainment speed normal to the contact line u_n = u_t cos(beta_b) (CHOICE: the flank
-      velocities lie in the transverse plane, the contact line is inclined at beta_b on the
-      plane of action, and only the component normal to a line contact enters the 1-D
-      Reynolds equation, Johnson 1985, Contact Mechanics, ch. 13): the model's pinion speed is
-      omega1 cos^2(beta_b) (with the lengths scaled by 1/cos(beta_b)); sliding likewise;
-    * load per unit length of contact line w_n = (F_t / cos beta_b)/(w / cos beta_b) = F_t / w,
-      the transverse slice load per face width unchanged (ISO 6336-2: F_bn/l_b);
-    * the model's normal stiffness k_n (N/m per contact-line length w/cos(beta_b)) goes in
-      series with the normal-section tooth compliances of the slice (virtual spur gear,
-      :func:`gearfmu.gear.stiffness.virtual_normal_section`, same strip length) and the result is
-      turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz slice of
-      :func:`gearfmu.gear.stiffness.helical_slot_stiffness` (with the 'hertz' model this reproduces
-      that function's slice stiffness to round-off).
-    """
-
-    def __init__(self, pair, geom, env, ss, reps):
-        if ss.s_slice_m is None:
-            raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
-        c = math.cos(geom.base_helix_angle_rad)
-        self.cos_beta_b = c
-        self.t = c * c
-        self.omega1_rad_s = float(env.omega1_rad_s)
-        self.width_transverse_m = float(env.width_m)
-        s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
-        self.geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
-                              s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
-        self.env = replace(env, geom=self.geom_n, omega1_rad_s=env.omega1_rad_s * c * c,
-                           width_m=env.width_m / c, _flanks=None)
-        self.s_req = np.tile(s_t / c, (1, 1, reps))                                  # (P, NS, N)
-        vpair, vgeom = virtual_normal_section(pair, geom)
-        wn = ss.slice_width_m / c
-        on = np.isfinite(s_t)
-        ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
-        if np.any(on):
-            u1 = _normal_roll_m(geom, vgeom, 1, s_t[on])
-            u2 = _normal_roll_m(geom, vgeom, 2, s_t[on])
-            cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
-            cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
-            ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
-            fp[on], fg[on] = cp["foundation"], cg["foundation"]
-        # a partly engaged slice (stiffness.helical_slot_stiffness) is a strip of f w: compliances / f,
-        # the model's contact stiffness x f, its load per unit length = slice load / (f w)
-        fr = getattr(ss, "slice_contact_fraction", None)
-        fr = np.ones(s_t.shape) if fr is None else np.where(on, np.asarray(fr, dtype=float), 1.0)
-        ct, fp, fg = ct / fr, fp / fr, fg / fr
-        self.frac = np.tile(fr, (1, 1, reps))
-        self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
-
-    def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
-        """(P, NS, N) transverse slice stiffness from the models' normal contact stiffness:
-        k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
-        :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
-        combine_pairs is homogeneous, so scaling after it equals scaling before)."""
-        kc = np.asarray(kc_normal_N_per_m, dtype=float)
-        P, NS, N = kc.shape
-        flat = (P, NS * N)
-        k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
-                                  (kc * self.frac).reshape(P, 1, NS * N), opts)
-        return self.t * k.reshape(P, NS, N)
-
-    def provenance(self) -> dict:
-        """The request mapping, for the tables' provenance ('contact')."""
-        return {"speed_rad_s": self.omega1_rad_s,
-                "helical_normal_section": {
-                    "base_helix_angle_rad": math.acos(self.cos_beta_b),
-                    "radius_of_curvature": "rho_t / cos(beta_b)",
-                    "entrainment_speed": "u_t cos(beta_b)",
-                    "load_per_contact_line_length": "F_t / w (slice face width w)",
-                    "contact_line_length_per_slice_m": self.width_transverse_m / self.cos_beta_b,
-                    "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
-
-
-def _contact_provenance(ci, axis_note) -> dict:
-    """Provenance of a contact-model run: settings, passes, solves, film failures."""
-    env = ci.env
-    fails = [f for r in ci.records for f in r["failure_list"]]
-    out = {
-        "model": ci.model.name, "load_dependent": ci.model.load_dependent,
-        "speed_rad_s": env.omega1_rad_s, "eta0_Pas": env.eta0_Pas, "alpha_Pa_inv": env.alpha_Pa_inv,
-        "rho0_kg_m3": env.rho0_kg_m3, "ehl_nodes": env.ehl_nodes,
-        "load_iteration": {"tol_slice_load_over_F_per_NS": LOAD_ITERATION_TOL, "max_passes": LOAD_ITERATION_MAX,
-                           "unloaded_slice_load_share": UNLOADED_SLICE_LOAD_SHARE,
-                           "rows": [{k: v for k, v in r.items() if k != "failure_list"} for r in ci.records]},
-        "solves": ci.solves,
-    }
-    if axis_note:
-        out["torque_axis_note"] = axis_note
-    r = env.roughness
-    if r is not None and ci.model.name == "rough_ehl":
-        out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
-                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
-                            "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
-                            "composite_sigma_m": composite_sigma_m(r)}
-        if getattr(env, "_grid", None) is not None:
-            out["film_grid"] = env._grid.summary()
-        out["film_failures"] = len(fails)
-        out["film_failures_by_status"] = {st: sum(1 for f in fails if f["status"] == st)
-                                          for st in sorted({f["status"] for f in fails})}
-        out["film_failures_first"] = [
-            {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
-        if fails:
-            lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
-            names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
-                     "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
-                     "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
-            uses = {}
-            for f in fails:
-                uses[f.get("used", r.on_failure)] = uses.get(f.get("used", r.on_failure), 0) + 1
-            out["film_failures_by_use"] = uses
-            rng = f" (lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g})" if lam else ""
-            msg = (f"rough_ehl: film parameter below {r.full_film_parameter:g} or rough film failed at "
-                   f"{len(fails)} (position, slice, torque) points{rng}; used there: "
-                   + ", ".join(f"{names.get(k, k)} at {v}" for k, v in sorted(uses.items()))
-                   + " (tables' provenance 'contact.film_failures_first')")
-            out["warning"] = msg
-            warnings.warn(msg)
-    return out
 
 
 def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS, reps, e_slot, E,
@@ -417,7 +132,7 @@ def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_pe
             k_rows.append(k_row)
             e_rows.append(e_row)
             te_rows.append(lm.static_te_m)
-        bar.step(f"torque {T:g} N m")
+        _step(bar, f"torque {T:g} N m")
     return k_rows, e_rows, te_rows, k_nominal
 
 
@@ -431,9 +146,9 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     pinion torques (N m) of the table rows (None: one row at the nominal torque,
     or with lead crowning ``DEFAULT_TORQUE_FACTORS`` x nominal);
     ``nominal_torque_Nm`` (N m, > 0): sets ``k_mean_N_per_m``; ``slots``: P
-    (None: ceil(contact ratio)); ``progress``: print progress to stderr (tqdm
-    when installed).  Without lead crowning k is load-independent and the error
-    tables are the meshing errors; with crowning every torque row holds the
+    (None: ceil(contact ratio)); ``progress``: progress bars on stderr
+    (:func:`gearfmu.common.progress.progress_bar`).  Without lead crowning k is
+    load-independent and the error tables are the meshing errors; with crowning every torque row holds the
     secant stiffness and effective error of :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`
     (they reproduce the loaded static TE of that row exactly).  Lead crowning
     only acts with ``opts.slices`` > 1 (one slice sits at the face centre).
@@ -490,7 +205,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     rb1 = float(geom.rb1_m)
     nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
     rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
-    bar = _Progress(progress, 1 + len(rows), "gearfmu tables")
+    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step")
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
     if opts.contact_model != "hertz":
@@ -509,7 +224,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
             slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
         if contact_it is not None:  # the load iteration uses the pair error of the helical pair
             contact_it.e = e_slot
-    bar.step(f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
+    _step(bar, f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
 
     if contact_it is not None:
         contact_it.__enter__()
@@ -536,7 +251,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         "wall_s": round(time.perf_counter() - t_start, 3),
     })
     if contact_it is not None:
-        prov["contact"] = _contact_provenance(contact_it, axis_note)
+        prov["contact"] = contact_provenance(contact_it, axis_note)
         if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
             prov["contact"].update(contact_it.helical.provenance())
     tables = MeshTables(
@@ -617,7 +332,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
             f"torque_axis_Nm: a non-standard temperature needs torques > 0 (seed 004 stiffness is a secant "
             f"stiffness under load), got {torques.tolist()!r}")
     rb1 = float(geom.rb1_m)
-    bar = _Progress(progress, len(torques), label)
+    bar = progress_bar(desc=label, enabled=progress, total=len(torques), unit="row")
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
         ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
@@ -644,7 +359,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
         k4.append(np.stack(k_row))
         e4.append(np.stack(e_row))
         te4.append(np.stack(te_row))
-        bar.step(f"torque {float(T):g} N m, {len(states)} thermal states")
+        _step(bar, f"torque {float(T):g} N m, {len(states)} thermal states")
     bar.close()
     return np.ascontiguousarray(np.stack(k4)), np.ascontiguousarray(np.stack(e4)), np.stack(te4)
 

@@ -31,6 +31,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from ..common.checks import finite_number
 from .mesh_tables import MeshTables, TableError
 
 __all__ = [
@@ -57,18 +58,18 @@ KB_CONTACT_RATIO = 1.7547
 KB_BACKLASH_HALF_M = 0.5 * 0.136e-3
 
 
+#: gear scalars :func:`rectangular_wave_tables` hands on to :func:`tables_from_arrays`
+_GEAR_DATA = frozenset(("teeth_pinion", "teeth_gear", "base_radius_pinion_m", "base_radius_gear_m",
+                        "inertia_pinion_kgm2", "inertia_gear_kgm2"))
+
+
 class SyntheticTableError(TableError):
     """Bad argument to a synthetic table builder (a ValueError subclass)."""
 
 
 def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise SyntheticTableError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0.0:
-        raise SyntheticTableError(f"{name}: must be finite and > 0, got {value!r}")
-    return v
+    """``value`` as a finite float > 0 (SyntheticTableError naming ``name`` otherwise)."""
+    return finite_number(name, value, positive=True, error=SyntheticTableError)
 
 
 def comprehensive_error_m(k_N_per_m: np.ndarray, e_m: np.ndarray) -> np.ndarray:
@@ -215,14 +216,9 @@ def rectangular_wave_tables(
     points_per_mesh: int = 64,
     backlash_half_m: float = 0.0,
     pair_error_m: Optional[Callable[[int, np.ndarray], np.ndarray]] = None,
-    teeth_pinion: int = KB_TEETH,
-    teeth_gear: int = KB_TEETH,
-    base_radius_pinion_m: float = KB_BASE_RADIUS_M,
-    base_radius_gear_m: float = KB_BASE_RADIUS_M,
-    inertia_pinion_kgm2: float = KB_INERTIA_KGM2,
-    inertia_gear_kgm2: float = KB_INERTIA_KGM2,
     slots: Optional[int] = None,
     mesh_periods: Optional[int] = None,
+    **gear_data,
 ) -> MeshTables:
     """Rectangular-wave TVMS tables (k in N/m, e in m, angles in rad).
 
@@ -237,6 +233,10 @@ def rectangular_wave_tables(
     ``pair_error_m(slot, u)`` (optional) gives the meshing error (m) of the pair
     in ``slot`` at engagement fraction ``u`` in [0, 1) (u = (phi - start)/(eps*T));
     it is only sampled where the pair is engaged (0 elsewhere).
+
+    ``gear_data``: the gear scalars of :func:`tables_from_arrays` (``teeth_pinion``,
+    ``teeth_gear``, ``base_radius_pinion_m``, ``base_radius_gear_m``, ``inertia_pinion_kgm2``,
+    ``inertia_gear_kgm2``; defaults there, the Kahraman & Blankenship gears).
 
     Grid: ``points_per_mesh`` points per mesh period; the tables hold
     ``mesh_periods`` mesh periods (default = slots = ceil(contact_ratio)); the
@@ -259,6 +259,10 @@ def rectangular_wave_tables(
     nmesh = p if mesh_periods is None else int(mesh_periods)
     if nmesh < p or nmesh % p != 0:
         raise SyntheticTableError(f"mesh_periods: must be a positive multiple of slots={p}, got {mesh_periods!r}")
+    unknown = sorted(set(gear_data) - _GEAR_DATA)
+    if unknown:
+        raise SyntheticTableError(f"{unknown[0]}: not an argument of rectangular_wave_tables")
+    teeth_pinion = gear_data.pop("teeth_pinion", KB_TEETH)
     z1 = int(teeth_pinion)
     if z1 != teeth_pinion or z1 < 1:
         raise SyntheticTableError(f"teeth_pinion: must be a positive integer, got {teeth_pinion!r}")
@@ -290,10 +294,7 @@ def rectangular_wave_tables(
             e[j] = np.where(engaged[j], np.broadcast_to(vals, (nphi,)), 0.0)
     return tables_from_arrays(
         phi_period_rad=nmesh * mp, mesh_period_rad=mp, k_N_per_m=k, e_m=e,
-        backlash_half_m=b_half,
-        base_radius_pinion_m=base_radius_pinion_m, base_radius_gear_m=base_radius_gear_m,
-        inertia_pinion_kgm2=inertia_pinion_kgm2, inertia_gear_kgm2=inertia_gear_kgm2,
-        teeth_pinion=z1, teeth_gear=teeth_gear, contact_ratio=eps,
+        backlash_half_m=b_half, teeth_pinion=z1, contact_ratio=eps, **gear_data,
         provenance={"source": "gearfmu.tables.synthetic.rectangular_wave_tables",
                     "k_single_N_per_m": ks, "k_double_N_per_m": kd, "contact_ratio": eps,
                     "points_per_mesh": npm, "backlash_half_m": b_half},

@@ -84,10 +84,10 @@ def read_meta(path) -> dict:
     """Read a TOML sidecar (flat keys of :data:`META_KEYS`; a ``[gear]`` or
     ``[tables]`` table is flattened too)."""
     p = Path(path)
+    if not p.exists():
+        raise TableImportError(f"{p}: file not found")
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise TableImportError(f"{p}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise TableImportError(f"{p}: not valid TOML ({exc})") from None
     flat = {}

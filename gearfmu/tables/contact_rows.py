@@ -1,0 +1,257 @@
+"""Torque rows of the tables with a load-dependent contact model: the slice stiffness of each row
+from the contact model's stiffness at that row's slice loads, iterated with the loaded mesh
+(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`; docs/ehl_mesh.md), for spur pairs and
+slice by slice on the normal section of helical pairs (docs/helical.md).  Used by
+:func:`gearfmu.tables.precompute.precompute_tables`.  SI units.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+import warnings
+
+import numpy as np
+
+from ..common.executors import make_executor
+from ..contact.models import composite_sigma_m, get_contact_model, tooth_compliances, sliced_mesh_stiffness
+from ..gear.stiffness import (slot_stiffness, _normal_roll_m, tooth_compliance_m_per_N, virtual_normal_section)
+from .load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE,
+                             iterate_load_sharing, slice_loads_N)
+
+
+class PrecomputeInputError(ValueError):
+    """Bad input to the table precomputation (names the field and the reason); raised here and by
+    :mod:`gearfmu.tables.precompute`, which exports it."""
+
+
+def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(k total (P, N), k per slice (P, NS, N)) tiled over the table period."""
+    k = np.asarray(ss.k_N_per_m, dtype=float)
+    k_tile = np.tile(k, (1, reps))
+    ks = getattr(ss, "k_per_slice_N_per_m", None)
+    ks = None if ks is None else np.asarray(ks, dtype=float)
+    if ks is not None and ks.ndim == 3:  # slices differ (e.g. rough surfaces)
+        k_slice = np.tile(ks, (1, 1, reps))
+    else:  # equal slices: split the pair stiffness evenly so totals match exactly
+        k_slice = np.repeat((k_tile / slices)[:, None, :], slices, axis=1)
+    return k_tile, k_slice
+
+
+class _ContactIteration:
+    """Slice stiffness with a load-dependent contact model, iterated with the
+    loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
+
+    def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
+        self.model = get_contact_model(opts.contact_model)
+        self.env, self.opts, self.e, self.E = env, opts, e_slot, E
+        ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
+        self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
+        self.NS = int(opts.slices)
+        self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
+        self.helical = None
+        if getattr(geom, "helix_angle_rad", 0.0) != 0.0:  # per-slice normal-section requests (docs/helical.md)
+            self.helical = _HelicalContactView(pair, geom, env, ss, reps)
+            self.env = self.helical.env
+            self.s_req = self.helical.s_req                                  # (P, NS, N)
+        else:
+            ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
+            self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
+            self.s_req = np.broadcast_to(self.s[:, None, :], self.k_hertz.shape)
+        self.width = ss.slice_width_m
+        self.face = ss.slice_width_m * self.NS
+        self.nominal_F = nominal_F
+        self.zone = np.isfinite(self.s_req)
+        self.solves = 0
+        self.records = []
+        self._pool = None
+
+    def __enter__(self):
+        """Open one local process pool for all passes and rows (unless the
+        environment brings an executor or asks for max_workers = 1)."""
+        env = self.env
+        if env.executor is None and (env.max_workers is None or env.max_workers > 1):
+            self._pool = make_executor(max_workers=env.max_workers)
+            self.env = replace(env, executor=self._pool.__enter__())
+        return self
+
+    def __exit__(self, *exc):
+        if self._pool is not None:
+            self._pool.__exit__(*exc)
+            self.env = replace(self.env, executor=None)
+            self._pool = None
+        return False
+
+    def set_load_range(self, torques, rb1: float) -> None:
+        """Tell the contact model which slice loads (N/m) the rows will ask for: the load floor
+        of the lightest row to 1.1 x the largest Hertz static slice load of the heaviest, so that
+        a film grid can place its load nodes (contact_models.RoughFilmGrid, docs/ehl_mesh.md)."""
+        F = [float(t) / rb1 for t in torques]
+        lo = UNLOADED_SLICE_LOAD_SHARE * min(f if f > 0 else self.nominal_F for f in F) / self.face
+        hi = max([float(np.max(slice_loads_N(self.k_hertz, self.e, self.E, f)[self.zone], initial=0.0))
+                  for f in F if f > 0] + [0.0]) / self.width
+        self.env = replace(self.env, film_load_range_N_per_m=(lo, max(1.1 * hi, 1.5 * lo)))
+
+    def k_slice(self, torque_Nm: float, rb1: float):
+        """(P, NS, N) slice stiffness of the torque row ``torque_Nm`` (N m): the load-sharing
+        iteration (:func:`gearfmu.tables.load_iteration.iterate_load_sharing`) from the Hertz
+        slice loads, the films of the row's slice loads from the contact model."""
+        F = torque_Nm / rb1
+        F_eval = F if F > 0 else self.nominal_F
+        floor = UNLOADED_SLICE_LOAD_SHARE * F_eval / self.face               # N/m
+        idx = np.nonzero(self.zone)
+        j, n, i = idx
+        failures = {}
+
+        def solve(w, redo, _pass):
+            res = self.model.fn(self.env, self.s_req[j[redo], n[redo], i[redo]], n[redo], w[redo])
+            self.solves += res.solves
+            for f in res.failures:
+                failures[(f["s_m"], f["slice"])] = f
+            if not res.failures:
+                return res.k_N_per_m, None
+            bad = {(f["s_m"], f["slice"]) for f in res.failures}
+            sk = np.array([float(f"{x:.10g}") for x in self.s_req[j, n, i]])
+            return res.k_N_per_m, np.array([(a, int(b)) in bad for a, b in zip(sk, n)])
+
+        def mesh_stiffness(kc):
+            return (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
+                    else self.helical.mesh_stiffness(kc, self.opts))
+
+        width = self.width if self.helical is None else self.width * self.helical.frac[idx]
+        ls = iterate_load_sharing(slice_loads_N(self.k_hertz, self.e, self.E, F), self.e, self.E, F, idx, width,
+                                  floor, solve, mesh_stiffness, what=f"{self.model.name} at torque {torque_Nm:g} N m")
+        self.records.append(dict(torque_Nm=float(torque_Nm), passes=ls.passes, load_change=ls.load_change,
+                                 failures=len(failures), failure_list=list(failures.values())))
+        return ls.k_slice_N_per_m
+
+
+class _HelicalContactView:
+    """Contact-model requests of a helical pair, slice by slice (docs/helical.md,
+    "Load-dependent contact models").
+
+    Each slice is a thin spur gear of the transverse section whose stiffness is taken on the
+    normal section (:func:`gearfmu.gear.stiffness.helical_slot_stiffness`).  The contact model sees
+    the slice as a line contact of length w / cos(beta_b) (the slice's piece of the inclined
+    contact line) at the slice's own transverse LOA position ``s_slice_m`` and load:
+
+    * radius of curvature in the normal section rho_n = rho_t / cos(beta_b) (ISO 6336-2
+      Z_H / Z_beta derivation; Niemann/Winter, Maschinenelemente II, ch. 21): the model's
+      geometry is the transverse one with every LOA length (N1N2, A, C, E, the request
+      positions) divided by cos(beta_b), so R = s1 s2/(s1 + s2) becomes rho_n;
+    * entrainment speed normal to the contact line u_n = u_t cos(beta_b) (CHOICE: the flank
+      velocities lie in the transverse plane, the contact line is inclined at beta_b on the
+      plane of action, and only the component normal to a line contact enters the 1-D
+      Reynolds equation, Johnson 1985, Contact Mechanics, ch. 13): the model's pinion speed is
+      omega1 cos^2(beta_b) (with the lengths scaled by 1/cos(beta_b)); sliding likewise;
+    * load per unit length of contact line w_n = (F_t / cos beta_b)/(w / cos beta_b) = F_t / w,
+      the transverse slice load per face width unchanged (ISO 6336-2: F_bn/l_b);
+    * the model's normal stiffness k_n (N/m per contact-line length w/cos(beta_b)) goes in
+      series with the normal-section tooth compliances of the slice (virtual spur gear,
+      :func:`gearfmu.gear.stiffness.virtual_normal_section`, same strip length) and the result is
+      turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz slice of
+      :func:`gearfmu.gear.stiffness.helical_slot_stiffness` (with the 'hertz' model this reproduces
+      that function's slice stiffness to round-off).
+    """
+
+    def __init__(self, pair, geom, env, ss, reps):
+        if ss.s_slice_m is None:
+            raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
+        c = math.cos(geom.base_helix_angle_rad)
+        self.cos_beta_b = c
+        self.t = c * c
+        self.omega1_rad_s = float(env.omega1_rad_s)
+        self.width_transverse_m = float(env.width_m)
+        s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
+        self.geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
+                              s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
+        self.env = replace(env, geom=self.geom_n, omega1_rad_s=env.omega1_rad_s * c * c,
+                           width_m=env.width_m / c, _flanks=None)
+        self.s_req = np.tile(s_t / c, (1, 1, reps))                                  # (P, NS, N)
+        vpair, vgeom = virtual_normal_section(pair, geom)
+        wn = ss.slice_width_m / c
+        on = np.isfinite(s_t)
+        ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
+        if np.any(on):
+            u1 = _normal_roll_m(geom, vgeom, 1, s_t[on])
+            u2 = _normal_roll_m(geom, vgeom, 2, s_t[on])
+            cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
+            cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
+            ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
+            fp[on], fg[on] = cp["foundation"], cg["foundation"]
+        # a partly engaged slice (stiffness.helical_slot_stiffness) is a strip of f w: compliances / f,
+        # the model's contact stiffness x f, its load per unit length = slice load / (f w)
+        fr = getattr(ss, "slice_contact_fraction", None)
+        fr = np.ones(s_t.shape) if fr is None else np.where(on, np.asarray(fr, dtype=float), 1.0)
+        ct, fp, fg = ct / fr, fp / fr, fg / fr
+        self.frac = np.tile(fr, (1, 1, reps))
+        self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
+
+    def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
+        """(P, NS, N) transverse slice stiffness from the models' normal contact stiffness:
+        k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
+        :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
+        combine_pairs is homogeneous, so scaling after it equals scaling before)."""
+        kc = np.asarray(kc_normal_N_per_m, dtype=float)
+        P, NS, N = kc.shape
+        flat = (P, NS * N)
+        k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
+                                  (kc * self.frac).reshape(P, 1, NS * N), opts)
+        return self.t * k.reshape(P, NS, N)
+
+    def provenance(self) -> dict:
+        """The request mapping, for the tables' provenance ('contact')."""
+        return {"speed_rad_s": self.omega1_rad_s,
+                "helical_normal_section": {
+                    "base_helix_angle_rad": math.acos(self.cos_beta_b),
+                    "radius_of_curvature": "rho_t / cos(beta_b)",
+                    "entrainment_speed": "u_t cos(beta_b)",
+                    "load_per_contact_line_length": "F_t / w (slice face width w)",
+                    "contact_line_length_per_slice_m": self.width_transverse_m / self.cos_beta_b,
+                    "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
+
+
+def contact_provenance(ci, axis_note) -> dict:
+    """Provenance of a contact-model run: settings, passes, solves, film failures."""
+    env = ci.env
+    fails = [f for r in ci.records for f in r["failure_list"]]
+    out = {
+        "model": ci.model.name, "load_dependent": ci.model.load_dependent,
+        "speed_rad_s": env.omega1_rad_s, "eta0_Pas": env.eta0_Pas, "alpha_Pa_inv": env.alpha_Pa_inv,
+        "rho0_kg_m3": env.rho0_kg_m3, "ehl_nodes": env.ehl_nodes,
+        "load_iteration": {"tol_slice_load_over_F_per_NS": LOAD_ITERATION_TOL, "max_passes": LOAD_ITERATION_MAX,
+                           "unloaded_slice_load_share": UNLOADED_SLICE_LOAD_SHARE,
+                           "rows": [{k: v for k, v in r.items() if k != "failure_list"} for r in ci.records]},
+        "solves": ci.solves,
+    }
+    if axis_note:
+        out["torque_axis_note"] = axis_note
+    r = env.roughness
+    if r is not None and ci.model.name == "rough_ehl":
+        out["roughness"] = {"level": r.level, "D": r.D, "G_m": r.G_m, "seed": r.seed,
+                            "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
+                            "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
+                            "composite_sigma_m": composite_sigma_m(r)}
+        if getattr(env, "_grid", None) is not None:
+            out["film_grid"] = env._grid.summary()
+        out["film_failures"] = len(fails)
+        out["film_failures_by_status"] = {st: sum(1 for f in fails if f["status"] == st)
+                                          for st in sorted({f["status"] for f in fails})}
+        out["film_failures_first"] = [
+            {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
+        if fails:
+            lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
+            names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
+                     "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
+                     "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
+            uses = {}
+            for f in fails:
+                uses[f.get("used", r.on_failure)] = uses.get(f.get("used", r.on_failure), 0) + 1
+            out["film_failures_by_use"] = uses
+            rng = f" (lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g})" if lam else ""
+            msg = (f"rough_ehl: film parameter below {r.full_film_parameter:g} or rough film failed at "
+                   f"{len(fails)} (position, slice, torque) points{rng}; used there: "
+                   + ", ".join(f"{names.get(k, k)} at {v}" for k, v in sorted(uses.items()))
+                   + " (tables' provenance 'contact.film_failures_first')")
+            out["warning"] = msg
+            warnings.warn(msg)
+    return out
