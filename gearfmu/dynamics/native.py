@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..common.checks import finite_number
 
@@ -206,7 +206,7 @@ def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
                 f = 0.0
         else:
             f = 0.0
-    else:  # seed003
+    else:  # contact_zone
         if kv > 0.0:
             f = fc + fd
         else:
@@ -1196,6 +1196,7 @@ def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping
     H = _finite("comm_step_s", comm_step_s, positive=True)
     hmax = _finite("max_step_s", max_step_s, positive=True)
     zeta = _finite("damping_ratio", damping_ratio, nonneg=True)
+    damping_model = current_spelling("damping_model", damping_model)
     if damping_model not in DAMPING_MODELS:
         raise NativeInputError(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
     n_steps = _n_steps(stop, H)

@@ -287,7 +287,7 @@ class GearFmuSlave(Fmi2Slave):
         if not msgs and not float(self._v["max_step"]) > 0.0:
             msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
         if not msgs and int(self._v["damping_model"]) not in (0, 1):
-            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (seed003)")
+            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (contact_zone)")
         if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1):
             msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4) or 1 (rk4_kink)")
         return msgs
