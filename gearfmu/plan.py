@@ -65,7 +65,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .common.vocabulary import LUBRICATED_CONTACT_MODELS
+from .common.vocabulary import INTEGRATORS, LUBRICATED_CONTACT_MODELS, TEMPERATURE_INPUTS
 from .scene.envelope import PLAN_CHOICES, AccuracyTarget, Envelope, accuracy_of, envelope_of, VerifiedEnvelope
 from .contact.models import CONTACT_MODELS, environment_from_scene, get_contact_model
 from .dynamics.native import choose_max_step_s, simulate
@@ -81,7 +81,7 @@ from .gear.stiffness import required_slots
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
-           "verify_fmus", "TEMPERATURE_INPUTS", "estimate_as_written", "verified_envelope_of",
+           "verify_fmus", "estimate_as_written", "verified_envelope_of",
            "DEFAULT_BUDGET_RUNS"]
 
 #: contact models from the cheapest to the most detailed
@@ -193,7 +193,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     else:
         ch["torque_points"] = Choice("torque_points", [1], note="no torque range in the envelope")
     add("slots", [pmin] if full_slots == pmin else [pmin, full_slots], full_slots)
-    add("integrator", ["rk4", "rk4_kink"], scene.solver.integrator)
+    add("integrator", list(INTEGRATORS), scene.solver.integrator)
     # levels: multiples of h0 (the automatic step at the top envelope speed); pinned: the scene's
     # max_step_s in s, or 1 x h0 when the scene says "auto" (_step_absolute tells which)
     add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,
@@ -885,8 +885,6 @@ def _measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
 
 
 # ============================================================== verification through the FMUs
-#: FMU inputs that select the tables' temperature axis (modeldescription/variables.toml)
-TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 _SAMPLES_PER_MESH = 16      # communication steps per mesh period at the case's top speed (CHOICE)
 _CASE_MESH_PERIODS = 3      # a case lasts 3 x accuracy.run_mesh_periods mesh periods (CHOICE)
 _RUN_UP_LOAD_SHARE = 0.1    # run-up: acceleration torque <= 10 % of the nominal torque (CHOICE)
@@ -984,7 +982,7 @@ def run_fmu_drive(fmu_path, case: DriveCase, names=("dte", "mesh_force", "pinion
 
     md = read_model_description(str(fmu_path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    tname = next((n for n in TEMPERATURE_INPUTS if n in vr), None)
+    tname = next((n for n in TEMPERATURE_INPUTS.values() if n in vr), None)
     unzip = extract(str(fmu_path))
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                     instanceName="plan_verify")

@@ -6,7 +6,6 @@ planner (:mod:`gearfmu.plan`) builds its planned scenes with :func:`build_fmu_fr
 """
 from __future__ import annotations
 
-import inspect
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +14,7 @@ from typing import Optional
 import numpy as np
 
 from . import __version__
-from .common.vocabulary import DEFAULT_RUNTIME, RUNTIMES
+from .common.vocabulary import RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
@@ -62,7 +61,7 @@ def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
         progress=progress,
         provenance=prov,
         **_contact_kw(scene, progress),
-        thermal=getattr(scene, "thermal", None),
+        thermal=scene.thermal,
     )
 
 
@@ -78,10 +77,10 @@ def max_step_for(scene, tables) -> float:
     if scene.solver.max_step_s is not None:
         return float(scene.solver.max_step_s)
     vmax = scene.operating.speed_rad_s
-    rng = getattr(scene.operating, "speed_range_rad_s", None)
+    rng = scene.operating.speed_range_rad_s
     if rng:
         vmax = max(abs(v) for v in rng)
-    if getattr(tables, "has_temperature_axis", False):  # the bound of the stiffest temperature slice
+    if tables.has_temperature_axis:  # the bound of the stiffest temperature slice
         return min(choose_max_step_s(tables.at_temperature(float(t)), abs(vmax)) for t in tables.temperature_C)
     return choose_max_step_s(tables, abs(vmax))
 
@@ -131,7 +130,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     and operating settings.  ``plan``, ``verified_envelope``: kept in the result.
     ``platforms``: binaries of a standalone FMU.  ``allow_large``: build even when the
     estimate (gearfmu.tables.estimate) exceeds the limits."""
-    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
+    runtime = runtime or scene.fmu.runtime
     builder = fmu_builder(runtime)
     extra = platform_kw(runtime, platforms)
     est = estimate_build(scene) if tables is None else None
@@ -154,22 +153,11 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
         output_interval_s=scene.fmu.output_interval_s,
         scene_text=scene.text,
         envelope=fmu_envelope_record(tables, verified_envelope,
-                                     speed_range_rad_s=getattr(scene.operating, "speed_range_rad_s", None)),
-        **_integrator_kw(builder, scene), **extra,
+                                     speed_range_rad_s=scene.operating.speed_range_rad_s),
+        integrator=scene.solver.integrator, **extra,
     )
     t2 = time.perf_counter()
     return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified_envelope, est)
-
-
-def _integrator_kw(builder, scene) -> dict:
-    """{'integrator': scene.solver.integrator} for a builder that takes it; a builder
-    without the argument gets nothing for 'rk4' (its kernel default) and an error otherwise."""
-    name = getattr(scene.solver, "integrator", "rk4")
-    if "integrator" in inspect.signature(builder).parameters:
-        return {"integrator": name}
-    if name != "rk4":
-        raise ValueError(f"solver.integrator: {name!r} is not supported by this FMU runtime's builder")
-    return {}
 
 
 def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
@@ -186,5 +174,5 @@ def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_st
         pinion_speed_start_rad_s=scene.operating.speed_rad_s,
         damping_ratio=scene.fmu.damping_ratio if damping_ratio is None else damping_ratio,
         damping_model=scene.solver.damping_model,
-        integrator=getattr(scene.solver, "integrator", "rk4"),
+        integrator=scene.solver.integrator,
     )

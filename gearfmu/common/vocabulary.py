@@ -21,7 +21,8 @@ import warnings
 
 __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES", "FILM_TRANSIENT_MODES",
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
-           "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling"]
+           "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
+           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -37,12 +38,16 @@ FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error", "load_sharing")
 #: k_transient/k_smooth, the same for every slice, no steady rough solve; start 'auto';
 #: docs/ehl_mesh.md "Transient films in the tables")
 FILM_TRANSIENT_MODES = ("off", "correction", "film")
-#: [thermal] axis_quantity: what the tables' temperature axis is (docs/thermal.md)
+#: [thermal] axis_quantity: what the tables' temperature axis is (docs/thermal.md); the first is the default
 THERMAL_AXIS_QUANTITIES = ("bulk", "oil", "bulk_and_oil")
-#: free-flank thermal deformation laws (gearfmu.gear.thermal.free_flank_deformation_m)
+#: axis_quantity -> the FMU input that selects the tables' temperature axis (docs/thermal.md;
+#: modeldescription/variables.toml); the FMU runtime template, which imports nothing from
+#: gearfmu, keeps its own copy of the input names
+TEMPERATURE_INPUTS = {"bulk": "bulk_temperature", "oil": "oil_temperature", "bulk_and_oil": "gearbox_temperature"}
+#: free-flank thermal deformation laws (gearfmu.gear.thermal.free_flank_deformation_m); the first is the default
 FLANK_LAWS = ("radial_tangential", "homogeneous")
 #: [thermal] oil_alpha: the pressure-viscosity coefficient along an oil temperature axis,
-#: "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T)) or "constant" (docs/thermal.md)
+#: "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T); the default) or "constant" (docs/thermal.md)
 OIL_ALPHA_LAWS = ("roelands", "constant")
 #: helix hand of the pinion (the gear has the opposite hand; docs/helical.md)
 HELIX_HANDS = ("right", "left")
@@ -52,9 +57,16 @@ HELIX_HANDS = ("right", "left")
 #: contact zone (k_j > 0) carries spring plus viscous damping force, even while separated
 #: by the backlash, and may pull (Xu et al. 2022, Appl. Sci. 12, 4690, eq 3-5)
 DAMPING_MODELS = {"elastobacklash": 0, "contact_zone": 1}
+#: the damping rule of a scene, solver and FMU builder that names none
+DEFAULT_DAMPING_MODEL = "elastobacklash"
 #: integrator names -> kernel code (docs/model.md "Integration"; gearkernel.h GK_INTEGRATOR_*);
 #: the FMU parameter ``integrator`` takes the code
 INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+#: the integrator wherever none is named: the setting on the speed-against-error front below
+#: ~5e-4 relative error (benchmarks/bench_integrators.py, docs/dynamics_validation.md); the
+#: default of the native solver, the scene, the FMU builders and the FMU parameter
+#: ``integrator`` alike, so a native run and an FMU built with defaults integrate identically
+DEFAULT_INTEGRATOR = "rk4_kink"
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
+from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS, current_spelling
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..common.checks import finite_number
 
@@ -52,12 +52,6 @@ __all__ = [
     "substeps",
 ]
 
-#: the setting on the speed-against-error front below ~5e-4 relative error
-#: (benchmarks/bench_integrators.py, ``gearfmu bench accuracy``, docs/dynamics_validation.md);
-#: the default of :func:`simulate`, :func:`simulate_sdof`, the scene, the FMU builders
-#: and the FMU parameter ``integrator`` alike, so a native run and an FMU built with
-#: defaults integrate identically.  Pass ``integrator='rk4'`` for classical RK4.
-DEFAULT_INTEGRATOR = "rk4_kink"
 
 InputLike = Union[float, np.ndarray, Callable[[float], float]]
 

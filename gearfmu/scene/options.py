@@ -13,7 +13,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, List, Optional, Sequence, Tuple
 
-from ..common.vocabulary import DEFAULT_RUNTIME
+from ..common.vocabulary import (DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, DEFAULT_RUNTIME, FLANK_LAWS,
+                                 OIL_ALPHA_LAWS, THERMAL_AXIS_QUANTITIES)
 from ..contact.base import RoughnessSpec
 from ..ehl.lubricant import walther_kinematic_viscosity_cSt
 from ..gear.gearpair import GearPairSpec, MeshModelOptions
@@ -95,16 +96,16 @@ class TableOptions:
 class SolverOptions:
     """Dynamic solver settings (docs/model.md).
 
-    ``integrator``: 'rk4_kink' (default: the setting on the speed-against-error
-    front, docs/dynamics_validation.md) or 'rk4'; ``max_step_s``: largest internal step in s
+    ``integrator``: :data:`~gearfmu.common.vocabulary.INTEGRATORS`, default 'rk4_kink'
+    (the setting on the speed-against-error front, docs/dynamics_validation.md) or 'rk4'; ``max_step_s``: largest internal step in s
     (``None`` = automatic, chosen by the builder from the mesh frequency and
     the contact natural frequency); ``damping_model``: 'elastobacklash' or
-    'seed003' (docs/model.md, "Per-pair force").
+    'contact_zone' (docs/model.md, "Per-pair force").
     """
 
-    integrator: str = "rk4_kink"
+    integrator: str = DEFAULT_INTEGRATOR
     max_step_s: Optional[float] = None
-    damping_model: str = "elastobacklash"
+    damping_model: str = DEFAULT_DAMPING_MODEL
 
 
 @dataclass(frozen=True)
@@ -194,9 +195,9 @@ class ThermalOptions:
     gear_profile_gamma: Tuple[float, ...] = ()
     gear_profile_C: Tuple[float, ...] = ()
     temperature_axis_C: Tuple[float, ...] = ()
-    flank_law: str = "radial_tangential"
-    axis_quantity: str = "bulk"
-    oil_alpha: str = "roelands"
+    flank_law: str = FLANK_LAWS[0]
+    axis_quantity: str = THERMAL_AXIS_QUANTITIES[0]
+    oil_alpha: str = OIL_ALPHA_LAWS[0]
     lubricant: Optional["Lubricant"] = None
 
 
@@ -209,21 +210,34 @@ class Scene:
     :func:`gearfmu.scene.reader.load_scene`.
     """
 
+    #: ``[scene] name`` (also the default FMU model name) and ``description``
     name: str
     description: str
+    #: the TOML source as read (provenance)
     text: str
+    #: ``[gears]``, ``[gears.pinion]``, ``[gears.gear]``, ``[material]``, ``[deviations]``
     pair: GearPairSpec
+    #: ``[mesh]``: contact model, slices, foundation
     mesh: MeshModelOptions
+    #: ``[operating]``: nominal torque and speed, their ranges
     operating: OperatingPoint
+    #: ``[tables]``: resolution of the tooth-pair tables
     tables: TableOptions
+    #: ``[solver]``: integrator, largest step, damping rule
     solver: SolverOptions
+    #: ``[fmu]``: model name, damping ratio, runtime, DefaultExperiment
     fmu: FmuOptions
+    #: ``[lubricant]``, None when absent
     lubricant: Optional[Lubricant] = None
+    #: the scene file, None for a scene given as text or a mapping
     source_path: Optional[str] = None
+    #: ``[thermal]``, None when absent
     thermal: Optional[ThermalOptions] = None
-    envelope: Optional[Any] = None  # gearfmu.scene.envelope.Envelope ([envelope], docs/plan.md)
-    accuracy: Optional[Any] = None  # gearfmu.scene.envelope.AccuracyTarget ([accuracy], docs/plan.md)
-    #: the ``[roughness]`` table (SI), None when absent; the contact models use it as it is
+    #: ``[envelope]``: gearfmu.scene.envelope.Envelope (docs/plan.md), None when absent
+    envelope: Optional[Any] = None
+    #: ``[accuracy]``: gearfmu.scene.envelope.AccuracyTarget (docs/plan.md), None when absent
+    accuracy: Optional[Any] = None
+    #: ``[roughness]`` (SI), None when absent; the contact models take it as it is
     roughness: Optional[RoughnessSpec] = None
 
     @property

@@ -12,7 +12,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Dict, Optional, Tuple
 
-from ..common.vocabulary import (CONTACT_MODELS, DAMPING_MODELS, DEFAULT_RUNTIME, FILM_FAILURE_POLICIES,
+from ..common.vocabulary import (CONTACT_MODELS, DAMPING_MODELS, DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR,
+                                 DEFAULT_RUNTIME, FILM_FAILURE_POLICIES,
                                  FILM_TRANSIENT_MODES, FLANK_LAWS, HELIX_HANDS, INTEGRATORS, OIL_ALPHA_LAWS,
                                  RUNTIMES, THERMAL_AXIS_QUANTITIES)
 from ..contact.base import DEFAULT_FILM_POSITION_NODES, FULL_FILM_PARAMETER
@@ -163,10 +164,10 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            kind="int_or_auto"),
     ),
     "solver": (
-        _e("integrator", INTEGRATORS, "rk4_kink", "internal integrator (docs/model.md)"),
+        _e("integrator", INTEGRATORS, DEFAULT_INTEGRATOR, "internal integrator (docs/model.md)"),
         _f("max_step_s", "s", AUTO, "largest internal step, or \"auto\"", 0.0, 1.0, lo_open=True,
            kind="float_or_auto"),
-        _e("damping_model", DAMPING_MODELS, "elastobacklash", "per-pair damping rule (docs/model.md)"),
+        _e("damping_model", DAMPING_MODELS, DEFAULT_DAMPING_MODEL, "per-pair damping rule (docs/model.md)"),
     ),
     "fmu": (
         Key("model_name", "identifier", "-", None, "FMU model name / identifier (C identifier; none = "
@@ -207,12 +208,12 @@ SCHEMA: Dict[str, Tuple[Key, ...]] = {
            kind="float_list"),
         _f("temperature_axis_C", "degC", (), "tables' temperature axis (uniform bulk temperature of both "
            "gears), ascending; empty = none", -200.0, 500.0, kind="float_list"),
-        _e("flank_law", FLANK_LAWS, "radial_tangential",
+        _e("flank_law", FLANK_LAWS, FLANK_LAWS[0],
            "free thermal deformation of a flank (docs/thermal.md)"),
-        _e("axis_quantity", THERMAL_AXIS_QUANTITIES, "bulk", "what temperature_axis_C is: bulk temperature "
+        _e("axis_quantity", THERMAL_AXIS_QUANTITIES, THERMAL_AXIS_QUANTITIES[0], "what temperature_axis_C is: bulk temperature "
            "of both gears (FMU input bulk_temperature), oil temperature (eta0 of a lubricated contact model; "
            "input oil_temperature) or both at one temperature (input gearbox_temperature)"),
-        _e("oil_alpha", OIL_ALPHA_LAWS, "roelands", "pressure-viscosity coefficient along an oil "
+        _e("oil_alpha", OIL_ALPHA_LAWS, OIL_ALPHA_LAWS[0], "pressure-viscosity coefficient along an oil "
            "axis: Roelands (constant Z, alpha from eta0(T)) or the [lubricant] value at every temperature"),
     ),
     # operating envelope and accuracy target of the fidelity planner (gearfmu/scene/envelope.py, docs/plan.md)
