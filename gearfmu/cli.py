@@ -468,7 +468,7 @@ def make_parser() -> argparse.ArgumentParser:
 def _one_line(exc: BaseException) -> str:
     """The message of a user-facing error: CliError and the project's ValueErrors (SceneError,
     TableError, FmuMismatchError, ...) name the field or file; an OSError names its file."""
-    if isinstance(exc, OSError) and getattr(exc, "filename", None):
+    if isinstance(exc, OSError) and exc.filename:
         return f"{exc.filename}: {exc.strerror or exc}"
     return str(exc)
 
