@@ -506,7 +506,7 @@ def _cell_nodes(nd, n_phi):
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
-    kpos (seed003) the pair is in the contact zone in this cell."""
+    kpos (contact_zone) the pair is in the contact zone in this cell."""
     de = es * omega1
     d = x - ev
     if reg == 1:

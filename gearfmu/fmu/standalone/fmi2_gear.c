@@ -762,7 +762,7 @@ static int init_state(gf_inst *c)
         ok = 0;
     }
     if (ok && c->values[c->vr_dm] != 0.0 && c->values[c->vr_dm] != 1.0) {
-        gf_log(c, fmi2Error, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (seed003)",
+        gf_log(c, fmi2Error, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (contact_zone)",
                c->values[c->vr_dm]);
         ok = 0;
     }
