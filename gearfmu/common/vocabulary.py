@@ -9,8 +9,9 @@ Renamed option values keep their old spelling for one release: :data:`DEPRECATED
 maps it to the new one and :func:`current_spelling` (called wherever a value enters: the
 scene reader, the native and reference solvers, the sweeps, the FMU builders) returns the
 new spelling with a :class:`FutureWarning`.  FutureWarning, not DeprecationWarning: the
-old spellings are written by end users in scene files and on the command line, and Python
-shows DeprecationWarning by default only for code run as ``__main__`` (Python docs,
+old spellings are written by end users in scene files (read by the ``gearfmu`` command as
+well as by Python code), and Python shows DeprecationWarning by default only for code run
+as ``__main__`` (Python docs,
 "warnings -- Warning control", section "Warning Categories": FutureWarning is "the base
 category for warnings about deprecated features when those warnings are intended for end
 users of applications").
