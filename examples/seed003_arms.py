@@ -3,7 +3,7 @@
 
 The seed 003 Table 1 pair (Kahraman & Blankenship test gears,
 examples/scenes/seed003_table1.toml), tables from gearfmu.pipeline.compute_tables,
-zeta = 0.02, T = 340 N*m, no meshing error (e = 0), damping model 'seed003'
+zeta = 0.02, T = 340 N*m, no meshing error (e = 0), damping model 'contact_zone'
 (eq 8-9: constant damping per pair, rho = 2 in the double-tooth zone), the
 dimensionless form of eq 7-9 with q = x/l, l = 1 um.  An up-sweep and a
 down-sweep in Omega_h, each point continuing from the previous point's state,
@@ -83,7 +83,7 @@ def run(args) -> dict:
     settings = (PointSettings(settle_meshes=150, record_meshes=40) if args.quick
                 else PointSettings(settle_meshes=300, record_meshes=100))
     common = dict(tables=tables, pinion_torque_Nm=args.torque, damping_ratio=args.zeta,
-                  damping_model="seed003", continuation=True, settings=settings)
+                  damping_model="contact_zone", continuation=True, settings=settings)
     jobs = [SweepJob(omega_h=omega, label="up", **common),
             SweepJob(omega_h=omega[::-1].copy(), label="down", **common)]
     _log(f"{n} points x 2 sweeps, Omega_h {omega[0]:g}..{omega[-1]:g} step {step:g}, "
@@ -111,7 +111,7 @@ def run(args) -> dict:
         "hysteresis": feat["hysteresis"],
         "seed_jumps": list(SEED_JUMPS),
         "comparison": cmp,
-        "zeta": args.zeta, "torque_Nm": args.torque, "damping_model": "seed003",
+        "zeta": args.zeta, "torque_Nm": args.torque, "damping_model": "contact_zone",
         "length_scale_m": settings.length_scale_m, "bandwidth_orders": settings.bandwidth_orders,
         "normalization": "rms",
         "settle_meshes": settings.settle_meshes, "record_meshes": settings.record_meshes,

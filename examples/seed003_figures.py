@@ -9,7 +9,7 @@ give epsilon = 1.27, 1.75, 1.91; seed 003 uses 1.28, 1.75, 1.92).  Figs. 6-9 use
 the epsilon = 1.91 pair (seed 003 takes Fig. 5c/d), Figs. 10-30 the Table 1
 pair (epsilon = 1.75, the pair the paper specifies).  Dynamics: time-indexed
 SDOF of eq 3-6 in the dimensionless form of eq 7-9 (q = x / 1 um), damping
-model 'seed003' (eq 8-9), defaults zeta = 0.04, T1 = 500 N*m, Omega_h = 0.6 as in
+model 'contact_zone' (eq 8-9), defaults zeta = 0.04, T1 = 500 N*m, Omega_h = 0.6 as in
 seed 003 section 3-4.  Independent cases run in parallel through
 gearfmu.dynamics.sweeps.run_jobs (local processes, or Dask with --scheduler).
 
@@ -346,7 +346,7 @@ def main(argv=None):
     summary = {"groups": {}, "contact_ratio_fig6_9": t192.contact_ratio,
                "contact_ratios_fig5": {k: v.contact_ratio for k, v in tabs5.items()},
                "settings": {"settle_meshes": st.settle_meshes, "record_meshes": st.record_meshes,
-                            "length_scale_m": st.length_scale_m, "damping_model": "seed003"}}
+                            "length_scale_m": st.length_scale_m, "damping_model": "contact_zone"}}
     by_group = {}
     for (g, n, t, om, T, z), r in zip(cases, results):
         summary["groups"].setdefault(g, {})[n] = dict(summarize(t, r), zeta=z, torque_Nm=T)

@@ -7,8 +7,8 @@ rectangular-wave TVMS of :mod:`gearfmu.tables.synthetic`, seed 003 Table 1 gear 
 and from a computed scene.  Inputs only -- no results are stored here.
 
 ``accuracy_benchmark()`` runs, on one case and in one process, every
-integrator that :func:`gearfmu.dynamics.native.simulate` offers (read from its
-signature at run time) at several internal steps, the FMU (fmpy) at several
+integrator that :func:`gearfmu.dynamics.native.simulate` offers
+(:data:`gearfmu.common.vocabulary.INTEGRATORS`) at several internal steps, the FMU (fmpy) at several
 communication steps, and scipy ``solve_ivp`` DOP853 and Radau (event-located,
 :mod:`gearfmu.dynamics.reference`) at several tolerances, and reports wall time and
 error against the tight reference: ``gearfmu bench accuracy --json [--png P]``.
@@ -19,7 +19,6 @@ dynamic transmission error (dte) and the total mesh force.
 """
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import sys
@@ -30,8 +29,8 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
-from .dynamics import native
-from .dynamics.native import simulate, DEFAULT_INTEGRATOR
+from .common.vocabulary import DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, INTEGRATORS
+from .dynamics.native import simulate
 from .dynamics.reference import simulate_reference
 from .fmu.compare import output_names, run_fmu
 from .fmu.pythonfmu_build import build_fmu
@@ -162,17 +161,9 @@ def rel_errors(res, ref) -> dict:
 
 
 def native_integrators():
-    """Integrator names :func:`gearfmu.dynamics.native.simulate` offers, read from its signature
-    (a parameter ``integrator`` or ``method`` with a default; its allowed values from
-    ``native.INTEGRATORS`` when present).  ["rk4"] when it has no such parameter."""
-    sig = inspect.signature(native.simulate)
-    for pname in ("integrator", "method"):
-        if pname in sig.parameters:
-            names = getattr(native, "INTEGRATORS", None)
-            if names:
-                return pname, list(names)
-            return pname, [sig.parameters[pname].default]
-    return None, ["rk4"]
+    """``("integrator", names)``: the argument of :func:`gearfmu.dynamics.native.simulate` that
+    selects the integrator and the names it takes (:data:`gearfmu.common.vocabulary.INTEGRATORS`)."""
+    return "integrator", list(INTEGRATORS)
 
 
 def _fmu_build(tables, kw, max_step_s, workdir, integrator):
@@ -180,7 +171,7 @@ def _fmu_build(tables, kw, max_step_s, workdir, integrator):
                      integrator=integrator,
                      pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
                      pinion_torque_start_Nm=float(kw["pinion_torque_Nm"]), max_step_s=max_step_s,
-                     damping_model=kw.get("damping_model", "elastobacklash"), stop_time_s=kw["stop_time_s"],
+                     damping_model=kw.get("damping_model", DEFAULT_DAMPING_MODEL), stop_time_s=kw["stop_time_s"],
                      output_interval_s=kw["comm_step_s"], pinion_angle_start_rad=kw.get("pinion_angle_start_rad", 0.0))
 
 

@@ -123,13 +123,13 @@ def cmd_build(args) -> int:
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
-    if getattr(args, "tables", None):  # imported tables instead of the scene's physics
+    if args.tables:  # imported tables instead of the scene's physics
 
         tables = load_tables_file(*_tables_args(args.tables, args.tables_meta))
     platforms = None
-    if getattr(args, "platforms", None) is not None:
+    if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
-    res = build(scene, out, progress=not args.quiet, runtime=getattr(args, "runtime", None), tables=tables,
+    res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
                 fmi_version=args.fmi_version)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
@@ -189,7 +189,7 @@ def _tables_args(tables, meta):
 def _print_contact(tables) -> None:
     """One line on the contact model the tables were computed with, from their provenance: the
     environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model."""
-    c = (getattr(tables, "provenance", None) or {}).get("contact")
+    c = tables.provenance.get("contact")
     if not c:
         return
     fails = sum(r.get("failures", 0) for r in c.get("load_iteration", {}).get("rows", []))
@@ -298,7 +298,7 @@ def _validate(args) -> dict:
         fmu = _fmu(args.fmu)
         check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
         fmu_path = fmu.path
-        if getattr(scene, "accuracy", None) is not None:  # build followed the scene's plan: so does the check
+        if scene.accuracy is not None:  # build followed the scene's plan: so does the check
             scene = planned_scene(scene, plan_scene(scene))
         tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
@@ -476,7 +476,7 @@ def make_parser() -> argparse.ArgumentParser:
 def _one_line(exc: BaseException) -> str:
     """The message of a user-facing error: CliError and the project's ValueErrors (SceneError,
     TableError, FmuMismatchError, ...) name the field or file; an OSError names its file."""
-    if isinstance(exc, OSError) and getattr(exc, "filename", None):
+    if isinstance(exc, OSError) and exc.filename:
         return f"{exc.filename}: {exc.strerror or exc}"
     return str(exc)
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Optional
 
-from .common.vocabulary import DEFAULT_RUNTIME
 from .plan import PlanError, estimate_as_written, plan_scene, planned_scene
 from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
                      max_step_for, platform_kw, simulate_native)
@@ -33,13 +32,13 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
     The FMU records and checks its envelope (:func:`gearfmu.scene.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
-    runtime = runtime or getattr(scene.fmu, "runtime", DEFAULT_RUNTIME)
+    runtime = runtime or scene.fmu.runtime
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
     platform_kw(runtime, platforms, fmi_version)
     if tables is None:  # refuse an oversized scene before planning or estimating anything
         check_build_cost(scene, allow_large=allow_large)
     plan = None
-    if tables is None and getattr(scene, "accuracy", None) is not None:  # follow the plan (docs/plan.md)
+    if tables is None and scene.accuracy is not None:  # follow the plan (docs/plan.md)
         plan = plan_scene(scene, progress=progress)
         if not plan.within_target:
             v = plan.verification

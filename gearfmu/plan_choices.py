@@ -13,7 +13,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .common.vocabulary import LUBRICATED_CONTACT_MODELS
+from .common.vocabulary import INTEGRATORS, LUBRICATED_CONTACT_MODELS
 from .contact.models import CONTACT_MODELS, get_contact_model
 from .gear.geometry import pair_geometry
 from .gear.meshing_errors import pair_table_mesh_count
@@ -135,7 +135,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
         skip("slots", pmin, "the scene's slots are the pair's minimum ceil(contact ratio)")
     else:
         add("slots", [pmin, full_slots], full_slots)
-    add("integrator", ["rk4", "rk4_kink"], scene.solver.integrator)
+    add("integrator", list(INTEGRATORS), scene.solver.integrator)
     # levels: multiples of h0 (the automatic step at the top envelope speed); pinned: the scene's
     # max_step_s in s, or 1 x h0 when the scene says "auto" (_step_absolute tells which)
     add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,

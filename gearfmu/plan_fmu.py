@@ -14,6 +14,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from .common.vocabulary import TEMPERATURE_INPUTS
 from .gear.gearpair import GearDeviations
 from .plan_choices import _thermal_options
 from .plan_evaluator import relative_rms
@@ -32,8 +33,6 @@ def _measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
 
 
 # ============================================================== verification through the FMUs
-#: FMU inputs that select the tables' temperature axis (modeldescription/variables.toml)
-TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 _SAMPLES_PER_MESH = 16      # communication steps per mesh period at the case's top speed (CHOICE)
 _CASE_MESH_PERIODS = 3      # a case lasts 3 x accuracy.run_mesh_periods mesh periods (CHOICE)
 _RUN_UP_LOAD_SHARE = 0.1    # run-up: acceleration torque <= 10 % of the nominal torque (CHOICE)
@@ -121,7 +120,7 @@ def run_fmu_drive(fmu_path, case: DriveCase, names=("dte", "mesh_force", "pinion
 
     md = read_model_description(str(fmu_path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    tname = next((n for n in TEMPERATURE_INPUTS if n in vr), None)
+    tname = next((n for n in TEMPERATURE_INPUTS.values() if n in vr), None)
     unzip = extract(str(fmu_path))
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                     instanceName="plan_verify")

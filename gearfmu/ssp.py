@@ -345,7 +345,7 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
         res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress, tables=tables,
                     fmi_version=fmi_version)
-        trange = getattr(res.tables, "temperature_range_C", None)
-        tin = getattr(res.tables, "temperature_input", None) or "bulk_temperature"
+        trange = res.tables.temperature_range_C
+        tin = res.tables.temperature_input or "bulk_temperature"
         return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),
                          stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)

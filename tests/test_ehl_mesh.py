@@ -278,7 +278,7 @@ def test_tiny_rough_scene_mixes_film_and_mixed_model_and_the_fmu_runs(tmp_path):
             .replace("slices = 44 ", "slices = 2 ").replace("points_per_mesh = 64", "points_per_mesh = 8")
             + "\n[roughness]\nlevel = 2\nfull_film_parameter = 5.0\nfilm_position_nodes = 5\n")
     scene = load_scene(text)
-    assert scene.mesh.slices == 2 and scene.roughness.film_position_nodes == 5
+    assert scene.mesh.slices == 2 and scene.roughness.position_nodes == 5
     with pytest.warns(UserWarning, match=r"film parameter below 5 .* fractal mixed"):
         tables = precompute_tables(scene.pair, scene.mesh, points_per_mesh=8, torque_axis_Nm=None,
                                    nominal_torque_Nm=scene.operating.torque_Nm,
@@ -303,7 +303,7 @@ def test_scene_roughness_keys():
     base = (ROOT / "examples" / "scenes" / "seed000_table1.toml").read_text()
     r = load_scene(base + "\n[roughness]\nlevel = 3\nseed = 5\n").roughness
     assert (r.level, r.D, r.G_m, r.seed, r.f_max_per_m) == (3, 1.565, pytest.approx(4.513e-9), 5, 1e4)
-    assert (r.on_failure, r.full_film_parameter, r.film_position_nodes) == ("fractal_mixed", 3.0, 9)
+    assert (r.on_failure, r.full_film_parameter, r.position_nodes) == ("fractal_mixed", 3.0, 9)
     env = environment_from_scene(load_scene(base + "\n[roughness]\nlevel = 2\non_film_failure = \"hertz\"\n"
                                             "full_film_parameter = 2.5\nfilm_position_nodes = 0\n"))
     assert (env.roughness.on_failure, env.roughness.full_film_parameter, env.roughness.position_nodes) == \

@@ -15,8 +15,10 @@ from __future__ import annotations
 import math
 import re
 import tomllib
+import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -440,7 +442,7 @@ _SCALAR = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),
     st.booleans(),
     st.text(alphabet=st.characters(blacklist_categories=("Cs",)), max_size=12),
-    st.sampled_from(["auto", "hertz", "rough_ehl", "rk4", "seed003", "pythonfmu"]),
+    st.sampled_from(["auto", "hertz", "rough_ehl", "rk4", "contact_zone", "seed003", "pythonfmu"]),
 )
 _VALUE = st.one_of(
     _SCALAR,
@@ -518,3 +520,91 @@ def test_docs_example_loads():
     assert s.pair.gear.material.youngs_modulus_Pa == 210e9 and s.pair.pinion.material.youngs_modulus_Pa == 207e9
     assert s.pair.pinion.deviations.tooth(7) == ToothDeviation(25e-6, 0.0, 2.0, 4e-6)
     assert s.pair.gear.deviations.tooth(2).pitch_m == 2e-6
+
+
+# ------------------------------------------------------------------ option vocabulary, renamed values
+def _with_damping(value: str) -> str:
+    data = tomllib.loads(DEFAULT_TEXT)
+    data.setdefault("solver", {})["damping_model"] = value
+    return dumps_toml(data)
+
+
+def test_old_damping_spelling_warns_naming_the_new_one_and_reads_as_it():
+    """damping_model = "seed003" (the paper's label) is the rule now spelled "contact_zone": the old
+    spelling loads with a FutureWarning naming the key path and the new spelling, and gives the
+    same scene; the new spelling loads without a warning."""
+    with pytest.warns(FutureWarning, match=r"solver\.damping_model = 'seed003' is deprecated.*use 'contact_zone'"):
+        old = load_scene(_with_damping("seed003"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        new = load_scene(_with_damping("contact_zone"))
+    assert old.solver.damping_model == new.solver.damping_model == "contact_zone"
+    assert old.solver == new.solver and old.pair == new.pair and old.fmu == new.fmu
+
+
+def test_old_damping_spelling_runs_the_same_rule_in_the_solvers():
+    """The native solver and the sweeps take the old spelling with the warning and give arrays
+    identical to the new spelling's; the rule is the one that differs from elastobacklash inside
+    the backlash (seed 003 eq 3-5: a pair in its contact zone is damped even while separated),
+    on rectangular-wave tables with backlash (seed 003 Fig. 2 / eq 4-5)."""
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.dynamics.sweeps import SweepJob
+    from gearfmu.tables.synthetic import rectangular_wave_tables
+
+    tb = rectangular_wave_tables(4e8, backlash_half_m=20e-6)
+    kw = dict(stop_time_s=2e-3, comm_step_s=2e-5, max_step_s=2e-6, pinion_torque_Nm=50.0,
+              pinion_speed_start_rad_s=150.0, damping_ratio=0.05, dte_start_m=0.0, dte_rate_start_m_s=0.02)
+    with pytest.warns(FutureWarning, match="use 'contact_zone'"):
+        old = simulate(tb, damping_model="seed003", **kw)
+    new = simulate(tb, damping_model="contact_zone", **kw)
+    other = simulate(tb, damping_model="elastobacklash", **kw)
+    for name in ("dte", "mesh_force", "pair_force", "pinion_speed"):
+        assert np.array_equal(getattr(old, name), getattr(new, name)), name
+    assert not np.array_equal(new.dte, other.dte)  # the two rules are told apart by this case
+    with pytest.warns(FutureWarning, match="use 'contact_zone'"):
+        job = SweepJob(tb, omega_h=[0.5], pinion_torque_Nm=50.0, damping_ratio=0.05,
+                       damping_model="seed003").validate()
+    assert job.damping_model == "contact_zone"
+
+
+@pytest.mark.parametrize("key,value", [("solver.damping_model", "seed004"), ("solver.integrator", "euler"),
+                                       ("mesh.contact_model", "elastic"), ("thermal.oil_alpha", "walther")])
+def test_unknown_option_value_is_one_line_naming_the_key_and_the_choices(key, value):
+    """An unknown option value is one line: the key path, every allowed value (the vocabulary's,
+    not the deprecated spellings), what was given."""
+    from gearfmu.common import vocabulary
+
+    table, name = key.split(".")
+    data = tomllib.loads(DEFAULT_TEXT)
+    data.setdefault(table, {})[name] = value
+    with pytest.raises(SceneError) as exc:
+        load_scene(dumps_toml(data))
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{key}: must be one of ") and repr(value) in msg, msg
+    choices = {"damping_model": vocabulary.DAMPING_MODELS, "integrator": vocabulary.INTEGRATORS,
+               "contact_model": vocabulary.CONTACT_MODELS, "oil_alpha": vocabulary.OIL_ALPHA_LAWS}[name]
+    for c in choices:
+        assert repr(c) in msg, (c, msg)
+    assert "seed003" not in msg
+
+
+def test_every_deprecated_spelling_names_a_current_value_of_its_field():
+    """The alias table holds old spellings only: each maps to a value the field accepts now and is
+    not itself a current value; every scene key that takes such a field knows the new value."""
+    from gearfmu.common import vocabulary
+
+    fields = {"damping_model": vocabulary.DAMPING_MODELS}
+    assert set(vocabulary.DEPRECATED_SPELLINGS) <= set(fields)
+    for field, table in vocabulary.DEPRECATED_SPELLINGS.items():
+        for old, new in table.items():
+            assert new in fields[field] and old not in fields[field], (field, old, new)
+            assert vocabulary.current_spelling(field, new) == new
+
+
+def test_fmu_runtime_copy_of_the_temperature_inputs_matches_the_vocabulary():
+    """The FMU runtime template imports nothing from gearfmu, so it keeps its own list of the
+    inputs that select a temperature axis; it must be the vocabulary's."""
+    from gearfmu.common.vocabulary import TEMPERATURE_INPUTS
+    from gearfmu.fmu.runtime import gearfmu_slave
+
+    assert gearfmu_slave.TEMPERATURE_INPUT_NAMES == tuple(TEMPERATURE_INPUTS.values())

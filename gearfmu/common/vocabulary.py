@@ -4,11 +4,26 @@ One definition each; the scene schema, the contact-model registry, the native so
 the reference integrator, the FMU builders, the planner and the CLI import them from here.
 Names that a kernel switches on map to the integer code the numba kernels and the C
 kernel (gearkernel.h) use.
+
+Renamed option values keep their old spelling for one release: :data:`DEPRECATED_SPELLINGS`
+maps it to the new one and :func:`current_spelling` (called wherever a value enters: the
+scene reader, the native and reference solvers, the sweeps, the FMU builders) returns the
+new spelling with a :class:`FutureWarning`.  FutureWarning, not DeprecationWarning: the
+old spellings are written by end users in scene files (read by the ``gearfmu`` command as
+well as by Python code), and Python shows DeprecationWarning by default only for code run
+as ``__main__`` (Python docs,
+"warnings -- Warning control", section "Warning Categories": FutureWarning is "the base
+category for warnings about deprecated features when those warnings are intended for end
+users of applications").
 """
+import os
+import sys
+import warnings
 
 __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES", "FILM_TRANSIENT_MODES",
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
-           "DEFAULT_RUNTIME"]
+           "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
+           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -24,16 +39,64 @@ FILM_FAILURE_POLICIES = ("fractal_mixed", "hertz", "error", "load_sharing")
 #: k_transient/k_smooth, the same for every slice, no steady rough solve; start 'auto';
 #: docs/ehl_mesh.md "Transient films in the tables")
 FILM_TRANSIENT_MODES = ("off", "correction", "film")
-#: [thermal] axis_quantity: what the tables' temperature axis is (docs/thermal.md)
+#: [thermal] axis_quantity: what the tables' temperature axis is (docs/thermal.md); the first is the default
 THERMAL_AXIS_QUANTITIES = ("bulk", "oil", "bulk_and_oil")
-#: free-flank thermal deformation laws (gearfmu.gear.thermal.free_flank_deformation_m)
+#: axis_quantity -> the FMU input that selects the tables' temperature axis (docs/thermal.md;
+#: modeldescription/variables.toml); the FMU runtime template, which imports nothing from
+#: gearfmu, keeps its own copy of the input names
+TEMPERATURE_INPUTS = {"bulk": "bulk_temperature", "oil": "oil_temperature", "bulk_and_oil": "gearbox_temperature"}
+#: free-flank thermal deformation laws (gearfmu.gear.thermal.free_flank_deformation_m); the first is the default
 FLANK_LAWS = ("radial_tangential", "homogeneous")
-#: damping-model names -> kernel code (docs/model.md "Per-pair force"; gearkernel.h)
-DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
+#: [thermal] oil_alpha: the pressure-viscosity coefficient along an oil temperature axis,
+#: "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T); the default) or "constant" (docs/thermal.md)
+OIL_ALPHA_LAWS = ("roelands", "constant")
+#: helix hand of the pinion (the gear has the opposite hand; docs/helical.md)
+HELIX_HANDS = ("right", "left")
+#: damping-model names -> kernel code (docs/model.md "Per-pair force"; gearkernel.h GK_DAMPING_*):
+#: "elastobacklash" the Modelica ElastoBacklash rule (the damping force never exceeds the
+#: spring force and a pair never pulls); "contact_zone" every pair inside its geometric
+#: contact zone (k_j > 0) carries spring plus viscous damping force, even while separated
+#: by the backlash, and may pull (Xu et al. 2022, Appl. Sci. 12, 4690, eq 3-5)
+DAMPING_MODELS = {"elastobacklash": 0, "contact_zone": 1}
+#: the damping rule of a scene, solver and FMU builder that names none
+DEFAULT_DAMPING_MODEL = "elastobacklash"
 #: integrator names -> kernel code (docs/model.md "Integration"; gearkernel.h GK_INTEGRATOR_*);
 #: the FMU parameter ``integrator`` takes the code
 INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+#: the integrator wherever none is named: the setting on the speed-against-error front below
+#: ~5e-4 relative error (benchmarks/bench_integrators.py, docs/dynamics_validation.md); the
+#: default of the native solver, the scene, the FMU builders and the FMU parameter
+#: ``integrator`` alike, so a native run and an FMU built with defaults integrate identically
+DEFAULT_INTEGRATOR = "rk4_kink"
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
 DEFAULT_RUNTIME = "standalone"
+
+#: old spellings of option values, field -> {old: new}; accepted for one release with a
+#: FutureWarning naming the new spelling (:func:`current_spelling`).  "seed003" named the
+#: damping rule after the paper that uses it (Xu et al. 2022); "contact_zone" says what it does.
+DEPRECATED_SPELLINGS = {"damping_model": {"seed003": "contact_zone"}}
+
+
+def current_spelling(field: str, value, where: str = ""):
+    """``value`` of the option ``field`` (a key of :data:`DEPRECATED_SPELLINGS`), or its new
+    spelling with a :class:`FutureWarning` that names it when ``value`` is an old spelling.
+    ``where``: the name the warning gives the field (e.g. the scene key path; default ``field``).
+    Any other value is returned unchanged (the caller checks it against its vocabulary)."""
+    new = DEPRECATED_SPELLINGS.get(field, {}).get(value) if isinstance(value, str) else None
+    if new is None:
+        return value
+    warnings.warn(f"{where or field} = {value!r} is deprecated and will be removed; use {new!r} "
+                  "(the same rule)", FutureWarning, stacklevel=_first_frame_outside_package())
+    return new
+
+
+def _first_frame_outside_package() -> int:
+    """The ``stacklevel`` of the innermost caller outside the gearfmu package, so that the
+    warning points at the user's line, not at the reader that met the value."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_code.co_filename.startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level

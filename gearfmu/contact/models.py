@@ -182,16 +182,8 @@ def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
     pair = scene.pair
     ns = int(scene.mesh.slices)
     lub = scene.lubricant
-    rough = None
-    ro = getattr(scene, "roughness", None)
-    if ro is not None:
-        rough = ro if isinstance(ro, RoughnessSpec) else RoughnessSpec(
-            D=ro.D, G_m=ro.G_m, seed=ro.seed, f_max_per_m=ro.f_max_per_m, level=ro.level,
-            on_failure=ro.on_failure,
-            full_film_parameter=getattr(ro, "full_film_parameter", FULL_FILM_PARAMETER),
-            position_nodes=getattr(ro, "film_position_nodes", DEFAULT_FILM_POSITION_NODES),
-            film_transient=getattr(ro, "film_transient", "off"))
-    elif scene.mesh.contact_model == "rough_ehl":
+    rough = scene.roughness  # the scene reader builds the RoughnessSpec
+    if rough is None and scene.mesh.contact_model == "rough_ehl":
         rough = RoughnessSpec.from_level(1)
     args = dict(pair=pair, geom=geom, omega1_rad_s=float(scene.operating.speed_rad_s), n_slices=ns,
                 width_m=min(pair.pinion.face_width_m, pair.gear.face_width_m) / ns,

@@ -15,7 +15,7 @@ kernels many times per substep.  ``tab`` = (kp, ep, bp, o0, o1, rows2, wt,
 n_phi, P, dphi, c, model, inv_dphi): pointers of k, e (NT, P, N) and b (P, N),
 the offsets of torque rows it and it+1, whether a second row is blended
 (NT > 1), its weight, the node count N, the slot count P, the cell width
-(rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 seed003) and
+(rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 contact_zone) and
 the reciprocal cell width N/Phi (1/rad).
 """
 from __future__ import annotations
@@ -205,7 +205,7 @@ def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
                 f = 0.0
         else:
             f = 0.0
-    else:  # seed003
+    else:  # contact_zone
         if kv > 0.0:
             f = fc + fd
         else:
@@ -217,7 +217,7 @@ def _pair_force(kv, ev, es, bv, x, v, omega1, c, model):
 def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
     """Force of one pair (N) with its contact mode held: reg 1 drive, -1 back, 0
     separated; sub 0 'two' (2 fc), 1 'sum' (fc + fd), 2 'zero' (clamped);
-    kpos (seed003) the pair is in the contact zone in this cell."""
+    kpos (contact_zone) the pair is in the contact zone in this cell."""
     de = es * omega1
     d = x - ev
     if reg == 1:

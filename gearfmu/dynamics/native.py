@@ -36,7 +36,7 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS, current_spelling
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..common.checks import finite_number
 from .driver import _run, _warmup
@@ -58,12 +58,6 @@ __all__ = [
     "substeps",
 ]
 
-#: the setting on the speed-against-error front below ~5e-4 relative error
-#: (benchmarks/bench_integrators.py, ``gearfmu bench accuracy``, docs/dynamics_validation.md);
-#: the default of :func:`simulate`, :func:`simulate_sdof`, the scene, the FMU builders
-#: and the FMU parameter ``integrator`` alike, so a native run and an FMU built with
-#: defaults integrate identically.  Pass ``integrator='rk4'`` for classical RK4.
-DEFAULT_INTEGRATOR = "rk4_kink"
 
 InputLike = Union[float, np.ndarray, Callable[[float], float]]
 
@@ -284,6 +278,7 @@ def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping
     H = _finite("comm_step_s", comm_step_s, positive=True)
     hmax = _finite("max_step_s", max_step_s, positive=True)
     zeta = _finite("damping_ratio", damping_ratio, nonneg=True)
+    damping_model = current_spelling("damping_model", damping_model)
     if damping_model not in DAMPING_MODELS:
         raise NativeInputError(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
     n_steps = _n_steps(stop, H)

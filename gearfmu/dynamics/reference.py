@@ -68,7 +68,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..common.vocabulary import DAMPING_MODELS
+from ..common.vocabulary import DAMPING_MODELS, current_spelling
 from ..tables.mesh_tables import MeshTables
 from .native import _finite, _input_series, _n_steps, SimResult
 
@@ -299,7 +299,7 @@ class _Segment:
             if forced is not None and forced[0] == ip and forced[1] < 2:
                 sg[forced[1]] = forced[2]
             side = 1 if sg[0] > 0 else (-1 if sg[1] < 0 else 0)
-            if self.model == "seed003":
+            if self.model == "contact_zone":
                 modes.append((side, 1 if side != 0 else 0, 1))
                 continue
             if side == 0:
@@ -382,7 +382,7 @@ class _Segment:
                 make(ind(0), -1.0, ("pair", ip, 0, -1))
             else:
                 make(ind(1), 1.0, ("pair", ip, 1, +1))
-            if self.model == "seed003":
+            if self.model == "contact_zone":
                 continue
             if (al, be) == (2, 0):
                 d = -1.0 if side > 0 else 1.0
@@ -439,6 +439,7 @@ def simulate_reference(
     H = _num("comm_step_s", comm_step_s, positive=True)
     n_steps = _n_steps(stop, H, error=ReferenceInputError)
     zeta = _num("damping_ratio", damping_ratio, nonneg=True)
+    damping_model = current_spelling("damping_model", damping_model)
     if damping_model not in DAMPING_MODELS:
         raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {tuple(DAMPING_MODELS)}")
     rtol = _num("rtol", rtol, positive=True)

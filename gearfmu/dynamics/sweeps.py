@@ -46,6 +46,7 @@ from scipy.signal import find_peaks
 
 from ..common.executors import SweepInputError, _ManagedExecutor, make_executor
 from ..common.progress import progress_bar
+from ..common.vocabulary import DAMPING_MODELS, current_spelling
 from .harmonics import DEFAULT_BANDWIDTH_ORDERS, mesh_harmonics
 from ..tables.mesh_tables import MeshTables
 from .native import choose_max_step_s, simulate_sdof
@@ -117,7 +118,7 @@ class SweepJob:
     omega_h : dimensionless mesh frequencies Omega_h (seed 003 eq 7), in run order.
     pinion_torque_Nm : T1 (N*m); the load is F_m = T1/Rb1.
     damping_ratio : per-pair damping ratio zeta bar (seed 003 eq 8).
-    damping_model : ``"seed003"`` (eq 8-9: constant damping on every pair in
+    damping_model : ``"contact_zone"`` (eq 8-9: constant damping on every pair in
         its contact zone, rho = 2 in the double zone) or ``"elastobacklash"``.
     continuation : start each point from the previous point's final state.
     start_state : optional (x_m, v_m_s, theta1_rad) for the first point.
@@ -128,7 +129,7 @@ class SweepJob:
     omega_h: np.ndarray
     pinion_torque_Nm: float
     damping_ratio: float
-    damping_model: str = "seed003"
+    damping_model: str = "contact_zone"
     continuation: bool = True
     settings: PointSettings = field(default_factory=PointSettings)
     start_state: Optional[tuple] = None
@@ -149,9 +150,9 @@ class SweepJob:
                 raise SweepInputError(f"{name}: must be a finite number, got {v!r}")
         if self.damping_ratio < 0:
             raise SweepInputError(f"damping_ratio: must be >= 0, got {self.damping_ratio!r}")
-        if self.damping_model not in ("seed003", "elastobacklash"):
-            raise SweepInputError(f"damping_model: {self.damping_model!r} unknown; "
-                                  "choose 'seed003' or 'elastobacklash'")
+        self.damping_model = current_spelling("damping_model", self.damping_model)
+        if self.damping_model not in DAMPING_MODELS:
+            raise SweepInputError(f"damping_model: {self.damping_model!r} unknown; choose one of {list(DAMPING_MODELS)}")
         if self.start_state is not None:
             s = tuple(float(v) for v in self.start_state)
             if len(s) != 3 or not all(math.isfinite(v) for v in s):

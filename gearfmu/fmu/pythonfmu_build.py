@@ -46,7 +46,7 @@ from .. import __version__
 from .modeldesc import (apply_start_values, check_model_description, check_registered,
                         expand_variables, features_of, load_spec, model_description_xml,
                         runtime_variable_table)
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
 from ..scene.reader import default_output_interval_s
@@ -159,11 +159,12 @@ def _check_finite(name: str, value) -> float:
 
 def _damping_model_code(damping_model) -> int:
     if isinstance(damping_model, str):
+        damping_model = current_spelling("damping_model", damping_model)
         if damping_model not in DAMPING_MODELS:
             raise FmuBuildError(f"damping_model: {damping_model!r} not one of {sorted(DAMPING_MODELS)}")
         return DAMPING_MODELS[damping_model]
     if isinstance(damping_model, bool) or damping_model not in (0, 1):
-        raise FmuBuildError(f"damping_model: {damping_model!r} must be 0 (elastobacklash) or 1 (seed003)")
+        raise FmuBuildError(f"damping_model: {damping_model!r} must be 0 (elastobacklash) or 1 (contact_zone)")
     return int(damping_model)
 
 
@@ -261,7 +262,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
     ``gear_torque_start_Nm`` None means the static balance
     ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
-    "elastobacklash", 1 or "seed003" (docs/model.md).  ``integrator``: 0 or
+    "elastobacklash", 1 or "contact_zone" (docs/model.md).  ``integrator``: 0 or
     "rk4", 1 or "rk4_kink" (default; docs/model.md "Integration", docs/dynamics_validation.md;
     FMU parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``

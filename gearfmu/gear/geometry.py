@@ -48,6 +48,7 @@ from typing import Tuple
 
 import numpy as np
 
+from ..common.vocabulary import HELIX_HANDS
 from .gearpair import GearPairSpec, GearSpec
 
 
@@ -343,8 +344,8 @@ def _check_helix(pair: GearPairSpec) -> float:
         if not (isinstance(b, (int, float, np.floating)) and math.isfinite(b)
                 and 0.0 <= b <= MAX_HELIX_ANGLE_RAD):
             raise GeometryError(f"{name}.helix_angle_rad: must lie in [0, pi/4] (0 = spur), got {b!r}")
-        if gs.helix_hand not in ("right", "left"):
-            raise GeometryError(f"{name}.helix_hand: must be 'right' or 'left', got {gs.helix_hand!r}")
+        if gs.helix_hand not in HELIX_HANDS:
+            raise GeometryError(f"{name}.helix_hand: must be one of {HELIX_HANDS}, got {gs.helix_hand!r}")
     if abs(p.helix_angle_rad - g.helix_angle_rad) > 1e-12:
         raise GeometryError("gear.helix_angle_rad: must equal pinion.helix_angle_rad "
                             f"({p.helix_angle_rad!r} != {g.helix_angle_rad!r})")

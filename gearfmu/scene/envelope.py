@@ -35,12 +35,13 @@ from typing import Any, Optional, Tuple
 
 import numpy as np
 
+from .options import RPM_TO_RAD_S
+
 __all__ = ["EnvelopeError", "DutyCycle", "Envelope", "AccuracyTarget", "load_duty_cycle_csv",
            "read_envelope_sections", "envelope_of", "accuracy_of", "check_target", "PLAN_CHOICES",
            "VerifiedEnvelope", "fmu_envelope_record", "envelope_note", "ENVELOPE_FILE", "ENVELOPE_STATUS",
            "runtime_envelope"]
 
-_RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
 #: names of the modelling choices a scene may pin (``accuracy.pin``), docs/plan.md
 PLAN_CHOICES = ("contact_model", "thermal", "tooth_specific_errors", "slices", "points_per_mesh",
@@ -179,14 +180,13 @@ def fmu_envelope_record(tables, verified: Optional[dict] = None, *,
     N*m, pinion speed rad/s and rpm, temperature degC (None: that quantity is not checked).
     A verified record without a temperature range (no variation) keeps the tables' axis."""
     torque = np.asarray(tables.torque_Nm, dtype=float)
-    axis = getattr(tables, "temperature_C", None)
-    table_temp = ([float(np.min(axis)), float(np.max(axis))]
-                  if getattr(tables, "has_temperature_axis", False) and axis is not None else None)
+    axis = tables.temperature_C
+    table_temp = [float(np.min(axis)), float(np.max(axis))] if tables.has_temperature_axis else None
     usable = bool(verified) and "error" not in verified and verified.get("kind") in ENVELOPE_STATUS
     if usable:
         status, source = ENVELOPE_STATUS[verified["kind"]], verified["kind"]
         tq = _pair(verified["torque_range_Nm"])
-        w = [x * _RPM_TO_RAD_S for x in verified["speed_range_rpm"]]
+        w = [x * RPM_TO_RAD_S for x in verified["speed_range_rpm"]]
         temp = _pair(verified.get("temperature_range_C")) if table_temp is not None else None
         temp = temp or table_temp
     else:
@@ -198,7 +198,7 @@ def fmu_envelope_record(tables, verified: Optional[dict] = None, *,
         "format": "gearfmu-envelope", "version": 1, "status": status, "source": source,
         "pinion_torque_range_Nm": tq,
         "pinion_speed_range_rad_s": w,
-        "pinion_speed_range_rpm": None if w is None else [x / _RPM_TO_RAD_S for x in w],
+        "pinion_speed_range_rpm": None if w is None else [x / RPM_TO_RAD_S for x in w],
         "temperature_range_C": temp,
         "speed_margin_rel": 0.1,  # gearkernel.h GK_ENV_SPEED_MARGIN
         "outside": "the FMU logs one fmi2Warning per input (pinion_torque, pinion speed, temperature input) "
@@ -302,36 +302,31 @@ def load_duty_cycle_csv(path) -> DutyCycle:
     temp = col.get("temperature_C")
     if temp is not None and (np.any(temp < -200) or np.any(temp > 500)):
         raise EnvelopeError(f"duty_cycle_csv: temperature_C must lie in [-200, 500] in {p}")
-    return DutyCycle(time_s=t, torque_Nm=col["torque_Nm"], speed_rad_s=col["speed_rpm"] * _RPM_TO_RAD_S,
+    return DutyCycle(time_s=t, torque_Nm=col["torque_Nm"], speed_rad_s=col["speed_rpm"] * RPM_TO_RAD_S,
                      temperature_C=temp, source=str(p))
 
 
 # ------------------------------------------------------------------ scene sections
 def read_envelope_sections(reader, data: Any, operating: dict, source_path: Optional[str]):
     """Read ``[envelope]`` and ``[accuracy]`` of a parsed scene with the scene
-    reader (``gearfmu.scene.reader._Reader``; problems are added to it with their key
+    reader (:class:`gearfmu.scene.validate.Reader`; problems are added to it with their key
     paths).  ``operating``: the SI values of ``[operating]``.  Returns
     ``(Envelope or None, AccuracyTarget or None)``: None for a section that is
     absent or invalid (then a problem was recorded)."""
-    env_raw = data.get("envelope") if isinstance(data, dict) else None
-    acc_raw = data.get("accuracy") if isinstance(data, dict) else None
     envelope = accuracy = None
-    if env_raw is not None:
-        n0 = len(reader.problems)
-        e = reader.table(env_raw, "envelope")
-        if len(reader.problems) == n0:
-            envelope = _envelope(reader, e, operating, source_path)
-    if acc_raw is not None:
-        n0 = len(reader.problems)
-        a = reader.table(acc_raw, "accuracy")
-        if len(reader.problems) == n0:
-            bad = [p for p in a["pin"] if p not in PLAN_CHOICES]
-            if bad:
-                reader.add("accuracy.pin", f"unknown choice {bad[0]!r}; choices: {', '.join(PLAN_CHOICES)}")
-            else:
-                accuracy = AccuracyTarget(dte_rel=a["dte_rel_error"], mesh_force_rel=a["mesh_force_rel_error"],
-                                          safety_factor=a["safety_factor"], run_mesh_periods=a["run_mesh_periods"],
-                                          pin=tuple(a["pin"]))
+    got = reader.section(data, "envelope")
+    if got is not None:
+        envelope = _envelope(reader, got[1], operating, source_path)
+    got = reader.section(data, "accuracy")
+    if got is not None:
+        a = got[1]
+        bad = [p for p in a["pin"] if p not in PLAN_CHOICES]
+        if bad:
+            reader.add("accuracy.pin", f"unknown choice {bad[0]!r}; choices: {', '.join(PLAN_CHOICES)}")
+        else:
+            accuracy = AccuracyTarget(dte_rel=a["dte_rel_error"], mesh_force_rel=a["mesh_force_rel_error"],
+                                      safety_factor=a["safety_factor"], run_mesh_periods=a["run_mesh_periods"],
+                                      pin=tuple(a["pin"]))
     return envelope, accuracy
 
 
@@ -358,7 +353,7 @@ def _envelope(reader, e: dict, op: dict, source_path: Optional[str]) -> Optional
             lo, hi = float(duty.temperature_C.min()), float(duty.temperature_C.max())
             temp = (lo, hi) if temp is None else (min(temp[0], lo), max(temp[1], hi))
     if wr[0] <= 0:
-        reader.add("envelope.speed_range_rpm", f"low end must be > 0, got {wr[0] / _RPM_TO_RAD_S:g}")
+        reader.add("envelope.speed_range_rpm", f"low end must be > 0, got {wr[0] / RPM_TO_RAD_S:g}")
         return None
     return Envelope(torque_range_Nm=(float(tr[0]), float(tr[1])), speed_range_rad_s=(float(wr[0]), float(wr[1])),
                     nominal_torque_Nm=float(t_nom), nominal_speed_rad_s=float(w_nom),
@@ -371,14 +366,14 @@ def envelope_of(scene) -> Envelope:
     """The scene's envelope: its ``[envelope]`` section, else built from
     ``[operating]`` (ranges or the nominal point) and ``[thermal]``'s
     temperature axis (its first and last value) when it has one."""
-    env = getattr(scene, "envelope", None)
+    env = scene.envelope
     if env is not None:
         return env
     op = scene.operating
     tr = op.torque_range_Nm or (op.torque_Nm, op.torque_Nm)
     wr = op.speed_range_rad_s or (op.speed_rad_s, op.speed_rad_s)
     temp = None
-    th = getattr(scene, "thermal", None)
+    th = scene.thermal
     if th is not None and len(th.temperature_axis_C) > 1:
         temp = (float(th.temperature_axis_C[0]), float(th.temperature_axis_C[-1]))
     return Envelope(torque_range_Nm=(float(tr[0]), float(tr[1])), speed_range_rad_s=(float(wr[0]), float(wr[1])),
@@ -388,7 +383,7 @@ def envelope_of(scene) -> Envelope:
 
 def accuracy_of(scene) -> AccuracyTarget:
     """The scene's ``[accuracy]`` target, else the defaults of :class:`AccuracyTarget`."""
-    acc = getattr(scene, "accuracy", None)
+    acc = scene.accuracy
     return acc if acc is not None else AccuracyTarget()
 
 

@@ -39,6 +39,8 @@ from typing import Dict, Optional
 
 import numpy as np
 
+from ..common.vocabulary import TEMPERATURE_INPUTS  # noqa: F401 (used here and by precompute)
+
 FORMAT_NAME = "gearfmu-tables"
 FORMAT_VERSION = 1
 #: written when the tables have a temperature axis (docs/tables.md "Operating axes")
@@ -46,9 +48,8 @@ FORMAT_VERSION_AXES = 2
 SUPPORTED_VERSIONS = (1, 2)
 #: operating axes of version 2, in array order: name -> (unit, FMU input selecting it or None)
 OPERATING_AXES = {"torque_Nm": ("N*m", "pinion_torque"), "temperature_C": ("degC", "bulk_temperature")}
-#: what a temperature axis means ([thermal] axis_quantity) -> the FMU input that selects it
-#: (docs/thermal.md); the tables record it in provenance["thermal"]["input"] (default bulk_temperature)
-TEMPERATURE_INPUTS = {"bulk": "bulk_temperature", "oil": "oil_temperature", "bulk_and_oil": "gearbox_temperature"}
+# the FMU input of a temperature axis (TEMPERATURE_INPUTS) is recorded in
+# provenance["thermal"]["input"] (default bulk_temperature)
 
 #: arrays every table set has, with their axes and units
 ARRAY_FIELDS = {

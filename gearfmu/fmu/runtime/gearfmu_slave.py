@@ -36,8 +36,10 @@ RUNTIME_FILE = "gearfmu_runtime.json"
 TABLE_VERSIONS = (1, 2)  # docs/tables.md (2: operating axes with a temperature axis)
 TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects a bulk temperature axis (docs/model.md)
 #: inputs that may select the temperature axis, by what the axis is (docs/thermal.md); the
-#: variable table holds exactly one of them when the tables have a temperature axis
-TEMPERATURE_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
+#: variable table holds exactly one of them when the tables have a temperature axis.  A copy of
+#: gearfmu.common.vocabulary.TEMPERATURE_INPUTS' values (this template imports nothing from
+#: gearfmu; tests/test_scene.py checks that the two agree)
+TEMPERATURE_INPUT_NAMES = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
 # Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian
 # header, the raw bytes of the kernel's gk_state, the output vector, the values
@@ -182,11 +184,11 @@ class GearFmuSlave(Fmi2Slave):
         if "temperature_C" in arr:  # version 2 tables with a temperature axis (docs/tables.md)
             self._tax = arr["temperature_C"]
             st = lib.gk_set_temperature_axis(self._pm, int(self._tax.size), self._tax.ctypes.data)
-            names = [n for n in TEMPERATURE_INPUTS if n in [v["name"] for v in cfg["variables"]]]
+            names = [n for n in TEMPERATURE_INPUT_NAMES if n in [v["name"] for v in cfg["variables"]]]
             self._temp_name = names[0] if len(names) == 1 else TEMPERATURE_INPUT
             if st != 0 or len(names) != 1:
                 msg = (f"resources/tables.json: temperature axis rejected by the kernel or not exactly one "
-                       f"of {list(TEMPERATURE_INPUTS)} inputs in the variable table")
+                       f"of {list(TEMPERATURE_INPUT_NAMES)} inputs in the variable table")
                 self.log(msg, Fmi2Status.fatal)
                 raise GearFmuResourceError(msg)
             self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
@@ -287,7 +289,7 @@ class GearFmuSlave(Fmi2Slave):
         if not msgs and not float(self._v["max_step"]) > 0.0:
             msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
         if not msgs and int(self._v["damping_model"]) not in (0, 1):
-            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (seed003)")
+            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (contact_zone)")
         if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1):
             msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4) or 1 (rk4_kink)")
         return msgs

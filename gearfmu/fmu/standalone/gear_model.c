@@ -598,7 +598,7 @@ static int init_state(gf_inst *c)
         ok = 0;
     }
     if (ok && c->values[c->vr_dm] != 0.0 && c->values[c->vr_dm] != 1.0) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (seed003)",
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (contact_zone)",
                c->values[c->vr_dm]);
         ok = 0;
     }

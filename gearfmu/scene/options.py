@@ -1,0 +1,273 @@
+"""What a scene reads into: the validated, SI option dataclasses and :class:`Scene`.
+
+:func:`gearfmu.scene.reader.load_scene` builds these from the TOML tables (the keys,
+units and ranges are in :mod:`gearfmu.scene.schema`, their documentation in
+``docs/scene.md``); the gear pair itself is :class:`gearfmu.gear.gearpair.GearPairSpec`
+and the ``[roughness]`` table is :class:`gearfmu.contact.base.RoughnessSpec`, the one
+dataclass the contact models take.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from typing import Any, List, Optional, Sequence, Tuple
+
+from ..common.vocabulary import (DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, DEFAULT_RUNTIME, FLANK_LAWS,
+                                 OIL_ALPHA_LAWS, THERMAL_AXIS_QUANTITIES)
+from ..contact.base import RoughnessSpec
+from ..ehl.lubricant import walther_kinematic_viscosity_cSt
+from ..gear.gearpair import GearPairSpec, MeshModelOptions
+
+__all__ = ["SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions", "FmuOptions", "Lubricant",
+           "ThermalOptions", "default_output_interval_s", "OUTPUT_SAMPLES_PER_MESH", "RPM_TO_RAD_S"]
+
+#: rev/min -> rad/s
+RPM_TO_RAD_S = 2.0 * math.pi / 60.0
+
+
+# ============================================================== errors
+class SceneError(ValueError):
+    """A scene is invalid.  ``problems`` lists ``(key_path, reason)`` pairs;
+    the message names every key path and reason, one per line."""
+
+    def __init__(self, problems: Sequence[Tuple[str, str]], source: str = ""):
+        self.problems: List[Tuple[str, str]] = list(problems)
+        self.source = source
+        lines = [f"{path}: {reason}" for path, reason in self.problems]
+        where = f" in scene {source!r}" if source else ""
+        if len(lines) == 1:
+            msg = lines[0] + (f" ({where.strip()})" if where else "")
+        else:
+            msg = f"{len(lines)} problems{where}:\n" + "\n".join("  - " + s for s in lines)
+        super().__init__(msg)
+
+
+# ============================================================== result dataclasses
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Operating envelope (SI).
+
+    ``torque_Nm`` is the nominal pinion torque (N*m, positive drives),
+    ``speed_rad_s`` the nominal pinion speed (rad/s).  The optional ranges
+    (N*m and rad/s, ``(low, high)``) span the torque axis of the tables
+    (see :meth:`torque_axis_Nm`) and the envelope the FMU accepts.
+    """
+
+    torque_Nm: float
+    speed_rad_s: float
+    torque_range_Nm: Optional[Tuple[float, float]] = None
+    speed_range_rad_s: Optional[Tuple[float, float]] = None
+    torque_points: int = 1
+
+    @property
+    def speed_rpm(self) -> float:
+        """Nominal pinion speed in rev/min."""
+        return self.speed_rad_s / RPM_TO_RAD_S
+
+    def torque_axis_Nm(self, points: Optional[int] = None) -> Tuple[float, ...]:
+        """Torque axis of the tables (N*m): the nominal torque alone when
+        ``points == 1`` or no range is given, else ``points`` equally spaced
+        values over ``torque_range_Nm`` (both ends included).  ``points``
+        None = ``torque_points`` (the scene's ``tables.torque_points``)."""
+        if points is None:
+            points = self.torque_points
+        if points <= 1 or self.torque_range_Nm is None:
+            return (float(self.torque_Nm),)
+        lo, hi = self.torque_range_Nm
+        return tuple(lo + (hi - lo) * i / (points - 1) for i in range(points))
+
+
+@dataclass(frozen=True)
+class TableOptions:
+    """Resolution of the tooth-pair tables.
+
+    ``points_per_mesh``: pinion-angle samples per mesh period 2*pi/z1;
+    ``torque_points``: samples of the torque axis (1 = no torque axis);
+    ``slots``: tooth-pair slot count P, ``None`` = automatic (from the contact ratio).
+    """
+
+    points_per_mesh: int = 64
+    torque_points: int = 1
+    slots: Optional[int] = None
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Dynamic solver settings (docs/model.md).
+
+    ``integrator``: :data:`~gearfmu.common.vocabulary.INTEGRATORS`, default 'rk4_kink'
+    (the setting on the speed-against-error front, docs/dynamics_validation.md) or 'rk4'; ``max_step_s``: largest internal step in s
+    (``None`` = automatic, chosen by the builder from the mesh frequency and
+    the contact natural frequency); ``damping_model``: 'elastobacklash' or
+    'contact_zone' (docs/model.md, "Per-pair force").
+    """
+
+    integrator: str = DEFAULT_INTEGRATOR
+    max_step_s: Optional[float] = None
+    damping_model: str = DEFAULT_DAMPING_MODEL
+
+
+@dataclass(frozen=True)
+class FmuOptions:
+    """FMU options.
+
+    ``model_name``: the FMU's model name / identifier (a C identifier);
+    ``damping_ratio``: mesh damping ratio zeta (dimensionless, default 0.05,
+    see docs/scene.md for why); ``runtime``: 'standalone' (default, all-C) or 'pythonfmu';
+    ``stop_time_s`` and ``output_interval_s``: the DefaultExperiment (s);
+    ``output_interval_auto``: True when the scene left ``output_interval_s`` unset (or
+    "auto") and it was resolved by :func:`default_output_interval_s`.
+    """
+
+    model_name: str
+    damping_ratio: float = 0.05
+    runtime: str = DEFAULT_RUNTIME
+    stop_time_s: float = 0.05
+    output_interval_s: float = 1e-4
+    output_interval_auto: bool = False
+
+
+@dataclass(frozen=True)
+class Lubricant:
+    """Lubricant properties (SI).
+
+    ``dynamic_viscosity_Pas`` is eta0, the ambient-pressure dynamic viscosity
+    at ``temperature_C`` (either given directly or from the kinematic
+    viscosities at 40 and 100 degC by the Walther / ASTM D341 law times
+    ``density_kg_m3``); ``pressure_viscosity_Pa_inv`` is the
+    pressure-viscosity coefficient alpha (1/Pa).  Kinematic viscosities are
+    kept (m^2/s) when given.
+    """
+
+    name: str
+    dynamic_viscosity_Pas: float
+    pressure_viscosity_Pa_inv: float
+    density_kg_m3: float
+    temperature_C: float
+    kinematic_viscosity_40C_m2_s: Optional[float] = None
+    kinematic_viscosity_100C_m2_s: Optional[float] = None
+
+    def kinematic_viscosity_m2_s(self, temperature_C: float) -> float:
+        """Kinematic viscosity (m^2/s) at ``temperature_C`` (degC): Walther /
+        ASTM D341 through the 40 and 100 degC values when given, otherwise
+        the constant eta0/rho (no temperature law known)."""
+        if self.kinematic_viscosity_40C_m2_s is None or self.kinematic_viscosity_100C_m2_s is None:
+            return self.dynamic_viscosity_Pas / self.density_kg_m3
+        return 1e-6 * walther_kinematic_viscosity_cSt(
+            self.kinematic_viscosity_40C_m2_s * 1e6, self.kinematic_viscosity_100C_m2_s * 1e6,
+            temperature_C)
+
+
+@dataclass(frozen=True)
+class ThermalOptions:
+    """The ``[thermal]`` section (seed 004; docs/thermal.md), degC.
+
+    ``pinion_temperature_C`` / ``gear_temperature_C``: uniform bulk temperature
+    (None = the standard temperature); ``*_profile_gamma`` / ``*_profile_C``:
+    a bulk temperature along the line of action over seed 004's normalised
+    coordinate Gamma_K (overrides the uniform value when given);
+    ``temperature_axis_C``: temperatures of the tables' temperature axis
+    (empty = no axis); ``flank_law``: free flank deformation law of
+    :func:`gearfmu.gear.thermal.free_flank_deformation_m`; ``axis_quantity``: what
+    the axis is (:data:`THERMAL_AXIS_QUANTITIES`): "bulk" the bulk temperature of
+    both gears (seed 004 stiffness, FMU input ``bulk_temperature``), "oil" the
+    oil temperature (eta0 of a lubricated contact model, input
+    ``oil_temperature``), "bulk_and_oil" both at one temperature (input
+    ``gearbox_temperature``); ``lubricant``: the scene's ``[lubricant]`` (its
+    viscosity-temperature law), attached by the scene reader when the axis
+    involves the oil.  Without an axis, ``pinion_temperature_C`` /
+    ``gear_temperature_C`` / the profiles change the tables (seed 004 eq 27-28
+    at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
+    temperatures and these keys must be absent; with an "oil" axis they give
+    the gears' state at every oil temperature (docs/thermal.md).
+    ``oil_alpha``: the pressure-viscosity coefficient along an oil axis:
+    "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T),
+    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`) or
+    "constant" (the ``[lubricant]`` value at every temperature).
+    """
+
+    standard_temperature_C: float = 30.0
+    pinion_temperature_C: Optional[float] = None
+    gear_temperature_C: Optional[float] = None
+    pinion_profile_gamma: Tuple[float, ...] = ()
+    pinion_profile_C: Tuple[float, ...] = ()
+    gear_profile_gamma: Tuple[float, ...] = ()
+    gear_profile_C: Tuple[float, ...] = ()
+    temperature_axis_C: Tuple[float, ...] = ()
+    flank_law: str = FLANK_LAWS[0]
+    axis_quantity: str = THERMAL_AXIS_QUANTITIES[0]
+    oil_alpha: str = OIL_ALPHA_LAWS[0]
+    lubricant: Optional["Lubricant"] = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene, in SI.
+
+    ``text`` is the TOML source (provenance; hash it with :attr:`sha256`),
+    ``source_path`` the file it came from (``None`` for text).  Built only by
+    :func:`gearfmu.scene.reader.load_scene`.
+    """
+
+    #: ``[scene] name`` (also the default FMU model name) and ``description``
+    name: str
+    description: str
+    #: the TOML source as read (provenance)
+    text: str
+    #: ``[gears]``, ``[gears.pinion]``, ``[gears.gear]``, ``[material]``, ``[deviations]``
+    pair: GearPairSpec
+    #: ``[mesh]``: contact model, slices, foundation
+    mesh: MeshModelOptions
+    #: ``[operating]``: nominal torque and speed, their ranges
+    operating: OperatingPoint
+    #: ``[tables]``: resolution of the tooth-pair tables
+    tables: TableOptions
+    #: ``[solver]``: integrator, largest step, damping rule
+    solver: SolverOptions
+    #: ``[fmu]``: model name, damping ratio, runtime, DefaultExperiment
+    fmu: FmuOptions
+    #: ``[lubricant]``, None when absent
+    lubricant: Optional[Lubricant] = None
+    #: the scene file, None for a scene given as text or a mapping
+    source_path: Optional[str] = None
+    #: ``[thermal]``, None when absent
+    thermal: Optional[ThermalOptions] = None
+    #: ``[envelope]``: gearfmu.scene.envelope.Envelope (docs/plan.md), None when absent
+    envelope: Optional[Any] = None
+    #: ``[accuracy]``: gearfmu.scene.envelope.AccuracyTarget (docs/plan.md), None when absent
+    accuracy: Optional[Any] = None
+    #: ``[roughness]`` (SI), None when absent; the contact models take it as it is
+    roughness: Optional[RoughnessSpec] = None
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the TOML source (hex)."""
+        return hashlib.sha256(self.text.encode("utf-8")).hexdigest()
+
+    @property
+    def torque_axis_Nm(self) -> Tuple[float, ...]:
+        """The tables' torque axis (N*m), see :meth:`OperatingPoint.torque_axis_Nm`."""
+        return self.operating.torque_axis_Nm(self.tables.torque_points)
+
+
+# ============================================================== defaults that depend on the scene
+#: samples per mesh period of a defaulted output (communication) interval
+OUTPUT_SAMPLES_PER_MESH = 20
+
+
+def default_output_interval_s(pinion_speed_rad_s: float, pinion_teeth: int,
+                              samples_per_mesh: int = OUTPUT_SAMPLES_PER_MESH) -> float:
+    """The output (communication) interval, s, used wherever the user gives none.
+
+    At least ``samples_per_mesh`` samples per mesh period 2*pi / (z1 |omega1|) at the
+    pinion speed ``pinion_speed_rad_s`` (rad/s), rounded down to 1, 2 or 5 x 10^n s so
+    that the DefaultExperiment reads well (so 20 to 50 samples per mesh period).  A fixed
+    interval aliases the mesh frequency: 1e-4 s is 6 samples per mesh period at 1667 Hz.
+    A zero speed falls back to the mesh period at 1 rad/s.
+    """
+    w = abs(float(pinion_speed_rad_s)) or 1.0
+    h = 2.0 * math.pi / (int(pinion_teeth) * w) / int(samples_per_mesh)
+    e = math.floor(math.log10(h))
+    m = h / 10.0 ** e
+    return float(max(c for c in (1.0, 2.0, 5.0, 10.0) if c <= m * (1 + 1e-12)) * 10.0 ** e)
