@@ -1,12 +1,12 @@
 """Test-session configuration shared by every test file.
 
-The suite runs in parallel (pytest-xdist, ``-n auto`` in pyproject's [tool.pytest.ini_options]) with
-``--dist loadgroup``.  Many files build something expensive once per module (an FMU, tables, a
-compiled host, a pool of film runs) in a module-scoped fixture.  A test that uses such a fixture is
-put in its module's group, so the module's tests that share it run on one worker and the fixture is
-built once; every other test is scheduled on its own and fills the gaps.  The groups are handed
-out first (largest pieces of work first, small independent tests last), which shortens the tail
-of the run.  With ``-n 0`` the same order is used in one process.
+The suite runs in parallel: pytest-xdist with ``-n auto --dist loadfile`` (pyproject's
+[tool.pytest.ini_options]).  Many files build something expensive once per module (an FMU,
+tables, a compiled host, a pool of film runs) in a module-scoped fixture; ``loadfile`` keeps each
+file on one worker, so such a fixture is built once.  The files whose tests share a module, class
+or package fixture are handed out first (the large pieces of work first, the files of small
+independent tests last), which shortens the tail of the run.  ``-n 0`` runs the same order in
+one process.
 """
 import pytest
 
@@ -27,11 +27,6 @@ def _shares_a_fixture(item) -> bool:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    shared = {}
-    for item in items:
-        if _shares_a_fixture(item):
-            group = item.nodeid.split("::", 1)[0]
-            item.add_marker(pytest.mark.xdist_group(group))
-            shared[item.nodeid] = True
-    # stable: each module's grouped tests stay together and in their written order
-    items.sort(key=lambda it: 0 if it.nodeid in shared else 1)
+    heavy = {it.nodeid.split("::", 1)[0] for it in items if _shares_a_fixture(it)}
+    # stable: every file keeps its tests together and in their written order
+    items.sort(key=lambda it: 0 if it.nodeid.split("::", 1)[0] in heavy else 1)
