@@ -330,7 +330,7 @@ def backward_case():
 
 
 @pytest.mark.parametrize("case", [impact_case, torque_axis_case, backward_case])
-@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink"])
+@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node"])
 def test_native_and_c_kernel_agree_bit_for_bit(clib, case, integrator):
     """docs/model.md pins every floating-point operation (table lookup with the
     reciprocal cell width, force law, RK4 and rk4_kink arithmetic), so the two
@@ -338,7 +338,7 @@ def test_native_and_c_kernel_agree_bit_for_bit(clib, case, integrator):
     mesh force after each of 96 communication steps over two or more table periods."""
     tb, T1, T2, w0, zeta, x0 = case()
     H = tb.mesh_period_rad / abs(w0) / 8
-    code = {"rk4": 0, "rk4_kink": 1}[integrator]
+    code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
     r = simulate(tb, stop_time_s=96 * H, comm_step_s=H, max_step_s=H / 7, pinion_torque_Nm=T1,
                  gear_torque_Nm=T2, pinion_speed_start_rad_s=w0, damping_ratio=zeta, dte_start_m=x0,
                  integrator=integrator)
@@ -356,7 +356,7 @@ def test_c_kernel_rejects_unknown_integrator(clib):
     m = np.zeros(clib.gk_sizeof_model() // 8 + 2)
     assert clib.gk_init(m.ctypes.data, tb.slots, tb.n_phi, 1, tq.ctypes.data, k.ctypes.data, e.ctypes.data,
                         b.ctypes.data, tb.phi_period_rad, 0.07, 0.07, 0.0074, 0.0074, 1e8) == 0
-    assert clib.gk_set_integrator(m.ctypes.data, 2) == 6      # GK_ERR_PARAM
+    assert clib.gk_set_integrator(m.ctypes.data, 3) == 6      # GK_ERR_PARAM
     assert clib.gk_set_integrator(m.ctypes.data, -1) == 6
     assert clib.gk_set_integrator(m.ctypes.data, 1) == 0
 

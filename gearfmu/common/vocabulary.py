@@ -32,7 +32,7 @@ FLANK_LAWS = ("radial_tangential", "homogeneous")
 DAMPING_MODELS = {"elastobacklash": 0, "seed003": 1}
 #: integrator names -> kernel code (docs/model.md "Integration"; gearkernel.h GK_INTEGRATOR_*);
 #: the FMU parameter ``integrator`` takes the code
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)

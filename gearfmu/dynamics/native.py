@@ -272,8 +272,8 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
 def _integrator_code(integrator, slots) -> int:
     if integrator not in INTEGRATORS:
         raise NativeInputError(f"integrator: {integrator!r} unknown; choose one of {sorted(INTEGRATORS)}")
-    if integrator == "rk4_kink" and slots > KINK_MAX_SLOTS:
-        raise NativeInputError(f"integrator: 'rk4_kink' handles at most {KINK_MAX_SLOTS} slots, "
+    if integrator != "rk4" and slots > KINK_MAX_SLOTS:
+        raise NativeInputError(f"integrator: {integrator!r} handles at most {KINK_MAX_SLOTS} slots, "
                                f"the tables have {slots}")
     return INTEGRATORS[integrator]
 

@@ -37,6 +37,7 @@ extern "C" {
  * RK4 that steps exactly to every table node and contact-mode change */
 #define GK_INTEGRATOR_RK4 0
 #define GK_INTEGRATOR_RK4_KINK 1
+#define GK_INTEGRATOR_RK4_NODE 2
 /* rk4_kink: most slots it accepts, and events located per substep before the
  * rest of the substep is taken without detection */
 #define GK_KINK_MAX_SLOTS 32
