@@ -361,8 +361,9 @@ def test_c_kernel_rejects_unknown_integrator(clib):
     assert clib.gk_set_integrator(m.ctypes.data, 1) == 0
 
 
-def test_fmu_with_rk4_kink_agrees_with_native(tmp_path):
-    """FMU built with integrator='rk4_kink' (FMU parameter integrator = 1), run by
+@pytest.mark.parametrize("integrator", ["rk4_kink", "rk4_node"])
+def test_fmu_with_rk4_kink_agrees_with_native(tmp_path, integrator):
+    """FMU built with integrator='rk4_kink' or 'rk4_node' (FMU parameter integrator = 1, 2), run by
     fmpy with communication steps of a quarter mesh period: every output within
     1e-9 of its range of the native rk4_kink run (the FMU starts from the
     quasi-static equilibrium, so the native run does too)."""
@@ -373,11 +374,11 @@ def test_fmu_with_rk4_kink_agrees_with_native(tmp_path):
     hmax = H / 7
     path = build_fmu(tb, tmp_path / "kink.fmu", damping_ratio=zeta, pinion_speed_start_rad_s=w0,
                      pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2, max_step_s=hmax,
-                     integrator="rk4_kink", stop_time_s=40 * H, output_interval_s=H)
+                     integrator=integrator, stop_time_s=40 * H, output_interval_s=H)
     res = simulate_fmu(str(path), stop_time=40 * H, output_interval=H,
                        output=["dte", "pinion_speed", "mesh_force", "pinion_angle"])
     r = simulate(tb, stop_time_s=40 * H, comm_step_s=H, max_step_s=hmax, pinion_torque_Nm=T1,
-                 gear_torque_Nm=T2, pinion_speed_start_rad_s=w0, damping_ratio=zeta, integrator="rk4_kink")
+                 gear_torque_Nm=T2, pinion_speed_start_rad_s=w0, damping_ratio=zeta, integrator=integrator)
     assert r.info["events"] > 40
     for name in ("dte", "pinion_speed", "mesh_force", "pinion_angle"):
         ours = getattr(r, name)
