@@ -144,9 +144,10 @@ def case_front(name, repeat):
             "wall_at": at, "speedup_vs_DOP853": speedup}
 
 
-def fmu_rtf(front, repeat, comm_s=1e-4, sim_s=0.1):
+def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
     """Real-time factor of the standalone FMU (rk4_node) of the front's case at the internal
-    step where the native rk4_node rows cross 1e-4 relative RMS dte error."""
+    step where the native rk4_node rows cross 1e-4 relative RMS dte error; and that of the
+    C kernel alone (gk_do_step through ctypes, same steps) to show what the FMI layer adds."""
     from fmpy import extract, read_model_description
     from bench_fmu import _fmu_loop
     from gearfmu.fmu.compare import run_fmu
@@ -171,7 +172,13 @@ def fmu_rtf(front, repeat, comm_s=1e-4, sim_s=0.1):
                       names=["dte", "mesh_force"])
         err = rel_errors({"dte": run.columns["dte"], "mesh_force": run.columns["mesh_force"]}, ref)
         shutil.rmtree(unz, ignore_errors=True)
-    return {"case": front["case"], "integrator": "rk4_node", "max_step_s": h, "comm_step_s": comm_s,
+    T1 = float(kw["pinion_torque_Nm"])
+    T2 = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
+    x0 = float(simulate(tables, **dict(kw, stop_time_s=kw["comm_step_s"])).dte[0])
+    kwall = min(c_runner(tables, T1, T2, kw["pinion_speed_start_rad_s"], kw["damping_ratio"], x0, comm_s,
+                         int(round(sim_s / comm_s)), h, 2, lib)[0] for _ in range(repeat))
+    return {"kernel_wall_s": kwall, "kernel_real_time_factor": sim_s / kwall,
+            "case": front["case"], "integrator": "rk4_node", "max_step_s": h, "comm_step_s": comm_s,
             "simulated_s": sim_s, "wall_s": min(walls), "real_time_factor": sim_s / min(walls),
             "error_on_case_grid": err}
 
@@ -249,7 +256,7 @@ def main():
     extra = {}
     if args.fronts:
         extra["fronts"] = [case_front(name, args.repeat) for name in FRONT_CASES]
-        extra["fmu_rtf"] = fmu_rtf(extra["fronts"][0], args.repeat)
+        extra["fmu_rtf"] = fmu_rtf(extra["fronts"][0], args.repeat, lib)
     print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
                       "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
                       "front": [(r["method"], r["setting"]) for r in front],
