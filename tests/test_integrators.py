@@ -361,18 +361,22 @@ def test_c_kernel_rejects_unknown_integrator(clib):
     assert clib.gk_set_integrator(m.ctypes.data, 1) == 0
 
 
+@pytest.mark.parametrize("runtime", ["pythonfmu", "standalone"])
 @pytest.mark.parametrize("integrator", ["rk4_kink", "rk4_node"])
-def test_fmu_with_rk4_kink_agrees_with_native(tmp_path, integrator):
-    """FMU built with integrator='rk4_kink' or 'rk4_node' (FMU parameter integrator = 1, 2), run by
+def test_fmu_with_rk4_kink_agrees_with_native(tmp_path, integrator, runtime):
+    """FMU (pythonfmu and standalone runtimes) built with integrator='rk4_kink' or 'rk4_node'
+    (FMU parameter integrator = 1, 2), run by
     fmpy with communication steps of a quarter mesh period: every output within
-    1e-9 of its range of the native rk4_kink run (the FMU starts from the
+    1e-9 of its range of the native run with the same integrator (the FMU starts from the
     quasi-static equilibrium, so the native run does too)."""
     from fmpy import simulate_fmu
     tb, T1, T2, w0, zeta, _ = hcr_case()
     T1, T2 = 20.0, 20.0 * tb.base_radius_gear_m / tb.base_radius_pinion_m
     H = tb.mesh_period_rad / w0 / 4
     hmax = H / 7
-    path = build_fmu(tb, tmp_path / "kink.fmu", damping_ratio=zeta, pinion_speed_start_rad_s=w0,
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+    builder = build_fmu if runtime == "pythonfmu" else build_standalone_fmu
+    path = builder(tb, tmp_path / "kink.fmu", damping_ratio=zeta, pinion_speed_start_rad_s=w0,
                      pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2, max_step_s=hmax,
                      integrator=integrator, stop_time_s=40 * H, output_interval_s=H)
     res = simulate_fmu(str(path), stop_time=40 * H, output_interval=H,
