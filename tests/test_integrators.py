@@ -295,15 +295,17 @@ def run_c(L, tb, T1, T2, w0, zeta, model, x0, H, n, hmax, integrator):
 @pytest.mark.parametrize("case", [impact_case, hcr_case])
 @pytest.mark.parametrize("model", ["elastobacklash", "seed003"])
 @pytest.mark.parametrize("div", [2, 40])
-def test_native_and_c_kernel_agree_rk4_kink(clib, case, model, div):
-    """Same tables, inputs and steps: numba and C rk4_kink agree to <= 1e-9 of each
-    signal's range over 48 communication steps (measured: bit for bit)."""
+@pytest.mark.parametrize("integrator", ["rk4_kink", "rk4_node"])
+def test_native_and_c_kernel_agree_rk4_kink(clib, case, model, div, integrator):
+    """Same tables, inputs and steps: numba and C rk4_kink (and rk4_node) agree to <= 1e-9
+    of each signal's range over 48 communication steps (measured: bit for bit)."""
     tb, T1, T2, w0, zeta, x0 = case()
     H = tb.mesh_period_rad / w0 / 8
     r = simulate(tb, stop_time_s=48 * H, comm_step_s=H, max_step_s=H / div, pinion_torque_Nm=T1,
                  gear_torque_Nm=T2, pinion_speed_start_rad_s=w0, damping_ratio=zeta, dte_start_m=x0,
-                 integrator="rk4_kink", damping_model=model)
-    c, fc = run_c(clib, tb, T1, T2, w0, zeta, {"elastobacklash": 0, "seed003": 1}[model], x0, H, 48, H / div, 1)
+                 integrator=integrator, damping_model=model)
+    c, fc = run_c(clib, tb, T1, T2, w0, zeta, {"elastobacklash": 0, "seed003": 1}[model], x0, H, 48, H / div,
+              {"rk4_kink": 1, "rk4_node": 2}[integrator])
     nat = np.vstack([r.pinion_angle, r.pinion_speed, r.dte, r.dte_rate])
     assert r.info["events"] > 48
     for q in range(4):
