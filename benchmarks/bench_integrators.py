@@ -1,5 +1,19 @@
-"""Speed against error of the integrators 'rk4' and 'rk4_kink' (docs/model.md), and
-numba against the C kernel per step.  Prints JSON (stdout); progress on stderr.
+"""Speed against error of the integrators 'rk4', 'rk4_kink' and 'rk4_node' (docs/model.md,
+docs/native.md), and numba against the C kernel per step.  Prints JSON (stdout); progress
+on stderr.
+
+``fronts`` (``--fronts``, default on): per case -- the default scene's computed tables
+(gearfmu.bench hard case computed_default_scene), an impact case (single_sided_impacts)
+and a 3-slot case (the seed 003 gears at contact ratio 2.4, tent errors) -- every native
+integrator at 1..256 substeps per communication step and solve_ivp DOP853 at rtol 1e-3..1e-10
+(gearfmu.dynamics.reference, event-located), each row's relative RMS dte and force error
+against the event-located DOP853 reference at rtol 1e-12 and its wall time (best of
+``--repeat``; native: the whole ``simulate`` call, ``loop_wall_s`` its compiled loop alone); ``wall_at`` gives each method's wall time at relative RMS dte errors 1e-4 and
+1e-6 (log-log interpolation along its own front) and ``speedup_vs_DOP853`` the ratio of
+DOP853's to each integrator's.  ``fmu_rtf``: the standalone FMU of the default scene built
+with 'rk4_node' at the internal step where the native rk4_node front crosses 1e-4, run by
+fmpy's low-level FMU2Slave loop at a communication step of 1e-4 s for 0.1 s simulated
+(real-time factor = simulated / wall); its own error from an fmpy run on the case's grid.
 
 Case: the impact case of tests/test_integrators.py (rectangular-wave TVMS, errors,
 backlash, light load, impact start), 4 mesh periods, 8 communication steps per
@@ -19,14 +33,20 @@ Usage: python benchmarks/bench_integrators.py [--repeat 3]
 import argparse
 import ctypes
 import json
+import math
+import shutil
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
 from gearfmu.fmu.pythonfmu_build import compile_kernel
+from gearfmu.bench import _kb, _kw, hard_case, rel_errors, tent_error
+from gearfmu.common.vocabulary import INTEGRATORS
 from gearfmu.dynamics.native import simulate
+from gearfmu.dynamics.reference import simulate_reference
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
 
@@ -57,9 +77,116 @@ def c_runner(tb, T1, T2, w0, zeta, x0, H, n, hmax, integrator, lib):
     return time.perf_counter() - t0, s.copy()
 
 
+def three_slot_case():
+    """The seed 003 gears (gearfmu.bench) at contact ratio 2.4 on 3 slots, tent errors 3 um."""
+    t = _kb(contact_ratio=2.4, slots=3, pair_error_m=tent_error(3e-6))
+    return t, _kw(t, 0.7, 340.0, 0.02, 30)
+
+
+FRONT_CASES = ("computed_default_scene", "single_sided_impacts", "three_slot")
+FRONT_SUBSTEPS = (1, 2, 4, 8, 16, 32, 64, 128, 256)
+DOP853_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+
+
+def _case(name):
+    return three_slot_case() if name == "three_slot" else hard_case(name)
+
+
+def wall_at(rows, target):
+    """Wall time (s) at relative RMS dte error ``target`` on the rows' own front
+    (log-log interpolation between the front's points around it; None outside)."""
+    pts = sorted((r["wall_s"], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
+    front, best = [], math.inf
+    for w, e in pts:
+        if e < best:
+            front.append((w, e))
+            best = e
+    for (w0, e0), (w1, e1) in zip(front, front[1:]):
+        if e1 <= target <= e0:
+            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
+    if front and front[0][1] <= target:
+        return front[0][0]     # the cheapest row already beats the target
+    return None
+
+
+def case_front(name, repeat):
+    """Rows of the speed-against-error front of one case (module docstring)."""
+    tables, kw = _case(name)
+    H = kw["comm_step_s"]
+    print(f"front {name}: reference ...", file=sys.stderr)
+    ref = simulate_reference(tables, rtol=1e-12, steps_per_period=128, **kw)
+    rows = []
+    simulate(tables, **dict(kw, stop_time_s=H, max_step_s=H, integrator="rk4_node"))  # compile
+    for integ in INTEGRATORS:
+        for n in FRONT_SUBSTEPS:
+            best, r = math.inf, None
+            for _ in range(repeat):   # the whole call, as gearfmu bench accuracy times it
+                t0 = time.perf_counter()
+                r = simulate(tables, max_step_s=H / n, integrator=integ, **kw)
+                best = min(best, time.perf_counter() - t0)
+            rows.append(dict(method=integ, setting=f"h=H/{n}", step_s=H / n, wall_s=best, loop_wall_s=r.wall_s,
+                             events=int(r.info.get("events", 0)), **rel_errors(r, ref)))
+    for rt in DOP853_RTOLS:
+        print(f"front {name}: DOP853 rtol {rt:g} ...", file=sys.stderr)
+        t0 = time.perf_counter()
+        r = simulate_reference(tables, rtol=rt, method="DOP853", steps_per_period=8, **kw)
+        rows.append(dict(method="solve_ivp-DOP853", setting=f"rtol={rt:g}", wall_s=time.perf_counter() - t0,
+                         **rel_errors(r, ref)))
+    methods = list(INTEGRATORS) + ["solve_ivp-DOP853"]
+    at = {m: {f"{tg:g}": wall_at([r for r in rows if r["method"] == m], tg) for tg in (1e-4, 1e-6)}
+          for m in methods}
+    speedup = {m: {tg: (at["solve_ivp-DOP853"][tg] / at[m][tg]
+                        if at[m][tg] and at["solve_ivp-DOP853"][tg] else None) for tg in at[m]}
+               for m in INTEGRATORS}
+    return {"case": name, "slots": tables.slots, "comm_step_s": H, "stop_time_s": kw["stop_time_s"],
+            "reference": "event-located DOP853 rtol 1e-12 (gearfmu.dynamics.reference)", "rows": rows,
+            "wall_at": at, "speedup_vs_DOP853": speedup}
+
+
+def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
+    """Real-time factor of the standalone FMU (rk4_node) of the front's case at the internal
+    step where the native rk4_node rows cross 1e-4 relative RMS dte error; and that of the
+    C kernel alone (gk_do_step through ctypes, same steps) to show what the FMI layer adds."""
+    from fmpy import extract, read_model_description
+    from bench_fmu import _fmu_loop
+    from gearfmu.fmu.compare import run_fmu
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+
+    tables, kw = _case(front["case"])
+    ok = [r for r in front["rows"] if r["method"] == "rk4_node" and r["dte_rel_rms_err"] <= 1e-4]
+    h = max(r["step_s"] for r in ok)
+    with tempfile.TemporaryDirectory() as wd:
+        path = build_standalone_fmu(tables, Path(wd) / "rtf.fmu", damping_ratio=kw["damping_ratio"],
+                                    pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
+                                    pinion_torque_start_Nm=float(kw["pinion_torque_Nm"]), max_step_s=h,
+                                    damping_model=kw.get("damping_model", "elastobacklash"),
+                                    stop_time_s=max(sim_s, kw["stop_time_s"]), output_interval_s=comm_s,
+                                    integrator="rk4_node", validation=False)
+        md = read_model_description(str(path))
+        unz = extract(str(path))
+        walls = [_fmu_loop(path, unz, md, sim_s, comm_s, {})[1] for _ in range(repeat)]
+        print("fmu: error run on the case's grid ...", file=sys.stderr)
+        ref = simulate_reference(tables, rtol=1e-12, steps_per_period=128, **kw)
+        run = run_fmu(path, stop_time_s=kw["stop_time_s"], comm_step_s=kw["comm_step_s"],
+                      names=["dte", "mesh_force"])
+        err = rel_errors({"dte": run.columns["dte"], "mesh_force": run.columns["mesh_force"]}, ref)
+        shutil.rmtree(unz, ignore_errors=True)
+    T1 = float(kw["pinion_torque_Nm"])
+    T2 = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
+    x0 = float(simulate(tables, **dict(kw, stop_time_s=kw["comm_step_s"])).dte[0])
+    kwall = min(c_runner(tables, T1, T2, kw["pinion_speed_start_rad_s"], kw["damping_ratio"], x0, comm_s,
+                         int(round(sim_s / comm_s)), h, 2, lib)[0] for _ in range(repeat))
+    return {"kernel_wall_s": kwall, "kernel_real_time_factor": sim_s / kwall,
+            "case": front["case"], "integrator": "rk4_node", "max_step_s": h, "comm_step_s": comm_s,
+            "simulated_s": sim_s, "wall_s": min(walls), "real_time_factor": sim_s / min(walls),
+            "error_on_case_grid": err}
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--fronts", action=argparse.BooleanOptionalAction, default=True)
     args = ap.parse_args()
     tb, T1, T2, w0, zeta, x0 = case()
     H = tb.mesh_period_rad / w0 / 8
@@ -77,9 +204,10 @@ def main():
 
     print("reference ...", file=sys.stderr)
     ref, _ = run("rk4_kink", 3200)
+    integrators = ("rk4", "rk4_kink", "rk4_node")
     rx, rf = np.ptp(ref.dte), np.ptp(ref.mesh_force[1:])
     rows = []
-    for integ in ("rk4", "rk4_kink"):
+    for integ in integrators:
         for div in (4, 8, 16, 32, 64, 128, 256, 512):
             print(f"{integ} h = H/{div} ...", file=sys.stderr)
             r, wall = run(integ, div)
@@ -104,7 +232,7 @@ def main():
     lib.gk_set_integrator.argtypes = [p, i]
     lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
     per_step = []
-    for integ, code in (("rk4", 0), ("rk4_kink", 1)):
+    for integ, code in (("rk4", 0), ("rk4_kink", 1), ("rk4_node", 2)):
         div = 256
         _, wn = run(integ, div)
         wc = min(c_runner(tb, T1, T2, w0, zeta, x0, H, n, H / div, code, lib)[0] for _ in range(args.repeat))
@@ -116,19 +244,23 @@ def main():
     # least squares wall = a*substeps + b*events over the rows of each integrator
     event_cost = {"events": [r["events"] for r in rows if r["method"] == "rk4_kink"],
                   "table_node_crossings": nodes}
-    for integ in ("rk4", "rk4_kink"):
+    for integ in integrators:
         sel = [r for r in rows if r["method"] == integ]
         a = np.array([[n * int(r["setting"].split("/")[1]), r["events"]] for r in sel], dtype=float)
         w = np.array([r["wall_s"] for r in sel])
-        coef = np.linalg.lstsq(a if integ == "rk4_kink" else a[:, :1], w, rcond=None)[0]
+        coef = np.linalg.lstsq(a if integ != "rk4" else a[:, :1], w, rcond=None)[0]
         event_cost[f"{integ}_ns_per_substep"] = float(coef[0] * 1e9)
-        if integ == "rk4_kink":
-            event_cost["rk4_kink_ns_per_event"] = float(coef[1] * 1e9)
+        if integ != "rk4":
+            event_cost[f"{integ}_ns_per_event"] = float(coef[1] * 1e9)
     front = [r for r in rows if r["on_front"]]
+    extra = {}
+    if args.fronts:
+        extra["fronts"] = [case_front(name, args.repeat) for name in FRONT_CASES]
+        extra["fmu_rtf"] = fmu_rtf(extra["fronts"][0], args.repeat, lib)
     print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
                       "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
                       "front": [(r["method"], r["setting"]) for r in front],
-                      "per_step": per_step, "event_cost": event_cost}, indent=1))
+                      "per_step": per_step, "event_cost": event_cost, **extra}, indent=1))
 
 
 if __name__ == "__main__":

@@ -22,6 +22,12 @@ from .scene.envelope import AccuracyTarget, Envelope
 from .scene.reader import ThermalOptions
 from .tables.estimate import estimate_build
 
+#: the integrator levels the planner measures, cheapest first, the last the full model's: rk4,
+#: then rk4_kink (node and contact events located).  rk4_node (same events, node crossings
+#: predicted) is a scene setting the planner keeps when pinned but does not yet offer as a level.
+PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_kink")
+assert set(PLAN_INTEGRATOR_LEVELS) <= set(INTEGRATORS)
+
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")
 _PPM_LEVELS = (16, 32, 64, 128, 256)
@@ -135,7 +141,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
         skip("slots", pmin, "the scene's slots are the pair's minimum ceil(contact ratio)")
     else:
         add("slots", [pmin, full_slots], full_slots)
-    add("integrator", list(INTEGRATORS), scene.solver.integrator)
+    add("integrator", list(PLAN_INTEGRATOR_LEVELS), scene.solver.integrator)
     # levels: multiples of h0 (the automatic step at the top envelope speed); pinned: the scene's
     # max_step_s in s, or 1 x h0 when the scene says "auto" (_step_absolute tells which)
     add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,

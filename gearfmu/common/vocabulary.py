@@ -62,7 +62,7 @@ DAMPING_MODELS = {"elastobacklash": 0, "contact_zone": 1}
 DEFAULT_DAMPING_MODEL = "elastobacklash"
 #: integrator names -> kernel code (docs/model.md "Integration"; gearkernel.h GK_INTEGRATOR_*);
 #: the FMU parameter ``integrator`` takes the code
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1}
+INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}
 #: the integrator wherever none is named: the setting on the speed-against-error front below
 #: ~5e-4 relative error (benchmarks/bench_integrators.py, docs/dynamics_validation.md); the
 #: default of the native solver, the scene, the FMU builders and the FMU parameter

@@ -2,7 +2,7 @@
 
 :func:`_run` writes output row 0 (the initial state with the inputs of step 0)
 and advances the state over every communication step with the chosen
-integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink',
+integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node',
 gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
 seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
 vary; the inputs held over the step, the table row blend and the outputs are
@@ -42,7 +42,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
 
     Step s holds T1 = t1s[s], T2 = t2s[s] (N*m) and takes n_sub substeps of h (s).
     'rk4' carries the table cell across steps; in the SDOF form theta1 is
-    th0 + omega1*t with t = s*H + i*h at substep i.  'rk4_kink' sets the contact
+    th0 + omega1*t with t = s*H + i*h at substep i.  'rk4_kink' and 'rk4_node' set the contact
     mode from the state at the start of every step and counts the located events
     per step in out_events; in the SDOF form it integrates theta1 as a state
     with omega1' = 0.  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
@@ -66,13 +66,13 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
         if s == 0:
             _write_row(tab, 0, th, om, x, v, out_state, out_pair, out_force, out_stiff)
-        if icode == 1:
+        if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
             for _ in range(n_sub):
-                th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
+                th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk, icode == 2)
                 nev += ne
             out_events[s + 1] = nev
         else:
@@ -86,7 +86,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
                     th, om, x, v, nd, i0 = _rk4_step(tab, dyn, False, th0, t0, th, om, x, v, h, nd, i0)
         _write_row(tab, s + 1, th, om, x, v, out_state, out_pair, out_force, out_stiff)
         finite = math.isfinite(x) and math.isfinite(v)
-        if icode == 1 or not sdof:  # rk4 SDOF: theta1, omega1 follow from the time
+        if icode >= 1 or not sdof:  # rk4 SDOF: theta1, omega1 follow from the time
             finite = finite and math.isfinite(th) and math.isfinite(om)
         if not finite:
             return s + 1

@@ -4,7 +4,9 @@
   (seed 003 eq 1-2) or time-indexed SDOF (seed 003 eq 3-6).
 * :func:`_kink_substep` -- one substep of 'rk4_kink': RK4 with the contact mode
   and the table cell held, stepping exactly to every table node and contact
-  mode change located on the step's cubic Hermite interpolant.
+  mode change located on the step's cubic Hermite interpolant; and of
+  'rk4_node': the same, but a table node is reached by one RK4 step to its
+  crossing time predicted from theta1' = omega1 (no trial step, no root finder).
 
 Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
@@ -230,9 +232,56 @@ def _put4(wk, o, a, b, c, d):
 
 
 @njit(cache=True, error_model="numpy")
-def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
+def _node_time(th, om, fb, rem, nd, dphi):
+    """Time to the table node ahead of theta1 predicted from the step's first
+    stage (rk4_node): theta1(tau) = th + tau*(om + 0.5*fb*tau) with fb = omega1',
+    the node (nd + 1)*dphi for om > 0, nd*dphi for om < 0; linear start
+    tau = (node - th)/om, then two Newton iterations.  Returns tau when
+    0 < tau < rem and the slope keeps the sign of om, else -1 (no prediction)."""
+    if om > 0.0:
+        dist = (nd + 1.0) * dphi - th
+    elif om < 0.0:
+        dist = nd * dphi - th
+    else:
+        return -1.0
+    tau = dist / om
+    for _ in range(2):
+        d = om + fb * tau
+        if not d * om > 0.0:
+            return -1.0
+        tau = tau - (tau * (om + 0.5 * fb * tau) - dist) / d
+    if tau > 0.0 and tau < rem:
+        return tau
+    return -1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _pairs_hold(tab, md, th, om, x, v, nd, i0, i1):
+    """True when no pair guard is negative at the state (cell nd held)."""
+    p = tab[8]
+    w = (th - nd * tab[9]) * tab[12]
+    for j in range(p):
+        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        rj = md[j]
+        sj = md[p + j]
+        for q in range(3):
+            if _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], rj, sj) < 0.0:
+                return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
-    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place."""
+    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place.
+
+    With ``node`` (the 'rk4_node' integrator) a table node ahead within the
+    remaining substep is not located by a trial step and the root finder: its
+    crossing time is predicted from theta1' = omega1 (:func:`_node_time`), the
+    RK4 step ends there, and when no pair guard is negative at that end the cell
+    switches to the next one as at a located node event; when a pair guard is
+    negative the prediction is dropped and the rk4_kink trial and location
+    follow.  Without ``node`` the arithmetic is that of rk4_kink exactly."""
     n_phi = tab[7]
     p = tab[8]
     dphi = tab[9]
@@ -244,6 +293,20 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     nev = 0
     while True:
         fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
+        if node and nev < KINK_MAX_EVENTS:
+            tau = _node_time(th, om, fb, rem, nd, dphi)
+            if tau > 0.0:
+                ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
+                if _pairs_hold(tab, md, ta, tb, tc, td, nd, i0, i1):
+                    nd = nd + 1.0 if om > 0.0 else nd - 1.0
+                    th, om, x, v = ta, tb, tc, td
+                    rem = rem - tau
+                    nev += 1
+                    i0, i1 = _cell_nodes(nd, n_phi)
+                    _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
+                    if not rem > 0.0:
+                        break
+                    continue
         ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
         if nev >= KINK_MAX_EVENTS:
             th, om, x, v = ta, tb, tc, td

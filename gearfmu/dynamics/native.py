@@ -12,7 +12,7 @@ indexed by the pinion angle; state y = [theta1 (rad), omega1 (rad/s),
 x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
 
 The compiled parts live in gearfmu.dynamics.model_rhs (table lookup, force
-laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink') and
+laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink', 'rk4_node') and
 gearfmu.dynamics.driver (the one loop over communication steps); this module
 checks the arguments, prepares the tables and inputs and wraps the results.
 
@@ -266,8 +266,8 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
 def _integrator_code(integrator, slots) -> int:
     if integrator not in INTEGRATORS:
         raise NativeInputError(f"integrator: {integrator!r} unknown; choose one of {sorted(INTEGRATORS)}")
-    if integrator == "rk4_kink" and slots > KINK_MAX_SLOTS:
-        raise NativeInputError(f"integrator: 'rk4_kink' handles at most {KINK_MAX_SLOTS} slots, "
+    if integrator != "rk4" and slots > KINK_MAX_SLOTS:
+        raise NativeInputError(f"integrator: {integrator!r} handles at most {KINK_MAX_SLOTS} slots, "
                                f"the tables have {slots}")
     return INTEGRATORS[integrator]
 
@@ -371,7 +371,9 @@ def simulate(
     ``integrator``: 'rk4_kink' (default, :data:`DEFAULT_INTEGRATOR`: RK4 that
     steps exactly to every table node and contact-mode change, docs/model.md
     "rk4_kink"; ``info['events']`` counts the located events; at most
-    KINK_MAX_SLOTS slots) or 'rk4' (fixed-step classical RK4).
+    KINK_MAX_SLOTS slots), 'rk4_node' (rk4_kink with each table node reached by
+    one RK4 step to its crossing time predicted from theta1' = omega1, docs/native.md
+    "rk4_node"; its node crossings count as events) or 'rk4' (fixed-step classical RK4).
     ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
@@ -429,7 +431,7 @@ def simulate_sdof(
     F the same per-pair force sum as :func:`simulate` (de_j = slope*omega1).
     Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
-    ``integrator`` 'rk4_kink' integrates theta1 as a state with omega1' = 0
+    ``integrator`` 'rk4_kink' (and 'rk4_node') integrates theta1 as a state with omega1' = 0
     and steps to every table node and contact-mode change (docs/model.md).
     ``bulk_temperature_C`` (degC, constant; tables with a temperature axis):
     the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).

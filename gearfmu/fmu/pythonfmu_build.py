@@ -176,17 +176,17 @@ def _replace_class_name(template: str, class_name: str) -> str:
 
 
 def _integrator_code(integrator, slots: int) -> int:
-    """0/'rk4' or 1/'rk4_kink' (gearfmu.dynamics.native.INTEGRATORS) -> the kernel code."""
+    """0/'rk4', 1/'rk4_kink' or 2/'rk4_node' (gearfmu.dynamics.native.INTEGRATORS) -> the kernel code."""
     if isinstance(integrator, str):
         if integrator not in INTEGRATORS:
             raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
         code = INTEGRATORS[integrator]
-    elif isinstance(integrator, bool) or integrator not in (0, 1):
-        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4) or 1 (rk4_kink)")
+    elif isinstance(integrator, bool) or integrator not in INTEGRATORS.values():
+        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
     else:
         code = int(integrator)
-    if code == 1 and slots > KINK_MAX_SLOTS:
-        raise FmuBuildError(f"integrator: rk4_kink handles at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
+    if code != 0 and slots > KINK_MAX_SLOTS:
+        raise FmuBuildError(f"integrator: rk4_kink/rk4_node handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
     return code
 
 

@@ -142,7 +142,8 @@ int gk_set_integrator(gk_model *m, int integrator)
         m->integrator = integrator;
         return GK_OK;
     }
-    if (integrator == GK_INTEGRATOR_RK4_KINK && m->P <= GK_KINK_MAX_SLOTS) {
+    if ((integrator == GK_INTEGRATOR_RK4_KINK || integrator == GK_INTEGRATOR_RK4_NODE)
+        && m->P <= GK_KINK_MAX_SLOTS) {
         m->integrator = integrator;
         return GK_OK;
     }
@@ -153,7 +154,7 @@ int gk_set_damping(gk_model *m, double damping_ratio, int damping_model)
 {
     if (m == NULL) return GK_ERR_MODEL;
     if (!isfinite(damping_ratio) || damping_ratio < 0.0) return GK_ERR_PARAM;
-    if (damping_model != GK_DAMPING_ELASTOBACKLASH && damping_model != GK_DAMPING_SEED003)
+    if (damping_model != GK_DAMPING_ELASTOBACKLASH && damping_model != GK_DAMPING_CONTACT_ZONE)
         return GK_ERR_PARAM;
     m->damping_ratio = damping_ratio;
     m->c_Ns_per_m = 2.0 * damping_ratio * sqrt(m->k_mean_N_per_m * m->m_e_kg);
@@ -333,7 +334,7 @@ GK_INLINE double mesh_force(const gk_model *m, const gk_tq *t, gk_ph *c, double 
         else if (d < -b) { fc = k * (d + b); region = -1; }
         else { fc = 0.0; region = 0; }
         fd = m->c_Ns_per_m * (v - es * omega1);
-        if (m->damping_model == GK_DAMPING_SEED003) {
+        if (m->damping_model == GK_DAMPING_CONTACT_ZONE) {
             Fj = (k > 0.0) ? fc + fd : 0.0;
         } else if (region == 1) {
             double a = fc + ((fc < fd) ? fc : fd);
@@ -386,7 +387,7 @@ GK_INLINE void rk4_update(double *y, double h, const double *k1, const double *k
 
 /* --------------------------------------------------------------- rk4_kink
  * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
- * elastobacklash sub-mode sub, seed003 flag kpos) is held during each RK4
+ * elastobacklash sub-mode sub, contact_zone flag kpos) is held during each RK4
  * step; guards (>= 0 while the mode holds) are tested at the step end, the
  * earliest zero is located on the cubic Hermite interpolant of the step, the
  * step is retaken exactly to it and the mode switched there.  Same arithmetic
@@ -400,7 +401,7 @@ typedef struct {
     int i0, i1;
     int reg[GK_KINK_MAX_SLOTS];      /* 1 drive, -1 back, 0 separated */
     int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
-    int kpos[GK_KINK_MAX_SLOTS];     /* seed003: k > 0 inside the cell */
+    int kpos[GK_KINK_MAX_SLOTS];     /* contact_zone: k > 0 inside the cell */
 } gk_mode;
 
 GK_INLINE void cell_nodes(gk_mode *md, int N)
@@ -616,8 +617,39 @@ static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, cons
     mode_sync(m, t, md, y, 1);
 }
 
+/* rk4_node: time to the table node ahead of theta1 predicted from the step's
+ * first stage, theta1(tau) = th + tau*(om + 0.5*fb*tau); linear start, two
+ * Newton iterations; -1 when there is no prediction (as _node_time in
+ * gearfmu/dynamics/integrators.py). */
+static double node_time(double th, double om, double fb, double rem, double nd, double dphi)
+{
+    double dist, tau;
+    int it;
+    if (om > 0.0) dist = (nd + 1.0) * dphi - th;
+    else if (om < 0.0) dist = nd * dphi - th;
+    else return -1.0;
+    tau = dist / om;
+    for (it = 0; it < 2; ++it) {
+        double d = om + fb * tau;
+        if (!(d * om > 0.0)) return -1.0;
+        tau = tau - (tau * (om + 0.5 * fb * tau) - dist) / d;
+    }
+    if (tau > 0.0 && tau < rem) return tau;
+    return -1.0;
+}
+
+/* 1 when no pair guard is negative at y (cell held) */
+static int pairs_hold(const gk_model *m, const gk_tq *t, const gk_mode *md, const double *y)
+{
+    int gi, n_guard = 2 + 3 * m->P;
+    for (gi = 2; gi < n_guard; ++gi)
+        if (guard_at(m, t, md, gi, y) < 0.0) return 0;
+    return 1;
+}
+
+/* node != 0: rk4_node (the node crossing predicted, see _kink_substep) */
 static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2,
-                         double *y, double h)
+                         double *y, double h, int node)
 {
     double rem = h, f0[4], y1[4], f1[4];
     int nev = 0, n_guard = 2 + 3 * m->P, q;
@@ -625,6 +657,22 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
         double best = 2.0;
         int best_gi = -1, have_f1 = 0, gi, any_neg;
         deriv_locked(m, t, md, T1, T2, y, f0);
+        if (node && nev < GK_KINK_MAX_EVENTS) {
+            double tau = node_time(y[0], y[1], f0[1], rem, md->nd, m->dphi_rad);
+            if (tau > 0.0) {
+                rk4_locked(m, t, md, T1, T2, y, f0, tau, y1);
+                if (pairs_hold(m, t, md, y1)) {
+                    md->nd = (y[1] > 0.0) ? md->nd + 1.0 : md->nd - 1.0;
+                    for (q = 0; q < 4; ++q) y[q] = y1[q];
+                    rem = rem - tau;
+                    nev += 1;
+                    cell_nodes(md, m->n_phi);
+                    mode_sync(m, t, md, y, 0);
+                    if (!(rem > 0.0)) break;
+                    continue;
+                }
+            }
+        }
         rk4_locked(m, t, md, T1, T2, y, f0, rem, y1);
         if (nev >= GK_KINK_MAX_EVENTS) {
             for (q = 0; q < 4; ++q) y[q] = y1[q];
@@ -791,11 +839,12 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     y[1] = s->omega1_rad_s;
     y[2] = s->x_m;
     y[3] = s->v_m_s;
-    if (m->integrator == GK_INTEGRATOR_RK4_KINK) {
+    if (m->integrator == GK_INTEGRATOR_RK4_KINK || m->integrator == GK_INTEGRATOR_RK4_NODE) {
         gk_mode md;
         if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
         mode_from_state(m, &t, &md, y);
-        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h);
+        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h,
+                                                 m->integrator == GK_INTEGRATOR_RK4_NODE);
         nsub = 0;
     }
     for (i = 0; i < nsub; ++i) {

@@ -31,12 +31,13 @@ extern "C" {
 
 /* damping models (docs/model.md "Per-pair force") */
 #define GK_DAMPING_ELASTOBACKLASH 0
-#define GK_DAMPING_SEED003 1
+#define GK_DAMPING_CONTACT_ZONE 1
 
 /* integrators (docs/model.md "Integration"): fixed-step classical RK4, and
  * RK4 that steps exactly to every table node and contact-mode change */
 #define GK_INTEGRATOR_RK4 0
 #define GK_INTEGRATOR_RK4_KINK 1
+#define GK_INTEGRATOR_RK4_NODE 2
 /* rk4_kink: most slots it accepts, and events located per substep before the
  * rest of the substep is taken without detection */
 #define GK_KINK_MAX_SLOTS 32
@@ -117,7 +118,7 @@ int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C
  * [axis[0], axis[n_temp-1]] (no clamping): GK_ERR_INPUT, selection unchanged. */
 int gk_set_temperature(gk_model *m, double temperature_C);
 
-/* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_SEED003 */
+/* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_CONTACT_ZONE */
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
 
 /* GK_INTEGRATOR_RK4 or GK_INTEGRATOR_RK4_KINK (the latter needs P <= GK_KINK_MAX_SLOTS);

@@ -290,8 +290,8 @@ class GearFmuSlave(Fmi2Slave):
             msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
         if not msgs and int(self._v["damping_model"]) not in (0, 1):
             msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (contact_zone)")
-        if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1):
-            msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4) or 1 (rk4_kink)")
+        if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1, 2):
+            msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
         return msgs
 
     def _apply_damping(self):
