@@ -53,7 +53,7 @@ def fmus(tmp_path_factory):
                   scene_text='[gear]\nname = "test"\n')
     b = build_fmu(make_tables(P=3, eps=2.4, e_amp=-1e-6, b=0.0), d / "b.fmu", model_name="pairB",
                   stop_time_s=0.01, output_interval_s=1e-4, max_step_s=1e-5, pinion_torque_start_Nm=80.0,
-                  damping_model="seed003")
+                  damping_model="contact_zone")
     return {"a": a, "b": b, "dir": d}
 
 
@@ -292,7 +292,7 @@ def test_spec_errors(tmp_path):
 
 @pytest.mark.parametrize("damping_model,slots,eps,backlash,torque", [
     ("elastobacklash", 2, 1.5, 1e-5, (100.0,)),
-    ("seed003", 3, 2.4, 0.0, (100.0,)),
+    ("contact_zone", 3, 2.4, 0.0, (100.0,)),
     ("elastobacklash", 2, 1.5, 2e-6, (50.0, 120.0, 300.0)),
 ])
 def test_fmu_agrees_with_native_solver(tmp_path, damping_model, slots, eps, backlash, torque):

@@ -219,7 +219,7 @@ def test_rk4_kink_matches_reference_on_hcr_five_slots_and_seed003():
     """eps = 2.4 with five slots (elastobacklash) and the impact case under the
     seed003 damping law: rk4_kink at h = H/50 within 1e-7 of each signal's range
     of the event-located reference (measured: 4e-9 .. 3e-8); all values finite."""
-    for case, model in ((hcr_case, "elastobacklash"), (impact_case, "seed003")):
+    for case, model in ((hcr_case, "elastobacklash"), (impact_case, "contact_zone")):
         tb, T1, T2, w0, zeta, x0 = case()
         H = tb.mesh_period_rad / w0 / 8
         t_eval = np.arange(17) * H
@@ -293,7 +293,7 @@ def run_c(L, tb, T1, T2, w0, zeta, model, x0, H, n, hmax, integrator):
 
 
 @pytest.mark.parametrize("case", [impact_case, hcr_case])
-@pytest.mark.parametrize("model", ["elastobacklash", "seed003"])
+@pytest.mark.parametrize("model", ["elastobacklash", "contact_zone"])
 @pytest.mark.parametrize("div", [2, 40])
 @pytest.mark.parametrize("integrator", ["rk4_kink", "rk4_node"])
 def test_native_and_c_kernel_agree_rk4_kink(clib, case, model, div, integrator):
@@ -304,7 +304,7 @@ def test_native_and_c_kernel_agree_rk4_kink(clib, case, model, div, integrator):
     r = simulate(tb, stop_time_s=48 * H, comm_step_s=H, max_step_s=H / div, pinion_torque_Nm=T1,
                  gear_torque_Nm=T2, pinion_speed_start_rad_s=w0, damping_ratio=zeta, dte_start_m=x0,
                  integrator=integrator, damping_model=model)
-    c, fc = run_c(clib, tb, T1, T2, w0, zeta, {"elastobacklash": 0, "seed003": 1}[model], x0, H, 48, H / div,
+    c, fc = run_c(clib, tb, T1, T2, w0, zeta, {"elastobacklash": 0, "contact_zone": 1}[model], x0, H, 48, H / div,
               {"rk4_kink": 1, "rk4_node": 2}[integrator])
     nat = np.vstack([r.pinion_angle, r.pinion_speed, r.dte, r.dte_rate])
     assert r.info["events"] > 48

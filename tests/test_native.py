@@ -74,7 +74,7 @@ def test_sdof_linear_step_response_closed_form_and_rk4_order():
         H = period / 20
         r = simulate_sdof(tb, omega1_rad_s=w1, stop_time_s=200 * H, comm_step_s=H,
                           max_step_s=period / ppp, pinion_torque_Nm=T1, damping_ratio=zeta,
-                          damping_model="seed003", dte_start_m=0.0, integrator="rk4")
+                          damping_model="contact_zone", dte_start_m=0.0, integrator="rk4")
         assert r.substeps == ppp // 20
         c = 2 * zeta * math.sqrt(K_CONST * me)
         x_ref, v_ref = oscillator(r.time_s, me, c, K_CONST, T1 / RB, 0.0, 0.0)
@@ -163,7 +163,7 @@ def _table_rhs(tb, T1, T2, zeta, model):
             d = x - e
             fd = c * (v - de)
             fc = k * (d - b) if d > b else (k * (d + b) if d < -b else 0.0)
-            if model == "seed003":
+            if model == "contact_zone":
                 F += fc + fd if k > 0 else 0.0
             elif d > b:
                 F += max(0.0, fc + min(fc, fd))
@@ -179,7 +179,7 @@ def _table_rhs(tb, T1, T2, zeta, model):
     return rhs, force
 
 
-@pytest.mark.parametrize("model", ["elastobacklash", "seed003"])
+@pytest.mark.parametrize("model", ["elastobacklash", "contact_zone"])
 def test_rectangular_wave_with_backlash_vs_scipy(model):
     """Rectangular-wave TVMS, per-pair sine errors, backlash 2b = 40 um, light
     load and an impact start so the teeth separate and hit the back flank.
@@ -254,14 +254,14 @@ def test_damping_models_identical_while_in_contact_and_differ_after_separation()
     kw = dict(stop_time_s=0.02, comm_step_s=1e-4, pinion_torque_Nm=400.0, pinion_speed_start_rad_s=300.0,
               damping_ratio=0.05)
     a = simulate(tb, damping_model="elastobacklash", **kw)
-    b = simulate(tb, damping_model="seed003", **kw)
+    b = simulate(tb, damping_model="contact_zone", **kw)
     assert np.all(a.pair_force > 0) and np.ptp(a.mesh_force) > 0.1 * a.mesh_force.mean()
     for name in ("dte", "pinion_speed", "mesh_force", "pair_force", "mesh_stiffness"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
     tbl = smooth_two_slot_tables(backlash_half_m=10e-6)
     kw.update(pinion_torque_Nm=2.0, dte_start_m=-25e-6)
     a = simulate(tbl, damping_model="elastobacklash", **kw)
-    b = simulate(tbl, damping_model="seed003", **kw)
+    b = simulate(tbl, damping_model="contact_zone", **kw)
     assert np.sum(a.mesh_force == 0.0) > 5
     assert np.max(np.abs(a.dte - b.dte)) > 1e-7
 
@@ -297,7 +297,7 @@ def test_traditional_model_vs_scipy_eq12():
     mp = tb.mesh_period_rad / w1
     H = mp / 32
     r = simulate_sdof(tr, omega1_rad_s=w1, stop_time_s=5 * 32 * H, comm_step_s=H, max_step_s=H / 6400,
-                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="seed003", dte_start_m=0.0,
+                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="contact_zone", dte_start_m=0.0,
                       integrator="rk4")
     Phi, N = tr.phi_period_rad, tr.n_phi
     dphi = Phi / N
@@ -345,7 +345,7 @@ def test_dimensionless_form_closed_form():
     me = me_of(RB, RB, INERTIA, INERTIA)
     wn = math.sqrt(K_CONST / me)
     r = simulate_sdof(tb, omega1_rad_s=w1, stop_time_s=0.002, comm_step_s=2e-5, max_step_s=2e-7,
-                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="seed003", dte_start_m=0.0)
+                      pinion_torque_Nm=T1, damping_ratio=zeta, damping_model="contact_zone", dte_start_m=0.0)
     d = dimensionless(r, tb, l)
     assert d.Omega_h == pytest.approx(50 * w1 / wn, rel=1e-12)
     assert d.zeta == pytest.approx(zeta, rel=1e-12)

@@ -35,7 +35,7 @@ def test_damped_oscillator_closed_form():
     wn = math.sqrt(k / ME)
     H = 2 * math.pi / wn / 10
     r = simulate_reference(t, stop_time_s=60 * H, comm_step_s=H, pinion_torque_Nm=0.0, gear_torque_Nm=0.0,
-                           pinion_speed_start_rad_s=50.0, damping_ratio=zeta, damping_model="seed003",
+                           pinion_speed_start_rad_s=50.0, damping_ratio=zeta, damping_model="contact_zone",
                            dte_start_m=x0)
     wd = wn * math.sqrt(1 - zeta ** 2)
     ts = r.time_s

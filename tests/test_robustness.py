@@ -186,7 +186,7 @@ _BASE = tomllib.loads(default_scene_path().read_text())
 @settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(z1=st.integers(17, 40), z2=st.integers(17, 60), x1=st.floats(-0.2, 0.5), x2=st.floats(-0.2, 0.5),
        torque=st.floats(10.0, 3000.0), backlash=st.floats(0.0, 300.0), zeta=st.floats(0.0, 1.0),
-       slices=st.integers(1, 4), model=st.sampled_from(["elastobacklash", "seed003"]))
+       slices=st.integers(1, 4), model=st.sampled_from(["elastobacklash", "contact_zone"]))
 def test_valid_scene_perturbations_build_or_fail_naming_a_key(tmp_path_factory, z1, z2, x1, x2, torque, backlash,
                                                               zeta, slices, model):
     import copy
