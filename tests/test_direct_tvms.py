@@ -55,7 +55,7 @@ ST_257_8 = TransientFilmSettings(n_nodes=257, T_average=8.0)
 @pytest.fixture(scope="module")
 def pool():
     """Two worker processes for the film runs of the Figs. 12-13 tests (the same results as
-    in-process: the runs are deterministic; halves the wall time on two cores)."""
+    in-process: the runs are deterministic)."""
     from gearfmu.dynamics.sweeps import make_executor
 
     with make_executor(max_workers=2) as ex:

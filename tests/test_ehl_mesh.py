@@ -1,7 +1,7 @@
 """EHL film in the mesh: contact kinematics, contact-model registry, film-stiffness TVMS and the
 seed 000 section 5 trends on its Table 1 pair (docs/ehl_mesh.md).
 
-Runtime: the trend tests use coarse tables (4 points per mesh period, 2 face-width slices,
+The trend tests use coarse tables (4 points per mesh period, 2 face-width slices,
 in-process solves) -- the trends, not the converged values, are what seed 000 states.
 """
 from __future__ import annotations

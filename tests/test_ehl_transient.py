@@ -375,7 +375,7 @@ def test_seed000_fig13_film_stiffness_falls_with_the_roughness_level_at_the_pitc
     # T = 0 (start 'auto') to T_settled + 8, reduction (b) = seed 000 eq 8 on the
     # window means <h_m>, <p_m>, as a ratio to the smooth steady film on the same grid
     # (smooth transient = 1 by T1).
-    # Measured (one run, 2026-11-22; mean of slices 0-1):
+    # Measured (one run; mean of slices 0-1):
     #   256 intervals: smooth 1.0000025, level 1 0.998684, level 2 0.964667
     #   512 intervals: smooth 1.0000081, level 1 0.998693, level 2 0.965233
     # Margins at 256: smooth - level 1 = 1.3e-3, level 1 - level 2 = 0.034; the

@@ -5,7 +5,7 @@ not seed 001's fractal K_n (docs/ehl_mesh.md "Transient films in the tables").
 
 The collapse is forced (every transient run raises FilmCollapseError, as
 tests/test_film_transient_tables.py does for one node), so no transient film is solved: the grid
-solves only its smooth columns (129 EHL nodes, ~5 s CPU).
+solves only its smooth columns (129 EHL nodes).
 
 References (none produced by the code under test):
 * the smooth film at the node: an independent solve_line_contact + seed 000 eq 8 on |x| <= b

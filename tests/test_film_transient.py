@@ -12,7 +12,7 @@ References:
   solve_line_contact_transient at that node (position, load, slices spread over the face),
   and every slice's ratio is its steady ratio times c;
 * bad values: a clear error naming the key.
-Small grids (2-3 positions, one load column, 129 EHL nodes) keep this file at ~20-30 s CPU.
+Small grids (2-3 positions, one load column, 129 EHL nodes) keep this file short.
 """
 from __future__ import annotations
 

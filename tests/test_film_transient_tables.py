@@ -13,7 +13,7 @@ References (none produced by the code under test):
 * failures: a stall takes the linear interpolation of the neighbours' ratios (the grid's stall
   rule, computed here), a collapse (h <= 0: no full film) goes to the film-failure policy;
 * bad values: a clear error naming the field.
-Small grids (2-3 positions, one load column, 129 EHL nodes): ~20 s CPU.
+Small grids (2-3 positions, one load column, 129 EHL nodes) keep this file short.
 """
 from __future__ import annotations
 

@@ -260,7 +260,7 @@ def test_fractal_mixed_is_registered_and_load_dependent():
     assert k[2] > k[0]             # stiffer at the higher slice load
 
 
-# ------------------------------------------------------------ issue 9: slicing, complete contact, film parameter
+# ------------------------------------------------------------ slicing, complete contact, film parameter
 def _seed000_pitch():
     """Seed 000 Table 1 pair at its pitch point and nominal line load w = T/(r_b1 b)."""
     from pathlib import Path
@@ -286,7 +286,7 @@ def _eta_alpha(sc):
 
 @pytest.mark.parametrize("level", [1, 4])
 def test_slice_stiffness_per_unit_width_does_not_depend_on_the_slicing(level):
-    """Issue 9: the 44 mm face of the seed 000 pair at its pitch point and nominal line load, cut
+    """The 44 mm face of the seed 000 pair at its pitch point and nominal line load, cut
     into 1, 2, 4, 11 or 44 slices: K_n, K_s, K_l per unit width and A_r/A0 are the same.  Reference:
     slices are springs in parallel under the same line load, so stiffness per unit width of a uniform
     face is a property of the face (and the 1 mm + 43 mm cut adds up to the whole face).  The old
@@ -332,7 +332,7 @@ def test_raw_mb_area_ratio_grows_with_nominal_area_extensive_does_not():
 
 
 def test_real_area_reaching_the_nominal_area_raises():
-    """Issue 9: A_r >= A0 (complete contact) is outside the model: the load the asperities carry at
+    """A_r >= A0 (complete contact) is outside the model: the load the asperities carry at
     A_r = A0 is the limit; just below it the real area stays below A0, just above it
     FullContactError (a FractalInputError) names load_N and real_area_ratio."""
     s = fc.FractalSurface(1.45, 8e-9)

@@ -1,4 +1,4 @@
-"""Hard cases of the dynamic model (issue 5): the native RK4 solver (``integrator="rk4"``,
+"""Hard cases of the dynamic model (gearfmu.bench.HARD_CASES): the native RK4 solver (``integrator="rk4"``,
 passed explicitly: the default is rk4_kink, whose hard-case checks are in
 tests/test_integrators.py) and the FMU
 against the event-located scipy reference (gearfmu.dynamics.reference, checked against

@@ -1,4 +1,4 @@
-"""Helical gear pairs through staggered face-width slices (issue 9, docs/helical.md).
+"""Helical gear pairs through staggered face-width slices (docs/helical.md).
 
 References (none produced by gearfmu):
 * textbook helical geometry (ISO 21771; Niemann/Winter, Maschinenelemente II, ch. 21):

@@ -1,4 +1,4 @@
-"""Helical pairs with load-dependent contact models per slice (issue 9, docs/helical.md
+"""Helical pairs with load-dependent contact models per slice (docs/helical.md
 "Load-dependent contact models"), and the CLI paths that pass the scene's contact environment.
 
 References (none produced by gearfmu):

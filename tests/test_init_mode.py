@@ -142,7 +142,7 @@ def test_initial_unknowns_dependencies_are_true(fmus):
     observed = {n: set() for n in s.outputs}
     # three operating points, since a dependency may be invisible at one: the start torque (both
     # pairs loaded), and a light load below the torque axis (clamped to its first row) at two angles,
-    # where pair 2, then pair 1, is in its contact zone but inside the backlash, so that only seed003
+    # where pair 2, then pair 1, is in its contact zone but inside the backlash, so that only contact_zone
     # damping (damping_model 1) acts on it; the angle perturbation (0.2 rad, mesh period 0.314 rad)
     # moves into the single-contact zone
     for t1, angle in ((starts["pinion_torque"], 0.0), (5.0, 0.0), (5.0, 0.1)):

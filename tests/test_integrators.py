@@ -183,7 +183,7 @@ def order_fit(hs, errs):
 def test_convergence_order_rk4_first_rk4_kink_fourth():
     """Impact case over four mesh periods (128 table-node and contact events).
     Error = max over the 33 communication points of |dte - dte_ref| / range(dte_ref).
-    Measured (this machine): rk4 1.1e-4, 3.0e-5, 1.9e-5, 2.7e-6 at h = H/25..H/200,
+    Measured: rk4 1.1e-4, 3.0e-5, 1.9e-5, 2.7e-6 at h = H/25..H/200,
     fitted order 1.7 (erratic: the error depends on where nodes fall in a step);
     rk4_kink 3.7e-7, 3.1e-8, 1.2e-9 at H/25..H/100, fitted order 4.1 (1.6e-9 at
     H/200 is the reference's own level, so the fit stops at H/100).
@@ -217,7 +217,7 @@ def test_convergence_order_rk4_first_rk4_kink_fourth():
 
 def test_rk4_kink_matches_reference_on_hcr_five_slots_and_seed003():
     """eps = 2.4 with five slots (elastobacklash) and the impact case under the
-    seed003 damping law: rk4_kink at h = H/50 within 1e-7 of each signal's range
+    contact_zone damping law: rk4_kink at h = H/50 within 1e-7 of each signal's range
     of the event-located reference (measured: 4e-9 .. 3e-8); all values finite."""
     for case, model in ((hcr_case, "elastobacklash"), (impact_case, "contact_zone")):
         tb, T1, T2, w0, zeta, x0 = case()
@@ -408,7 +408,7 @@ def test_bad_integrator_names_the_field(tmp_path):
 # ------------------------------------------------- hard cases and the default
 #: hard case (gearfmu.bench.HARD_CASES) -> tolerance on the max relative error of dte and
 #: mesh force of rk4_kink at 64 substeps per communication step (H = mesh period/4), about
-#: 3x the error measured on this machine against gearfmu.dynamics.reference (event-located DOP853,
+#: 3x the error measured against gearfmu.dynamics.reference (event-located DOP853,
 #: rtol 1e-10, closed-form checks in tests/test_reference.py).  tests/test_hard_cases.py
 #: holds rk4 to 3e-5 .. 1.2e-3 at 1024 substeps on the same cases.
 KINK_HARD = {
@@ -425,7 +425,7 @@ KINK_HARD = {
 
 @pytest.mark.parametrize("name", sorted(KINK_HARD))
 def test_rk4_kink_hard_cases_against_reference(name):
-    """Issue 5 hard cases with the default integrator: rk4_kink at 64 substeps per
+    """The hard cases with the default integrator: rk4_kink at 64 substeps per
     communication step within the tolerance above of the event-located reference;
     every output finite."""
     from gearfmu.bench import hard_case, rel_errors

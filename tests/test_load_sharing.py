@@ -2,7 +2,7 @@
 gearfmu/contact/load_sharing.py and the ``on_film_failure = "load_sharing"`` policy (docs/load_sharing.md).
 
 Every test names its reference; none compares the code with numbers it produced itself.
-Runtime: a few seconds plus one coarse table build (4 points per mesh, 2 slices).
+The table test uses one coarse table build (4 points per mesh, 2 slices).
 """
 from __future__ import annotations
 

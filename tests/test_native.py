@@ -60,7 +60,7 @@ def oscillator(t, m, c, k, f, x0, v0):
 
 # --------------------------------------------------------------- linear limit
 def test_sdof_linear_step_response_closed_form_and_rk4_order():
-    """Constant k, no errors/backlash, seed003 damping (F = k x + c v exactly):
+    """Constant k, no errors/backlash, contact_zone damping (F = k x + c v exactly):
     closed-form step response from x = 0.  RK4 global phase error estimate
     omega_n t (omega_n h)^4/120 (Hairer et al. sec. II.1); tolerance 2x that.
     Halving h must cut the error by 2^4 (fourth order): ratio in [12, 20]."""
@@ -184,10 +184,10 @@ def test_rectangular_wave_with_backlash_vs_scipy(model):
     """Rectangular-wave TVMS, per-pair sine errors, backlash 2b = 40 um, light
     load and an impact start so the teeth separate and hit the back flank.
     Reference: solve_ivp DOP853 rtol 1e-10 on the plain-Python RHS above.
-    The table slopes of e jump at grid nodes (and seed003 switches damping on
+    The table slopes of e jump at grid nodes (and contact_zone switches damping on
     where k becomes > 0), so RK4 is locally O(h^2) there: with h = mesh
     period/51200 the measured difference is <= 6e-7 of each signal's range
-    (seed003: 6e-6 at h 4x larger, i.e. ~h^2; elastobacklash: flat at ~4e-7,
+    (contact_zone: 6e-6 at h 4x larger, i.e. ~h^2; elastobacklash: flat at ~4e-7,
     the reference's own level: rtol 1e-12 moves it by 1e-7); tolerance 2e-6."""
     A = 4e-6
     tb = rectangular_wave_tables(2e8, contact_ratio=1.6, backlash_half_m=20e-6, points_per_mesh=16,
@@ -245,7 +245,7 @@ def smooth_two_slot_tables(k0=2e8, amp=0.3, backlash_half_m=0.0):
 
 def test_damping_models_identical_while_in_contact_and_differ_after_separation():
     """docs/model.md: elastobacklash gives fc + fd while the pair is on the drive
-    flank and |fd| < fc; seed003 gives fc + fd for k > 0.  Every slot always
+    flank and |fd| < fc; contact_zone gives fc + fd for k > 0.  Every slot always
     loaded (k > 0 everywhere, no errors, heavy load): identical to the last bit.
     (Rectangular-wave tables do not qualify: a pair meshing in has k -> 0 but the
     full damping c, so elastobacklash clips its force; see docs/native.md.)

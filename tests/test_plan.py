@@ -351,7 +351,7 @@ def test_cli_plan_json(tmp_path, capsys):
     assert main(["plan", str(tmp_path / "nope.toml")]) == 2
 
 
-# ------------------------------------------------------------------ verification through the FMUs (issue 8)
+# ------------------------------------------------------------------ verification through the FMUs
 WARM = SMALL.replace("[tables]", """[thermal]
 temperature_axis_C = [20.0, 55.0, 90.0]
 

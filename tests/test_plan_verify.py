@@ -212,7 +212,7 @@ def test_plan_that_fails_is_not_reported_within_target(tmp_path, capsys):
 
 def test_default_scene_full_reference_is_its_own_hertz_contact():
     """The default scene asks for Hertz contact: the full-fidelity model is Hertz; the film models are
-    what-if rows, skipped (their tables take minutes) and never the reference."""
+    what-if rows, skipped (their film tables are the costly part) and never the reference."""
     from gearfmu.scene.envelope import accuracy_of, envelope_of
     from gearfmu.plan import _choices
 

@@ -28,7 +28,7 @@ def constant_tables(k, b=0.0):
 
 
 def test_damped_oscillator_closed_form():
-    """Constant k, no error, no backlash, no torque, seed003 damping: x obeys
+    """Constant k, no error, no backlash, no torque, contact_zone damping: x obeys
     m_e x'' + c x' + k x = 0 exactly (docs/model.md with T1 = T2 = 0)."""
     k, zeta, x0 = 3e8, 0.05, 1e-5
     t = constant_tables(k)

@@ -1,4 +1,4 @@
-"""The two steady rough-film paths agree on the same slice (issue 3, docs/ehl_mesh.md
+"""The two steady rough-film paths agree on the same slice (docs/ehl_mesh.md
 "Steady rough film: table path vs direct sampling").
 
 * Table path: ``contact_models._rough_profile`` (composite roughness resampled on 2801 points
@@ -11,11 +11,11 @@
   resampling, cold start), i.e. docs/ehl_transient.md 6.5's "frozen steady film at T = 0".
 
 Seed 000 Table 1 pair (examples/scenes/seed000_table1.toml), roughness level 1, nominal line
-load, 256 intervals (the solver's own choice there).  Measured (2026-11-22): the two paths
+load, 256 intervals (the solver's own choice there).  Measured: the two paths
 differ by <= 6e-6 in the ratio at level 1 (slices 0, 7) and <= 9.3e-5 at level 2 (slices 0, 2,
 4, 6, 7; the 8 dX filter); a composite with the wrong sign convention of wm
 (z1(a1 + x) + z2(a2 - x)) moves the level-1 ratio by 0.028-0.029, so the tolerance 1e-4
-separates them.  About 6 s.
+separates them.
 """
 from pathlib import Path
 

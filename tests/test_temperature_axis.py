@@ -1,5 +1,5 @@
 """Temperature axis of the tables (format version 2) and the FMU input
-``bulk_temperature`` (issue 4; docs/tables.md "Operating axes", docs/model.md
+``bulk_temperature`` (docs/tables.md "Operating axes", docs/model.md
 "Temperature axis", docs/fmu.md).
 
 References, none produced by gearfmu:
@@ -397,7 +397,7 @@ def test_seed004_low_high_low_in_dynamic_runs(seed004):
     assert mean_k[30.0] > mean_k[70.0] > mean_k[10.0], mean_k
 
 
-# ------------------------------------------- oil temperature axis (eta0 of the EHL film), issue 4
+# ------------------------------------------- oil temperature axis (eta0 of the EHL film)
 # Tiny smooth_ehl scene: seed 004 pair I with its Table 4 oil (SCH632, 320 / 38.5 cSt at 40 / 100 degC),
 # here at 40 degC, one face slice, 8 points per mesh period, two torque rows, in-process film solves.
 OIL_AXIS = (40.0, 80.0)

@@ -272,25 +272,55 @@ def _integrator_code(integrator, slots) -> int:
     return INTEGRATORS[integrator]
 
 
-def _common(tables, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model):
-    t = _check_tables(tables)
-    stop = _finite("stop_time_s", stop_time_s, positive=True)
-    H = _finite("comm_step_s", comm_step_s, positive=True)
-    hmax = _finite("max_step_s", max_step_s, positive=True)
-    zeta = _finite("damping_ratio", damping_ratio, nonneg=True)
+@dataclass(frozen=True)
+class RunArguments:
+    """The checked arguments that :func:`simulate`, :func:`simulate_sdof` and
+    gearfmu.dynamics.reference.simulate_reference share (SI units): ``speed_rad_s`` the start
+    (or prescribed) pinion speed; torques one value per communication step (n_steps + 1,
+    :func:`_input_series`); ``dte_start_m`` None = the solver's equilibrium start."""
+
+    stop_time_s: float
+    comm_step_s: float
+    n_steps: int
+    damping_ratio: float
+    damping_model: str
+    speed_rad_s: float
+    pinion_torque_Nm: np.ndarray
+    gear_torque_Nm: np.ndarray
+    pinion_angle_start_rad: float
+    dte_start_m: Optional[float]
+    dte_rate_start_m_s: float
+
+
+def run_arguments(tables: MeshTables, *, speed_name: str, speed_rad_s, stop_time_s, comm_step_s, pinion_torque_Nm,
+                  gear_torque_Nm, damping_ratio, damping_model, pinion_angle_start_rad, dte_start_m,
+                  dte_rate_start_m_s, error=NativeInputError) -> RunArguments:
+    """Check and convert the run arguments common to the solvers; ``error`` (default
+    NativeInputError) names the first bad one.  ``speed_name`` is the speed's argument name;
+    ``gear_torque_Nm`` None is the balancing load T2 = T1*Rb2/Rb1 (seed 003: F_m = T1/Rb1 =
+    T2/Rb2) on the radii of ``tables`` (already checked by the caller)."""
+    w = _finite(speed_name, speed_rad_s, error=error)
+    stop = _finite("stop_time_s", stop_time_s, positive=True, error=error)
+    H = _finite("comm_step_s", comm_step_s, positive=True, error=error)
+    zeta = _finite("damping_ratio", damping_ratio, nonneg=True, error=error)
     damping_model = current_spelling("damping_model", damping_model)
     if damping_model not in DAMPING_MODELS:
-        raise NativeInputError(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
-    n_steps = _n_steps(stop, H)
-    n_sub = substeps(H, hmax)
-    h = H / n_sub
-    c, me = _damping(t, zeta)
-    return t, stop, H, n_steps, n_sub, h, c, me, DAMPING_MODELS[damping_model]
+        raise error(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
+    n_steps = _n_steps(stop, H, error=error)
+    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H, error=error)
+    if gear_torque_Nm is None:
+        t2s = t1s * float(tables.base_radius_gear_m) / float(tables.base_radius_pinion_m)
+    else:
+        t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H, error=error)
+    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad, error=error)
+    x0 = None if dte_start_m is None else _finite("dte_start_m", dte_start_m, error=error)
+    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s, error=error)
+    return RunArguments(stop, H, n_steps, zeta, damping_model, w, t1s, t2s, th0, x0, v0)
 
 
 def _initial_x(t, arrays, theta1, t1, dte_start_m):
     if dte_start_m is not None:
-        return _finite("dte_start_m", dte_start_m)
+        return dte_start_m
     k, e, b, tq, inv_dphi, dphi = arrays
     x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
     if not math.isfinite(x0):
@@ -300,20 +330,27 @@ def _initial_x(t, arrays, theta1, t1, dte_start_m):
     return x0
 
 
-def _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, done, info):
+def _result(t, time_s, state, pair, force, stiff, t1s, t2s, step_s, n_sub, c, damping_model, wall, info) -> SimResult:
+    """A :class:`SimResult` from the rows of the state [theta1, omega1, x, v], the pair forces,
+    mesh force and stiffness: the gear speed and angle and the load sharing are derived as
+    docs/model.md "Outputs" defines them (also used by gearfmu.dynamics.reference)."""
     rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
     th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]
     with np.errstate(invalid="ignore", divide="ignore"):
         ls = np.where(force[:, None] != 0.0, pair / np.where(force[:, None] != 0.0, force[:, None], 1.0), 0.0)
-    info = dict(info, completed_steps=int(done))
-    if done < state.shape[0] - 1:
-        info["diverged_at_step"] = int(done)
     return SimResult(
         time_s=time_s, pinion_speed=om.copy(), gear_speed=(om * rb1 - v) / rb2,
         pinion_angle=th.copy(), gear_angle=(th * rb1 - x) / rb2, dte=x.copy(), dte_rate=v.copy(),
         mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
-        pinion_torque=t1s, gear_torque=t2s, step_s=h, substeps=n_sub, damping_Ns_per_m=c,
+        pinion_torque=t1s, gear_torque=t2s, step_s=step_s, substeps=n_sub, damping_Ns_per_m=c,
         damping_model=damping_model, wall_s=wall, info=info)
+
+
+def _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, done, info):
+    info = dict(info, completed_steps=int(done))
+    if done < state.shape[0] - 1:
+        info["diverged_at_step"] = int(done)
+    return _result(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, info)
 
 
 def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
@@ -337,6 +374,22 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
     time_s = np.arange(n_steps + 1) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
                    done, dict(info, events=int(events.sum())))
+
+
+def _solve(t, a: RunArguments, icode, sdof, max_step_s, form, info) -> SimResult:
+    """The run of :func:`simulate` (``sdof`` False) or :func:`simulate_sdof` (True) on checked
+    tables ``t`` and arguments ``a`` (:func:`run_arguments`): substeps of at most ``max_step_s``,
+    damping, initial state, the compiled driver; ``info`` follows form and equivalent mass."""
+    H = a.comm_step_s
+    n_sub = substeps(H, _finite("max_step_s", max_step_s, positive=True))
+    h = H / n_sub
+    c, me = _damping(t, a.damping_ratio)
+    arrays = _arrays(t)
+    th0 = a.pinion_angle_start_rad
+    x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+    return _integrate(t, arrays, icode, sdof, th0, a.speed_rad_s, x0, a.dte_rate_start_m_s, a.pinion_torque_Nm,
+                      a.gear_torque_Nm, H, n_sub, h, c, me, DAMPING_MODELS[a.damping_model], a.damping_model,
+                      {"form": form, "equivalent_mass_kg": me, **info})
 
 
 def simulate(
@@ -378,34 +431,24 @@ def simulate(
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
     """
-    if isinstance(tables, MeshTables) and tables.has_temperature_axis:
-        return _simulate_temperature_axis(
-            tables, bulk_temperature_C, stop_time_s=stop_time_s, comm_step_s=comm_step_s, max_step_s=max_step_s,
-            pinion_torque_Nm=pinion_torque_Nm, gear_torque_Nm=gear_torque_Nm,
-            pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
-            damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
-            dte_rate_start_m_s=dte_rate_start_m_s, integrator=integrator)
-    if bulk_temperature_C is not None:
+    temperature_axis = isinstance(tables, MeshTables) and tables.has_temperature_axis
+    if temperature_axis:
+        t = tables.validate()
+    elif bulk_temperature_C is not None:
         raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
-    t = _check_tables(tables)
-    icode = _integrator_code(integrator, t.slots)
-    w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    if max_step_s is None:
-        max_step_s = choose_max_step_s(t, max(1.5 * abs(w0), 1.0))
-    t, stop, H, n_steps, n_sub, h, c, me, model = _common(
-        t, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model)
-    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
-    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
-    if gear_torque_Nm is None:
-        t2s = t1s * rb2 / rb1
     else:
-        t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
-    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    arrays = _arrays(t)
-    x0 = _initial_x(t, arrays, th0, t1s[0], dte_start_m)
-    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    return _integrate(t, arrays, icode, False, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
-                      {"form": "two-inertia (docs/model.md)", "equivalent_mass_kg": me, "integrator": integrator})
+        t = _check_tables(tables)
+        icode = _integrator_code(integrator, t.slots)
+    a = run_arguments(t, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
+                      stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,
+                      gear_torque_Nm=gear_torque_Nm, damping_ratio=damping_ratio, damping_model=damping_model,
+                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
+                      dte_rate_start_m_s=dte_rate_start_m_s)
+    if temperature_axis:
+        return _simulate_temperature_axis(t, a, bulk_temperature_C, max_step_s, integrator)
+    if max_step_s is None:
+        max_step_s = choose_max_step_s(t, max(1.5 * abs(a.speed_rad_s), 1.0))
+    return _solve(t, a, icode, False, max_step_s, "two-inertia (docs/model.md)", {"integrator": integrator})
 
 
 def simulate_sdof(
@@ -443,21 +486,15 @@ def simulate_sdof(
         raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     t = _check_tables(tables)
     icode = _integrator_code(integrator, t.slots)
-    om = _finite("omega1_rad_s", omega1_rad_s)
+    a = run_arguments(t, speed_name="omega1_rad_s", speed_rad_s=omega1_rad_s, stop_time_s=stop_time_s,
+                      comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm, gear_torque_Nm=None,
+                      damping_ratio=damping_ratio, damping_model=damping_model,
+                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
+                      dte_rate_start_m_s=dte_rate_start_m_s)
     if max_step_s is None:
-        max_step_s = choose_max_step_s(t, max(abs(om), 1.0))
-    t, stop, H, n_steps, n_sub, h, c, me, model = _common(
-        t, stop_time_s, comm_step_s, max_step_s, damping_ratio, damping_model)
-    rb1 = float(t.base_radius_pinion_m)
-    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
-    t2s = t1s * float(t.base_radius_gear_m) / rb1
-    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    arrays = _arrays(t)
-    x0 = _initial_x(t, arrays, th0, t1s[0], dte_start_m)
-    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s)
-    return _integrate(t, arrays, icode, True, th0, om, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
-                      {"form": "time-indexed SDOF (seed 003 eq 3-6)", "equivalent_mass_kg": me,
-                       "omega1_rad_s": om, "integrator": integrator})
+        max_step_s = choose_max_step_s(t, max(abs(a.speed_rad_s), 1.0))
+    return _solve(t, a, icode, True, max_step_s, "time-indexed SDOF (seed 003 eq 3-6)",
+                  {"omega1_rad_s": a.speed_rad_s, "integrator": integrator})
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:
@@ -492,32 +529,24 @@ def _at_temperature(tables: MeshTables, temperature_C) -> MeshTables:
         raise NativeInputError(f"bulk_temperature_C: expected a number, got {temperature_C!r}") from None
 
 
-def _simulate_temperature_axis(tables: MeshTables, bulk_temperature_C, *, stop_time_s, comm_step_s, max_step_s,
-                               pinion_torque_Nm, gear_torque_Nm, pinion_speed_start_rad_s, damping_ratio,
-                               damping_model, pinion_angle_start_rad, dte_start_m, dte_rate_start_m_s,
+def _simulate_temperature_axis(t: MeshTables, a: RunArguments, bulk_temperature_C, max_step_s,
                                integrator) -> SimResult:
-    """:func:`simulate` on tables with a temperature axis.  The temperature is held
-    over each communication step like the torques; every run of steps with one
-    temperature is simulated on ``tables.at_temperature(T)`` (the node-wise blend of
+    """:func:`simulate` on tables ``t`` with a temperature axis (checked arguments ``a``).
+    The temperature is held over each communication step like the torques; every run of
+    steps with one temperature is simulated on ``t.at_temperature(T)`` (the node-wise blend of
     docs/model.md "Temperature axis", the arithmetic of the C kernel), continuing
     from the state [theta1, omega1, x, v] of the previous run -- the same
     per-step computation as an FMU whose input changes at those steps."""
-    t = tables.validate()
-    H = _finite("comm_step_s", comm_step_s, positive=True)
-    n_steps = _n_steps(_finite("stop_time_s", stop_time_s, positive=True), H)
+    H, n_steps, t1s, t2s = a.comm_step_s, a.n_steps, a.pinion_torque_Nm, a.gear_torque_Nm
     temps = _input_series("bulk_temperature_C", t.default_temperature_C if bulk_temperature_C is None
                           else bulk_temperature_C, n_steps, H)
     slices = {}
     for T in np.unique(temps[:n_steps + 1]):
         slices[float(T)] = _at_temperature(t, T)
-    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
-    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
-    t2s = t1s * rb2 / rb1 if gear_torque_Nm is None else _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
-    w0 = _finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
     if max_step_s is None:  # k_mean does not depend on temperature: one step bound for all runs
-        max_step_s = choose_max_step_s(slices[float(temps[0])], max(1.5 * abs(w0), 1.0))
+        max_step_s = choose_max_step_s(slices[float(temps[0])], max(1.5 * abs(a.speed_rad_s), 1.0))
     parts = []
-    th, om, x, v = _finite("pinion_angle_start_rad", pinion_angle_start_rad), w0, dte_start_m, dte_rate_start_m_s
+    th, om, x, v = a.pinion_angle_start_rad, a.speed_rad_s, a.dte_start_m, a.dte_rate_start_m_s
     i = 0
     while i < n_steps:
         j = i + 1
@@ -525,7 +554,7 @@ def _simulate_temperature_axis(tables: MeshTables, bulk_temperature_C, *, stop_t
             j += 1
         r = simulate(slices[float(temps[i])], stop_time_s=(j - i) * H, comm_step_s=H, max_step_s=max_step_s,
                      pinion_torque_Nm=t1s[i:j], gear_torque_Nm=t2s[i:j], pinion_speed_start_rad_s=om,
-                     damping_ratio=damping_ratio, damping_model=damping_model, pinion_angle_start_rad=th,
+                     damping_ratio=a.damping_ratio, damping_model=a.damping_model, pinion_angle_start_rad=th,
                      dte_start_m=x, dte_rate_start_m_s=v, integrator=integrator)
         parts.append((i, r))
         if "diverged_at_step" in r.info:

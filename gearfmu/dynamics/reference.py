@@ -51,9 +51,11 @@ Choices (not in the papers)
 Public API
 ----------
 ``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
-takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``)
+takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``;
+checked by the same :func:`gearfmu.dynamics.native.run_arguments`)
 plus ``rtol``, ``atol_scale``, ``method``, and returns a
-:class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants;
+:class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
+derived outputs by the same rule;
 ``step_s`` is 0, ``substeps`` the number of segments, ``info`` counts segments,
 events and right-hand-side calls).
 """
@@ -62,35 +64,22 @@ from __future__ import annotations
 import bisect
 import math
 import time as _time
-from typing import Callable, Optional, Union
+from typing import Optional
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..common.vocabulary import DAMPING_MODELS, current_spelling
 from ..tables.mesh_tables import MeshTables
-from .native import _finite, _input_series, _n_steps, SimResult
+from .native import InputLike, _finite, _result, run_arguments
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
 
-InputLike = Union[float, np.ndarray, Callable[[float], float]]
 KINK_REL_TOL = 1e-13
 
 
 class ReferenceInputError(ValueError):
     """Bad argument to the reference integrator; the message names the argument."""
-
-
-# ----------------------------------------------------------------- helpers
-def _num(name, value, *, positive=False, nonneg=False) -> float:
-    return _finite(name, value, positive=positive, nonneg=nonneg, error=ReferenceInputError)
-
-
-def _series(name, value, n_steps, H) -> np.ndarray:
-    """Input value held over [t_k, t_k + H), k = 0..n_steps (the convention of
-    gearfmu.dynamics.native.simulate: number, n or n+1 values, or a callable of t_k)."""
-    return _input_series(name, value, n_steps, H, error=ReferenceInputError)
 
 
 class _Rows:
@@ -193,6 +182,25 @@ def equilibrium_dte_exact_m(K, E, B, fm: float) -> float:
     return float(pts[-1] - gv[-1] / S)  # right ray: every pair on the drive flank
 
 
+def _pair_force(k, d, b, fd, model):
+    """The per-pair force law of docs/model.md at stiffness ``k``, deflection ``d = x - e``,
+    half backlash ``b`` and damping force ``fd = c (v - de/dt)``: (F_j in N, contact side
+    +1 drive flank, -1 back flank, 0 separated)."""
+    if d > b:
+        fc, side = k * (d - b), 1
+    elif d < -b:
+        fc, side = k * (d + b), -1
+    else:
+        fc, side = 0.0, 0
+    if model == "elastobacklash":
+        if side == 1:
+            return max(0.0, fc + min(fc, fd)), side
+        if side == -1:
+            return min(0.0, fc + max(fc, fd)), side
+        return 0.0, side
+    return (fc + fd if k > 0.0 else 0.0), side
+
+
 def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
     """Per-pair forces (N), contact states and stiffnesses at one state, by the
     literal formulas of docs/model.md (lookup, force law): used for outputs."""
@@ -212,23 +220,7 @@ def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
         e = rows.E[j, i0] + w * (rows.E[j, i1] - rows.E[j, i0])
         b = rows.B[j, i0] + w * (rows.B[j, i1] - rows.B[j, i0])
         de = (rows.E[j, i1] - rows.E[j, i0]) / dphi * omega
-        d = x - e
-        if d > b:
-            fc, s_ = k * (d - b), 1
-        elif d < -b:
-            fc, s_ = k * (d + b), -1
-        else:
-            fc, s_ = 0.0, 0
-        fd = c * (v - de)
-        if model == "elastobacklash":
-            if s_ == 1:
-                f = max(0.0, fc + min(fc, fd))
-            elif s_ == -1:
-                f = min(0.0, fc + max(fc, fd))
-            else:
-                f = 0.0
-        else:
-            f = fc + fd if k > 0.0 else 0.0
+        f, s_ = _pair_force(k, x - e, b, c * (v - de), model)
         F[j], st[j], kk[j] = f, s_, k
     return F, st, kk
 
@@ -335,16 +327,7 @@ class _Segment:
         F = 0.0
         for p in self.pairs:
             k, d, b, fd = self._pair(p, th, om, x, v)
-            if d > b:
-                fc, s = k * (d - b), 1
-            elif d < -b:
-                fc, s = k * (d + b), -1
-            else:
-                fc, s = 0.0, 0
-            if self.model == "elastobacklash":
-                F += max(0.0, fc + min(fc, fd)) if s == 1 else (min(0.0, fc + max(fc, fd)) if s == -1 else 0.0)
-            else:
-                F += fc + fd if (p[1] + p[2] * (self.off + th)) > 0.0 else 0.0
+            F += _pair_force(k, d, b, fd, self.model)[0]
         return F
 
     def deriv(self, y, F):
@@ -435,21 +418,17 @@ def simulate_reference(
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
     tables.validate()
-    stop = _num("stop_time_s", stop_time_s, positive=True)
-    H = _num("comm_step_s", comm_step_s, positive=True)
-    n_steps = _n_steps(stop, H, error=ReferenceInputError)
-    zeta = _num("damping_ratio", damping_ratio, nonneg=True)
-    damping_model = current_spelling("damping_model", damping_model)
-    if damping_model not in DAMPING_MODELS:
-        raise ReferenceInputError(f"damping_model: {damping_model!r} unknown; choose one of {tuple(DAMPING_MODELS)}")
-    rtol = _num("rtol", rtol, positive=True)
-    w0 = _num("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    th0 = _num("pinion_angle_start_rad", pinion_angle_start_rad)
-    v0 = _num("dte_rate_start_m_s", dte_rate_start_m_s)
-    t1s = _series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H)
+    a = run_arguments(tables, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
+                      stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,
+                      gear_torque_Nm=gear_torque_Nm, damping_ratio=damping_ratio, damping_model=damping_model,
+                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
+                      dte_rate_start_m_s=dte_rate_start_m_s, error=ReferenceInputError)
+    rtol = _finite("rtol", rtol, positive=True, error=ReferenceInputError)
+    H, n_steps, zeta, damping_model = a.comm_step_s, a.n_steps, a.damping_ratio, a.damping_model
+    w0, th0, v0 = a.speed_rad_s, a.pinion_angle_start_rad, a.dte_rate_start_m_s
+    t1s, t2s = a.pinion_torque_Nm, a.gear_torque_Nm
     rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
     I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
-    t2s = t1s * rb2 / rb1 if gear_torque_Nm is None else _series("gear_torque_Nm", gear_torque_Nm, n_steps, H)
     me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
     km = float(tables.k_mean_N_per_m)
     c = 2.0 * zeta * math.sqrt(km * me)  # docs/model.md, seed 003 eq 7-9
@@ -465,7 +444,7 @@ def simulate_reference(
         return rows_cache[key]
 
     r0 = rows_for(t1s[0])
-    if dte_start_m is None:
+    if a.dte_start_m is None:
         Phi = r0.N * r0.dphi
         phim = th0 - Phi * math.floor(th0 / Phi)
         s = phim / r0.dphi
@@ -477,7 +456,7 @@ def simulate_reference(
         if not math.isfinite(x0):
             raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
     else:
-        x0 = _num("dte_start_m", dte_start_m)
+        x0 = a.dte_start_m
 
     # absolute tolerances (module docstring)
     xs = max(abs(t1s).max() / rb1 / km, float(np.max(tables.backlash_half_m)),
@@ -581,17 +560,10 @@ def simulate_reference(
         out_row(k + 1, (theta, y_rest[0], y_rest[1], y_rest[2]), rows)
     wall = _time.perf_counter() - t_wall
 
-    th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ls = np.where(force[:, None] != 0.0, pair / np.where(force[:, None] != 0.0, force[:, None], 1.0), 0.0)
     info = {"form": "two-inertia (docs/model.md), event-located solve_ivp reference",
             "method": method, "rtol": rtol, "max_step_s": h_cap, "atol": atol.tolist(), "segments": n_seg, "events": n_ev,
             "rhs_calls": nfev, "equivalent_mass_kg": me}
     if diverged is not None:
         info["diverged_at_step"] = int(diverged)
-    return SimResult(
-        time_s=np.arange(n_steps + 1) * H, pinion_speed=om.copy(), gear_speed=(om * rb1 - v) / rb2,
-        pinion_angle=th.copy(), gear_angle=(th * rb1 - x) / rb2, dte=x.copy(), dte_rate=v.copy(),
-        mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
-        pinion_torque=t1s, gear_torque=t2s, step_s=0.0, substeps=n_seg, damping_Ns_per_m=c,
-        damping_model=damping_model, wall_s=wall, info=info)
+    return _result(tables, np.arange(n_steps + 1) * H, state, pair, force, stiff, t1s, t2s, 0.0, n_seg, c,
+                   damping_model, wall, info)

@@ -272,6 +272,25 @@ def combine_pairs(k_tooth: np.ndarray, cf_p: np.ndarray, cf_g: np.ndarray, opts:
     return kt * (k_n / safe_K)[None, :]
 
 
+def _slot_grid(slots, need: int, need_text: str, n_per_mesh, opts: MeshModelOptions, foundation_lambda):
+    """The checked (slots, slices) of a slot-stiffness computation: ``slots`` None is ``need``
+    (:func:`required_slots`, ``need_text`` says where it comes from), otherwise an integer >=
+    ``need``; ``n_per_mesh`` an integer >= 2, ``opts.slices`` >= 1, both foundation factors > 0."""
+    if slots is None:
+        slots = need
+    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < need:
+        raise StiffnessError(f"slots: must be an integer >= {need_text}, got {slots!r}")
+    if isinstance(n_per_mesh, bool) or not isinstance(n_per_mesh, (int, np.integer)) or n_per_mesh < 2:
+        raise StiffnessError(f"n_per_mesh: must be an integer >= 2, got {n_per_mesh!r}")
+    n_slices = int(opts.slices)
+    if n_slices < 1:
+        raise StiffnessError(f"opts.slices: must be >= 1, got {opts.slices!r}")
+    for lam in foundation_lambda:
+        if not (lam > 0):
+            raise StiffnessError(f"foundation_lambda: must be > 0, got {foundation_lambda!r}")
+    return slots, n_slices
+
+
 def slot_stiffness(pair: GearPairSpec, geom: Optional[PairGeometry] = None,
                    opts: Optional[MeshModelOptions] = None, slots: Optional[int] = None,
                    n_per_mesh: int = 128, *,
@@ -291,18 +310,8 @@ def slot_stiffness(pair: GearPairSpec, geom: Optional[PairGeometry] = None,
                                       foundation_lambda=foundation_lambda)
     eps = geom.contact_ratio
     min_slots = required_slots(geom)
-    if slots is None:
-        slots = min_slots
-    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < min_slots:
-        raise StiffnessError(f"slots: must be an integer >= ceil(contact ratio) = {min_slots}, got {slots!r}")
-    if isinstance(n_per_mesh, bool) or not isinstance(n_per_mesh, (int, np.integer)) or n_per_mesh < 2:
-        raise StiffnessError(f"n_per_mesh: must be an integer >= 2, got {n_per_mesh!r}")
-    n_slices = int(opts.slices)
-    if n_slices < 1:
-        raise StiffnessError(f"opts.slices: must be >= 1, got {opts.slices!r}")
-    for lam in foundation_lambda:
-        if not (lam > 0):
-            raise StiffnessError(f"foundation_lambda: must be > 0, got {foundation_lambda!r}")
+    slots, n_slices = _slot_grid(slots, min_slots, f"ceil(contact ratio) = {min_slots}", n_per_mesh, opts,
+                                 foundation_lambda)
     b = min(pair.pinion.face_width_m, pair.gear.face_width_m)
     w = b / n_slices
     mp = geom.mesh_period_rad
@@ -468,19 +477,8 @@ def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshMod
     for comparison.
     """
     need = required_slots(geom)
-    if slots is None:
-        slots = need
-    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < need:
-        raise StiffnessError(f"slots: must be an integer >= {need} (from the total contact ratio "
-                             f"{geom.total_contact_ratio:.6g}), got {slots!r}")
-    if isinstance(n_per_mesh, bool) or not isinstance(n_per_mesh, (int, np.integer)) or n_per_mesh < 2:
-        raise StiffnessError(f"n_per_mesh: must be an integer >= 2, got {n_per_mesh!r}")
-    NS = int(opts.slices)
-    if NS < 1:
-        raise StiffnessError(f"opts.slices: must be >= 1, got {opts.slices!r}")
-    for lam in foundation_lambda:
-        if not (lam > 0):
-            raise StiffnessError(f"foundation_lambda: must be > 0, got {foundation_lambda!r}")
+    slots, NS = _slot_grid(slots, need, f"{need} (from the total contact ratio {geom.total_contact_ratio:.6g})",
+                           n_per_mesh, opts, foundation_lambda)
     if section not in ("normal", "transverse"):
         raise StiffnessError(f"section: must be 'normal' or 'transverse', got {section!r}")
     eps = geom.contact_ratio
