@@ -158,12 +158,12 @@ class FilmOutcome:
 
 #: Relaxation setting tried first by a rough solve warm-started from the smooth film
 #: (:func:`solve_node_films`; the solver's keyword options, docs/ehl.md): Gauss-Seidel /
-#: Jacobi switch 0.3, nu1 = 2, nu2 = 3, under-relaxation 0.6 / 0.4.  Measured on the default
-#: scene (3 grid positions x 44 slices at the nominal load, warm starts): with the solver's own
-#: order (the smooth film's setting first, then every setting in turn, the later ones from a
-#: Hertz start) 60 of the 110 level-2 rough films that converged did so only on this setting,
-#: after four failed settings; tried first (warm) it converges 107 of them at 3.2 s CPU against
-#: 13.5 s, film stiffness within 1.2e-5, and at level 1 all 132 at 2.6 s against 4.7 s.
+#: Jacobi switch 0.3, nu1 = 2, nu2 = 3, under-relaxation 0.6 / 0.4.  On the default scene
+#: (3 grid positions x 44 slices at the nominal load, warm starts) most level-2 rough films
+#: that converge with the solver's own order (the smooth film's setting first, then every
+#: setting in turn, the later ones from a Hertz start) do so only on this setting, after the
+#: others fail; tried first it converges them with the film stiffness unchanged to 1.2e-5 and
+#: without the failed attempts' cost.
 ROUGH_WARM_SETTINGS = dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4)
 
 
