@@ -364,7 +364,8 @@ def sec_thermal_model(pg: Page):
             "Reference: Dowson & Higginson's minimum-film and Moes' (1992) central-film fits of the smooth "
             "line contact.  Ours: η0(T) of the seed 004 Table 4 oil (320 / 38.5 cSt, ASTM D341 Walther "
             "law) and the slice film of the `smooth_ehl` contact model (the multigrid solver, the solve "
-            "the tables' oil axis makes) at pair I's pitch point, Table 4 load, 2000 rpm.  The Moes fit "
+            "the tables' oil axis makes) at pair I's pitch point, Table 4 load, 2000 rpm, the scene's α at every "
+            "temperature.  The Moes fit "
             "describes the Barus, incompressible film; the solver's Roelands, compressible film lies "
             "below it by physics (docs/ehl.md).\n\n"
             + table(["T (°C)", *[f"{r['temperature_C']:g}" for r in rows]], body)
