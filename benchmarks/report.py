@@ -64,6 +64,7 @@ SOURCES = {
                   "benchmarks/bench_fmu.py --sim-time 0.1 --repeat 3"),
     "kernels": ([PY, *_KERNELS], None, " ".join(_KERNELS)),
     "stiffness_iso": ([PY, "benchmarks/bench_stiffness_iso.py"], None, "benchmarks/bench_stiffness_iso.py"),
+    "helical_sawtooth": ([PY, "benchmarks/bench_helical_sawtooth.py"], None, "benchmarks/bench_helical_sawtooth.py"),
     "thermal": ([PY, "benchmarks/bench_thermal.py"], None, "benchmarks/bench_thermal.py"),
     "load_sharing": ([PY, "benchmarks/bench_load_sharing.py"], None, "benchmarks/bench_load_sharing.py"),
     "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
@@ -175,6 +176,8 @@ def sec_stiffness(pg: Page):
     if not pg.missing("seed004", "Geometry and mesh stiffness: seed 004 Tables 2-3"):
         sec_stiffness_seed004(pg)
     sec_stiffness_iso(pg)
+    if not pg.missing("helical_sawtooth", "Helical slices: sawtooth against the slice count"):
+        sec_helical_sawtooth(pg)
 
 
 def sec_stiffness_seed004(pg: Page):
@@ -253,6 +256,27 @@ def sec_stiffness_iso(pg: Page):
         + f"\n\nSource: `{SOURCES['helical_iso'][2]}` ({pg.cost('helical_iso')}).\n")
     pg.summary.append(["mean mesh stiffness over β", "ISO 6336-1 method B", f"≤ {100 * worst:.0f} % (band ±25 %)",
                        pg.cost("helical_iso")])
+
+
+def sec_helical_sawtooth(pg: Page):
+    d = pg.data["helical_sawtooth"]
+    body = [[r["slices"], sci(r["one_over_ns_eps_alpha"]), sci(r["k_dev_whole"]), sci(r["k_dev_partial"]),
+             sci(r["te_dev_whole"]), sci(r["te_dev_partial"])] for r in d["rows"]]
+    pg.parts.append(
+        "### Helical slices: sawtooth against the slice count\n\n"
+        "Reference: the continuous face width (the limit of partly engaged slices at "
+        f"NS = {d['limit_slices']}, which changes by {sci(d['limit_change_rel'], 1)} of the mean from half "
+        "that slice count; the engaged width itself is checked against its closed form in "
+        "tests/test_helical_sawtooth.py).  Seed 001 Table 1 pair "
+        f"(ε_α {d['eps_alpha']:.4f}, ε_β {d['eps_beta']:.4f}), {d['points_per_mesh']} points per mesh: largest "
+        "deviation of the total mesh stiffness (relative to its mean) and of the static transmission error "
+        "(relative to its peak-to-peak, "
+        f"{d['limit_static_te_ptp_m'] * 1e6:.3g} µm in the limit; k ptp/mean {d['limit_k_ptp_over_mean']:.3g}) "
+        "from the limit, with whole slices entering and leaving and with partly engaged slices (the default, "
+        "docs/helical.md).  1/(NS ε_α) is the size of one whole-slice step.\n\n"
+        + table(["NS", "1/(NS ε_α)", "k dev, whole slices", "k dev, partial slices", "TE dev, whole",
+                 "TE dev, partial"], body)
+        + f"\n\nSource: `{SOURCES['helical_sawtooth'][2]}` ({pg.cost('helical_sawtooth')}).\n")
 
 
 def sec_thermal(pg: Page):

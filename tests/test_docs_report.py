@@ -81,7 +81,11 @@ def _fixture(d: pathlib.Path):
     startup = {"commands": {"build": {"cold_s": 9.0, "warm_s": 1.5}}}
     ehl_corners = {"summary": {"points": 63, "max_cpu_s": 1.5, "median_cpu_s": 0.1},
                    "rows": [{"case": "default_1025", "M": 20.0, "cpu_s": 0.004}]}
-    for name, data in (("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    sawtooth = {"limit_slices": 960, "limit_change_rel": 1e-6, "eps_alpha": 1.5, "eps_beta": 2.0, "points_per_mesh": 64,
+                "limit_static_te_ptp_m": 1e-6, "limit_k_ptp_over_mean": 0.06,
+                "rows": [{"slices": 15, "one_over_ns_eps_alpha": 1 / 22.5, "k_dev_whole": 0.05, "k_dev_partial": 0.001,
+                          "te_dev_whole": 0.9, "te_dev_partial": 0.025}]}
+    for name, data in (("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners)):
@@ -131,6 +135,7 @@ def test_report_from_saved_json(tmp_path):
     # load sharing: k/k_smooth 1.05; fractal: the element sizes side by side
     assert "| 4 | 2.50 | 3.00 | 5e+11 | 0.3 | 1.5 | 150 | 0.1 | 5.000 / 4.900 | 0.001 | 0.9500 | 0.1 | 1.0500 |" in page
     assert "| 4 | 7e+12 / 8e+12 | 0.50 / 0.75 |" in page
+    assert "| 15 | 4.44e-02 | 5.00e-02 | 1.00e-03 | 9.00e-01 | 2.50e-02 |" in page      # helical sawtooth
     # speed goals beside the measured values, in the page and the README; no JSON: "not measured"
     for where in (page, readme.read_text()):
         assert "| warm `gearfmu build` of the default scene ≤ 2 s | 1.50 s warm, 9.0 s cold (empty numba cache) | yes |" in where
