@@ -943,15 +943,25 @@ def write_readme_speed(readme: Path, data: dict) -> bool:
     return True
 
 
-def load_dir(d: Path):
-    data = {}
+def load_dir(d: Path, failed: list = None):
+    """The saved JSON of every source in ``d`` and the run records; a file that is not JSON is
+    left out (its section reads "not run") and named in ``failed``."""
+    data, runs = {}, {}
     for name in SOURCES:
         p = d / f"{name}.json"
         if p.is_file():
-            data[name] = json.loads(p.read_text())
+            try:
+                data[name] = json.loads(p.read_text())
+            except ValueError as exc:
+                runs[name] = {"ok": False, "reason": f"{p.name} is not JSON ({exc})"}
+                if failed is not None:
+                    failed.append(f"source {name}: {p} is not JSON ({exc})")
     runs_p = d / "runs.json"
-    runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
-    return data, runs
+    try:
+        saved = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+    except ValueError:
+        saved = {}
+    return data, {**saved, **runs}
 
 
 def main(argv=None) -> int:
@@ -976,7 +986,10 @@ def main(argv=None) -> int:
     else:
         a.save_dir.mkdir(parents=True, exist_ok=True)
         runs_p = a.save_dir / "runs.json"
-        runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+        try:
+            runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+        except ValueError:
+            runs = {}
         for name in a.only or [n for n in SOURCES if a.all or n not in SLOW]:
             timeout = a.timeout if a.timeout is not None else (3600.0 if name in SLOW else 900.0)
             try:
@@ -989,7 +1002,7 @@ def main(argv=None) -> int:
                 (a.save_dir / f"{name}.json").unlink(missing_ok=True)
             runs_p.write_text(json.dumps(runs, indent=1))
         src = a.save_dir
-    data, runs = load_dir(src)
+    data, runs = load_dir(src, failed)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text(render(data, runs, a.out, a.img_dir, failed))
     print(f"report: wrote {a.out} from {len(data)} of {len(SOURCES)} sources", file=sys.stderr)

@@ -183,3 +183,8 @@ def test_a_failing_source_or_section_does_not_stop_the_others(tmp_path, monkeypa
     page = out.read_text()
     assert "## Fractal\n\nCould not be rendered from its JSON (TypeError" in page
     assert "### Tooth and pair stiffness against seed 004 Tables 2-3" in page   # the other sections are there
+    # a saved file that is not JSON: named, its section "not run", the page still written
+    (tmp_path / "json" / "seed004.json").write_text("{not json")
+    assert rep.main(["--from", str(tmp_path / "json"), "--out", str(out), "--img-dir", str(tmp_path / "img"),
+                     "--readme", "none"]) == 1
+    assert "seed004.json is not JSON" in out.read_text() and "source seed004" in capsys.readouterr().err
