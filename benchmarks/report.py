@@ -70,6 +70,8 @@ SOURCES = {
     "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
     "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "3"], None,
                     "benchmarks/bench_ehl_corners.py --repeats 3"),
+    "seed003_statements": ([PY, "examples/seed003_figures.py", "--quick", "--json", "--out", "{tmp}"], None,
+                           "examples/seed003_figures.py --quick --json"),
     "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
                None, "examples/seed000_trends.py --json --also-policy load_sharing"),
     "integrators": ([PY, "benchmarks/bench_integrators.py", "--repeat", "3"], None,
@@ -81,7 +83,7 @@ SOURCES = {
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan", "tests"}
+SLOW = {"trends", "seed003_statements", "ehl_corners", "integrators", "startup", "plan", "tests"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -692,6 +694,38 @@ def sec_arms(pg: Page):
                        f"{len(found)} of {len(body)} seed features matched within 0.06", pg.cost("arms")])
 
 
+def _compact(v) -> str:
+    """A JSON value of a statement's numbers in one table cell."""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, (int, float)):
+        return num(v, 3)
+    if isinstance(v, list):
+        return "[" + ", ".join(_compact(x) for x in v) + "]" if v else "none"
+    if isinstance(v, dict):
+        return "; ".join(f"{k}: {_compact(x)}" for k, x in v.items())
+    return str(v).replace("|", "/")
+
+
+def sec_seed003_statements(pg: Page):
+    if pg.missing("seed003_statements", "Seed 003 statements (Figs. 6-30)"):
+        return
+    st = pg.data["seed003_statements"].get("statements", [])
+    body = [[s["statement"].replace("|", "/"), "yes" if s["holds"] else "**no**", _compact(s.get("numbers"))]
+            for s in st]
+    pg.parts.append(
+        "### Seed 003's statements (Figs. 6-30)\n\n"
+        "Reference: the qualitative statements seed 003 makes about its Figs. 6-30 (errors, speed, load, "
+        "damping), each judged on our numbers (docs/seed003.md; quick settings, the default stiffness "
+        "model with an independent foundation per pair; A_r, A_rms and q in µm, forces in N).\n\n"
+        + table(["statement (seed 003)", "reproduced", "our numbers"], body)
+        + f"\n\nSource: `{SOURCES['seed003_statements'][2]}` ({pg.cost('seed003_statements')}; a slow source: "
+        "`python benchmarks/report.py --only seed003_statements`).\n")
+    pg.summary.append(["dynamic response: seed 003's statements on errors, speed, load, damping",
+                       "seed 003 Figs. 6-30 (statements)",
+                       f"{sum(1 for s in st if s['holds'])} of {len(st)} reproduced", pg.cost("seed003_statements")])
+
+
 def sec_fmu(pg: Page):
     if not pg.missing("kernels", "FMU runtime: C kernel against the native solver"):
         d = pg.data["kernels"]
@@ -888,7 +922,7 @@ def sec_goals(pg: Page):
 
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
-            "sec_dynamics", "sec_arms", "sec_fmu", "sec_goals")
+            "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_fmu", "sec_goals")
 
 
 def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:

@@ -85,7 +85,11 @@ def _fixture(d: pathlib.Path):
                 "limit_static_te_ptp_m": 1e-6, "limit_k_ptp_over_mean": 0.06,
                 "rows": [{"slices": 15, "one_over_ns_eps_alpha": 1 / 22.5, "k_dev_whole": 0.05, "k_dev_partial": 0.001,
                           "te_dev_whole": 0.9, "te_dev_partial": 0.025}]}
-    for name, data in (("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    seed003 = {"statements": [{"statement": "Fig. 10: growing f_fa raises the DTE amplitude", "holds": True,
+                               "numbers": {"A_rms": [7.5, 8.25]}},
+                              {"statement": "Fig. 12: a pair loses contact", "holds": False,
+                               "numbers": {"f_fa=25 um": []}}]}
+    for name, data in (("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners)):
@@ -135,6 +139,8 @@ def test_report_from_saved_json(tmp_path):
     # load sharing: k/k_smooth 1.05; fractal: the element sizes side by side
     assert "| 4 | 2.50 | 3.00 | 5e+11 | 0.3 | 1.5 | 150 | 0.1 | 5.000 / 4.900 | 0.001 | 0.9500 | 0.1 | 1.0500 |" in page
     assert "| 4 | 7e+12 / 8e+12 | 0.50 / 0.75 |" in page
+    assert "| Fig. 10: growing f_fa raises the DTE amplitude | yes | A_rms: [7.5, 8.25] |" in page
+    assert "| Fig. 12: a pair loses contact | **no** | f_fa=25 um: none |" in page
     assert "| 15 | 4.44e-02 | 5.00e-02 | 1.00e-03 | 9.00e-01 | 2.50e-02 |" in page      # helical sawtooth
     # speed goals beside the measured values, in the page and the README; no JSON: "not measured"
     for where in (page, readme.read_text()):
