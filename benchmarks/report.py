@@ -88,6 +88,23 @@ SLOW = {"trends", "seed003_statements", "ehl_corners", "integrators", "startup",
 
 # ------------------------------------------------------------------------------- running
 
+def json_in(text: str):
+    """The JSON a benchmark printed: the whole text, or from the first line that starts a JSON
+    object or array to the end (lines of progress before it are skipped)."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        pass
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if line.lstrip()[:1] in ("{", "["):
+            try:
+                return json.loads("\n".join(lines[i:]))
+            except ValueError:
+                continue
+    raise ValueError("no JSON object or array in it")
+
+
 def run_source(name: str, save_dir: Path, timeout_s: float) -> dict:
     """Run one source, save its JSON as save_dir/name.json; returns its run record."""
     cmd, written, label = SOURCES[name]
@@ -109,7 +126,7 @@ def run_source(name: str, save_dir: Path, timeout_s: float) -> dict:
                     "reason": f"exit status {proc.returncode}: {tail[:200]}"}
         try:
             text = (ROOT / written).read_text() if written else proc.stdout
-            data = json.loads(text[text.index("{") if text.lstrip()[:1] != "[" else text.index("["):])
+            data = json_in(text)
         except (OSError, ValueError) as exc:
             return {"command": label, "ok": False, "wall_s": wall, "reason": f"no JSON in the output: {exc}"}
     (save_dir / f"{name}.json").write_text(json.dumps(data, indent=1))

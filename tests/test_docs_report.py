@@ -178,7 +178,7 @@ def test_a_failing_source_or_section_does_not_stop_the_others(tmp_path, monkeypa
     monkeypatch.setattr(rep, "SOURCES", {
         "broken": ([py, "-c", "import sys; sys.exit('broken on purpose')"], None, "broken"),
         "fractal": ([py, "-c", "import json; print(json.dumps(dict(levels=1)))"], None, "fractal"),
-        "seed004": ([py, "-c", "print('[]')"], None, "seed004")})
+        "seed004": ([py, "-c", "print('step {1}'); print('[]')"], None, "seed004")})
     out = tmp_path / "v.md"
     rc = rep.main(["--only", "broken", "fractal", "seed004", "--save-dir", str(tmp_path / "json"),
                    "--out", str(out), "--img-dir", str(tmp_path / "img"), "--readme", "none"])
