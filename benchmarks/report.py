@@ -857,8 +857,14 @@ def _g_dop853(d):
     speed = {}
     for f in fronts:
         for integ, at in f["speedup_vs_DOP853"].items():
-            speed.setdefault(integ, []).append(at.get("1e-06"))
-    cells = [f"{m} " + ("n/a" if any(v is None for v in vs) else f"≥ {min(vs):.0f} ×") for m, vs in speed.items()]
+            speed.setdefault(integ, []).append((f["case"], at.get("1e-06")))
+    cells = []
+    for m, vs in speed.items():
+        ok = [v for _, v in vs if v is not None]
+        miss = [c for c, v in vs if v is None]
+        cells.append(f"{m} " + (f"≥ {min(ok):.0f} ×" if ok else "n/a")
+                     + (f" (1e-6 not reached or no DOP853 time on {', '.join(miss)})" if miss else ""))
+    speed = {m: [v for _, v in vs] for m, vs in speed.items()}
     default = _default_integrator()
     vs = speed.get(default, [None])
     ok = None if any(v is None for v in vs) else min(vs) >= 300.0
