@@ -89,7 +89,11 @@ def _fixture(d: pathlib.Path):
                                "numbers": {"A_rms": [7.5, 8.25]}},
                               {"statement": "Fig. 12: a pair loses contact", "holds": False,
                                "numbers": {"f_fa=25 um": []}}]}
-    for name, data in (("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    helical_contact = {"iso_c_gamma_alpha": 13.5, "torque_Nm": 1200.0,
+                       "rows": [{"model": "smooth_ehl", "slices": 4, "points_per_mesh": 8, "k_mean_N_per_mm_um": 14.85,
+                                 "rel_diff_iso": 0.1, "over_hertz": 1.07, "ptp_over_mean": 0.057,
+                                 "hertz_ptp_over_mean": 0.06, "spur_ptp_over_mean": 0.644}]}
+    for name, data in (("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners)):
@@ -139,6 +143,7 @@ def test_report_from_saved_json(tmp_path):
     # load sharing: k/k_smooth 1.05; fractal: the element sizes side by side
     assert "| 4 | 2.50 | 3.00 | 5e+11 | 0.3 | 1.5 | 150 | 0.1 | 5.000 / 4.900 | 0.001 | 0.9500 | 0.1 | 1.0500 |" in page
     assert "| 4 | 7e+12 / 8e+12 | 0.50 / 0.75 |" in page
+    assert "| `smooth_ehl` | 4 × 8 | 14.85 | +10.0 % | × 1.070 | 0.057 | 0.060 | 0.644 |" in page
     assert "| Fig. 10: growing f_fa raises the DTE amplitude | yes | A_rms: [7.5, 8.25] |" in page
     assert "| Fig. 12: a pair loses contact | **no** | f_fa=25 um: none |" in page
     assert "| 15 | 4.44e-02 | 5.00e-02 | 1.00e-03 | 9.00e-01 | 2.50e-02 |" in page      # helical sawtooth
