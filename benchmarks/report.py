@@ -853,8 +853,9 @@ def _g_build(d):
 def _g_proxy(d):
     rows = [r for r in d["cases"].values() if r.get("c_over_proxy") is not None]
     if not rows:
-        raise NotMeasured("the kernels benchmark ran without a plain-C proxy source (`--proxy`); the project "
-                          "has none")
+        raise NotMeasured("the kernels benchmark ran without a plain-C proxy source (`--proxy`); "
+                          + ("the project has none" if PROXY is None else
+                             f"regenerate: `python benchmarks/report.py --only kernels` passes {PROXY}"))
     r = next((r for r in rows if r["case"] == "default_scene" and r["integrator"] == "rk4"), rows[0])
     return f"{r['c_over_proxy']:.2f} × ({r['case']}, {r['integrator']})", r["c_over_proxy"] <= 1.5
 
