@@ -84,7 +84,7 @@ SOURCES = {
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "seed003_statements", "ehl_corners", "integrators", "startup", "plan", "tests"}
+SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan", "tests"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -758,8 +758,7 @@ def sec_seed003_statements(pg: Page):
         "damping), each judged on our numbers (docs/seed003.md; quick settings, the default stiffness "
         "model with an independent foundation per pair; A_r, A_rms and q in µm, forces in N).\n\n"
         + table(["statement (seed 003)", "reproduced", "our numbers"], body)
-        + f"\n\nSource: `{SOURCES['seed003_statements'][2]}` ({pg.cost('seed003_statements')}; a slow source: "
-        "`python benchmarks/report.py --only seed003_statements`).\n")
+        + f"\n\nSource: `{SOURCES['seed003_statements'][2]}` ({pg.cost('seed003_statements')}).\n")
     pg.summary.append(["dynamic response: seed 003's statements on errors, speed, load, damping",
                        "seed 003 Figs. 6-30 (statements)",
                        f"{sum(1 for s in st if s['holds'])} of {len(st)} reproduced", pg.cost("seed003_statements")])
