@@ -4,7 +4,7 @@
     python benchmarks/report.py                 # run every source (quick settings), then write
     python benchmarks/report.py --from DIR      # write from JSON saved by an earlier run
     python benchmarks/report.py --only NAME ... # run only these sources (others from --save-dir)
-    python benchmarks/report.py --all           # also the slow sources (seed 000 trends, minutes)
+    python benchmarks/report.py --all           # also the slow sources (seed 000 trends, speed goals)
 
 Each *source* is one existing benchmark or example script that prints (or writes) JSON: the
 report runs it with its quick settings in a fresh interpreter, saves the JSON as
@@ -12,11 +12,15 @@ report runs it with its quick settings in a fresh interpreter, saves the JSON as
 the command and its wall time in ``DIR/runs.json``.  The page is rendered only from those
 files, so every number in docs/validation.md (and the README's speed table, written between
 its ``report:speed`` marker comments) comes from a benchmark's JSON, never from a copied log.
-A source whose JSON is missing is listed as "not run" rather than stopping the report.
+A source whose JSON is missing is listed as "not run" rather than stopping the report; a
+source that fails (non-zero exit, timeout, no JSON) or a section that cannot be rendered from its
+JSON is named on stderr, the other sources and sections still run, and the exit status is 1.
+The README block also holds the speed goals beside the measured values (``goal_rows``); a goal
+whose benchmark JSON is missing reads "not measured".
 
 Options: ``--out`` (page, default docs/validation.md), ``--img-dir`` (plots, default
 docs/img), ``--readme`` (README to update, ``none`` to leave it), ``--save-dir`` (where a run
-saves the JSON), ``--timeout`` (seconds per source).
+saves the JSON), ``--timeout`` (seconds per source; default 900, 3600 for the slow sources).
 """
 from __future__ import annotations
 
@@ -38,6 +42,11 @@ CLI = [PY, "-c", "import sys; from gearfmu.cli import main; sys.exit(main())"]
 SPEED_BEGIN = "<!-- report:speed:begin -->"
 SPEED_END = "<!-- report:speed:end -->"
 
+#: C source of the plain-C speed reference of bench_kernels (--proxy), where the project has one
+PROXY = "benchmarks/rk4_proxy.c" if (ROOT / "benchmarks" / "rk4_proxy.c").is_file() else None
+_KERNELS = ["benchmarks/bench_kernels.py", "--sim-time", "0.05", "--repeat", "3",
+            "--integrators", "rk4,rk4_kink,rk4_node"] + (["--proxy", PROXY] if PROXY else [])
+
 # name -> (command, file the command writes instead of stdout or None, what it is)
 SOURCES = {
     "seed004": ([PY, "examples/seed004_temperature.py", "--json"], None,
@@ -53,16 +62,49 @@ SOURCES = {
              "examples/seed003_arms.py --json --quick"),
     "fmu_speed": ([PY, "benchmarks/bench_fmu.py", "--sim-time", "0.1", "--repeat", "3"], None,
                   "benchmarks/bench_fmu.py --sim-time 0.1 --repeat 3"),
-    "kernels": ([PY, "benchmarks/bench_kernels.py", "--sim-time", "0.05", "--repeat", "3"], None,
-                "benchmarks/bench_kernels.py --sim-time 0.05 --repeat 3"),
-    "trends": ([PY, "examples/seed000_trends.py", "--json", "--out", "{tmp}"], None,
-               "examples/seed000_trends.py --json"),
+    "kernels": ([PY, *_KERNELS], None, " ".join(_KERNELS)),
+    "stiffness_iso": ([PY, "benchmarks/bench_stiffness_iso.py"], None, "benchmarks/bench_stiffness_iso.py"),
+    "helical_sawtooth": ([PY, "benchmarks/bench_helical_sawtooth.py"], None, "benchmarks/bench_helical_sawtooth.py"),
+    "helical_contact": ([PY, "benchmarks/bench_helical_contact.py"], None, "benchmarks/bench_helical_contact.py"),
+    "thermal": ([PY, "benchmarks/bench_thermal.py"], None, "benchmarks/bench_thermal.py"),
+    "load_sharing": ([PY, "benchmarks/bench_load_sharing.py"], None, "benchmarks/bench_load_sharing.py"),
+    "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
+    "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "3"], None,
+                    "benchmarks/bench_ehl_corners.py --repeats 3"),
+    "seed003_statements": ([PY, "examples/seed003_figures.py", "--quick", "--json", "--out", "{tmp}"], None,
+                           "examples/seed003_figures.py --quick --json"),
+    "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
+               None, "examples/seed000_trends.py --json --also-policy load_sharing"),
+    "integrators": ([PY, "benchmarks/bench_integrators.py", "--repeat", "3"], None,
+                    "benchmarks/bench_integrators.py --repeat 3"),
+    "startup": ([PY, "benchmarks/bench_startup.py", "--commands", "build"], None,
+                "benchmarks/bench_startup.py --commands build"),
+    "plan": ([PY, "benchmarks/bench_plan.py", "--scenes", "default", "--timeout", "600"], None,
+             "benchmarks/bench_plan.py --scenes default"),
+    "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends"}
+SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan", "tests"}
 
 
 # ------------------------------------------------------------------------------- running
+
+def json_in(text: str):
+    """The JSON a benchmark printed: the whole text, or from the first line that starts a JSON
+    object or array to the end (lines of progress before it are skipped)."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        pass
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if line.lstrip()[:1] in ("{", "["):
+            try:
+                return json.loads("\n".join(lines[i:]))
+            except ValueError:
+                continue
+    raise ValueError("no JSON object or array in it")
+
 
 def run_source(name: str, save_dir: Path, timeout_s: float) -> dict:
     """Run one source, save its JSON as save_dir/name.json; returns its run record."""
@@ -76,15 +118,17 @@ def run_source(name: str, save_dir: Path, timeout_s: float) -> dict:
             proc = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout_s)
         except subprocess.TimeoutExpired:
             return {"command": label, "ok": False, "reason": f"timed out after {timeout_s:g} s"}
+        except OSError as exc:
+            return {"command": label, "ok": False, "reason": f"could not start: {exc}"}
         wall = time.perf_counter() - t0
         if proc.returncode != 0:
             tail = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
             return {"command": label, "ok": False, "wall_s": wall,
                     "reason": f"exit status {proc.returncode}: {tail[:200]}"}
-        text = (ROOT / written).read_text() if written else proc.stdout
         try:
-            data = json.loads(text[text.index("{") if text.lstrip()[:1] != "[" else text.index("["):])
-        except (ValueError, json.JSONDecodeError) as exc:
+            text = (ROOT / written).read_text() if written else proc.stdout
+            data = json_in(text)
+        except (OSError, ValueError) as exc:
             return {"command": label, "ok": False, "wall_s": wall, "reason": f"no JSON in the output: {exc}"}
     (save_dir / f"{name}.json").write_text(json.dumps(data, indent=1))
     return {"command": label, "ok": True, "wall_s": wall}
@@ -149,8 +193,16 @@ class Page:
 # ------------------------------------------------------------------------------- sections
 
 def sec_stiffness(pg: Page):
-    if pg.missing("seed004", "Geometry and mesh stiffness: seed 004 Tables 2-3"):
-        return
+    if not pg.missing("seed004", "Geometry and mesh stiffness: seed 004 Tables 2-3"):
+        sec_stiffness_seed004(pg)
+    sec_stiffness_iso(pg)
+    if not pg.missing("helical_sawtooth", "Helical slices: sawtooth against the slice count"):
+        sec_helical_sawtooth(pg)
+    if not pg.missing("helical_contact", "Helical pair with load-dependent contact models"):
+        sec_helical_contact(pg)
+
+
+def sec_stiffness_seed004(pg: Page):
     rows = [r for r in pg.data["seed004"] if r["state"] == "standard"]
     body, worst_mesh = [], {}
     for r in rows:
@@ -173,6 +225,42 @@ def sec_stiffness(pg: Page):
                        ", ".join(f"pair {p}: ≤ {100 * w:.0f} %" for p, w in sorted(worst_mesh.items())),
                        pg.cost("seed004")])
 
+
+def sec_stiffness_iso(pg: Page):
+    if not pg.missing("stiffness_iso", "Mean mesh stiffness of the seed pairs against ISO 6336-1"):
+        d = pg.data["stiffness_iso"]
+        body = []
+        for r in d["rows"]:
+            cp, cga = r["iso_c_prime"], r["iso_c_gamma_alpha"]
+            body.append([r["pair"], f"{r['eps_alpha']:.4f}", f"{cp:.2f}",
+                         f"{r['ours_max_single_pair']:.2f} ({pct(r['ours_max_single_pair'] / cp - 1, 0)})",
+                         f"{cga:.2f}",
+                         f"{r['ours_mean_shared_correction']:.2f} ({pct(r['ours_mean_shared_correction'] / cga - 1, 0)})",
+                         f"{r['ours_mean_independent_foundations']:.2f} "
+                         f"({pct(r['ours_mean_independent_foundations'] / cga - 1, 0)})",
+                         f"{r['ours_mean_no_foundation']:.2f} ({r['ours_mean_no_foundation'] / cga:.1f} ×)"])
+
+        def span(key):
+            v = [r[key] / r["iso_c_gamma_alpha"] - 1 for r in d["rows"]]
+            return f"{pct(min(v), 0)} … {pct(max(v), 0)}" if v else "n/a"
+
+        pg.parts.append(
+            "### Mean mesh stiffness of the seed pairs against ISO 6336-1 method B\n\n"
+            "Reference: ISO 6336-1:2019 clause 9 (method B): single stiffness c′ = C_M C_R C_B / q′ "
+            "(q′ from C1..C9 of its Table 9, C_M 0.8, C_R 1, C_B = 1 + 0.5 (1.2 − h_fP/m)) and mesh "
+            "stiffness c_γα = c′ (0.75 ε_α + 0.25), an empirical band (±25 %) rather than an exact value.  "
+            "Ours: the largest single-pair stiffness and the mean total mesh stiffness over a mesh period, "
+            "per face width, of the example scenes of the seed pairs (their hub radii as the foundation's "
+            "r_int), with the shared-foundation correction (λ = 1), with independent foundations (the "
+            "default) and without the foundation term (docs/physics_stiffness.md).  N/(mm·µm); in brackets "
+            "against ISO.\n\n"
+            + table(["pair", "ε_α", "ISO c′", "ours max single pair", "ISO c_γα", "ours mean, shared correction",
+                     "ours mean, independent foundations (default)", "ours mean, no foundation"], body)
+            + f"\n\nSource: `{SOURCES['stiffness_iso'][2]}` ({pg.cost('stiffness_iso')}).\n")
+        pg.summary.append(["mean mesh stiffness of the seed spur pairs", "ISO 6336-1 method B",
+                           f"default {span('ours_mean_independent_foundations')}, shared correction "
+                           f"{span('ours_mean_shared_correction')} (band ±25 %)", pg.cost("stiffness_iso")])
+
     if pg.missing("helical_iso", "Mesh stiffness against ISO 6336-1"):
         return
     iso = pg.data["helical_iso"]
@@ -192,9 +280,54 @@ def sec_stiffness(pg: Page):
                        pg.cost("helical_iso")])
 
 
+def sec_helical_sawtooth(pg: Page):
+    d = pg.data["helical_sawtooth"]
+    body = [[r["slices"], sci(r["one_over_ns_eps_alpha"]), sci(r["k_dev_whole"]), sci(r["k_dev_partial"]),
+             sci(r["te_dev_whole"]), sci(r["te_dev_partial"])] for r in d["rows"]]
+    pg.parts.append(
+        "### Helical slices: sawtooth against the slice count\n\n"
+        "Reference: the continuous face width (the limit of partly engaged slices at "
+        f"NS = {d['limit_slices']}, which changes by {sci(d['limit_change_rel'], 1)} of the mean from half "
+        "that slice count; the engaged width itself is checked against its closed form in "
+        "tests/test_helical_sawtooth.py).  Seed 001 Table 1 pair "
+        f"(ε_α {d['eps_alpha']:.4f}, ε_β {d['eps_beta']:.4f}), {d['points_per_mesh']} points per mesh: largest "
+        "deviation of the total mesh stiffness (relative to its mean) and of the static transmission error "
+        "(relative to its peak-to-peak, "
+        f"{d['limit_static_te_ptp_m'] * 1e6:.3g} µm in the limit; k ptp/mean {d['limit_k_ptp_over_mean']:.3g}) "
+        "from the limit, with whole slices entering and leaving and with partly engaged slices (the default, "
+        "docs/helical.md).  1/(NS ε_α) is the size of one whole-slice step.\n\n"
+        + table(["NS", "1/(NS ε_α)", "k dev, whole slices", "k dev, partial slices", "TE dev, whole",
+                 "TE dev, partial"], body)
+        + f"\n\nSource: `{SOURCES['helical_sawtooth'][2]}` ({pg.cost('helical_sawtooth')}).\n")
+
+
+def sec_helical_contact(pg: Page):
+    d = pg.data["helical_contact"]
+    iso = d["iso_c_gamma_alpha"]
+    body = [[f"`{r['model']}`", f"{r['slices']} × {r['points_per_mesh']}", f"{r['k_mean_N_per_mm_um']:.2f}",
+             pct(r["rel_diff_iso"]), f"× {r['over_hertz']:.3f}", f"{r['ptp_over_mean']:.3f}",
+             f"{r['hertz_ptp_over_mean']:.3f}", f"{r['spur_ptp_over_mean']:.3f}"] for r in d["rows"]]
+    pg.parts.append(
+        "### Helical pair with load-dependent contact models\n\n"
+        f"Reference: ISO 6336-1:2019 method B, c_γα = {iso:.2f} N/(mm·µm) for the seed 001 Table 1 helical pair "
+        "(virtual numbers of teeth; ±25 % band), and the spur pair of the same transverse section with the "
+        "same contact model (the classical overlap smoothing).  Ours: tables with the contact model per "
+        "slice (SCH632 at 60 °C, 1000 rpm, EHL grid of 129 nodes; docs/helical.md), mean total mesh "
+        f"stiffness per face width at {d['torque_Nm']:g} N·m, against the Hertz tables of the same slicing, "
+        "and the fluctuation peak-to-peak / mean.\n\n"
+        + table(["model", "slices × points/mesh", "k̄/b (N/(mm·µm))", "vs ISO c_γα", "vs Hertz, same slicing",
+                 "ptp/mean", "ptp/mean, Hertz", "ptp/mean, spur same section"], body)
+        + f"\n\nSource: `{SOURCES['helical_contact'][2]}` ({pg.cost('helical_contact')}).\n")
+
+
 def sec_thermal(pg: Page):
-    if pg.missing("seed004", "Thermal stiffness: seed 004 temperature states"):
-        return
+    if not pg.missing("seed004", "Thermal stiffness: seed 004 temperature states"):
+        sec_thermal_factor(pg)
+    if not pg.missing("thermal", "Thermal model, flank law and oil temperature"):
+        sec_thermal_model(pg)
+
+
+def sec_thermal_factor(pg: Page):
     by = {(r["pair"], r["quantity"], r["point"], r["state"]): r for r in pg.data["seed004"]}
     body, worst = [], {}
     order = {"pinion": 0, "gear": 1, "mesh": 2, "meshing-in": 0, "pitch": 1, "meshing-out": 2}
@@ -220,6 +353,171 @@ def sec_thermal(pg: Page):
     pg.summary.append(["temperature factor k(T)/k(30 °C) of the pair stiffness", "seed 004 Tables 2-3",
                        ", ".join(f"pair {p}: within {w:.3f}" for p, w in sorted(worst.items())),
                        pg.cost("seed004")])
+
+
+def _three(vals, fmt) -> str:
+    return " / ".join(fmt(v) for v in vals)
+
+
+def sec_thermal_model(pg: Page):
+    d = pg.data["thermal"]
+    points = d.get("points", ["meshing-in", "pitch", "meshing-out"])
+    by = {(r["pair"], r["quantity"], r["state"], r["point"]): r for r in d["tables23"]}
+    body, worst = [], {}
+    for pair in ("I", "II"):
+        for state in ("expansion", "shrinkage"):
+            for q in ("pinion", "gear", "mesh"):
+                rs = [by.get((pair, q, state, p)) for p in points]
+                if any(r is None for r in rs):
+                    continue
+                da = [r["ours_with_seed_standard"] / r["seed"] - 1 for r in rs]
+                db = [r["ours"] / r["seed"] - 1 for r in rs]
+                worst[pair] = max([worst.get(pair, 0.0)] + [abs(v) for v in da])
+                body.append([pair, q, state, _three([r["seed"] / 1e8 for r in rs], lambda v: f"{v:.5g}"),
+                             _three([r["ours_with_seed_standard"] / 1e8 for r in rs], lambda v: f"{v:.5g}"),
+                             _three(da, lambda v: f"{100 * v:+.2f}") + " %",
+                             _three([r["ours"] / 1e8 for r in rs], lambda v: f"{v:.5g}"),
+                             _three(db, lambda v: f"{100 * v:+.0f}") + " %"])
+    src = f"\n\nSource: `{SOURCES['thermal'][2]}` ({pg.cost('thermal')} for this section).\n"
+    pg.parts.append(
+        "### Thermal model alone: Tables 2-3 with the seed's standard stiffness\n\n"
+        "Reference: seed 004 Tables 2-3 (He & Yang), expansion (70 °C) and shrinkage (10 °C) states, "
+        "in/pitch/out = meshing-in, pitch point, meshing-out.  (a): our thermal model (seed 004 eq 5-28, "
+        "the radial + tangential flank law, Table 4 load F_n = T_1/r_b1) applied to the seed's own "
+        "standard-state stiffness, which isolates the thermal model; (b): ours end to end (our standard "
+        "stiffness too, docs/physics_stiffness.md).  1e8 N/m.\n\n"
+        + table(["pair", "stiffness", "state", "seed 004 in / pitch / out", "(a) ours, seed's standard",
+                 "difference (a)", "(b) ours end to end", "difference (b)"], body) + src)
+    pg.summary.append(["thermal model on the seed's standard stiffness", "seed 004 Tables 2-3",
+                       ", ".join(f"pair {p}: ≤ {100 * w:.2f} %" for p, w in sorted(worst.items())),
+                       pg.cost("thermal")])
+
+    body = []
+    for pair, v in sorted(d.get("implied_load", {}).items()):
+        ref = v["table4_load_N"]
+        for law, loads in v["laws"].items():
+            allv = loads["pinion"] + loads["gear"]
+            body.append([pair, f"`{law}`", _three(loads["pinion"], lambda x: f"{x:.0f}"),
+                         _three(loads["gear"], lambda x: f"{x:.0f}"), f"{ref:.1f}",
+                         f"{pct(min(allv) / ref - 1, 2)} … {pct(max(allv) / ref - 1, 2)}"])
+    pg.parts.append(
+        "### Free flank deformation: the load the seed's Table 2 implies\n\n"
+        "Reference: seed 004 Table 4 load F_n = T_1/r_b1 (80 kW at 2000 rpm, the load that reproduces its "
+        "Table 2).  For each flank law of `gearfmu.gear.thermal` the load implied at each key point by "
+        "the seed's shrinkage (−20 K) compliance of each tooth, F_n = |Δx_S,i| / (1/k_S,i − 1/k_i) with "
+        "k_i, k_S,i from Table 2 (docs/thermal.md): a law consistent with the seed gives the Table 4 load "
+        "at all six points.  N.\n\n"
+        + table(["pair", "law", "pinion in / pitch / out", "gear in / pitch / out", "Table 4 load",
+                 "range against Table 4"], body) + src)
+
+    oil = d.get("oil", {})
+    rows = oil.get("rows", [])
+    if rows:
+        def col(key, scale=1e6, digits=3):
+            return [num(r[key] * scale, digits) if r.get(key) is not None else "n/a" for r in rows]
+
+        hmin = [r["h_min_solver_m"] / r["h_min_dowson_higginson_m"] - 1 for r in rows if r.get("h_min_solver_m")]
+        hc = [r["h_central_solver_m"] / r["h_central_moes_m"] - 1 for r in rows if r.get("h_central_solver_m")]
+        body = [["η0 (Pa·s)", *col("eta0_Pas", 1.0)],
+                ["h_min Dowson-Higginson (µm)", *col("h_min_dowson_higginson_m")],
+                ["h_min solver (µm)", *col("h_min_solver_m")],
+                ["h_c Moes (µm)", *col("h_central_moes_m")],
+                ["h_c solver (µm)", *col("h_central_solver_m")],
+                ["film stiffness per length, solver (N/m per m)", *col("k_film_solver_N_per_m_per_m", 1.0, 2)]]
+        pg.parts.append(
+            "### Oil temperature: film against the closed-form fits\n\n"
+            "Reference: Dowson & Higginson's minimum-film and Moes' (1992) central-film fits of the smooth "
+            "line contact.  Ours: η0(T) of the seed 004 Table 4 oil (320 / 38.5 cSt, ASTM D341 Walther "
+            "law) and the slice film of the `smooth_ehl` contact model (the multigrid solver, the solve "
+            "the tables' oil axis makes) at pair I's pitch point, Table 4 load, 2000 rpm, the scene's α at every "
+            "temperature.  The Moes fit "
+            "describes the Barus, incompressible film; the solver's Roelands, compressible film lies "
+            "below it by physics (docs/ehl.md).\n\n"
+            + table(["T (°C)", *[f"{r['temperature_C']:g}" for r in rows]], body)
+            + (f"\n\nSolver against the fits over the temperatures: h_min {pct(min(hmin))} … {pct(max(hmin))} "
+               f"against Dowson-Higginson, h_c {pct(min(hc))} … {pct(max(hc))} against Moes." if hmin and hc else "")
+            + src)
+        if hmin and hc:
+            pg.summary.append(["film at the seed 004 oil's temperatures", "Dowson-Higginson, Moes (1992) fits",
+                               f"h_min {pct(min(hmin))} … {pct(max(hmin))}, h_c {pct(min(hc))} … {pct(max(hc))}",
+                               pg.cost("thermal")])
+
+    pm = d.get("profile_vs_mean")
+    if pm:
+        kp = pm.get("key_points_one_pair_whole_load", {})
+        tv = pm.get("tvms", {})
+        body = [[f"pair stiffness at {p}, one pair, whole load", f"{v['difference_percent']:+.3f} %"]
+                for p, v in kp.items()]
+        body += [["TVMS over a mesh period (load shared), mean", f"{tv.get('mean_difference_percent', math.nan):+.3f} %"],
+                 ["TVMS over a mesh period, largest absolute difference", f"{tv.get('max_abs_difference_percent', math.nan):.3f} %"]]
+        pg.parts.append(
+            "### Temperature profile against its mean\n\n"
+            "No outside reference (seed Fig. 6b's profile is not in its text): pair I with illustrative "
+            f"linear bulk-temperature profiles along the line of action, the seed's Fig. 7 means "
+            f"(pinion {pm.get('pinion_mean_C', math.nan):.2f} °C, gear {pm.get('gear_mean_C', math.nan):.2f} °C) "
+            "± 4 K, against the uniform mean temperatures (docs/thermal.md).\n\n"
+            + table(["quantity", "profile against uniform mean"], body) + src)
+
+
+def sec_load_sharing(pg: Page):
+    if pg.missing("load_sharing", "Film-asperity load sharing"):
+        return
+    d = pg.data["load_sharing"]
+    ks, kh = d["k_smooth_N_per_m"], d["k_hertz_N_per_m"]
+    body = [[r["level"], f"{r['film_parameter_dh']:.2f}", f"{r['film_parameter_central']:.2f}",
+             f"{r['eta_per_m2']:.3g}", num(r["beta_m"] * 1e6, 3), num(r["sigma_s_m"] * 1e6, 3), f"{r['alpha']:.0f}",
+             num(r["asperity_share"], 2), f"{r['h_c_m'] * 1e6:.3f} / {r['h_c_smooth_m'] * 1e6:.3f}",
+             num(r["area_ratio"], 2), f"{r['k_film_N_per_m'] / 1e9:.4f}", num(r["k_asp_N_per_m"] / 1e9, 2),
+             f"{r['k_N_per_m'] / ks:.4f}"] for r in d["rows"]]
+    pg.parts.append(
+        "## Film-asperity load sharing\n\n"
+        "No outside reference for the numbers (Johnson, Greenwood & Poon's own load-share curve was not "
+        "available; the module's checks against closed forms and quadrature are in "
+        "tests/test_load_sharing.py).  Seed 000 Table 1 pair at its pitch point, "
+        f"{d['torque_Nm']:g} N·m (w = {d['w_N_per_m'] / 1e3:.1f} kN/m), its oil at "
+        f"{d.get('oil_temperature_C', math.nan):g} °C, a {d['width_m'] * 1e3:g} mm slice, roughness levels of "
+        "seed 000 Table 2 (docs/load_sharing.md): film parameters on the Dowson-Higginson minimum film "
+        "(the switch's Λ) and on the central film (Λ_c), the Nayak/McCool summit parameters, the "
+        "asperities' load share, the JGP central film against the smooth one, the real area ratio, the "
+        "film and asperity springs and the total against the smooth film's stiffness k_smooth = "
+        f"{ks / 1e9:.4f} GN/m (the EHL solver; Hertz: {kh / 1e9:.4f} GN/m).  Stiffness in GN/m.\n\n"
+        + table(["level", "Λ (DH h_min)", "Λ_c (central)", "η (1/m²)", "β (µm)", "σ_s (µm)", "α", "asperity share",
+                 "h_c / smooth (µm)", "A_r/A0", "k_film", "k_asp", "k/k_smooth"], body)
+        + "\n\nThe mean TVMS with this policy is in the seed 000 trends section below (rows "
+        "`+load sharing`)."
+        + f"\n\nSource: `{SOURCES['load_sharing'][2]}` ({pg.cost('load_sharing')}).\n")
+
+
+def sec_fractal(pg: Page):
+    if pg.missing("fractal", "Fractal mixed-lubrication contact (seed 001)"):
+        return
+    d = pg.data["fractal"]
+    body = [[r["level"], f"{r['K_n_per_width_N_per_m2']:.4g}", f"{r['K_s_per_width_N_per_m2']:.4g}",
+             f"{r['K_l_per_width_N_per_m2']:.3g}", f"{r['real_area_ratio']:.3f}", f"{r['film_parameter']:.3g}",
+             f"{r['lambda_c']:.3f}", sci(r["K_n_rel_spread_over_slicings"], 1)] for r in d["levels"]]
+    sides = sorted({e["element_side_m"] for e in d.get("element_size", [])})
+    by = {(e["level"], e["element_side_m"]): e for e in d.get("element_size", [])}
+    ebody = [[r["level"], _three([by[(r["level"], a)]["K_s_per_width_N_per_m2"] for a in sides], lambda v: f"{v:.3g}"),
+              _three([by[(r["level"], a)]["real_area_ratio"] for a in sides], lambda v: f"{v:.2f}")]
+             for r in d["levels"] if all((r["level"], a) in by for a in sides)]
+    slicings = ", ".join(str(n) for n in d["levels"][0].get("slicings", [])) if d["levels"] else ""
+    hz = d.get("hertz_per_width_N_per_m2")
+    pg.parts.append(
+        "## Fractal mixed-lubrication contact\n\n"
+        "No outside reference for the numbers: they describe our rebuild of seed 001 (docs/fractal_contact.md; "
+        "its checks against closed forms and quadrature are in tests/test_fractal_contact.py).  Seed 000 "
+        f"Table 1 pair at its pitch point, {d['torque_Nm']:g} N·m (w = {d['w_N_per_m'] / 1e3:.1f} kN/m, "
+        f"R = {d['R_m'] * 1e3:.2f} mm, u = {d['u_m_s']:.2f} m/s, b = {d['b_m'] * 1e3:.3f} mm), the "
+        "`fractal_mixed` slice model, roughness levels of seed 000 Table 2, per unit face width (N/m²); "
+        f"the last column is the relative spread of K_n per width over {slicings} slices of the face."
+        + (f"  For scale, Hertz: {hz:.3g} N/m²." if hz else "") + "\n\n"
+        + table(["level", "K_n / width", "K_s / width", "K_l / width", "A_r/A0", "Λ", "λc", "spread over slicings"],
+                body)
+        + "\n\nThe solid part on reference elements of side "
+        + " / ".join(f"{a * 1e3:g}" for a in sides) + " mm (the model's choice is the W-M sample length "
+        f"{d.get('L_s_m', math.nan) * 1e3:g} mm):\n\n"
+        + table(["level", "K_s / width", "A_r/A0"], ebody)
+        + f"\n\nSource: `{SOURCES['fractal'][2]}` ({pg.cost('fractal')}).\n")
 
 
 def sec_ehl(pg: Page):
@@ -298,6 +596,12 @@ def sec_trends(pg: Page):
             below = [t for t in torques if row[t] < smooth[t]]
             checks.append([f"Fig. 13: rough level {lv} below smooth", "tables, every torque",
                            f"{len(below)} of {len(torques)} torques"])
+    for lv in (3, 4):
+        row = tv.get(f"rough_level_{lv}+load_sharing")
+        if row and smooth and hertz:
+            between = [t for t in torques if hertz[t] < row[t] <= smooth[t]]
+            checks.append([f"Fig. 13: rough level {lv} between Hertz and smooth", "tables, policy `load_sharing`",
+                           f"{len(between)} of {len(torques)} torques"])
     notes = "".join(f"\n* {k.replace('_', ' ')}: {v}" for k, v in d.get("notes", {}).items())
     pg.parts.append(
         "## Contact models in the mesh\n\n"
@@ -306,8 +610,9 @@ def sec_trends(pg: Page):
         "rises and falls as the roughness level rises.  Ours: mean TVMS of the tables "
         f"({d.get('points_per_mesh')} points per mesh period, {d.get('slices')} slices) with each contact "
         "model (docs/ehl_mesh.md); in 1e9 N/m, in brackets against the smooth film.  Where the film "
-        "parameter is below 3 the scene's film-failure policy applies (notes below), which is "
-        "outside seed 000's full-film assumption.\n\n"
+        "parameter is below 3 the scene's film-failure policy applies (notes below; the default "
+        "`fractal_mixed`, rows `+load sharing` with the policy `load_sharing`, docs/load_sharing.md), "
+        "which is outside seed 000's full-film assumption.\n\n"
         + table(["model", *[f"{t} N·m" for t in torques]], body) + "\n\n"
         + table(["seed 000 statement", "compared on", "reproduced"], checks)
         + (f"\n\nNotes of the run:{notes}" if notes else "")
@@ -343,25 +648,29 @@ def sec_dynamics(pg: Page):
         kink = [r for r in d["rows"] if r["method"].endswith("rk4_kink") and r["method"].startswith("native")]
         best = next((r for r in kink if r["setting"] == "h=H/64"), None) or (
             min(kink, key=lambda r: r.get("dte_rel_rms_err", math.inf)) if kink else None)
-        rk4 = next((r for r in d["rows"] if r["method"] == "native-rk4" and best
-                    and r["setting"] == best["setting"]), None)
+        others = [(m, next((r for r in d["rows"] if r["method"] == f"native-{m}" and best
+                            and r["setting"] == best["setting"]), None)) for m in ("rk4_node", "rk4")]
+        natives = sorted({r["method"][len("native-"):] for r in d["rows"] if r["method"].startswith("native-")})
+        lacking = [m for m in ("rk4", "rk4_kink", "rk4_node") if m not in natives]
         pg.parts.append(
             "## Dynamics and integrators\n\n"
             f"### Speed against error on the hard case `{d['case']}`\n\n"
             "Reference: an independent solver, scipy's DOP853 restarted at every table kink and contact "
             f"change (event location, `gearfmu/dynamics/reference.py`), rtol {ref.get('rtol', 'n/a')}.  "
-            "Compared: the native solver's integrators at internal steps h = H/n (H the communication "
-            "step), the FMU at communication steps of several mesh periods, and scipy's DOP853 and "
-            "Radau at looser tolerances.  Errors are RMS and maximum over the communication instants, "
-            "relative to the reference's range (docs/dynamics_validation.md).\n\n"
+            f"Compared: the native solver's integrators ({', '.join(natives) or 'none'}) at internal steps "
+            "h = H/n (H the communication step), the FMU at communication steps of several mesh periods, "
+            "and scipy's DOP853 and Radau at looser tolerances.  Errors are RMS and maximum over the "
+            "communication instants, relative to the reference's range (docs/dynamics_validation.md)."
+            + (f"  This JSON has no rows of {', '.join(lacking)}: regenerate it with "
+               "`python benchmarks/report.py --only accuracy`." if lacking else "") + "\n\n"
             + table(["method", "setting", "wall s", "DTE rel. RMS", "DTE rel. max", "force rel. RMS"], body)
             + f"\n\n{img}\n\nSource: `{SOURCES['accuracy'][2]}` ({pg.cost('accuracy')}).\n")
         if best:
             diff = f"DTE RMS error at {best['setting']}: rk4_kink {sci(best['dte_rel_rms_err'])}"
-            if rk4:
-                diff += f", rk4 {sci(rk4['dte_rel_rms_err'])} of the range"
+            diff += "".join(f", {m} {sci(r['dte_rel_rms_err'])}" for m, r in others if r) + " of the range"
+            cost = ", ".join(f"{m} {num(r['wall_s'], 2)} s" for m, r in [("rk4_kink", best), *others] if r)
             pg.summary.append(["dynamic response (DTE, mesh force)", "event-located DOP853 (scipy)", diff,
-                               f"{num(best['wall_s'], 2)} s per run (rk4_kink)"])
+                               f"per run: {cost}"])
 
     if not pg.missing("hard_cases", "Hard cases against the reference"):
         d = pg.data["hard_cases"]
@@ -370,7 +679,7 @@ def sec_dynamics(pg: Page):
         for name, c in (cases.items() if isinstance(cases, dict) else []):
             if not isinstance(c, dict):
                 continue
-            for integ in ("rk4_kink", "rk4"):
+            for integ in ("rk4_kink", "rk4_node", "rk4"):
                 e = c.get(integ)
                 if isinstance(e, dict):
                     body.append([c.get("title", name), integ, sci(e.get("dte_rel_rms_err", e.get("dte_rel_rms"))),
@@ -379,7 +688,7 @@ def sec_dynamics(pg: Page):
                                  num(e.get("wall_s"), 3)])
         pg.parts.append(
             "### Every hard case\n\n"
-            f"Same reference; the native solver with both integrators at the same internal step "
+            f"Same reference; the native solver with each integrator in the JSON at the same internal step "
             f"h = H/{d.get('substeps_per_comm_step', '?')}, H = {d.get('comm_step', 'the communication step')} (heavy load, impacts on one and both flanks, low damping near resonance, high contact "
             "ratio, Ω_h = 2, torque steps, the default scene's computed tables).\n\n"
             + (table(["case", "integrator", "DTE rel. RMS", "DTE rel. max", "force rel. RMS", "wall s"], body)
@@ -422,6 +731,37 @@ def sec_arms(pg: Page):
         + f"\n\n{img}\n\nSource: `{SOURCES['arms'][2]}` ({pg.cost('arms')}).\n")
     pg.summary.append(["A_rms jumps against Ω_h", "seed 003 Fig. 3 (Kahraman & Blankenship rig)",
                        f"{len(found)} of {len(body)} seed features matched within 0.06", pg.cost("arms")])
+
+
+def _compact(v) -> str:
+    """A JSON value of a statement's numbers in one table cell."""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, (int, float)):
+        return num(v, 3)
+    if isinstance(v, list):
+        return "[" + ", ".join(_compact(x) for x in v) + "]" if v else "none"
+    if isinstance(v, dict):
+        return "; ".join(f"{k}: {_compact(x)}" for k, x in v.items())
+    return str(v).replace("|", "/")
+
+
+def sec_seed003_statements(pg: Page):
+    if pg.missing("seed003_statements", "Seed 003 statements (Figs. 6-30)"):
+        return
+    st = pg.data["seed003_statements"].get("statements", [])
+    body = [[s["statement"].replace("|", "/"), "yes" if s["holds"] else "**no**", _compact(s.get("numbers"))]
+            for s in st]
+    pg.parts.append(
+        "### Seed 003's statements (Figs. 6-30)\n\n"
+        "Reference: the qualitative statements seed 003 makes about its Figs. 6-30 (errors, speed, load, "
+        "damping), each judged on our numbers (docs/seed003.md; quick settings, the default stiffness "
+        "model with an independent foundation per pair; A_r, A_rms and q in µm, forces in N).\n\n"
+        + table(["statement (seed 003)", "reproduced", "our numbers"], body)
+        + f"\n\nSource: `{SOURCES['seed003_statements'][2]}` ({pg.cost('seed003_statements')}).\n")
+    pg.summary.append(["dynamic response: seed 003's statements on errors, speed, load, damping",
+                       "seed 003 Figs. 6-30 (statements)",
+                       f"{sum(1 for s in st if s['holds'])} of {len(st)} reproduced", pg.cost("seed003_statements")])
 
 
 def sec_fmu(pg: Page):
@@ -480,10 +820,171 @@ COVERED_BY_TESTS = [
 ]
 
 
-def render(data: dict, runs: dict, out: Path, img_dir: Path) -> str:
+NOT_MEASURED = "not measured"
+
+
+def _yes(ok) -> str:
+    return "n/a" if ok is None else ("yes" if ok else "no")
+
+
+class NotMeasured(Exception):
+    """The source's JSON exists but does not measure this goal (the message says why)."""
+
+
+def _goal(data, name, fn):
+    """fn(JSON) -> (measured, met) for a goal; "not measured" without the source's JSON."""
+    if name not in data:
+        return [f"{NOT_MEASURED} (no `{name}` JSON: `python benchmarks/report.py --only {name}`)", "n/a"]
+    try:
+        measured, ok = fn(data[name])
+    except NotMeasured as exc:
+        return [f"{NOT_MEASURED} ({exc})", "n/a"]
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        return [f"{NOT_MEASURED} (the `{name}` JSON has no {exc})", "n/a"]
+    return [measured, _yes(ok)]
+
+
+def _g_build(d):
+    b = d["commands"]["build"]
+    return f"{b['warm_s']:.2f} s warm, {b['cold_s']:.1f} s cold (empty numba cache)", b["warm_s"] <= 2.0
+
+
+def _g_proxy(d):
+    rows = [r for r in d["cases"].values() if r.get("c_over_proxy") is not None]
+    if not rows:
+        raise NotMeasured("the kernels benchmark ran without a plain-C proxy source (`--proxy`); "
+                          + ("the project has none" if PROXY is None else
+                             f"regenerate: `python benchmarks/report.py --only kernels` passes {PROXY}"))
+    r = next((r for r in rows if r["case"] == "default_scene" and r["integrator"] == "rk4"), rows[0])
+    return f"{r['c_over_proxy']:.2f} × ({r['case']}, {r['integrator']})", r["c_over_proxy"] <= 1.5
+
+
+def _g_numba(d):
+    rows = list(d["cases"].values())
+    worst = max(rows, key=lambda r: r["numba_over_c"])
+    return (f"≤ {worst['numba_over_c']:.2f} × over {len(rows)} case/integrator rows (worst "
+            f"{worst['case']}, {worst['integrator']})", worst["numba_over_c"] <= 1.3)
+
+
+def _default_integrator():
+    try:
+        from gearfmu.common.vocabulary import DEFAULT_INTEGRATOR
+        return DEFAULT_INTEGRATOR
+    except ImportError:
+        return None
+
+
+def _g_dop853(d):
+    fronts = d["fronts"]
+    speed = {}
+    for f in fronts:
+        for integ, at in f["speedup_vs_DOP853"].items():
+            speed.setdefault(integ, []).append((f["case"], at.get("1e-06")))
+    cells = []
+    for m, vs in speed.items():
+        ok = [v for _, v in vs if v is not None]
+        miss = [c for c, v in vs if v is None]
+        cells.append(f"{m} " + (f"≥ {min(ok):.0f} ×" if ok else "n/a")
+                     + (f" (1e-6 not reached or no DOP853 time on {', '.join(miss)})" if miss else ""))
+    speed = {m: [v for _, v in vs] for m, vs in speed.items()}
+    default = _default_integrator()
+    vs = speed.get(default, [None])
+    ok = None if any(v is None for v in vs) else min(vs) >= 300.0
+    return (", ".join(cells) + f" (smallest over the cases {', '.join(f['case'] for f in fronts)}; "
+            f"met judged on the default integrator {default})", ok)
+
+
+def _g_fmu_native(d):
+    r, s = d["fmu_over_native_per_sim_s_lowlevel"], d["fmu_over_native_per_sim_s_simulate_fmu"]
+    return (f"{r:.2f} × (low-level FMI loop), {s:.2f} × (`fmpy.simulate_fmu`) at a "
+            f"{1e6 * d['comm_step_scene_s']:.3g} µs communication step", r <= 3.0)
+
+
+def _g_rtf(d):
+    f = d["fmu_rtf"]
+    err = f.get("error_on_case_grid", {}).get("dte_rel_rms_err")
+    return (f"{f['real_time_factor']:.0f} × real time (standalone FMU, {f['integrator']}, {f['case']}, "
+            f"communication step {1e6 * f['comm_step_s']:.3g} µs; its DTE error {sci(err)})",
+            f["real_time_factor"] >= 50.0)
+
+
+def _g_ehl_point(d):
+    s = d["summary"]
+    return (f"worst {s['max_cpu_s']:.3g} s, median {1e3 * s['median_cpu_s']:.3g} ms CPU over {s['points']} "
+            "points of Moes' (M, L) range (default solve)", s["max_cpu_s"] <= 1.0)
+
+
+def _g_ehl_default(d):
+    rows = [r for r in d["rows"] if r.get("case") == "default_1025"]
+    if not rows:
+        raise NotMeasured("no default 1025-node rows in the `ehl_corners` JSON")
+    worst = max(r["cpu_s"] for r in rows)
+    return (f"≤ {1e3 * worst:.3g} ms CPU (default 1025-node solve, Roelands, M = "
+            + "/".join(f"{r['M']:g}" for r in rows) + ", L = 10)", worst <= 5e-3)
+
+
+def _g_plan(d):
+    r = d["scenes"]["default"]
+    if r.get("exit_code") is None:
+        return f"stopped after {r.get('stopped_after_s', math.nan):.0f} s", False
+    return f"{r['wall_s']:.1f} s wall, {r.get('cpu_s', math.nan):.1f} s CPU (default scene)", r["wall_s"] <= 60.0
+
+
+def _g_tests(d):
+    extra = "" if d.get("exit_code") == 0 else f"; the suite did not pass: {d.get('summary', '?')}"
+    return f"{d['wall_s']:.0f} s ({d.get('summary', '')}){extra}", d["wall_s"] <= 300.0
+
+
+def goal_rows(data: dict) -> list:
+    """[goal, measured, met] for each speed goal, from whatever benchmark JSON exists."""
+    goals = [
+        ("warm `gearfmu build` of the default scene ≤ 2 s", "startup", _g_build),
+        ("C kernel per RK4 step ≤ 1.5 × the plain-C proxy at equal flags", "kernels", _g_proxy),
+        ("numba native solver per step ≤ 1.3 × the C kernel", "kernels", _g_numba),
+        ("rk4 integrators ≥ 300 × faster than DOP853 at 1e-6 relative DTE error", "integrators", _g_dop853),
+        ("FMU ≤ 3 × native per simulated second", "fmu_speed", _g_fmu_native),
+        ("FMU ≥ 50 × real time at 1e-4 relative DTE error", "integrators", _g_rtf),
+        ("EHL film ≤ 1 s per point", "ehl_corners", _g_ehl_point),
+        ("EHL film ≤ 5 ms per point at the default settings", "ehl_corners", _g_ehl_default),
+        ("`gearfmu plan` of the default scene ≤ 60 s", "plan", _g_plan),
+        ("test suite ≤ 5 min", "tests", _g_tests),
+    ]
+    return [[g, *_goal(data, name, fn)] for g, name, fn in goals]
+
+
+def goals_table(data: dict) -> str:
+    return table(["goal", "measured", "met"], goal_rows(data))
+
+
+def sec_goals(pg: Page):
+    srcs = ["startup", "kernels", "integrators", "fmu_speed", "ehl_corners", "plan", "tests"]
+    pg.parts.append(
+        "## Speed goals\n\n"
+        "Each goal beside the value measured by its benchmark (wall or CPU time of one run on the machine "
+        "that generated the page); a goal whose benchmark JSON is missing reads \"not measured\".  The "
+        "same table is in the README.\n\n" + goals_table(pg.data)
+        + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs) + ".\n")
+
+
+SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
+            "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_fmu", "sec_goals")
+
+
+def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:
+    """The page; a section that cannot be rendered from its JSON is named on the page and in
+    ``failed`` (when given) and the others are still written."""
     pg = Page(data, runs, img_dir, out)
-    for sec in (sec_stiffness, sec_thermal, sec_ehl, sec_trends, sec_dynamics, sec_arms, sec_fmu):
-        sec(pg)
+    for name in SECTIONS:
+        n_parts = len(pg.parts)
+        try:
+            globals()[name](pg)
+        except Exception as exc:  # noqa: BLE001 -- one section's JSON must not stop the page
+            del pg.parts[n_parts:]
+            msg = f"{type(exc).__name__}: {exc}"
+            pg.parts.append(f"## {name[4:].replace('_', ' ').capitalize()}\n\nCould not be rendered from its "
+                            f"JSON ({msg}).\n")
+            if failed is not None:
+                failed.append(f"section {name[4:]}: {msg}")
     head = (
         "# Validation report\n\n"
         "<!-- Generated by benchmarks/report.py from benchmark JSON; do not edit by hand. -->\n\n"
@@ -492,7 +993,7 @@ def render(data: dict, runs: dict, out: Path, img_dir: Path) -> str:
         "what it costs.  Every number on this page comes from the JSON of the benchmark or example "
         "named under its table; regenerate the page (and the plots in `docs/img/`) with\n\n"
         "```bash\npython benchmarks/report.py              # runs the sources with quick settings, a few minutes\n"
-        "python benchmarks/report.py --all        # also the slow sources (seed 000 trends)\n"
+        f"python benchmarks/report.py --all        # also the slow sources ({', '.join(sorted(SLOW))})\n"
         "python benchmarks/report.py --from DIR   # from JSON saved earlier (DIR/<source>.json)\n```\n\n"
         "Costs are wall times of one run on the machine that generated the page: compare them with "
         "each other, not with another machine.  The equations and choices behind each area are in "
@@ -505,27 +1006,41 @@ def render(data: dict, runs: dict, out: Path, img_dir: Path) -> str:
 
 
 def write_readme_speed(readme: Path, data: dict) -> bool:
-    """Replace the block between the speed markers of README.md; False if markers are absent."""
+    """Replace the block between the speed markers of README.md (the speed table and the goals
+    table); False if the markers are absent."""
     text = readme.read_text()
-    if SPEED_BEGIN not in text or SPEED_END not in text or "fmu_speed" not in data:
+    if SPEED_BEGIN not in text or SPEED_END not in text:
         return False
     a, rest = text.split(SPEED_BEGIN, 1)
     _, b = rest.split(SPEED_END, 1)
-    block = (f"{SPEED_BEGIN}\n<!-- written by benchmarks/report.py from `{SOURCES['fmu_speed'][2]}` -->\n"
-             + speed_table(data["fmu_speed"]) + f"\n{SPEED_END}")
+    speed = (speed_table(data["fmu_speed"]) if "fmu_speed" in data else
+             f"{NOT_MEASURED.capitalize()} (no `fmu_speed` JSON: `python benchmarks/report.py --only fmu_speed`).")
+    block = (f"{SPEED_BEGIN}\n<!-- written by benchmarks/report.py from `{SOURCES['fmu_speed'][2]}` and the "
+             "benchmarks named in docs/validation.md \"Speed goals\" -->\n"
+             + speed + "\n\nGoals beside the measured values:\n\n" + goals_table(data) + f"\n{SPEED_END}")
     readme.write_text(a + block + b)
     return True
 
 
-def load_dir(d: Path):
-    data = {}
+def load_dir(d: Path, failed: list = None):
+    """The saved JSON of every source in ``d`` and the run records; a file that is not JSON is
+    left out (its section reads "not run") and named in ``failed``."""
+    data, runs = {}, {}
     for name in SOURCES:
         p = d / f"{name}.json"
         if p.is_file():
-            data[name] = json.loads(p.read_text())
+            try:
+                data[name] = json.loads(p.read_text())
+            except ValueError as exc:
+                runs[name] = {"ok": False, "reason": f"{p.name} is not JSON ({exc})"}
+                if failed is not None:
+                    failed.append(f"source {name}: {p} is not JSON ({exc})")
     runs_p = d / "runs.json"
-    runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
-    return data, runs
+    try:
+        saved = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+    except ValueError:
+        saved = {}
+    return data, {**saved, **runs}
 
 
 def main(argv=None) -> int:
@@ -538,8 +1053,10 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "validation.md")
     ap.add_argument("--img-dir", type=Path, default=ROOT / "docs" / "img")
     ap.add_argument("--readme", default=str(ROOT / "README.md"), help="README to update ('none': leave it)")
-    ap.add_argument("--timeout", type=float, default=900.0, help="seconds per source")
+    ap.add_argument("--timeout", type=float, default=None,
+                    help="seconds per source (default 900, 3600 for the slow sources)")
     a = ap.parse_args(argv)
+    failed: list[str] = []
     if a.from_dir is not None:
         if not a.from_dir.is_dir():
             print(f"report: --from {a.from_dir}: not a directory", file=sys.stderr)
@@ -548,20 +1065,37 @@ def main(argv=None) -> int:
     else:
         a.save_dir.mkdir(parents=True, exist_ok=True)
         runs_p = a.save_dir / "runs.json"
-        runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+        try:
+            runs = json.loads(runs_p.read_text()) if runs_p.is_file() else {}
+        except ValueError:
+            runs = {}
         for name in a.only or [n for n in SOURCES if a.all or n not in SLOW]:
-            runs[name] = run_source(name, a.save_dir, a.timeout)
+            timeout = a.timeout if a.timeout is not None else (3600.0 if name in SLOW else 900.0)
+            try:
+                runs[name] = run_source(name, a.save_dir, timeout)
+            except Exception as exc:  # noqa: BLE001 -- one failing source must not stop the others
+                runs[name] = {"command": SOURCES[name][2], "ok": False, "reason": f"{type(exc).__name__}: {exc}"}
             if not runs[name]["ok"]:
                 print(f"report: {name}: {runs[name]['reason']}", file=sys.stderr)
+                failed.append(f"source {name}: {runs[name]['reason']}")
                 (a.save_dir / f"{name}.json").unlink(missing_ok=True)
             runs_p.write_text(json.dumps(runs, indent=1))
         src = a.save_dir
-    data, runs = load_dir(src)
+    data, runs = load_dir(src, failed)
     a.out.parent.mkdir(parents=True, exist_ok=True)
-    a.out.write_text(render(data, runs, a.out, a.img_dir))
+    a.out.write_text(render(data, runs, a.out, a.img_dir, failed))
     print(f"report: wrote {a.out} from {len(data)} of {len(SOURCES)} sources", file=sys.stderr)
-    if a.readme != "none" and write_readme_speed(Path(a.readme), data):
-        print(f"report: wrote the speed table of {a.readme}", file=sys.stderr)
+    if a.readme != "none":
+        if not Path(a.readme).is_file():
+            failed.append(f"--readme {a.readme}: no such file")
+        elif write_readme_speed(Path(a.readme), data):
+            print(f"report: wrote the speed and goals tables of {a.readme}", file=sys.stderr)
+        else:
+            failed.append(f"--readme {a.readme}: no {SPEED_BEGIN} ... {SPEED_END} markers")
+    if failed:
+        print("report: FAILED (the page names them; the rest was written):\n  " + "\n  ".join(failed),
+              file=sys.stderr)
+        return 1
     return 0
 
 

@@ -42,8 +42,61 @@ def _fixture(d: pathlib.Path):
                                     "smooth": {"1000": 1.2e9, "2000": 1.25e9},
                                     "rough_level_4": {"1000": 1.26e9, "2000": 1.2e9}},
               "speed_rpm": {"smooth": {"1000": 1.3e9, "2000": 1.25e9, "4000": 1.28e9}}}
-    for name, data in (("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
-                       ("trends", trends)):
+    fmu_speed.update(fmu_over_native_per_sim_s_lowlevel=2.5, fmu_over_native_per_sim_s_simulate_fmu=6.0)
+    stiffness_iso = {"rows": [{"pair": "seed 004 pair I", "eps_alpha": 1.6, "iso_c_prime": 12.5,
+                               "iso_c_gamma_alpha": 20.0, "ours_max_single_pair": 15.0,
+                               "ours_mean_shared_correction": 18.0, "ours_mean_independent_foundations": 22.0,
+                               "ours_mean_no_foundation": 40.0}]}
+    pts = ["meshing-in", "pitch", "meshing-out"]
+    thermal = {"points": pts, "tables23": [
+        {"pair": "I", "quantity": "mesh", "state": "shrinkage", "point": p, "seed": 2e8, "ours": 2.2e8,
+         "ours_with_seed_standard": 2.01e8} for p in pts],
+        "implied_load": {"I": {"table4_load_N": 10000.0, "laws": {
+            "radial_tangential": {"pinion": [10000.0, 10010.0, 9990.0], "gear": [10000.0, 10000.0, 10000.0]}}}},
+        "oil": {"rows": [{"temperature_C": 40.0, "eta0_Pas": 0.25, "h_min_dowson_higginson_m": 2e-6,
+                          "h_min_solver_m": 1.9e-6, "h_central_moes_m": 3e-6, "h_central_solver_m": 2.4e-6,
+                          "k_film_solver_N_per_m_per_m": 2e12}]}}
+    load_sharing = {"torque_Nm": 2000.0, "w_N_per_m": 3.5e5, "oil_temperature_C": 60.0, "width_m": 1e-3,
+                    "k_smooth_N_per_m": 1.0e9, "k_hertz_N_per_m": 2e8,
+                    "rows": [{"level": 4, "film_parameter_dh": 2.5, "film_parameter_central": 3.0, "eta_per_m2": 5e11,
+                              "beta_m": 3e-7, "sigma_s_m": 1.5e-6, "alpha": 150.0, "asperity_share": 0.1,
+                              "h_c_m": 5e-6, "h_c_smooth_m": 4.9e-6, "area_ratio": 1e-3, "k_film_N_per_m": 0.95e9,
+                              "k_asp_N_per_m": 0.1e9, "k_N_per_m": 1.05e9}]}
+    fractal = {"torque_Nm": 2000.0, "w_N_per_m": 3.5e5, "R_m": 0.02, "u_m_s": 10.0, "b_m": 3e-4, "L_s_m": 5e-4,
+               "levels": [{"level": 4, "K_n_per_width_N_per_m2": 7.5e12, "K_s_per_width_N_per_m2": 7e12,
+                           "K_l_per_width_N_per_m2": 5e11, "real_area_ratio": 0.5, "film_parameter": 2.2,
+                           "lambda_c": 0.56, "slicings": [1, 2], "K_n_rel_spread_over_slicings": 0.0}],
+               "element_size": [{"level": 4, "element_side_m": a, "K_s_per_width_N_per_m2": k, "real_area_ratio": r}
+                                for a, k, r in ((5e-4, 7e12, 0.5), (1e-3, 8e12, 0.75))]}
+    # speed goals: round numbers on either side of each goal; "plan" and "tests" have no JSON
+    kernels = {"cases": {"default_scene/rk4": {"case": "default_scene", "integrator": "rk4", "slots": 2,
+                                               "internal_steps": 100, "events": 0, "c_ns_per_step": 80.0,
+                                               "numba_ns_per_step": 96.0, "numba_over_c": 1.2,
+                                               "final_dte_rel_diff": 0.0}}}
+    integrators = {"fronts": [{"case": "computed_default_scene",
+                               "speedup_vs_DOP853": {"rk4": {"1e-06": 250.0}, "rk4_kink": {"1e-06": 400.0},
+                                                     "rk4_node": {"1e-06": 500.0}}}],
+                   "fmu_rtf": {"real_time_factor": 40.0, "integrator": "rk4_node", "case": "computed_default_scene",
+                               "comm_step_s": 1e-4, "error_on_case_grid": {"dte_rel_rms_err": 9e-5}}}
+    startup = {"commands": {"build": {"cold_s": 9.0, "warm_s": 1.5}}}
+    ehl_corners = {"summary": {"points": 63, "max_cpu_s": 1.5, "median_cpu_s": 0.1},
+                   "rows": [{"case": "default_1025", "M": 20.0, "cpu_s": 0.004}]}
+    sawtooth = {"limit_slices": 960, "limit_change_rel": 1e-6, "eps_alpha": 1.5, "eps_beta": 2.0, "points_per_mesh": 64,
+                "limit_static_te_ptp_m": 1e-6, "limit_k_ptp_over_mean": 0.06,
+                "rows": [{"slices": 15, "one_over_ns_eps_alpha": 1 / 22.5, "k_dev_whole": 0.05, "k_dev_partial": 0.001,
+                          "te_dev_whole": 0.9, "te_dev_partial": 0.025}]}
+    seed003 = {"statements": [{"statement": "Fig. 10: growing f_fa raises the DTE amplitude", "holds": True,
+                               "numbers": {"A_rms": [7.5, 8.25]}},
+                              {"statement": "Fig. 12: a pair loses contact", "holds": False,
+                               "numbers": {"f_fa=25 um": []}}]}
+    helical_contact = {"iso_c_gamma_alpha": 13.5, "torque_Nm": 1200.0,
+                       "rows": [{"model": "smooth_ehl", "slices": 4, "points_per_mesh": 8, "k_mean_N_per_mm_um": 14.85,
+                                 "rel_diff_iso": 0.1, "over_hertz": 1.07, "ptp_over_mean": 0.057,
+                                 "hertz_ptp_over_mean": 0.06, "spur_ptp_over_mean": 0.644}]}
+    for name, data in (("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+                       ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
+                       ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
+                       ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners)):
         (d / f"{name}.json").write_text(json.dumps(data))
     (d / "runs.json").write_text(json.dumps({"seed004": {"ok": True, "wall_s": 4.0, "command": "x"}}))
 
@@ -80,6 +133,35 @@ def test_report_from_saved_json(tmp_path):
     assert "| internal step, FMU (C kernel, long communication steps) | 240 ns (0.96 × native) |" in text
     assert "old table" not in text and text.endswith("\n\ntail\n")
     assert "benchmarks/bench_fmu.py" in text
+    # ISO 6336-1: 18 and 22 against c_ga = 20 are -10 % and +10 %, 40 is 2.0 x; 15 against c' = 12.5 is +20 %
+    assert ("| seed 004 pair I | 1.6000 | 12.50 | 15.00 (+20 %) | 20.00 | 18.00 (-10 %) | 22.00 (+10 %) "
+            "| 40.00 (2.0 ×) |") in page
+    # thermal model alone: (a) 2.01 against 2 is +0.50 %, (b) 2.2 is +10 %; implied load within 0.10 %
+    assert "| I | mesh | shrinkage | 2 / 2 / 2 | 2.01 / 2.01 / 2.01 | +0.50 / +0.50 / +0.50 % | 2.2 / 2.2 / 2.2 " in page
+    assert "| I | `radial_tangential` | 10000 / 10010 / 9990 | 10000 / 10000 / 10000 | 10000.0 | -0.10 % … +0.10 % |" in page
+    assert "| h_c solver (µm) | 2.4 |" in page and "h_c -20.0 % … -20.0 % against Moes" in page
+    # load sharing: k/k_smooth 1.05; fractal: the element sizes side by side
+    assert "| 4 | 2.50 | 3.00 | 5e+11 | 0.3 | 1.5 | 150 | 0.1 | 5.000 / 4.900 | 0.001 | 0.9500 | 0.1 | 1.0500 |" in page
+    assert "| 4 | 7e+12 / 8e+12 | 0.50 / 0.75 |" in page
+    assert "| `smooth_ehl` | 4 × 8 | 14.85 | +10.0 % | × 1.070 | 0.057 | 0.060 | 0.644 |" in page
+    assert "| Fig. 10: growing f_fa raises the DTE amplitude | yes | A_rms: [7.5, 8.25] |" in page
+    assert "| Fig. 12: a pair loses contact | **no** | f_fa=25 um: none |" in page
+    assert "| 15 | 4.44e-02 | 5.00e-02 | 1.00e-03 | 9.00e-01 | 2.50e-02 |" in page      # helical sawtooth
+    # speed goals beside the measured values, in the page and the README; no JSON: "not measured"
+    for where in (page, readme.read_text()):
+        assert "| warm `gearfmu build` of the default scene ≤ 2 s | 1.50 s warm, 9.0 s cold (empty numba cache) | yes |" in where
+        assert "| numba native solver per step ≤ 1.3 × the C kernel | ≤ 1.20 × over 1 case/integrator rows" in where
+        assert "| FMU ≤ 3 × native per simulated second | 2.50 × (low-level FMI loop), 6.00 × " in where
+        assert "rk4 ≥ 250 ×, rk4_kink ≥ 400 ×, rk4_node ≥ 500 ×" in where
+        assert "| FMU ≥ 50 × real time at 1e-4 relative DTE error | 40 × real time" in where
+        assert "| EHL film ≤ 1 s per point | worst 1.5 s, median 100 ms CPU over 63 points" in where
+        assert "| EHL film ≤ 5 ms per point at the default settings | ≤ 4 ms CPU" in where
+        assert "| `gearfmu plan` of the default scene ≤ 60 s | not measured (no `plan` JSON" in where
+        assert "| C kernel per RK4 step ≤ 1.5 × the plain-C proxy at equal flags | not measured (" in where
+    goals = {r[0]: r[2] for r in rep.goal_rows(json.loads(json.dumps({n: json.loads((src / f"{n}.json").read_text())
+                                                                      for n in ("startup", "integrators")})))}
+    assert goals["FMU ≥ 50 × real time at 1e-4 relative DTE error"] == "no"
+    assert goals["test suite ≤ 5 min"] == "n/a"
     # sources without JSON are named, not silently dropped; plots are written and linked
     assert "## Dynamic response against experiment: seed 003 Fig. 3\n\nNot run" in page
     assert (tmp_path / "docs" / "img" / "validation_integrators.png").is_file()
@@ -90,3 +172,30 @@ def test_report_refuses_a_missing_directory(tmp_path, capsys):
     rep = _report()
     assert rep.main(["--from", str(tmp_path / "nope"), "--out", str(tmp_path / "v.md"), "--readme", "none"]) == 2
     assert "not a directory" in capsys.readouterr().err
+
+
+def test_a_failing_source_or_section_does_not_stop_the_others(tmp_path, monkeypatch, capsys):
+    """One source exits with an error, another prints JSON: the second is saved, the page is written,
+    the failure is named on stderr and the exit status is 1.  A section whose JSON lacks its fields
+    is named on the page instead of stopping it."""
+    rep = _report()
+    py = rep.PY
+    monkeypatch.setattr(rep, "SOURCES", {
+        "broken": ([py, "-c", "import sys; sys.exit('broken on purpose')"], None, "broken"),
+        "fractal": ([py, "-c", "import json; print(json.dumps(dict(levels=1)))"], None, "fractal"),
+        "seed004": ([py, "-c", "print('step {1}'); print('[]')"], None, "seed004")})
+    out = tmp_path / "v.md"
+    rc = rep.main(["--only", "broken", "fractal", "seed004", "--save-dir", str(tmp_path / "json"),
+                   "--out", str(out), "--img-dir", str(tmp_path / "img"), "--readme", "none"])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert "source broken: exit status 1: broken on purpose" in err and "section fractal" in err
+    assert (tmp_path / "json" / "fractal.json").is_file() and not (tmp_path / "json" / "broken.json").exists()
+    page = out.read_text()
+    assert "## Fractal\n\nCould not be rendered from its JSON (TypeError" in page
+    assert "### Tooth and pair stiffness against seed 004 Tables 2-3" in page   # the other sections are there
+    # a saved file that is not JSON: named, its section "not run", the page still written
+    (tmp_path / "json" / "seed004.json").write_text("{not json")
+    assert rep.main(["--from", str(tmp_path / "json"), "--out", str(out), "--img-dir", str(tmp_path / "img"),
+                     "--readme", "none"]) == 1
+    assert "seed004.json is not JSON" in out.read_text() and "source seed004" in capsys.readouterr().err
