@@ -3,7 +3,8 @@ and the standalone C runtime, :mod:`gearfmu.fmu.standalone_build`).
 
 * the arguments: :func:`check_arguments` (numbers, names, the output path; one-line
   :class:`FmuBuildError` naming the field);
-* the C side: the kernel's sources and flags, :func:`find_c_compiler`, :func:`run_compiler`;
+* the C side: the kernel's sources and flags (with the FMU layer over it, gkfmu.c, that both
+  runtimes call), :func:`find_c_compiler`, :func:`run_compiler`;
 * the interface: :func:`interface_variables` (modeldescription/variables.toml expanded for
   these tables, start values applied, the temperature input), :func:`model_description`;
 * the resources: :func:`write_tables`, :func:`write_scene`, :func:`envelope_json`, the
@@ -34,6 +35,10 @@ from .modeldesc import (apply_start_values, check_model_description, check_model
 HERE = Path(__file__).resolve().parent
 KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
 KERNEL_HEADER = HERE / "kernel" / "gearkernel.h"
+#: the FMU behaviour over the kernel both runtimes call (input checks, steps, messages; docs/fmu.md)
+FMU_LAYER_SOURCE = HERE / "kernel" / "gkfmu.c"
+FMU_LAYER_HEADER = HERE / "kernel" / "gkfmu.h"
+FMU_LAYER_ABI_VERSION = 1  # gkfmu.h GKF_ABI_VERSION
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
 KERNEL_ABI_VERSION = 3  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check)

@@ -2,7 +2,8 @@
 
 The FMU is a pythonfmu FMU whose Python slave (``gearfmu/fmu/runtime/gearfmu_slave.py``,
 a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/gearkernel.c``
-(docs/model.md), compiled here with the system C compiler and shipped in the
+(docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``: input checks,
+steps, messages), compiled here with the system C compiler and shipped in the
 FMU's ``resources/`` together with its sources.  The model description is
 produced from ``modeldescription/variables.toml`` (:mod:`gearfmu.fmu.modeldesc`),
 checked against what the slave registers, and replaces pythonfmu's.
@@ -15,8 +16,8 @@ FMU layout (docs/fmu.md)::
     resources/<id>.py                    the slave (unique module and class name)
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
-    resources/gearkernel.so              the compiled kernel
-    resources/kernel_src/gearkernel.c|h  its sources and the compile command
+    resources/gearkernel.so              the compiled kernel with the FMU layer (gkfmu.c) over it
+    resources/kernel_src/                gearkernel.c|h, gkfmu.c|h and the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
     resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
     resources/pyshim_src/                the loader's source and its compile command
@@ -41,8 +42,8 @@ from typing import Optional, Union
 import sysconfig
 
 from .. import __version__
-from .build_steps import (CFLAGS, FMI2_HEADERS, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE,  # noqa: F401
-                          KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
+                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
                           check_build_arguments, check_output_arguments, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
@@ -67,15 +68,16 @@ def _kernel_filename() -> str:
 
 
 def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
-    """Compile gearkernel.c into a shared library in ``dest_dir``; return its path.
+    """Compile gearkernel.c and the FMU layer over it (gkfmu.c) into a shared library in ``dest_dir``;
+    return its path.
 
-    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c -lm``.
+    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gkfmu.c -lm``.
     """
     cc = cc or find_c_compiler()
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     lib = dest / _kernel_filename()
-    run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), "-lm"], "kernel")
+    run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), str(FMU_LAYER_SOURCE), "-lm"], "kernel")
     return lib
 
 
@@ -133,14 +135,15 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         lib = compile_kernel(stage, cc=cc)
         src_dir = stage / "kernel_src"
         src_dir.mkdir()
-        shutil.copy2(KERNEL_SOURCE, src_dir / KERNEL_SOURCE.name)
-        shutil.copy2(KERNEL_HEADER, src_dir / KERNEL_HEADER.name)
+        for f in (KERNEL_SOURCE, KERNEL_HEADER, FMU_LAYER_SOURCE, FMU_LAYER_HEADER):
+            shutil.copy2(f, src_dir / f.name)
         (src_dir / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c -lm\n", encoding="utf-8")
+            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c gkfmu.c -lm\n", encoding="utf-8")
         sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
-            "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION, "slots": tables.slots,
+            "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION,
+            "fmu_layer_abi_version": FMU_LAYER_ABI_VERSION, "slots": tables.slots,
             "sha256": sha, "variables": runtime_variable_table(variables),
             "envelope": runtime_envelope(env_rec),
         }

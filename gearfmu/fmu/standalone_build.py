@@ -1,7 +1,8 @@
 """Build the *standalone* gearfmu FMU: FMI 2.0 (or 3.0) Co-Simulation in C, no Python.
 
 The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` (FMI 3: ``fmi3_gear.c``) with the
-plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``) and the C kernel
+plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``), the FMU behaviour
+the pythonfmu runtime shares (``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel
 ``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
 into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
 sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
@@ -18,7 +19,8 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files + gearkernel.c for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gearkernel.[ch] fmi2*.h BUILD.txt
+    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gkfmu.[ch] gearkernel.[ch] fmi2*.h
+                                         BUILD.txt
                                          CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
                                          buildflags.txt
     documentation/platforms.txt          which platforms carry a binary, which not and why
@@ -51,7 +53,8 @@ from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
 from . import crossbuild
-from .build_steps import (CFLAGS, FMI2_HEADERS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError,  # noqa: F401
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADER,  # noqa: F401
+                          KERNEL_SOURCE, CompilerNotFoundError,
                           FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, write_scene, write_tables, zip_folder)
@@ -63,8 +66,9 @@ from .validation import validation_record
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
 FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
-#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split)
-SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c")
+#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split), and
+#: the FMU behaviour over the kernel the pythonfmu runtime calls too (gkfmu.h)
+SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c", FMU_LAYER_SOURCE)
 SHARED_HEADER = HERE / "standalone" / "gear_model.h"
 #: the C files of the FMI 2 binary besides the kernel, in compile order
 LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
@@ -93,7 +97,7 @@ def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     layer = FMI3_LAYER_SOURCE if fmi_version == 3 else LAYER_SOURCE
-    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
+    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, FMU_LAYER_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
         shutil.copy2(src, dest / src.name)
     hdr = fmi2_header_dir()
     for h in (FMI3_HEADERS if fmi_version == 3 else FMI2_HEADERS):
@@ -105,7 +109,7 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_ve
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
     ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
-    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
+    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gkfmu.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
