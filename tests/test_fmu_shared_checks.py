@@ -12,7 +12,6 @@ runtime only makes them differ.
 """
 from __future__ import annotations
 
-import math
 import re
 
 import fmpy
@@ -128,21 +127,12 @@ def _once(msgs):
     return list(dict.fromkeys(msgs))
 
 
-@pytest.mark.parametrize("step_size", [0.0, -H, NAN, INF])
+@pytest.mark.parametrize("step_size", [0.0, -0.0, -H, -1e-05, -123.5, -2.5e16, -1 / 3, NAN, INF, -INF])
 def test_both_runtimes_discard_a_bad_step_size_with_the_same_message(fmus, step_size):
     py = run_case(fmus["pythonfmu"], "pythonfmu", {}, {}, step_size)
     sa = run_case(fmus["standalone"], "standalone", {}, {}, step_size)
     assert py == sa
     assert py[0][-1] == 2  # fmi2Discard
-    assert [m for _, m in py[1]] == [f"communication step size {'nan' if math.isnan(step_size) else ''}"
-                                     f"{'' if math.isnan(step_size) else _g(step_size)} at t = 0.0001 s: must be "
+    # the numbers as Python's repr writes them (docs/fmu.md)
+    assert [m for _, m in py[1]] == [f"communication step size {step_size!r} at t = 0.0001 s: must be "
                                      "finite and > 0; step rejected, state unchanged"]
-
-
-def _g(x):
-    """The layer's number form: the shortest %g that reads back exactly, no exponent for 1 <= |x| < 1e16."""
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    p = next(p for p in range(1, 18) if float(f"{x:.{p}g}") == x)
-    e = int(f"{x:.{p - 1}e}".split("e")[1])
-    return f"{x:.{max(p, e + 1) if 0 <= e < 16 else p}g}"

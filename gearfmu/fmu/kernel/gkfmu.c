@@ -9,7 +9,8 @@
  * warning (the tables are used at the nearest end); the verified envelope -> the
  * kernel's gk_envelope_check warnings.
  *
- * Numbers in messages: the shortest %g form that reads back to the same double.
+ * Numbers in messages: as Python's repr writes a float (the shortest form that reads back to
+ * the same double, e.g. 170.0, 0.0001, 1e-05, nan).
  */
 #include <math.h>
 #include <stdarg.h>
@@ -46,8 +47,8 @@ const char *gkf_kernel_error(int st)
     }
 }
 
-/* x in the shortest %g form that reads back exactly, without an exponent for 1 <= |x| < 1e16
- * (nan, inf, -inf as such) */
+/* x as Python's repr writes a float: the shortest form that reads back exactly, an exponent
+ * only below 1e-4 or from 1e16 on, ".0" after a whole number (nan, inf, -inf as such) */
 static const char *num(double x, char buf[NUM_LEN])
 {
     int p, e;
@@ -63,6 +64,7 @@ static const char *num(double x, char buf[NUM_LEN])
     e = ep != NULL ? atoi(ep + 1) : 0;
     if (e >= 0 && e < 16 && p < e + 1) p = e + 1;
     snprintf(buf, NUM_LEN, "%.*g", p, x);
+    if (strpbrk(buf, ".e") == NULL) strcat(buf, ".0");
     return buf;
 }
 
