@@ -141,10 +141,10 @@ def test_validate_fmu_and_interface(built):
         bc = md.buildConfigurations[0]
         assert bc.modelIdentifier == cs.modelIdentifier
         assert sorted(bc.sourceFileSets[0].sourceFiles) == ["fmi2_gear.c", "fmi_common.c", "gear_model.c",
-                                                            "gearkernel.c"]
+                                                            "gearkernel.c", "gkfmu.c"]
         names = set(zipfile.ZipFile(sa).namelist())
         for f in ("sources/fmi2_gear.c", "sources/fmi_common.c", "sources/gear_model.c", "sources/gear_model.h",
-                  "sources/gearkernel.c", "sources/gearkernel.h",
+                  "sources/gearkernel.c", "sources/gearkernel.h", "sources/gkfmu.c", "sources/gkfmu.h",
                   "sources/fmi2Functions.h", "sources/fmi2FunctionTypes.h", "sources/fmi2TypesPlatform.h",
                   f"binaries/linux64/{cs.modelIdentifier}.so", "resources/tables.bin",
                   "resources/gearfmu_standalone.txt"):
@@ -483,7 +483,7 @@ def test_sources_in_fmu_compile_to_same_results(built, host, tmp_path):
     subprocess.run([gcc, "-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99", "-fvisibility=hidden",
                     f"-I{d / 'sources'}", "-o", str(so),
                     *(str(d / "sources" / n) for n in ("fmi2_gear.c", "fmi_common.c", "gear_model.c",
-                                                       "gearkernel.c")), "-lm"], check=True, capture_output=True)
+                                                       "gkfmu.c", "gearkernel.c")), "-lm"], check=True, capture_output=True)
     again = _host_run(host, d, md, c, [2, 3, 4, 5, 6, 7, 8])
     assert ref.returncode == 0 and again.returncode == 0
     assert ref.stdout == again.stdout

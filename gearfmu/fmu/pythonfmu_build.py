@@ -2,7 +2,8 @@
 
 The FMU is a pythonfmu FMU whose Python slave (``gearfmu/fmu/runtime/gearfmu_slave.py``,
 a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/gearkernel.c``
-(docs/model.md), compiled here with the system C compiler and shipped in the
+(docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``: input checks,
+steps, messages), compiled here with the system C compiler and shipped in the
 FMU's ``resources/`` together with its sources.  The model description is
 produced from ``modeldescription/variables.toml`` (:mod:`gearfmu.fmu.modeldesc`),
 checked against what the slave registers, and replaces pythonfmu's.
@@ -15,8 +16,8 @@ FMU layout (docs/fmu.md)::
     resources/<id>.py                    the slave (unique module and class name)
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
-    resources/gearkernel.so              the compiled kernel
-    resources/kernel_src/gearkernel.c|h  its sources and the compile command
+    resources/gearkernel.so              the compiled kernel with the FMU layer (gkfmu.c) over it
+    resources/kernel_src/                gearkernel.c|h, gkfmu.c|h and the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
     resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
     resources/pyshim_src/                the loader's source and its compile command
@@ -32,63 +33,33 @@ import os
 import platform
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 import uuid
 import zipfile
 from pathlib import Path
 from typing import Optional, Union
-from dataclasses import replace
 import sysconfig
 
 from .. import __version__
-from .modeldesc import (apply_start_values, check_model_description, check_registered,
-                        expand_variables, features_of, load_spec, model_description_xml,
-                        runtime_variable_table)
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
+                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
+                          check_build_arguments, check_output_arguments, compiler_version, envelope_json,
+                          find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
+                          model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
+                          write_scene, write_tables)
+from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
-from ..scene.reader import default_output_interval_s
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
-KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
-KERNEL_HEADER = HERE / "kernel" / "gearkernel.h"
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
 PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
 #: the loader's compile flags (docs/fmu.md "The binary"); it links no Python
 PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
-#: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
-CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 3  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check)
-#: gearkernel.h GK_KINK_MAX_SLOTS
-KINK_MAX_SLOTS = 32
-
-
-class FmuBuildError(ValueError):
-    """The FMU cannot be built from these arguments; the message names the field."""
-
-
-#: the FMI 2.0 standard headers the C layers are compiled against
-FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-
-
-def fmi2_header_dir() -> Path:
-    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
-    import fmpy  # fmpy: only for its FMI 2 headers
-
-    d = Path(fmpy.__file__).resolve().parent / "c-code"
-    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
-    if missing:
-        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
-    return d
-
-
-class CompilerNotFoundError(FmuBuildError):
-    """No C compiler to build the kernel."""
 
 
 def _kernel_filename() -> str:
@@ -96,76 +67,18 @@ def _kernel_filename() -> str:
     return "gearkernel" + ext
 
 
-def find_c_compiler() -> str:
-    """The C compiler: ``$CC``, else gcc, else cc.  Raises :class:`CompilerNotFoundError`."""
-    for cand in (os.environ.get("CC"), "gcc", "cc"):
-        if cand and shutil.which(cand):
-            return shutil.which(cand)
-    raise CompilerNotFoundError("C compiler: none found (tried $CC, gcc, cc); the FMU's kernel is compiled "
-                                "at build time -- install gcc or set CC")
-
-
 def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
-    """Compile gearkernel.c into a shared library in ``dest_dir``; return its path.
+    """Compile gearkernel.c and the FMU layer over it (gkfmu.c) into a shared library in ``dest_dir``;
+    return its path.
 
-    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c -lm``.
+    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gkfmu.c -lm``.
     """
     cc = cc or find_c_compiler()
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     lib = dest / _kernel_filename()
-    cmd = [cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), "-lm"]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    except OSError as exc:
-        raise CompilerNotFoundError(f"C compiler {cc!r}: cannot run ({exc})") from None
-    if proc.returncode != 0:
-        raise FmuBuildError(f"kernel: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+    run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), str(FMU_LAYER_SOURCE), "-lm"], "kernel")
     return lib
-
-
-def _compiler_version(cc: str) -> str:
-    try:
-        return subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30).stdout.splitlines()[0]
-    except (OSError, IndexError, subprocess.SubprocessError):
-        return "unknown"
-
-
-def _sha256_file(p: Path) -> str:
-    return hashlib.sha256(Path(p).read_bytes()).hexdigest()
-
-
-def _check_positive(name: str, value, allow_zero: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise FmuBuildError(f"{name}: expected a number, got {value!r}") from None
-    if not (v == v and abs(v) != float("inf")):
-        raise FmuBuildError(f"{name}: must be finite, got {value!r}")
-    if v < 0 or (v == 0 and not allow_zero):
-        raise FmuBuildError(f"{name}: must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-    return v
-
-
-def _check_finite(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise FmuBuildError(f"{name}: expected a number, got {value!r}") from None
-    if not (v == v and abs(v) != float("inf")):
-        raise FmuBuildError(f"{name}: must be finite, got {value!r}")
-    return v
-
-
-def _damping_model_code(damping_model) -> int:
-    if isinstance(damping_model, str):
-        damping_model = current_spelling("damping_model", damping_model)
-        if damping_model not in DAMPING_MODELS:
-            raise FmuBuildError(f"damping_model: {damping_model!r} not one of {sorted(DAMPING_MODELS)}")
-        return DAMPING_MODELS[damping_model]
-    if isinstance(damping_model, bool) or damping_model not in (0, 1):
-        raise FmuBuildError(f"damping_model: {damping_model!r} must be 0 (elastobacklash) or 1 (contact_zone)")
-    return int(damping_model)
 
 
 def _replace_class_name(template: str, class_name: str) -> str:
@@ -173,81 +86,6 @@ def _replace_class_name(template: str, class_name: str) -> str:
     if n == 0 or f"class {class_name}(Fmi2Slave):" not in text:
         raise FmuBuildError(f"{SLAVE_TEMPLATE}: template lacks 'class {TEMPLATE_CLASS}(Fmi2Slave):'")
     return text
-
-
-def _integrator_code(integrator, slots: int) -> int:
-    """0/'rk4', 1/'rk4_kink' or 2/'rk4_node' (gearfmu.dynamics.native.INTEGRATORS) -> the kernel code."""
-    if isinstance(integrator, str):
-        if integrator not in INTEGRATORS:
-            raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
-        code = INTEGRATORS[integrator]
-    elif isinstance(integrator, bool) or integrator not in INTEGRATORS.values():
-        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
-    else:
-        code = int(integrator)
-    if code != 0 and slots > KINK_MAX_SLOTS:
-        raise FmuBuildError(f"integrator: rk4_kink/rk4_node handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
-    return code
-
-
-def temperature_input(variables, tables: MeshTables):
-    """The temperature input (:attr:`MeshTables.temperature_input`: ``bulk_temperature``,
-    ``oil_temperature`` or ``gearbox_temperature``) for tables with a temperature
-    axis: start = :attr:`MeshTables.default_temperature_C`, min/max = the axis
-    ends (degC).  Returns (variables, start or None)."""
-    if not tables.has_temperature_axis:
-        return list(variables), None
-
-    name = tables.temperature_input
-    lo, hi = tables.temperature_range_C
-    start = tables.default_temperature_C
-    out = [replace(v, start=start, min=lo, max=hi) if v.name == name else v for v in variables]
-    if not any(v.name == name for v in out):
-        raise FmuBuildError(f"{name}: the tables have a temperature axis but the interface spec "
-                            f"has no {name!r} input (a 'requires' entry for it)")
-    return out, start
-
-
-def check_output_arguments(out_path, scene_text) -> Path:
-    """``out_path`` as a Path ending in .fmu and ``scene_text`` a str or None (FmuBuildError
-    naming the field otherwise); shared by both FMU builders."""
-    if scene_text is not None and not isinstance(scene_text, str):
-        raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
-    out_path = Path(out_path)
-    if out_path.suffix != ".fmu":
-        raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
-    return out_path
-
-
-def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_start_rad_s,
-                          pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
-                          max_step_s, stop_time_s, output_interval_s, damping_model):
-    """Check the arguments both FMU builders share (pythonfmu and standalone runtimes).
-
-    Returns (damping ratio, pinion speed rad/s, pinion angle rad, pinion torque N*m,
-    gear torque N*m, max step s, stop time s, output interval s, damping model code);
-    raises :class:`FmuBuildError` naming the field.  ``gear_torque_start_Nm`` None
-    means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``.
-    """
-    if not isinstance(tables, MeshTables):
-        raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
-    tables.validate()
-    if not isinstance(model_name, str) or not model_name.strip():
-        raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
-    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
-    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
-    if gear_torque_start_Nm is None:
-        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
-    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
-    hmax = _check_positive("max_step_s", max_step_s)
-    tstop = _check_positive("stop_time_s", stop_time_s)
-    if output_interval_s is None:  # the scene's rule (gearfmu.scene.reader.default_output_interval_s)
-
-        output_interval_s = min(default_output_interval_s(w0, tables.teeth_pinion), tstop)
-    dt = _check_positive("output_interval_s", output_interval_s)
-    return zeta, w0, th0, T1, T2, hmax, tstop, dt, _damping_model_code(damping_model)
 
 
 def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
@@ -273,27 +111,17 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
     """
-    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
-        tables, model_name=model_name, damping_ratio=damping_ratio,
-        pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
-        pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
-        max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
-        damping_model=damping_model)
-    ig = _integrator_code(integrator, tables.slots)
-    out_path = check_output_arguments(out_path, scene_text)
-
+    a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
+                        damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
+                        pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
+                        gear_torque_start_Nm=gear_torque_start_Nm, max_step_s=max_step_s, stop_time_s=stop_time_s,
+                        output_interval_s=output_interval_s, damping_model=damping_model)
+    tstop, dt = a.stop_time_s, a.output_interval_s
     spec = load_spec(spec_path)
-    variables = expand_variables(spec, tables.slots, features_of(tables))
-    variables = apply_start_values(variables, {
-        "pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
-        "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm, "integrator": ig})
-    variables, temp0 = temperature_input(variables, tables)
-
-
+    variables, temp0 = interface_variables(spec, tables, a.starts())
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
-    digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
-    suffix = f"{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
+    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
     identifier = f"gearfmu_{suffix}"       # module name and modelIdentifier
     class_name = f"GearFmu_{suffix}"
     guid = "{" + str(uuid.uuid4()) + "}"
@@ -303,19 +131,19 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         tmp = Path(tmpd)
         stage = tmp / "stage"
         stage.mkdir()
-        (stage / "tables.json").write_bytes(meta_bytes)
-        (stage / "tables.bin").write_bytes(bin_bytes)
+        write_tables(stage, meta_bytes, bin_bytes)
         lib = compile_kernel(stage, cc=cc)
         src_dir = stage / "kernel_src"
         src_dir.mkdir()
-        shutil.copy2(KERNEL_SOURCE, src_dir / KERNEL_SOURCE.name)
-        shutil.copy2(KERNEL_HEADER, src_dir / KERNEL_HEADER.name)
+        for f in (KERNEL_SOURCE, KERNEL_HEADER, FMU_LAYER_SOURCE, FMU_LAYER_HEADER):
+            shutil.copy2(f, src_dir / f.name)
         (src_dir / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c -lm\n", encoding="utf-8")
-        sha = {name: _sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
+            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c gkfmu.c -lm\n", encoding="utf-8")
+        sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
-            "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION, "slots": tables.slots,
+            "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION,
+            "fmu_layer_abi_version": FMU_LAYER_ABI_VERSION, "slots": tables.slots,
             "sha256": sha, "variables": runtime_variable_table(variables),
             "envelope": runtime_envelope(env_rec),
         }
@@ -331,22 +159,20 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             f"pyshim.c -ldl -lpthread\n", encoding="utf-8")
         files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json",
                                      PYSHIM_CONFIG)]
-        if scene_text is not None:
-            (stage / "scene.toml").write_text(scene_text, encoding="utf-8")
-            files.append(stage / "scene.toml")
+        scene_file = write_scene(stage, scene_text)
+        if scene_file is not None:
+            files.append(scene_file)
+        parameters = dict(a.parameters(), stop_time_s=tstop, output_interval_s=dt)
+        if temp0 is not None:  # after the experiment times (the record's key order)
+            parameters["bulk_temperature_start_C"] = temp0
         provenance = {
             "gearfmu_version": __version__, "built_utc": now, "model_name": model_name,
-            "model_identifier": identifier, "guid": guid,
-            "parameters": {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
-                           "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
-                           "damping_model": dm, "integrator": ig, "stop_time_s": tstop,
-                           "output_interval_s": dt,
-                           **({} if temp0 is None else {"bulk_temperature_start_C": temp0})},
+            "model_identifier": identifier, "guid": guid, "parameters": parameters,
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
             "tables_provenance": tables.provenance,
-            "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": _compiler_version(cc),
-                       "flags": list(CFLAGS), "source_sha256": _sha256_file(KERNEL_SOURCE)},
-            "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+            "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": compiler_version(cc),
+                       "flags": list(CFLAGS), "source_sha256": sha256_file(KERNEL_SOURCE)},
+            "scene_sha256": scene_sha256(scene_text),
             "python": sys.version.split()[0], "platform": platform.platform(),
             "spec": str(Path(spec.path).name),
         }
@@ -364,42 +190,33 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
 
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
-            parameters={k: v for k, v in provenance["parameters"].items() if k not in ("stop_time_s", "output_interval_s")},
-            scene_text=scene_text, compiler=provenance["kernel"]["compiler"], envelope=env_rec)
-        record[ENVELOPE_FILE] = json.dumps(env_rec, indent=1).encode("utf-8")
+            parameters=a.parameters(temp0), scene_text=scene_text, compiler=provenance["kernel"]["compiler"],
+            envelope=env_rec)
+        record[ENVELOPE_FILE] = envelope_json(env_rec).encode("utf-8")
 
         with zipfile.ZipFile(raw_fmu) as zin:
-            registered = zin.read("modelDescription.xml")
-            check_registered(registered, variables)
-            xml = model_description_xml(spec, variables, model_name=model_name, model_identifier=identifier,
-                                        guid=guid, stop_time_s=tstop, step_size_s=dt,
-                                        generation_tool=f"gearfmu {__version__}", generation_date=now,
-                                        version=__version__, description_note=envelope_note(env_rec))
-            check_model_description(xml, variables)
-            out_path.parent.mkdir(parents=True, exist_ok=True)
-            part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
+            check_registered(zin.read("modelDescription.xml"), variables)
+            xml = model_description(spec, variables, 2, model_name=model_name, model_identifier=identifier,
+                                    guid=guid, stop_time_s=tstop, step_size_s=dt,
+                                    generation_tool=f"gearfmu {__version__}", generation_date=now,
+                                    version=__version__, description_note=envelope_note(env_rec))
             plat = _platform_dir()
-            try:
-                with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as zout:
-                    zout.writestr("modelDescription.xml", xml)
-                    for info in zin.infolist():
-                        n = info.filename
-                        if n == "modelDescription.xml":
-                            continue
-                        if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
-                            continue  # the kernel is compiled for this platform only
-                        if shim is not None and n == f"binaries/{plat}/{identifier}.so":  # behind the loader
-                            zout.writestr(f"binaries/{plat}/{identifier}.pythonfmu.so", zin.read(n))
-                            zout.write(shim, n)
-                            continue
-                        zout.writestr(info, zin.read(n))
-                    for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
-                        zout.writestr(rel, data)
-                os.replace(part, out_path)
-            finally:
-                if part.exists():
-                    part.unlink()
-    return out_path
+            with fmu_zip(a.out_path) as zout:
+                zout.writestr("modelDescription.xml", xml)
+                for info in zin.infolist():
+                    n = info.filename
+                    if n == "modelDescription.xml":
+                        continue
+                    if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
+                        continue  # the kernel is compiled for this platform only
+                    if shim is not None and n == f"binaries/{plat}/{identifier}.so":  # behind the loader
+                        zout.writestr(f"binaries/{plat}/{identifier}.pythonfmu.so", zin.read(n))
+                        zout.write(shim, n)
+                        continue
+                    zout.writestr(info, zin.read(n))
+                for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
+                    zout.writestr(rel, data)
+    return a.out_path
 
 
 def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:
@@ -415,13 +232,8 @@ def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Op
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     lib = dest / f"{identifier}.so"
-    cmd = [cc, *PYSHIM_CFLAGS, f"-I{fmi2_header_dir()}", "-o", str(lib), str(PYSHIM_SOURCE), "-ldl", "-lpthread"]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    except OSError as exc:
-        raise CompilerNotFoundError(f"C compiler {cc!r}: cannot run ({exc})") from None
-    if proc.returncode != 0:
-        raise FmuBuildError(f"pyshim: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+    run_compiler([cc, *PYSHIM_CFLAGS, f"-I{fmi2_header_dir()}", "-o", str(lib), str(PYSHIM_SOURCE), "-ldl",
+                  "-lpthread"], "pyshim")
     return lib
 
 

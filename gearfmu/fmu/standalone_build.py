@@ -1,7 +1,8 @@
 """Build the *standalone* gearfmu FMU: FMI 2.0 (or 3.0) Co-Simulation in C, no Python.
 
 The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` (FMI 3: ``fmi3_gear.c``) with the
-plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``) and the C kernel
+plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``), the FMU behaviour
+the pythonfmu runtime shares (``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel
 ``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
 into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
 sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
@@ -18,7 +19,8 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files + gearkernel.c for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gearkernel.[ch] fmi2*.h BUILD.txt
+    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gkfmu.[ch] gearkernel.[ch] fmi2*.h
+                                         BUILD.txt
                                          CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
                                          buildflags.txt
     documentation/platforms.txt          which platforms carry a binary, which not and why
@@ -40,35 +42,33 @@ from __future__ import annotations
 import datetime
 import hashlib
 import json
-import os
 import platform
 import shutil
-import subprocess
 import sys
 import tempfile
 import uuid
 import xml.etree.ElementTree as ET
-import zipfile
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
 from . import crossbuild
-from .pythonfmu_build import (CFLAGS, KERNEL_HEADER, KERNEL_SOURCE, CompilerNotFoundError, FmuBuildError,
-                       _compiler_version, _integrator_code,
-                       FMI2_HEADERS, check_build_arguments, check_output_arguments, fmi2_header_dir,
-                       find_c_compiler, temperature_input)
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADER,  # noqa: F401
+                          KERNEL_SOURCE, CompilerNotFoundError,
+                          FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
+                          find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
+                          model_description, run_compiler, scene_sha256, write_scene, write_tables, zip_folder)
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
-from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
-                        features_of, load_spec, model_description_xml, model_description_xml3)
+from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
 from .validation import validation_record
 
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
 FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
-#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split)
-SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c")
+#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split), and
+#: the FMU behaviour over the kernel the pythonfmu runtime calls too (gkfmu.h)
+SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c", FMU_LAYER_SOURCE)
 SHARED_HEADER = HERE / "standalone" / "gear_model.h"
 #: the C files of the FMI 2 binary besides the kernel, in compile order
 LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
@@ -97,7 +97,7 @@ def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     layer = FMI3_LAYER_SOURCE if fmi_version == 3 else LAYER_SOURCE
-    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
+    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, FMU_LAYER_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
         shutil.copy2(src, dest / src.name)
     hdr = fmi2_header_dir()
     for h in (FMI3_HEADERS if fmi_version == 3 else FMI2_HEADERS):
@@ -109,7 +109,7 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_ve
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
     ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
-    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
+    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gkfmu.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
@@ -117,12 +117,7 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_ve
     out_lib.parent.mkdir(parents=True, exist_ok=True)
     cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib),
            *(str(src / n) for n in layer_sources(fmi_version)), str(src / KERNEL_SOURCE.name), "-lm"]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    except OSError as exc:
-        raise CompilerNotFoundError(f"C compiler {cc!r}: cannot run ({exc})") from None
-    if proc.returncode != 0:
-        raise FmuBuildError(f"standalone binary: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+    run_compiler(cmd, "standalone binary", timeout=300)
     return cmd
 
 
@@ -331,42 +326,26 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     """
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
-    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(
-        tables, model_name=model_name, damping_ratio=damping_ratio,
-        pinion_speed_start_rad_s=pinion_speed_start_rad_s, pinion_angle_start_rad=pinion_angle_start_rad,
-        pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
-        max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
-        damping_model=damping_model)
-    ig = _integrator_code(integrator, tables.slots)
-    out_path = check_output_arguments(out_path, scene_text)
+    a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
+                        damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
+                        pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
+                        gear_torque_start_Nm=gear_torque_start_Nm, max_step_s=max_step_s, stop_time_s=stop_time_s,
+                        output_interval_s=output_interval_s, damping_model=damping_model)
+    tstop, dt = a.stop_time_s, a.output_interval_s
     keys = crossbuild.parse_platforms(None) if platforms is None else tuple(platforms)
     unknown = [k for k in keys if k not in crossbuild.TARGETS]
     if unknown or not keys:
         raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
 
     spec = load_spec(spec_path)
-    variables = expand_variables(spec, tables.slots, features_of(tables))
-    starts = {"pinion_torque": T1, "gear_torque": T2, "damping_ratio": zeta, "pinion_speed_start": w0,
-              "pinion_angle_start": th0, "max_step": hmax, "damping_model": dm}
-    if any(v.name == "integrator" for v in variables):
-        starts["integrator"] = ig
-    elif ig != 0:
-        raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")
-    variables = apply_start_values(variables, starts)
-    variables, temp0 = temperature_input(variables, tables)
-
+    variables, temp0 = interface_variables(spec, tables, a.starts(), integrator_optional=True)
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
-    digest = hashlib.sha256(meta_bytes + bin_bytes + repr((model_name, zeta, w0, th0, T1, T2, hmax, dm, ig)).encode())
-    identifier = f"gearfmu_sa_{digest.hexdigest()[:12]}_{uuid.uuid4().hex[:8]}"
+    identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
     guid = "{" + str(uuid.uuid4()) + "}"
     cc_given = cc is not None
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    params = {"damping_ratio": zeta, "pinion_speed_start_rad_s": w0, "pinion_angle_start_rad": th0,
-              "pinion_torque_start_Nm": T1, "gear_torque_start_Nm": T2, "max_step_s": hmax,
-              "damping_model": dm, "integrator": ig}
-    if temp0 is not None:
-        params["bulk_temperature_start_C"] = temp0
+    params = a.parameters(temp0)
 
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"
@@ -376,7 +355,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         def host_compile(out_lib):
             host_cc["cc"] = cc or find_c_compiler()
             return (compile_standalone(src, out_lib, cc=host_cc["cc"], fmi_version=fmi_version),
-                    _compiler_version(host_cc["cc"]))
+                    compiler_version(host_cc["cc"]))
 
         try:
             binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
@@ -396,14 +375,12 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         build_line = "; ".join(sorted({r["command"] for r in built.values()}))
         res = root / "resources"
         res.mkdir()
-        (res / "tables.json").write_bytes(meta_bytes)
-        (res / "tables.bin").write_bytes(bin_bytes)
+        write_tables(res, meta_bytes, bin_bytes)
         (res / CONFIG_FILE).write_text(config_text(tables, variables, guid=guid, model_identifier=identifier,
                                                    meta_bytes=meta_bytes, bin_bytes=bin_bytes,
                                                    envelope=runtime_envelope(env_rec)), encoding="utf-8")
-        (root / ENVELOPE_FILE).write_text(json.dumps(env_rec, indent=1), encoding="utf-8")
-        if scene_text is not None:
-            (res / "scene.toml").write_text(scene_text, encoding="utf-8")
+        (root / ENVELOPE_FILE).write_text(envelope_json(env_rec), encoding="utf-8")
+        write_scene(res, scene_text)
         compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
         provenance = {
             "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone", "fmi_version": fmi_version,
@@ -414,7 +391,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                        "platforms": binaries,
                        "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
                                           for p in sorted(src.iterdir())}},
-            "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
+            "scene_sha256": scene_sha256(scene_text),
             "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(spec.path).name,
         }
         (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
@@ -429,29 +406,14 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid, stop_time_s=tstop,
                        step_size_s=dt, generation_tool=f"gearfmu {__version__} (standalone runtime)",
                        generation_date=now, version=__version__, description_note=envelope_note(env_rec))
+        note = crossbuild.platform_summary(binaries)
         if fmi_version == 3:
-            xml = model_description_xml3(spec, variables, platforms_note=crossbuild.platform_summary(binaries),
-                                         **md_args)
-            check_model_description3(xml, variables)
+            xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
         else:
-            xml = model_description_xml(spec, variables, **md_args)
-            check_model_description(xml, variables)
-            xml = standalone_model_description(xml, [*LAYER_SOURCES, KERNEL_SOURCE.name],
-                                               platforms_note=crossbuild.platform_summary(binaries))
+            xml = standalone_model_description(model_description(spec, variables, 2, **md_args),
+                                               [*LAYER_SOURCES, KERNEL_SOURCE.name], platforms_note=note)
             check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
-
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
-        try:
-            with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as zout:
-                zout.write(root / "modelDescription.xml", "modelDescription.xml")
-                for p in sorted(root.rglob("*")):
-                    rel = p.relative_to(root).as_posix()
-                    if p.is_file() and rel != "modelDescription.xml":
-                        zout.write(p, rel)
-            os.replace(part, out_path)
-        finally:
-            if part.exists():
-                part.unlink()
-    return out_path
+        with fmu_zip(a.out_path) as zout:
+            zip_folder(zout, root)
+    return a.out_path

@@ -13,10 +13,13 @@ numpy and the pythonfmu wrapper only.  Everything it needs sits in the FMU's
   the kernel file name and the SHA-256 of every resource file;
 * ``tables.json`` + ``tables.bin`` -- the tooth-pair tables (format:
   gearfmu/tables/mesh_tables.py, docs/tables.md), checked against their SHA-256 sums;
-* the kernel shared library (gearfmu/fmu/kernel/gearkernel.c), loaded with ctypes.
+* the kernel shared library (gearfmu/fmu/kernel/gearkernel.c with gkfmu.c), loaded with ctypes.
 
-The verified envelope (``envelope`` in ``gearfmu_runtime.json``) is checked by the
-kernel's ``gk_envelope_check``, the rule and message the standalone runtime uses too.
+The parameter and input checks, the damping and temperature applied, the initial state, the
+communication step, the outputs and the torque-axis and verified-envelope warnings (``envelope``
+in ``gearfmu_runtime.json``), with their messages, are the kernel's FMU layer (gkfmu.c): the
+functions the standalone runtime calls too.  This file hands the values over and passes the
+messages to the host's logger.
 
 The model is docs/model.md; the FMU behaviour is docs/fmu.md.
 """
@@ -51,14 +54,10 @@ _STATE_HEAD = struct.Struct("<8sHHI32sIII")  # magic, version, flags, reserved, 
 _STATE_TAIL = struct.Struct("<ddQ")          # zeta applied (NaN = none), start time, accepted steps
 _FLAG_INITIALIZED, _FLAG_WARNED_RANGE, _FLAG_TERMINATED, _FLAG_INIT_MODE = 1, 2, 4, 8
 
-_KERNEL_ERRORS = {
-    1: "bad table dimensions or scalars",
-    2: "non-finite input",
-    3: "communication step or max_step not finite and > 0 (or more than 1e8 substeps)",
-    4: "the state became non-finite (step too large for the stiffness? lower max_step)",
-    5: "no tooth pair in contact at the initial angle (tables have k = 0 there)",
-    6: "damping_ratio or damping_model out of range",
-}
+#: the variable of each gkfmu.h GKF_* slot (the temperature slot: the one temperature input)
+FMU_LAYER_SLOTS = ("damping_ratio", "pinion_speed_start", "pinion_angle_start", "max_step", "damping_model",
+                   "integrator", "pinion_torque", "gear_torque", None)
+_GKF_TEMPERATURE = 8
 
 
 class GearFmuResourceError(ValueError):
@@ -127,7 +126,21 @@ def _bind(lib):
         "gk_sizeof_envelope": ([], c_int),
         "gk_envelope_init": ([c_void_p, c_int], c_int),
         "gk_envelope_set": ([c_void_p, c_int, c_double, c_double], c_int),
-        "gk_envelope_check": ([c_void_p, c_int, ctypes.c_char_p, c_double, c_double, c_void_p, c_int], c_int),
+        "gkf_abi_version": ([], c_int),
+        "gkf_sizeof": ([], c_int),
+        "gkf_kernel_error": ([c_int], ctypes.c_char_p),
+        "gkf_init": ([c_void_p, c_void_p, c_void_p], c_int),
+        "gkf_declare": ([c_void_p, c_int, ctypes.c_char_p, c_int, c_double, c_int, c_double], c_int),
+        "gkf_set_values": ([c_void_p, c_void_p], c_int),
+        "gkf_initialize": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
+        "gkf_do_step": ([c_void_p, c_void_p, c_double, c_double, c_void_p], c_int),
+        "gkf_restore": ([c_void_p, c_int, c_int, c_double, c_int], c_int),
+        "gkf_zeta_valid": ([c_void_p], c_int),
+        "gkf_zeta_applied": ([c_void_p], c_double),
+        "gkf_warned_range": ([c_void_p], c_int),
+        "gkf_n_messages": ([c_void_p], c_int),
+        "gkf_message_level": ([c_void_p, c_int], c_int),
+        "gkf_message": ([c_void_p, c_int], ctypes.c_char_p),
     }
     for name, (args, res) in sigs.items():
         fn = getattr(lib, name)
@@ -157,7 +170,8 @@ class GearFmuSlave(Fmi2Slave):
         self._cfg = cfg
         self._lib = _bind(ctypes.CDLL(os.path.join(res, cfg["kernel_file"])))
         lib = self._lib
-        if lib.gk_abi_version() != cfg["kernel_abi_version"]:
+        if (lib.gk_abi_version() != cfg["kernel_abi_version"]
+                or lib.gkf_abi_version() != cfg.get("fmu_layer_abi_version")):
             raise GearFmuResourceError(f"resources/{cfg['kernel_file']}: kernel ABI version mismatch")
         P, n_phi, nt = int(meta["slots"]), int(meta["n_phi"]), int(meta["n_torque"])
         sc = meta["scalars"]
@@ -177,10 +191,10 @@ class GearFmuSlave(Fmi2Slave):
                          sc["base_radius_pinion_m"], sc["base_radius_gear_m"], sc["inertia_pinion_kgm2"],
                          sc["inertia_gear_kgm2"], sc["k_mean_N_per_m"])
         if st != 0:
-            msg = f"resources/tables.json: kernel rejects the tables ({_KERNEL_ERRORS.get(st, st)})"
+            msg = f"resources/tables.json: kernel rejects the tables ({self._kernel_error(st)})"
             self.log(msg, Fmi2Status.fatal)
             raise GearFmuResourceError(msg)
-        self._temperature_range = None
+        self._temp_name = None
         if "temperature_C" in arr:  # version 2 tables with a temperature axis (docs/tables.md)
             self._tax = arr["temperature_C"]
             st = lib.gk_set_temperature_axis(self._pm, int(self._tax.size), self._tax.ctypes.data)
@@ -191,15 +205,11 @@ class GearFmuSlave(Fmi2Slave):
                        f"of {list(TEMPERATURE_INPUT_NAMES)} inputs in the variable table")
                 self.log(msg, Fmi2Status.fatal)
                 raise GearFmuResourceError(msg)
-            self._temperature_range = (float(self._tax[0]), float(self._tax[-1]))
         self._init_envelope(cfg.get("envelope"))
         self._slots = P
-        self._torque_range = (float(self._torque[0]), float(self._torque[-1])) if nt > 1 else None
         self._initialized = False
         self._in_init = False  # between fmi2EnterInitializationMode and fmi2ExitInitializationMode
         self._dirty = True     # a value was set since the outputs were last computed
-        self._zeta_applied = None
-        self._warned_range = False
         self._terminated = False
         self._n_steps = 0  # accepted communication steps (part of the FMU state)
         self._t0 = 0.0
@@ -211,6 +221,7 @@ class GearFmuSlave(Fmi2Slave):
         self._output_vrs = {int(ent["vr"]) for ent in cfg["variables"] if ent["causality"] == "output"}
         for ent in cfg["variables"]:
             self._register(ent)
+        self._init_fmu_layer()
 
     # ------------------------------------------------------------ variables
     def _register(self, ent):
@@ -237,144 +248,62 @@ class GearFmuSlave(Fmi2Slave):
             raise GearFmuResourceError(f"resources/{RUNTIME_FILE}: {name} registered with value reference "
                                        f"{var.value_reference}, expected {ent['vr']}")
 
-    # --------------------------------------------------------------- checks
+    # ------------------------------------------- the kernel's FMU layer (gkfmu.c)
     _ENV_QUANTITIES = ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C")  # GK_ENV_* order
 
+    def _kernel_error(self, st):
+        return self._lib.gkf_kernel_error(int(st)).decode("utf-8", "replace")
+
     def _init_envelope(self, env):
-        """The kernel's envelope check (docs/fmu.md "Verified envelope"); kept by self."""
+        """The kernel's envelope (docs/fmu.md "Verified envelope"); kept by self, checked by gkfmu.c."""
         self._env = np.zeros(self._lib.gk_sizeof_envelope() // 8 + 1)
         self._pe = self._env.ctypes.data
-        self._env_msg = ctypes.create_string_buffer(900)
         env = env or {}
         self._lib.gk_envelope_init(self._pe, int(env.get("kind", 2)))
         for q, key in enumerate(self._ENV_QUANTITIES):
             if env.get(key) is not None:
                 self._lib.gk_envelope_set(self._pe, q, float(env[key][0]), float(env[key][1]))
 
-    def _check_envelope(self, t, speed=True, torque=True):
-        """One warning per input the first time it leaves the envelope (the kernel decides and words it)."""
-        checks = []
-        if torque:
-            checks.append((0, "pinion_torque", float(self._v["pinion_torque"])))
-            if self._temperature_range is not None:
-                checks.append((2, self._temp_name, float(self._v[self._temp_name])))
-        if speed:
-            checks.append((1, "pinion_speed", float(self._state[1])))  # gk_state.omega1_rad_s
-        for q, name, value in checks:
-            if self._lib.gk_envelope_check(self._pe, q, name.encode(), value, float(t), self._env_msg,
-                                           len(self._env_msg)):
-                self.log(self._env_msg.value.decode("utf-8", "replace"), Fmi2Status.warning)
+    def _init_fmu_layer(self):
+        """Declare the variables gkfmu.c checks and drives, with their min/max (the standalone
+        runtime declares the same ones from its variable table)."""
+        lib = self._lib
+        self._fmu = np.zeros(lib.gkf_sizeof() // 8 + 1)
+        self._pf = self._fmu.ctypes.data
+        self._vals = np.zeros(len(FMU_LAYER_SLOTS))
+        self._pv = self._vals.ctypes.data
+        lib.gkf_init(self._pf, self._pm, self._pe)
+        self._slot_names = []
+        for slot, name in enumerate(FMU_LAYER_SLOTS):
+            name = self._temp_name if slot == _GKF_TEMPERATURE else name
+            if name is None or name not in self._v:
+                continue
+            lo, hi = self._limits[name]
+            if lib.gkf_declare(self._pf, slot, name.encode(), lo is not None, 0.0 if lo is None else float(lo),
+                               hi is not None, 0.0 if hi is None else float(hi)) != 0:
+                raise GearFmuResourceError(f"resources/{RUNTIME_FILE}: variable {name!r} refused by the kernel")
+            self._slot_names.append((slot, name))
 
-    def _bad_value(self, name, t=None):
-        """A message if variable `name` is non-finite or outside its min/max, else None."""
-        val = self._v[name]
-        at = "" if t is None else f" at t = {t!r} s"
-        try:
-            fval = float(val)
-        except (TypeError, ValueError):
-            return f"{name} = {val!r}{at}: not a number"
-        if not math.isfinite(fval):
-            return f"{name} = {fval!r}{at}: not finite"
-        lo, hi = self._limits.get(name, (None, None))
-        if lo is not None and fval < lo:
-            return f"{name} = {fval!r}{at}: below its minimum {lo!r}"
-        if hi is not None and fval > hi:
-            return f"{name} = {fval!r}{at}: above its maximum {hi!r}"
-        return None
+    def _hand_over(self, values=None):
+        """The current values (or ``values``, a name -> value mapping) to gkfmu.c."""
+        values = self._v if values is None else values
+        for slot, name in self._slot_names:
+            self._vals[slot] = float(values[name])
+        self._lib.gkf_set_values(self._pf, self._pv)
 
-    def _check_parameters(self):
-        msgs = [m for m in (self._bad_value(n) for n in ("damping_ratio", "pinion_speed_start",
-                                                          "pinion_angle_start", "max_step", "damping_model"))
-                if m]
-        if not msgs and not float(self._v["max_step"]) > 0.0:
-            msgs.append(f"max_step = {self._v['max_step']!r}: must be > 0")
-        if not msgs and int(self._v["damping_model"]) not in (0, 1):
-            msgs.append(f"damping_model = {self._v['damping_model']!r}: must be 0 (elastobacklash) or 1 (contact_zone)")
-        if "integrator" in self._v and int(self._v["integrator"]) not in (0, 1, 2):
-            msgs.append(f"integrator = {self._v['integrator']!r}: must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
-        return msgs
-
-    def _apply_damping(self):
-        zeta = self._v["damping_ratio"]
-        if zeta == self._zeta_applied:
-            return True
-        msg = self._bad_value("damping_ratio")
-        if msg is None:
-            st = self._lib.gk_set_damping(self._pm, float(zeta), int(self._v["damping_model"]))
-            if st != 0:
-                msg = f"damping_ratio = {zeta!r}: {_KERNEL_ERRORS.get(st, st)}"
-        if msg is not None:
-            self.log(msg + "; rejected", Fmi2Status.error)
-            return False
-        self._zeta_applied = zeta
-        return True
-
-    def _apply_temperature(self, t):
-        """Select the temperature (bulk, oil or gearbox) in the kernel; a message if it is NaN/inf or
-        outside the temperature axis (policy: reject, no clamping; docs/fmu.md)."""
-        if self._temperature_range is None:
-            return None
-        val = self._v[self._temp_name]
-        lo, hi = self._temperature_range
-        try:
-            T = float(val)
-        except (TypeError, ValueError):
-            return f"{self._temp_name} = {val!r} at t = {t!r} s: not a number"
-        if not math.isfinite(T) or not lo <= T <= hi:
-            return (f"{self._temp_name} = {T!r} degC at t = {t!r} s outside the table range "
-                    f"[{lo!r}, {hi!r}] degC")
-        st = self._lib.gk_set_temperature(self._pm, T)
-        if st != 0:
-            return f"{self._temp_name} = {T!r} degC at t = {t!r} s: {_KERNEL_ERRORS.get(st, st)}"
-        return None
-
-    def _check_torque_range(self, T1, t):
-        if self._torque_range is None:
-            return
-        lo, hi = self._torque_range
-        if T1 < lo or T1 > hi:
-            if not self._warned_range:
-                self.log(f"pinion_torque = {T1!r} N.m at t = {t!r} s is outside the tables' torque axis "
-                         f"[{lo!r}, {hi!r}] N.m; the tables are used at the nearest end (docs/model.md)",
-                         Fmi2Status.warning)
-                self._warned_range = True
-        else:
-            self._warned_range = False
+    def _log_fmu_messages(self):
+        lib = self._lib
+        for i in range(lib.gkf_n_messages(self._pf)):
+            self.log(lib.gkf_message(self._pf, i).decode("utf-8", "replace"),
+                     Fmi2Status(lib.gkf_message_level(self._pf, i)))
 
     # ---------------------------------------------------------------- FMI
     def _init_state(self, t):
-        msgs = self._check_parameters()
-        msg = self._bad_value("pinion_torque", t)
-        if msg:
-            msgs.append(msg)
-        if msgs:
-            for m in msgs:
-                self.log(m + "; cannot compute the initial state", Fmi2Status.error)
-            return False
-        self._zeta_applied = None
-        if not self._apply_damping():
-            return False
-        if "integrator" in self._v:  # docs/model.md "Integration"
-            st = self._lib.gk_set_integrator(self._pm, int(self._v["integrator"]))
-            if st != 0:
-                self.log(f"integrator = {self._v['integrator']!r}: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
-                return False
-        msg = self._apply_temperature(t)
-        if msg:
-            self.log(msg + "; cannot compute the initial state", Fmi2Status.error)
-            return False
-        T1 = float(self._v["pinion_torque"])
-        st = self._lib.gk_initialize(self._pm, self._ps, float(self._v["pinion_angle_start"]),
-                                     float(self._v["pinion_speed_start"]), T1)
-        if st == 0:
-            st = self._lib.gk_outputs(self._pm, self._ps, T1, self._po)
-        if st != 0:
-            self.log(f"initial state: {_KERNEL_ERRORS.get(st, st)}", Fmi2Status.error)
-            return False
-        self._check_torque_range(T1, t)
-        self._check_envelope(t)
-        self._initialized = True
-        return True
+        self._hand_over()
+        ok = self._lib.gkf_initialize(self._pf, self._ps, float(t), self._po)
+        self._log_fmu_messages()
+        self._initialized = bool(ok)
+        return self._initialized
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._t0 = start_time
@@ -426,30 +355,11 @@ class GearFmuSlave(Fmi2Slave):
                 return False
             if not self._initialized and not self._init_state(current_time):
                 return False
-            msgs = [m for m in (self._bad_value("pinion_torque", current_time),
-                                self._bad_value("gear_torque", current_time)) if m]
-            if not msgs:
-                msg = self._apply_temperature(current_time)
-                if msg:
-                    msgs.append(msg)
-            if not (isinstance(step_size, float) and math.isfinite(step_size) and step_size > 0.0):
-                msgs.append(f"communication step size {step_size!r} at t = {current_time!r} s: must be finite and > 0")
-            if msgs:
-                for m in msgs:
-                    self.log(m + "; step rejected, state unchanged", Fmi2Status.discard)
+            self._hand_over()
+            ok = self._lib.gkf_do_step(self._pf, self._ps, float(current_time), float(step_size), self._po)
+            self._log_fmu_messages()
+            if not ok:
                 return False
-            if not self._apply_damping():
-                return False
-            T1 = float(self._v["pinion_torque"])
-            self._check_torque_range(T1, current_time)
-            self._check_envelope(current_time, speed=False)
-            st = self._lib.gk_do_step(self._pm, self._ps, T1, float(self._v["gear_torque"]),
-                                      float(step_size), float(self._v["max_step"]), self._po)
-            if st != 0:
-                self.log(f"step at t = {current_time!r} s, H = {step_size!r} s rejected: "
-                         f"{_KERNEL_ERRORS.get(st, st)}; state unchanged", Fmi2Status.discard)
-                return False
-            self._check_envelope(current_time + step_size, torque=False)
             self._n_steps += 1
             return True
         except Exception as exc:  # noqa: BLE001 - an FMU must not crash its host
@@ -517,7 +427,9 @@ class GearFmuSlave(Fmi2Slave):
     def _get_fmu_state(self):
         try:
             names = self._state_values()
-            flags = ((_FLAG_INITIALIZED if self._initialized else 0) | (_FLAG_WARNED_RANGE if self._warned_range else 0)
+            lib, pf = self._lib, self._pf
+            flags = ((_FLAG_INITIALIZED if self._initialized else 0)
+                     | (_FLAG_WARNED_RANGE if lib.gkf_warned_range(pf) else 0)
                      | (_FLAG_TERMINATED if self._terminated else 0) | (_FLAG_INIT_MODE if self._in_init else 0))
             state = self._state.tobytes()
             body = b"".join([
@@ -525,7 +437,7 @@ class GearFmuSlave(Fmi2Slave):
                                  self._out.size, len(names)),
                 state, self._out.astype("<f8").tobytes(),
                 np.array([float(self._v[n]) for n in names], dtype="<f8").tobytes(),
-                _STATE_TAIL.pack(float("nan") if self._zeta_applied is None else float(self._zeta_applied),
+                _STATE_TAIL.pack(lib.gkf_zeta_applied(pf) if lib.gkf_zeta_valid(pf) else float("nan"),
                                  float(self._t0), int(self._n_steps)),
             ])
             return body + hashlib.sha256(body).digest()
@@ -567,23 +479,19 @@ class GearFmuSlave(Fmi2Slave):
         values = np.frombuffer(state, dtype="<f8", count=n_values, offset=o)
         o += 8 * n_values
         zeta, t0, n_steps = _STATE_TAIL.unpack_from(state, o)
-        if math.isfinite(zeta):
-            st = self._lib.gk_set_damping(self._pm, zeta, int(values[names.index("damping_model")]))
-            if st != 0:
-                return f"damping_ratio = {zeta!r} in the state: {_KERNEL_ERRORS.get(st, st)}"
-        if flags & _FLAG_INITIALIZED and "integrator" in names:  # a model setting applied at initialisation
-            st = self._lib.gk_set_integrator(self._pm, int(values[names.index("integrator")]))
-            if st != 0:
-                return f"integrator in the state: {_KERNEL_ERRORS.get(st, st)}"
+        # the integrator (a model setting applied at initialisation) and the damping applied
+        self._hand_over(dict(zip(names, values.tolist())))
+        st = self._lib.gkf_restore(self._pf, int(bool(flags & _FLAG_INITIALIZED)), int(math.isfinite(zeta)),
+                                   zeta if math.isfinite(zeta) else 0.0, int(bool(flags & _FLAG_WARNED_RANGE)))
+        if st != 0:
+            return f"integrator or damping_ratio in the state: {self._kernel_error(st)}"
         # from here on nothing can fail: copy everything in place
-        self._zeta_applied = zeta if math.isfinite(zeta) else None
         self._state[:] = kernel_state
         self._out[:] = out
         types = {ent["name"]: ent["type"] for ent in self._cfg["variables"]}
         for n, val in zip(names, values.tolist()):
             self._v[n] = int(val) if types[n] == "Integer" else val
         self._initialized = bool(flags & _FLAG_INITIALIZED)
-        self._warned_range = bool(flags & _FLAG_WARNED_RANGE)
         self._terminated = bool(flags & _FLAG_TERMINATED)
         self._in_init = bool(flags & _FLAG_INIT_MODE)
         self._dirty = self._in_init or not self._initialized

@@ -16,7 +16,8 @@
  *       gearfmu/tables/mesh_tables.py format); its SHA-256 (FIPS 180-4, computed here)
  *       must equal the recorded one, else instantiation is refused.
  *
- * Behaviour (same as the pythonfmu runtime, docs/fmu.md): non-finite or
+ * Behaviour (docs/fmu.md): the checks, kernel calls and messages are the ones of
+ * ../kernel/gkfmu.c, which the pythonfmu runtime calls too: non-finite or
  * out-of-range inputs, a bad communication step or a kernel failure -> a log
  * message and Discard with the state unchanged; nothing here ever aborts
  * or calls exit.  The FMU state is a plain struct (the kernel state), copied
@@ -53,19 +54,6 @@ typedef struct {
     gk_state state;
     /* followed by double values[n_vars], double out[n_out] */
 } gf_snap_header;
-
-static const char *kernel_error(int st)
-{
-    switch (st) {
-    case GK_ERR_MODEL: return "bad table dimensions or scalars";
-    case GK_ERR_INPUT: return "non-finite input";
-    case GK_ERR_STEP: return "communication step or max_step not finite and > 0 (or more than 1e8 substeps)";
-    case GK_ERR_NONFINITE: return "the state became non-finite (step too large for the stiffness? lower max_step)";
-    case GK_ERR_NOCONTACT: return "no tooth pair in contact at the initial angle (tables have k = 0 there)";
-    case GK_ERR_PARAM: return "damping_ratio, damping_model or integrator out of range";
-    default: return "kernel error";
-    }
-}
 
 /* ------------------------------------------------------------- SHA-256 */
 /* FIPS 180-4 section 6.2 (SHA-256), written from the standard's text. */
@@ -489,147 +477,35 @@ static void swap8(unsigned char *p, size_t n_doubles)
 }
 
 /* ------------------------------------------------------------ checks */
-/* NULL if value i is acceptable, else writes a message into buf */
-static const char *bad_value(const gf_inst *c, int i, char *buf, size_t cap)
+/* The checks, the kernel calls and their messages are gkfmu.c's, the ones the pythonfmu
+ * runtime calls too; here the current values go in and the messages go to the host. */
+static void to_fmu_layer(gf_inst *c)
 {
-    const gf_var *v = &c->vars[i];
-    double x = c->values[i];
-    if (!isfinite(x)) {
-        snprintf(buf, cap, "%s = %g at t = %.17g s: not finite", v->name, x, c->time);
-        return buf;
-    }
-    if (v->has_min && x < v->min) {
-        snprintf(buf, cap, "%s = %.17g at t = %.17g s: below its minimum %.17g", v->name, x, c->time, v->min);
-        return buf;
-    }
-    if (v->has_max && x > v->max) {
-        snprintf(buf, cap, "%s = %.17g at t = %.17g s: above its maximum %.17g", v->name, x, c->time, v->max);
-        return buf;
-    }
-    return NULL;
+    double v[GKF_N];
+    int k;
+    for (k = 0; k < GKF_N; ++k) v[k] = c->slot_vr[k] >= 0 ? c->values[c->slot_vr[k]] : 0.0;
+    gkf_set_values(c->fmu, v);
 }
 
-static int apply_damping(gf_inst *c)
+static void log_fmu_messages(gf_inst *c)
 {
-    char buf[512];
-    double zeta = c->values[c->vr_zeta];
-    int st;
-    if (c->zeta_valid && zeta == c->zeta_applied) return 1;
-    if (bad_value(c, c->vr_zeta, buf, sizeof buf) != NULL) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; rejected", buf);
-        return 0;
+    static const char *const category[4] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError"};
+    int i, n = gkf_n_messages(c->fmu);
+    for (i = 0; i < n; ++i) {
+        int level = gkf_message_level(c->fmu, i);
+        gf_log(c, level, category[level & 3], "%s", gkf_message(c->fmu, i));
     }
-    st = gk_set_damping(c->model, zeta, gm_as_int(c->values[c->vr_dm]));
-    if (st != GK_OK) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_ratio = %.17g: %s; rejected", zeta, kernel_error(st));
-        return 0;
-    }
-    c->zeta_applied = zeta;
-    c->zeta_valid = 1;
-    return 1;
-}
-
-/* Compare an applied input or the pinion speed with the verified envelope: the kernel's
- * rule and message (gk_envelope_check), logged as the one GF_WARNING for that input. */
-static void check_envelope(gf_inst *c, int q, const char *name, double value)
-{
-    char msg[900];
-    if (gk_envelope_check(&c->env, q, name, value, c->time, msg, (int)sizeof msg))
-        gf_log(c, GF_WARNING, "logStatusWarning", "%s", msg);
-}
-
-/* the applied inputs (torque, temperature) and the pinion speed of the current state */
-static void check_inputs_envelope(gf_inst *c, int speed)
-{
-    check_envelope(c, GK_ENV_PINION_TORQUE, "pinion_torque", c->values[c->vr_T1]);
-    if (c->vr_temp >= 0) check_envelope(c, GK_ENV_TEMPERATURE, c->temp_name, c->values[c->vr_temp]);
-    if (speed) check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
-}
-
-static void check_torque_range(gf_inst *c, double T1)
-{
-    if (!c->has_torque_range) return;
-    if (T1 < c->torque_lo || T1 > c->torque_hi) {
-        if (!c->warned_range)
-            gf_log(c, GF_WARNING, "logStatusWarning",
-                   "pinion_torque = %.17g N.m at t = %.17g s is outside the tables' torque axis [%.17g, %.17g] N.m; "
-                   "the tables are used at the nearest end (docs/model.md)", T1, c->time, c->torque_lo, c->torque_hi);
-        c->warned_range = 1;
-    } else {
-        c->warned_range = 0;
-    }
-}
-
-/* Select the bulk temperature in the kernel (docs/model.md "Temperature axis");
- * NULL if fine, else a message in buf (NaN/inf or outside the axis: rejected, no clamping) */
-static const char *apply_temperature(gf_inst *c, char *buf, size_t cap)
-{
-    double T;
-    if (c->vr_temp < 0) return NULL;
-    T = c->values[c->vr_temp];
-    if (!isfinite(T) || T < c->temp_lo || T > c->temp_hi) {
-        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s outside the table range [%.17g, %.17g] degC",
-                 c->temp_name, T, c->time, c->temp_lo, c->temp_hi);
-        return buf;
-    }
-    if (gk_set_temperature(c->model, T) != GK_OK) {
-        snprintf(buf, cap, "%s = %.17g degC at t = %.17g s: rejected by the kernel", c->temp_name, T, c->time);
-        return buf;
-    }
-    return NULL;
 }
 
 static int init_state(gf_inst *c)
 {
-    char buf[512];
-    int names[6], i, ok = 1, st;
-    double T1;
-    names[0] = c->vr_zeta; names[1] = c->vr_w0; names[2] = c->vr_th0;
-    names[3] = c->vr_hmax; names[4] = c->vr_dm; names[5] = c->vr_T1;
+    int ok;
     c->initialized = 0;
-    for (i = 0; i < 6; ++i)
-        if (bad_value(c, names[i], buf, sizeof buf) != NULL) {
-            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; cannot compute the initial state", buf);
-            ok = 0;
-        }
-    if (ok && !(c->values[c->vr_hmax] > 0.0)) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "max_step = %.17g: must be > 0; cannot compute the initial state",
-               c->values[c->vr_hmax]);
-        ok = 0;
-    }
-    if (ok && c->values[c->vr_dm] != 0.0 && c->values[c->vr_dm] != 1.0) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "damping_model = %g: must be 0 (elastobacklash) or 1 (contact_zone)",
-               c->values[c->vr_dm]);
-        ok = 0;
-    }
-#ifdef GK_INTEGRATOR_RK4 /* the kernel has the integrator choice (gk_set_integrator) */
-    if (ok && c->vr_integrator >= 0) {
-        st = gk_set_integrator(c->model, gm_as_int(c->values[c->vr_integrator]));
-        if (st != GK_OK) {
-            gf_log(c, GF_ERROR_STATUS, "logStatusError", "integrator = %g: %s", c->values[c->vr_integrator],
-                   kernel_error(st));
-            ok = 0;
-        }
-    }
-#endif
-    if (ok && apply_temperature(c, buf, sizeof buf) != NULL) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s; cannot compute the initial state", buf);
-        ok = 0;
-    }
-    if (!ok) return 0;
-    c->zeta_valid = 0;
-    if (!apply_damping(c)) return 0;
-    T1 = c->values[c->vr_T1];
-    st = gk_initialize(c->model, &c->state, c->values[c->vr_th0], c->values[c->vr_w0], T1);
-    if (st == GK_OK) st = gk_outputs(c->model, &c->state, T1, c->out);
-    if (st != GK_OK) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "initial state: %s", kernel_error(st));
-        return 0;
-    }
-    check_torque_range(c, T1);
-    check_inputs_envelope(c, 1);
-    c->initialized = 1;
-    return 1;
+    to_fmu_layer(c);
+    ok = gkf_initialize(c->fmu, &c->state, c->time, c->out);
+    log_fmu_messages(c);
+    c->initialized = ok;
+    return ok;
 }
 
 void gm_reset(gf_inst *c)
@@ -640,10 +516,8 @@ void gm_reset(gf_inst *c)
     memset(&c->state, 0, sizeof c->state);
     c->initialized = 0;
     c->dirty = 1;
-    c->warned_range = 0;
     gk_envelope_rearm(&c->env);
-    c->zeta_valid = 0;
-    c->zeta_applied = 0.0;
+    gkf_reset(c->fmu);
     c->time = 0.0;
     c->mode = GF_INSTANTIATED;
 }
@@ -656,6 +530,7 @@ void gm_free(gf_inst *c)
     free(c->values);
     free(c->blob);
     free(c->model);
+    free(c->fmu);
     free(c->out);
     free(c);
 }
@@ -695,7 +570,6 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     gf_sha256 sha;
     c->vr_integrator = -1;
     c->vr_temp = -1;
-    c->temp_name = "bulk_temperature";
     if (!join_path(res_dir, GF_CONFIG_FILE, path, sizeof path)) return "resource location too long";
     text = read_file(path, &size);
     if (text == NULL) {
@@ -751,21 +625,19 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         st = gk_init(c->model, c->P, (int)N, (int)NT, c->arr_torque, c->arr_k, c->arr_e, c->arr_b,
                      cfg.phi_period, cfg.Rb1, cfg.Rb2, cfg.I1, cfg.I2, cfg.k_mean);
         if (st != GK_OK) {
-            snprintf(err, errcap, "kernel rejects the tables (%s)", kernel_error(st));
+            snprintf(err, errcap, "kernel rejects the tables (%s)", gkf_kernel_error(st));
             return err;
         }
         if (cfg.n_temp > 0) { /* temperature axis: k, e are [NT][NTemp][P][N] */
             if (gk_set_temperature_axis(c->model, (int)NTemp, c->arr_temp) != GK_OK)
                 return "kernel rejects the temperature axis (not finite and ascending)";
-            c->temp_lo = c->arr_temp[0];
-            c->temp_hi = c->arr_temp[NTemp - 1];
         }
-        c->has_torque_range = NT > 1;
         gk_envelope_init(&c->env, cfg.env_kind);
         for (i = 0; i < GK_ENV_N; ++i)
             if (cfg.env_have[i]) gk_envelope_set(&c->env, i, cfg.env_lo[i], cfg.env_hi[i]);
-        c->torque_lo = c->arr_torque[0];
-        c->torque_hi = c->arr_torque[NT - 1];
+        c->fmu = (gkf_fmu *)calloc(1, (size_t)gkf_sizeof());
+        if (c->fmu == NULL) return "out of memory";
+        gkf_init(c->fmu, c->model, &c->env);
     }
     /* the variables the layer drives, by name (the spec's contract) */
     c->vr_T1 = find_var(c, "pinion_torque");
@@ -782,7 +654,7 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         int ti, found = 0;
         for (ti = 0; ti < 3; ti++) {
             int vr = find_var(c, temp_names[ti]);
-            if (vr >= 0) { c->vr_temp = vr; c->temp_name = temp_names[ti]; found++; }
+            if (vr >= 0) { c->vr_temp = vr; found++; }
         }
         if (found != 1)
             return "tables have a temperature axis but not exactly one bulk_temperature, "
@@ -795,6 +667,23 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     for (i = 0; i < c->n_vars; ++i)
         if (c->vars[i].causality == GF_OUTPUT && (c->vars[i].out_index < 0 || c->vars[i].out_index >= c->n_out))
             return "an output's kernel index is outside the output vector";
+    /* the variables gkfmu.c checks and drives, with their names and min/max */
+    c->slot_vr[GKF_DAMPING_RATIO] = c->vr_zeta;
+    c->slot_vr[GKF_PINION_SPEED_START] = c->vr_w0;
+    c->slot_vr[GKF_PINION_ANGLE_START] = c->vr_th0;
+    c->slot_vr[GKF_MAX_STEP] = c->vr_hmax;
+    c->slot_vr[GKF_DAMPING_MODEL] = c->vr_dm;
+    c->slot_vr[GKF_INTEGRATOR] = c->vr_integrator;
+    c->slot_vr[GKF_PINION_TORQUE] = c->vr_T1;
+    c->slot_vr[GKF_GEAR_TORQUE] = c->vr_T2;
+    c->slot_vr[GKF_TEMPERATURE] = c->vr_temp;
+    for (i = 0; i < GKF_N; ++i) {
+        const gf_var *v;
+        if (c->slot_vr[i] < 0) continue;
+        v = &c->vars[c->slot_vr[i]];
+        if (gkf_declare(c->fmu, i, v->name, v->has_min, v->min, v->has_max, v->max) != GK_OK)
+            return "a variable name is too long";
+    }
     mark_arrays(c);
     gm_reset(c);
     gf_log(c, GF_OK, "logAll", "instantiated: %d slots, %ld angle points, %ld torque rows, tables SHA-256 ok",
@@ -861,43 +750,14 @@ int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size
 
 int gm_do_step(gf_inst *c, double t, double H)
 {
-    char buf[512];
-    double T1, T2;
-    int st, bad = 0;
+    int ok;
     if (isfinite(t)) c->time = t;
     if (!c->initialized && !init_state(c)) return GF_DISCARD;
-    if (bad_value(c, c->vr_T1, buf, sizeof buf) != NULL) {
-        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
-        bad = 1;
-    }
-    if (bad_value(c, c->vr_T2, buf, sizeof buf) != NULL) {
-        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
-        bad = 1;
-    }
-    if (!(isfinite(H) && H > 0.0)) {
-        gf_log(c, GF_DISCARD, "logStatusDiscard",
-               "communication step size %g at t = %.17g s: must be finite and > 0; step rejected, state unchanged",
-               H, c->time);
-        bad = 1;
-    }
-    if (!bad && apply_temperature(c, buf, sizeof buf) != NULL) {
-        gf_log(c, GF_DISCARD, "logStatusDiscard", "%s; step rejected, state unchanged", buf);
-        bad = 1;
-    }
-    if (bad) return GF_DISCARD;
-    if (!apply_damping(c)) return GF_DISCARD;
-    T1 = c->values[c->vr_T1];
-    T2 = c->values[c->vr_T2];
-    check_torque_range(c, T1);
-    check_inputs_envelope(c, 0);
-    st = gk_do_step(c->model, &c->state, T1, T2, H, c->values[c->vr_hmax], c->out);
-    if (st != GK_OK) {
-        gf_log(c, GF_DISCARD, "logStatusDiscard", "step at t = %.17g s, H = %.17g s rejected: %s; state unchanged",
-               c->time, H, kernel_error(st));
-        return GF_DISCARD;
-    }
+    to_fmu_layer(c);
+    ok = gkf_do_step(c->fmu, &c->state, c->time, H, c->out);
+    log_fmu_messages(c);
+    if (!ok) return GF_DISCARD;
     c->time = c->time + H;
-    check_envelope(c, GK_ENV_PINION_SPEED, "pinion_speed", c->state.omega1_rad_s);
     return GF_OK;
 }
 
@@ -918,10 +778,10 @@ void gm_snap_write(const gf_inst *c, unsigned char *p)
     h.tables_tag = c->tables_tag;
     h.mode = c->mode;
     h.initialized = c->initialized;
-    h.warned_range = c->warned_range;
-    h.zeta_valid = c->zeta_valid;
+    h.warned_range = gkf_warned_range(c->fmu);
+    h.zeta_valid = gkf_zeta_valid(c->fmu);
     h.time = c->time;
-    h.zeta_applied = c->zeta_applied;
+    h.zeta_applied = gkf_zeta_applied(c->fmu);
     h.state = c->state;
     memcpy(p, &h, sizeof h);
     memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
@@ -939,6 +799,7 @@ int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size)
 int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn)
 {
     gf_snap_header h;
+    int st;
     if (size != gm_snap_size(c)) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has %lu bytes, this FMU's has %lu", fn,
                (unsigned long)size, (unsigned long)gm_snap_size(c));
@@ -956,20 +817,17 @@ int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn
     c->mode = h.mode;
     c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
     c->initialized = h.initialized;
-    c->warned_range = h.warned_range;
     c->time = h.time;
     c->state = h.state;
     memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
     /* the kernel model's integrator and damping are derived from the restored values */
-#ifdef GK_INTEGRATOR_RK4
-    if (c->vr_integrator >= 0 && gk_set_integrator(c->model, gm_as_int(c->values[c->vr_integrator])) != GK_OK) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: integrator %g of the state is invalid", fn,
-               c->values[c->vr_integrator]);
+    to_fmu_layer(c);
+    st = gkf_restore(c->fmu, 1, h.zeta_valid, h.zeta_applied, h.warned_range);
+    if (st != GK_OK) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state's integrator or damping is refused (%s)", fn,
+               gkf_kernel_error(st));
         return 0;
     }
-#endif
-    c->zeta_valid = 0;
-    if (h.zeta_valid && !apply_damping(c)) return 0;
     return 1;
 }

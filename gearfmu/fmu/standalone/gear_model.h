@@ -6,10 +6,11 @@
  *
  *   gear_model.c   the gear glue, one definition for both FMI versions:
  *                  the resources the FMU reads at instantiation (the
- *                  configuration, tables.bin and its SHA-256), parameters and
- *                  their checks, the kernel calls (initial state, one
- *                  communication step), the outputs, the verified-envelope
- *                  warnings and the FMU state snapshot;
+ *                  configuration, tables.bin and its SHA-256), the values
+ *                  handed to ../kernel/gkfmu.c (the parameter and input checks,
+ *                  the initial state, one communication step, the outputs and
+ *                  the warnings, with their messages: the functions the
+ *                  pythonfmu runtime calls too), and the FMU state snapshot;
  *   fmi_common.c   the generic FMI plumbing: logging, the state-machine check
  *                  of every call against a per-version table of allowed
  *                  states, get/set dispatch over the variable table, the FMU
@@ -25,6 +26,7 @@
 #include <stdint.h>
 
 #include "gearkernel.h"
+#include "gkfmu.h"
 
 #define GF_MAX_NAME 128
 
@@ -88,18 +90,13 @@ struct gf_inst {
     int P;
     int vr_T1, vr_T2, vr_zeta, vr_w0, vr_th0, vr_hmax, vr_dm, vr_integrator;
     int vr_temp;          /* temperature input (bulk_, oil_ or gearbox_temperature), -1 without a temperature axis */
-    const char *temp_name; /* its name, for the log messages */
-    double temp_lo, temp_hi;
     int initialized;
     int dirty;            /* a value changed since the outputs were last computed (initialization mode) */
-    int warned_range;
-    int zeta_valid;
-    double zeta_applied;
     double time;
-    double torque_lo, torque_hi;
-    int has_torque_range;
     uint64_t tables_tag;
     gk_envelope env;      /* the verified envelope (docs/fmu.md "Verified envelope"), one warning per input */
+    gkf_fmu *fmu;         /* the checks, steps and messages both runtimes share (gkfmu.h) */
+    int slot_vr[GKF_N];   /* value reference of each GKF_* slot, -1 if none */
 };
 
 /* ------------------------------------------------ plumbing (fmi_common.c) */

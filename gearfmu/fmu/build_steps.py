@@ -1,0 +1,328 @@
+"""The build steps both FMU builders share (the pythonfmu runtime, :mod:`gearfmu.fmu.pythonfmu_build`,
+and the standalone C runtime, :mod:`gearfmu.fmu.standalone_build`).
+
+* the arguments: :func:`check_arguments` (numbers, names, the output path; one-line
+  :class:`FmuBuildError` naming the field);
+* the C side: the kernel's sources and flags (with the FMU layer over it, gkfmu.c, that both
+  runtimes call), :func:`find_c_compiler`, :func:`run_compiler`;
+* the interface: :func:`interface_variables` (modeldescription/variables.toml expanded for
+  these tables, start values applied, the temperature input), :func:`model_description`;
+* the resources: :func:`write_tables`, :func:`write_scene`, :func:`envelope_json`, the
+  validation record (:func:`gearfmu.fmu.validation.validation_record`);
+* the FMU file: :func:`fmu_digest` (the identifier's hash), :func:`fmu_zip` (written under a
+  temporary name beside the target and renamed at the end), :func:`zip_folder`.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import uuid
+import zipfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Optional
+
+from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
+from ..scene.reader import default_output_interval_s
+from ..tables.mesh_tables import MeshTables
+from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
+                        features_of, model_description_xml, model_description_xml3)
+
+HERE = Path(__file__).resolve().parent
+KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
+KERNEL_HEADER = HERE / "kernel" / "gearkernel.h"
+#: the FMU behaviour over the kernel both runtimes call (input checks, steps, messages; docs/fmu.md)
+FMU_LAYER_SOURCE = HERE / "kernel" / "gkfmu.c"
+FMU_LAYER_HEADER = HERE / "kernel" / "gkfmu.h"
+FMU_LAYER_ABI_VERSION = 1  # gkfmu.h GKF_ABI_VERSION
+#: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
+CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
+KERNEL_ABI_VERSION = 3  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check)
+#: gearkernel.h GK_KINK_MAX_SLOTS
+KINK_MAX_SLOTS = 32
+#: the FMI 2.0 standard headers the C layers are compiled against
+FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+
+
+class FmuBuildError(ValueError):
+    """The FMU cannot be built from these arguments; the message names the field."""
+
+
+class CompilerNotFoundError(FmuBuildError):
+    """No C compiler to build the kernel."""
+
+
+def fmi2_header_dir() -> Path:
+    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
+    import fmpy  # fmpy: only for its FMI 2 headers
+
+    d = Path(fmpy.__file__).resolve().parent / "c-code"
+    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
+    if missing:
+        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
+    return d
+
+
+def find_c_compiler() -> str:
+    """The C compiler: ``$CC``, else gcc, else cc.  Raises :class:`CompilerNotFoundError`."""
+    for cand in (os.environ.get("CC"), "gcc", "cc"):
+        if cand and shutil.which(cand):
+            return shutil.which(cand)
+    raise CompilerNotFoundError("C compiler: none found (tried $CC, gcc, cc); the FMU's kernel is compiled "
+                                "at build time -- install gcc or set CC")
+
+
+def run_compiler(cmd, what: str, *, timeout: float = 120) -> None:
+    """Run the compile command ``cmd`` (``cmd[0]`` the compiler); :class:`CompilerNotFoundError`
+    if it cannot start, :class:`FmuBuildError` naming ``what`` with the compiler's messages if it fails."""
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except OSError as exc:
+        raise CompilerNotFoundError(f"C compiler {cmd[0]!r}: cannot run ({exc})") from None
+    if proc.returncode != 0:
+        raise FmuBuildError(f"{what}: compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+
+
+def compiler_version(cc: str) -> str:
+    """The first line of ``<cc> --version`` ("unknown" if it gives none)."""
+    try:
+        return subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30).stdout.splitlines()[0]
+    except (OSError, IndexError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def sha256_file(p: Path) -> str:
+    return hashlib.sha256(Path(p).read_bytes()).hexdigest()
+
+
+# ----------------------------------------------------------------- arguments
+def _check_positive(name: str, value, allow_zero: bool = False) -> float:
+    v = _check_finite(name, value)
+    if v < 0 or (v == 0 and not allow_zero):
+        raise FmuBuildError(f"{name}: must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+    return v
+
+
+def _check_finite(name: str, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise FmuBuildError(f"{name}: expected a number, got {value!r}") from None
+    if not (v == v and abs(v) != float("inf")):
+        raise FmuBuildError(f"{name}: must be finite, got {value!r}")
+    return v
+
+
+def damping_model_code(damping_model) -> int:
+    """0/'elastobacklash' or 1/'contact_zone' (an older spelling too) -> the kernel code."""
+    if isinstance(damping_model, str):
+        damping_model = current_spelling("damping_model", damping_model)
+        if damping_model not in DAMPING_MODELS:
+            raise FmuBuildError(f"damping_model: {damping_model!r} not one of {sorted(DAMPING_MODELS)}")
+        return DAMPING_MODELS[damping_model]
+    if isinstance(damping_model, bool) or damping_model not in (0, 1):
+        raise FmuBuildError(f"damping_model: {damping_model!r} must be 0 (elastobacklash) or 1 (contact_zone)")
+    return int(damping_model)
+
+
+def integrator_code(integrator, slots: int) -> int:
+    """0/'rk4', 1/'rk4_kink' or 2/'rk4_node' (gearfmu.dynamics.native.INTEGRATORS) -> the kernel code."""
+    if isinstance(integrator, str):
+        if integrator not in INTEGRATORS:
+            raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
+        code = INTEGRATORS[integrator]
+    elif isinstance(integrator, bool) or integrator not in INTEGRATORS.values():
+        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
+    else:
+        code = int(integrator)
+    if code != 0 and slots > KINK_MAX_SLOTS:
+        raise FmuBuildError(f"integrator: rk4_kink/rk4_node handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
+    return code
+
+
+def check_output_arguments(out_path, scene_text) -> Path:
+    """``out_path`` as a Path ending in .fmu and ``scene_text`` a str or None (FmuBuildError
+    naming the field otherwise)."""
+    if scene_text is not None and not isinstance(scene_text, str):
+        raise FmuBuildError(f"scene_text: expected str or None, got {type(scene_text).__name__}")
+    out_path = Path(out_path)
+    if out_path.suffix != ".fmu":
+        raise FmuBuildError(f"out_path: must end in .fmu, got {str(out_path)!r}")
+    return out_path
+
+
+def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_start_rad_s,
+                          pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
+                          max_step_s, stop_time_s, output_interval_s, damping_model):
+    """Check the arguments both FMU builders share.
+
+    Returns (damping ratio, pinion speed rad/s, pinion angle rad, pinion torque N*m,
+    gear torque N*m, max step s, stop time s, output interval s, damping model code);
+    raises :class:`FmuBuildError` naming the field.  ``gear_torque_start_Nm`` None
+    means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``.
+    """
+    if not isinstance(tables, MeshTables):
+        raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
+    tables.validate()
+    if not isinstance(model_name, str) or not model_name.strip():
+        raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
+    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
+    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
+    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
+    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
+    if gear_torque_start_Nm is None:
+        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
+    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
+    hmax = _check_positive("max_step_s", max_step_s)
+    tstop = _check_positive("stop_time_s", stop_time_s)
+    if output_interval_s is None:  # the scene's rule (gearfmu.scene.reader.default_output_interval_s)
+        output_interval_s = min(default_output_interval_s(w0, tables.teeth_pinion), tstop)
+    dt = _check_positive("output_interval_s", output_interval_s)
+    return zeta, w0, th0, T1, T2, hmax, tstop, dt, damping_model_code(damping_model)
+
+
+@dataclass(frozen=True)
+class BuildArguments:
+    """The checked arguments of one FMU build (SI units; damping model and integrator as kernel codes)."""
+    damping_ratio: float
+    pinion_speed_start_rad_s: float
+    pinion_angle_start_rad: float
+    pinion_torque_start_Nm: float
+    gear_torque_start_Nm: float
+    max_step_s: float
+    stop_time_s: float
+    output_interval_s: float
+    damping_model: int
+    integrator: int
+    out_path: Path
+
+    def starts(self) -> dict:
+        """Start values of the interface variables (modeldescription/variables.toml names)."""
+        return {"pinion_torque": self.pinion_torque_start_Nm, "gear_torque": self.gear_torque_start_Nm,
+                "damping_ratio": self.damping_ratio, "pinion_speed_start": self.pinion_speed_start_rad_s,
+                "pinion_angle_start": self.pinion_angle_start_rad, "max_step": self.max_step_s,
+                "damping_model": self.damping_model, "integrator": self.integrator}
+
+    def parameters(self, temperature_start_C: Optional[float] = None) -> dict:
+        """The parameters the provenance and the validation record name (no experiment times)."""
+        p = {"damping_ratio": self.damping_ratio, "pinion_speed_start_rad_s": self.pinion_speed_start_rad_s,
+             "pinion_angle_start_rad": self.pinion_angle_start_rad,
+             "pinion_torque_start_Nm": self.pinion_torque_start_Nm,
+             "gear_torque_start_Nm": self.gear_torque_start_Nm, "max_step_s": self.max_step_s,
+             "damping_model": self.damping_model, "integrator": self.integrator}
+        if temperature_start_C is not None:
+            p["bulk_temperature_start_C"] = temperature_start_C
+        return p
+
+
+def check_arguments(tables, out_path, *, scene_text, integrator, **kw) -> BuildArguments:
+    """:func:`check_build_arguments`, the integrator code and :func:`check_output_arguments`, in that order."""
+    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(tables, **kw)
+    ig = integrator_code(integrator, tables.slots)
+    out_path = check_output_arguments(out_path, scene_text)
+    return BuildArguments(zeta, w0, th0, T1, T2, hmax, tstop, dt, dm, ig, out_path)
+
+
+# ----------------------------------------------------------------- interface
+def temperature_input(variables, tables: MeshTables):
+    """The temperature input (:attr:`MeshTables.temperature_input`: ``bulk_temperature``,
+    ``oil_temperature`` or ``gearbox_temperature``) for tables with a temperature
+    axis: start = :attr:`MeshTables.default_temperature_C`, min/max = the axis
+    ends (degC).  Returns (variables, start or None)."""
+    if not tables.has_temperature_axis:
+        return list(variables), None
+
+    name = tables.temperature_input
+    lo, hi = tables.temperature_range_C
+    start = tables.default_temperature_C
+    out = [replace(v, start=start, min=lo, max=hi) if v.name == name else v for v in variables]
+    if not any(v.name == name for v in out):
+        raise FmuBuildError(f"{name}: the tables have a temperature axis but the interface spec "
+                            f"has no {name!r} input (a 'requires' entry for it)")
+    return out, start
+
+
+def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_optional: bool = False):
+    """The spec's variables for these tables with ``starts`` applied and the temperature input
+    (:func:`temperature_input`); returns (variables, temperature start degC or None).
+    ``integrator_optional``: a spec without an ``integrator`` parameter is accepted when the
+    integrator is rk4 (0), the one the runtime then uses."""
+    variables = expand_variables(spec, tables.slots, features_of(tables))
+    if integrator_optional and not any(v.name == "integrator" for v in variables):
+        if starts.get("integrator", 0) != 0:
+            raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")
+        starts = {k: v for k, v in starts.items() if k != "integrator"}
+    return temperature_input(apply_start_values(variables, starts), tables)
+
+
+def model_description(spec, variables, fmi_version: int, **md_args) -> bytes:
+    """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``."""
+    if fmi_version == 3:
+        xml = model_description_xml3(spec, variables, **md_args)
+        check_model_description3(xml, variables)
+    else:
+        xml = model_description_xml(spec, variables, **md_args)
+        check_model_description(xml, variables)
+    return xml
+
+
+# ----------------------------------------------------------------- resources
+def fmu_digest(meta_bytes: bytes, bin_bytes: bytes, model_name: str, a: BuildArguments) -> str:
+    """SHA-256 (hex) of the tables and the model's settings: the first 12 digits go into the identifier."""
+    key = (model_name, a.damping_ratio, a.pinion_speed_start_rad_s, a.pinion_angle_start_rad,
+           a.pinion_torque_start_Nm, a.gear_torque_start_Nm, a.max_step_s, a.damping_model, a.integrator)
+    return hashlib.sha256(meta_bytes + bin_bytes + repr(key).encode()).hexdigest()
+
+
+def write_tables(res_dir: Path, meta_bytes: bytes, bin_bytes: bytes) -> None:
+    """``tables.json`` and ``tables.bin`` (gearfmu/tables/mesh_tables.py format) into ``res_dir``."""
+    (res_dir / "tables.json").write_bytes(meta_bytes)
+    (res_dir / "tables.bin").write_bytes(bin_bytes)
+
+
+def write_scene(res_dir: Path, scene_text: Optional[str]) -> Optional[Path]:
+    """``scene.toml`` into ``res_dir`` when a scene was given; its path (None without one)."""
+    if scene_text is None:
+        return None
+    p = res_dir / "scene.toml"
+    p.write_text(scene_text, encoding="utf-8")
+    return p
+
+
+def scene_sha256(scene_text: Optional[str]) -> Optional[str]:
+    return None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest()
+
+
+def envelope_json(env_rec: dict) -> str:
+    """``resources/envelope.json`` (:func:`gearfmu.scene.envelope.fmu_envelope_record`)."""
+    return json.dumps(env_rec, indent=1)
+
+
+# ----------------------------------------------------------------- the file
+@contextlib.contextmanager
+def fmu_zip(out_path: Path):
+    """A :class:`zipfile.ZipFile` (deflated) to write the FMU into: written under a temporary name
+    beside ``out_path`` and renamed to it when the block ends without an error, so a failed
+    build never leaves a half-written FMU under the final name."""
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
+    try:
+        with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as zout:
+            yield zout
+        os.replace(part, out_path)
+    finally:
+        if part.exists():
+            part.unlink()
+
+
+def zip_folder(zout: zipfile.ZipFile, root: Path) -> None:
+    """``root/modelDescription.xml`` first, then every other file under ``root`` in sorted order."""
+    zout.write(root / "modelDescription.xml", "modelDescription.xml")
+    for p in sorted(root.rglob("*")):
+        rel = p.relative_to(root).as_posix()
+        if p.is_file() and rel != "modelDescription.xml":
+            zout.write(p, rel)
