@@ -57,7 +57,7 @@ def case():
     return tb, T1, T1 * tb.base_radius_gear_m / tb.base_radius_pinion_m, w0, zeta, x0
 
 
-def c_runner(tb, T1, T2, w0, zeta, x0, H, n, hmax, integrator, lib):
+def c_runner(tb, T1, T2, w0, zeta, x0, H, n, hmax, integrator, lib, damping_model=0):
     k = np.ascontiguousarray(tb.k_N_per_m)
     e = np.ascontiguousarray(tb.e_m)
     b = np.ascontiguousarray(tb.backlash_half_m)
@@ -67,7 +67,7 @@ def c_runner(tb, T1, T2, w0, zeta, x0, H, n, hmax, integrator, lib):
     lib.gk_init(m.ctypes.data, tb.slots, tb.n_phi, len(tq), tq.ctypes.data, k.ctypes.data, e.ctypes.data,
                 b.ctypes.data, tb.phi_period_rad, tb.base_radius_pinion_m, tb.base_radius_gear_m,
                 tb.inertia_pinion_kgm2, tb.inertia_gear_kgm2, tb.k_mean_N_per_m)
-    lib.gk_set_damping(m.ctypes.data, zeta, 0)
+    lib.gk_set_damping(m.ctypes.data, zeta, damping_model)
     lib.gk_set_integrator(m.ctypes.data, integrator)
     s = np.array([0.0, w0, x0, 0.0])
     pm, ps, po = m.ctypes.data, s.ctypes.data, out.ctypes.data

@@ -73,7 +73,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
-            _seg_start(tab, wk, ndk, icode == 2)
+            _seg_start(tab, wk, ndk, icode == 2, om)
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
             for _ in range(n_sub):

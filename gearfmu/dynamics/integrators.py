@@ -287,11 +287,16 @@ def _seg_down(tab, n):
 
 
 @njit(cache=True, error_model="numpy")
-def _seg_start(tab, wk, nd, node):
-    """Held segment for cell nd at a step start: lo = nd, hi = the first flagged node
-    above nd (rk4_node) or nd + 1 (rk4_kink)."""
-    wk[16] = nd
-    wk[17] = _seg_up(tab, nd) if node else nd + 1.0
+def _seg_start(tab, wk, nd, node, om):
+    """Held segment for cell nd at a step start: [nd, nd + 1] (rk4_kink); rk4_node:
+    from nd to the first flagged node above it when om >= 0, from the last flagged
+    node below nd + 1 to nd + 1 when om < 0 (the scan runs ahead of the motion)."""
+    if node and om < 0.0:
+        wk[17] = nd + 1.0
+        wk[16] = _seg_down(tab, nd + 1.0)
+    else:
+        wk[16] = nd
+        wk[17] = _seg_up(tab, nd) if node else nd + 1.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -375,7 +380,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th * tab[12])
             i0, i1 = _cell_nodes(nd, n_phi)
-            _seg_start(tab, wk, nd, node)
+            _seg_start(tab, wk, nd, node, om)
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
         # scan the guards at the trial end: cheap test first (one lookup per pair)

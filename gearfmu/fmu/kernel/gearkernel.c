@@ -482,11 +482,17 @@ static double seg_down(const gk_model *m, double n)
     return q;
 }
 
-/* held segment at a step start: lo = nd, hi = next flagged node (rk4_node) or nd + 1 */
-static void seg_start(const gk_model *m, gk_mode *md, int node)
+/* held segment at a step start: [nd, nd + 1] (rk4_kink); rk4_node: nd to the next
+ * flagged node above for om >= 0, the last flagged node below nd + 1 to nd + 1 for om < 0 */
+static void seg_start(const gk_model *m, gk_mode *md, int node, double om)
 {
-    md->lo = md->nd;
-    md->hi = node ? seg_up(m, md->nd) : md->nd + 1.0;
+    if (node && om < 0.0) {
+        md->hi = md->nd + 1.0;
+        md->lo = seg_down(m, md->nd + 1.0);
+    } else {
+        md->lo = md->nd;
+        md->hi = node ? seg_up(m, md->nd) : md->nd + 1.0;
+    }
 }
 
 /* move the held segment across its end (up) or start; the held cell follows */
@@ -705,7 +711,7 @@ static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, cons
 {
     md->nd = floor(y[0] * m->inv_dphi);
     cell_nodes(md, m->n_phi);
-    seg_start(m, md, node);
+    seg_start(m, md, node, y[1]);
     mode_sync(m, t, md, y, 1);
 }
 
