@@ -33,8 +33,10 @@ extern "C" {
 #define GK_DAMPING_ELASTOBACKLASH 0
 #define GK_DAMPING_CONTACT_ZONE 1
 
-/* integrators (docs/model.md "Integration"): fixed-step classical RK4, and
- * RK4 that steps exactly to every table node and contact-mode change */
+/* integrators (docs/model.md "Integration"): fixed-step classical RK4, RK4 that
+ * steps exactly to every table node and contact-mode change (rk4_kink), and
+ * rk4_kink stopping only at the table nodes where the tables bend, each reached
+ * by one step to its predicted crossing time (rk4_node, docs/native.md) */
 #define GK_INTEGRATOR_RK4 0
 #define GK_INTEGRATOR_RK4_KINK 1
 #define GK_INTEGRATOR_RK4_NODE 2
