@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
 )
 
 
@@ -268,7 +268,10 @@ def _node_flagged(tab, n):
 
 @njit(cache=True, error_model="numpy")
 def _seg_up(tab, n):
-    """First flagged node above global node n, at most n + N."""
+    """First flagged node above global node n, at most n + N (n + 1 beyond 2^52 cells,
+    where doubles no longer count single nodes, and for a non-finite n)."""
+    if not abs(n) < _CELL_LIMIT:
+        return n + 1.0
     top = n + tab[7]
     m = n + 1.0
     while m < top and not _node_flagged(tab, m):
@@ -278,7 +281,9 @@ def _seg_up(tab, n):
 
 @njit(cache=True, error_model="numpy")
 def _seg_down(tab, n):
-    """Last flagged node below global node n, at least n - N."""
+    """Last flagged node below global node n, at least n - N (n - 1 beyond 2^52 cells)."""
+    if not abs(n) < _CELL_LIMIT:
+        return n - 1.0
     bottom = n - tab[7]
     m = n - 1.0
     while m > bottom and not _node_flagged(tab, m):

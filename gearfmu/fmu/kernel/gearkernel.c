@@ -471,6 +471,7 @@ static int node_flagged(const gk_model *m, double n)
 static double seg_up(const gk_model *m, double n)
 {
     double top = n + m->n_phi, q = n + 1.0;
+    if (!(fabs(n) < GK_CELL_LIMIT)) return n + 1.0;   /* doubles no longer count single nodes */
     while (q < top && !node_flagged(m, q)) q += 1.0;
     return q;
 }
@@ -478,6 +479,7 @@ static double seg_up(const gk_model *m, double n)
 static double seg_down(const gk_model *m, double n)
 {
     double bottom = n - m->n_phi, q = n - 1.0;
+    if (!(fabs(n) < GK_CELL_LIMIT)) return n - 1.0;
     while (q > bottom && !node_flagged(m, q)) q -= 1.0;
     return q;
 }
