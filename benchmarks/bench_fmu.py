@@ -9,7 +9,16 @@ Measured in one run, on the same tables, inputs and internal steps:
 * ``*_wall_per_sim_s``: wall time per simulated second at the scene's own
   communication step (FMU through fmpy's low-level API and through
   ``fmpy.simulate_fmu``), and their ratio to native;
-* ``fmu_instantiate_s``: extract + instantiate + initialise of the FMU.
+* ``fmu_instantiate_s``: extract + instantiate + initialise of the FMU;
+* ``rtf``: real-time factor (simulated s / wall s) of the standalone FMU built with
+  ``--rtf-integrator`` (default rk4_node) at a stated error (``--rtf-error``, relative
+  RMS dte error, default 1e-4) and communication step (``--rtf-comm``, default 1e-4 s),
+  over ``--rtf-sim`` simulated seconds: the largest internal step H/n whose native run
+  (bitwise the FMU's kernel) meets the error against a fine run (native rk4_kink at
+  H/512) is built into the FMU; the FMU's own outputs, recorded in the timed fmpy
+  low-level loop, are compared with the fine run again (``fmu_dte_rel_rms_err``); the
+  same steps through the C kernel alone (gk_do_step via ctypes) give
+  ``kernel_real_time_factor`` (what the FMI layer and the Python host loop add).
 
 Prints one JSON object.  Ratios, not absolute times, are the comparable
 numbers (these machines are shared and noisy): each timing is the best of
@@ -29,7 +38,9 @@ from pathlib import Path
 import numpy as np
 
 
-def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values):
+def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None):
+    """Timed fmpy low-level doStep/getReal loop; ``record`` (a list): the dte of every
+    communication point is appended to it (row 0 the initial one)."""
     from fmpy.fmi2 import FMU2Slave
 
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -46,10 +57,14 @@ def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values):
     n = int(round(stop_s / comm_s))
     out_vr = [vr["dte"], vr["mesh_force"]]
     t = 0.0
+    if record is not None:
+        record.append(fmu.getReal(out_vr)[0])
     t1 = time.perf_counter()
     for _ in range(n):
         fmu.doStep(currentCommunicationPoint=t, communicationStepSize=comm_s)
-        fmu.getReal(out_vr)
+        v = fmu.getReal(out_vr)
+        if record is not None:
+            record.append(v[0])
         t += comm_s
     wall = time.perf_counter() - t1
     last = fmu.getReal(out_vr)
@@ -58,11 +73,81 @@ def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values):
     return t_init, wall, n, last
 
 
+def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target, comm_s, sim_s, repeat):
+    """The ``rtf`` block of the report (module docstring)."""
+    from fmpy import extract, read_model_description
+
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+    from gearfmu.fmu.pythonfmu_build import compile_kernel
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_integrators import c_runner
+
+    kw = dict(stop_time_s=sim_s, comm_step_s=comm_s, pinion_torque_Nm=T1, gear_torque_Nm=T2,
+              pinion_speed_start_rad_s=w0, damping_ratio=zeta, damping_model=damping_model)
+    fine = simulate(tables, max_step_s=comm_s / 512, integrator="rk4_kink", **kw)
+    rng = float(np.ptp(fine.dte))
+
+    def err(dte):
+        d = np.asarray(dte, float)[:len(fine.dte)] - fine.dte[:len(dte)]
+        return float(np.sqrt(np.mean(d ** 2)) / rng)
+
+    tried, n_ok = [], None
+    for n in (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64):
+        e = err(simulate(tables, max_step_s=comm_s / n, integrator=integrator, **kw).dte)
+        tried.append({"substeps": n, "dte_rel_rms_err": e})
+        if e <= target:
+            n_ok = n
+            break
+    if n_ok is None:
+        return {"error": f"no internal step down to H/64 meets {target:g}", "tried": tried}
+    h = comm_s / n_ok
+    tmp = Path(tempfile.mkdtemp(prefix="gearfmu_rtf_"))
+    try:
+        path = build_standalone_fmu(tables, tmp / "rtf.fmu", damping_ratio=zeta, pinion_speed_start_rad_s=w0,
+                                    pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2, max_step_s=h,
+                                    damping_model=damping_model, stop_time_s=sim_s, output_interval_s=comm_s,
+                                    integrator=integrator, validation=False)
+        md = read_model_description(str(path))
+        unz = extract(str(path))
+        walls, rec = [], []
+        for _ in range(repeat):
+            rec = []
+            walls.append(_fmu_loop(path, unz, md, sim_s, comm_s, {"pinion_torque": T1, "gear_torque": T2},
+                                   record=rec)[1])
+        shutil.rmtree(unz, ignore_errors=True)
+        import ctypes
+        lib = ctypes.CDLL(str(compile_kernel(tmp)))
+        d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
+        lib.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
+        lib.gk_set_damping.argtypes = [p, d, i]
+        lib.gk_set_integrator.argtypes = [p, i]
+        lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+        code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
+        dm = {"elastobacklash": 0, "contact_zone": 1}[damping_model]
+        nsteps = int(round(sim_s / comm_s))
+        kwall = min(c_runner(tables, T1, T2, w0, zeta, float(fine.dte[0]), comm_s, nsteps, h, code, lib,
+                             damping_model=dm)[0] for _ in range(repeat))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return {"integrator": integrator, "target_dte_rel_rms_err": target, "comm_step_s": comm_s,
+            "simulated_s": sim_s, "max_step_s": h, "substeps": n_ok, "tried": tried,
+            "reference": "native rk4_kink at H/512 (fine run)",
+            "fmu_dte_rel_rms_err": err(rec), "fmu_wall_s": min(walls), "real_time_factor": sim_s / min(walls),
+            "fmu_host": "fmpy FMU2Slave doStep + getReal per communication step (Python loop)",
+            "kernel_wall_s": kwall, "kernel_real_time_factor": sim_s / kwall}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scene", nargs="?")
     ap.add_argument("--sim-time", type=float, default=0.2, help="simulated seconds per timing (s)")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--rtf-error", type=float, default=1e-4, help="relative RMS dte error of the rtf block")
+    ap.add_argument("--rtf-comm", type=float, default=1e-4, help="communication step of the rtf block (s)")
+    ap.add_argument("--rtf-sim", type=float, default=0.1, help="simulated seconds of the rtf block (s)")
+    ap.add_argument("--rtf-integrator", default="rk4_node")
+    ap.add_argument("--only-rtf", action="store_true", help="report the rtf block only")
     args = ap.parse_args(argv)
 
     import fmpy
@@ -72,6 +157,16 @@ def main(argv=None):
     from gearfmu.pipeline import build, gear_torque_for, load
 
     scene = load(args.scene)
+    if args.only_rtf:
+        from gearfmu.pipeline import compute_tables
+        tables = compute_tables(scene)
+        T1 = scene.operating.torque_Nm
+        rep = rtf_at_error(tables, T1=T1, T2=gear_torque_for(tables, T1), w0=scene.operating.speed_rad_s,
+                           zeta=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model,
+                           integrator=args.rtf_integrator, target=args.rtf_error, comm_s=args.rtf_comm,
+                           sim_s=args.rtf_sim, repeat=args.repeat)
+        print(json.dumps({"scene": scene.name, "rtf": rep}, indent=1))
+        return 0
     tmp = Path(tempfile.mkdtemp(prefix="gearfmu_bench_"))
     try:
         t0 = time.perf_counter()
@@ -139,6 +234,9 @@ def main(argv=None):
             "fmu_instantiate_and_initialize_s": min(inits),
             "fmu_build_s": build_s,
             "tables_s": res.tables_wall_s,
+            "rtf": rtf_at_error(tables, T1=T1, T2=T2, w0=w0, zeta=zeta, damping_model=scene.solver.damping_model,
+                                integrator=args.rtf_integrator, target=args.rtf_error, comm_s=args.rtf_comm,
+                                sim_s=args.rtf_sim, repeat=args.repeat),
         }
         print(json.dumps(report, indent=1))
     finally:

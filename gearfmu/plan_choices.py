@@ -23,8 +23,9 @@ from .scene.reader import ThermalOptions
 from .tables.estimate import estimate_build
 
 #: the integrator levels the planner measures, cheapest first, the last the full model's: rk4,
-#: then rk4_kink (node and contact events located).  rk4_node (same events, node crossings
-#: predicted) is a scene setting the planner keeps when pinned but does not yet offer as a level.
+#: then rk4_kink (node and contact events located).  rk4_node (events only at the table nodes
+#: where the tables bend, their crossings predicted) is a scene setting the planner keeps when
+#: pinned but does not yet offer as a level.
 PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_kink")
 assert set(PLAN_INTEGRATOR_LEVELS) <= set(INTEGRATORS)
 

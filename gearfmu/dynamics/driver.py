@@ -16,9 +16,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .integrators import _kink_substep, _mode_sync, _rk4_step
+from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start
 from .model_rhs import (
-    _CELL_NONE, _cell_nodes, _equilibrium, _outputs_row, _ptr, _tab, _table_pointers, _torque_index,
+    _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _outputs_row, _ptr, _tab, _table_pointers,
+    _torque_index,
 )
 
 
@@ -45,15 +46,18 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     th0 + omega1*t with t = s*H + i*h at substep i.  'rk4_kink' and 'rk4_node' set the contact
     mode from the state at the start of every step and counts the located events
     per step in out_events; in the SDOF form it integrates theta1 as a state
-    with omega1' = 0.  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
+    with omega1' = 0.  'rk4_node' stops only at the table nodes flagged by
+    _node_flags (computed once per run from k, e, b).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
     kernels read their data pointers, see gearfmu.dynamics.model_rhs)."""
     n_steps = out_state.shape[0] - 1
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
     rows2 = k.shape[0] > 1
     mode = np.zeros(3 * p, dtype=np.int64)
-    work = np.zeros(16)
+    work = np.zeros(18)
+    flags = _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
+    fp = _ptr(flags)
     th0 = th
     nd = _CELL_NONE
     i0 = 0
@@ -62,13 +66,14 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         t2 = t2s[s]
         fm = t1 / rb1
         it, wt = _torque_index(t1, torque)
-        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
+        tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp)
         dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
         if s == 0:
             _write_row(tab, 0, th, om, x, v, out_state, out_pair, out_force, out_stiff)
         if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
+            _seg_start(tab, wk, ndk, icode == 2, om)
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
             for _ in range(n_sub):

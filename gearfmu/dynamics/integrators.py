@@ -5,8 +5,10 @@
 * :func:`_kink_substep` -- one substep of 'rk4_kink': RK4 with the contact mode
   and the table cell held, stepping exactly to every table node and contact
   mode change located on the step's cubic Hermite interpolant; and of
-  'rk4_node': the same, but a table node is reached by one RK4 step to its
-  crossing time predicted from theta1' = omega1 (no trial step, no root finder).
+  'rk4_node': the same, but only at table nodes where the tables bend (the node
+  kink flags of :func:`gearfmu.dynamics.model_rhs._node_flags`), each reached by
+  one RK4 step to its crossing time predicted from theta1' = omega1 (no trial
+  step, no root finder); between them the steps are full substeps.
 
 Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
@@ -20,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
 )
 
 
@@ -103,7 +105,8 @@ _KINK_MAX_IT = 60       # Illinois iterations per root
 # times per substep.  The driver hands them the tables as ``tab``, the inputs as
 # ``dyn``, the mode as an int64 pointer ``md`` (reg[j] = md[j], sub[j] = md[P + j],
 # kpos[j] = md[2P + j]) and the Hermite data as a float64 pointer ``wk``
-# (y0 = wk[0:4], f0 = wk[4:8], y1 = wk[8:12], f1 = wk[12:16]).  LLVM then
+# (y0 = wk[0:4], f0 = wk[4:8], y1 = wk[8:12], f1 = wk[12:16]; the held segment's
+# end nodes lo = wk[16], hi = wk[17], global node indices).  LLVM then
 # inlines the whole substep; no allocation or slicing happens in the loop.
 
 
@@ -127,14 +130,15 @@ def _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, h, nd, i0, i1):
 
 
 @njit(cache=True, error_model="numpy")
-def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1):
-    """Guard gi at a state: 0 cell start theta1 - nd*dphi, 1 cell end (nd+1)*dphi - theta1,
-    2 + 3*j + q guard q of pair j."""
+def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1, lo, hi):
+    """Guard gi at a state: 0 segment start theta1 - lo*dphi, 1 segment end hi*dphi - theta1
+    (rk4_kink: lo = nd, hi = nd + 1, the cell), 2 + 3*j + q guard q of pair j; the
+    tables are interpolated in the held cell nd."""
     dphi = tab[9]
     if gi == 0:
-        return th - nd * dphi
+        return th - lo * dphi
     if gi == 1:
-        return (nd + 1.0) * dphi - th
+        return hi * dphi - th
     p = tab[8]
     j = (gi - 2) // 3
     q = (gi - 2) - 3 * j
@@ -156,14 +160,14 @@ def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
     yb = ((h00 * wk[1] + h10 * (tau * wk[5])) + h01 * wk[9]) + h11 * (tau * wk[13])
     yc = ((h00 * wk[2] + h10 * (tau * wk[6])) + h01 * wk[10]) + h11 * (tau * wk[14])
     yd = ((h00 * wk[3] + h10 * (tau * wk[7])) + h01 * wk[11]) + h11 * (tau * wk[15])
-    return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1)
+    return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, wk[16], wk[17])
 
 
 @njit(cache=True, error_model="numpy")
 def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
     """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
     (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
-    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1)
+    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1, wk[16], wk[17])
     if not ga > 0.0:
         return 0.0
     a = 0.0
@@ -232,16 +236,16 @@ def _put4(wk, o, a, b, c, d):
 
 
 @njit(cache=True, error_model="numpy")
-def _node_time(th, om, fb, rem, nd, dphi):
-    """Time to the table node ahead of theta1 predicted from the step's first
+def _node_time(th, om, fb, rem, lo, hi, dphi):
+    """Time to the flagged table node ahead of theta1 predicted from the step's first
     stage (rk4_node): theta1(tau) = th + tau*(om + 0.5*fb*tau) with fb = omega1',
-    the node (nd + 1)*dphi for om > 0, nd*dphi for om < 0; linear start
-    tau = (node - th)/om, then two Newton iterations.  Returns tau when
+    the node hi*dphi for om > 0, lo*dphi for om < 0 (the held segment's ends);
+    linear start tau = (node - th)/om, then two Newton iterations.  Returns tau when
     0 < tau < rem and the slope keeps the sign of om, else -1 (no prediction)."""
     if om > 0.0:
-        dist = (nd + 1.0) * dphi - th
+        dist = hi * dphi - th
     elif om < 0.0:
-        dist = nd * dphi - th
+        dist = lo * dphi - th
     else:
         return -1.0
     tau = dist / om
@@ -253,6 +257,65 @@ def _node_time(th, om, fb, rem, nd, dphi):
     if tau > 0.0 and tau < rem:
         return tau
     return -1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _node_flagged(tab, n):
+    """Kink flag of global table node n (float holding an integer), node n mod N."""
+    i0, i1 = _cell_nodes(n, tab[7])
+    return tab[13][i0] != 0
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_up(tab, n):
+    """First flagged node above global node n, at most n + N (n + 1 beyond 2^52 cells,
+    where doubles no longer count single nodes, and for a non-finite n)."""
+    if not abs(n) < _CELL_LIMIT:
+        return n + 1.0
+    top = n + tab[7]
+    m = n + 1.0
+    while m < top and not _node_flagged(tab, m):
+        m += 1.0
+    return m
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_down(tab, n):
+    """Last flagged node below global node n, at least n - N (n - 1 beyond 2^52 cells)."""
+    if not abs(n) < _CELL_LIMIT:
+        return n - 1.0
+    bottom = n - tab[7]
+    m = n - 1.0
+    while m > bottom and not _node_flagged(tab, m):
+        m -= 1.0
+    return m
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_start(tab, wk, nd, node, om):
+    """Held segment for cell nd at a step start: [nd, nd + 1] (rk4_kink); rk4_node:
+    from nd to the first flagged node above it when om >= 0, from the last flagged
+    node below nd + 1 to nd + 1 when om < 0 (the scan runs ahead of the motion)."""
+    if node and om < 0.0:
+        wk[17] = nd + 1.0
+        wk[16] = _seg_down(tab, nd + 1.0)
+    else:
+        wk[16] = nd
+        wk[17] = _seg_up(tab, nd) if node else nd + 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_cross(tab, wk, up, node):
+    """Move the held segment across its end (up) or start; returns the new held cell."""
+    if up:
+        lo = wk[17]
+        wk[16] = lo
+        wk[17] = _seg_up(tab, lo) if node else lo + 1.0
+        return lo
+    hi = wk[16]
+    wk[17] = hi
+    wk[16] = _seg_down(tab, hi) if node else hi - 1.0
+    return hi - 1.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -275,13 +338,18 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
     Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place.
 
-    With ``node`` (the 'rk4_node' integrator) a table node ahead within the
-    remaining substep is not located by a trial step and the root finder: its
-    crossing time is predicted from theta1' = omega1 (:func:`_node_time`), the
-    RK4 step ends there, and when no pair guard is negative at that end the cell
-    switches to the next one as at a located node event; when a pair guard is
-    negative the prediction is dropped and the rk4_kink trial and location
-    follow.  Without ``node`` the arithmetic is that of rk4_kink exactly."""
+    The held segment [lo, hi) (wk[16], wk[17], global node indices) is the cell nd
+    for rk4_kink.  With ``node`` (the 'rk4_node' integrator) it runs from flagged
+    node to flagged node (:func:`gearfmu.dynamics.model_rhs._node_flags`; the tables
+    are linear across the nodes inside, so the held cell's interpolant is theirs):
+    at the start of every RK4 step the held cell moves to the cell of theta1 when
+    that lies in the segment; the flagged node ahead within the remaining substep
+    is not located by a trial step and the root finder: its crossing time is
+    predicted from theta1' = omega1 (:func:`_node_time`), the RK4 step ends there,
+    and when no pair guard is negative at that end the segment switches to the
+    next one as at a located node event; when a pair guard is negative the
+    prediction is dropped and the rk4_kink trial and location follow.  Without
+    ``node`` the arithmetic is that of rk4_kink exactly."""
     n_phi = tab[7]
     p = tab[8]
     dphi = tab[9]
@@ -292,13 +360,18 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
     rem = h
     nev = 0
     while True:
+        if node:
+            cn = np.floor(th * tab[12])
+            if cn >= wk[16] and cn < wk[17] and cn != nd:
+                nd = cn
+                i0, i1 = _cell_nodes(nd, n_phi)
         fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
         if node and nev < KINK_MAX_EVENTS:
-            tau = _node_time(th, om, fb, rem, nd, dphi)
+            tau = _node_time(th, om, fb, rem, wk[16], wk[17], dphi)
             if tau > 0.0:
                 ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
                 if _pairs_hold(tab, md, ta, tb, tc, td, nd, i0, i1):
-                    nd = nd + 1.0 if om > 0.0 else nd - 1.0
+                    nd = _seg_cross(tab, wk, om > 0.0, True)
                     th, om, x, v = ta, tb, tc, td
                     rem = rem - tau
                     nev += 1
@@ -312,10 +385,11 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th * tab[12])
             i0, i1 = _cell_nodes(nd, n_phi)
+            _seg_start(tab, wk, nd, node, om)
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
         # scan the guards at the trial end: cheap test first (one lookup per pair)
-        any_neg = (ta - nd * dphi < 0.0) or ((nd + 1.0) * dphi - ta < 0.0)
+        any_neg = (ta - wk[16] * dphi < 0.0) or (wk[17] * dphi - ta < 0.0)
         if not any_neg:
             w = (ta - nd * dphi) * tab[12]
             for j in range(p):
@@ -334,7 +408,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
         best_gi = -1
         have_f1 = False
         for gi in range(n_guard):
-            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1)
+            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
             if g < 0.0:
                 if not have_f1:
                     _put4(wk, 0, th, om, x, v)
@@ -360,7 +434,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
             rem = rem - tau
         nev += 1
         if best_gi < 2:
-            nd = nd - 1.0 if best_gi == 0 else nd + 1.0
+            nd = _seg_cross(tab, wk, best_gi == 1, node)
             i0, i1 = _cell_nodes(nd, n_phi)
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
         else:

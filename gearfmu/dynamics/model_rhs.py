@@ -12,11 +12,12 @@ tuple ``tab`` (:func:`_tab`): a numba call with an array argument increfs and
 decrefs the array's memory block (atomic operations the refcount pruner cannot
 remove across calls, loops and branches), and the integrators call these
 kernels many times per substep.  ``tab`` = (kp, ep, bp, o0, o1, rows2, wt,
-n_phi, P, dphi, c, model, inv_dphi): pointers of k, e (NT, P, N) and b (P, N),
+n_phi, P, dphi, c, model, inv_dphi, fp): pointers of k, e (NT, P, N) and b (P, N),
 the offsets of torque rows it and it+1, whether a second row is blended
 (NT > 1), its weight, the node count N, the slot count P, the cell width
 (rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 contact_zone) and
-the reciprocal cell width N/Phi (1/rad).
+the reciprocal cell width N/Phi (1/rad), and the pointer of the node kink
+flags (N uint8, :func:`_node_flags`; rk4_node stops only at flagged nodes).
 """
 from __future__ import annotations
 
@@ -30,6 +31,11 @@ from numba.extending import intrinsic
 _CELL_NONE = -(1 << 62)
 #: 2^52: below it the global cell index and s - nd are exact in doubles
 _CELL_LIMIT = 4503599627370496.0
+#: relative tolerance of the node kink test (:func:`_node_flags`; gearkernel.c GK_NODE_KINK_TOL,
+#: docs/native.md "rk4_node"): a second difference above it times the sum of the three |values|
+NODE_KINK_TOL = 1e-9
+#: most table nodes that get kink flags (gearkernel.h GK_NODE_FLAGS_MAX); more: every node flagged
+NODE_FLAGS_MAX = 8192
 
 
 @intrinsic
@@ -138,11 +144,62 @@ def _table_pointers(k, e, b):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi):
+def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp):
     """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2)."""
     o0 = it * p * n_phi
     o1 = (it + 1) * p * n_phi if rows2 else o0
-    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi)
+    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _kinked(a0, a1, a2):
+    """True when the piecewise-linear interpolant through (a0, a1, a2) bends at a1:
+    |(a2 - a1) - (a1 - a0)| > NODE_KINK_TOL*(|a0| + |a1| + |a2|) (or not finite)."""
+    d = (a2 - a1) - (a1 - a0)
+    s = (abs(a0) + abs(a1)) + abs(a2)
+    return not abs(d) <= NODE_KINK_TOL * s
+
+
+@njit(cache=True, error_model="numpy")
+def _node_flags(k, e, b):
+    """Kink flag (uint8) of every table node i (docs/native.md "rk4_node"): 1 when in any
+    torque row and slot the table k, e or b bends at node i (:func:`_kinked`, periodic
+    neighbours), or the contact_zone flag kpos (k at the cell midpoint > 0) can differ
+    between the cells on either side (the midpoint values over every row and both cells
+    are neither all > 0 nor all <= 0).  Every node is flagged when N > NODE_FLAGS_MAX.
+    The arithmetic of gearkernel.c node_flags."""
+    nt, p, n = k.shape
+    flags = np.ones(n, dtype=np.uint8)
+    if n > NODE_FLAGS_MAX:
+        return flags
+    for i in range(n):
+        im = n - 1 if i == 0 else i - 1
+        ip = 0 if i == n - 1 else i + 1
+        bent = False
+        for j in range(p):
+            if _kinked(b[j, im], b[j, i], b[j, ip]):
+                bent = True
+            pos = False
+            nonpos = False
+            for r in range(nt):
+                ka = k[r, j, im]
+                kb = k[r, j, i]
+                kc = k[r, j, ip]
+                if _kinked(ka, kb, kc) or _kinked(e[r, j, im], e[r, j, i], e[r, j, ip]):
+                    bent = True
+                ml = ka + 0.5 * (kb - ka)
+                mr = kb + 0.5 * (kc - kb)
+                if ml > 0.0 and mr > 0.0:
+                    pos = True
+                elif not ml > 0.0 and not mr > 0.0:
+                    nonpos = True
+                else:
+                    pos = True
+                    nonpos = True
+            if pos and nonpos:
+                bent = True
+        flags[i] = 1 if bent else 0
+    return flags
 
 
 @njit(cache=True, error_model="numpy")
@@ -165,7 +222,7 @@ def _kvals(tab, j, i0, i1, w):
     (i0, i1) and weight w (docs/model.md 'Table lookup'): phi interpolation in
     torque row it, and when rows2 (NT > 1) also in row it+1, then linear
     interpolation between the two rows with weight wt."""
-    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi = tab
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp = tab
     r = j * n_phi
     kv, ev, es = _row_values(kp, ep, o0 + r, i0, i1, w, inv_dphi)
     if rows2:
@@ -355,7 +412,8 @@ def _equilibrium(theta1, t1, rb1, k, e, b, torque, inv_dphi):
     k, e (NT, P, N) and b (P, N) must be C-contiguous."""
     it, wt = _torque_index(t1, torque)
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
-    tab = _tab(kp, ep, bp, it, k.shape[0] > 1, wt, n_phi, p, np.nan, 0.0, 0, inv_dphi)
+    no_flags = np.ones(1, dtype=np.uint8)   # the flags are not read here
+    tab = _tab(kp, ep, bp, it, k.shape[0] > 1, wt, n_phi, p, np.nan, 0.0, 0, inv_dphi, _ptr(no_flags))
     nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
     fm = t1 / rb1
     kk = np.empty(p)

@@ -49,6 +49,8 @@ int gk_n_outputs(int P) { return GK_OUT_PAIR_FORCE + 2 * P; }
 
 static inline int finite_pos(double v) { return isfinite(v) && v > 0.0; }
 
+static void node_flags(gk_model *m);
+
 int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *torque_Nm, const double *k_N_per_m,
             const double *e_m, const double *backlash_half_m,
@@ -94,6 +96,7 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->temp_two = 0;
     m->temp_w = 0.0;
     m->temperature_now_C = 0.0;
+    node_flags(m);
     return GK_OK;
 }
 
@@ -111,6 +114,7 @@ int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C
     m->temp_two = 0;
     m->temp_w = 0.0;
     m->temperature_now_C = temperature_C[0];
+    node_flags(m);
     return GK_OK;
 }
 
@@ -398,6 +402,7 @@ GK_INLINE void rk4_update(double *y, double h, const double *k1, const double *k
 
 typedef struct {
     double nd;                       /* global cell index (integer value) */
+    double lo, hi;                   /* held segment [lo, hi): global node indices (rk4_kink: nd, nd + 1) */
     int i0, i1;
     int reg[GK_KINK_MAX_SLOTS];      /* 1 drive, -1 back, 0 separated */
     int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
@@ -412,6 +417,100 @@ GK_INLINE void cell_nodes(gk_mode *md, int N)
     if (i0 >= N) i0 = N - 1;
     md->i0 = i0;
     md->i1 = (i0 + 1 == N) ? 0 : i0 + 1;
+}
+
+/* rk4_node node kink flags (gearkernel.h; as _node_flags in gearfmu/dynamics/model_rhs.py) */
+static int kinked(double a0, double a1, double a2)
+{
+    double d = (a2 - a1) - (a1 - a0);
+    double s = (fabs(a0) + fabs(a1)) + fabs(a2);
+    return !(fabs(d) <= GK_NODE_KINK_TOL * s);
+}
+
+static void node_flags(gk_model *m)
+{
+    int N = m->n_phi, P = m->P, rows = m->n_torque * m->n_temp, i, j, r;
+    if (N > GK_NODE_FLAGS_MAX) return;   /* every node counts as flagged (node_flagged) */
+    for (i = 0; i < N; ++i) {
+        int im = (i == 0) ? N - 1 : i - 1, ip = (i == N - 1) ? 0 : i + 1, bent = 0;
+        for (j = 0; j < P; ++j) {
+            const double *b = m->backlash_half_m + (size_t)j * N;
+            int pos = 0, nonpos = 0;
+            if (kinked(b[im], b[i], b[ip])) bent = 1;
+            for (r = 0; r < rows; ++r) {
+                const double *k = m->k_N_per_m + ((size_t)r * P + j) * N;
+                const double *e = m->e_m + ((size_t)r * P + j) * N;
+                double ka = k[im], kb = k[i], kc = k[ip], ml, mr;
+                if (kinked(ka, kb, kc) || kinked(e[im], e[i], e[ip])) bent = 1;
+                ml = ka + 0.5 * (kb - ka);
+                mr = kb + 0.5 * (kc - kb);
+                if (ml > 0.0 && mr > 0.0) pos = 1;
+                else if (!(ml > 0.0) && !(mr > 0.0)) nonpos = 1;
+                else { pos = 1; nonpos = 1; }
+            }
+            if (pos && nonpos) bent = 1;
+        }
+        m->node_kink[i] = (unsigned char)bent;
+    }
+}
+
+/* kink flag of global node n (an integer value), node n mod N */
+static int node_flagged(const gk_model *m, double n)
+{
+    int N = m->n_phi, i0;
+    double r;
+    if (N > GK_NODE_FLAGS_MAX) return 1;
+    r = n - (double)N * floor(n / (double)N);
+    i0 = (int)r;
+    if (i0 < 0) i0 = 0;
+    if (i0 >= N) i0 = N - 1;
+    return m->node_kink[i0] != 0;
+}
+
+/* first flagged node above n (at most n + N); last flagged node below n (at least n - N) */
+static double seg_up(const gk_model *m, double n)
+{
+    double top = n + m->n_phi, q = n + 1.0;
+    if (!(fabs(n) < GK_CELL_LIMIT)) return n + 1.0;   /* doubles no longer count single nodes */
+    while (q < top && !node_flagged(m, q)) q += 1.0;
+    return q;
+}
+
+static double seg_down(const gk_model *m, double n)
+{
+    double bottom = n - m->n_phi, q = n - 1.0;
+    if (!(fabs(n) < GK_CELL_LIMIT)) return n - 1.0;
+    while (q > bottom && !node_flagged(m, q)) q -= 1.0;
+    return q;
+}
+
+/* held segment at a step start: [nd, nd + 1] (rk4_kink); rk4_node: nd to the next
+ * flagged node above for om >= 0, the last flagged node below nd + 1 to nd + 1 for om < 0 */
+static void seg_start(const gk_model *m, gk_mode *md, int node, double om)
+{
+    if (node && om < 0.0) {
+        md->hi = md->nd + 1.0;
+        md->lo = seg_down(m, md->nd + 1.0);
+    } else {
+        md->lo = md->nd;
+        md->hi = node ? seg_up(m, md->nd) : md->nd + 1.0;
+    }
+}
+
+/* move the held segment across its end (up) or start; the held cell follows */
+static void seg_cross(const gk_model *m, gk_mode *md, int up, int node)
+{
+    if (up) {
+        double lo = md->hi;
+        md->lo = lo;
+        md->hi = node ? seg_up(m, lo) : lo + 1.0;
+        md->nd = lo;
+    } else {
+        double hi = md->lo;
+        md->hi = hi;
+        md->lo = node ? seg_down(m, hi) : hi - 1.0;
+        md->nd = hi - 1.0;
+    }
 }
 
 /* k, e, de/dphi, b of slot j at angle th with the cell held */
@@ -529,8 +628,8 @@ GK_INLINE double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, 
 {
     int j, q;
     double kv, ev, es, bv;
-    if (gi == 0) return y[0] - md->nd * m->dphi_rad;
-    if (gi == 1) return (md->nd + 1.0) * m->dphi_rad - y[0];
+    if (gi == 0) return y[0] - md->lo * m->dphi_rad;
+    if (gi == 1) return md->hi * m->dphi_rad - y[0];
     j = (gi - 2) / 3;
     q = (gi - 2) - 3 * j;
     locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
@@ -610,23 +709,25 @@ static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const doub
     }
 }
 
-static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y)
+static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y, int node)
 {
     md->nd = floor(y[0] * m->inv_dphi);
     cell_nodes(md, m->n_phi);
+    seg_start(m, md, node, y[1]);
     mode_sync(m, t, md, y, 1);
 }
 
-/* rk4_node: time to the table node ahead of theta1 predicted from the step's
- * first stage, theta1(tau) = th + tau*(om + 0.5*fb*tau); linear start, two
+/* rk4_node: time to the flagged table node ahead of theta1 (the held segment's
+ * end hi for om > 0, start lo for om < 0) predicted from the step's first
+ * stage, theta1(tau) = th + tau*(om + 0.5*fb*tau); linear start, two
  * Newton iterations; -1 when there is no prediction (as _node_time in
  * gearfmu/dynamics/integrators.py). */
-static double node_time(double th, double om, double fb, double rem, double nd, double dphi)
+static double node_time(double th, double om, double fb, double rem, double lo, double hi, double dphi)
 {
     double dist, tau;
     int it;
-    if (om > 0.0) dist = (nd + 1.0) * dphi - th;
-    else if (om < 0.0) dist = nd * dphi - th;
+    if (om > 0.0) dist = hi * dphi - th;
+    else if (om < 0.0) dist = lo * dphi - th;
     else return -1.0;
     tau = dist / om;
     for (it = 0; it < 2; ++it) {
@@ -647,7 +748,8 @@ static int pairs_hold(const gk_model *m, const gk_tq *t, const gk_mode *md, cons
     return 1;
 }
 
-/* node != 0: rk4_node (the node crossing predicted, see _kink_substep) */
+/* node != 0: rk4_node (segments between flagged nodes, the crossing of a flagged
+ * node predicted; see _kink_substep) */
 static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2,
                          double *y, double h, int node)
 {
@@ -656,13 +758,20 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
     for (;;) {
         double best = 2.0;
         int best_gi = -1, have_f1 = 0, gi, any_neg;
+        if (node) {   /* the held cell follows theta1 inside the segment */
+            double cn = floor(y[0] * m->inv_dphi);
+            if (cn >= md->lo && cn < md->hi && cn != md->nd) {
+                md->nd = cn;
+                cell_nodes(md, m->n_phi);
+            }
+        }
         deriv_locked(m, t, md, T1, T2, y, f0);
         if (node && nev < GK_KINK_MAX_EVENTS) {
-            double tau = node_time(y[0], y[1], f0[1], rem, md->nd, m->dphi_rad);
+            double tau = node_time(y[0], y[1], f0[1], rem, md->lo, md->hi, m->dphi_rad);
             if (tau > 0.0) {
                 rk4_locked(m, t, md, T1, T2, y, f0, tau, y1);
                 if (pairs_hold(m, t, md, y1)) {
-                    md->nd = (y[1] > 0.0) ? md->nd + 1.0 : md->nd - 1.0;
+                    seg_cross(m, md, y[1] > 0.0, 1);
                     for (q = 0; q < 4; ++q) y[q] = y1[q];
                     rem = rem - tau;
                     nev += 1;
@@ -676,7 +785,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
         rk4_locked(m, t, md, T1, T2, y, f0, rem, y1);
         if (nev >= GK_KINK_MAX_EVENTS) {
             for (q = 0; q < 4; ++q) y[q] = y1[q];
-            mode_from_state(m, t, md, y);
+            mode_from_state(m, t, md, y, node);
             break;
         }
         any_neg = 0;
@@ -710,7 +819,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
         }
         nev += 1;
         if (best_gi < 2) {
-            md->nd = (best_gi == 0) ? md->nd - 1.0 : md->nd + 1.0;
+            seg_cross(m, md, best_gi == 1, node);
             cell_nodes(md, m->n_phi);
             mode_sync(m, t, md, y, 0);
         } else {
@@ -841,10 +950,10 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     y[3] = s->v_m_s;
     if (m->integrator == GK_INTEGRATOR_RK4_KINK || m->integrator == GK_INTEGRATOR_RK4_NODE) {
         gk_mode md;
+        int node = (m->integrator == GK_INTEGRATOR_RK4_NODE);
         if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
-        mode_from_state(m, &t, &md, y);
-        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h,
-                                                 m->integrator == GK_INTEGRATOR_RK4_NODE);
+        mode_from_state(m, &t, &md, y, node);
+        for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h, node);
         nsub = 0;
     }
     for (i = 0; i < nsub; ++i) {

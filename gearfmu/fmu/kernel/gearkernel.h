@@ -33,8 +33,10 @@ extern "C" {
 #define GK_DAMPING_ELASTOBACKLASH 0
 #define GK_DAMPING_CONTACT_ZONE 1
 
-/* integrators (docs/model.md "Integration"): fixed-step classical RK4, and
- * RK4 that steps exactly to every table node and contact-mode change */
+/* integrators (docs/model.md "Integration"): fixed-step classical RK4, RK4 that
+ * steps exactly to every table node and contact-mode change (rk4_kink), and
+ * rk4_kink stopping only at the table nodes where the tables bend, each reached
+ * by one step to its predicted crossing time (rk4_node, docs/native.md) */
 #define GK_INTEGRATOR_RK4 0
 #define GK_INTEGRATOR_RK4_KINK 1
 #define GK_INTEGRATOR_RK4_NODE 2
@@ -42,6 +44,15 @@ extern "C" {
  * rest of the substep is taken without detection */
 #define GK_KINK_MAX_SLOTS 32
 #define GK_KINK_MAX_EVENTS 1000
+/* rk4_node stops only at table nodes where the tables bend (docs/native.md
+ * "rk4_node"): node i is flagged when in some torque row, temperature slice and
+ * slot |(a[i+1] - a[i]) - (a[i] - a[i-1])| > GK_NODE_KINK_TOL*(|a[i-1]| + |a[i]| + |a[i+1]|)
+ * for a = k, e or b, or when the contact_zone flag (k > 0 at the cell midpoint) can
+ * differ between its two cells.  The flags live in gk_model (computed by gk_init
+ * and gk_set_temperature_axis); with more than GK_NODE_FLAGS_MAX nodes every node
+ * is flagged. */
+#define GK_NODE_KINK_TOL 1e-9
+#define GK_NODE_FLAGS_MAX 8192
 
 /* layout of the output vector written by gk_do_step / gk_outputs
  * (length gk_n_outputs(P) = GK_OUT_PAIR_FORCE + 2*P) */
@@ -83,6 +94,7 @@ typedef struct gk_model {
     int temp_two;                   /* 1: blend slices temp_ia, temp_ia + 1 with temp_w */
     double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
     double temperature_now_C;       /* the temperature selected last (degC) */
+    unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* rk4_node: 1 at node i where the tables bend */
 } gk_model;
 
 typedef struct gk_state {
@@ -121,8 +133,8 @@ int gk_set_temperature(gk_model *m, double temperature_C);
 /* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_CONTACT_ZONE */
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
 
-/* GK_INTEGRATOR_RK4 or GK_INTEGRATOR_RK4_KINK (the latter needs P <= GK_KINK_MAX_SLOTS);
- * GK_ERR_PARAM otherwise. */
+/* GK_INTEGRATOR_RK4, GK_INTEGRATOR_RK4_KINK or GK_INTEGRATOR_RK4_NODE (the latter two
+ * need P <= GK_KINK_MAX_SLOTS); GK_ERR_PARAM otherwise. */
 int gk_set_integrator(gk_model *m, int integrator);
 
 /* Initial state of docs/model.md: theta1 = theta1_0, omega1 = omega1_0, v = 0,
