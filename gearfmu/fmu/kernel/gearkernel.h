@@ -18,7 +18,7 @@
 extern "C" {
 #endif
 
-#define GK_ABI_VERSION 3  /* 3: verified envelope check (gk_envelope) */
+#define GK_ABI_VERSION 4  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model */
 
 /* status codes */
 #define GK_OK 0
