@@ -424,9 +424,9 @@ def simulate(
     ``integrator``: 'rk4_kink' (default, :data:`DEFAULT_INTEGRATOR`: RK4 that
     steps exactly to every table node and contact-mode change, docs/model.md
     "rk4_kink"; ``info['events']`` counts the located events; at most
-    KINK_MAX_SLOTS slots), 'rk4_node' (rk4_kink with each table node reached by
-    one RK4 step to its crossing time predicted from theta1' = omega1, docs/native.md
-    "rk4_node"; its node crossings count as events) or 'rk4' (fixed-step classical RK4).
+    KINK_MAX_SLOTS slots), 'rk4_node' (rk4_kink stopping only at the table nodes
+    where the tables bend, each reached by one RK4 step to its crossing time predicted
+    from theta1' = omega1, docs/native.md "rk4_node"; those crossings count as events) or 'rk4' (fixed-step classical RK4).
     ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
