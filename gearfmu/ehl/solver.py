@@ -581,8 +581,9 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         for kg, ka in PIEZO_CORNER_PLAN:
             if kg >= n_default or ka >= len(attempts):
                 continue
-            if kg > 0 and not min((t_[3] for t_ in tried), default=math.inf) \
-                    < RETRY_BELOW_RESIDUAL:
+            g0 = (grids[0][0] - 1, grids[0][1])
+            if kg > 0 and not min((t_[3] for t_ in tried if t_[:2] == g0),
+                                  default=math.inf) < RETRY_BELOW_RESIDUAL:
                 break
             converged, solver_obj, hist, it = run(kg, ka)
             entry = done.get((kg, ka))
