@@ -173,6 +173,10 @@ FAST_STALL_WINDOW = 6
 #: or the 2x finer coarsest grid, Barus M = 1000, L = 18 only with setting 0
 #: on the 2x finer one.
 PIEZO_CORNER_PLAN = ((0, 6), (1, 0), (1, 6), (0, 3))
+#: a pair of the plan that stalls below this scaled residual is polished at
+#: once (measured over the corner: the plan's polishes that converged started
+#: from 3.5e-5, those from 2e-4 .. 1e-3 failed)
+PLAN_POLISH_BELOW_RESIDUAL = 1e-4
 
 
 def _flat_opts(opts):
@@ -587,8 +591,9 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                 break
             converged, solver_obj, hist, it = run(kg, ka)
             entry = done.get((kg, ka))
-            if not converged and entry is not None:
-                # its stalled state polished at once (as after all settings below)
+            if not converged and entry is not None and entry[0] < PLAN_POLISH_BELOW_RESIDUAL:
+                # its stalled state polished at once (as after all settings below;
+                # a state further from the solution waits for that polish)
                 ok, nr, ph = _polish(entry[2], tol_pressure, tol_load, tol_residual, tol_film,
                                      max_cycles)
                 done[(kg, ka)] = None
