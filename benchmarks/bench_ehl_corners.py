@@ -7,9 +7,11 @@ film compared with Moes' (1992) fit as quoted by Venner & Lubrecht 2000
 (:func:`gearfmu.ehl.fits.moes_central_film`), the reference of
 tests/test_ehl.py.  Output: ``{"rows": [...], "worst": {...}, "summary": {...}}``,
 one flat row per point with ``M``, ``L``, ``cpu_s``, ``cycles``,
-``n_intervals``, ``coarse_intervals``, ``attempt``, ``H_central_moes``,
+``n_intervals``, ``coarse_intervals``, ``attempt``, ``path`` ("fast",
+"corner_plan" or "settings", docs/ehl.md), ``H_central_moes``,
 ``H_central_fit``, ``dev_vs_moes`` (relative); ``worst`` is the slowest row,
-``summary`` the median and maximum CPU time and the mean and maximum
+``summary`` the median, maximum and total CPU time, the number of points
+above 1 s (``points_over_1s``) and the mean and maximum
 |dev_vs_moes|.  The rows with ``case`` = "default_1025" time the default
 1025-node solve of the Roelands / Dowson-Higginson reference oil at M = 20
 and 100, L = 10 (minimum of ``--repeats``).
@@ -31,6 +33,15 @@ M_GRID = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 600.0, 1000.0)
 L_GRID = (0.0, 2.0, 5.0, 10.0, 15.0, 18.0, 20.0)
 
 
+def _path(r):
+    """Which part of the default path converged (docs/ehl.md)."""
+    if "fast_path" in r.residuals:
+        return "fast"
+    if "corner_plan_pair" in r.residuals:
+        return "corner_plan"
+    return "settings"
+
+
 def point(M, L):
     t = time.process_time()
     try:
@@ -44,7 +55,7 @@ def point(M, L):
     return dict(case="moes_range", M=M, L=L, cpu_s=round(cpu, 4), converged=True,
                 cycles=r.iterations, n_intervals=n,
                 coarse_intervals=n // 2 ** (r.grid_levels - 1),
-                attempt=int(r.residuals["attempt"]), H_central_moes=r.H_central_moes,
+                attempt=int(r.residuals["attempt"]), path=_path(r), H_central_moes=r.H_central_moes,
                 H_central_fit=fit, dev_vs_moes=r.H_central_moes / fit - 1.0)
 
 
@@ -55,7 +66,8 @@ def default_1025(M, L, repeats):
         r = solve_line_contact(M=M, L=L, n_nodes=1025)
         best = min(best, time.process_time() - t)
     return dict(case="default_1025", M=M, L=L, cpu_s=round(best, 5), converged=True,
-                cycles=r.iterations, n_intervals=1024, H_central_moes=r.H_central_moes)
+                cycles=r.iterations, n_intervals=1024, path=_path(r),
+                H_central_moes=r.H_central_moes)
 
 
 def main(argv=None):
@@ -75,6 +87,7 @@ def main(argv=None):
     out = dict(rows=rows, worst=max(grid, key=lambda r: r["cpu_s"]),
                summary=dict(points=len(grid), converged=len(devs),
                             median_cpu_s=statistics.median(cpu), max_cpu_s=max(cpu),
+                            total_cpu_s=sum(cpu), points_over_1s=sum(c > 1.0 for c in cpu),
                             mean_abs_dev_vs_moes=sum(devs) / max(len(devs), 1),
                             max_abs_dev_vs_moes=max(devs, default=float("nan"))))
     json.dump(out, sys.stdout, indent=1)

@@ -272,3 +272,39 @@ def test_speed_path_stops_inside_the_discretisation_error(M, L):
                            **multigrid.DISC_TOLERANCES)
     assert r.converged and r.iterations <= 6
     assert abs(r.H_central_moes / h[1024] - 1.0) < 0.3 * disc
+
+
+@pytest.mark.parametrize("M", [20.0, 100.0])
+def test_default_solve_takes_the_fast_path_to_the_discrete_solution(M):
+    # The default 1025-node solve (Roelands + Dowson-Higginson, L = 10) converges on the fast
+    # path (F-cycles, Newton on the coarsest grid, full-multigrid start; docs/ehl.md) without
+    # any option.  References: the discretised equations re-evaluated in numpy with a dense
+    # deformation sum (as the other tests: film 1e-9, load 1e-5, scaled residual 1e-5), and
+    # the film of the same equations solved to tolerances 1000x tighter (W-cycles, no fast
+    # path since options are given): the central film within 1e-4 (measured 4e-8 at M = 20,
+    # 9e-6 at M = 100; the discretisation error of this grid is about 1e-3).
+    r = solve_line_contact(M=M, L=10.0, n_nodes=1025)
+    assert r.residuals.get("fast_path") == [1.0]
+    assert r.residuals["settings"]["switch"] == 0.3 and "gamma" not in r.residuals["settings"]
+    gap_spread, load_err, scaled = _discrete_equations_check(r)
+    assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
+    tight = solve_line_contact(M=M, L=10.0, n_nodes=1025, tol_pressure=1e-8, tol_load=1e-9,
+                               tol_residual=1e-9, max_cycles=300, switch=0.3, nu1=2, nu2=1,
+                               omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1, stick=10.0)
+    assert "fast_path" not in tight.residuals
+    assert abs(r.H_central_moes / tight.H_central_moes - 1.0) < 1e-4
+
+
+@pytest.mark.parametrize("M,L", [(1000.0, 15.0), (600.0, 18.0)])
+def test_piezoviscous_corner_converges_on_the_first_pairs_of_its_plan(M, L):
+    # Barus, incompressible: the piezoviscous coarsest-grid rule is capped there, and the
+    # (grid, setting) pairs of PIEZO_CORNER_PLAN run before the normal order (docs/ehl.md);
+    # these points stalled on 6 resp. 3 settings before converging in the normal order.
+    # References: the discretised equations re-evaluated in numpy (as above) and Moes' fit
+    # at the tolerance of the range test in tests/test_ehl.py (6 %; measured -1.3 %, +0.6 %).
+    from gearfmu.ehl.fits import moes_central_film
+    r = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False)
+    assert r.residuals.get("corner_plan_pair") is not None
+    gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
+    assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
+    assert abs(r.H_central_moes / moes_central_film(M, L) - 1.0) < 0.06

@@ -59,6 +59,14 @@ def choose_grid(Hc_VL: float, length: float, n_nodes=None, n_coarse=None,
     return n_nodes, n_coarse, n_levels
 
 
+def corner_rule_capped(alpha_eff: float, length: float, n_coarse: int) -> bool:
+    """True where the coarsest grid of ``n_coarse`` intervals misses the
+    piezoviscous rule dX <= :data:`COARSE_DX_ALPHA` / alpha_eff of
+    :func:`choose_grid` (capped there by the minimum number of levels): the
+    strongly piezoviscous corner (high M with high L)."""
+    return alpha_eff > 0.0 and alpha_eff * length / n_coarse > COARSE_DX_ALPHA
+
+
 #: grid rule of the refined retry: dX <= REFINE_DX_ALPHA / alpha_eff (found
 #: by experiment over the (M, L) table in docs/ehl.md: the pressure spike and
 #: the outlet drop are then resolved by several nodes)

@@ -38,8 +38,10 @@ from ..common.checks import finite_number
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stalled_residual
 from .fits import moes_central_film
 from .grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL, RETRY_PROGRESS_FACTOR,
-                    choose_grid, coarse_retry_grids, effective_alpha, refined_grid_intervals)
+                    choose_grid, coarse_retry_grids, corner_rule_capped, effective_alpha,
+                    refined_grid_intervals)
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
+from .coarse_newton import COARSE_NEWTON_MAX_NODES
 from .multigrid import EHLParams, FlatMultigrid
 from .polish import (POLISH_BELOW_RESIDUAL, POLISH_BEST_BELOW_RESIDUAL,
                      POLISH_EARLY_BELOW_RESIDUAL, _HIST_KEYS, _polish)
@@ -148,6 +150,35 @@ STOP_FILM_CHANGE_CAP = 3e-4
 FREEZE_BELOW_PRESSURE_CHANGE = 1e-3
 
 
+#: Fast path of the default smooth solve (docs/ehl.md): the relaxation of
+#: setting 0 of :data:`RELAXATION_SETTINGS` with F-cycles, the coarsest grid
+#: solved by Newton steps (:mod:`.coarse_newton`) and a full-multigrid start
+#: (one cycle per level; a warm start instead starts from ``initial``).  Tried
+#: first where the coarsest grid has at most
+#: COARSE_NEWTON_MAX_NODES nodes; it stops at the same tolerances, and when it
+#: does not converge within FAST_MAX_CYCLES cycles (or stalls over
+#: FAST_STALL_WINDOW cycles) the settings of :data:`RELAXATION_SETTINGS` follow
+#: from a fresh start, as without it.
+FAST_SETTING = dict(RELAXATION_SETTINGS[0], gamma="F", coarse_newton=1)
+FAST_FMG_CYCLES = 1
+FAST_MAX_CYCLES = 20
+FAST_STALL_WINDOW = 6
+
+#: Strongly piezoviscous corner (the piezoviscous coarsest-grid rule of
+#: :func:`.grids.choose_grid` capped, alpha_eff dX_coarse > COARSE_DX_ALPHA):
+#: (grid, setting) pairs tried before the normal order -- grid 0 the default
+#: hierarchy, 1 the first coarse-grid retry (only under fail-fast rule 1);
+#: indices into :data:`RELAXATION_SETTINGS`.  Measured over the Barus (M, L)
+#: table (docs/ehl.md): setting 6 converges most of these points on the first
+#: or the 2x finer coarsest grid, Barus M = 1000, L = 18 only with setting 0
+#: on the 2x finer one.
+PIEZO_CORNER_PLAN = ((0, 6), (1, 0), (1, 6), (0, 3))
+#: a pair of the plan that stalls below this scaled residual is polished at
+#: once (measured over the corner: the plan's polishes that converged started
+#: from 3.5e-5, those from 2e-4 .. 1e-3 failed)
+PLAN_POLISH_BELOW_RESIDUAL = 1e-4
+
+
 def _flat_opts(opts):
     """Option dict with ``load_on_coarse`` mapped to ``load_mode`` and ``order2`` to 0/1."""
     o = dict(opts)
@@ -159,7 +190,8 @@ def _flat_opts(opts):
 
 def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
                   min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0,
-                  fmg=0, stop_at_discretisation=0.0):
+                  fmg=0, stop_at_discretisation=0.0, continuation=True,
+                  stall_window=STALL_WINDOW):
     """Compiled W-cycles (:mod:`.multigrid`) from ``P_start`` (finest grid), a
     full-multigrid start (``fmg`` > 0 cycles per level) or a Hertzian
     pressure; with roughness the amplitude steps of ``ramp``."""
@@ -197,7 +229,7 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
                                           tol_pressure=tol_pressure, tol_load=tol_load,
                                           tol_residual=tol_residual, tol_film=tol_film,
-                                          stall_window=STALL_WINDOW,
+                                          stall_window=stall_window,
                                           tol_discretisation=tol_disc)
         it += nc
         for k_ in _HIST_KEYS:
@@ -205,6 +237,8 @@ def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, ma
         if not converged and nc >= max_cycles:
             # stopped by the caller's cycle limit, not stalled: no polish either
             hist["hit_max_cycles"] = [float(nc)]
+        if not continuation:
+            break
         last_dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
         last_res = h["reynolds_residual"][-1] if h["reynolds_residual"] else float("nan")
         if (not converged and math.isfinite(last_res) and last_res < POLISH_EARLY_BELOW_RESIDUAL
@@ -344,6 +378,12 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       ``residuals["stopped_at_discretisation"]`` = [estimate, tolerance].  Only
       where the coarse grids resolve the solution (docs/ehl.md: low alpha_eff).
 
+    Default path (docs/ehl.md): a smooth solve with default options first
+    tries the fast path :data:`FAST_SETTING` (F-cycles, Newton on the coarsest
+    grid, full-multigrid start or ``initial``; ``residuals["fast_path"]``); in the strongly
+    piezoviscous corner the pairs of :data:`PIEZO_CORNER_PLAN` come first
+    (``residuals["corner_plan_pair"]``).
+
     Robustness (compiled solver, docs/ehl.md): the relaxation settings of
     :data:`RELAXATION_SETTINGS` are tried in turn; a setting that stalls
     with a pressure change per cycle below
@@ -475,10 +515,101 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         n_ref = refined_grid_intervals(prm, x_out - x_in, n_nodes - 1)
         if n_ref is not None:
             grids.append(choose_grid(Hc_guess, x_out - x_in, n_ref + 1, n_coarse))
+    # fast path first (FAST_SETTING): default options, smooth
+    fast_path = (not multigrid_options and rfun is None and fmg_cycles == 0 and sad == 0.0)
+    fast_failed_cycles = 0
+    # strongly piezoviscous corner: the piezoviscous coarsest-grid rule was capped
+    plan_corner = (not multigrid_options and rfun is None and initial is None
+                   and not user_coarse
+                   and corner_rule_capped(effective_alpha(prm), x_out - x_in, n_coarse))
     collapsed = None
     tried = []          # (grid intervals, coarsest intervals, setting, final scaled residual)
     skipped = []        # why settings or grids were skipped (fail fast)
-    for k_grid, (n_nodes, n_coarse, n_levels) in enumerate(grids):
+    done = {}           # (grid, setting) tried -> its stalled state for the polish, or None
+
+    def run(k_grid, k_att):
+        """One relaxation setting on one grid; records a failure in ``tried``."""
+        nonlocal collapsed
+        n_nodes_, n_coarse_, n_levels_ = grids[k_grid]
+        opts_ = attempts[k_att]
+        s_obj, h_, conv, it_ = _iterate_flat(
+            prm, n_levels_, n_coarse_, rough_fn, opts_, Hc_guess,
+            P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
+            tol_load, tol_residual, tuple(roughness_ramp), tol_film,
+            fmg=fmg_cycles if rough_fn is None else 0,
+            stop_at_discretisation=float(stop_at_discretisation))
+        if conv:
+            return True, s_obj, h_, it_
+        rr = h_["reynolds_residual"]
+        tried.append((n_nodes_ - 1, n_coarse_, k_att,
+                      float(rr[-1]) if rr and math.isfinite(rr[-1]) else math.inf))
+        # remember the last attempt that ended with a collapsed film (h <= 0):
+        # if no attempt converges, that is reported (FilmCollapseError) rather
+        # than the stall of whichever setting happened to run last
+        H_end = s_obj.level_H()
+        if rfun is not None and np.all(np.isfinite(H_end)) and float(np.min(H_end)) <= 0.0:
+            collapsed = (s_obj, h_, opts_, k_att, k_grid, it_)
+        # stalled states close to a solution (final scaled residual below
+        # POLISH_BEST_BELOW_RESIDUAL, not yet polished) for the polish below
+        entry = None
+        if (rr and math.isfinite(rr[-1]) and "newton_polish_rounds" not in h_
+                and "newton_polish_early_rounds" not in h_ and "hit_max_cycles" not in h_
+                and rr[-1] < POLISH_BEST_BELOW_RESIDUAL
+                and s_obj.opts.get("order2", 1) and not s_obj.opts.get("defect", 0)):
+            entry = (rr[-1], k_att, s_obj, h_, opts_, it_)
+        done[(k_grid, k_att)] = entry
+        return False, s_obj, h_, it_
+
+    converged = False
+    k_grid, k_att, opts = 0, 0, attempts[0]
+    n_nodes, n_coarse, n_levels = grids[0]
+    if fast_path and n_coarse + 1 <= COARSE_NEWTON_MAX_NODES:
+        # from the given solution (warm start) or a full-multigrid start
+        P_fast = None
+        if initial is not None:
+            P_fast = np.interp(np.linspace(x_in, x_out, n_nodes), initial.X, initial.P,
+                               left=0.0, right=0.0)
+        solver_obj, hist, converged, it = _iterate_flat(
+            prm, n_levels, n_coarse, None, FAST_SETTING, Hc_guess, P_fast,
+            min(max_cycles, FAST_MAX_CYCLES), min_cycles, tol_pressure, tol_load,
+            tol_residual, (1.0,), tol_film, fmg=0 if initial is not None else FAST_FMG_CYCLES,
+            continuation=False, stall_window=FAST_STALL_WINDOW)
+        if converged:
+            hist["fast_path"] = [1.0]
+            opts = dict(RELAXATION_SETTINGS[0])     # the relaxation it used
+        else:
+            fast_failed_cycles = it
+    if not converged and plan_corner:
+        # strongly piezoviscous corner (docs/ehl.md): the pairs of PIEZO_CORNER_PLAN
+        # first; the coarse-grid retry only under fail-fast rule 1
+        for kg, ka in PIEZO_CORNER_PLAN:
+            if kg >= n_default or ka >= len(attempts):
+                continue
+            g0 = (grids[0][0] - 1, grids[0][1])
+            if kg > 0 and not min((t_[3] for t_ in tried if t_[:2] == g0),
+                                  default=math.inf) < RETRY_BELOW_RESIDUAL:
+                break
+            converged, solver_obj, hist, it = run(kg, ka)
+            entry = done.get((kg, ka))
+            if not converged and entry is not None and entry[0] < PLAN_POLISH_BELOW_RESIDUAL:
+                # its stalled state polished at once (as after all settings below;
+                # a state further from the solution waits for that polish)
+                ok, nr, ph = _polish(entry[2], tol_pressure, tol_load, tol_residual, tol_film,
+                                     max_cycles)
+                done[(kg, ka)] = None
+                if ok:
+                    hist["newton_polish_from_cycle"] = [it]
+                    hist["newton_polish_rounds"] = [nr]
+                    for k_ in _HIST_KEYS:
+                        hist[k_].extend(ph[k_])
+                    it += nr
+                    converged = True
+            if converged:
+                k_grid, k_att, opts = kg, ka, attempts[ka]
+                n_nodes, n_coarse, n_levels = grids[kg]
+                hist["corner_plan_pair"] = [float(kg), float(ka)]
+                break
+    for k_grid, (n_nodes, n_coarse, n_levels) in enumerate(grids if not converged else []):
         if k_grid > 0:
             # fail fast (rules 1 and 2 above): best stalled residual per grid so far
             per_grid = [min((t_[3] for t_ in tried if t_[:2] == (g[0] - 1, g[1])),
@@ -494,40 +625,19 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                                f"{RETRY_PROGRESS_FACTOR:g}x below {min(per_grid[:-1]):.1e} "
                                f"nor below {RETRY_CLOSE_RESIDUAL:.0e}")
                 break
-        best = []
         if initial is not None:
             Xg = np.linspace(x_in, x_out, n_nodes)
             P_start = np.interp(Xg, initial.X, initial.P, left=0.0, right=0.0)
         for k_att, opts in enumerate(attempts):
-            solver_obj, hist, converged, it = _iterate_flat(
-                prm, n_levels, n_coarse, rough_fn, opts, Hc_guess,
-                P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
-                tol_load, tol_residual, tuple(roughness_ramp), tol_film,
-                fmg=fmg_cycles if rough_fn is None else 0,
-                stop_at_discretisation=float(stop_at_discretisation))
+            if (k_grid, k_att) in done:
+                continue
+            converged, solver_obj, hist, it = run(k_grid, k_att)
             if converged:
                 break
-            rr = hist["reynolds_residual"]
-            tried.append((n_nodes - 1, n_coarse, k_att,
-                          float(rr[-1]) if rr and math.isfinite(rr[-1]) else math.inf))
-            # remember the last attempt that ended with a collapsed film (h <= 0):
-            # if no attempt converges, that is reported (FilmCollapseError) rather
-            # than the stall of whichever setting happened to run last
-            H_end = solver_obj.level_H()
-            if rfun is not None and np.all(np.isfinite(H_end)) and float(np.min(H_end)) <= 0.0:
-                collapsed = (solver_obj, hist, opts, k_att, k_grid, it)
-            # stalled states close to a solution (final scaled residual below
-            # POLISH_BEST_BELOW_RESIDUAL, not yet polished) for the polish below
-            rr = hist["reynolds_residual"]
-            if (rr and math.isfinite(rr[-1]) and "newton_polish_rounds" not in hist
-                    and "newton_polish_early_rounds" not in hist and "hit_max_cycles" not in hist
-                    and rr[-1] < POLISH_BEST_BELOW_RESIDUAL
-                    and solver_obj.opts.get("order2", 1) and not solver_obj.opts.get("defect", 0)
-                    ):
-                best.append((rr[-1], k_att, solver_obj, hist, opts, it))
         # every setting failed on this grid: polish the stalled states, lowest
         # residual first, until one converges (docs/ehl.md: Barus M = 500, L = 15 converges only from setting 5's
         # state, whose residual is not the lowest)
+        best = [e for (g, _), e in done.items() if g == k_grid and e is not None]
         for _, b_att, b_obj, b_hist, b_opts, b_it in sorted(best, key=lambda t: t[:2]):
             if converged:
                 break
@@ -550,6 +660,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         hist["coarse_grid_retry"] = [float(n_coarse)]
     hist["settings"] = opts
     hist["attempt"] = k_att
+    if fast_failed_cycles:
+        hist["fast_path_failed_cycles"] = [float(fast_failed_cycles)]
     X = solver_obj.X[solver_obj.top]
     H = solver_obj.level_H().copy()
     P_top = solver_obj.level_P().copy()
