@@ -7,7 +7,9 @@ reference result of the validation record, gearfmu.fmu.validation).  "Warm" is t
 the same command, which loads the compiled code and the cached results.  Every run is a fresh
 process, as a user's shell command is.  The compiled C objects (GEARFMU_CACHE_DIR/objects) and
 the C compilers' own caches (zig's) are the user's, left as they are: a machine's first
-cross-compilation is a one-off cost that this benchmark does not measure.
+cross-compilation is a one-off cost that this benchmark does not measure.  Python's bytecode
+cache is on (PYTHONDONTWRITEBYTECODE is dropped from the environment), as it is for an installed
+package: the first run writes the .pyc files that the next runs read.
 
 Prints one JSON object: per subcommand ``cold_s`` and ``warm_s`` (wall, best of ``--repeat``),
 ``warm_cpu_s`` (user + system CPU seconds of the best warm run, its child processes included:
@@ -57,11 +59,17 @@ def _run(args, env):
     return wall, cpu
 
 
+def _base_env() -> dict:
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
 def _fresh_env(tmp: Path, tag: str) -> dict:
     """Empty numba and gearfmu caches, but the user's compiled C objects."""
     cache = tmp / f"gearfmu_cache_{tag}"
     cache.mkdir()
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp / f"numba_{tag}"), "GEARFMU_CACHE_DIR": str(cache)}
+    env = {**_base_env(), "NUMBA_CACHE_DIR": str(tmp / f"numba_{tag}"), "GEARFMU_CACHE_DIR": str(cache)}
     objects = object_cache_dir()
     objects.mkdir(parents=True, exist_ok=True)
     (cache / "objects").symlink_to(objects, target_is_directory=True)
@@ -80,7 +88,7 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         cmds = _commands(tmp)
         if "validate" in names and "build" not in names:
-            _run(cmds["build"], os.environ.copy())
+            _run(cmds["build"], _base_env())
         for name in names:
             cold, warm = [], []
             for r in range(a.repeat):
