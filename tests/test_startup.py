@@ -1,7 +1,7 @@
 """What a short command loads and computes: the CLI's imports and the cached reference result of
 the validation record (gearfmu.fmu.validation, gearfmu.common.cache).
 
-References: the native solver itself (a cached reference result must be byte for byte the file a
+References: the SSP 1.0 XSD (through xmlschema, as pyssp-standard applies it); the native solver itself (a cached reference result must be byte for byte the file a
 fresh run of :func:`gearfmu.dynamics.native.simulate` writes) and Python's ``sys.modules`` (what
 an import really loaded).  Speed itself is measured in benchmarks/bench_startup.py, not here.
 """
@@ -11,12 +11,16 @@ import dataclasses
 import json
 import subprocess
 import sys
+import zipfile
 
 import pytest
 
 import gearfmu.fmu.validation as validation
 from gearfmu.common.cache import CacheWarning, cache_dir
+from gearfmu.fmu.crossbuild import host_key
+from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
+from gearfmu.ssp import SspError, build_ssp, validate_ssp_dir
 
 RECORD = f"{validation.VALIDATION_DIR}/record.json"
 REFERENCE = f"{validation.VALIDATION_DIR}/reference_result.csv"
@@ -172,3 +176,24 @@ def test_an_unwritable_cache_costs_only_the_computation(default_case, tmp_path, 
     a = _record(default_case)
     b = _record(default_case)
     assert len(native_runs) == 2 and a[REFERENCE] == b[REFERENCE]
+
+
+def test_the_ssp_schema_check_parses_each_schema_once_and_still_refuses_invalid_files(default_case, tmp_path):
+    """Every .ssd and .ssv is still checked against its SSP 1.0 XSD when the parsed schema is
+    reused: an attribute the XSD does not allow, in the last file of each kind, is refused."""
+    scene, tables, params = default_case
+    fmu = build_standalone_fmu(tables, tmp_path / "g.fmu", platforms=(host_key(),), validation=False,
+                               model_name="sspcheck", max_step_s=params["max_step_s"])
+    ssp = build_ssp(fmu, tmp_path / "g.ssp", {"nominal": {"damping_ratio": 0.05}, "soft": {"damping_ratio": 0.02}})
+    d = tmp_path / "unpacked"
+    with zipfile.ZipFile(ssp) as z:
+        z.extractall(d)
+    validate_ssp_dir(d)  # as written: valid
+    for rel, tag in (("resources/soft.ssv", b"<ssv:ParameterSet "), ("soft_closed.ssd", b"<ssd:SystemStructureDescription ")):
+        f = d / rel
+        good = f.read_bytes()
+        assert good.count(tag) == 1
+        f.write_bytes(good.replace(tag, tag + b'bogus="1" '))
+        with pytest.raises(SspError, match=f"^{rel}: not valid SSP 1.0"):
+            validate_ssp_dir(d)
+        f.write_bytes(good)
