@@ -36,11 +36,9 @@ from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_ag
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from . import pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
-from .plan import format_report, plan_scene, planned_scene
 from .ssp import parse_variant, ssp_from_scene
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
-from .bench import main_accuracy
 
 
 class CliError(Exception):
@@ -299,6 +297,7 @@ def _validate(args) -> dict:
         check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
         fmu_path = fmu.path
         if scene.accuracy is not None:  # build followed the scene's plan: so does the check
+            from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
             scene = planned_scene(scene, plan_scene(scene))
         tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
     else:
@@ -306,6 +305,7 @@ def _validate(args) -> dict:
                     allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
         if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
+            from .plan import planned_scene  # the planner: loaded only for scenes with [accuracy]
             scene = planned_scene(scene, res.plan)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
@@ -348,6 +348,7 @@ def cmd_ssp(args) -> int:
 
 
 def cmd_plan(args) -> int:
+    from .plan import format_report, plan_scene  # the planner: loaded only by the commands that plan
     scene = _scene(args.scene)
     if args.output is not None:
         d = Path(args.output)
@@ -373,6 +374,7 @@ def _allow_large(parser) -> None:
 def cmd_bench(args) -> int:
     if args.png:
         _output_file(args.png, "--png")
+    from .bench import main_accuracy  # bench: loads scipy.integrate (the reference solver), only for bench
     return main_accuracy(args)
 
 

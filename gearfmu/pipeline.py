@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Optional
 
-from .plan import PlanError, estimate_as_written, plan_scene, planned_scene
 from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
                      max_step_for, platform_kw, simulate_native)
 from .tables.estimate import check_build_cost
@@ -39,6 +38,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         check_build_cost(scene, allow_large=allow_large)
     plan = None
     if tables is None and scene.accuracy is not None:  # follow the plan (docs/plan.md)
+        from .plan import PlanError, plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
         plan = plan_scene(scene, progress=progress)
         if not plan.within_target:
             v = plan.verification
@@ -48,6 +48,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         verified = plan.verified_envelope
         scene = planned_scene(scene, plan)
     elif tables is None and estimate_accuracy:
+        from .plan import estimate_as_written  # the planner: loaded only for the as-written estimate
         try:
             verified = estimate_as_written(scene, progress=progress)
         except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing

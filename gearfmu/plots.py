@@ -79,7 +79,8 @@ def plot_simulation(result, path, *, title: str = "", last_meshes: int | None = 
         ax.grid(alpha=0.3)
     if title:
         axes[0].set_title(title)
-    fig.tight_layout()
+    # fixed margins: tight_layout measures every label by drawing the figure once more
+    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.05, top=0.96, hspace=0.12)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -61,7 +61,6 @@ from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..common.checks import finite_number
 from ..ehl.lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa
@@ -381,6 +380,7 @@ def _full_area_log_a_l(surface, material, A0, options) -> float:
         lo -= 4.0
     while g(hi) < 0:
         hi += 4.0
+    from scipy.optimize import brentq  # scipy.optimize: heavy import, only when a fractal contact is solved
     return brentq(g, lo, hi, xtol=1e-12, rtol=1e-12)
 
 
@@ -415,6 +415,7 @@ def solid_contact_at_load(surface: FractalSurface, material: FractalMaterial, lo
         lo -= 10.0
         if lo < hi - 400:
             raise FractalInputError(f"load_N={P!r}: too small to resolve")
+    from scipy.optimize import brentq  # scipy.optimize: heavy import, only when a fractal contact is solved
     u = brentq(f, lo, hi, xtol=1e-12, rtol=1e-12)
     r = solid_contact(surface, material, math.exp(u), A0, options)
     if r.real_area_m2 >= A0:

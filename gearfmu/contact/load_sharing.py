@@ -48,10 +48,6 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
-from scipy.optimize import brentq
-from scipy.special import gamma as _gamma_fn
-from scipy.special import pbdv
-from scipy.integrate import quad
 
 from ..common.checks import finite_number
 from ..ehl.fits import moes_central_film
@@ -194,6 +190,7 @@ def gw_integral(n: float, t, distribution: str = "gaussian"):
     F_n(t) = Gamma(n+1) exp(-t) for t >= 0 (and int_0^inf (s - t)^n e^-s ds for t < 0)."""
     n = _pos("n", n, zero=True)
     t = np.asarray(t, float)
+    from scipy.special import gamma as _gamma_fn, pbdv  # scipy.special: heavy import, only for a rough contact
     if distribution == "gaussian":
         tc = np.clip(t, -_T_LOW, _T_HIGH)
         with np.errstate(over="ignore", invalid="ignore", under="ignore"):
@@ -211,6 +208,7 @@ def gw_integral(n: float, t, distribution: str = "gaussian"):
         return out[()] if out.ndim else float(out)
     if distribution == "exponential":
         if np.any(t < 0):
+            from scipy.integrate import quad  # scipy.integrate: heavy import, only for t < 0
             f = np.vectorize(lambda tt: _gamma_fn(n + 1.0) * math.exp(-tt) if tt >= 0 else
                              quad(lambda s: (s - tt) ** n * math.exp(-s), 0.0, np.inf)[0])
             return f(t)[()]
@@ -360,6 +358,7 @@ def load_sharing(st: LineContactState, asp: AsperityParameters, *, distribution:
             raise LoadSharingInputError(
                 f"w_N_per_m={w!r}: the asperities carry the load only with a film share below "
                 f"min_film_share={s_min:g} (film thickness out of the fit's range)")
+        from scipy.optimize import brentq  # scipy.optimize: heavy import, only for a rough contact
         s = math.exp(brentq(resid, lo, 0.0, xtol=1e-14, rtol=1e-12, maxiter=200))
     h = jgp_central_film_m(st, 1.0 / s)
     gc = gw_contact(asp, h - asp.y_s_m, Es, distribution)

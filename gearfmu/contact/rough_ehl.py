@@ -15,7 +15,6 @@ from typing import Dict, List
 import time
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from ..common.vocabulary import FILM_FAILURE_POLICIES
 from ..gear.hertz import hertz_stiffness_N_per_m, reduced_modulus_Pa
@@ -311,6 +310,7 @@ class RoughFilmGrid:
             for j in nodes:
                 col = np.log(table[j])
                 if np.all(np.isfinite(col)):
+                    from scipy.interpolate import CubicSpline  # scipy.interpolate: heavy import, only here
                     vals.append(CubicSpline(self.s_nodes, col)(s[m]))
                 else:  # a failed node: piecewise linear, NaN next to it
                     i0, f = self._s_weights(s[m])
@@ -372,6 +372,7 @@ class RoughFilmGrid:
             for j in (jj, jj + 1):
                 col = np.log(self.mixed[j])
                 if np.all(np.isfinite(col)):
+                    from scipy.interpolate import CubicSpline  # scipy.interpolate: heavy import, only here
                     vals.append(CubicSpline(self.s_nodes, col)(s[m]))
                 else:
                     i0, f = self._s_weights(s[m])

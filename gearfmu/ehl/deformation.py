@@ -31,7 +31,6 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy import fft as _fft
 
 
 def kernel_coefficients(n_nodes: int, dX: float) -> np.ndarray:
@@ -222,6 +221,7 @@ class DeformationOperator:
         c[: self.n] = self.K
         c[m - self.n + 1:] = self.K[1:][::-1]
         self._m = m
+        import scipy.fft as _fft  # scipy.fft: heavy import, only when a kernel is set up
         khat = _fft.fft(c) * (-1.0 / np.pi)
         self.khr = np.ascontiguousarray(khat.real)
         self.khi = np.ascontiguousarray(khat.imag)

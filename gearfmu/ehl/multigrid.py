@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as _fft
 
 from .deformation import kernel_coefficients, stage_twiddles
 from .errors import EHLInputError
@@ -78,6 +77,7 @@ def _grid_constants(ns, ms, off, moff, toff, x_in, x_out):
         c = np.zeros(m)
         c[:n] = Kl
         c[m - n + 1:] = Kl[1:][::-1]
+        import scipy.fft as _fft  # scipy.fft: heavy import, only when a kernel is set up
         kh = _fft.fft(c) * (-1.0 / np.pi)
         khr[moff[l]:moff[l] + m] = kh.real
         khi[moff[l]:moff[l] + m] = kh.imag

@@ -47,6 +47,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import platform as _platform
 
+from ..common.cache import cache_dir
+
 
 @dataclass(frozen=True)
 class Target:
@@ -122,10 +124,7 @@ def _zig_version(zig: Tuple[str, ...]) -> str:
 def object_cache_dir() -> Path:
     """Where compiled object files are kept between builds: ``$GEARFMU_CACHE_DIR/objects``, else
     ``$XDG_CACHE_HOME/gearfmu/objects``, else ``~/.cache/gearfmu/objects``."""
-    root = os.environ.get("GEARFMU_CACHE_DIR")
-    if root:
-        return Path(root) / "objects"
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "gearfmu" / "objects"
+    return cache_dir("objects")  # gearfmu.common.cache: the root shared with the other cached results
 
 
 def _compile_flags(cflags: Sequence[str]) -> List[str]:

@@ -18,16 +18,21 @@ import sys
 from typing import Dict, Optional
 
 from .. import __version__
+from ..common.cache import cache_dir, load_entry, store_entry
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..dynamics.native import simulate
 from ..tables.mesh_tables import MeshTables
 from .compare import native_columns, output_names
 
-__all__ = ["validation_record", "VALIDATION_DIR", "RECORD_PACKAGES"]
+__all__ = ["validation_record", "VALIDATION_DIR", "RECORD_PACKAGES", "REFERENCE_CACHE"]
 
 VALIDATION_DIR = "resources/validation"
 #: packages whose versions the validation record names
 RECORD_PACKAGES = ("numpy", "scipy", "numba", "fmpy", "pythonfmu", "libcosimpy")
+#: folder of gearfmu's file cache (:mod:`gearfmu.common.cache`) holding the native reference results
+REFERENCE_CACHE = "validation"
+#: packages whose versions are part of a cached reference result's key (the numbers depend on them)
+_SOLVER_PACKAGES = ("numpy", "numba")
 
 
 def _versions() -> Dict[str, Optional[str]]:
@@ -67,22 +72,14 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
         extra["integrator"] = {v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))]
     if p.get("bulk_temperature_start_C") is not None:
         extra["bulk_temperature_C"] = float(p["bulk_temperature_start_C"])
-    res = simulate(tables, **extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s,
-                   max_step_s=p["max_step_s"], pinion_torque_Nm=p["pinion_torque_start_Nm"],
-                   gear_torque_Nm=p["gear_torque_start_Nm"],
-                   pinion_speed_start_rad_s=p["pinion_speed_start_rad_s"], damping_ratio=p["damping_ratio"],
-                   damping_model=names_by_code[int(p["damping_model"])],
-                   pinion_angle_start_rad=p.get("pinion_angle_start_rad", 0.0))
-    cols = native_columns(res, tables.slots)
-    names = output_names(tables.slots)
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["time", *names])
-    for i in range(len(res.time_s)):
-        w.writerow([repr(float(res.time_s[i]))] + [repr(float(cols[n][i])) for n in names])
-    ref = buf.getvalue().encode("utf-8")
+    sim_kw = dict(extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s, max_step_s=p["max_step_s"],
+                  pinion_torque_Nm=p["pinion_torque_start_Nm"], gear_torque_Nm=p["gear_torque_start_Nm"],
+                  pinion_speed_start_rad_s=p["pinion_speed_start_rad_s"], damping_ratio=p["damping_ratio"],
+                  damping_model=names_by_code[int(p["damping_model"])],
+                  pinion_angle_start_rad=p.get("pinion_angle_start_rad", 0.0))
     meta_bytes, bin_bytes = tables.to_bytes()
     meta = json.loads(meta_bytes.decode("utf-8"))
+    ref, ref_meta = _reference(tables, sim_kw, meta)
     record = {
         "format": "gearfmu-validation-record", "version": 1,
         "runtime": runtime, "model_identifier": model_identifier,
@@ -100,10 +97,10 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
             "file": "reference_result.csv", "sha256": hashlib.sha256(ref).hexdigest(),
             "solver": "gearfmu.dynamics.native.simulate (numba, docs/model.md RK4)",
             "start_time_s": 0.0, "stop_time_s": stop_time_s, "output_interval_s": output_interval_s,
-            "substeps_per_interval": int(res.substeps), "rows": int(len(res.time_s)),
+            "substeps_per_interval": ref_meta["substeps"], "rows": ref_meta["rows"],
             "criterion": "every output within 1e-9 of its range in this file when a master steps the FMU "
                          "with communication step = output_interval_s and the start values above",
-            "native_wall_s": res.wall_s,
+            "native_wall_s": ref_meta["native_wall_s"],
         },
     }
     out = {f"{VALIDATION_DIR}/record.json": json.dumps(record, indent=1, default=str).encode("utf-8"),
@@ -111,3 +108,37 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
     if scene_text is not None:
         out[f"{VALIDATION_DIR}/scene.toml"] = scene_text.encode("utf-8")
     return out
+
+
+def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
+    """(reference_result.csv bytes, {substeps, rows, native_wall_s}) of the native solver on
+    ``tables`` with ``sim_kw``.  Kept in gearfmu's file cache (:mod:`gearfmu.common.cache`, folder
+    :data:`REFERENCE_CACHE`) under the key: the tables' content checksum (every array's SHA-256,
+    shapes, scalars and axes: ``tables.json`` without its provenance, which the solver does not
+    read), every argument of the run, the gearfmu, Python and solver package versions and the
+    machine type.  A later build with the same key reads the file instead of running the solver
+    (the same bytes: the solver is deterministic); any change in the key runs it again.
+    ``native_wall_s`` is the wall time of the run that computed the file."""
+    content = {k: v for k, v in tables_meta.items() if k != "provenance"}
+    versions = _versions()
+    key = {"what": "gearfmu native reference result",
+           "tables_content_sha256": hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest(),
+           "simulate": {k: repr(v) for k, v in sorted(sim_kw.items())},
+           "versions": {k: versions[k] for k in ("gearfmu", "python", *_SOLVER_PACKAGES)},
+           "machine": platform.machine()}
+    folder = cache_dir(REFERENCE_CACHE)
+    hit = load_entry(folder, key, ".csv", fields={"substeps": int, "rows": int, "native_wall_s": float})
+    if hit is not None:
+        return hit[1], hit[0]
+    res = simulate(tables, **sim_kw)
+    cols = native_columns(res, tables.slots)
+    names = output_names(tables.slots)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", *names])
+    for i in range(len(res.time_s)):
+        w.writerow([repr(float(res.time_s[i]))] + [repr(float(cols[n][i])) for n in names])
+    ref = buf.getvalue().encode("utf-8")
+    meta = {"substeps": int(res.substeps), "rows": int(len(res.time_s)), "native_wall_s": float(res.wall_s)}
+    store_entry(folder, key, meta, ref, ".csv")
+    return ref, meta
