@@ -100,8 +100,15 @@ def host_key() -> Optional[str]:
 
 
 def zig_command() -> Optional[List[str]]:
-    """The zig C compiler driver: ``python -m ziglang`` when the package is installed, else a ``zig`` on PATH."""
-    if importlib.util.find_spec("ziglang") is not None:
+    """The zig C compiler driver: the ``ziglang`` package's binary when the package is installed
+    (called directly: ``python -m ziglang`` would start one more Python process per compiler
+    run, only to exec that binary), else a ``zig`` on PATH."""
+    spec = importlib.util.find_spec("ziglang")
+    if spec is not None:
+        for folder in spec.submodule_search_locations or ():
+            binary = os.path.join(folder, "zig.exe" if os.name == "nt" else "zig")
+            if os.path.isfile(binary) and os.access(binary, os.X_OK):
+                return [binary]
         return [sys.executable, "-m", "ziglang"]
     z = shutil.which("zig")
     return [z] if z else None
