@@ -5,10 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+# A bare Figure renders PNG through matplotlib's Agg canvas without pyplot: no GUI backend is
+# chosen or imported, and no global figure manager holds the figures.
+from matplotlib.figure import Figure
 
 
 def plot_tables(tables, path, *, torque_index: int = 0, max_meshes: int = 6) -> Path:
@@ -20,7 +19,8 @@ def plot_tables(tables, path, *, torque_index: int = 0, max_meshes: int = 6) -> 
     phi_deg = np.degrees(tables.phi_rad[:n_show])
     k = tables.k_N_per_m[torque_index][:, :n_show]
     e = tables.e_m[torque_index][:, :n_show]
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    fig = Figure(figsize=(9, 9))
+    axes = fig.subplots(3, 1, sharex=True)
     for j in range(tables.slots):
         axes[0].plot(phi_deg, k[j] / 1e9, lw=1, label=f"slot {j + 1}")
     axes[0].plot(phi_deg, k.sum(axis=0) / 1e9, "k", lw=1.6, label="total (TVMS)")
@@ -45,7 +45,6 @@ def plot_tables(tables, path, *, torque_index: int = 0, max_meshes: int = 6) -> 
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
 
 
@@ -61,7 +60,8 @@ def plot_simulation(result, path, *, title: str = "", last_meshes: int | None = 
     sel = slice(None)
     if last_meshes and mesh_period_s:
         sel = t >= t[-1] - last_meshes * mesh_period_s
-    fig, axes = plt.subplots(4, 1, figsize=(9, 10), sharex=True)
+    fig = Figure(figsize=(9, 10))
+    axes = fig.subplots(4, 1, sharex=True)
     axes[0].plot(t[sel] * 1e3, np.asarray(result.dte)[sel] * 1e6, "k", lw=1)
     axes[0].set_ylabel("DTE [um]")
     axes[1].plot(t[sel] * 1e3, np.asarray(result.mesh_force)[sel] / 1e3, "k", lw=1)
@@ -83,5 +83,4 @@ def plot_simulation(result, path, *, title: str = "", last_meshes: int | None = 
     fig.subplots_adjust(left=0.09, right=0.98, bottom=0.05, top=0.96, hspace=0.12)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
