@@ -1,0 +1,229 @@
+#!/usr/bin/env python3
+"""Benchmark: real-time factor of the standalone FMU against its error, per table resolution.
+
+For each points-per-mesh level (the planner's levels, gearfmu.plan_choices: 16 .. 256 by
+default, and 512 .. 2048) the scene's tables are built at that resolution and packed into a standalone
+FMI 2.0 FMU (this machine's binary only).  Each (points per mesh, integrator, max_step)
+is then run over ``--sim`` simulated seconds at the communication step ``--comm``:
+
+* through ``benchmarks/fmu_rtf_host.c`` (compiled here with the system ``cc``): a plain C
+  FMI 2.0 host, dlopen of the FMU binary, doStep + getReal(dte) per communication step;
+* through fmpy's low-level ``FMU2Slave`` loop (the same calls, a Python loop).
+
+Both hosts read ``dte`` and ``mesh_force`` after every doStep.
+
+``max_step`` and ``integrator`` are the FMU's own parameters, set in initialization mode;
+``max_step`` = comm / substeps.  Every run's outputs (recorded by the C host; the fmpy run's
+are compared with them bit for bit) are compared with a fine run: native rk4_kink on tables at
+``--fine-ppm`` points per mesh (finer than every level) and max_step comm / ``--fine-substeps``.
+Two errors over all communication points: ``dte_rel_rms_err`` = RMS(dte - dte_fine) /
+RMS(dte_fine), the planner's measure (gearfmu.plan_evaluator.relative_rms; mesh_force the same
+in ``mesh_force_rel_rms_err``), and ``dte_rel_ptp_err`` = RMS(dte - dte_fine) /
+peak-to-peak(dte_fine), the measure of bench_fmu.py's ``rtf`` block (stricter: the mean
+deflection is not in the denominator).  ``reference_check``: both errors of the fine run against
+one on tables twice as fine (how far the reference itself is from table convergence).
+``dte_rel_rms_err_same_table``: the planner's measure against the same fine run on the run's own
+tables (the integration error alone, as in bench_fmu.py's ``rtf`` block).
+
+real_time_factor = simulated s / best wall s of ``--repeat`` runs (the machine is shared:
+best of N; run it under ``nice``); ``cpu`` the same on process CPU time (C host only).
+``cheapest`` lists, per error measure, among the settings within ``--target``, the fastest
+through each host; ``smallest_error`` the run closest to the fine run.  ``dostep_overhead``:
+the C host's wall time per doStep beyond its internal steps (rk4 at max_step = comm, run at
+comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).
+
+Prints one JSON object.
+
+    nice python benchmarks/bench_fmu_rtf.py [SCENE] [--ppm 16,32,64,128,256] [--repeat 5]
+"""
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+INTEGRATOR_CODE = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}
+
+
+def compile_host(tmp: Path) -> Path:
+    """benchmarks/fmu_rtf_host.c compiled with the system cc against fmpy's FMI 2 headers."""
+    from gearfmu.fmu.build_steps import fmi2_header_dir
+
+    exe = tmp / "fmu_rtf_host"
+    src = Path(__file__).with_name("fmu_rtf_host.c")
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", f"-I{fmi2_header_dir()}", "-o", str(exe), str(src), "-ldl"],
+                   check=True)
+    return exe
+
+
+def host_run(exe, unz, md, vr, *, sim_s, comm_s, repeat, max_step_s, integrator, reals):
+    """(best wall s, best CPU s, rows of (dte, mesh_force)) of the C host."""
+    args = [str(exe), str(unz), md.coSimulation.modelIdentifier, md.guid, repr(sim_s), repr(comm_s), str(repeat),
+            f"{vr['dte']},{vr['mesh_force']}", str(vr["max_step"]), repr(max_step_s), str(vr["integrator"]),
+            str(INTEGRATOR_CODE[integrator])] + [f"{vr[k]}={v!r}" for k, v in reals.items()]
+    proc = subprocess.run(args, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"fmu_rtf_host exit {proc.returncode}: {proc.stderr.strip()}")
+    out = proc.stdout.splitlines()
+    head = json.loads(out[0])
+    return min(head["wall_s"]), min(head["cpu_s"]), np.array([[float(x) for x in r.split(",")] for r in out[1:]])
+
+
+def fmpy_run(unz, md, vr, *, sim_s, comm_s, max_step_s, integrator, reals):
+    """(wall s, rows of (dte, mesh_force)) of fmpy's low-level doStep + getReal loop."""
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(unz), modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="rtf")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0, stopTime=sim_s)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["max_step"]], [max_step_s])
+    fmu.setInteger([vr["integrator"]], [INTEGRATOR_CODE[integrator]])
+    for k, v in reals.items():
+        fmu.setReal([vr[k]], [v])
+    fmu.exitInitializationMode()
+    n = int(round(sim_s / comm_s))
+    out = [vr["dte"], vr["mesh_force"]]
+    rec = [fmu.getReal(out)]
+    t = 0.0
+    t0 = time.perf_counter()
+    for _ in range(n):
+        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=comm_s)
+        rec.append(fmu.getReal(out))
+        t += comm_s
+    wall = time.perf_counter() - t0
+    fmu.terminate()
+    fmu.freeInstance()
+    return wall, np.array(rec)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("scene", nargs="?")
+    ap.add_argument("--ppm", default="16,32,64,128,256,512,1024,2048", help="points per mesh of the FMUs")
+    ap.add_argument("--fine-ppm", type=int, default=4096, help="points per mesh of the fine run")
+    ap.add_argument("--integrators", default="rk4,rk4_kink,rk4_node")
+    ap.add_argument("--substeps", default="1,2,3,4,6,8", help="max_step = comm / substeps")
+    ap.add_argument("--comm", type=float, default=1e-4, help="communication step (s)")
+    ap.add_argument("--sim", type=float, default=0.1, help="simulated seconds per run (s)")
+    ap.add_argument("--target", type=float, default=1e-4, help="relative RMS dte error target")
+    ap.add_argument("--fine-substeps", type=int, default=512)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--no-fmpy", action="store_true", help="time the C host only")
+    args = ap.parse_args(argv)
+
+    from fmpy import extract, read_model_description
+
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+    from gearfmu.pipeline import compute_tables, gear_torque_for, load
+    from gearfmu.plan_evaluator import relative_rms
+
+    scene = load(args.scene)
+    ppms = sorted(int(x) for x in args.ppm.split(","))
+    integrators = [s.strip() for s in args.integrators.split(",")]
+    subs = [int(x) for x in args.substeps.split(",")]
+    T1 = scene.operating.torque_Nm
+    w0 = scene.operating.speed_rad_s
+    zeta = scene.fmu.damping_ratio
+    dmodel = scene.solver.damping_model
+
+    def tables_at(p):
+        return compute_tables(replace(scene, tables=replace(scene.tables, points_per_mesh=p)))
+
+    def fine_run(tables):
+        r = simulate(tables, max_step_s=args.comm / args.fine_substeps, integrator="rk4_kink",
+                     stop_time_s=args.sim, comm_step_s=args.comm, pinion_torque_Nm=T1,
+                     gear_torque_Nm=gear_torque_for(tables, T1), pinion_speed_start_rad_s=w0,
+                     damping_ratio=zeta, damping_model=dmodel)
+        return np.column_stack([r.dte, r.mesh_force])
+
+    fine = fine_run(tables_at(args.fine_ppm))
+    rng = float(np.ptp(fine[:, 0]))
+
+    def errors(rows, ref=None):
+        ref = fine if ref is None else ref
+        rows = np.asarray(rows, float)
+        n = min(len(rows), len(ref))
+        a, b = rows[:n], ref[:n]
+        if ref is not fine:
+            return {"dte_rel_rms_err_same_table": relative_rms(a[:, 0], b[:, 0])}
+        return {"dte_rel_rms_err": relative_rms(a[:, 0], b[:, 0]),
+                "dte_rel_ptp_err": float(np.sqrt(np.mean((a[:, 0] - b[:, 0]) ** 2)) / rng),
+                "mesh_force_rel_rms_err": relative_rms(a[:, 1], b[:, 1])}
+
+    report = {"scene": scene.name, "comm_step_s": args.comm, "simulated_s": args.sim, "repeat": args.repeat,
+              "target": args.target,
+              "reference": {"kind": "native rk4_kink", "points_per_mesh": args.fine_ppm,
+                            "max_step_s": args.comm / args.fine_substeps, "dte_peak_to_peak_m": rng,
+                            "dte_rms_m": float(np.sqrt(np.mean(fine[:, 0] ** 2)))},
+              "reference_check": dict(points_per_mesh=2 * args.fine_ppm, **errors(fine_run(tables_at(2 * args.fine_ppm)))),
+              "errors": {"dte_rel_rms_err": "RMS(dte - dte_ref) / RMS(dte_ref) (the planner's measure)",
+                         "dte_rel_ptp_err": "RMS(dte - dte_ref) / peak-to-peak(dte_ref) (bench_fmu.py rtf block)",
+                         "mesh_force_rel_rms_err": "RMS(F - F_ref) / RMS(F_ref)"},
+              "c_host": "benchmarks/fmu_rtf_host.c: dlopen, fmi2DoStep + fmi2GetReal(dte, mesh_force) per step",
+              "fmpy_host": None if args.no_fmpy else "fmpy FMU2Slave doStep + getReal(dte, mesh_force) per step (Python loop)",
+              "runs": []}
+    tmp = Path(tempfile.mkdtemp(prefix="gearfmu_rtf_"))
+    try:
+        exe = compile_host(tmp)
+        for p in ppms:
+            tables = tables_at(p)
+            same = fine_run(tables)
+            T2 = gear_torque_for(tables, T1)
+            t0 = time.perf_counter()
+            path = build_standalone_fmu(tables, tmp / f"rtf{p}.fmu", damping_ratio=zeta, pinion_speed_start_rad_s=w0,
+                                        pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2,
+                                        max_step_s=args.comm, damping_model=dmodel, stop_time_s=args.sim,
+                                        output_interval_s=args.comm, integrator="rk4_kink", validation=False,
+                                        platforms=("x86_64-linux",), model_name=f"GearRtf{p}")
+            build_s = time.perf_counter() - t0
+            md = read_model_description(str(path))
+            vr = {v.name: v.valueReference for v in md.modelVariables}
+            unz = Path(extract(str(path)))
+            reals = {"pinion_torque": T1, "gear_torque": T2}
+            if p == ppms[0]:  # what one doStep costs beyond its internal steps: rk4 at max_step = comm
+                w = [host_run(exe, unz, md, vr, sim_s=args.sim, comm_s=c, repeat=args.repeat, max_step_s=args.comm,
+                              integrator="rk4", reals=reals)[0] for c in (args.comm, 10 * args.comm)]
+                n1, n10 = round(args.sim / args.comm), round(args.sim / (10 * args.comm))
+                report["dostep_overhead"] = {
+                    "points_per_mesh": p, "integrator": "rk4", "max_step_s": args.comm,
+                    "c_host_wall_s_comm": w[0], "c_host_wall_s_10comm": w[1],
+                    "s_per_dostep_beyond_internal_steps": (w[0] - w[1]) / (n1 - n10)}
+            for integ in integrators:
+                for n in subs:
+                    h = args.comm / n
+                    kw = dict(sim_s=args.sim, comm_s=args.comm, max_step_s=h, integrator=integ, reals=reals)
+                    wall, cpu, rows = host_run(exe, unz, md, vr, repeat=args.repeat, **kw)
+                    row = {"points_per_mesh": p, "integrator": integ, "substeps": n, "max_step_s": h,
+                           **errors(rows), **errors(rows, same), "c_host_wall_s": wall, "c_host_real_time_factor": args.sim / wall,
+                           "c_host_cpu_real_time_factor": args.sim / cpu, "fmu_build_s": build_s}
+                    if not args.no_fmpy:
+                        fr = [fmpy_run(unz, md, vr, **kw) for _ in range(args.repeat)]
+                        fw = min(w for w, _ in fr)
+                        row.update(fmpy_wall_s=fw, fmpy_real_time_factor=args.sim / fw,
+                                   fmpy_outputs_equal_c_host=bool(np.array_equal(np.asarray(fr[0][1]), rows)))
+                    report["runs"].append(row)
+                    print(json.dumps(row), file=sys.stderr, flush=True)
+            shutil.rmtree(unz, ignore_errors=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    keys = ["c_host_real_time_factor"] + ([] if args.no_fmpy else ["fmpy_real_time_factor"])
+    report["cheapest"] = {}
+    for m in ("dte_rel_rms_err", "dte_rel_ptp_err", "dte_rel_rms_err_same_table"):
+        ok = [r for r in report["runs"] if np.isfinite(r[m]) and r[m] <= args.target]
+        report["cheapest"][m] = {k: (max(ok, key=lambda r: r[k]) if ok else None) for k in keys}
+    report["smallest_error"] = min(report["runs"], key=lambda r: r["dte_rel_rms_err"], default=None)
+    print(json.dumps(report, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
