@@ -126,11 +126,12 @@ static int bad_value(gkf_fmu *f, int slot, int at_time, double t, int level, con
     const char *why;
     double limit = 0.0;
     if (!f->present[slot]) return 0;
-    if (at_time) snprintf(at, sizeof at, " at t = %s s", num(t, b));
     if (!isfinite(x)) why = "not finite";
     else if (f->has_min[slot] && x < f->min[slot]) { why = "below its minimum"; limit = f->min[slot]; }
     else if (f->has_max[slot] && x > f->max[slot]) { why = "above its maximum"; limit = f->max[slot]; }
     else return 0;
+    /* formatted only for a refused value: this check runs on every doStep */
+    if (at_time) snprintf(at, sizeof at, " at t = %s s", num(t, b));
     if (isfinite(x))
         say(f, level, "%s = %s%s: %s %s%s", f->name[slot], num(x, a), at, why, num(limit, b), tail);
     else
