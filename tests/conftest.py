@@ -3,12 +3,43 @@
 The suite runs in parallel: pytest-xdist with ``-n auto --dist loadfile`` (pyproject's
 [tool.pytest.ini_options]).  Many files build something expensive once per module (an FMU,
 tables, a compiled host, a pool of film runs) in a module-scoped fixture; ``loadfile`` keeps each
-file on one worker, so such a fixture is built once.  The files whose tests share a module, class
-or package fixture are handed out first (the large pieces of work first, the files of small
-independent tests last), which shortens the tail of the run.  ``-n 0`` runs the same order in
-one process.
+file on one worker, so such a fixture is built once.  Files are handed out longest first, so that
+the two workers finish together: the files of :data:`LONGEST_FIRST` in that order, then the other
+files whose tests share a module, class or package fixture, then the files of small independent
+tests.  xdist would otherwise re-sort the files by their number of tests, which hands the few-test
+heavy files (the direct TVMS films, the fresh-process checks) out last; :func:`pytest_configure`
+turns that off.  ``-n 0`` runs the same order in one process.
 """
 import pytest
+
+#: the test files with the largest CPU cost, largest first (measured per test with the process
+#: and child-process CPU time, warm caches; test_integrators moves up because in a fresh
+#: environment its first standalone build cross-compiles every platform's objects and it compiles
+#: the native solver); refresh the order when a file's cost changes a lot
+LONGEST_FIRST = (
+    "tests/test_direct_tvms.py",
+    "tests/test_integrators.py",
+    "tests/test_direct_tvms_speed_torque.py",
+    "tests/test_temperature_axis.py",
+    "tests/test_ehl_transient.py",
+    "tests/test_helical_contact.py",
+    "tests/test_ehl.py",
+    "tests/test_native_cache.py",
+    "tests/test_pipeline.py",
+    "tests/test_standalone.py",
+    "tests/test_plan.py",
+    "tests/test_pyshim.py",
+    "tests/test_ehl_mesh.py",
+    "tests/test_fmu.py",
+    "tests/test_ehl_determinism.py",
+    "tests/test_film_transient.py",
+    "tests/test_platforms.py",
+    "tests/test_robustness.py",
+    "tests/test_plan_verify.py",
+    "tests/test_dask_tables.py",
+    "tests/test_fuzz.py",
+    "tests/test_hard_cases.py",
+)
 
 _SHARED_SCOPES = ("module", "class", "package")
 
@@ -25,8 +56,19 @@ def _shares_a_fixture(item) -> bool:
     return False
 
 
+def pytest_configure(config):
+    # keep the order below: xdist's loadfile otherwise hands out the files with most tests first
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+def _file(item) -> str:
+    return item.nodeid.split("::", 1)[0]
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    heavy = {it.nodeid.split("::", 1)[0] for it in items if _shares_a_fixture(it)}
+    rank = {f: i for i, f in enumerate(LONGEST_FIRST)}
+    heavy = {_file(it) for it in items if _shares_a_fixture(it)}
     # stable: every file keeps its tests together and in their written order
-    items.sort(key=lambda it: 0 if it.nodeid.split("::", 1)[0] in heavy else 1)
+    items.sort(key=lambda it: rank.get(_file(it), len(rank) + (0 if _file(it) in heavy else 1)))

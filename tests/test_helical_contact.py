@@ -125,10 +125,17 @@ def test_helical_fractal_mixed_tables():
     np.testing.assert_allclose(a[:, :, same], b[:, :, same], rtol=1e-4, atol=0)   # measured 2.3e-5
 
 
-def test_helical_smooth_ehl_tables_and_beta_to_zero():
+@pytest.fixture(scope="module")
+def smooth_2x8():
+    """The seed 001 pair's smooth_ehl tables (2 slices, 8 points per mesh): computed once for the
+    two tests that use them (the same call in each)."""
+    return _contact_tables(helical(), "smooth_ehl", 2, 8)
+
+
+def test_helical_smooth_ehl_tables_and_beta_to_zero(smooth_2x8):
     pair = helical()
     g = pair_geometry(pair)
-    t = _contact_tables(pair, "smooth_ehl", 2, 8)
+    t = smooth_2x8
     k = t.k_N_per_m[-1].sum(axis=0)
     kh = slot_stiffness(pair, g, MeshModelOptions(slices=2), None, 8).k_total_N_per_m
     # ISO 6336-1 c_gamma_alpha, +-25 % (measured +10.6 % with 4 slices x 8 points, docs/helical.md)
@@ -180,7 +187,7 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
     assert '"fractal_mixed"' in json.dumps(meta)
 
 
-def test_helical_rough_ehl_level1_is_the_smooth_film_limit():
+def test_helical_rough_ehl_level1_is_the_smooth_film_limit(smooth_2x8):
     """rough_ehl on a helical pair (per-slice normal-section requests, the film grid over each
     slice's own positions).  Reference: the full-film limit -- seed 000 Table 2 level 1
     (Ra 0.107 um) gives a film parameter Lambda = h_min/sigma far above 3 here, where the
@@ -192,7 +199,7 @@ def test_helical_rough_ehl_level1_is_the_smooth_film_limit():
     pair = helical()
     g = pair_geometry(pair)
     t = _contact_tables(pair, "rough_ehl", 2, 8, roughness=RoughnessSpec.from_level(1))
-    sm = _contact_tables(pair, "smooth_ehl", 2, 8)
+    sm = smooth_2x8
     c = t.provenance["contact"]
     assert c["model"] == "rough_ehl" and "helical_normal_section" in c
     assert c["roughness"]["level"] == 1
