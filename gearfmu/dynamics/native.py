@@ -397,14 +397,16 @@ def _result(t, time_s, state, pair, force, stiff, t1s, t2s, step_s, n_sub, c, da
     mesh force and stiffness: the gear speed and angle and the load sharing are derived as
     docs/model.md "Outputs" defines them (also used by gearfmu.dynamics.reference)."""
     rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
-    th, om, x, v = state.T.copy()  # the four columns as contiguous copies, one block
+    cols = state.T.copy()  # the four columns [theta1, omega1, x, v] as contiguous rows, one block
+    th, om, x, v = cols
+    gear_angle, gear_speed = (cols[:2] * rb1 - cols[2:]) / rb2  # (th*Rb1 - x)/Rb2, (om*Rb1 - v)/Rb2
     f = force[:, None]
     ls = np.zeros(pair.shape)  # pair / force where force != 0 (NaN rows stay NaN), else 0
     with np.errstate(invalid="ignore", divide="ignore"):
         np.divide(pair, f, out=ls, where=f != 0.0)
     return SimResult(
-        time_s=time_s, pinion_speed=om, gear_speed=(om * rb1 - v) / rb2,
-        pinion_angle=th, gear_angle=(th * rb1 - x) / rb2, dte=x, dte_rate=v,
+        time_s=time_s, pinion_speed=om, gear_speed=gear_speed,
+        pinion_angle=th, gear_angle=gear_angle, dte=x, dte_rate=v,
         mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
         pinion_torque=t1s, gear_torque=t2s, step_s=step_s, substeps=n_sub, damping_Ns_per_m=c,
         damping_model=damping_model, wall_s=wall, info=info)
