@@ -443,3 +443,39 @@ def test_inputs_csv_and_errors(tmp_path):
         tables_from_arrays(k_N_per_m=np.ones((2, 8)), e_m=np.ones((3, 8)))
     with pytest.raises(ValueError, match="k_N_per_m"):
         tables_from_arrays(k_N_per_m=-np.ones((2, 8)))
+
+
+def test_tables_changed_in_place_between_runs_are_checked_and_used_again():
+    """simulate skips MeshTables.validate for the same tables object only while nothing validate
+    reads has changed: a value made invalid in place (array element, optional array, scalar,
+    replaced array) after a good run is still refused, and a valid in-place change is used --
+    the run equals, bit for bit, one on freshly built tables with the new values."""
+    from gearfmu.tables.mesh_tables import TableError
+
+    kw = dict(stop_time_s=2e-3, comm_step_s=1e-4, pinion_torque_Nm=50.0, pinion_speed_start_rad_s=100.0,
+              damping_ratio=0.05)
+    tb = rectangular_wave_tables(2e8, contact_ratio=1.6, backlash_half_m=20e-6, points_per_mesh=16)
+    assert tb.e_comprehensive_m is not None
+    simulate(tb, **kw)
+
+    def refused(change, match):
+        t = rectangular_wave_tables(2e8, contact_ratio=1.6, backlash_half_m=20e-6, points_per_mesh=16)
+        simulate(t, **kw)
+        change(t)
+        with pytest.raises(TableError, match=match):
+            simulate(t, **kw)
+
+    refused(lambda t: t.k_N_per_m.__setitem__((0, 0, 3), np.nan), "k_N_per_m")
+    refused(lambda t: t.backlash_half_m.__setitem__((0, 2), -1e-6), "backlash_half_m")
+    refused(lambda t: t.e_comprehensive_m.__setitem__((0, 1), np.inf), "e_comprehensive_m")
+    refused(lambda t: setattr(t, "inertia_gear_kgm2", -1.0), "inertia_gear_kgm2")
+    refused(lambda t: setattr(t, "e_m", np.zeros((1, 1, 4))), "e_m")
+
+    fresh = rectangular_wave_tables(2e8, contact_ratio=1.6, backlash_half_m=20e-6, points_per_mesh=16)
+    fresh.k_N_per_m = fresh.k_N_per_m * 1.5
+    tb.k_N_per_m *= 1.5          # in place: same array object, new values
+    a, b = simulate(tb, **kw), simulate(fresh, **kw)
+    for name in ("dte", "mesh_force", "pair_force", "mesh_stiffness"):
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+    assert not np.array_equal(a.mesh_stiffness, simulate(rectangular_wave_tables(
+        2e8, contact_ratio=1.6, backlash_half_m=20e-6, points_per_mesh=16), **kw).mesh_stiffness)

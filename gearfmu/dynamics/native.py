@@ -29,8 +29,10 @@ Details and choices: docs/native.md.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time as _time
+import weakref
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Union
 
@@ -153,10 +155,59 @@ class DimensionlessResult:
 def _check_tables(tables) -> MeshTables:
     if not isinstance(tables, MeshTables):
         raise NativeInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
-    if tables.has_temperature_axis:
+    if tables.temperature_C is not None:
         raise NativeInputError("tables: have a temperature axis; pass bulk_temperature_C to simulate / "
                                "simulate_sdof, or select one with tables.at_temperature(T)")
-    return tables.validate()
+    return _validated(tables)
+
+
+#: id(tables) -> (weak reference, :func:`_fingerprint`) of tables that passed ``validate()``
+_VALIDATED: dict = {}
+
+
+def _fingerprint(t: MeshTables):
+    """Everything ``MeshTables.validate`` reads -- every dataclass field but ``provenance``,
+    arrays as (dtype, shape, bytes) -- or None when a field is neither an array, a number
+    nor None (then nothing is cached)."""
+    parts = [type(t)]
+    for name in _fields_validated(type(t)):
+        v = getattr(t, name)
+        if isinstance(v, np.ndarray):
+            parts.append((v.dtype.str, v.shape, v.tobytes()))
+        elif v is None or isinstance(v, (float, int, np.floating, np.integer)):
+            parts.append(v)
+        else:
+            return None
+    return tuple(parts)
+
+
+_FIELDS: dict = {}
+
+
+def _fields_validated(cls) -> tuple:
+    names = _FIELDS.get(cls)
+    if names is None:
+        names = _FIELDS[cls] = tuple(f.name for f in dataclasses.fields(cls) if f.name != "provenance")
+    return names
+
+
+def _validated(t: MeshTables) -> MeshTables:
+    """``t.validate()``, skipped when ``t`` (the same object) passed it before and nothing
+    validate reads has changed since, bit for bit (:func:`_fingerprint`); validate is a pure
+    function of those fields, so the outcome is the same."""
+    key = id(t)
+    fp = _fingerprint(t)
+    hit = _VALIDATED.get(key)
+    if fp is not None and hit is not None and hit[0]() is t and hit[1] == fp:
+        return t
+    t.validate()
+    if fp is not None:
+        try:
+            ref = weakref.ref(t, lambda _r, key=key: _VALIDATED.pop(key, None))
+        except TypeError:  # no weak references (a subclass with __slots__): nothing cached
+            return t
+        _VALIDATED[key] = (ref, fp)
+    return t
 
 
 def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
@@ -181,6 +232,13 @@ def _n_steps(stop_time_s, comm_step_s, error=NativeInputError) -> int:
 def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float, error=NativeInputError) -> np.ndarray:
     """Input sampled at t_k = k*comm_step_s, k = 0..n_steps (the value held over step k);
     ``error`` naming ``name`` for a value of the wrong shape or not finite."""
+    if isinstance(value, float) or type(value) is int:  # a number: one check, one fill
+        v = float(value)
+        if not math.isfinite(v):
+            raise error(f"{name}: contains NaN or infinite values")
+        arr = np.empty(n_steps + 1)
+        arr.fill(v)
+        return arr
     if callable(value):
         arr = np.array([float(value(k * comm_step_s)) for k in range(n_steps + 1)])
     else:
@@ -255,7 +313,11 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
     ppp = int(points_per_period)
     if ppp != points_per_period or ppp < 1:
         raise NativeInputError(f"points_per_period: must be a positive integer, got {points_per_period!r}")
-    w = abs(_finite("max_speed_rad_s", max_speed_rad_s))
+    return _max_step_s(t, abs(_finite("max_speed_rad_s", max_speed_rad_s)), ppp)
+
+
+def _max_step_s(t: MeshTables, w: float, ppp: int) -> float:
+    """:func:`choose_max_step_s` on checked tables at speed ``|w|`` (rad/s) and ``ppp`` points."""
     wn = math.sqrt(t.k_mean_N_per_m / t.equivalent_mass_kg)
     period = 2.0 * math.pi / wn
     if w > 0.0:
@@ -335,12 +397,16 @@ def _result(t, time_s, state, pair, force, stiff, t1s, t2s, step_s, n_sub, c, da
     mesh force and stiffness: the gear speed and angle and the load sharing are derived as
     docs/model.md "Outputs" defines them (also used by gearfmu.dynamics.reference)."""
     rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
-    th, om, x, v = state[:, 0], state[:, 1], state[:, 2], state[:, 3]
+    cols = state.T.copy()  # the four columns [theta1, omega1, x, v] as contiguous rows, one block
+    th, om, x, v = cols
+    gear_angle, gear_speed = (cols[:2] * rb1 - cols[2:]) / rb2  # (th*Rb1 - x)/Rb2, (om*Rb1 - v)/Rb2
+    f = force[:, None]
+    ls = np.zeros(pair.shape)  # pair / force where force != 0 (NaN rows stay NaN), else 0
     with np.errstate(invalid="ignore", divide="ignore"):
-        ls = np.where(force[:, None] != 0.0, pair / np.where(force[:, None] != 0.0, force[:, None], 1.0), 0.0)
+        np.divide(pair, f, out=ls, where=f != 0.0)
     return SimResult(
-        time_s=time_s, pinion_speed=om.copy(), gear_speed=(om * rb1 - v) / rb2,
-        pinion_angle=th.copy(), gear_angle=(th * rb1 - x) / rb2, dte=x.copy(), dte_rate=v.copy(),
+        time_s=time_s, pinion_speed=om, gear_speed=gear_speed,
+        pinion_angle=th, gear_angle=gear_angle, dte=x, dte_rate=v,
         mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
         pinion_torque=t1s, gear_torque=t2s, step_s=step_s, substeps=n_sub, damping_Ns_per_m=c,
         damping_model=damping_model, wall_s=wall, info=info)
@@ -358,20 +424,23 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
     """Run the compiled driver (gearfmu.dynamics.driver) on the tables' ``arrays``
     (:func:`_arrays`) from the initial state (theta1, omega1, x, v) =
     (th0, w0, x0, v0) and wrap its arrays in a SimResult."""
-    n_steps = t1s.shape[0] - 1
+    n = t1s.shape[0]
     k, e, b, tq, inv_dphi, dphi = arrays
-    state = np.full((n_steps + 1, 4), np.nan)
-    pair = np.full((n_steps + 1, t.slots), np.nan)
-    force = np.full(n_steps + 1, np.nan)
-    stiff = np.full(n_steps + 1, np.nan)
-    events = np.zeros(n_steps + 1, dtype=np.int64)
+    p = k.shape[1]
+    out = np.empty(n * (6 + p))  # the output rows in one NaN block (rows left unwritten stay NaN)
+    out.fill(np.nan)
+    state = out[:4 * n].reshape(n, 4)
+    pair = out[4 * n:(4 + p) * n].reshape(n, p)
+    force = out[(4 + p) * n:(5 + p) * n]
+    stiff = out[(5 + p) * n:]
+    events = np.zeros(n, dtype=np.int64)
     _warmup()
     t_start = _time.perf_counter()
     done = _run(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
                 float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me,
                 k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
     wall = _time.perf_counter() - t_start
-    time_s = np.arange(n_steps + 1) * H
+    time_s = np.arange(n) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
                    done, dict(info, events=int(events.sum())))
 
@@ -433,7 +502,7 @@ def simulate(
     """
     temperature_axis = isinstance(tables, MeshTables) and tables.has_temperature_axis
     if temperature_axis:
-        t = tables.validate()
+        t = _validated(tables)
     elif bulk_temperature_C is not None:
         raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     else:
@@ -447,7 +516,7 @@ def simulate(
     if temperature_axis:
         return _simulate_temperature_axis(t, a, bulk_temperature_C, max_step_s, integrator)
     if max_step_s is None:
-        max_step_s = choose_max_step_s(t, max(1.5 * abs(a.speed_rad_s), 1.0))
+        max_step_s = _max_step_s(t, max(1.5 * abs(a.speed_rad_s), 1.0), 64)
     return _solve(t, a, icode, False, max_step_s, "two-inertia (docs/model.md)", {"integrator": integrator})
 
 
@@ -492,7 +561,7 @@ def simulate_sdof(
                       pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
                       dte_rate_start_m_s=dte_rate_start_m_s)
     if max_step_s is None:
-        max_step_s = choose_max_step_s(t, max(abs(a.speed_rad_s), 1.0))
+        max_step_s = _max_step_s(t, max(abs(a.speed_rad_s), 1.0), 64)
     return _solve(t, a, icode, True, max_step_s, "time-indexed SDOF (seed 003 eq 3-6)",
                   {"omega1_rad_s": a.speed_rad_s, "integrator": integrator})
 
