@@ -10,7 +10,8 @@ time a user waits for the first plan after installing.  A plan that has not fini
 Prints one JSON object (and writes it to ``-o``): per scene ``wall_s``, ``cpu_s`` (user + system
 time of the plan's process and the processes it waited for: on a shared machine the wall time
 follows the load, the CPU time much less), ``exit_code`` (0 within
-target, 1 not within target, None when stopped), the chosen levels, the verified worst errors
+target, 1 not within target, None when stopped), the accuracy target, each choice's status (kept, reduced, dropped,
+pinned, fixed), the chosen levels, the verified worst errors
 (``dte_rel``, ``mesh_force_rel``, relative RMS against the full-fidelity reference), the native
 runs, and the skipped choices with their reasons.  The machine may be shared: repeat and read
 the best.
@@ -48,7 +49,8 @@ def _plan(scene: str, timeout_s: float, env: dict) -> dict:
         return out
     d = json.loads(p.stdout)
     v = d["verification"]
-    out.update(chosen=d["chosen"], full=d["full"], within_target=d["within_target"],
+    out.update(chosen=d["chosen"], full=d["full"], within_target=d["within_target"], target=d["target"],
+               choices=[{k: r[k] for k in ("choice", "status", "full", "chosen")} for r in d["choices"]],
                dte_rel=v["dte_rel"], mesh_force_rel=v["mesh_force_rel"], worst=v.get("worst"),
                native_runs=v.get("native_runs"), probes=v.get("probes"),
                skipped=[{"choice": r["choice"], "levels": r["levels"], "reason": r["reason"]} for r in d.get("skipped", [])])

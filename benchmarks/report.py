@@ -81,10 +81,12 @@ SOURCES = {
                 "benchmarks/bench_startup.py --commands build"),
     "plan": ([PY, "benchmarks/bench_plan.py", "--scenes", "default", "--timeout", "600"], None,
              "benchmarks/bench_plan.py --scenes default"),
+    "plan_study": ([PY, "examples/plan_study.py", "--json", "--out", "{tmp}"], None,
+                   "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan", "tests"}
+SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan_study", "tests"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -764,6 +766,87 @@ def sec_seed003_statements(pg: Page):
                        f"{sum(1 for s in st if s['holds'])} of {len(st)} reproduced", pg.cost("seed003_statements")])
 
 
+def _level(name, v) -> str:
+    if name == "max_step" and isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0:
+        return f"h0/{1 / v:g}" if v < 1 else ("h0" if v == 1 else f"{v:g} h0")
+    if isinstance(v, bool):
+        return "on" if v else "off"
+    return num(v) if isinstance(v, float) else str(v)
+
+
+def _plan_choices(r) -> tuple:
+    """(kept at full, reduced or dropped) of one plan: its choice rows, or for JSON without them
+    the chosen and full configurations compared (then pinned and fixed choices count as kept)."""
+    rows = r.get("choices") or [{"choice": n, "full": f, "chosen": r["chosen"].get(n),
+                                 "status": "kept" if r["chosen"].get(n) == f else "reduced"}
+                                for n, f in r["full"].items() if n != "max_step_s"]
+    kept = [x["choice"] + (" (pinned)" if x["status"] == "pinned" else "")
+            for x in rows if x["status"] in ("kept", "pinned")]
+    changed = [f"{x['choice']} {_level(x['choice'], x['full'])} → {_level(x['choice'], x['chosen'])}"
+               for x in rows if x["status"] in ("reduced", "dropped")]
+    return ", ".join(kept) or "none", ", ".join(changed) or "none"
+
+
+def _plan_target(t) -> str:
+    return "n/a" if not t else f"{100 * t['dte_rel']:g} % / {100 * t['mesh_force_rel']:g} %"
+
+
+def _plan_fmu(fv) -> str:
+    cases = (fv or {}).get("cases") or {}
+    if not cases:
+        return "not run"
+    return (f"{sci(max(c['dte_rel'] for c in cases.values()))} / "
+            f"{sci(max(c['mesh_force_rel'] for c in cases.values()))} ({len(cases)} cases)")
+
+
+def sec_plan(pg: Page):
+    title = "Fidelity plans: the planned model against the full-fidelity model"
+    if "plan" not in pg.data and "plan_study" not in pg.data:
+        pg.missing("plan", title)
+        return
+    body = []
+    for scene, r in pg.data.get("plan", {}).get("scenes", {}).items():
+        label = "default scene" if scene == "default" else f"`{scene}`"
+        if r.get("exit_code") not in (0, 1):
+            why = (f"stopped after {r['stopped_after_s']:.0f} s" if r.get("exit_code") is None
+                   else f"failed (exit status {r['exit_code']})")
+            body.append([label, "n/a", why, "", "n/a", "n/a", "n/a", f"{r['wall_s']:.1f} s", "not run"])
+            continue
+        kept, changed = _plan_choices(r)
+        body.append([label, _plan_target(r.get("target")), kept, changed,
+                     f"{sci(r['dte_rel'])} / {sci(r['mesh_force_rel'])} ({r.get('worst') or 'n/a'})",
+                     _yes(r.get("within_target")), str(r.get("native_runs", "n/a")),
+                     f"{r['wall_s']:.1f} s ({num(r.get('cpu_s', math.nan))} s CPU)", "not run"])
+    for scene, r in pg.data.get("plan_study", {}).items():
+        kept, changed = _plan_choices(r)
+        v = r["verification"]
+        body.append([f"`{scene}` (study)", _plan_target(r.get("target")), kept, changed,
+                     f"{sci(v['dte_rel'])} / {sci(v['mesh_force_rel'])} ({v.get('worst') or 'n/a'})",
+                     _yes(r.get("within_target")), str(v.get("native_runs", "n/a")),
+                     f"{r['study_wall_s']:.1f} s ({num(r['study_cpu_s'])} s CPU)"
+                     + (", with the FMUs" if r.get("fmu_verification") else ""),
+                     _plan_fmu(r.get("fmu_verification"))])
+    srcs = [n for n in ("plan", "plan_study") if n in pg.data]
+    absent = [n for n in ("plan", "plan_study") if n not in pg.data]
+    pg.parts.append(
+        f"## {title}\n\n"
+        "`gearfmu plan` (docs/plan.md) keeps or lowers each modelling choice of a scene and then searches "
+        "its envelope for the worst point of the planned configuration against the scene's full-fidelity "
+        "configuration (the finest level of every choice).  Reference: that full-fidelity model, run by the "
+        "same native solver; the error is the relative RMS of the DTE and of the mesh force over the run "
+        "(docs/plan.md \"Error measure\"), beside the scene's accuracy target.  The study scenes "
+        "(`examples/plan_study.py`: shipped scenes with an envelope and a target added) are also built as "
+        "FMUs, planned and full, and driven through fmpy over its verification cases (steady point, run-up, "
+        "run-down, warm-up, duty cycle, the worst point found); the last column is the worst of those "
+        "cases.  Choices with one level only (nothing to plan, e.g. thermal on a scene without a temperature "
+        "range) are not listed.\n\n"
+        + table(["scene", "target (DTE / force)", "kept at full", "reduced or dropped (full → chosen)",
+                 "worst found (DTE / force, where)", "within target", "native runs", "plan time",
+                 "through the FMUs (DTE / force)"], body)
+        + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs)
+        + "".join(f"; `{n}` not run (`python benchmarks/report.py --only {n}`)" for n in absent) + ".\n")
+
+
 def sec_fmu(pg: Page):
     if not pg.missing("kernels", "FMU runtime: C kernel against the native solver"):
         d = pg.data["kernels"]
@@ -967,7 +1050,7 @@ def sec_goals(pg: Page):
 
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
-            "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_fmu", "sec_goals")
+            "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_goals")
 
 
 def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:

@@ -8,9 +8,12 @@ temperature, duty-cycle replay, run-down and the envelope search's worst point;
 gearfmu.plan.verify_fmus).  Writes
 examples/output/plan_study.json (every plan's report with its FMU verification) and
 plan_study.png (per scene: error contribution of each choice's chosen level; cost of the
-chosen model against the full one; measured planned-vs-full FMU error per case).
+chosen model against the full one; measured planned-vs-full FMU error per case).  ``--out DIR``
+writes them (and the FMUs) to DIR instead; ``--json`` also prints the JSON on stdout (the text
+reports go to stderr then), the form benchmarks/report.py reads.
 
     python examples/plan_study.py [--no-fmu] [--only NAME] [--runtime pythonfmu|standalone]
+                                  [--json] [--out DIR]
 """
 import argparse
 import json
@@ -47,8 +50,12 @@ def main(argv=None):
     ap.add_argument("--no-fmu", action="store_true", help="skip building and driving the FMUs")
     ap.add_argument("--only", action="append", help="run only this study scene (repeatable)")
     ap.add_argument("--runtime", choices=("pythonfmu", "standalone"), help="FMU runtime (default: the scene's)")
+    ap.add_argument("--json", action="store_true", help="print the JSON on stdout (text reports to stderr)")
+    ap.add_argument("--out", type=Path, default=OUT, help=f"output directory (default {OUT})")
     args = ap.parse_args(argv)
-    OUT.mkdir(parents=True, exist_ok=True)
+    out_dir = args.out
+    out_dir.mkdir(parents=True, exist_ok=True)
+    text_out = sys.stderr if args.json else sys.stdout
     reports = {}
     for name, extra in STUDIES.items():
         if args.only and name not in args.only:
@@ -62,13 +69,16 @@ def main(argv=None):
             scene = load_scene(path)
         print(f"== {name}", file=sys.stderr, flush=True)
         t0, c0 = time.perf_counter(), time.process_time()
-        plan = plan_scene(scene, progress=True, measure_fmu=not args.no_fmu, fmu_dir=str(OUT / "plan_fmus"),
+        plan = plan_scene(scene, progress=True, measure_fmu=not args.no_fmu, fmu_dir=str(out_dir / "plan_fmus"),
                            fmu_runtime=args.runtime)
-        print(format_report(plan), flush=True)
+        print(format_report(plan), file=text_out, flush=True)
         reports[name] = plan.to_dict()
         reports[name]["study_wall_s"] = time.perf_counter() - t0
         reports[name]["study_cpu_s"] = time.process_time() - c0
-    (OUT / "plan_study.json").write_text(json.dumps(reports, indent=1), encoding="utf-8")
+    text = json.dumps(reports, indent=1)
+    (out_dir / "plan_study.json").write_text(text, encoding="utf-8")
+    if args.json:
+        print(text, flush=True)
 
     fig, axes = plt.subplots(len(reports), 3, figsize=(18, 4 * len(reports)), squeeze=False)
     for row, (name, rep) in enumerate(reports.items()):
@@ -115,8 +125,8 @@ def main(argv=None):
         else:
             ax.set_axis_off()
     fig.tight_layout()
-    fig.savefig(OUT / "plan_study.png", dpi=110)
-    print(f"wrote {OUT / 'plan_study.json'} and {OUT / 'plan_study.png'}")
+    fig.savefig(out_dir / "plan_study.png", dpi=110)
+    print(f"wrote {out_dir / 'plan_study.json'} and {out_dir / 'plan_study.png'}", file=text_out)
 
 
 if __name__ == "__main__":

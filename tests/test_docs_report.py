@@ -199,3 +199,53 @@ def test_a_failing_source_or_section_does_not_stop_the_others(tmp_path, monkeypa
     assert rep.main(["--from", str(tmp_path / "json"), "--out", str(out), "--img-dir", str(tmp_path / "img"),
                      "--readme", "none"]) == 1
     assert "seed004.json is not JSON" in out.read_text() and "source seed004" in capsys.readouterr().err
+
+
+def test_plan_section_from_saved_json(tmp_path):
+    """The fidelity-plan table: per scene the target, the choices kept and reduced (the study's and
+    bench_plan's choice rows; one-level choices left out), the worst error the envelope search found,
+    the plan time and the worst FMU case, exactly as in the fixture JSON; a stopped plan is named."""
+    rep = _report()
+    src = tmp_path / "json"
+    src.mkdir()
+    plan = {"scenes": {
+        "default": {"wall_s": 12.34, "cpu_s": 10.0, "exit_code": 0,
+                    "target": {"dte_rel": 0.02, "mesh_force_rel": 0.05},
+                    "choices": [{"choice": "slices", "status": "reduced", "full": 44, "chosen": 1},
+                                {"choice": "points_per_mesh", "status": "kept", "full": 256, "chosen": 256},
+                                {"choice": "thermal", "status": "fixed", "full": False, "chosen": False},
+                                {"choice": "integrator", "status": "pinned", "full": "rk4_kink", "chosen": "rk4_kink"},
+                                {"choice": "max_step", "status": "reduced", "full": 0.25, "chosen": 4.0},
+                                {"choice": "tooth_specific_errors", "status": "dropped", "full": True, "chosen": False}],
+                    "within_target": True, "dte_rel": 1e-3, "mesh_force_rel": 6e-3,
+                    "worst": "steady 2000 N*m, 2000 rpm", "native_runs": 3},
+        "examples/scenes/x.toml": {"wall_s": 600.0, "exit_code": None, "stopped_after_s": 600.0}}}
+    study = {"s.toml": {"target": {"dte_rel": 0.02, "mesh_force_rel": 0.02},
+                        "choices": [{"choice": "torque_points", "status": "reduced", "full": 9, "chosen": 5},
+                                    {"choice": "thermal", "status": "kept", "full": True, "chosen": True}],
+                        "verification": {"dte_rel": 2.4e-3, "mesh_force_rel": 1.13e-2, "worst": "steady 386 N*m",
+                                         "native_runs": 872},
+                        "within_target": False, "study_wall_s": 95.34, "study_cpu_s": 90.0,
+                        "fmu_verification": {"cases": {"steady": {"dte_rel": 1e-3, "mesh_force_rel": 2e-3},
+                                                       "warm_up": {"dte_rel": 3e-3, "mesh_force_rel": 1e-3}}}}}
+    (src / "plan.json").write_text(json.dumps(plan))
+    (src / "plan_study.json").write_text(json.dumps(study))
+    (src / "runs.json").write_text(json.dumps({"plan": {"ok": True, "wall_s": 13.0, "command": "x"}}))
+    out = tmp_path / "validation.md"
+    assert rep.main(["--from", str(src), "--out", str(out), "--img-dir", str(tmp_path / "img"),
+                     "--readme", "none"]) == 0
+    page = out.read_text()
+    assert ("| default scene | 2 % / 5 % | points_per_mesh, integrator (pinned) | slices 44 → 1, "
+            "max_step h0/4 → 4 h0, tooth_specific_errors on → off | 1.00e-03 / 6.00e-03 "
+            "(steady 2000 N*m, 2000 rpm) | yes | 3 | 12.3 s (10 s CPU) | not run |") in page
+    assert "| `examples/scenes/x.toml` | n/a | stopped after 600 s |  | n/a | n/a | n/a | 600.0 s | not run |" in page
+    assert ("| `s.toml` (study) | 2 % / 2 % | thermal | torque_points 9 → 5 | 2.40e-03 / 1.13e-02 "
+            "(steady 386 N*m) | no | 872 | 95.3 s (90 s CPU), with the FMUs | 3.00e-03 / 2.00e-03 (2 cases) |") in page
+    assert "Sources: `benchmarks/bench_plan.py --scenes default` (13 s), `examples/plan_study.py --json` (n/a)." in page
+    # the same bench_plan JSON measures the planner's speed goal
+    assert "| `gearfmu plan` of the default scene ≤ 60 s | 12.3 s wall, 10.0 s CPU (default scene) | yes |" in page
+    # without the study's JSON the section says how to produce it
+    (src / "plan_study.json").unlink()
+    assert rep.main(["--from", str(src), "--out", str(out), "--img-dir", str(tmp_path / "img"),
+                     "--readme", "none"]) == 0
+    assert "; `plan_study` not run (`python benchmarks/report.py --only plan_study`)." in out.read_text()
