@@ -42,10 +42,16 @@ CLI = [PY, "-c", "import sys; from gearfmu.cli import main; sys.exit(main())"]
 SPEED_BEGIN = "<!-- report:speed:begin -->"
 SPEED_END = "<!-- report:speed:end -->"
 
-#: C source of the plain-C speed reference of bench_kernels (--proxy), where the project has one
-PROXY = "benchmarks/rk4_proxy.c" if (ROOT / "benchmarks" / "rk4_proxy.c").is_file() else None
+#: C source of the plain-C speed reference of bench_kernels (--proxy): the file named by the
+#: environment variable GEARFMU_RK4_PROXY (a reference kept outside the project), else
+#: benchmarks/rk4_proxy.c where the project has one
+PROXY = os.environ.get("GEARFMU_RK4_PROXY") or (
+    "benchmarks/rk4_proxy.c" if (ROOT / "benchmarks" / "rk4_proxy.c").is_file() else None)
+_PROXY_SHOWN = "$GEARFMU_RK4_PROXY" if os.environ.get("GEARFMU_RK4_PROXY") else PROXY
 _KERNELS = ["benchmarks/bench_kernels.py", "--sim-time", "0.05", "--repeat", "3",
-            "--integrators", "rk4,rk4_kink,rk4_node"] + (["--proxy", PROXY] if PROXY else [])
+            "--integrators", "rk4,rk4_kink,rk4_node"]
+_KERNELS_SHOWN = " ".join(_KERNELS + (["--proxy", _PROXY_SHOWN] if PROXY else []))
+_KERNELS = _KERNELS + (["--proxy", PROXY] if PROXY else [])
 
 # name -> (command, file the command writes instead of stdout or None, what it is)
 SOURCES = {
@@ -62,7 +68,7 @@ SOURCES = {
              "examples/seed003_arms.py --json --quick"),
     "fmu_speed": ([PY, "benchmarks/bench_fmu.py", "--sim-time", "0.1", "--repeat", "3"], None,
                   "benchmarks/bench_fmu.py --sim-time 0.1 --repeat 3"),
-    "kernels": ([PY, *_KERNELS], None, " ".join(_KERNELS)),
+    "kernels": ([PY, *_KERNELS], None, _KERNELS_SHOWN),
     "stiffness_iso": ([PY, "benchmarks/bench_stiffness_iso.py"], None, "benchmarks/bench_stiffness_iso.py"),
     "helical_sawtooth": ([PY, "benchmarks/bench_helical_sawtooth.py"], None, "benchmarks/bench_helical_sawtooth.py"),
     "helical_contact": ([PY, "benchmarks/bench_helical_contact.py"], None, "benchmarks/bench_helical_contact.py"),
@@ -936,7 +942,7 @@ def _g_proxy(d):
     rows = [r for r in d["cases"].values() if r.get("c_over_proxy") is not None]
     if not rows:
         raise NotMeasured("the kernels benchmark ran without a plain-C proxy source (`--proxy`); "
-                          + ("the project has none" if PROXY is None else
+                          + ("set GEARFMU_RK4_PROXY to the proxy's C source" if PROXY is None else
                              f"regenerate: `python benchmarks/report.py --only kernels` passes {PROXY}"))
     r = next((r for r in rows if r["case"] == "default_scene" and r["integrator"] == "rk4"), rows[0])
     return f"{r['c_over_proxy']:.2f} × ({r['case']}, {r['integrator']})", r["c_over_proxy"] <= 1.5
