@@ -94,6 +94,11 @@ def file_diary_marks(path: pathlib.Path, whole: bool):
     rel = path.relative_to(ROOT).as_posix()
     generated = (set(range(1, text.count("\n") + 2)) if rel in GENERATED_FILES
                  else generated_lines(text))
+    return without_generated_timings(hits, generated)
+
+
+def without_generated_timings(hits, generated):
+    """``hits`` less the "timing" marks on the ``generated`` line numbers."""
     return [h for h in hits if not (h[1] == "timing" and h[0] in generated)]
 
 
@@ -115,7 +120,7 @@ def test_the_patterns_find_diary_lines():
 def test_generated_blocks_may_carry_times_but_no_other_mark():
     text = ("intro at ~20 s CPU\n<!-- report:speed:begin -->\n| plan | 1.2 s wall |\n"
             "| machine | load average 3 |\n<!-- report:speed:end -->\nafter: 3 s wall\n")
-    marks = [(n, w) for n, w, _ in diary_marks(text) if not (w == "timing" and n in generated_lines(text))]
+    marks = [(n, w) for n, w, _ in without_generated_timings(diary_marks(text), generated_lines(text))]
     assert marks == [(1, "timing"), (4, "machine load"), (6, "timing")]
 
 
