@@ -124,6 +124,15 @@ class MeshTables:
     tables of docs/model.md "Temperature axis".  ``temperature_reference_C``:
     the standard temperature t0 of the geometry (degC; sets the FMU input's
     start value, :attr:`default_temperature_C`).
+
+    ``engagement_in_rad``, ``engagement_out_rad`` (optional, both or neither): the exact
+    meshing-in and meshing-out pinion angles of every tooth pair, measured from the start
+    of its mesh (the pair that starts mesh n is in its contact zone for
+    ``n*mesh_period_rad + in <= phi < n*mesh_period_rad + out``, in slot ``n % P``).
+    With them the sub-cell lookup (docs/model.md "Contact-zone edges",
+    :mod:`gearfmu.tables.zones`) puts the stiffness step exactly at these angles instead
+    of a linear ramp over the table cell that holds it.  None: unknown (imported tables,
+    files written before the field existed), the lookup is plain linear interpolation.
     """
 
     torque_Nm: np.ndarray
@@ -145,6 +154,8 @@ class MeshTables:
     provenance: Dict[str, object] = field(default_factory=dict)
     temperature_C: Optional[np.ndarray] = None
     temperature_reference_C: Optional[float] = None
+    engagement_in_rad: Optional[float] = None
+    engagement_out_rad: Optional[float] = None
 
     # ------------------------------------------------------------------ shape
     @property
@@ -225,6 +236,7 @@ class MeshTables:
             **{n: getattr(self, n) for n in SCALAR_FIELDS},
             e_comprehensive_m=blend(self.e_comprehensive_m), static_te_m=blend(self.static_te_m),
             provenance=dict(self.provenance, at_bulk_temperature_C=float(temperature_C)),
+            engagement_in_rad=self.engagement_in_rad, engagement_out_rad=self.engagement_out_rad,
         )
 
     @property
@@ -309,6 +321,11 @@ class MeshTables:
         nmesh = self.phi_period_rad / self.mesh_period_rad
         if abs(nmesh - round(nmesh)) > 1e-9 * max(1.0, nmesh):
             raise TableError(f"phi_period_rad: must be a whole number of mesh periods, got {nmesh:.6g}")
+        if (self.engagement_in_rad is None) != (self.engagement_out_rad is None):
+            raise TableError("engagement_in_rad, engagement_out_rad: give both or neither")
+        if self.engagement_in_rad is not None:
+            from .zones import check_engagement  # the zone geometry lives there
+            check_engagement(self)
         return self
 
     # ------------------------------------------------------------ transforms
@@ -371,6 +388,9 @@ class MeshTables:
             "bin_sha256": hashlib.sha256(binary).hexdigest(),
             "provenance": self.provenance,
         }
+        if self.engagement_in_rad is not None:  # optional key, older readers ignore it (docs/tables.md)
+            meta["engagement"] = {"in_rad": float(self.engagement_in_rad), "out_rad": float(self.engagement_out_rad),
+                                  "unit": "rad"}
         if self.temperature_C is not None:  # version 2: operating axes (docs/tables.md)
             meta["version"] = FORMAT_VERSION_AXES
             meta["n_temperature"] = self.n_temperature
@@ -434,6 +454,13 @@ class MeshTables:
         kw = {n: scalars[n] for n in SCALAR_FIELDS}
         kw["teeth_pinion"] = int(kw["teeth_pinion"])
         kw["teeth_gear"] = int(kw["teeth_gear"])
+        eng = meta.get("engagement")
+        if eng is not None:
+            try:
+                extra["engagement_in_rad"] = float(eng["in_rad"])
+                extra["engagement_out_rad"] = float(eng["out_rad"])
+            except (TypeError, KeyError, ValueError):
+                raise TableError(f"{source}/tables.json: 'engagement' needs numbers 'in_rad' and 'out_rad'") from None
         return cls(**arrays, **kw, **extra, provenance=meta.get("provenance", {})).validate()
 
     def save(self, path) -> Path:
@@ -488,6 +515,7 @@ def stack_temperatures(slices, temperature_C, temperature_reference_C: Optional[
         e_comprehensive_m=stack("e_comprehensive_m"), static_te_m=stack("static_te_m"),
         provenance=dict(first.provenance), temperature_C=ax,
         temperature_reference_C=None if temperature_reference_C is None else float(temperature_reference_C),
+        engagement_in_rad=first.engagement_in_rad, engagement_out_rad=first.engagement_out_rad,
     ).validate()
 
 

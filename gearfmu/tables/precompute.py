@@ -272,6 +272,10 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         e_comprehensive_m=e_comp,
         static_te_m=np.ascontiguousarray(np.stack(te_rows)),
         provenance=prov,
+        # exact meshing-in / meshing-out angles of every pair (phi = 0 is point A; the pair
+        # leaves eps mesh periods later): the sub-cell lookup's zone edges (docs/tables.md)
+        engagement_in_rad=0.0,
+        engagement_out_rad=eps * float(geom.mesh_period_rad),
     )
     if thermal is not None:
         # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")

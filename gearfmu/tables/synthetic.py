@@ -108,6 +108,8 @@ def tables_from_arrays(
     e_comprehensive_m=None,
     static_te_m=None,
     provenance: Optional[dict] = None,
+    engagement_in_rad: Optional[float] = None,
+    engagement_out_rad: Optional[float] = None,
 ) -> MeshTables:
     """Build validated :class:`MeshTables` from raw per-slot arrays.
 
@@ -129,6 +131,9 @@ def tables_from_arrays(
         mean of the total stiffness over the phi grid and all torque rows (the
         grid mean equals the mean of the periodic linear interpolant).
     e_comprehensive_m : (NT, n_phi) (m); default :func:`comprehensive_error_m`.
+    engagement_in_rad, engagement_out_rad : exact meshing-in and meshing-out pinion angles
+        (rad) of every pair from the start of its mesh (both or neither; default none: the
+        lookup interpolates plainly across the zone edges, docs/tables.md "Contact-zone edges").
 
     Raises :class:`SyntheticTableError` / :class:`TableError` (ValueError) naming the field.
     """
@@ -204,6 +209,8 @@ def tables_from_arrays(
         e_comprehensive_m=np.ascontiguousarray(ec),
         static_te_m=st,
         provenance=dict(provenance or {"source": "gearfmu.tables.synthetic.tables_from_arrays"}),
+        engagement_in_rad=None if engagement_in_rad is None else float(engagement_in_rad),
+        engagement_out_rad=None if engagement_out_rad is None else float(engagement_out_rad),
     )
     return t.validate()
 
@@ -242,7 +249,9 @@ def rectangular_wave_tables(
     ``mesh_periods`` mesh periods (default = slots = ceil(contact_ratio)); the
     table value at a grid point is the engaged/not-engaged state *at* the point,
     so the stored wave is a trapezoid with ramps one grid step wide once it is
-    linearly interpolated (docs/model.md table lookup).
+    linearly interpolated (docs/model.md table lookup) -- unless the sub-cell lookup
+    at the contact-zone edges is on: the tables carry the engagement angles 0 and
+    ``contact_ratio*T`` (docs/model.md "Contact-zone edges").
     """
     ks = _positive("k_single_N_per_m", k_single_N_per_m)
     kd = 2.0 * ks if k_double_N_per_m is None else _positive("k_double_N_per_m", k_double_N_per_m)
@@ -295,6 +304,7 @@ def rectangular_wave_tables(
     return tables_from_arrays(
         phi_period_rad=nmesh * mp, mesh_period_rad=mp, k_N_per_m=k, e_m=e,
         backlash_half_m=b_half, teeth_pinion=z1, contact_ratio=eps, **gear_data,
+        engagement_in_rad=0.0, engagement_out_rad=eps * mp,
         provenance={"source": "gearfmu.tables.synthetic.rectangular_wave_tables",
                     "k_single_N_per_m": ks, "k_double_N_per_m": kd, "contact_ratio": eps,
                     "points_per_mesh": npm, "backlash_half_m": b_half},

@@ -1,0 +1,131 @@
+"""Contact-zone edges of the tooth-pair tables and the sub-cell cuts of the lookup (SI units).
+
+Every tooth pair's stiffness steps from 0 to a finite value where it enters mesh and back to 0
+where it leaves (for a spur pair at the pinion angles 0 and eps_alpha*T from the start of its
+mesh, T = 2*pi/z1).  A table stores k on a uniform angle grid; linear interpolation between the
+last node outside the zone and the first node inside turns the step into a ramp one cell wide,
+an O(h) error in the stiffness integral (h the cell width) that dominates the table error of the
+dynamic response (docs/model.md "Contact-zone edges").
+
+With the exact meshing-in and meshing-out angles (:attr:`MeshTables.engagement_in_rad`,
+``engagement_out_rad``) the lookup treats k, e and b inside a cell that holds an edge as the
+in-zone function times the zone indicator: the in-zone part of the cell takes the straight line
+of the neighbouring cell on the in-zone side, extended (linear extrapolation, O(h^2)); the part
+outside the zone has k = 0 (e and b there keep the plain interpolation; they act only with k > 0).
+
+:func:`zone_cuts` gives the per-slot, per-cell description the kernels read: two arrays
+(P, n_phi) of cell fractions, ``lo`` and ``hi``.  ``lo < 0`` (:data:`PLAIN`): the cell holds no
+edge, plain linear interpolation.  Otherwise, at cell fraction w in [0, 1): w < lo is in the zone
+of the pair that leaves inside this cell (extended line of the cell to the left), w >= hi in the
+zone of the pair that enters inside this cell (extended line of the cell to the right), and
+lo <= w < hi outside every zone (k = 0).  A cell without an exit has lo = 0, without an entry
+hi = 1.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+
+from .mesh_tables import MeshTables, TableError
+
+#: ``lo`` of a cell that holds no zone edge (plain linear interpolation)
+PLAIN = -1.0
+#: fewest table cells a contact zone must span for the extrapolated lookup (each edge cell takes
+#: the line of the next cell inside the zone, which must not hold an edge itself)
+MIN_ZONE_CELLS = 3.0
+
+
+def _mesh_count(t: MeshTables) -> int:
+    return int(round(t.phi_period_rad / t.mesh_period_rad))
+
+
+def zone_edges_nodes(t: MeshTables) -> np.ndarray:
+    """(P, Z, 2) meshing-in and meshing-out positions of every pair in every slot, in node
+    units s = phi/dphi (s in [0, n_phi), the grid's node j at s = j); Z = mesh periods / P."""
+    n_mesh = _mesh_count(t)
+    p, n = t.slots, t.n_phi
+    ppm = n / n_mesh                       # nodes per mesh period (an integer for every table built here)
+    inv_dphi = n / t.phi_period_rad        # the kernels' N/Phi
+    a_in = float(t.engagement_in_rad) * inv_dphi
+    a_out = float(t.engagement_out_rad) * inv_dphi
+    z = n_mesh // p
+    out = np.empty((p, z, 2))
+    for m in range(n_mesh):
+        start = m * ppm
+        out[m % p, m // p] = (np.fmod(start + a_in, n) % n, np.fmod(start + a_out, n) % n)
+    return out
+
+
+def check_engagement(t: MeshTables) -> None:
+    """TableError naming the field unless the engagement angles are finite, the zone is
+    shorter than P mesh periods (pairs of one slot do not overlap) and every table node
+    strictly outside the zones of its slot has k = 0 in every operating row."""
+    a_in, a_out = t.engagement_in_rad, t.engagement_out_rad
+    for name, v in (("engagement_in_rad", a_in), ("engagement_out_rad", a_out)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v):
+            raise TableError(f"{name}: must be a finite number (rad), got {v!r}")
+    span = float(a_out) - float(a_in)
+    if not span > 0.0:
+        raise TableError(f"engagement_out_rad: must exceed engagement_in_rad ({a_in!r}), got {a_out!r}")
+    if span > t.slots * t.mesh_period_rad * (1.0 + 1e-12):
+        raise TableError(f"engagement_out_rad: the zone ({span:.6g} rad) is longer than P = {t.slots} mesh "
+                         f"periods ({t.slots * t.mesh_period_rad:.6g} rad): pairs of one slot would overlap")
+    inside = _inside_closed(t)
+    k = t.k_N_per_m.reshape(-1, t.slots, t.n_phi)
+    bad = np.any(k != 0.0, axis=0) & ~inside
+    if np.any(bad):
+        j, i = np.argwhere(bad)[0]
+        raise TableError(f"k_N_per_m: slot {j} has k != 0 at node {i} (phi = {i * t.dphi_rad:.9g} rad), outside "
+                         f"its contact zone [engagement_in_rad, engagement_out_rad] = [{a_in!r}, {a_out!r}] rad")
+
+
+def _inside_closed(t: MeshTables) -> np.ndarray:
+    """(P, n_phi) bool: node j lies in a closed zone [in, out] of its slot (periodic)."""
+    n = t.n_phi
+    nodes = np.arange(n, dtype=float)
+    inside = np.zeros((t.slots, n), dtype=bool)
+    for j, zones in enumerate(zone_edges_nodes(t)):
+        for s_in, s_out in zones:
+            if s_in <= s_out:
+                inside[j] |= (nodes >= s_in) & (nodes <= s_out)
+            else:  # the zone wraps past the period end
+                inside[j] |= (nodes >= s_in) | (nodes <= s_out)
+    return inside
+
+
+def zone_cuts(t: MeshTables) -> Optional[np.ndarray]:
+    """(2, P, n_phi) float64 cuts (``lo``, ``hi`` of the module docstring) of the sub-cell
+    lookup, C-contiguous; None when the tables carry no engagement angles or a zone spans
+    fewer than :data:`MIN_ZONE_CELLS` cells (then the lookup stays plain linear interpolation)."""
+    if t.engagement_in_rad is None:
+        return None
+    n = t.n_phi
+    span = (float(t.engagement_out_rad) - float(t.engagement_in_rad)) * (n / t.phi_period_rad)
+    if span < MIN_ZONE_CELLS:
+        return None
+    lo = np.full((t.slots, n), PLAIN)
+    hi = np.ones((t.slots, n))
+
+    def mark(j, c):
+        if lo[j, c] < 0.0:
+            lo[j, c] = 0.0
+
+    for j, zones in enumerate(zone_edges_nodes(t)):
+        for s_in, s_out in zones:
+            m = int(math.floor(s_in))
+            f = s_in - m
+            c = (m - 1) % n if f == 0.0 else m % n   # on a node: the cell before it is all outside
+            mark(j, c)
+            hi[j, c] = min(hi[j, c], 1.0 if f == 0.0 else f)
+            m = int(math.floor(s_out))
+            f = s_out - m
+            if f == 0.0:   # on a node: the cell before it is all inside, the one after all outside
+                mark(j, (m - 1) % n)
+                lo[j, (m - 1) % n] = 1.0
+                mark(j, m % n)
+            else:
+                mark(j, m % n)
+                lo[j, m % n] = max(lo[j, m % n], f)
+    return np.ascontiguousarray(np.stack([lo, hi]))
