@@ -159,7 +159,8 @@ def test_zone_cuts_layout():
 
 
 def test_engagement_round_trip_and_older_files(tmp_path):
-    t = rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=16)
+    assert rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=16).engagement_in_rad is None
+    t = rectangular_wave_tables(2e8, contact_ratio=1.6, points_per_mesh=16, zone_edges=True)
     assert t.engagement_in_rad == 0.0 and t.engagement_out_rad == pytest.approx(1.6 * t.mesh_period_rad)
     back = load_tables(t.save(tmp_path / "a.gtab"))
     assert back.engagement_in_rad == t.engagement_in_rad and back.engagement_out_rad == t.engagement_out_rad
@@ -185,3 +186,140 @@ def test_engagement_checks():
     with pytest.raises(TableError, match="longer than P = 2 mesh periods"):
         tables_from_arrays(phi_period_rad=P * T, mesh_period_rad=T, k_N_per_m=k, teeth_pinion=Z1,
                            engagement_in_rad=0.0, engagement_out_rad=2.5 * T)
+
+
+# ---------------------------------------------------------------- the C kernel, bit for bit
+@pytest.fixture(scope="module")
+def clib(tmp_path_factory):
+    import ctypes
+
+    from gearfmu.fmu.pythonfmu_build import compile_kernel
+
+    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("kernel"))))
+    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
+    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
+    L.gk_set_damping.argtypes = [p, d, i]
+    L.gk_set_integrator.argtypes = [p, i]
+    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+    L.gk_initialize.argtypes = [p, p, d, d, d]
+    L.gk_zone_cuts.argtypes = [i, i, d, d, d, d, p]
+    L.gk_set_zone_cuts.argtypes = [p, p]
+    return L
+
+
+def _c_cuts(L, t):
+    cuts = np.zeros(2 * t.slots * t.n_phi)
+    st = L.gk_zone_cuts(t.slots, t.n_phi, t.phi_period_rad, t.mesh_period_rad, t.engagement_in_rad,
+                        t.engagement_out_rad, cuts.ctypes.data)
+    return st, cuts
+
+
+@pytest.mark.parametrize("ppm,eps", [(16, 1.5), (16, 1.0 + 1.0 / math.sqrt(3.0)), (7, 1.9), (64, 1.3)])
+def test_c_zone_cuts_equal_python(clib, ppm, eps):
+    t = _tables(ppm, eps)
+    st, cuts = _c_cuts(clib, t)
+    assert st == 0
+    assert np.array_equal(cuts.reshape(2, t.slots, t.n_phi), zone_cuts(t))
+    # a zone of fewer than 3 cells: no cuts (the plain lookup) in both
+    assert clib.gk_zone_cuts(P, 2 * P, P * T, T, 0.0, 1.2 * T, np.zeros(2 * P * 2 * P).ctypes.data) == 6
+
+
+def replace_engagement(t, a, b):
+    import dataclasses
+    return dataclasses.replace(t, engagement_in_rad=a, engagement_out_rad=b)
+
+
+def _run_c(L, t, T1, T2, w0, zeta, model, H, n, hmax, integrator, edges=True):
+    k = np.ascontiguousarray(t.k_N_per_m)
+    e = np.ascontiguousarray(t.e_m)
+    b = np.ascontiguousarray(t.backlash_half_m)
+    tq = np.ascontiguousarray(t.torque_Nm, dtype=float)
+    m = np.zeros(L.gk_sizeof_model() // 8 + 2)
+    s = np.zeros(4)
+    out = np.zeros(L.gk_n_outputs(t.slots))
+    assert L.gk_init(m.ctypes.data, t.slots, t.n_phi, len(tq), tq.ctypes.data, k.ctypes.data, e.ctypes.data,
+                     b.ctypes.data, t.phi_period_rad, t.base_radius_pinion_m, t.base_radius_gear_m,
+                     t.inertia_pinion_kgm2, t.inertia_gear_kgm2, t.k_mean_N_per_m) == 0
+    st, cuts = _c_cuts(L, t)
+    if edges:
+        assert st == 0 and L.gk_set_zone_cuts(m.ctypes.data, cuts.ctypes.data) == 0
+    assert L.gk_set_damping(m.ctypes.data, zeta, model) == 0
+    assert L.gk_set_integrator(m.ctypes.data, integrator) == 0
+    assert L.gk_initialize(m.ctypes.data, s.ctypes.data, 0.0, w0, T1) == 0
+    rows, forces = [s.copy()], [np.nan]
+    for _ in range(n):
+        assert L.gk_do_step(m.ctypes.data, s.ctypes.data, T1, T2, H, hmax, out.ctypes.data) == 0
+        rows.append(s.copy())
+        forces.append(out[5])
+    return np.array(rows).T, np.array(forces)
+
+
+def _dyn_tables(two_rows):
+    t = _tables(16, 1.0 + 1.0 / math.sqrt(3.0), error=True)
+    if two_rows:
+        import dataclasses
+        t = dataclasses.replace(t, torque_Nm=np.array([20.0, 80.0]),
+                                k_N_per_m=np.concatenate([t.k_N_per_m, 1.3 * t.k_N_per_m]),
+                                e_m=np.concatenate([t.e_m, 0.7 * t.e_m]), e_comprehensive_m=None, static_te_m=None)
+    return t.validate()
+
+
+@pytest.mark.parametrize("backward", [False, True])
+@pytest.mark.parametrize("two_rows", [False, True])
+@pytest.mark.parametrize("model", [0, 1])
+@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node"])
+def test_native_and_c_kernel_agree_bit_for_bit_with_zone_edges(clib, backward, two_rows, model, integrator):
+    """The sub-cell lookup and the stops at the cuts pin every operation: numba and C give
+    identical doubles (states and mesh force after each of 64 communication steps over more
+    than two table periods, forwards and backwards, one and two torque rows, both damping laws)."""
+    from gearfmu.dynamics.native import simulate
+
+    t = _dyn_tables(two_rows)
+    sg = -1.0 if backward else 1.0
+    w0 = sg * 300.0
+    T1 = sg * 50.0
+    T2 = T1 * t.base_radius_gear_m / t.base_radius_pinion_m
+    H = t.mesh_period_rad / 300.0 / 8
+    code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
+    r = simulate(t, stop_time_s=64 * H, comm_step_s=H, max_step_s=H / 5, pinion_torque_Nm=T1, gear_torque_Nm=T2,
+                 pinion_speed_start_rad_s=w0, damping_ratio=0.05, integrator=integrator,
+                 damping_model=["elastobacklash", "contact_zone"][model])
+    c, fc = _run_c(clib, t, T1, T2, w0, 0.05, model, H, 64, H / 5, code)
+    nat = np.vstack([r.pinion_angle, r.pinion_speed, r.dte, r.dte_rate])
+    assert abs(nat[0, -1] - nat[0, 0]) > 2 * t.phi_period_rad
+    assert np.array_equal(nat, c)
+    assert np.array_equal(r.mesh_force[1:], fc[1:])
+    # and the edges change the run (the plain lookup is a different model)
+    c0, _ = _run_c(clib, t, T1, T2, w0, 0.05, model, H, 64, H / 5, code, edges=False)
+    assert not np.array_equal(c0, c)
+
+
+@pytest.mark.parametrize("runtime", ["pythonfmu", "standalone"])
+def test_fmu_with_zone_edges_agrees_with_native(tmp_path, runtime):
+    """Both FMU runtimes pass the tables' engagement angles to the kernel (gk_zone_cuts,
+    gk_set_zone_cuts): run by fmpy, every output equals the native run's (which reads the
+    same angles), and differs from the run on the same tables without them."""
+    import dataclasses
+
+    from fmpy import simulate_fmu
+
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+
+    t = _dyn_tables(False)
+    w0, T1 = 300.0, 50.0
+    T2 = T1 * t.base_radius_gear_m / t.base_radius_pinion_m
+    H = t.mesh_period_rad / w0 / 4
+    builder = build_fmu if runtime == "pythonfmu" else build_standalone_fmu
+    path = builder(t, tmp_path / "zones.fmu", damping_ratio=0.05, pinion_speed_start_rad_s=w0,
+                   pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2, max_step_s=H / 5, integrator="rk4_node",
+                   stop_time_s=40 * H, output_interval_s=H)
+    res = simulate_fmu(str(path), stop_time=40 * H, output_interval=H, output=["dte", "mesh_force"])
+    kw = dict(stop_time_s=40 * H, comm_step_s=H, max_step_s=H / 5, pinion_torque_Nm=T1, gear_torque_Nm=T2,
+              pinion_speed_start_rad_s=w0, damping_ratio=0.05, integrator="rk4_node")
+    r = simulate(t, **kw)
+    plain = simulate(dataclasses.replace(t, engagement_in_rad=None, engagement_out_rad=None), **kw)
+    for name in ("dte", "mesh_force"):
+        assert np.max(np.abs(res[name] - getattr(r, name))) <= 1e-12 * np.ptp(getattr(r, name)), name
+    assert np.max(np.abs(plain.dte - r.dte)) > 1e-4 * np.ptp(r.dte)

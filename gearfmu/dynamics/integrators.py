@@ -280,6 +280,8 @@ def _seg_up(tab, n, node=True):
     if tab[15]:
         i0, i1 = _cell_nodes(c, n_phi)
         f = _cut_above(tab, i0, n - c, False)
+        while f < 1.0 and not c + f > n:   # n - c rounds: the stop must lie above n
+            f = _cut_above(tab, i0, f, False)
         if f < 1.0:
             return c + f
     if not node:
@@ -309,6 +311,8 @@ def _seg_down(tab, n, node=True):
     if tab[15]:
         i0, i1 = _cell_nodes(c, n_phi)
         f = _cut_below(tab, i0, n - c, False)
+        while f > 0.0 and not c + f < n:   # the stop must lie below n
+            f = _cut_below(tab, i0, f, False)
         if f > 0.0:
             return c + f
     if not node:

@@ -25,7 +25,9 @@ A ``.gtab`` file is an uncompressed zip archive holding ``tables.json``
 (format name, version, axes, scalars, provenance, one entry per array with
 dtype, shape, byte offset and SHA-256) and ``tables.bin`` (the arrays as
 little-endian float64, C order, concatenated).  The same two files sit
-unzipped in an FMU's ``resources/``.  No pickle anywhere.
+unzipped in an FMU's ``resources/``.  No pickle anywhere.  An optional key
+``engagement`` holds the exact meshing-in and meshing-out angles (the sub-cell lookup at
+the contact-zone edges, :mod:`gearfmu.tables.zones`); older readers ignore it.
 """
 from __future__ import annotations
 

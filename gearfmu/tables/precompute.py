@@ -161,6 +161,10 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
     torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
     x nominal (docs/ehl_mesh.md).
+
+    The tables carry the exact engagement of every pair, ``engagement_in_rad`` = 0 (point A)
+    and ``engagement_out_rad`` = eps x mesh period, so that both kernels put the stiffness
+    steps at meshing-in and meshing-out exactly there (docs/model.md "Contact-zone edges").
     """
     if int(points_per_mesh) != points_per_mesh or points_per_mesh < 4:
         raise PrecomputeInputError(f"points_per_mesh: must be an integer >= 4, got {points_per_mesh!r}")

@@ -225,6 +225,7 @@ def rectangular_wave_tables(
     pair_error_m: Optional[Callable[[int, np.ndarray], np.ndarray]] = None,
     slots: Optional[int] = None,
     mesh_periods: Optional[int] = None,
+    zone_edges: bool = False,
     **gear_data,
 ) -> MeshTables:
     """Rectangular-wave TVMS tables (k in N/m, e in m, angles in rad).
@@ -249,9 +250,15 @@ def rectangular_wave_tables(
     ``mesh_periods`` mesh periods (default = slots = ceil(contact_ratio)); the
     table value at a grid point is the engaged/not-engaged state *at* the point,
     so the stored wave is a trapezoid with ramps one grid step wide once it is
-    linearly interpolated (docs/model.md table lookup) -- unless the sub-cell lookup
-    at the contact-zone edges is on: the tables carry the engagement angles 0 and
-    ``contact_ratio*T`` (docs/model.md "Contact-zone edges").
+    linearly interpolated (docs/model.md table lookup).
+
+    ``zone_edges``: also carry the engagement angles 0 and ``contact_ratio*T``, so that
+    the kernels put each pair's own meshing-in and meshing-out steps exactly there
+    (docs/model.md "Contact-zone edges").  Off by default (choice): a pair of the
+    rectangular wave also steps *inside* its zone, wherever another pair enters or leaves
+    (it carries total/count), and those steps stay one-cell ramps; the default keeps the
+    textbook trapezoid that the dynamics validation against seed 003 and the reference
+    solvers of the tests are built on.
     """
     ks = _positive("k_single_N_per_m", k_single_N_per_m)
     kd = 2.0 * ks if k_double_N_per_m is None else _positive("k_double_N_per_m", k_double_N_per_m)
@@ -304,7 +311,7 @@ def rectangular_wave_tables(
     return tables_from_arrays(
         phi_period_rad=nmesh * mp, mesh_period_rad=mp, k_N_per_m=k, e_m=e,
         backlash_half_m=b_half, teeth_pinion=z1, contact_ratio=eps, **gear_data,
-        engagement_in_rad=0.0, engagement_out_rad=eps * mp,
+        engagement_in_rad=0.0 if zone_edges else None, engagement_out_rad=eps * mp if zone_edges else None,
         provenance={"source": "gearfmu.tables.synthetic.rectangular_wave_tables",
                     "k_single_N_per_m": ks, "k_double_N_per_m": kd, "contact_ratio": eps,
                     "points_per_mesh": npm, "backlash_half_m": b_half},

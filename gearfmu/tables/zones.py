@@ -95,37 +95,67 @@ def _inside_closed(t: MeshTables) -> np.ndarray:
     return inside
 
 
+#: an edge within this many cells of a node is put on the node (gearkernel.c GK_ZONE_SNAP): the
+#: rounding of (n T + angle) N/Phi must not move an edge that lies on a node into the next cell
+SNAP_CELLS = 1e-9
+
+
+def _wrap(x: float, n: int) -> float:
+    """x mod n for a float x, on the nearest node when within SNAP_CELLS of it (gearkernel.c
+    zone_wrap: fmod, + n when negative, then the snap)."""
+    r = math.fmod(x, float(n))
+    if r < 0.0:
+        r += float(n)
+    rn = math.floor(r + 0.5)
+    if abs(r - rn) <= SNAP_CELLS:
+        r = rn
+    return r
+
+
 def zone_cuts(t: MeshTables) -> Optional[np.ndarray]:
     """(2, P, n_phi) float64 cuts (``lo``, ``hi`` of the module docstring) of the sub-cell
     lookup, C-contiguous; None when the tables carry no engagement angles or a zone spans
-    fewer than :data:`MIN_ZONE_CELLS` cells (then the lookup stays plain linear interpolation)."""
+    fewer than :data:`MIN_ZONE_CELLS` cells (then the lookup stays plain linear interpolation).
+    The arithmetic of gearkernel.c gk_zone_cuts (the FMU computes its cuts there), so the
+    two give the same doubles."""
     if t.engagement_in_rad is None:
         return None
-    n = t.n_phi
-    span = (float(t.engagement_out_rad) - float(t.engagement_in_rad)) * (n / t.phi_period_rad)
-    if span < MIN_ZONE_CELLS:
+    p, n = t.slots, t.n_phi
+    phi_period = float(t.phi_period_rad)
+    inv = float(n) / phi_period
+    a_in_rad, a_out_rad = float(t.engagement_in_rad), float(t.engagement_out_rad)
+    if not (a_out_rad - a_in_rad) * inv >= MIN_ZONE_CELLS:
         return None
-    lo = np.full((t.slots, n), PLAIN)
-    hi = np.ones((t.slots, n))
+    n_mesh = int(math.floor(phi_period / float(t.mesh_period_rad) + 0.5))
+    ppm = float(n) / float(n_mesh)
+    a_in = a_in_rad * inv
+    a_out = a_out_rad * inv
+    lo = np.full((p, n), PLAIN)
+    hi = np.ones((p, n))
 
     def mark(j, c):
         if lo[j, c] < 0.0:
             lo[j, c] = 0.0
 
-    for j, zones in enumerate(zone_edges_nodes(t)):
-        for s_in, s_out in zones:
-            m = int(math.floor(s_in))
-            f = s_in - m
-            c = (m - 1) % n if f == 0.0 else m % n   # on a node: the cell before it is all outside
+    for m in range(n_mesh):
+        j = m % p
+        start = float(m) * ppm
+        s = _wrap(start + a_in, n)          # meshing-in: the zone starts inside the cell
+        fl = math.floor(s)
+        f = s - fl
+        c = (int(fl) - 1) % n if f == 0.0 else int(fl) % n   # on a node: the cell before is all outside
+        mark(j, c)
+        hi[j, c] = min(hi[j, c], 1.0 if f == 0.0 else f)
+        s = _wrap(start + a_out, n)         # meshing-out: the zone ends inside the cell
+        fl = math.floor(s)
+        f = s - fl
+        if f == 0.0:   # on a node: the cell before it all inside, the one after all outside
+            c = (int(fl) - 1) % n
             mark(j, c)
-            hi[j, c] = min(hi[j, c], 1.0 if f == 0.0 else f)
-            m = int(math.floor(s_out))
-            f = s_out - m
-            if f == 0.0:   # on a node: the cell before it is all inside, the one after all outside
-                mark(j, (m - 1) % n)
-                lo[j, (m - 1) % n] = 1.0
-                mark(j, m % n)
-            else:
-                mark(j, m % n)
-                lo[j, m % n] = max(lo[j, m % n], f)
+            lo[j, c] = max(lo[j, c], 1.0)
+            mark(j, int(fl) % n)
+        else:
+            c = int(fl) % n
+            mark(j, c)
+            lo[j, c] = max(lo[j, c], f)
     return np.ascontiguousarray(np.stack([lo, hi]))
