@@ -28,71 +28,13 @@ from typing import Optional
 
 import numpy as np
 
-from .mesh_tables import MeshTables, TableError
+from .mesh_tables import MeshTables, check_engagement, zone_edges_nodes  # noqa: F401 (re-exported)
 
 #: ``lo`` of a cell that holds no zone edge (plain linear interpolation)
 PLAIN = -1.0
 #: fewest table cells a contact zone must span for the extrapolated lookup (each edge cell takes
 #: the line of the next cell inside the zone, which must not hold an edge itself)
 MIN_ZONE_CELLS = 3.0
-
-
-def _mesh_count(t: MeshTables) -> int:
-    return int(round(t.phi_period_rad / t.mesh_period_rad))
-
-
-def zone_edges_nodes(t: MeshTables) -> np.ndarray:
-    """(P, Z, 2) meshing-in and meshing-out positions of every pair in every slot, in node
-    units s = phi/dphi (s in [0, n_phi), the grid's node j at s = j); Z = mesh periods / P."""
-    n_mesh = _mesh_count(t)
-    p, n = t.slots, t.n_phi
-    ppm = n / n_mesh                       # nodes per mesh period (an integer for every table built here)
-    inv_dphi = n / t.phi_period_rad        # the kernels' N/Phi
-    a_in = float(t.engagement_in_rad) * inv_dphi
-    a_out = float(t.engagement_out_rad) * inv_dphi
-    z = n_mesh // p
-    out = np.empty((p, z, 2))
-    for m in range(n_mesh):
-        start = m * ppm
-        out[m % p, m // p] = (np.fmod(start + a_in, n) % n, np.fmod(start + a_out, n) % n)
-    return out
-
-
-def check_engagement(t: MeshTables) -> None:
-    """TableError naming the field unless the engagement angles are finite, the zone is
-    shorter than P mesh periods (pairs of one slot do not overlap) and every table node
-    strictly outside the zones of its slot has k = 0 in every operating row."""
-    a_in, a_out = t.engagement_in_rad, t.engagement_out_rad
-    for name, v in (("engagement_in_rad", a_in), ("engagement_out_rad", a_out)):
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v):
-            raise TableError(f"{name}: must be a finite number (rad), got {v!r}")
-    span = float(a_out) - float(a_in)
-    if not span > 0.0:
-        raise TableError(f"engagement_out_rad: must exceed engagement_in_rad ({a_in!r}), got {a_out!r}")
-    if span > t.slots * t.mesh_period_rad * (1.0 + 1e-12):
-        raise TableError(f"engagement_out_rad: the zone ({span:.6g} rad) is longer than P = {t.slots} mesh "
-                         f"periods ({t.slots * t.mesh_period_rad:.6g} rad): pairs of one slot would overlap")
-    inside = _inside_closed(t)
-    k = t.k_N_per_m.reshape(-1, t.slots, t.n_phi)
-    bad = np.any(k != 0.0, axis=0) & ~inside
-    if np.any(bad):
-        j, i = np.argwhere(bad)[0]
-        raise TableError(f"k_N_per_m: slot {j} has k != 0 at node {i} (phi = {i * t.dphi_rad:.9g} rad), outside "
-                         f"its contact zone [engagement_in_rad, engagement_out_rad] = [{a_in!r}, {a_out!r}] rad")
-
-
-def _inside_closed(t: MeshTables) -> np.ndarray:
-    """(P, n_phi) bool: node j lies in a closed zone [in, out] of its slot (periodic)."""
-    n = t.n_phi
-    nodes = np.arange(n, dtype=float)
-    inside = np.zeros((t.slots, n), dtype=bool)
-    for j, zones in enumerate(zone_edges_nodes(t)):
-        for s_in, s_out in zones:
-            if s_in <= s_out:
-                inside[j] |= (nodes >= s_in) & (nodes <= s_out)
-            else:  # the zone wraps past the period end
-                inside[j] |= (nodes >= s_in) | (nodes <= s_out)
-    return inside
 
 
 #: an edge within this many cells of a node is put on the node (gearkernel.c GK_ZONE_SNAP): the
