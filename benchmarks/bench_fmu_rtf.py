@@ -32,7 +32,9 @@ through each host; ``smallest_error`` the run closest to the fine run.  ``dostep
 the C host's wall time per doStep beyond its internal steps (rk4 at max_step = comm, run at
 comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).
 
-Prints one JSON object.
+Prints one JSON object.  ``--table-front``: only the table error per points per mesh, with the
+tables' engagement angles (the sub-cell lookup at the contact-zone edges, docs/model.md) and
+without them (the plain lookup), each against its own fine run (:func:`table_front`).
 
     nice python benchmarks/bench_fmu_rtf.py [SCENE] [--ppm 16,32,64,128,256] [--repeat 5]
 """
