@@ -20,6 +20,11 @@ Measured in one run, on the same tables, inputs and internal steps:
   same steps through the C kernel alone (gk_do_step via ctypes) give
   ``kernel_real_time_factor`` (what the FMI layer and the Python host loop add).
 
+Every fmpy loop here is one of ``FMPY_LOOPS`` (by default ``lean``: FMU2Slave.doStep and
+fmi2GetReal on ctypes arrays built once).  ``step_costs`` (used by bench_integrators.py's
+``fmu_rtf``) splits one communication step into the kernel, the FMU's fixed cost, the ctypes
+calls and fmpy's wrappers, and gives the rate through the C host and each fmpy loop.
+
 Prints one JSON object.  Ratios, not absolute times, are the comparable
 numbers (these machines are shared and noisy): each timing is the best of
 ``--repeat`` runs.
@@ -38,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 
-#: the Python loops of fmpy_loop / _fmu_loop: one doStep and one getReal of the outputs per
+#: the Python loops of _fmu_loop: one doStep and one getReal of the outputs per
 #: communication step, the FMU instantiated once (what each number in the JSON came from)
 FMPY_LOOPS = {
     "lean": "fmpy FMU2Slave.doStep + FMU2Slave.fmi2GetReal (fmpy's status-checked function) on ctypes "
