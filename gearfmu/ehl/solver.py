@@ -152,14 +152,17 @@ FREEZE_BELOW_PRESSURE_CHANGE = 1e-3
 
 #: Fast path of the default smooth solve (docs/ehl.md): the relaxation of
 #: setting 0 of :data:`RELAXATION_SETTINGS` with F-cycles, the coarsest grid
-#: solved by Newton steps (:mod:`.coarse_newton`) and a full-multigrid start
-#: (one cycle per level; a warm start instead starts from ``initial``).  Tried
+#: solved by Newton steps (:mod:`.coarse_newton`), a full-multigrid start
+#: (one cycle per level; a warm start instead starts from ``initial``) and after
+#: each cycle one Newton step on the finest-grid block of 2 x 6 + 1 nodes around
+#: the largest scaled residual (:func:`.coarse_newton._spike_newton`).  Tried
 #: first where the coarsest grid has at most
 #: COARSE_NEWTON_MAX_NODES nodes; it stops at the same tolerances, and when it
 #: does not converge within FAST_MAX_CYCLES cycles (or stalls over
 #: FAST_STALL_WINDOW cycles) the settings of :data:`RELAXATION_SETTINGS` follow
 #: from a fresh start, as without it.
-FAST_SETTING = dict(RELAXATION_SETTINGS[0], gamma="F", coarse_newton=1)
+FAST_SETTING = dict(RELAXATION_SETTINGS[0], gamma="F", coarse_newton=1, spike_newton=1,
+                    spike_width=6)
 FAST_FMG_CYCLES = 1
 FAST_MAX_CYCLES = 20
 FAST_STALL_WINDOW = 6
