@@ -20,6 +20,11 @@ Measured in one run, on the same tables, inputs and internal steps:
   same steps through the C kernel alone (gk_do_step via ctypes) give
   ``kernel_real_time_factor`` (what the FMI layer and the Python host loop add).
 
+Every fmpy loop here is one of ``FMPY_LOOPS`` (by default ``lean``: FMU2Slave.doStep and
+fmi2GetReal on ctypes arrays built once).  ``step_costs`` (used by bench_integrators.py's
+``fmu_rtf``) splits one communication step into the kernel, the FMU's fixed cost, the ctypes
+calls and fmpy's wrappers, and gives the rate through the C host and each fmpy loop.
+
 Prints one JSON object.  Ratios, not absolute times, are the comparable
 numbers (these machines are shared and noisy): each timing is the best of
 ``--repeat`` runs.
@@ -38,39 +43,220 @@ from pathlib import Path
 import numpy as np
 
 
-def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None):
-    """Timed fmpy low-level doStep/getReal loop; ``record`` (a list): the dte of every
-    communication point is appended to it (row 0 the initial one)."""
+#: the Python loops of _fmu_loop: one doStep and one getReal of the outputs per
+#: communication step, the FMU instantiated once (what each number in the JSON came from)
+FMPY_LOOPS = {
+    "lean": "fmpy FMU2Slave.doStep + FMU2Slave.fmi2GetReal (fmpy's status-checked function) on ctypes "
+            "arrays of value references and values built once",
+    "raw": "the FMU library's own fmi2DoStep / fmi2GetReal through fmpy's ctypes pointers (FMU2Slave.dll, "
+           "fmpy's argument types; no fmpy wrapper in the loop; the loop checks the status itself)",
+    "getreal_list": "fmpy FMU2Slave.doStep + FMU2Slave.getReal(list of value references): a ctypes array of "
+                    "references and of values built and a list returned on every call",
+}
+
+
+def _open_fmu(unzipdir, md, start_values):
+    """An fmpy FMU2Slave instantiated and initialised with start_values (name: value, set as the
+    variable's declared type)."""
     from fmpy.fmi2 import FMU2Slave
 
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    t0 = time.perf_counter()
+    var = {v.name: v for v in md.modelVariables}
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bench")
     fmu.instantiate()
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     for name, value in start_values.items():
-        fmu.setReal([vr[name]], [value])
+        if var[name].type == "Integer":
+            fmu.setInteger([var[name].valueReference], [int(value)])
+        else:
+            fmu.setReal([var[name].valueReference], [float(value)])
     fmu.exitInitializationMode()
+    return fmu
+
+
+def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None, loop="lean", rows=None,
+              outputs=("dte", "mesh_force")):
+    """Timed fmpy doStep/getReal loop (``loop``: a key of FMPY_LOOPS) over round(stop_s / comm_s)
+    communication steps; returns (instantiate + initialise s, loop wall s, steps, last outputs, loop CPU s
+    of this thread: the wall time without the time the thread waited for a core on a shared machine).
+    ``record`` (a list): the first output at every communication point is appended (row 0 the
+    initial one); ``rows`` (a list): every output."""
+    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+    vrs = [next(v.valueReference for v in md.modelVariables if v.name == o) for o in outputs]
+    t0 = time.perf_counter()
+    fmu = _open_fmu(unzipdir, md, start_values)
     t_init = time.perf_counter() - t0
     n = int(round(stop_s / comm_s))
-    out_vr = [vr["dte"], vr["mesh_force"]]
-    t = 0.0
-    if record is not None:
-        record.append(fmu.getReal(out_vr)[0])
-    t1 = time.perf_counter()
-    for _ in range(n):
-        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=comm_s)
-        v = fmu.getReal(out_vr)
+    nv = len(vrs)
+    vr_arr = (fmi2ValueReference * nv)(*vrs)
+    vals = (fmi2Real * nv)()
+    comp = fmu.component
+    do_step, get_real = fmu.doStep, fmu.fmi2GetReal
+    if loop == "raw":
+        do_step, get_real = fmu.dll.fmi2DoStep, fmu.dll.fmi2GetReal
+    elif loop not in FMPY_LOOPS:
+        raise ValueError(f"loop: {loop!r} unknown; choose one of {sorted(FMPY_LOOPS)}")
+    get_real(comp, vr_arr, nv, vals)
+
+    def keep(v):
         if record is not None:
             record.append(v[0])
-        t += comm_s
+        if rows is not None:
+            rows.append(list(v))
+    keep(vals)
+    kept = record is not None or rows is not None
+    t = 0.0
+    c1 = time.thread_time()
+    t1 = time.perf_counter()
+    if loop == "lean":
+        for _ in range(n):
+            do_step(t, comm_s)
+            get_real(comp, vr_arr, nv, vals)
+            if kept:
+                keep(vals)
+            t += comm_s
+    elif loop == "raw":
+        for _ in range(n):
+            if do_step(comp, t, comm_s, 1) or get_real(comp, vr_arr, nv, vals):
+                raise RuntimeError(f"fmi2DoStep / fmi2GetReal at t = {t!r} s: status not OK")
+            if kept:
+                keep(vals)
+            t += comm_s
+    else:
+        for _ in range(n):
+            do_step(t, comm_s)
+            v = fmu.getReal(vrs)
+            if kept:
+                keep(v)
+            t += comm_s
     wall = time.perf_counter() - t1
-    last = fmu.getReal(out_vr)
+    cpu = time.thread_time() - c1
+    last = list(vals) if loop != "getreal_list" else fmu.getReal(vrs)
     fmu.terminate()
     fmu.freeInstance()
-    return t_init, wall, n, last
+    return t_init, wall, n, last, cpu
+
+
+def fmpy_call_ns(unzipdir, md, start_values, calls=20000, repeat=5):
+    """Nanoseconds per call of fmi2GetReal with no value reference (the FMU's state check and
+    nothing else) through each layer of fmpy: ``raw`` the ctypes pointer (the ctypes call
+    itself), ``wrapped`` FMU2Slave.fmi2GetReal (fmpy's status check and logger hook on top)."""
+    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+    fmu = _open_fmu(unzipdir, md, start_values)
+    comp, vr_arr, vals = fmu.component, (fmi2ValueReference * 1)(0), (fmi2Real * 1)()
+    raw, wrapped = fmu.dll.fmi2GetReal, fmu.fmi2GetReal
+
+    def per_call(fn):
+        best = float("inf")
+        for _ in range(repeat):
+            t0 = time.thread_time()
+            for _ in range(calls):
+                fn(comp, vr_arr, 0, vals)
+            best = min(best, time.thread_time() - t0)
+        return 1e9 * best / calls
+    out = {"raw": per_call(raw), "wrapped": per_call(wrapped)}
+    fmu.terminate()
+    fmu.freeInstance()
+    return out
+
+
+def c_layers(unzipdir, md, comm_s, n_steps, repeat, max_step_s, integrator_code, reals, tmp):
+    """benchmarks/fmu_layers.c compiled with the FMU's own sources/ at its compile flags and run:
+    nanoseconds per call of the kernel, the shared checks, fmi2DoStep, fmi2DoStep + fmi2GetReal
+    and fmi2GetReal alone, over the same trajectory (its header comment)."""
+    import subprocess
+
+    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, layer_sources
+    from gearfmu.fmu.build_steps import KERNEL_SOURCE
+
+    unzipdir = Path(unzipdir).resolve()  # the resource URI is file://<absolute path>
+    src = unzipdir / "sources"
+    exe = Path(tmp) / "fmu_layers"
+    flags = [f for f in STANDALONE_CFLAGS if f not in ("-fPIC", "-shared", "-fvisibility=hidden")]
+    files = [str(src / f) for f in (*layer_sources(2), Path(KERNEL_SOURCE).name)]
+    subprocess.run(["cc", *flags, f"-I{src}", "-o", str(exe), str(Path(__file__).with_name("fmu_layers.c")),
+                    *files, "-lm"], check=True, capture_output=True)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    args = [str(exe), str(unzipdir), md.guid, repr(comm_s), str(n_steps), str(repeat),
+            f"{vr['dte']},{vr['mesh_force']}", str(vr["max_step"]), repr(max_step_s), str(vr["integrator"]),
+            str(integrator_code)] + [f"{vr[k]}={v!r}" for k, v in reals.items()]
+    proc = subprocess.run(args, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"fmu_layers exit {proc.returncode}: {proc.stderr.strip()}")
+    return json.loads(proc.stdout)
+
+
+def step_costs(unzipdir, md, *, sim_s, comm_s, max_step_s, integrator, reals, repeat):
+    """Where one communication step goes, measured in one run on one FMU (same tables, integrator,
+    max_step and inputs for every host): the real-time factor (simulated s / loop wall s, and
+    the same on the loop's CPU time) through the C host (benchmarks/fmu_rtf_host.c) and each fmpy
+    loop (FMPY_LOOPS), the hosts in turn, best of ``repeat`` (at least 10) each; ``c_layers`` (c_layers) and
+    ``per_step_ns``: nanoseconds per communication step of each layer -- the kernel, the FMU's
+    fixed cost (fmi2DoStep + fmi2GetReal beyond the kernel; its shared checks, its FMI 2
+    plumbing, its fmi2GetReal), and from the hosts' CPU times: the Python loop with its two
+    ctypes calls (fmpy raw - C host), fmpy's wrappers (lean - raw) and FMU2Slave.getReal's
+    list building (getreal_list - lean).  ``per_call_ns_fmi2GetReal_no_refs``: fmpy_call_ns."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_fmu_rtf import INTEGRATOR_CODE, compile_host, host_run
+
+    code = INTEGRATOR_CODE[integrator]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    start = dict(reals, max_step=max_step_s, integrator=code)
+    n = int(round(sim_s / comm_s))
+    repeat = max(repeat, 10)  # short loops: more of them, the best one is the one nobody interrupted
+    tmp = Path(tempfile.mkdtemp(prefix="gearfmu_steps_"))
+    walls = {"c_host": math.inf, **{k: math.inf for k in FMPY_LOOPS}}
+    cpus = dict(walls)
+    rows = {k: [] for k in FMPY_LOOPS}
+    try:
+        exe = compile_host(tmp)
+        layers = c_layers(unzipdir, md, comm_s, n, 4 * repeat, max_step_s, code, reals, tmp)
+        for r in range(repeat):  # the hosts in turn, best of `repeat` each (a shared machine)
+            w, c, c_rows = host_run(exe, unzipdir, md, vr, sim_s=sim_s, comm_s=comm_s, repeat=1,
+                                    max_step_s=max_step_s, integrator=integrator, reals=reals)
+            walls["c_host"], cpus["c_host"] = min(walls["c_host"], w), min(cpus["c_host"], c)
+            for loop in FMPY_LOOPS:
+                _, w, _, _, c = _fmu_loop(None, unzipdir, md, sim_s, comm_s, start, loop=loop,
+                                          rows=rows[loop] if r == 0 else None)
+                walls[loop], cpus[loop] = min(walls[loop], w), min(cpus[loop], c)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    c_wall, c_cpu = walls.pop("c_host"), cpus.pop("c_host")
+    calls = fmpy_call_ns(unzipdir, md, start, repeat=repeat)
+    ns = {k: 1e9 * w / n for k, w in cpus.items()}
+    c_ns = 1e9 * c_cpu / n
+    per_step = {
+        "kernel": layers["kernel_ns"],
+        "fmu_fixed": layers["step_get_ns"] - layers["kernel_ns"],
+        "fmu_shared_checks": layers["shared_ns"] - layers["kernel_ns"],
+        "fmu_fmi2_dostep_plumbing": layers["dostep_ns"] - layers["shared_ns"],
+        "fmu_fmi2_getreal": layers["getreal_ns"],
+        "c_host_step": c_ns,
+        "fmpy_raw_step": ns["raw"],
+        "fmpy_lean_step": ns["lean"],
+        "fmpy_getreal_list_step": ns["getreal_list"],
+        "python_loop_and_two_ctypes_calls": ns["raw"] - c_ns,
+        "fmpy_wrappers": ns["lean"] - ns["raw"],
+        "getreal_list_building": ns["getreal_list"] - ns["lean"],
+    }
+    return {
+        "loops": {"c_host": "benchmarks/fmu_rtf_host.c: dlopen, fmi2DoStep + fmi2GetReal(dte, mesh_force) per step",
+                  **{f"fmpy_{k}": v for k, v in FMPY_LOOPS.items()}},
+        "c_host_wall_s": c_wall, "c_host_real_time_factor": sim_s / c_wall,
+        "c_host_cpu_s": c_cpu, "c_host_cpu_real_time_factor": sim_s / c_cpu,
+        **{f"fmpy_{k}_wall_s": w for k, w in walls.items()},
+        **{f"fmpy_{k}_real_time_factor": sim_s / w for k, w in walls.items()},
+        **{f"fmpy_{k}_cpu_s": c for k, c in cpus.items()},
+        **{f"fmpy_{k}_cpu_real_time_factor": sim_s / c for k, c in cpus.items()},
+        "fmpy_loops_same_outputs": all(rows[k] == rows["lean"] for k in rows),
+        "fmpy_outputs_equal_c_host": bool(np.array_equal(np.array(rows["lean"]), c_rows)),
+        "c_layers": layers,
+        "per_call_ns_fmi2GetReal_no_refs": calls,
+        "per_step_ns": per_step,
+    }
 
 
 def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target, comm_s, sim_s, repeat):
@@ -201,10 +387,10 @@ def main(argv=None):
         sv = {"pinion_torque": T1, "gear_torque": T2}
         inits, fmu_big, fmu_small = [], [], []
         for _ in range(args.repeat):
-            ti, wb, _, _ = _fmu_loop(res.fmu_path, unz, md, sim, big, sv)
+            ti, wb, _, _, _ = _fmu_loop(res.fmu_path, unz, md, sim, big, sv)
             inits.append(ti)
             fmu_big.append(wb)
-            _, ws, _, _ = _fmu_loop(res.fmu_path, unz, md, sim, small, sv)
+            _, ws, _, _, _ = _fmu_loop(res.fmu_path, unz, md, sim, small, sv)
             fmu_small.append(ws)
         t0 = time.perf_counter()
         fmpy.simulate_fmu(str(res.fmu_path), stop_time=sim, output_interval=small)

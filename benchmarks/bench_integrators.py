@@ -152,7 +152,7 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
     step where the native rk4_node rows cross 1e-4 relative RMS dte error; and that of the
     C kernel alone (gk_do_step through ctypes, same steps) to show what the FMI layer adds."""
     from fmpy import extract, read_model_description
-    from bench_fmu import _fmu_loop
+    from bench_fmu import step_costs
     from gearfmu.fmu.compare import run_fmu
     from gearfmu.fmu.standalone_build import build_standalone_fmu
 
@@ -168,7 +168,9 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
                                     integrator="rk4_node", validation=False)
         md = read_model_description(str(path))
         unz = extract(str(path))
-        walls = [_fmu_loop(path, unz, md, sim_s, comm_s, {})[1] for _ in range(repeat)]
+        hosts = step_costs(unz, md, sim_s=sim_s, comm_s=comm_s, max_step_s=h, integrator="rk4_node", reals={},
+                           repeat=repeat)  # C host, fmpy loops, per-step layer costs (bench_fmu.py)
+        walls = [hosts["fmpy_lean_wall_s"]]
         print("fmu: error run on the case's grid ...", file=sys.stderr)
         ref = simulate_reference(tables, rtol=1e-12, steps_per_period=128, **kw)
         run = run_fmu(path, stop_time_s=kw["stop_time_s"], comm_step_s=kw["comm_step_s"],
@@ -183,7 +185,7 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
     return {"kernel_wall_s": kwall, "kernel_real_time_factor": sim_s / kwall,
             "case": front["case"], "integrator": "rk4_node", "max_step_s": h, "comm_step_s": comm_s,
             "simulated_s": sim_s, "wall_s": min(walls), "real_time_factor": sim_s / min(walls),
-            "error_on_case_grid": err}
+            "error_on_case_grid": err, "hosts": hosts}
 
 
 def main():

@@ -992,9 +992,17 @@ def _g_fmu_native(d):
 def _g_rtf(d):
     f = d["fmu_rtf"]
     err = f.get("error_on_case_grid", {}).get("dte_rel_rms_err")
-    return (f"{f['real_time_factor']:.0f} × real time (standalone FMU, {f['integrator']}, {f['case']}, "
-            f"communication step {1e6 * f['comm_step_s']:.3g} µs; its DTE error {sci(err)})",
-            f["real_time_factor"] >= 50.0)
+    text = (f"{f['real_time_factor']:.0f} × real time (standalone FMU, fmpy low-level loop, {f['integrator']}, "
+            f"{f['case']}, communication step {1e6 * f['comm_step_s']:.3g} µs; its DTE error {sci(err)})")
+    h = f.get("hosts")
+    if h:  # the same FMU through fmpy's raw ctypes pointers and a C host, and where a step goes
+        s = h["per_step_ns"]
+        text += (f"; {h['fmpy_lean_cpu_real_time_factor']:.0f} × on the loop's CPU time; "
+                 f"{h['fmpy_raw_real_time_factor']:.0f} × through fmpy's raw ctypes pointers, "
+                 f"{h['c_host_real_time_factor']:.0f} × from a C host; per step: kernel {1e-3 * s['kernel']:.2g} µs, "
+                 f"FMU fixed cost {s['fmu_fixed']:.0f} ns, Python loop and ctypes "
+                 f"{1e-3 * s['python_loop_and_two_ctypes_calls']:.2g} µs, fmpy wrappers {1e-3 * s['fmpy_wrappers']:.2g} µs")
+    return text, f["real_time_factor"] >= 50.0
 
 
 def _g_ehl_point(d):

@@ -23,10 +23,10 @@ from .scene.reader import ThermalOptions
 from .tables.estimate import estimate_build
 
 #: the integrator levels the planner measures, cheapest first, the last the full model's: rk4,
-#: then rk4_kink (node and contact events located).  rk4_node (events only at the table nodes
-#: where the tables bend, their crossings predicted) is a scene setting the planner keeps when
-#: pinned but does not yet offer as a level.
-PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_kink")
+#: rk4_node (the default: contact events and the table nodes where the tables bend, their
+#: crossings predicted), then rk4_kink (every table node and contact event located; at one
+#: step the most accurate, so the full-fidelity reference).
+PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_node", "rk4_kink")
 assert set(PLAN_INTEGRATOR_LEVELS) <= set(INTEGRATORS)
 
 #: contact models from the cheapest to the most detailed

@@ -1,5 +1,5 @@
 """Hard cases of the dynamic model (gearfmu.bench.HARD_CASES): the native RK4 solver (``integrator="rk4"``,
-passed explicitly: the default is rk4_kink, whose hard-case checks are in
+passed explicitly: the default is rk4_node, whose hard-case checks (and rk4_kink's) are in
 tests/test_integrators.py) and the FMU
 against the event-located scipy reference (gearfmu.dynamics.reference, checked against
 closed forms in tests/test_reference.py), never NaN.

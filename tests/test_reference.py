@@ -132,3 +132,38 @@ def test_bad_input_names_the_argument():
             simulate_reference(t, **dict(base, **{key: val}))
     with pytest.raises(ReferenceInputError, match="tables"):
         simulate_reference("nope", **base)
+
+
+def test_temperature_axis_selects_the_slice_as_the_native_solver_does():
+    """Tables with a temperature axis (two constant-k slices, 3e8 N/m at 30 degC and
+    2e8 N/m at 70 degC): the reference runs at ``bulk_temperature_C`` (default: the
+    tables' default_temperature_C, as gearfmu.dynamics.native.simulate) on the node-wise
+    blend, so at 50 degC k = 2.5e8 N/m and x follows the damped oscillator
+    m_e x'' + c x' + k x = 0 in closed form (c = 2 zeta sqrt(k_mean m_e) with the
+    tables' k_mean, docs/model.md).  Bad temperatures give a one-line error naming
+    bulk_temperature_C."""
+    from gearfmu.tables.mesh_tables import stack_temperatures
+
+    tt = stack_temperatures([constant_tables(3e8), constant_tables(2e8)], [30.0, 70.0],
+                            temperature_reference_C=30.0)
+    zeta, x0 = 0.02, 1e-5
+    c = 2 * zeta * math.sqrt(tt.k_mean_N_per_m * ME)
+    for T, k in ((None, 3e8), (50.0, 2.5e8), (70.0, 2e8)):
+        wn = math.sqrt(k / ME)
+        H = 2 * math.pi / wn / 10
+        r = simulate_reference(tt, stop_time_s=40 * H, comm_step_s=H, pinion_torque_Nm=0.0, gear_torque_Nm=0.0,
+                               pinion_speed_start_rad_s=50.0, damping_ratio=zeta, damping_model="contact_zone",
+                               dte_start_m=x0, bulk_temperature_C=T)
+        g = c / (2 * ME)
+        wd = math.sqrt(wn ** 2 - g ** 2)
+        ts = r.time_s
+        x = x0 * np.exp(-g * ts) * (np.cos(wd * ts) + g / wd * np.sin(wd * ts))
+        assert np.max(np.abs(r.dte - x)) / x0 < 1e-9, (T, np.max(np.abs(r.dte - x)) / x0)
+    base = dict(stop_time_s=1e-3, comm_step_s=1e-4, pinion_torque_Nm=1.0, pinion_speed_start_rad_s=1.0,
+                damping_ratio=0.01)
+    for bad in (80.0, float("nan"), "warm", [30.0, 40.0]):
+        with pytest.raises(ReferenceInputError, match="bulk_temperature_C") as info:
+            simulate_reference(tt, bulk_temperature_C=bad, **base)
+        assert "\n" not in str(info.value)
+    with pytest.raises(ReferenceInputError, match="bulk_temperature_C: the tables have no temperature axis"):
+        simulate_reference(constant_tables(1e8), bulk_temperature_C=30.0, **base)

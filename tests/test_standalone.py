@@ -435,6 +435,51 @@ def test_bad_inputs_discard_state_unchanged(built, tmp_path):
     assert results[0] == results[1]
 
 
+def test_getters_read_each_value_and_refuse_bad_references(built, tmp_path):
+    """fmi2GetReal / fmi2GetInteger of several references in one call give the values of the
+    same references read one by one (outputs, an input, a parameter, in any order), in
+    initialization mode after a set too (the outputs recomputed); a reference past the last
+    variable, a variable of the other type or NULL arrays give fmi2Error and a message naming
+    the function and the reason (the FMI 2.0 standard, section 2.1.7, leaves no other answer)."""
+    from ctypes import POINTER, c_double, c_uint, cast
+
+    from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
+
+    c = built["impacts"]
+    s, vrs, msgs = _slave(c["sa"], tmp_path)
+    names = ["mesh_force", "pinion_torque", "dte", "max_step", "pinion_speed", "dte"]
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    force_before = s.getReal([vrs["mesh_force"]])[0]
+    s.setReal([vrs["pinion_torque"]], [2 * c["T1"]])
+    init_all = s.getReal([vrs[n] for n in names])
+    s.exitInitializationMode()
+    s.doStep(0.0, c["H"])
+    one_by_one = [s.getReal([vrs[n]])[0] for n in names]
+    assert s.getReal([vrs[n] for n in names]) == one_by_one
+    assert init_all[1] == 2 * c["T1"] and init_all[0] != force_before  # recomputed after the set
+    assert s.getInteger([vrs["damping_model"], vrs["integrator"]]) == [s.getInteger([vrs["damping_model"]])[0],
+                                                                      s.getInteger([vrs["integrator"]])[0]]
+    n_vars = len(vrs)
+    bad = [([vrs["dte"], n_vars], "fmi2GetReal: no variable with value reference"),
+           ([vrs["integrator"], vrs["dte"]], "fmi2GetReal: integrator is not of type Real")]
+    for refs, words in bad:
+        del msgs[:]
+        arr, vals = (fmi2ValueReference * len(refs))(*refs), (fmi2Real * len(refs))()
+        assert _status(s.fmi2GetReal, s.component, arr, len(refs), vals) == 3
+        assert any(words in m for _, m in msgs), (words, msgs)
+    del msgs[:]
+    arr, ints = (fmi2ValueReference * 1)(vrs["dte"]), (fmi2Integer * 1)()
+    assert _status(s.fmi2GetInteger, s.component, arr, 1, ints) == 3
+    assert any("fmi2GetInteger: dte is not of type Integer" in m for _, m in msgs), msgs
+    del msgs[:]
+    assert _status(s.fmi2GetReal, s.component, arr, 1, cast(None, POINTER(c_double))) == 3
+    assert _status(s.fmi2GetReal, s.component, cast(None, POINTER(c_uint)), 1, (fmi2Real * 1)()) == 3
+    assert sum("vr[] or value[] is NULL with nvr = 1" in m for _, m in msgs) == 2, msgs
+    s.terminate()
+    s.freeInstance()
+
+
 def test_tampered_tables_refused(built, tmp_path):
     """One flipped byte in resources/tables.bin: the C layer's SHA-256 differs
     from the recorded one (hashlib's at build time) and instantiation is

@@ -29,6 +29,7 @@ from fmpy.fmi1 import FMICallException
 import numpy as np
 import pytest
 
+from gearfmu.common.vocabulary import INTEGRATORS
 from gearfmu.fmu.compare import native_columns, output_names
 from gearfmu.fmu.pythonfmu_build import build_fmu, compile_kernel
 from gearfmu.fmu.modeldesc import expand_variables, load_spec
@@ -185,7 +186,7 @@ def test_at_a_node_both_kernels_reproduce_the_single_temperature_tables_exactly(
         assert k.temperature(T) == 0
         ref = Kernel(lib, sl).run(T1)
         assert np.array_equal(k.run(T1), ref), T
-        for ig in ("rk4", "rk4_kink"):
+        for ig in ("rk4", "rk4_kink", "rk4_node"):
             kw = dict(stop_time_s=20 * H, comm_step_s=H, max_step_s=1e-5, pinion_torque_Nm=T1,
                       pinion_speed_start_rad_s=100.0, damping_ratio=0.02, integrator=ig)
             a = simulate(tt, bulk_temperature_C=T, **kw)
@@ -253,7 +254,7 @@ def _ramp():
     return np.linspace(12.0, 68.0, N_STEPS + 1)
 
 
-@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink"])
+@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node"])
 def test_native_pythonfmu_standalone_agree_with_a_temperature_ramp(tabs, fmus, integrator):
     tt, _ = tabs
     temps = _ramp()
@@ -266,7 +267,7 @@ def test_native_pythonfmu_standalone_agree_with_a_temperature_ramp(tabs, fmus, i
                    dtype=[("time", float), ("bulk_temperature", float)])
     for kind in ("pythonfmu", "standalone"):
         res = fmpy.simulate_fmu(str(fmus[kind]), stop_time=N_STEPS * H, output_interval=H, step_size=H,
-                                input=sig, start_values={"integrator": 1 if integrator == "rk4_kink" else 0})
+                                input=sig, start_values={"integrator": INTEGRATORS[integrator]})
         for n in output_names(tt.slots):
             rngv = max(float(np.ptp(cols[n])), 1e-300)
             assert np.max(np.abs(res[n] - cols[n])) <= 1e-9 * rngv, (kind, n)

@@ -497,12 +497,12 @@ def simulate(
     last state of a previous run (continuation in a speed sweep).
     If the state turns non-finite the run stops there; the remaining rows are
     NaN and ``info['diverged_at_step']`` says where.
-    ``integrator``: 'rk4_kink' (default, :data:`DEFAULT_INTEGRATOR`: RK4 that
-    steps exactly to every table node and contact-mode change, docs/model.md
-    "rk4_kink"; ``info['events']`` counts the located events; at most
-    KINK_MAX_SLOTS slots), 'rk4_node' (rk4_kink stopping only at the table nodes
-    where the tables bend, each reached by one RK4 step to its crossing time predicted
-    from theta1' = omega1, docs/native.md "rk4_node"; those crossings count as events) or 'rk4' (fixed-step classical RK4).
+    ``integrator``: 'rk4_node' (default, :data:`DEFAULT_INTEGRATOR`: rk4_kink stopping
+    only at the table nodes where the tables bend, each reached by one RK4 step to its
+    crossing time predicted from theta1' = omega1, docs/native.md "rk4_node"; those
+    crossings count as events), 'rk4_kink' (RK4 that steps exactly to every table node
+    and contact-mode change, docs/model.md "rk4_kink"; ``info['events']`` counts the
+    located events; both at most KINK_MAX_SLOTS slots) or 'rk4' (fixed-step classical RK4).
     ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".

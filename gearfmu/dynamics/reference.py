@@ -53,7 +53,8 @@ Public API
 ``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
 takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``;
 checked by the same :func:`gearfmu.dynamics.native.run_arguments`)
-plus ``rtol``, ``atol_scale``, ``method``, and returns a
+plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one constant
+``bulk_temperature_C``, the slice ``tables.at_temperature`` gives), and returns a
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
 derived outputs by the same rule;
 ``step_s`` is 0, ``substeps`` the number of segments, ``info`` counts segments,
@@ -71,7 +72,7 @@ from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
-from .native import InputLike, _finite, _result, run_arguments
+from .native import InputLike, NativeInputError, _at_temperature, _finite, _result, run_arguments
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
 
@@ -476,6 +477,19 @@ class _Segment:
 
 
 # ------------------------------------------------------------------- main
+def _temperature_slice(tables: MeshTables, bulk_temperature_C) -> MeshTables:
+    """The single-temperature tables the reference runs on (docs/model.md "Temperature axis")."""
+    if not tables.has_temperature_axis:
+        if bulk_temperature_C is not None:
+            raise ReferenceInputError("bulk_temperature_C: the tables have no temperature axis")
+        return tables
+    try:
+        return _at_temperature(tables, tables.default_temperature_C if bulk_temperature_C is None
+                               else bulk_temperature_C)
+    except NativeInputError as exc:
+        raise ReferenceInputError(str(exc)) from None
+
+
 def simulate_reference(
     tables: MeshTables,
     *,
@@ -496,6 +510,7 @@ def simulate_reference(
     max_segments: int = 5_000_000,
     progress: bool = False,
     max_step_s: Optional[float] = None,
+    bulk_temperature_C: Optional[float] = None,
 ):
     """Event-located solve_ivp reference of docs/model.md (two-inertia form).
 
@@ -508,10 +523,14 @@ def simulate_reference(
     2 pi/sqrt(max k_total/m_e) over this number, so that no contact or clamp
     indicator crosses and returns inside one step unseen).
     ``max_step_s`` is accepted and ignored (the reference chooses its steps).
+    ``bulk_temperature_C`` (degC, one constant value; tables with a temperature axis
+    only): the run uses ``tables.at_temperature`` (None: ``default_temperature_C``),
+    the slice :func:`gearfmu.dynamics.native.simulate` runs on at that temperature.
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
+    tables = _temperature_slice(tables, bulk_temperature_C)
     tables.validate()
     a = run_arguments(tables, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
                       stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,

@@ -7,6 +7,9 @@ finest-grid load balance and the convergence test in one compiled call.
 Load balance: ``load_mode = 0`` moves H0 on the finest grid after every
 cycle (adaptive gain), ``load_mode = 1`` moves H0 on the coarsest grid
 inside the cycle with the FAS load right-hand side (Venner & Lubrecht 2000).
+``spike_newton`` > 0: after every cycle that many Newton steps on the
+finest-grid block of 2 ``spike_width`` + 1 nodes around the largest scaled
+residual (:func:`.coarse_newton._spike_newton`; steady only).
 The options are passed as one float vector in the order of :data:`OPT_KEYS`.
 """
 from __future__ import annotations
@@ -16,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .coarse_newton import COARSE_NEWTON_MAX_NODES, _coarse_newton
+from .coarse_newton import COARSE_NEWTON_MAX_NODES, _coarse_newton, _spike_newton
 from .errors import EHLInputError
 from .mgkernels import _coef, _down, _film, _load, _relax, _residual, _up
 
@@ -143,6 +146,8 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
             dprev = dH0
             H0[top] += dH0
             _film(top, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+        if opt[19] > 0.5 and opt[15] == 0.0:
+            _spike_newton(int(opt[19]), int(opt[20]), S)
         sp = 0.0
         dp = 0.0
         for k in range(n):
@@ -226,8 +231,8 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
 #: option vector layout of the compiled core
 OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
             "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze", "c_t", "c_char",
-            "lean", "coarse_newton")
+            "lean", "coarse_newton", "spike_newton", "spike_width")
 OPT_DEFAULTS = dict(omega_gs=0.8, omega_j=0.6, switch=3.0, order2=1, dmax=0.3, dist=0,
                     c_h0=0.5, h0_step=0.5, nu1=2, nu2=1, nu0=10, load_mode=0,
                     defect=0, stick=1.0, freeze=0, c_t=0.0, c_char=0, lean=1,
-                    coarse_newton=0)
+                    coarse_newton=0, spike_newton=0, spike_width=6)

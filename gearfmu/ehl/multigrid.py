@@ -327,6 +327,9 @@ class FlatMultigrid:
         self.H0[first] = Hc - float(np.interp(0.0, X, self.H[sl]))
         self.update_film(first)
         self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
+        # the spike Newton step belongs to the finest grid's iteration, not to
+        # the coarse sub-hierarchies of the start
+        self.optv[OPT_KEYS.index("spike_newton")] = 0.0
         for l in range(first, t):
             if l > first:
                 self._prolong_solution(l)

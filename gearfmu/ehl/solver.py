@@ -107,7 +107,11 @@ class LineContactResult:
 #: of the nodes upstream of the spike made the high-M piezoviscous corner
 #: converge (measured over the (M, L) tables); placed after (1) so that the
 #: cases (1) converges (and warm-started sweeps from them) keep their path;
-#: (6)-(8) older fallbacks found by numerical experiment.
+#: (6)-(8) older fallbacks found by numerical experiment; (9) the under-relaxation
+#: of Venner & Lubrecht's EHL program (listing EHL2d.c: switch xi_l = 0.3,
+#: Gauss-Seidel 0.4, distributive Jacobi 0.2) with F-cycles and the coarsest-grid
+#: Newton solve, used by the piezoviscous corner plan (converges Barus M = 1000,
+#: L = 18 and 20, where setting 6 stalls).
 RELAXATION_SETTINGS = (
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1,
          stick=10.0),
@@ -124,6 +128,8 @@ RELAXATION_SETTINGS = (
          stick=10.0),
     dict(switch=3.0, nu1=2, nu2=1, omega_gs=0.8, omega_j=0.6, stick=10.0),
     dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4),
+    dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.4, omega_j=0.2, load_mode=1, c_h0=0.1,
+         stick=10.0, gamma="F", coarse_newton=1),
 )
 
 #: Stall test of the compiled solver: a setting stalls when neither the
@@ -152,14 +158,17 @@ FREEZE_BELOW_PRESSURE_CHANGE = 1e-3
 
 #: Fast path of the default smooth solve (docs/ehl.md): the relaxation of
 #: setting 0 of :data:`RELAXATION_SETTINGS` with F-cycles, the coarsest grid
-#: solved by Newton steps (:mod:`.coarse_newton`) and a full-multigrid start
-#: (one cycle per level; a warm start instead starts from ``initial``).  Tried
+#: solved by Newton steps (:mod:`.coarse_newton`), a full-multigrid start
+#: (one cycle per level; a warm start instead starts from ``initial``) and after
+#: each cycle one Newton step on the finest-grid block of 2 x 6 + 1 nodes around
+#: the largest scaled residual (:func:`.coarse_newton._spike_newton`).  Tried
 #: first where the coarsest grid has at most
 #: COARSE_NEWTON_MAX_NODES nodes; it stops at the same tolerances, and when it
 #: does not converge within FAST_MAX_CYCLES cycles (or stalls over
 #: FAST_STALL_WINDOW cycles) the settings of :data:`RELAXATION_SETTINGS` follow
 #: from a fresh start, as without it.
-FAST_SETTING = dict(RELAXATION_SETTINGS[0], gamma="F", coarse_newton=1)
+FAST_SETTING = dict(RELAXATION_SETTINGS[0], gamma="F", coarse_newton=1, spike_newton=1,
+                    spike_width=6)
 FAST_FMG_CYCLES = 1
 FAST_MAX_CYCLES = 20
 FAST_STALL_WINDOW = 6
@@ -170,9 +179,10 @@ FAST_STALL_WINDOW = 6
 #: hierarchy, 1 the first coarse-grid retry (only under fail-fast rule 1);
 #: indices into :data:`RELAXATION_SETTINGS`.  Measured over the Barus (M, L)
 #: table (docs/ehl.md): setting 6 converges most of these points on the first
-#: or the 2x finer coarsest grid, Barus M = 1000, L = 18 only with setting 0
-#: on the 2x finer one.
-PIEZO_CORNER_PLAN = ((0, 6), (1, 0), (1, 6), (0, 3))
+#: or the 2x finer coarsest grid, setting 9 Barus M = 1000, L = 18 and 20 on the
+#: first (which made the pairs (1, 0) and (0, 3) of the plan before it
+#: unnecessary).
+PIEZO_CORNER_PLAN = ((0, 6), (0, 9), (1, 6))
 #: a pair of the plan that stalls below this scaled residual is polished at
 #: once (measured over the corner: the plan's polishes that converged started
 #: from 3.5e-5, those from 2e-4 .. 1e-3 failed)

@@ -42,6 +42,7 @@ from typing import Optional, Union
 import sysconfig
 
 from .. import __version__
+from ..common.vocabulary import DEFAULT_INTEGRATOR
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
                           check_build_arguments, check_output_arguments, compiler_version, envelope_json,
@@ -93,7 +94,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
               gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
               damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
               output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = 1,
+              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = DEFAULT_INTEGRATOR,
               envelope: Optional[dict] = None) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
@@ -101,8 +102,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     ``gear_torque_start_Nm`` None means the static balance
     ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
     "elastobacklash", 1 or "contact_zone" (docs/model.md).  ``integrator``: 0 or
-    "rk4", 1 or "rk4_kink" (default; docs/model.md "Integration", docs/dynamics_validation.md;
-    FMU parameter ``integrator``).  ``stop_time_s`` and
+    "rk4", 1 or "rk4_kink", 2 or "rk4_node" (default, :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`;
+    docs/model.md "Integration", docs/native.md "rk4_node"; FMU parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
     None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
     ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,

@@ -52,6 +52,7 @@ from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
+from ..common.vocabulary import DEFAULT_INTEGRATOR
 from . import crossbuild
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADER,  # noqa: F401
                           KERNEL_SOURCE, CompilerNotFoundError,
@@ -309,14 +310,14 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          stop_time_s: float = 0.1, output_interval_s: Optional[float] = None,
                          scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
-                         integrator: Union[int, str] = 1,
+                         integrator: Union[int, str] = DEFAULT_INTEGRATOR,
                          platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
                          fmi_version: int = 2) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
     ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
-    0/"rk4", 1/"rk4_kink" (default) or 2/"rk4_node", the FMU parameter ``integrator``); ``validation``
+    0/"rk4", 1/"rk4_kink" or 2/"rk4_node" (default), the FMU parameter ``integrator``); ``validation``
     False skips the validation record (and its native run).  ``platforms``:
     keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default: all); without the zig
     compiler only the build machine's platform is compiled (with ``cc`` or the

@@ -96,8 +96,8 @@ class TableOptions:
 class SolverOptions:
     """Dynamic solver settings (docs/model.md).
 
-    ``integrator``: :data:`~gearfmu.common.vocabulary.INTEGRATORS`, default 'rk4_kink'
-    (the setting on the speed-against-error front, docs/dynamics_validation.md) or 'rk4'; ``max_step_s``: largest internal step in s
+    ``integrator``: :data:`~gearfmu.common.vocabulary.INTEGRATORS`, default 'rk4_node'
+    (:data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`, docs/native.md "rk4_node"), 'rk4_kink' or 'rk4'; ``max_step_s``: largest internal step in s
     (``None`` = automatic, chosen by the builder from the mesh frequency and
     the contact natural frequency); ``damping_model``: 'elastobacklash' or
     'contact_zone' (docs/model.md, "Per-pair force").

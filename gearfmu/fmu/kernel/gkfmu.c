@@ -117,26 +117,33 @@ void gkf_reset(gkf_fmu *f)
     f->n_messages = 0;
 }
 
-/* 0 if the value of `slot` is finite and inside its min/max; else 1 and the reason queued
- * (" at t = ... s" when at_time, then `tail`) */
-static int bad_value(gkf_fmu *f, int slot, int at_time, double t, int level, const char *tail)
+/* the reason the value of `slot` is refused, queued (" at t = ... s" when at_time, then `tail`); 1 */
+static int refuse_value(gkf_fmu *f, int slot, int at_time, double t, int level, const char *tail)
 {
     char a[NUM_LEN], b[NUM_LEN], at[NUM_LEN + 16] = "";
     double x = f->value[slot];
     const char *why;
     double limit = 0.0;
-    if (!f->present[slot]) return 0;
     if (!isfinite(x)) why = "not finite";
     else if (f->has_min[slot] && x < f->min[slot]) { why = "below its minimum"; limit = f->min[slot]; }
-    else if (f->has_max[slot] && x > f->max[slot]) { why = "above its maximum"; limit = f->max[slot]; }
-    else return 0;
-    /* formatted only for a refused value: this check runs on every doStep */
+    else { why = "above its maximum"; limit = f->max[slot]; }
     if (at_time) snprintf(at, sizeof at, " at t = %s s", num(t, b));
     if (isfinite(x))
         say(f, level, "%s = %s%s: %s %s%s", f->name[slot], num(x, a), at, why, num(limit, b), tail);
     else
         say(f, level, "%s = %s%s: %s%s", f->name[slot], num(x, a), at, why, tail);
     return 1;
+}
+
+/* 0 if the value of `slot` is finite and inside its min/max (this check runs on every
+ * doStep: comparisons only); else 1 and the reason queued (refuse_value) */
+static int bad_value(gkf_fmu *f, int slot, int at_time, double t, int level, const char *tail)
+{
+    double x = f->value[slot];
+    if (!f->present[slot] || (isfinite(x) && !(f->has_min[slot] && x < f->min[slot]) &&
+                              !(f->has_max[slot] && x > f->max[slot])))
+        return 0;
+    return refuse_value(f, slot, at_time, t, level, tail);
 }
 
 /* Select the temperature in the kernel (docs/model.md "Temperature axis"); 1 if refused (queued). */

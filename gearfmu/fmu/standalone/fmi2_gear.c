@@ -72,7 +72,7 @@ static const gf_call GF_CALLS[F_COUNT] = {
 
 #define GF_GUARD(comp, fn)                                                     \
     gf_inst *c = (gf_inst *)(comp);                                            \
-    if (!gf_allowed(c, &GF_CALLS[fn])) return fmi2Error
+    if (!gf_may_call(c, &GF_CALLS[fn])) return fmi2Error
 
 /* the FMI 2 logger is variadic (a format); the message is passed as "%s" */
 static void log_fmi2(gf_inst *c, int status, const char *category, const char *msg)

@@ -76,7 +76,7 @@ static const gf_call GF_CALLS[F_COUNT] = {
 
 #define GF_GUARD(inst, fn)                                                     \
     gf_inst *c = (gf_inst *)(inst);                                            \
-    if (!gf_allowed(c, &GF_CALLS[fn])) return fmi3Error
+    if (!gf_may_call(c, &GF_CALLS[fn])) return fmi3Error
 /* a function this FMU never offers: the guard logs why */
 #define GF_NEVER(fn) return (gf_allowed((gf_inst *)instance, &GF_CALLS[fn]), fmi3Error)
 

@@ -721,13 +721,6 @@ int gm_exit_init(gf_inst *c)
     return 1;
 }
 
-double gm_value(const gf_inst *c, int i)
-{
-    const gf_var *v = &c->vars[i];
-    if (v->causality == GF_OUTPUT) return c->out[v->out_index];
-    return c->values[i];
-}
-
 int gm_settable(gf_inst *c, const char *fn, int i)
 {
     const gf_var *v = &c->vars[i];
@@ -766,7 +759,7 @@ int gm_do_step(gf_inst *c, double t, double H)
     if (!c->initialized && !init_state(c)) return GF_DISCARD;
     to_fmu_layer(c);
     ok = gkf_do_step(c->fmu, &c->state, c->time, H, c->out);
-    log_fmu_messages(c);
+    if (gkf_n_messages(c->fmu) > 0) log_fmu_messages(c);
     if (!ok) return GF_DISCARD;
     c->time = c->time + H;
     return GF_OK;

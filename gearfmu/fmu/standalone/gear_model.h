@@ -104,6 +104,11 @@ struct gf_inst {
 void gf_log(gf_inst *c, int status, const char *category, const char *fmt, ...);
 /* 1 if calls[fn] may be called now, else logs why and returns 0 (the caller returns Error) */
 int gf_allowed(gf_inst *c, const gf_call *call);
+/* gf_allowed with its allowed case inline: every FMI call passes here */
+static inline int gf_may_call(gf_inst *c, const gf_call *call)
+{
+    return (c != NULL && (c->mode & call->allowed) != 0) || gf_allowed(c, call);
+}
 /* a new instance with its logger (NULL when out of memory) */
 gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_log_fn log, void *host_env,
                void (*host_logger)(void), const char *never_why);
@@ -142,7 +147,12 @@ void gm_enter_init(gf_inst *c);
 int gm_exit_init(gf_inst *c);
 /* in initialization mode, bring the outputs up to date when one of vr[] is an output */
 int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr);
-double gm_value(const gf_inst *c, int i);
+/* the current value of variable i (an output: the kernel's output vector), inline for the getters */
+static inline double gm_value(const gf_inst *c, int i)
+{
+    const gf_var *v = &c->vars[i];
+    return v->causality == GF_OUTPUT ? c->out[v->out_index] : c->values[i];
+}
 int gm_settable(gf_inst *c, const char *fn, int i);
 /* one communication step: GF_OK or GF_DISCARD (state unchanged, logged) */
 int gm_do_step(gf_inst *c, double t, double H);
