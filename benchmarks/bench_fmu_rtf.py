@@ -117,8 +117,9 @@ def table_front(scene, ppms, *, fine_ppm, comm_s, sim_s, fine_substeps, integrat
     those tables with max_step comm / ``fine_substeps`` (the integration error far below
     the table error) against the same run on ``fine_ppm`` tables.  ``plain``: the tables
     without their engagement angles (linear interpolation across the edges, the lookup
-    before); ``subcell``: with them.  Each against its own fine reference, and the two
-    references against each other."""
+    before, and ``k_mean_N_per_m`` the grid mean of the nodes as before); ``subcell``: with them
+    (and the exact mean).  Each against its own fine reference, and the two references against
+    each other."""
     from gearfmu.dynamics.native import simulate
     from gearfmu.pipeline import compute_tables, gear_torque_for
     from gearfmu.plan_evaluator import relative_rms
@@ -127,7 +128,12 @@ def table_front(scene, ppms, *, fine_ppm, comm_s, sim_s, fine_substeps, integrat
 
     def tables_at(p, edges):
         t = compute_tables(replace(scene, tables=replace(scene.tables, points_per_mesh=p)))
-        return t if edges else replace(t, engagement_in_rad=None, engagement_out_rad=None)
+        if edges:
+            return t
+        # before: no engagement angles, k_mean the grid mean of the nominal row
+        row = np.flatnonzero(np.asarray(t.torque_Nm) == T1)
+        k_grid = float(t.k_N_per_m[int(row[0]) if row.size else 0].sum(axis=0).mean())
+        return replace(t, engagement_in_rad=None, engagement_out_rad=None, k_mean_N_per_m=k_grid)
 
     def run(t):
         r = simulate(t, max_step_s=comm_s / fine_substeps, integrator=integrator, stop_time_s=sim_s,

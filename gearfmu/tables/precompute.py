@@ -23,6 +23,7 @@ from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, 
 from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
 from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
 from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
+from .zones import mean_total_stiffness_N_per_m
 from ..common.progress import progress_bar
 from ..contact.models import get_contact_model
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
@@ -281,6 +282,8 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         engagement_in_rad=0.0,
         engagement_out_rad=eps * float(geom.mesh_period_rad),
     )
+    # the mean TVMS of the lookup (exact at the contact-zone edges, docs/tables.md): the damping
+    tables = replace(tables, k_mean_N_per_m=mean_total_stiffness_N_per_m(tables, k_nominal))
     if thermal is not None:
         # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
         tables = _apply_thermal(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,

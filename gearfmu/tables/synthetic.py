@@ -33,6 +33,7 @@ import numpy as np
 
 from ..common.checks import finite_number
 from .mesh_tables import MeshTables, TableError
+from .zones import mean_total_stiffness_N_per_m
 
 __all__ = [
     "SyntheticTableError",
@@ -129,7 +130,8 @@ def tables_from_arrays(
         (for a rectangular wave this is the contact ratio exactly).
     k_mean_N_per_m : mean mesh stiffness k_m of seed 003 eq 7 (N/m); default =
         mean of the total stiffness over the phi grid and all torque rows (the
-        grid mean equals the mean of the periodic linear interpolant).
+        grid mean equals the mean of the periodic linear interpolant; with engagement
+        angles the mean of the sub-cell lookup, gearfmu.tables.zones.mean_total_stiffness_N_per_m).
     e_comprehensive_m : (NT, n_phi) (m); default :func:`comprehensive_error_m`.
     engagement_in_rad, engagement_out_rad : exact meshing-in and meshing-out pinion angles
         (rad) of every pair from the start of its mesh (both or neither; default none: the
@@ -188,6 +190,7 @@ def tables_from_arrays(
     if contact_ratio is None:
         contact_ratio = float((k > 0).sum(axis=1).mean())
     km = float(ktot.mean()) if k_mean_N_per_m is None else _positive("k_mean_N_per_m", k_mean_N_per_m)
+    exact_mean = k_mean_N_per_m is None and engagement_in_rad is not None
     if e_comprehensive_m is None:
         ec = comprehensive_error_m(k, e)
     else:
@@ -212,6 +215,9 @@ def tables_from_arrays(
         engagement_in_rad=None if engagement_in_rad is None else float(engagement_in_rad),
         engagement_out_rad=None if engagement_out_rad is None else float(engagement_out_rad),
     )
+    t.validate()
+    if exact_mean:  # the mean of the sub-cell lookup over the rows (docs/tables.md "Contact-zone edges")
+        t.k_mean_N_per_m = float(np.mean([mean_total_stiffness_N_per_m(t, t.k_N_per_m[r]) for r in range(nt)]))
     return t.validate()
 
 

@@ -101,3 +101,25 @@ def zone_cuts(t: MeshTables) -> Optional[np.ndarray]:
             mark(j, c)
             lo[j, c] = max(lo[j, c], f)
     return np.ascontiguousarray(np.stack([lo, hi]))
+
+
+def mean_total_stiffness_N_per_m(t: MeshTables, k_row) -> float:
+    """Mean over the table period of the total stiffness sum_j k_j(phi) (N/m) of one operating
+    row ``k_row`` (P, n_phi) as the kernels look it up: with the sub-cell rule at the
+    contact-zone edges the exact integral of its pieces (the grid mean of the nodes is off by
+    about a pair's stiffness times the fraction of a cell at every edge, a first-order error in
+    the resolution that enters the damping through ``k_mean_N_per_m``); without engagement
+    angles the grid mean (the mean of the periodic linear interpolant)."""
+    k = np.asarray(k_row, dtype=float)
+    cuts = zone_cuts(t)
+    if cuts is None:
+        return float(k.sum(axis=0).mean())
+    lo, hi = cuts
+    km = np.roll(k, 1, axis=1)       # node i0 - 1
+    k1 = np.roll(k, -1, axis=1)      # node i1
+    k2 = np.roll(k, -2, axis=1)      # node i1 + 1
+    plain = 0.5 * (k + k1)
+    left = lo * k + 0.5 * lo * lo * (k - km)                               # int_0^lo of the left line
+    right = (1.0 - hi) * k1 - 0.5 * (1.0 - hi) ** 2 * (k2 - k1)            # int_hi^1 of the right line
+    cell = np.where(lo < 0.0, plain, np.maximum(left, 0.0) + np.maximum(right, 0.0))
+    return float(cell.sum(axis=0).mean())
