@@ -131,6 +131,19 @@ def test_subcell_lookup_static_te_second_order_with_error_jump():
     assert errs[3] < plain[1] / 20.0
 
 
+def test_k_mean_is_the_exact_mean_of_the_lookup():
+    """k_mean_N_per_m (the damping's mean stiffness) of tables with engagement angles converges at
+    second order to the closed-form mean; the grid mean of tables without them is first order
+    (modulated by where the edge falls in its cell) and far off at every level."""
+    eps = 1.0 + 1.0 / math.sqrt(3.0)
+    ref = _kbar_exact(eps)
+    errs = [abs(_tables(p, eps).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
+    for a, b in zip(errs, errs[1:]):
+        assert b < a / 3.0
+    grid = [abs(_tables(p, eps, engagement=False).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
+    assert all(e < g / 20.0 for e, g in zip(errs, grid))
+
+
 def test_values_at_the_edges():
     """Just outside an edge k = 0; just inside it the closed form K within O(h^2)."""
     eps = 1.0 + 1.0 / math.sqrt(3.0)
