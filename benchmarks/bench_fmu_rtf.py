@@ -34,12 +34,15 @@ through each host; ``smallest_error`` the run closest to the fine run.  ``dostep
 the C host's wall time per doStep beyond its internal steps (rk4 at max_step = comm, run at
 comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).
 
-Prints one JSON object.
+Prints one JSON object.  ``--table-front``: only the table error per points per mesh, with the
+tables' engagement angles (the sub-cell lookup at the contact-zone edges, docs/model.md) and
+without them (the plain lookup), each against its own fine run (:func:`table_front`).
 
     nice python benchmarks/bench_fmu_rtf.py [SCENE] [--ppm 16,32,64,128,256] [--repeat 5]
 """
 import argparse
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -107,6 +110,58 @@ def fmpy_columns(unz, md, vr, kw, repeat, c_rows):
             "fmpy_outputs_equal_c_host": bool(np.array_equal(rows, c_rows))}
 
 
+def table_front(scene, ppms, *, fine_ppm, comm_s, sim_s, fine_substeps, integrator="rk4_kink"):
+    """Table error against table resolution, before and after the sub-cell lookup at the
+    contact-zone edges (docs/model.md "Contact-zone edges").  Native runs only (the FMU's C
+    kernel gives the same numbers bit for bit): for each points-per-mesh level, the run on
+    those tables with max_step comm / ``fine_substeps`` (the integration error far below
+    the table error) against the same run on ``fine_ppm`` tables.  ``plain``: the tables
+    without their engagement angles (linear interpolation across the edges, the lookup
+    before, and ``k_mean_N_per_m`` the grid mean of the nodes as before); ``subcell``: with them
+    (and the exact mean).  Each against its own fine reference, and the two references against
+    each other."""
+    from gearfmu.dynamics.native import simulate
+    from gearfmu.pipeline import compute_tables, gear_torque_for
+    from gearfmu.plan_evaluator import relative_rms
+
+    T1 = scene.operating.torque_Nm
+
+    def tables_at(p, edges):
+        t = compute_tables(replace(scene, tables=replace(scene.tables, points_per_mesh=p)))
+        if edges:
+            return t
+        # before: no engagement angles, k_mean the grid mean of the nominal row
+        row = np.flatnonzero(np.asarray(t.torque_Nm) == T1)
+        k_grid = float(t.k_N_per_m[int(row[0]) if row.size else 0].sum(axis=0).mean())
+        return replace(t, engagement_in_rad=None, engagement_out_rad=None, k_mean_N_per_m=k_grid)
+
+    def run(t):
+        r = simulate(t, max_step_s=comm_s / fine_substeps, integrator=integrator, stop_time_s=sim_s,
+                     comm_step_s=comm_s, pinion_torque_Nm=T1, gear_torque_Nm=gear_torque_for(t, T1),
+                     pinion_speed_start_rad_s=scene.operating.speed_rad_s, damping_ratio=scene.fmu.damping_ratio,
+                     damping_model=scene.solver.damping_model)
+        return r.dte, r.info.get("events", 0)
+
+    ref = {k: run(tables_at(fine_ppm, k == "subcell"))[0] for k in ("plain", "subcell")}
+    out = {"scene": scene.name, "integrator": integrator, "comm_step_s": comm_s, "simulated_s": sim_s,
+           "max_step_s": comm_s / fine_substeps, "fine_points_per_mesh": fine_ppm,
+           "error": "RMS(dte - dte_ref) / RMS(dte_ref), dte_ref the same lookup on the fine tables",
+           "fine_plain_vs_fine_subcell": relative_rms(ref["plain"], ref["subcell"]), "rows": []}
+    for p in ppms:
+        row = {"points_per_mesh": p}
+        for k in ("plain", "subcell"):
+            dte, ev = run(tables_at(p, k == "subcell"))
+            row[f"{k}_dte_rel_rms_err"] = relative_rms(dte, ref[k])
+            row[f"{k}_vs_fine_subcell"] = relative_rms(dte, ref["subcell"])
+        out["rows"].append(row)
+        print(json.dumps(row), file=sys.stderr, flush=True)
+    errs = [r["subcell_dte_rel_rms_err"] for r in out["rows"]]
+    out["subcell_order"] = [math.log2(a / b) if a > 0 and b > 0 else None for a, b in zip(errs, errs[1:])]
+    errs = [r["plain_dte_rel_rms_err"] for r in out["rows"]]
+    out["plain_order"] = [math.log2(a / b) if a > 0 and b > 0 else None for a, b in zip(errs, errs[1:])]
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scene", nargs="?")
@@ -120,7 +175,16 @@ def main(argv=None):
     ap.add_argument("--fine-substeps", type=int, default=512)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--no-fmpy", action="store_true", help="time the C host only")
+    ap.add_argument("--table-front", action="store_true",
+                    help="only the table error per points per mesh, plain lookup and sub-cell edges (table_front)")
     args = ap.parse_args(argv)
+    if args.table_front:
+        from gearfmu.pipeline import load
+
+        print(json.dumps({"table_front": table_front(
+            load(args.scene), sorted(int(x) for x in args.ppm.split(",")), fine_ppm=args.fine_ppm, comm_s=args.comm,
+            sim_s=args.sim, fine_substeps=args.fine_substeps)}, indent=1))
+        return 0
 
     from fmpy import extract, read_model_description
 

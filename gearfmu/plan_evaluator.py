@@ -18,6 +18,7 @@ from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .plan_choices import _step_absolute, _thermal_options
+from .tables.zones import mean_total_stiffness_N_per_m
 from .scene.envelope import AccuracyTarget, Envelope
 from .tables.precompute import precompute_tables
 
@@ -132,8 +133,8 @@ class _Evaluator:
             prov["precompute"] = dict(prov["precompute"], points_per_mesh=ppm,
                                       derived_from_points_per_mesh=int(k2[3]))
         out = replace(tb, k_N_per_m=k, e_m=sub(tb.e_m), backlash_half_m=sub(tb.backlash_half_m),
-                      e_comprehensive_m=sub(tb.e_comprehensive_m), static_te_m=sub(tb.static_te_m),
-                      k_mean_N_per_m=float(k[int(nominal[0])].sum(axis=0).mean()), provenance=prov)
+                      e_comprehensive_m=sub(tb.e_comprehensive_m), static_te_m=sub(tb.static_te_m), provenance=prov)
+        out = replace(out, k_mean_N_per_m=mean_total_stiffness_N_per_m(out, k[int(nominal[0])]))
         return out.validate(), dt / s
 
     def table_args(self, cfg: dict) -> dict:

@@ -77,4 +77,7 @@ def test_seed003_simulated_mean_force_matches_the_static_load():
     n_per = int(round(T / s.fmu.output_interval_s * 10))  # ten mesh periods at a time
     tail = np.asarray(res.mesh_force)[t >= 0.02][: (np.count_nonzero(t >= 0.02) // n_per) * n_per]
     assert tail.size >= n_per
-    assert float(np.mean(tail)) == pytest.approx(F_ref, rel=0.01)
+    # 2 %: the mesh force steps where a pair meshes in or out (docs/model.md "Contact-zone
+    # edges"), and 30 samples locked to the mesh phase carry up to a step / 30 of bias
+    # (measured 1.4 %; the ramps of the plain lookup gave < 1 %)
+    assert float(np.mean(tail)) == pytest.approx(F_ref, rel=0.02)

@@ -229,8 +229,10 @@ def test_default_scene_full_reference_is_its_own_hertz_contact():
 
 def test_build_as_written_states_its_estimated_error(tmp_path, capsys):
     """`gearfmu build` of a scene without [accuracy] builds it as written and says how far it is from
-    full fidelity: seed 003 as written has 64 points per mesh against the full 256 (the planner's
-    own per-choice measure of that level is several % of the mesh force)."""
+    full fidelity: seed 003 as written has 64 points per mesh against the full 256.  With the exact
+    contact-zone edges of the table lookup (docs/model.md) that level is within the default 2 %
+    target (measured 0.13 % of the mesh force, 0.03 % of the DTE; the plain lookup's one-cell
+    ramps made it several %)."""
     from gearfmu.pipeline import build
 
     res = build(load_scene(SCENES / "seed003_table1.toml"), tmp_path / "s3.fmu", estimate_accuracy=True)
@@ -238,7 +240,7 @@ def test_build_as_written_states_its_estimated_error(tmp_path, capsys):
     print(ve)
     assert ve["kind"] == "as-written estimate" and ve["as_written"]["points_per_mesh"] == 64
     assert ve["full_fidelity"]["points_per_mesh"] == 256 and ve["full_fidelity"]["contact_model"] == "hertz"
-    assert ve["worst_mesh_force_rel"] > 0.02 and ve["within_target"] is False
+    assert 0.0 < ve["worst_mesh_force_rel"] < 0.02 and ve["within_target"] is True
     import zipfile
 
     with zipfile.ZipFile(res.fmu_path) as z:  # the FMU states it (docs/fmu.md "Verified envelope")

@@ -82,8 +82,14 @@ def test_table_validates_and_round_trips(tables0, tmp_path):
 
 def test_mean_stiffness_matches_stiffness_module(tables0):
     k_ref = stiffness.mean_mesh_stiffness_N_per_m(PAIR0, pair_geometry(PAIR0), OPTS, PPM)
-    assert abs(tables0.k_mean_N_per_m / k_ref - 1) < 1e-9
     assert abs(tables0.k_total_N_per_m()[0].mean() / k_ref - 1) < 1e-9
+    # k_mean is the mean of the lookup with the exact contact-zone edges (docs/tables.md): within
+    # 2e-4 of the stiffness module's grid mean on a 128 x finer grid (itself first order: off by up
+    # to about a pair's share of the total / (2 x 4096) at the edges; measured 1.6e-4), where the
+    # grid mean of these tables is 20 x further off (measured 1.2e-2)
+    k_fine = stiffness.mean_mesh_stiffness_N_per_m(PAIR0, pair_geometry(PAIR0), OPTS, 128 * PPM)
+    assert abs(tables0.k_mean_N_per_m / k_fine - 1) < 2e-4
+    assert abs(tables0.k_mean_N_per_m / k_fine - 1) < 0.05 * abs(k_ref / k_fine - 1)
 
 
 def test_pinion_only_tooth_deviation_hunting_period_and_pairs_differ():

@@ -65,7 +65,7 @@ def test_csv_with_degrees_and_k_total_reads_back(computed, tmp_path):
 def test_single_pair_expands_to_the_rectangular_wave(tmp_path):
     """One pair of constant stiffness over eps = 1.7547 mesh periods, expanded into slots,
     is the rectangular wave of the same pair stiffness (k_double = 2 k_single)."""
-    want = rectangular_wave_tables(2.5e8, points_per_mesh=64)
+    want = rectangular_wave_tables(2.5e8, points_per_mesh=64, zone_edges=True)   # the pair's own edges
     span = want.contact_ratio * want.mesh_period_rad
     a = np.linspace(0.0, np.degrees(span), 41)
     (tmp_path / "pair.csv").write_text("pinion_angle_deg,k_pair_N_per_m,e_pair_um\n"
@@ -77,7 +77,8 @@ def test_single_pair_expands_to_the_rectangular_wave(tmp_path):
     got = load_tables_csv(tmp_path / "pair.csv", tmp_path / "pair.toml")
     assert got.slots == 2 and got.n_phi == want.n_phi
     assert np.array_equal(got.k_N_per_m, want.k_N_per_m)
-    assert got.k_mean_N_per_m == pytest.approx(want.k_mean_N_per_m, rel=1e-15)
+    assert got.engagement_in_rad == 0.0 and got.engagement_out_rad == pytest.approx(span, rel=1e-14)
+    assert got.k_mean_N_per_m == pytest.approx(want.k_mean_N_per_m, rel=1e-12)
     # meshing error of the pair follows it into each slot
     (tmp_path / "pair2.csv").write_text("pinion_angle_rad,k_pair_N_per_m,e_pair_m\n0,2e8,1e-6\n"
                                         f"{float(span)!r},2e8,3e-6\n")

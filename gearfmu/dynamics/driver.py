@@ -19,7 +19,7 @@ from numba import njit
 from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start
 from .model_rhs import (
     _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _outputs_row, _ptr, _tab, _table_pointers,
-    _torque_index,
+    _torque_index, _with_zones, _zone_sel,
 )
 
 
@@ -37,7 +37,7 @@ def _write_row(tab, row, th, om, x, v, out_state, out_pair, out_force, out_stiff
 
 @njit(cache=True, error_model="numpy")
 def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
-         inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events):
+         inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events, cuts, zoned):
     """Rows 0..n of the outputs; returns the number of completed steps (fewer than
     n when the state turned non-finite).
 
@@ -48,16 +48,19 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     per step in out_events; in the SDOF form it integrates theta1 as a state
     with omega1' = 0.  'rk4_node' stops only at the table nodes flagged by
     _node_flags (computed once per run from k, e, b).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
-    kernels read their data pointers, see gearfmu.dynamics.model_rhs)."""
+    kernels read their data pointers, see gearfmu.dynamics.model_rhs).  ``zoned``: the sub-cell
+    lookup at the contact-zone edges with the (2, P, N) ``cuts`` of gearfmu.tables.zones.zone_cuts
+    (docs/model.md "Contact-zone edges"; rk4_kink and rk4_node stop at the cuts)."""
     n_steps = out_state.shape[0] - 1
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
     rows2 = k.shape[0] > 1
-    mode = np.zeros(3 * p, dtype=np.int64)
+    mode = np.zeros(4 * p, dtype=np.int64)   # reg, sub, kpos and the held zone side per pair
     work = np.zeros(18)
     flags = _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
     fp = _ptr(flags)
+    zp = _ptr(cuts)
     th0 = th
     nd = _CELL_NONE
     i0 = 0
@@ -67,13 +70,16 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         fm = t1 / rb1
         it, wt = _torque_index(t1, torque)
         tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp)
+        if zoned:
+            tab = _with_zones(tab, zp)
         dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
         if s == 0:
             _write_row(tab, 0, th, om, x, v, out_state, out_pair, out_force, out_stiff)
         if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
-            _seg_start(tab, wk, ndk, icode == 2, om)
+            _seg_start(tab, wk, ndk, icode == 2, om, th)
+            _zone_sel(tab, md, ndk, ik0, work[16], work[17])
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
             for _ in range(n_sub):
@@ -99,6 +105,8 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
 
 
 _COMPILED = False
+#: the cuts argument of :func:`_run` without the sub-cell lookup (never read)
+NO_CUTS = np.full((2, 1, 1), -1.0)
 
 
 def _warmup() -> None:
@@ -114,5 +122,5 @@ def _warmup() -> None:
     x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 4.0)
     _run(0, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
          k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
-         np.zeros(2, dtype=np.int64))
+         np.zeros(2, dtype=np.int64), NO_CUTS, False)
     _COMPILED = True

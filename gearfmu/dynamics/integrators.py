@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _mesh_force, _pair_guard,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel, _mesh_force, _pair_guard,
 )
 
 
@@ -143,7 +143,7 @@ def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1, lo, hi):
     j = (gi - 2) // 3
     q = (gi - 2) - 3 * j
     w = (th - nd * dphi) * tab[12]
-    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+    kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
     return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
 
 
@@ -209,9 +209,9 @@ def _mode_sync(tab, md, th, om, x, v, nd, i0, i1, from_state):
     p = tab[8]
     w = (th - nd * dphi) * tab[12]
     for j in range(p):
-        km, em, esm, bm = _kvals(tab, j, i0, i1, 0.5)
+        km, em, esm, bm = _kvals_sel(tab, j, i0, i1, 0.5, md[3 * p + j])
         md[2 * p + j] = 1 if km > 0.0 else 0
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
         if from_state:
             d = x - ev
             if d > bv:
@@ -267,41 +267,94 @@ def _node_flagged(tab, n):
 
 
 @njit(cache=True, error_model="numpy")
-def _seg_up(tab, n):
-    """First flagged node above global node n, at most n + N (n + 1 beyond 2^52 cells,
-    where doubles no longer count single nodes, and for a non-finite n)."""
+def _seg_up(tab, n, node=True):
+    """First stop above position n (global node units, rk4_kink/rk4_node segment ends):
+    a contact-zone cut (docs/model.md "Contact-zone edges") or the next node (rk4_kink) or
+    flagged node (rk4_node), at most floor(n) + N (n + 1 beyond 2^52 cells, where doubles no
+    longer count single nodes, and for a non-finite n).  Without the cuts: the next node
+    (rk4_kink), the first flagged node above n (rk4_node)."""
     if not abs(n) < _CELL_LIMIT:
         return n + 1.0
-    top = n + tab[7]
-    m = n + 1.0
-    while m < top and not _node_flagged(tab, m):
+    n_phi = tab[7]
+    c = np.floor(n)
+    if tab[15]:
+        i0, i1 = _cell_nodes(c, n_phi)
+        f = _cut_above(tab, i0, n - c, False)
+        while f < 1.0 and not c + f > n:   # n - c rounds: the stop must lie above n
+            f = _cut_above(tab, i0, f, False)
+        if f < 1.0:
+            return c + f
+    if not node:
+        return c + 1.0
+    top = c + n_phi
+    m = c + 1.0
+    while m < top:
+        if _node_flagged(tab, m):
+            return m
+        if tab[15]:
+            i0, i1 = _cell_nodes(m, n_phi)
+            f = _cut_above(tab, i0, 0.0, False)
+            if f < 1.0:
+                return m + f
         m += 1.0
     return m
 
 
 @njit(cache=True, error_model="numpy")
-def _seg_down(tab, n):
-    """Last flagged node below global node n, at least n - N (n - 1 beyond 2^52 cells)."""
+def _seg_down(tab, n, node=True):
+    """Last stop below position n (as :func:`_seg_up`, downwards), at least ceil(n) - N
+    (n - 1 beyond 2^52 cells)."""
     if not abs(n) < _CELL_LIMIT:
         return n - 1.0
-    bottom = n - tab[7]
-    m = n - 1.0
-    while m > bottom and not _node_flagged(tab, m):
+    n_phi = tab[7]
+    c = np.ceil(n) - 1.0
+    if tab[15]:
+        i0, i1 = _cell_nodes(c, n_phi)
+        f = _cut_below(tab, i0, n - c, False)
+        while f > 0.0 and not c + f < n:   # the stop must lie below n
+            f = _cut_below(tab, i0, f, False)
+        if f > 0.0:
+            return c + f
+    if not node:
+        return c
+    bottom = c + 1.0 - n_phi
+    m = c
+    while m > bottom:
+        if _node_flagged(tab, m):
+            return m
+        if tab[15]:
+            i0, i1 = _cell_nodes(m - 1.0, n_phi)
+            f = _cut_below(tab, i0, 1.0, False)
+            if f > 0.0:
+                return m - 1.0 + f
         m -= 1.0
     return m
 
 
 @njit(cache=True, error_model="numpy")
-def _seg_start(tab, wk, nd, node, om):
-    """Held segment for cell nd at a step start: [nd, nd + 1] (rk4_kink); rk4_node:
-    from nd to the first flagged node above it when om >= 0, from the last flagged
-    node below nd + 1 to nd + 1 when om < 0 (the scan runs ahead of the motion)."""
+def _seg_start(tab, wk, nd, node, om, th):
+    """Held segment for cell nd at a step start (theta1 = th): [nd, nd + 1] (rk4_kink);
+    rk4_node: from nd to the first flagged node above it when om >= 0, from the last
+    flagged node below nd + 1 to nd + 1 when om < 0 (the scan runs ahead of the motion).
+    A contact-zone cut in cell nd splits it: the segment starts at the last cut at or below
+    theta1 (om >= 0 or rk4_kink), or ends at the first cut at or above it (rk4_node, om < 0)."""
+    lo = nd
+    hi = nd + 1.0
+    if tab[15]:
+        i0, i1 = _cell_nodes(nd, tab[7])
+        f = th * tab[12] - nd
+        fb = _cut_below(tab, i0, f, True)
+        if fb > 0.0:
+            lo = nd + fb
+        fa = _cut_above(tab, i0, f, True)
+        if fa < 1.0:
+            hi = nd + fa
     if node and om < 0.0:
-        wk[17] = nd + 1.0
-        wk[16] = _seg_down(tab, nd + 1.0)
+        wk[17] = hi
+        wk[16] = _seg_down(tab, hi, True)
     else:
-        wk[16] = nd
-        wk[17] = _seg_up(tab, nd) if node else nd + 1.0
+        wk[16] = lo
+        wk[17] = _seg_up(tab, lo, node)
 
 
 @njit(cache=True, error_model="numpy")
@@ -310,12 +363,12 @@ def _seg_cross(tab, wk, up, node):
     if up:
         lo = wk[17]
         wk[16] = lo
-        wk[17] = _seg_up(tab, lo) if node else lo + 1.0
-        return lo
+        wk[17] = _seg_up(tab, lo, node)
+        return np.floor(lo)
     hi = wk[16]
     wk[17] = hi
-    wk[16] = _seg_down(tab, hi) if node else hi - 1.0
-    return hi - 1.0
+    wk[16] = _seg_down(tab, hi, node)
+    return np.ceil(hi) - 1.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -324,7 +377,7 @@ def _pairs_hold(tab, md, th, om, x, v, nd, i0, i1):
     p = tab[8]
     w = (th - nd * tab[9]) * tab[12]
     for j in range(p):
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
         rj = md[j]
         sj = md[p + j]
         for q in range(3):
@@ -362,9 +415,10 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
     while True:
         if node:
             cn = np.floor(th * tab[12])
-            if cn >= wk[16] and cn < wk[17] and cn != nd:
+            if cn + 1.0 > wk[16] and cn < wk[17] and cn != nd:
                 nd = cn
                 i0, i1 = _cell_nodes(nd, n_phi)
+                _zone_sel(tab, md, nd, i0, wk[16], wk[17])
         fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
         if node and nev < KINK_MAX_EVENTS:
             tau = _node_time(th, om, fb, rem, wk[16], wk[17], dphi)
@@ -376,6 +430,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
                     rem = rem - tau
                     nev += 1
                     i0, i1 = _cell_nodes(nd, n_phi)
+                    _zone_sel(tab, md, nd, i0, wk[16], wk[17])
                     _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
                     if not rem > 0.0:
                         break
@@ -385,7 +440,8 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th * tab[12])
             i0, i1 = _cell_nodes(nd, n_phi)
-            _seg_start(tab, wk, nd, node, om)
+            _seg_start(tab, wk, nd, node, om, th)
+            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
         # scan the guards at the trial end: cheap test first (one lookup per pair)
@@ -393,7 +449,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
         if not any_neg:
             w = (ta - nd * dphi) * tab[12]
             for j in range(p):
-                kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
                 rj = md[j]
                 sj = md[p + j]
                 if (_pair_guard(0, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
@@ -436,6 +492,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
         if best_gi < 2:
             nd = _seg_cross(tab, wk, best_gi == 1, node)
             i0, i1 = _cell_nodes(nd, n_phi)
+            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
         else:
             j = (best_gi - 2) // 3
@@ -444,7 +501,7 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
                 md[j] = 1 if q == 0 else -1
                 if model == 0:
                     w = (th - nd * dphi) * tab[12]
-                    kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+                    kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
                     md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
             elif q == 0:
                 md[j] = 0

@@ -12,12 +12,15 @@ tuple ``tab`` (:func:`_tab`): a numba call with an array argument increfs and
 decrefs the array's memory block (atomic operations the refcount pruner cannot
 remove across calls, loops and branches), and the integrators call these
 kernels many times per substep.  ``tab`` = (kp, ep, bp, o0, o1, rows2, wt,
-n_phi, P, dphi, c, model, inv_dphi, fp): pointers of k, e (NT, P, N) and b (P, N),
+n_phi, P, dphi, c, model, inv_dphi, fp, zp, zoned): pointers of k, e (NT, P, N) and b (P, N),
 the offsets of torque rows it and it+1, whether a second row is blended
 (NT > 1), its weight, the node count N, the slot count P, the cell width
 (rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 contact_zone) and
 the reciprocal cell width N/Phi (1/rad), and the pointer of the node kink
-flags (N uint8, :func:`_node_flags`; rk4_node stops only at flagged nodes).
+flags (N uint8, :func:`_node_flags`; rk4_node stops only at flagged nodes), the pointer
+of the contact-zone cuts (2, P, N) and whether they are read (:func:`_with_zones`,
+docs/model.md "Contact-zone edges"; off: plain linear interpolation, the arithmetic of
+gearkernel.c, which has no cuts yet).
 """
 from __future__ import annotations
 
@@ -145,10 +148,20 @@ def _table_pointers(k, e, b):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp):
-    """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2)."""
+    """The ``tab`` tuple of :func:`_kvals` for torque row it (and it+1 if rows2), plain
+    linear interpolation (no contact-zone cuts: the last two entries are a placeholder
+    pointer and False; :func:`_with_zones` sets them)."""
     o0 = it * p * n_phi
     o1 = (it + 1) * p * n_phi if rows2 else o0
-    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp)
+    return (kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp, kp, False)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _with_zones(tab, zp):
+    """``tab`` with the sub-cell lookup on: zp is the data pointer of the (2, P, N) cuts of
+    gearfmu.tables.zones.zone_cuts (docs/model.md "Contact-zone edges")."""
+    return (tab[0], tab[1], tab[2], tab[3], tab[4], tab[5], tab[6], tab[7], tab[8], tab[9], tab[10], tab[11],
+            tab[12], tab[13], zp, True)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -216,14 +229,80 @@ def _row_values(kp, ep, o, i0, i1, w, inv_dphi):
     return kv, ev, es
 
 
+@njit(cache=True, error_model="numpy")
+def _edge_line(ap, o, i0, i1, w, ws, lo, hi, n_phi, inv_dphi):
+    """Value and phi-slope at cell weight w of the row at offset o of pointer ap in a cell
+    holding a contact-zone edge (cuts lo, hi; docs/model.md "Contact-zone edges"), on the
+    side of the cut that weight ws selects: ws < lo the line of the cell to the left
+    extended, ws >= hi the line of the cell to the right extended back, else the plain
+    interpolation (third result False: outside the zone)."""
+    if ws < lo:
+        im = n_phi - 1 if i0 == 0 else i0 - 1
+        a = ap[o + im]
+        b = ap[o + i0]
+        return b + w * (b - a), (b - a) * inv_dphi, True
+    if ws >= hi:
+        i2 = 0 if i1 == n_phi - 1 else i1 + 1
+        a = ap[o + i1]
+        b = ap[o + i2]
+        return a + (w - 1.0) * (b - a), (b - a) * inv_dphi, True
+    a = ap[o + i0]
+    b = ap[o + i1]
+    return a + w * (b - a), (b - a) * inv_dphi, False
+
+
+@njit(cache=True, error_model="numpy")
+def _kvals_edge(tab, j, i0, i1, w, ws, lo, hi):
+    """:func:`_kvals` in a cell that holds a contact-zone edge, on the side of the cut that
+    ws selects: k = 0 outside the zone, the in-zone side's extended line inside (k, e, b
+    alike; e and b outside as plain)."""
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp, zp, zoned = tab
+    r = j * n_phi
+    kv, ks, inz = _edge_line(kp, o0 + r, i0, i1, w, ws, lo, hi, n_phi, inv_dphi)
+    ev, es, inz = _edge_line(ep, o0 + r, i0, i1, w, ws, lo, hi, n_phi, inv_dphi)
+    if rows2:
+        kv2, ks2, inz = _edge_line(kp, o1 + r, i0, i1, w, ws, lo, hi, n_phi, inv_dphi)
+        ev2, es2, inz = _edge_line(ep, o1 + r, i0, i1, w, ws, lo, hi, n_phi, inv_dphi)
+        kv = kv + wt * (kv2 - kv)
+        ev = ev + wt * (ev2 - ev)
+        es = es + wt * (es2 - es)
+    bv, bs, inz = _edge_line(bp, r, i0, i1, w, ws, lo, hi, n_phi, inv_dphi)
+    if not inz:
+        kv = 0.0
+    elif kv < 0.0:   # an extended line never gives a negative stiffness
+        kv = 0.0
+    return kv, ev, es, bv
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _kvals(tab, j, i0, i1, w):
     """k_j (N/m), e_j (m), de_j/dphi (m/rad), b_j (m) of slot j at cell nodes
     (i0, i1) and weight w (docs/model.md 'Table lookup'): phi interpolation in
     torque row it, and when rows2 (NT > 1) also in row it+1, then linear
-    interpolation between the two rows with weight wt."""
-    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp = tab
+    interpolation between the two rows with weight wt.  With the contact-zone cuts
+    on (:func:`_with_zones`) a cell that holds a zone edge goes to :func:`_kvals_edge`."""
+    return _kvals_sel(tab, j, i0, i1, w, -1)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _kvals_sel(tab, j, i0, i1, w, sel):
+    """:func:`_kvals` with the side of a contact-zone cut held (the rk4_kink mode, see
+    :func:`_zone_sel`): sel -1 the side of w, 0 the in-zone part left of the cut, 1 the
+    part outside the zone, 2 the in-zone part right of the cut.  A cell without an
+    edge ignores sel."""
+    kp, ep, bp, o0, o1, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp, zp, zoned = tab
     r = j * n_phi
+    if zoned:
+        lo = zp[r + i0]
+        if lo >= 0.0:
+            ws = w
+            if sel == 0:
+                ws = -1.0
+            elif sel == 1:
+                ws = lo
+            elif sel == 2:
+                ws = 2.0
+            return _kvals_edge(tab, j, i0, i1, w, ws, lo, zp[p * n_phi + r + i0])
     kv, ev, es = _row_values(kp, ep, o0 + r, i0, i1, w, inv_dphi)
     if rows2:
         kv2, ev2, es2 = _row_values(kp, ep, o1 + r, i0, i1, w, inv_dphi)
@@ -234,6 +313,75 @@ def _kvals(tab, j, i0, i1, w):
     bb = bp[r + i1]
     bv = ba + w * (bb - ba)
     return kv, ev, es, bv
+
+
+@njit(cache=True, error_model="numpy")
+def _zone_sel(tab, md, nd, i0, lo, hi):
+    """Hold the side of every pair's contact-zone cut for cell nd inside the held segment
+    [lo, hi) (global node units): md[3P + j] = 0 left in-zone part, 1 outside, 2 right
+    in-zone part, by the segment's midpoint in the cell; -1 in a cell without an edge
+    (and always without the cuts).  gearkernel.c zone_sel."""
+    p = tab[8]
+    n_phi = tab[7]
+    zp = tab[14]
+    a = lo if lo > nd else nd
+    b = hi if hi < nd + 1.0 else nd + 1.0
+    wm = 0.5 * (a + b) - nd
+    for j in range(p):
+        sel = -1
+        if tab[15]:
+            r = j * n_phi + i0
+            clo = zp[r]
+            if clo >= 0.0:
+                if wm < clo:
+                    sel = 0
+                elif wm >= zp[p * n_phi + r]:
+                    sel = 2
+                else:
+                    sel = 1
+        md[3 * p + j] = sel
+
+
+@njit(cache=True, error_model="numpy")
+def _cut_above(tab, i0, f, incl):
+    """Smallest cut fraction of cell i0 over all slots above f (at or above with incl)
+    and below 1 (2.0: none; always none without the cuts)."""
+    best = 2.0
+    if tab[15]:
+        p = tab[8]
+        n_phi = tab[7]
+        zp = tab[14]
+        for j in range(p):
+            r = j * n_phi + i0
+            clo = zp[r]
+            if clo >= 0.0:
+                chi = zp[p * n_phi + r]
+                if (clo > f or (incl and clo == f)) and clo < 1.0 and clo < best:
+                    best = clo
+                if (chi > f or (incl and chi == f)) and chi < 1.0 and chi < best:
+                    best = chi
+    return best
+
+
+@njit(cache=True, error_model="numpy")
+def _cut_below(tab, i0, f, incl):
+    """Largest cut fraction of cell i0 over all slots below f (at or below with incl)
+    and above 0 (-1.0: none; always none without the cuts)."""
+    best = -1.0
+    if tab[15]:
+        p = tab[8]
+        n_phi = tab[7]
+        zp = tab[14]
+        for j in range(p):
+            r = j * n_phi + i0
+            clo = zp[r]
+            if clo >= 0.0:
+                chi = zp[p * n_phi + r]
+                if (clo < f or (incl and clo == f)) and clo > 0.0 and clo > best:
+                    best = clo
+                if (chi < f or (incl and chi == f)) and chi > 0.0 and chi > best:
+                    best = chi
+    return best
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -380,7 +528,7 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     w = (th - nd * dphi) * tab[12]
     f = 0.0
     for j in range(p):
-        kv, ev, es, bv = _kvals(tab, j, i0, i1, w)
+        kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
         f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
     if sdof:
         return om, 0.0, v, (fm - f) / me
@@ -414,8 +562,26 @@ def _equilibrium(theta1, t1, rb1, k, e, b, torque, inv_dphi):
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
     no_flags = np.ones(1, dtype=np.uint8)   # the flags are not read here
     tab = _tab(kp, ep, bp, it, k.shape[0] > 1, wt, n_phi, p, np.nan, 0.0, 0, inv_dphi, _ptr(no_flags))
-    nd, i0, i1, w = _phi_cell(theta1, inv_dphi, n_phi, _CELL_NONE, 0)
-    fm = t1 / rb1
+    return _equilibrium_tab(tab, theta1, t1 / rb1)
+
+
+@njit(cache=True, error_model="numpy")
+def _equilibrium_zoned(theta1, t1, rb1, k, e, b, torque, inv_dphi, cuts):
+    """:func:`_equilibrium` with the sub-cell lookup at the contact-zone edges (``cuts``: the
+    C-contiguous (2, P, N) array of gearfmu.tables.zones.zone_cuts)."""
+    it, wt = _torque_index(t1, torque)
+    kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
+    no_flags = np.ones(1, dtype=np.uint8)
+    tab = _tab(kp, ep, bp, it, k.shape[0] > 1, wt, n_phi, p, np.nan, 0.0, 0, inv_dphi, _ptr(no_flags))
+    return _equilibrium_tab(_with_zones(tab, _ptr(cuts)), theta1, t1 / rb1)
+
+
+@njit(cache=True, error_model="numpy")
+def _equilibrium_tab(tab, theta1, fm):
+    """The bisection of :func:`_equilibrium` on the table tuple ``tab`` under F_m = fm (N)."""
+    n_phi = tab[7]
+    p = tab[8]
+    nd, i0, i1, w = _phi_cell(theta1, tab[12], n_phi, _CELL_NONE, 0)
     kk = np.empty(p)
     ee = np.empty(p)
     bb = np.empty(p)

@@ -40,10 +40,11 @@ import numpy as np
 
 from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS, current_spelling
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
+from ..tables.zones import zone_cuts
 from ..common.checks import finite_number
-from .driver import _run, _warmup
+from .driver import NO_CUTS, _run, _warmup
 from .integrators import KINK_MAX_SLOTS
-from .model_rhs import _equilibrium
+from .model_rhs import _equilibrium, _equilibrium_zoned
 
 __all__ = [
     "NativeInputError",
@@ -272,7 +273,7 @@ def _arrays(tables: MeshTables):
     phi_period = float(tables.phi_period_rad)
     dphi = phi_period / tables.n_phi
     inv_dphi = tables.n_phi / phi_period  # docs/model.md 'Table lookup': N/Phi, one rounding
-    return k, e, b, tq, inv_dphi, dphi
+    return k, e, b, tq, inv_dphi, dphi, zone_cuts(tables)  # cuts: docs/model.md "Contact-zone edges"
 
 
 def _damping(tables: MeshTables, damping_ratio) -> float:
@@ -289,10 +290,8 @@ def equilibrium_dte_m(tables: MeshTables, pinion_torque_Nm: float, pinion_angle_
     """Quasi-static equilibrium x (m) at the pinion angle under F_m = T1/Rb1, by the
     200-step bisection of docs/model.md 'Initial state'."""
     t = _check_tables(tables)
-    k, e, b, tq, inv_dphi, dphi = _arrays(t)
-    x = _equilibrium(_finite("pinion_angle_rad", pinion_angle_rad),
-                     _finite("pinion_torque_Nm", pinion_torque_Nm),
-                     float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
+    x = _equilibrium_x(t, _arrays(t), _finite("pinion_angle_rad", pinion_angle_rad),
+                       _finite("pinion_torque_Nm", pinion_torque_Nm))
     if not math.isfinite(x):
         raise NativeInputError(
             f"pinion_angle_rad: no tooth pair in the contact zone (all k = 0) at {pinion_angle_rad!r}; "
@@ -380,11 +379,18 @@ def run_arguments(tables: MeshTables, *, speed_name: str, speed_rad_s, stop_time
     return RunArguments(stop, H, n_steps, zeta, damping_model, w, t1s, t2s, th0, x0, v0)
 
 
+def _equilibrium_x(t, arrays, theta1, t1):
+    """docs/model.md 'Initial state' on the tables' ``arrays`` (:func:`_arrays`)."""
+    k, e, b, tq, inv_dphi, dphi, cuts = arrays
+    if cuts is None:
+        return _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
+    return _equilibrium_zoned(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi, cuts)
+
+
 def _initial_x(t, arrays, theta1, t1, dte_start_m):
     if dte_start_m is not None:
         return dte_start_m
-    k, e, b, tq, inv_dphi, dphi = arrays
-    x0 = _equilibrium(theta1, t1, float(t.base_radius_pinion_m), k, e, b, tq, inv_dphi)
+    x0 = _equilibrium_x(t, arrays, theta1, t1)
     if not math.isfinite(x0):
         raise NativeInputError(
             f"pinion_angle_start_rad: no tooth pair in the contact zone (all k = 0) at {theta1!r}; "
@@ -425,7 +431,7 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
     (:func:`_arrays`) from the initial state (theta1, omega1, x, v) =
     (th0, w0, x0, v0) and wrap its arrays in a SimResult."""
     n = t1s.shape[0]
-    k, e, b, tq, inv_dphi, dphi = arrays
+    k, e, b, tq, inv_dphi, dphi, cuts = arrays
     p = k.shape[1]
     out = np.empty(n * (6 + p))  # the output rows in one NaN block (rows left unwritten stay NaN)
     out.fill(np.nan)
@@ -438,7 +444,8 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
     t_start = _time.perf_counter()
     done = _run(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
                 float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me,
-                k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events)
+                k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events,
+                NO_CUTS if cuts is None else cuts, cuts is not None)
     wall = _time.perf_counter() - t_start
     time_s = np.arange(n) * H
     return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,

@@ -102,18 +102,77 @@ class _Rows:
         self.B = np.asarray(tables.backlash_half_m, dtype=float).copy()
         self.P, self.N = self.K.shape
         self.dphi = float(tables.phi_period_rad) / self.N
-        self.kinks = kink_nodes(self.K, self.E, self.B)
+        self.zones = _zones(tables)
+        kinks = kink_nodes(self.K, self.E, self.B)
+        if self.zones is not None:
+            kinks = [float(i) for i in kinks]  # the contact-zone edges are piece ends too (docs/model.md)
+            span = self.zones[1]
+            for starts in self.zones[0]:
+                for s0 in starts:
+                    for q in (s0, math.fmod(s0 + span, self.N)):
+                        near = round(q)
+                        kinks.append(float(near) % self.N if abs(q - near) < 1e-9 else q)
+            kinks = sorted(set(kinks))
+        self.kinks = kinks
         self.key = (float(self.K.sum()), float(self.E.sum()))
 
+    def coeffs(self, j: int, u: float):
+        """The straight line of slot j's k, e, b at position u (node units, unwrapped) by the
+        rule of docs/model.md "Contact-zone edges": ((kA, kB), (eA, eB), (bA, bB), base, inz),
+        value(u') = A + (u' - base)(B - A); inz False: outside the contact zone, k = 0.  Without
+        zone edges the line of the cell holding u."""
+        N = self.N
+        c = math.floor(u)
+        base = c
+        inz = True
+        if self.zones is not None:
+            starts, span = self.zones
+            r = u - N * math.floor(u / N)
+            inz = False
+            for s0 in starts[j]:
+                d = (r - s0) % N
+                if d < span:
+                    inz = True
+                    start = u - d
+                    end = start + span
+                    if c < end <= c + 1:      # the zone ends in this cell: the line of the cell before
+                        base = c - 1
+                    elif c < start < c + 1:   # it starts in this cell: the line of the cell after
+                        base = c + 1
+                    break
+        i0 = int(base - N * math.floor(base / N))
+        i1 = 0 if i0 + 1 == N else i0 + 1
+        return ((self.K[j, i0], self.K[j, i1]), (self.E[j, i0], self.E[j, i1]), (self.B[j, i0], self.B[j, i1]),
+                base, inz)
+
+    def values_at(self, u: float):
+        """k, e, de/dphi (per node unit), b of every slot at position u (node units)."""
+        out = np.zeros((4, self.P))
+        for j in range(self.P):
+            (ka, kb), (ea, eb), (ba, bb), base, inz = self.coeffs(j, u)
+            w = u - base
+            k = ka + w * (kb - ka)
+            out[0, j] = max(k, 0.0) if inz else 0.0
+            out[1, j] = ea + w * (eb - ea)
+            out[2, j] = eb - ea
+            out[3, j] = ba + w * (bb - ba)
+        return out
+
     def piece_of(self, theta: float, omega: float):
-        """(m_lo, m_hi) unwrapped kink nodes bracketing theta (None if no kinks)."""
+        """(m_lo, m_hi) unwrapped kink nodes (and zone edges) bracketing theta (None if none)."""
         ks = self.kinks
         if len(ks) == 0:
             return None
         N = self.N
         u = theta / self.dphi
         m = math.floor(u)
-        if abs(u - round(u)) < 1e-9:  # on a node: take the side we move to
+        if self.zones is not None:  # pieces end at nodes and zone edges (floats)
+            m = float(round(u)) if abs(u - round(u)) < 1e-9 else u
+            q0, r0 = divmod(m, N)
+            i = bisect.bisect_right(ks, r0 + 1e-9) - 1
+            if i >= 0 and abs(ks[i] - r0) <= 1e-9:  # on a piece end: take the side we move to
+                m = q0 * N + ks[i] if omega >= 0 else q0 * N + ks[i] - 1e-6
+        elif abs(u - round(u)) < 1e-9:  # on a node: take the side we move to
             m = int(round(u)) if omega >= 0 else int(round(u)) - 1
         q, r = divmod(m, N)
         i = bisect.bisect_right(ks, r) - 1
@@ -126,14 +185,33 @@ class _Rows:
     def next_kink(self, m: int) -> int:
         ks, N = self.kinks, self.N
         q, r = divmod(m, N)
-        i = bisect.bisect_right(ks, r)
+        i = bisect.bisect_right(ks, r + 1e-9) if self.zones is not None else bisect.bisect_right(ks, r)
         return q * N + ks[i] if i < len(ks) else (q + 1) * N + ks[0]
 
     def prev_kink(self, m: int) -> int:
         ks, N = self.kinks, self.N
         q, r = divmod(m, N)
-        i = bisect.bisect_left(ks, r) - 1
+        i = (bisect.bisect_left(ks, r - 1e-9) if self.zones is not None else bisect.bisect_left(ks, r)) - 1
         return q * N + ks[i] if i >= 0 else (q - 1) * N + ks[-1]
+
+
+def _zones(tables: MeshTables):
+    """(starts, span): per slot the meshing-in positions of its pairs in node units (in
+    [0, N)) and the zone length in node units, from the tables' engagement angles (pair n,
+    slot n % P, is in its zone for n T + in <= phi < n T + out); None without the angles or
+    for a zone shorter than 3 cells (the plain lookup, docs/model.md "Contact-zone edges")."""
+    if tables.engagement_in_rad is None:
+        return None
+    N = tables.n_phi
+    inv = N / float(tables.phi_period_rad)
+    span = (float(tables.engagement_out_rad) - float(tables.engagement_in_rad)) * inv
+    if span < 3.0:
+        return None
+    n_mesh = int(round(float(tables.phi_period_rad) / float(tables.mesh_period_rad)))
+    starts = [[] for _ in range(tables.slots)]
+    for m in range(n_mesh):
+        starts[m % tables.slots].append(math.fmod(m * (N / n_mesh) + float(tables.engagement_in_rad) * inv, N) % N)
+    return starts, span
 
 
 def kink_nodes(K, E, B) -> list:
@@ -216,6 +294,13 @@ def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
     F = np.zeros(rows.P)
     st = np.zeros(rows.P, dtype=int)
     kk = np.zeros(rows.P)
+    if rows.zones is not None:  # docs/model.md "Contact-zone edges"
+        vals = rows.values_at(s)
+        for j in range(rows.P):
+            k, e, de, b = vals[0, j], vals[1, j], vals[2, j] / dphi * omega, vals[3, j]
+            f, s_ = _pair_force(k, x - e, b, c * (v - de), model)
+            F[j], st[j], kk[j] = f, s_, k
+        return F, st, kk
     for j in range(rows.P):
         k = rows.K[j, i0] + w * (rows.K[j, i1] - rows.K[j, i0])
         e = rows.E[j, i0] + w * (rows.E[j, i1] - rows.E[j, i0])
@@ -245,7 +330,17 @@ class _Segment:
         self.off = theta_base - theta_a  # theta - theta_a = off + theta_rel
         ia1 = (ia + 1) % rows.N
         pairs = []
-        for j in range(rows.P):
+        if piece is not None and rows.zones is not None:
+            ia = ia1 = None  # the lines of docs/model.md "Contact-zone edges" (_Rows.coeffs)
+            umid = 0.5 * (piece[0] + piece[1])
+            for j in range(rows.P):
+                (ka, kb), (ea, eb), (ba, bb), base, inz = rows.coeffs(j, umid)
+                w0, w1 = piece[0] - base, piece[1] - base
+                if not inz or max(ka + w0 * (kb - ka), ka + w1 * (kb - ka)) <= 0.0:
+                    continue
+                pairs.append((j, ka + w0 * (kb - ka), (kb - ka) / rows.dphi, ea + w0 * (eb - ea),
+                              (eb - ea) / rows.dphi, ba + w0 * (bb - ba), (bb - ba) / rows.dphi))
+        for j in range(rows.P if ia is not None else 0):
             k0, e0, b0 = rows.K[j, ia], rows.E[j, ia], rows.B[j, ia]
             if slope_ok:
                 ks = (rows.K[j, ia1] - k0) / rows.dphi
@@ -471,7 +566,11 @@ def simulate_reference(
         w = s - i0
         i1 = (i0 + 1) % r0.N
         lerp = lambda A: A[:, i0] + w * (A[:, i1] - A[:, i0])
-        x0 = equilibrium_dte_exact_m(lerp(r0.K), lerp(r0.E), lerp(r0.B), t1s[0] / rb1)
+        if r0.zones is None:
+            x0 = equilibrium_dte_exact_m(lerp(r0.K), lerp(r0.E), lerp(r0.B), t1s[0] / rb1)
+        else:  # docs/model.md "Contact-zone edges"
+            vals = r0.values_at(s)
+            x0 = equilibrium_dte_exact_m(vals[0], vals[1], vals[3], t1s[0] / rb1)
         if not math.isfinite(x0):
             raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
     else:

@@ -50,6 +50,7 @@ from ..common.vocabulary import DAMPING_MODELS, current_spelling
 from .harmonics import DEFAULT_BANDWIDTH_ORDERS, mesh_harmonics
 from ..tables.mesh_tables import MeshTables
 from .native import choose_max_step_s, simulate_sdof
+from .subcell import table_values
 
 __all__ = [
     "SweepInputError",
@@ -254,8 +255,12 @@ def pair_values_at(tables: MeshTables, theta1_rad, pinion_torque_Nm: float):
     """k_j (N/m), e_j (m), b_j (m) of every slot at pinion angles theta1 (arrays (n, P)).
 
     The table lookup of docs/model.md (periodic linear interpolation in phi,
-    linear in clamped torque) in vectorised numpy, for post-processing.
+    linear in clamped torque) in vectorised numpy, for post-processing; tables with
+    engagement angles through the kernels' own lookup (docs/model.md "Contact-zone edges").
     """
+    if tables.engagement_in_rad is not None and not tables.has_temperature_axis:
+        k, e, _, b = table_values(tables, np.ravel(np.asarray(theta1_rad, dtype=float)), pinion_torque_Nm)
+        return k, e, b
     th = np.asarray(theta1_rad, dtype=float)
     Phi = tables.phi_period_rad
     N = tables.n_phi

@@ -41,7 +41,8 @@ FMU_LAYER_HEADER = HERE / "kernel" / "gkfmu.h"
 FMU_LAYER_ABI_VERSION = 1  # gkfmu.h GKF_ABI_VERSION
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 4  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check, 4: node kink flags)
+KERNEL_ABI_VERSION = 5  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check, 4: node kink flags,
+#                          5: contact-zone cuts from the tables' engagement angles)
 #: gearkernel.h GK_KINK_MAX_SLOTS
 KINK_MAX_SLOTS = 32
 #: the FMI 2.0 standard headers the C layers are compiled against

@@ -259,6 +259,10 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
     for name in ("phi_period_rad", "base_radius_pinion_m", "base_radius_gear_m", "inertia_pinion_kgm2",
                  "inertia_gear_kgm2", "k_mean_N_per_m"):
         lines.append(f"{name}={_hexf(sc[name])}")
+    if meta.get("engagement") is not None:  # contact-zone edges (docs/model.md "Contact-zone edges")
+        lines.append(f"mesh_period_rad={_hexf(sc['mesh_period_rad'])}")
+        lines.append(f"engagement_in_rad={_hexf(meta['engagement']['in_rad'])}")
+        lines.append(f"engagement_out_rad={_hexf(meta['engagement']['out_rad'])}")
     if envelope is not None:  # docs/fmu.md "Verified envelope"
         lines.append(f"envelope.kind={int(envelope['kind'])}")
         for q in ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"):

@@ -25,11 +25,14 @@ A ``.gtab`` file is an uncompressed zip archive holding ``tables.json``
 (format name, version, axes, scalars, provenance, one entry per array with
 dtype, shape, byte offset and SHA-256) and ``tables.bin`` (the arrays as
 little-endian float64, C order, concatenated).  The same two files sit
-unzipped in an FMU's ``resources/``.  No pickle anywhere.
+unzipped in an FMU's ``resources/``.  No pickle anywhere.  An optional key
+``engagement`` holds the exact meshing-in and meshing-out angles (the sub-cell lookup at
+the contact-zone edges, :mod:`gearfmu.tables.zones`); older readers ignore it.
 """
 from __future__ import annotations
 
 import hashlib
+import math
 import io
 import json
 import zipfile
@@ -124,6 +127,15 @@ class MeshTables:
     tables of docs/model.md "Temperature axis".  ``temperature_reference_C``:
     the standard temperature t0 of the geometry (degC; sets the FMU input's
     start value, :attr:`default_temperature_C`).
+
+    ``engagement_in_rad``, ``engagement_out_rad`` (optional, both or neither): the exact
+    meshing-in and meshing-out pinion angles of every tooth pair, measured from the start
+    of its mesh (the pair that starts mesh n is in its contact zone for
+    ``n*mesh_period_rad + in <= phi < n*mesh_period_rad + out``, in slot ``n % P``).
+    With them the sub-cell lookup (docs/model.md "Contact-zone edges",
+    :mod:`gearfmu.tables.zones`) puts the stiffness step exactly at these angles instead
+    of a linear ramp over the table cell that holds it.  None: unknown (imported tables,
+    files written before the field existed), the lookup is plain linear interpolation.
     """
 
     torque_Nm: np.ndarray
@@ -145,6 +157,8 @@ class MeshTables:
     provenance: Dict[str, object] = field(default_factory=dict)
     temperature_C: Optional[np.ndarray] = None
     temperature_reference_C: Optional[float] = None
+    engagement_in_rad: Optional[float] = None
+    engagement_out_rad: Optional[float] = None
 
     # ------------------------------------------------------------------ shape
     @property
@@ -225,6 +239,7 @@ class MeshTables:
             **{n: getattr(self, n) for n in SCALAR_FIELDS},
             e_comprehensive_m=blend(self.e_comprehensive_m), static_te_m=blend(self.static_te_m),
             provenance=dict(self.provenance, at_bulk_temperature_C=float(temperature_C)),
+            engagement_in_rad=self.engagement_in_rad, engagement_out_rad=self.engagement_out_rad,
         )
 
     @property
@@ -309,6 +324,10 @@ class MeshTables:
         nmesh = self.phi_period_rad / self.mesh_period_rad
         if abs(nmesh - round(nmesh)) > 1e-9 * max(1.0, nmesh):
             raise TableError(f"phi_period_rad: must be a whole number of mesh periods, got {nmesh:.6g}")
+        if (self.engagement_in_rad is None) != (self.engagement_out_rad is None):
+            raise TableError("engagement_in_rad, engagement_out_rad: give both or neither")
+        if self.engagement_in_rad is not None:
+            check_engagement(self)
         return self
 
     # ------------------------------------------------------------ transforms
@@ -371,6 +390,9 @@ class MeshTables:
             "bin_sha256": hashlib.sha256(binary).hexdigest(),
             "provenance": self.provenance,
         }
+        if self.engagement_in_rad is not None:  # optional key, older readers ignore it (docs/tables.md)
+            meta["engagement"] = {"in_rad": float(self.engagement_in_rad), "out_rad": float(self.engagement_out_rad),
+                                  "unit": "rad"}
         if self.temperature_C is not None:  # version 2: operating axes (docs/tables.md)
             meta["version"] = FORMAT_VERSION_AXES
             meta["n_temperature"] = self.n_temperature
@@ -434,6 +456,13 @@ class MeshTables:
         kw = {n: scalars[n] for n in SCALAR_FIELDS}
         kw["teeth_pinion"] = int(kw["teeth_pinion"])
         kw["teeth_gear"] = int(kw["teeth_gear"])
+        eng = meta.get("engagement")
+        if eng is not None:
+            try:
+                extra["engagement_in_rad"] = float(eng["in_rad"])
+                extra["engagement_out_rad"] = float(eng["out_rad"])
+            except (TypeError, KeyError, ValueError):
+                raise TableError(f"{source}/tables.json: 'engagement' needs numbers 'in_rad' and 'out_rad'") from None
         return cls(**arrays, **kw, **extra, provenance=meta.get("provenance", {})).validate()
 
     def save(self, path) -> Path:
@@ -456,6 +485,65 @@ class MeshTables:
         (d / "tables.bin").write_bytes(binary)
         (d / "tables.json").write_bytes(meta)
         return d
+
+
+# ------------------------------------------------ contact-zone edges (docs/tables.md)
+def _mesh_count(t: "MeshTables") -> int:
+    return int(round(t.phi_period_rad / t.mesh_period_rad))
+
+
+def zone_edges_nodes(t: "MeshTables") -> np.ndarray:
+    """(P, Z, 2) meshing-in and meshing-out positions of every pair in every slot, in node
+    units s = phi/dphi (s in [0, n_phi), the grid's node j at s = j); Z = mesh periods / P."""
+    n_mesh = _mesh_count(t)
+    p, n = t.slots, t.n_phi
+    ppm = n / n_mesh                       # nodes per mesh period (an integer for every table built here)
+    inv_dphi = n / t.phi_period_rad        # the kernels' N/Phi
+    a_in = float(t.engagement_in_rad) * inv_dphi
+    a_out = float(t.engagement_out_rad) * inv_dphi
+    z = n_mesh // p
+    out = np.empty((p, z, 2))
+    for m in range(n_mesh):
+        start = m * ppm
+        out[m % p, m // p] = (np.fmod(start + a_in, n) % n, np.fmod(start + a_out, n) % n)
+    return out
+
+
+def check_engagement(t: "MeshTables") -> None:
+    """TableError naming the field unless the engagement angles are finite, the zone is
+    shorter than P mesh periods (pairs of one slot do not overlap) and every table node
+    strictly outside the zones of its slot has k = 0 in every operating row."""
+    a_in, a_out = t.engagement_in_rad, t.engagement_out_rad
+    for name, v in (("engagement_in_rad", a_in), ("engagement_out_rad", a_out)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v):
+            raise TableError(f"{name}: must be a finite number (rad), got {v!r}")
+    span = float(a_out) - float(a_in)
+    if not span > 0.0:
+        raise TableError(f"engagement_out_rad: must exceed engagement_in_rad ({a_in!r}), got {a_out!r}")
+    if span > t.slots * t.mesh_period_rad * (1.0 + 1e-12):
+        raise TableError(f"engagement_out_rad: the zone ({span:.6g} rad) is longer than P = {t.slots} mesh "
+                         f"periods ({t.slots * t.mesh_period_rad:.6g} rad): pairs of one slot would overlap")
+    inside = _inside_closed(t)
+    k = t.k_N_per_m.reshape(-1, t.slots, t.n_phi)
+    bad = np.any(k != 0.0, axis=0) & ~inside
+    if np.any(bad):
+        j, i = np.argwhere(bad)[0]
+        raise TableError(f"k_N_per_m: slot {j} has k != 0 at node {i} (phi = {i * t.dphi_rad:.9g} rad), outside "
+                         f"its contact zone [engagement_in_rad, engagement_out_rad] = [{a_in!r}, {a_out!r}] rad")
+
+
+def _inside_closed(t: "MeshTables") -> np.ndarray:
+    """(P, n_phi) bool: node j lies in a closed zone [in, out] of its slot (periodic)."""
+    n = t.n_phi
+    nodes = np.arange(n, dtype=float)
+    inside = np.zeros((t.slots, n), dtype=bool)
+    for j, zones in enumerate(zone_edges_nodes(t)):
+        for s_in, s_out in zones:
+            if s_in <= s_out:
+                inside[j] |= (nodes >= s_in) & (nodes <= s_out)
+            else:  # the zone wraps past the period end
+                inside[j] |= (nodes >= s_in) | (nodes <= s_out)
+    return inside
 
 
 def stack_temperatures(slices, temperature_C, temperature_reference_C: Optional[float] = None) -> MeshTables:
@@ -488,6 +576,7 @@ def stack_temperatures(slices, temperature_C, temperature_reference_C: Optional[
         e_comprehensive_m=stack("e_comprehensive_m"), static_te_m=stack("static_te_m"),
         provenance=dict(first.provenance), temperature_C=ax,
         temperature_reference_C=None if temperature_reference_C is None else float(temperature_reference_C),
+        engagement_in_rad=first.engagement_in_rad, engagement_out_rad=first.engagement_out_rad,
     ).validate()
 
 

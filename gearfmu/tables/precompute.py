@@ -23,6 +23,7 @@ from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, 
 from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
 from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
 from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
+from .zones import mean_total_stiffness_N_per_m
 from ..common.progress import progress_bar
 from ..contact.models import get_contact_model
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
@@ -161,6 +162,10 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
     torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
     x nominal (docs/ehl_mesh.md).
+
+    The tables carry the exact engagement of every pair, ``engagement_in_rad`` = 0 (point A)
+    and ``engagement_out_rad`` = eps x mesh period, so that both kernels put the stiffness
+    steps at meshing-in and meshing-out exactly there (docs/model.md "Contact-zone edges").
     """
     if int(points_per_mesh) != points_per_mesh or points_per_mesh < 4:
         raise PrecomputeInputError(f"points_per_mesh: must be an integer >= 4, got {points_per_mesh!r}")
@@ -272,7 +277,13 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         e_comprehensive_m=e_comp,
         static_te_m=np.ascontiguousarray(np.stack(te_rows)),
         provenance=prov,
+        # exact meshing-in / meshing-out angles of every pair (phi = 0 is point A; the pair
+        # leaves eps mesh periods later): the sub-cell lookup's zone edges (docs/tables.md)
+        engagement_in_rad=0.0,
+        engagement_out_rad=eps * float(geom.mesh_period_rad),
     )
+    # the mean TVMS of the lookup (exact at the contact-zone edges, docs/tables.md): the damping
+    tables = replace(tables, k_mean_N_per_m=mean_total_stiffness_N_per_m(tables, k_nominal))
     if thermal is not None:
         # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
         tables = _apply_thermal(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,

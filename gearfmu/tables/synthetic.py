@@ -33,6 +33,7 @@ import numpy as np
 
 from ..common.checks import finite_number
 from .mesh_tables import MeshTables, TableError
+from .zones import mean_total_stiffness_N_per_m
 
 __all__ = [
     "SyntheticTableError",
@@ -108,6 +109,8 @@ def tables_from_arrays(
     e_comprehensive_m=None,
     static_te_m=None,
     provenance: Optional[dict] = None,
+    engagement_in_rad: Optional[float] = None,
+    engagement_out_rad: Optional[float] = None,
 ) -> MeshTables:
     """Build validated :class:`MeshTables` from raw per-slot arrays.
 
@@ -127,8 +130,12 @@ def tables_from_arrays(
         (for a rectangular wave this is the contact ratio exactly).
     k_mean_N_per_m : mean mesh stiffness k_m of seed 003 eq 7 (N/m); default =
         mean of the total stiffness over the phi grid and all torque rows (the
-        grid mean equals the mean of the periodic linear interpolant).
+        grid mean equals the mean of the periodic linear interpolant; with engagement
+        angles the mean of the sub-cell lookup, gearfmu.tables.zones.mean_total_stiffness_N_per_m).
     e_comprehensive_m : (NT, n_phi) (m); default :func:`comprehensive_error_m`.
+    engagement_in_rad, engagement_out_rad : exact meshing-in and meshing-out pinion angles
+        (rad) of every pair from the start of its mesh (both or neither; default none: the
+        lookup interpolates plainly across the zone edges, docs/tables.md "Contact-zone edges").
 
     Raises :class:`SyntheticTableError` / :class:`TableError` (ValueError) naming the field.
     """
@@ -183,6 +190,7 @@ def tables_from_arrays(
     if contact_ratio is None:
         contact_ratio = float((k > 0).sum(axis=1).mean())
     km = float(ktot.mean()) if k_mean_N_per_m is None else _positive("k_mean_N_per_m", k_mean_N_per_m)
+    exact_mean = k_mean_N_per_m is None and engagement_in_rad is not None
     if e_comprehensive_m is None:
         ec = comprehensive_error_m(k, e)
     else:
@@ -204,7 +212,12 @@ def tables_from_arrays(
         e_comprehensive_m=np.ascontiguousarray(ec),
         static_te_m=st,
         provenance=dict(provenance or {"source": "gearfmu.tables.synthetic.tables_from_arrays"}),
+        engagement_in_rad=None if engagement_in_rad is None else float(engagement_in_rad),
+        engagement_out_rad=None if engagement_out_rad is None else float(engagement_out_rad),
     )
+    t.validate()
+    if exact_mean:  # the mean of the sub-cell lookup over the rows (docs/tables.md "Contact-zone edges")
+        t.k_mean_N_per_m = float(np.mean([mean_total_stiffness_N_per_m(t, t.k_N_per_m[r]) for r in range(nt)]))
     return t.validate()
 
 
@@ -218,6 +231,7 @@ def rectangular_wave_tables(
     pair_error_m: Optional[Callable[[int, np.ndarray], np.ndarray]] = None,
     slots: Optional[int] = None,
     mesh_periods: Optional[int] = None,
+    zone_edges: bool = False,
     **gear_data,
 ) -> MeshTables:
     """Rectangular-wave TVMS tables (k in N/m, e in m, angles in rad).
@@ -243,6 +257,14 @@ def rectangular_wave_tables(
     table value at a grid point is the engaged/not-engaged state *at* the point,
     so the stored wave is a trapezoid with ramps one grid step wide once it is
     linearly interpolated (docs/model.md table lookup).
+
+    ``zone_edges``: also carry the engagement angles 0 and ``contact_ratio*T``, so that
+    the kernels put each pair's own meshing-in and meshing-out steps exactly there
+    (docs/model.md "Contact-zone edges").  Off by default (choice): a pair of the
+    rectangular wave also steps *inside* its zone, wherever another pair enters or leaves
+    (it carries total/count), and those steps stay one-cell ramps; the default keeps the
+    textbook trapezoid that the dynamics validation against seed 003 and the reference
+    solvers of the tests are built on.
     """
     ks = _positive("k_single_N_per_m", k_single_N_per_m)
     kd = 2.0 * ks if k_double_N_per_m is None else _positive("k_double_N_per_m", k_double_N_per_m)
@@ -295,6 +317,7 @@ def rectangular_wave_tables(
     return tables_from_arrays(
         phi_period_rad=nmesh * mp, mesh_period_rad=mp, k_N_per_m=k, e_m=e,
         backlash_half_m=b_half, teeth_pinion=z1, contact_ratio=eps, **gear_data,
+        engagement_in_rad=0.0 if zone_edges else None, engagement_out_rad=eps * mp if zone_edges else None,
         provenance={"source": "gearfmu.tables.synthetic.rectangular_wave_tables",
                     "k_single_N_per_m": ks, "k_double_N_per_m": kd, "contact_ratio": eps,
                     "points_per_mesh": npm, "backlash_half_m": b_half},

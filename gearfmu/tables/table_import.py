@@ -67,6 +67,9 @@ META_KEYS = {
     "slots": (int, "single-pair form: number of slots P (default ceil(contact ratio))"),
     "points_per_mesh": (int, "single-pair form: grid points per mesh period (default 64)"),
     "form": (str, '"slots" or "single_pair" (default: from the columns)'),
+    "engagement_in_rad": (float, "rad, meshing-in angle of every pair from the start of its mesh (with "
+                                 "engagement_out_rad; single-pair form default 0; slots form default none)"),
+    "engagement_out_rad": (float, "rad, meshing-out angle (single-pair form default: the engagement span)"),
     "name": (str, "free text, kept in the provenance"),
 }
 REQUIRED = ("teeth_pinion", "teeth_gear", "base_radius_pinion_m", "base_radius_gear_m",
@@ -116,6 +119,10 @@ def _meta_value(meta, key, src):
             raise TableImportError(f"{src}: {key} must be a positive integer, got {v!r}")
         return int(v)
     v = float(v)
+    if key.startswith("engagement_"):
+        if not math.isfinite(v):
+            raise TableImportError(f"{src}: {key} must be finite, got {v!r}")
+        return v
     if not math.isfinite(v) or v < 0 or (v == 0 and key != "backlash_half_m"):
         raise TableImportError(f"{src}: {key} must be finite and > 0 (>= 0 for backlash), got {v!r}")
     return v
@@ -331,7 +338,8 @@ def _make(k, e, b, tq, period, mp, meta, prov, **opt):
         inertia_pinion_kgm2=meta["inertia_pinion_kgm2"], inertia_gear_kgm2=meta["inertia_gear_kgm2"],
         teeth_pinion=meta["teeth_pinion"], teeth_gear=meta["teeth_gear"],
         torque_Nm=tq, contact_ratio=meta.get("contact_ratio"),
-        k_mean_N_per_m=meta.get("k_mean_N_per_m"), provenance=prov, **opt)
+        k_mean_N_per_m=meta.get("k_mean_N_per_m"), provenance=prov,
+        engagement_in_rad=meta.get("engagement_in_rad"), engagement_out_rad=meta.get("engagement_out_rad"), **opt)
 
 
 def _load_single_pair(header, data, lines, src, meta, mp, prov):
@@ -398,7 +406,9 @@ def _load_single_pair(header, data, lines, src, meta, mp, prov):
                 e[it, j] = np.where(on, np.interp(u, a, data[g, header.index(ecol)] * efac), 0.0)
             if "b_pair_m" in header and it == 0:
                 b[j] = np.where(on, np.interp(u, a, data[g, header.index("b_pair_m")]), b[j])
-    meta = dict(meta, contact_ratio=eps)
+    # the pair is in contact from 0 to the span (docs/tables.md "Contact-zone edges")
+    meta = dict(meta, contact_ratio=eps, engagement_in_rad=meta.get("engagement_in_rad", 0.0),
+                engagement_out_rad=meta.get("engagement_out_rad", span))
     return _make(k, e, b, tq, period, mp, meta, prov)
 
 
@@ -456,6 +466,9 @@ def tables_to_csv(tables: MeshTables, csv_path, meta_path=None):
                                             "base_radius_gear_m", "inertia_pinion_kgm2", "inertia_gear_kgm2",
                                             "phi_period_rad", "mesh_period_rad", "contact_ratio",
                                             "k_mean_N_per_m")}
+    if tables.engagement_in_rad is not None:
+        scal["engagement_in_rad"] = tables.engagement_in_rad
+        scal["engagement_out_rad"] = tables.engagement_out_rad
     lines = ["# sidecar of " + csv_path.name + " (docs/tables.md 'CSV import')"]
     lines += [f"{k} = {_toml_value(v)}" for k, v in scal.items()]
     meta_path.write_text("\n".join(lines) + "\n", encoding="utf-8")

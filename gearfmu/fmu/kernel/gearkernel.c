@@ -96,7 +96,85 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->temp_two = 0;
     m->temp_w = 0.0;
     m->temperature_now_C = 0.0;
+    m->zone_cuts = NULL;
     node_flags(m);
+    return GK_OK;
+}
+
+/* x mod n for a double x, on the nearest node within GK_ZONE_SNAP cells (gearfmu/tables/zones.py _wrap) */
+static double zone_wrap(double x, int n)
+{
+    double r = fmod(x, (double)n), rn;
+    if (r < 0.0) r += (double)n;
+    rn = floor(r + 0.5);
+    if (fabs(r - rn) <= GK_ZONE_SNAP) r = rn;   /* an edge on a node stays on it */
+    return r;
+}
+
+static int imod(long long a, int n)
+{
+    long long r = a % n;
+    if (r < 0) r += n;
+    return (int)r;
+}
+
+/* the arithmetic of gearfmu.tables.zones.zone_cuts (docs/model.md "Contact-zone edges") */
+int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad,
+                 double in_rad, double out_rad, double *cuts)
+{
+    double inv, ppm, a_in, a_out, nm;
+    double *lo, *hi;
+    long long n_mesh, mm;
+    int N = n_phi, i;
+    if (cuts == NULL || P < 1 || N < 2 || !finite_pos(phi_period_rad) || !finite_pos(mesh_period_rad))
+        return GK_ERR_MODEL;
+    if (!isfinite(in_rad) || !isfinite(out_rad)) return GK_ERR_PARAM;
+    inv = (double)N / phi_period_rad;
+    if (!((out_rad - in_rad) * inv >= GK_ZONE_MIN_CELLS)) return GK_ERR_PARAM;
+    nm = floor(phi_period_rad / mesh_period_rad + 0.5);
+    if (!(nm >= 1.0 && nm <= 1e9)) return GK_ERR_MODEL;
+    n_mesh = (long long)nm;
+    ppm = (double)N / (double)n_mesh;
+    a_in = in_rad * inv;
+    a_out = out_rad * inv;
+    lo = cuts;
+    hi = cuts + (size_t)P * N;
+    for (i = 0; i < P * N; ++i) {
+        lo[i] = -1.0;
+        hi[i] = 1.0;
+    }
+    for (mm = 0; mm < n_mesh; ++mm) {
+        size_t r = (size_t)(mm % P) * N;
+        double start = (double)mm * ppm, sv, fl, f;
+        int c;
+        sv = zone_wrap(start + a_in, N);     /* meshing-in */
+        fl = floor(sv);
+        f = sv - fl;
+        c = (f == 0.0) ? imod((long long)fl - 1, N) : imod((long long)fl, N);
+        if (lo[r + c] < 0.0) lo[r + c] = 0.0;
+        if (((f == 0.0) ? 1.0 : f) < hi[r + c]) hi[r + c] = (f == 0.0) ? 1.0 : f;
+        sv = zone_wrap(start + a_out, N);    /* meshing-out */
+        fl = floor(sv);
+        f = sv - fl;
+        if (f == 0.0) {
+            c = imod((long long)fl - 1, N);
+            if (lo[r + c] < 0.0) lo[r + c] = 0.0;
+            if (lo[r + c] < 1.0) lo[r + c] = 1.0;
+            c = imod((long long)fl, N);
+            if (lo[r + c] < 0.0) lo[r + c] = 0.0;
+        } else {
+            c = imod((long long)fl, N);
+            if (lo[r + c] < 0.0) lo[r + c] = 0.0;
+            if (lo[r + c] < f) lo[r + c] = f;
+        }
+    }
+    return GK_OK;
+}
+
+int gk_set_zone_cuts(gk_model *m, const double *cuts)
+{
+    if (m == NULL) return GK_ERR_MODEL;
+    m->zone_cuts = cuts;
     return GK_OK;
 }
 
@@ -294,14 +372,95 @@ GK_INLINE void row_interp_t(const gk_model *m, const gk_tq *t, const double *A, 
     if (slope != NULL) *slope = (a1 - a0) * m->inv_dphi;
 }
 
-/* k, e, de/dphi, b of slot j */
-GK_INLINE void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j,
+/* node i of row A at the selected temperature (row_interp_t's node blend) */
+GK_INLINE double node_t(const gk_model *m, const gk_tq *t, const double *A, int i)
+{
+    double a = A[i];
+    if (m->temp_two) a = a + m->temp_w * (A[t->next_temp + i] - a);
+    return a;
+}
+
+/* value and slope at cell weight w in a cell holding a contact-zone edge (cuts lo, hi), on
+ * the side ws selects (model_rhs._edge_line); returns 1 inside the zone.  tb: temperature
+ * blend of the nodes (NULL: the row as stored, the backlash) */
+GK_INLINE int edge_line(const gk_model *m, const gk_tq *tb, const double *A, const gk_ph *c, double ws,
+                        double lo, double hi, double *val, double *slope)
+{
+    int N = m->n_phi;
+    double a, b;
+    if (ws < lo) {
+        int im = (c->i0 == 0) ? N - 1 : c->i0 - 1;
+        a = tb ? node_t(m, tb, A, im) : A[im];
+        b = tb ? node_t(m, tb, A, c->i0) : A[c->i0];
+        *val = b + c->w * (b - a);
+        if (slope != NULL) *slope = (b - a) * m->inv_dphi;
+        return 1;
+    }
+    if (ws >= hi) {
+        int i2 = (c->i1 == N - 1) ? 0 : c->i1 + 1;
+        a = tb ? node_t(m, tb, A, c->i1) : A[c->i1];
+        b = tb ? node_t(m, tb, A, i2) : A[i2];
+        *val = a + (c->w - 1.0) * (b - a);
+        if (slope != NULL) *slope = (b - a) * m->inv_dphi;
+        return 1;
+    }
+    a = tb ? node_t(m, tb, A, c->i0) : A[c->i0];
+    b = tb ? node_t(m, tb, A, c->i1) : A[c->i1];
+    *val = a + c->w * (b - a);
+    if (slope != NULL) *slope = (b - a) * m->inv_dphi;
+    return 0;
+}
+
+/* slot_tables in a cell holding a contact-zone edge (model_rhs._kvals_edge) */
+static void slot_tables_edge(const gk_model *m, const gk_tq *t, const gk_ph *c, int j, double ws, double lo,
+                             double hi, double *k, double *e, double *de_dphi, double *b)
+{
+    size_t off = (size_t)j * m->n_phi;
+    const double *ka = t->k0 + off;
+    const double *ea = t->e0 + off;
+    double kv, ev, es, kd;
+    int inz = edge_line(m, t, ka, c, ws, lo, hi, &kv, &kd);
+    edge_line(m, t, ea, c, ws, lo, hi, &ev, &es);
+    if (t->two_rows) {
+        double kv2, ev2, es2;
+        edge_line(m, t, ka + t->next_torque, c, ws, lo, hi, &kv2, &kd);
+        edge_line(m, t, ea + t->next_torque, c, ws, lo, hi, &ev2, &es2);
+        kv = kv + t->wT * (kv2 - kv);
+        ev = ev + t->wT * (ev2 - ev);
+        es = es + t->wT * (es2 - es);
+    }
+    if (!inz || kv < 0.0) kv = 0.0;
+    *k = kv;
+    *e = ev;
+    if (de_dphi != NULL) *de_dphi = es;
+    if (b != NULL) {
+        double bv;
+        edge_line(m, NULL, m->backlash_half_m + off, c, ws, lo, hi, &bv, NULL);
+        *b = bv;
+    }
+}
+
+/* k, e, de/dphi, b of slot j; sel: the side of a contact-zone cut (model_rhs._kvals_sel:
+ * -1 the side of the weight, 0 in-zone left, 1 outside, 2 in-zone right) */
+GK_INLINE void slot_tables(const gk_model *m, const gk_tq *t, const gk_ph *c, int j, int sel,
                                double *k, double *e, double *de_dphi, double *b)
 {
     size_t off = (size_t)j * m->n_phi;
     const double *ka = t->k0 + off;
     const double *ea = t->e0 + off;
     double kv, ev, es;
+    if (m->zone_cuts != NULL) {
+        double lo = m->zone_cuts[off + c->i0];
+        if (lo >= 0.0) {
+            double ws = c->w;
+            if (sel == 0) ws = -1.0;
+            else if (sel == 1) ws = lo;
+            else if (sel == 2) ws = 2.0;
+            slot_tables_edge(m, t, c, j, ws, lo, m->zone_cuts[(size_t)m->P * m->n_phi + off + c->i0], k, e,
+                             de_dphi, b);
+            return;
+        }
+    }
     row_interp_t(m, t, ka, c, &kv, NULL);
     row_interp_t(m, t, ea, c, &ev, &es);
     if (t->two_rows) {
@@ -332,7 +491,7 @@ GK_INLINE double mesh_force(const gk_model *m, const gk_tq *t, gk_ph *c, double 
     for (j = 0; j < m->P; ++j) {
         double k, e, es, b, d, fc, fd, Fj;
         int region;
-        slot_tables(m, t, c, j, &k, &e, &es, &b);
+        slot_tables(m, t, c, j, -1, &k, &e, &es, &b);
         d = x - e;                             /* seed 003 eq 6 */
         if (d > b) { fc = k * (d - b); region = 1; }
         else if (d < -b) { fc = k * (d + b); region = -1; }
@@ -407,6 +566,7 @@ typedef struct {
     int reg[GK_KINK_MAX_SLOTS];      /* 1 drive, -1 back, 0 separated */
     int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
     int kpos[GK_KINK_MAX_SLOTS];     /* contact_zone: k > 0 inside the cell */
+    int zsel[GK_KINK_MAX_SLOTS];     /* side of a contact-zone cut held in the cell (zone_sel) */
 } gk_mode;
 
 GK_INLINE void cell_nodes(gk_mode *md, int N)
@@ -467,33 +627,122 @@ static int node_flagged(const gk_model *m, double n)
     return m->node_kink[i0] != 0;
 }
 
-/* first flagged node above n (at most n + N); last flagged node below n (at least n - N) */
-static double seg_up(const gk_model *m, double n)
+/* contact-zone cuts of cell i0 over all slots (model_rhs._cut_above / _cut_below): the
+ * smallest above f (at or above with incl) and below 1, 2.0 for none; the largest below f
+ * (at or below with incl) and above 0, -1.0 for none */
+static double cut_above(const gk_model *m, int i0, double f, int incl)
 {
-    double top = n + m->n_phi, q = n + 1.0;
+    double best = 2.0;
+    int j, PN = m->P * m->n_phi;
+    if (m->zone_cuts == NULL) return best;
+    for (j = 0; j < m->P; ++j) {
+        size_t r = (size_t)j * m->n_phi + i0;
+        double clo = m->zone_cuts[r], chi;
+        if (!(clo >= 0.0)) continue;
+        chi = m->zone_cuts[PN + r];
+        if ((clo > f || (incl && clo == f)) && clo < 1.0 && clo < best) best = clo;
+        if ((chi > f || (incl && chi == f)) && chi < 1.0 && chi < best) best = chi;
+    }
+    return best;
+}
+
+static double cut_below(const gk_model *m, int i0, double f, int incl)
+{
+    double best = -1.0;
+    int j, PN = m->P * m->n_phi;
+    if (m->zone_cuts == NULL) return best;
+    for (j = 0; j < m->P; ++j) {
+        size_t r = (size_t)j * m->n_phi + i0;
+        double clo = m->zone_cuts[r], chi;
+        if (!(clo >= 0.0)) continue;
+        chi = m->zone_cuts[PN + r];
+        if ((clo < f || (incl && clo == f)) && clo > 0.0 && clo > best) best = clo;
+        if ((chi < f || (incl && chi == f)) && chi > 0.0 && chi > best) best = chi;
+    }
+    return best;
+}
+
+/* node index (n mod N) of global node n (an integer value); as cell_nodes */
+static int node_index(int N, double n)
+{
+    double r = n - (double)N * floor(n / (double)N);
+    int i0 = (int)r;
+    if (i0 < 0) i0 = 0;
+    if (i0 >= N) i0 = N - 1;
+    return i0;
+}
+
+/* first stop above position n (global node units; model_rhs / integrators._seg_up): a
+ * contact-zone cut, or the next node (rk4_kink) or flagged node (rk4_node), at most
+ * floor(n) + N; last stop below n (_seg_down), at least ceil(n) - N */
+static double seg_up(const gk_model *m, double n, int node)
+{
+    double c, top, q, f;
     if (!(fabs(n) < GK_CELL_LIMIT)) return n + 1.0;   /* doubles no longer count single nodes */
-    while (q < top && !node_flagged(m, q)) q += 1.0;
+    c = floor(n);
+    if (m->zone_cuts != NULL) {
+        int i0 = node_index(m->n_phi, c);
+        f = cut_above(m, i0, n - c, 0);
+        while (f < 1.0 && !(c + f > n)) f = cut_above(m, i0, f, 0);   /* n - c rounds: above n */
+        if (f < 1.0) return c + f;
+    }
+    if (!node) return c + 1.0;
+    top = c + m->n_phi;
+    q = c + 1.0;
+    while (q < top) {
+        if (node_flagged(m, q)) return q;
+        if (m->zone_cuts != NULL) {
+            f = cut_above(m, node_index(m->n_phi, q), 0.0, 0);
+            if (f < 1.0) return q + f;
+        }
+        q += 1.0;
+    }
     return q;
 }
 
-static double seg_down(const gk_model *m, double n)
+static double seg_down(const gk_model *m, double n, int node)
 {
-    double bottom = n - m->n_phi, q = n - 1.0;
+    double c, bottom, q, f;
     if (!(fabs(n) < GK_CELL_LIMIT)) return n - 1.0;
-    while (q > bottom && !node_flagged(m, q)) q -= 1.0;
+    c = ceil(n) - 1.0;
+    if (m->zone_cuts != NULL) {
+        int i0 = node_index(m->n_phi, c);
+        f = cut_below(m, i0, n - c, 0);
+        while (f > 0.0 && !(c + f < n)) f = cut_below(m, i0, f, 0);   /* below n */
+        if (f > 0.0) return c + f;
+    }
+    if (!node) return c;
+    bottom = c + 1.0 - m->n_phi;
+    q = c;
+    while (q > bottom) {
+        if (node_flagged(m, q)) return q;
+        if (m->zone_cuts != NULL) {
+            f = cut_below(m, node_index(m->n_phi, q - 1.0), 1.0, 0);
+            if (f > 0.0) return q - 1.0 + f;
+        }
+        q -= 1.0;
+    }
     return q;
 }
 
-/* held segment at a step start: [nd, nd + 1] (rk4_kink); rk4_node: nd to the next
- * flagged node above for om >= 0, the last flagged node below nd + 1 to nd + 1 for om < 0 */
-static void seg_start(const gk_model *m, gk_mode *md, int node, double om)
+/* held segment at a step start (theta1 = th): [nd, nd + 1] (rk4_kink); rk4_node: nd to the
+ * next flagged node above for om >= 0, the last flagged node below nd + 1 to nd + 1 for
+ * om < 0; a contact-zone cut in cell nd splits it (integrators._seg_start) */
+static void seg_start(const gk_model *m, gk_mode *md, int node, double om, double th)
 {
+    double lo = md->nd, hi = md->nd + 1.0;
+    if (m->zone_cuts != NULL) {
+        int i0 = node_index(m->n_phi, md->nd);
+        double f = th * m->inv_dphi - md->nd, fb = cut_below(m, i0, f, 1), fa = cut_above(m, i0, f, 1);
+        if (fb > 0.0) lo = md->nd + fb;
+        if (fa < 1.0) hi = md->nd + fa;
+    }
     if (node && om < 0.0) {
-        md->hi = md->nd + 1.0;
-        md->lo = seg_down(m, md->nd + 1.0);
+        md->hi = hi;
+        md->lo = seg_down(m, hi, 1);
     } else {
-        md->lo = md->nd;
-        md->hi = node ? seg_up(m, md->nd) : md->nd + 1.0;
+        md->lo = lo;
+        md->hi = seg_up(m, lo, node);
     }
 }
 
@@ -503,13 +752,36 @@ static void seg_cross(const gk_model *m, gk_mode *md, int up, int node)
     if (up) {
         double lo = md->hi;
         md->lo = lo;
-        md->hi = node ? seg_up(m, lo) : lo + 1.0;
-        md->nd = lo;
+        md->hi = seg_up(m, lo, node);
+        md->nd = floor(lo);
     } else {
         double hi = md->lo;
         md->hi = hi;
-        md->lo = node ? seg_down(m, hi) : hi - 1.0;
-        md->nd = hi - 1.0;
+        md->lo = seg_down(m, hi, node);
+        md->nd = ceil(hi) - 1.0;
+    }
+}
+
+/* the side of every pair's contact-zone cut held in cell nd of the segment [lo, hi), by the
+ * segment's midpoint in the cell (model_rhs._zone_sel); -1 without an edge */
+static void zone_sel(const gk_model *m, gk_mode *md)
+{
+    double a = (md->lo > md->nd) ? md->lo : md->nd;
+    double b = (md->hi < md->nd + 1.0) ? md->hi : md->nd + 1.0;
+    double wm = 0.5 * (a + b) - md->nd;
+    int j, PN = m->P * m->n_phi;
+    for (j = 0; j < m->P; ++j) {
+        int sel = -1;
+        if (m->zone_cuts != NULL) {
+            size_t r = (size_t)j * m->n_phi + md->i0;
+            double clo = m->zone_cuts[r];
+            if (clo >= 0.0) {
+                if (wm < clo) sel = 0;
+                else if (wm >= m->zone_cuts[PN + r]) sel = 2;
+                else sel = 1;
+            }
+        }
+        md->zsel[j] = sel;
     }
 }
 
@@ -522,7 +794,7 @@ GK_INLINE void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *m
     c.i0 = md->i0;
     c.i1 = md->i1;
     c.w = (th - md->nd * m->dphi_rad) * m->inv_dphi;
-    slot_tables(m, t, &c, j, k, e, es, b);
+    slot_tables(m, t, &c, j, md->zsel[j], k, e, es, b);
 }
 
 GK_INLINE double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
@@ -693,7 +965,7 @@ static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const doub
     half.w = 0.5;
     for (j = 0; j < m->P; ++j) {
         double km, em, esm, bm, kv, ev, es, bv;
-        slot_tables(m, t, &half, j, &km, &em, &esm, &bm);
+        slot_tables(m, t, &half, j, md->zsel[j], &km, &em, &esm, &bm);
         md->kpos[j] = (km > 0.0) ? 1 : 0;
         locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
         if (from_state) {
@@ -713,7 +985,8 @@ static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, cons
 {
     md->nd = floor(y[0] * m->inv_dphi);
     cell_nodes(md, m->n_phi);
-    seg_start(m, md, node, y[1]);
+    seg_start(m, md, node, y[1], y[0]);
+    zone_sel(m, md);
     mode_sync(m, t, md, y, 1);
 }
 
@@ -760,9 +1033,10 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
         int best_gi = -1, have_f1 = 0, gi, any_neg;
         if (node) {   /* the held cell follows theta1 inside the segment */
             double cn = floor(y[0] * m->inv_dphi);
-            if (cn >= md->lo && cn < md->hi && cn != md->nd) {
+            if (cn + 1.0 > md->lo && cn < md->hi && cn != md->nd) {
                 md->nd = cn;
                 cell_nodes(md, m->n_phi);
+                zone_sel(m, md);
             }
         }
         deriv_locked(m, t, md, T1, T2, y, f0);
@@ -776,6 +1050,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
                     rem = rem - tau;
                     nev += 1;
                     cell_nodes(md, m->n_phi);
+                    zone_sel(m, md);
                     mode_sync(m, t, md, y, 0);
                     if (!(rem > 0.0)) break;
                     continue;
@@ -821,6 +1096,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
         if (best_gi < 2) {
             seg_cross(m, md, best_gi == 1, node);
             cell_nodes(md, m->n_phi);
+            zone_sel(m, md);
             mode_sync(m, t, md, y, 0);
         } else {
             int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
@@ -861,7 +1137,7 @@ int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
     Fm = T1_Nm / m->Rb1_m;
     for (j = 0; j < m->P; ++j) {
         double k, e, b;
-        slot_tables(m, &t, &c, j, &k, &e, NULL, &b);
+        slot_tables(m, &t, &c, j, -1, &k, &e, NULL, &b);
         S += k;
         if (k > 0.0) {
             if (!any || e - b < lo) lo = e - b;
@@ -876,7 +1152,7 @@ int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
         double mid = 0.5 * (lo + hi), g = 0.0;
         for (j = 0; j < m->P; ++j) {
             double k, e, b, d;
-            slot_tables(m, &t, &c, j, &k, &e, NULL, &b);
+            slot_tables(m, &t, &c, j, -1, &k, &e, NULL, &b);
             if (!(k > 0.0)) continue;
             d = mid - e;
             if (d > b) g += k * (d - b);

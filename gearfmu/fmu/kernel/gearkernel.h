@@ -18,7 +18,8 @@
 extern "C" {
 #endif
 
-#define GK_ABI_VERSION 4  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model */
+#define GK_ABI_VERSION 5  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model;
+                             5: contact-zone cuts (gk_zone_cuts, gk_set_zone_cuts, gk_model.zone_cuts) */
 
 /* status codes */
 #define GK_OK 0
@@ -95,6 +96,7 @@ typedef struct gk_model {
     double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
     double temperature_now_C;       /* the temperature selected last (degC) */
     unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* rk4_node: 1 at node i where the tables bend */
+    const double *zone_cuts;        /* [2][P][n_phi] cuts of gk_zone_cuts (borrowed), NULL: plain lookup */
 } gk_model;
 
 typedef struct gk_state {
@@ -118,6 +120,20 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *e_m, const double *backlash_half_m,
             double phi_period_rad, double Rb1_m, double Rb2_m,
             double I1_kgm2, double I2_kgm2, double k_mean_N_per_m);
+
+/* Contact-zone edges (docs/model.md "Contact-zone edges", gearfmu/tables/zones.py): every
+ * tooth pair is in its contact zone for n*mesh_period + in <= phi < n*mesh_period + out (slot
+ * n % P).  gk_zone_cuts writes the sub-cell cuts of the lookup, 2*P*n_phi doubles
+ * (lo[P][n_phi], then hi[P][n_phi]; lo < 0: no edge in the cell), into cuts (caller-owned);
+ * GK_ERR_PARAM when a zone spans fewer than GK_ZONE_MIN_CELLS cells or the angles are not
+ * finite with out > in (then keep the plain lookup), GK_ERR_MODEL for bad dimensions.
+ * gk_set_zone_cuts (after gk_init) makes the lookup read them (borrowed; NULL: plain
+ * linear interpolation, the default of gk_init); rk4_kink and rk4_node then stop at the cuts. */
+#define GK_ZONE_MIN_CELLS 3.0
+#define GK_ZONE_SNAP 1e-9   /* an edge within this many cells of a node lies on the node */
+int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad,
+                 double in_rad, double out_rad, double *cuts);
+int gk_set_zone_cuts(gk_model *m, const double *cuts);
 
 /* Declare a temperature axis (call after gk_init): k and e are then laid out
  * [n_torque][n_temp][P][n_phi].  temperature_C (degC, borrowed) finite and

@@ -120,6 +120,8 @@ def _bind(lib):
         "gk_set_integrator": ([c_void_p, c_int], c_int),
         "gk_set_temperature_axis": ([c_void_p, c_int, c_void_p], c_int),
         "gk_set_temperature": ([c_void_p, c_double], c_int),
+        "gk_zone_cuts": ([c_int, c_int] + [c_double] * 4 + [c_void_p], c_int),
+        "gk_set_zone_cuts": ([c_void_p, c_void_p], c_int),
         "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
         "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
         "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
@@ -205,6 +207,12 @@ class GearFmuSlave(Fmi2Slave):
                        f"of {list(TEMPERATURE_INPUT_NAMES)} inputs in the variable table")
                 self.log(msg, Fmi2Status.fatal)
                 raise GearFmuResourceError(msg)
+        eng = meta.get("engagement")  # contact-zone edges (docs/model.md "Contact-zone edges")
+        if eng is not None:
+            self._cuts = np.zeros(2 * P * n_phi)
+            if lib.gk_zone_cuts(P, n_phi, sc["phi_period_rad"], sc["mesh_period_rad"], float(eng["in_rad"]),
+                                float(eng["out_rad"]), self._cuts.ctypes.data) == 0:
+                lib.gk_set_zone_cuts(self._pm, self._cuts.ctypes.data)
         self._init_envelope(cfg.get("envelope"))
         self._slots = P
         self._initialized = False

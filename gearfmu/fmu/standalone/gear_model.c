@@ -276,6 +276,7 @@ typedef struct {
     long off_torque, off_k, off_e, off_b;
     long n_temp, off_temp;  /* optional: temperature axis (n_temp = 0: none) */
     double phi_period, Rb1, Rb2, I1, I2, k_mean;
+    double mesh_period, eng_in, eng_out;  /* optional: contact-zone edges (all three or none) */
     int have_mask;
     /* optional: the verified envelope (envelope.kind, envelope.<quantity>=lo|hi) */
     int env_kind, env_have[GK_ENV_N];
@@ -396,6 +397,9 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
         GF_D("inertia_pinion_kgm2", I1, HAVE_I1)
         GF_D("inertia_gear_kgm2", I2, HAVE_I2)
         GF_D("k_mean_N_per_m", k_mean, HAVE_KM)
+        GF_D("mesh_period_rad", mesh_period, 0)
+        GF_D("engagement_in_rad", eng_in, 0)
+        GF_D("engagement_out_rad", eng_out, 0)
         else if (strcmp(key, "n_vars") == 0) {
             long nv;
             if (!parse_long(val, &nv) || nv < 1 || nv > 100000 || c->vars != NULL) {
@@ -529,6 +533,7 @@ void gm_free(gf_inst *c)
     free(c->vars);
     free(c->values);
     free(c->blob);
+    free(c->cuts);
     free(c->model);
     free(c->fmu);
     free(c->out);
@@ -631,6 +636,12 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         if (cfg.n_temp > 0) { /* temperature axis: k, e are [NT][NTemp][P][N] */
             if (gk_set_temperature_axis(c->model, (int)NTemp, c->arr_temp) != GK_OK)
                 return "kernel rejects the temperature axis (not finite and ascending)";
+        }
+        if (cfg.mesh_period > 0.0) { /* contact-zone edges (docs/model.md "Contact-zone edges") */
+            c->cuts = (double *)calloc((size_t)(2 * P * N), sizeof(double));
+            if (c->cuts == NULL) return "out of memory";
+            if (gk_zone_cuts((int)P, (int)N, cfg.phi_period, cfg.mesh_period, cfg.eng_in, cfg.eng_out, c->cuts) == GK_OK)
+                gk_set_zone_cuts(c->model, c->cuts);
         }
         gk_envelope_init(&c->env, cfg.env_kind);
         for (i = 0; i < GK_ENV_N; ++i)

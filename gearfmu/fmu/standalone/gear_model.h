@@ -83,6 +83,7 @@ struct gf_inst {
     /* gear glue */
     unsigned char *blob;  /* tables.bin */
     double *arr_torque, *arr_k, *arr_e, *arr_b, *arr_temp;
+    double *cuts;         /* contact-zone cuts (gk_zone_cuts), NULL: none */
     gk_model *model;
     gk_state state;
     double *out;
