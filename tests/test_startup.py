@@ -8,6 +8,8 @@ an import really loaded).  Speed itself is measured in benchmarks/bench_startup.
 from __future__ import annotations
 
 import dataclasses
+import pathlib
+import shutil
 import json
 import subprocess
 import sys
@@ -106,7 +108,7 @@ def test_a_cache_hit_runs_no_solver_and_gives_the_same_record(default_case, cach
 
 
 @pytest.mark.parametrize("change", ["tables", "damping_ratio", "max_step_s", "integrator", "stop_time_s",
-                                    "gearfmu_version"])
+                                    "gearfmu_version", "gearfmu_sources"])
 def test_any_change_in_the_key_runs_the_solver_again(default_case, cache, native_runs, monkeypatch, change):
     scene, tables, params = default_case
     base = _record(default_case)
@@ -124,6 +126,8 @@ def test_any_change_in_the_key_runs_the_solver_again(default_case, cache, native
         kw["integrator"] = 0
     elif change == "stop_time_s":
         kw["stop_time_s"] = 0.003
+    elif change == "gearfmu_sources":  # the solver's code changed, the version string did not
+        monkeypatch.setattr(validation, "_sources_sha256", lambda: "0" * 64)
     else:
         monkeypatch.setattr(validation, "__version__", validation.__version__ + ".post1")
     changed = _record(default_case, **kw)
@@ -131,6 +135,20 @@ def test_any_change_in_the_key_runs_the_solver_again(default_case, cache, native
     if change in ("tables", "damping_ratio", "max_step_s", "stop_time_s"):  # another run, another file
         assert changed[REFERENCE] != base[REFERENCE]
     assert len(list((cache / validation.REFERENCE_CACHE).glob("*.csv"))) == 2
+
+
+def test_the_sources_checksum_follows_any_change_of_a_package_source(tmp_path):
+    """Reference: the definition in the docstring (path and bytes of every .py file); a copy of
+    the package with one byte of the native solver changed must give another checksum, a copy
+    left alone the same one."""
+    pkg = pathlib.Path(validation.__file__).resolve().parents[1]
+    copy = tmp_path / "gearfmu"
+    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    same = validation.package_sources_sha256(copy)
+    assert same == validation.package_sources_sha256(pkg)
+    f = copy / "dynamics" / "integrators.py"
+    f.write_bytes(f.read_bytes() + b"\n")
+    assert validation.package_sources_sha256(copy) != same
 
 
 def _corrupt(folder, how):

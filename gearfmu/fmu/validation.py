@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import datetime
+import functools
 import hashlib
 import importlib.metadata
 import inspect
@@ -15,6 +16,7 @@ import io
 import json
 import platform
 import sys
+from pathlib import Path
 from typing import Dict, Optional
 
 from .. import __version__
@@ -33,6 +35,23 @@ RECORD_PACKAGES = ("numpy", "scipy", "numba", "fmpy", "pythonfmu", "libcosimpy")
 REFERENCE_CACHE = "validation"
 #: packages whose versions are part of a cached reference result's key (the numbers depend on them)
 _SOLVER_PACKAGES = ("numpy", "numba")
+
+
+def package_sources_sha256(root: Path = Path(__file__).resolve().parents[1]) -> str:
+    """SHA-256 over the path and bytes of every ``.py`` file under ``root`` (default: the
+    installed gearfmu package), in sorted path order.  Part of a cached reference result's key:
+    in a development checkout the version string stays the same while the solver's code
+    changes, and a result of other code must not be read back."""
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode("utf-8") + b"\0")
+        h.update(f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=1)
+def _sources_sha256() -> str:
+    return package_sources_sha256()
 
 
 def _versions() -> Dict[str, Optional[str]]:
@@ -115,8 +134,8 @@ def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
     ``tables`` with ``sim_kw``.  Kept in gearfmu's file cache (:mod:`gearfmu.common.cache`, folder
     :data:`REFERENCE_CACHE`) under the key: the tables' content checksum (every array's SHA-256,
     shapes, scalars and axes: ``tables.json`` without its provenance, which the solver does not
-    read), every argument of the run, the gearfmu, Python and solver package versions and the
-    machine type.  A later build with the same key reads the file instead of running the solver
+    read), every argument of the run, the gearfmu, Python and solver package versions, the
+    checksum of gearfmu's own source files (:func:`package_sources_sha256`) and the machine type.  A later build with the same key reads the file instead of running the solver
     (the same bytes: the solver is deterministic); any change in the key runs it again.
     ``native_wall_s`` is the wall time of the run that computed the file."""
     content = {k: v for k, v in tables_meta.items() if k != "provenance"}
@@ -125,6 +144,7 @@ def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
            "tables_content_sha256": hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest(),
            "simulate": {k: repr(v) for k, v in sorted(sim_kw.items())},
            "versions": {k: versions[k] for k in ("gearfmu", "python", *_SOLVER_PACKAGES)},
+           "gearfmu_sources_sha256": _sources_sha256(),
            "machine": platform.machine()}
     folder = cache_dir(REFERENCE_CACHE)
     hit = load_entry(folder, key, ".csv", fields={"substeps": int, "rows": int, "native_wall_s": float})
