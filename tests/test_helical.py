@@ -246,9 +246,12 @@ def test_seed001_scene_tables_and_fmu_agree_with_native(tmp_path):
     t = res.tables
     g = pair_geometry(scene.pair)
     assert t.slots == 4 and t.contact_ratio == pytest.approx(g.total_contact_ratio)
-    # mean of the tables' total stiffness = the stiffness module's mean (whole table period)
+    # mean of the tables' total stiffness (whole table period) against k_mean, the exact mean of the
+    # lookup with the contact-zone edges (docs/tables.md): the two differ only in the edge cells, by
+    # a second-order term, and a helical pair's stiffness rises from nearly zero at its edges (the
+    # contact line enters over the face width), so they agree far inside 5e-5 (measured 4.5e-6)
     ks = t.k_N_per_m[0].sum(axis=0)
-    assert t.k_mean_N_per_m == pytest.approx(ks.mean(), rel=1e-12)
+    assert t.k_mean_N_per_m == pytest.approx(ks.mean(), rel=5e-5)
     assert (ks.max() - ks.min()) / ks.mean() < 0.15
     t1 = scene.operating.torque_Nm
     rep = validate_fmu_against_native(
