@@ -20,7 +20,7 @@ from .mgkernels import _coef, _film, _residual
 COARSE_NEWTON_MAX_NODES = 129
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _lu_solve(A, b):
     """x with A x = b, Gaussian elimination with partial pivoting (A, b
     overwritten); NaN where A is singular."""
@@ -58,7 +58,7 @@ def _lu_solve(A, b):
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coarse_jacobian(S, act, na, load_here, l=0):
     """Newton system of :func:`_coarse_newton` on level l (default the
     coarsest; :func:`_spike_newton` uses it on the finest): J (dense, unknowns
@@ -131,7 +131,7 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     return J, b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coarse_newton(steps, load_here, S, coef_valid=False):
     """Coarsest-grid solve by Newton steps on the whole (FAS) coarse problem
     instead of point sweeps (option ``coarse_newton`` = steps; steady only).
@@ -190,7 +190,7 @@ def _coarse_newton(steps, load_here, S, coef_valid=False):
         _film(0, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _block_scaled_residual(l, S, k0, k1):
     """Coefficients and residual of level l for the current state, and the
     largest |r_i / (dL_i/dP_i)| over the pressurised nodes k0 <= k < k1 (the
@@ -219,7 +219,7 @@ def _block_scaled_residual(l, S, k0, k1):
     return kmax, big
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _spike_newton(steps, width, S):
     """Newton steps on the block of the finest grid around the node with the
     largest scaled Reynolds residual (option ``spike_newton`` = steps,

@@ -24,7 +24,7 @@ from .errors import EHLInputError
 from .mgkernels import _coef, _down, _film, _load, _relax, _residual, _up
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _run_schedule(sched, S, top_coef_valid=False):
     """One cycle.  With option ``lean`` (default 1) work whose result is never
     read is skipped: (i) the coefficients of a level at its first sweep right
@@ -54,7 +54,7 @@ def _run_schedule(sched, S, top_coef_valid=False):
             _up(-code, S, not (lean and nxt == code - 1))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _scaled_residual(l, S, order2, zero_f):
     """Mean over pressurised nodes of |r_i / (dL_i/dP_i)| (units of p_h);
     ``zero_f``: residual of the undisturbed equation (f = 0)."""
@@ -89,7 +89,7 @@ def _scaled_residual(l, S, order2, zero_f):
     return s / max(cnt, 1)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
              stall_window, tol_d):
     """Cycles until converged (returns +cycles) or stalled/failed (-cycles).

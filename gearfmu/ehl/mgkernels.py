@@ -47,7 +47,7 @@ from .deformation import conv_real
 N_DIRECT = 64
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
     """V = -(1/pi) sum_j K_|i-j| P_j on level l (direct sum or FFT)."""
     o = iarr[0, l]
@@ -72,7 +72,7 @@ def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
               im[h:2 * h], V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V):
     o = iarr[0, l]
     n = iarr[1, l]
@@ -81,7 +81,7 @@ def _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V):
         H[o + i] = H0[l] + base[o + i] + V[i] + tauH[o + i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
     """rho, eps = rho H^3/(eta lambda), d ln(eps)/dP and d rho/dP on level l."""
     lam, A, z, php0, c1, comp = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]
@@ -112,7 +112,7 @@ def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
         dle[i] = dl
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _reynolds_terms(P, H, rho, eps, i, sec, dX, h2, ct, char):
     """Terms of the discrete Reynolds equation at node i: eps at the half nodes
     (em, ep), the Poiseuille term and the wedge term (second-order upstream if
@@ -134,7 +134,7 @@ def _reynolds_terms(P, H, rho, eps, i, sec, dX, h2, ct, char):
     return em, ep, poi, wedge
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
     """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends).
 
@@ -157,7 +157,7 @@ def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
         out[i] = f[i] - (poi - wedge)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     """One relaxation sweep on level l (P in place; H stale afterwards)."""
     omega_gs, omega_j, switch, order2, dmax, dist = opt[0], opt[1], opt[2], opt[3] > 0, \
@@ -271,7 +271,7 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
             P[o + k] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _relax(l, sweeps, load_here, S, coef_valid=False, last_film=True):
     """``sweeps`` relaxation sweeps on level l, each followed by a film update.
     ``coef_valid``: rho, eps, dle, drho of level l already belong to the current
@@ -307,7 +307,7 @@ def _relax(l, sweeps, load_here, S, coef_valid=False, last_film=True):
             _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _load(l, P, iarr, dx):
     o = iarr[0, l]
     n = iarr[1, l]
@@ -317,7 +317,7 @@ def _load(l, P, iarr, dx):
     return dx[l] * s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _down(k, S, coef_valid=False):
     """Pre-relax on level k and set up the FAS problem on level k-1 (whose
     coefficients are left valid for the current P and H on return)."""
@@ -369,7 +369,7 @@ def _down(k, S, coef_valid=False):
     H0old[k - 1] = H0[k - 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _up(k, S, last_film=True):
     """Prolong the level k-1 correction to level k and post-relax
     (``last_film`` = False: no film update after the last sweep)."""
