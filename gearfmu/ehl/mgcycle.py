@@ -228,6 +228,19 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
     return np.array(ops, dtype=np.int64)
 
 
+_SCHEDULES: dict = {}
+
+
+def cached_schedule(n_levels: int, gamma=2) -> np.ndarray:
+    """:func:`w_schedule`, built once per (n_levels, gamma) (the compiled
+    cycles only read it)."""
+    key = (int(n_levels), gamma)
+    s = _SCHEDULES.get(key)
+    if s is None:
+        s = _SCHEDULES[key] = w_schedule(n_levels, gamma)
+    return s
+
+
 #: option vector layout of the compiled core
 OPT_KEYS = ("omega_gs", "omega_j", "switch", "order2", "dmax", "dist", "c_h0", "h0_step",
             "nu1", "nu2", "nu0", "load_mode", "defect", "stick", "freeze", "c_t", "c_char",

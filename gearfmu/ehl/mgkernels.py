@@ -400,3 +400,36 @@ def _up(k, S, last_film=True):
     H0[k] += H0[k - 1] - H0old[k - 1]
     _film(k, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
     _relax(k, int(opt[9]), False, S, False, last_film)
+
+
+@njit(cache=True, error_model="numpy")
+def _fmg_prolong(l, S):
+    """Start level l from the solution on level l-1 (full multigrid): P
+    injected at the even nodes and cubic (4-point) interpolation at the odd
+    ones (linear next to the ends), clipped to P >= 0, zero right-hand sides,
+    H0 carried over, film updated (:meth:`.multigrid.FlatMultigrid._prolong_solution`)."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    oc = iarr[0, l - 1]
+    nc = iarr[1, l - 1]
+    of = iarr[0, l]
+    nf = iarr[1, l]
+    for I in range(nc):
+        P[of + 2 * I] = P[oc + I]
+    for I in range(nc - 1):
+        a = P[oc + I]
+        b = P[oc + I + 1]
+        if nc >= 4 and 1 <= I <= nc - 3:
+            v = (9.0 * (a + b) - (P[oc + I - 1] + P[oc + I + 2])) / 16.0
+        else:
+            v = 0.5 * (a + b)
+        P[of + 2 * I + 1] = v
+    for k in range(nf):
+        if P[of + k] < 0.0:
+            P[of + k] = 0.0
+        f[of + k] = 0.0
+        tauH[of + k] = 0.0
+    P[of] = 0.0
+    P[of + nf - 1] = 0.0
+    H0[l] = H0[l - 1]
+    _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
