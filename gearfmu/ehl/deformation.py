@@ -93,22 +93,23 @@ def _butterfly(re, im, i, half, wr, wi):
 
 
 @njit(cache=True, error_model="numpy")
-def _cfft_stages(re, im, N, sr, si, sign):
+def _cfft_stages(re, im, N, sr, si, sign, skip_first=False):
     """Butterfly stages of :func:`_cfft` on input already in bit-reversed
     order (natural-order output).  Stages with >= 8 twiddles run block by
     block on slices of the two halves (separate views: the compiler proves
     them apart and vectorises the twiddle loop; the same operations on the
     same numbers as the scalar loop, so the same bits), shorter ones twiddle
-    by twiddle."""
-    for i in range(0, N - 1, 2):          # length-2 stage: twiddle 1
-        ar = re[i]
-        ai = im[i]
-        br = re[i + 1]
-        bi = im[i + 1]
-        re[i] = ar + br
-        im[i] = ai + bi
-        re[i + 1] = ar - br
-        im[i + 1] = ai - bi
+    by twiddle.  ``skip_first``: the caller has done the length-2 stage."""
+    if not skip_first:
+        for i in range(0, N - 1, 2):          # length-2 stage: twiddle 1
+            ar = re[i]
+            ai = im[i]
+            br = re[i + 1]
+            bi = im[i + 1]
+            re[i] = ar + br
+            im[i] = ai + bi
+            re[i + 1] = ar - br
+            im[i + 1] = ai - bi
     length = 4
     while length <= N:
         half = length >> 1
@@ -196,13 +197,20 @@ def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
     bits = 0
     while (1 << bits) < N:
         bits += 1
-    # packed input written in bit-reversed order (the FFT stages need no permutation)
-    for k in range(N):
+    # packed input written in bit-reversed order (the FFT stages need no
+    # permutation); its second half is zero (N >= n - 1), i.e. the odd
+    # bit-reversed positions, so the length-2 stage copies each even entry
+    # into the odd one after it (x + 0 = x - 0 = x) and is done here
+    for k in range(N // 2):
         a = 2 * k
         j = _bitrev(k, bits)
-        re[j] = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
-        im[j] = P[o + a + 1] if a + 1 <= n - 2 else 0.0
-    _cfft_stages(re, im, N, twr[to + N:], twi[to + N:], 1.0)
+        vr = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
+        vi = P[o + a + 1] if a + 1 <= n - 2 else 0.0
+        re[j] = vr
+        re[j + 1] = vr
+        im[j] = vi
+        im[j + 1] = vi
+    _cfft_stages(re, im, N, twr[to + N:], twi[to + N:], 1.0, True)
     # spectrum of the real input (k = 0 and N: the pair (0, 0); else (k, N - k)) times
     # the kernel spectrum
     _spectrum_times(re, im, 0, 0, twr[to], twi[to], khr[mo], yr, yi, 0)
