@@ -83,6 +83,15 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     col = np.full(n, -1, dtype=np.int64)        # node -> column of the system
     for c in range(na):
         col[act[c]] = c
+    # the kernel extended symmetrically, Ks[n + t] = K_|t| (no abs per entry), and
+    # whether the unknowns are consecutive nodes (then each row reads Ks backwards
+    # in one run, which the compiler vectorises)
+    Ks = np.empty(2 * n + 1)
+    for t in range(n):
+        Ks[n + t] = K[ko + t]
+        Ks[n - t] = K[ko + t]
+    Ks[0] = 0.0                                  # t = -n: never read
+    consecutive = na > 0 and act[na - 1] - act[0] == na - 1
     for a in range(na):
         k = act[a]
         i = o + k
@@ -106,10 +115,16 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
         A1 = (-cm * e3m + w1 * rho[i - 1]) * ipi
         A2 = (w2 * rho[i - 2]) * ipi if k >= 2 else 0.0
         Ap = (-cp * e3p) * ipi
-        for c in range(na):
-            kk = act[c]
-            J[a, c] = -(A2 * K[ko + abs(k - 2 - kk)] + A1 * K[ko + abs(k - 1 - kk)]
-                        + A0 * K[ko + abs(k - kk)] + Ap * K[ko + abs(k + 1 - kk)])
+        if consecutive:
+            row = J[a, :na]
+            s0 = n + k - act[0]
+            for c in range(na):
+                row[c] = -(A2 * Ks[s0 - 2 - c] + A1 * Ks[s0 - 1 - c]
+                           + A0 * Ks[s0 - c] + Ap * Ks[s0 + 1 - c])
+        else:
+            for c in range(na):
+                t = n + k - act[c]
+                J[a, c] = -(A2 * Ks[t - 2] + A1 * Ks[t - 1] + A0 * Ks[t] + Ap * Ks[t + 1])
         # local part: Poiseuille coefficients, d eps/dP and d rho/dP of the node
         c = col[k]
         J[a, c] += -(cm + cp) * eps[i] * dle[i] + (em + ep) / h2 + w0 * drho[i] * H[i]
