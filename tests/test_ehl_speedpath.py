@@ -369,3 +369,47 @@ def test_piezoviscous_corner_converges_on_the_first_pairs_of_its_plan(M, L):
     gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     assert abs(r.H_central_moes / moes_central_film(M, L) - 1.0) < 0.06
+
+
+def test_spike_step_film_update_matches_the_direct_deformation_sum():
+    # The spike Newton step updates the film by kernel columns of the changed nodes
+    # (coarse_newton._add_deformation) instead of an FFT.  Reference: the film
+    # H0 + X^2/2 + V(P) with V the O(N^2) direct sum (deformation.deformation_direct)
+    # of the changed pressure.
+    from gearfmu.ehl.deformation import deformation_direct
+    prm = EHLParams(lam=0.17, A=7.5, z=0.52, php0=4.7, c1=0.64, compressible=True,
+                    x_in=-4.5, x_out=1.5)
+    fm = multigrid.FlatMultigrid(prm, 5, 32)            # finest level 513 nodes
+    fm.hertz_start(0.78)
+    t = fm.top
+    S = fm.state()
+    o = int(fm.iarr[0, t])
+    rng = np.random.default_rng(11)
+    for k in (1, 7, 200, 256, 500, 511):
+        dp = float(rng.uniform(-0.05, 0.05))
+        fm.P[o + k] += dp
+        coarse_newton._add_deformation(t, S, k, dp)
+    P = fm.level_P()
+    ref = fm.H0[t] + 0.5 * fm.X[t] ** 2 + deformation_direct(P.copy(), fm.K[o:o + P.size])
+    assert np.max(np.abs(fm.level_H() - ref)) < 1e-12 * np.max(np.abs(ref))
+
+
+def test_fmg_prolongation_is_exact_for_cubic_pressures():
+    # The compiled full-multigrid prolongation (mgkernels._fmg_prolong) interpolates
+    # with the 4-point cubic rule (Venner & Lubrecht 2000).  Reference: a cubic
+    # polynomial, which that rule reproduces exactly at every fine node with two
+    # coarse nodes on each side; linear rule next to the ends; P = 0 at the ends.
+    prm = EHLParams(lam=0.17, A=7.5, z=0.52, php0=4.7, c1=0.64, compressible=True,
+                    x_in=-4.5, x_out=1.5)
+    fm = multigrid.FlatMultigrid(prm, 3, 32)
+    cubic = lambda x: 3.0 + 0.2 * x + 0.1 * x ** 2 + 0.02 * x ** 3     # > 0 on the grid
+    Xc, Xf = fm.X[1], fm.X[2]
+    fm.P[fm._sl(1)] = cubic(Xc)
+    fm.H0[1] = 0.37
+    fm._prolong_solution(2)
+    Pf = fm.level_P(2)
+    assert Pf[0] == 0.0 and Pf[-1] == 0.0
+    assert np.max(np.abs(Pf[2:-2] - cubic(Xf[2:-2]))) < 1e-12
+    lin = 0.5 * (cubic(Xc[:2]).sum()), 0.5 * (cubic(Xc[-2:]).sum())
+    assert abs(Pf[1] - lin[0]) < 1e-12 and abs(Pf[-2] - lin[1]) < 1e-12
+    assert fm.H0[2] == 0.37

@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .mgkernels import _coef, _film, _residual
+from .mgkernels import _coef, _coef_span, _film, _residual, _reynolds_terms
 
 #: the coarsest-grid Newton solve (option ``coarse_newton``) is used only up to
 #: this many coarsest nodes (dense LU, O(n^3));
@@ -20,7 +20,7 @@ from .mgkernels import _coef, _film, _residual
 COARSE_NEWTON_MAX_NODES = 129
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _lu_solve(A, b):
     """x with A x = b, Gaussian elimination with partial pivoting (A, b
     overwritten); NaN where A is singular."""
@@ -44,11 +44,14 @@ def _lu_solve(A, b):
             b[k] = b[p]
             b[p] = t
         inv = 1.0 / A[k, k]
+        rowk = A[k, k + 1:]
         for i in range(k + 1, n):
             m = A[i, k] * inv
             if m != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= m * A[k, j]
+                # on row views: the compiler sees two separate rows and vectorises
+                rowi = A[i, k + 1:]
+                for j in range(rowi.size):
+                    rowi[j] -= m * rowk[j]
                 b[i] -= m * b[k]
     for k in range(n - 1, -1, -1):
         s = b[k]
@@ -58,7 +61,7 @@ def _lu_solve(A, b):
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coarse_jacobian(S, act, na, load_here, l=0):
     """Newton system of :func:`_coarse_newton` on level l (default the
     coarsest; :func:`_spike_newton` uses it on the finest): J (dense, unknowns
@@ -80,6 +83,15 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     col = np.full(n, -1, dtype=np.int64)        # node -> column of the system
     for c in range(na):
         col[act[c]] = c
+    # the kernel extended symmetrically, Ks[n + t] = K_|t| (no abs per entry), and
+    # whether the unknowns are consecutive nodes (then each row reads Ks backwards
+    # in one run, which the compiler vectorises)
+    Ks = np.empty(2 * n + 1)
+    for t in range(n):
+        Ks[n + t] = K[ko + t]
+        Ks[n - t] = K[ko + t]
+    Ks[0] = 0.0                                  # t = -n: never read
+    consecutive = na > 0 and act[na - 1] - act[0] == na - 1
     for a in range(na):
         k = act[a]
         i = o + k
@@ -103,10 +115,16 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
         A1 = (-cm * e3m + w1 * rho[i - 1]) * ipi
         A2 = (w2 * rho[i - 2]) * ipi if k >= 2 else 0.0
         Ap = (-cp * e3p) * ipi
-        for c in range(na):
-            kk = act[c]
-            J[a, c] = -(A2 * K[ko + abs(k - 2 - kk)] + A1 * K[ko + abs(k - 1 - kk)]
-                        + A0 * K[ko + abs(k - kk)] + Ap * K[ko + abs(k + 1 - kk)])
+        if consecutive:
+            row = J[a, :na]
+            s0 = n + k - act[0]
+            for c in range(na):
+                row[c] = -(A2 * Ks[s0 - 2 - c] + A1 * Ks[s0 - 1 - c]
+                           + A0 * Ks[s0 - c] + Ap * Ks[s0 + 1 - c])
+        else:
+            for c in range(na):
+                t = n + k - act[c]
+                J[a, c] = -(A2 * Ks[t - 2] + A1 * Ks[t - 1] + A0 * Ks[t] + Ap * Ks[t + 1])
         # local part: Poiseuille coefficients, d eps/dP and d rho/dP of the node
         c = col[k]
         J[a, c] += -(cm + cp) * eps[i] * dle[i] + (em + ep) / h2 + w0 * drho[i] * H[i]
@@ -131,7 +149,7 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     return J, b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coarse_newton(steps, load_here, S, coef_valid=False):
     """Coarsest-grid solve by Newton steps on the whole (FAS) coarse problem
     instead of point sweeps (option ``coarse_newton`` = steps; steady only).
@@ -190,7 +208,7 @@ def _coarse_newton(steps, load_here, S, coef_valid=False):
         _film(0, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _block_scaled_residual(l, S, k0, k1):
     """Coefficients and residual of level l for the current state, and the
     largest |r_i / (dL_i/dP_i)| over the pressurised nodes k0 <= k < k1 (the
@@ -219,7 +237,60 @@ def _block_scaled_residual(l, S, k0, k1):
     return kmax, big
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def _block_scaled_residual_local(l, S, k0, k1):
+    """As :func:`_block_scaled_residual` (steady operator), but the
+    coefficients only of the nodes k0 - 2 .. k1 that the residual of the
+    nodes k0 <= k < k1 reads and the residual only of those nodes (the
+    acceptance test of :func:`_spike_newton`; the other nodes' coefficients
+    are left as they were)."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    dX = dx[l]
+    h2 = dX * dX
+    idX = 1.0 / dX
+    ih2 = idX * idX
+    order2 = opt[3] > 0
+    _coef_span(o + max(k0 - 2, 0), o + min(k1 + 1, n), P, H, rho, eps, dle, drho, prm)
+    kmax = -1
+    big = 0.0
+    for k in range(k0, k1):
+        i = o + k
+        em, ep, poi, wedge = _reynolds_terms(P, H, rho, eps, i, k >= 2 and order2, idX, ih2,
+                                             0.0, False)
+        wrk[i] = f[i] - (poi - wedge)
+        if P[i] <= 0.0:
+            continue
+        J0 = -(em + ep) / h2 + rho[i] * (K[ko] - K[ko + 1]) / (math.pi * dX)
+        v = abs(wrk[i] / J0)
+        if v > big:
+            big = v
+            kmax = k
+    return kmax, big
+
+
+@njit(cache=True, error_model="numpy")
+def _add_deformation(l, S, k, dp):
+    """H of level l += the film change of a pressure change ``dp`` at node k
+    (-dp K_|j-k| / pi at every node j: the direct form of one column of the
+    deformation, instead of a full FFT film update after a local change)."""
+    H = S[1]
+    iarr = S[14]
+    K = S[16]
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    c = -dp / math.pi
+    for j in range(k):
+        H[o + j] += c * K[ko + k - j]
+    for j in range(k, n):
+        H[o + j] += c * K[ko + j - k]
+
+
+@njit(cache=True, error_model="numpy")
 def _spike_newton(steps, width, S):
     """Newton steps on the block of the finest grid around the node with the
     largest scaled Reynolds residual (option ``spike_newton`` = steps,
@@ -240,7 +311,11 @@ def _spike_newton(steps, width, S):
     kernel, eps through P and H, the wedge term through rho and H) removes
     it.  Trust region and clipping as in :func:`_coarse_newton`; the step is
     undone unless the largest scaled residual of the block falls; a singular
-    or non-finite system leaves the state unchanged."""
+    or non-finite system leaves the state unchanged.  The film follows the
+    step column by column (:func:`_add_deformation`, a few nodes changed)
+    and the acceptance test reads only the block
+    (:func:`_block_scaled_residual_local`); the caller's convergence test
+    recomputes the coefficients of the whole level."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     l = iarr.shape[1] - 1
@@ -252,6 +327,7 @@ def _spike_newton(steps, width, S):
     order2 = opt[3] > 0
     act = np.empty(2 * width + 1, dtype=np.int64)
     old = np.empty(2 * width + 1)
+    Hs = np.empty(n)
     for st in range(steps):
         kmax, big0 = _block_scaled_residual(l, S, 1, n - 1)
         if kmax < 0:
@@ -273,16 +349,20 @@ def _spike_newton(steps, width, S):
             if v > big:
                 big = v
         sc = 1.0 if big <= 1.0 else 1.0 / big
+        for k in range(n):
+            Hs[k] = H[o + k]
         for a in range(na):
             i = o + act[a]
             old[a] = P[i]
             v = P[i] + sc * d[a]
             P[i] = v if v > 0.0 else 0.0
-        _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+            if P[i] != old[a]:
+                _add_deformation(l, S, act[a], P[i] - old[a])
         # accepted only if the largest scaled residual of the block fell
-        k_, big1 = _block_scaled_residual(l, S, act[0], act[na - 1] + 1)
+        k_, big1 = _block_scaled_residual_local(l, S, act[0], act[na - 1] + 1)
         if not big1 < big0:
             for a in range(na):
                 P[o + act[a]] = old[a]
-            _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+            for k in range(n):
+                H[o + k] = Hs[k]
             return

@@ -55,8 +55,7 @@ def stage_twiddles(twr: np.ndarray, twi: np.ndarray, m: int):
     exp(-2 pi i k / (2 h)), copied from the base table twr/twi[j] =
     exp(-2 pi i j / m) at j = k m / (2 h) (same values bit for bit, so the FFT
     result is unchanged; the butterfly loop then reads its twiddles
-    contiguously and vectorises: 1024 points 14.5 -> 11.1 us, docs/ehl.md
-    "Speed").  Entry 0 is unused."""
+    contiguously, docs/ehl.md "Speed").  Entry 0 is unused."""
     N = m // 2
     sr = np.zeros(N)
     si = np.zeros(N)
@@ -69,7 +68,19 @@ def stage_twiddles(twr: np.ndarray, twi: np.ndarray, m: int):
     return sr, si
 
 
-@njit(cache=True)
+#: bit reversal of a byte (:func:`_bitrev`)
+_REV8 = np.array([int(f"{i:08b}"[::-1], 2) for i in range(256)], dtype=np.int64)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bitrev(k, bits):
+    """k (< 2^32) with its lowest ``bits`` bits in reverse order (byte table)."""
+    r = ((_REV8[k & 255] << 24) | (_REV8[(k >> 8) & 255] << 16)
+         | (_REV8[(k >> 16) & 255] << 8) | _REV8[(k >> 24) & 255])
+    return r >> (32 - bits)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _butterfly(re, im, i, half, wr, wi):
     """Radix-2 butterfly of entries i and i + half with the twiddle wr + i wi."""
     i2 = i + half
@@ -81,20 +92,66 @@ def _butterfly(re, im, i, half, wr, wi):
     im[i] += vi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def _cfft_stages(re, im, N, sr, si, sign, skip_first=False):
+    """Butterfly stages of :func:`_cfft` on input already in bit-reversed
+    order (natural-order output).  Stages with >= 8 twiddles run block by
+    block on slices of the two halves (separate views: the compiler proves
+    them apart and vectorises the twiddle loop; the same operations on the
+    same numbers as the scalar loop, so the same bits), shorter ones twiddle
+    by twiddle.  ``skip_first``: the caller has done the length-2 stage."""
+    if not skip_first:
+        for i in range(0, N - 1, 2):          # length-2 stage: twiddle 1
+            ar = re[i]
+            ai = im[i]
+            br = re[i + 1]
+            bi = im[i + 1]
+            re[i] = ar + br
+            im[i] = ai + bi
+            re[i + 1] = ar - br
+            im[i + 1] = ai - bi
+    length = 4
+    while length <= N:
+        half = length >> 1
+        if half >= 8:
+            wr = sr[half:length]
+            wi = si[half:length]
+            for s in range(0, N, length):
+                xr = re[s:s + half]
+                xi = im[s:s + half]
+                yr = re[s + half:s + length]
+                yi = im[s + half:s + length]
+                for k in range(half):
+                    twi = sign * wi[k]
+                    vr = yr[k] * wr[k] - yi[k] * twi
+                    vi = yr[k] * twi + yi[k] * wr[k]
+                    ar = xr[k]
+                    ai = xi[k]
+                    yr[k] = ar - vr
+                    yi[k] = ai - vi
+                    xr[k] = ar + vr
+                    xi[k] = ai + vi
+        else:
+            for k in range(half):
+                wr_ = sr[half + k]
+                wi_ = sign * si[half + k]
+                for s in range(0, N, length):
+                    _butterfly(re, im, s + k, half, wr_, wi_)
+        length <<= 1
+
+
+@njit(cache=True, error_model="numpy")
 def _cfft(re, im, N, sr, si, sign):
     """Iterative radix-2 complex FFT of re[0:N] + i im[0:N] in place (N a
     power of 2, no 1/N scaling); twiddles of the stage of half length h at
     sr/si[h:2h] (:func:`stage_twiddles`); ``sign`` = +1 forward, -1 inverse.
-    Stages with h >= 8 run block by block with the twiddle index innermost
-    (contiguous, vectorisable), shorter ones twiddle by twiddle."""
-    j = 0
+    Bit-reversal permutation, then :func:`_cfft_stages` (:func:`conv_real`
+    writes its input in bit-reversed order instead)."""
+    bits = 0
+    while (1 << bits) < N:
+        bits += 1
     for i in range(1, N):
-        bit = N >> 1
-        while j & bit:
-            j ^= bit
-            bit >>= 1
-        j ^= bit
+        j = _bitrev(i, bits)
         if i < j:
             t = re[i]
             re[i] = re[j]
@@ -102,34 +159,27 @@ def _cfft(re, im, N, sr, si, sign):
             t = im[i]
             im[i] = im[j]
             im[j] = t
-    for i in range(0, N - 1, 2):          # length-2 stage: twiddle 1
-        ar = re[i]
-        ai = im[i]
-        br = re[i + 1]
-        bi = im[i + 1]
-        re[i] = ar + br
-        im[i] = ai + bi
-        re[i + 1] = ar - br
-        im[i + 1] = ai - bi
-    length = 4
-    while length <= N:
-        half = length >> 1
-        # same butterflies in two loop orders: the inner loop runs over k (contiguous, vectorised)
-        # once a stage has >= 8 twiddles, over the blocks s for the short early stages
-        if half >= 8:
-            for s in range(0, N, length):
-                for k in range(half):
-                    _butterfly(re, im, s + k, half, sr[half + k], sign * si[half + k])
-        else:
-            for k in range(half):
-                wr = sr[half + k]
-                wi = sign * si[half + k]
-                for s in range(0, N, length):
-                    _butterfly(re, im, s + k, half, wr, wi)
-        length <<= 1
+    _cfft_stages(re, im, N, sr, si, sign)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
+def _spectrum_times(re, im, kk, jj, wr, wi, kh, yr, yi, k):
+    """Entry k of the length-m spectrum of the packed real sequence (entries kk
+    and jj = N - kk of its half-length FFT, twiddle wr + i wi) times kh, into
+    yr/yi[k] (:func:`conv_real`)."""
+    zr = re[kk]
+    zi = im[kk]
+    cr = re[jj]
+    ci = -im[jj]
+    er = 0.5 * (zr + cr)
+    ei = 0.5 * (zi + ci)
+    orr = 0.5 * (zi - ci)
+    oi = -0.5 * (zr - cr)
+    yr[k] = (er + wr * orr - wi * oi) * kh
+    yi[k] = (ei + wr * oi + wi * orr) * kh
+
+
+@njit(cache=True, error_model="numpy")
 def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
     """V_i = -(1/pi) sum_j K_|i-j| P_{o+j} (i, j < n) by FFT.
 
@@ -144,31 +194,29 @@ def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
     by the FFT's stage table (:func:`stage_twiddles`) at ``[to+m/2:to+m]``.
     Work buffers re, im, yr, yi need m/2 + 1 entries."""
     N = m // 2
-    for k in range(N):
+    bits = 0
+    while (1 << bits) < N:
+        bits += 1
+    # packed input written in bit-reversed order (the FFT stages need no
+    # permutation); its second half is zero (N >= n - 1), i.e. the odd
+    # bit-reversed positions, so the length-2 stage copies each even entry
+    # into the odd one after it (x + 0 = x - 0 = x) and is done here
+    for k in range(N // 2):
         a = 2 * k
-        re[k] = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
-        im[k] = P[o + a + 1] if a + 1 <= n - 2 else 0.0
-    _cfft(re, im, N, twr[to + N:], twi[to + N:], 1.0)
-    for k in range(N + 1):
-        kk = k if k < N else 0
-        jj = (N - k) % N
-        zr = re[kk]
-        zi = im[kk]
-        cr = re[jj]
-        ci = -im[jj]
-        er = 0.5 * (zr + cr)
-        ei = 0.5 * (zi + ci)
-        orr = 0.5 * (zi - ci)
-        oi = -0.5 * (zr - cr)
-        if k < N:
-            wr = twr[to + k]
-            wi = twi[to + k]
-        else:
-            wr = -1.0
-            wi = 0.0
-        kh = khr[mo + k]
-        yr[k] = (er + wr * orr - wi * oi) * kh
-        yi[k] = (ei + wr * oi + wi * orr) * kh
+        j = _bitrev(k, bits)
+        vr = P[o + a] if (a >= 1 and a <= n - 2) else 0.0
+        vi = P[o + a + 1] if a + 1 <= n - 2 else 0.0
+        re[j] = vr
+        re[j + 1] = vr
+        im[j] = vi
+        im[j + 1] = vi
+    _cfft_stages(re, im, N, twr[to + N:], twi[to + N:], 1.0, True)
+    # spectrum of the real input (k = 0 and N: the pair (0, 0); else (k, N - k)) times
+    # the kernel spectrum
+    _spectrum_times(re, im, 0, 0, twr[to], twi[to], khr[mo], yr, yi, 0)
+    for k in range(1, N):
+        _spectrum_times(re, im, k, N - k, twr[to + k], twi[to + k], khr[mo + k], yr, yi, k)
+    _spectrum_times(re, im, 0, 0, -1.0, 0.0, khr[mo + N], yr, yi, N)
     for k in range(N):
         j = N - k
         ar = yr[k]
@@ -179,19 +227,20 @@ def conv_real(P, o, n, khr, mo, m, twr, twi, to, K, ko, re, im, yr, yi, V):
         di = 0.5 * (ai - ci)
         wr = twr[to + k]
         wi = -twi[to + k]
-        re[k] = 0.5 * (ar + cr) - (dr * wi + di * wr)
-        im[k] = 0.5 * (ai + ci) + (dr * wr - di * wi)
-    _cfft(re, im, N, twr[to + N:], twi[to + N:], -1.0)
+        j = _bitrev(k, bits)
+        re[j] = 0.5 * (ar + cr) - (dr * wi + di * wr)
+        im[j] = 0.5 * (ai + ci) + (dr * wr - di * wi)
+    _cfft_stages(re, im, N, twr[to + N:], twi[to + N:], -1.0)
     inv = 1.0 / N
     p0 = P[o]
     p1 = P[o + n - 1]
-    for i in range(n):
-        h = i >> 1
-        v = re[h] if (i & 1) == 0 else im[h]
-        V[i] = v * inv - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
+    for i in range(0, n, 2):
+        V[i] = re[i >> 1] * inv - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
+    for i in range(1, n, 2):
+        V[i] = im[i >> 1] * inv - (K[ko + i] * p0 + K[ko + n - 1 - i] * p1) / math.pi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fft_deformation(P, khr, khi, twr, twi, K):
     """V = -(1/pi) K * P by zero-padded circular convolution (numba FFT,
     :func:`conv_real`); (khr, khi) is the FFT of the circulant embedding of

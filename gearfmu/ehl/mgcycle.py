@@ -24,7 +24,7 @@ from .errors import EHLInputError
 from .mgkernels import _coef, _down, _film, _load, _relax, _residual, _up
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _run_schedule(sched, S, top_coef_valid=False):
     """One cycle.  With option ``lean`` (default 1) work whose result is never
     read is skipped: (i) the coefficients of a level at its first sweep right
@@ -54,7 +54,7 @@ def _run_schedule(sched, S, top_coef_valid=False):
             _up(-code, S, not (lean and nxt == code - 1))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _scaled_residual(l, S, order2, zero_f):
     """Mean over pressurised nodes of |r_i / (dL_i/dP_i)| (units of p_h);
     ``zero_f``: residual of the undisturbed equation (f = 0)."""
@@ -89,7 +89,7 @@ def _scaled_residual(l, S, order2, zero_f):
     return s / max(cnt, 1)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
              stall_window, tol_d):
     """Cycles until converged (returns +cycles) or stalled/failed (-cycles).
@@ -226,6 +226,19 @@ def w_schedule(n_levels: int, gamma=2) -> np.ndarray:
         raise EHLInputError(f"gamma={gamma!r}: must be 1 (V-cycle), 2 (W-cycle) or 'F'")
     cyc(n_levels - 1, gamma)
     return np.array(ops, dtype=np.int64)
+
+
+_SCHEDULES: dict = {}
+
+
+def cached_schedule(n_levels: int, gamma=2) -> np.ndarray:
+    """:func:`w_schedule`, built once per (n_levels, gamma) (the compiled
+    cycles only read it)."""
+    key = (int(n_levels), gamma)
+    s = _SCHEDULES.get(key)
+    if s is None:
+        s = _SCHEDULES[key] = w_schedule(n_levels, gamma)
+    return s
 
 
 #: option vector layout of the compiled core

@@ -47,7 +47,7 @@ from .deformation import conv_real
 N_DIRECT = 64
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
     """V = -(1/pi) sum_j K_|i-j| P_j on level l (direct sum or FFT)."""
     o = iarr[0, l]
@@ -72,7 +72,7 @@ def _deform(l, P, V, iarr, K, khr, khi, twr, twi, re, im):
               im[h:2 * h], V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V):
     o = iarr[0, l]
     n = iarr[1, l]
@@ -81,13 +81,18 @@ def _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V):
         H[o + i] = H0[l] + base[o + i] + V[i] + tauH[o + i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
     """rho, eps = rho H^3/(eta lambda), d ln(eps)/dP and d rho/dP on level l."""
-    lam, A, z, php0, c1, comp = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]
     o = iarr[0, l]
-    n = iarr[1, l]
-    for i in range(o, o + n):
+    _coef_span(o, o + iarr[1, l], P, H, rho, eps, dle, drho, prm)
+
+
+@njit(cache=True, error_model="numpy")
+def _coef_span(i0, i1, P, H, rho, eps, dle, drho, prm):
+    """:func:`_coef` of the flat indices i0 <= i < i1."""
+    lam, A, z, php0, c1, comp = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]
+    for i in range(i0, i1):
         p = P[i] if P[i] > 0.0 else 0.0
         dl = 0.0
         r = 1.0
@@ -97,9 +102,10 @@ def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
             dl += 1.34 / (c1 + 1.34 * p) - 1.0 / (c1 + p)
             dr = 0.34 * c1 / ((c1 + p) * (c1 + p))
         if z > 0.0:
-            q = (1.0 + p * php0) ** z
+            x = 1.0 + p * php0
+            q = math.exp(z * math.log(x))       # x^z (exp/log: cheaper than pow)
             eta = math.exp(A * (q - 1.0))
-            dl -= A * z * php0 * q / (1.0 + p * php0)
+            dl -= A * z * php0 * q / x
         elif z < 0.0:
             eta = math.exp(A * p)
             dl -= A
@@ -112,20 +118,21 @@ def _coef(l, P, H, rho, eps, dle, drho, iarr, prm):
         dle[i] = dl
 
 
-@njit(cache=True)
-def _reynolds_terms(P, H, rho, eps, i, sec, dX, h2, ct, char):
+@njit(cache=True, error_model="numpy", inline="always")
+def _reynolds_terms(P, H, rho, eps, i, sec, idX, ih2, ct, char):
     """Terms of the discrete Reynolds equation at node i: eps at the half nodes
     (em, ep), the Poiseuille term and the wedge term (second-order upstream if
     ``sec``, else first order), with the implicit time term ct rho_i H_i added
-    to the wedge term (``char``: replacing it)."""
+    to the wedge term (``char``: replacing it); ``idX`` = 1/dX, ``ih2`` =
+    1/dX^2 (products instead of divisions in the sweeps)."""
     em = 0.5 * (eps[i - 1] + eps[i])
     ep = 0.5 * (eps[i] + eps[i + 1])
-    poi = (em * (P[i - 1] - P[i]) + ep * (P[i + 1] - P[i])) / h2
+    poi = (em * (P[i - 1] - P[i]) + ep * (P[i + 1] - P[i])) * ih2
     if sec:
         wedge = (1.5 * rho[i] * H[i] - 2.0 * rho[i - 1] * H[i - 1]
-                 + 0.5 * rho[i - 2] * H[i - 2]) / dX
+                 + 0.5 * rho[i - 2] * H[i - 2]) * idX
     else:
-        wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) / dX
+        wedge = (rho[i] * H[i] - rho[i - 1] * H[i - 1]) * idX
     if ct != 0.0:
         if char:
             wedge = ct * rho[i] * H[i]
@@ -134,7 +141,7 @@ def _reynolds_terms(P, H, rho, eps, i, sec, dX, h2, ct, char):
     return em, ep, poi, wedge
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
     """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends).
 
@@ -147,17 +154,18 @@ def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
     o = iarr[0, l]
     n = iarr[1, l]
     dX = dx[l]
-    h2 = dX * dX
+    idX = 1.0 / dX
+    ih2 = idX * idX
     out[o] = 0.0
     out[o + n - 1] = 0.0
     for k in range(1, n - 1):
         i = o + k
-        em, ep, poi, wedge = _reynolds_terms(P, H, rho, eps, i, k >= 2 and order2, dX, h2,
+        em, ep, poi, wedge = _reynolds_terms(P, H, rho, eps, i, k >= 2 and order2, idX, ih2,
                                              ct, char)
         out[i] = f[i] - (poi - wedge)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     """One relaxation sweep on level l (P in place; H stale afterwards)."""
     omega_gs, omega_j, switch, order2, dmax, dist = opt[0], opt[1], opt[2], opt[3] > 0, \
@@ -171,7 +179,8 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     n = iarr[1, l]
     ko = iarr[2, l]
     dX = dx[l]
-    h2 = dX * dX
+    idX = 1.0 / dX
+    ih2 = idX * idX
     ipi = 1.0 / math.pi
     K0 = K[ko]
     K1 = K[ko + 1]
@@ -199,13 +208,13 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
     for k in range(1, n - 1):
         i = o + k
         sec = k >= 2 and order2
-        em, ep, poi, wedge = _reynolds_terms(P, H, rho, eps, i, sec, dX, h2, ct, char)
+        em, ep, poi, wedge = _reynolds_terms(P, H, rho, eps, i, sec, idX, ih2, ct, char)
         r = f[i] - (poi - wedge)
-        xtra = -abs(0.5 * eps[i] * dle[i] * (P[i - 1] - 2.0 * P[i] + P[i + 1]) / h2)
+        xtra = -abs(0.5 * eps[i] * dle[i] * (P[i - 1] - 2.0 * P[i] + P[i + 1]) * ih2)
         # hysteresis (``stick`` >= 1): a node relaxed by Jacobi stays Jacobi
         # until eps/dX^2 exceeds stick * switch (prevents switching limit cycles)
         thr = switch * stick if mode[i] == 1 else switch
-        gs = eps[i] / h2 >= thr or P[i - 1] <= 0.0 or P[i + 1] <= 0.0 or P[i] <= 0.0
+        gs = eps[i] * ih2 >= thr or P[i - 1] <= 0.0 or P[i + 1] <= 0.0 or P[i] <= 0.0
         if freeze and l == top_level:
             # frozen switch (finest grid): keep the relaxation type of each node
             gs = mode[i] == 0
@@ -213,15 +222,15 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
         if gs:
             if sec:
                 w = (1.5 * rho[i] * K0 - 2.0 * rho[i - 1] * K1 + 0.5 * rho[i - 2] * K2) * ipi
-                w = (w - 1.5 * H[i] * drho[i]) / dX
+                w = (w - 1.5 * H[i] * drho[i]) * idX
             else:
-                w = ((rho[i] * K0 - rho[i - 1] * K1) * ipi - H[i] * drho[i]) / dX
+                w = ((rho[i] * K0 - rho[i - 1] * K1) * ipi - H[i] * drho[i]) * idX
             if ct != 0.0:
                 # d[ct rho_i H_i]/dP_i with dH_i/dP_i = -K0/pi (time term)
                 if char:
                     w = 0.0
                 w += ct * (rho[i] * K0 * ipi - H[i] * drho[i])
-            J = -(em + ep) / h2 + w + xtra
+            J = -(em + ep) * ih2 + w + xtra
             d = omega_gs * r / J
             if abs(d * dle[i]) > dmax:
                 d = math.copysign(dmax / abs(dle[i]), d)
@@ -236,16 +245,16 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
             else:
                 w = (rho[i] * c0 - rho[i - 1] * cm1) * ipi
                 w -= H[i] * drho[i] - H[i - 1] * drho[i - 1] * pm1
-            w /= dX
+            w *= idX
             if ct != 0.0:
                 # time term: film change -c0/pi and density change at i per unit d
                 if char:
                     w = 0.0
                 w += ct * (rho[i] * c0 * ipi - H[i] * drho[i])
             if dist > 0.5:
-                Jp = -poifac * (em + ep) / h2
+                Jp = -poifac * (em + ep) * ih2
             else:
-                Jp = -(2.0 * em + ep) / h2
+                Jp = -(2.0 * em + ep) * ih2
             J = Jp + w + xtra
             d = omega_j * r / J
             if abs(d * dle[i]) > dmax:
@@ -271,7 +280,7 @@ def _relax_once(l, P, H, f, rho, eps, dle, drho, delta, iarr, dx, K, opt, mode):
             P[o + k] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _relax(l, sweeps, load_here, S, coef_valid=False, last_film=True):
     """``sweeps`` relaxation sweeps on level l, each followed by a film update.
     ``coef_valid``: rho, eps, dle, drho of level l already belong to the current
@@ -307,7 +316,7 @@ def _relax(l, sweeps, load_here, S, coef_valid=False, last_film=True):
             _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _load(l, P, iarr, dx):
     o = iarr[0, l]
     n = iarr[1, l]
@@ -317,7 +326,7 @@ def _load(l, P, iarr, dx):
     return dx[l] * s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _down(k, S, coef_valid=False):
     """Pre-relax on level k and set up the FAS problem on level k-1 (whose
     coefficients are left valid for the current P and H on return)."""
@@ -369,7 +378,7 @@ def _down(k, S, coef_valid=False):
     H0old[k - 1] = H0[k - 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _up(k, S, last_film=True):
     """Prolong the level k-1 correction to level k and post-relax
     (``last_film`` = False: no film update after the last sweep)."""
@@ -391,3 +400,36 @@ def _up(k, S, last_film=True):
     H0[k] += H0[k - 1] - H0old[k - 1]
     _film(k, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
     _relax(k, int(opt[9]), False, S, False, last_film)
+
+
+@njit(cache=True, error_model="numpy")
+def _fmg_prolong(l, S):
+    """Start level l from the solution on level l-1 (full multigrid): P
+    injected at the even nodes and cubic (4-point) interpolation at the odd
+    ones (linear next to the ends), clipped to P >= 0, zero right-hand sides,
+    H0 carried over, film updated (:meth:`.multigrid.FlatMultigrid._prolong_solution`)."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    oc = iarr[0, l - 1]
+    nc = iarr[1, l - 1]
+    of = iarr[0, l]
+    nf = iarr[1, l]
+    for I in range(nc):
+        P[of + 2 * I] = P[oc + I]
+    for I in range(nc - 1):
+        a = P[oc + I]
+        b = P[oc + I + 1]
+        if nc >= 4 and 1 <= I <= nc - 3:
+            v = (9.0 * (a + b) - (P[oc + I - 1] + P[oc + I + 2])) / 16.0
+        else:
+            v = 0.5 * (a + b)
+        P[of + 2 * I + 1] = v
+    for k in range(nf):
+        if P[of + k] < 0.0:
+            P[of + k] = 0.0
+        f[of + k] = 0.0
+        tauH[of + k] = 0.0
+    P[of] = 0.0
+    P[of + nf - 1] = 0.0
+    H0[l] = H0[l - 1]
+    _film(l, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)

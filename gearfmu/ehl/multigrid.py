@@ -17,8 +17,8 @@ import numpy as np
 
 from .deformation import kernel_coefficients, stage_twiddles
 from .errors import EHLInputError
-from .mgcycle import OPT_DEFAULTS, OPT_KEYS, _iterate, w_schedule
-from .mgkernels import N_DIRECT, _coef, _film
+from .mgcycle import OPT_DEFAULTS, OPT_KEYS, _iterate, cached_schedule
+from .mgkernels import N_DIRECT, _coef, _film, _fmg_prolong
 
 
 @dataclass
@@ -156,7 +156,7 @@ class FlatMultigrid:
         self.prmv = np.array([prm.lam, prm.A, prm.z, prm.php0, prm.c1,
                               1.0 if prm.compressible else 0.0, prm.x_in, prm.x_out, 1.0])
         self.optv = np.array([float(o[k]) for k in OPT_KEYS])
-        self.sched = w_schedule(n_levels, self.gamma)
+        self.sched = cached_schedule(n_levels, self.gamma)
 
     # -- access ---------------------------------------------------------------
     def _sl(self, l):
@@ -267,22 +267,7 @@ class FlatMultigrid:
         Venner & Lubrecht 2000 sec. 3.x "FMG interpolation of higher order
         than the discretisation": 2nd-order discretisation -> order >= 3)
         interpolation of P, clipped to P >= 0; H0 carried over."""
-        Pc = self.level_P(l - 1)
-        nc = Pc.size
-        Pf = np.empty(2 * nc - 1)
-        Pf[0::2] = Pc
-        mid = 0.5 * (Pc[:-1] + Pc[1:])
-        if nc >= 4:
-            mid[1:-1] = (9.0 * (Pc[1:-2] + Pc[2:-1]) - (Pc[:-3] + Pc[3:])) / 16.0
-        Pf[1::2] = mid
-        np.clip(Pf, 0.0, None, out=Pf)
-        Pf[0] = Pf[-1] = 0.0
-        sl = self._sl(l)
-        self.P[sl] = Pf
-        self.f[sl] = 0.0
-        self.tauH[sl] = 0.0
-        self.H0[l] = self.H0[l - 1]
-        self.update_film(l)
+        _fmg_prolong(l, self.state())
 
     def fmg_start(self, Hc: float, cycles_per_level: int = 1, coarse_cycles: int = 20,
                   coarse_tol: float = 1e-4, alpha_dx: float = math.inf, alpha_eff: float = 0.0):
@@ -336,7 +321,7 @@ class FlatMultigrid:
             ncyc = coarse_cycles if l == first else cycles_per_level
             tol = coarse_tol if l == first else 0.0
             hist = np.full((6, ncyc), np.nan)
-            k = _iterate(w_schedule(l - lo + 1, self.gamma), self._substate(lo, l), hist,
+            k = _iterate(cached_schedule(l - lo + 1, self.gamma), self._substate(lo, l), hist,
                          int(ncyc), 1, tol, tol, tol, 1.0, 6 if l == first else 10 ** 6, 0.0)
             counts.append(abs(int(k)))
             Xl = self.X[l]
