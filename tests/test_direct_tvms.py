@@ -55,26 +55,18 @@ ST_129_8 = TransientFilmSettings(n_nodes=129, T_average=8.0)
 
 
 @pytest.fixture(scope="module")
-def pool():
-    """Two worker processes for the film runs of the Figs. 12-13 tests (the same results as
-    in-process: the runs are deterministic)."""
-    from gearfmu.dynamics.sweeps import make_executor
-
-    with make_executor(max_workers=2) as ex:
-        yield ex
-
-
-@pytest.fixture(scope="module")
-def figs12_13_levels_1_2(pool):
+def figs12_13_levels_1_2():
     """Hertz, smooth steady film and the level 1-2 transient rough films at S_TWO (default film
     parameter screen: both levels have Lambda > 3 there), shared by the two Figs. 12-13 tests so
-    that the file computes them once."""
+    that the file computes them once.  In this process (``max_workers=1``): a pool's workers would
+    each compile the numba film kernels on a fresh install, and the xdist workers already use both
+    cores; the executor path is exercised by tests/test_direct_tvms_speed_torque.py."""
     sc = _scene(2)
     out = {}
     for name, model, level in (("hertz", "hertz", None), ("smooth", "smooth_ehl", None),
                                ("L1", "rough_transient", 1), ("L2", "rough_transient", 2)):
         out[name] = direct_mesh_stiffness(_env(sc, level), sc.mesh, S_TWO, 2000.0, model, transient=ST_129_8,
-                                          executor=pool)
+                                          max_workers=1)
     return out
 
 
@@ -111,7 +103,7 @@ def test_seed000_figs12_13_direct_tvms_ordering_at_two_positions(figs12_13_level
         assert k["hertz"][i] < k["L2"][i] < k["L1"][i] < k["smooth"][i], (i, {q: v[i] for q, v in k.items()})
 
 
-def test_seed000_fig13_all_four_levels_under_the_full_film_assumption(figs12_13_levels_1_2, pool):
+def test_seed000_fig13_all_four_levels_under_the_full_film_assumption(figs12_13_levels_1_2):
     # Reference: seed 000 section 5.2 / Fig. 13 and its conclusions -- the TVMS falls as the
     # roughness level rises through ALL four levels of its Table 2, and the pair runs in full film at
     # every level (the paper's assumption).  Our default screen refuses levels 3-4 (Lambda =
@@ -148,7 +140,7 @@ def test_seed000_fig13_all_four_levels_under_the_full_film_assumption(figs12_13_
         env = _env(sc, level)
         with pytest.raises(DirectTVMSError, match="lambda = h_min/sigma"):    # the default screen refuses
             direct_mesh_stiffness(env, sc.mesh, s, 2000.0, "rough_transient", transient=ST_129_8, max_workers=1)
-        r = direct_mesh_stiffness(env, sc.mesh, s, 2000.0, "rough_transient", transient=ST_129_8, executor=pool,
+        r = direct_mesh_stiffness(env, sc.mesh, s, 2000.0, "rough_transient", transient=ST_129_8, max_workers=1,
                                   check_film_parameter=False)
         assert r.failures == [] and r.load_change < 1e-3, (level, r.failures, r.load_change)
         assert np.nanmax(r.film_parameter) < 3.0                   # below the screen's full-film limit
