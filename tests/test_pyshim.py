@@ -1,8 +1,9 @@
 """The pythonfmu runtime's FMU never takes its host down (docs/fmu.md "The binary").
 
 Hosts: tests/fmi_host.c (one FMU, plain C), tests/fmi_threads_host.c (several
-FMUs instantiated at the same moment from several threads, plain C), and a
-Python interpreter without numpy driving the binary through ctypes.  Every
+FMUs instantiated at the same moment from several threads, plain C),
+LATE_HOST below (a second FMU instantiated while the first one's interpreter
+is still starting, plain C), and a Python interpreter without numpy driving the binary through ctypes.  Every
 run is a fresh process; the reference is the FMI 2.0 contract (section 2.1.5:
 fmi2Instantiate returns NULL when it cannot instantiate, and reports why
 through the logger) and the process exit code (a crash is a signal, negative
@@ -14,6 +15,7 @@ import subprocess
 import sys
 import textwrap
 import zipfile
+from pathlib import Path
 
 import fmpy
 import pytest
@@ -176,3 +178,106 @@ def test_python_host_without_numpy_is_refused_cleanly(two, tmp_path):
     assert rc == 0, (rc, o[-400:], e[-400:])
     assert "INSTANCE NULL" in o
     assert REFUSED in o and "'numpy'" in o and "install it" in o  # what is missing, how to provide it
+
+
+LATE_HOST = textwrap.dedent(r"""
+    /* Two FMUs, one thread each: the first instantiates at once; the second waits until
+     * Py_IsInitialized() says 1 -- the interpreter the first one started is up, though it
+     * may still be importing site -- and only then instantiates.  Exit 0 iff both instances
+     * are created. */
+    #define _GNU_SOURCE
+    #include <dlfcn.h>
+    #include <pthread.h>
+    #include <stdarg.h>
+    #include <stdio.h>
+    #include <stdlib.h>
+    #include <unistd.h>
+    #include "fmi2Functions.h"
+
+    static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                       fmi2String message, ...)
+    {
+        va_list ap;
+        (void)env; (void)category;
+        fprintf(stderr, "[%s %d] ", name ? name : "?", (int)status);
+        va_start(ap, message);
+        vfprintf(stderr, message, ap);
+        va_end(ap);
+        fputc('\n', stderr);
+    }
+
+    typedef struct { const char *dir, *id, *guid; void *lib; int late, ok; } job;
+
+    static void *run(void *arg)
+    {
+        job *j = (job *)arg;
+        char uri[4200];
+        fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+        fmi2InstantiateTYPE *inst = (fmi2InstantiateTYPE *)dlsym(j->lib, "fmi2Instantiate");
+        fmi2FreeInstanceTYPE *fr = (fmi2FreeInstanceTYPE *)dlsym(j->lib, "fmi2FreeInstance");
+        fmi2Component c;
+        if (j->late) {
+            int (*up)(void) = NULL;
+            while (up == NULL || !up()) {
+                usleep(200);
+                if (up == NULL) *(void **)(&up) = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+            }
+        }
+        snprintf(uri, sizeof uri, "file://%s/resources", j->dir);
+        c = inst(j->id, fmi2CoSimulation, j->guid, uri, &cb, fmi2False, fmi2False);
+        j->ok = c != NULL;
+        if (c != NULL) fr(c);
+        return NULL;
+    }
+
+    int main(int argc, char **argv)
+    {
+        job jobs[2];
+        pthread_t t[2];
+        char path[4200];
+        int i;
+        if (argc != 7) return 1;
+        for (i = 0; i < 2; ++i) {
+            jobs[i] = (job){argv[1 + 3 * i], argv[2 + 3 * i], argv[3 + 3 * i], NULL, i, 0};
+            snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", jobs[i].dir, jobs[i].id);
+            if ((jobs[i].lib = dlopen(path, RTLD_NOW | RTLD_LOCAL)) == NULL) return 2;
+        }
+        for (i = 0; i < 2; ++i) pthread_create(&t[i], NULL, run, &jobs[i]);
+        for (i = 0; i < 2; ++i) pthread_join(t[i], NULL);
+        return jobs[0].ok && jobs[1].ok ? 0 : 4;
+    }
+""")
+
+
+def test_fmu_started_while_another_fmus_python_imports_site(two, tmp_path):
+    """Py_IsInitialized() turns 1 before the interpreter imports site (which puts
+    site-packages, and numpy with it, on sys.path).  A second FMU instantiated in
+    that window must wait for the first FMU's start to finish, not import numpy
+    from a half-started interpreter.  The window is widened on purpose: the FMUs
+    run a venv of the base interpreter whose site-packages first sleeps in a
+    .pth file and then adds this environment's site-packages.  Reference: the
+    FMI 2.0 contract (fmi2Instantiate of a healthy FMU returns an instance);
+    3 fresh processes, every one must create both instances."""
+    import sysconfig
+
+    venv = tmp_path / "venv"
+    base = getattr(sys, "_base_executable", sys.executable)
+    subprocess.run([base, "-m", "venv", "--without-pip", str(venv)], check=True, capture_output=True)
+    py = venv / "bin" / "python"
+    site_dir = subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                              check=True, capture_output=True, text=True).stdout.strip()
+    (Path(site_dir) / "00_slow.pth").write_text("import time; time.sleep(1.0)\n")
+    (Path(site_dir) / "zz_env.pth").write_text(
+        f"import site; site.addsitedir({sysconfig.get_paths()['purelib']!r})\n")
+    args = []
+    for key in ("a", "b"):
+        d = tmp_path / key
+        shutil.copytree(two[key]["dir"], d)
+        cfg = d / "resources" / "gearfmu_pyshim.txt"
+        lines = [ln for ln in cfg.read_text().splitlines() if not ln.startswith("python_executable")]
+        cfg.write_text("\n".join(lines + [f"python_executable={py}"]) + "\n")
+        args += [str(d), two[key]["id"], two[key]["guid"]]
+    (tmp_path / "late_host.c").write_text(LATE_HOST)
+    host = _cc(tmp_path / "late_host.c", tmp_path / "late_host", "-ldl", "-lpthread")
+    res = _batches([[str(host), *args]] * 3, _clean_env(), width=1)
+    assert [rc for rc, _, _ in res] == [0] * 3, [(rc, e[-600:]) for rc, _, e in res if rc != 0]

@@ -15,7 +15,9 @@
  *  2. starts the interpreter if nobody has, under a process-wide lock shared
  *     by every gearfmu FMU in the process: flock() on a per-process lock file
  *     (each FMU's copy of this library opens the file itself; flock locks of
- *     separate open file descriptions conflict even within one process);
+ *     separate open file descriptions conflict even within one process); the
+ *     lock is taken even when the interpreter reports itself initialized, since
+ *     that flag is set before site-packages is on sys.path;
  *  3. imports the modules the slave needs from outside the FMU (ctypes,
  *     numpy) and refuses to instantiate, with a message through the host's
  *     logger, if one is missing;
@@ -204,9 +206,13 @@ static int start_interpreter(const shim_config *cfg, char *err, size_t n)
 {
     char lock_path[PATH_MAX];
     int fd, ok;
-    if (py.IsInitialized()) return 0;
+    /* Always through the lock, even when Py_IsInitialized() already says 1: CPython sets
+     * that flag before it imports site (which puts site-packages, numpy's home, on
+     * sys.path), so another FMU's start may still be under way; the lock is held until
+     * that start has returned. */
     fd = process_lock(lock_path, sizeof lock_path);
     if (fd < 0) {
+        if (py.IsInitialized()) return 0; /* started by the host itself, which needs no lock file */
         fail(err, n, "cannot open or lock %s (%s): the Python interpreter is not started without the "
                      "lock that keeps several FMUs from starting it at once", lock_path, strerror(errno));
         return -1;
