@@ -33,29 +33,11 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+#include "bench_host.h"
 #include "gear_model.h"
 
 enum { L_KERNEL, L_SHARED, L_DOSTEP, L_STEP_GET, L_GETREAL, L_N };
 static const char *const LOOP_NAME[L_N] = {"kernel", "shared", "dostep", "step_get", "getreal"};
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...)
-{
-    va_list ap;
-    (void)env;
-    fprintf(stderr, "[%s %d %s] ", name ? name : "?", (int)status, category ? category : "?");
-    va_start(ap, message);
-    vfprintf(stderr, message, ap);
-    va_end(ap);
-    fputc('\n', stderr);
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 #define CHECK(call)                                                           \
     do {                                                                      \
@@ -73,7 +55,7 @@ static int run_loop(fmi2Component comp, int loop, int n, double H, const fmi2Val
     double t = g->time, T1 = g->values[g->vr_T1], T2 = g->values[g->vr_T2], hmax = g->values[g->vr_hmax];
     double w0;
     int k;
-    w0 = now_s();
+    w0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
     switch (loop) {
     case L_KERNEL:
         for (k = 0; k < n; ++k)
@@ -97,7 +79,7 @@ static int run_loop(fmi2Component comp, int loop, int n, double H, const fmi2Val
             if (fmi2GetReal(comp, outs, (size_t)nout, vals) != fmi2OK) return 1;
         break;
     }
-    *wall = now_s() - w0;
+    *wall = clock_s(CLOCK_THREAD_CPUTIME_ID) - w0;
     return 0;
 }
 
@@ -123,10 +105,7 @@ int main(int argc, char **argv)
     H = atof(argv[3]);
     n = atoi(argv[4]);
     repeat = atoi(argv[5]);
-    for (p = argv[6]; *p != '\0' && nout < 16;) {
-        outs[nout++] = (fmi2ValueReference)strtoul(p, &p, 10);
-        if (*p == ',') p++;
-    }
+    nout = parse_vrs(argv[6], outs, 16);
     vr_hmax = (fmi2ValueReference)strtoul(argv[7], NULL, 10);
     hmax = atof(argv[8]);
     vr_int = (fmi2ValueReference)strtoul(argv[9], NULL, 10);

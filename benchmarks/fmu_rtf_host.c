@@ -26,31 +26,13 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+#include "bench_host.h"
 
 #if defined(__aarch64__)
 #define FMU_BIN "aarch64-linux"
 #else
 #define FMU_BIN "linux64"
 #endif
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...)
-{
-    va_list ap;
-    (void)env;
-    fprintf(stderr, "[%s %d %s] ", name ? name : "?", (int)status, category ? category : "?");
-    va_start(ap, message);
-    vfprintf(stderr, message, ap);
-    va_end(ap);
-    fputc('\n', stderr);
-}
-
-static double seconds(clockid_t clk)
-{
-    struct timespec ts;
-    clock_gettime(clk, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 #define LOAD(T, name)                                                         \
     T name = (T)dlsym(lib, #name);                                            \
@@ -90,10 +72,7 @@ int main(int argc, char **argv)
     stop = atof(argv[4]);
     step = atof(argv[5]);
     repeat = atoi(argv[6]);
-    for (p = argv[7]; *p != '\0' && nout < 16;) {
-        outs[nout++] = (fmi2ValueReference)strtoul(p, &p, 10);
-        if (*p == ',') p++;
-    }
+    nout = parse_vrs(argv[7], outs, 16);
     vr_hmax = (fmi2ValueReference)strtoul(argv[8], NULL, 10);
     hmax = atof(argv[9]);
     vr_int = (fmi2ValueReference)strtoul(argv[10], NULL, 10);
@@ -141,14 +120,14 @@ int main(int argc, char **argv)
             }
             CHECK(fmi2ExitInitializationMode(c));
             CHECK(fmi2GetReal(c, outs, (size_t)nout, rows));
-            w0 = seconds(CLOCK_MONOTONIC);
-            c0 = seconds(CLOCK_PROCESS_CPUTIME_ID);
+            w0 = clock_s(CLOCK_MONOTONIC);
+            c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
             for (k = 1; k <= nsteps; ++k) {
                 CHECK(fmi2DoStep(c, (k - 1) * step, step, fmi2True));
                 CHECK(fmi2GetReal(c, outs, (size_t)nout, rows + (size_t)k * nout));
             }
-            cpus[r] = seconds(CLOCK_PROCESS_CPUTIME_ID) - c0;
-            walls[r] = seconds(CLOCK_MONOTONIC) - w0;
+            cpus[r] = clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
+            walls[r] = clock_s(CLOCK_MONOTONIC) - w0;
             CHECK(fmi2Terminate(c));
             fmi2FreeInstance(c);
         }
