@@ -76,18 +76,26 @@ def _open_fmu(unzipdir, md, start_values):
 
 
 def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None, loop="lean", rows=None,
-              outputs=("dte", "mesh_force")):
+              outputs=("dte", "mesh_force"), noop=None):
     """Timed fmpy doStep/getReal loop (``loop``: a key of FMPY_LOOPS) over round(stop_s / comm_s)
     communication steps; returns (instantiate + initialise s, loop wall s, steps, last outputs, loop CPU s
     of this thread: the wall time without the time the thread waited for a core on a shared machine).
     ``record`` (a list): the first output at every communication point is appended (row 0 the
-    initial one); ``rows`` (a list): every output."""
+    initial one); ``rows`` (a list): every output.  ``noop`` (a ctypes library of
+    benchmarks/fmi2_noop.c): the loop calls its fmi2DoStep and fmi2GetReal, with fmpy's argument
+    types and through fmpy's own wrappers, instead of the FMU's (:func:`python_floor`)."""
     from fmpy.fmi2 import fmi2Real, fmi2ValueReference
 
     vrs = [next(v.valueReference for v in md.modelVariables if v.name == o) for o in outputs]
     t0 = time.perf_counter()
     fmu = _open_fmu(unzipdir, md, start_values)
     t_init = time.perf_counter() - t0
+    real_functions = dict(fmu._functions)
+    if noop is not None:
+        for name in ("fmi2DoStep", "fmi2GetReal"):
+            f = getattr(noop, name)
+            f.argtypes, f.restype = real_functions[name].argtypes, real_functions[name].restype
+            fmu._functions[name] = f
     n = int(round(stop_s / comm_s))
     nv = len(vrs)
     vr_arr = (fmi2ValueReference * nv)(*vrs)
@@ -95,7 +103,7 @@ def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None,
     comp = fmu.component
     do_step, get_real = fmu.doStep, fmu.fmi2GetReal
     if loop == "raw":
-        do_step, get_real = fmu.dll.fmi2DoStep, fmu.dll.fmi2GetReal
+        do_step, get_real = fmu._functions["fmi2DoStep"], fmu._functions["fmi2GetReal"]
     elif loop not in FMPY_LOOPS:
         raise ValueError(f"loop: {loop!r} unknown; choose one of {sorted(FMPY_LOOPS)}")
     get_real(comp, vr_arr, nv, vals)
@@ -134,9 +142,34 @@ def _fmu_loop(fmu_path, unzipdir, md, stop_s, comm_s, start_values, record=None,
     wall = time.perf_counter() - t1
     cpu = time.thread_time() - c1
     last = list(vals) if loop != "getreal_list" else fmu.getReal(vrs)
+    fmu._functions.update(real_functions)
     fmu.terminate()
     fmu.freeInstance()
     return t_init, wall, n, last, cpu
+
+
+def python_floor(unzipdir, md, start_values, *, sim_s, comm_s, repeat, tmp):
+    """The fmpy loops of FMPY_LOOPS around benchmarks/fmi2_noop.c's fmi2DoStep and fmi2GetReal
+    (compiled here with the system cc): per loop the wall s, the loop's CPU s, the real-time
+    factor (simulated s / wall s, best of ``repeat``) and the nanoseconds per communication step
+    when the FMU costs nothing -- the ceiling of every FMU driven through that loop on this
+    machine and interpreter."""
+    import ctypes
+    import subprocess
+
+    lib = Path(tmp) / "libfmi2_noop.so"
+    subprocess.run(["cc", "-O2", "-shared", "-fPIC", "-o", str(lib), str(Path(__file__).with_name("fmi2_noop.c"))],
+                   check=True, capture_output=True)
+    noop = ctypes.CDLL(str(lib))
+    out = {}
+    for loop in FMPY_LOOPS:
+        wall = cpu = math.inf
+        for _ in range(max(repeat, 3)):
+            _, w, n, _, c = _fmu_loop(None, unzipdir, md, sim_s, comm_s, start_values, loop=loop, noop=noop)
+            wall, cpu = min(wall, w), min(cpu, c)
+        out[loop] = {"wall_s": wall, "cpu_s": cpu, "real_time_factor": sim_s / wall,
+                     "ns_per_step": 1e9 * cpu / n}
+    return out
 
 
 def fmpy_call_ns(unzipdir, md, start_values, calls=20000, repeat=5):

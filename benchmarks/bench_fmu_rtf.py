@@ -32,7 +32,9 @@ best of N; run it under ``nice``); ``cpu`` the same on process CPU time (C host 
 ``cheapest`` lists, per error measure, among the settings within ``--target``, the fastest
 through each host; ``smallest_error`` the run closest to the fine run.  ``dostep_overhead``:
 the C host's wall time per doStep beyond its internal steps (rk4 at max_step = comm, run at
-comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).
+comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).  ``python_floor``:
+each fmpy loop around two C functions that do nothing (benchmarks/fmi2_noop.c, bench_fmu.python_floor),
+the real-time factor no FMU can exceed through that loop on this machine.
 
 Prints one JSON object.  ``--table-front``: only the table error per points per mesh, with the
 tables' engagement angles (the sub-cell lookup at the contact-zone edges, docs/model.md) and
@@ -189,7 +191,7 @@ def main(argv=None):
     from fmpy import extract, read_model_description
 
     sys.path.insert(0, str(Path(__file__).parent))
-    from bench_fmu import FMPY_LOOPS
+    from bench_fmu import FMPY_LOOPS, python_floor
     from gearfmu.dynamics.native import simulate
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.pipeline import compute_tables, gear_torque_for, load
@@ -267,6 +269,10 @@ def main(argv=None):
                     "points_per_mesh": p, "integrator": "rk4", "max_step_s": args.comm,
                     "c_host_wall_s_comm": w[0], "c_host_wall_s_10comm": w[1],
                     "s_per_dostep_beyond_internal_steps": (w[0] - w[1]) / (n1 - n10)}
+                if not args.no_fmpy:
+                    report["python_floor"] = python_floor(
+                        unz, md, dict(reals, max_step=args.comm, integrator=INTEGRATOR_CODE["rk4"]), sim_s=args.sim,
+                        comm_s=args.comm, repeat=args.repeat, tmp=tmp)
             for integ in integrators:
                 for n in subs:
                     h = args.comm / n

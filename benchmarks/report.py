@@ -927,6 +927,7 @@ def rtf_section(pg: Page) -> str:
             "loop (`FMU2Slave.doStep` and `fmi2GetReal`).\n\n"
             + table(["points per mesh", "integrator", "max step = comm /", "total error", "integration error",
                      "C host × RT", "fmpy raw × RT", "fmpy × RT"], body)
+            + _floor_text(d)
             + f"\n\nSource: `{SOURCES['fmu_rtf'][2]}` ({pg.cost('fmu_rtf')}).\n")
     return "\n".join(out)
 
@@ -1046,6 +1047,19 @@ _RTF_HOSTS = (("fmpy_real_time_factor", "fmpy low-level loop"),
               ("c_host_real_time_factor", "C host"))
 
 
+def _floor_text(d) -> str:
+    """The fmpy loops' ceiling on this machine: the same loops around two C functions that do nothing."""
+    fl = d.get("python_floor")
+    if not fl:
+        return ""
+    return ("\n\nThe same Python loops around two C functions that do nothing (`benchmarks/fmi2_noop.c`, "
+            "called with fmpy's argument types and through fmpy's own wrappers) reach "
+            f"{fl['lean']['real_time_factor']:.0f} × real time (fmpy's low-level loop, "
+            f"{fl['lean']['ns_per_step']:.0f} ns per step) and {fl['raw']['real_time_factor']:.0f} × (raw ctypes "
+            f"pointers, {fl['raw']['ns_per_step']:.0f} ns per step): no FMU, however cheap, runs faster than "
+            "that through these loops on this machine.")
+
+
 def _rtf_setting(r) -> str:
     return (f"{r['points_per_mesh']} points per mesh, {r['integrator']}, max step = communication step / "
             f"{r['substeps']}, total DTE error {sci(r['dte_rel_rms_err'])}")
@@ -1061,7 +1075,10 @@ def _g_rtf(d):
     cells = ", ".join(f"{label} {r[k]:.0f} ×" + ("" if len(settings) == 1 else f" ({_rtf_setting(r)})")
                       for label, r, k in rows if r)
     where = f"; fastest within {sci(d['target'])}: {settings.pop()}" if len(settings) == 1 else ""
-    return (f"{cells}{where} (scene {d['scene']}, communication step {1e6 * d['comm_step_s']:.3g} µs)",
+    fl = d.get("python_floor")
+    ceiling = (f"; the fmpy loop around two no-op C functions: {fl['lean']['real_time_factor']:.0f} × "
+               f"(raw pointers {fl['raw']['real_time_factor']:.0f} ×)") if fl else ""
+    return (f"{cells}{where}{ceiling} (scene {d['scene']}, communication step {1e6 * d['comm_step_s']:.3g} µs)",
             rows[0][1]["fmpy_real_time_factor"] >= 50.0)
 
 

@@ -82,6 +82,8 @@ def _fixture(d: pathlib.Path):
     fmu_rtf = {"scene": "default", "comm_step_s": 1e-4, "simulated_s": 0.1, "target": 1e-4,
                "reference": {"kind": "native rk4_kink", "points_per_mesh": 4096, "max_step_s": 2e-7},
                "reference_check": {"dte_rel_rms_err": 2e-8}, "runs": [rtf_row],
+               "python_floor": {"lean": {"real_time_factor": 44.0, "ns_per_step": 2272.0},
+                                "raw": {"real_time_factor": 55.0, "ns_per_step": 1818.0}},
                "cheapest": {"dte_rel_rms_err": {k: rtf_row for k in ("c_host_real_time_factor", "fmpy_real_time_factor",
                                                                        "fmpy_raw_real_time_factor")}}}
     startup = {"commands": {"build": {"cold_s": 9.0, "warm_s": 1.5}}}
@@ -162,7 +164,8 @@ def test_report_from_saved_json(tmp_path):
         assert "rk4 ≥ 250 ×, rk4_kink ≥ 400 ×, rk4_node ≥ 500 ×" in where
         assert ("| FMU ≥ 50 × real time at 1e-4 relative DTE error (fmpy low-level loop) | fmpy low-level loop "
                 "40 ×, fmpy's raw ctypes pointers 45 ×, C host 60 ×; fastest within 1.00e-04: 64 points per mesh, "
-                "rk4_node, max step = communication step / 2, total DTE error 9.00e-05") in where
+                "rk4_node, max step = communication step / 2, total DTE error 9.00e-05; the fmpy loop around two "
+                "no-op C functions: 44 × (raw pointers 55 ×)") in where
         assert "| EHL film ≤ 1 s per point | worst 1.5 s, median 100 ms CPU over 63 points" in where
         assert "| EHL film ≤ 5 ms per point at the default settings | ≤ 4 ms CPU" in where
         assert "| `gearfmu plan` of the default scene ≤ 60 s | not measured (no `plan` JSON" in where
@@ -172,6 +175,7 @@ def test_report_from_saved_json(tmp_path):
     assert goals["FMU ≥ 50 × real time at 1e-4 relative DTE error (fmpy low-level loop)"] == "no"
     assert goals["test suite ≤ 5 min"] == "n/a"
     # sources without JSON are named, not silently dropped; plots are written and linked
+    assert "reach 44 × real time (fmpy's low-level loop, 2272 ns per step) and 55 × (raw ctypes pointers" in page
     assert "## Dynamic response against experiment: seed 003 Fig. 3\n\nNot run" in page
     assert (tmp_path / "docs" / "img" / "validation_integrators.png").is_file()
     assert "](img/validation_integrators.png)" in page
