@@ -39,13 +39,6 @@
 enum { L_KERNEL, L_SHARED, L_DOSTEP, L_STEP_GET, L_GETREAL, L_N };
 static const char *const LOOP_NAME[L_N] = {"kernel", "shared", "dostep", "step_get", "getreal"};
 
-#define CHECK(call)                                                           \
-    do {                                                                      \
-        if ((call) != fmi2OK) {                                               \
-            fprintf(stderr, "%s failed\n", #call);                            \
-            return 3;                                                         \
-        }                                                                     \
-    } while (0)
 
 /* one timed loop of kind `loop`; 0 on success */
 static int run_loop(fmi2Component comp, int loop, int n, double H, const fmi2ValueReference *outs, int nout,
@@ -93,8 +86,7 @@ int main(int argc, char **argv)
     fmi2FMUstate s0 = NULL;
     fmi2Component c;
     double best[L_N];
-    int n, repeat, r, loop, argi, i, nout = 0;
-    char *p;
+    int n, repeat, r, loop, i, nout = 0;
 
     if (argc < 11) {
         fprintf(stderr, "usage: %s dir guid comm n_steps repeat out_vrs hmax_vr hmax int_vr int [vr=value ...]\n",
@@ -117,12 +109,9 @@ int main(int argc, char **argv)
     CHECK(fmi2EnterInitializationMode(c));
     CHECK(fmi2SetReal(c, &vr_hmax, 1, &hmax));
     CHECK(fmi2SetInteger(c, &vr_int, 1, &integ));
-    for (argi = 11; argi < argc; ++argi) {
-        fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[argi], &p, 10);
-        fmi2Real v;
-        if (*p != '=') return 1;
-        v = atof(p + 1);
-        CHECK(fmi2SetReal(c, &vr, 1, &v));
+    {
+        int bad = set_start_values(c, fmi2SetReal, 11, argc, argv);
+        if (bad) return bad;
     }
     CHECK(fmi2ExitInitializationMode(c));
     CHECK(fmi2GetFMUstate(c, &s0));

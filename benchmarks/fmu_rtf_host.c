@@ -41,14 +41,6 @@
         return 2;                                                             \
     }
 
-#define CHECK(call)                                                           \
-    do {                                                                      \
-        fmi2Status st_ = (call);                                              \
-        if (st_ != fmi2OK) {                                                  \
-            fprintf(stderr, "%s returned %d\n", #call, (int)st_);             \
-            return 3;                                                         \
-        }                                                                     \
-    } while (0)
 
 int main(int argc, char **argv)
 {
@@ -59,8 +51,7 @@ int main(int argc, char **argv)
     fmi2Real hmax;
     fmi2Integer integ;
     double stop, step, *rows, *walls, *cpus;
-    int repeat, nsteps, r, k, argi, nout = 0;
-    char *p;
+    int repeat, nsteps, r, k, nout = 0;
 
     if (argc < 12) {
         fprintf(stderr, "usage: %s dir id guid stop step repeat out_vrs hmax_vr hmax int_vr int [vr=value ...]\n",
@@ -111,12 +102,9 @@ int main(int argc, char **argv)
             CHECK(fmi2EnterInitializationMode(c));
             CHECK(fmi2SetReal(c, &vr_hmax, 1, &hmax));
             CHECK(fmi2SetInteger(c, &vr_int, 1, &integ));
-            for (argi = 12; argi < argc; ++argi) {
-                fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[argi], &p, 10);
-                fmi2Real v;
-                if (*p != '=') return 1;
-                v = atof(p + 1);
-                CHECK(fmi2SetReal(c, &vr, 1, &v));
+            {
+                int bad = set_start_values(c, fmi2SetReal, 12, argc, argv);
+                if (bad) return bad;
             }
             CHECK(fmi2ExitInitializationMode(c));
             CHECK(fmi2GetReal(c, outs, (size_t)nout, rows));
