@@ -16,9 +16,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start
+from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
 from .model_rhs import (
-    _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _outputs_row, _ptr, _tab, _table_pointers,
+    _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _seg_flags, _outputs_row, _ptr, _tab, _table_pointers,
     _torque_index, _with_zones, _zone_sel,
 )
 
@@ -56,7 +56,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     rows2 = k.shape[0] > 1
     mode = np.zeros(4 * p, dtype=np.int64)   # reg, sub, kpos and the held zone side per pair
     work = np.zeros(18)
-    flags = _node_flags(k, e, b)
+    flags = _seg_flags(k, cuts, zoned) if icode == 3 else _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
     fp = _ptr(flags)
@@ -78,13 +78,18 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
-            _seg_start(tab, wk, ndk, icode == 2, om, th)
+            _seg_start(tab, wk, ndk, icode >= 2, om, th)
             _zone_sel(tab, md, ndk, ik0, work[16], work[17])
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
-            for _ in range(n_sub):
-                th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk, icode == 2)
-                nev += ne
+            if icode == 3:
+                for _ in range(n_sub):
+                    th, om, x, v, ndk, ne = _seg_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
+                    nev += ne
+            else:
+                for _ in range(n_sub):
+                    th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk, icode == 2)
+                    nev += ne
             out_events[s + 1] = nev
         else:
             t0 = s * H
