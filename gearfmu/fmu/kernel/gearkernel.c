@@ -175,6 +175,7 @@ int gk_set_zone_cuts(gk_model *m, const double *cuts)
 {
     if (m == NULL) return GK_ERR_MODEL;
     m->zone_cuts = cuts;
+    node_flags(m);   /* the rk4_seg stops include the cells with an edge */
     return GK_OK;
 }
 
@@ -612,6 +613,8 @@ static void node_flags(gk_model *m)
                 bent = 1;
                 zone = 1;
             }
+            if (m->zone_cuts != NULL && (m->zone_cuts[(size_t)j * N + im] >= 0.0 || m->zone_cuts[(size_t)j * N + i] >= 0.0))
+                zone = 1;   /* rk4_seg: a contact-zone edge in a cell of the node */
         }
         m->node_kink[i] = (unsigned char)(bent | (zone << 1));
     }
@@ -629,15 +632,7 @@ static int node_flagged(const gk_model *m, double n)
     i0 = (int)r;
     if (i0 < 0) i0 = 0;
     if (i0 >= N) i0 = N - 1;
-    if (m->integrator == GK_INTEGRATOR_RK4_SEG) {
-        int j, im = (i0 == 0) ? N - 1 : i0 - 1;
-        if ((m->node_kink[i0] & 2) != 0) return 1;
-        if (m->zone_cuts != NULL)
-            for (j = 0; j < m->P; ++j)
-                if (m->zone_cuts[(size_t)j * N + im] >= 0.0 || m->zone_cuts[(size_t)j * N + i0] >= 0.0) return 1;
-        return 0;
-    }
-    return (m->node_kink[i0] & 1) != 0;
+    return (m->node_kink[i0] & ((m->integrator == GK_INTEGRATOR_RK4_SEG) ? 2 : 1)) != 0;
 }
 
 /* contact-zone cuts of cell i0 over all slots (model_rhs._cut_above / _cut_below): the
@@ -702,6 +697,16 @@ static double seg_up(const gk_model *m, double n, int node)
     if (!node) return c + 1.0;
     top = c + m->n_phi;
     q = c + 1.0;
+    if (m->integrator == GK_INTEGRATOR_RK4_SEG && m->n_phi <= GK_NODE_FLAGS_MAX) {
+        /* every cell with a cut has both nodes flagged: the first flag comes first */
+        int i = node_index(m->n_phi, q);
+        while (q < top) {
+            if ((m->node_kink[i] & 2) != 0) return q;
+            q += 1.0;
+            if (++i == m->n_phi) i = 0;
+        }
+        return q;
+    }
     while (q < top) {
         if (node_flagged(m, q)) return q;
         if (m->zone_cuts != NULL) {
@@ -727,6 +732,15 @@ static double seg_down(const gk_model *m, double n, int node)
     if (!node) return c;
     bottom = c + 1.0 - m->n_phi;
     q = c;
+    if (m->integrator == GK_INTEGRATOR_RK4_SEG && m->n_phi <= GK_NODE_FLAGS_MAX) {
+        int i = node_index(m->n_phi, q);
+        while (q > bottom) {
+            if ((m->node_kink[i] & 2) != 0) return q;
+            q -= 1.0;
+            if (--i < 0) i = m->n_phi - 1;
+        }
+        return q;
+    }
     while (q > bottom) {
         if (node_flagged(m, q)) return q;
         if (m->zone_cuts != NULL) {
