@@ -2,7 +2,7 @@
 
 :func:`_run` writes output row 0 (the initial state with the inputs of step 0)
 and advances the state over every communication step with the chosen
-integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node',
+integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg',
 gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
 seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
 vary; the inputs held over the step, the table row blend and the outputs are
@@ -47,7 +47,8 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     mode from the state at the start of every step and counts the located events
     per step in out_events; in the SDOF form it integrates theta1 as a state
     with omega1' = 0.  'rk4_node' stops only at the table nodes flagged by
-    _node_flags (computed once per run from k, e, b).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
+    _node_flags (computed once per run from k, e, b), 'rk4_seg' only at those of _seg_flags
+    (from k and the cuts).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
     kernels read their data pointers, see gearfmu.dynamics.model_rhs).  ``zoned``: the sub-cell
     lookup at the contact-zone edges with the (2, P, N) ``cuts`` of gearfmu.tables.zones.zone_cuts
     (docs/model.md "Contact-zone edges"; rk4_kink and rk4_node stop at the cuts)."""

@@ -9,6 +9,9 @@
   kink flags of :func:`gearfmu.dynamics.model_rhs._node_flags`), each reached by
   one RK4 step to its crossing time predicted from theta1' = omega1 (no trial
   step, no root finder); between them the steps are full substeps.
+* :func:`_seg_substep` -- one substep of 'rk4_seg': rk4_node's segments running
+  only between contact-zone edges, every evaluation in its own table cell, RK4 in
+  the shifted velocities (docs/model.md "rk4_seg").
 
 Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of

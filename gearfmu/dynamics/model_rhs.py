@@ -17,7 +17,8 @@ the offsets of torque rows it and it+1, whether a second row is blended
 (NT > 1), its weight, the node count N, the slot count P, the cell width
 (rad), the damping (N*s/m), the damping law (0 elastobacklash, 1 contact_zone) and
 the reciprocal cell width N/Phi (1/rad), and the pointer of the node kink
-flags (N uint8, :func:`_node_flags`; rk4_node stops only at flagged nodes), the pointer
+flags (N uint8, :func:`_node_flags`, or for rk4_seg :func:`_seg_flags`; rk4_node and rk4_seg stop
+only at flagged nodes), the pointer
 of the contact-zone cuts (2, P, N) and whether they are read (:func:`_with_zones`,
 docs/model.md "Contact-zone edges"; off: plain linear interpolation, the arithmetic of
 gearkernel.c, which has no cuts yet).
