@@ -568,6 +568,7 @@ typedef struct {
     int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
     int kpos[GK_KINK_MAX_SLOTS];     /* contact_zone: k > 0 inside the cell */
     int zsel[GK_KINK_MAX_SLOTS];     /* side of a contact-zone cut held in the cell (zone_sel) */
+    double cl, ch;                   /* rk4_seg: floor(lo), ceil(hi) - 1 (the cells of the segment) */
 } gk_mode;
 
 GK_INLINE void cell_nodes(gk_mode *md, int N)
@@ -1161,9 +1162,9 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
 GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
 {
     int N = m->n_phi;
-    double cl = floor(md->lo), ch = ceil(md->hi) - 1.0, cc = floor(th * m->inv_dphi);
-    if (!(cc > cl)) cc = cl;
-    if (cc > ch) cc = ch;
+    double cc = floor(th * m->inv_dphi);
+    if (!(cc > md->cl)) cc = md->cl;
+    if (cc > md->ch) cc = md->ch;
     if (cc == md->nd) {
         c->i0 = md->i0;
         c->i1 = md->i1;
@@ -1369,20 +1370,86 @@ GK_INLINE void seg_true(const gk_model *m, const gk_tq *t, const gk_mode *md, do
     y[3] = y[3] + gv * ce;
 }
 
-/* 1 when no pair guard is negative at y = (theta1, omega1, x, v) (integrators._pairs_hold_seg) */
-static int pairs_hold_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, const double *y)
+/* the first stage at the state y: the shifted state ys (C at y) and f0 = seg_rhs(ys), with one
+ * table lookup per pair for both (the values and operations of seg_ce, then seg_rhs) */
+static void seg_first(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2, double gw,
+                      double gv, const double *y, double *ys, double *f0, double *sk)
 {
     gk_ph c;
-    int j, q;
+    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double ea = 0.0, fs = 0.0, ea2 = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    int j;
     double cc = seg_cell(m, md, y[0], &c);
     for (j = 0; j < m->P; ++j) {
-        double kv, ev, es, bv;
-        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
-        for (q = 0; q < 3; ++q)
-            if (pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, md->reg[j],
-                           md->sub[j]) < 0.0)
-                return 0;
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
+        if (seg_damped(m, md, j)) ea += ev[j];
     }
+    ce = cd * ea;
+    ys[0] = y[0];
+    ys[1] = y[1] - gw * ce;
+    ys[2] = y[2];
+    ys[3] = y[3] - gv * ce;
+    for (j = 0; j < m->P; ++j) {
+        double fc;
+        int reg = md->reg[j];
+        if (reg == 1) fc = kv[j] * ((ys[2] - ev[j]) - bv[j]);
+        else if (reg == -1) fc = kv[j] * ((ys[2] - ev[j]) + bv[j]);
+        else fc = 0.0;
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+            if (reg != 0) {
+                int sub = md->sub[j];
+                if (sub == 0) {
+                    fs += fc + fc;
+                } else if (sub == 1) {
+                    fs += fc;
+                    ea2 += ev[j];
+                    sa += es[j];
+                    na += 1.0;
+                }
+            }
+        } else if (md->kpos[j] != 0) {
+            fs += fc;
+            ea2 += ev[j];
+            sa += es[j];
+            na += 1.0;
+        }
+    }
+    ce = cd * ea2;
+    om = ys[1] + gw * ce;
+    v = ys[3] + gv * ce;
+    f = fs + na * (cd * v);
+    f0[0] = om;
+    f0[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    f0[2] = v;
+    f0[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    *sk = cd * sa;
+}
+
+/* the state yt = (theta1, omega1, x, v) of the shifted state y1 (seg_true) and 1 when no pair
+ * guard is negative there (pairs_hold_seg), with one table lookup per pair for both */
+static int seg_end(const gk_model *m, const gk_tq *t, const gk_mode *md, double gw, double gv, const double *y1,
+                   double *yt)
+{
+    gk_ph c;
+    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double ea = 0.0, ce;
+    int j, q;
+    double cc = seg_cell(m, md, y1[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
+        if (seg_damped(m, md, j)) ea += ev[j];
+    }
+    ce = m->c_Ns_per_m * ea;
+    yt[0] = y1[0];
+    yt[1] = y1[1] + gw * ce;
+    yt[2] = y1[2];
+    yt[3] = y1[3] + gv * ce;
+    for (j = 0; j < m->P; ++j)
+        for (q = 0; q < 3; ++q)
+            if (pair_guard(q, kv[j], ev[j], es[j], bv[j], yt[2], yt[3], yt[1], m->c_Ns_per_m, m->damping_model,
+                           md->reg[j], md->sub[j]) < 0.0)
+                return 0;
     return 1;
 }
 
@@ -1394,28 +1461,24 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
     gw = m->Rb1_m / m->I1_kgm2;
     gv = m->Rb1_m * (m->Rb1_m / m->I1_kgm2) + m->Rb2_m * (m->Rb2_m / m->I2_kgm2);
     for (;;) {
-        double best = 2.0, ce, cn;
+        double best = 2.0, cn;
         int best_gi = -1, have_f1 = 0, gi, any_neg;
+        md->cl = floor(md->lo);   /* the segment is fixed until the next pass */
+        md->ch = ceil(md->hi) - 1.0;
         cn = floor(y[0] * m->inv_dphi);
         if (cn + 1.0 > md->lo && cn < md->hi && cn != md->nd) {
             md->nd = cn;
             cell_nodes(md, m->n_phi);
             zone_sel(m, md);
         }
-        ce = seg_ce(m, t, md, y[0]);
-        ys[0] = y[0];
-        ys[1] = y[1] - gw * ce;
-        ys[2] = y[2];
-        ys[3] = y[3] - gv * ce;
-        seg_rhs(m, t, md, T1, T2, gw, gv, ys, f0, &sk);
+        seg_first(m, t, md, T1, T2, gw, gv, y, ys, f0, &sk);
         if (nev < GK_KINK_MAX_EVENTS) {
             double tau = node_time(y[0], y[1], f0[1] + gw * (sk * y[1]), rem, md->lo, md->hi, m->dphi_rad);
             if (tau > 0.0) {
                 rk4_seg(m, t, md, T1, T2, gw, gv, ys, f0, tau, y1);
-                seg_true(m, t, md, gw, gv, y1);
-                if (pairs_hold_seg(m, t, md, y1)) {
+                if (seg_end(m, t, md, gw, gv, y1, yt1)) {
                     seg_cross(m, md, y[1] > 0.0, 1);
-                    for (q = 0; q < 4; ++q) y[q] = y1[q];
+                    for (q = 0; q < 4; ++q) y[q] = yt1[q];
                     rem = rem - tau;
                     nev += 1;
                     cell_nodes(md, m->n_phi);
@@ -1427,15 +1490,13 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
             }
         }
         rk4_seg(m, t, md, T1, T2, gw, gv, ys, f0, rem, y1);
-        for (q = 0; q < 4; ++q) yt1[q] = y1[q];
-        seg_true(m, t, md, gw, gv, yt1);
+        any_neg = !seg_end(m, t, md, gw, gv, y1, yt1);
         if (nev >= GK_KINK_MAX_EVENTS) {
             for (q = 0; q < 4; ++q) y[q] = yt1[q];
             mode_from_state(m, t, md, y, 1);
             break;
         }
-        any_neg = (yt1[0] - md->lo * m->dphi_rad < 0.0) || (md->hi * m->dphi_rad - yt1[0] < 0.0);
-        if (!any_neg) any_neg = !pairs_hold_seg(m, t, md, yt1);
+        if ((yt1[0] - md->lo * m->dphi_rad < 0.0) || (md->hi * m->dphi_rad - yt1[0] < 0.0)) any_neg = 1;
         if (!any_neg) {
             for (q = 0; q < 4; ++q) y[q] = yt1[q];
             break;
