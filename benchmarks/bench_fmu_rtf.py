@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-INTEGRATOR_CODE = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}
+INTEGRATOR_CODE = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}
 
 
 def compile_host(tmp: Path) -> Path:
@@ -169,7 +169,7 @@ def main(argv=None):
     ap.add_argument("scene", nargs="?")
     ap.add_argument("--ppm", default="16,32,64,128,256,512,1024,2048", help="points per mesh of the FMUs")
     ap.add_argument("--fine-ppm", type=int, default=4096, help="points per mesh of the fine run")
-    ap.add_argument("--integrators", default="rk4,rk4_kink,rk4_node")
+    ap.add_argument("--integrators", default="rk4,rk4_kink,rk4_node,rk4_seg")
     ap.add_argument("--substeps", default="1,2,3,4,6,8", help="max_step = comm / substeps")
     ap.add_argument("--comm", type=float, default=1e-4, help="communication step (s)")
     ap.add_argument("--sim", type=float, default=0.1, help="simulated seconds per run (s)")

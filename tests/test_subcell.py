@@ -280,7 +280,7 @@ def _dyn_tables(two_rows):
 @pytest.mark.parametrize("backward", [False, True])
 @pytest.mark.parametrize("two_rows", [False, True])
 @pytest.mark.parametrize("model", [0, 1])
-@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node"])
+@pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node", "rk4_seg"])
 def test_native_and_c_kernel_agree_bit_for_bit_with_zone_edges(clib, backward, two_rows, model, integrator):
     """The sub-cell lookup and the stops at the cuts pin every operation: numba and C give
     identical doubles (states and mesh force after each of 64 communication steps over more
@@ -293,7 +293,7 @@ def test_native_and_c_kernel_agree_bit_for_bit_with_zone_edges(clib, backward, t
     T1 = sg * 50.0
     T2 = T1 * t.base_radius_gear_m / t.base_radius_pinion_m
     H = t.mesh_period_rad / 300.0 / 8
-    code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
+    code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}[integrator]
     r = simulate(t, stop_time_s=64 * H, comm_step_s=H, max_step_s=H / 5, pinion_torque_Nm=T1, gear_torque_Nm=T2,
                  pinion_speed_start_rad_s=w0, damping_ratio=0.05, integrator=integrator,
                  damping_model=["elastobacklash", "contact_zone"][model])

@@ -62,7 +62,7 @@ DAMPING_MODELS = {"elastobacklash": 0, "contact_zone": 1}
 DEFAULT_DAMPING_MODEL = "elastobacklash"
 #: integrator names -> kernel code (docs/model.md "Integration"; gearkernel.h GK_INTEGRATOR_*);
 #: the FMU parameter ``integrator`` takes the code
-INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}
+INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}
 #: the integrator wherever none is named: rk4_kink with the table nodes reached by one step to
 #: their predicted crossing and only where the tables bend (docs/native.md "rk4_node"), faster
 #: than rk4_kink down to 1e-9 relative error on the fronts of benchmarks/bench_integrators.py;

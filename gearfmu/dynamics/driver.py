@@ -2,7 +2,7 @@
 
 :func:`_run` writes output row 0 (the initial state with the inputs of step 0)
 and advances the state over every communication step with the chosen
-integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node',
+integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg',
 gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
 seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
 vary; the inputs held over the step, the table row blend and the outputs are
@@ -16,9 +16,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start
+from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
 from .model_rhs import (
-    _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _outputs_row, _ptr, _tab, _table_pointers,
+    _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _seg_flags, _outputs_row, _ptr, _tab, _table_pointers,
     _torque_index, _with_zones, _zone_sel,
 )
 
@@ -47,7 +47,8 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     mode from the state at the start of every step and counts the located events
     per step in out_events; in the SDOF form it integrates theta1 as a state
     with omega1' = 0.  'rk4_node' stops only at the table nodes flagged by
-    _node_flags (computed once per run from k, e, b).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
+    _node_flags (computed once per run from k, e, b), 'rk4_seg' only at those of _seg_flags
+    (from k and the cuts).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
     kernels read their data pointers, see gearfmu.dynamics.model_rhs).  ``zoned``: the sub-cell
     lookup at the contact-zone edges with the (2, P, N) ``cuts`` of gearfmu.tables.zones.zone_cuts
     (docs/model.md "Contact-zone edges"; rk4_kink and rk4_node stop at the cuts)."""
@@ -56,7 +57,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     rows2 = k.shape[0] > 1
     mode = np.zeros(4 * p, dtype=np.int64)   # reg, sub, kpos and the held zone side per pair
     work = np.zeros(18)
-    flags = _node_flags(k, e, b)
+    flags = _seg_flags(k, cuts, zoned) if icode == 3 else _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
     fp = _ptr(flags)
@@ -78,13 +79,18 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
         if icode >= 1:
             ndk = np.floor(th * inv_dphi)
             ik0, ik1 = _cell_nodes(ndk, n_phi)
-            _seg_start(tab, wk, ndk, icode == 2, om, th)
+            _seg_start(tab, wk, ndk, icode >= 2, om, th)
             _zone_sel(tab, md, ndk, ik0, work[16], work[17])
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
-            for _ in range(n_sub):
-                th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk, icode == 2)
-                nev += ne
+            if icode == 3:
+                for _ in range(n_sub):
+                    th, om, x, v, ndk, ne = _seg_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
+                    nev += ne
+            else:
+                for _ in range(n_sub):
+                    th, om, x, v, ndk, ne = _kink_substep(tab, dyn, md, wk, th, om, x, v, h, ndk, icode == 2)
+                    nev += ne
             out_events[s + 1] = nev
         else:
             t0 = s * H

@@ -9,6 +9,9 @@
   kink flags of :func:`gearfmu.dynamics.model_rhs._node_flags`), each reached by
   one RK4 step to its crossing time predicted from theta1' = omega1 (no trial
   step, no root finder); between them the steps are full substeps.
+* :func:`_seg_substep` -- one substep of 'rk4_seg': rk4_node's segments running
+  only between contact-zone edges, every evaluation in its own table cell, RK4 in
+  the shifted velocities (docs/model.md "rk4_seg").
 
 Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
@@ -22,7 +25,8 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel, _mesh_force, _pair_guard,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _seg_cell, _seg_ce, _seg_gains, _seg_rhs,
+    _seg_sel, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel, _mesh_force, _pair_guard,
 )
 
 
@@ -148,7 +152,51 @@ def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1, lo, hi):
 
 
 @njit(cache=True, error_model="numpy")
-def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
+def _pair_guard_seg(tab, md, j, q, th, om, x, v, nd, i0, i1, lo, hi):
+    """Guard q of pair j at a state (theta1, omega1, x, v), the tables read in the cell of
+    theta1 clamped to the held segment [lo, hi) (rk4_seg)."""
+    p = tab[8]
+    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
+
+
+@njit(cache=True, error_model="numpy")
+def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
+    """rk4_seg: guard gi (as :func:`_guard_at`) at the shifted state (theta1, Omega, x, V):
+    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`gearfmu.dynamics.model_rhs._seg_rhs`)."""
+    dphi = tab[9]
+    if gi == 0:
+        return th - lo * dphi
+    if gi == 1:
+        return hi * dphi - th
+    ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
+    j = (gi - 2) // 3
+    q = (gi - 2) - 3 * j
+    return _pair_guard_seg(tab, md, j, q, th, wo + gw * ce, x, wv + gv * ce, nd, i0, i1, lo, hi)
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, h, nd, i0, i1, lo, hi):
+    """One classical RK4 step of length h of the shifted state (theta1, Omega, x, V) with
+    :func:`gearfmu.dynamics.model_rhs._seg_rhs` (rk4_seg), first stage (fa..fd) given, mode
+    held; the arithmetic of :func:`_rk4_locked`."""
+    h2 = h / 2.0
+    ka, kb, kc, kd, sk = _seg_rhs(tab, dyn, md, th + h2 * fa, wo + h2 * fb, x + h2 * fc, wv + h2 * fd,
+                                  nd, i0, i1, lo, hi)
+    sa, sb, sc, sd = _rk4_accumulate(1, fa, fb, fc, fd, ka, kb, kc, kd)
+    ka, kb, kc, kd, sk = _seg_rhs(tab, dyn, md, th + h2 * ka, wo + h2 * kb, x + h2 * kc, wv + h2 * kd,
+                                  nd, i0, i1, lo, hi)
+    sa, sb, sc, sd = _rk4_accumulate(2, sa, sb, sc, sd, ka, kb, kc, kd)
+    ka, kb, kc, kd, sk = _seg_rhs(tab, dyn, md, th + h * ka, wo + h * kb, x + h * kc, wv + h * kd,
+                                  nd, i0, i1, lo, hi)
+    sa, sb, sc, sd = _rk4_accumulate(3, sa, sb, sc, sd, ka, kb, kc, kd)
+    h6 = h / 6.0
+    return th + h6 * sa, wo + h6 * sb, x + h6 * sc, wv + h6 * sd
+
+
+@njit(cache=True, error_model="numpy")
+def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1, seg=False, gw=0.0, gv=0.0):
     """Guard gi on the cubic Hermite interpolant of the step (wk: y0, f0, y1, f1)
     at fraction s in [0, 1]."""
     u = 1.0 - s
@@ -160,14 +208,19 @@ def _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1):
     yb = ((h00 * wk[1] + h10 * (tau * wk[5])) + h01 * wk[9]) + h11 * (tau * wk[13])
     yc = ((h00 * wk[2] + h10 * (tau * wk[6])) + h01 * wk[10]) + h11 * (tau * wk[14])
     yd = ((h00 * wk[3] + h10 * (tau * wk[7])) + h01 * wk[11]) + h11 * (tau * wk[15])
+    if seg:
+        return _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, wk[16], wk[17], gw, gv)
     return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, wk[16], wk[17])
 
 
 @njit(cache=True, error_model="numpy")
-def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
+def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1, seg=False, gw=0.0, gv=0.0):
     """Fraction s in [0, 1] where guard gi crosses zero on the Hermite interpolant
     (Illinois regula falsi; returns the end of the bracket where the guard < 0)."""
-    ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1, wk[16], wk[17])
+    if seg:
+        ga = _guard_seg(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1, wk[16], wk[17], gw, gv)
+    else:
+        ga = _guard_at(tab, md, gi, wk[0], wk[1], wk[2], wk[3], nd, i0, i1, wk[16], wk[17])
     if not ga > 0.0:
         return 0.0
     a = 0.0
@@ -178,7 +231,7 @@ def _guard_root(tab, md, gi, g_end, wk, tau, nd, i0, i1):
         s = (a * gb - bb * ga) / (gb - ga)
         if not (s > a and s < bb):
             s = 0.5 * (a + bb)
-        gs = _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1)
+        gs = _hermite_guard(tab, md, gi, s, wk, tau, nd, i0, i1, seg, gw, gv)
         if gs < 0.0:
             bb = s
             gb = gs
@@ -502,6 +555,151 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
                 if model == 0:
                     w = (th - nd * dphi) * tab[12]
                     kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
+                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
+            elif q == 0:
+                md[j] = 0
+                md[p + j] = 0
+            elif md[p + j] == 1:
+                md[p + j] = 0 if q == 1 else 2
+            else:
+                md[p + j] = 1
+        if not rem > 0.0:
+            break
+    return th, om, x, v, nd, nev
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_true(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
+    """(omega1, v) of the shifted state (theta1, Omega, x, V) (rk4_seg)."""
+    gw, gv = _seg_gains(dyn)
+    ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
+    return wo + gw * ce, wv + gv * ce
+
+
+@njit(cache=True, error_model="numpy")
+def _pairs_hold_seg(tab, md, th, om, x, v, nd, i0, i1, lo, hi):
+    """True when no pair guard is negative at the state (rk4_seg lookup)."""
+    p = tab[8]
+    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+    for j in range(p):
+        kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+        for q in range(3):
+            if _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j]) < 0.0:
+                return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
+    """Advance one substep of length h with the rk4_seg integrator (docs/model.md "rk4_seg").
+    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place.
+
+    rk4_node's held segments, stops and event location, with two changes: the segments run
+    from contact-zone cut to contact-zone cut (and the nodes where the contact_zone flag kpos
+    can change, :func:`gearfmu.dynamics.model_rhs._seg_flags`), and every evaluation reads
+    the tables in the cell of its own theta1 clamped to the segment, so the tables' piecewise
+    linear interpolant is integrated exactly; the RK4 steps integrate the shifted state
+    (theta1, Omega, x, V) of :func:`gearfmu.dynamics.model_rhs._seg_rhs`, whose right-hand
+    side has no jump at the table nodes (the e-slope damping term is moved into the state)."""
+    n_phi = tab[7]
+    p = tab[8]
+    dphi = tab[9]
+    c = tab[10]
+    model = tab[11]
+    n_guard = 2 + 3 * p
+    gw, gv = _seg_gains(dyn)
+    i0, i1 = _cell_nodes(nd, n_phi)
+    rem = h
+    nev = 0
+    while True:
+        lo = wk[16]
+        hi = wk[17]
+        cn = np.floor(th * tab[12])
+        if cn + 1.0 > lo and cn < hi and cn != nd:
+            nd = cn
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _zone_sel(tab, md, nd, i0, lo, hi)
+        ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
+        wo = om - gw * ce
+        wv = v - gv * ce
+        fa, fb, fc, fd, sk = _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi)
+        if nev < KINK_MAX_EVENTS:
+            tau = _node_time(th, om, fb + gw * (sk * om), rem, lo, hi, dphi)
+            if tau > 0.0:
+                ta, tb, tc, td = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi)
+                tb, td = _seg_true(tab, dyn, md, ta, tb, tc, td, nd, i0, i1, lo, hi)
+                if _pairs_hold_seg(tab, md, ta, tb, tc, td, nd, i0, i1, lo, hi):
+                    nd = _seg_cross(tab, wk, om > 0.0, True)
+                    th, om, x, v = ta, tb, tc, td
+                    rem = rem - tau
+                    nev += 1
+                    i0, i1 = _cell_nodes(nd, n_phi)
+                    _zone_sel(tab, md, nd, i0, wk[16], wk[17])
+                    _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
+                    if not rem > 0.0:
+                        break
+                    continue
+        ya, yb, yc, yd = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, rem, nd, i0, i1, lo, hi)
+        ta = ya
+        tc = yc
+        tb, td = _seg_true(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+        if nev >= KINK_MAX_EVENTS:
+            th, om, x, v = ta, tb, tc, td
+            nd = np.floor(th * tab[12])
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _seg_start(tab, wk, nd, True, om, th)
+            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
+            break
+        any_neg = (ta - lo * dphi < 0.0) or (hi * dphi - ta < 0.0)
+        if not any_neg:
+            any_neg = not _pairs_hold_seg(tab, md, ta, tb, tc, td, nd, i0, i1, lo, hi)
+        if not any_neg:
+            th, om, x, v = ta, tb, tc, td
+            break
+        best = 2.0
+        best_gi = -1
+        have_f1 = False
+        for gi in range(n_guard):
+            g = _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi, gw, gv)
+            if g < 0.0:
+                if not have_f1:
+                    _put4(wk, 0, th, wo, x, wv)
+                    _put4(wk, 4, fa, fb, fc, fd)
+                    _put4(wk, 8, ya, yb, yc, yd)
+                    ga_, gb_, gc_, gd_, sk_ = _seg_rhs(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+                    _put4(wk, 12, ga_, gb_, gc_, gd_)
+                    have_f1 = True
+                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1, True, gw, gv)
+                if s < best:
+                    best = s
+                    best_gi = gi
+        if best_gi < 0:
+            th, om, x, v = ta, tb, tc, td
+            break
+        if best >= 1.0:
+            th, om, x, v = ta, tb, tc, td
+            rem = 0.0
+        elif best > 0.0:
+            tau = best * rem
+            ya, yb, yc, yd = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi)
+            yb, yd = _seg_true(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+            th, om, x, v = ya, yb, yc, yd
+            rem = rem - tau
+        nev += 1
+        if best_gi < 2:
+            nd = _seg_cross(tab, wk, best_gi == 1, True)
+            i0, i1 = _cell_nodes(nd, n_phi)
+            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
+            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
+        else:
+            j = (best_gi - 2) // 3
+            q = (best_gi - 2) - 3 * j
+            if md[j] == 0:
+                md[j] = 1 if q == 0 else -1
+                if model == 0:
+                    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, wk[16], wk[17])
+                    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, wk[16], wk[17]))
                     md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
             elif q == 0:
                 md[j] = 0

@@ -12,7 +12,7 @@ indexed by the pinion angle; state y = [theta1 (rad), omega1 (rad/s),
 x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
 
 The compiled parts live in gearfmu.dynamics.model_rhs (table lookup, force
-laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink', 'rk4_node') and
+laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink', 'rk4_node', 'rk4_seg') and
 gearfmu.dynamics.driver (the one loop over communication steps); this module
 checks the arguments, prepares the tables and inputs and wraps the results.
 
@@ -502,7 +502,9 @@ def simulate(
     crossing time predicted from theta1' = omega1, docs/native.md "rk4_node"; those
     crossings count as events), 'rk4_kink' (RK4 that steps exactly to every table node
     and contact-mode change, docs/model.md "rk4_kink"; ``info['events']`` counts the
-    located events; both at most KINK_MAX_SLOTS slots) or 'rk4' (fixed-step classical RK4).
+    located events; both at most KINK_MAX_SLOTS slots), 'rk4_seg' (rk4_node stopping only at
+    the contact-zone edges and contact changes, every evaluation in its own table cell,
+    docs/model.md "rk4_seg") or 'rk4' (fixed-step classical RK4).
     ``bulk_temperature_C`` (degC; tables with a temperature axis only): the FMU
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
@@ -550,7 +552,7 @@ def simulate_sdof(
     F the same per-pair force sum as :func:`simulate` (de_j = slope*omega1).
     Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
-    ``integrator`` 'rk4_kink' (and 'rk4_node') integrates theta1 as a state with omega1' = 0
+    ``integrator`` 'rk4_kink' (and 'rk4_node', 'rk4_seg') integrates theta1 as a state with omega1' = 0
     and steps to every table node and contact-mode change (docs/model.md).
     ``bulk_temperature_C`` (degC, constant; tables with a temperature axis):
     the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).

@@ -131,17 +131,17 @@ def damping_model_code(damping_model) -> int:
 
 
 def integrator_code(integrator, slots: int) -> int:
-    """0/'rk4', 1/'rk4_kink' or 2/'rk4_node' (gearfmu.dynamics.native.INTEGRATORS) -> the kernel code."""
+    """0/'rk4', 1/'rk4_kink', 2/'rk4_node' or 3/'rk4_seg' (gearfmu.common.vocabulary.INTEGRATORS) -> the kernel code."""
     if isinstance(integrator, str):
         if integrator not in INTEGRATORS:
             raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
         code = INTEGRATORS[integrator]
     elif isinstance(integrator, bool) or integrator not in INTEGRATORS.values():
-        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)")
+        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink), 2 (rk4_node) or 3 (rk4_seg)")
     else:
         code = int(integrator)
     if code != 0 and slots > KINK_MAX_SLOTS:
-        raise FmuBuildError(f"integrator: rk4_kink/rk4_node handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
+        raise FmuBuildError(f"integrator: rk4_kink/rk4_node/rk4_seg handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
     return code
 
 

@@ -220,7 +220,7 @@ def diff_report(ref: Dict[str, np.ndarray], other: Dict[str, np.ndarray]) -> Dic
 
 
 def fmu_integrator(fmu_path, start_values=None):
-    """Name of the integrator an FMU runs with ('rk4', 'rk4_kink', 'rk4_node'): its parameter
+    """Name of the integrator an FMU runs with ('rk4', 'rk4_kink', 'rk4_node', 'rk4_seg'): its parameter
     ``integrator`` (docs/model.md; code 0/1) from ``start_values`` or else the start
     value in its modelDescription.xml; None if the FMU has no such parameter."""
     from fmpy import read_model_description  # fmpy: heavy, only to read an FMU

@@ -103,7 +103,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
     ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
     "elastobacklash", 1 or "contact_zone" (docs/model.md).  ``integrator``: 0 or
     "rk4", 1 or "rk4_kink", 2 or "rk4_node" (default, :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`;
-    docs/model.md "Integration", docs/native.md "rk4_node"; FMU parameter ``integrator``).  ``stop_time_s`` and
+    docs/model.md "Integration", docs/native.md "rk4_node"), 3 or "rk4_seg" (docs/model.md "rk4_seg"; FMU
+    parameter ``integrator``).  ``stop_time_s`` and
     ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
     None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
     ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,

@@ -317,7 +317,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
     ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
-    0/"rk4", 1/"rk4_kink" or 2/"rk4_node" (default), the FMU parameter ``integrator``); ``validation``
+    0/"rk4", 1/"rk4_kink", 2/"rk4_node" (default) or 3/"rk4_seg", the FMU parameter ``integrator``); ``validation``
     False skips the validation record (and its native run).  ``platforms``:
     keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default: all); without the zig
     compiler only the build machine's platform is compiled (with ``cc`` or the

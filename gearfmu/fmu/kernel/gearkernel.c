@@ -175,6 +175,7 @@ int gk_set_zone_cuts(gk_model *m, const double *cuts)
 {
     if (m == NULL) return GK_ERR_MODEL;
     m->zone_cuts = cuts;
+    node_flags(m);   /* the rk4_seg stops include the cells with an edge */
     return GK_OK;
 }
 
@@ -224,8 +225,8 @@ int gk_set_integrator(gk_model *m, int integrator)
         m->integrator = integrator;
         return GK_OK;
     }
-    if ((integrator == GK_INTEGRATOR_RK4_KINK || integrator == GK_INTEGRATOR_RK4_NODE)
-        && m->P <= GK_KINK_MAX_SLOTS) {
+    if ((integrator == GK_INTEGRATOR_RK4_KINK || integrator == GK_INTEGRATOR_RK4_NODE
+         || integrator == GK_INTEGRATOR_RK4_SEG) && m->P <= GK_KINK_MAX_SLOTS) {
         m->integrator = integrator;
         return GK_OK;
     }
@@ -567,6 +568,7 @@ typedef struct {
     int sub[GK_KINK_MAX_SLOTS];      /* 0 two (2 fc), 1 sum (fc + fd), 2 zero */
     int kpos[GK_KINK_MAX_SLOTS];     /* contact_zone: k > 0 inside the cell */
     int zsel[GK_KINK_MAX_SLOTS];     /* side of a contact-zone cut held in the cell (zone_sel) */
+    double cl, ch;                   /* rk4_seg: floor(lo), ceil(hi) - 1 (the cells of the segment) */
 } gk_mode;
 
 GK_INLINE void cell_nodes(gk_mode *md, int N)
@@ -592,7 +594,7 @@ static void node_flags(gk_model *m)
     int N = m->n_phi, P = m->P, rows = m->n_torque * m->n_temp, i, j, r;
     if (N > GK_NODE_FLAGS_MAX) return;   /* every node counts as flagged (node_flagged) */
     for (i = 0; i < N; ++i) {
-        int im = (i == 0) ? N - 1 : i - 1, ip = (i == N - 1) ? 0 : i + 1, bent = 0;
+        int im = (i == 0) ? N - 1 : i - 1, ip = (i == N - 1) ? 0 : i + 1, bent = 0, zone = 0;
         for (j = 0; j < P; ++j) {
             const double *b = m->backlash_half_m + (size_t)j * N;
             int pos = 0, nonpos = 0;
@@ -608,13 +610,20 @@ static void node_flags(gk_model *m)
                 else if (!(ml > 0.0) && !(mr > 0.0)) nonpos = 1;
                 else { pos = 1; nonpos = 1; }
             }
-            if (pos && nonpos) bent = 1;
+            if (pos && nonpos) {
+                bent = 1;
+                zone = 1;
+            }
+            if (m->zone_cuts != NULL && (m->zone_cuts[(size_t)j * N + im] >= 0.0 || m->zone_cuts[(size_t)j * N + i] >= 0.0))
+                zone = 1;   /* rk4_seg: a contact-zone edge in a cell of the node */
         }
-        m->node_kink[i] = (unsigned char)bent;
+        m->node_kink[i] = (unsigned char)(bent | (zone << 1));
     }
 }
 
-/* kink flag of global node n (an integer value), node n mod N */
+/* stop flag of global node n (an integer value), node n mod N: rk4_node the kink flag;
+ * rk4_seg the contact_zone-flag change or a contact-zone edge in one of the node's two
+ * cells (model_rhs._seg_flags) */
 static int node_flagged(const gk_model *m, double n)
 {
     int N = m->n_phi, i0;
@@ -624,7 +633,7 @@ static int node_flagged(const gk_model *m, double n)
     i0 = (int)r;
     if (i0 < 0) i0 = 0;
     if (i0 >= N) i0 = N - 1;
-    return m->node_kink[i0] != 0;
+    return (m->node_kink[i0] & ((m->integrator == GK_INTEGRATOR_RK4_SEG) ? 2 : 1)) != 0;
 }
 
 /* contact-zone cuts of cell i0 over all slots (model_rhs._cut_above / _cut_below): the
@@ -689,6 +698,16 @@ static double seg_up(const gk_model *m, double n, int node)
     if (!node) return c + 1.0;
     top = c + m->n_phi;
     q = c + 1.0;
+    if (m->integrator == GK_INTEGRATOR_RK4_SEG && m->n_phi <= GK_NODE_FLAGS_MAX) {
+        /* every cell with a cut has both nodes flagged: the first flag comes first */
+        int i = node_index(m->n_phi, q);
+        while (q < top) {
+            if ((m->node_kink[i] & 2) != 0) return q;
+            q += 1.0;
+            if (++i == m->n_phi) i = 0;
+        }
+        return q;
+    }
     while (q < top) {
         if (node_flagged(m, q)) return q;
         if (m->zone_cuts != NULL) {
@@ -714,6 +733,15 @@ static double seg_down(const gk_model *m, double n, int node)
     if (!node) return c;
     bottom = c + 1.0 - m->n_phi;
     q = c;
+    if (m->integrator == GK_INTEGRATOR_RK4_SEG && m->n_phi <= GK_NODE_FLAGS_MAX) {
+        int i = node_index(m->n_phi, q);
+        while (q > bottom) {
+            if ((m->node_kink[i] & 2) != 0) return q;
+            q -= 1.0;
+            if (--i < 0) i = m->n_phi - 1;
+        }
+        return q;
+    }
     while (q > bottom) {
         if (node_flagged(m, q)) return q;
         if (m->zone_cuts != NULL) {
@@ -1120,6 +1148,416 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
     }
 }
 
+
+/* --------------------------------------------------------------- rk4_seg
+ * docs/model.md "rk4_seg": rk4_node's held segments, stops and event location, the
+ * segments running from contact-zone edge to edge (node_flagged), every evaluation
+ * reading the tables in the cell of its own theta1 clamped to the segment, and the RK4
+ * steps taken in the shifted state (theta1, Omega, x, V) = (theta1, omega1 - g_w*C, x,
+ * v - g_v*C), C = c*sum e_j over the damped pairs.  Same arithmetic as _seg_substep and
+ * friends in gearfmu/dynamics/integrators.py and model_rhs.py. */
+
+/* the cell of th clamped to the held segment (model_rhs._seg_cell): its nodes and weight in
+ * *c, its global index returned */
+GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
+{
+    int N = m->n_phi;
+    double cc = floor(th * m->inv_dphi);
+    if (!(cc > md->cl)) cc = md->cl;
+    if (cc > md->ch) cc = md->ch;
+    if (cc == md->nd) {
+        c->i0 = md->i0;
+        c->i1 = md->i1;
+    } else if (cc == md->nd + 1.0) {
+        c->i0 = md->i1;
+        c->i1 = (md->i1 == N - 1) ? 0 : md->i1 + 1;
+    } else if (cc == md->nd - 1.0) {
+        c->i1 = md->i0;
+        c->i0 = (md->i0 == 0) ? N - 1 : md->i0 - 1;
+    } else {
+        c->i0 = node_index(N, cc);
+        c->i1 = (c->i0 + 1 == N) ? 0 : c->i0 + 1;
+    }
+    c->nd = GK_CELL_NONE;
+    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
+    return cc;
+}
+
+/* held side of pair j's contact-zone cut in cell c of the segment (model_rhs._seg_sel) */
+GK_INLINE int seg_sel(const gk_model *m, const gk_mode *md, int j, double cc, const gk_ph *c)
+{
+    size_t r;
+    double clo, a, b, wm;
+    if (cc == md->nd || m->zone_cuts == NULL) return md->zsel[j];
+    r = (size_t)j * m->n_phi + c->i0;
+    clo = m->zone_cuts[r];
+    if (!(clo >= 0.0)) return -1;
+    a = (md->lo > cc) ? md->lo : cc;
+    b = (md->hi < cc + 1.0) ? md->hi : cc + 1.0;
+    wm = 0.5 * (a + b) - cc;
+    if (wm < clo) return 0;
+    if (wm >= m->zone_cuts[(size_t)m->P * m->n_phi + r]) return 2;
+    return 1;
+}
+
+/* the pair carries the viscous term in its held mode (model_rhs._seg_damped) */
+GK_INLINE int seg_damped(const gk_model *m, const gk_mode *md, int j)
+{
+    if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) return md->reg[j] != 0 && md->sub[j] == 1;
+    return md->kpos[j] != 0;
+}
+
+/* C = c*sum e_j over the damped pairs at th (model_rhs._seg_ce) */
+GK_INLINE double seg_ce(const gk_model *m, const gk_tq *t, const gk_mode *md, double th)
+{
+    gk_ph c;
+    double ea = 0.0;
+    int j;
+    double cc = seg_cell(m, md, th, &c);
+    for (j = 0; j < m->P; ++j) {
+        if (seg_damped(m, md, j)) {
+            double kv, ev, es, bv;
+            slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+            ea += ev;
+        }
+    }
+    return m->c_Ns_per_m * ea;
+}
+
+/* right-hand side in the shifted state y = (theta1, Omega, x, V) (model_rhs._seg_rhs);
+ * *sk = c*sum de_j/dphi over the damped pairs */
+GK_INLINE void seg_rhs(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                       double gw, double gv, const double *y, double *dy, double *sk)
+{
+    gk_ph c;
+    double fs = 0.0, ea = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    int j;
+    double cc = seg_cell(m, md, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv, fc;
+        int reg = md->reg[j];
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+        if (reg == 1) fc = kv * ((y[2] - ev) - bv);
+        else if (reg == -1) fc = kv * ((y[2] - ev) + bv);
+        else fc = 0.0;
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+            if (reg != 0) {
+                int sub = md->sub[j];
+                if (sub == 0) {
+                    fs += fc + fc;
+                } else if (sub == 1) {
+                    fs += fc;
+                    ea += ev;
+                    sa += es;
+                    na += 1.0;
+                }
+            }
+        } else if (md->kpos[j] != 0) {
+            fs += fc;
+            ea += ev;
+            sa += es;
+            na += 1.0;
+        }
+    }
+    ce = cd * ea;
+    om = y[1] + gw * ce;
+    v = y[3] + gv * ce;
+    f = fs + na * (cd * v);
+    dy[0] = om;
+    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[2] = v;
+    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    *sk = cd * sa;
+}
+
+/* classical RK4 of the shifted state, first stage f0 given (integrators._rk4_seg) */
+GK_INLINE void rk4_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
+                       double gw, double gv, const double *y, const double *f0, double h, double *yn)
+{
+    double h2 = h / 2.0, h6, k[4], sum[4], yt[4], sk;
+    axpy4(y, h2, f0, yt);
+    seg_rhs(m, t, md, T1, T2, gw, gv, yt, k, &sk);
+    axpy4(f0, 2.0, k, sum);
+    axpy4(y, h2, k, yt);
+    seg_rhs(m, t, md, T1, T2, gw, gv, yt, k, &sk);
+    axpy4(sum, 2.0, k, sum);
+    axpy4(y, h, k, yt);
+    seg_rhs(m, t, md, T1, T2, gw, gv, yt, k, &sk);
+    axpy4(sum, 1.0, k, sum);
+    h6 = h / 6.0;
+    axpy4(y, h6, sum, yn);
+}
+
+/* guard q of pair j at the state y = (theta1, omega1, x, v), rk4_seg lookup */
+GK_INLINE double pair_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int j, int q,
+                                const double *y)
+{
+    gk_ph c;
+    double kv, ev, es, bv;
+    double cc = seg_cell(m, md, y[0], &c);
+    slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+    return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, md->reg[j], md->sub[j]);
+}
+
+/* guard gi at the shifted state y (integrators._guard_seg) */
+GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y,
+                           double gw, double gv)
+{
+    double ce, yt[4];
+    int j, q;
+    if (gi == 0) return y[0] - md->lo * m->dphi_rad;
+    if (gi == 1) return md->hi * m->dphi_rad - y[0];
+    ce = seg_ce(m, t, md, y[0]);
+    j = (gi - 2) / 3;
+    q = (gi - 2) - 3 * j;
+    yt[0] = y[0];
+    yt[1] = y[1] + gw * ce;
+    yt[2] = y[2];
+    yt[3] = y[3] + gv * ce;
+    return pair_guard_seg(m, t, md, j, q, yt);
+}
+
+static double hermite_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
+                                const double *y0, const double *f0, const double *y1, const double *f1,
+                                double tau, double gw, double gv)
+{
+    double u = 1.0 - s, yy[4];
+    double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
+    double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
+    int q;
+    for (q = 0; q < 4; ++q)
+        yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
+    return guard_seg(m, t, md, gi, yy, gw, gv);
+}
+
+/* guard_root on the Hermite interpolant of the shifted state */
+static double guard_root_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
+                             const double *y0, const double *f0, const double *y1, const double *f1,
+                             double tau, double gw, double gv)
+{
+    double ga = guard_seg(m, t, md, gi, y0, gw, gv), gb = g_end, a = 0.0, b = 1.0, s, gs;
+    int side = 0, it;
+    if (!(ga > 0.0)) return 0.0;
+    for (it = 0; it < KINK_MAX_IT; ++it) {
+        s = (a * gb - b * ga) / (gb - ga);
+        if (!(s > a && s < b)) s = 0.5 * (a + b);
+        gs = hermite_guard_seg(m, t, md, gi, s, y0, f0, y1, f1, tau, gw, gv);
+        if (gs < 0.0) {
+            b = s;
+            gb = gs;
+            if (side == -1) ga = 0.5 * ga;
+            side = -1;
+        } else if (gs == 0.0) {
+            b = s;
+            break;
+        } else {
+            a = s;
+            ga = gs;
+            if (side == 1) gb = 0.5 * gb;
+            side = 1;
+        }
+        if (b - a <= KINK_TOL_S) break;
+    }
+    return b;
+}
+
+/* the state (theta1, omega1, x, v) of the shifted state y, in place (integrators._seg_true) */
+GK_INLINE void seg_true(const gk_model *m, const gk_tq *t, const gk_mode *md, double gw, double gv, double *y)
+{
+    double ce = seg_ce(m, t, md, y[0]);
+    y[1] = y[1] + gw * ce;
+    y[3] = y[3] + gv * ce;
+}
+
+/* the first stage at the state y: the shifted state ys (C at y) and f0 = seg_rhs(ys), with one
+ * table lookup per pair for both (the values and operations of seg_ce, then seg_rhs) */
+static void seg_first(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2, double gw,
+                      double gv, const double *y, double *ys, double *f0, double *sk)
+{
+    gk_ph c;
+    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double ea = 0.0, fs = 0.0, ea2 = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    int j;
+    double cc = seg_cell(m, md, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
+        if (seg_damped(m, md, j)) ea += ev[j];
+    }
+    ce = cd * ea;
+    ys[0] = y[0];
+    ys[1] = y[1] - gw * ce;
+    ys[2] = y[2];
+    ys[3] = y[3] - gv * ce;
+    for (j = 0; j < m->P; ++j) {
+        double fc;
+        int reg = md->reg[j];
+        if (reg == 1) fc = kv[j] * ((ys[2] - ev[j]) - bv[j]);
+        else if (reg == -1) fc = kv[j] * ((ys[2] - ev[j]) + bv[j]);
+        else fc = 0.0;
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+            if (reg != 0) {
+                int sub = md->sub[j];
+                if (sub == 0) {
+                    fs += fc + fc;
+                } else if (sub == 1) {
+                    fs += fc;
+                    ea2 += ev[j];
+                    sa += es[j];
+                    na += 1.0;
+                }
+            }
+        } else if (md->kpos[j] != 0) {
+            fs += fc;
+            ea2 += ev[j];
+            sa += es[j];
+            na += 1.0;
+        }
+    }
+    ce = cd * ea2;
+    om = ys[1] + gw * ce;
+    v = ys[3] + gv * ce;
+    f = fs + na * (cd * v);
+    f0[0] = om;
+    f0[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    f0[2] = v;
+    f0[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    *sk = cd * sa;
+}
+
+/* the state yt = (theta1, omega1, x, v) of the shifted state y1 (seg_true) and 1 when no pair
+ * guard is negative there (pairs_hold_seg), with one table lookup per pair for both */
+static int seg_end(const gk_model *m, const gk_tq *t, const gk_mode *md, double gw, double gv, const double *y1,
+                   double *yt)
+{
+    gk_ph c;
+    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double ea = 0.0, ce;
+    int j, q;
+    double cc = seg_cell(m, md, y1[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
+        if (seg_damped(m, md, j)) ea += ev[j];
+    }
+    ce = m->c_Ns_per_m * ea;
+    yt[0] = y1[0];
+    yt[1] = y1[1] + gw * ce;
+    yt[2] = y1[2];
+    yt[3] = y1[3] + gv * ce;
+    for (j = 0; j < m->P; ++j)
+        for (q = 0; q < 3; ++q)
+            if (pair_guard(q, kv[j], ev[j], es[j], bv[j], yt[2], yt[3], yt[1], m->c_Ns_per_m, m->damping_model,
+                           md->reg[j], md->sub[j]) < 0.0)
+                return 0;
+    return 1;
+}
+
+/* one substep of rk4_seg (integrators._seg_substep) */
+static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2, double *y, double h)
+{
+    double rem = h, ys[4], f0[4], y1[4], yt1[4], f1[4], gw, gv, sk;
+    int nev = 0, n_guard = 2 + 3 * m->P, q;
+    gw = m->Rb1_m / m->I1_kgm2;
+    gv = m->Rb1_m * (m->Rb1_m / m->I1_kgm2) + m->Rb2_m * (m->Rb2_m / m->I2_kgm2);
+    for (;;) {
+        double best = 2.0, cn;
+        int best_gi = -1, have_f1 = 0, gi, any_neg;
+        md->cl = floor(md->lo);   /* the segment is fixed until the next pass */
+        md->ch = ceil(md->hi) - 1.0;
+        cn = floor(y[0] * m->inv_dphi);
+        if (cn + 1.0 > md->lo && cn < md->hi && cn != md->nd) {
+            md->nd = cn;
+            cell_nodes(md, m->n_phi);
+            zone_sel(m, md);
+        }
+        seg_first(m, t, md, T1, T2, gw, gv, y, ys, f0, &sk);
+        if (nev < GK_KINK_MAX_EVENTS) {
+            double tau = node_time(y[0], y[1], f0[1] + gw * (sk * y[1]), rem, md->lo, md->hi, m->dphi_rad);
+            if (tau > 0.0) {
+                rk4_seg(m, t, md, T1, T2, gw, gv, ys, f0, tau, y1);
+                if (seg_end(m, t, md, gw, gv, y1, yt1)) {
+                    seg_cross(m, md, y[1] > 0.0, 1);
+                    for (q = 0; q < 4; ++q) y[q] = yt1[q];
+                    rem = rem - tau;
+                    nev += 1;
+                    cell_nodes(md, m->n_phi);
+                    zone_sel(m, md);
+                    mode_sync(m, t, md, y, 0);
+                    if (!(rem > 0.0)) break;
+                    continue;
+                }
+            }
+        }
+        rk4_seg(m, t, md, T1, T2, gw, gv, ys, f0, rem, y1);
+        any_neg = !seg_end(m, t, md, gw, gv, y1, yt1);
+        if (nev >= GK_KINK_MAX_EVENTS) {
+            for (q = 0; q < 4; ++q) y[q] = yt1[q];
+            mode_from_state(m, t, md, y, 1);
+            break;
+        }
+        if ((yt1[0] - md->lo * m->dphi_rad < 0.0) || (md->hi * m->dphi_rad - yt1[0] < 0.0)) any_neg = 1;
+        if (!any_neg) {
+            for (q = 0; q < 4; ++q) y[q] = yt1[q];
+            break;
+        }
+        for (gi = 0; gi < n_guard; ++gi) {
+            double g = guard_seg(m, t, md, gi, y1, gw, gv), s;
+            if (!(g < 0.0)) continue;
+            if (!have_f1) {
+                seg_rhs(m, t, md, T1, T2, gw, gv, y1, f1, &sk);
+                have_f1 = 1;
+            }
+            s = guard_root_seg(m, t, md, gi, g, ys, f0, y1, f1, rem, gw, gv);
+            if (s < best) {
+                best = s;
+                best_gi = gi;
+            }
+        }
+        if (best_gi < 0) {
+            for (q = 0; q < 4; ++q) y[q] = yt1[q];
+            break;
+        }
+        if (best >= 1.0) {
+            for (q = 0; q < 4; ++q) y[q] = yt1[q];
+            rem = 0.0;
+        } else if (best > 0.0) {
+            double tau = best * rem, ye[4];
+            rk4_seg(m, t, md, T1, T2, gw, gv, ys, f0, tau, ye);
+            seg_true(m, t, md, gw, gv, ye);
+            for (q = 0; q < 4; ++q) y[q] = ye[q];
+            rem = rem - tau;
+        }
+        nev += 1;
+        if (best_gi < 2) {
+            seg_cross(m, md, best_gi == 1, 1);
+            cell_nodes(md, m->n_phi);
+            zone_sel(m, md);
+            mode_sync(m, t, md, y, 0);
+        } else {
+            int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
+            if (md->reg[j] == 0) {
+                md->reg[j] = (qq == 0) ? 1 : -1;
+                if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+                    gk_ph c;
+                    double kv, ev, es, bv;
+                    double cc = seg_cell(m, md, y[0], &c);
+                    slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+                    md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+                }
+            } else if (qq == 0) {
+                md->reg[j] = 0;
+                md->sub[j] = 0;
+            } else if (md->sub[j] == 1) {
+                md->sub[j] = (qq == 1) ? 0 : 2;
+            } else {
+                md->sub[j] = 1;
+            }
+        }
+        if (!(rem > 0.0)) break;
+    }
+}
+
 /* ------------------------------------------------------------ public API */
 
 int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
@@ -1230,6 +1668,12 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
         if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
         mode_from_state(m, &t, &md, y, node);
         for (i = 0; i < nsub; ++i) kink_substep(m, &t, &md, T1_Nm, T2_Nm, y, h, node);
+        nsub = 0;
+    } else if (m->integrator == GK_INTEGRATOR_RK4_SEG) {
+        gk_mode md;
+        if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+        mode_from_state(m, &t, &md, y, 1);
+        for (i = 0; i < nsub; ++i) seg_substep(m, &t, &md, T1_Nm, T2_Nm, y, h);
         nsub = 0;
     }
     for (i = 0; i < nsub; ++i) {

@@ -35,12 +35,15 @@ extern "C" {
 #define GK_DAMPING_CONTACT_ZONE 1
 
 /* integrators (docs/model.md "Integration"): fixed-step classical RK4, RK4 that
- * steps exactly to every table node and contact-mode change (rk4_kink), and
+ * steps exactly to every table node and contact-mode change (rk4_kink),
  * rk4_kink stopping only at the table nodes where the tables bend, each reached
- * by one step to its predicted crossing time (rk4_node, docs/native.md) */
+ * by one step to its predicted crossing time (rk4_node, docs/native.md), and
+ * rk4_node stopping only at the contact-zone edges and reading every evaluation's
+ * own table cell, in the shifted velocities (rk4_seg, docs/model.md "rk4_seg") */
 #define GK_INTEGRATOR_RK4 0
 #define GK_INTEGRATOR_RK4_KINK 1
 #define GK_INTEGRATOR_RK4_NODE 2
+#define GK_INTEGRATOR_RK4_SEG 3
 /* rk4_kink: most slots it accepts, and events located per substep before the
  * rest of the substep is taken without detection */
 #define GK_KINK_MAX_SLOTS 32
@@ -95,7 +98,8 @@ typedef struct gk_model {
     int temp_two;                   /* 1: blend slices temp_ia, temp_ia + 1 with temp_w */
     double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
     double temperature_now_C;       /* the temperature selected last (degC) */
-    unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* rk4_node: 1 at node i where the tables bend */
+    unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* bit 0 (rk4_node): the tables bend at node i; bit 1
+                                                    (rk4_seg): the contact_zone flag can change there */
     const double *zone_cuts;        /* [2][P][n_phi] cuts of gk_zone_cuts (borrowed), NULL: plain lookup */
 } gk_model;
 
@@ -149,8 +153,8 @@ int gk_set_temperature(gk_model *m, double temperature_C);
 /* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_CONTACT_ZONE */
 int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
 
-/* GK_INTEGRATOR_RK4, GK_INTEGRATOR_RK4_KINK or GK_INTEGRATOR_RK4_NODE (the latter two
- * need P <= GK_KINK_MAX_SLOTS); GK_ERR_PARAM otherwise. */
+/* GK_INTEGRATOR_RK4, GK_INTEGRATOR_RK4_KINK, GK_INTEGRATOR_RK4_NODE or GK_INTEGRATOR_RK4_SEG
+ * (all but the first need P <= GK_KINK_MAX_SLOTS); GK_ERR_PARAM otherwise. */
 int gk_set_integrator(gk_model *m, int integrator);
 
 /* Initial state of docs/model.md: theta1 = theta1_0, omega1 = omega1_0, v = 0,

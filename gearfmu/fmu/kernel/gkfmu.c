@@ -2,7 +2,7 @@
  * gkfmu.c -- the FMU behaviour both gearfmu runtimes share (gkfmu.h says what and who).
  *
  * Policy (docs/fmu.md): a parameter that is non-finite or outside its min/max, or
- * max_step <= 0, damping_model not 0/1, integrator not 0/1/2 -> no initial state (Error);
+ * max_step <= 0, damping_model not 0/1, integrator not 0/1/2/3 -> no initial state (Error);
  * a non-finite or out-of-range input, a temperature outside the table's axis (no
  * clamping) or a communication step that is not finite and > 0 -> the step is discarded
  * with the state unchanged; a pinion torque outside the tables' torque axis -> one
@@ -242,13 +242,13 @@ int gkf_initialize(gkf_fmu *f, gk_state *s, double t, double *out)
             num(f->value[GKF_DAMPING_MODEL], a), tail);
         bad = 1;
     }
-    if (f->present[GKF_INTEGRATOR] && code_of(ig, 3) < 0) {
-        say(f, GKF_ERROR, "integrator = %s: must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)%s", num(ig, a), tail);
+    if (f->present[GKF_INTEGRATOR] && code_of(ig, 4) < 0) {
+        say(f, GKF_ERROR, "integrator = %s: must be 0 (rk4), 1 (rk4_kink), 2 (rk4_node) or 3 (rk4_seg)%s", num(ig, a), tail);
         bad = 1;
     }
     if (bad) return 0;
     if (f->present[GKF_INTEGRATOR]) { /* docs/model.md "Integration" */
-        st = gk_set_integrator(f->model, code_of(ig, 3));
+        st = gk_set_integrator(f->model, code_of(ig, 4));
         if (st != GK_OK) {
             say(f, GKF_ERROR, "integrator = %s: %s%s", num(ig, a), gkf_kernel_error(st), tail);
             return 0;
@@ -304,7 +304,7 @@ int gkf_restore(gkf_fmu *f, int integrator, int zeta_valid, double zeta, int war
     if (f == NULL) return GK_ERR_MODEL;
     ig = f->value[GKF_INTEGRATOR];
     if (integrator && f->present[GKF_INTEGRATOR]) {
-        st = gk_set_integrator(f->model, code_of(ig, 3));
+        st = gk_set_integrator(f->model, code_of(ig, 4));
         if (st != GK_OK) return st;
     }
     if (zeta_valid) {
