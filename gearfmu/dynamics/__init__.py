@@ -9,9 +9,14 @@ native       public API of the numba solver (simulate, simulate_sdof,
              SimResult), argument checks, step choice
 driver       the one compiled loop over communication steps (all
              integrators and forms), output rows
-integrators  RK4 step ('rk4') and the event-locating 'rk4_kink' substep
+integrators  RK4 step ('rk4'), the event-locating 'rk4_kink' substep and
+             its 'rk4_node' and 'rk4_seg' variants
 model_rhs    table lookup, per-pair force laws, contact-mode guards,
              quasi-static equilibrium (numba, the C kernel's arithmetic)
+seg_rhs      'rk4_seg' right-hand side: per-evaluation cell in the held
+             segment, shifted velocities
+subcell      table values and quasi-static TE with or without the
+             sub-cell lookup at the contact-zone edges (measurement)
 reference    event-located reference integrator (tests and benchmarks)
 sweeps       steady-state sweeps through an executor
 harmonics    mesh-harmonic amplitudes of the DTE (seed 003 eq 10-11)

@@ -25,9 +25,10 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _seg_cell, _seg_ce, _seg_gains, _seg_rhs,
-    _seg_sel, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel, _mesh_force, _pair_guard,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel,
+    _mesh_force, _pair_guard,
 )
+from .seg_rhs import _seg_cell, _seg_ce, _seg_gains, _seg_rhs, _seg_sel
 
 
 @njit(cache=True, error_model="numpy")
@@ -164,7 +165,7 @@ def _pair_guard_seg(tab, md, j, q, th, om, x, v, nd, i0, i1, lo, hi):
 @njit(cache=True, error_model="numpy")
 def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
     """rk4_seg: guard gi (as :func:`_guard_at`) at the shifted state (theta1, Omega, x, V):
-    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`gearfmu.dynamics.model_rhs._seg_rhs`)."""
+    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`gearfmu.dynamics.seg_rhs._seg_rhs`)."""
     dphi = tab[9]
     if gi == 0:
         return th - lo * dphi
@@ -179,7 +180,7 @@ def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
 @njit(cache=True, error_model="numpy")
 def _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, h, nd, i0, i1, lo, hi):
     """One classical RK4 step of length h of the shifted state (theta1, Omega, x, V) with
-    :func:`gearfmu.dynamics.model_rhs._seg_rhs` (rk4_seg), first stage (fa..fd) given, mode
+    :func:`gearfmu.dynamics.seg_rhs._seg_rhs` (rk4_seg), first stage (fa..fd) given, mode
     held; the arithmetic of :func:`_rk4_locked`."""
     h2 = h / 2.0
     ka, kb, kc, kd, sk = _seg_rhs(tab, dyn, md, th + h2 * fa, wo + h2 * fb, x + h2 * fc, wv + h2 * fd,
@@ -599,7 +600,7 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     can change, :func:`gearfmu.dynamics.model_rhs._seg_flags`), and every evaluation reads
     the tables in the cell of its own theta1 clamped to the segment, so the tables' piecewise
     linear interpolant is integrated exactly; the RK4 steps integrate the shifted state
-    (theta1, Omega, x, V) of :func:`gearfmu.dynamics.model_rhs._seg_rhs`, whose right-hand
+    (theta1, Omega, x, V) of :func:`gearfmu.dynamics.seg_rhs._seg_rhs`, whose right-hand
     side has no jump at the table nodes (the e-slope damping term is moved into the state)."""
     n_phi = tab[7]
     p = tab[8]

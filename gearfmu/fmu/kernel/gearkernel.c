@@ -1157,7 +1157,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
  * v - g_v*C), C = c*sum e_j over the damped pairs.  Same arithmetic as _seg_substep and
  * friends in gearfmu/dynamics/integrators.py and model_rhs.py. */
 
-/* the cell of th clamped to the held segment (model_rhs._seg_cell): its nodes and weight in
+/* the cell of th clamped to the held segment (seg_rhs._seg_cell): its nodes and weight in
  * *c, its global index returned */
 GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
 {
@@ -1183,7 +1183,7 @@ GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph
     return cc;
 }
 
-/* held side of pair j's contact-zone cut in cell c of the segment (model_rhs._seg_sel) */
+/* held side of pair j's contact-zone cut in cell c of the segment (seg_rhs._seg_sel) */
 GK_INLINE int seg_sel(const gk_model *m, const gk_mode *md, int j, double cc, const gk_ph *c)
 {
     size_t r;
@@ -1200,14 +1200,14 @@ GK_INLINE int seg_sel(const gk_model *m, const gk_mode *md, int j, double cc, co
     return 1;
 }
 
-/* the pair carries the viscous term in its held mode (model_rhs._seg_damped) */
+/* the pair carries the viscous term in its held mode (seg_rhs._seg_damped) */
 GK_INLINE int seg_damped(const gk_model *m, const gk_mode *md, int j)
 {
     if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) return md->reg[j] != 0 && md->sub[j] == 1;
     return md->kpos[j] != 0;
 }
 
-/* C = c*sum e_j over the damped pairs at th (model_rhs._seg_ce) */
+/* C = c*sum e_j over the damped pairs at th (seg_rhs._seg_ce) */
 GK_INLINE double seg_ce(const gk_model *m, const gk_tq *t, const gk_mode *md, double th)
 {
     gk_ph c;
@@ -1224,7 +1224,7 @@ GK_INLINE double seg_ce(const gk_model *m, const gk_tq *t, const gk_mode *md, do
     return m->c_Ns_per_m * ea;
 }
 
-/* right-hand side in the shifted state y = (theta1, Omega, x, V) (model_rhs._seg_rhs);
+/* right-hand side in the shifted state y = (theta1, Omega, x, V) (seg_rhs._seg_rhs);
  * *sk = c*sum de_j/dphi over the damped pairs */
 GK_INLINE void seg_rhs(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
                        double gw, double gv, const double *y, double *dy, double *sk)
