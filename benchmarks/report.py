@@ -81,9 +81,10 @@ SOURCES = {
                            "examples/seed003_figures.py --quick --json"),
     "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
                None, "examples/seed000_trends.py --json --also-policy load_sharing"),
-    "fmu_rtf": ([PY, "benchmarks/bench_fmu_rtf.py", "--ppm", "32,64,128", "--integrators", "rk4_node,rk4_kink",
-                 "--substeps", "1,2,3", "--repeat", "3"], None,
-                "benchmarks/bench_fmu_rtf.py --ppm 32,64,128 --integrators rk4_node,rk4_kink --substeps 1,2,3 --repeat 3"),
+    "fmu_rtf": ([PY, "benchmarks/bench_fmu_rtf.py", "--ppm", "32,64,128", "--integrators", "rk4_node,rk4_seg,rk4_kink",
+                 "--substeps", "2,3,4,6", "--repeat", "3"], None,
+                "benchmarks/bench_fmu_rtf.py --ppm 32,64,128 --integrators rk4_node,rk4_seg,rk4_kink --substeps 2,3,4,6 "
+                "--repeat 3"),
     "table_front": ([PY, "benchmarks/bench_fmu_rtf.py", "--table-front"], None,
                     "benchmarks/bench_fmu_rtf.py --table-front"),
     "integrators": ([PY, "benchmarks/bench_integrators.py", "--repeat", "3"], None,
