@@ -84,13 +84,14 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     for c in range(na):
         col[act[c]] = c
     # the kernel extended symmetrically, Ks[n + t] = K_|t| (no abs per entry), and
-    # whether the unknowns are consecutive nodes (then each row reads Ks backwards
-    # in one run, which the compiler vectorises)
+    # whether the unknowns are consecutive nodes (then each row reads Ks in one
+    # forward run, mirrored: Ks[m] = Ks[2n - m], which the compiler vectorises)
     Ks = np.empty(2 * n + 1)
     for t in range(n):
         Ks[n + t] = K[ko + t]
         Ks[n - t] = K[ko + t]
     Ks[0] = 0.0                                  # t = -n: never read
+    Ks[2 * n] = 0.0                              # t = n: never read
     consecutive = na > 0 and act[na - 1] - act[0] == na - 1
     for a in range(na):
         k = act[a]
@@ -117,10 +118,10 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
         Ap = (-cp * e3p) * ipi
         if consecutive:
             row = J[a, :na]
-            s0 = n + k - act[0]
+            q = n - k + act[0]
             for c in range(na):
-                row[c] = -(A2 * Ks[s0 - 2 - c] + A1 * Ks[s0 - 1 - c]
-                           + A0 * Ks[s0 - c] + Ap * Ks[s0 + 1 - c])
+                row[c] = -(A2 * Ks[q + 2 + c] + A1 * Ks[q + 1 + c]
+                           + A0 * Ks[q + c] + Ap * Ks[q - 1 + c])
         else:
             for c in range(na):
                 t = n + k - act[c]

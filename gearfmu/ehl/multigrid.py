@@ -333,15 +333,20 @@ class FlatMultigrid:
 
     # -- iteration ------------------------------------------------------------
     def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
-                tol_residual=1e-6, stall_window=12, tol_film=1.0, tol_discretisation=0.0):
+                tol_residual=1e-6, stall_window=12, tol_film=1.0, tol_discretisation=0.0,
+                tol_discretisation_residual=math.inf, tol_discretisation_load=math.inf):
         """Compiled W-cycles; returns (converged, cycles, history dict).
         ``tol_discretisation`` > 0: also stop when the relative film change per
-        cycle and the load error are below it."""
+        cycle and the load error are below it, the scaled residual below
+        ``tol_discretisation_residual`` and the load error below
+        ``tol_discretisation_load`` (a finite value: the finest-grid pressure is
+        scaled to the load when only the load is missing, :func:`.mgcycle._iterate`)."""
         hist = np.full((6, max_cycles), np.nan)
         self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
         k = _iterate(self.sched, self.state(), hist, int(max_cycles), int(min_cycles),
                      float(tol_pressure), float(tol_load), float(tol_residual),
-                     float(tol_film), int(stall_window), float(tol_discretisation))
+                     float(tol_film), int(stall_window), float(tol_discretisation),
+                     float(tol_discretisation_residual), float(tol_discretisation_load))
         nc = abs(int(k))
         h = {"pressure_change": hist[0, :nc].tolist(), "load_balance": hist[1, :nc].tolist(),
              "reynolds_residual": hist[2, :nc].tolist(), "H_central": hist[3, :nc].tolist(),
