@@ -387,7 +387,9 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     below ``tol_pressure``, relative load error below ``tol_load`` and the
     scaled Reynolds residual (mean |r_i / (dL_i/dP_i)| over pressurised
     nodes, in units of p_h) below ``tol_residual``; otherwise
-    :class:`EHLConvergenceError` names the stalled residual.
+    :class:`EHLConvergenceError` names the stalled residual.  ``None`` (the
+    default for all three): 1e-5, 1e-6 and 1e-6, and the fast path may stop
+    earlier, at its estimated discretisation error (below).
     With roughness the smooth solution is computed first and then continued
     through the amplitude steps ``roughness_ramp`` (last must be 1; default
     (1.0,): one step -- finer ramps did not help in the cases tried).
@@ -426,10 +428,22 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       where the coarse grids resolve the solution (docs/ehl.md: low alpha_eff).
 
     Default path (docs/ehl.md): a smooth solve with default options first
-    tries the fast path :data:`FAST_SETTING` (F-cycles, Newton on the coarsest
-    grid, full-multigrid start or ``initial``; ``residuals["fast_path"]``); in the strongly
-    piezoviscous corner the pairs of :data:`PIEZO_CORNER_PLAN` come first
-    (``residuals["corner_plan_pair"]``).
+    tries the fast path, :data:`FAST_SETTING` then :data:`FAST_ROBUST_SETTING`
+    (F-cycles, Newton on the coarsest grid, full-multigrid start or
+    ``initial``; ``residuals["fast_path"]``, ``residuals["fast_path_stage"]``); in the
+    strongly piezoviscous corner the pairs of :data:`PIEZO_CORNER_PLAN` come first
+    (``residuals["corner_plan_pair"]``).  Given no tolerance, the fast path
+    stops at the discretisation error: when the relative change of the central
+    and minimum film over a cycle is below :data:`FAST_STOP_FRACTION` times the
+    FMG levels' Richardson estimate of the discretisation error of the central
+    film (as ``stop_at_discretisation``, capped at :data:`STOP_FILM_CHANGE_CAP`;
+    a warm start uses the estimate of ``initial`` on the same grid), with the
+    scaled residual below :data:`FAST_STOP_RESIDUAL` and the load error below
+    ``tol_load`` (the finest pressure scaled to the load when only that is
+    missing) -- or at the tolerances.  Measured on 1025 nodes (Roelands, L = 10,
+    M = 20 and 100): 3 cycles after the start, the central and minimum film
+    within 0.005-0.04 of the discretisation error (about 1e-3 and 1e-2) of the
+    same equations converged 1000x tighter.
 
     Robustness (compiled solver, docs/ehl.md): the relaxation settings of
     :data:`RELAXATION_SETTINGS` are tried in turn; a setting that stalls
