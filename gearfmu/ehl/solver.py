@@ -186,8 +186,13 @@ FAST_STALL_WINDOW = 6
 #: the minimum film is below FAST_STOP_FRACTION times the discretisation error
 #: of the central film estimated from the full-multigrid levels (Richardson, as
 #: ``stop_at_discretisation``; capped at :data:`STOP_FILM_CHANGE_CAP`), with the
-#: relative load error and the scaled Reynolds residual below FAST_STOP_RESIDUAL
-#: -- or at the normal tolerances, whichever comes first.
+#: scaled Reynolds residual below FAST_STOP_RESIDUAL (units of p_h) and the
+#: relative load error below ``tol_load`` (the load balance has no
+#: discretisation error; the finest pressure is scaled to the load when only
+#: that is missing, :func:`.mgcycle._iterate`) -- or at the normal tolerances,
+#: whichever comes first.  The algebraic film error left is then about a tenth
+#: of the discretisation error or less (measured on 1025 nodes, Roelands,
+#: L = 10: 0.005-0.04 of it at M = 20 and 100).
 FAST_STOP_FRACTION = 0.25
 FAST_STOP_RESIDUAL = 5e-6
 
