@@ -9,7 +9,8 @@ film compared with Moes' (1992) fit as quoted by Venner & Lubrecht 2000
 tests/test_ehl.py.  Output: ``{"rows": [...], "worst": {...}, "summary": {...}}``,
 one flat row per point with ``M``, ``L``, ``cpu_s``, ``cycles``,
 ``n_intervals``, ``coarse_intervals``, ``attempt``, ``path`` ("fast",
-"corner_plan" or "settings", docs/ehl.md), ``H_central_moes``,
+"corner_plan" or "settings", docs/ehl.md), ``fast_stage`` (the fast path's
+stage that converged, 0 or 1, else None), ``H_central_moes``,
 ``H_central_fit``, ``dev_vs_moes`` (relative); ``worst`` is the slowest row,
 ``summary`` the median, maximum and total CPU time, the number of points
 above 1 s (``points_over_1s``) and the mean and maximum
@@ -43,6 +44,11 @@ def _path(r):
     return "settings"
 
 
+def _fast_stage(r):
+    st = r.residuals.get("fast_path_stage")
+    return int(st[0]) if st else None
+
+
 def point(M, L, repeats=2):
     """One grid point, timed as the best of ``repeats`` solves: the first one of a point also
     compiles whatever path it is the first to take (numba compiles on first use), which the
@@ -61,7 +67,8 @@ def point(M, L, repeats=2):
     return dict(case="moes_range", M=M, L=L, cpu_s=round(cpu, 4), converged=True,
                 cycles=r.iterations, n_intervals=n,
                 coarse_intervals=n // 2 ** (r.grid_levels - 1),
-                attempt=int(r.residuals["attempt"]), path=_path(r), H_central_moes=r.H_central_moes,
+                attempt=int(r.residuals["attempt"]), path=_path(r), fast_stage=_fast_stage(r),
+                H_central_moes=r.H_central_moes,
                 H_central_fit=fit, dev_vs_moes=r.H_central_moes / fit - 1.0)
 
 
@@ -72,7 +79,7 @@ def default_1025(M, L, repeats):
         r = solve_line_contact(M=M, L=L, n_nodes=1025)
         best = min(best, time.process_time() - t)
     return dict(case="default_1025", M=M, L=L, cpu_s=round(best, 5), converged=True,
-                cycles=r.iterations, n_intervals=1024, path=_path(r),
+                cycles=r.iterations, n_intervals=1024, path=_path(r), fast_stage=_fast_stage(r),
                 H_central_moes=r.H_central_moes)
 
 

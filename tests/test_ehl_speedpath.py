@@ -333,21 +333,31 @@ def test_speed_path_stops_inside_the_discretisation_error(M, L):
 def test_default_solve_takes_the_fast_path_to_the_discrete_solution(M):
     # The default 1025-node solve (Roelands + Dowson-Higginson, L = 10) converges on the fast
     # path (F-cycles, Newton on the coarsest grid, full-multigrid start; docs/ehl.md) without
-    # any option.  References: the discretised equations re-evaluated in numpy with a dense
-    # deformation sum (as the other tests: film 1e-9, load 1e-5, scaled residual 1e-5), and
-    # the film of the same equations solved to tolerances 1000x tighter (W-cycles, no fast
-    # path since options are given): the central film within 1e-4 (measured 4e-8 at M = 20,
-    # 9e-6 at M = 100; the discretisation error of this grid is about 1e-3).
+    # any option, and stops at its estimated discretisation error.  References: the
+    # discretised equations re-evaluated in numpy with a dense deformation sum (as the other
+    # tests: film 1e-9, load 1e-5, scaled residual 1e-5; the load error also below the default
+    # load tolerance 1e-6 of the problem statement), and the films of the same equations
+    # solved to tolerances 1000x tighter (W-cycles, no fast path since options are given) on
+    # 1024 and 512 intervals: the central and minimum film of the default solve within a
+    # tenth of the discretisation error of the 1024-interval grid, estimated by Richardson
+    # (second order) from the two (measured: 9.2e-4 / 8.4e-4 at M = 20, 1.1e-2 / 1.2e-2 at
+    # M = 100; the algebraic error left 0.005 / 0.04 and 0.01 / 0.013 of it).
     r = solve_line_contact(M=M, L=10.0, n_nodes=1025)
     assert r.residuals.get("fast_path") == [1.0]
+    assert "stopped_at_discretisation" in r.residuals
     assert r.residuals["settings"]["switch"] == 0.3 and "gamma" not in r.residuals["settings"]
     gap_spread, load_err, scaled = _discrete_equations_check(r)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
-    tight = solve_line_contact(M=M, L=10.0, n_nodes=1025, tol_pressure=1e-8, tol_load=1e-9,
-                               tol_residual=1e-9, max_cycles=300, switch=0.3, nu1=2, nu2=1,
-                               omega_gs=0.6, omega_j=0.5, load_mode=1, c_h0=0.1, stick=10.0)
-    assert "fast_path" not in tight.residuals
-    assert abs(r.H_central_moes / tight.H_central_moes - 1.0) < 1e-4
+    assert abs(r.load_N_per_m / r.inputs["w_N_per_m"] - 1.0) < 1e-6
+    tight = {n: solve_line_contact(M=M, L=10.0, n_nodes=n + 1, tol_pressure=1e-8,
+                                   tol_load=1e-9, tol_residual=1e-9, max_cycles=300,
+                                   switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5,
+                                   load_mode=1, c_h0=0.1, stick=10.0) for n in (512, 1024)}
+    assert "fast_path" not in tight[1024].residuals
+    for key in ("H_central_moes", "H_min_moes"):
+        h1, h2 = getattr(tight[1024], key), getattr(tight[512], key)
+        disc = abs(h1 - h2) / 3.0 / h1
+        assert abs(getattr(r, key) / h1 - 1.0) < 0.1 * disc
 
 
 @pytest.mark.parametrize("M,L", [(1000.0, 15.0), (600.0, 18.0), (1000.0, 20.0)])

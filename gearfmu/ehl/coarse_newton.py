@@ -84,13 +84,14 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
     for c in range(na):
         col[act[c]] = c
     # the kernel extended symmetrically, Ks[n + t] = K_|t| (no abs per entry), and
-    # whether the unknowns are consecutive nodes (then each row reads Ks backwards
-    # in one run, which the compiler vectorises)
+    # whether the unknowns are consecutive nodes (then each row reads Ks in one
+    # forward run, mirrored: Ks[m] = Ks[2n - m], which the compiler vectorises)
     Ks = np.empty(2 * n + 1)
     for t in range(n):
         Ks[n + t] = K[ko + t]
         Ks[n - t] = K[ko + t]
     Ks[0] = 0.0                                  # t = -n: never read
+    Ks[2 * n] = 0.0                              # t = n: never read
     consecutive = na > 0 and act[na - 1] - act[0] == na - 1
     for a in range(na):
         k = act[a]
@@ -117,10 +118,10 @@ def _coarse_jacobian(S, act, na, load_here, l=0):
         Ap = (-cp * e3p) * ipi
         if consecutive:
             row = J[a, :na]
-            s0 = n + k - act[0]
+            q = n - k + act[0]
             for c in range(na):
-                row[c] = -(A2 * Ks[s0 - 2 - c] + A1 * Ks[s0 - 1 - c]
-                           + A0 * Ks[s0 - c] + Ap * Ks[s0 + 1 - c])
+                row[c] = -(A2 * Ks[q + 2 + c] + A1 * Ks[q + 1 + c]
+                           + A0 * Ks[q + c] + Ap * Ks[q - 1 + c])
         else:
             for c in range(na):
                 t = n + k - act[c]
@@ -273,6 +274,33 @@ def _block_scaled_residual_local(l, S, k0, k1):
 
 
 @njit(cache=True, error_model="numpy")
+def _stale_scaled_residual_argmax(l, S):
+    """Node of level l with the largest |r_i / (dL_i/dP_i)| over the pressurised
+    nodes from the residual (``wrk``) and coefficients as they are (nothing
+    recomputed); -1 if there is none."""
+    (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
+     twr, twi, re, im, V, prm, opt, H0old, mode) = S
+    o = iarr[0, l]
+    n = iarr[1, l]
+    ko = iarr[2, l]
+    dX = dx[l]
+    ih2 = 1.0 / (dX * dX)
+    w = (K[ko] - K[ko + 1]) / (math.pi * dX)
+    kmax = -1
+    big = 0.0
+    for k in range(1, n - 1):
+        i = o + k
+        if P[i] <= 0.0:
+            continue
+        J0 = -0.5 * (eps[i - 1] + 2.0 * eps[i] + eps[i + 1]) * ih2 + rho[i] * w
+        v = abs(wrk[i] / J0)
+        if v > big:
+            big = v
+            kmax = k
+    return kmax
+
+
+@njit(cache=True, error_model="numpy")
 def _add_deformation(l, S, k, dp):
     """H of level l += the film change of a pressure change ``dp`` at node k
     (-dp K_|j-k| / pi at every node j: the direct form of one column of the
@@ -329,7 +357,19 @@ def _spike_newton(steps, width, S):
     old = np.empty(2 * width + 1)
     Hs = np.empty(n)
     for st in range(steps):
-        kmax, big0 = _block_scaled_residual(l, S, 1, n - 1)
+        if st == 0:
+            kmax, big0 = _block_scaled_residual(l, S, 1, n - 1)
+        else:
+            # a further step: the largest scaled residual from the coefficients
+            # and residuals at hand (current on the last block; elsewhere from
+            # before the last step, which moved the film there only by the
+            # deformation of a few changed nodes), then both recomputed on the
+            # new block
+            kmax = _stale_scaled_residual_argmax(l, S)
+            if kmax < 0:
+                return
+            kmax, big0 = _block_scaled_residual_local(
+                l, S, max(1, kmax - width), min(n - 1, kmax + width + 1))
         if kmax < 0:
             return
         na = 0

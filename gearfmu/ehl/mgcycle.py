@@ -91,7 +91,7 @@ def _scaled_residual(l, S, order2, zero_f):
 
 @njit(cache=True, error_model="numpy")
 def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
-             stall_window, tol_d):
+             stall_window, tol_d, tol_dr=math.inf, tol_dw=math.inf):
     """Cycles until converged (returns +cycles) or stalled/failed (-cycles).
 
     hist[:, k] = (pressure change, load error, scaled residual, central film,
@@ -99,7 +99,11 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
     units, central = node at X = 0); converged when the first three and the
     relative change of the central and minimum films are below tol_p, tol_w,
     tol_r, tol_f -- or, with ``tol_d`` > 0, when the relative film change and
-    the load error are both below tol_d (stop at the discretisation error)."""
+    the load error are both below tol_d, the scaled residual below ``tol_dr``
+    and the load error below ``tol_dw`` (stop at the discretisation error).
+    With a finite ``tol_dw``, a state at that stop but for a load error
+    between tol_dw and tol_d has its finest-grid pressure scaled to the load
+    and is evaluated again (load projection)."""
     (P, H, f, tauH, base, rho, eps, dle, drho, delta, wrk, Pold, H0, g, iarr, dx, K, khr, khi,
      twr, twi, re, im, V, prm, opt, H0old, mode) = S
     nl = iarr.shape[1]
@@ -148,37 +152,50 @@ def _iterate(sched, S, hist, max_cycles, min_cycles, tol_p, tol_w, tol_r, tol_f,
             _film(top, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
         if opt[19] > 0.5 and opt[15] == 0.0:
             _spike_newton(int(opt[19]), int(opt[20]), S)
-        sp = 0.0
-        dp = 0.0
-        for k in range(n):
-            sp += abs(P[o + k])
-            dp += abs(P[o + k] - Pprev[k])
-        dP = dp / max(sp, 1e-300)
-        dW = abs(_load(top, P, iarr, dx) - 0.5 * math.pi) / (0.5 * math.pi)
-        if defect:
-            res = _scaled_residual(top, S, True, True)
-        else:
-            res = _scaled_residual(top, S, opt[3] > 0, False)
-        hist[0, cyc] = dP
-        hist[1, cyc] = dW
-        hist[2, cyc] = res
-        hc = H[o + i0]
-        hm = H[o]
-        for k in range(1, n):
-            if H[o + k] < hm:
-                hm = H[o + k]
-        hist[3, cyc] = hc
-        hist[4, cyc] = hm
-        if cyc > 0:
-            dh = max(abs(hc - hist[3, cyc - 1]) / max(abs(hc), 1e-300),
-                     abs(hm - hist[4, cyc - 1]) / max(abs(hm), 1e-300))
-        else:
-            dh = 1.0
-        hist[5, cyc] = dh
+        for ev in range(2):
+            sp = 0.0
+            dp = 0.0
+            for k in range(n):
+                sp += abs(P[o + k])
+                dp += abs(P[o + k] - Pprev[k])
+            dP = dp / max(sp, 1e-300)
+            dW = abs(_load(top, P, iarr, dx) - 0.5 * math.pi) / (0.5 * math.pi)
+            if defect:
+                res = _scaled_residual(top, S, True, True)
+            else:
+                res = _scaled_residual(top, S, opt[3] > 0, False)
+            hist[0, cyc] = dP
+            hist[1, cyc] = dW
+            hist[2, cyc] = res
+            hc = H[o + i0]
+            hm = H[o]
+            for k in range(1, n):
+                if H[o + k] < hm:
+                    hm = H[o + k]
+            hist[3, cyc] = hc
+            hist[4, cyc] = hm
+            if cyc > 0:
+                dh = max(abs(hc - hist[3, cyc - 1]) / max(abs(hc), 1e-300),
+                         abs(hm - hist[4, cyc - 1]) / max(abs(hm), 1e-300))
+            else:
+                dh = 1.0
+            hist[5, cyc] = dh
+            if (ev == 0 and cyc + 1 >= min_cycles and dh < tol_d and res < tol_dr
+                    and tol_dw <= dW < tol_d):
+                # at the discretisation stop but for the load: scale the finest
+                # pressure to the load (the film changes by about dW times the
+                # deformation, far below tol_d) and evaluate the state again
+                c = 0.5 * math.pi / _load(top, P, iarr, dx)
+                for k in range(n):
+                    P[o + k] *= c
+                _film(top, P, H, base, tauH, H0, iarr, K, khr, khi, twr, twi, re, im, V)
+                continue
+            break
         if not (math.isfinite(dP) and math.isfinite(dW) and math.isfinite(res)):
             return -(cyc + 1)
         if cyc + 1 >= min_cycles and ((dP < tol_p and dW < tol_w and res < tol_r and dh < tol_f)
-                                      or (dh < tol_d and dW < tol_d)):
+                                      or (dh < tol_d and dW < tol_d and dW < tol_dw
+                                          and res < tol_dr)):
             return cyc + 1
         if cyc + 1 >= 2 * stall_window:
             # stall: neither the change nor the residual fell 3x in the last window

@@ -41,8 +41,8 @@ class EHLParams:
 #: by one Newton step (:func:`_coarse_newton`) instead of 10 point sweeps.
 #: Fewer and cheaper cycles than the default W-cycles (benchmarks/bench_ehl.py
 #: --speed), but without the fallback settings of the default path (passing
-#: options disables them); the default path tries the same cycle first
-#: (:data:`.solver.FAST_SETTING`, with an FMG start and the default tolerances).
+#: options disables them); the default path tries similar cycles first
+#: (:data:`.solver.FAST_SETTING`, :data:`.solver.FAST_ROBUST_SETTING`, with an FMG start).
 SPEED_SETTING = dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1,
                      c_h0=0.1, stick=10.0, gamma="F", coarse_newton=1)
 
@@ -92,6 +92,49 @@ def _grid_constants(ns, ms, off, moff, toff, x_in, x_out):
     return X, dx, K, khr, khi, twr, twi
 
 
+#: per (levels, coarsest intervals, domain): node counts, total nodes, longest
+#: FFT, the level index table, the grid constants and 0.5 X^2 of every level
+_LAYOUT_CACHE: dict = {}
+
+
+def _layout(n_levels, n_coarse, x_in, x_out):
+    key = (n_levels, n_coarse, x_in, x_out)
+    lay = _LAYOUT_CACHE.get(key)
+    if lay is not None:
+        return lay
+    ns = [n_coarse * 2 ** k + 1 for k in range(n_levels)]
+    off = np.concatenate(([0], np.cumsum(ns)))
+    ms = []
+    for n in ns:
+        m = 1
+        while m < 2 * n - 3:
+            m *= 2
+        ms.append(m if n > N_DIRECT else 0)
+    moff = np.concatenate(([0], np.cumsum(ms)))
+    # per level: m/2 twiddles exp(-2 pi i k/m), then the FFT's stage table
+    toff = np.concatenate(([0], np.cumsum(ms)))
+    iarr = np.zeros((6, n_levels), dtype=np.int64)
+    iarr[0] = off[:-1]
+    iarr[1] = ns
+    iarr[2] = off[:-1]          # kernel coefficients share the level offsets
+    iarr[3] = moff[:-1]
+    iarr[4] = ms
+    iarr[5] = toff[:-1]
+    gkey = (tuple(ns), x_in, x_out)
+    cached = _GRID_CACHE.get(gkey)
+    if cached is None:
+        cached = _grid_constants(ns, ms, off, moff, toff, x_in, x_out)
+        if len(_GRID_CACHE) >= _GRID_CACHE_SIZE:
+            _GRID_CACHE.pop(next(iter(_GRID_CACHE)))
+        _GRID_CACHE[gkey] = cached
+    base0 = np.concatenate([0.5 * x ** 2 for x in cached[0]])
+    lay = (ns, int(off[-1]), max(max(ms), 1), iarr, cached, base0)
+    if len(_LAYOUT_CACHE) >= _GRID_CACHE_SIZE:
+        _LAYOUT_CACHE.pop(next(iter(_LAYOUT_CACHE)))
+    _LAYOUT_CACHE[key] = lay
+    return lay
+
+
 class FlatMultigrid:
     """Level hierarchy in flat arrays for the compiled W-cycle (see module doc).
 
@@ -110,41 +153,19 @@ class FlatMultigrid:
         o.update({k: v for k, v in opts.items() if k != "gamma"})
         self.opts = o
         self.gamma = opts.get("gamma", 2)
-        ns = [n_coarse * 2 ** k + 1 for k in range(n_levels)]
-        off = np.concatenate(([0], np.cumsum(ns)))
-        ms = []
-        for n in ns:
-            m = 1
-            while m < 2 * n - 3:
-                m *= 2
-            ms.append(m if n > N_DIRECT else 0)
-        moff = np.concatenate(([0], np.cumsum(ms)))
-        # per level: m/2 twiddles exp(-2 pi i k/m), then the FFT's stage table
-        toff = np.concatenate(([0], np.cumsum(ms)))
-        self.iarr = np.zeros((6, n_levels), dtype=np.int64)
-        self.iarr[0] = off[:-1]
-        self.iarr[1] = ns
-        self.iarr[2] = off[:-1]          # kernel coefficients share the level offsets
-        self.iarr[3] = moff[:-1]
-        self.iarr[4] = ms
-        self.iarr[5] = toff[:-1]
-        ntot = int(off[-1])
-        key = (tuple(ns), float(prm.x_in), float(prm.x_out))
-        cached = _GRID_CACHE.get(key)
-        if cached is None:
-            cached = _grid_constants(ns, ms, off, moff, toff, prm.x_in, prm.x_out)
-            if len(_GRID_CACHE) >= _GRID_CACHE_SIZE:
-                _GRID_CACHE.pop(next(iter(_GRID_CACHE)))
-            _GRID_CACHE[key] = cached
+        lay = _layout(self.n_levels, int(n_coarse), float(prm.x_in), float(prm.x_out))
+        ns, ntot, mmax, iarr, cached, base0 = lay
+        self.iarr = iarr.copy()
         # shared between solvers on the same grid (never written after construction)
         self.X, self.dx, self.K, self.khr, self.khi, self.twr, self.twi = cached
-        mmax = max(max(ms), 1)
         z = lambda: np.zeros(ntot)
         self.P, self.H, self.f, self.tauH = z(), z(), z(), z()
-        self.rough = np.concatenate([np.zeros(n) if rough_fn is None else
-                                     np.asarray(rough_fn(x), float) for n, x in
-                                     zip(ns, self.X)])
-        self.base = np.concatenate([0.5 * x ** 2 for x in self.X]) + self.rough
+        if rough_fn is None:
+            self.rough = np.zeros(ntot)
+            self.base = base0.copy()
+        else:
+            self.rough = np.concatenate([np.asarray(rough_fn(x), float) for x in self.X])
+            self.base = base0 + self.rough
         self.work = [z() for _ in range(7)]   # rho eps dle drho delta wrk Pold
         self.H0 = np.zeros(n_levels)
         self.H0old = np.zeros(n_levels)
@@ -333,15 +354,20 @@ class FlatMultigrid:
 
     # -- iteration ------------------------------------------------------------
     def iterate(self, max_cycles=60, min_cycles=2, tol_pressure=1e-5, tol_load=1e-6,
-                tol_residual=1e-6, stall_window=12, tol_film=1.0, tol_discretisation=0.0):
+                tol_residual=1e-6, stall_window=12, tol_film=1.0, tol_discretisation=0.0,
+                tol_discretisation_residual=math.inf, tol_discretisation_load=math.inf):
         """Compiled W-cycles; returns (converged, cycles, history dict).
         ``tol_discretisation`` > 0: also stop when the relative film change per
-        cycle and the load error are below it."""
+        cycle and the load error are below it, the scaled residual below
+        ``tol_discretisation_residual`` and the load error below
+        ``tol_discretisation_load`` (a finite value: the finest-grid pressure is
+        scaled to the load when only the load is missing, :func:`.mgcycle._iterate`)."""
         hist = np.full((6, max_cycles), np.nan)
         self.optv[:] = [float(self.opts[k]) for k in OPT_KEYS]
         k = _iterate(self.sched, self.state(), hist, int(max_cycles), int(min_cycles),
                      float(tol_pressure), float(tol_load), float(tol_residual),
-                     float(tol_film), int(stall_window), float(tol_discretisation))
+                     float(tol_film), int(stall_window), float(tol_discretisation),
+                     float(tol_discretisation_residual), float(tol_discretisation_load))
         nc = abs(int(k))
         h = {"pressure_change": hist[0, :nc].tolist(), "load_balance": hist[1, :nc].tolist(),
              "reynolds_residual": hist[2, :nc].tolist(), "H_central": hist[3, :nc].tolist(),
