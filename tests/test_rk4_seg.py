@@ -35,7 +35,7 @@ def test_rk4_seg_constant_tables_closed_form_without_node_stops():
     e[0, 0] = 3e-6
     e[0, 1] = -1e-6
     tb = dataclasses.replace(tb, e_m=e, e_comprehensive_m=e[:, 0].copy())
-    assert not np.any(_seg_flags(tb.k_N_per_m, np.full((2, P, N), -1.0), False))
+    assert not np.any(_seg_flags(tb.k_N_per_m, tb.e_m, tb.backlash_half_m, np.full((2, P, N), -1.0), False))
     T1, zeta, w0, x0 = 40e-6 * 1e8 * tb.base_radius_pinion_m, 0.05, 200.0, 10e-6
     me = tb.equivalent_mass_kg
     K, Fm = 2e8, T1 / tb.base_radius_pinion_m
@@ -73,17 +73,65 @@ def _errors(case, model, divs, integrator="rk4_seg", n=32):
     return errs, runs
 
 
-def test_rk4_seg_steps_over_kinked_nodes_and_damping_jumps_converging_to_reference():
-    """Tent tables (kinks of e at nodes 0, 8, 16 of 32, where c*(de/dphi)*omega1 jumps): rk4_seg
-    stops at no node (0 events) and still converges to the event-located reference; measured
-    3.5e-6, 2.7e-6, 1.4e-6, 6.6e-7, 2.7e-7 at H/8 .. H/128 (both damping laws alike: no
-    separation).  RK4 over a kink inside a step converges erratically at about second order
-    (Hairer, Norsett & Wanner, sec. II.6); asserted: <= 1.5e-6 at H/32, <= 5e-7 at H/128 and a
-    tenfold fall from H/8 to H/128."""
+def test_rk4_seg_stops_at_big_kinks_fourth_order_to_reference():
+    """Tent tables (kinks of e at nodes 0, 8, 16 of 32, where c*(de/dphi)*omega1 jumps; second
+    differences 1, 0.09 and 1 of the sum of the three |values|, above SEG_KINK_TOL): rk4_seg stops
+    at exactly these nodes (events = the 5 kinked nodes crossed) and converges at fourth order to
+    the event-located reference; measured 5.3e-6, 3.3e-7, 2.0e-8, 2.0e-9 at H/8 .. H/64, both
+    damping laws (without the stops, the rule before SEG_KINK_TOL: 3.5e-6, 1.4e-6 at H/8, H/32).
+    Asserted: <= 5e-8 at H/32, <= 5e-9 at H/64 and a fitted order > 3.5 over H/8 .. H/32."""
+    from test_integrators import order_fit
+
+    tb = tent_case()[0]
+    P, N = tb.slots, tb.n_phi
+    flags = _seg_flags(tb.k_N_per_m, tb.e_m, tb.backlash_half_m, np.full((2, P, N), -1.0), False)
+    assert list(np.flatnonzero(flags)) == [0, 8, 16]
+    divs = np.array([8, 16, 32, 64])
     for model in ("contact_zone", "elastobacklash"):
-        errs, runs = _errors(tent_case, model, (8, 32, 128))
+        errs, runs = _errors(tent_case, model, divs)
+        assert all(r.info["events"] >= 3 for r in runs)
+        assert errs[2] <= 5e-8 and errs[3] <= 5e-9, (model, errs)
+        assert order_fit(1.0 / divs[:3], errs[:3]) > 3.5, (model, errs)
+
+
+def _k_tent_case(amp):
+    """tent_case without errors, slot 0's stiffness k = 1e8*(1 + amp*tent) N/m with the tent
+    0..1..0 over nodes 0..8..16 (kinks at nodes 0, 8, 16 of relative size about amp/18)."""
+    def case():
+        tb, T1, T2, w0, zeta, x0 = tent_case()
+        P, N = tb.slots, tb.n_phi
+        i = np.arange(N) % 32
+        k = np.full((1, P, N), 1e8)
+        k[0, 0] *= 1.0 + amp * np.where(i <= 8, i / 8.0, np.where(i <= 16, (16 - i) / 8.0, 0.0))
+        e = np.zeros_like(tb.e_m)
+        return dataclasses.replace(tb, k_N_per_m=k, e_m=e, e_comprehensive_m=e[:, 0].copy()), T1, T2, w0, zeta, x0
+    return case
+
+
+def test_rk4_seg_kink_threshold_flags_big_stiffness_kinks_only():
+    """Stiffness tents (:func:`_k_tent_case`): amplitude 0.5 bends k at nodes 0, 8, 16 by 0.020,
+    0.028, 0.020 of the sum of the three |values| (above SEG_KINK_TOL = 1e-2), amplitude 0.05 by
+    0.0021, 0.0040, 0.0021 (below it; rk4_node's NODE_KINK_TOL flags both).  The big tent: stops
+    there, fourth order to the event-located reference (measured 3.3e-6, 2.0e-7, 1.2e-8, 6.7e-10
+    at H/8 .. H/64); the small tent: no flag, no event, and RK4 over the kinks converges at about
+    second order (Hairer, Norsett & Wanner, sec. II.6; measured 5.6e-6, 4.4e-7, 8.7e-8 at H/8,
+    H/32, H/128).  Asserted: big <= 5e-8 at H/32, <= 3e-9 at H/64; small <= 1e-6 at H/32,
+    <= 3e-7 at H/128 and a tenfold fall from H/8 to H/128."""
+    from gearfmu.dynamics.model_rhs import _node_flags
+
+    for amp, want in ((0.5, [0, 8, 16]), (0.05, [])):
+        tb = _k_tent_case(amp)()[0]
+        P, N = tb.slots, tb.n_phi
+        flags = _seg_flags(tb.k_N_per_m, tb.e_m, tb.backlash_half_m, np.full((2, P, N), -1.0), False)
+        assert list(np.flatnonzero(flags)) == want, amp
+        assert list(np.flatnonzero(_node_flags(tb.k_N_per_m, tb.e_m, tb.backlash_half_m))) == [0, 8, 16]
+    for model in ("contact_zone", "elastobacklash"):
+        errs, runs = _errors(_k_tent_case(0.5), model, (8, 16, 32, 64))
+        assert all(r.info["events"] >= 3 for r in runs)
+        assert errs[2] <= 5e-8 and errs[3] <= 3e-9, (model, errs)
+        errs, runs = _errors(_k_tent_case(0.05), model, (8, 32, 128))
         assert all(r.info["events"] == 0 for r in runs)
-        assert errs[1] <= 1.5e-6 and errs[2] <= 5e-7, (model, errs)
+        assert errs[1] <= 1e-6 and errs[2] <= 3e-7, (model, errs)
         assert errs[2] <= errs[0] / 10, (model, errs)
 
 

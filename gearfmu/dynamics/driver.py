@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .integrators import _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
+from .integrators import SEG_WORK_BASE, _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
 from .model_rhs import (
     _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _seg_flags, _outputs_row, _ptr, _tab, _table_pointers,
     _torque_index, _with_zones, _zone_sel,
@@ -48,7 +48,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     per step in out_events; in the SDOF form it integrates theta1 as a state
     with omega1' = 0.  'rk4_node' stops only at the table nodes flagged by
     _node_flags (computed once per run from k, e, b), 'rk4_seg' only at those of _seg_flags
-    (from k and the cuts).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
+    (from k, e, b and the cuts).  k, e (NT, P, N) and b (P, N) must be C-contiguous (the
     kernels read their data pointers, see gearfmu.dynamics.model_rhs).  ``zoned``: the sub-cell
     lookup at the contact-zone edges with the (2, P, N) ``cuts`` of gearfmu.tables.zones.zone_cuts
     (docs/model.md "Contact-zone edges"; rk4_kink and rk4_node stop at the cuts)."""
@@ -56,8 +56,8 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
     rows2 = k.shape[0] > 1
     mode = np.zeros(4 * p, dtype=np.int64)   # reg, sub, kpos and the held zone side per pair
-    work = np.zeros(18)
-    flags = _seg_flags(k, cuts, zoned) if icode == 3 else _node_flags(k, e, b)
+    work = np.zeros(SEG_WORK_BASE + 4 * p)   # Hermite data, the held segment, rk4_seg's lookup
+    flags = _seg_flags(k, e, b, cuts, zoned) if icode == 3 else _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
     fp = _ptr(flags)
@@ -84,6 +84,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
             if icode == 3:
+                work[18] = 0.0   # no reuse of a lookup across communication steps (tables, mode)
                 for _ in range(n_sub):
                     th, om, x, v, ndk, ne = _seg_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
                     nev += ne

@@ -28,7 +28,7 @@ from .model_rhs import (
     _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel,
     _mesh_force, _pair_guard,
 )
-from .seg_rhs import _seg_cell, _seg_ce, _seg_gains, _seg_rhs, _seg_sel
+from .seg_rhs import _seg_cell, _seg_ce, _seg_damped, _seg_gains, _seg_rhs, _seg_sel
 
 
 @njit(cache=True, error_model="numpy")
@@ -577,17 +577,115 @@ def _seg_true(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     return wo + gw * ce, wv + gv * ce
 
 
+#: rk4_seg's reuse of the step end's lookup (:func:`_seg_end`, :func:`_seg_first`) in the work
+#: array: wk[18] 1 when valid, wk[19] theta1, wk[20:22] the segment, wk[22 + 4j .. 25 + 4j] pair
+#: j's (k, e, de/dphi, b); the work array holds SEG_WORK_BASE + 4*P values
+SEG_WORK_BASE = 22
+
+
 @njit(cache=True, error_model="numpy")
-def _pairs_hold_seg(tab, md, th, om, x, v, nd, i0, i1, lo, hi):
-    """True when no pair guard is negative at the state (rk4_seg lookup)."""
+def _seg_lookup(tab, md, wk, th, nd, i0, i1, lo, hi):
+    """rk4_seg: (k, e, de/dphi, b) of every pair at theta1 th (:func:`_seg_cell`) into the
+    work array (wk[22 + 4j ..]); returns C = c*sum e_j over the damped pairs."""
     p = tab[8]
     cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+    ea = 0.0
     for j in range(p):
         kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+        o = SEG_WORK_BASE + 4 * j
+        wk[o] = kv
+        wk[o + 1] = ev
+        wk[o + 2] = es
+        wk[o + 3] = bv
+        if _seg_damped(tab, md, j):
+            ea += ev
+    return tab[10] * ea
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi):
+    """rk4_seg's first stage at the state (theta1, omega1, x, v) with one lookup per pair:
+    (Omega, V, f0 (4), S) with the shifted state and f0, S as :func:`_seg_rhs` there (the
+    values and operations of :func:`_seg_ce`, then :func:`_seg_rhs`); the lookup of the last
+    :func:`_seg_end` when the substep ended at th in the same segment (wk[18]: the same cell
+    and mode, so the same values).  gearkernel.c seg_first."""
+    p = tab[8]
+    c = tab[10]
+    model = tab[11]
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    gw, gv = _seg_gains(dyn)
+    if wk[18] != 0.0 and th == wk[19] and lo == wk[20] and hi == wk[21]:
+        ea = 0.0
+        for j in range(p):
+            if _seg_damped(tab, md, j):
+                ea += wk[SEG_WORK_BASE + 4 * j + 1]
+        ce = c * ea
+    else:
+        ce = _seg_lookup(tab, md, wk, th, nd, i0, i1, lo, hi)
+    wk[18] = 0.0
+    wo = om - gw * ce
+    wv = v - gv * ce
+    fs = 0.0
+    ea = 0.0
+    sa = 0.0
+    na = 0.0
+    for j in range(p):
+        o = SEG_WORK_BASE + 4 * j
+        kv = wk[o]
+        ev = wk[o + 1]
+        es = wk[o + 2]
+        bv = wk[o + 3]
+        reg = md[j]
+        if reg == 1:
+            fc = kv * ((x - ev) - bv)
+        elif reg == -1:
+            fc = kv * ((x - ev) + bv)
+        else:
+            fc = 0.0
+        if model == 0:
+            if reg != 0:
+                sub = md[p + j]
+                if sub == 0:
+                    fs += fc + fc
+                elif sub == 1:
+                    fs += fc
+                    ea += ev
+                    sa += es
+                    na += 1.0
+        elif md[2 * p + j] != 0:
+            fs += fc
+            ea += ev
+            sa += es
+            na += 1.0
+    ce = c * ea
+    omr = wo + gw * ce
+    vr = wv + gv * ce
+    f = fs + na * (c * vr)
+    if sdof:
+        return wo, wv, omr, 0.0, vr, (fm - f) / me, c * sa
+    return wo, wv, omr, (t1 - rb1 * f) / in1, vr, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi):
+    """rk4_seg at the end (ya..yd) of a step in the shifted state: (omega1, v) (:func:`_seg_true`)
+    and True when no pair guard is negative there (as :func:`_pairs_hold`), with one lookup
+    per pair for both, kept in the work array with theta1 and the segment (wk[19:22]) for
+    :func:`_seg_first`.  gearkernel.c seg_end."""
+    p = tab[8]
+    ce = _seg_lookup(tab, md, wk, ya, nd, i0, i1, lo, hi)
+    wk[19] = ya
+    wk[20] = lo
+    wk[21] = hi
+    om = yb + gw * ce
+    v = yd + gv * ce
+    for j in range(p):
+        o = SEG_WORK_BASE + 4 * j
         for q in range(3):
-            if _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j]) < 0.0:
-                return False
-    return True
+            if _pair_guard(q, wk[o], wk[o + 1], wk[o + 2], wk[o + 3], yc, v, om, tab[10], tab[11],
+                           md[j], md[p + j]) < 0.0:
+                return om, v, False
+    return om, v, True
 
 
 @njit(cache=True, error_model="numpy")
@@ -620,16 +718,13 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             nd = cn
             i0, i1 = _cell_nodes(nd, n_phi)
             _zone_sel(tab, md, nd, i0, lo, hi)
-        ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
-        wo = om - gw * ce
-        wv = v - gv * ce
-        fa, fb, fc, fd, sk = _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi)
+        wo, wv, fa, fb, fc, fd, sk = _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi)
         if nev < KINK_MAX_EVENTS:
             tau = _node_time(th, om, fb + gw * (sk * om), rem, lo, hi, dphi)
             if tau > 0.0:
                 ta, tb, tc, td = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi)
-                tb, td = _seg_true(tab, dyn, md, ta, tb, tc, td, nd, i0, i1, lo, hi)
-                if _pairs_hold_seg(tab, md, ta, tb, tc, td, nd, i0, i1, lo, hi):
+                tb, td, hold = _seg_end(tab, md, wk, gw, gv, ta, tb, tc, td, nd, i0, i1, lo, hi)
+                if hold:
                     nd = _seg_cross(tab, wk, om > 0.0, True)
                     th, om, x, v = ta, tb, tc, td
                     rem = rem - tau
@@ -643,7 +738,7 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
         ya, yb, yc, yd = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, rem, nd, i0, i1, lo, hi)
         ta = ya
         tc = yc
-        tb, td = _seg_true(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+        tb, td, hold = _seg_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi)
         if nev >= KINK_MAX_EVENTS:
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th * tab[12])
@@ -652,11 +747,10 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             _zone_sel(tab, md, nd, i0, wk[16], wk[17])
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
-        any_neg = (ta - lo * dphi < 0.0) or (hi * dphi - ta < 0.0)
-        if not any_neg:
-            any_neg = not _pairs_hold_seg(tab, md, ta, tb, tc, td, nd, i0, i1, lo, hi)
+        any_neg = (ta - lo * dphi < 0.0) or (hi * dphi - ta < 0.0) or not hold
         if not any_neg:
             th, om, x, v = ta, tb, tc, td
+            wk[18] = 1.0   # the next substep starts at the end of _seg_end's lookup
             break
         best = 2.0
         best_gi = -1

@@ -38,6 +38,11 @@ _CELL_LIMIT = 4503599627370496.0
 #: relative tolerance of the node kink test (:func:`_node_flags`; gearkernel.c GK_NODE_KINK_TOL,
 #: docs/native.md "rk4_node"): a second difference above it times the sum of the three |values|
 NODE_KINK_TOL = 1e-9
+#: relative tolerance of rk4_seg's big-kink stops (:func:`_seg_flags`; gearkernel.h
+#: GK_SEG_KINK_TOL): the test of NODE_KINK_TOL with this threshold.  Chosen from the default
+#: scene's tables (docs/model.md "rk4_seg"): at 64 points per mesh the sampled smooth curves
+#: bend by at most 0.0054 (e), the kinks at the ends of contact and error curves by 0.045 to 1
+SEG_KINK_TOL = 1e-2
 #: most table nodes that get kink flags (gearkernel.h GK_NODE_FLAGS_MAX); more: every node flagged
 NODE_FLAGS_MAX = 8192
 
@@ -169,9 +174,15 @@ def _with_zones(tab, zp):
 def _kinked(a0, a1, a2):
     """True when the piecewise-linear interpolant through (a0, a1, a2) bends at a1:
     |(a2 - a1) - (a1 - a0)| > NODE_KINK_TOL*(|a0| + |a1| + |a2|) (or not finite)."""
+    return _bent(a0, a1, a2, NODE_KINK_TOL)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bent(a0, a1, a2, tol):
+    """True when |(a2 - a1) - (a1 - a0)| > tol*(|a0| + |a1| + |a2|) (or not finite)."""
     d = (a2 - a1) - (a1 - a0)
     s = (abs(a0) + abs(a1)) + abs(a2)
-    return not abs(d) <= NODE_KINK_TOL * s
+    return not abs(d) <= tol * s
 
 
 @njit(cache=True, error_model="numpy")
@@ -217,14 +228,17 @@ def _node_flags(k, e, b):
 
 
 @njit(cache=True, error_model="numpy")
-def _seg_flags(k, cuts, zoned):
+def _seg_flags(k, e, b, cuts, zoned):
     """Stop flag (uint8) of every table node i for rk4_seg (docs/model.md "rk4_seg"): 1 where
     the contact_zone flag kpos (k at the cell midpoint > 0) can differ between the cells on
-    either side (the second test of :func:`_node_flags`) and, with the contact-zone cuts
-    (``zoned``, ``cuts`` (2, P, N)), at both nodes of every cell that holds a zone edge (an
-    edge may lie on the node itself, where k steps); the kinks of k, e and b are not stops
-    (rk4_seg reads every cell's own line).  Every node is flagged when N > NODE_FLAGS_MAX.
-    The arithmetic of gearkernel.c seg_flags."""
+    either side (the second test of :func:`_node_flags`), where in some torque row and slot
+    k, e or b has a big kink, |(a[i+1] - a[i]) - (a[i] - a[i-1])| > SEG_KINK_TOL*(|a[i-1]| +
+    |a[i]| + |a[i+1]|) (:func:`_bent`, periodic neighbours; the small kinks of a smoothly
+    curved table sampled at its nodes are not stops: rk4_seg reads every cell's own line),
+    and, with the contact-zone cuts (``zoned``, ``cuts`` (2, P, N)), at both nodes of every
+    cell that holds a zone edge (an edge may lie on the node itself, where k steps).  Every
+    node is flagged when N > NODE_FLAGS_MAX.  The arithmetic of gearkernel.c node_flags
+    (its rk4_seg bit)."""
     nt, p, n = k.shape
     flags = np.ones(n, dtype=np.uint8)
     if n > NODE_FLAGS_MAX:
@@ -234,12 +248,16 @@ def _seg_flags(k, cuts, zoned):
         ip = 0 if i == n - 1 else i + 1
         bent = False
         for j in range(p):
+            if _bent(b[j, im], b[j, i], b[j, ip], SEG_KINK_TOL):
+                bent = True
             pos = False
             nonpos = False
             for r in range(nt):
                 ka = k[r, j, im]
                 kb = k[r, j, i]
                 kc = k[r, j, ip]
+                if _bent(ka, kb, kc, SEG_KINK_TOL) or _bent(e[r, j, im], e[r, j, i], e[r, j, ip], SEG_KINK_TOL):
+                    bent = True
                 ml = ka + 0.5 * (kb - ka)
                 mr = kb + 0.5 * (kc - kb)
                 if ml > 0.0 and mr > 0.0:

@@ -569,6 +569,12 @@ typedef struct {
     int kpos[GK_KINK_MAX_SLOTS];     /* contact_zone: k > 0 inside the cell */
     int zsel[GK_KINK_MAX_SLOTS];     /* side of a contact-zone cut held in the cell (zone_sel) */
     double cl, ch;                   /* rk4_seg: floor(lo), ceil(hi) - 1 (the cells of the segment) */
+    /* rk4_seg: the table values of every pair at theta1 = fth read by the last seg_end, and
+     * fsal = 1 when the substep ended there with the segment [flo, fhi) and the mode unchanged
+     * (seg_first reuses them: the same lookup) */
+    int fsal;
+    double fth, flo, fhi;
+    double fkv[GK_KINK_MAX_SLOTS], fev[GK_KINK_MAX_SLOTS], fes[GK_KINK_MAX_SLOTS], fbv[GK_KINK_MAX_SLOTS];
 } gk_mode;
 
 GK_INLINE void cell_nodes(gk_mode *md, int N)
@@ -582,11 +588,16 @@ GK_INLINE void cell_nodes(gk_mode *md, int N)
 }
 
 /* rk4_node node kink flags (gearkernel.h; as _node_flags in gearfmu/dynamics/model_rhs.py) */
-static int kinked(double a0, double a1, double a2)
+static int bent_tol(double a0, double a1, double a2, double tol)
 {
     double d = (a2 - a1) - (a1 - a0);
     double s = (fabs(a0) + fabs(a1)) + fabs(a2);
-    return !(fabs(d) <= GK_NODE_KINK_TOL * s);
+    return !(fabs(d) <= tol * s);
+}
+
+static int kinked(double a0, double a1, double a2)
+{
+    return bent_tol(a0, a1, a2, GK_NODE_KINK_TOL);
 }
 
 static void node_flags(gk_model *m)
@@ -599,11 +610,13 @@ static void node_flags(gk_model *m)
             const double *b = m->backlash_half_m + (size_t)j * N;
             int pos = 0, nonpos = 0;
             if (kinked(b[im], b[i], b[ip])) bent = 1;
+            if (bent_tol(b[im], b[i], b[ip], GK_SEG_KINK_TOL)) zone = 1;   /* rk4_seg: a big kink */
             for (r = 0; r < rows; ++r) {
                 const double *k = m->k_N_per_m + ((size_t)r * P + j) * N;
                 const double *e = m->e_m + ((size_t)r * P + j) * N;
                 double ka = k[im], kb = k[i], kc = k[ip], ml, mr;
                 if (kinked(ka, kb, kc) || kinked(e[im], e[i], e[ip])) bent = 1;
+                if (bent_tol(ka, kb, kc, GK_SEG_KINK_TOL) || bent_tol(e[im], e[i], e[ip], GK_SEG_KINK_TOL)) zone = 1;
                 ml = ka + 0.5 * (kb - ka);
                 mr = kb + 0.5 * (kc - kb);
                 if (ml > 0.0 && mr > 0.0) pos = 1;
@@ -622,8 +635,8 @@ static void node_flags(gk_model *m)
 }
 
 /* stop flag of global node n (an integer value), node n mod N: rk4_node the kink flag;
- * rk4_seg the contact_zone-flag change or a contact-zone edge in one of the node's two
- * cells (model_rhs._seg_flags) */
+ * rk4_seg the contact_zone-flag change, a big kink (GK_SEG_KINK_TOL) or a contact-zone edge
+ * in one of the node's two cells (model_rhs._seg_flags) */
 static int node_flagged(const gk_model *m, double n)
 {
     int N = m->n_phi, i0;
@@ -1371,20 +1384,28 @@ GK_INLINE void seg_true(const gk_model *m, const gk_tq *t, const gk_mode *md, do
 }
 
 /* the first stage at the state y: the shifted state ys (C at y) and f0 = seg_rhs(ys), with one
- * table lookup per pair for both (the values and operations of seg_ce, then seg_rhs) */
-static void seg_first(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2, double gw,
+ * table lookup per pair for both (the values and operations of seg_ce, then seg_rhs); the
+ * lookup of the last seg_end when the substep ended at y (md->fsal: the same cell, segment
+ * and mode, so the same values) */
+static void seg_first(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2, double gw,
                       double gv, const double *y, double *ys, double *f0, double *sk)
 {
     gk_ph c;
-    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double *kv = md->fkv, *ev = md->fev, *es = md->fes, *bv = md->fbv;
     double ea = 0.0, fs = 0.0, ea2 = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
     double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
     int j;
-    double cc = seg_cell(m, md, y[0], &c);
-    for (j = 0; j < m->P; ++j) {
-        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
-        if (seg_damped(m, md, j)) ea += ev[j];
+    if (md->fsal && y[0] == md->fth && md->lo == md->flo && md->hi == md->fhi) {
+        for (j = 0; j < m->P; ++j)
+            if (seg_damped(m, md, j)) ea += ev[j];
+    } else {
+        double cc = seg_cell(m, md, y[0], &c);
+        for (j = 0; j < m->P; ++j) {
+            slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
+            if (seg_damped(m, md, j)) ea += ev[j];
+        }
     }
+    md->fsal = 0;
     ce = cd * ea;
     ys[0] = y[0];
     ys[1] = y[1] - gw * ce;
@@ -1427,15 +1448,19 @@ static void seg_first(const gk_model *m, const gk_tq *t, const gk_mode *md, doub
 }
 
 /* the state yt = (theta1, omega1, x, v) of the shifted state y1 (seg_true) and 1 when no pair
- * guard is negative there (pairs_hold_seg), with one table lookup per pair for both */
-static int seg_end(const gk_model *m, const gk_tq *t, const gk_mode *md, double gw, double gv, const double *y1,
+ * guard is negative there (pairs_hold_seg), with one table lookup per pair for both (kept in
+ * md->fkv.. for seg_first, theta1 and the segment in md->fth, flo, fhi) */
+static int seg_end(const gk_model *m, const gk_tq *t, gk_mode *md, double gw, double gv, const double *y1,
                    double *yt)
 {
     gk_ph c;
-    double kv[GK_KINK_MAX_SLOTS], ev[GK_KINK_MAX_SLOTS], es[GK_KINK_MAX_SLOTS], bv[GK_KINK_MAX_SLOTS];
+    double *kv = md->fkv, *ev = md->fev, *es = md->fes, *bv = md->fbv;
     double ea = 0.0, ce;
     int j, q;
     double cc = seg_cell(m, md, y1[0], &c);
+    md->fth = y1[0];
+    md->flo = md->lo;
+    md->fhi = md->hi;
     for (j = 0; j < m->P; ++j) {
         slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv[j], &ev[j], &es[j], &bv[j]);
         if (seg_damped(m, md, j)) ea += ev[j];
@@ -1499,6 +1524,7 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
         if ((yt1[0] - md->lo * m->dphi_rad < 0.0) || (md->hi * m->dphi_rad - yt1[0] < 0.0)) any_neg = 1;
         if (!any_neg) {
             for (q = 0; q < 4; ++q) y[q] = yt1[q];
+            md->fsal = 1;   /* the next substep starts at the end of seg_end's lookup */
             break;
         }
         for (gi = 0; gi < n_guard; ++gi) {
@@ -1673,6 +1699,7 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
         gk_mode md;
         if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
         mode_from_state(m, &t, &md, y, 1);
+        md.fsal = 0;
         for (i = 0; i < nsub; ++i) seg_substep(m, &t, &md, T1_Nm, T2_Nm, y, h);
         nsub = 0;
     }

@@ -56,6 +56,10 @@ extern "C" {
  * and gk_set_temperature_axis); with more than GK_NODE_FLAGS_MAX nodes every node
  * is flagged. */
 #define GK_NODE_KINK_TOL 1e-9
+/* rk4_seg stops at the big kinks only (docs/model.md "rk4_seg"): the test above with
+ * this threshold (model_rhs.SEG_KINK_TOL), besides the contact_zone-flag changes and
+ * the cells holding a contact-zone edge */
+#define GK_SEG_KINK_TOL 1e-2
 #define GK_NODE_FLAGS_MAX 8192
 
 /* layout of the output vector written by gk_do_step / gk_outputs
