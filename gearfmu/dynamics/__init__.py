@@ -13,8 +13,8 @@ integrators  RK4 step ('rk4'), the event-locating 'rk4_kink' substep and
              its 'rk4_node' and 'rk4_seg' variants
 model_rhs    table lookup, per-pair force laws, contact-mode guards,
              quasi-static equilibrium (numba, the C kernel's arithmetic)
-seg_rhs      'rk4_seg' right-hand side: per-evaluation cell in the held
-             segment, shifted velocities
+seg_rhs      'rk4_seg' right-hand side and guards: per-evaluation cell in
+             the held segment, shifted velocities
 subcell      table values and quasi-static TE with or without the
              sub-cell lookup at the contact-zone edges (measurement)
 reference    event-located reference integrator (tests and benchmarks)

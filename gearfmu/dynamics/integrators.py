@@ -25,10 +25,10 @@ import numpy as np
 from numba import njit
 
 from .model_rhs import (
-    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals, _kvals_sel, _cut_above, _cut_below, _zone_sel,
+    _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals_sel, _cut_above, _cut_below, _zone_sel,
     _mesh_force, _pair_guard,
 )
-from .seg_rhs import _seg_cell, _seg_ce, _seg_damped, _seg_gains, _seg_rhs, _seg_sel
+from .seg_rhs import _guard_seg, _seg_ce, _seg_cell, _seg_damped, _seg_gains, _seg_rhs, _seg_sel
 
 
 @njit(cache=True, error_model="numpy")
@@ -150,31 +150,6 @@ def _guard_at(tab, md, gi, th, om, x, v, nd, i0, i1, lo, hi):
     w = (th - nd * dphi) * tab[12]
     kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
     return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
-
-
-@njit(cache=True, error_model="numpy")
-def _pair_guard_seg(tab, md, j, q, th, om, x, v, nd, i0, i1, lo, hi):
-    """Guard q of pair j at a state (theta1, omega1, x, v), the tables read in the cell of
-    theta1 clamped to the held segment [lo, hi) (rk4_seg)."""
-    p = tab[8]
-    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
-    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
-    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
-
-
-@njit(cache=True, error_model="numpy")
-def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
-    """rk4_seg: guard gi (as :func:`_guard_at`) at the shifted state (theta1, Omega, x, V):
-    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`gearfmu.dynamics.seg_rhs._seg_rhs`)."""
-    dphi = tab[9]
-    if gi == 0:
-        return th - lo * dphi
-    if gi == 1:
-        return hi * dphi - th
-    ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
-    j = (gi - 2) // 3
-    q = (gi - 2) - 3 * j
-    return _pair_guard_seg(tab, md, j, q, th, wo + gw * ce, x, wv + gv * ce, nd, i0, i1, lo, hi)
 
 
 @njit(cache=True, error_model="numpy")

@@ -1,4 +1,5 @@
-"""Right-hand side of the 'rk4_seg' integrator (numba kernels, SI units; docs/model.md "rk4_seg").
+"""Right-hand side and contact guards of the 'rk4_seg' integrator (numba kernels, SI units;
+docs/model.md "rk4_seg").
 
 Inside a held segment (between two stops of :func:`gearfmu.dynamics.model_rhs._seg_flags`)
 every evaluation looks the tables up in its own cell (:func:`_seg_cell`), and the state is
@@ -13,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .model_rhs import _cell_nodes, _kvals_sel
+from .model_rhs import _cell_nodes, _kvals_sel, _pair_guard
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -151,3 +152,28 @@ def _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     if sdof:
         return om, 0.0, v, (fm - f) / me, c * sa
     return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+
+
+@njit(cache=True, error_model="numpy")
+def _pair_guard_seg(tab, md, j, q, th, om, x, v, nd, i0, i1, lo, hi):
+    """Guard q of pair j at a state (theta1, omega1, x, v), the tables read in the cell of
+    theta1 clamped to the held segment [lo, hi) (rk4_seg)."""
+    p = tab[8]
+    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
+
+
+@njit(cache=True, error_model="numpy")
+def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
+    """rk4_seg: guard gi (as :func:`gearfmu.dynamics.integrators._guard_at`) at the shifted state (theta1, Omega, x, V):
+    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`_seg_rhs`)."""
+    dphi = tab[9]
+    if gi == 0:
+        return th - lo * dphi
+    if gi == 1:
+        return hi * dphi - th
+    ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
+    j = (gi - 2) // 3
+    q = (gi - 2) - 3 * j
+    return _pair_guard_seg(tab, md, j, q, th, wo + gw * ce, x, wv + gv * ce, nd, i0, i1, lo, hi)

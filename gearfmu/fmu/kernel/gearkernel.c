@@ -1313,7 +1313,7 @@ GK_INLINE double pair_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode
     return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, md->reg[j], md->sub[j]);
 }
 
-/* guard gi at the shifted state y (integrators._guard_seg) */
+/* guard gi at the shifted state y (seg_rhs._guard_seg) */
 GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y,
                            double gw, double gv)
 {
