@@ -25,8 +25,8 @@ from dataclasses import replace
 from typing import Dict, List, Optional, Tuple
 
 from .dynamics.native import choose_max_step_s
-from .plan_choices import (CONTACT_ORDER, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, _choices, _p_min,
-                           _scene_has_thermal, _step_absolute, _thermal_options, _what_if_contact,
+from .plan_choices import (CONTACT_ORDER, LEVELS_NOT_COST_ORDERED, PLAN_LEVEL_TABLE_WORK, Choice, PlanError,
+                           _choices, _p_min, _scene_has_thermal, _step_absolute, _thermal_options, _what_if_contact,
                            reference_is_expensive, skipped_choices, table_work)
 from .plan_evaluator import _Evaluator, _cost_entry, _h0, relative_rms
 from .plan_fmu import (TEMPERATURE_INPUTS, _measure_fmus, full_scene, planned_scene, run_fmu_drive,
@@ -68,6 +68,20 @@ def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) ->
                 r *= m[k] / base[k]
         total += r
     return total
+
+
+def _cheapest_fit(c: Choice, below: int, room: float, acc: AccuracyTarget, cost_at) -> Optional[tuple]:
+    """The greedy rule's candidate of choice ``c``: of its measured levels below ``below`` whose
+    budget use fits in ``room``, (estimated cost ``cost_at(i)``, level i, budget use) of the
+    lowest cost, the lower level on a tie; None when none fits.  Mostly the first level that
+    fits, but levels can trade places in cost with the step (``LEVELS_NOT_COST_ORDERED``)."""
+    fits = []
+    for i in range(below):
+        if i in c.measured:
+            u = _budget_use(c.measured[i], acc)
+            if math.isfinite(u) and u <= room:
+                fits.append((cost_at(i), i, u))
+    return min(fits) if fits else None
 
 
 def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
@@ -115,7 +129,7 @@ def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc:
                     progress: bool, log: List[str], work_budget: float = math.inf) -> None:
     """Step 2 of the budget rule: every non-full level measured alone against the full model,
     cheapest first.  A choice stops at the first level whose budget use is negligible
-    (:data:`_NEGLIGIBLE_USE`); a level whose tables are still to be built and would take the
+    (:data:`_NEGLIGIBLE_USE`; not the choices of ``LEVELS_NOT_COST_ORDERED``); a level whose tables are still to be built and would take the
     table work of the levels (:func:`gearfmu.plan_choices.table_work`) above ``work_budget``
     is not measured.  Both are recorded in ``Choice.skipped_levels``."""
     for c in choices.values():
@@ -147,7 +161,7 @@ def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc:
                 say(progress, f"{name} = {lv}: TVMS {m['tvms_rel']:.2e}, DTE {m['dte_rel']:.2e}, "
                               f"force {m['mesh_force_rel']:.2e}", log)
                 u = _budget_use(m, acc)
-                if u <= _NEGLIGIBLE_USE * acc.safety_factor and i < n - 1:
+                if u <= _NEGLIGIBLE_USE * acc.safety_factor and i < n - 1 and name not in LEVELS_NOT_COST_ORDERED:
                     why = (f"not measured: the cheaper level {lv} already has a negligible budget use "
                            f"({u:.2g} <= {_NEGLIGIBLE_USE:g} x safety factor)")
                     for j in range(i + 1, n):
@@ -197,16 +211,12 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
         best = None
         cur_cost, total = cost_of(level), sum(use.values())
         for name, c in choices.items():
-            # levels are ordered by cost by construction: the candidate is the cheapest one that fits
-            for i in range(level[name]):
-                if i not in c.measured:
-                    continue
-                u = _budget_use(c.measured[i], acc)
-                if math.isfinite(u) and total - use[name] + u <= acc.safety_factor:
-                    break
-            else:
+            fit = _cheapest_fit(c, level[name], acc.safety_factor - (total - use[name]), acc,
+                                lambda i: cost_of(dict(level, **{name: i})))
+            if fit is None:
                 continue
-            saved = max(cur_cost - cost_of(dict(level, **{name: i})), 0.0)  # measured (noisy) saving
+            new_cost, i, u = fit
+            saved = max(cur_cost - new_cost, 0.0)  # measured (noisy) saving
             score = (saved + 1e-6) / max(u - use[name], 1e-6)
             if best is None or score > best[0]:
                 best = (score, name, i, u)

@@ -22,12 +22,18 @@ from .scene.envelope import AccuracyTarget, Envelope
 from .scene.reader import ThermalOptions
 from .tables.estimate import estimate_build
 
-#: the integrator levels the planner measures, cheapest first, the last the full model's: rk4,
-#: rk4_node (the default: contact events and the table nodes where the tables bend, their
-#: crossings predicted), then rk4_kink (every table node and contact event located; at one
-#: step the most accurate, so the full-fidelity reference).
-PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_node", "rk4_kink")
+#: the integrator levels the planner measures, the last the full model's: rk4 (cheapest),
+#: rk4_seg (stops only at contact-zone edges, big kinks and contact events: cheaper than rk4_node
+#: when a step spans several table cells, dearer per step below that), rk4_node (the default:
+#: contact events and the table nodes where the tables bend, their crossings predicted), then
+#: rk4_kink (every table node and contact event located; at one step the most accurate, so the
+#: full-fidelity reference).  rk4_seg and rk4_node trade places in cost with the step, so the
+#: greedy rule compares the levels' measured costs (gearfmu.plan, not the order).
+PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_seg", "rk4_node", "rk4_kink")
 assert set(PLAN_INTEGRATOR_LEVELS) <= set(INTEGRATORS)
+#: choices whose levels are not in cost order at every step: all their levels are measured (a
+#: negligible budget use of one level does not skip the next ones, which may be cheaper)
+LEVELS_NOT_COST_ORDERED = ("integrator",)
 
 #: contact models from the cheapest to the most detailed
 CONTACT_ORDER = ("hertz", "smooth_ehl", "rough_ehl")

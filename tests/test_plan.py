@@ -574,3 +574,27 @@ def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
     ref = precompute_tables(bulk.pair, bulk.mesh, thermal=bulk.thermal, **kw)
     assert planned.temperature_C is not None and np.array_equal(planned.temperature_C, ref.temperature_C)
     assert np.array_equal(planned.k_N_per_m, ref.k_N_per_m)
+
+
+def test_greedy_candidate_is_the_cheapest_fitting_level_not_the_first():
+    # Reference: the rule of docs/plan.md "Budget rule" step 3 on a hand-made choice whose
+    # levels are not in cost order (rk4_seg and rk4_node trade places with the step): of the
+    # measured levels below the current one that fit the room left, the one of the lowest
+    # estimated cost; a level over the room, an unmeasured one and one with an infinite
+    # error are never taken.
+    from gearfmu.plan import _cheapest_fit
+    from gearfmu.plan_choices import Choice
+    from gearfmu.scene.envelope import AccuracyTarget
+
+    acc = AccuracyTarget()
+    def m(u):  # a measurement of budget use u (DTE-limited)
+        return {"dte_rel": u * acc.dte_rel, "mesh_force_rel": 0.0}
+    c = Choice(name="integrator", levels=["rk4", "rk4_seg", "rk4_node", "rk4_kink"])
+    c.measured = {0: m(0.9), 1: m(0.1), 2: m(0.2), 3: m(0.0)}
+    cost = {0: 0.2, 1: 0.6, 2: 0.4, 3: 1.0}
+    assert _cheapest_fit(c, 3, 0.5, acc, cost.get) == (0.4, 2, pytest.approx(0.2))
+    assert _cheapest_fit(c, 2, 0.5, acc, cost.get) == (0.6, 1, pytest.approx(0.1))   # below level 2 only
+    assert _cheapest_fit(c, 3, 0.15, acc, cost.get) == (0.6, 1, pytest.approx(0.1))  # level 2 over the room
+    c.measured = {0: m(math.inf), 1: m(0.1)}
+    assert _cheapest_fit(c, 3, 0.5, acc, cost.get)[1] == 1
+    assert _cheapest_fit(c, 1, 0.5, acc, cost.get) is None
