@@ -271,7 +271,7 @@ def main(argv=None):
                     "s_per_dostep_beyond_internal_steps": (w[0] - w[1]) / (n1 - n10)}
                 if not args.no_fmpy:
                     report["python_floor"] = python_floor(
-                        unz, md, dict(reals, max_step=args.comm, integrator=INTEGRATOR_CODE["rk4"]), sim_s=args.sim,
+                        unz, md, dict(reals, max_step=args.comm, integrator=INTEGRATOR_CODE["rk4"]), sim_s=10 * args.sim,
                         comm_s=args.comm, repeat=args.repeat, tmp=tmp)
             for integ in integrators:
                 for n in subs:
