@@ -53,7 +53,7 @@ def fmus(tmp_path_factory):
 
 def _set(fmu, vr, values):
     for name, x in values.items():
-        if name == "damping_model":
+        if name in ("damping_model", "integrator"):   # the Integer parameters
             fmu.setInteger([vr[name]], [int(x)])
         else:
             fmu.setReal([vr[name]], [float(x)])
@@ -97,6 +97,7 @@ CASES = {
     "damping_ratio below min": ({"damping_ratio": -0.5}, {}),
     "max_step zero": ({"max_step": 0.0}, {}),
     "damping_model 3": ({"damping_model": 3}, {}),
+    "integrator 4": ({"integrator": 4}, {}),
     "temperature outside the axis at init": ({"bulk_temperature": 80.0}, {}),
     "torques not finite": ({}, {"pinion_torque": INF, "gear_torque": NAN}),
     "temperature outside the axis": ({}, {"bulk_temperature": 75.0}),
