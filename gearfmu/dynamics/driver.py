@@ -1,8 +1,9 @@
 """The one loop over communication steps of the native solver (numba, SI units).
 
-:func:`_run` writes output row 0 (the initial state with the inputs of step 0)
+:func:`_loop` writes output row 0 (the initial state with the inputs of step 0)
 and advances the state over every communication step with the chosen
-integrator and form; the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg',
+integrator and form (compiled as two drivers, :func:`_run` and :func:`_run_seg`,
+so that a run compiles only what it runs; :func:`driver_for` picks one); the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg',
 gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
 seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
 vary; the inputs held over the step, the table row blend and the outputs are
@@ -35,11 +36,15 @@ def _write_row(tab, row, th, om, x, v, out_state, out_pair, out_force, out_stiff
     out_stiff[row] = ks
 
 
-@njit(cache=True, error_model="numpy")
-def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
-         inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events, cuts, zoned):
+@njit(cache=True, error_model="numpy", inline="always")
+def _loop(seg, icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+          inv_dphi, dphi, c, model, outs, cuts, zoned):
     """Rows 0..n of the outputs; returns the number of completed steps (fewer than
-    n when the state turned non-finite).
+    n when the state turned non-finite).  ``seg`` (a constant of the caller, :func:`_run` or
+    :func:`_run_seg`): the 'rk4_seg' loop; numba prunes the branch not taken, so each driver
+    compiles only its own integrators.  ``outs`` = (out_state, out_pair, out_force,
+    out_stiff, out_events), one argument (a call of more than 30 arguments reaches numba's
+    inliner as a call with *args, which it cannot inline).
 
     Step s holds T1 = t1s[s], T2 = t2s[s] (N*m) and takes n_sub substeps of h (s).
     'rk4' carries the table cell across steps; in the SDOF form theta1 is
@@ -52,12 +57,16 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     kernels read their data pointers, see gearfmu.dynamics.model_rhs).  ``zoned``: the sub-cell
     lookup at the contact-zone edges with the (2, P, N) ``cuts`` of gearfmu.tables.zones.zone_cuts
     (docs/model.md "Contact-zone edges"; rk4_kink and rk4_node stop at the cuts)."""
+    out_state, out_pair, out_force, out_stiff, out_events = outs
     n_steps = out_state.shape[0] - 1
     kp, ep, bp, p, n_phi = _table_pointers(k, e, b)
     rows2 = k.shape[0] > 1
     mode = np.zeros(4 * p, dtype=np.int64)   # reg, sub, kpos and the held zone side per pair
     work = np.zeros(SEG_WORK_BASE + 4 * p)   # Hermite data, the held segment, rk4_seg's lookup
-    flags = _seg_flags(k, e, b, cuts, zoned) if icode == 3 else _node_flags(k, e, b)
+    if seg:
+        flags = _seg_flags(k, e, b, cuts, zoned)
+    else:
+        flags = _node_flags(k, e, b)
     md = _ptr(mode)
     wk = _ptr(work)
     fp = _ptr(flags)
@@ -83,7 +92,7 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
             _zone_sel(tab, md, ndk, ik0, work[16], work[17])
             _mode_sync(tab, md, th, om, x, v, ndk, ik0, ik1, True)
             nev = 0
-            if icode == 3:
+            if seg:
                 work[18] = 0.0   # no reuse of a lookup across communication steps (tables, mode)
                 for _ in range(n_sub):
                     th, om, x, v, ndk, ne = _seg_substep(tab, dyn, md, wk, th, om, x, v, h, ndk)
@@ -111,23 +120,45 @@ def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, m
     return n_steps
 
 
-_COMPILED = False
+@njit(cache=True, error_model="numpy")
+def _run(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+         inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events, cuts, zoned):
+    """:func:`_loop` of 'rk4', 'rk4_kink' and 'rk4_node' (``icode`` 0, 1, 2)."""
+    return _loop(False, icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+                 inv_dphi, dphi, c, model, (out_state, out_pair, out_force, out_stiff, out_events), cuts, zoned)
+
+
+@njit(cache=True, error_model="numpy")
+def _run_seg(icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+             inv_dphi, dphi, c, model, out_state, out_pair, out_force, out_stiff, out_events, cuts, zoned):
+    """:func:`_loop` of 'rk4_seg' (``icode`` 3), compiled only when a run asks for it."""
+    return _loop(True, icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, in2, me, k, e, b, torque,
+                 inv_dphi, dphi, c, model, (out_state, out_pair, out_force, out_stiff, out_events), cuts, zoned)
+
+
+def driver_for(icode: int):
+    """The compiled driver of integrator code ``icode``: :func:`_run_seg` for 'rk4_seg', else :func:`_run`."""
+    return _run_seg if icode == 3 else _run
+
+
+_COMPILED = set()
 #: the cuts argument of :func:`_run` without the sub-cell lookup (never read)
 NO_CUTS = np.full((2, 1, 1), -1.0)
 
 
-def _warmup() -> None:
-    """Compile (or load from the cache) the kernels on a tiny problem, so that a
-    run's ``wall_s`` excludes the compilation; argument types as simulate passes them."""
-    global _COMPILED
-    if _COMPILED:
+def _warmup(icode: int = 0) -> None:
+    """Compile (or load from the cache) the driver of integrator code ``icode``
+    (:func:`driver_for`) on a tiny problem, so that a run's ``wall_s`` excludes the
+    compilation; argument types as simulate passes them."""
+    run = driver_for(icode)
+    if run in _COMPILED:
         return
     k = np.ones((2, 1, 4)) * 1e8
     e = np.zeros((2, 1, 4))
     b = np.zeros((1, 4))
     tq = np.array([0.0, 1.0])
     x0 = _equilibrium(0.0, 1.0, 0.1, k, e, b, tq, 4.0)
-    _run(0, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
-         k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
-         np.zeros(2, dtype=np.int64), NO_CUTS, False)
-    _COMPILED = True
+    run(icode, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
+        k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
+        np.zeros(2, dtype=np.int64), NO_CUTS, False)
+    _COMPILED.add(run)

@@ -42,7 +42,7 @@ from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS,
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..tables.zones import zone_cuts
 from ..common.checks import finite_number
-from .driver import NO_CUTS, _run, _warmup
+from .driver import NO_CUTS, _warmup, driver_for
 from .integrators import KINK_MAX_SLOTS
 from .model_rhs import _equilibrium, _equilibrium_zoned
 
@@ -440,9 +440,9 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
     force = out[(4 + p) * n:(5 + p) * n]
     stiff = out[(5 + p) * n:]
     events = np.zeros(n, dtype=np.int64)
-    _warmup()
+    _warmup(icode)
     t_start = _time.perf_counter()
-    done = _run(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
+    done = driver_for(icode)(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
                 float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me,
                 k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events,
                 NO_CUTS if cuts is None else cuts, cuts is not None)
