@@ -731,7 +731,13 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
         best_gi = -1
         have_f1 = False
         for gi in range(n_guard):
-            g = _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi, gw, gv)
+            if gi < 2:
+                g = _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi, gw, gv)
+            else:   # _guard_seg at the step end from _seg_end's lookup (the same cell and values)
+                j = (gi - 2) // 3
+                o = SEG_WORK_BASE + 4 * j
+                g = _pair_guard((gi - 2) - 3 * j, wk[o], wk[o + 1], wk[o + 2], wk[o + 3], tc, td, tb, c, model,
+                                md[j], md[p + j])
             if g < 0.0:
                 if not have_f1:
                     _put4(wk, 0, th, wo, x, wv)

@@ -155,25 +155,35 @@ def _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
 
 
 @njit(cache=True, error_model="numpy")
-def _pair_guard_seg(tab, md, j, q, th, om, x, v, nd, i0, i1, lo, hi):
-    """Guard q of pair j at a state (theta1, omega1, x, v), the tables read in the cell of
-    theta1 clamped to the held segment [lo, hi) (rk4_seg)."""
-    p = tab[8]
-    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
-    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
-    return _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j])
-
-
-@njit(cache=True, error_model="numpy")
 def _guard_seg(tab, md, gi, th, wo, x, wv, nd, i0, i1, lo, hi, gw, gv):
     """rk4_seg: guard gi (as :func:`gearfmu.dynamics.integrators._guard_at`) at the shifted state (theta1, Omega, x, V):
-    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`_seg_rhs`)."""
+    omega1 = Omega + g_w*C, v = V + g_v*C (:func:`_seg_rhs`), C as :func:`_seg_ce` and the pair's
+    guard, the tables read once per pair for both, in the cell of theta1 clamped to the held
+    segment [lo, hi).  gearkernel.c guard_seg."""
     dphi = tab[9]
     if gi == 0:
         return th - lo * dphi
     if gi == 1:
         return hi * dphi - th
-    ce = _seg_ce(tab, md, th, nd, i0, i1, lo, hi)
-    j = (gi - 2) // 3
-    q = (gi - 2) - 3 * j
-    return _pair_guard_seg(tab, md, j, q, th, wo + gw * ce, x, wv + gv * ce, nd, i0, i1, lo, hi)
+    p = tab[8]
+    jg = (gi - 2) // 3
+    q = (gi - 2) - 3 * jg
+    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+    ea = 0.0
+    kj = 0.0
+    ej = 0.0
+    sj = 0.0
+    bj = 0.0
+    for j in range(p):
+        damped = _seg_damped(tab, md, j)
+        if damped or j == jg:
+            kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+            if damped:
+                ea += ev
+            if j == jg:
+                kj = kv
+                ej = ev
+                sj = es
+                bj = bv
+    ce = tab[10] * ea
+    return _pair_guard(q, kj, ej, sj, bj, x, wv + gv * ce, wo + gw * ce, tab[10], tab[11], md[jg], md[p + jg])

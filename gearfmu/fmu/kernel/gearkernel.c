@@ -1302,33 +1302,36 @@ GK_INLINE void rk4_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, dou
     axpy4(y, h6, sum, yn);
 }
 
-/* guard q of pair j at the state y = (theta1, omega1, x, v), rk4_seg lookup */
-GK_INLINE double pair_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int j, int q,
-                                const double *y)
-{
-    gk_ph c;
-    double kv, ev, es, bv;
-    double cc = seg_cell(m, md, y[0], &c);
-    slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
-    return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, md->reg[j], md->sub[j]);
-}
-
-/* guard gi at the shifted state y (seg_rhs._guard_seg) */
+/* guard gi at the shifted state y (seg_rhs._guard_seg): the values and operations of seg_ce,
+ * then the guard of the pair, with one table lookup per pair for both */
 GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y,
                            double gw, double gv)
 {
-    double ce, yt[4];
-    int j, q;
+    gk_ph c;
+    double cc, ea = 0.0, ce, kj = 0.0, ej = 0.0, sj = 0.0, bj = 0.0;
+    int j, jg, q;
     if (gi == 0) return y[0] - md->lo * m->dphi_rad;
     if (gi == 1) return md->hi * m->dphi_rad - y[0];
-    ce = seg_ce(m, t, md, y[0]);
-    j = (gi - 2) / 3;
-    q = (gi - 2) - 3 * j;
-    yt[0] = y[0];
-    yt[1] = y[1] + gw * ce;
-    yt[2] = y[2];
-    yt[3] = y[3] + gv * ce;
-    return pair_guard_seg(m, t, md, j, q, yt);
+    jg = (gi - 2) / 3;
+    q = (gi - 2) - 3 * jg;
+    cc = seg_cell(m, md, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        int damped = seg_damped(m, md, j);
+        if (damped || j == jg) {
+            double kv, ev, es, bv;
+            slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+            if (damped) ea += ev;
+            if (j == jg) {
+                kj = kv;
+                ej = ev;
+                sj = es;
+                bj = bv;
+            }
+        }
+    }
+    ce = m->c_Ns_per_m * ea;
+    return pair_guard(q, kj, ej, sj, bj, y[2], y[3] + gv * ce, y[1] + gw * ce, m->c_Ns_per_m, m->damping_model,
+                      md->reg[jg], md->sub[jg]);
 }
 
 static double hermite_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
@@ -1528,7 +1531,14 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
             break;
         }
         for (gi = 0; gi < n_guard; ++gi) {
-            double g = guard_seg(m, t, md, gi, y1, gw, gv), s;
+            double g, s;
+            if (gi < 2) {
+                g = guard_seg(m, t, md, gi, y1, gw, gv);
+            } else { /* guard_seg at y1 from seg_end's lookup (the same cell and values) */
+                int j = (gi - 2) / 3;
+                g = pair_guard((gi - 2) - 3 * j, md->fkv[j], md->fev[j], md->fes[j], md->fbv[j], yt1[2], yt1[3],
+                               yt1[1], m->c_Ns_per_m, m->damping_model, md->reg[j], md->sub[j]);
+            }
             if (!(g < 0.0)) continue;
             if (!have_f1) {
                 seg_rhs(m, t, md, T1, T2, gw, gv, y1, f1, &sk);
