@@ -28,7 +28,9 @@ from .model_rhs import (
     _CELL_LIMIT, _cell_nodes, _decide_sub, _deriv_locked, _kvals_sel, _cut_above, _cut_below, _zone_sel,
     _mesh_force, _pair_guard,
 )
-from .seg_rhs import _guard_seg, _seg_ce, _seg_cell, _seg_damped, _seg_gains, _seg_rhs, _seg_sel
+from .seg_rhs import (
+    _guard_seg, _pair_terms, _seg_accel, _seg_ce, _seg_cell, _seg_damped, _seg_gains, _seg_rhs, _seg_sel,
+)
 
 
 @njit(cache=True, error_model="numpy")
@@ -415,6 +417,26 @@ def _pairs_hold(tab, md, th, om, x, v, nd, i0, i1):
     return True
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _switch_pair(md, p, j, q, model, kv, ev, es, bv, x, v, om, c):
+    """The mode change of pair j when its guard q reached zero (rk4_kink, rk4_node and rk4_seg;
+    gearkernel.c switch_pair): a pair out of contact enters contact on the side of the guard
+    (the elastobacklash sub-mode decided from the state and the pair's table values kv, ev, es,
+    bv there, which are read only then); a pair in contact leaves it at guard 0, and otherwise
+    moves between the elastobacklash sub-modes (1 -> 0 at guard 1, 1 -> 2 at guard 2, back to 1)."""
+    if md[j] == 0:
+        md[j] = 1 if q == 0 else -1
+        if model == 0:
+            md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
+    elif q == 0:
+        md[j] = 0
+        md[p + j] = 0
+    elif md[p + j] == 1:
+        md[p + j] = 0 if q == 1 else 2
+    else:
+        md[p + j] = 1
+
+
 @njit(cache=True, error_model="numpy")
 def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
     """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
@@ -525,20 +547,11 @@ def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
         else:
             j = (best_gi - 2) // 3
-            q = (best_gi - 2) - 3 * j
-            if md[j] == 0:
-                md[j] = 1 if q == 0 else -1
-                if model == 0:
-                    w = (th - nd * dphi) * tab[12]
-                    kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
-                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
-            elif q == 0:
-                md[j] = 0
-                md[p + j] = 0
-            elif md[p + j] == 1:
-                md[p + j] = 0 if q == 1 else 2
-            else:
-                md[p + j] = 1
+            kv = ev = es = bv = 0.0
+            if md[j] == 0 and model == 0:   # _switch_pair's sub-mode decision reads the tables
+                w = (th - nd * dphi) * tab[12]
+                kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
+            _switch_pair(md, p, j, (best_gi - 2) - 3 * j, model, kv, ev, es, bv, x, v, om, c)
         if not rem > 0.0:
             break
     return th, om, x, v, nd, nev
@@ -586,8 +599,6 @@ def _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi):
     and mode, so the same values).  gearkernel.c seg_first."""
     p = tab[8]
     c = tab[10]
-    model = tab[11]
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
     gw, gv = _seg_gains(dyn)
     if wk[18] != 0.0 and th == wk[19] and lo == wk[20] and hi == wk[21]:
         ea = 0.0
@@ -606,39 +617,9 @@ def _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi):
     na = 0.0
     for j in range(p):
         o = SEG_WORK_BASE + 4 * j
-        kv = wk[o]
-        ev = wk[o + 1]
-        es = wk[o + 2]
-        bv = wk[o + 3]
-        reg = md[j]
-        if reg == 1:
-            fc = kv * ((x - ev) - bv)
-        elif reg == -1:
-            fc = kv * ((x - ev) + bv)
-        else:
-            fc = 0.0
-        if model == 0:
-            if reg != 0:
-                sub = md[p + j]
-                if sub == 0:
-                    fs += fc + fc
-                elif sub == 1:
-                    fs += fc
-                    ea += ev
-                    sa += es
-                    na += 1.0
-        elif md[2 * p + j] != 0:
-            fs += fc
-            ea += ev
-            sa += es
-            na += 1.0
-    ce = c * ea
-    omr = wo + gw * ce
-    vr = wv + gv * ce
-    f = fs + na * (c * vr)
-    if sdof:
-        return wo, wv, omr, 0.0, vr, (fm - f) / me, c * sa
-    return wo, wv, omr, (t1 - rb1 * f) / in1, vr, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+        fs, ea, sa, na = _pair_terms(tab, md, j, wk[o], wk[o + 1], wk[o + 2], wk[o + 3], x, fs, ea, sa, na)
+    omr, ob, vr, vb, sk = _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na)
+    return wo, wv, omr, ob, vr, vb, sk
 
 
 @njit(cache=True, error_model="numpy")
@@ -770,20 +751,11 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
         else:
             j = (best_gi - 2) // 3
-            q = (best_gi - 2) - 3 * j
-            if md[j] == 0:
-                md[j] = 1 if q == 0 else -1
-                if model == 0:
-                    cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, wk[16], wk[17])
-                    kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, wk[16], wk[17]))
-                    md[p + j] = _decide_sub(md[j], kv, ev, es, bv, x, v, om, c)
-            elif q == 0:
-                md[j] = 0
-                md[p + j] = 0
-            elif md[p + j] == 1:
-                md[p + j] = 0 if q == 1 else 2
-            else:
-                md[p + j] = 1
+            kv = ev = es = bv = 0.0
+            if md[j] == 0 and model == 0:   # _switch_pair's sub-mode decision reads the tables
+                cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, wk[16], wk[17])
+                kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, wk[16], wk[17]))
+            _switch_pair(md, p, j, (best_gi - 2) - 3 * j, model, kv, ev, es, bv, x, v, om, c)
         if not rem > 0.0:
             break
     return th, om, x, v, nd, nev

@@ -171,13 +171,6 @@ def _with_zones(tab, zp):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _kinked(a0, a1, a2):
-    """True when the piecewise-linear interpolant through (a0, a1, a2) bends at a1:
-    |(a2 - a1) - (a1 - a0)| > NODE_KINK_TOL*(|a0| + |a1| + |a2|) (or not finite)."""
-    return _bent(a0, a1, a2, NODE_KINK_TOL)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def _bent(a0, a1, a2, tol):
     """True when |(a2 - a1) - (a1 - a0)| > tol*(|a0| + |a1| + |a2|) (or not finite)."""
     d = (a2 - a1) - (a1 - a0)
@@ -186,13 +179,10 @@ def _bent(a0, a1, a2, tol):
 
 
 @njit(cache=True, error_model="numpy")
-def _node_flags(k, e, b):
-    """Kink flag (uint8) of every table node i (docs/native.md "rk4_node"): 1 when in any
-    torque row and slot the table k, e or b bends at node i (:func:`_kinked`, periodic
-    neighbours), or the contact_zone flag kpos (k at the cell midpoint > 0) can differ
-    between the cells on either side (the midpoint values over every row and both cells
-    are neither all > 0 nor all <= 0).  Every node is flagged when N > NODE_FLAGS_MAX.
-    The arithmetic of gearkernel.c node_flags."""
+def _stop_flags(k, e, b, cuts, zoned, tol):
+    """Stop flag (uint8) of every table node: the loop of :func:`_node_flags` (``tol`` =
+    NODE_KINK_TOL, no zone cuts) and :func:`_seg_flags` (``tol`` = SEG_KINK_TOL, the zone
+    cuts when ``zoned``)."""
     nt, p, n = k.shape
     flags = np.ones(n, dtype=np.uint8)
     if n > NODE_FLAGS_MAX:
@@ -202,7 +192,7 @@ def _node_flags(k, e, b):
         ip = 0 if i == n - 1 else i + 1
         bent = False
         for j in range(p):
-            if _kinked(b[j, im], b[j, i], b[j, ip]):
+            if _bent(b[j, im], b[j, i], b[j, ip], tol):
                 bent = True
             pos = False
             nonpos = False
@@ -210,53 +200,7 @@ def _node_flags(k, e, b):
                 ka = k[r, j, im]
                 kb = k[r, j, i]
                 kc = k[r, j, ip]
-                if _kinked(ka, kb, kc) or _kinked(e[r, j, im], e[r, j, i], e[r, j, ip]):
-                    bent = True
-                ml = ka + 0.5 * (kb - ka)
-                mr = kb + 0.5 * (kc - kb)
-                if ml > 0.0 and mr > 0.0:
-                    pos = True
-                elif not ml > 0.0 and not mr > 0.0:
-                    nonpos = True
-                else:
-                    pos = True
-                    nonpos = True
-            if pos and nonpos:
-                bent = True
-        flags[i] = 1 if bent else 0
-    return flags
-
-
-@njit(cache=True, error_model="numpy")
-def _seg_flags(k, e, b, cuts, zoned):
-    """Stop flag (uint8) of every table node i for rk4_seg (docs/model.md "rk4_seg"): 1 where
-    the contact_zone flag kpos (k at the cell midpoint > 0) can differ between the cells on
-    either side (the second test of :func:`_node_flags`), where in some torque row and slot
-    k, e or b has a big kink, |(a[i+1] - a[i]) - (a[i] - a[i-1])| > SEG_KINK_TOL*(|a[i-1]| +
-    |a[i]| + |a[i+1]|) (:func:`_bent`, periodic neighbours; the small kinks of a smoothly
-    curved table sampled at its nodes are not stops: rk4_seg reads every cell's own line),
-    and, with the contact-zone cuts (``zoned``, ``cuts`` (2, P, N)), at both nodes of every
-    cell that holds a zone edge (an edge may lie on the node itself, where k steps).  Every
-    node is flagged when N > NODE_FLAGS_MAX.  The arithmetic of gearkernel.c node_flags
-    (its rk4_seg bit)."""
-    nt, p, n = k.shape
-    flags = np.ones(n, dtype=np.uint8)
-    if n > NODE_FLAGS_MAX:
-        return flags
-    for i in range(n):
-        im = n - 1 if i == 0 else i - 1
-        ip = 0 if i == n - 1 else i + 1
-        bent = False
-        for j in range(p):
-            if _bent(b[j, im], b[j, i], b[j, ip], SEG_KINK_TOL):
-                bent = True
-            pos = False
-            nonpos = False
-            for r in range(nt):
-                ka = k[r, j, im]
-                kb = k[r, j, i]
-                kc = k[r, j, ip]
-                if _bent(ka, kb, kc, SEG_KINK_TOL) or _bent(e[r, j, im], e[r, j, i], e[r, j, ip], SEG_KINK_TOL):
+                if _bent(ka, kb, kc, tol) or _bent(e[r, j, im], e[r, j, i], e[r, j, ip], tol):
                     bent = True
                 ml = ka + 0.5 * (kb - ka)
                 mr = kb + 0.5 * (kc - kb)
@@ -273,6 +217,32 @@ def _seg_flags(k, e, b, cuts, zoned):
                 bent = True
         flags[i] = 1 if bent else 0
     return flags
+
+
+@njit(cache=True, error_model="numpy")
+def _node_flags(k, e, b):
+    """Kink flag (uint8) of every table node i (docs/native.md "rk4_node"): 1 when in any
+    torque row and slot the table k, e or b bends at node i (:func:`_bent` with NODE_KINK_TOL,
+    periodic neighbours), or the contact_zone flag kpos (k at the cell midpoint > 0) can differ
+    between the cells on either side (the midpoint values over every row and both cells
+    are neither all > 0 nor all <= 0).  Every node is flagged when N > NODE_FLAGS_MAX.
+    The arithmetic of gearkernel.c node_flags."""
+    return _stop_flags(k, e, b, k, False, NODE_KINK_TOL)   # no zone cuts: k is never read as cuts
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_flags(k, e, b, cuts, zoned):
+    """Stop flag (uint8) of every table node i for rk4_seg (docs/model.md "rk4_seg"): 1 where
+    the contact_zone flag kpos (k at the cell midpoint > 0) can differ between the cells on
+    either side (the second test of :func:`_node_flags`), where in some torque row and slot
+    k, e or b has a big kink, |(a[i+1] - a[i]) - (a[i] - a[i-1])| > SEG_KINK_TOL*(|a[i-1]| +
+    |a[i]| + |a[i+1]|) (:func:`_bent`, periodic neighbours; the small kinks of a smoothly
+    curved table sampled at its nodes are not stops: rk4_seg reads every cell's own line),
+    and, with the contact-zone cuts (``zoned``, ``cuts`` (2, P, N)), at both nodes of every
+    cell that holds a zone edge (an edge may lie on the node itself, where k steps).  Every
+    node is flagged when N > NODE_FLAGS_MAX.  The arithmetic of gearkernel.c node_flags
+    (its rk4_seg bit)."""
+    return _stop_flags(k, e, b, cuts, zoned, SEG_KINK_TOL)
 
 
 @njit(cache=True, error_model="numpy")

@@ -102,6 +102,54 @@ def _seg_ce(tab, md, th, nd, i0, i1, lo, hi):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _pair_terms(tab, md, j, kv, ev, es, bv, x, fs, ea, sa, na):
+    """Pair j's terms of :func:`_seg_rhs` added to the sums (fs, ea, sa, na) and returned: its
+    spring force F_j = k_j*(x - e_j -+ b_j) in its held regime (twice in the elastobacklash
+    sub-mode 0), and when the pair is damped in its held mode its e_j, de_j/dphi and one
+    viscous term (docs/model.md "rk4_seg")."""
+    p = tab[8]
+    reg = md[j]
+    if reg == 1:
+        fc = kv * ((x - ev) - bv)
+    elif reg == -1:
+        fc = kv * ((x - ev) + bv)
+    else:
+        fc = 0.0
+    if tab[11] == 0:
+        if reg != 0:
+            sub = md[p + j]
+            if sub == 0:
+                fs += fc + fc
+            elif sub == 1:
+                fs += fc
+                ea += ev
+                sa += es
+                na += 1.0
+    elif md[2 * p + j] != 0:
+        fs += fc
+        ea += ev
+        sa += es
+        na += 1.0
+    return fs, ea, sa, na
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na):
+    """(omega1, Omega', v, V', S) of :func:`_seg_rhs` from the shifted velocities (wo, wv) and
+    the sums of :func:`_pair_terms` over the pairs."""
+    c = tab[10]
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    gw, gv = _seg_gains(dyn)
+    ce = c * ea
+    om = wo + gw * ce
+    v = wv + gv * ce
+    f = fs + na * (c * v)
+    if sdof:
+        return om, 0.0, v, (fm - f) / me, c * sa
+    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     """rk4_seg right-hand side in the shifted state (theta1, Omega, x, V) (docs/model.md
     "rk4_seg"), the mode held and the tables read in the cell of theta1 clamped to the held
@@ -111,11 +159,7 @@ def _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     spring terms + n_d*c*v.  Returns (omega1, (T1 - Rb1*F_r)/I1, v, V') with
     V' = Rb1*(T1 - Rb1*F_r)/I1 - Rb2*(Rb2*F_r - T2)/I2 (SDOF: 0 and (F_m - F_r)/m_e), and
     S = c*sum de_j/dphi over the damped pairs (omega1' = Omega' + g_w*S*omega1)."""
-    c = tab[10]
-    model = tab[11]
     p = tab[8]
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
-    gw, gv = _seg_gains(dyn)
     cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
     fs = 0.0
     ea = 0.0
@@ -123,35 +167,8 @@ def _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     na = 0.0
     for j in range(p):
         kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
-        reg = md[j]
-        if reg == 1:
-            fc = kv * ((x - ev) - bv)
-        elif reg == -1:
-            fc = kv * ((x - ev) + bv)
-        else:
-            fc = 0.0
-        if model == 0:
-            if reg != 0:
-                sub = md[p + j]
-                if sub == 0:
-                    fs += fc + fc
-                elif sub == 1:
-                    fs += fc
-                    ea += ev
-                    sa += es
-                    na += 1.0
-        elif md[2 * p + j] != 0:
-            fs += fc
-            ea += ev
-            sa += es
-            na += 1.0
-    ce = c * ea
-    om = wo + gw * ce
-    v = wv + gv * ce
-    f = fs + na * (c * v)
-    if sdof:
-        return om, 0.0, v, (fm - f) / me, c * sa
-    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+        fs, ea, sa, na = _pair_terms(tab, md, j, kv, ev, es, bv, x, fs, ea, sa, na)
+    return _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na)
 
 
 @njit(cache=True, error_model="numpy")

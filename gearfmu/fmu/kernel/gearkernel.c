@@ -901,6 +901,26 @@ GK_INLINE int decide_sub(int reg, double kv, double ev, double es, double bv, do
     return 1;
 }
 
+/* the mode change of pair j when its guard q reached zero (integrators._switch_pair); kv..bv:
+ * the pair's table values at the state y, read only when the pair enters contact under
+ * the elastobacklash model */
+GK_INLINE void switch_pair(const gk_model *m, gk_mode *md, int j, int q, double kv, double ev, double es,
+                           double bv, const double *y)
+{
+    if (md->reg[j] == 0) {
+        md->reg[j] = (q == 0) ? 1 : -1;
+        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+            md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
+    } else if (q == 0) {
+        md->reg[j] = 0;
+        md->sub[j] = 0;
+    } else if (md->sub[j] == 1) {
+        md->sub[j] = (q == 1) ? 0 : 2;
+    } else {
+        md->sub[j] = 1;
+    }
+}
+
 GK_INLINE void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
                          const double *y, double *dy)
 {
@@ -1140,22 +1160,11 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
             zone_sel(m, md);
             mode_sync(m, t, md, y, 0);
         } else {
-            int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
-            if (md->reg[j] == 0) {
-                md->reg[j] = (qq == 0) ? 1 : -1;
-                if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
-                    double kv, ev, es, bv;
-                    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
-                    md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
-                }
-            } else if (qq == 0) {
-                md->reg[j] = 0;
-                md->sub[j] = 0;
-            } else if (md->sub[j] == 1) {
-                md->sub[j] = (qq == 1) ? 0 : 2;
-            } else {
-                md->sub[j] = 1;
-            }
+            int j = (best_gi - 2) / 3;
+            double kv = 0.0, ev = 0.0, es = 0.0, bv = 0.0;
+            if (md->reg[j] == 0 && m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+                locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
+            switch_pair(m, md, j, (best_gi - 2) - 3 * j, kv, ev, es, bv, y);
         }
         if (!(rem > 0.0)) break;
     }
@@ -1237,51 +1246,64 @@ GK_INLINE double seg_ce(const gk_model *m, const gk_tq *t, const gk_mode *md, do
     return m->c_Ns_per_m * ea;
 }
 
+/* pair j's terms of seg_rhs added to the sums fs, ea, sa, na (seg_rhs._pair_terms) */
+GK_INLINE void seg_pair_terms(const gk_model *m, const gk_mode *md, int j, double kv, double ev, double es,
+                              double bv, double x, double *fs, double *ea, double *sa, double *na)
+{
+    double fc;
+    int reg = md->reg[j];
+    if (reg == 1) fc = kv * ((x - ev) - bv);
+    else if (reg == -1) fc = kv * ((x - ev) + bv);
+    else fc = 0.0;
+    if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+        if (reg != 0) {
+            int sub = md->sub[j];
+            if (sub == 0) {
+                *fs += fc + fc;
+            } else if (sub == 1) {
+                *fs += fc;
+                *ea += ev;
+                *sa += es;
+                *na += 1.0;
+            }
+        }
+    } else if (md->kpos[j] != 0) {
+        *fs += fc;
+        *ea += ev;
+        *sa += es;
+        *na += 1.0;
+    }
+}
+
+/* dy = (omega1, Omega', v, V') and *sk = S of seg_rhs from the shifted velocities wo, wv and
+ * the sums of seg_pair_terms (seg_rhs._seg_accel) */
+GK_INLINE void seg_accel(const gk_model *m, double T1, double T2, double gw, double gv, double wo, double wv,
+                         double fs, double ea, double sa, double na, double *dy, double *sk)
+{
+    double cd = m->c_Ns_per_m, Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    double ce = cd * ea, v = wv + gv * ce, f = fs + na * (cd * v);
+    dy[0] = wo + gw * ce;
+    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[2] = v;
+    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    *sk = cd * sa;
+}
+
 /* right-hand side in the shifted state y = (theta1, Omega, x, V) (seg_rhs._seg_rhs);
  * *sk = c*sum de_j/dphi over the damped pairs */
 GK_INLINE void seg_rhs(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
                        double gw, double gv, const double *y, double *dy, double *sk)
 {
     gk_ph c;
-    double fs = 0.0, ea = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
-    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    double fs = 0.0, ea = 0.0, sa = 0.0, na = 0.0;
     int j;
     double cc = seg_cell(m, md, y[0], &c);
     for (j = 0; j < m->P; ++j) {
-        double kv, ev, es, bv, fc;
-        int reg = md->reg[j];
+        double kv, ev, es, bv;
         slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
-        if (reg == 1) fc = kv * ((y[2] - ev) - bv);
-        else if (reg == -1) fc = kv * ((y[2] - ev) + bv);
-        else fc = 0.0;
-        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
-            if (reg != 0) {
-                int sub = md->sub[j];
-                if (sub == 0) {
-                    fs += fc + fc;
-                } else if (sub == 1) {
-                    fs += fc;
-                    ea += ev;
-                    sa += es;
-                    na += 1.0;
-                }
-            }
-        } else if (md->kpos[j] != 0) {
-            fs += fc;
-            ea += ev;
-            sa += es;
-            na += 1.0;
-        }
+        seg_pair_terms(m, md, j, kv, ev, es, bv, y[2], &fs, &ea, &sa, &na);
     }
-    ce = cd * ea;
-    om = y[1] + gw * ce;
-    v = y[3] + gv * ce;
-    f = fs + na * (cd * v);
-    dy[0] = om;
-    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
-    dy[2] = v;
-    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
-    *sk = cd * sa;
+    seg_accel(m, T1, T2, gw, gv, y[1], y[3], fs, ea, sa, na, dy, sk);
 }
 
 /* classical RK4 of the shifted state, first stage f0 given (integrators._rk4_seg) */
@@ -1395,8 +1417,7 @@ static void seg_first(const gk_model *m, const gk_tq *t, gk_mode *md, double T1,
 {
     gk_ph c;
     double *kv = md->fkv, *ev = md->fev, *es = md->fes, *bv = md->fbv;
-    double ea = 0.0, fs = 0.0, ea2 = 0.0, sa = 0.0, na = 0.0, cd = m->c_Ns_per_m, ce, om, v, f;
-    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    double ea = 0.0, fs = 0.0, sa = 0.0, na = 0.0, ce;
     int j;
     if (md->fsal && y[0] == md->fth && md->lo == md->flo && md->hi == md->fhi) {
         for (j = 0; j < m->P; ++j)
@@ -1409,45 +1430,14 @@ static void seg_first(const gk_model *m, const gk_tq *t, gk_mode *md, double T1,
         }
     }
     md->fsal = 0;
-    ce = cd * ea;
+    ce = m->c_Ns_per_m * ea;
     ys[0] = y[0];
     ys[1] = y[1] - gw * ce;
     ys[2] = y[2];
     ys[3] = y[3] - gv * ce;
-    for (j = 0; j < m->P; ++j) {
-        double fc;
-        int reg = md->reg[j];
-        if (reg == 1) fc = kv[j] * ((ys[2] - ev[j]) - bv[j]);
-        else if (reg == -1) fc = kv[j] * ((ys[2] - ev[j]) + bv[j]);
-        else fc = 0.0;
-        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
-            if (reg != 0) {
-                int sub = md->sub[j];
-                if (sub == 0) {
-                    fs += fc + fc;
-                } else if (sub == 1) {
-                    fs += fc;
-                    ea2 += ev[j];
-                    sa += es[j];
-                    na += 1.0;
-                }
-            }
-        } else if (md->kpos[j] != 0) {
-            fs += fc;
-            ea2 += ev[j];
-            sa += es[j];
-            na += 1.0;
-        }
-    }
-    ce = cd * ea2;
-    om = ys[1] + gw * ce;
-    v = ys[3] + gv * ce;
-    f = fs + na * (cd * v);
-    f0[0] = om;
-    f0[1] = (T1 - Rb1 * f) / m->I1_kgm2;
-    f0[2] = v;
-    f0[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
-    *sk = cd * sa;
+    ea = 0.0;
+    for (j = 0; j < m->P; ++j) seg_pair_terms(m, md, j, kv[j], ev[j], es[j], bv[j], ys[2], &fs, &ea, &sa, &na);
+    seg_accel(m, T1, T2, gw, gv, ys[1], ys[3], fs, ea, sa, na, f0, sk);
 }
 
 /* the state yt = (theta1, omega1, x, v) of the shifted state y1 (seg_true) and 1 when no pair
@@ -1571,24 +1561,14 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
             zone_sel(m, md);
             mode_sync(m, t, md, y, 0);
         } else {
-            int j = (best_gi - 2) / 3, qq = (best_gi - 2) - 3 * j;
-            if (md->reg[j] == 0) {
-                md->reg[j] = (qq == 0) ? 1 : -1;
-                if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
-                    gk_ph c;
-                    double kv, ev, es, bv;
-                    double cc = seg_cell(m, md, y[0], &c);
-                    slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
-                    md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
-                }
-            } else if (qq == 0) {
-                md->reg[j] = 0;
-                md->sub[j] = 0;
-            } else if (md->sub[j] == 1) {
-                md->sub[j] = (qq == 1) ? 0 : 2;
-            } else {
-                md->sub[j] = 1;
+            int j = (best_gi - 2) / 3;
+            double kv = 0.0, ev = 0.0, es = 0.0, bv = 0.0;
+            if (md->reg[j] == 0 && m->damping_model == GK_DAMPING_ELASTOBACKLASH) {
+                gk_ph c;
+                double cc = seg_cell(m, md, y[0], &c);
+                slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
             }
+            switch_pair(m, md, j, (best_gi - 2) - 3 * j, kv, ev, es, bv, y);
         }
         if (!(rem > 0.0)) break;
     }
