@@ -970,49 +970,21 @@ GK_INLINE double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, 
                       md->reg[j], md->sub[j]);
 }
 
-GK_INLINE double hermite_guard(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
-                            const double *y0, const double *f0, const double *y1, const double *f1,
-                            double tau)
+/* the cubic Hermite interpolant at fraction s of a step of length tau from (y0, f0) to (y1, f1) */
+GK_INLINE void hermite_point(double s, const double *y0, const double *f0, const double *y1, const double *f1,
+                             double tau, double *yy)
 {
-    double u = 1.0 - s, yy[4];
+    double u = 1.0 - s;
     double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
     double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
     int q;
     for (q = 0; q < 4; ++q)
         yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
-    return guard_at(m, t, md, gi, yy);
 }
 
-/* fraction s in [0, 1] of the guard's zero on the Hermite interpolant (Illinois) */
 static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
-                         const double *y0, const double *f0, const double *y1, const double *f1,
-                         double tau)
-{
-    double ga = guard_at(m, t, md, gi, y0), gb = g_end, a = 0.0, b = 1.0, s, gs;
-    int side = 0, it;
-    if (!(ga > 0.0)) return 0.0;
-    for (it = 0; it < KINK_MAX_IT; ++it) {
-        s = (a * gb - b * ga) / (gb - ga);
-        if (!(s > a && s < b)) s = 0.5 * (a + b);
-        gs = hermite_guard(m, t, md, gi, s, y0, f0, y1, f1, tau);
-        if (gs < 0.0) {
-            b = s;
-            gb = gs;
-            if (side == -1) ga = 0.5 * ga;
-            side = -1;
-        } else if (gs == 0.0) {
-            b = s;
-            break;
-        } else {
-            a = s;
-            ga = gs;
-            if (side == 1) gb = 0.5 * gb;
-            side = 1;
-        }
-        if (b - a <= KINK_TOL_S) break;
-    }
-    return b;
-}
+                         const double *y0, const double *f0, const double *y1, const double *f1, double tau,
+                         int seg, double gw, double gv);
 
 /* kpos of every pair for the held cell and the sub-modes of pairs in contact;
  * with from_state also the regions */
@@ -1134,7 +1106,7 @@ static void kink_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double 
                 deriv_locked(m, t, md, T1, T2, y1, f1);
                 have_f1 = 1;
             }
-            s = guard_root(m, t, md, gi, g, y, f0, y1, f1, rem);
+            s = guard_root(m, t, md, gi, g, y, f0, y1, f1, rem, 0, 0.0, 0.0);
             if (s < best) {
                 best = s;
                 best_gi = gi;
@@ -1356,31 +1328,22 @@ GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md,
                       md->reg[jg], md->sub[jg]);
 }
 
-static double hermite_guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double s,
-                                const double *y0, const double *f0, const double *y1, const double *f1,
-                                double tau, double gw, double gv)
+/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of the step (Illinois;
+ * integrators._guard_root): rk4_kink / rk4_node guard_at on the state, rk4_seg (seg) guard_seg
+ * on the shifted state */
+static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
+                         const double *y0, const double *f0, const double *y1, const double *f1, double tau,
+                         int seg, double gw, double gv)
 {
-    double u = 1.0 - s, yy[4];
-    double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
-    double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
-    int q;
-    for (q = 0; q < 4; ++q)
-        yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
-    return guard_seg(m, t, md, gi, yy, gw, gv);
-}
-
-/* guard_root on the Hermite interpolant of the shifted state */
-static double guard_root_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
-                             const double *y0, const double *f0, const double *y1, const double *f1,
-                             double tau, double gw, double gv)
-{
-    double ga = guard_seg(m, t, md, gi, y0, gw, gv), gb = g_end, a = 0.0, b = 1.0, s, gs;
+    double ga = seg ? guard_seg(m, t, md, gi, y0, gw, gv) : guard_at(m, t, md, gi, y0);
+    double gb = g_end, a = 0.0, b = 1.0, s, gs, yy[4];
     int side = 0, it;
     if (!(ga > 0.0)) return 0.0;
     for (it = 0; it < KINK_MAX_IT; ++it) {
         s = (a * gb - b * ga) / (gb - ga);
         if (!(s > a && s < b)) s = 0.5 * (a + b);
-        gs = hermite_guard_seg(m, t, md, gi, s, y0, f0, y1, f1, tau, gw, gv);
+        hermite_point(s, y0, f0, y1, f1, tau, yy);
+        gs = seg ? guard_seg(m, t, md, gi, yy, gw, gv) : guard_at(m, t, md, gi, yy);
         if (gs < 0.0) {
             b = s;
             gb = gs;
@@ -1534,7 +1497,7 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
                 seg_rhs(m, t, md, T1, T2, gw, gv, y1, f1, &sk);
                 have_f1 = 1;
             }
-            s = guard_root_seg(m, t, md, gi, g, ys, f0, y1, f1, rem, gw, gv);
+            s = guard_root(m, t, md, gi, g, ys, f0, y1, f1, rem, 1, gw, gv);
             if (s < best) {
                 best = s;
                 best_gi = gi;
