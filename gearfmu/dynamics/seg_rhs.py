@@ -136,7 +136,8 @@ def _pair_terms(tab, md, j, kv, ev, es, bv, x, fs, ea, sa, na):
 @njit(cache=True, error_model="numpy", inline="always")
 def _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na):
     """(omega1, Omega', v, V', S) of :func:`_seg_rhs` from the shifted velocities (wo, wv) and
-    the sums of :func:`_pair_terms` over the pairs."""
+    the sums of :func:`_pair_terms` over the pairs; the accelerations multiply by 1/I1 and 1/I2
+    (kg^-1 m^-2) rather than divide (a division per evaluation is slow)."""
     c = tab[10]
     sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
     gw, gv = _seg_gains(dyn)
@@ -146,7 +147,9 @@ def _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na):
     f = fs + na * (c * v)
     if sdof:
         return om, 0.0, v, (fm - f) / me, c * sa
-    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2, c * sa
+    ii1 = 1.0 / in1   # gearkernel.c multiplies by 1/I1, 1/I2 computed once (gk_init)
+    ii2 = 1.0 / in2
+    return om, (t1 - rb1 * f) * ii1, v, rb1 * (t1 - rb1 * f) * ii1 - rb2 * (rb2 * f - t2) * ii2, c * sa
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -83,6 +83,10 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->Rb2_m = Rb2_m;
     m->I1_kgm2 = I1_kgm2;
     m->I2_kgm2 = I2_kgm2;
+    m->inv_I1 = 1.0 / I1_kgm2;
+    m->inv_I2 = 1.0 / I2_kgm2;
+    m->seg_gw = Rb1_m / I1_kgm2;
+    m->seg_gv = Rb1_m * (Rb1_m / I1_kgm2) + Rb2_m * (Rb2_m / I2_kgm2);
     m->k_mean_N_per_m = k_mean_N_per_m;
     /* m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2), seed 003 below eq 2 */
     m->m_e_kg = I1_kgm2 * I2_kgm2 / (I1_kgm2 * Rb2_m * Rb2_m + I2_kgm2 * Rb1_m * Rb1_m);
@@ -1248,16 +1252,16 @@ GK_INLINE void seg_pair_terms(const gk_model *m, const gk_mode *md, int j, doubl
 }
 
 /* dy = (omega1, Omega', v, V') and *sk = S of seg_rhs from the shifted velocities wo, wv and
- * the sums of seg_pair_terms (seg_rhs._seg_accel) */
+ * the sums of seg_pair_terms (seg_rhs._seg_accel); multiplied by 1/I1, 1/I2 of gk_init */
 GK_INLINE void seg_accel(const gk_model *m, double T1, double T2, double gw, double gv, double wo, double wv,
                          double fs, double ea, double sa, double na, double *dy, double *sk)
 {
     double cd = m->c_Ns_per_m, Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
     double ce = cd * ea, v = wv + gv * ce, f = fs + na * (cd * v);
     dy[0] = wo + gw * ce;
-    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[1] = (T1 - Rb1 * f) * m->inv_I1;
     dy[2] = v;
-    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    dy[3] = Rb1 * (T1 - Rb1 * f) * m->inv_I1 - Rb2 * (Rb2 * f - T2) * m->inv_I2;
     *sk = cd * sa;
 }
 
@@ -1439,8 +1443,8 @@ static void seg_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T
 {
     double rem = h, ys[4], f0[4], y1[4], yt1[4], f1[4], gw, gv, sk;
     int nev = 0, n_guard = 2 + 3 * m->P, q;
-    gw = m->Rb1_m / m->I1_kgm2;
-    gv = m->Rb1_m * (m->Rb1_m / m->I1_kgm2) + m->Rb2_m * (m->Rb2_m / m->I2_kgm2);
+    gw = m->seg_gw;
+    gv = m->seg_gv;
     for (;;) {
         double best = 2.0, cn;
         int best_gi = -1, have_f1 = 0, gi, any_neg;
