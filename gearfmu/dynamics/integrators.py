@@ -58,6 +58,8 @@ def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
     cell (nd, i0) is carried from stage to stage and returned.  The caller passes
     ``sdof`` as a constant, so that the inlined step has no branch on it."""
     _, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    ii1 = 1.0 / in1   # the products of gearkernel.c (1/I1, 1/I2 of gk_init)
+    ii2 = 1.0 / in2
     h2 = h / 2.0
     ka, kb, kc, kd = 0.0, 0.0, 0.0, 0.0
     sa, sb, sc, sd = 0.0, 0.0, 0.0, 0.0
@@ -89,8 +91,8 @@ def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
             kd = (fm - f) / me
         else:
             ka = yb
-            kb = (t1 - rb1 * f) / in1
-            kd = rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
+            kb = (t1 - rb1 * f) * ii1
+            kd = rb1 * (t1 - rb1 * f) * ii1 - rb2 * (rb2 * f - t2) * ii2
         sa, sb, sc, sd = _rk4_accumulate(stage, sa, sb, sc, sd, ka, kb, kc, kd)
     h6 = h / 6.0
     if sdof:

@@ -562,7 +562,9 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
         f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
     if sdof:
         return om, 0.0, v, (fm - f) / me
-    return om, (t1 - rb1 * f) / in1, v, rb1 * (t1 - rb1 * f) / in1 - rb2 * (rb2 * f - t2) / in2
+    ii1 = 1.0 / in1   # the products of gearkernel.c (1/I1, 1/I2 of gk_init)
+    ii2 = 1.0 / in2
+    return om, (t1 - rb1 * f) * ii1, v, rb1 * (t1 - rb1 * f) * ii1 - rb2 * (rb2 * f - t2) * ii2
 
 
 @njit(cache=True, error_model="numpy")

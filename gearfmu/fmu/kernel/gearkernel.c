@@ -527,9 +527,9 @@ GK_INLINE void deriv(const gk_model *m, const gk_tq *t, gk_ph *c, double T1, dou
     double F = mesh_force(m, t, c, y[0], y[1], y[2], y[3], NULL, NULL);
     double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
     dy[0] = y[1];
-    dy[1] = (T1 - Rb1 * F) / m->I1_kgm2;
+    dy[1] = (T1 - Rb1 * F) * m->inv_I1;
     dy[2] = y[3];
-    dy[3] = Rb1 * (T1 - Rb1 * F) / m->I1_kgm2 - Rb2 * (Rb2 * F - T2) / m->I2_kgm2;
+    dy[3] = Rb1 * (T1 - Rb1 * F) * m->inv_I1 - Rb2 * (Rb2 * F - T2) * m->inv_I2;
 }
 
 
@@ -937,9 +937,9 @@ GK_INLINE void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md
                                md->reg[j], md->sub[j], md->kpos[j]);
     }
     dy[0] = y[1];
-    dy[1] = (T1 - Rb1 * f) / m->I1_kgm2;
+    dy[1] = (T1 - Rb1 * f) * m->inv_I1;
     dy[2] = y[3];
-    dy[3] = Rb1 * (T1 - Rb1 * f) / m->I1_kgm2 - Rb2 * (Rb2 * f - T2) / m->I2_kgm2;
+    dy[3] = Rb1 * (T1 - Rb1 * f) * m->inv_I1 - Rb2 * (Rb2 * f - T2) * m->inv_I2;
 }
 
 /* classical RK4 of length h from y with first stage f0 given, mode held */

@@ -89,7 +89,7 @@ typedef struct gk_model {
     double inv_dphi;                /* n_phi / phi_period_rad (1/rad): the lookup multiplies by it */
     double Rb1_m, Rb2_m;            /* base radii */
     double I1_kgm2, I2_kgm2;        /* inertias */
-    double inv_I1, inv_I2;          /* 1/I1, 1/I2 (rk4_seg multiplies by them) */
+    double inv_I1, inv_I2;          /* 1/I1, 1/I2 (the right-hand sides multiply by them) */
     double seg_gw, seg_gv;          /* rk4_seg's gains Rb1/I1, Rb1*(Rb1/I1) + Rb2*(Rb2/I2) */
     double k_mean_N_per_m;
     double m_e_kg;                  /* I1 I2 / (I1 Rb2^2 + I2 Rb1^2) */
