@@ -28,7 +28,7 @@ def main(argv=None) -> int:
 
     from gearfmu.cli import print_report
     from gearfmu.fmu.compare import validate_fmu_against_native
-    from gearfmu.pipeline import build, gear_torque_for, load, max_step_for
+    from gearfmu.pipeline import build, gear_torque_for, load
 
     try:
         if args.scene is not None and not Path(args.scene).exists():

@@ -408,7 +408,6 @@ def main(argv=None):
             r = simulate(tables, stop_time_s=sim, comm_step_s=comm, **kw)
             return r.wall_s
         n_big = int(round(sim / big)) * substeps(big, h_max)
-        n_small = int(round(sim / small)) * substeps(small, h_max)
 
         md = read_model_description(str(res.fmu_path))
         unz = extract(str(res.fmu_path))

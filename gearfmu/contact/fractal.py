@@ -57,7 +57,7 @@ the seed ("composite Young's modulus of the contact material").
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Optional, Tuple
 
 import numpy as np
@@ -330,7 +330,7 @@ def solid_contact(surface: FractalSurface, material: FractalMaterial, a_l_m2: fl
     pc, H = material.p_c_Pa, material.H_Pa
     lam = options.lambda_c
     cn = lam * 0.5 * D * a_l ** (D / 2.0)
-    a_all, q_all, s_all, w_all = [], [], [], []
+    a_all, q_all, s_all = [], [], []
     for s, wgt in zip(options.lateral.s, options.lateral.weights):
         if wgt == 0.0:
             continue

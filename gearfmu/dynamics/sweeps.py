@@ -38,7 +38,7 @@ import math
 import os
 import time
 from concurrent.futures import as_completed
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import List, Optional, Sequence
 
 import numpy as np

@@ -49,13 +49,13 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from dataclasses import dataclass
+from typing import List, Optional, Sequence, Tuple
 from concurrent.futures import as_completed
 
 import numpy as np
 
-from .errors import EHLConvergenceError, EHLError, EHLInputError, FilmCollapseError
+from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
 from .solver import solve_line_contact

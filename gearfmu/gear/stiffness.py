@@ -68,7 +68,7 @@ import numpy as np
 from .hertz import hertz_stiffness_N_per_m
 from .foundation import sainsot_compliance_m_per_N
 from .gearpair import GearPairSpec, GearSpec, MeshModelOptions
-from .geometry import PairGeometry, half_tooth_angle_at_base, involute, pair_geometry, transverse_equivalent
+from .geometry import PairGeometry, half_tooth_angle_at_base, pair_geometry, transverse_equivalent
 
 
 class StiffnessError(ValueError):

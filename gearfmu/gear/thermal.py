@@ -92,7 +92,6 @@ docs/thermal.md "One temperature without an axis").
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple, Union
 

@@ -26,7 +26,6 @@ below leave that much room.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 from .precompute import LOAD_DEPENDENT_TORQUE_FACTORS

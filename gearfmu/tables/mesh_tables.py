@@ -280,7 +280,7 @@ class MeshTables:
         if self.temperature_C is not None:
             tax = self.temperature_C
             if not isinstance(tax, np.ndarray) or tax.ndim != 1 or tax.size < 1:
-                raise TableError(f"temperature_C: expected a 1-D numpy array with at least one point")
+                raise TableError("temperature_C: expected a 1-D numpy array with at least one point")
             if not np.all(np.isfinite(tax)):
                 raise TableError("temperature_C: contains NaN or infinite values")
             if tax.size > 1 and not np.all(np.diff(tax) > 0):

@@ -30,8 +30,6 @@ from __future__ import annotations
 import csv
 import math
 from pathlib import Path
-from typing import Optional
-
 import numpy as np
 
 from .mesh_tables import MeshTables, TableError, load_tables
