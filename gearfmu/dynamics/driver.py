@@ -82,7 +82,7 @@ def _loop(seg, icode, sdof, th, om, x, v, t1s, t2s, H, n_sub, h, rb1, rb2, in1, 
         tab = _tab(kp, ep, bp, it, rows2, wt, n_phi, p, dphi, c, model, inv_dphi, fp)
         if zoned:
             tab = _with_zones(tab, zp)
-        dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me)
+        dyn = (sdof, t1, t2, rb1, rb2, in1, in2, fm, me, 1.0 / in1, 1.0 / in2)   # the last two: 1/I1, 1/I2
         if s == 0:
             _write_row(tab, 0, th, om, x, v, out_state, out_pair, out_force, out_stiff)
         if icode >= 1:

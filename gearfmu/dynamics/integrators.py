@@ -17,7 +17,8 @@ Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
 :mod:`gearfmu.dynamics.model_rhs` and the inputs as the tuple
 ``dyn`` = (sdof, T1 (N*m), T2 (N*m), Rb1 (m), Rb2 (m), I1 (kg*m^2),
-I2 (kg*m^2), F_m = T1/Rb1 (N), m_e (kg)).
+I2 (kg*m^2), F_m = T1/Rb1 (N), m_e (kg), 1/I1, 1/I2 (1/(kg*m^2))); the accelerations
+multiply by 1/I1 and 1/I2, as gearkernel.c does with the values of gk_init.
 """
 from __future__ import annotations
 
@@ -57,9 +58,7 @@ def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
     acc = ((k1 + 2*k2) + 2*k3) + k4, and y_new = y + (h/6.0)*acc.  The table
     cell (nd, i0) is carried from stage to stage and returned.  The caller passes
     ``sdof`` as a constant, so that the inlined step has no branch on it."""
-    _, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
-    ii1 = 1.0 / in1   # the products of gearkernel.c (1/I1, 1/I2 of gk_init)
-    ii2 = 1.0 / in2
+    _, t1, t2, rb1, rb2, in1, in2, fm, me, ii1, ii2 = dyn
     h2 = h / 2.0
     ka, kb, kc, kd = 0.0, 0.0, 0.0, 0.0
     sa, sb, sc, sd = 0.0, 0.0, 0.0, 0.0

@@ -554,7 +554,7 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
     c = tab[10]
     model = tab[11]
     p = tab[8]
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me, ii1, ii2 = dyn
     w = (th - nd * dphi) * tab[12]
     f = 0.0
     for j in range(p):
@@ -562,8 +562,6 @@ def _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1):
         f += _pair_force_locked(kv, ev, es, bv, x, v, om, c, model, md[j], md[p + j], md[2 * p + j])
     if sdof:
         return om, 0.0, v, (fm - f) / me
-    ii1 = 1.0 / in1   # the products of gearkernel.c (1/I1, 1/I2 of gk_init)
-    ii2 = 1.0 / in2
     return om, (t1 - rb1 * f) * ii1, v, rb1 * (t1 - rb1 * f) * ii1 - rb2 * (rb2 * f - t2) * ii2
 
 

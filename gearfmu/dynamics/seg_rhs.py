@@ -71,7 +71,7 @@ def _seg_gains(dyn):
     """rk4_seg (docs/model.md "rk4_seg"): the gains (g_w, g_v) of the shifted velocities
     Omega = omega1 - g_w*C, V = v - g_v*C with C = c*sum of e_j over the damped pairs:
     two-inertia g_w = Rb1/I1, g_v = Rb1*(Rb1/I1) + Rb2*(Rb2/I2) (1/kg); SDOF 0 and 1/m_e."""
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me, ii1, ii2 = dyn
     if sdof:
         return 0.0, 1.0 / me
     return rb1 / in1, rb1 * (rb1 / in1) + rb2 * (rb2 / in2)
@@ -139,7 +139,7 @@ def _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na):
     the sums of :func:`_pair_terms` over the pairs; the accelerations multiply by 1/I1 and 1/I2
     (kg^-1 m^-2) rather than divide (a division per evaluation is slow)."""
     c = tab[10]
-    sdof, t1, t2, rb1, rb2, in1, in2, fm, me = dyn
+    sdof, t1, t2, rb1, rb2, in1, in2, fm, me, ii1, ii2 = dyn
     gw, gv = _seg_gains(dyn)
     ce = c * ea
     om = wo + gw * ce
@@ -147,8 +147,6 @@ def _seg_accel(tab, dyn, wo, wv, fs, ea, sa, na):
     f = fs + na * (c * v)
     if sdof:
         return om, 0.0, v, (fm - f) / me, c * sa
-    ii1 = 1.0 / in1   # gearkernel.c multiplies by 1/I1, 1/I2 computed once (gk_init)
-    ii2 = 1.0 / in2
     return om, (t1 - rb1 * f) * ii1, v, rb1 * (t1 - rb1 * f) * ii1 - rb2 * (rb2 * f - t2) * ii2, c * sa
 
 
