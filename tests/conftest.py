@@ -26,9 +26,10 @@ from pathlib import Path
 
 import pytest
 
-#: the test files with the largest CPU cost, in the order they are handed out (measured per test
-#: with the process and child-process CPU time, fresh install: cold numba and object caches).
-#: First the two files that fill the caches, one family each: test_integrators compiles the native
+#: the test files with the largest cost, in the order they are handed out (measured per file: the
+#: process and child-process CPU time and the wall time, warm numba and object caches; a file that
+#: waits on wine, qemu or a Dask cluster holds its worker for the wall time).  First the two files
+#: that fill the caches on a fresh install, one family each: test_integrators compiles the native
 #: solver and makes the first standalone build (it cross-compiles every platform's objects),
 #: test_direct_tvms compiles the numba film kernels.  Then the files that only solve films (no FMU
 #: build), so that the other worker does not compile the same platform objects while that first
@@ -37,28 +38,30 @@ LONGEST_FIRST = (
     "tests/test_integrators.py",
     "tests/test_direct_tvms.py",
     "tests/test_ehl_transient.py",
-    "tests/test_ehl_determinism.py",
-    "tests/test_film_transient.py",
-    "tests/test_ehl.py",
     "tests/test_ehl_speedpath.py",
+    "tests/test_ehl.py",
     "tests/test_direct_tvms_speed_torque.py",
-    "tests/test_fmu.py",
+    "tests/test_film_transient.py",
+    "tests/test_ehl_determinism.py",
     "tests/test_helical_contact.py",
-    "tests/test_native_cache.py",
-    "tests/test_temperature_axis.py",
-    "tests/test_platforms.py",
-    "tests/test_fmi3.py",
     "tests/test_standalone.py",
-    "tests/test_pyshim.py",
+    "tests/test_platforms.py",
     "tests/test_plan_verify.py",
-    "tests/test_fuzz.py",
-    "tests/test_pipeline.py",
-    "tests/test_hard_cases.py",
+    "tests/test_pyshim.py",
     "tests/test_plan.py",
-    "tests/test_robustness.py",
+    "tests/test_fmu.py",
+    "tests/test_pipeline.py",
+    "tests/test_fuzz.py",
+    "tests/test_hard_cases.py",
+    "tests/test_fmi3.py",
     "tests/test_sweeps.py",
-    "tests/test_film_transient_tables.py",
+    "tests/test_temperature_axis.py",
+    "tests/test_ehl_mesh.py",
     "tests/test_dask_tables.py",
+    "tests/test_cli_user_errors.py",
+    "tests/test_subcell.py",
+    "tests/test_robustness.py",
+    "tests/test_film_transient_tables.py",
 )
 
 _SHARED_SCOPES = ("module", "class", "package")
