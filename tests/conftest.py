@@ -62,6 +62,16 @@ LONGEST_FIRST = (
     "tests/test_subcell.py",
     "tests/test_robustness.py",
     "tests/test_film_transient_tables.py",
+    "tests/test_object_cache.py",
+    "tests/test_helical.py",
+    "tests/test_envelope_fmu.py",
+    "tests/test_init_mode.py",
+    "tests/test_process_pool.py",
+    "tests/test_reference.py",
+    "tests/test_state.py",
+    "tests/test_fmu_shared_checks.py",
+    "tests/test_helical_sawtooth.py",
+    "tests/test_ssp.py",
 )
 
 _SHARED_SCOPES = ("module", "class", "package")
