@@ -9,21 +9,7 @@ files whose tests share a module, class or package fixture, then the files of sm
 tests.  xdist would otherwise re-sort the files by their number of tests, which hands the few-test
 heavy files (the direct TVMS films, the fresh-process checks) out last; :func:`pytest_configure`
 turns that off.  ``-n 0`` runs the same order in one process.
-
-The C kernel of the pythonfmu runtime (:func:`gearfmu.fmu.pythonfmu_build.compile_kernel`: the
-system C compiler on gearkernel.c and gkfmu.c) is compiled once per test process and input, not
-once per FMU built: :func:`_compile_kernel_once` keys the compiled library by everything the
-compiler reads (the compiler file, the flags, the paths and bytes of the kernel folder's sources)
-and copies it where the build asks for it.  The compiler is deterministic (the same inputs give
-the same bytes), so every FMU and every ctypes library of the suite holds the bytes a fresh
-compilation gives; any failure (no compiler, a bad ``cc``, a compile error) is the real
-function's, because a key is only stored after the real function succeeded.
 """
-import hashlib
-import shutil
-import tempfile
-from pathlib import Path
-
 import pytest
 
 #: the test files with the largest cost, in the order they are handed out (measured per file: the
@@ -89,54 +75,10 @@ def _shares_a_fixture(item) -> bool:
     return False
 
 
-_KERNELS = {}          # key -> the library compiled for it, in this process's scratch folder
-_SCRATCH = []
-
-
-def _kernel_key(pb, cc):
-    """Everything the kernel compile command reads, as one SHA-256; None if ``cc`` is not a file."""
-    cc = Path(cc or pb.find_c_compiler())
-    if not cc.is_file():
-        return None
-    st = cc.stat()
-    h = hashlib.sha256(repr((str(cc), st.st_size, st.st_mtime_ns, tuple(pb.CFLAGS), str(pb.KERNEL_SOURCE),
-                             str(pb.FMU_LAYER_SOURCE), pb._kernel_filename())).encode())
-    for f in sorted({*Path(pb.KERNEL_SOURCE).parent.iterdir(), Path(pb.KERNEL_SOURCE), Path(pb.FMU_LAYER_SOURCE)}):
-        if f.is_file():
-            h.update(str(f).encode() + b"\0" + f.read_bytes())
-    return h.hexdigest()
-
-
-def _compile_kernel_once(real, pb):
-    def compile_kernel(dest_dir, *, cc=None):
-        key = _kernel_key(pb, cc)
-        if key is None:
-            return real(dest_dir, cc=cc)
-        if key not in _KERNELS:
-            if not _SCRATCH:
-                _SCRATCH.append(Path(tempfile.mkdtemp(prefix="gearfmu_test_kernels_")))
-            _KERNELS[key] = real(_SCRATCH[0] / key[:16], cc=cc)
-        dest = Path(dest_dir)
-        dest.mkdir(parents=True, exist_ok=True)
-        return Path(shutil.copy2(_KERNELS[key], dest / _KERNELS[key].name))
-    compile_kernel.__doc__ = real.__doc__
-    return compile_kernel
-
-
 def pytest_configure(config):
     # keep the order below: xdist's loadfile otherwise hands out the files with most tests first
     if hasattr(config.option, "loadscopereorder"):
         config.option.loadscopereorder = False
-    if getattr(config.option, "numprocesses", 0) and not hasattr(config, "workerinput"):
-        return  # the xdist controller runs no test
-    # before the test modules import it (module docstring)
-    from gearfmu.fmu import pythonfmu_build as pb
-    pb.compile_kernel = _compile_kernel_once(pb.compile_kernel, pb)
-
-
-def pytest_unconfigure(config):
-    for d in _SCRATCH:
-        shutil.rmtree(d, ignore_errors=True)
 
 
 def _file(item) -> str:

@@ -53,3 +53,32 @@ def test_second_build_links_kept_objects(counted_compiles, tmp_path):
     kernel.write_text(kernel.read_text() + "\n/* changed */\n")
     _build(src, tmp_path / "c", "gear_a")
     assert len([c for c in counted_compiles if "-c" in c]) == 1   # only the changed source
+
+
+def test_pythonfmu_kernel_is_compiled_once_and_kept(monkeypatch, tmp_path):
+    # Reference: the compiler's own invocations (build_steps.run_compiler) and a fresh compilation.
+    # The first compile_kernel calls the compiler; a second one with the same compiler, flags and
+    # sources copies the kept library (no compiler call) with the bytes of a fresh compilation;
+    # another flag is another key, so it compiles again.
+    from gearfmu.fmu import pythonfmu_build as pb
+
+    monkeypatch.setenv("GEARFMU_CACHE_DIR", str(tmp_path / "cache"))
+    calls = []
+    real = pb.run_compiler
+
+    def counted(cmd, what, **k):
+        calls.append(list(cmd))
+        return real(cmd, what, **k)
+
+    monkeypatch.setattr(pb, "run_compiler", counted)
+    first = pb.compile_kernel(tmp_path / "a")
+    assert len(calls) == 1
+    second = pb.compile_kernel(tmp_path / "b")
+    assert len(calls) == 1, "the second compile_kernel ran the compiler again"
+    assert second.read_bytes() == first.read_bytes()
+    monkeypatch.setenv("GEARFMU_CACHE_DIR", str(tmp_path / "other"))
+    fresh = pb.compile_kernel(tmp_path / "c")
+    assert len(calls) == 2 and fresh.read_bytes() == first.read_bytes()
+    monkeypatch.setattr(pb, "CFLAGS", [*pb.CFLAGS, "-DGEARFMU_CACHE_KEY_TEST=1"])
+    pb.compile_kernel(tmp_path / "d")
+    assert len(calls) == 3, "a changed flag must compile again"

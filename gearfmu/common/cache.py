@@ -2,7 +2,8 @@
 
 The root is ``$GEARFMU_CACHE_DIR``, else ``$XDG_CACHE_HOME/gearfmu``, else
 ``~/.cache/gearfmu``; each user of the cache has a folder there (``objects``: compiled C
-objects, :mod:`gearfmu.fmu.crossbuild`; ``validation``: the native reference results of
+objects, :mod:`gearfmu.fmu.crossbuild`; ``kernels``: the pythonfmu runtime's compiled kernel,
+:func:`gearfmu.fmu.pythonfmu_build.compile_kernel`; ``validation``: the native reference results of
 the validation record, :mod:`gearfmu.fmu.validation`).
 
 An entry is two plain files named by the SHA-256 of its key (a JSON-able dict): ``<digest>.json``

@@ -42,6 +42,7 @@ from typing import Optional, Union
 import sysconfig
 
 from .. import __version__
+from ..common.cache import cache_dir
 from ..common.vocabulary import DEFAULT_INTEGRATOR
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
@@ -68,17 +69,51 @@ def _kernel_filename() -> str:
     return "gearkernel" + ext
 
 
+def _kernel_key(cc: str) -> Optional[str]:
+    """SHA-256 of everything the kernel compilation reads: the compiler file (resolved path, size,
+    modification time), :data:`CFLAGS`, the library's name and the bytes of every C source and
+    header of the kernel folder; None when the compiler is not a file (then nothing is kept)."""
+    p = Path(shutil.which(cc) or cc)
+    if not p.is_file():
+        return None
+    st = p.stat()
+    h = hashlib.sha256()
+    for part in (str(p.resolve()), str(st.st_size), str(st.st_mtime_ns), " ".join(CFLAGS), _kernel_filename()):
+        h.update(part.encode() + b"\0")
+    folder = Path(KERNEL_SOURCE).parent
+    for f in sorted({*folder.glob("*.c"), *folder.glob("*.h"), Path(KERNEL_SOURCE), Path(FMU_LAYER_SOURCE)}):
+        h.update(f.name.encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
 def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     """Compile gearkernel.c and the FMU layer over it (gkfmu.c) into a shared library in ``dest_dir``;
     return its path.
 
     Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gkfmu.c -lm``.
+    The library is kept in gearfmu's file cache (:func:`gearfmu.common.cache.cache_dir`, folder
+    ``kernels``) under :func:`_kernel_key`; a later build with the same compiler, flags and
+    sources copies it instead of compiling again (the compiler gives the same bytes for the same
+    inputs).  A cache folder that cannot be written only costs the next build a compilation.
     """
     cc = cc or find_c_compiler()
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     lib = dest / _kernel_filename()
+    key = _kernel_key(cc)
+    kept = cache_dir("kernels") / f"{key[:32]}-{lib.name}" if key else None
+    if kept is not None and kept.is_file():
+        shutil.copy2(kept, lib)
+        return lib
     run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), str(FMU_LAYER_SOURCE), "-lm"], "kernel")
+    if kept is not None:
+        try:  # atomic publish: a concurrent build sees either no file or the whole library
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            part = kept.with_name(kept.name + f".{os.getpid()}.part")
+            shutil.copy2(lib, part)
+            os.replace(part, kept)
+        except OSError:
+            pass
     return lib
 
 
