@@ -1038,8 +1038,15 @@ def _g_dop853(d):
 
 def _g_fmu_native(d):
     r, s = d["fmu_over_native_per_sim_s_lowlevel"], d["fmu_over_native_per_sim_s_simulate_fmu"]
-    return (f"{r:.2f} × (low-level FMI loop), {s:.2f} × (`fmpy.simulate_fmu`) at a "
-            f"{1e6 * d['comm_step_scene_s']:.3g} µs communication step", r <= 3.0)
+    text = (f"{r:.2f} × (low-level FMI loop), {s:.2f} × (`fmpy.simulate_fmu`) at a "
+            f"{1e6 * d['comm_step_scene_s']:.3g} µs communication step")
+    b = d.get("fmu_over_native_per_sim_s_bound")
+    if b:
+        text += (f"; the same loop around two C functions that do nothing already takes {b['lean'] - 1:.2f} × the "
+                 f"native solver's time, so an FMU whose steps cost what the native solver's do cannot be below "
+                 f"{b['lean']:.2f} × through that loop on this machine ({b['raw']:.2f} × through fmpy's raw "
+                 "ctypes pointers)")
+    return text, r <= 3.0
 
 
 _RTF_HOSTS = (("fmpy_real_time_factor", "fmpy low-level loop"),
