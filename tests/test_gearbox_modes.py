@@ -29,8 +29,8 @@ def const_tables(k, z1, z2, rb1, rb2, i1, i2, n=16):
 
 
 # stage 1: 23/67 teeth, stage 2: 19/73 (an e-axle-like reducer, total 11.19)
-S1 = dict(k=4.0e8, z1=23, z2=67, rb1=0.0270, rb2=0.0787, i1=2.0e-4, i2=1.2e-2)
-S2 = dict(k=6.0e8, z1=19, z2=73, rb1=0.0312, rb2=0.1199, i1=8.0e-4, i2=8.0e-2)
+S1 = dict(k=4.0e8, z1=23, z2=67, rb1=0.0270, rb2=0.0270 * 67 / 23, i1=2.0e-4, i2=1.2e-2)
+S2 = dict(k=6.0e8, z1=19, z2=73, rb1=0.0312, rb2=0.0312 * 73 / 19, i1=8.0e-4, i2=8.0e-2)
 K_IN, K_MID, K_OUT = 4.0e4, 1.6e5, 5.0e5
 I_MOTOR, I_LOAD = 0.03, 2.0
 

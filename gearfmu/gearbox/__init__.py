@@ -19,5 +19,8 @@ kernels      the numba kernels: right-hand side, 'rk4', the event-aware
              'rk4_kink' / 'rk4_node' substep, the loop over steps
 reference    event-located scipy reference of the same equations
              (tests and benchmarks)
+cases        the hard cases of the tests and the benchmark (inputs only)
+_pair        the pair model's numba kernels used per mesh (the one place
+             that names them)
 ===========  =========================================================
 """

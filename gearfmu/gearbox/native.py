@@ -16,7 +16,6 @@ Public API
 from __future__ import annotations
 
 import math
-import sys
 import time as _time
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple
@@ -24,6 +23,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from ..common.checks import finite_number
+from ..common.progress import progress_bar
 from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS, INTEGRATORS
 from ..dynamics.native import InputLike, _input_series, _n_steps, choose_max_step_s as pair_max_step_s, substeps
 from ..tables.zones import zone_cuts
@@ -33,7 +33,8 @@ from .kernels import F_C, F_DPHI, F_G, F_INV, F_RBP, F_RBQ, I_B, I_CUTS, I_E, I_
 from .model import GearboxModel
 from .modes import modes
 
-__all__ = ["GearboxInputError", "GearboxResult", "simulate", "choose_max_step_s", "output_units"]
+__all__ = ["GearboxInputError", "GearboxResult", "simulate", "choose_max_step_s", "output_units", "RunArguments",
+           "run_arguments", "columns"]
 
 _NO_CUTS = np.full((2, 1, 1), -1.0)
 
@@ -183,6 +184,55 @@ def _integrator_code(integrator, model) -> int:
     return INTEGRATORS[integrator]
 
 
+@dataclass(frozen=True)
+class RunArguments:
+    """The checked run arguments :func:`simulate` and gearfmu.gearbox.reference share (SI): the
+    inputs one value per communication step (n_steps + 1), the motor-side reference torque that
+    selects the torque rows (:meth:`GearboxModel.reference_torque_Nm` per step), the start speed
+    and angle, and a given initial state (None: the quasi-static one)."""
+
+    stop_time_s: float
+    comm_step_s: float
+    n_steps: int
+    motor_torque_Nm: np.ndarray
+    load_torque_Nm: np.ndarray
+    reference_torque_Nm: np.ndarray
+    speed_rad_s: float
+    angle_rad: float
+    initial_state: Optional[np.ndarray]
+
+
+def run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
+                  motor_angle_start_rad, initial_state, error=GearboxInputError) -> RunArguments:
+    """Check and convert the run arguments of the gearbox solvers (:func:`simulate` documents
+    them); ``error`` names the first bad one."""
+    if not isinstance(model, GearboxModel):
+        raise error(f"model: expected GearboxModel, got {type(model).__name__}")
+    H = finite_number("comm_step_s", comm_step_s, positive=True, error=error)
+    stop = finite_number("stop_time_s", stop_time_s, positive=True, error=error)
+    n_steps = _n_steps(stop, H, error=error)
+    w0 = finite_number("motor_speed_start_rad_s", motor_speed_start_rad_s, error=error)
+    angle = finite_number("motor_angle_start_rad", motor_angle_start_rad, error=error)
+    t_in = _input_series("motor_torque_Nm", motor_torque_Nm, n_steps, H, error=error)
+    if load_torque_Nm is None:
+        if not model.motor_torque_input:
+            raise error("load_torque_Nm: required when the motor is no torque input")
+        t_out = t_in / model.load_ratio
+    else:
+        t_out = _input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
+    if not model.motor_torque_input:
+        t_in = np.zeros_like(t_in)
+    if not model.load_torque_input:
+        t_out = np.zeros_like(t_out)
+    t_ref = t_in if model.motor_torque_input else t_out * model.load_ratio
+    y = None
+    if initial_state is not None:
+        y = np.array(initial_state, dtype=np.float64)
+        if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
+            raise error(f"initial_state: expected {model.n_state} finite values (psi, omega, u_i, du_i)")
+    return RunArguments(stop, H, n_steps, t_in, t_out, t_ref, w0, angle, y)
+
+
 def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, motor_torque_Nm: InputLike,
              load_torque_Nm: Optional[InputLike] = None, motor_speed_start_rad_s: float,
              max_step_s: Optional[float] = None, integrator: str = DEFAULT_INTEGRATOR,
@@ -199,25 +249,11 @@ def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, mot
     'rk4_kink' or 'rk4' (docs/gearbox.md "Integrators").  If the state turns non-finite the run
     stops there; the remaining rows are NaN and ``info['diverged_at_step']`` says where.
     ``progress``: a bar on stderr (the run goes in chunks of steps; results unchanged)."""
-    if not isinstance(model, GearboxModel):
-        raise GearboxInputError(f"model: expected GearboxModel, got {type(model).__name__}")
+    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
+                      motor_angle_start_rad, initial_state)
     icode = _integrator_code(integrator, model)
-    H = finite_number("comm_step_s", comm_step_s, positive=True, error=GearboxInputError)
-    stop = finite_number("stop_time_s", stop_time_s, positive=True, error=GearboxInputError)
-    n_steps = _n_steps(stop, H, error=GearboxInputError)
-    w0 = finite_number("motor_speed_start_rad_s", motor_speed_start_rad_s, error=GearboxInputError)
-    t_in = _input_series("motor_torque_Nm", motor_torque_Nm, n_steps, H, error=GearboxInputError)
-    if load_torque_Nm is None:
-        if not model.motor_torque_input:
-            raise GearboxInputError("load_torque_Nm: required when the motor is no torque input")
-        t_out = t_in / model.load_ratio
-    else:
-        t_out = _input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=GearboxInputError)
-    if not model.motor_torque_input:
-        t_in = np.zeros_like(t_in)
-    if not model.load_torque_input:
-        t_out = np.zeros_like(t_out)
-    t_ref = t_in if model.motor_torque_input else t_out * model.load_ratio
+    H, n_steps, t_in, t_out, t_ref, w0 = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
+        a.reference_torque_Nm, a.speed_rad_s
     if max_step_s is None:
         max_step_s = choose_max_step_s(model, max(1.5 * abs(w0), 1.0), reference_torque_Nm=float(t_ref[0]))
     h_max = finite_number("max_step_s", max_step_s, positive=True, error=GearboxInputError)
@@ -232,13 +268,7 @@ def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, mot
             it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], t_ref / model.g[model.mesh_bodies[m, 0]])
         else:
             it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], np.zeros(n_steps + 1))
-    if initial_state is None:
-        y = model.static_state(float(t_ref[0]), w0, finite_number("motor_angle_start_rad", motor_angle_start_rad,
-                                                                   error=GearboxInputError))
-    else:
-        y = np.array(initial_state, dtype=np.float64)
-        if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
-            raise GearboxInputError(f"initial_state: expected {model.n_state} finite values (psi, omega, u_i, du_i)")
+    y = model.static_state(float(t_ref[0]), w0, a.angle_rad) if a.initial_state is None else a.initial_state
     y = np.ascontiguousarray(y, dtype=np.float64)
     n = model.n_bodies
     rows = n_steps + 1
@@ -253,27 +283,28 @@ def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, mot
     chunk = n_steps if not progress else max(1, n_steps // 100)
     wall = 0.0
     done = 0
-    while done < n_steps:
-        k = min(chunk, n_steps - done)
-        t0 = _time.perf_counter()
-        got = run(icode, y, t_in, t_out, it_rows, wt_rows, done, k, *args)
-        wall += _time.perf_counter() - t0
-        done += got
-        if progress:
-            print(f"\rgearbox: {done}/{n_steps} steps", end="", file=sys.stderr, flush=True)
-        if got < k:
-            break
-    if progress:
-        print(file=sys.stderr)
+    with progress_bar(None, "gearbox", progress, total=n_steps, unit="step") as bar:
+        while done < n_steps:
+            k = min(chunk, n_steps - done)
+            t0 = _time.perf_counter()
+            got = run(icode, y, t_in, t_out, it_rows, wt_rows, done, k, *args)
+            wall += _time.perf_counter() - t0
+            done += got
+            bar.update(got)
+            if got < k:
+                break
     info = {"events": int(events.sum()), "completed_steps": int(done), "reference_torque_Nm": t_ref}
     if done < n_steps:
         info["diverged_at_step"] = int(done)
-    cols = _columns(model, kd, out_body, out_mesh, out_pair, out_shaft, t_in, t_out)
+    cols = columns(model, kd.pair_off, out_body, out_mesh, out_pair, out_shaft, t_in, t_out)
     return GearboxResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=integrator,
                          wall_s=wall, state=y, info=info)
 
 
-def _columns(model, kd, out_body, out_mesh, out_pair, out_shaft, t_in, t_out):
+def columns(model, pair_off, out_body, out_mesh, out_pair, out_shaft, t_in, t_out):
+    """Output name -> (unit, array) from the rows the kernels write (per body angle and speed,
+    per mesh x, v, force, stiffness, the pair forces at columns pair_off[m]..pair_off[m+1], per
+    shaft torque) and the inputs; the load sharing derived as docs/model.md defines it."""
     units = output_units(model)
     cols = {}
     for p in model.parts:
@@ -286,7 +317,7 @@ def _columns(model, kd, out_body, out_mesh, out_pair, out_shaft, t_in, t_out):
         cols[f"{nm}.dte_rate"] = out_mesh[:, 4 * m + 1]
         f = out_mesh[:, 4 * m + 2]
         cols[f"{nm}.mesh_force"] = f
-        pf = out_pair[:, kd.pair_off[m]:kd.pair_off[m + 1]]
+        pf = out_pair[:, pair_off[m]:pair_off[m + 1]]
         for i in range(pf.shape[1]):
             cols[f"{nm}.pair_force[{i + 1}]"] = pf[:, i]
         ls = np.zeros(pf.shape)
