@@ -427,7 +427,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     run = r.table(sub(data, "run"), "run")
     if sub(data, "planetary") is not None:
         r.add("planetary", "planetary stages are not supported yet (parallel-axis [[stage]] only)")
-    base = Path(source_path).resolve().parent if source_path else Path.cwd()
+    base = Path(source_path).parent if source_path else Path(".")
     stages_raw = _rows(r, data, "stage")
     shafts_raw = _rows(r, data, "shaft")
     if not stages_raw and sub(data, "stage") is None:
