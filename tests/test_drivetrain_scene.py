@@ -6,6 +6,7 @@ G = E/(2(1 + nu)) and polar inertia rho pi (D^4 - d^4) L/32; the balancing load 
 torque times the total ratio (power balance).  The expected key paths are written out here.
 """
 import math
+import pathlib
 import textwrap
 
 import pytest
@@ -151,3 +152,12 @@ def test_schema_has_every_key_a_unit_and_a_meaning():
     for table, keys in DRIVETRAIN_SCHEMA.items():
         for k in keys:
             assert k.doc and k.unit, (table, k.name)
+
+
+def test_docs_document_every_drivetrain_key():
+    doc = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "scene.md").read_text(encoding="utf-8")
+    section = doc.split("## Drivetrain scenes", 1)[1].split("\n## ", 1)[0]
+    for table, keys in DRIVETRAIN_SCHEMA.items():
+        assert f"[{table}]" in section or f"[[{table}]]" in section, table
+        for k in keys:
+            assert f"`{k.name}`" in section, f"{table}.{k.name}"
