@@ -84,11 +84,13 @@ def simulate_drivetrain(scene: DrivetrainScene, model: GearboxModel, *, stop_tim
                         comm_step_s: Optional[float] = None, max_step_s: Optional[float] = None,
                         motor_torque_Nm=None, load_torque_Nm=None, integrator: Optional[str] = None,
                         progress: bool = False) -> GearboxResult:
-    """Run the native gearbox solver with the scene's settings (each overridable)."""
+    """Run the native gearbox solver with the scene's settings (each overridable).  Without a load
+    torque (argument or ``load.torque_Nm``) the load balances the motor torque at every step."""
     tm = scene.motor.torque_Nm if motor_torque_Nm is None else motor_torque_Nm
-    if load_torque_Nm is None:
-        load_torque_Nm = scene.load_torque_Nm if (scene.load.torque_Nm is not None or motor_torque_Nm is None) \
-            else model.balancing_load_torque_Nm(float(tm))
+    if load_torque_Nm is None and scene.load.torque_Nm is not None:
+        load_torque_Nm = scene.load.torque_Nm
+    if load_torque_Nm is None and not scene.motor.torque_input:
+        load_torque_Nm = scene.load_torque_Nm
     return simulate_gearbox(
         model, stop_time_s=scene.stop_time_s if stop_time_s is None else stop_time_s,
         comm_step_s=scene.output_interval_s if comm_step_s is None else comm_step_s,

@@ -22,7 +22,7 @@ from gearfmu.bench import hard_case
 from gearfmu.dynamics.native import simulate as simulate_pair
 from gearfmu.gearbox.model import Mesh, Shaft, build_gearbox
 from gearfmu.gearbox.native import GearboxInputError, simulate
-from gearfmu.tables.synthetic import rectangular_wave_tables, tables_from_arrays
+from gearfmu.tables.synthetic import rectangular_wave_tables
 
 from test_gearbox_modes import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices
 

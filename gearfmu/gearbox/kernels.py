@@ -33,7 +33,7 @@ from numba.extending import intrinsic
 
 from ._pair import (
     KINK_MAX_EVENTS, _CELL_NONE, _cell_nodes, _guard_at, _guard_root, _kvals, _kvals_sel, _mesh_force, _mode_sync,
-    _node_time, _pair_force, _pair_force_locked, _pair_guard, _pairs_hold, _phi_cell, _seg_cross, _seg_start,
+    _node_time, _pair_force, _pair_force_locked, _pairs_hold, _phi_cell, _seg_cross, _seg_start,
     _switch_pair, _tab, _with_zones, _zone_sel,
 )
 

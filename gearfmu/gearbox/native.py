@@ -15,7 +15,6 @@ Public API
 """
 from __future__ import annotations
 
-import math
 import time as _time
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple

@@ -148,15 +148,11 @@ _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 class _RowSchema(dict):
-    """The drivetrain schema, looked up with the row index of an array of tables removed
-    (``stage[1]`` reads the keys of ``stage``)."""
+    """A drivetrain table mapping (keys or sub-tables), looked up with the row index of an array of
+    tables removed (``stage[1]`` reads the keys of ``stage``)."""
 
     def get(self, path, default=None):
         return super().get(re.sub(r"\[\d+\]", "", path), default)
-
-
-class _RowSubtables(_RowSchema):
-    pass
 
 
 # ============================================================== result dataclasses
@@ -263,7 +259,7 @@ class DrivetrainScene:
         """The load's start torque (N*m): the given one, else the balancing T_motor * total ratio."""
         if self.load.torque_Nm is not None:
             return float(self.load.torque_Nm)
-        return float(self.motor.torque_Nm) * self.total_ratio if self.motor.torque_input else 0.0
+        return float(self.motor.torque_Nm) * self.total_ratio
 
 
 # ============================================================== reading
@@ -418,7 +414,7 @@ def _ratios(tree, links, radii) -> Dict[str, float]:
 
 
 def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> DrivetrainScene:
-    r = Reader(_RowSchema(DRIVETRAIN_SCHEMA), _RowSubtables(DRIVETRAIN_SUBTABLES))
+    r = Reader(_RowSchema(DRIVETRAIN_SCHEMA), _RowSchema(DRIVETRAIN_SUBTABLES))
     r.table(data, "")
     dt = r.table(sub(data, "drivetrain"), "drivetrain", required=True)
     motor = r.table(sub(data, "motor"), "motor", required=True)
@@ -480,7 +476,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     link_path = [p for p, _, _, _ in stage_scenes] + [p for p, _ in shafts]
     tree = drivetrain_tree(parts, links, "motor")
     for li, part, reason in tree.problems:
-        r.add(link_path[li] if li is not None else part_key(part, names), reason)
+        r.add(link_path[li] if li is not None else _part_key(part, names), reason)
     if not r.problems:
         path_edges = {tree.edges[e][0] for e in tree.path(tree.body_of["motor"], tree.body_of["load"])}
         for li, (kind, a, _) in enumerate(links):
@@ -538,7 +534,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
         notes=tuple(notes))
 
 
-def part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:
+def _part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:
     """The key path to name for a part (a stage's row, or the motor / load table)."""
     if part is None:
         return "shaft"
