@@ -6,6 +6,7 @@ ratios of the example reducer (71/19 x 55/17); a mesh order h z_p n_p meeting a 
 f/(h z_p g_p) (the definition of the Campbell diagram's interference); strain energy fractions
 summing to one.  Bad input: one line naming the key or option, exit status 2.
 """
+import dataclasses
 import json
 import math
 import shutil
@@ -14,8 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gearfmu import drivetrain
 from gearfmu.cli import main
 from gearfmu.pipeline import compute_tables, load
+from gearfmu.tables.estimate import BuildTooLargeError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "gearbox_two_stage.toml"
@@ -95,3 +98,20 @@ def test_bad_drivetrain_input_is_one_line_and_status_2(tmp_path, capsys):
     assert main(["simulate", str(EXAMPLE), "--stop-time", "0.00015", "--output-interval", "1e-4",
                  "-o", str(tmp_path / "y.csv")]) == 2
     assert "stop_time_s" in capsys.readouterr().err
+
+
+
+def test_every_stage_estimate_is_checked_before_any_table(monkeypatch):
+    """A stage over the size limits (gearfmu.tables.estimate) stops the work before the first
+    stage's tables are computed, naming the stage and the keys to change."""
+    kind, scene = drivetrain.load_any(EXAMPLE)
+    s2 = scene.stages[1]
+    huge = dataclasses.replace(s2.scene, tables=dataclasses.replace(s2.scene.tables, points_per_mesh=100000),
+                               mesh=dataclasses.replace(s2.scene.mesh, slices=1000))
+    scene = dataclasses.replace(scene, stages=(scene.stages[0], dataclasses.replace(s2, scene=huge)))
+    computed = []
+    monkeypatch.setattr(drivetrain, "compute_tables", lambda sc, **kw: computed.append(sc.name))
+    with pytest.raises(BuildTooLargeError, match=r"stage 'stage2' \(.*gearbox_stage2.toml\): "
+                                                 r"tables.points_per_mesh \(100000\)"):
+        drivetrain.stage_tables(scene)
+    assert computed == []
