@@ -40,6 +40,11 @@ Choices (written here and in docs/seed003.md)
   sweeps in :mod:`gearfmu.dynamics.sweeps` do.  No window is applied (a boxcar window is
   exact for whole periods).
 
+:func:`mesh_order_amplitudes` is the order-tracking companion the fidelity planner's error
+measure uses (docs/plan.md "Error measure"): peak amplitudes of mesh orders 1..k over the last
+whole mesh periods of a record, resampled uniformly in the rigid-body mesh angle when the speed
+varies.
+
 All functions are pure; inputs are numpy arrays in any unit (the amplitudes
 come out in the unit of the signal).
 """
