@@ -26,6 +26,7 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from .common.progress import progress_bar
+from .dynamics.harmonics import mesh_order_amplitudes
 
 __all__ = ["ERROR_DEFINITION", "MEASURES", "MEASURE_LABELS", "run_errors", "Probe", "Search", "budget_use",
            "limiting_measure", "target_of", "steady_phase", "drive_phase", "say", "ProgressBar", "DriveCase",
@@ -100,8 +101,6 @@ def run_errors(dte, force, dte_full, force_full, mesh_phase=None, window_from: i
     samples per mesh period at constant speed), all dimensionless; also ``dte_max_rel`` /
     ``mesh_force_max_rel`` (max|diff| / range of the full signal, reported).  Non-finite
     samples give inf."""
-    from .dynamics.harmonics import mesh_order_amplitudes
-
     out = {}
     arrs = {}
     for key, a, b in (("dte", dte, dte_full), ("mesh_force", force, force_full)):
