@@ -205,14 +205,13 @@ def c_layers(unzipdir, md, comm_s, n_steps, repeat, max_step_s, integrator_code,
     and fmi2GetReal alone, over the same trajectory (its header comment)."""
     import subprocess
 
-    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, layer_sources
-    from gearfmu.fmu.build_steps import KERNEL_SOURCE
+    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources
 
     unzipdir = Path(unzipdir).resolve()  # the resource URI is file://<absolute path>
     src = unzipdir / "sources"
     exe = Path(tmp) / "fmu_layers"
     flags = [f for f in STANDALONE_CFLAGS if f not in ("-fPIC", "-shared", "-fvisibility=hidden")]
-    files = [str(src / f) for f in (*layer_sources(2), Path(KERNEL_SOURCE).name)]
+    files = [str(src / f) for f in binary_sources(2)]
     subprocess.run(["cc", *flags, f"-I{src}", "-o", str(exe), str(Path(__file__).with_name("fmu_layers.c")),
                     *files, "-lm"], check=True, capture_output=True)
     vr = {v.name: v.valueReference for v in md.modelVariables}

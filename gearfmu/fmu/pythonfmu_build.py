@@ -1,9 +1,9 @@
 """Build an FMI 2.0 Co-Simulation FMU from tooth-pair tables.
 
 The FMU is a pythonfmu FMU whose Python slave (``gearfmu/fmu/runtime/gearfmu_slave.py``,
-a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/gearkernel.c``
-(docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``: input checks,
-steps, messages), compiled here with the system C compiler and shipped in the
+a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/`` (``gearkernel.c`` and
+the files beside it, docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``:
+input checks, steps, messages), compiled here with the system C compiler and shipped in the
 FMU's ``resources/`` together with its sources.  The model description is
 produced from ``modeldescription/variables.toml`` (:mod:`gearfmu.fmu.modeldesc`),
 checked against what the slave registers, and replaces pythonfmu's.
@@ -17,7 +17,8 @@ FMU layout (docs/fmu.md)::
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearkernel.so              the compiled kernel with the FMU layer (gkfmu.c) over it
-    resources/kernel_src/                gearkernel.c|h, gkfmu.c|h and the compile command
+    resources/kernel_src/                the kernel's sources (gearkernel.c|h, gk_*.c|h, gkfmu.c|h) and
+                                         the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
     resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
     resources/pyshim_src/                the loader's source and its compile command
@@ -45,7 +46,8 @@ from .. import __version__
 from ..common.cache import cache_dir
 from ..common.vocabulary import DEFAULT_INTEGRATOR
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
-                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
+                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
+                          KERNEL_LIBRARY_SOURCES, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
                           check_build_arguments, check_output_arguments, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
@@ -71,26 +73,29 @@ def _kernel_filename() -> str:
 
 def _kernel_key(cc: str) -> Optional[str]:
     """SHA-256 of everything the kernel compilation reads: the compiler file (resolved path, size,
-    modification time), :data:`CFLAGS`, the library's name and the bytes of every C source and
-    header of the kernel folder; None when the compiler is not a file (then nothing is kept)."""
+    modification time), :data:`CFLAGS`, the library's name, the C files it compiles (in order) and
+    the bytes of every C source and header of the kernel folder; None when the compiler is not a
+    file (then nothing is kept)."""
     p = Path(shutil.which(cc) or cc)
     if not p.is_file():
         return None
     st = p.stat()
     h = hashlib.sha256()
-    for part in (str(p.resolve()), str(st.st_size), str(st.st_mtime_ns), " ".join(CFLAGS), _kernel_filename()):
+    for part in (str(p.resolve()), str(st.st_size), str(st.st_mtime_ns), " ".join(CFLAGS), _kernel_filename(),
+                 " ".join(f.name for f in KERNEL_LIBRARY_SOURCES)):
         h.update(part.encode() + b"\0")
-    folder = Path(KERNEL_SOURCE).parent
-    for f in sorted({*folder.glob("*.c"), *folder.glob("*.h"), Path(KERNEL_SOURCE), Path(FMU_LAYER_SOURCE)}):
+    for f in sorted({*KERNEL_DIR.glob("*.c"), *KERNEL_DIR.glob("*.h"), *KERNEL_LIBRARY_SOURCES,
+                     *KERNEL_LIBRARY_HEADERS}):
         h.update(f.name.encode() + b"\0" + f.read_bytes())
     return h.hexdigest()
 
 
 def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
-    """Compile gearkernel.c and the FMU layer over it (gkfmu.c) into a shared library in ``dest_dir``;
-    return its path.
+    """Compile the kernel (:data:`~gearfmu.fmu.build_steps.KERNEL_SOURCES`) and the FMU layer over it
+    (gkfmu.c) into a shared library in ``dest_dir``; return its path.
 
-    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gkfmu.c -lm``.
+    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gk_model.c ...
+    gkfmu.c -lm``.
     The library is kept in gearfmu's file cache (:func:`gearfmu.common.cache.cache_dir`, folder
     ``kernels``) under :func:`_kernel_key`; a later build with the same compiler, flags and
     sources copies it instead of compiling again (the compiler gives the same bytes for the same
@@ -105,7 +110,7 @@ def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     if kept is not None and kept.is_file():
         shutil.copy2(kept, lib)
         return lib
-    run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), str(FMU_LAYER_SOURCE), "-lm"], "kernel")
+    run_compiler([cc, *CFLAGS, "-o", str(lib), *(str(f) for f in KERNEL_LIBRARY_SOURCES), "-lm"], "kernel")
     if kept is not None:
         try:  # atomic publish: a concurrent build sees either no file or the whole library
             kept.parent.mkdir(parents=True, exist_ok=True)
@@ -172,10 +177,11 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         lib = compile_kernel(stage, cc=cc)
         src_dir = stage / "kernel_src"
         src_dir.mkdir()
-        for f in (KERNEL_SOURCE, KERNEL_HEADER, FMU_LAYER_SOURCE, FMU_LAYER_HEADER):
+        for f in (*KERNEL_LIBRARY_SOURCES, *KERNEL_LIBRARY_HEADERS):
             shutil.copy2(f, src_dir / f.name)
         (src_dir / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c gkfmu.c -lm\n", encoding="utf-8")
+            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} {' '.join(f.name for f in KERNEL_LIBRARY_SOURCES)} -lm\n",
+            encoding="utf-8")
         sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
@@ -208,7 +214,9 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
             "tables_provenance": tables.provenance,
             "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": compiler_version(cc),
-                       "flags": list(CFLAGS), "source_sha256": sha256_file(KERNEL_SOURCE)},
+                       "flags": list(CFLAGS),
+                       "sources_sha256": {f.name: sha256_file(f) for f in (*KERNEL_LIBRARY_SOURCES,
+                                                                           *KERNEL_LIBRARY_HEADERS)}},
             "scene_sha256": scene_sha256(scene_text),
             "python": sys.version.split()[0], "platform": platform.platform(),
             "spec": str(Path(spec.path).name),

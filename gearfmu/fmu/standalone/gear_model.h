@@ -14,6 +14,7 @@
 #include "gf_model.h"
 #include "gkfmu.h"
 
+/* what the gear model keeps (gf_model.h gm_data) */
 struct gm_data {
     unsigned char *blob;  /* tables.bin */
     double *arr_torque, *arr_k, *arr_e, *arr_b, *arr_temp;
@@ -29,4 +30,5 @@ struct gm_data {
     gkf_fmu *fmu;         /* the checks, steps and messages both runtimes share (gkfmu.h) */
     int slot_vr[GKF_N];   /* value reference of each GKF_* slot, -1 if none */
 };
+
 #endif /* GEAR_MODEL_H */
