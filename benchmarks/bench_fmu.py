@@ -301,6 +301,7 @@ def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target,
     from gearfmu.dynamics.native import simulate
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.fmu.pythonfmu_build import compile_kernel
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
     sys.path.insert(0, str(Path(__file__).parent))
     from bench_integrators import c_runner
 
@@ -337,13 +338,7 @@ def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target,
             walls.append(_fmu_loop(path, unz, md, sim_s, comm_s, {"pinion_torque": T1, "gear_torque": T2},
                                    record=rec)[1])
         shutil.rmtree(unz, ignore_errors=True)
-        import ctypes
-        lib = ctypes.CDLL(str(compile_kernel(tmp)))
-        d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-        lib.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-        lib.gk_set_damping.argtypes = [p, d, i]
-        lib.gk_set_integrator.argtypes = [p, i]
-        lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+        lib = load_kernel(compile_kernel(tmp))
         code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
         dm = {"elastobacklash": 0, "contact_zone": 1}[damping_model]
         nsteps = int(round(sim_s / comm_s))

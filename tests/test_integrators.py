@@ -16,7 +16,6 @@ References (none produced by gearfmu code):
 * the C kernel (gearfmu/fmu/kernel/gearkernel.c) through ctypes, a second,
   independent implementation of docs/model.md.
 """
-import ctypes
 import dataclasses
 import math
 
@@ -25,6 +24,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gearfmu.fmu.pythonfmu_build import FmuBuildError, build_fmu, compile_kernel
+from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.common.vocabulary import DEFAULT_INTEGRATOR, INTEGRATORS
 from gearfmu.dynamics.native import NativeInputError, choose_max_step_s, simulate, simulate_sdof
 from gearfmu.tables.synthetic import rectangular_wave_tables
@@ -281,13 +281,7 @@ def test_sdof_rk4_kink_fourth_order_vs_reference():
 # ------------------------------------------------------------ C kernel
 @pytest.fixture(scope="module")
 def clib(tmp_path_factory):
-    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("kernel"))))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_set_integrator.argtypes = [p, i]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("kernel")))
 
 
 def run_c(L, tb, T1, T2, w0, zeta, model, x0, H, n, hmax, integrator):

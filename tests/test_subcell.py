@@ -204,20 +204,10 @@ def test_engagement_checks():
 # ---------------------------------------------------------------- the C kernel, bit for bit
 @pytest.fixture(scope="module")
 def clib(tmp_path_factory):
-    import ctypes
-
     from gearfmu.fmu.pythonfmu_build import compile_kernel
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
 
-    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("kernel"))))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_set_integrator.argtypes = [p, i]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    L.gk_initialize.argtypes = [p, p, d, d, d]
-    L.gk_zone_cuts.argtypes = [i, i, d, d, d, d, p]
-    L.gk_set_zone_cuts.argtypes = [p, p]
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("kernel")))
 
 
 def _c_cuts(L, t):

@@ -12,7 +12,8 @@ standalone_build    build_standalone_fmu: FMI 2.0 or 3.0 in C, no Python
 crossbuild          standalone binaries for every desktop platform (zig cc)
 validation          the validation record every FMU carries
 compare             FMU against the native solver (fmpy)
-runtime/            gearfmu_slave.py (slave template), pyshim.c (C loader)
+runtime/            gearfmu_slave.py (slave template), kernel_api.py (the kernel's C functions,
+                    declared once), pyshim.c (C loader)
 kernel/             the C kernel of both runtimes: gearkernel.h (contract), gearkernel.c (hot
                     path), gk_lookup.h, gk_model.c, gk_stops.c, gk_zones.c, gk_temperature.c,
                     gk_envelope.c; gkfmu.c/.h (the FMU behaviour both runtimes share)

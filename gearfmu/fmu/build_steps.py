@@ -29,6 +29,7 @@ from typing import Optional
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
 from ..scene.reader import default_output_interval_s
 from ..tables.mesh_tables import MeshTables
+from .runtime.kernel_api import FMU_LAYER_ABI_VERSION, KERNEL_ABI_VERSION  # noqa: F401 (the table's versions)
 from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
                         features_of, model_description_xml, model_description_xml3)
 
@@ -47,11 +48,8 @@ FMU_LAYER_HEADER = KERNEL_DIR / "gkfmu.h"
 #: the C files of the library both runtimes build from kernel/: the kernel and the FMU layer over it
 KERNEL_LIBRARY_SOURCES = (*KERNEL_SOURCES, FMU_LAYER_SOURCE)
 KERNEL_LIBRARY_HEADERS = (*KERNEL_HEADERS, FMU_LAYER_HEADER)
-FMU_LAYER_ABI_VERSION = 1  # gkfmu.h GKF_ABI_VERSION
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 5  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check, 4: node kink flags,
-#                          5: contact-zone cuts from the tables' engagement angles)
 #: gearkernel.h GK_KINK_MAX_SLOTS
 KINK_MAX_SLOTS = 32
 #: the FMI 2.0 standard headers the C layers are compiled against

@@ -4,7 +4,8 @@ The FMU is a pythonfmu FMU whose Python slave (``gearfmu/fmu/runtime/gearfmu_sla
 a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/`` (``gearkernel.c`` and
 the files beside it, docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``:
 input checks, steps, messages), compiled here with the system C compiler and shipped in the
-FMU's ``resources/`` together with its sources.  The model description is
+FMU's ``resources/`` together with its sources; the slave binds the library's functions with
+the declarative table ``gearfmu/fmu/runtime/kernel_api.py``, shipped beside it.  The model description is
 produced from ``modeldescription/variables.toml`` (:mod:`gearfmu.fmu.modeldesc`),
 checked against what the slave registers, and replaces pythonfmu's.
 
@@ -14,6 +15,7 @@ FMU layout (docs/fmu.md)::
     binaries/linux64/<id>.so             the loader (gearfmu/fmu/runtime/pyshim.c) in front of
     binaries/linux64/<id>.pythonfmu.so   pythonfmu's FMI wrapper
     resources/<id>.py                    the slave (unique module and class name)
+    resources/<id>_kernel_api.py         the kernel's function table (runtime/kernel_api.py)
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearkernel.so              the compiled kernel with the FMU layer (gkfmu.c) over it
@@ -59,6 +61,10 @@ from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, 
 
 HERE = Path(__file__).resolve().parent
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
+#: the kernel's function table the slave imports, and the name its template imports it by inside
+#: the FMU (replaced by ``<identifier>_kernel_api``: modules of FMUs in one process must differ)
+KERNEL_API = HERE / "runtime" / "kernel_api.py"
+TEMPLATE_KERNEL_API = "gearfmu_kernel_api"
 PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
 #: the loader's compile flags (docs/fmu.md "The binary"); it links no Python
@@ -122,10 +128,15 @@ def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     return lib
 
 
-def _replace_class_name(template: str, class_name: str) -> str:
+def _slave_text(template: str, class_name: str, kernel_api: str) -> str:
+    """The slave of one FMU: the template with its class named ``class_name`` and the kernel's
+    function table imported as the module ``kernel_api`` (the FMU's copy of kernel_api.py)."""
     text, n = re.subn(rf"\b{TEMPLATE_CLASS}\b", class_name, template)
     if n == 0 or f"class {class_name}(Fmi2Slave):" not in text:
         raise FmuBuildError(f"{SLAVE_TEMPLATE}: template lacks 'class {TEMPLATE_CLASS}(Fmi2Slave):'")
+    text, n = re.subn(rf"\b{TEMPLATE_KERNEL_API}\b", kernel_api, text)
+    if n == 0:
+        raise FmuBuildError(f"{SLAVE_TEMPLATE}: template lacks the import of {TEMPLATE_KERNEL_API}")
     return text
 
 
@@ -227,11 +238,13 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         script_dir = tmp / "script"
         script_dir.mkdir()
         script = script_dir / f"{identifier}.py"
-        script.write_text(_replace_class_name(SLAVE_TEMPLATE.read_text(encoding="utf-8"), class_name),
+        api = script_dir / f"{identifier}_kernel_api.py"
+        script.write_text(_slave_text(SLAVE_TEMPLATE.read_text(encoding="utf-8"), class_name, api.stem),
                           encoding="utf-8")
+        shutil.copy2(KERNEL_API, api)
         raw_fmu = tmp / "raw" / f"{identifier}.fmu"
         raw_fmu.parent.mkdir()
-        _pythonfmu_build(script, raw_fmu, [*files, src_dir, shim_src])
+        _pythonfmu_build(script, raw_fmu, [*files, api, src_dir, shim_src])
 
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
