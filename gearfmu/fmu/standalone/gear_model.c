@@ -1,5 +1,5 @@
 /*
- * gear_model.c -- the gear glue of the standalone gearfmu runtime, one
+ * gear_model.c -- the gear model of the standalone gearfmu runtime, one
  * definition for its FMI 2.0 layer (fmi2_gear.c) and its FMI 3.0 layer
  * (fmi3_gear.c): the model side of the contract gf_model.h (which says how the plumbing
  * fmi_common.c and this file split the work).  It calls nothing of the plumbing; its
