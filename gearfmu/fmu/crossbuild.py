@@ -244,10 +244,11 @@ def folder(key: str, fmi_version: int = 2) -> str:
 
 
 def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
-                   cflags: Sequence[str], layer_source, kernel_source: str,
+                   cflags: Sequence[str], sources: Sequence[str],
                    host_compile=None, host_cc_first: bool = False, fmi_version: int = 2) -> Dict[str, dict]:
     """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``
-    (:func:`folder`; ``layer_source``: one C file or a sequence of them, compiled before the kernel).
+    (:func:`folder`; ``sources``: the names of the binary's C files in ``sources_dir``, in compile
+    order).
 
     Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
     platform and ``{key: {"missing": reason}}`` for each that could not be built
@@ -256,8 +257,7 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     (the caller named its own C compiler)."""
     zig = zig_command()
     src = Path(sources_dir)
-    layer = [layer_source] if isinstance(layer_source, str) else list(layer_source)
-    sources = [*(src / n for n in layer), src / kernel_source]
+    sources = [src / n for n in sources]
     fat_mac = fmi_version != 3
     report: Dict[str, dict] = {}
     hk = host_key()
