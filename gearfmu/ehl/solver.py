@@ -252,7 +252,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     earlier, at its estimated discretisation error (below).
     With roughness the smooth solution is computed first and then continued
     through the amplitude steps ``roughness_ramp`` (last must be 1; default
-    (1.0,): one step -- finer ramps did not help in the cases tried).
+    (1.0,): one step; a rough film that does not converge in one step is
+    solved again in the steps :data:`.iterate.ROUGH_NEWTON_RAMP`, see ``newton_after_cycles``).
     ``viscosity``: "roelands" (seed 000 eq 5, default) or "barus"
     (exp(alpha p), the law behind Moes' fit; used by the validation tests).  Film collapse (h <= 0): :class:`FilmCollapseError`.
 
