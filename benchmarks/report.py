@@ -76,6 +76,10 @@ SOURCES = {
     "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
     "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "10"], None,
                     "benchmarks/bench_ehl_corners.py --repeats 10"),
+    "ehl_rough": ([PY, "benchmarks/bench_ehl_rough.py"], None, "benchmarks/bench_ehl_rough.py"),
+    "ehl_rough_tables": ([PY, "benchmarks/bench_ehl_tables.py", "--levels", "1", "2", "3", "--models", "hertz",
+                          "smooth_ehl"], None,
+                         "benchmarks/bench_ehl_tables.py --levels 1 2 3 --models hertz smooth_ehl"),
     "seed003_statements": ([PY, "examples/seed003_figures.py", "--quick", "--json", "--out", "{tmp}"], None,
                            "examples/seed003_figures.py --quick --json"),
     "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
@@ -98,7 +102,8 @@ SOURCES = {
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan_study", "plan_scan", "tests"}
+SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_rough_tables", "integrators", "startup", "plan_study", "plan_scan",
+        "tests"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -578,6 +583,16 @@ def sec_ehl(pg: Page):
     pg.summary.append(["smooth EHL central film (Barus, finest grid)", "Moes (1992) fit",
                        ", ".join(f"M={m:g}, L={l:g}: {pct(d)} ({n} intervals)" for (m, l), (n, d) in finest.items()),
                        pg.cost("ehl")])
+
+
+def sec_ehl_rough(pg: Page):
+    if "ehl_rough" not in pg.data and "ehl_rough_tables" not in pg.data:
+        pg.missing("ehl_rough", "Rough EHL films")
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_ehl_rough import render as render_rough  # the section's own module (report.py's size)
+
+    render_rough(pg, table, SOURCES["ehl_rough"][2])
 
 
 def sec_trends(pg: Page):
@@ -1190,7 +1205,7 @@ def sec_goals(pg: Page):
         + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs) + ".\n")
 
 
-SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
+SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_rough", "sec_load_sharing", "sec_fractal", "sec_trends",
             "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_goals")
 
 
