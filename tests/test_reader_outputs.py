@@ -168,6 +168,22 @@ def test_plan_report_columns_never_run_together():
     assert head.index("status") > row.index("fractal_mixed", row.index("fractal_mixed") + 1)
 
 
+def test_plan_fmu_report_says_what_each_fmu_is():
+    """`gearfmu plan --fmu`: the report names the runtime, FMI version and platforms of both FMUs."""
+    from gearfmu.plan import format_report
+
+    line = "runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64"
+    fmus = {w: {"fmu_path": f"/x/{w}.fmu", "fmu_bytes": 10, "table_build_s": 1.0, "fmu_build_s": 1.0,
+                "contents": line} for w in ("full", "chosen")}
+    case = {"note": "steady", "dte_rel": 1e-3, "mesh_force_rel": 1e-3, "within_target": True,
+            "temperature_input": {"full": None, "chosen": None}, "cpu_per_sim_s": {"full": 1.0, "chosen": 0.5},
+            "cpu_gain_full_over_chosen": 2.0}
+    d = dict(_plan_dict(), fmu_verification={"fmus": fmus, "cases": {"steady": case}, "within_target": True})
+    text = format_report(types.SimpleNamespace(to_dict=lambda: d))
+    assert f"  full FMU /x/full.fmu: {line}" in text.splitlines()
+    assert f"  chosen FMU /x/chosen.fmu: {line}" in text.splitlines()
+
+
 # --------------------------------------------------------------- bench accuracy
 def test_bench_accuracy_says_its_errors_are_relative_and_to_what():
     from gearfmu.bench import accuracy_table
