@@ -50,7 +50,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -272,56 +272,37 @@ def _probe_link(zig: Sequence[str], key: str, cflags: Sequence[str]) -> None:
                                   + (f": {lines[-1]}" if lines else "") + ")")
 
 
-def prepare_targets(zig: Sequence[str], keys: Sequence[str], cflags: Sequence[str], *, log=None,
-                    workers: int = 1) -> Dict[str, str]:
+def prepare_targets(zig: Sequence[str], keys: Sequence[str], cflags: Sequence[str], *, log=None) -> Dict[str, str]:
     """Have zig build the C runtime of every target in ``keys`` that it has not built yet (once
-    per zig version and cache), each announced on ``log`` (default: stderr) with its rough
-    duration and reported when done; a target still preparing is reported every
-    :data:`PREPARE_HEARTBEAT_S` s.  One target at a time by default (``workers``; zig builds a
-    runtime on all cores), so that each announced duration holds.  Returns ``{key: reason}``
+    per zig version and cache), one target at a time (zig builds a runtime on all cores), each
+    announced on ``log`` (default: stderr) with its rough duration, reported every
+    :data:`PREPARE_HEARTBEAT_S` s while it runs and when it is ready.  Returns ``{key: reason}``
     for the targets zig cannot link for (they cannot be built; the rest can)."""
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
     stamps = {k: _prepared_stamp(zig, k, cflags) for k in keys}
     todo = [k for k in keys if stamps[k] is None or not stamps[k].is_file()]
-    if not todo:
-        return {}
-    todo.sort(key=lambda k: k in PREPARE_ESTIMATE)  # the quick ones first, each announced as it starts
+    todo.sort(key=lambda k: k in PREPARE_ESTIMATE)  # the quick ones first
     failed: Dict[str, str] = {}
-    started: Dict[str, float] = {}
-
-    def one(key: str) -> None:
-        started[key] = time.perf_counter()
-        log(f"gearfmu: preparing zig's {key} C runtime (one time per zig version, "
-            f"{PREPARE_ESTIMATE.get(key, PREPARE_ESTIMATE_DEFAULT)}) ...")
-        _probe_link(zig, key, cflags)
-
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        jobs = {pool.submit(one, k): k for k in todo}
-        pending = set(jobs)
-        while pending:
-            done, pending = wait(pending, timeout=PREPARE_HEARTBEAT_S, return_when=FIRST_COMPLETED)
-            now = time.perf_counter()
-            for job in done:
-                key = jobs[job]
-                took = now - started.get(key, now)
-                try:
-                    job.result()
-                except CrossBuildError as exc:
-                    failed[key] = str(exc)
-                    log(f"gearfmu: {key}: {exc}; the FMU will not carry {key}")
-                    continue
-                log(f"gearfmu: zig's {key} C runtime ready ({took:.0f} s)")
-                stamp = stamps[key]
-                if stamp is not None:
-                    try:
-                        stamp.parent.mkdir(parents=True, exist_ok=True)
-                        stamp.write_text(f"{zig_version(zig)} {TARGETS[key].zig} {' '.join(cflags)}\n")
-                    except OSError:
-                        pass  # an unwritable cache only repeats the (then quick) check next time
-            if not done:
-                busy = [f"{jobs[j]} ({now - started[jobs[j]]:.0f} s)" for j in pending if jobs[j] in started]
-                if busy:
-                    log("gearfmu: still preparing " + ", ".join(busy) + " ...")
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        for key in todo:
+            log(f"gearfmu: preparing zig's {key} C runtime (one time per zig version, "
+                f"{PREPARE_ESTIMATE.get(key, PREPARE_ESTIMATE_DEFAULT)}) ...")
+            t0 = time.perf_counter()
+            job = pool.submit(_probe_link, zig, key, cflags)
+            while not wait([job], timeout=PREPARE_HEARTBEAT_S).done:
+                log(f"gearfmu: still preparing zig's {key} C runtime ({time.perf_counter() - t0:.0f} s) ...")
+            try:
+                job.result()
+            except CrossBuildError as exc:
+                failed[key] = str(exc)
+                log(f"gearfmu: {key}: {exc}; the FMU will not carry {key}")
+                continue
+            log(f"gearfmu: zig's {key} C runtime ready ({time.perf_counter() - t0:.0f} s)")
+            try:
+                stamps[key].parent.mkdir(parents=True, exist_ok=True)
+                stamps[key].write_text(f"{zig_version(zig)} {TARGETS[key].zig} {' '.join(cflags)}\n")
+            except (OSError, AttributeError):
+                pass  # no or an unwritable zig cache: the next build checks again (quickly, zig has it)
     return failed
 
 
