@@ -48,6 +48,13 @@ def output_names(slots: int) -> List[str]:
     return names
 
 
+def output_units(slots: int) -> Dict[str, str]:
+    """The unit of every output of :func:`output_names` (the FMU's, from
+    modeldescription/variables.toml; "1" for a dimensionless one)."""
+    units = {v.name: v.unit or "1" for v in expand_variables(load_spec(), slots)}
+    return {n: units[n] for n in output_names(slots)}
+
+
 def native_columns(result, slots: int) -> Dict[str, np.ndarray]:
     """Native SimResult arrays keyed by FMU output names."""
     cols = {n: np.asarray(getattr(result, n)) for n in SCALAR_OUTPUTS}

@@ -120,8 +120,12 @@ class _ContactIteration:
         width = self.width if self.helical is None else self.width * self.helical.frac[idx]
         ls = iterate_load_sharing(slice_loads_N(self.k_hertz, self.e, self.E, F), self.e, self.E, F, idx, width,
                                   floor, solve, mesh_stiffness, what=f"{self.model.name} at torque {torque_Nm:g} N m")
+        by_status = {}
+        for f in failures.values():
+            by_status[f["status"]] = by_status.get(f["status"], 0) + 1
         self.records.append(dict(torque_Nm=float(torque_Nm), passes=ls.passes, load_change=ls.load_change,
-                                 failures=len(failures), failure_list=list(failures.values())))
+                                 failures=len(failures), failures_by_status=dict(sorted(by_status.items())),
+                                 failure_list=list(failures.values())))
         return ls.k_slice_N_per_m
 
 
