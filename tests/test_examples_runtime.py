@@ -20,8 +20,7 @@ import pytest
 
 from gearfmu.cli import main
 from gearfmu.fmu import crossbuild
-from gearfmu.fmu.standalone_build import (KERNEL_SOURCE, LAYER_SOURCES, STANDALONE_CFLAGS, build_standalone_fmu,
-                                          copy_sources)
+from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources, build_standalone_fmu, copy_sources
 from gearfmu.scene.reader import default_scene_path, load_scene
 
 from test_fmu import make_tables
@@ -175,8 +174,7 @@ def test_a_target_zig_cannot_link_is_left_out_with_the_reason(fresh_zig_cache, m
     said = []
     src = copy_sources(tmp_path / "src")
     rep = crossbuild.build_binaries(["x86_64-linux", "x86_64-windows"], src, tmp_path / "bin", "g",
-                                    cflags=STANDALONE_CFLAGS, layer_source=LAYER_SOURCES,
-                                    kernel_source=KERNEL_SOURCE.name, log=said.append)
+                                    cflags=STANDALONE_CFLAGS, sources=binary_sources(), log=said.append)
     assert "missing" not in rep["x86_64-linux"] and (tmp_path / "bin" / "linux64" / "g.so").is_file()
     assert rep["x86_64-windows"] == {"missing": "zig cannot link for x86_64-windows-gnu (exit status 1: no MinGW)"}
     assert any("x86_64-windows: zig cannot link" in s for s in said), said

@@ -143,12 +143,16 @@ def test_flagged_points_are_explained_where_they_are_printed():
 
 # ---------------------------------------------------------------- plan report
 def _plan_dict():
-    contrib = {"tvms_rel": 0.0, "dte_rel": 0.0, "mesh_force_rel": 0.0}
-    return {"scene": "fr", "target": {"dte_rel": 0.02, "mesh_force_rel": 0.02, "safety_factor": 1.0},
+    from gearfmu.plan_verify import MEASURES
+
+    contrib = {"tvms_rel": 0.0, **{k: 0.0 for k in MEASURES}, "budget_use": 0.0, "limit": "dte_rel"}
+    return {"scene": "fr", "target": {"dte_rel": 0.02, "mesh_force_rel": 0.02, "safety_factor": 1.0,
+                                      "measures": {k: 0.02 for k in MEASURES}},
             "envelope": {"torque_range_Nm": [600.0, 1200.0], "speed_range_rpm": [1000.0, 1000.0],
                          "temperature_range_C": None},
             "verification": {"points": 1, "probes": 1, "native_runs": 1, "budget_runs": 80, "attempts": [],
-                             "worst": "steady", "dte_rel": 1e-3, "mesh_force_rel": 1e-3},
+                             "worst": "steady", "dte_rel": 1e-3, "mesh_force_rel": 1e-3, "u": 0.05, "limit": "dte_rel",
+                             "worst_by_measure": {}},
             "choices": [{"choice": "contact_model", "full": "fractal_mixed", "chosen": "fractal_mixed",
                          "status": "pinned", "contribution": contrib},
                         {"choice": "points_per_mesh", "full": 32, "chosen": 32, "status": "kept",
