@@ -15,17 +15,20 @@
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
-bad input (an invalid scene, a missing or unusable file, a bad option value,
-an output path that cannot be written).
+bad input (an invalid scene, a missing, damaged or wrong kind of file, a bad
+option value, an output path that cannot be written).  GEARFMU_DEBUG=1 adds
+the traceback behind that line.
 """
 from __future__ import annotations
 
 import argparse
 import io
 import json
+import os
 import sys
 import tempfile
 import time
+import traceback
 from pathlib import Path
 import contextlib
 
@@ -80,12 +83,39 @@ def _output_file(path, what: str) -> Path:
     return p
 
 
+def _debug() -> bool:
+    """GEARFMU_DEBUG set (and not 0): show the traceback behind a one-line error."""
+    return os.environ.get("GEARFMU_DEBUG", "") not in ("", "0")
+
+
+@contextlib.contextmanager
+def _reading(what: str, path):
+    """Around the reading of a file the user handed over (``what``: the argument).  The readers
+    name the file and the reason; this makes sure of it: a ValueError or OSError whose message
+    does not name the file gets ``what`` and the file in front, and an exception no reader
+    foresaw becomes one line naming the file with a hint (GEARFMU_DEBUG=1: the traceback)."""
+    try:
+        yield
+    except CliError:
+        raise
+    except (ValueError, OSError) as exc:
+        text = _one_line(exc)
+        if path is None or Path(path).name in text:
+            raise
+        raise CliError(f"{what} {path}: {text}") from exc
+    except Exception as exc:  # noqa: BLE001 - last resort for a file a reader did not foresee
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise CliError(f"{what} {path}: cannot be read ({type(exc).__name__}{': ' + first if first else ''}); "
+                       "is it the right kind of file, and intact? (GEARFMU_DEBUG=1 shows where it failed)") from exc
+
+
 def _scene(path):
-    if path is not None:
-        p = _input_file(path, "SCENE")
-        if not p.read_bytes().strip():
-            raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
-    return load(path)
+    with _reading("SCENE", path):
+        if path is not None:
+            p = _input_file(path, "SCENE")
+            if not p.read_bytes().strip():
+                raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
+        return load(path)
 
 
 def _positive(name):
@@ -116,7 +146,8 @@ def _tolerance(text):
 def _fmu(path):
     """The FMU of ``--fmu``, opened (CliError naming the file and what is wrong otherwise)."""
     try:
-        return open_fmu(path)
+        with _reading("--fmu", path):
+            return open_fmu(path)
     except FmuMismatchError as exc:
         raise CliError(f"--fmu: {exc}") from None
 
@@ -126,8 +157,9 @@ def cmd_build(args) -> int:
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
     if args.tables:  # imported tables instead of the scene's physics
-
-        tables = load_tables_file(*_tables_args(args.tables, args.tables_meta))
+        paths = _tables_args(args.tables, args.tables_meta)
+        with _reading("--tables", paths[0]):
+            tables = load_tables_file(*paths)
     platforms = None
     if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
@@ -505,6 +537,8 @@ def main(argv=None) -> int:
         with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
+        if _debug():
+            traceback.print_exc()
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)
         return 2
 
