@@ -205,14 +205,13 @@ def c_layers(unzipdir, md, comm_s, n_steps, repeat, max_step_s, integrator_code,
     and fmi2GetReal alone, over the same trajectory (its header comment)."""
     import subprocess
 
-    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, layer_sources
-    from gearfmu.fmu.build_steps import KERNEL_SOURCE
+    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources
 
     unzipdir = Path(unzipdir).resolve()  # the resource URI is file://<absolute path>
     src = unzipdir / "sources"
     exe = Path(tmp) / "fmu_layers"
     flags = [f for f in STANDALONE_CFLAGS if f not in ("-fPIC", "-shared", "-fvisibility=hidden")]
-    files = [str(src / f) for f in (*layer_sources(2), Path(KERNEL_SOURCE).name)]
+    files = [str(src / f) for f in binary_sources(2)]
     subprocess.run(["cc", *flags, f"-I{src}", "-o", str(exe), str(Path(__file__).with_name("fmu_layers.c")),
                     *files, "-lm"], check=True, capture_output=True)
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -302,6 +301,7 @@ def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target,
     from gearfmu.dynamics.native import simulate
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.fmu.pythonfmu_build import compile_kernel
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
     sys.path.insert(0, str(Path(__file__).parent))
     from bench_integrators import c_runner
 
@@ -338,13 +338,7 @@ def rtf_at_error(tables, *, T1, T2, w0, zeta, damping_model, integrator, target,
             walls.append(_fmu_loop(path, unz, md, sim_s, comm_s, {"pinion_torque": T1, "gear_torque": T2},
                                    record=rec)[1])
         shutil.rmtree(unz, ignore_errors=True)
-        import ctypes
-        lib = ctypes.CDLL(str(compile_kernel(tmp)))
-        d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-        lib.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-        lib.gk_set_damping.argtypes = [p, d, i]
-        lib.gk_set_integrator.argtypes = [p, i]
-        lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+        lib = load_kernel(compile_kernel(tmp))
         code = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2}[integrator]
         dm = {"elastobacklash": 0, "contact_zone": 1}[damping_model]
         nsteps = int(round(sim_s / comm_s))

@@ -32,7 +32,6 @@ rows of one integrator).
 Usage: python benchmarks/bench_integrators.py [--repeat 3] [--fronts-only]
 """
 import argparse
-import ctypes
 import json
 import math
 import shutil
@@ -44,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from gearfmu.fmu.pythonfmu_build import compile_kernel
+from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.bench import _kb, _kw, hard_case, rel_errors, tent_error
 from gearfmu.common.vocabulary import INTEGRATORS
 from gearfmu.dynamics.native import simulate
@@ -195,12 +195,7 @@ def main():
     ap.add_argument("--fronts-only", action="store_true", help="the fronts and fmu_rtf only")
     args = ap.parse_args()
     if args.fronts_only:
-        lib = ctypes.CDLL(str(compile_kernel(tempfile.mkdtemp(prefix="bench_gk_"))))
-        d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-        lib.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-        lib.gk_set_damping.argtypes = [p, d, i]
-        lib.gk_set_integrator.argtypes = [p, i]
-        lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+        lib = load_kernel(compile_kernel(tempfile.mkdtemp(prefix="bench_gk_")))
         fronts = [case_front(name, args.repeat) for name in FRONT_CASES]
         print(json.dumps({"fronts": fronts, "fmu_rtf": fmu_rtf(fronts[0], args.repeat, lib)}, indent=1))
         return
@@ -241,12 +236,7 @@ def main():
                                 for b in rows)
     # numba vs C per step (same loop of 32 communication steps, h = H/256)
     lib_dir = tempfile.mkdtemp(prefix="bench_gk_")
-    lib = ctypes.CDLL(str(compile_kernel(lib_dir)))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    lib.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    lib.gk_set_damping.argtypes = [p, d, i]
-    lib.gk_set_integrator.argtypes = [p, i]
-    lib.gk_do_step.argtypes = [p, p, d, d, d, d, p]
+    lib = load_kernel(compile_kernel(lib_dir))
     per_step = []
     for integ, code in (("rk4", 0), ("rk4_kink", 1), ("rk4_node", 2)):
         div = 256

@@ -38,7 +38,6 @@ steps minus that for one step (process start).  ``--clock wall``: wall time
         [--integrators rk4,rk4_kink] [--proxy PATH] [--clock cpu|wall]
 """
 import argparse
-import ctypes
 import hashlib
 import json
 import math
@@ -56,20 +55,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 def _c_kernel(tmp):
     from gearfmu.fmu.pythonfmu_build import compile_kernel
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
 
-    lib = ctypes.CDLL(str(compile_kernel(tmp)))
-    c_int, c_double, c_void_p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
-    lib.gk_sizeof_model.restype = c_int
-    lib.gk_sizeof_state.restype = c_int
-    lib.gk_n_outputs.argtypes, lib.gk_n_outputs.restype = [c_int], c_int
-    lib.gk_init.argtypes = [c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6
-    lib.gk_set_damping.argtypes = [c_void_p, c_double, c_int]
-    lib.gk_set_integrator.argtypes = [c_void_p, c_int]
-    lib.gk_initialize.argtypes = [c_void_p, c_void_p, c_double, c_double, c_double]
-    lib.gk_do_step.argtypes = [c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p]
-    for f in ("gk_init", "gk_set_damping", "gk_set_integrator", "gk_initialize", "gk_do_step"):
-        getattr(lib, f).restype = c_int
-    return lib
+    return load_kernel(compile_kernel(tmp))
 
 
 def _proxy_binary(source, tmp):

@@ -12,7 +12,9 @@ time of the plan's process and the processes it waited for: on a shared machine 
 follows the load, the CPU time much less), ``exit_code`` (0 within
 target, 1 not within target, None when stopped), the accuracy target, each choice's status (kept, reduced, dropped,
 pinned, fixed), the chosen levels, the verified worst errors
-(``dte_rel``, ``mesh_force_rel``, relative RMS against the full-fidelity reference), the native
+(``dte_rel``, ``mesh_force_rel``, relative RMS against the full-fidelity reference; ``measures``: every
+measure of docs/plan.md "Error measure" at the worst point, ``u`` the budget use and ``limit`` the
+measure that sets it), the native
 runs, and the skipped choices with their reasons.  The machine may be shared: repeat and read
 the best.
 
@@ -30,6 +32,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from gearfmu.plan_verify import MEASURES  # noqa: E402  (the measure names only; plans run in fresh processes)
 #: the planner's time goal on the default scene (a warm numba cache), s of wall time
 DEFAULT_SCENE_GOAL_S = 60.0
 
@@ -52,6 +57,8 @@ def _plan(scene: str, timeout_s: float, env: dict) -> dict:
     out.update(chosen=d["chosen"], full=d["full"], within_target=d["within_target"], target=d["target"],
                choices=[{k: r[k] for k in ("choice", "status", "full", "chosen")} for r in d["choices"]],
                dte_rel=v["dte_rel"], mesh_force_rel=v["mesh_force_rel"], worst=v.get("worst"),
+               u=v.get("u"), limit=v.get("limit"),
+               measures={k: v.get(k) for k in MEASURES if k in v},
                native_runs=v.get("native_runs"), probes=v.get("probes"),
                skipped=[{"choice": r["choice"], "levels": r["levels"], "reason": r["reason"]} for r in d.get("skipped", [])])
     return out

@@ -1,22 +1,30 @@
 """Bit-for-bit comparison of two gearfmu checkouts (for refactorings that must not change behaviour).
 
     python benchmarks/compare_refactor.py CHECKOUT_A CHECKOUT_B [--runtimes pythonfmu,standalone]
-                                          [--bench-full] [--keep DIR]
+                                          [--scenes default,examples,rough_ehl] [--fmi-versions 2,3]
+                                          [--bench-full] [--keep DIR [--reuse-a]]
 
 In each checkout (a fresh interpreter with the checkout first on ``sys.path``; the script
-checks that the ``gearfmu`` it imported is the checkout's) it computes
+checks that the ``gearfmu`` it imported is the checkout's) it computes, for every scene of
+``--scenes`` (``default``: the default scene; ``examples``: every ``examples/scenes/*.toml`` of
+checkout A; ``rough_ehl``: the default pair with ``contact_model = "rough_ehl"`` on a small grid,
+:data:`ROUGH_EHL_SCENE`; or scene file paths)
 
-* the default scene's tables: every array of the MeshTables;
-* the native solver on them with the scene's settings (``pipeline.simulate_native``): every
-  output array;
-* the default scene's FMU, built per runtime and run through fmpy over the scene's
-  experiment: every output column;
-* ``gearfmu bench accuracy``'s errors (every error of every row; wall times excluded), on
-  a shortened run unless ``--bench-full``.
+* the scene's tables: every array of the MeshTables (built as written: a scene with
+  ``[accuracy]`` is not planned);
+* the native solver on them with the scene's settings, once per integrator at the scene's
+  internal step and once more for the event integrators at a coarse step (one internal step per
+  output interval): every output array;
+* the scene's FMU, built per runtime (and per FMI version for the standalone runtime; the build
+  machine's binary only) and run through fmpy over the scene's experiment once per integrator
+  (the ``integrator`` parameter): every output column;
 
-and prints, per array, max |A - B| (NaN in the same places counts as equal) and whether the
-two are identical bit for bit.  Exit status 0 when every array is identical, 1 otherwise.
-Only ``.npz`` files (no pickle) cross between the processes.
+and, once, ``gearfmu bench accuracy``'s errors (every error of every row; wall times excluded),
+on a shortened run unless ``--bench-full``.  It prints, per array, max |A - B| (NaN in the same
+places counts as equal) and whether the two are identical bit for bit.  Exit status 0 when every
+array is identical, 1 otherwise.  Only ``.npz`` files (no pickle) cross between the processes;
+``--keep DIR`` keeps them (A.npz, B.npz) and ``--reuse-a`` takes A.npz from there instead of
+computing it again (record the unchanged tree once, compare every step of a refactoring to it).
 """
 from __future__ import annotations
 
@@ -33,6 +41,7 @@ import numpy as np
 CHILD = r'''
 import sys, json, tempfile, importlib
 checkout, out, runtimes, bench_full = sys.argv[1], sys.argv[2], sys.argv[3].split(","), sys.argv[4] == "1"
+scenes, fmi_versions = json.loads(sys.argv[5]), [int(v) for v in sys.argv[6].split(",")]
 sys.path.insert(0, checkout)
 import numpy as np
 import gearfmu
@@ -40,7 +49,7 @@ from pathlib import Path
 assert Path(gearfmu.__file__).resolve().is_relative_to(Path(checkout).resolve()), gearfmu.__file__
 
 def first(*names):
-    """The first importable module of ``names`` (the flat and the layered package)."""
+    # the first importable module of names (the flat and the layered package)
     for n in names:
         try:
             return importlib.import_module(n)
@@ -51,6 +60,8 @@ def first(*names):
 pipeline = importlib.import_module("gearfmu.pipeline")
 compare = first("gearfmu.fmu.compare", "gearfmu.compare")
 bench = importlib.import_module("gearfmu.bench")
+native = importlib.import_module("gearfmu.dynamics.native")
+crossbuild = importlib.import_module("gearfmu.fmu.crossbuild")
 arrays = {}
 
 def put(prefix, obj):
@@ -59,18 +70,39 @@ def put(prefix, obj):
         if isinstance(v, np.ndarray) and v.dtype != object:
             arrays[f"{prefix}.{k}"] = v
 
-scene = pipeline.load(None)
-tables = pipeline.compute_tables(scene)
-put("tables", tables)
-res = pipeline.simulate_native(scene, tables)
-put("native", res)
-with tempfile.TemporaryDirectory() as d:
-    for rt in runtimes:
-        b = pipeline.build(scene, Path(d) / f"{rt}.fmu", runtime=rt, tables=tables)
-        run = compare.run_fmu(b.fmu_path, stop_time_s=scene.fmu.stop_time_s, comm_step_s=scene.fmu.output_interval_s,
-                              names=compare.output_names(tables.slots))
-        put(f"fmu_{rt}", {k: np.asarray(v) for k, v in run.columns.items()})
-        arrays[f"fmu_{rt}.time"] = np.asarray(run.time_s) if hasattr(run, "time_s") else np.asarray(run.time)
+host = crossbuild.host_key()
+for label, path in scenes:
+    print(f"scene {label} ...", file=sys.stderr, flush=True)
+    scene = pipeline.load(path)
+    tables = pipeline.compute_tables(scene, allow_large=True)
+    put(f"{label}.tables", tables)
+    integrators = list(native.INTEGRATORS)
+    t1 = scene.operating.torque_Nm
+    kw = dict(stop_time_s=scene.fmu.stop_time_s, comm_step_s=scene.fmu.output_interval_s,
+              pinion_torque_Nm=t1, gear_torque_Nm=pipeline.gear_torque_for(tables, t1),
+              pinion_speed_start_rad_s=scene.operating.speed_rad_s, damping_ratio=scene.fmu.damping_ratio,
+              damping_model=scene.solver.damping_model)
+    for integ in integrators:
+        put(f"{label}.native_{integ}", native.simulate(tables, max_step_s=pipeline.max_step_for(scene, tables),
+                                                       integrator=integ, **kw))
+        if integ != "rk4":
+            put(f"{label}.native_{integ}_coarse", native.simulate(tables, max_step_s=scene.fmu.output_interval_s,
+                                                                  integrator=integ, **kw))
+    with tempfile.TemporaryDirectory() as d:
+        for rt in runtimes:
+            for v in (fmi_versions if rt == "standalone" else [2]):
+                extra = dict(platforms=[host], fmi_version=v) if rt == "standalone" else {}
+                fmu = Path(d) / f"{rt}{v}.fmu"
+                b = pipeline.build(scene, fmu, runtime=rt, tables=tables, **extra)
+                for integ in integrators:
+                    run = compare.run_fmu(b.fmu_path, stop_time_s=scene.fmu.stop_time_s,
+                                          comm_step_s=scene.fmu.output_interval_s,
+                                          start_values={"integrator": native.INTEGRATORS[integ]},
+                                          names=compare.output_names(tables.slots))
+                    key = f"{label}.fmu_{rt}_fmi{v}_{integ}"
+                    put(key, {k: np.asarray(val) for k, val in run.columns.items()})
+                    arrays[f"{key}.time"] = np.asarray(run.time_s) if hasattr(run, "time_s") else np.asarray(run.time)
+print("bench ...", file=sys.stderr, flush=True)
 kw = {} if bench_full else dict(substeps=(4, 16, 64), fmu_comm_mesh_periods=(1.0,), rtols=(1e-4,), mesh_periods=40)
 rep = bench.accuracy_benchmark("single_sided_impacts", progress=False, **kw)
 for r in rep["rows"]:
@@ -81,10 +113,56 @@ np.savez(out, **arrays)
 print(json.dumps({"gearfmu": gearfmu.__file__, "arrays": len(arrays)}))
 '''
 
+#: the rough-EHL scene of ``--scenes rough_ehl``: the default pair (its other keys) with the rough
+#: EHL contact model on a grid small enough to build in seconds
+ROUGH_EHL_SCENE = {"[mesh]": 'contact_model = "rough_ehl"\nslices = 4\nfoundation = true\n',
+                   "[tables]": "points_per_mesh = 16\ntorque_points = 1\nslots = \"auto\"\n",
+                   "[roughness]": "level = 1\nfilm_position_nodes = 3\n"}
 
-def run_checkout(checkout: Path, out: Path, runtimes: str, bench_full: bool) -> dict:
-    res = subprocess.run([sys.executable, "-c", CHILD, str(checkout), str(out), runtimes, "1" if bench_full else "0"],
-                         cwd=tempfile.gettempdir(), capture_output=True, text=True)
+
+def rough_ehl_scene(default_text: str) -> str:
+    """The default scene's text with :data:`ROUGH_EHL_SCENE`'s sections in place of its own."""
+    out, skip = [], False
+    for line in default_text.splitlines():
+        head = line.strip()
+        if head.startswith("["):
+            skip = head in ROUGH_EHL_SCENE
+            if skip:
+                out.append(head)
+                out.append(ROUGH_EHL_SCENE[head])
+                continue
+        if not skip:
+            out.append(line)
+    for head, body in ROUGH_EHL_SCENE.items():
+        if head not in default_text:
+            out += [head, body]
+    text = "\n".join(out) + "\n"
+    return text.replace('name = "seed000_table1"', 'name = "rough_ehl_small"', 1)
+
+
+def scene_list(spec: str, checkout_a: Path, tmp: Path):
+    """[(label, scene path or None)] of ``--scenes``."""
+    out = []
+    for item in spec.split(","):
+        if item == "default":
+            out.append(("default", None))
+        elif item == "examples":
+            out += [(p.stem, str(p)) for p in sorted((checkout_a / "examples" / "scenes").glob("*.toml"))]
+        elif item == "rough_ehl":
+            text = (checkout_a / "gearfmu" / "scene" / "data" / "default_scene.toml").read_text()
+            path = tmp / "rough_ehl_small.toml"
+            path.write_text(rough_ehl_scene(text))
+            out.append(("rough_ehl_small", str(path)))
+        else:
+            out.append((Path(item).stem, str(Path(item).resolve())))
+    return out
+
+
+
+def run_checkout(checkout: Path, out: Path, runtimes: str, bench_full: bool, scenes, fmi_versions: str) -> dict:
+    res = subprocess.run([sys.executable, "-c", CHILD, str(checkout), str(out), runtimes, "1" if bench_full else "0",
+                          json.dumps(scenes), fmi_versions],
+                         cwd=tempfile.gettempdir(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if res.returncode != 0:
         raise SystemExit(f"{checkout}: the child run failed:\n{res.stderr[-4000:]}")
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -127,15 +205,27 @@ def main(argv=None) -> int:
     ap.add_argument("a", type=Path)
     ap.add_argument("b", type=Path)
     ap.add_argument("--runtimes", default="pythonfmu,standalone")
+    ap.add_argument("--scenes", default="default,examples,rough_ehl",
+                    help="comma-separated: default, examples, rough_ehl or scene files")
+    ap.add_argument("--fmi-versions", default="2,3", help="FMI versions of the standalone FMU")
     ap.add_argument("--bench-full", action="store_true", help="the benchmark at its own settings (long)")
     ap.add_argument("--keep", type=Path, help="keep the two .npz files in this folder")
+    ap.add_argument("--reuse-a", action="store_true", help="with --keep: take A.npz from there when it exists")
     args = ap.parse_args(argv)
+    if args.reuse_a and args.keep is None:
+        ap.error("--reuse-a needs --keep DIR")
     with tempfile.TemporaryDirectory() as d:
+        scenes = scene_list(args.scenes, args.a.resolve(), Path(d))
         d = args.keep or Path(d)
         d.mkdir(parents=True, exist_ok=True)
         info = {}
         for tag, path in (("A", args.a), ("B", args.b)):
-            info[tag] = run_checkout(path.resolve(), d / f"{tag}.npz", args.runtimes, args.bench_full)
+            if tag == "A" and args.reuse_a and (d / "A.npz").is_file():
+                info[tag] = {"gearfmu": f"{path} (reused {d / 'A.npz'})"}
+                continue
+            print(f"{tag}: {path} ...", file=sys.stderr, flush=True)
+            info[tag] = run_checkout(path.resolve(), d / f"{tag}.npz", args.runtimes, args.bench_full, scenes,
+                                     args.fmi_versions)
         rows, identical = compare_npz(d / "A.npz", d / "B.npz")
     print(f"A: {info['A']['gearfmu']}\nB: {info['B']['gearfmu']}")
     w = max(len(r[0]) for r in rows)

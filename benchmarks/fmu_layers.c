@@ -45,18 +45,19 @@ static int run_loop(fmi2Component comp, int loop, int n, double H, const fmi2Val
                     double *vals, double *wall)
 {
     gf_inst *g = (gf_inst *)comp;
-    double t = g->time, T1 = g->values[g->vr_T1], T2 = g->values[g->vr_T2], hmax = g->values[g->vr_hmax];
+    gm_data *d = g->data;
+    double t = g->time, T1 = g->values[d->vr_T1], T2 = g->values[d->vr_T2], hmax = g->values[d->vr_hmax];
     double w0;
     int k;
     w0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
     switch (loop) {
     case L_KERNEL:
         for (k = 0; k < n; ++k)
-            if (gk_do_step(g->model, &g->state, T1, T2, H, hmax, g->out) != GK_OK) return 1;
+            if (gk_do_step(d->model, &d->state, T1, T2, H, hmax, g->out) != GK_OK) return 1;
         break;
     case L_SHARED:
         for (k = 0; k < n; ++k, t += H)
-            if (!gkf_do_step(g->fmu, &g->state, t, H, g->out)) return 1;
+            if (!gkf_do_step(d->fmu, &d->state, t, H, g->out)) return 1;
         break;
     case L_DOSTEP:
         for (k = 0; k < n; ++k, t += H)

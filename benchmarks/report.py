@@ -76,6 +76,10 @@ SOURCES = {
     "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
     "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "10"], None,
                     "benchmarks/bench_ehl_corners.py --repeats 10"),
+    "ehl_rough": ([PY, "benchmarks/bench_ehl_rough.py"], None, "benchmarks/bench_ehl_rough.py"),
+    "ehl_rough_tables": ([PY, "benchmarks/bench_ehl_tables.py", "--levels", "1", "2", "3", "--models", "hertz",
+                          "smooth_ehl"], None,
+                         "benchmarks/bench_ehl_tables.py --levels 1 2 3 --models hertz smooth_ehl"),
     "seed003_statements": ([PY, "examples/seed003_figures.py", "--quick", "--json", "--out", "{tmp}"], None,
                            "examples/seed003_figures.py --quick --json"),
     "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
@@ -92,13 +96,15 @@ SOURCES = {
                 "benchmarks/bench_startup.py --commands build"),
     "plan": ([PY, "benchmarks/bench_plan.py", "--scenes", "default", "--timeout", "600"], None,
              "benchmarks/bench_plan.py --scenes default"),
+    "plan_scan": ([PY, "benchmarks/bench_plan_scan.py", "--n", "50"], None, "benchmarks/bench_plan_scan.py --n 50"),
     "plan_study": ([PY, "examples/plan_study.py", "--json", "--out", "{tmp}"], None,
                    "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan_study", "tests", "gearbox"}
+SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_rough_tables", "integrators", "startup", "plan_study", "plan_scan",
+        "tests", "gearbox"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -580,6 +586,16 @@ def sec_ehl(pg: Page):
                        pg.cost("ehl")])
 
 
+def sec_ehl_rough(pg: Page):
+    if "ehl_rough" not in pg.data and "ehl_rough_tables" not in pg.data:
+        pg.missing("ehl_rough", "Rough EHL films")
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_ehl_rough import render as render_rough  # the section's own module (report.py's size)
+
+    render_rough(pg, table, SOURCES["ehl_rough"][2])
+
+
 def sec_trends(pg: Page):
     if pg.missing("trends", "Contact models in the mesh: seed 000 section 5 trends"):
         return
@@ -856,6 +872,11 @@ def _plan_target(t) -> str:
     return "n/a" if not t else f"{100 * t['dte_rel']:g} % / {100 * t['mesh_force_rel']:g} %"
 
 
+def _plan_use(v) -> str:
+    """"; budget use U limited by MEASURE" of a plan's verification (empty for JSON without them)."""
+    return "" if v.get("u") is None else f"; budget use {num(v['u'])} ({v.get('limit')})"
+
+
 def _plan_fmu(fv) -> str:
     cases = (fv or {}).get("cases") or {}
     if not cases:
@@ -879,27 +900,30 @@ def sec_plan(pg: Page):
             continue
         kept, changed = _plan_choices(r)
         body.append([label, _plan_target(r.get("target")), kept, changed,
-                     f"{sci(r['dte_rel'])} / {sci(r['mesh_force_rel'])} ({r.get('worst') or 'n/a'})",
+                     f"{sci(r['dte_rel'])} / {sci(r['mesh_force_rel'])}{_plan_use(r)} ({r.get('worst') or 'n/a'})",
                      _yes(r.get("within_target")), str(r.get("native_runs", "n/a")),
                      f"{r['wall_s']:.1f} s ({num(r.get('cpu_s', math.nan))} s CPU)", "not run"])
     for scene, r in pg.data.get("plan_study", {}).items():
         kept, changed = _plan_choices(r)
         v = r["verification"]
         body.append([f"`{scene}` (study)", _plan_target(r.get("target")), kept, changed,
-                     f"{sci(v['dte_rel'])} / {sci(v['mesh_force_rel'])} ({v.get('worst') or 'n/a'})",
+                     f"{sci(v['dte_rel'])} / {sci(v['mesh_force_rel'])}{_plan_use(v)} ({v.get('worst') or 'n/a'})",
                      _yes(r.get("within_target")), str(v.get("native_runs", "n/a")),
                      f"{r['study_wall_s']:.1f} s ({num(r['study_cpu_s'])} s CPU)"
                      + (", with the FMUs" if r.get("fmu_verification") else ""),
                      _plan_fmu(r.get("fmu_verification"))])
     srcs = [n for n in ("plan", "plan_study") if n in pg.data]
     absent = [n for n in ("plan", "plan_study") if n not in pg.data]
+    scan = _plan_scan_part(pg)
     pg.parts.append(
         f"## {title}\n\n"
         "`gearfmu plan` (docs/plan.md) keeps or lowers each modelling choice of a scene and then searches "
         "its envelope for the worst point of the planned configuration against the scene's full-fidelity "
         "configuration (the finest level of every choice).  Reference: that full-fidelity model, run by the "
-        "same native solver; the error is the relative RMS of the DTE and of the mesh force over the run "
-        "(docs/plan.md \"Error measure\"), beside the scene's accuracy target.  The study scenes "
+        "same native solver; the errors are the measures of docs/plan.md \"Error measure\" (relative RMS of the "
+        "DTE and of the mesh force, DTE peak-to-peak and mean, mesh orders 1-3 of DTE and mesh force), each "
+        "against the scene's accuracy target; the table gives the two RMS errors and the budget use (largest "
+        "measure over its target, with the measure that sets it) at the worst point.  The study scenes "
         "(`examples/plan_study.py`: shipped scenes with an envelope and a target added) are also built as "
         "FMUs, planned and full, and driven through fmpy over its verification cases (steady point, run-up, "
         "run-down, warm-up, duty cycle, the worst point found); the last column is the worst of those "
@@ -909,7 +933,41 @@ def sec_plan(pg: Page):
                  "worst found (DTE / force, where)", "within target", "native runs", "plan time",
                  "through the FMUs (DTE / force)"], body)
         + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs)
-        + "".join(f"; `{n}` not run (`python benchmarks/report.py --only {n}`)" for n in absent) + ".\n")
+        + "".join(f"; `{n}` not run (`python benchmarks/report.py --only {n}`)" for n in absent) + ".\n"
+        + scan)
+
+
+def _plan_scan_part(pg: Page) -> str:
+    """The planner's verdicts checked on a seeded random scan of pairs (benchmarks/bench_plan_scan.py)."""
+    head = "### The verdict on a random scan of pairs\n\n"
+    if "plan_scan" not in pg.data:
+        reason = pg.runs.get("plan_scan", {}).get("reason", "no saved JSON")
+        return f"\n{head}Not run ({reason}). Produce it with `python benchmarks/report.py --only plan_scan`.\n"
+    d = pg.data["plan_scan"]
+    rows = [r for r in d["rows"] if "pass" in r]
+    limits: dict = {}
+    for r in rows:
+        limits[r["plan_limit"]] = limits.get(r["plan_limit"], 0) + 1
+    body = [[str(d["planned"]), str(d["helical"]), str(d["within_target"]), str(d["not_within_target"]),
+             str(d["violations"]), num(d["worst_check_u_within_target"] if d["worst_check_u_within_target"]
+                                       is not None else math.nan),
+             ", ".join(f"{k} ({v})" for k, v in sorted(limits.items(), key=lambda x: -x[1]))]]
+    pg.summary.append(["planner verdict on a random scan of pairs", "full-fidelity model, own check points",
+                       f"{d['violations']} of {d['planned']} plans within target but above it at a check point",
+                       pg.cost("plan_scan")])
+    return (
+        f"\n{head}"
+        "Each of the scan's seeded random pairs (module, teeth, helix angle 0-40 deg, face width, load, speed, "
+        "deviations; one operating point) is planned with the default target 2 % / 2 % on every measure of "
+        "docs/plan.md \"Error measure\" (RMS, DTE peak-to-peak and mean, mesh orders 1-3 of DTE and mesh "
+        "force).  Reference: the scene's full-fidelity model, run by the native solver beside the chosen one "
+        "at the benchmark's own check points (the operating point with a run three times the planner's, and "
+        "a random speed inside the band the FMU accepts without a warning).  A violation is a plan that says "
+        "\"within target\" with a check point above the target; the budget use is the largest measure over "
+        "its target (1 = on target).\n\n"
+        + table(["pairs planned", "helical", "within target", "not within target (says so)", "violations",
+                 "largest check budget use (within target)", "limiting measure of the plans (count)"], body)
+        + f"\n\nSource: `{SOURCES['plan_scan'][2]}` ({pg.cost('plan_scan')}).\n")
 
 
 def sec_fmu(pg: Page):
@@ -1211,7 +1269,7 @@ def sec_goals(pg: Page):
         + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs) + ".\n")
 
 
-SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
+SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_rough", "sec_load_sharing", "sec_fractal", "sec_trends",
             "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_goals")
 
 

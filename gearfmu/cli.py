@@ -9,7 +9,8 @@
   gearfmu validate [SCENE] [--fmu F] [--stop-time S] [--output-interval S] [--tolerance R] [--json]
                                              an FMU against the native solver
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
-  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--fmi-version 2|3]   SSP package with variants
+  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--runtime R] [--platforms LIST]
+                   [--fmi-version 2|3]       SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
   gearfmu modes    [SCENE] [-o OUT.json] [--json] [--max-speed-rpm N]
                                              natural frequencies, strain energy, Campbell diagram (PNG + JSON)
@@ -19,31 +20,37 @@ native gearbox solver on it, modes gives its modes.
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
-bad input (an invalid scene, a missing or unusable file, a bad option value,
-an output path that cannot be written).
+bad input (an invalid scene, a missing, damaged or wrong kind of file, a bad
+option value, an output path that cannot be written).  GEARFMU_DEBUG=1 adds
+the traceback behind that line.
 """
 from __future__ import annotations
 
 import argparse
+import io
 import json
+import os
 import sys
 import tempfile
 import time
+import traceback
 from pathlib import Path
-import zipfile
 import contextlib
 
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.vocabulary import RUNTIMES
-from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
+from .contact.base import FLAG_MEANINGS
+from .dynamics.native import write_columns_csv
+from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
-from .ssp import parse_variant, ssp_from_scene
+from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
+from .fmu.summary import fmu_summary
 
 
 class CliError(Exception):
@@ -81,10 +88,37 @@ def _output_file(path, what: str) -> Path:
     return p
 
 
+def _debug() -> bool:
+    """GEARFMU_DEBUG set (and not 0): show the traceback behind a one-line error."""
+    return os.environ.get("GEARFMU_DEBUG", "") not in ("", "0")
+
+
+@contextlib.contextmanager
+def _reading(what: str, path):
+    """Around the reading of a file the user handed over (``what``: the argument).  The readers
+    name the file and the reason; this makes sure of it: a ValueError or OSError whose message
+    does not name the file gets ``what`` and the file in front, and an exception no reader
+    foresaw becomes one line naming the file with a hint (GEARFMU_DEBUG=1: the traceback)."""
+    try:
+        yield
+    except CliError:
+        raise
+    except (ValueError, OSError) as exc:
+        text = _one_line(exc)
+        if path is None or Path(path).name in text:
+            raise
+        raise CliError(f"{what} {path}: {text}") from exc
+    except Exception as exc:  # noqa: BLE001 - last resort for a file a reader did not foresee
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise CliError(f"{what} {path}: cannot be read ({type(exc).__name__}{': ' + first if first else ''}); "
+                       "is it the right kind of file, and intact? (GEARFMU_DEBUG=1 shows where it failed)") from exc
+
+
 def _scene(path):
-    if path is not None:
-        _scene_file(path)
-    return load(path)
+    with _reading("SCENE", path):
+        if path is not None:
+            _scene_file(path)
+        return load(path)
 
 
 def _positive(name):
@@ -115,7 +149,8 @@ def _tolerance(text):
 def _fmu(path):
     """The FMU of ``--fmu``, opened (CliError naming the file and what is wrong otherwise)."""
     try:
-        return open_fmu(path)
+        with _reading("--fmu", path):
+            return open_fmu(path)
     except FmuMismatchError as exc:
         raise CliError(f"--fmu: {exc}") from None
 
@@ -125,8 +160,9 @@ def cmd_build(args) -> int:
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
     if args.tables:  # imported tables instead of the scene's physics
-
-        tables = load_tables_file(*_tables_args(args.tables, args.tables_meta))
+        paths = _tables_args(args.tables, args.tables_meta)
+        with _reading("--tables", paths[0]):
+            tables = load_tables_file(*paths)
     platforms = None
     if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
@@ -137,7 +173,7 @@ def cmd_build(args) -> int:
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
         print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
-    _print_platforms(res.fmu_path)
+    print(fmu_summary(res.fmu_path))
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
@@ -162,13 +198,6 @@ def _print_accuracy(ve) -> None:
                                                  " (add [accuracy] to build the planned model instead)"))
 
 
-def _print_platforms(fmu_path) -> None:
-    """The standalone FMU's platform line (documentation/platforms.txt): built and missing binaries."""
-    with zipfile.ZipFile(fmu_path) as z:
-        if "documentation/platforms.txt" in z.namelist():
-            print(z.read("documentation/platforms.txt").decode("utf-8").rstrip())
-
-
 def _tables_args(tables, meta):
     """(tables path, sidecar path or None) of ``build --tables T [--tables-meta M]``: a CSV's
     sidecar defaults to the one ``gearfmu tables`` writes beside it (T.meta.toml)."""
@@ -189,16 +218,27 @@ def _tables_args(tables, meta):
 
 def _print_contact(tables) -> None:
     """One line on the contact model the tables were computed with, from their provenance: the
-    environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model."""
+    environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model,
+    and the flagged contact requests, counted per reason with what the tables hold there."""
     c = tables.provenance.get("contact")
     if not c:
         return
-    fails = sum(r.get("failures", 0) for r in c.get("load_iteration", {}).get("rows", []))
+    rows = c.get("load_iteration", {}).get("rows", [])
+    fails = sum(r.get("failures", 0) for r in rows)
+    by = {}
+    for r in rows:
+        for st, n in (r.get("failures_by_status") or {}).items():
+            by[st] = by.get(st, 0) + n
     eta = c.get("eta0_Pas")
+    flagged = ""
+    if fails:
+        why = "; ".join(f"{n} {st}: {FLAG_MEANINGS.get(st, st)}" for st, n in by.items()) or \
+            "contact requests the model could not answer as asked"
+        flagged = (f", {fails} flagged points (flagged = (position, slice load) requests of the load-sharing "
+                   f"iteration, summed over the torque rows: {why}; tables' provenance 'contact.load_iteration')")
     print(f"contact model {c.get('model')}: eta0 {eta if eta is None else format(eta, '.4g')} Pa s, "
           f"pinion speed {c.get('speed_rad_s', float('nan')):.4g} rad/s, {c.get('solves', 0)} contact solves"
-          + (f", {fails} flagged points (tables' provenance 'contact')" if fails else "")
-          + (", helical: normal-section requests per slice" if "helical_normal_section" in c else ""))
+          + flagged + (", helical: normal-section requests per slice" if "helical_normal_section" in c else ""))
 
 
 def cmd_tables(args) -> int:
@@ -228,9 +268,10 @@ def cmd_tables(args) -> int:
 
 def _any_scene(path):
     """("drivetrain", DrivetrainScene) or ("pair", Scene) of SCENE (docs/gearbox.md)."""
-    if path is not None:
-        _scene_file(path)
-    return drivetrain.load_any(path)
+    with _reading("SCENE", path):
+        if path is not None:
+            _scene_file(path)
+        return drivetrain.load_any(path)
 
 
 def _scene_file(path) -> Path:
@@ -262,9 +303,7 @@ def _simulate_drivetrain(args, scene) -> int:
     model = _gearbox("drivetrain", scene, args)
     res = drivetrain.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
                                          progress=not args.quiet)
-    head = ["time [s]"] + [f"{n} [{u}]" for n, (u, _) in res.columns.items()]
-    np.savetxt(out, np.column_stack([res.time_s] + [a for _, a in res.columns.values()]), delimiter=",",
-               header=",".join(head), comments="")
+    res.to_csv(out)
     png = plot_gearbox_simulation(res, model, out.with_suffix(".png"), title=f"{scene.name} (native gearbox solver)")
     if "diverged_at_step" in res.info:
         print(f"gearfmu: the state turned non-finite at step {res.info['diverged_at_step']}; the rows after it are "
@@ -338,12 +377,8 @@ def cmd_simulate(args) -> int:
         run = run_fmu(args.fmu, stop_time_s=stop, comm_step_s=step, start_values=sv,
                       names=output_names(slots))
         time_s, cols, wall = run.time_s, run.columns, run.wall_s
-    names = output_names(slots)
-    units = {"pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad", "gear_angle": "rad",
-             "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m"}
-    head = ["time [s]"] + [f"{n} [{units.get(n, 'N' if n.startswith('pair_force') else '1')}]" for n in names]
-    np.savetxt(out, np.column_stack([time_s] + [cols[n] for n in names]), delimiter=",",
-               header=",".join(head), comments="")
+    units = output_units(slots)  # the CSV layout of docs/native.md and docs/cli.md
+    write_columns_csv(out, {"time": ("s", time_s), **{n: (u, cols[n]) for n, u in units.items()}})
 
     class _R:  # the plot wants attributes
         pass
@@ -415,10 +450,14 @@ def print_report(rep: dict) -> None:
     print(f"fmpy validation problems: {len(probs)}" + "".join(f"\n  - {p}" for p in probs))
     print(f"{rep['samples']} samples, communication step {rep['comm_step_s']:.3g} s, "
           f"internal step <= {rep['max_step_s']:.3g} s, stop time {rep['stop_time_s']:.3g} s")
-    print(f"{'output':<18}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
+    units = output_units(sum(1 for n in rep["outputs"] if n.startswith("pair_force[")))
+    print(f"{'output':<18}{'unit':<7}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
     for name, v in rep["outputs"].items():
-        print(f"{name:<18}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}{v['range']:>14.4g}"
-              f"{v['rel_max_diff']:>12.2e}")
+        print(f"{name:<18}{units.get(name, '?'):<7}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}"
+              f"{v['range']:>14.4g}{v['rel_max_diff']:>12.2e}")
+    print("differences and range in the output's unit; range = max - min of the native solver's output over "
+          "the run (its largest |value| when it is constant); max/range = max |FMU-native| / range, the "
+          "quantity the tolerance applies to")
     print(f"wall time: native {rep['native_wall_s']:.4f} s, FMU (fmpy) {rep['fmu_wall_s']:.4f} s")
     if "failed" in rep:
         tol = rep.get("tolerance")
@@ -431,8 +470,11 @@ def cmd_ssp(args) -> int:
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.ssp", "--output")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
-    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet, fmi_version=args.fmi_version)
+    platforms = parse_platforms(args.platforms) if args.platforms is not None else None
+    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet, fmi_version=args.fmi_version,
+                          runtime=args.runtime, platforms=platforms)
     print(f"wrote {path}")
+    print(f"its FMU ({ssp_fmu_name(path)}): {fmu_summary(io.BytesIO(ssp_fmu_bytes(path)))}")
     return 0
 
 
@@ -453,6 +495,19 @@ def cmd_plan(args) -> int:
               f"(worst: {plan.verification.get('worst')}); see the report", file=sys.stderr)
         return 1
     return 0
+
+
+def _fmu_options(parser) -> None:
+    """--runtime, --platforms, --fmi-version: the FMU options of build and ssp."""
+    parser.add_argument("--runtime", choices=RUNTIMES,
+                        help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
+                             "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
+    parser.add_argument("--platforms", metavar="LIST",
+                        help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
+                             "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
+                             "all five; docs/standalone.md 'Platforms')")
+    parser.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                        help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
 
 
 def _allow_large(parser) -> None:
@@ -476,15 +531,7 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
-    b.add_argument("--runtime", choices=RUNTIMES,
-                   help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
-                        "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
-    b.add_argument("--platforms", metavar="LIST",
-                   help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
-                        "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
-                        "all that the installed compilers can build; docs/standalone.md 'Platforms')")
-    b.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
-                   help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
+    _fmu_options(b)
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
                                          "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
@@ -537,7 +584,7 @@ def make_parser() -> argparse.ArgumentParser:
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
     x.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
-    x.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the packaged FMU")
+    _fmu_options(x)
     x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
@@ -589,6 +636,8 @@ def main(argv=None) -> int:
         with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
+        if _debug():
+            traceback.print_exc()
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)
         return 2
 

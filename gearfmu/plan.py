@@ -32,7 +32,8 @@ from .plan_evaluator import _Evaluator, _cost_entry, _h0, relative_rms
 from .plan_fmu import (TEMPERATURE_INPUTS, _measure_fmus, full_scene, planned_scene, run_fmu_drive,
                        verification_cases, verify_fmus)
 from .plan_report import Plan, format_report, verified_envelope_of
-from .plan_verify import ERROR_DEFINITION, DriveCase, ProgressBar, Search, drive_case, say
+from .plan_verify import (ERROR_DEFINITION, MEASURES, DriveCase, ProgressBar, Search, budget_use, drive_case,
+                          limiting_measure, say)
 from .scene.envelope import PLAN_CHOICES, AccuracyTarget, VerifiedEnvelope, accuracy_of, envelope_of
 from .tables.estimate import estimate_build
 
@@ -49,16 +50,18 @@ _NEGLIGIBLE_USE = 0.02
 
 
 def _budget_use(m: dict, acc: AccuracyTarget) -> float:
-    return max(m["dte_rel"] / acc.dte_rel, m["mesh_force_rel"] / acc.mesh_force_rel)
+    return budget_use(m, acc.dte_rel, acc.mesh_force_rel)
 
 
-_COST_KEYS = ("table_build_s", "table_bytes", "wall_per_sim_s")
+#: the costs the budget rule ranks by: deterministic counts (docs/plan.md "Cost model"), never wall times
+_COST_KEYS = ("table_work", "table_bytes", "work_per_sim_s")
 
 
 def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) -> float:
-    """Relative cost estimate of a configuration: sum over table build time, table
-    size and time per simulated second of the product of the single-choice ratios
-    to the full model (each choice taken as acting independently)."""
+    """Relative cost estimate of a configuration: sum over table work, table size and solver
+    work per simulated second (:data:`_COST_KEYS`, counts: the plan is a function of the scene,
+    not of the machine's load) of the product of the single-choice ratios to the full model
+    (each choice taken as acting independently)."""
     total = 0.0
     for k in _COST_KEYS:
         r = 1.0
@@ -153,14 +156,15 @@ def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc:
                 try:
                     c.measured[i] = ev.measure(cfg, full)
                 except (ValueError, ArithmeticError) as exc:  # a level the physics rejects is not offered
-                    c.measured[i] = {"tvms_rel": math.inf, "dte_rel": math.inf, "mesh_force_rel": math.inf,
-                                     "table_build_s": math.nan, "table_bytes": 0, "wall_per_sim_s": math.nan,
-                                     "error": str(exc)}
+                    c.measured[i] = dict({k: math.inf for k in MEASURES}, tvms_rel=math.inf, table_build_s=math.nan,
+                                         table_work=math.nan, table_bytes=0, wall_per_sim_s=math.nan,
+                                         work_per_sim_s=math.nan, error=str(exc))
                 m = c.measured[i]
                 bar.update(note=f"{name} = {lv}")
-                say(progress, f"{name} = {lv}: TVMS {m['tvms_rel']:.2e}, DTE {m['dte_rel']:.2e}, "
-                              f"force {m['mesh_force_rel']:.2e}", log)
                 u = _budget_use(m, acc)
+                say(progress, f"{name} = {lv}: TVMS {m['tvms_rel']:.2e}, DTE {m['dte_rel']:.2e}, "
+                              f"force {m['mesh_force_rel']:.2e}; budget use {u:.3g} "
+                              f"({limiting_measure(m, acc.dte_rel, acc.mesh_force_rel)})", log)
                 if u <= _NEGLIGIBLE_USE * acc.safety_factor and i < n - 1 and name not in LEVELS_NOT_COST_ORDERED:
                     why = (f"not measured: the cheaper level {lv} already has a negligible budget use "
                            f"({u:.2g} <= {_NEGLIGIBLE_USE:g} x safety factor)")
@@ -216,7 +220,7 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
             if fit is None:
                 continue
             new_cost, i, u = fit
-            saved = max(cur_cost - new_cost, 0.0)  # measured (noisy) saving
+            saved = max(cur_cost - new_cost, 0.0)  # estimated saving
             score = (saved + 1e-6) / max(u - use[name], 1e-6)
             if best is None or score > best[0]:
                 best = (score, name, i, u)
@@ -282,8 +286,8 @@ def _verify_and_revise(ev: _Evaluator, choices: Dict[str, Choice], level: Dict[s
                "probes": len(res["probes"])}
         attempts.append(att)
         say(f"verify ({len(res['probes'])} probes, {res['native_runs']} native runs): worst {w['probe']}: "
-            f"DTE {w['dte_rel']:.2e}, force {w['mesh_force_rel']:.2e} "
-            f"({'within' if res['within_target'] else 'ABOVE'} target)")
+            f"DTE {w['dte_rel']:.2e}, force {w['mesh_force_rel']:.2e}, budget use {w['u']:.3g} limited by "
+            f"{w['limit']} {w[w['limit']]:.3g} ({'within' if res['within_target'] else 'ABOVE'} target)")
         if not res["exhausted"] and (best is None or w["u"] < best[0]["worst"]["u"]):
             best = (att, res)
         if res["within_target"]:
@@ -310,13 +314,15 @@ def _verify_and_revise(ev: _Evaluator, choices: Dict[str, Choice], level: Dict[s
         say(f"revise: {resp} = {choices[resp].levels[new]}")
     att, res = best if (refused and best is not None) else (attempts[-1], res)
     w = att["worst"]
-    ver = {"dte_rel": w["dte_rel"], "mesh_force_rel": w["mesh_force_rel"], "dte_max_rel": w["dte_max_rel"],
-           "mesh_force_max_rel": w["mesh_force_max_rel"], "worst": w["probe"], "worst_at": w["where"],
-           "within_target": bool(att["within_target"]) and refused is None, "refused": refused,
-           "native_runs": ev.native_runs - start, "budget_runs": budget_runs, "probes": att["probes"],
-           "attempts": attempts, "error_definition": ERROR_DEFINITION,
-           "probe_errors": [{k: p[k] for k in ("probe", "dte_rel", "mesh_force_rel", "dte_max_rel",
-                                                 "mesh_force_max_rel")} for p in res["probes"]]}
+    ver = dict({k: w[k] for k in MEASURES}, dte_max_rel=w["dte_max_rel"], mesh_force_max_rel=w["mesh_force_max_rel"],
+               u=w["u"], limit=w["limit"], worst=w["probe"], worst_at=w["where"],
+               within_target=bool(att["within_target"]) and refused is None, refused=refused,
+               native_runs=ev.native_runs - start, budget_runs=budget_runs, probes=att["probes"],
+               attempts=attempts, error_definition=ERROR_DEFINITION,
+               margin=acc.safety_factor, worst_by_measure=res["worst_by_measure"],
+               searched_speed_range_rpm=[x * 30 / math.pi for x in search.speed_range_rad_s()],
+               probe_errors=[{k: p[k] for k in ("probe", "u", "limit", *MEASURES, "dte_max_rel", "mesh_force_max_rel")}
+                             for p in res["probes"]])
     return dict(att["chosen"]), ver
 
 
@@ -361,12 +367,14 @@ def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = EST
         speed_range_rpm=tuple(x * 30 / math.pi for x in env.speed_range_rad_s),
         temperature_range_C=None if env.temperature_range_C is None else tuple(env.temperature_range_C),
         dte_target_rel=acc.dte_rel, mesh_force_target_rel=acc.mesh_force_rel, error_definition=ERROR_DEFINITION,
-        within_target=bool(w["dte_rel"] <= acc.dte_rel and w["mesh_force_rel"] <= acc.mesh_force_rel),
+        within_target=bool(w["u"] <= 1.0),
         worst_dte_rel=float(w["dte_rel"]), worst_mesh_force_rel=float(w["mesh_force_rel"]),
         worst_dte_max_rel=float(w["dte_max_rel"]), worst_mesh_force_max_rel=float(w["mesh_force_max_rel"]),
         worst_at=dict(w["where"]), native_runs=int(res["native_runs"]), probes=len(res["probes"]))
     d = ve.to_dict()
     d["search_complete"] = not res["exhausted"]
+    d["worst_measures"] = {k: w[k] for k in MEASURES}
+    d["limit"] = w["limit"]
     d["full_fidelity"] = dict(full, max_step_s=full["max_step"] * ev.h0)
     d["as_written"] = dict(written, max_step_s=step_s)
     return d

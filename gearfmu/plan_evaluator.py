@@ -2,8 +2,10 @@
 
 A configuration is a dict choice -> level value (:mod:`gearfmu.plan_choices`).
 :class:`_Evaluator` builds and caches the tables of configurations and the native runs at
-envelope points, and measures a configuration against the full one (TVMS, DTE and mesh
-force errors, table build time and size, native time per simulated second).
+envelope points, and measures a configuration against the full one (TVMS and the error
+measures of :func:`gearfmu.plan_verify.run_errors`; costs: the deterministic table work, table
+size and solver work per simulated second the budget rule ranks by, and the table build time and
+native time per simulated second, reported only).
 """
 from __future__ import annotations
 
@@ -17,12 +19,27 @@ import numpy as np
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
-from .plan_choices import _step_absolute, _thermal_options
+from .plan_choices import _step_absolute, _thermal_options, table_work
+from .plan_verify import MEASURES, run_errors, steady_phase
 from .tables.zones import mean_total_stiffness_N_per_m
 from .scene.envelope import AccuracyTarget, Envelope
 from .tables.precompute import precompute_tables
 
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
+#: RK4 steps that one event of the native solver costs, by integrator (CHOICE, docs/plan.md "Cost model"):
+#: rk4_seg and rk4_node end a step at a predicted crossing (one more step); rk4_kink locates the event by
+#: a trial step and a root search before the step to it
+EVENT_STEPS = {"rk4": 0.0, "rk4_seg": 1.0, "rk4_node": 1.0, "rk4_kink": 2.0}
+
+
+def run_work(res, integrator: str) -> float:
+    """Deterministic work of a native run (:class:`gearfmu.dynamics.native.SimResult`): right-hand-side
+    evaluations x pair slots, 4 per RK4 step, the steps being the substeps of the completed
+    communication steps plus :data:`EVENT_STEPS` per located event.  The budget rule ranks costs
+    by it (a count, the same on every machine and at every load; wall times are reported only)."""
+    steps = (int(res.info.get("completed_steps", len(res.dte) - 1)) * int(res.substeps)
+             + EVENT_STEPS.get(integrator, 1.0) * int(res.info.get("events", 0)))
+    return 4.0 * float(res.slots) * steps
 
 
 def relative_rms(y, y_ref) -> float:
@@ -222,7 +239,8 @@ class _Evaluator:
                        pinion_torque_Nm=T, pinion_speed_start_rad_s=w,
                        damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
                        integrator=cfg["integrator"])
-        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s}
+        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s,
+               "work": run_work(res, cfg["integrator"])}
         self._runs[key] = out
         return out
 
@@ -240,31 +258,36 @@ class _Evaluator:
                        pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
                        damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
                        integrator=cfg["integrator"], bulk_temperature_C=temp)
-        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": case.stop_time_s}
+        out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": case.stop_time_s,
+               "work": run_work(res, cfg["integrator"])}
         self._runs[key] = out
         return out
 
     def dynamic_error(self, cfg: dict, full: dict) -> dict:
-        """Worst relative RMS DTE / mesh-force difference over the envelope points, and the
-        native wall time per simulated second of ``cfg``."""
-        dte = force = 0.0
-        wall = sim = 0.0
+        """Worst over the envelope points of every error measure of ``cfg`` against ``full``
+        (:func:`gearfmu.plan_verify.run_errors` on the steady window of each run); the native
+        wall time per simulated second of ``cfg`` (reported) and its solver work per simulated
+        second (:func:`run_work`, the deterministic cost the budget rule ranks by)."""
+        worst: Dict[str, float] = {k: 0.0 for k in MEASURES}
+        wall = sim = work = 0.0
         for pt in self.points():
             a, b = self.run(cfg, pt), self.run(full, pt)
-            if not (np.all(np.isfinite(a["dte"])) and np.all(np.isfinite(b["dte"]))):
-                dte = force = math.inf
-                continue
-            dte = max(dte, relative_rms(a["dte"], b["dte"]))
-            force = max(force, relative_rms(a["mesh_force"], b["mesh_force"]))
+            n = len(b["dte"])
+            e = run_errors(a["dte"], a["mesh_force"], b["dte"], b["mesh_force"], steady_phase(n), n // 2)
+            for k in MEASURES:
+                worst[k] = max(worst[k], e[k])
             wall += a["wall_s"]
+            work += a["work"]
             sim += a["sim_s"]
-        return {"dte_rel": dte, "mesh_force_rel": force, "wall_per_sim_s": wall / sim if sim else math.nan}
+        return dict(worst, wall_per_sim_s=wall / sim if sim else math.nan,
+                    work_per_sim_s=work / sim if sim else math.nan)
 
     def measure(self, cfg: dict, full: dict) -> dict:
         _, build_s = self.tables(cfg)
         m = {"tvms_rel": self.tvms_error(cfg, full)}
         m.update(self.dynamic_error(cfg, full))
         m["table_build_s"] = build_s
+        m["table_work"] = table_work(cfg)
         m["table_bytes"] = self.table_bytes(cfg)
         return m
 
@@ -289,10 +312,12 @@ def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
         build_s = time.perf_counter() - t0
     else:  # expensive (EHL film solves): the first build's time stands
         build_s = first_s
-    wall = sim = 0.0
+    wall = sim = work = 0.0
     for pt in ev.points():
         r = ev.run(cfg, pt)
         wall += r["wall_s"]
+        work += r["work"]
         sim += r["sim_s"]
-    return {"table_build_s": build_s, "table_bytes": ev.table_bytes(cfg), "wall_per_sim_s": wall / sim,
+    return {"table_build_s": build_s, "table_work": table_work(cfg), "table_bytes": ev.table_bytes(cfg),
+            "wall_per_sim_s": wall / sim, "work_per_sim_s": work / sim,
             "tables_shape": [int(tb.n_torque), int(tb.slots), int(tb.n_phi)]}

@@ -15,11 +15,12 @@ from typing import List, Optional
 import numpy as np
 
 from .common.vocabulary import TEMPERATURE_INPUTS
+from .fmu.summary import fmu_summary
 from .gear.gearpair import GearDeviations
 from .plan_choices import _thermal_options
-from .plan_evaluator import relative_rms
 from .plan_report import Plan
-from .plan_verify import DriveCase, constant, drive_case, say, speed_sweeps
+from .plan_verify import (MEASURES, DriveCase, budget_use, case_errors, constant, drive_case, limiting_measure, say,
+                          speed_sweeps, target_of)
 from .stages import build_fmu_from_scene
 
 def _measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
@@ -167,9 +168,10 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
     and :func:`full_scene` (their tables computed from the scene, timed), drives both
     through the same cases (:func:`verification_cases`, or ``cases``) with
     :func:`run_fmu_drive` and returns, as JSON-ready data: per FMU its size, table build
-    time, FMU build time and temperature input; per case the relative RMS error
-    rms(y - y_full)/rms(y_full) of the DTE and of the mesh force (the planner's error
-    measure), whether both are within the target, the FMUs' wall and CPU time per
+    time, FMU build time and temperature input; per case every error measure of the planner
+    (:func:`gearfmu.plan_verify.case_errors`: a steady case on the whole mesh periods of its second
+    half, a transient one by segments, the worst kept), the budget use, the limiting measure,
+    the measures above their target and whether every one is within it, the FMUs' wall and CPU time per
     simulated second and their ratio, and how far the full FMU's pinion turned from the
     drive's rigid-body target (|angle - integral of w_target dt| / that integral)."""
     d = Path(fmu_dir) if fmu_dir else Path(tempfile.mkdtemp(prefix="gearfmu_plan_"))
@@ -181,6 +183,7 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
         res = build_fmu_from_scene(sc, d / f"{scene.fmu.model_name}_{which}.fmu", runtime=runtime)
         built[which] = res
         fmus[which] = {"fmu_path": str(res.fmu_path), "fmu_bytes": res.fmu_path.stat().st_size,
+                       "contents": fmu_summary(res.fmu_path),
                        "table_build_s": res.tables_wall_s, "fmu_build_s": res.build_wall_s,
                        "tables_shape": [int(x) for x in np.shape(res.tables.k_N_per_m)],
                        "max_step_s": res.max_step_s, "integrator": sc.solver.integrator}
@@ -197,7 +200,10 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
             for k in ("wall_s", "cpu_s"):
                 r[w][k] = min(r[w][k], again[k])
         a, b = r["chosen"], r["full"]
-        e_d, e_f = relative_rms(a["dte"], b["dte"]), relative_rms(a["mesh_force"], b["mesh_force"])
+        e = case_errors(case, a, b, float(built["full"].tables.mesh_period_rad), int(acc.run_mesh_periods),
+                        acc.dte_rel, acc.mesh_force_rel, with_start=False)
+        e_d, e_f = e["dte_rel"], e["mesh_force_rel"]
+        u = budget_use(e, acc.dte_rel, acc.mesh_force_rel)
         sim = case.stop_time_s
         # rigid-body closed form of the drive: the pinion turns through the integral of the
         # target speed (trapezoids: the speed is linear within each step); the change of the
@@ -211,15 +217,19 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
             "temperature_C": None if case.temperature_C is None else
             [float(case.temperature_C.min()), float(case.temperature_C.max())],
             "temperature_input": {w: r[w]["temperature_input"] for w in r},
-            "dte_rel": e_d, "mesh_force_rel": e_f,
-            "within_target": bool(e_d <= acc.dte_rel and e_f <= acc.mesh_force_rel),
+            **{k: e[k] for k in MEASURES}, "dte_max_rel": e["dte_max_rel"],
+            "mesh_force_max_rel": e["mesh_force_max_rel"], "window": e["window"],
+            "u": u, "limit": limiting_measure(e, acc.dte_rel, acc.mesh_force_rel),
+            "above": [k for k in MEASURES if e[k] > target_of(k, acc.dte_rel, acc.mesh_force_rel)],
+            "within_target": bool(u <= 1.0),
             "wall_per_sim_s": {w: r[w]["wall_s"] / sim for w in r},
             "cpu_per_sim_s": {w: r[w]["cpu_s"] / sim for w in r},
             "cpu_gain_full_over_chosen": r["full"]["cpu_s"] / r["chosen"]["cpu_s"] if r["chosen"]["cpu_s"] else None,
             "angle_tracking_rel": track,
         }
-        say(progress, f"FMU case {case.name}: DTE {e_d:.2e}, force {e_f:.2e} "
-                       f"({'within' if out[case.name]['within_target'] else 'above'} target)", plan.log)
+        say(progress, f"FMU case {case.name}: DTE {e_d:.2e}, force {e_f:.2e}, budget use {u:.3g} limited by "
+                       f"{out[case.name]['limit']} ({'within' if out[case.name]['within_target'] else 'above'} "
+                       f"target)", plan.log)
     gains = {k: fmus["full"][k] / fmus["chosen"][k] for k in ("fmu_bytes", "table_build_s")
              if fmus["chosen"][k]}
     return {"fmus": fmus, "cases": out, "gain_full_over_chosen": gains,

@@ -26,17 +26,37 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from .common.progress import progress_bar
+from .dynamics.harmonics import mesh_order_amplitudes
 
-__all__ = ["ERROR_DEFINITION", "run_errors", "Probe", "Search", "budget_use", "say", "ProgressBar",
-           "DriveCase", "drive_case", "constant", "speed_sweeps"]
+__all__ = ["ERROR_DEFINITION", "MEASURES", "MEASURE_LABELS", "run_errors", "Probe", "Search", "budget_use",
+           "limiting_measure", "target_of", "steady_phase", "drive_phase", "say", "ProgressBar", "DriveCase",
+           "drive_case", "constant", "speed_sweeps"]
+
+#: the planner's error measures, one key each (docs/plan.md "Error measure"): relative RMS of DTE and
+#: mesh force, DTE peak-to-peak and mean, and mesh orders 1-3 of DTE and mesh force
+MEASURES = ("dte_rel", "mesh_force_rel", "dte_p2p_rel", "dte_mean_rel", "dte_h1_rel", "dte_h2_rel", "dte_h3_rel",
+            "mesh_force_h1_rel", "mesh_force_h2_rel", "mesh_force_h3_rel")
+#: a short label of every measure (text report)
+MEASURE_LABELS = {"dte_rel": "DTE rms", "mesh_force_rel": "force rms", "dte_p2p_rel": "DTE p2p",
+                  "dte_mean_rel": "DTE mean", "dte_h1_rel": "DTE h1", "dte_h2_rel": "DTE h2", "dte_h3_rel": "DTE h3",
+                  "mesh_force_h1_rel": "force h1", "mesh_force_h2_rel": "force h2", "mesh_force_h3_rel": "force h3"}
+MESH_ORDERS = 3              # mesh-order harmonics measured (1, 2, 3)
+#: floor of a harmonic's normalisation, as a share of the strongest of the full model's first
+#: MESH_ORDERS harmonics of that signal (CHOICE, docs/plan.md: 20 dB below the strongest order)
+HARMONIC_FLOOR = 0.1
 
 #: the planner's error measure, word for word (docs/plan.md "Error measure")
 ERROR_DEFINITION = (
     "per comparison run (a steady point of run_mesh_periods mesh periods from the quasi-static start, or "
     "one segment of 16 x run_mesh_periods communication steps of a transient) and for y = DTE and y = total "
-    "mesh force, sampled 16 times per mesh period at the run's top speed: rms(y - y_full) / rms(y_full) "
-    "over the run's samples (the target applies to this, the worst over all runs); also reported: "
-    "max|y - y_full| / (max y_full - min y_full)")
+    "mesh force, sampled 16 times per mesh period at the run's top speed, against the full-fidelity model's "
+    "y_full driven identically: rms(y - y_full) / rms(y_full) over the run's samples; over the run's window "
+    "(a steady point: the whole mesh periods of its second half; a transient segment: its last whole mesh "
+    "periods) |p2p(DTE) - p2p(DTE_full)| / p2p(DTE_full), |mean(DTE) - mean(DTE_full)| / p2p(DTE_full) and, "
+    "for mesh orders k = 1, 2, 3 of DTE and mesh force (peak amplitudes A_k, resampled at the rigid-body mesh "
+    "angle), |A_k - A_k,full| / max(A_k,full, 0.1 x max_j A_j,full); the DTE measures against the DTE target, "
+    "the mesh-force ones against the mesh-force target, each the worst over all runs, every one within its "
+    "target; also reported: max|y - y_full| / (max y_full - min y_full)")
 
 _SEGMENT_SAMPLES_PER_RUN_PERIOD = 16  # communication steps per mesh period at a case's top speed (CHOICE)
 _SWEEP_RUN_LENGTHS = 12               # a sweep lasts 12 x run_mesh_periods mesh periods at its mean speed
@@ -50,20 +70,112 @@ def _ratio(num: float, den: float) -> float:
     return num / den
 
 
-def run_errors(dte, force, dte_full, force_full) -> dict:
-    """The error measure of one comparison run (:data:`ERROR_DEFINITION`): relative RMS
-    ``dte_rel`` / ``mesh_force_rel`` and max-over-range ``dte_max_rel`` /
-    ``mesh_force_max_rel`` (dimensionless).  Non-finite samples give inf."""
+def target_of(key: str, dte_target: float, force_target: float) -> float:
+    """The target a measure is held to: the DTE target for the DTE measures, else the mesh-force one."""
+    return dte_target if key.startswith("dte") else force_target
+
+
+def steady_phase(n_samples: int, samples_per_mesh: int = 16) -> np.ndarray:
+    """Rigid-body mesh phase (mesh periods) of the samples of a constant-speed run sampled
+    ``samples_per_mesh`` times per mesh period from phase 0."""
+    return np.arange(int(n_samples)) / float(samples_per_mesh)
+
+
+def drive_phase(case, mesh_period_rad: float, with_start: bool = True) -> np.ndarray:
+    """Rigid-body mesh phase (mesh periods) of a drive's samples: the integral of its target
+    speed (linear within each step), divided by the mesh period angle (rad); ``with_start``:
+    a sample at the start (the native solver's row 0) comes first."""
+    w = np.concatenate(([case.pinion_speed_start_rad_s], np.asarray(case.speed_profile_rad_s, dtype=float)))
+    turn = np.concatenate(([0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * case.comm_step_s)))
+    ph = turn / float(mesh_period_rad)
+    return ph if with_start else ph[1:]
+
+
+def run_errors(dte, force, dte_full, force_full, mesh_phase=None, window_from: int = 0) -> dict:
+    """The error measures of one comparison run (:data:`ERROR_DEFINITION`, :data:`MEASURES`):
+    relative RMS ``dte_rel`` / ``mesh_force_rel`` over every sample, and over the window --
+    the whole mesh periods that end at the last sample, starting at or after sample
+    ``window_from`` -- ``dte_p2p_rel``, ``dte_mean_rel`` and the harmonic measures
+    ``dte_hK_rel`` / ``mesh_force_hK_rel`` (K = 1..3; :func:`gearfmu.dynamics.harmonics.mesh_order_amplitudes`
+    at ``mesh_phase``, the rigid-body mesh phase of every sample in mesh periods; None: 16
+    samples per mesh period at constant speed), all dimensionless; also ``dte_max_rel`` /
+    ``mesh_force_max_rel`` (max|diff| / range of the full signal, reported).  Non-finite
+    samples give inf."""
     out = {}
+    arrs = {}
     for key, a, b in (("dte", dte, dte_full), ("mesh_force", force, force_full)):
         a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        arrs[key] = (a, b)
         if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
             out[f"{key}_rel"] = out[f"{key}_max_rel"] = math.inf
             continue
         d = a - b
         out[f"{key}_rel"] = _ratio(float(np.sqrt(np.mean(d ** 2))), float(np.sqrt(np.mean(b ** 2))))
         out[f"{key}_max_rel"] = _ratio(float(np.max(np.abs(d))), float(np.max(b) - np.min(b)))
+    n = len(arrs["dte"][1])
+    ph = steady_phase(n) if mesh_phase is None else np.asarray(mesh_phase, dtype=float)
+    i0 = min(max(int(window_from), 0), n - 1)
+    span = float(ph[-1] - ph[i0]) if n else 0.0
+    for key in ("dte", "mesh_force"):
+        a, b = arrs[key]
+        hk = [f"{key}_h{k}_rel" for k in range(1, MESH_ORDERS + 1)]
+        extra = hk + (["dte_p2p_rel", "dte_mean_rel"] if key == "dte" else [])
+        if not (math.isfinite(out[f"{key}_rel"]) and math.isfinite(out[f"{key}_max_rel"])) or span < 1.0 - 1e-9:
+            bad = not math.isfinite(out[f"{key}_rel"])
+            for k in extra:  # no whole mesh period in the window: these measures say nothing
+                out[k] = math.inf if bad else 0.0
+            continue
+        ra = mesh_order_amplitudes(a[i0:], ph[i0:], orders=MESH_ORDERS)
+        rb = mesh_order_amplitudes(b[i0:], ph[i0:], orders=MESH_ORDERS)
+        floor = HARMONIC_FLOOR * float(np.max(rb.amplitudes))
+        for k, name in enumerate(hk):
+            out[name] = _ratio(abs(float(ra.amplitudes[k] - rb.amplitudes[k])), max(float(rb.amplitudes[k]), floor))
+        if key == "dte":
+            out["dte_p2p_rel"] = _ratio(abs(ra.peak_to_peak - rb.peak_to_peak), rb.peak_to_peak)
+            out["dte_mean_rel"] = _ratio(abs(ra.mean - rb.mean), rb.peak_to_peak)
     return out
+
+
+def case_errors(case, a: dict, b: dict, mesh_period_rad: float, run_mesh_periods: int, dte_target: float = 1.0,
+                force_target: float = 1.0, with_start: bool = True) -> dict:
+    """:func:`run_errors` of a drive (:class:`DriveCase`) run by two models: ``a`` / ``b`` dicts with
+    ``dte`` and ``mesh_force`` (``b`` the full model; ``with_start``: a first sample at the start,
+    as the native solver gives, else one per communication step at its end, as an FMU gives).
+    A steady drive (constant speed, torques and temperature) is one run whose window is the whole
+    mesh periods of its second half; a transient is cut into segments of 16 x ``run_mesh_periods``
+    steps and the segment of the largest budget use (``dte_target``, ``force_target``) is
+    returned.  ``window``: the sample range the result is of."""
+    ph = drive_phase(case, mesh_period_rad, with_start=with_start)
+    n = len(b["dte"])
+    steady = (np.ptp(case.speed_profile_rad_s) == 0.0 and np.ptp(case.pinion_torque_Nm) == 0.0
+              and np.ptp(case.gear_torque_Nm) == 0.0 and (case.temperature_C is None or np.ptp(case.temperature_C) == 0.0)
+              and case.speed_profile_rad_s[0] == case.pinion_speed_start_rad_s)
+    if steady:
+        e = run_errors(a["dte"], a["mesh_force"], b["dte"], b["mesh_force"], ph, n // 2)
+        e["window"] = [0, n]
+        return e
+    seg = _SEGMENT_SAMPLES_PER_RUN_PERIOD * int(run_mesh_periods)
+    best = None
+    for i0 in range(0, max(n - seg // 2, 1), seg):
+        sl = slice(i0, min(i0 + seg, n))
+        e = run_errors(a["dte"][sl], a["mesh_force"][sl], b["dte"][sl], b["mesh_force"][sl], ph[sl])
+        u = budget_use(e, dte_target, force_target)
+        if best is None or u > best[0]:
+            best = (u, e, [i0, sl.stop])
+    best[1]["window"] = best[2]
+    return best[1]
+
+
+def budget_use(m: dict, dte_target: float, force_target: float) -> float:
+    """max over the measures of :data:`MEASURES` present in ``m`` of measure / its target
+    (:func:`target_of`; 1 = exactly on target)."""
+    return max(m[k] / target_of(k, dte_target, force_target) for k in MEASURES if k in m)
+
+
+def limiting_measure(m: dict, dte_target: float, force_target: float) -> str:
+    """The measure of ``m`` with the largest share of its target (the one that limits the budget use)."""
+    keys = [k for k in MEASURES if k in m]
+    return max(keys, key=lambda k: m[k] / target_of(k, dte_target, force_target))
 
 
 _BAR = None  # the progress bar on stderr while one is shown (say() writes above it)
@@ -127,9 +239,19 @@ def _progress_iter(items, progress: bool, what: str):
             bar.update()
 
 
-def budget_use(m: dict, dte_target: float, force_target: float) -> float:
-    """max(DTE error / DTE target, force error / force target) (1 = exactly on target)."""
-    return max(m["dte_rel"] / dte_target, m["mesh_force_rel"] / force_target)
+#: a one-speed envelope is searched over the band of pinion speeds around it that its FMU accepts
+#: without a warning (docs/plan.md "Verification"; the FMU kernel's GK_ENV_SPEED_MARGIN, gearkernel.h)
+POINT_SPEED_MARGIN_REL = 0.1
+
+
+def search_speed_range(env) -> Tuple[float, float]:
+    """The pinion speed range (rad/s) the envelope search covers: the envelope's speed range, or
+    for a one-speed envelope w the band w (1 -/+ :data:`POINT_SPEED_MARGIN_REL`), which the FMU
+    treats as inside its verified envelope (its speed margin for the torsional vibration)."""
+    w0, w1 = env.speed_range_rad_s
+    if w1 > w0:
+        return (float(w0), float(w1))
+    return (float(w0) * (1.0 - POINT_SPEED_MARGIN_REL), float(w1) * (1.0 + POINT_SPEED_MARGIN_REL))
 
 
 @dataclass(frozen=True)
@@ -167,6 +289,14 @@ class Search:
         self._resonance: Optional[List[float]] = None
 
     # ---------------------------------------------------------------- probes
+    def mesh_period_rad(self) -> float:
+        """The pinion angle of one mesh period (rad), from the full tables."""
+        return float(self.ev.tables(self.full)[0].mesh_period_rad)
+
+    def speed_range_rad_s(self) -> Tuple[float, float]:
+        """The pinion speeds the search covers (rad/s): :func:`search_speed_range` of the envelope."""
+        return search_speed_range(self.env)
+
     def cases(self) -> Dict[str, object]:
         """The transient drives (:class:`DriveCase`) of the envelope, built once."""
         if self._cases is None:
@@ -175,7 +305,7 @@ class Search:
             mesh_rad = float(tb.mesh_period_rad)
             n_run = int(acc.run_mesh_periods)
             T_nom, w_nom = env.nominal_torque_Nm, env.nominal_speed_rad_s
-            (T0, T1), (w0, w1) = env.torque_range_Nm, env.speed_range_rad_s
+            (T0, T1), (w0, w1) = env.torque_range_Nm, self.speed_range_rad_s()
             tr = env.temperature_range_C
             t_mid = None if tr is None else 0.5 * (tr[0] + tr[1])
 
@@ -239,7 +369,7 @@ class Search:
                 (wu, fu), (wd, fd) = curves["run_up"], curves["run_down"]
                 diff = np.abs(fu - np.interp(wu, wd, fd))
                 out.append(float(wu[int(np.argmax(diff))]))
-        w0, w1 = self.env.speed_range_rad_s
+        w0, w1 = self.speed_range_rad_s()
         uniq: List[float] = []
         for w in out:
             w = min(max(w, w0), w1)
@@ -284,7 +414,7 @@ class Search:
         return () if t is None else tuple(float(x) for x in np.atleast_1d(t))
 
     def _speeds(self) -> List[float]:
-        w0, w1 = self.env.speed_range_rad_s
+        w0, w1 = self.speed_range_rad_s()
         vals = sorted({w0, w1, self.env.nominal_speed_rad_s} | set(self.resonance_speeds()))
         return [v for v in vals if v > 0]
 
@@ -296,22 +426,17 @@ class Search:
         ev, acc = self.ev, self.acc
         if probe.kind == "steady":
             a, b = ev.run(cfg, probe.point()), ev.run(self.full, probe.point())
-            m = run_errors(a["dte"], a["mesh_force"], b["dte"], b["mesh_force"])
+            n = len(b["dte"])  # the steady window: the whole mesh periods of the run's second half
+            m = run_errors(a["dte"], a["mesh_force"], b["dte"], b["mesh_force"], steady_phase(n), n // 2)
             m["where"] = {"case": "steady", "torque_Nm": probe.torque_Nm,
                           "speed_rpm": probe.speed_rad_s * 30 / math.pi, "temperature_C": probe.temperature_C}
         else:
             case = self.cases()[probe.kind]
             a, b = ev.run_drive(cfg, case), ev.run_drive(self.full, case)
-            seg = _SEGMENT_SAMPLES_PER_RUN_PERIOD * int(acc.run_mesh_periods)
+            m = case_errors(case, a, b, self.mesh_period_rad(), int(acc.run_mesh_periods), acc.dte_rel,
+                            acc.mesh_force_rel)
+            i0, i1 = m.pop("window")
             n = len(b["dte"])
-            best = None
-            for i0 in range(0, max(n - seg // 2, 1), seg):
-                sl = slice(i0, min(i0 + seg, n))
-                e = run_errors(a["dte"][sl], a["mesh_force"][sl], b["dte"][sl], b["mesh_force"][sl])
-                u = budget_use(e, acc.dte_rel, acc.mesh_force_rel)
-                if best is None or u > best[0]:
-                    best = (u, e, i0, sl.stop)
-            _, m, i0, i1 = best
             k = min(max((i0 + i1) // 2, 1), n - 1) - 1  # input row of the segment's middle step
             temp = None if case.temperature_C is None else float(case.temperature_C[k])
             m = dict(m)
@@ -319,6 +444,7 @@ class Search:
                           "torque_Nm": float(case.pinion_torque_Nm[k]),
                           "speed_rpm": float(case.speed_profile_rad_s[k]) * 30 / math.pi, "temperature_C": temp}
         m["u"] = budget_use(m, acc.dte_rel, acc.mesh_force_rel)
+        m["limit"] = limiting_measure(m, acc.dte_rel, acc.mesh_force_rel)
         return m
 
     def verify(self, cfg: dict, budget_runs: int, margin: float = 1.0) -> dict:
@@ -404,7 +530,19 @@ class Search:
         ok = (not exhausted) and worst["u"] <= margin
         return {"worst": worst, "worst_probe": worst_p, "native_runs": ev.native_runs - start,
                 "exhausted": exhausted, "within_target": bool(ok),
+                "worst_by_measure": worst_by_measure(seen.values(), [p.describe() for p in seen]),
                 "probes": [dict(seen[p], probe=p.describe()) for p in seen]}
+
+
+def worst_by_measure(rows, names) -> Dict[str, dict]:
+    """Per measure of :data:`MEASURES`: its largest ``value`` over ``rows`` (dicts of measures)
+    and the name (of ``names``) of the row where it is."""
+    out: Dict[str, dict] = {}
+    for m, name in zip(rows, names):
+        for k in MEASURES:
+            if k in m and (k not in out or m[k] > out[k]["value"]):
+                out[k] = {"value": float(m[k]), "at": name}
+    return out
 
 
 # ============================================================== verification drives

@@ -130,7 +130,8 @@ def test_fmi3_interface_same_names_arrays_and_resources(built):
     bd = build_description_flags(zipfile.ZipFile(c["fmi3"]).read("sources/buildDescription.xml").decode())
     assert "-ffp-contract=off" in bd["cflags"] and "-fno-fast-math" in bd["cflags"]
     assert not [f for f in bd["cflags"] if "fast-math" in f and f != "-fno-fast-math"]
-    assert bd["sources"] == ["fmi3_gear.c", "fmi_common.c", "gear_model.c", "gkfmu.c", "gearkernel.c"]
+    assert bd["sources"] == ["fmi3_gear.c", "fmi_common.c", "gear_model.c", "gkfmu.c", "gearkernel.c", "gk_model.c",
+                             "gk_stops.c", "gk_zones.c", "gk_temperature.c", "gk_envelope.c"]
     imp = set(zipfile.ZipFile(built["impacts"]["fmi3"]).namelist())
     ext = {"x86_64-windows": ".dll", "x86_64-darwin": ".dylib", "aarch64-darwin": ".dylib"}
     for t in FMI3_TUPLES:

@@ -87,7 +87,10 @@ def test_interface_matches_design_contract(fmus):
     assert md.defaultExperiment.stepSize == "0.0001"
     names = set(zipfile.ZipFile(fmus["a"]).namelist())
     for f in ("resources/tables.json", "resources/tables.bin", "resources/kernel_src/gearkernel.c",
-              "resources/kernel_src/gearkernel.h", "resources/kernel_src/gkfmu.c", "resources/kernel_src/gkfmu.h",
+              "resources/kernel_src/gearkernel.h", "resources/kernel_src/gk_internal.h",
+              "resources/kernel_src/gk_lookup.h", "resources/kernel_src/gk_model.c", "resources/kernel_src/gk_stops.c",
+              "resources/kernel_src/gk_zones.c", "resources/kernel_src/gk_temperature.c",
+              "resources/kernel_src/gk_envelope.c", "resources/kernel_src/gkfmu.c", "resources/kernel_src/gkfmu.h",
               "resources/scene.toml", "resources/provenance.json"):
         assert f in names
     prov = json.loads(zipfile.ZipFile(fmus["a"]).read("resources/provenance.json"))

@@ -66,12 +66,12 @@ def test_simulate_the_example_gearbox(tmp_path, capsys):
     out = tmp_path / "run.csv"
     assert main(["simulate", str(EXAMPLE), "--stop-time", "0.01", "-o", str(out), "-q"]) == 0
     assert "simulated 0.01 s of gearbox_two_stage" in capsys.readouterr().out
-    head = out.read_text().splitlines()[0].split(",")
-    assert head[:3] == ["time [s]", "motor_angle [rad]", "motor_speed [rad/s]"]
-    assert "stage2.pair_force[1] [N]" in head and "intermediate_shaft.torque [N*m]" in head
-    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    units, names = (line.split(",") for line in out.read_text().splitlines()[:2])
+    assert names[:3] == ["time", "motor_angle", "motor_speed"] and units[:3] == ["# units: s", "rad", "rad/s"]
+    assert "stage2.pair_force[1]" in names and units[names.index("intermediate_shaft.torque")] == "N*m"
+    data = np.loadtxt(out, delimiter=",", skiprows=2)
     assert data.shape[0] == 101
-    col = {h.split(" [")[0]: data[:, i] for i, h in enumerate(head)}
+    col = {h: data[:, i] for i, h in enumerate(names)}
     ratio = (71 / 19) * (55 / 17)
     assert np.mean(col["load_speed"]) * ratio == pytest.approx(np.mean(col["motor_speed"]), rel=1e-3)
     # the shafts carry the motor torque times the ratios (balanced start, small vibration about it)

@@ -100,3 +100,29 @@ def test_bad_input_is_rejected_with_the_field_named():
     with pytest.raises(HarmonicsInputError, match="NaN"):
         mesh_harmonics(bad, samples_per_revolution=512, teeth=N_TEETH)
     assert issubclass(HarmonicsInputError, ValueError)
+
+
+def test_mesh_order_amplitudes_closed_form_at_constant_and_varying_speed():
+    """Closed form: c + sum_k a_k cos(2 pi k phi + p_k) over whole mesh periods has mean c and
+    mesh-order peak amplitudes a_k.  At constant speed the samples are used as they are (exact to
+    round-off); on a run-up (phi = 10 t + 8 t^2, samples uniform in time) the record is resampled
+    uniformly in phi (cubic spline) before the DFT."""
+    from gearfmu.dynamics.harmonics import mesh_order_amplitudes
+
+    a = [2.0e-6, 0.5e-6, 0.1e-6]
+
+    def sig(ph):
+        return 7e-6 + sum(ak * np.cos(2 * np.pi * (k + 1) * ph + 0.7 * k) for k, ak in enumerate(a))
+    ph = np.arange(16 * 30 + 1) / 16
+    r = mesh_order_amplitudes(sig(ph), ph)
+    assert r.periods == 30 and r.samples_per_period == 16
+    assert np.allclose(r.amplitudes, a, rtol=1e-10, atol=0.0) and r.mean == pytest.approx(7e-6, rel=1e-12)
+    t = np.linspace(0.0, 1.0, 1201)
+    ph = 10 * t + 8 * t ** 2
+    r = mesh_order_amplitudes(sig(ph), ph)
+    assert r.periods == 18
+    assert np.allclose(r.amplitudes, a, rtol=1e-4, atol=0.0) and r.mean == pytest.approx(7e-6, rel=1e-6)
+    with pytest.raises(HarmonicsInputError, match="mesh_phase"):
+        mesh_order_amplitudes(sig(ph), ph[::-1])
+    with pytest.raises(HarmonicsInputError, match="at least one"):
+        mesh_order_amplitudes(sig(ph[:10]), ph[:10] * 0.01)

@@ -16,7 +16,6 @@ References (none produced by gearfmu code):
 * the C kernel (gearfmu/fmu/kernel/gearkernel.c) through ctypes, a second,
   independent implementation of docs/model.md.
 """
-import ctypes
 import dataclasses
 import math
 
@@ -25,6 +24,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gearfmu.fmu.pythonfmu_build import FmuBuildError, build_fmu, compile_kernel
+from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.common.vocabulary import DEFAULT_INTEGRATOR, INTEGRATORS
 from gearfmu.dynamics.native import NativeInputError, choose_max_step_s, simulate, simulate_sdof
 from gearfmu.tables.synthetic import rectangular_wave_tables
@@ -281,29 +281,30 @@ def test_sdof_rk4_kink_fourth_order_vs_reference():
 # ------------------------------------------------------------ C kernel
 @pytest.fixture(scope="module")
 def clib(tmp_path_factory):
-    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("kernel"))))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_set_integrator.argtypes = [p, i]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("kernel")))
 
 
-def run_c(L, tb, T1, T2, w0, zeta, model, x0, H, n, hmax, integrator):
+def run_c(L, tb, T1, T2, w0, zeta, model, x0, H, n, hmax, integrator, cuts=None):
+    """n communication steps of the C kernel from theta1 = 0, omega1 = w0, x = x0, v = 0 (x0 None:
+    gk_initialize's quasi-static start); ``cuts``: contact-zone cuts of gk_zone_cuts to read.
+    Returns the states (4, n + 1) and the mesh force after every step."""
     k = np.ascontiguousarray(tb.k_N_per_m)
     e = np.ascontiguousarray(tb.e_m)
     b = np.ascontiguousarray(tb.backlash_half_m)
     tq = np.ascontiguousarray(tb.torque_Nm, dtype=float)
     m = np.zeros(L.gk_sizeof_model() // 8 + 2)
-    s = np.array([0.0, w0, x0, 0.0])
+    s = np.array([0.0, w0, 0.0 if x0 is None else x0, 0.0])
     out = np.zeros(L.gk_n_outputs(tb.slots))
     assert L.gk_init(m.ctypes.data, tb.slots, tb.n_phi, len(tq), tq.ctypes.data, k.ctypes.data,
                      e.ctypes.data, b.ctypes.data, tb.phi_period_rad, tb.base_radius_pinion_m,
                      tb.base_radius_gear_m, tb.inertia_pinion_kgm2, tb.inertia_gear_kgm2,
                      tb.k_mean_N_per_m) == 0
+    if cuts is not None:
+        assert L.gk_set_zone_cuts(m.ctypes.data, cuts.ctypes.data) == 0
     assert L.gk_set_damping(m.ctypes.data, zeta, model) == 0
     assert L.gk_set_integrator(m.ctypes.data, integrator) == 0
+    if x0 is None:
+        assert L.gk_initialize(m.ctypes.data, s.ctypes.data, 0.0, w0, T1) == 0
     rows, forces = [s.copy()], [np.nan]
     for _ in range(n):
         assert L.gk_do_step(m.ctypes.data, s.ctypes.data, T1, T2, H, hmax, out.ctypes.data) == 0

@@ -9,13 +9,13 @@ References (none produced by gearfmu code):
 * hand-solved static balances of parallel springs with gaps,
 * numpy.interp (independent periodic linear interpolation).
 """
-import ctypes
 import math
 
 import numpy as np
 import pytest
 
 from gearfmu.fmu.pythonfmu_build import compile_kernel
+from gearfmu.fmu.runtime.kernel_api import load_kernel
 
 RB1, RB2, I1, I2 = 0.05, 0.075, 0.002, 0.006
 ME = I1 * I2 / (I1 * RB2 ** 2 + I2 * RB1 ** 2)  # seed 003: equivalent mass
@@ -24,17 +24,7 @@ PHI = 2 * 2 * math.pi / 20  # two mesh periods of a 20-tooth pinion
 
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
-    path = compile_kernel(tmp_path_factory.mktemp("kernel"))
-    L = ctypes.CDLL(str(path))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_initialize.argtypes = [p, p, d, d, d]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    L.gk_outputs.argtypes = [p, p, d, p]
-    L.gk_substeps.argtypes = [d, d]
-    L.gk_substeps.restype = d
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("kernel")))
 
 
 class Kernel:

@@ -10,13 +10,13 @@ import subprocess
 import pytest
 
 from gearfmu.fmu import crossbuild
-from gearfmu.fmu.standalone_build import KERNEL_SOURCE, LAYER_SOURCES, STANDALONE_CFLAGS, copy_sources
+from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources, copy_sources
 
 
 @pytest.fixture
 def counted_compiles(monkeypatch, tmp_path):
     if crossbuild.zig_command() is None:
-        pytest.fail("zig C compiler missing: pip install 'gearfmu[cross]'")
+        pytest.fail("zig C compiler missing: pip install . (ziglang is a gearfmu dependency)")
     monkeypatch.setenv("GEARFMU_CACHE_DIR", str(tmp_path / "cache"))
     calls = []
     real = subprocess.run
@@ -32,14 +32,14 @@ def counted_compiles(monkeypatch, tmp_path):
 
 def _build(src, out, identifier):
     return crossbuild.build_binaries(["x86_64-linux"], src, out, identifier, cflags=STANDALONE_CFLAGS,
-                                     layer_source=LAYER_SOURCES, kernel_source=KERNEL_SOURCE.name)
+                                     sources=binary_sources(2))
 
 
 def test_second_build_links_kept_objects(counted_compiles, tmp_path):
     src = copy_sources(tmp_path / "src")
     _build(src, tmp_path / "a", "gear_a")
     compiles = [c for c in counted_compiles if "-c" in c]
-    assert len(compiles) == len(LAYER_SOURCES) + 1, compiles  # one per source
+    assert len(compiles) == len(binary_sources(2)), compiles  # one per source
     counted_compiles.clear()
     _build(src, tmp_path / "b", "gear_a")
     assert not [c for c in counted_compiles if "-c" in c], "the second build compiled again"
@@ -49,7 +49,7 @@ def test_second_build_links_kept_objects(counted_compiles, tmp_path):
     assert lib_a == lib_b
 
     counted_compiles.clear()
-    kernel = src / KERNEL_SOURCE.name
+    kernel = src / "gearkernel.c"
     kernel.write_text(kernel.read_text() + "\n/* changed */\n")
     _build(src, tmp_path / "c", "gear_a")
     assert len([c for c in counted_compiles if "-c" in c]) == 1   # only the changed source

@@ -233,7 +233,9 @@ def test_tight_target_keeps_loose_target_drops(tmp_path, small):
 
 
 def test_thermal_choice_and_temperature_axis(tmp_path):
-    text = PLAIN.replace("torque_range_Nm = [80.0, 200.0]", "temperature_range_C = [30.0, 90.0]")
+    # a narrow temperature range: over 30..90 degC the seed 004 stiffness change moves the DTE
+    # harmonics by more than any target allows (docs/plan.md "Error measure"), so thermal is kept
+    text = PLAIN.replace("torque_range_Nm = [80.0, 200.0]", "temperature_range_C = [30.0, 36.0]")
     loose = text.replace("run_mesh_periods = 10", "run_mesh_periods = 10\ndte_rel_error = 1.0\n"
                                                   "mesh_force_rel_error = 1.0")
     s = _scene(tmp_path, loose)
@@ -243,7 +245,7 @@ def test_thermal_choice_and_temperature_axis(tmp_path):
     assert th.measured[0]["tvms_rel"] > 0  # seed 004: the mesh stiffness changes with temperature
     assert p.chosen["thermal"] is False and planned_scene(s, p).thermal is None  # no temperature input
     full = full_scene(s, p)
-    assert full.thermal.temperature_axis_C == (30.0, 60.0, 90.0)
+    assert full.thermal.temperature_axis_C == (30.0, 33.0, 36.0)
 
 
 # ------------------------------------------------------------------ verification: FMU and native
@@ -352,7 +354,10 @@ def test_cli_plan_json(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ verification through the FMUs
-WARM = SMALL.replace("[tables]", """[thermal]
+# tooth 3's own deviation is kept small here (5.5 um against the 5 um default): dropping it moves the DTE
+# peak-to-peak by ~2 %, within a 5 % target (SMALL's 12 um moves it by ~25 %)
+WARM = SMALL.replace("index = 3\nprofile_form_um = 12.0", "index = 3\nprofile_form_um = 5.5").replace(
+    "[tables]", """[thermal]
 temperature_axis_C = [20.0, 55.0, 90.0]
 
 [tables]""").replace("slices = 8", "slices = 4").replace("speed_rpm = 1000.0", "speed_rpm = 1500.0").replace(
@@ -468,27 +473,41 @@ def test_warm_up_run_up_duty_cycle_through_fmus_thermal_kept(tmp_path):
 
 
 def test_warm_up_through_fmus_thermal_dropped_compared_at_the_same_temperatures(tmp_path):
-    """Target 30 %: the planner drops thermal; the planned FMU has no temperature input
-    and runs at the standard-temperature stiffness while the full FMU follows the
-    temperature ramp; the measured error is still within the target."""
+    """Target 30 %: over 20..90 degC the seed 004 stiffness moves the resonance, so dropping thermal
+    changes the DTE and mesh-force harmonics by more than the target (docs/plan.md "Error
+    measure") and the planner keeps it.  The FMUs confirm why: the same plan with thermal dropped by
+    hand gives a planned FMU without a temperature input, run at the standard-temperature stiffness
+    while the full FMU follows the temperature ramp, and its confirmation names the cases and the
+    measures above the target."""
+    import dataclasses
+
     import fmpy
 
+    from gearfmu.plan import verify_fmus
+    from gearfmu.plan_verify import MEASURES
+
     s = _warm_scene(tmp_path, 0.3)
-    plan = plan_scene(s, measure_fmu=True, fmu_dir=str(tmp_path / "fmus"))
-    assert plan.chosen["thermal"] is False
-    fv = plan.fmu_verification
+    plan = plan_scene(s)
+    th = plan.choices["thermal"].measured[0]
+    assert plan.chosen["thermal"] is True and plan.within_target
+    assert max(th[k] for k in MEASURES) > 0.8 * 0.3  # more than the room the safety factor leaves
+    dropped = dataclasses.replace(plan, chosen=dict(plan.chosen, thermal=False), fmu_verification={})
+    fv = verify_fmus(s, dropped, fmu_dir=str(tmp_path / "fmus"))
     names = {v.name for v in fmpy.read_model_description(fv["fmus"]["chosen"]["fmu_path"]).modelVariables}
     assert "bulk_temperature" not in names
-    assert fv["cases"]["warm_up"]["temperature_input"] == {"full": "bulk_temperature", "chosen": None}
-    _check_fmu_verification(plan, fv, 0.3)
-    # temperature matters in the comparison: the warm-up error exceeds the kept-thermal plan's 5 % target
-    assert max(fv["cases"]["warm_up"]["dte_rel"], fv["cases"]["warm_up"]["mesh_force_rel"]) > 0.05
-    # `gearfmu build` of the scene follows the same plan: no temperature input either
+    wu = fv["cases"]["warm_up"]
+    assert wu["temperature_input"] == {"full": "bulk_temperature", "chosen": None}
+    # temperature matters in the comparison: the warm-up is above the target, the report names the measures
+    assert not fv["within_target"] and not wu["within_target"] and wu["above"] and wu["limit"] in wu["above"]
+    for c in fv["cases"].values():
+        assert c["angle_tracking_rel"] < 1e-4 and set(MEASURES) <= set(c)
+    txt = format_report(dataclasses.replace(dropped, fmu_verification=fv))
+    assert "NOT within target: the FMU confirmation has a case ABOVE the target (" in txt and "warm_up: " in txt
+    # `gearfmu build` of the scene follows the plan: thermal kept, the temperature axis in the FMU
     from gearfmu.pipeline import build
 
     res = build(s, tmp_path / "built.fmu")
-    assert res.plan.chosen == plan.chosen and not res.tables.has_temperature_axis
-    assert "bulk_temperature" not in {v.name for v in fmpy.read_model_description(str(res.fmu_path)).modelVariables}
+    assert res.plan.chosen == plan.chosen and res.tables.has_temperature_axis
 
 
 LUBRICANT = """

@@ -204,20 +204,10 @@ def test_engagement_checks():
 # ---------------------------------------------------------------- the C kernel, bit for bit
 @pytest.fixture(scope="module")
 def clib(tmp_path_factory):
-    import ctypes
-
     from gearfmu.fmu.pythonfmu_build import compile_kernel
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
 
-    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("kernel"))))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_set_integrator.argtypes = [p, i]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    L.gk_initialize.argtypes = [p, p, d, d, d]
-    L.gk_zone_cuts.argtypes = [i, i, d, d, d, d, p]
-    L.gk_set_zone_cuts.argtypes = [p, p]
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("kernel")))
 
 
 def _c_cuts(L, t):
@@ -243,28 +233,11 @@ def replace_engagement(t, a, b):
 
 
 def _run_c(L, t, T1, T2, w0, zeta, model, H, n, hmax, integrator, edges=True):
-    k = np.ascontiguousarray(t.k_N_per_m)
-    e = np.ascontiguousarray(t.e_m)
-    b = np.ascontiguousarray(t.backlash_half_m)
-    tq = np.ascontiguousarray(t.torque_Nm, dtype=float)
-    m = np.zeros(L.gk_sizeof_model() // 8 + 2)
-    s = np.zeros(4)
-    out = np.zeros(L.gk_n_outputs(t.slots))
-    assert L.gk_init(m.ctypes.data, t.slots, t.n_phi, len(tq), tq.ctypes.data, k.ctypes.data, e.ctypes.data,
-                     b.ctypes.data, t.phi_period_rad, t.base_radius_pinion_m, t.base_radius_gear_m,
-                     t.inertia_pinion_kgm2, t.inertia_gear_kgm2, t.k_mean_N_per_m) == 0
+    from test_integrators import run_c
+
     st, cuts = _c_cuts(L, t)
-    if edges:
-        assert st == 0 and L.gk_set_zone_cuts(m.ctypes.data, cuts.ctypes.data) == 0
-    assert L.gk_set_damping(m.ctypes.data, zeta, model) == 0
-    assert L.gk_set_integrator(m.ctypes.data, integrator) == 0
-    assert L.gk_initialize(m.ctypes.data, s.ctypes.data, 0.0, w0, T1) == 0
-    rows, forces = [s.copy()], [np.nan]
-    for _ in range(n):
-        assert L.gk_do_step(m.ctypes.data, s.ctypes.data, T1, T2, H, hmax, out.ctypes.data) == 0
-        rows.append(s.copy())
-        forces.append(out[5])
-    return np.array(rows).T, np.array(forces)
+    assert st == 0 or not edges
+    return run_c(L, t, T1, T2, w0, zeta, model, None, H, n, hmax, integrator, cuts=cuts if edges else None)
 
 
 def _dyn_tables(two_rows):

@@ -19,7 +19,6 @@ References, none produced by gearfmu:
 * the FMI 2.0 standard for the interface: fmi2Discard and a log message for a
   rejected step, the value restored by fmi2SetFMUstate.
 """
-import ctypes
 import json
 import math
 from pathlib import Path
@@ -32,6 +31,7 @@ import pytest
 from gearfmu.common.vocabulary import INTEGRATORS
 from gearfmu.fmu.compare import native_columns, output_names
 from gearfmu.fmu.pythonfmu_build import build_fmu, compile_kernel
+from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.fmu.modeldesc import expand_variables, load_spec
 from gearfmu.dynamics.native import NativeInputError, simulate
 from gearfmu.pipeline import compute_tables
@@ -131,16 +131,7 @@ def test_version_2_with_an_unknown_operating_axis_is_rejected(tabs, tmp_path):
 # -------------------------------------------------------------- the C kernel
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
-    L = ctypes.CDLL(str(compile_kernel(tmp_path_factory.mktemp("k"))))
-    d, i, p = ctypes.c_double, ctypes.c_int, ctypes.c_void_p
-    L.gk_init.argtypes = [p, i, i, i, p, p, p, p, d, d, d, d, d, d]
-    L.gk_set_damping.argtypes = [p, d, i]
-    L.gk_set_temperature_axis.argtypes = [p, i, p]
-    L.gk_set_temperature.argtypes = [p, d]
-    L.gk_initialize.argtypes = [p, p, d, d, d]
-    L.gk_do_step.argtypes = [p, p, d, d, d, d, p]
-    L.gk_outputs.argtypes = [p, p, d, p]
-    return L
+    return load_kernel(compile_kernel(tmp_path_factory.mktemp("k")))
 
 
 class Kernel:

@@ -40,6 +40,11 @@ Choices (written here and in docs/seed003.md)
   sweeps in :mod:`gearfmu.dynamics.sweeps` do.  No window is applied (a boxcar window is
   exact for whole periods).
 
+:func:`mesh_order_amplitudes` is the order-tracking companion the fidelity planner's error
+measure uses (docs/plan.md "Error measure"): peak amplitudes of mesh orders 1..k over the last
+whole mesh periods of a record, resampled uniformly in the rigid-body mesh angle when the speed
+varies.
+
 All functions are pure; inputs are numpy arrays in any unit (the amplitudes
 come out in the unit of the signal).
 """
@@ -57,6 +62,8 @@ __all__ = [
     "mesh_harmonics",
     "NORMALIZATIONS",
     "DEFAULT_BANDWIDTH_ORDERS",
+    "OrderAmplitudes",
+    "mesh_order_amplitudes",
 ]
 
 #: accepted values of ``normalization`` -> factor applied to the RMS amplitudes
@@ -175,3 +182,69 @@ def mesh_harmonics(signal, *, samples_per_revolution: float, teeth: int, harmoni
     return MeshHarmonics(A_r=A, A_rms=float(math.sqrt(float(np.sum(A ** 2)))), orders=orders, W=W,
                          revolutions=float(revs), teeth=teeth, bandwidth_orders=bw,
                          normalization=normalization, mean=float(np.mean(signal)))
+
+
+@dataclass
+class OrderAmplitudes:
+    """Result of :func:`mesh_order_amplitudes` (in the unit of the signal).
+
+    ``amplitudes[k-1]``: peak amplitude of mesh order k (a x cos(2 pi k phi + p) gives a);
+    ``mean``: of the resampled window (its DFT bin 0); ``peak_to_peak``: max - min of the
+    samples inside the window; ``periods``: whole mesh
+    periods in the window; ``samples_per_period``: of the uniform resampling in mesh angle;
+    ``window``: (first, last) mesh phase of the window (mesh periods)."""
+
+    amplitudes: np.ndarray
+    mean: float
+    peak_to_peak: float
+    periods: int
+    samples_per_period: int
+    window: tuple
+
+
+def mesh_order_amplitudes(signal, mesh_phase, *, orders: int = 3, periods=None) -> OrderAmplitudes:
+    """Peak amplitudes of mesh orders 1..``orders`` over the last whole mesh periods of a record
+    (order tracking: the record resampled uniformly in mesh angle, then one DFT).
+
+    ``mesh_phase``: the rigid-body mesh angle of every sample in mesh periods (pinion angle /
+    mesh period angle; strictly increasing; at constant speed the sample times in mesh
+    periods).  The window is the largest whole number of mesh periods that ends at the last
+    sample (at most ``periods``).  Where the samples do not fall on a uniform grid of the mesh
+    angle (the speed varies), the signal is resampled at M points per mesh period by a cubic
+    spline through the samples (M: the record's mean density rounded, at least 2 x orders + 2);
+    on a uniform grid the samples are used as they are.  Then, with x_j the N M resampled
+    values, A_k = 2 |sum_j x_j exp(-2 pi i k j / M)| / (N M), exact for a signal whose
+    content lies at whole mesh orders below M / 2 (no leakage: whole periods, no window)."""
+    x = np.asarray(signal, dtype=float)
+    p = np.asarray(mesh_phase, dtype=float)
+    if x.ndim != 1 or x.shape != p.shape or x.size < 4:
+        raise HarmonicsInputError(f"signal, mesh_phase: expected two 1-D arrays of the same length >= 4, "
+                                  f"got shapes {x.shape} and {p.shape}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(p))):
+        raise HarmonicsInputError("signal, mesh_phase: contain NaN or infinite values")
+    if np.any(np.diff(p) <= 0):
+        raise HarmonicsInputError("mesh_phase: must be strictly increasing")
+    if isinstance(orders, bool) or int(orders) != orders or int(orders) < 1:
+        raise HarmonicsInputError(f"orders: must be a positive integer, got {orders!r}")
+    orders = int(orders)
+    span = float(p[-1] - p[0])
+    n_per = int(math.floor(span + 1e-9))
+    if periods is not None:
+        n_per = min(n_per, int(periods))
+    if n_per < 1:
+        raise HarmonicsInputError(f"mesh_phase: the record spans {span:.6g} mesh periods; at least one is needed")
+    m = max(int(round((x.size - 1) / span)), 2 * orders + 2)
+    p0 = float(p[-1]) - n_per
+    q = p0 + np.arange(n_per * m) / m  # the periodic grid: the window's end (= its start) not repeated
+    i0 = max(int(np.searchsorted(p, p0, side="left")) - 3, 0)
+    j0 = x.size - 1 - n_per * m
+    if j0 >= 0 and np.allclose(p[j0:x.size - 1], q, rtol=0.0, atol=1e-9):  # already uniform in mesh angle
+        xq = x[j0:x.size - 1]
+    else:
+        from scipy.interpolate import CubicSpline  # only where the speed varies
+        xq = CubicSpline(p[i0:], x[i0:])(q)
+    spec = np.fft.rfft(xq) / xq.size
+    amp = np.array([2.0 * abs(spec[k * n_per]) for k in range(1, orders + 1)])  # k n_per < N M / 2
+    inside = x[p >= p0 - 1e-9]
+    return OrderAmplitudes(amplitudes=amp, mean=float(np.mean(xq)), peak_to_peak=float(np.ptp(inside)),
+                           periods=n_per, samples_per_period=m, window=(p0, float(p[-1])))

@@ -12,6 +12,8 @@
 * :func:`_seg_substep` -- one substep of 'rk4_seg': rk4_node's segments running
   only between contact-zone edges, every evaluation in its own table cell, RK4 in
   the shifted velocities (docs/model.md "rk4_seg").
+* :func:`_event_substep` -- the event-location loop of the three, written once
+  (gearkernel.c event_substep); each of them compiles it with its own right-hand side.
 
 Operation by operation the arithmetic of gearfmu/fmu/kernel/gearkernel.c
 (bitwise agreement).  The kernels take the tables as the ``tab`` tuple of
@@ -439,126 +441,6 @@ def _switch_pair(md, p, j, q, model, kv, ev, es, bv, x, v, om, c):
 
 
 @njit(cache=True, error_model="numpy")
-def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
-    """Advance one substep of length h with the rk4_kink integrator (docs/model.md).
-    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place.
-
-    The held segment [lo, hi) (wk[16], wk[17], global node indices) is the cell nd
-    for rk4_kink.  With ``node`` (the 'rk4_node' integrator) it runs from flagged
-    node to flagged node (:func:`gearfmu.dynamics.model_rhs._node_flags`; the tables
-    are linear across the nodes inside, so the held cell's interpolant is theirs):
-    at the start of every RK4 step the held cell moves to the cell of theta1 when
-    that lies in the segment; the flagged node ahead within the remaining substep
-    is not located by a trial step and the root finder: its crossing time is
-    predicted from theta1' = omega1 (:func:`_node_time`), the RK4 step ends there,
-    and when no pair guard is negative at that end the segment switches to the
-    next one as at a located node event; when a pair guard is negative the
-    prediction is dropped and the rk4_kink trial and location follow.  Without
-    ``node`` the arithmetic is that of rk4_kink exactly."""
-    n_phi = tab[7]
-    p = tab[8]
-    dphi = tab[9]
-    c = tab[10]
-    model = tab[11]
-    n_guard = 2 + 3 * p
-    i0, i1 = _cell_nodes(nd, n_phi)
-    rem = h
-    nev = 0
-    while True:
-        if node:
-            cn = np.floor(th * tab[12])
-            if cn + 1.0 > wk[16] and cn < wk[17] and cn != nd:
-                nd = cn
-                i0, i1 = _cell_nodes(nd, n_phi)
-                _zone_sel(tab, md, nd, i0, wk[16], wk[17])
-        fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
-        if node and nev < KINK_MAX_EVENTS:
-            tau = _node_time(th, om, fb, rem, wk[16], wk[17], dphi)
-            if tau > 0.0:
-                ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
-                if _pairs_hold(tab, md, ta, tb, tc, td, nd, i0, i1):
-                    nd = _seg_cross(tab, wk, om > 0.0, True)
-                    th, om, x, v = ta, tb, tc, td
-                    rem = rem - tau
-                    nev += 1
-                    i0, i1 = _cell_nodes(nd, n_phi)
-                    _zone_sel(tab, md, nd, i0, wk[16], wk[17])
-                    _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
-                    if not rem > 0.0:
-                        break
-                    continue
-        ta, tb, tc, td = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, rem, nd, i0, i1)
-        if nev >= KINK_MAX_EVENTS:
-            th, om, x, v = ta, tb, tc, td
-            nd = np.floor(th * tab[12])
-            i0, i1 = _cell_nodes(nd, n_phi)
-            _seg_start(tab, wk, nd, node, om, th)
-            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
-            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
-            break
-        # scan the guards at the trial end: cheap test first (one lookup per pair)
-        any_neg = (ta - wk[16] * dphi < 0.0) or (wk[17] * dphi - ta < 0.0)
-        if not any_neg:
-            w = (ta - nd * dphi) * tab[12]
-            for j in range(p):
-                kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
-                rj = md[j]
-                sj = md[p + j]
-                if (_pair_guard(0, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
-                        or _pair_guard(1, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0
-                        or _pair_guard(2, kv, ev, es, bv, tc, td, tb, c, model, rj, sj) < 0.0):
-                    any_neg = True
-                    break
-        if not any_neg:
-            th, om, x, v = ta, tb, tc, td
-            break
-        best = 2.0
-        best_gi = -1
-        have_f1 = False
-        for gi in range(n_guard):
-            g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
-            if g < 0.0:
-                if not have_f1:
-                    _put4(wk, 0, th, om, x, v)
-                    _put4(wk, 4, fa, fb, fc, fd)
-                    _put4(wk, 8, ta, tb, tc, td)
-                    ga_, gb_, gc_, gd_ = _deriv_locked(tab, dyn, md, ta, tb, tc, td, nd, i0, i1)
-                    _put4(wk, 12, ga_, gb_, gc_, gd_)
-                    have_f1 = True
-                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
-                if s < best:
-                    best = s
-                    best_gi = gi
-        if best_gi < 0:
-            th, om, x, v = ta, tb, tc, td
-            break
-        # step exactly to the event, then switch the mode
-        if best >= 1.0:
-            th, om, x, v = ta, tb, tc, td
-            rem = 0.0
-        elif best > 0.0:
-            tau = best * rem
-            th, om, x, v = _rk4_locked(tab, dyn, md, th, om, x, v, fa, fb, fc, fd, tau, nd, i0, i1)
-            rem = rem - tau
-        nev += 1
-        if best_gi < 2:
-            nd = _seg_cross(tab, wk, best_gi == 1, node)
-            i0, i1 = _cell_nodes(nd, n_phi)
-            _zone_sel(tab, md, nd, i0, wk[16], wk[17])
-            _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
-        else:
-            j = (best_gi - 2) // 3
-            kv = ev = es = bv = 0.0
-            if md[j] == 0 and model == 0:   # _switch_pair's sub-mode decision reads the tables
-                w = (th - nd * dphi) * tab[12]
-                kv, ev, es, bv = _kvals_sel(tab, j, i0, i1, w, md[3 * p + j])
-            _switch_pair(md, p, j, (best_gi - 2) - 3 * j, model, kv, ev, es, bv, x, v, om, c)
-        if not rem > 0.0:
-            break
-    return th, om, x, v, nd, nev
-
-
-@njit(cache=True, error_model="numpy")
 def _seg_true(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi):
     """(omega1, v) of the shifted state (theta1, Omega, x, V) (rk4_seg)."""
     gw, gv = _seg_gains(dyn)
@@ -645,18 +527,91 @@ def _seg_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi):
     return om, v, True
 
 
-@njit(cache=True, error_model="numpy")
-def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
-    """Advance one substep of length h with the rk4_seg integrator (docs/model.md "rk4_seg").
-    Returns (theta1, omega1, x, v, nd, events); the mode md is updated in place.
+# ------------------------------------------------------------------ event location
+# One substep of rk4_kink, rk4_node and rk4_seg, the loop written once (gearkernel.c
+# event_substep): the helpers below pick the right-hand side, step, state and guards of the
+# integrator by ``seg``, a constant of each caller (_kink_substep, _seg_substep), so numba
+# compiles each caller with its own branch only.
 
-    rk4_node's held segments, stops and event location, with two changes: the segments run
-    from contact-zone cut to contact-zone cut (and the nodes where the contact_zone flag kpos
-    can change, :func:`gearfmu.dynamics.model_rhs._seg_flags`), and every evaluation reads
-    the tables in the cell of its own theta1 clamped to the segment, so the tables' piecewise
-    linear interpolant is integrated exactly; the RK4 steps integrate the shifted state
-    (theta1, Omega, x, V) of :func:`gearfmu.dynamics.seg_rhs._seg_rhs`, whose right-hand
-    side has no jump at the table nodes (the e-slope damping term is moved into the state)."""
+@njit(cache=True, error_model="numpy", inline="always")
+def _first_stage(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi, gw, seg):
+    """The first RK4 stage at the state: (omega, v of the integrated state -- rk4_seg: the shifted
+    Omega, V --, the stage f (4), omega1' for the node prediction)."""
+    if seg:
+        wo, wv, fa, fb, fc, fd, sk = _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi)
+        return wo, wv, fa, fb, fc, fd, fb + gw * (sk * om)
+    fa, fb, fc, fd = _deriv_locked(tab, dyn, md, th, om, x, v, nd, i0, i1)
+    return om, v, fa, fb, fc, fd, fb
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _held_step(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, h, nd, i0, i1, lo, hi, seg):
+    """An RK4 step of length h, first stage given, mode held (rk4_seg: of the shifted state)."""
+    if seg:
+        return _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, h, nd, i0, i1, lo, hi)
+    return _rk4_locked(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, h, nd, i0, i1)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _held_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi, seg):
+    """The right-hand side, mode held (rk4_seg: in the shifted state)."""
+    if seg:
+        fa, fb, fc, fd, sk = _seg_rhs(tab, dyn, md, th, wo, x, wv, nd, i0, i1, lo, hi)
+        return fa, fb, fc, fd
+    return _deriv_locked(tab, dyn, md, th, wo, x, wv, nd, i0, i1)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _step_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi, seg):
+    """The state at the end (ya..yd) of a step and, for rk4_seg, whether no pair guard is negative
+    there (:func:`_seg_end`, one lookup for both); rk4_kink and rk4_node test the pair guards
+    apart (:func:`_pairs_hold`), only when the segment's guards hold."""
+    if seg:
+        tb, td, hold = _seg_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+        return ya, tb, yc, td, hold
+    return ya, yb, yc, yd, True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _end_guard(tab, md, wk, gi, ya, yb, yc, yd, tb, td, nd, i0, i1, lo, hi, gw, gv, seg):
+    """Guard gi at the end (ya..yd) of a trial step (rk4_seg: the shifted state, with the state's
+    omega1, v = tb, td and the pair values of :func:`_seg_end`'s lookup there)."""
+    if not seg:
+        return _guard_at(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+    if gi < 2:
+        return _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi, gw, gv)
+    p = tab[8]
+    j = (gi - 2) // 3
+    o = SEG_WORK_BASE + 4 * j
+    return _pair_guard((gi - 2) - 3 * j, wk[o], wk[o + 1], wk[o + 2], wk[o + 3], yc, td, tb, tab[10], tab[11],
+                       md[j], md[p + j])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _held_tables(tab, md, j, th, nd, i0, i1, lo, hi, seg):
+    """(k, e, de/dphi, b) of pair j at theta1 = th, mode held (rk4_seg: in th's own cell of the segment)."""
+    if seg:
+        cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, lo, hi)
+        return _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+    w = (th - nd * tab[9]) * tab[12]
+    return _kvals_sel(tab, j, i0, i1, w, md[3 * tab[8] + j])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _event_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node, seg):
+    """One substep of length h of rk4_kink, rk4_node (``node``) or rk4_seg (``seg``, which runs as
+    rk4_node); returns (theta1, omega1, x, v, nd, events), the mode md updated in place.
+
+    Per pass: the held cell follows theta1 inside the held segment [lo, hi) (wk[16], wk[17]; not
+    for rk4_kink, whose segment is the cell), the first RK4 stage is taken at the state; rk4_node
+    and rk4_seg predict the crossing of the segment's end ahead (:func:`_node_time`) and take one
+    step to it, which crosses into the next segment when no pair guard is negative at its end;
+    otherwise a trial step to the end of the substep follows, and when a guard is negative at its
+    end, the earliest zero is located on the step's cubic Hermite interpolant
+    (:func:`_guard_root`), the step retaken exactly to it and the mode switched there.  After
+    KINK_MAX_EVENTS events the rest of the substep is taken without detection.  rk4_seg
+    integrates the shifted state (theta1, Omega, x, V) of :func:`gearfmu.dynamics.seg_rhs._seg_rhs`
+    and carries the step end's lookup into the next substep (wk[18])."""
     n_phi = tab[7]
     p = tab[8]
     dphi = tab[9]
@@ -670,18 +625,19 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
     while True:
         lo = wk[16]
         hi = wk[17]
-        cn = np.floor(th * tab[12])
-        if cn + 1.0 > lo and cn < hi and cn != nd:
-            nd = cn
-            i0, i1 = _cell_nodes(nd, n_phi)
-            _zone_sel(tab, md, nd, i0, lo, hi)
-        wo, wv, fa, fb, fc, fd, sk = _seg_first(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi)
-        if nev < KINK_MAX_EVENTS:
-            tau = _node_time(th, om, fb + gw * (sk * om), rem, lo, hi, dphi)
+        if node:   # the held cell follows theta1 inside the segment
+            cn = np.floor(th * tab[12])
+            if cn + 1.0 > lo and cn < hi and cn != nd:
+                nd = cn
+                i0, i1 = _cell_nodes(nd, n_phi)
+                _zone_sel(tab, md, nd, i0, lo, hi)
+        wo, wv, fa, fb, fc, fd, fbn = _first_stage(tab, dyn, md, wk, th, om, x, v, nd, i0, i1, lo, hi, gw, seg)
+        if node and nev < KINK_MAX_EVENTS:   # the segment's end ahead: one step to it
+            tau = _node_time(th, om, fbn, rem, lo, hi, dphi)
             if tau > 0.0:
-                ta, tb, tc, td = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi)
-                tb, td, hold = _seg_end(tab, md, wk, gw, gv, ta, tb, tc, td, nd, i0, i1, lo, hi)
-                if hold:
+                ya, yb, yc, yd = _held_step(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi, seg)
+                ta, tb, tc, td, hold = _step_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi, seg)
+                if hold if seg else _pairs_hold(tab, md, ta, tb, tc, td, nd, i0, i1):
                     nd = _seg_cross(tab, wk, om > 0.0, True)
                     th, om, x, v = ta, tb, tc, td
                     rem = rem - tau
@@ -692,61 +648,58 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
                     if not rem > 0.0:
                         break
                     continue
-        ya, yb, yc, yd = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, rem, nd, i0, i1, lo, hi)
-        ta = ya
-        tc = yc
-        tb, td, hold = _seg_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+        ya, yb, yc, yd = _held_step(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, rem, nd, i0, i1, lo, hi, seg)
+        ta, tb, tc, td, hold = _step_end(tab, md, wk, gw, gv, ya, yb, yc, yd, nd, i0, i1, lo, hi, seg)
         if nev >= KINK_MAX_EVENTS:
             th, om, x, v = ta, tb, tc, td
             nd = np.floor(th * tab[12])
             i0, i1 = _cell_nodes(nd, n_phi)
-            _seg_start(tab, wk, nd, True, om, th)
+            _seg_start(tab, wk, nd, node, om, th)
             _zone_sel(tab, md, nd, i0, wk[16], wk[17])
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, True)
             break
-        any_neg = (ta - lo * dphi < 0.0) or (hi * dphi - ta < 0.0) or not hold
+        # the guards at the trial end: the segment's first, then the pairs' (one lookup per pair)
+        any_neg = ((ta - lo * dphi < 0.0) or (hi * dphi - ta < 0.0)
+                   or not (hold if seg else _pairs_hold(tab, md, ta, tb, tc, td, nd, i0, i1)))
         if not any_neg:
             th, om, x, v = ta, tb, tc, td
-            wk[18] = 1.0   # the next substep starts at the end of _seg_end's lookup
+            if seg:
+                wk[18] = 1.0   # the next substep starts at the end of _seg_end's lookup
             break
         best = 2.0
         best_gi = -1
         have_f1 = False
         for gi in range(n_guard):
-            if gi < 2:
-                g = _guard_seg(tab, md, gi, ya, yb, yc, yd, nd, i0, i1, lo, hi, gw, gv)
-            else:   # _guard_seg at the step end from _seg_end's lookup (the same cell and values)
-                j = (gi - 2) // 3
-                o = SEG_WORK_BASE + 4 * j
-                g = _pair_guard((gi - 2) - 3 * j, wk[o], wk[o + 1], wk[o + 2], wk[o + 3], tc, td, tb, c, model,
-                                md[j], md[p + j])
+            g = _end_guard(tab, md, wk, gi, ya, yb, yc, yd, tb, td, nd, i0, i1, lo, hi, gw, gv, seg)
             if g < 0.0:
                 if not have_f1:
                     _put4(wk, 0, th, wo, x, wv)
                     _put4(wk, 4, fa, fb, fc, fd)
                     _put4(wk, 8, ya, yb, yc, yd)
-                    ga_, gb_, gc_, gd_, sk_ = _seg_rhs(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+                    ga_, gb_, gc_, gd_ = _held_rhs(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi, seg)
                     _put4(wk, 12, ga_, gb_, gc_, gd_)
                     have_f1 = True
-                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1, True, gw, gv)
+                s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1, seg, gw, gv)
                 if s < best:
                     best = s
                     best_gi = gi
         if best_gi < 0:
             th, om, x, v = ta, tb, tc, td
             break
+        # step exactly to the event, then switch the mode
         if best >= 1.0:
             th, om, x, v = ta, tb, tc, td
             rem = 0.0
         elif best > 0.0:
             tau = best * rem
-            ya, yb, yc, yd = _rk4_seg(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi)
-            yb, yd = _seg_true(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
+            ya, yb, yc, yd = _held_step(tab, dyn, md, th, wo, x, wv, fa, fb, fc, fd, tau, nd, i0, i1, lo, hi, seg)
+            if seg:
+                yb, yd = _seg_true(tab, dyn, md, ya, yb, yc, yd, nd, i0, i1, lo, hi)
             th, om, x, v = ya, yb, yc, yd
             rem = rem - tau
         nev += 1
         if best_gi < 2:
-            nd = _seg_cross(tab, wk, best_gi == 1, True)
+            nd = _seg_cross(tab, wk, best_gi == 1, node)
             i0, i1 = _cell_nodes(nd, n_phi)
             _zone_sel(tab, md, nd, i0, wk[16], wk[17])
             _mode_sync(tab, md, th, om, x, v, nd, i0, i1, False)
@@ -754,9 +707,42 @@ def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
             j = (best_gi - 2) // 3
             kv = ev = es = bv = 0.0
             if md[j] == 0 and model == 0:   # _switch_pair's sub-mode decision reads the tables
-                cc, a0, a1, w = _seg_cell(tab, th, nd, i0, i1, wk[16], wk[17])
-                kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, wk[16], wk[17]))
+                kv, ev, es, bv = _held_tables(tab, md, j, th, nd, i0, i1, wk[16], wk[17], seg)
             _switch_pair(md, p, j, (best_gi - 2) - 3 * j, model, kv, ev, es, bv, x, v, om, c)
         if not rem > 0.0:
             break
     return th, om, x, v, nd, nev
+
+
+@njit(cache=True, error_model="numpy")
+def _kink_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node=False):
+    """Advance one substep of length h with the rk4_kink integrator (docs/model.md), or with
+    ``node`` the 'rk4_node' integrator; :func:`_event_substep`.  Returns (theta1, omega1, x, v,
+    nd, events); the mode md is updated in place.
+
+    The held segment [lo, hi) (wk[16], wk[17], global node indices) is the cell nd for
+    rk4_kink.  With ``node`` it runs from flagged node to flagged node
+    (:func:`gearfmu.dynamics.model_rhs._node_flags`; the tables are linear across the nodes
+    inside, so the held cell's interpolant is theirs): the flagged node ahead within the
+    remaining substep is not located by a trial step and the root finder: its crossing time is
+    predicted from theta1' = omega1 (:func:`_node_time`), the RK4 step ends there, and when no
+    pair guard is negative at that end the segment switches to the next one as at a located
+    node event; when a pair guard is negative the prediction is dropped and the rk4_kink trial
+    and location follow.  Without ``node`` the arithmetic is that of rk4_kink exactly."""
+    return _event_substep(tab, dyn, md, wk, th, om, x, v, h, nd, node, False)
+
+
+@njit(cache=True, error_model="numpy")
+def _seg_substep(tab, dyn, md, wk, th, om, x, v, h, nd):
+    """Advance one substep of length h with the rk4_seg integrator (docs/model.md "rk4_seg");
+    :func:`_event_substep`.  Returns (theta1, omega1, x, v, nd, events); the mode md is updated
+    in place.
+
+    rk4_node's held segments, stops and event location, with two changes: the segments run
+    from contact-zone cut to contact-zone cut (and the nodes where the contact_zone flag kpos
+    can change, :func:`gearfmu.dynamics.model_rhs._seg_flags`), and every evaluation reads
+    the tables in the cell of its own theta1 clamped to the segment, so the tables' piecewise
+    linear interpolant is integrated exactly; the RK4 steps integrate the shifted state
+    (theta1, Omega, x, V) of :func:`gearfmu.dynamics.seg_rhs._seg_rhs`, whose right-hand
+    side has no jump at the table nodes (the e-slope damping term is moved into the state)."""
+    return _event_substep(tab, dyn, md, wk, th, om, x, v, h, nd, True, True)

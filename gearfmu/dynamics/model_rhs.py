@@ -21,7 +21,7 @@ flags (N uint8, :func:`_node_flags`, or for rk4_seg :func:`_seg_flags`; rk4_node
 only at flagged nodes), the pointer
 of the contact-zone cuts (2, P, N) and whether they are read (:func:`_with_zones`,
 docs/model.md "Contact-zone edges"; off: plain linear interpolation, the arithmetic of
-gearkernel.c, which has no cuts yet).
+the C kernel's lookup without cuts, gk_lookup.h).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ from numba.extending import intrinsic
 _CELL_NONE = -(1 << 62)
 #: 2^52: below it the global cell index and s - nd are exact in doubles
 _CELL_LIMIT = 4503599627370496.0
-#: relative tolerance of the node kink test (:func:`_node_flags`; gearkernel.c GK_NODE_KINK_TOL,
+#: relative tolerance of the node kink test (:func:`_node_flags`; gearkernel.h GK_NODE_KINK_TOL,
 #: docs/native.md "rk4_node"): a second difference above it times the sum of the three |values|
 NODE_KINK_TOL = 1e-9
 #: relative tolerance of rk4_seg's big-kink stops (:func:`_seg_flags`; gearkernel.h
@@ -226,7 +226,7 @@ def _node_flags(k, e, b):
     periodic neighbours), or the contact_zone flag kpos (k at the cell midpoint > 0) can differ
     between the cells on either side (the midpoint values over every row and both cells
     are neither all > 0 nor all <= 0).  Every node is flagged when N > NODE_FLAGS_MAX.
-    The arithmetic of gearkernel.c node_flags."""
+    The arithmetic of gk_stops.c gki_node_flags."""
     return _stop_flags(k, e, b, k, False, NODE_KINK_TOL)   # no zone cuts: k is never read as cuts
 
 
@@ -240,7 +240,7 @@ def _seg_flags(k, e, b, cuts, zoned):
     curved table sampled at its nodes are not stops: rk4_seg reads every cell's own line),
     and, with the contact-zone cuts (``zoned``, ``cuts`` (2, P, N)), at both nodes of every
     cell that holds a zone edge (an edge may lie on the node itself, where k steps).  Every
-    node is flagged when N > NODE_FLAGS_MAX.  The arithmetic of gearkernel.c node_flags
+    node is flagged when N > NODE_FLAGS_MAX.  The arithmetic of gk_stops.c gki_node_flags
     (its rk4_seg bit)."""
     return _stop_flags(k, e, b, cuts, zoned, SEG_KINK_TOL)
 
@@ -350,7 +350,7 @@ def _zone_sel(tab, md, nd, i0, lo, hi):
     """Hold the side of every pair's contact-zone cut for cell nd inside the held segment
     [lo, hi) (global node units): md[3P + j] = 0 left in-zone part, 1 outside, 2 right
     in-zone part, by the segment's midpoint in the cell; -1 in a cell without an edge
-    (and always without the cuts).  gearkernel.c zone_sel."""
+    (and always without the cuts).  gk_stops.c gki_zone_sel."""
     p = tab[8]
     n_phi = tab[7]
     zp = tab[14]

@@ -59,6 +59,7 @@ __all__ = [
     "choose_max_step_s",
     "equilibrium_dte_m",
     "substeps",
+    "write_columns_csv",
 ]
 
 
@@ -128,14 +129,20 @@ class SimResult:
         return cols
 
     def to_csv(self, path) -> None:
-        """Write a CSV: a '# units:' comment line, a row of FMU variable names, data
-        with 17 significant digits (round-trips float64)."""
-        cols = self.columns()
-        data = np.column_stack([a for _, a in cols.values()])
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
-            fh.write(",".join(cols) + "\n")
-            np.savetxt(fh, data, delimiter=",", fmt="%.17g")
+        """Write :meth:`columns` as a CSV (:func:`write_columns_csv`)."""
+        write_columns_csv(path, self.columns())
+
+
+def write_columns_csv(path, cols) -> None:
+    """The CSV of results (``SimResult.to_csv``, ``gearfmu simulate``): a ``# units:`` comment
+    line (one unit per column), a row of names (the FMU's: ``pair_force[1]`` ...), then the data,
+    comma-separated, 17 significant digits (round-trips float64).  ``cols``: ordered
+    ``{name: (unit, 1-D array)}``."""
+    data = np.column_stack([np.asarray(a, dtype=float) for _, a in cols.values()])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
+        fh.write(",".join(cols) + "\n")
+        np.savetxt(fh, data, delimiter=",", fmt="%.17g")
 
 
 @dataclass

@@ -10,10 +10,7 @@ modeldesc           modelDescription.xml from modeldescription/variables.toml
 pythonfmu_build     build_fmu: the pythonfmu runtime; compile flags, kernel
 standalone_build    build_standalone_fmu: FMI 2.0 or 3.0 in C, no Python
 crossbuild          standalone binaries for every desktop platform (zig cc)
+summary             one line on an FMU file: runtime, FMI version, platforms
 validation          the validation record every FMU carries
-compare             FMU against the native solver (fmpy)
-runtime/            gearfmu_slave.py (slave template), pyshim.c (C loader)
-kernel/             gearkernel.c/.h: the C kernel of both runtimes
-standalone/         fmi2_gear.c / fmi3_gear.c: the FMI 2.0 / 3.0 layers in C over fmi_common.c + gear_model.c
 ==================  =========================================================
 """

@@ -29,20 +29,27 @@ from typing import Optional
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
 from ..scene.reader import default_output_interval_s
 from ..tables.mesh_tables import MeshTables
+from .runtime.kernel_api import FMU_LAYER_ABI_VERSION, KERNEL_ABI_VERSION  # noqa: F401 (the table's versions)
 from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
                         features_of, model_description_xml, model_description_xml3)
 
 HERE = Path(__file__).resolve().parent
-KERNEL_SOURCE = HERE / "kernel" / "gearkernel.c"
-KERNEL_HEADER = HERE / "kernel" / "gearkernel.h"
+KERNEL_DIR = HERE / "kernel"
+#: the kernel's C files in compile order (kernel/gk_internal.h says which holds what): the hot path
+#: (forces, RK4, the event integrators, the step functions), the model and its setters, the stops of
+#: the event integrators, the contact-zone cuts, the temperature axis, the verified envelope
+KERNEL_SOURCES = tuple(KERNEL_DIR / n for n in ("gearkernel.c", "gk_model.c", "gk_stops.c", "gk_zones.c",
+                                                 "gk_temperature.c", "gk_envelope.c"))
+#: the kernel's headers: the public contract (gearkernel.h), what its files share, the table lookup
+KERNEL_HEADERS = tuple(KERNEL_DIR / n for n in ("gearkernel.h", "gk_internal.h", "gk_lookup.h"))
 #: the FMU behaviour over the kernel both runtimes call (input checks, steps, messages; docs/fmu.md)
-FMU_LAYER_SOURCE = HERE / "kernel" / "gkfmu.c"
-FMU_LAYER_HEADER = HERE / "kernel" / "gkfmu.h"
-FMU_LAYER_ABI_VERSION = 1  # gkfmu.h GKF_ABI_VERSION
+FMU_LAYER_SOURCE = KERNEL_DIR / "gkfmu.c"
+FMU_LAYER_HEADER = KERNEL_DIR / "gkfmu.h"
+#: the C files of the library both runtimes build from kernel/: the kernel and the FMU layer over it
+KERNEL_LIBRARY_SOURCES = (*KERNEL_SOURCES, FMU_LAYER_SOURCE)
+KERNEL_LIBRARY_HEADERS = (*KERNEL_HEADERS, FMU_LAYER_HEADER)
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-KERNEL_ABI_VERSION = 5  # gearkernel.h GK_ABI_VERSION (2: temperature axis, 3: verified envelope check, 4: node kink flags,
-#                          5: contact-zone cuts from the tables' engagement angles)
 #: gearkernel.h GK_KINK_MAX_SLOTS
 KINK_MAX_SLOTS = 32
 #: the FMI 2.0 standard headers the C layers are compiled against

@@ -1,10 +1,11 @@
 """Build an FMI 2.0 Co-Simulation FMU from tooth-pair tables.
 
 The FMU is a pythonfmu FMU whose Python slave (``gearfmu/fmu/runtime/gearfmu_slave.py``,
-a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/gearkernel.c``
-(docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``: input checks,
-steps, messages), compiled here with the system C compiler and shipped in the
-FMU's ``resources/`` together with its sources.  The model description is
+a template) is a thin FMI layer over the C kernel ``gearfmu/fmu/kernel/`` (``gearkernel.c`` and
+the files beside it, docs/model.md) and the FMU behaviour the standalone runtime shares (``gkfmu.c``:
+input checks, steps, messages), compiled here with the system C compiler and shipped in the
+FMU's ``resources/`` together with its sources; the slave binds the library's functions with
+the declarative table ``gearfmu/fmu/runtime/kernel_api.py``, shipped beside it.  The model description is
 produced from ``modeldescription/variables.toml`` (:mod:`gearfmu.fmu.modeldesc`),
 checked against what the slave registers, and replaces pythonfmu's.
 
@@ -14,10 +15,12 @@ FMU layout (docs/fmu.md)::
     binaries/linux64/<id>.so             the loader (gearfmu/fmu/runtime/pyshim.c) in front of
     binaries/linux64/<id>.pythonfmu.so   pythonfmu's FMI wrapper
     resources/<id>.py                    the slave (unique module and class name)
+    resources/<id>_kernel_api.py         the kernel's function table (runtime/kernel_api.py)
     resources/pythonfmu/                 pythonfmu's Python side
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearkernel.so              the compiled kernel with the FMU layer (gkfmu.c) over it
-    resources/kernel_src/                gearkernel.c|h, gkfmu.c|h and the compile command
+    resources/kernel_src/                the kernel's sources (gearkernel.c|h, gk_*.c|h, gkfmu.c|h) and
+                                         the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
     resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
     resources/pyshim_src/                the loader's source and its compile command
@@ -45,7 +48,8 @@ from .. import __version__
 from ..common.cache import cache_dir
 from ..common.vocabulary import DEFAULT_INTEGRATOR
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
-                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_HEADER, KERNEL_SOURCE, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
+                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
+                          KERNEL_LIBRARY_SOURCES, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
                           check_build_arguments, check_output_arguments, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
@@ -57,6 +61,10 @@ from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, 
 
 HERE = Path(__file__).resolve().parent
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
+#: the kernel's function table the slave imports, and the name its template imports it by inside
+#: the FMU (replaced by ``<identifier>_kernel_api``: modules of FMUs in one process must differ)
+KERNEL_API = HERE / "runtime" / "kernel_api.py"
+TEMPLATE_KERNEL_API = "gearfmu_kernel_api"
 PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
 #: the loader's compile flags (docs/fmu.md "The binary"); it links no Python
@@ -71,26 +79,29 @@ def _kernel_filename() -> str:
 
 def _kernel_key(cc: str) -> Optional[str]:
     """SHA-256 of everything the kernel compilation reads: the compiler file (resolved path, size,
-    modification time), :data:`CFLAGS`, the library's name and the bytes of every C source and
-    header of the kernel folder; None when the compiler is not a file (then nothing is kept)."""
+    modification time), :data:`CFLAGS`, the library's name, the C files it compiles (in order) and
+    the bytes of every C source and header of the kernel folder; None when the compiler is not a
+    file (then nothing is kept)."""
     p = Path(shutil.which(cc) or cc)
     if not p.is_file():
         return None
     st = p.stat()
     h = hashlib.sha256()
-    for part in (str(p.resolve()), str(st.st_size), str(st.st_mtime_ns), " ".join(CFLAGS), _kernel_filename()):
+    for part in (str(p.resolve()), str(st.st_size), str(st.st_mtime_ns), " ".join(CFLAGS), _kernel_filename(),
+                 " ".join(f.name for f in KERNEL_LIBRARY_SOURCES)):
         h.update(part.encode() + b"\0")
-    folder = Path(KERNEL_SOURCE).parent
-    for f in sorted({*folder.glob("*.c"), *folder.glob("*.h"), Path(KERNEL_SOURCE), Path(FMU_LAYER_SOURCE)}):
+    for f in sorted({*KERNEL_DIR.glob("*.c"), *KERNEL_DIR.glob("*.h"), *KERNEL_LIBRARY_SOURCES,
+                     *KERNEL_LIBRARY_HEADERS}):
         h.update(f.name.encode() + b"\0" + f.read_bytes())
     return h.hexdigest()
 
 
 def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
-    """Compile gearkernel.c and the FMU layer over it (gkfmu.c) into a shared library in ``dest_dir``;
-    return its path.
+    """Compile the kernel (:data:`~gearfmu.fmu.build_steps.KERNEL_SOURCES`) and the FMU layer over it
+    (gkfmu.c) into a shared library in ``dest_dir``; return its path.
 
-    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gkfmu.c -lm``.
+    Command: ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -o <lib> gearkernel.c gk_model.c ...
+    gkfmu.c -lm``.
     The library is kept in gearfmu's file cache (:func:`gearfmu.common.cache.cache_dir`, folder
     ``kernels``) under :func:`_kernel_key`; a later build with the same compiler, flags and
     sources copies it instead of compiling again (the compiler gives the same bytes for the same
@@ -105,7 +116,7 @@ def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     if kept is not None and kept.is_file():
         shutil.copy2(kept, lib)
         return lib
-    run_compiler([cc, *CFLAGS, "-o", str(lib), str(KERNEL_SOURCE), str(FMU_LAYER_SOURCE), "-lm"], "kernel")
+    run_compiler([cc, *CFLAGS, "-o", str(lib), *(str(f) for f in KERNEL_LIBRARY_SOURCES), "-lm"], "kernel")
     if kept is not None:
         try:  # atomic publish: a concurrent build sees either no file or the whole library
             kept.parent.mkdir(parents=True, exist_ok=True)
@@ -117,10 +128,15 @@ def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     return lib
 
 
-def _replace_class_name(template: str, class_name: str) -> str:
+def _slave_text(template: str, class_name: str, kernel_api: str) -> str:
+    """The slave of one FMU: the template with its class named ``class_name`` and the kernel's
+    function table imported as the module ``kernel_api`` (the FMU's copy of kernel_api.py)."""
     text, n = re.subn(rf"\b{TEMPLATE_CLASS}\b", class_name, template)
     if n == 0 or f"class {class_name}(Fmi2Slave):" not in text:
         raise FmuBuildError(f"{SLAVE_TEMPLATE}: template lacks 'class {TEMPLATE_CLASS}(Fmi2Slave):'")
+    text, n = re.subn(rf"\b{TEMPLATE_KERNEL_API}\b", kernel_api, text)
+    if n == 0:
+        raise FmuBuildError(f"{SLAVE_TEMPLATE}: template lacks the import of {TEMPLATE_KERNEL_API}")
     return text
 
 
@@ -172,10 +188,11 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         lib = compile_kernel(stage, cc=cc)
         src_dir = stage / "kernel_src"
         src_dir.mkdir()
-        for f in (KERNEL_SOURCE, KERNEL_HEADER, FMU_LAYER_SOURCE, FMU_LAYER_HEADER):
+        for f in (*KERNEL_LIBRARY_SOURCES, *KERNEL_LIBRARY_HEADERS):
             shutil.copy2(f, src_dir / f.name)
         (src_dir / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} gearkernel.c gkfmu.c -lm\n", encoding="utf-8")
+            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} {' '.join(f.name for f in KERNEL_LIBRARY_SOURCES)} -lm\n",
+            encoding="utf-8")
         sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
         runtime = {
             "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
@@ -208,7 +225,9 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
             "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
             "tables_provenance": tables.provenance,
             "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": compiler_version(cc),
-                       "flags": list(CFLAGS), "source_sha256": sha256_file(KERNEL_SOURCE)},
+                       "flags": list(CFLAGS),
+                       "sources_sha256": {f.name: sha256_file(f) for f in (*KERNEL_LIBRARY_SOURCES,
+                                                                           *KERNEL_LIBRARY_HEADERS)}},
             "scene_sha256": scene_sha256(scene_text),
             "python": sys.version.split()[0], "platform": platform.platform(),
             "spec": str(Path(spec.path).name),
@@ -219,11 +238,13 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         script_dir = tmp / "script"
         script_dir.mkdir()
         script = script_dir / f"{identifier}.py"
-        script.write_text(_replace_class_name(SLAVE_TEMPLATE.read_text(encoding="utf-8"), class_name),
+        api = script_dir / f"{identifier}_kernel_api.py"
+        script.write_text(_slave_text(SLAVE_TEMPLATE.read_text(encoding="utf-8"), class_name, api.stem),
                           encoding="utf-8")
+        shutil.copy2(KERNEL_API, api)
         raw_fmu = tmp / "raw" / f"{identifier}.fmu"
         raw_fmu.parent.mkdir()
-        _pythonfmu_build(script, raw_fmu, [*files, src_dir, shim_src])
+        _pythonfmu_build(script, raw_fmu, [*files, api, src_dir, shim_src])
 
         record = validation_record(
             tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,

@@ -1,9 +1,10 @@
 """Build the *standalone* gearfmu FMU: FMI 2.0 (or 3.0) Co-Simulation in C, no Python.
 
 The FMI layer ``gearfmu/fmu/standalone/fmi2_gear.c`` (FMI 3: ``fmi3_gear.c``) with the
-plumbing and gear glue both layers share (``fmi_common.c``, ``gear_model.c``), the FMU behaviour
-the pythonfmu runtime shares (``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel
-``gearfmu/fmu/kernel/gearkernel.c`` (docs/model.md) are compiled at build time
+generic FMI plumbing and the gear model both layers share (``fmi_common.c``, ``gear_model.c``,
+the contract between them ``gf_model.h``), the FMU behaviour the pythonfmu runtime shares
+(``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel (``gearfmu/fmu/kernel/``: ``gearkernel.c`` and
+the files beside it, docs/model.md) are compiled at build time
 into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
 sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
 2.0 headers (copied from fmpy's ``c-code`` folder), so any other platform can
@@ -17,9 +18,10 @@ FMU layout (docs/standalone.md)::
 
     modelDescription.xml                 from the spec (gearfmu.fmu.modeldesc), CoSimulation
                                          needsExecutionTool=false, FMU state supported, SourceFiles
-    binaries/<folder>/<id>.<so|dll|dylib>  the C files + gearkernel.c for linux64, aarch64-linux, win64 and
+    binaries/<folder>/<id>.<so|dll|dylib>  the C files for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c fmi_common.c gear_model.[ch] gkfmu.[ch] gearkernel.[ch] fmi2*.h
+    sources/                             fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch] gkfmu.[ch]
+                                         gearkernel.[ch] gk_*.[ch] fmi2*.h
                                          BUILD.txt
                                          CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
                                          buildflags.txt
@@ -54,8 +56,8 @@ from typing import Dict, Optional, Sequence, Union
 from .. import __version__
 from ..common.vocabulary import DEFAULT_INTEGRATOR
 from . import crossbuild
-from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADER,  # noqa: F401
-                          KERNEL_SOURCE, CompilerNotFoundError,
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADERS,  # noqa: F401
+                          KERNEL_SOURCES, CompilerNotFoundError,
                           FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, write_scene, write_tables, zip_folder)
@@ -67,13 +69,18 @@ from .validation import validation_record
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
 FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
-#: the generic FMI plumbing and the gear glue both FMI layers share (gear_model.h says the split), and
-#: the FMU behaviour over the kernel the pythonfmu runtime calls too (gkfmu.h)
+#: the generic FMI plumbing and the gear model both FMI layers share, and the FMU behaviour over the
+#: kernel the pythonfmu runtime calls too (gkfmu.h)
 SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c", FMU_LAYER_SOURCE)
-SHARED_HEADER = HERE / "standalone" / "gear_model.h"
+#: their headers: the model contract (gf_model.h, as the Reference-FMUs' model.h), the plumbing's API,
+#: the gear model's data, the FMU layer's API
+SHARED_HEADERS = (HERE / "standalone" / "gf_model.h", HERE / "standalone" / "fmi_common.h",
+                  HERE / "standalone" / "gear_model.h", FMU_LAYER_HEADER)
 #: the C files of the FMI 2 binary besides the kernel, in compile order
 LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
 FMI3_LAYER_SOURCES = (FMI3_LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
+#: the kernel's C files (build_steps.KERNEL_SOURCES), compiled after the layer's
+KERNEL_SOURCE_NAMES = tuple(p.name for p in KERNEL_SOURCES)
 FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 FMI_VERSIONS = (2, 3)
 CONFIG_FILE = "gearfmu_standalone.txt"
@@ -89,8 +96,13 @@ BUILDFLAGS_FILE = "buildflags.txt"
 
 
 def layer_sources(fmi_version: int = 2) -> tuple:
-    """The C files of the binary besides the kernel: the FMI layer of ``fmi_version``, the plumbing, the glue."""
+    """The C files of the binary besides the kernel: the FMI layer of ``fmi_version``, the plumbing, the model."""
     return FMI3_LAYER_SOURCES if fmi_version == 3 else LAYER_SOURCES
+
+
+def binary_sources(fmi_version: int = 2) -> tuple:
+    """Every C file of the binary in compile order: :func:`layer_sources`, then the kernel's."""
+    return (*layer_sources(fmi_version), *KERNEL_SOURCE_NAMES)
 
 
 def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
@@ -98,7 +110,7 @@ def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     layer = FMI3_LAYER_SOURCE if fmi_version == 3 else LAYER_SOURCE
-    for src in (layer, *SHARED_SOURCES, SHARED_HEADER, FMU_LAYER_HEADER, KERNEL_SOURCE, KERNEL_HEADER):
+    for src in (layer, *SHARED_SOURCES, *SHARED_HEADERS, *KERNEL_SOURCES, *KERNEL_HEADERS):
         shutil.copy2(src, dest / src.name)
     hdr = fmi2_header_dir()
     for h in (FMI3_HEADERS if fmi_version == 3 else FMI2_HEADERS):
@@ -110,14 +122,15 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_ve
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
     ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
-    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gkfmu.c gearkernel.c -lm`` (FMI 3: fmi3_gear.c first)
+    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gkfmu.c gearkernel.c gk_model.c ... -lm``
+    (:func:`binary_sources`; FMI 3: fmi3_gear.c first)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
     cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib),
-           *(str(src / n) for n in layer_sources(fmi_version)), str(src / KERNEL_SOURCE.name), "-lm"]
+           *(str(src / n) for n in binary_sources(fmi_version)), "-lm"]
     run_compiler(cmd, "standalone binary", timeout=300)
     return cmd
 
@@ -127,7 +140,7 @@ def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
     reads) and CMakeLists.txt (``cmake -S sources -B b && cmake --build b``), all with the
     flags of :data:`STANDALONE_CFLAGS`; FMI 3 also buildDescription.xml (:func:`build_description_xml`)."""
     flags = " ".join(STANDALONE_CFLAGS)
-    srcs = " ".join((*layer_sources(fmi_version), KERNEL_SOURCE.name))
+    srcs = " ".join(binary_sources(fmi_version))
     build_txt = (
         f"Build the binary of this FMU from these sources (C99, FMI {fmi_version}.0 headers included):\n"
         f"  cc {flags} -I. -o {identifier}.so {srcs} -lm\n"
@@ -172,7 +185,7 @@ BUILD_DESCRIPTION_FILE = "buildDescription.xml"
 
 def build_description_xml(identifier: str) -> str:
     """``sources/buildDescription.xml`` of an FMI 3 FMU (the standard's fmi3BuildDescription
-    format): one C99 source file set (the FMI 3 layer, plumbing, glue, kernel), include directory
+    format): one C99 source file set (the FMI 3 layer, plumbing, model, kernel), include directory
     ``.``, the reproducibility flags of :data:`STANDALONE_CFLAGS` as ``compilerOptions``
     (``-ffp-contract=off``, ``-fno-fast-math``) and the C math library."""
     root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
@@ -182,7 +195,7 @@ def build_description_xml(identifier: str) -> str:
                        "fast-math, so every platform computes the same numbers (MSVC: /O2 /fp:strict)"})
     sfs = ET.SubElement(bc, "SourceFileSet", {"language": "C99", "compilerOptions": " ".join(
         f for f in STANDALONE_CFLAGS if f not in ("-shared",))})
-    for name in (*FMI3_LAYER_SOURCES, KERNEL_SOURCE.name):
+    for name in binary_sources(3):
         ET.SubElement(sfs, "SourceFile", {"name": name})
     ET.SubElement(sfs, "IncludeDirectory", {"name": "."})
     ET.SubElement(bc, "Library", {"name": "m", "external": "true", "description": "C math library (-lm)"})
@@ -364,8 +377,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
 
         try:
             binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
-                                                 cflags=STANDALONE_CFLAGS, layer_source=layer_sources(fmi_version),
-                                                 kernel_source=KERNEL_SOURCE.name, host_compile=host_compile,
+                                                 cflags=STANDALONE_CFLAGS, sources=binary_sources(fmi_version),
+                                                 host_compile=host_compile,
                                                  host_cc_first=cc_given, fmi_version=fmi_version)
         except crossbuild.CrossBuildError as exc:
             raise FmuBuildError(str(exc)) from None
@@ -416,7 +429,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
             xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
         else:
             xml = standalone_model_description(model_description(spec, variables, 2, **md_args),
-                                               [*LAYER_SOURCES, KERNEL_SOURCE.name], platforms_note=note)
+                                               binary_sources(2), platforms_note=note)
             check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
         with fmu_zip(a.out_path) as zout:

@@ -24,7 +24,8 @@ import numpy as np
 from ..common.checks import finite_number
 from ..common.progress import progress_bar
 from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS, INTEGRATORS
-from ..dynamics.native import InputLike, _input_series, _n_steps, choose_max_step_s as pair_max_step_s, substeps
+from ..dynamics.native import (InputLike, _input_series, _n_steps, choose_max_step_s as pair_max_step_s, substeps,
+                               write_columns_csv)
 from ..tables.zones import zone_cuts
 from ._pair import KINK_MAX_SLOTS, _node_flags
 from .kernels import F_C, F_DPHI, F_G, F_INV, F_RBP, F_RBQ, I_B, I_CUTS, I_E, I_FLAGS, I_K, I_MD, I_MODEL, I_N, \
@@ -65,13 +66,9 @@ class GearboxResult:
         return list(self.columns)
 
     def to_csv(self, path) -> None:
-        """A '# units:' line, a row of output names, the data with 17 significant digits."""
-        cols = {"time": ("s", self.time_s), **self.columns}
-        data = np.column_stack([a for _, a in cols.values()])
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
-            fh.write(",".join(cols) + "\n")
-            np.savetxt(fh, data, delimiter=",", fmt="%.17g")
+        """The CSV layout of the pair solver's results (gearfmu.dynamics.native.write_columns_csv): a
+        '# units:' line, a row of output names (``time`` first), the data with 17 significant digits."""
+        write_columns_csv(path, {"time": ("s", self.time_s), **self.columns})
 
 
 def output_units(model: GearboxModel) -> Dict[str, str]:

@@ -37,13 +37,13 @@ PLAIN = -1.0
 MIN_ZONE_CELLS = 3.0
 
 
-#: an edge within this many cells of a node is put on the node (gearkernel.c GK_ZONE_SNAP): the
+#: an edge within this many cells of a node is put on the node (gearkernel.h GK_ZONE_SNAP): the
 #: rounding of (n T + angle) N/Phi must not move an edge that lies on a node into the next cell
 SNAP_CELLS = 1e-9
 
 
 def _wrap(x: float, n: int) -> float:
-    """x mod n for a float x, on the nearest node when within SNAP_CELLS of it (gearkernel.c
+    """x mod n for a float x, on the nearest node when within SNAP_CELLS of it (gk_zones.c
     zone_wrap: fmod, + n when negative, then the snap)."""
     r = math.fmod(x, float(n))
     if r < 0.0:
@@ -58,7 +58,7 @@ def zone_cuts(t: MeshTables) -> Optional[np.ndarray]:
     """(2, P, n_phi) float64 cuts (``lo``, ``hi`` of the module docstring) of the sub-cell
     lookup, C-contiguous; None when the tables carry no engagement angles or a zone spans
     fewer than :data:`MIN_ZONE_CELLS` cells (then the lookup stays plain linear interpolation).
-    The arithmetic of gearkernel.c gk_zone_cuts (the FMU computes its cuts there), so the
+    The arithmetic of gk_zones.c gk_zone_cuts (the FMU computes its cuts there), so the
     two give the same doubles."""
     if t.engagement_in_rad is None:
         return None

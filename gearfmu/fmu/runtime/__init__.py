@@ -1,4 +1,6 @@
 """The pythonfmu runtime: ``gearfmu_slave.py`` is the slave class copied into every
-pythonfmu FMU (it loads the C kernel with ctypes).  It runs inside the FMU, without gearfmu,
-so it imports nothing from the package (checked by tests/test_architecture.py).
+pythonfmu FMU (it loads the C kernel with ctypes), ``kernel_api.py`` the table of the kernel's C
+functions it binds the library with (copied beside it; the tests and benchmarks bind the kernel
+with it too).  Both run inside the FMU, without gearfmu, so they import nothing from the package
+(checked by tests/test_architecture.py).
 """

@@ -13,7 +13,9 @@ numpy and the pythonfmu wrapper only.  Everything it needs sits in the FMU's
   the kernel file name and the SHA-256 of every resource file;
 * ``tables.json`` + ``tables.bin`` -- the tooth-pair tables (format:
   gearfmu/tables/mesh_tables.py, docs/tables.md), checked against their SHA-256 sums;
-* the kernel shared library (gearfmu/fmu/kernel/gearkernel.c with gkfmu.c), loaded with ctypes.
+* the kernel shared library (gearfmu/fmu/kernel/: gearkernel.c and the files beside it, with
+  gkfmu.c), loaded with ctypes and bound by the function table of ``kernel_api.py`` (this FMU's
+  copy beside this file, under the FMU's own module name).
 
 The parameter and input checks, the damping and temperature applied, the initial state, the
 communication step, the outputs and the torque-axis and verified-envelope warnings (``envelope``
@@ -23,7 +25,6 @@ messages to the host's logger.
 
 The model is docs/model.md; the FMU behaviour is docs/fmu.md.
 """
-import ctypes
 import hashlib
 import json
 import math
@@ -34,6 +35,11 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Integer, Real
+
+if __package__:  # the package's template (gearfmu.fmu.runtime)
+    from .kernel_api import load_kernel
+else:  # inside the FMU: the copy beside this file (the builder names the module after the FMU)
+    from gearfmu_kernel_api import load_kernel
 
 RUNTIME_FILE = "gearfmu_runtime.json"
 TABLE_VERSIONS = (1, 2)  # docs/tables.md (2: operating axes with a temperature axis)
@@ -108,49 +114,6 @@ def _load_resources(res, cfg):
     return meta, arrays
 
 
-def _bind(lib):
-    c_int, c_double, c_void_p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
-    sigs = {
-        "gk_abi_version": ([], c_int),
-        "gk_sizeof_model": ([], c_int),
-        "gk_sizeof_state": ([], c_int),
-        "gk_n_outputs": ([c_int], c_int),
-        "gk_init": ([c_void_p, c_int, c_int, c_int] + [c_void_p] * 4 + [c_double] * 6, c_int),
-        "gk_set_damping": ([c_void_p, c_double, c_int], c_int),
-        "gk_set_integrator": ([c_void_p, c_int], c_int),
-        "gk_set_temperature_axis": ([c_void_p, c_int, c_void_p], c_int),
-        "gk_set_temperature": ([c_void_p, c_double], c_int),
-        "gk_zone_cuts": ([c_int, c_int] + [c_double] * 4 + [c_void_p], c_int),
-        "gk_set_zone_cuts": ([c_void_p, c_void_p], c_int),
-        "gk_initialize": ([c_void_p, c_void_p, c_double, c_double, c_double], c_int),
-        "gk_do_step": ([c_void_p, c_void_p, c_double, c_double, c_double, c_double, c_void_p], c_int),
-        "gk_outputs": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
-        "gk_sizeof_envelope": ([], c_int),
-        "gk_envelope_init": ([c_void_p, c_int], c_int),
-        "gk_envelope_set": ([c_void_p, c_int, c_double, c_double], c_int),
-        "gkf_abi_version": ([], c_int),
-        "gkf_sizeof": ([], c_int),
-        "gkf_kernel_error": ([c_int], ctypes.c_char_p),
-        "gkf_init": ([c_void_p, c_void_p, c_void_p], c_int),
-        "gkf_declare": ([c_void_p, c_int, ctypes.c_char_p, c_int, c_double, c_int, c_double], c_int),
-        "gkf_set_values": ([c_void_p, c_void_p], c_int),
-        "gkf_initialize": ([c_void_p, c_void_p, c_double, c_void_p], c_int),
-        "gkf_do_step": ([c_void_p, c_void_p, c_double, c_double, c_void_p], c_int),
-        "gkf_restore": ([c_void_p, c_int, c_int, c_double, c_int], c_int),
-        "gkf_zeta_valid": ([c_void_p], c_int),
-        "gkf_zeta_applied": ([c_void_p], c_double),
-        "gkf_warned_range": ([c_void_p], c_int),
-        "gkf_n_messages": ([c_void_p], c_int),
-        "gkf_message_level": ([c_void_p, c_int], c_int),
-        "gkf_message": ([c_void_p, c_int], ctypes.c_char_p),
-    }
-    for name, (args, res) in sigs.items():
-        fn = getattr(lib, name)
-        fn.argtypes = args
-        fn.restype = res
-    return lib
-
-
 class GearFmuSlave(Fmi2Slave):
     """Two-inertia spur or helical gear pair (docs/model.md) over the C kernel."""
 
@@ -170,7 +133,7 @@ class GearFmuSlave(Fmi2Slave):
             raise
         self.modelName = cfg["model_identifier"]
         self._cfg = cfg
-        self._lib = _bind(ctypes.CDLL(os.path.join(res, cfg["kernel_file"])))
+        self._lib = load_kernel(os.path.join(res, cfg["kernel_file"]))
         lib = self._lib
         if (lib.gk_abi_version() != cfg["kernel_abi_version"]
                 or lib.gkf_abi_version() != cfg.get("fmu_layer_abi_version")):

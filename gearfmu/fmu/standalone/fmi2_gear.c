@@ -1,8 +1,8 @@
 /*
  * fmi2_gear.c -- FMI 2.0 Co-Simulation layer of the standalone gearfmu
  * runtime (docs/standalone.md): the fmi2* functions, their table of allowed
- * states, and the adapters to the shared plumbing (fmi_common.c) and gear
- * glue (gear_model.c) that the FMI 3.0 layer (fmi3_gear.c) uses too.
+ * states, and the adapters to the shared plumbing (fmi_common.h) and the gear
+ * model behind the contract gf_model.h, which the FMI 3.0 layer (fmi3_gear.c) uses too.
  *
  * Standard: Modelica Association, "Functional Mock-up Interface for Model
  * Exchange and Co-Simulation", version 2.0 (sections 2.1 common API,
@@ -14,10 +14,10 @@
 #include <math.h>
 
 #include "fmi2Functions.h"
-#include "gear_model.h"
+#include "fmi_common.h"
 
 /* FMI 2.0 Co-Simulation states (standard section 4.2.4, figure 2 and the table
- * of allowed calls), GF_* bits of gear_model.h. */
+ * of allowed calls), GF_* bits of gf_model.h. */
 typedef enum {
     F_SetDebugLogging, F_SetupExperiment, F_EnterInitializationMode, F_ExitInitializationMode,
     F_Terminate, F_Reset, F_FreeInstance,
@@ -109,14 +109,14 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
                "stepInProgress, which the synchronous fmi2DoStep never enters");
     if (c == NULL) return NULL;
     if (fmuType != fmi2CoSimulation) return gf_instantiate_error(c, fn, "only Co-Simulation is supported");
-    if (!gm_uri_to_dir(fmuResourceLocation, dir, sizeof dir))
+    if (!gf_uri_to_dir(fmuResourceLocation, dir, sizeof dir))
         return gf_instantiate_error(c, fn, "resource location is not a file:// URI");
     e = gm_instantiate(c, dir, fmuGUID, err, sizeof err);
     if (e != NULL) return gf_instantiate_error(c, fn, e);
     return (fmi2Component)c;
 }
 
-FMI2_Export void fmi2FreeInstance(fmi2Component comp) { gm_free((gf_inst *)comp); }
+FMI2_Export void fmi2FreeInstance(fmi2Component comp) { gf_free((gf_inst *)comp); }
 
 FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                            fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
@@ -134,7 +134,7 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toler
 FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
 {
     GF_GUARD(comp, F_EnterInitializationMode);
-    gm_enter_init(c);
+    gf_enter_init(c);
     return fmi2OK;
 }
 

@@ -1,8 +1,8 @@
 /*
  * fmi3_gear.c -- FMI 3.0 Co-Simulation layer of the standalone gearfmu
  * runtime (docs/standalone.md "FMI 3.0"): the fmi3* functions and their table
- * of allowed states over the same plumbing (fmi_common.c) and gear glue
- * (gear_model.c) as the FMI 2.0 layer (fmi2_gear.c), so both FMUs compute the
+ * of allowed states over the same plumbing (fmi_common.h) and gear model
+ * (gf_model.h) as the FMI 2.0 layer (fmi2_gear.c), so both FMUs compute the
  * same numbers from the same calls.
  *
  * Standard: Modelica Association, "Functional Mock-up Interface Specification",
@@ -21,7 +21,7 @@
 #include <math.h>
 
 #include "fmi3Functions.h"
-#include "gear_model.h"
+#include "fmi_common.h"
 
 typedef enum {
     F_SetDebugLogging, F_EnterInitializationMode, F_ExitInitializationMode, F_EnterEventMode,
@@ -153,7 +153,7 @@ FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
     return (fmi3Instance)c;
 }
 
-FMI3_Export void fmi3FreeInstance(fmi3Instance instance) { gm_free((gf_inst *)instance); }
+FMI3_Export void fmi3FreeInstance(fmi3Instance instance) { gf_free((gf_inst *)instance); }
 
 FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                                    fmi3Float64 tolerance, fmi3Float64 startTime,
@@ -166,7 +166,7 @@ FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
         return fmi3Error;
     }
     c->time = startTime;
-    gm_enter_init(c);
+    gf_enter_init(c);
     return fmi3OK;
 }
 
@@ -500,7 +500,7 @@ FMI3_Export fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi
     return fmi3Error;
 }
 
-/* one communication step (the glue's gm_do_step, as fmi2DoStep); synchronous: never an event,
+/* one communication step (the model's gm_do_step, as fmi2DoStep); synchronous: never an event,
  * never early, lastSuccessfulTime = the time reached (the start of the step when discarded) */
 FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
                                   fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,

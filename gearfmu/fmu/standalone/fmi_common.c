@@ -1,29 +1,17 @@
 /*
  * fmi_common.c -- the generic FMI plumbing of the standalone gearfmu runtime,
- * shared by fmi2_gear.c (FMI 2.0) and fmi3_gear.c (FMI 3.0): logging, the
+ * shared by fmi2_gear.c (FMI 2.0) and fmi3_gear.c (FMI 3.0): the instance, the
  * state-machine check of every call, get/set dispatch over the variable table
- * and the FMU state box.  Nothing here knows gears (gear_model.h).
+ * and the FMU state box (fmi_common.h).  Nothing here knows gears: the model is
+ * called through the contract of gf_model.h only.
  */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "gear_model.h"
+#include "fmi_common.h"
 
-/* ------------------------------------------------------------- logging */
-void gf_log(gf_inst *c, int status, const char *category, const char *fmt, ...)
-{
-    char msg[1024];
-    va_list ap;
-    if (c == NULL || c->log == NULL || c->host_logger == NULL) return;
-    if (status == GF_OK && !c->logging_on) return;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    c->log(c, status, category, msg);
-}
-
+/* ------------------------------------------------------------ instance */
 gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_log_fn log, void *host_env,
                 void (*host_logger)(void), const char *never_why)
 {
@@ -39,11 +27,70 @@ gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_l
     return c;
 }
 
+void gf_free(gf_inst *c)
+{
+    if (c == NULL) return;
+    gm_free(c);
+    free(c);
+}
+
 gf_inst *gf_instantiate_error(gf_inst *c, const char *fn, const char *msg)
 {
     gf_log(c, GF_ERROR_STATUS, "logStatusFatal", "%s: %s; refusing to instantiate", fn, msg);
-    gm_free(c);
+    gf_free(c);
     return NULL;
+}
+
+static int hexval(int ch)
+{
+    if (ch >= '0' && ch <= '9') return ch - '0';
+    if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
+    if (ch >= 'A' && ch <= 'F') return ch - 'A' + 10;
+    return -1;
+}
+
+/* file:// URI of the resources folder -> local folder path ending in '/' (percent-decoded).
+ * Accepts file:///abs, file://localhost/abs and file:/abs (RFC 8089). */
+int gf_uri_to_dir(const char *uri, char *out, size_t cap)
+{
+    const char *p;
+    size_t n = 0;
+    if (uri == NULL) return 0;
+    if (strncmp(uri, "file://localhost/", 17) == 0) p = uri + 16;
+    else if (strncmp(uri, "file:///", 8) == 0) p = uri + 7;
+    else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
+    else return 0;
+#ifdef _WIN32
+    if (p[0] == '/' && p[1] != '\0' && p[2] == ':') p++; /* /C:/... */
+#endif
+    while (*p != '\0') {
+        int ch = (unsigned char)*p;
+        if (ch == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
+            ch = hexval(p[1]) * 16 + hexval(p[2]);
+            p += 3;
+        } else {
+            p++;
+        }
+        if (n + 1 >= cap) return 0;
+        out[n++] = (char)ch;
+    }
+    if (n > 0 && out[n - 1] != '/') {
+        if (n + 1 >= cap) return 0;
+        out[n++] = '/';
+    }
+    if (n >= cap) return 0;
+    out[n] = '\0';
+    return 1;
+}
+
+/* Initialization Mode (FMI 2.0 section 3.2.3 / 4.2.4, FMI 3.0 section 4.2.3): from here on every
+ * output is the initial one computed from the values set so far -- the same initial state
+ * gm_exit_init computes; a value set in this mode marks the outputs dirty and the next get of an
+ * output recomputes them (gm_refresh_outputs). */
+void gf_enter_init(gf_inst *c)
+{
+    c->mode = GF_INIT_MODE;
+    c->dirty = 1;
 }
 
 /* ------------------------------------------------------ state machine */
@@ -80,6 +127,36 @@ int gf_allowed(gf_inst *c, const gf_call *call)
 }
 
 /* ------------------------------------------------------------ get / set */
+/* a stored Integer value as int; a value no int holds (only from a foreign or
+ * corrupted FMU state) becomes -1, which every integer parameter here rejects
+ * (a plain cast would be undefined behaviour) */
+static int as_int(double x)
+{
+    return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
+}
+
+/* the current value of variable i (an output: the model's output vector) */
+static inline double value_of(const gf_inst *c, int i)
+{
+    const gf_var *v = &c->vars[i];
+    return v->causality == GF_OUTPUT ? c->out[v->out_index] : c->values[i];
+}
+
+/* 1 if variable i may be set now (inputs, tunable parameters, fixed parameters before the
+ * initialization ends), else logs why */
+static int settable(gf_inst *c, const char *fn, int i)
+{
+    const gf_var *v = &c->vars[i];
+    if (v->causality == GF_INPUT) return 1;
+    if (v->causality == GF_PARAMETER && v->variability == GF_TUNABLE) return 1;
+    if (v->causality == GF_PARAMETER && v->variability == GF_FIXED &&
+        (c->mode == GF_INSTANTIATED || c->mode == GF_INIT_MODE))
+        return 1;
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s cannot be set now (causality/variability forbid it)", fn,
+           v->name);
+    return 0;
+}
+
 int gf_null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const void *value)
 {
     if (nvr > 0 && (vr == NULL || value == NULL)) {
@@ -122,7 +199,7 @@ static int check_refs(gf_inst *c, const char *fn, const unsigned int vr[], size_
         if (set && (time_vr < 0 || (long)vr[i] != time_vr)) {
             size_t k;
             for (k = 0; k < n; ++k)
-                if (!gm_settable(c, fn, (int)vr[i] + (int)k)) return 0;
+                if (!settable(c, fn, (int)vr[i] + (int)k)) return 0;
         } else if (set) {
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: time (the independent variable) cannot be set", fn);
             return 0;
@@ -150,8 +227,8 @@ int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nv
         for (i = 0; i < nvr && vr[i] < (unsigned int)c->n_vars && c->vars[vr[i]].is_integer == want_integer; ++i) {}
         if (i == nvr) {
             for (i = 0; i < nvr; ++i) {
-                double x = gm_value(c, (int)vr[i]);
-                if (want_integer) integer[i] = gm_as_int(x);
+                double x = value_of(c, (int)vr[i]);
+                if (want_integer) integer[i] = as_int(x);
                 else real[i] = x;
             }
             return GF_OK;
@@ -163,8 +240,8 @@ int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nv
     for (i = 0; i < nvr; ++i) {
         size_t k, n = (time_vr >= 0 && (long)vr[i] == time_vr) ? 1 : (arrays ? (size_t)c->vars[vr[i]].array_len : 1);
         for (k = 0; k < n; ++k, ++j) {
-            double x = (time_vr >= 0 && (long)vr[i] == time_vr) ? c->time : gm_value(c, (int)(vr[i] + k));
-            if (want_integer) integer[j] = gm_as_int(x);
+            double x = (time_vr >= 0 && (long)vr[i] == time_vr) ? c->time : value_of(c, (int)(vr[i] + k));
+            if (want_integer) integer[j] = as_int(x);
             else real[j] = x;
         }
     }

@@ -1,7 +1,9 @@
 /*
- * gear_model.c -- the gear glue of the standalone gearfmu runtime, one
+ * gear_model.c -- the gear model of the standalone gearfmu runtime, one
  * definition for its FMI 2.0 layer (fmi2_gear.c) and its FMI 3.0 layer
- * (fmi3_gear.c); gear_model.h says how the layers and this file split the work.
+ * (fmi3_gear.c): the model side of the contract gf_model.h (which says how the plumbing
+ * fmi_common.c and this file split the work).  It calls nothing of the plumbing; its
+ * messages go through gf_log to the host.
  *
  * What instantiation reads (from the resource folder the layer resolves: FMI 2
  * gives a file:// URI, FMI 3 a native path):
@@ -140,62 +142,12 @@ static void sha_final_hex(gf_sha256 *s, char hex[65])
 }
 
 /* ----------------------------------------------------------- utilities */
-/* a stored Integer value as int; a value no int holds (only from a foreign or
- * corrupted FMU state) becomes -1, which every integer parameter here rejects
- * (a plain cast would be undefined behaviour) */
-int gm_as_int(double x)
-{
-    return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
-}
-
 static void copy_str(char *dst, size_t cap, const char *src)
 {
     size_t n = strlen(src);
     if (n >= cap) n = cap - 1;
     memcpy(dst, src, n);
     dst[n] = '\0';
-}
-
-static int hexval(int ch)
-{
-    if (ch >= '0' && ch <= '9') return ch - '0';
-    if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
-    if (ch >= 'A' && ch <= 'F') return ch - 'A' + 10;
-    return -1;
-}
-
-/* file:// URI of the resources folder -> local folder path ending in '/' (percent-decoded).
- * Accepts file:///abs, file://localhost/abs and file:/abs (RFC 8089). */
-int gm_uri_to_dir(const char *uri, char *out, size_t cap)
-{
-    const char *p;
-    size_t n = 0;
-    if (uri == NULL) return 0;
-    if (strncmp(uri, "file://localhost/", 17) == 0) p = uri + 16;
-    else if (strncmp(uri, "file:///", 8) == 0) p = uri + 7;
-    else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
-    else return 0;
-#ifdef _WIN32
-    if (p[0] == '/' && p[1] != '\0' && p[2] == ':') p++; /* /C:/... */
-#endif
-    while (*p != '\0') {
-        int ch = (unsigned char)*p;
-        if (ch == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
-            ch = hexval(p[1]) * 16 + hexval(p[2]);
-            p += 3;
-        } else {
-            p++;
-        }
-        if (n + 1 >= cap) return 0;
-        out[n++] = (char)ch;
-    }
-    if (n > 0 && out[n - 1] != '/') {
-        if (n + 1 >= cap) return 0;
-        out[n++] = '/';
-    }
-    if (n >= cap) return 0;
-    out[n] = '\0';
-    return 1;
 }
 
 /* folder (ending in a separator, else one is added) + fname */
@@ -487,28 +439,28 @@ static void to_fmu_layer(gf_inst *c)
 {
     double v[GKF_N];
     int k;
-    for (k = 0; k < GKF_N; ++k) v[k] = c->slot_vr[k] >= 0 ? c->values[c->slot_vr[k]] : 0.0;
-    gkf_set_values(c->fmu, v);
+    for (k = 0; k < GKF_N; ++k) v[k] = c->data->slot_vr[k] >= 0 ? c->values[c->data->slot_vr[k]] : 0.0;
+    gkf_set_values(c->data->fmu, v);
 }
 
 static void log_fmu_messages(gf_inst *c)
 {
     static const char *const category[4] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError"};
-    int i, n = gkf_n_messages(c->fmu);
+    int i, n = gkf_n_messages(c->data->fmu);
     for (i = 0; i < n; ++i) {
-        int level = gkf_message_level(c->fmu, i);
-        gf_log(c, level, category[level & 3], "%s", gkf_message(c->fmu, i));
+        int level = gkf_message_level(c->data->fmu, i);
+        gf_log(c, level, category[level & 3], "%s", gkf_message(c->data->fmu, i));
     }
 }
 
 static int init_state(gf_inst *c)
 {
     int ok;
-    c->initialized = 0;
+    c->data->initialized = 0;
     to_fmu_layer(c);
-    ok = gkf_initialize(c->fmu, &c->state, c->time, c->out);
+    ok = gkf_initialize(c->data->fmu, &c->data->state, c->time, c->out);
     log_fmu_messages(c);
-    c->initialized = ok;
+    c->data->initialized = ok;
     return ok;
 }
 
@@ -517,27 +469,33 @@ void gm_reset(gf_inst *c)
     int i;
     for (i = 0; i < c->n_vars; ++i) c->values[i] = c->vars[i].has_start ? c->vars[i].start : 0.0;
     for (i = 0; i < c->n_out; ++i) c->out[i] = 0.0;
-    memset(&c->state, 0, sizeof c->state);
-    c->initialized = 0;
+    memset(&c->data->state, 0, sizeof c->data->state);
+    c->data->initialized = 0;
     c->dirty = 1;
-    gk_envelope_rearm(&c->env);
-    gkf_reset(c->fmu);
+    gk_envelope_rearm(&c->data->env);
+    gkf_reset(c->data->fmu);
     c->time = 0.0;
     c->mode = GF_INSTANTIATED;
 }
-
 
 void gm_free(gf_inst *c)
 {
     if (c == NULL) return;
     free(c->vars);
     free(c->values);
-    free(c->blob);
-    free(c->cuts);
-    free(c->model);
-    free(c->fmu);
     free(c->out);
-    free(c);
+    c->vars = NULL;
+    c->values = NULL;
+    c->out = NULL;
+    c->n_vars = c->n_out = 0;
+    if (c->data != NULL) {
+        free(c->data->blob);
+        free(c->data->cuts);
+        free(c->data->model);
+        free(c->data->fmu);
+        free(c->data);
+        c->data = NULL;
+    }
 }
 
 /* name[1], name[2], ... name[n] in a row: element 1 carries n (FMI 3 arrays, docs/fmu.md) */
@@ -573,8 +531,10 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     size_t size = 0;
     int st, i;
     gf_sha256 sha;
-    c->vr_integrator = -1;
-    c->vr_temp = -1;
+    c->data = (gm_data *)calloc(1, sizeof(gm_data));
+    if (c->data == NULL) return "out of memory";
+    c->data->vr_integrator = -1;
+    c->data->vr_temp = -1;
     if (!join_path(res_dir, GF_CONFIG_FILE, path, sizeof path)) return "resource location too long";
     text = read_file(path, &size);
     if (text == NULL) {
@@ -593,16 +553,20 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     if (token == NULL || strcmp(token, cfg.guid) != 0) return "GUID differs from the one this FMU was built with";
     /* tables.bin: size and SHA-256 */
     if (!join_path(res_dir, "tables.bin", path, sizeof path)) return "resource location too long";
-    c->blob = read_file(path, &size);
-    if (c->blob == NULL) return "cannot read resources/tables.bin";
+    c->data->blob = read_file(path, &size);
+    if (c->data->blob == NULL) return "cannot read resources/tables.bin";
     if ((long)size != cfg.bin_size) return "resources/tables.bin: wrong size (file corrupted)";
     sha_init(&sha);
-    sha_update(&sha, c->blob, size);
+    sha_update(&sha, c->data->blob, size);
     sha_final_hex(&sha, hex);
     if (strcmp(hex, cfg.sha) != 0)
         return "resources/tables.bin: SHA-256 checksum mismatch (file corrupted or tampered with)";
-    c->tables_tag = 0;
-    for (i = 0; i < 16; ++i) c->tables_tag = (c->tables_tag << 4) | (uint64_t)hexval(cfg.sha[i]);
+    {   /* the first 16 hex digits of the checksum (equal to hex: checked above) */
+        char tag[17];
+        memcpy(tag, hex, 16);
+        tag[16] = '\0';
+        c->data->tables_tag = (uint64_t)strtoull(tag, NULL, 16);
+    }
     {
         long P = cfg.P, N = cfg.n_phi, NT = cfg.n_torque, NTemp = cfg.n_temp > 0 ? cfg.n_temp : 1;
         long need[5], offs[5];
@@ -616,122 +580,101 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         for (i = 0; i < n_arr; ++i)
             if (offs[i] < 0 || offs[i] % 8 != 0 || offs[i] + 8 * need[i] > (long)size)
                 return "table array offsets outside resources/tables.bin";
-        if (!host_little_endian()) swap8(c->blob, size / 8); /* stored little-endian (docs/tables.md) */
-        c->arr_torque = (double *)(void *)(c->blob + cfg.off_torque);
-        c->arr_k = (double *)(void *)(c->blob + cfg.off_k);
-        c->arr_e = (double *)(void *)(c->blob + cfg.off_e);
-        c->arr_b = (double *)(void *)(c->blob + cfg.off_b);
-        c->arr_temp = (double *)(void *)(c->blob + cfg.off_temp);
-        c->P = (int)P;
-        c->model = (gk_model *)calloc(1, (size_t)gk_sizeof_model());
-        c->n_out = gk_n_outputs(c->P);
+        if (!host_little_endian()) swap8(c->data->blob, size / 8); /* stored little-endian (docs/tables.md) */
+        c->data->arr_torque = (double *)(void *)(c->data->blob + cfg.off_torque);
+        c->data->arr_k = (double *)(void *)(c->data->blob + cfg.off_k);
+        c->data->arr_e = (double *)(void *)(c->data->blob + cfg.off_e);
+        c->data->arr_b = (double *)(void *)(c->data->blob + cfg.off_b);
+        c->data->arr_temp = (double *)(void *)(c->data->blob + cfg.off_temp);
+        c->data->P = (int)P;
+        c->data->model = (gk_model *)calloc(1, (size_t)gk_sizeof_model());
+        c->n_out = gk_n_outputs(c->data->P);
         c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
-        if (c->model == NULL || c->out == NULL) return "out of memory";
-        st = gk_init(c->model, c->P, (int)N, (int)NT, c->arr_torque, c->arr_k, c->arr_e, c->arr_b,
+        if (c->data->model == NULL || c->out == NULL) return "out of memory";
+        st = gk_init(c->data->model, c->data->P, (int)N, (int)NT, c->data->arr_torque, c->data->arr_k, c->data->arr_e, c->data->arr_b,
                      cfg.phi_period, cfg.Rb1, cfg.Rb2, cfg.I1, cfg.I2, cfg.k_mean);
         if (st != GK_OK) {
             snprintf(err, errcap, "kernel rejects the tables (%s)", gkf_kernel_error(st));
             return err;
         }
         if (cfg.n_temp > 0) { /* temperature axis: k, e are [NT][NTemp][P][N] */
-            if (gk_set_temperature_axis(c->model, (int)NTemp, c->arr_temp) != GK_OK)
+            if (gk_set_temperature_axis(c->data->model, (int)NTemp, c->data->arr_temp) != GK_OK)
                 return "kernel rejects the temperature axis (not finite and ascending)";
         }
         if (cfg.mesh_period > 0.0) { /* contact-zone edges (docs/model.md "Contact-zone edges") */
-            c->cuts = (double *)calloc((size_t)(2 * P * N), sizeof(double));
-            if (c->cuts == NULL) return "out of memory";
-            if (gk_zone_cuts((int)P, (int)N, cfg.phi_period, cfg.mesh_period, cfg.eng_in, cfg.eng_out, c->cuts) == GK_OK)
-                gk_set_zone_cuts(c->model, c->cuts);
+            c->data->cuts = (double *)calloc((size_t)(2 * P * N), sizeof(double));
+            if (c->data->cuts == NULL) return "out of memory";
+            if (gk_zone_cuts((int)P, (int)N, cfg.phi_period, cfg.mesh_period, cfg.eng_in, cfg.eng_out, c->data->cuts) == GK_OK)
+                gk_set_zone_cuts(c->data->model, c->data->cuts);
         }
-        gk_envelope_init(&c->env, cfg.env_kind);
+        gk_envelope_init(&c->data->env, cfg.env_kind);
         for (i = 0; i < GK_ENV_N; ++i)
-            if (cfg.env_have[i]) gk_envelope_set(&c->env, i, cfg.env_lo[i], cfg.env_hi[i]);
-        c->fmu = (gkf_fmu *)calloc(1, (size_t)gkf_sizeof());
-        if (c->fmu == NULL) return "out of memory";
-        gkf_init(c->fmu, c->model, &c->env);
+            if (cfg.env_have[i]) gk_envelope_set(&c->data->env, i, cfg.env_lo[i], cfg.env_hi[i]);
+        c->data->fmu = (gkf_fmu *)calloc(1, (size_t)gkf_sizeof());
+        if (c->data->fmu == NULL) return "out of memory";
+        gkf_init(c->data->fmu, c->data->model, &c->data->env);
     }
     /* the variables the layer drives, by name (the spec's contract) */
-    c->vr_T1 = find_var(c, "pinion_torque");
-    c->vr_T2 = find_var(c, "gear_torque");
-    c->vr_zeta = find_var(c, "damping_ratio");
-    c->vr_w0 = find_var(c, "pinion_speed_start");
-    c->vr_th0 = find_var(c, "pinion_angle_start");
-    c->vr_hmax = find_var(c, "max_step");
-    c->vr_dm = find_var(c, "damping_model");
-    c->vr_integrator = find_var(c, "integrator");
+    c->data->vr_T1 = find_var(c, "pinion_torque");
+    c->data->vr_T2 = find_var(c, "gear_torque");
+    c->data->vr_zeta = find_var(c, "damping_ratio");
+    c->data->vr_w0 = find_var(c, "pinion_speed_start");
+    c->data->vr_th0 = find_var(c, "pinion_angle_start");
+    c->data->vr_hmax = find_var(c, "max_step");
+    c->data->vr_dm = find_var(c, "damping_model");
+    c->data->vr_integrator = find_var(c, "integrator");
     if (cfg.n_temp > 0) {
         /* the one temperature input the interface declares (docs/thermal.md: what the axis is) */
         static const char *const temp_names[3] = {"bulk_temperature", "oil_temperature", "gearbox_temperature"};
         int ti, found = 0;
         for (ti = 0; ti < 3; ti++) {
             int vr = find_var(c, temp_names[ti]);
-            if (vr >= 0) { c->vr_temp = vr; found++; }
+            if (vr >= 0) { c->data->vr_temp = vr; found++; }
         }
         if (found != 1)
             return "tables have a temperature axis but not exactly one bulk_temperature, "
                    "oil_temperature or gearbox_temperature input";
     }
-    if (c->vr_T1 < 0 || c->vr_T2 < 0 || c->vr_zeta < 0 || c->vr_w0 < 0 || c->vr_th0 < 0 || c->vr_hmax < 0 ||
-        c->vr_dm < 0)
+    if (c->data->vr_T1 < 0 || c->data->vr_T2 < 0 || c->data->vr_zeta < 0 || c->data->vr_w0 < 0 || c->data->vr_th0 < 0 || c->data->vr_hmax < 0 ||
+        c->data->vr_dm < 0)
         return "variable table lacks one of pinion_torque, gear_torque, damping_ratio, "
                "pinion_speed_start, pinion_angle_start, max_step, damping_model";
     for (i = 0; i < c->n_vars; ++i)
         if (c->vars[i].causality == GF_OUTPUT && (c->vars[i].out_index < 0 || c->vars[i].out_index >= c->n_out))
             return "an output's kernel index is outside the output vector";
     /* the variables gkfmu.c checks and drives, with their names and min/max */
-    c->slot_vr[GKF_DAMPING_RATIO] = c->vr_zeta;
-    c->slot_vr[GKF_PINION_SPEED_START] = c->vr_w0;
-    c->slot_vr[GKF_PINION_ANGLE_START] = c->vr_th0;
-    c->slot_vr[GKF_MAX_STEP] = c->vr_hmax;
-    c->slot_vr[GKF_DAMPING_MODEL] = c->vr_dm;
-    c->slot_vr[GKF_INTEGRATOR] = c->vr_integrator;
-    c->slot_vr[GKF_PINION_TORQUE] = c->vr_T1;
-    c->slot_vr[GKF_GEAR_TORQUE] = c->vr_T2;
-    c->slot_vr[GKF_TEMPERATURE] = c->vr_temp;
+    c->data->slot_vr[GKF_DAMPING_RATIO] = c->data->vr_zeta;
+    c->data->slot_vr[GKF_PINION_SPEED_START] = c->data->vr_w0;
+    c->data->slot_vr[GKF_PINION_ANGLE_START] = c->data->vr_th0;
+    c->data->slot_vr[GKF_MAX_STEP] = c->data->vr_hmax;
+    c->data->slot_vr[GKF_DAMPING_MODEL] = c->data->vr_dm;
+    c->data->slot_vr[GKF_INTEGRATOR] = c->data->vr_integrator;
+    c->data->slot_vr[GKF_PINION_TORQUE] = c->data->vr_T1;
+    c->data->slot_vr[GKF_GEAR_TORQUE] = c->data->vr_T2;
+    c->data->slot_vr[GKF_TEMPERATURE] = c->data->vr_temp;
     for (i = 0; i < GKF_N; ++i) {
         const gf_var *v;
-        if (c->slot_vr[i] < 0) continue;
-        v = &c->vars[c->slot_vr[i]];
-        if (gkf_declare(c->fmu, i, v->name, v->has_min, v->min, v->has_max, v->max) != GK_OK)
+        if (c->data->slot_vr[i] < 0) continue;
+        v = &c->vars[c->data->slot_vr[i]];
+        if (gkf_declare(c->data->fmu, i, v->name, v->has_min, v->min, v->has_max, v->max) != GK_OK)
             return "a variable name is too long";
     }
     mark_arrays(c);
     gm_reset(c);
     gf_log(c, GF_OK, "logAll", "instantiated: %d slots, %ld angle points, %ld torque rows, tables SHA-256 ok",
-           c->P, cfg.n_phi, cfg.n_torque);
+           c->data->P, cfg.n_phi, cfg.n_torque);
     return NULL;
 }
 
-/* Initialization Mode (FMI 2.0 section 3.2.3 / 4.2.4, FMI 3.0 section 4.2.3): from here on every
- * output is the initial one computed from the values set so far -- the same
- * init_state (gk_initialize + gk_outputs) that exit uses; a value set in this
- * mode marks the outputs dirty and the next get of an output recomputes them. */
-void gm_enter_init(gf_inst *c)
-{
-    c->mode = GF_INIT_MODE;
-    c->dirty = 1;
-}
-
+/* the end of initialization mode (gf_enter_init): the initial state from the values set, unless
+ * the outputs are already those of the current values */
 int gm_exit_init(gf_inst *c)
 {
-    if (c->dirty || !c->initialized) {
+    if (c->dirty || !c->data->initialized) {
         if (!init_state(c)) return 0;
         c->dirty = 0;
     }
     return 1;
-}
-
-int gm_settable(gf_inst *c, const char *fn, int i)
-{
-    const gf_var *v = &c->vars[i];
-    if (v->causality == GF_INPUT) return 1;
-    if (v->causality == GF_PARAMETER && v->variability == GF_TUNABLE) return 1;
-    if (v->causality == GF_PARAMETER && v->variability == GF_FIXED &&
-        (c->mode == GF_INSTANTIATED || c->mode == GF_INIT_MODE))
-        return 1;
-    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s cannot be set now (causality/variability forbid it)", fn,
-           v->name);
-    return 0;
 }
 
 /* In initialization mode, bring the outputs up to date with the values set
@@ -756,10 +699,10 @@ int gm_do_step(gf_inst *c, double t, double H)
 {
     int ok;
     if (isfinite(t)) c->time = t;
-    if (!c->initialized && !init_state(c)) return GF_DISCARD;
+    if (!c->data->initialized && !init_state(c)) return GF_DISCARD;
     to_fmu_layer(c);
-    ok = gkf_do_step(c->fmu, &c->state, c->time, H, c->out);
-    if (gkf_n_messages(c->fmu) > 0) log_fmu_messages(c);
+    ok = gkf_do_step(c->data->fmu, &c->data->state, c->time, H, c->out);
+    if (gkf_n_messages(c->data->fmu) > 0) log_fmu_messages(c);
     if (!ok) return GF_DISCARD;
     c->time = c->time + H;
     return GF_OK;
@@ -779,14 +722,14 @@ void gm_snap_write(const gf_inst *c, unsigned char *p)
     h.version = GF_SNAPSHOT_VERSION;
     h.n_vars = (uint32_t)c->n_vars;
     h.n_out = (uint32_t)c->n_out;
-    h.tables_tag = c->tables_tag;
+    h.tables_tag = c->data->tables_tag;
     h.mode = c->mode;
-    h.initialized = c->initialized;
-    h.warned_range = gkf_warned_range(c->fmu);
-    h.zeta_valid = gkf_zeta_valid(c->fmu);
+    h.initialized = c->data->initialized;
+    h.warned_range = gkf_warned_range(c->data->fmu);
+    h.zeta_valid = gkf_zeta_valid(c->data->fmu);
     h.time = c->time;
-    h.zeta_applied = gkf_zeta_applied(c->fmu);
-    h.state = c->state;
+    h.zeta_applied = gkf_zeta_applied(c->data->fmu);
+    h.state = c->data->state;
     memcpy(p, &h, sizeof h);
     memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
     memcpy(p + sizeof h + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
@@ -797,7 +740,7 @@ int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size)
     gf_snap_header h;
     if (size < sizeof h) return 0;
     memcpy(&h, p, sizeof h);
-    return h.magic == GF_SNAPSHOT_MAGIC && h.version == GF_SNAPSHOT_VERSION && h.tables_tag == c->tables_tag;
+    return h.magic == GF_SNAPSHOT_MAGIC && h.version == GF_SNAPSHOT_VERSION && h.tables_tag == c->data->tables_tag;
 }
 
 int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn)
@@ -820,14 +763,14 @@ int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn
     }
     c->mode = h.mode;
     c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
-    c->initialized = h.initialized;
+    c->data->initialized = h.initialized;
     c->time = h.time;
-    c->state = h.state;
+    c->data->state = h.state;
     memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
     /* the kernel model's integrator and damping are derived from the restored values */
     to_fmu_layer(c);
-    st = gkf_restore(c->fmu, 1, h.zeta_valid, h.zeta_applied, h.warned_range);
+    st = gkf_restore(c->data->fmu, 1, h.zeta_valid, h.zeta_applied, h.warned_range);
     if (st != GK_OK) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state's integrator or damping is refused (%s)", fn,
                gkf_kernel_error(st));

@@ -1,0 +1,119 @@
+/*
+ * gf_model.h -- the model contract of the standalone gearfmu runtime, shaped as the
+ * Modelica Reference-FMUs' include/model.h: the instance both sides share, what a model
+ * provides (gm_*), and the one way a model reaches back (gf_log).
+ *
+ *   fmi_common.c   the generic FMI plumbing (fmi_common.h): the state-machine check of every
+ *                  call, get/set over the variable table, the FMU state box.  It calls the
+ *                  model through the gm_* functions below only, and knows no gears;
+ *   gear_model.c   the gear model: it reads the resources at instantiation (the configuration,
+ *                  tables.bin and its SHA-256), fills the variable table, hands the values to
+ *                  ../kernel/gkfmu.c (the parameter and input checks, the initial state, one
+ *                  communication step, the outputs and the warnings, with their messages: the
+ *                  functions the pythonfmu runtime calls too) and writes the FMU state snapshot.
+ *                  It knows no FMI function and calls nothing of the plumbing; its messages go
+ *                  through gf_log to the logger the FMI layer put into the instance;
+ *   fmi2_gear.c, fmi3_gear.c  the FMI 2.0 and 3.0 layers over both.
+ *
+ * Status codes (GF_OK .. GF_FATAL) have the numbering of both fmi2Status and fmi3Status
+ * (OK 0, Warning 1, Discard 2, Error 3, Fatal 4), so a layer casts.
+ */
+#ifndef GF_MODEL_H
+#define GF_MODEL_H
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#define GF_MAX_NAME 128
+
+enum { GF_OK = 0, GF_WARNING = 1, GF_DISCARD = 2, GF_ERROR_STATUS = 3, GF_FATAL = 4 };
+enum { GF_PARAMETER = 0, GF_INPUT = 1, GF_OUTPUT = 2, GF_OTHER = 3 };
+enum { GF_FIXED = 0, GF_TUNABLE = 1, GF_CONTINUOUS = 2, GF_OTHER_VAR = 3 };
+/* The Co-Simulation states both FMI versions pass through here (FMI 2.0
+ * section 4.2.4; FMI 3.0 section 4.2, with no configuration, event or
+ * intermediate-update mode: this FMU has no structural parameters, no events,
+ * no clocks), one bit each so that a set of states is a mask.  A discarded
+ * doStep leaves the state unchanged (nothing was integrated), so the instance
+ * stays in GF_STEP_MODE and may step again. */
+enum { GF_INSTANTIATED = 1, GF_INIT_MODE = 2, GF_STEP_MODE = 4, GF_TERMINATED = 8, GF_ERROR = 16 };
+#define GF_ANY_STATE (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR)
+
+/* one variable of the table (resources/gearfmu_standalone.txt) */
+typedef struct {
+    int causality;
+    int variability;
+    int is_integer;
+    int out_index;        /* position in the model's output vector, -1 if none */
+    int array_len;        /* name[1]: elements name[1..n] follow (n); a scalar: 1; name[k>1]: 0 */
+    double start, min, max;
+    int has_start, has_min, has_max;
+    char name[GF_MAX_NAME];
+} gf_var;
+
+typedef struct gf_inst gf_inst;
+/* the FMI layer's adapter from one message to its host's logger */
+typedef void (*gf_log_fn)(gf_inst *c, int status, const char *category, const char *msg);
+/* what the model keeps beside the variable table (gear_model.c) */
+typedef struct gm_data gm_data;
+
+struct gf_inst {
+    /* set by the FMI layer (gf_new) */
+    gf_log_fn log;
+    void *host_env;            /* componentEnvironment / instanceEnvironment */
+    void (*host_logger)(void); /* the host's callback, cast back by the layer's gf_log_fn */
+    char instance_name[GF_MAX_NAME];
+    int logging_on;
+    int fmi_version;           /* 2 or 3: the names in messages (state names, types) */
+    const char *never_why;     /* the reason a call allowed in no state is refused */
+    /* the FMI state, the time and whether a value changed since the outputs were computed
+     * (initialization mode), kept by the plumbing and the model */
+    int mode;                  /* one GF_* state bit */
+    int dirty;
+    double time;
+    /* the variable table and the outputs, filled by the model (gm_instantiate) */
+    int n_vars;
+    gf_var *vars;
+    double *values;            /* current value of every variable (Integer ones held exactly) */
+    double *out;               /* the model's outputs, gf_var.out_index of the output variables */
+    int n_out;
+    gm_data *data;
+};
+
+/* A message to the host (printf format), when logging is on or the status is not OK: the
+ * model's one way back, through the logger the FMI layer set in the instance. */
+static inline void gf_log(gf_inst *c, int status, const char *category, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    if (c == NULL || c->log == NULL || c->host_logger == NULL) return;
+    if (status == GF_OK && !c->logging_on) return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    c->log(c, status, category, msg);
+}
+
+/* ------------------------------------------- what the model provides (gear_model.c) */
+/* Read the resources in folder res_dir (ending in '/' or '\\'), check token (the GUID /
+ * instantiation token), fill the variable table and the outputs, set up the model and its
+ * start values (gm_reset); NULL on success, else a message in err. */
+const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap);
+/* free what gm_instantiate allocated (the instance itself stays) */
+void gm_free(gf_inst *c);
+/* back to the start values, state instantiated, time 0 */
+void gm_reset(gf_inst *c);
+/* compute the initial state if the values changed since (logs why not); 1 on success */
+int gm_exit_init(gf_inst *c);
+/* in initialization mode, bring the outputs up to date when one of vr[] is an output (logs why not) */
+int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr);
+/* one communication step: GF_OK or GF_DISCARD (state unchanged, logged) */
+int gm_do_step(gf_inst *c, double t, double H);
+/* the FMU state snapshot (flat bytes, no pointers) */
+size_t gm_snap_size(const gf_inst *c);
+void gm_snap_write(const gf_inst *c, unsigned char *p);
+int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn);
+/* 1 if the bytes carry this FMU's snapshot header (magic, version, tables) */
+int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size);
+
+#endif /* GF_MODEL_H */

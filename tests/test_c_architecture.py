@@ -1,0 +1,141 @@
+"""The C of the package has no cycle: between its files, calls run one way (gearfmu/fmu/kernel,
+gearfmu/fmu/standalone, gearfmu/fmu/runtime/pyshim.c).
+
+Reference: the sources themselves, read as text.  Every function defined in a C file or
+(inline) in a header is found with the file that defines it; a file that calls a function of
+another file depends on it; the graph of those dependencies (Tarjan's strongly connected
+components) must have no component of more than one file.  The standalone runtime's model
+contract (gf_model.h, in the shape of the Modelica Reference-FMUs' include/model.h) is checked
+besides: the plumbing reaches the gear model through it only, and the model includes nothing
+of the plumbing.
+"""
+import re
+from pathlib import Path
+
+import pytest
+
+FMU = Path(__file__).resolve().parents[1] / "gearfmu" / "fmu"
+C_FOLDERS = (FMU / "kernel", FMU / "standalone", FMU / "runtime")
+
+_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
+_STRING = re.compile(r'"(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\'')
+_CALL = re.compile(r"\b([A-Za-z_]\w*)\s*\(")
+_KEYWORDS = {"if", "for", "while", "switch", "return", "sizeof", "defined"}
+
+
+def _code(text: str):
+    """(the code without comments, strings, C++ guards and preprocessor lines, the macro bodies):
+    a call written in a macro is a call of the file that defines the macro."""
+    text = _STRING.sub('""', _COMMENT.sub(" ", text)).replace("\\\n", " ")
+    text = re.sub(r"#ifdef __cplusplus.*?#endif", "", text, flags=re.S)
+    lines = text.splitlines()
+    macros = " ".join(m.group(1) for ln in lines for m in [re.match(r"\s*#\s*define\s+\w+(?:\([^)]*\))?(.*)", ln)] if m)
+    return "\n".join("" if ln.lstrip().startswith("#") else ln for ln in lines), macros
+
+
+def _definitions_and_calls(text: str):
+    """(functions defined at file level, names called inside function bodies and macros)."""
+    code, macros = _code(text)
+    defined, called = set(), {m.group(1) for m in _CALL.finditer(macros)}
+    depth, start = 0, 0
+    for i, ch in enumerate(code):
+        if ch == "{":
+            if depth == 0:  # a body at file level: a function if its head ends with "name(...)"
+                head = code[max(code.rfind(";", 0, i), code.rfind("}", 0, i)) + 1:i]
+                m = re.search(r"\b([A-Za-z_]\w*)\s*\([^()]*(?:\([^()]*\)[^()]*)*\)\s*$", head)
+                if m and m.group(1) not in _KEYWORDS and "=" not in head:
+                    defined.add(m.group(1))
+                start = i
+            depth += 1
+        elif ch == "}":
+            depth -= 1
+            if depth == 0:
+                called.update(m.group(1) for m in _CALL.finditer(code, start, i))
+    return defined, called - _KEYWORDS
+
+
+def call_graph(folders):
+    """{file: set of files it calls a function of} over the C files and headers in ``folders``."""
+    files = sorted(p for d in folders for p in d.glob("*.[ch]"))
+    defs, calls = {}, {}
+    for p in files:
+        defs[p], calls[p] = _definitions_and_calls(p.read_text())
+    owner = {}
+    for p in files:
+        for name in defs[p]:
+            owner.setdefault(name, set()).add(p)
+    return {p: {q for name in calls[p] - defs[p] for q in owner.get(name, ())} for p in files}
+
+
+def cycles(graph):
+    """The strongly connected components of more than one node (Tarjan)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(x.name for x in comp))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_the_c_files_call_each_other_one_way():
+    graph = call_graph(C_FOLDERS)
+    assert cycles(graph) == []
+    names = {p.name for p in graph}
+    assert {"gearkernel.c", "gk_stops.c", "gkfmu.c", "fmi_common.c", "gear_model.c", "fmi2_gear.c"} <= names
+    # the graph sees the calls it should: the layers call the plumbing and the model, the model the kernel
+    edges = {(p.name, q.name) for p, qs in graph.items() for q in qs}
+    assert {("fmi2_gear.c", "fmi_common.c"), ("fmi_common.c", "gear_model.c"), ("gear_model.c", "gkfmu.c"),
+            ("gkfmu.c", "gearkernel.c"), ("gearkernel.c", "gk_stops.c"), ("gk_stops.c", "gk_zones.c")} <= edges
+
+
+def test_a_call_back_from_the_model_into_the_plumbing_is_a_cycle(tmp_path):
+    # the check itself: the model calling a function of the plumbing closes a cycle
+    for d in C_FOLDERS:
+        (tmp_path / d.name).mkdir()
+        for p in d.glob("*.[ch]"):
+            (tmp_path / d.name / p.name).write_text(p.read_text())
+    model = tmp_path / "standalone" / "gear_model.c"
+    model.write_text(model.read_text() + "\nstatic void call_back(gf_inst *c) { gf_enter_init(c); }\n")
+    found = cycles(call_graph([tmp_path / d.name for d in C_FOLDERS]))
+    assert found and {"fmi_common.c", "gear_model.c"} <= set(found[0]), found
+
+
+@pytest.mark.parametrize("name", ["gear_model.c", "gear_model.h"])
+def test_the_model_includes_the_contract_not_the_plumbing(name):
+    text = (FMU / "standalone" / name).read_text()
+    includes = set(re.findall(r'#include "([^"]+)"', text))
+    assert "fmi_common.h" not in includes
+    assert "gf_model.h" in includes or "gear_model.h" in includes
+
+
+def test_the_plumbing_reaches_the_model_through_the_contract_only():
+    text = (FMU / "standalone" / "fmi_common.c").read_text() + (FMU / "standalone" / "fmi_common.h").read_text()
+    includes = set(re.findall(r'#include "([^"]+)"', text))
+    assert includes <= {"fmi_common.h", "gf_model.h"}, includes
+    contract = (FMU / "standalone" / "gf_model.h").read_text()
+    declared = set(re.findall(r"\b(gm_\w+)\s*\(", contract))
+    used = _definitions_and_calls((FMU / "standalone" / "fmi_common.c").read_text())[1]
+    used = {u for u in used if u.startswith("gm_")}
+    assert used and used <= declared, used - declared
