@@ -12,6 +12,11 @@
   gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--runtime R] [--platforms LIST]
                    [--fmi-version 2|3]       SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
+  gearfmu modes    [SCENE] [-o OUT.json] [--json] [--max-speed-rpm N]
+                                             natural frequencies, strain energy, Campbell diagram (PNG + JSON)
+
+A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): simulate runs the
+native gearbox solver on it, modes gives its modes.
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -40,7 +45,7 @@ from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
-from . import pipeline
+from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
@@ -112,9 +117,7 @@ def _reading(what: str, path):
 def _scene(path):
     with _reading("SCENE", path):
         if path is not None:
-            p = _input_file(path, "SCENE")
-            if not p.read_bytes().strip():
-                raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
+            _scene_file(path)
         return load(path)
 
 
@@ -263,9 +266,94 @@ def cmd_tables(args) -> int:
     return 0
 
 
+def _any_scene(path):
+    """("drivetrain", DrivetrainScene) or ("pair", Scene) of SCENE (docs/gearbox.md)."""
+    with _reading("SCENE", path):
+        if path is not None:
+            _scene_file(path)
+        return drivetrain.load_any(path)
+
+
+def _scene_file(path) -> Path:
+    p = _input_file(path, "SCENE")
+    if not p.read_bytes().strip():
+        raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
+    return p
+
+
+def _gearbox(kind, scene, args):
+    """The gearbox model of a drivetrain or pair scene (its tables computed; the notes of a drivetrain
+    -- replaced operating points, torque-axis warnings -- on stderr)."""
+    if kind == "drivetrain":
+        for note in scene.notes:
+            print(f"gearfmu: {note}", file=sys.stderr)
+        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        return drivetrain.gearbox_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None))
+    tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+    return drivetrain.pair_model(scene, tables)
+
+
+def _simulate_drivetrain(args, scene) -> int:
+    from .plots import plot_gearbox_simulation  # matplotlib: loaded only by the plotting commands
+
+    if args.backend != "native" or args.fmu:
+        raise CliError("--backend: a drivetrain scene runs with the native gearbox solver only (--backend native)")
+    out = _output_file(args.output or f"out/{scene.model_name}_native.csv", "--output")
+    _output_file(out.with_suffix(".png"), "--output")
+    model = _gearbox("drivetrain", scene, args)
+    res = drivetrain.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
+                                         progress=not args.quiet)
+    res.to_csv(out)
+    png = plot_gearbox_simulation(res, model, out.with_suffix(".png"), title=f"{scene.name} (native gearbox solver)")
+    if "diverged_at_step" in res.info:
+        print(f"gearfmu: the state turned non-finite at step {res.info['diverged_at_step']}; the rows after it are "
+              "NaN", file=sys.stderr)
+    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({len(model.meshes)} stages, {model.n_bodies} bodies, "
+          f"{res.integrator}, step {res.step_s:.3g} s, {res.info['events']} events) in {res.wall_s:.3f} s -> "
+          f"{out}, {png}")
+    return 0
+
+
+def cmd_modes(args) -> int:
+    from .plots import plot_campbell  # matplotlib: loaded only by the plotting commands
+
+    kind, scene = _any_scene(args.scene)
+    name = scene.model_name if kind == "drivetrain" else scene.fmu.model_name
+    out = _output_file(args.output or f"out/{name}_modes.json", "--output")
+    png = _output_file(out.with_suffix(".png"), "--output")
+    with _logs_to_stderr(args.json):
+        model = _gearbox(kind, scene, args)
+    res, cb = drivetrain.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
+    report = {"scene": scene.name, "kind": kind, **res.to_dict(), "campbell": cb}
+    out.write_text(json.dumps(report, indent=1), encoding="utf-8")
+    plot_campbell(cb, png, title=f"{scene.name}: Campbell diagram (modes at {res.reference_torque_Nm:.4g} N*m)")
+    if args.json:
+        print(json.dumps(report, indent=1))
+        return 0
+    print(f"{scene.name}: {model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s); "
+          f"linearised at the mean mesh stiffness, motor torque {res.reference_torque_Nm:.6g} N*m")
+    print(f"{'mode':>4} {'f [Hz]':>10} {'f_d [Hz]':>10} {'zeta':>8}  strain energy (largest shares)")
+    for m in res.modes:
+        if m.rigid:
+            print(f"{m.index:>4} {'rigid':>10}")
+            continue
+        top = sorted(m.energy.items(), key=lambda kv: -kv[1])[:3]
+        shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in top if v >= 0.005)
+        print(f"{m.index:>4} {m.frequency_Hz:>10.5g} {m.damped_frequency_Hz:>10.5g} {m.damping_ratio:>8.4f}  {shares}")
+    pts = cb["interferences"]
+    print(f"interferences of mesh and shaft orders with the modes, motor speed 0 .. {cb['speed_axis_rpm'][1]:.5g} rpm "
+          f"(operating {cb['operating_speed_rpm']:.5g} rpm): {len(pts)}")
+    for p in pts:
+        print(f"  {p['speed_rpm']:>9.5g} rpm  {p['order']} on mode {p['mode']} ({p['frequency_Hz']:.5g} Hz)")
+    print(f"wrote {out}, {png}")
+    return 0
+
+
 def cmd_simulate(args) -> int:
     from .plots import plot_simulation  # matplotlib: loaded only by the plotting commands
 
+    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+        return _simulate_drivetrain(args, _any_scene(args.scene)[1])
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
@@ -520,6 +608,17 @@ def make_parser() -> argparse.ArgumentParser:
     pl.add_argument("-q", "--quiet", action="store_true")
     add_scheduler_option(pl)
     pl.set_defaults(func=cmd_plan)
+
+    mo = sub.add_parser("modes", help="natural frequencies, mode shapes, strain energy per mesh and shaft, and "
+                                      "the Campbell diagram (PNG + JSON) of a pair or drivetrain scene")
+    mo.add_argument("scene", nargs="?", help="pair or drivetrain scene TOML (default: the default scene)")
+    mo.add_argument("-o", "--output", help="JSON path (default out/<model_name>_modes.json; the PNG beside it)")
+    mo.add_argument("--json", action="store_true", help="print the report as JSON")
+    mo.add_argument("--max-speed-rpm", type=_positive("--max-speed-rpm"),
+                    help="top of the Campbell diagram's motor speed axis (default 1.25 x the highest speed)")
+    mo.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(mo)
+    mo.set_defaults(func=cmd_modes)
     return p
 
 
