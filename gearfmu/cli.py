@@ -31,12 +31,14 @@ import contextlib
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
+from .common.progress import notice, quiet
 from .common.vocabulary import RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from . import pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_from_scene
+from .tables import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
 
@@ -366,6 +368,12 @@ def cmd_plan(args) -> int:
     return 0
 
 
+def _no_cache(parser) -> None:
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute the tables without reading or writing gearfmu's table cache "
+                             "(docs/cli.md 'Table cache')")
+
+
 def _allow_large(parser) -> None:
     parser.add_argument("--allow-large", action="store_true",
                         help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
@@ -403,6 +411,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
     _allow_large(b)
+    _no_cache(b)
     add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
 
@@ -419,6 +428,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
     _allow_large(t)
+    _no_cache(t)
     add_scheduler_option(t)
     t.set_defaults(func=cmd_tables)
 
@@ -432,6 +442,7 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", help="CSV path")
     s.add_argument("-q", "--quiet", action="store_true")
     _allow_large(s)
+    _no_cache(s)
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
@@ -443,7 +454,9 @@ def make_parser() -> argparse.ArgumentParser:
                    help=f"largest |FMU - native| allowed, relative to each output's range (default "
                         f"{DEFAULT_TOLERANCE:g}); exit status 1 beyond it")
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    v.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     _allow_large(v)
+    _no_cache(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
@@ -453,6 +466,7 @@ def make_parser() -> argparse.ArgumentParser:
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
     x.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(x)
     x.set_defaults(func=cmd_ssp)
 
     pl = sub.add_parser("plan", help="fidelity plan: each modelling choice's error over the envelope, "
@@ -470,6 +484,7 @@ def make_parser() -> argparse.ArgumentParser:
                     help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(pl)
     add_scheduler_option(pl)
     pl.set_defaults(func=cmd_plan)
     return p
@@ -486,7 +501,10 @@ def _one_line(exc: BaseException) -> str:
 def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
-        with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
+        # --scheduler: the parallel work on that Dask cluster; --no-cache: tables computed afresh;
+        # -q: no notices (the bars follow each command's progress flag)
+        with cluster(getattr(args, "scheduler", None)), table_cache.bypassed(getattr(args, "no_cache", False)), \
+                quiet(getattr(args, "quiet", False)):
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)

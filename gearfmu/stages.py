@@ -22,7 +22,7 @@ from .fmu.standalone_build import build_standalone_fmu
 from .scene.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
 from .tables.estimate import check_build_cost, estimate_build
-from .tables import precompute
+from .tables import precompute, table_cache
 
 
 def load(scene_path: Optional[str] = None):
@@ -36,11 +36,13 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 
-def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
+def compute_tables(scene, *, progress: bool = False, allow_large: bool = False, cache: Optional[bool] = None):
     """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
     :class:`gearfmu.tables.estimate.BuildTooLargeError` naming the scene keys when the estimated
     tables, FMU or build time exceed the limits of :mod:`gearfmu.tables.estimate`, unless
-    ``allow_large``."""
+    ``allow_large``.  The tables are kept in gearfmu's table cache and read back when the same
+    physics is asked again (:mod:`gearfmu.tables.table_cache`); ``cache`` False computes without
+    it, None follows ``--no-cache`` / ``GEARFMU_NO_TABLE_CACHE``."""
     check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
@@ -51,18 +53,11 @@ def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "contact_model": scene.mesh.contact_model,
     }
+    args = dict(pair=scene.pair, opts=scene.mesh, points_per_mesh=scene.tables.points_per_mesh,
+                torque_axis_Nm=torque_axis, nominal_torque_Nm=scene.operating.torque_Nm,
+                slots=scene.tables.slots, **_contact_kw(scene, progress), thermal=scene.thermal)
     # looked up at call time, so a substitute set on the module is used
-    return precompute.precompute_tables(
-        scene.pair, scene.mesh,
-        points_per_mesh=scene.tables.points_per_mesh,
-        torque_axis_Nm=torque_axis,
-        nominal_torque_Nm=scene.operating.torque_Nm,
-        slots=scene.tables.slots,
-        progress=progress,
-        provenance=prov,
-        **_contact_kw(scene, progress),
-        thermal=scene.thermal,
-    )
+    return table_cache.cached_tables(precompute.precompute_tables, args, prov, progress=progress, use_cache=cache)
 
 
 def _contact_kw(scene, progress: bool) -> dict:

@@ -1,31 +1,103 @@
-"""Progress bars: the one progress reporter of gearfmu (tqdm on stderr).
+"""Progress on stderr: the one progress reporter of gearfmu (tqdm bars and one-line notices).
 
 Every long computation that reports progress (table rows, film grids, film batches, sweeps,
 plan searches) goes through :func:`progress_bar`, so that all bars look alike, go to stderr
-(stdout stays free for results such as ``--json``) and cost nothing when not asked for.
+(stdout stays free for results such as ``--json``) and cost nothing when not asked for.  A
+phase without countable steps (a compilation, an FMU build, a run through fmpy) announces itself
+with :func:`notice` before it starts.  Inside :func:`quiet` (the command line's ``-q``) notices
+print nothing.
+
+The time left that a bar shows is measured from its first step on: the first step of a batch
+often carries a one-off cost (worker processes starting, numba loading or compiling its code),
+and an average over it would promise many times the real remainder.  Until a second step has
+finished the bar shows no time left ("?").
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import sys
+import time
 from typing import Iterable, Optional
 
 from tqdm import tqdm
 
-__all__ = ["progress_bar"]
+__all__ = ["progress_bar", "notice", "quiet", "is_quiet", "wait_refreshing"]
+
+_quiet: contextvars.ContextVar = contextvars.ContextVar("gearfmu_quiet", default=False)
+
+
+@contextlib.contextmanager
+def quiet(on: bool = True):
+    """Within the block (``on`` True) :func:`notice` prints nothing."""
+    token = _quiet.set(bool(on) or _quiet.get())
+    try:
+        yield
+    finally:
+        _quiet.reset(token)
+
+
+def is_quiet() -> bool:
+    """True inside :func:`quiet`."""
+    return bool(_quiet.get())
+
+
+def notice(message: str) -> None:
+    """One line ``gearfmu: message`` on stderr (beside any open bar), unless inside :func:`quiet`."""
+    if _quiet.get():
+        return
+    _Bar.write(f"gearfmu: {message}", file=sys.stderr)
+    sys.stderr.flush()
 
 
 class _Bar(tqdm):
     """tqdm without its monitor thread: every tqdm instance, even a disabled one, would
     otherwise start that thread, and a second thread in the process stops the local process
-    pool from forking (gearfmu.common.executors._start_method)."""
+    pool from forking (gearfmu.common.executors._start_method).  Its rate (and so the time
+    left) counts from the first finished step (module doc)."""
 
     monitor_interval = 0
+    _first: Optional[tuple] = None
+
+    @property
+    def format_dict(self):
+        d = super().format_dict
+        if self.disable or not hasattr(self, "start_t"):
+            return d
+        now = self._time()
+        if self._first is None:
+            if self.n > self.initial:
+                self._first = (now, self.n)
+            d["rate"] = 0.0  # no time left until a step after the first has finished
+            return d
+        t1, n1 = self._first
+        d["rate"] = (self.n - n1) / (now - t1) if self.n > n1 and now > t1 else 0.0
+        return d
 
 
 def progress_bar(iterable: Optional[Iterable] = None, desc: str = "", enabled: bool = True, *,
                  total: Optional[int] = None, unit: str = "it", leave: bool = True) -> tqdm:
     """A tqdm bar on stderr over ``iterable`` (or, with ``iterable`` None, a bar of ``total``
     steps advanced by ``update(n)``); ``desc`` names the work; ``enabled`` False gives a bar
-    that prints nothing (it still iterates, counts and closes)."""
+    that prints nothing (it still iterates, counts and closes).  ``refresh()`` redraws it
+    (elapsed time) while a step runs."""
     return _Bar(iterable, desc=desc, total=total, unit=unit, leave=leave, file=sys.stderr,
                 disable=not enabled, dynamic_ncols=True)
+
+
+def wait_refreshing(futures, bar, interval_s: float = 1.0):
+    """Yield the futures as they complete (as ``concurrent.futures.as_completed``), redrawing
+    ``bar`` at least every ``interval_s`` seconds while none completes, so that a long first
+    step (worker start, compilation) still shows the elapsed time move."""
+    from concurrent.futures import FIRST_COMPLETED, wait  # noqa: PLC0415 -- only for pooled work
+
+    pending = set(futures)
+    last = time.monotonic()
+    while pending:
+        done, pending = wait(pending, timeout=interval_s, return_when=FIRST_COMPLETED)
+        for f in done:
+            yield f
+        if not done or time.monotonic() - last >= interval_s:
+            if not bar.disable:
+                bar.refresh()
+            last = time.monotonic()

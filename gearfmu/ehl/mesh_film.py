@@ -51,7 +51,6 @@ import math
 import os
 from dataclasses import dataclass
 from typing import List, Optional, Sequence, Tuple
-from concurrent.futures import as_completed
 
 import numpy as np
 
@@ -60,7 +59,7 @@ from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
 from .solver import solve_line_contact
 from ..common.executors import make_executor, _ManagedExecutor
-from ..common.progress import progress_bar
+from ..common.progress import progress_bar, wait_refreshing
 
 
 class MeshFilmInputError(EHLInputError):
@@ -298,7 +297,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     try:
         with ctx as ex:
             futs = {ex.submit(worker, env, c): i for i, c in enumerate(chunks)}
-            for f in as_completed(futs):
+            for f in wait_refreshing(futs, bar):
                 i = futs[f]
                 out[i] = f.result()
                 bar.update(int(counts[i]))
