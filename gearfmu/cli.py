@@ -31,7 +31,7 @@ import contextlib
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
-from .common.progress import notice, quiet
+from .common.progress import notice, reporting
 from .common.vocabulary import RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
@@ -211,6 +211,7 @@ def cmd_tables(args) -> int:
     t0 = time.perf_counter()
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
+    notice(f"writing {out}, its plot and its CSV form")
     tables.save(out)
     flat, note = tables, ""
     if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
@@ -239,6 +240,7 @@ def cmd_simulate(args) -> int:
     _output_file(out.with_suffix(".png"), "--output")
     if args.backend == "native":
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        notice(f"simulating {stop:g} s with the native solver")
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -252,6 +254,7 @@ def cmd_simulate(args) -> int:
                       names=output_names(slots))
         time_s, cols, wall = run.time_s, run.columns, run.wall_s
     names = output_names(slots)
+    notice(f"writing {out} and its plot")
     units = {"pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad", "gear_angle": "rad",
              "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m"}
     head = ["time [s]"] + [f"{n} [{units.get(n, 'N' if n.startswith('pair_force') else '1')}]" for n in names]
@@ -300,10 +303,10 @@ def _validate(args) -> dict:
         fmu_path = fmu.path
         if scene.accuracy is not None:  # build followed the scene's plan: so does the check
             from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, plan_scene(scene))
-        tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
+            scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
+        tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     else:
-        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False,
+        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
                     allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
         if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
@@ -502,9 +505,9 @@ def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
         # --scheduler: the parallel work on that Dask cluster; --no-cache: tables computed afresh;
-        # -q: no notices (the bars follow each command's progress flag)
+        # notices of the long phases on stderr unless -q (the bars follow each command's progress flag)
         with cluster(getattr(args, "scheduler", None)), table_cache.bypassed(getattr(args, "no_cache", False)), \
-                quiet(getattr(args, "quiet", False)):
+                reporting(not getattr(args, "quiet", False)):
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)

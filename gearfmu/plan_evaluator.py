@@ -74,15 +74,15 @@ class _Evaluator:
         lo, hi = self.env.torque_range_Nm
         return tuple(lo + (hi - lo) * i / (n - 1) for i in range(n))
 
-    def tables(self, cfg: dict, progress: bool = False):
+    def tables(self, cfg: dict, progress: Optional[bool] = None):
         """(MeshTables, build wall time in s) of a configuration (cached).  Taken from the
         tables of a finer nesting grid when one is cached (:meth:`_from_finer`; its time is
         the finer build's time scaled by the angle count), else built (``progress``: the
-        table builder's progress on stderr)."""
+        table builder's progress on stderr; None: the planner's)."""
         key = self.table_key(cfg)
         if not self.tables_ready(cfg):
             t0 = time.perf_counter()
-            tb = precompute_tables(**self.table_args(cfg), progress=progress)
+            tb = precompute_tables(**self.table_args(cfg), progress=self.progress if progress is None else progress)
             dt = time.perf_counter() - t0
             self.table_wall_s += dt
             self._tables[key] = (tb, dt)
@@ -148,7 +148,8 @@ class _Evaluator:
             kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
 
-            kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
+            kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts),
+                                                       progress=self.progress)
         return kw
 
     def tables_at(self, cfg: dict, temperature_C: Optional[float]):

@@ -14,6 +14,7 @@ from typing import Optional
 import numpy as np
 
 from . import __version__
+from .common.progress import notice
 from .common.vocabulary import RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
@@ -137,6 +138,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
+    notice(f"building the FMU {out_path} ({runtime} runtime, FMI {fmi_version})", enabled=progress or None)
     path = builder(
         tables, out_path,
         model_name=scene.fmu.model_name,

@@ -17,6 +17,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..common.jit import cache_is_cold
+from ..common.progress import ticking
 from .integrators import SEG_WORK_BASE, _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
 from .model_rhs import (
     _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _seg_flags, _outputs_row, _ptr, _tab, _table_pointers,
@@ -153,6 +155,13 @@ def _warmup(icode: int = 0) -> None:
     run = driver_for(icode)
     if run in _COMPILED:
         return
+    with ticking("compiling the native solver (first run after installing or updating gearfmu, about a minute; "
+                 "kept for later runs)", enabled=None if cache_is_cold([run]) else False):
+        _warm(run, icode)
+    _COMPILED.add(run)
+
+
+def _warm(run, icode: int) -> None:
     k = np.ones((2, 1, 4)) * 1e8
     e = np.zeros((2, 1, 4))
     b = np.zeros((1, 4))
@@ -161,4 +170,3 @@ def _warmup(icode: int = 0) -> None:
     run(icode, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
         k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
         np.zeros(2, dtype=np.int64), NO_CUTS, False)
-    _COMPILED.add(run)

@@ -19,6 +19,7 @@ from typing import Dict, Optional
 
 from .. import __version__
 from ..common.cache import cache_dir, load_entry, package_sources_sha256, sources_sha256, store_entry  # noqa: F401
+from ..common.progress import ticking
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..dynamics.native import simulate
 from ..tables.mesh_tables import MeshTables
@@ -135,7 +136,9 @@ def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
     hit = load_entry(folder, key, ".csv", fields={"substeps": int, "rows": int, "native_wall_s": float})
     if hit is not None:
         return hit[1], hit[0]
-    res = simulate(tables, **sim_kw)
+    with ticking(f"validation record: native reference run over {sim_kw['stop_time_s']:g} s "
+                 "(kept for later builds)"):
+        res = simulate(tables, **sim_kw)
     cols = native_columns(res, tables.slots)
     names = output_names(tables.slots)
     buf = io.StringIO()

@@ -216,9 +216,8 @@ def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: di
                 "entry": digest, "read_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                 "note": f"read from gearfmu's table cache ({folder}); computed at created_utc in "
                         f"{meta['wall_s']:.3g} s"}
-            if progress:
-                notice(f"tables read from the cache (computed {meta['created_utc']} in {meta['wall_s']:.3g} s; "
-                       f"--no-cache computes them again)")
+            notice(f"tables read from the cache (computed {meta['created_utc']} in {meta['wall_s']:.3g} s; "
+                   f"--no-cache computes them again)", enabled=progress or None)
             return dataclasses.replace(tables, provenance=prov)
     t0 = time.perf_counter()
     tables = compute(**args, provenance=provenance, progress=progress)
