@@ -132,7 +132,9 @@ def cmd_build(args) -> int:
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
                 fmi_version=args.fmi_version)
-    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
+    cached = _from_cache(res.tables) if not args.tables else ""
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
+          f"FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
         print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
@@ -140,6 +142,11 @@ def cmd_build(args) -> int:
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
+
+
+def _from_cache(tables) -> str:
+    """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
+    return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
 
 
 def _print_accuracy(ve) -> None:
@@ -220,7 +227,7 @@ def cmd_tables(args) -> int:
     png = plot_tables(flat, out.with_suffix(".png"))
     csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
-          f"{wall:.2f} s); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
+          f"{wall:.2f} s{_from_cache(tables)}); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
     _print_contact(tables)
     return 0
