@@ -4,14 +4,15 @@
 Every command shows what it is doing on stderr at least every couple of seconds (bars, one-line
 notices before each long phase).  This runs each command in a fresh process with stderr on a
 pipe that a reader thread drains, stamps every chunk written, and reports the longest gap
-between two writes (the start of the process and its exit count as writes), with the text
-just before the gap (what the user was looking at) and after it.  The table cache is empty for
+between two writes after the first one (the exit counts as a write), with the text just before
+the gap (what the user was looking at) and after it, and the start-up: the time from the process
+start to its first write (Python loading gearfmu and its libraries).  The table cache is empty for
 each scene's first command and kept for the rest (as a user's second command finds it); numba's
 cache is the user's.
 
 Prints one JSON object: per scene and command ``longest_silence_s``, ``before`` / ``after``
-(the last and next line around it), ``wall_s``, ``cpu_s`` (the process and its children) and
-``exit``.  The machine may be shared: a long gap in a loaded run can be the scheduler's; read
+(the last and next line around it), ``startup_s``, ``wall_s``, ``cpu_s`` (the process and its
+children) and ``exit``; ``worst_s`` and ``worst_startup_s`` over all of them.  The machine may be shared: a long gap in a loaded run can be the scheduler's; read
 ``before`` to see which phase it was.
 
     python benchmarks/bench_silence.py [--scenes default,fractal] [--commands tables,build,...]
@@ -90,13 +91,16 @@ def _last_line(b: bytes) -> str:
 
 
 def longest_silence(run: dict) -> dict:
-    """The longest gap between stderr writes (start and exit count as writes) and its neighbours."""
-    times = [0.0] + [t for t, _ in run["chunks"]] + [run["wall_s"]]
-    texts = [b"(start)"] + [b for _, b in run["chunks"]] + [b"(exit)"]
+    """The longest gap between stderr writes after the first one (the exit counts as a write) and
+    its neighbours; ``startup_s``: from the process start to its first write (Python's imports)."""
+    times = [t for t, _ in run["chunks"]] + [run["wall_s"]]
+    texts = [b for _, b in run["chunks"]] + [b"(exit)"]
+    out = {"startup_s": round(times[0], 3), "stderr_writes": len(run["chunks"])}
+    if len(times) < 2:
+        return dict(out, longest_silence_s=0.0, at_s=0.0, before="(start)", after=_last_line(texts[0]))
     best = max(range(1, len(times)), key=lambda i: times[i] - times[i - 1])
-    return {"longest_silence_s": round(times[best] - times[best - 1], 3), "at_s": round(times[best - 1], 3),
-            "before": _last_line(texts[best - 1]), "after": _last_line(texts[best]),
-            "stderr_writes": len(run["chunks"])}
+    return dict(out, longest_silence_s=round(times[best] - times[best - 1], 3), at_s=round(times[best - 1], 3),
+                before=_last_line(texts[best - 1]), after=_last_line(texts[best]))
 
 
 def main(argv=None) -> int:
@@ -124,6 +128,7 @@ def main(argv=None) -> int:
                 print(f"  {res[cmd]}", file=sys.stderr, flush=True)
             out["scenes"][name] = res
     out["worst_s"] = max(r["longest_silence_s"] for s in out["scenes"].values() for r in s.values())
+    out["worst_startup_s"] = max(r["startup_s"] for s in out["scenes"].values() for r in s.values())
     print(json.dumps(out, indent=1))
     return 0
 

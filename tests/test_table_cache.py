@@ -314,3 +314,27 @@ def test_an_fmu_built_from_kept_tables_names_its_own_scene(cache, computed, tmp_
 def _write(path, text) -> str:
     path.write_text(text)
     return str(path)
+
+
+def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
+    """A second plan of the same scene reads the tables of its configurations from the cache; the
+    cost it records for them stays the computation's time (the planner compares costs)."""
+    from gearfmu import plan_evaluator
+    from gearfmu.plan_choices import _choices
+    from gearfmu.scene.envelope import accuracy_of, envelope_of
+
+    calls = []
+    real = plan_evaluator.precompute_tables
+
+    def counted(*a, **k):
+        calls.append(k)
+        return real(*a, **k)
+
+    monkeypatch.setattr(plan_evaluator, "precompute_tables", counted)
+    scene = load_scene(DEFAULT)
+    env, acc = envelope_of(scene), accuracy_of(scene)
+    full = {n: c.full for n, c in _choices(scene, env, acc).items()}
+    tb1, dt1 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
+    tb2, dt2 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
+    assert len(calls) == 1 and _same_arrays(tb1, tb2)
+    assert dt2 == tb1.provenance["precompute"]["wall_s"] and "table_cache" in tb2.provenance

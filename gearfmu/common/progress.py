@@ -20,6 +20,7 @@ import contextvars
 import sys
 import threading
 import time
+from concurrent.futures import FIRST_COMPLETED, wait
 from typing import Iterable, Optional
 
 from tqdm import tqdm
@@ -99,8 +100,6 @@ def wait_refreshing(futures, bar, interval_s: float = 1.0):
     """Yield the futures as they complete (as ``concurrent.futures.as_completed``), redrawing
     ``bar`` at least every ``interval_s`` seconds while none completes, so that a long first
     step (worker start, compilation) still shows the elapsed time move."""
-    from concurrent.futures import FIRST_COMPLETED, wait  # noqa: PLC0415 -- only for pooled work
-
     pending = set(futures)
     last = time.monotonic()
     while pending:

@@ -54,6 +54,7 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from . import mgcycle
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
@@ -280,7 +281,6 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
 
 def _film_solver_cold() -> bool:
     """True when numba's cache lacks the compiled multigrid cycle of the film solver."""
-    from . import mgcycle  # noqa: PLC0415 -- loaded by the solver anyway
     return module_cache_is_cold(mgcycle)
 
 

@@ -34,6 +34,7 @@ benchmarks/bench_estimate.py checks the model against measurement within a facto
 """
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -123,7 +124,6 @@ def _fmt_time(s: float) -> str:
 
 
 def _workers() -> int:
-    import os  # noqa: PLC0415
     return max(1, os.cpu_count() or 1)
 
 

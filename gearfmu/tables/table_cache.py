@@ -40,6 +40,7 @@ import math
 import os
 import sys
 import time
+import warnings
 import zipfile
 from pathlib import Path
 from typing import Callable, Optional
@@ -203,7 +204,6 @@ def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: di
         try:
             tables = _from_gtab(payload, str(folder / f"{digest}{_PAYLOAD}"))
         except TableError as exc:
-            import warnings
             warnings.warn(f"gearfmu cache: ignoring the unusable entry {entry_path(folder, key)} ({exc}); "
                           "computing again", CacheWarning, stacklevel=2)
         else:
