@@ -31,7 +31,7 @@ import contextlib
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
-from .common.progress import notice, reporting
+from .common.progress import notice, reporting, ticking
 from .common.vocabulary import RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
@@ -218,14 +218,14 @@ def cmd_tables(args) -> int:
     t0 = time.perf_counter()
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
-    notice(f"writing {out}, its plot and its CSV form")
-    tables.save(out)
-    flat, note = tables, ""
-    if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
-        flat = tables.at_temperature(tables.default_temperature_C)
-        note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
-    png = plot_tables(flat, out.with_suffix(".png"))
-    csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
+    with ticking(f"writing {out}, its plot and its CSV form"):
+        tables.save(out)
+        flat, note = tables, ""
+        if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
+            flat = tables.at_temperature(tables.default_temperature_C)
+            note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
+        png = plot_tables(flat, out.with_suffix(".png"))
+        csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
           f"{wall:.2f} s{_from_cache(tables)}); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
@@ -261,12 +261,9 @@ def cmd_simulate(args) -> int:
                       names=output_names(slots))
         time_s, cols, wall = run.time_s, run.columns, run.wall_s
     names = output_names(slots)
-    notice(f"writing {out} and its plot")
     units = {"pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad", "gear_angle": "rad",
              "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m"}
     head = ["time [s]"] + [f"{n} [{units.get(n, 'N' if n.startswith('pair_force') else '1')}]" for n in names]
-    np.savetxt(out, np.column_stack([time_s] + [cols[n] for n in names]), delimiter=",",
-               header=",".join(head), comments="")
 
     class _R:  # the plot wants attributes
         pass
@@ -275,7 +272,10 @@ def cmd_simulate(args) -> int:
     r.time_s, r.dte, r.mesh_force = time_s, cols["dte"], cols["mesh_force"]
     r.pair_force = np.column_stack([cols[f"pair_force[{i + 1}]"] for i in range(slots)])
     r.load_sharing = np.column_stack([cols[f"load_sharing[{i + 1}]"] for i in range(slots)])
-    png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
+    with ticking(f"writing {out} and its plot"):
+        np.savetxt(out, np.column_stack([time_s] + [cols[n] for n in names]), delimiter=",",
+                   header=",".join(head), comments="")
+        png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
     print(f"simulated {stop} s with {args.backend} in {wall:.3f} s -> {out}, {png}")
     return 0
 

@@ -12,6 +12,7 @@ shared.  The per-step order of operations is that of gearkernel.c
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -148,6 +149,26 @@ _COMPILED = set()
 NO_CUTS = np.full((2, 1, 1), -1.0)
 
 
+_ANNOUNCING = []  # the open compiling() block, if any (one line for the whole compilation)
+
+
+@contextlib.contextmanager
+def compiling(icode: int = 0):
+    """The block that first calls the native solver's compiled code of integrator code ``icode``
+    (the table arrays, the equilibrium, the driver): one line with the elapsed time on stderr
+    while it runs when numba's cache does not hold the driver yet (the first run after
+    installing or updating gearfmu; :func:`gearfmu.common.progress.ticking`), nothing otherwise."""
+    run = driver_for(icode)
+    cold = not _ANNOUNCING and run not in _COMPILED and cache_is_cold([run])
+    with ticking("compiling the native solver (first run after installing or updating gearfmu, about a minute; "
+                 "kept for later runs)", enabled=None if cold else False):
+        _ANNOUNCING.append(icode)
+        try:
+            yield
+        finally:
+            _ANNOUNCING.pop()
+
+
 def _warmup(icode: int = 0) -> None:
     """Compile (or load from the cache) the driver of integrator code ``icode``
     (:func:`driver_for`) on a tiny problem, so that a run's ``wall_s`` excludes the
@@ -155,8 +176,7 @@ def _warmup(icode: int = 0) -> None:
     run = driver_for(icode)
     if run in _COMPILED:
         return
-    with ticking("compiling the native solver (first run after installing or updating gearfmu, about a minute; "
-                 "kept for later runs)", enabled=None if cache_is_cold([run]) else False):
+    with compiling(icode):
         _warm(run, icode)
     _COMPILED.add(run)
 
