@@ -2,13 +2,15 @@
 """Benchmark: the cost estimate (gearfmu.tables.estimate) against the measured cost, per scene.
 
 For every example scene (examples/scenes/*.toml), the default scene and the scenes of
-benchmarks/scenes/ (a small rough-EHL pair, a large helical pair, a temperature axis), one fresh
-process computes the tables without the table cache and builds the scene's FMU from them.
+benchmarks/scenes/ (a small rough-EHL pair, a large helical pair, an oil-temperature axis), one
+fresh process computes the tables without the table cache and builds the scene's FMU from them.
 Measured: the table build's CPU time (the process and its worker processes, user + system) and
 wall time, the ``.gtab`` size and the FMU size; beside them the estimate's ``build_s``, table and
-FMU bytes, and their ratios estimate / measured.  The estimate models the CPU time of one core of
-this machine class (docs/tables.md "Cost estimate"); CPU time is compared because the machine may
-be shared (wall time is printed too).  Goal: every ratio within [1/2, 2].
+FMU bytes, and their ratios estimate / measured.  A build under a second of CPU is measured in
+three fresh processes and the median kept (such short times vary by tens of per cent).  The
+estimate models the CPU time of one core of this machine class (docs/tables.md "Cost
+estimate"); CPU time is compared because it depends less on other load than wall time (wall
+time is printed too).  Goal: every ratio within [1/2, 2].
 
 Prints one JSON object: ``scenes`` {name: {estimate, measured, ratio, counts}}, ``worst_ratio``
 (the largest of max(r, 1/r) over all scenes and quantities), ``within_2x``.
@@ -29,6 +31,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 GOAL = 2.0
+#: table builds below this CPU time (s) are measured three times (fresh processes), the median kept
+SHORT_S = 1.0
 
 
 def scene_files() -> dict:
@@ -46,8 +50,8 @@ def _cpu() -> float:
     return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 
 
-def child(scene_path, out_dir: Path) -> dict:
-    """Measure one scene in this process (run as ``--child``)."""
+def child(scene_path, out_dir: Path, time_only: bool = False) -> dict:
+    """Measure one scene in this process (run as ``--child``; ``time_only``: the table build alone)."""
     from gearfmu.pipeline import compute_tables, load
     from gearfmu.stages import build_fmu_from_scene
     from gearfmu.tables.estimate import estimate_build, work_counts
@@ -57,6 +61,8 @@ def child(scene_path, out_dir: Path) -> dict:
     c0, t0 = _cpu(), time.perf_counter()
     tables = compute_tables(scene, allow_large=True, cache=False)
     cpu, wall = _cpu() - c0, time.perf_counter() - t0
+    if time_only:
+        return {"measured": {"build_cpu_s": cpu, "build_wall_s": wall}}
     gtab = tables.save(out_dir / "t.gtab").stat().st_size
     fmu = build_fmu_from_scene(scene, out_dir / "m.fmu", tables=tables).fmu_path.stat().st_size
     c = tables.provenance.get("contact") or {}
@@ -72,16 +78,27 @@ def child(scene_path, out_dir: Path) -> dict:
     }
 
 
+def _run_child(path, env, timeout_s: float, time_only: bool = False) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        p = subprocess.run([sys.executable, __file__, "--child", str(path) if path else "-", tmp]
+                           + (["--time-only"] if time_only else []), env=env, capture_output=True, text=True,
+                           timeout=timeout_s)
+    if p.returncode != 0:
+        raise RuntimeError((p.stderr.strip().splitlines() or ["?"])[-1])
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", help="comma-separated names or scene files (default: all; --list shows the names)")
     ap.add_argument("--list", action="store_true")
     ap.add_argument("--child", nargs=2, metavar=("SCENE", "DIR"), help=argparse.SUPPRESS)
+    ap.add_argument("--time-only", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--timeout", type=float, default=3600.0, help="seconds per scene")
     a = ap.parse_args(argv)
     if a.child:
         scene = None if a.child[0] == "-" else a.child[0]
-        print(json.dumps(child(scene, Path(a.child[1]))))
+        print(json.dumps(child(scene, Path(a.child[1]), a.time_only)))
         return 0
     files = scene_files()
     if a.list:
@@ -98,15 +115,18 @@ def main(argv=None) -> int:
     for name in names:
         path = files[name]
         print(f"bench_estimate: {name}", file=sys.stderr, flush=True)
-        with tempfile.TemporaryDirectory() as tmp:
-            p = subprocess.run([sys.executable, __file__, "--child", str(path) if path else "-", tmp], env=env,
-                               capture_output=True, text=True, timeout=a.timeout)
-        if p.returncode != 0:
-            out["scenes"][name] = {"error": (p.stderr.strip().splitlines() or ["?"])[-1]}
-            print(f"  failed: {out['scenes'][name]['error']}", file=sys.stderr)
+        try:
+            r = _run_child(path, env, a.timeout)
+            m = r["measured"]
+            if m["build_cpu_s"] < SHORT_S:  # short builds: the median of three fresh processes
+                cpus = sorted([m["build_cpu_s"]] + [_run_child(path, env, a.timeout, True)["measured"]["build_cpu_s"]
+                                                    for _ in range(2)])
+                m["build_cpu_s_runs"], m["build_cpu_s"] = cpus, cpus[1]
+        except RuntimeError as exc:
+            out["scenes"][name] = {"error": str(exc)}
+            print(f"  failed: {exc}", file=sys.stderr)
             continue
-        r = json.loads(p.stdout.strip().splitlines()[-1])
-        e, m = r["estimate"], r["measured"]
+        e = r["estimate"]
         r["ratio"] = {"build_time": e["build_s"] / max(m["build_cpu_s"], 1e-9),
                       "table_bytes": e["table_bytes"] / m["table_bytes"],
                       "fmu_bytes": e["fmu_bytes"] / m["fmu_bytes"]}
