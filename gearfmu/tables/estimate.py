@@ -67,7 +67,7 @@ TABLE_DEFLATE_RATIO = 0.2
 #: process); per sliced-stiffness cell; per meshing-error cell; per loaded-mesh cell; per
 #: temperature-stiffness cell
 SECONDS_FIXED = 0.01
-SECONDS_PER_STIFFNESS_CELL = 2.0e-5
+SECONDS_PER_STIFFNESS_CELL = 1.4e-5
 SECONDS_PER_ERROR_CELL = 2.4e-7
 SECONDS_PER_MESH_CELL = 6.6e-8
 SECONDS_PER_THERMAL_CELL = 6.0e-6
@@ -75,7 +75,7 @@ SECONDS_PER_THERMAL_CELL = 6.0e-6
 #: contact solve of each load-dependent model; per film of the rough film grid; per worker process
 #: started for film solves
 LOAD_PASSES = 1.5
-SECONDS_PER_SOLVE = {"fractal_mixed": 2.7e-3, "smooth_ehl": 2.7e-3, "rough_ehl": 2.7e-3}
+SECONDS_PER_SOLVE = {"fractal_mixed": 2.3e-3, "smooth_ehl": 2.7e-3, "rough_ehl": 2.7e-3}
 SECONDS_PER_GRID_FILM = 0.016
 SECONDS_PER_WORKER = 1.3
 #: model constant: load columns of the rough film grid that the rows ask for
