@@ -338,3 +338,15 @@ def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
     tb2, dt2 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
     assert len(calls) == 1 and _same_arrays(tb1, tb2)
     assert dt2 == tb1.provenance["precompute"]["wall_s"] and "table_cache" in tb2.provenance
+
+
+def test_a_build_from_kept_tables_reports_the_computation_time(cache, tmp_path):
+    """BuildResult.tables_compute_s (what `plan --fmu` compares between the planned and the full
+    model) is the computation's time also when the tables were read back; tables_wall_s is the
+    time this build spent on them."""
+    scene = load_scene(DEFAULT)
+    first = pipeline.build(scene, tmp_path / "a.fmu", runtime="pythonfmu")
+    second = pipeline.build(scene, tmp_path / "b.fmu", runtime="pythonfmu")
+    assert "table_cache" not in first.tables.provenance and "table_cache" in second.tables.provenance
+    assert first.tables_compute_s == first.tables_wall_s
+    assert second.tables_compute_s == first.tables.provenance["precompute"]["wall_s"]
