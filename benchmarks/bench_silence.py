@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -38,17 +39,18 @@ SCENES = {"default": None, "fractal": ROOT / "examples" / "scenes" / "seed001_ta
 SILENCE_GOAL_S = 2.0
 
 
-def commands(out: Path) -> dict:
-    return {
-        "tables": ["tables", "-o", str(out / "t.gtab")],
-        "build": ["build", "-o", str(out / "b.fmu")],
-        "simulate": ["simulate", "-o", str(out / "s.csv")],
-        "validate": ["validate"],
-        "validate_json": ["validate", "--json"],
-        "validate_fmu": ["validate", "--fmu", str(out / "b.fmu")],
-        "ssp": ["ssp", "-o", str(out / "p.ssp")],
-        "plan_json": ["plan", "--json"],
-    }
+#: the commands, run in a work folder of each scene (output names relative to it)
+COMMANDS = {
+    "tables": ["tables", "-o", "t.gtab"],
+    "build": ["build", "-o", "b.fmu"],
+    "simulate": ["simulate", "-o", "s.csv"],
+    "validate": ["validate"],
+    "validate_json": ["validate", "--json"],
+    "validate_fmu": ["validate", "--fmu", "b.fmu"],
+    "ssp": ["ssp", "-o", "p.ssp"],
+    "plan_json": ["plan", "--json"],
+}
+_ESCAPE = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 
 
 def watch(argv, env, cwd=None, timeout_s: float = 3600.0) -> dict:
@@ -85,28 +87,34 @@ def watch(argv, env, cwd=None, timeout_s: float = 3600.0) -> dict:
             "cpu_s": (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime)}
 
 
-def _last_line(b: bytes) -> str:
-    text = b.decode("utf-8", "replace").replace("\r", "\n").strip()
-    return (text.splitlines() or [""])[-1][-160:]
+def _screen_lines(chunks) -> list:
+    """The line on the screen after each chunk: its last non-empty line, else the one before."""
+    out, cur = [], "(start)"
+    for b in chunks:
+        text = _ESCAPE.sub("", b.decode("utf-8", "replace")).replace("\r", "\n")
+        lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+        cur = lines[-1][:160] if lines else cur
+        out.append(cur)
+    return out
 
 
 def longest_silence(run: dict) -> dict:
     """The longest gap between stderr writes after the first one (the exit counts as a write) and
     its neighbours; ``startup_s``: from the process start to its first write (Python's imports)."""
     times = [t for t, _ in run["chunks"]] + [run["wall_s"]]
-    texts = [b for _, b in run["chunks"]] + [b"(exit)"]
+    texts = _screen_lines([b for _, b in run["chunks"]]) + ["(exit)"]
     out = {"startup_s": round(times[0], 3), "stderr_writes": len(run["chunks"])}
     if len(times) < 2:
-        return dict(out, longest_silence_s=0.0, at_s=0.0, before="(start)", after=_last_line(texts[0]))
+        return dict(out, longest_silence_s=0.0, at_s=0.0, before="(start)", after=texts[0])
     best = max(range(1, len(times)), key=lambda i: times[i] - times[i - 1])
     return dict(out, longest_silence_s=round(times[best] - times[best - 1], 3), at_s=round(times[best - 1], 3),
-                before=_last_line(texts[best - 1]), after=_last_line(texts[best]))
+                before=texts[best - 1], after=texts[best])
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", default="default,fractal")
-    ap.add_argument("--commands", default=",".join(commands(Path("."))))
+    ap.add_argument("--commands", default=",".join(COMMANDS))
     ap.add_argument("--timeout", type=float, default=3600.0, help="seconds per command")
     a = ap.parse_args(argv)
     out = {"goal_s": SILENCE_GOAL_S, "scenes": {}}
@@ -120,7 +128,7 @@ def main(argv=None) -> int:
             work.mkdir()
             res = {}
             for cmd in a.commands.split(","):
-                args = commands(work)[cmd] + ([str(scene)] if scene is not None else [])
+                args = COMMANDS[cmd] + ([str(scene)] if scene is not None else [])
                 print(f"bench_silence: {name}: gearfmu {' '.join(args)}", file=sys.stderr, flush=True)
                 run = watch([sys.executable, "-m", "gearfmu.cli", *args], env, cwd=work, timeout_s=a.timeout)
                 res[cmd] = dict(longest_silence(run), wall_s=round(run["wall_s"], 2), cpu_s=round(run["cpu_s"], 2),

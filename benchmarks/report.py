@@ -1181,7 +1181,7 @@ def sec_costs(pg: Page):
         d = pg.data["table_cache"]
         first = d["runs"][0]["table_s"]
         body = [[f"`{r['command']}`", "yes" if r["from_cache"] else "no", f"{r['table_s']:.3g}",
-                 f"{100 * r['table_s'] / first:.2g} %", f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}"] for r in d["runs"]]
+                 f"{100 * r['table_s'] / first:.3g} %", f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}"] for r in d["runs"]]
         pg.parts.append(
             "### Table cache: the second command on a scene\n\n"
             f"Scene `{d['scene']}`; every command a fresh process, the gearfmu cache empty before the first.  "
