@@ -101,10 +101,13 @@ SOURCES = {
                    "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
+    "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
+    "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
+    "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
 SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_rough_tables", "integrators", "startup", "plan_study", "plan_scan",
-        "tests", "gearbox"}
+        "tests", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -1237,6 +1240,22 @@ def _g_gearbox(d):
             f"default integrator {default})", None if v is None else v >= 300.0)
 
 
+def _g_cache(d):
+    worst = max(d["ratio"].values())
+    return (f"{100 * worst:.2g} % of the first command's table time ({d['runs'][0]['table_s']:.1f} s, scene "
+            f"{d['scene']})", bool(d["within_goal"]))
+
+
+def _g_estimate(d):
+    n = sum(1 for r in d["scenes"].values() if "ratio" in r)
+    return f"worst {d['worst_ratio']:.2f} × over {n} scenes (time, table and FMU size)", bool(d["within_2x"])
+
+
+def _g_silence(d):
+    return (f"longest {d['worst_s']:.1f} s between two lines; start-up (Python imports) up to "
+            f"{d['worst_startup_s']:.1f} s", d["worst_s"] <= d["goal_s"])
+
+
 def goal_rows(data: dict) -> list:
     """[goal, measured, met] for each speed goal, from whatever benchmark JSON exists."""
     goals = [
@@ -1251,6 +1270,9 @@ def goal_rows(data: dict) -> list:
         ("EHL film ≤ 5 ms per point at the default settings", "ehl_corners", _g_ehl_default),
         ("`gearfmu plan` of the default scene ≤ 60 s", "plan", _g_plan),
         ("test suite ≤ 5 min", "tests", _g_tests),
+        ("second command on a scene: table time < 5 % of the first (table cache)", "table_cache", _g_cache),
+        ("cost estimate within 2 × of the measured table time and sizes", "estimate", _g_estimate),
+        ("no command silent on stderr for more than 2 s", "silence", _g_silence),
     ]
     return [[g, *_goal(data, name, fn)] for g, name, fn in goals]
 
@@ -1260,7 +1282,8 @@ def goals_table(data: dict) -> str:
 
 
 def sec_goals(pg: Page):
-    srcs = ["startup", "kernels", "integrators", "gearbox", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests"]
+    srcs = ["startup", "kernels", "integrators", "gearbox", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
+            "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
         "Each goal beside the value measured by its benchmark (wall or CPU time of one run on the machine "
@@ -1269,8 +1292,71 @@ def sec_goals(pg: Page):
         + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs) + ".\n")
 
 
+def _mb(b) -> str:
+    return f"{b / 1e6:.3g}"
+
+
+def sec_costs(pg: Page):
+    """The table cache, the cost estimate and the silence of the commands."""
+    pg.parts.append("## Table cache, cost estimate and progress\n")
+    if not pg.missing("table_cache", "Table cache: the second command on a scene"):
+        d = pg.data["table_cache"]
+        first = d["runs"][0]["table_s"]
+        body = [[f"`{r['command']}`", "yes" if r["from_cache"] else "no", f"{r['table_s']:.3g}",
+                 f"{100 * r['table_s'] / first:.3g} %", f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}"] for r in d["runs"]]
+        pg.parts.append(
+            "### Table cache: the second command on a scene\n\n"
+            f"Scene `{d['scene']}`; every command a fresh process, the gearfmu cache empty before the first.  "
+            "Table time: the table step as the command prints it (wall); the command's wall and CPU time "
+            "(process and children) beside it.  Reference: the first command, which computes the tables "
+            "(docs/cli.md \"Table cache\").\n\n"
+            + table(["command", "tables from the cache", "table s", "of the first", "command wall s",
+                     "command CPU s"], body)
+            + f"\n\nSource: `{SOURCES['table_cache'][2]}` ({pg.cost('table_cache')}).\n")
+        pg.summary.append(["table cache (second command)", "the first command's table time",
+                           f"{100 * max(d['ratio'].values()):.2g} % of it", pg.cost("table_cache")])
+    if not pg.missing("estimate", "Cost estimate against the measured cost"):
+        d = pg.data["estimate"]
+        body = []
+        for name, r in d["scenes"].items():
+            if "ratio" not in r:
+                body.append([f"`{name}`", r.get("error", "failed"), "", "", "", "", "", ""])
+                continue
+            e, m, q = r["estimate"], r["measured"], r["ratio"]
+            body.append([f"`{name}`", r["counts"]["contact_model"], f"{e['build_s']:.3g}", f"{m['build_cpu_s']:.3g}",
+                         f"{q['build_time']:.2f}", f"{_mb(e['fmu_bytes'])} / {_mb(m['fmu_bytes'])}",
+                         f"{q['fmu_bytes']:.2f}", f"{q['table_bytes']:.2f}"])
+        pg.parts.append(
+            "### Cost estimate against the measured cost\n\n"
+            "Every example scene, the default scene and the scenes of `benchmarks/scenes/` (a small rough-EHL "
+            "pair, a large helical table over the hunting-tooth cycle, an oil-temperature axis): the estimate "
+            "of `gearfmu.tables.estimate` before anything is computed, against one table build in a fresh process "
+            "(CPU time of the process and its film workers, less sensitive to other load than wall time) and the "
+            "FMU built from those tables.  Goal: every ratio within [0.5, 2] (docs/tables.md \"Cost estimate\").\n\n"
+            + table(["scene", "contact model", "estimated CPU s", "measured CPU s", "time est./meas.",
+                     "FMU MB est. / meas.", "FMU est./meas.", "tables est./meas."], body)
+            + f"\n\nWorst ratio {d['worst_ratio']:.2f} ({'within' if d['within_2x'] else 'NOT within'} 2 ×); "
+            f"{d.get('cpu_count')} CPUs.  Source: `{SOURCES['estimate'][2]}` ({pg.cost('estimate')}).\n")
+        pg.summary.append(["cost estimate (time, sizes)", "measured table build and FMU",
+                           f"within {d['worst_ratio']:.2f} ×", pg.cost("estimate")])
+    if not pg.missing("silence", "Progress: the longest silence of each command"):
+        d = pg.data["silence"]
+        body = [[f"`{sc}`", f"`{cmd}`", f"{r['longest_silence_s']:.2f}", r["before"].replace("|", "/")[:70],
+                 f"{r['startup_s']:.2f}", f"{r['wall_s']:.1f}"]
+                for sc, cmds in d["scenes"].items() for cmd, r in cmds.items()]
+        pg.parts.append(
+            "### Progress: the longest silence of each command\n\n"
+            "Each command in a fresh process, stderr stamped on every write (the table cache empty for each "
+            "scene's first command).  Longest silence: the largest gap between two writes after the first "
+            "(the exit counts), with the line shown during it; start-up: from the process start to its "
+            f"first line.  Goal: ≤ {d['goal_s']:g} s.\n\n"
+            + table(["scene", "command", "longest silence s", "during", "start-up s", "wall s"], body)
+            + f"\n\nSource: `{SOURCES['silence'][2]}` ({pg.cost('silence')}).\n")
+
+
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_rough", "sec_load_sharing", "sec_fractal", "sec_trends",
-            "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_goals")
+            "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs",
+            "sec_goals")
 
 
 def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:

@@ -40,6 +40,7 @@ import contextlib
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
+from .common.progress import notice, reporting, ticking
 from .common.vocabulary import RUNTIMES
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
@@ -48,6 +49,7 @@ from .fmu.compare import (native_columns, output_names, output_units, run_fmu, v
 from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
+from .tables import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
 from .fmu.summary import fmu_summary
@@ -169,7 +171,9 @@ def cmd_build(args) -> int:
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
                 fmi_version=args.fmi_version)
-    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
+    cached = _from_cache(res.tables) if not args.tables else ""
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
+          f"FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
         print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
@@ -177,6 +181,11 @@ def cmd_build(args) -> int:
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
+
+
+def _from_cache(tables) -> str:
+    """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
+    return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
 
 
 def _print_accuracy(ve) -> None:
@@ -252,15 +261,16 @@ def cmd_tables(args) -> int:
     t0 = time.perf_counter()
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
-    tables.save(out)
-    flat, note = tables, ""
-    if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
-        flat = tables.at_temperature(tables.default_temperature_C)
-        note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
-    png = plot_tables(flat, out.with_suffix(".png"))
-    csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
+    with ticking(f"writing {out}, its plot and its CSV form"):
+        tables.save(out)
+        flat, note = tables, ""
+        if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
+            flat = tables.at_temperature(tables.default_temperature_C)
+            note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
+        png = plot_tables(flat, out.with_suffix(".png"))
+        csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
-          f"{wall:.2f} s); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
+          f"{wall:.2f} s{_from_cache(tables)}); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
     _print_contact(tables)
     return 0
@@ -365,6 +375,7 @@ def cmd_simulate(args) -> int:
     _output_file(out.with_suffix(".png"), "--output")
     if args.backend == "native":
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        notice(f"simulating {stop:g} s with the native solver")
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -378,7 +389,6 @@ def cmd_simulate(args) -> int:
                       names=output_names(slots))
         time_s, cols, wall = run.time_s, run.columns, run.wall_s
     units = output_units(slots)  # the CSV layout of docs/native.md and docs/cli.md
-    write_columns_csv(out, {"time": ("s", time_s), **{n: (u, cols[n]) for n, u in units.items()}})
 
     class _R:  # the plot wants attributes
         pass
@@ -387,7 +397,9 @@ def cmd_simulate(args) -> int:
     r.time_s, r.dte, r.mesh_force = time_s, cols["dte"], cols["mesh_force"]
     r.pair_force = np.column_stack([cols[f"pair_force[{i + 1}]"] for i in range(slots)])
     r.load_sharing = np.column_stack([cols[f"load_sharing[{i + 1}]"] for i in range(slots)])
-    png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
+    with ticking(f"writing {out} and its plot"):
+        write_columns_csv(out, {"time": ("s", time_s), **{n: (u, cols[n]) for n, u in units.items()}})
+        png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
     print(f"simulated {stop} s with {args.backend} in {wall:.3f} s -> {out}, {png}")
     return 0
 
@@ -422,10 +434,10 @@ def _validate(args) -> dict:
         fmu_path = fmu.path
         if scene.accuracy is not None:  # build followed the scene's plan: so does the check
             from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, plan_scene(scene))
-        tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
+            scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
+        tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     else:
-        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False,
+        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
                     allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
         if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
@@ -510,6 +522,12 @@ def _fmu_options(parser) -> None:
                         help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
 
 
+def _no_cache(parser) -> None:
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute the tables without reading or writing gearfmu's table cache "
+                             "(docs/cli.md 'Table cache')")
+
+
 def _allow_large(parser) -> None:
     parser.add_argument("--allow-large", action="store_true",
                         help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
@@ -539,6 +557,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
     _allow_large(b)
+    _no_cache(b)
     add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
 
@@ -555,6 +574,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
     _allow_large(t)
+    _no_cache(t)
     add_scheduler_option(t)
     t.set_defaults(func=cmd_tables)
 
@@ -568,6 +588,7 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", help="CSV path")
     s.add_argument("-q", "--quiet", action="store_true")
     _allow_large(s)
+    _no_cache(s)
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
@@ -579,7 +600,9 @@ def make_parser() -> argparse.ArgumentParser:
                    help=f"largest |FMU - native| allowed, relative to each output's range (default "
                         f"{DEFAULT_TOLERANCE:g}); exit status 1 beyond it")
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    v.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     _allow_large(v)
+    _no_cache(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
@@ -589,6 +612,7 @@ def make_parser() -> argparse.ArgumentParser:
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
     x.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(x)
     x.set_defaults(func=cmd_ssp)
 
     pl = sub.add_parser("plan", help="fidelity plan: each modelling choice's error over the envelope, "
@@ -606,6 +630,7 @@ def make_parser() -> argparse.ArgumentParser:
                     help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(pl)
     add_scheduler_option(pl)
     pl.set_defaults(func=cmd_plan)
 
@@ -618,6 +643,7 @@ def make_parser() -> argparse.ArgumentParser:
                     help="top of the Campbell diagram's motor speed axis (default 1.25 x the highest speed)")
     mo.add_argument("-q", "--quiet", action="store_true")
     _allow_large(mo)
+    _no_cache(mo)
     mo.set_defaults(func=cmd_modes)
     return p
 
@@ -633,7 +659,10 @@ def _one_line(exc: BaseException) -> str:
 def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
-        with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
+        # --scheduler: the parallel work on that Dask cluster; --no-cache: tables computed afresh;
+        # notices of the long phases on stderr unless -q (the bars follow each command's progress flag)
+        with cluster(getattr(args, "scheduler", None)), table_cache.bypassed(getattr(args, "no_cache", False)), \
+                reporting(not getattr(args, "quiet", False)):
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
         if _debug():

@@ -48,6 +48,7 @@ from pathlib import Path
 from typing import Dict, Mapping, Optional
 
 from .common.checks import finite_number
+from .common.progress import ticking
 from .pipeline import build
 
 NS = {
@@ -356,8 +357,11 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
                     fmi_version=fmi_version, runtime=runtime, platforms=platforms)
         trange = res.tables.temperature_range_C
         tin = res.tables.temperature_input or "bulk_temperature"
-        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),
-                         stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
+        with ticking(f"writing the SSP package {out_path} (every .ssd and .ssv checked against its SSP 1.0 schema)",
+                     enabled=progress or None):
+            return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange,
+                                                                                   tin),
+                             stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
 
 
 def ssp_fmu_name(ssp_path) -> str:

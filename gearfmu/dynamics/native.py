@@ -42,7 +42,7 @@ from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS,
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..tables.zones import zone_cuts
 from ..common.checks import finite_number
-from .driver import NO_CUTS, _warmup, driver_for
+from .driver import NO_CUTS, _warmup, compiling, driver_for
 from .integrators import KINK_MAX_SLOTS
 from .model_rhs import _equilibrium, _equilibrium_zoned
 
@@ -467,9 +467,11 @@ def _solve(t, a: RunArguments, icode, sdof, max_step_s, form, info) -> SimResult
     n_sub = substeps(H, _finite("max_step_s", max_step_s, positive=True))
     h = H / n_sub
     c, me = _damping(t, a.damping_ratio)
-    arrays = _arrays(t)
-    th0 = a.pinion_angle_start_rad
-    x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+    with compiling(icode):  # the first run after installing gearfmu compiles all of this: one line
+        arrays = _arrays(t)
+        th0 = a.pinion_angle_start_rad
+        x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+        _warmup(icode)
     return _integrate(t, arrays, icode, sdof, th0, a.speed_rad_s, x0, a.dte_rate_start_m_s, a.pinion_torque_Nm,
                       a.gear_torque_Nm, H, n_sub, h, c, me, DAMPING_MODELS[a.damping_model], a.damping_model,
                       {"form": form, "equivalent_mass_kg": me, **info})

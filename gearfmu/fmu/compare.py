@@ -25,6 +25,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from ..common.user_files import ArchiveError, archive_kind, read_archive
+from ..common.progress import progress_bar, reporting_enabled, ticking
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import simulate
 from .integrity import RECORDS, integrity_problem, platform_problem
@@ -227,18 +228,31 @@ def run_fmu(fmu_path, *, stop_time_s: float, comm_step_s: float, start_values=No
     import fmpy  # fmpy: heavy, only to run an FMU
 
     log = _LogTee(sys.stdout)
+    bar = None
     try:
         fmi3 = fmpy.read_model_description(str(fmu_path)).fmiVersion.startswith("3")
         if fmi3 and names is not None:  # FMI 3: the elements pair_force[i] are the array pair_force
             names = list(dict.fromkeys(n.split("[", 1)[0] for n in names))
+        steps = max(1, int(round(stop_time_s / comm_step_s)))
+        bar = progress_bar(desc=f"gearfmu: {Path(fmu_path).name} through fmpy", enabled=reporting_enabled(),
+                           total=steps, unit="step", leave=False)
+
+        def step_finished(time_s, recorder):  # fmpy calls it after every communication step
+            bar.update(1)
+            return True
+
         t0 = time.perf_counter()
         with contextlib.redirect_stdout(log):
             res = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time_s, output_interval=comm_step_s,
-                                    start_values=dict(start_values or {}), output=names)
+                                    start_values=dict(start_values or {}), output=names,
+                                    step_finished=step_finished if not bar.disable else None)
     except Exception as exc:  # noqa: BLE001 - fmpy raises Exception, FMICallException, OSError (loader)
         said = log.last_error()
         raise FmuRunError(f"{fmu_path}: fmpy could not run the FMU ({_first_line(exc)}"
                           + (f"; the FMU logged: {said})" if said else ")")) from exc
+    finally:
+        if bar is not None:
+            bar.close()
     wall = time.perf_counter() - t0
     cols = {}
     for n in res.dtype.names:
@@ -310,7 +324,8 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
     if not (tolerance >= 0 and tolerance < float("inf")):
         raise FmuMismatchError(f"tolerance: must be finite and >= 0, got {tolerance!r}")
     check_fmu_matches(open_fmu(fmu_path), scene_text=scene_text, tables=tables)
-    problems = [str(p) for p in validate_fmu(str(fmu_path))]
+    with ticking(f"checking {Path(fmu_path).name} with fmpy's validation"):
+        problems = [str(p) for p in validate_fmu(str(fmu_path))]
     if "integrator" not in native_kwargs:
         integ = fmu_integrator(fmu_path, start_values)
         if integ is not None:
@@ -320,9 +335,10 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
                   start_values=start_values, names=names)
     simulate(tables, **dict(native_kwargs, stop_time_s=min(stop_time_s, 10 * comm_step_s),
                             comm_step_s=comm_step_s))  # JIT warm-up, not timed
-    t0 = time.perf_counter()
-    nat = simulate(tables, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
-    native_wall = time.perf_counter() - t0
+    with ticking(f"native solver over {stop_time_s:g} s"):
+        t0 = time.perf_counter()
+        nat = simulate(tables, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
+        native_wall = time.perf_counter() - t0
     per = diff_report(native_columns(nat, tables.slots), fmu.columns)
     return {
         "fmu": str(fmu_path),

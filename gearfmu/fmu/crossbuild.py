@@ -58,6 +58,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import platform as _platform
 
 from ..common.cache import cache_dir
+from ..common.progress import progress_bar, reporting_enabled, wait_refreshing
 
 
 @dataclass(frozen=True)
@@ -379,7 +380,9 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     errors: Dict[str, str] = {}
     with tempfile.TemporaryDirectory(prefix="gearfmu_xbuild_") as tmp:
         outs, jobs = {}, {}
-        with ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
+        bar = progress_bar(desc="gearfmu: FMU binaries", enabled=reporting_enabled(), total=len(keys),
+                           unit="platform", leave=False)
+        with bar, ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
             for key in keys:  # the zig compilations run side by side (one process each)
                 t = TARGETS[key]
                 outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") and fat_mac else
@@ -397,6 +400,12 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
                 else:
                     report[key] = {"missing": "no cross compiler: the ziglang package (a gearfmu dependency) is "
                                               "not installed in this Python"}
+                if key not in jobs:
+                    bar.update(1)
+            names = {job: key for key, job in jobs.items()}
+            for job in wait_refreshing(list(jobs.values()), bar):  # the elapsed time moves while zig runs
+                bar.set_postfix_str(names[job], refresh=False)
+                bar.update(1)
             for key, job in jobs.items():
                 t = TARGETS[key]
                 try:
