@@ -139,25 +139,32 @@ def _compile_flags(cflags: Sequence[str]) -> List[str]:
     return [f for f in cflags if f != "-shared"]
 
 
-def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include: Path, tmp: Path) -> Path:
+def _includes(include) -> List[Path]:
+    """The include folders: one path or a sequence of them."""
+    return [Path(include)] if isinstance(include, (str, os.PathLike)) else [Path(d) for d in include]
+
+
+def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include, tmp: Path) -> Path:
     """The object file of ``source`` for target ``key``, compiled once and kept in
     :func:`object_cache_dir` under a name that hashes everything the object depends on (zig's
-    version, target, flags, the source and every header of ``include``); a later build with the
+    version, target, flags, the source and every header and C file of the ``include`` folders: a
+    translation unit that includes C files, fmi2_all.c, depends on them); a later build with the
     same inputs links the kept object instead of compiling again."""
     t = TARGETS[key]
     h = hashlib.sha256()
     for part in (zig_version(zig), t.zig, " ".join(_compile_flags(cflags)), source.name):
         h.update(part.encode() + b"\0")
     h.update(source.read_bytes())
-    for hdr in sorted(Path(include).glob("*.h")):
-        h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
+    for d in _includes(include):
+        for hdr in sorted([*Path(d).glob("*.h"), *Path(d).glob("*.c")]):
+            h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
     cache = object_cache_dir()
     obj = cache / f"{source.stem}-{key}-{h.hexdigest()[:24]}.o"
     if obj.is_file():
         return obj
     out = tmp / obj.name
-    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", f"-I{include}", "-c", "-o", str(out),
-           str(source)]
+    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", *(f"-I{d}" for d in _includes(include)),
+           "-c", "-o", str(out), str(source)]
     _run(cmd, key, "compilation", tmp)
     try:  # atomic publish: a concurrent build sees either no file or the whole object
         cache.mkdir(parents=True, exist_ok=True)
@@ -178,13 +185,13 @@ def _run(cmd: Sequence[str], key: str, what: str, cwd: Path) -> None:
         raise CrossBuildError(f"platform {key}: {what} failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
 
 
-def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include: Path,
+def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include,
                 out_lib: Path) -> List[str]:
     """Build ``out_lib`` for target ``key``: each source compiled to an object
     (:func:`_object`, kept between builds), then linked with ``zig cc -target <t> <cflags> -g0
     -o <lib> <objects> -lm`` (macOS: plus ``-Wl,-install_name,@rpath/<lib>``, a link option).
-    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include> -o <lib>
-    <sources> -lm`` (what the FMU's build recipe records).  Runs in a scratch folder (the Windows
+    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include>... -o <lib>
+    <sources> -lm`` (what the FMU's build recipe records; ``include``: a folder or a list of them).  Runs in a scratch folder (the Windows
     linker writes an import library and a .pdb beside its output)."""
     t = TARGETS[key]
     out_lib = Path(out_lib)
@@ -197,8 +204,8 @@ def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Se
         _run([*zig, "cc", "-target", t.zig, *cflags, "-g0", "-o", str(tmp_out), *(str(o) for o in objects),
               "-lm", *link], key, "link", tmp)
         shutil.copyfile(tmp_out, out_lib)
-    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
-            *(str(s) for s in sources), "-lm", *link]
+    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", *(f"-I{d}" for d in _includes(include)), "-o",
+            str(tmp_out), *(str(s) for s in sources), "-lm", *link]
 
 
 # ------------------------------------------------------------- Mach-O fat files
@@ -245,10 +252,11 @@ def folder(key: str, fmi_version: int = 2) -> str:
 
 def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
                    cflags: Sequence[str], sources: Sequence[str],
-                   host_compile=None, host_cc_first: bool = False, fmi_version: int = 2) -> Dict[str, dict]:
+                   host_compile=None, host_cc_first: bool = False, fmi_version: int = 2,
+                   header_dir: Optional[Path] = None) -> Dict[str, dict]:
     """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``
     (:func:`folder`; ``sources``: the names of the binary's C files in ``sources_dir``, in compile
-    order).
+    order; ``header_dir``: the folder of the FMI headers, searched after ``sources_dir``).
 
     Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
     platform and ``{key: {"missing": reason}}`` for each that could not be built
@@ -274,16 +282,17 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
                     cmd, compiler = host_compile(out)
                     report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext,
                                    "compiler": compiler,
-                                   "command": _portable(cmd, src, None)}
+                                   "command": _portable(cmd, src, None, header_dir)}
                 elif zig is not None:
-                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
+                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources,
+                                            [src] + ([Path(header_dir)] if header_dir else []), out)
                     report[key] = {}
                 else:
                     report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
             for key, job in jobs.items():
                 t = TARGETS[key]
                 report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext, "compiler": zver,
-                               "command": _portable(job.result(), src, zig)}
+                               "command": _portable(job.result(), src, zig, header_dir)}
         for key in keys:
             if fat_mac and key.endswith("-darwin") and "missing" not in report[key]:
                 darwin[key] = outs[key].read_bytes()
@@ -295,14 +304,17 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     return report
 
 
-def _portable(cmd: Sequence[str], src: Path, zig) -> str:
-    """The command with the scratch paths replaced by names relative to sources/."""
+def _portable(cmd: Sequence[str], src: Path, zig, header_dir: Optional[Path] = None) -> str:
+    """The command with the scratch paths replaced by names relative to sources/ (the FMI headers'
+    folder: ``<FMI headers>``, no path of the build machine)."""
     out = []
     skip = len(zig) if zig else 0
     words = (["zig"] if zig else []) + list(cmd[skip:])
     for i, w in enumerate(words):
         if i > 0 and words[i - 1] == "-o":
             w = "<lib>"
+        elif header_dir is not None and w == f"-I{header_dir}":
+            w = "-I<FMI headers>"
         elif w.startswith("-I"):
             w = "-I."
         elif w.startswith(str(src)):

@@ -49,21 +49,31 @@ static int hexval(int ch)
     return -1;
 }
 
-/* file:// URI of the resources folder -> local folder path ending in '/' (percent-decoded).
- * Accepts file:///abs, file://localhost/abs and file:/abs (RFC 8089). */
+/* file:// URI of the resources folder (FMI 2.0 fmuResourceLocation, RFC 8089 / RFC 3986) -> local
+ * folder path ending in '/', UTF-8 (the percent-escapes decoded: a URI carries a non-ASCII or
+ * space character as %XX bytes of its UTF-8 encoding).  Accepts file:///path, file://localhost/path
+ * and file:/path; on Windows also a drive letter (file:///C:/dir, file:///C%3A/dir, file:///C|/dir)
+ * and a UNC host (file://server/share/dir -> //server/share/dir).  The path keeps its '/'; the model
+ * opens it through the platform's wide-character API (gear_model.c open_read).  0 if the URI is
+ * not a file URI this platform can open, or the path does not fit. */
 int gf_uri_to_dir(const char *uri, char *out, size_t cap)
 {
     const char *p;
-    size_t n = 0;
-    if (uri == NULL) return 0;
+    size_t n = 0, skip = 0;
+    int unc = 0;
+    if (uri == NULL || cap < 3) return 0;
     if (strncmp(uri, "file://localhost/", 17) == 0) p = uri + 16;
     else if (strncmp(uri, "file:///", 8) == 0) p = uri + 7;
-    else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
-    else return 0;
+    else if (strncmp(uri, "file://", 7) == 0) { /* file://host/path */
 #ifdef _WIN32
-    if (p[0] == '/' && p[1] != '\0' && p[2] == ':') p++; /* /C:/... */
+        p = uri + 5; /* //host/path: a UNC path */
+        unc = 1;
+#else
+        return 0; /* no remote hosts here */
 #endif
-    while (*p != '\0') {
+    } else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
+    else return 0;
+    while (*p != '\0' && *p != '?' && *p != '#') {
         int ch = (unsigned char)*p;
         if (ch == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
             ch = hexval(p[1]) * 16 + hexval(p[2]);
@@ -71,15 +81,28 @@ int gf_uri_to_dir(const char *uri, char *out, size_t cap)
         } else {
             p++;
         }
-        if (n + 1 >= cap) return 0;
+        if (ch == 0 || n + 2 >= cap) return 0;
         out[n++] = (char)ch;
     }
-    if (n > 0 && out[n - 1] != '/') {
-        if (n + 1 >= cap) return 0;
-        out[n++] = '/';
-    }
-    if (n >= cap) return 0;
     out[n] = '\0';
+#ifdef _WIN32
+    /* /C:/dir (or /C|/dir) -> C:/dir */
+    if (!unc && n >= 3 && out[0] == '/' && ((out[1] >= 'A' && out[1] <= 'Z') || (out[1] >= 'a' && out[1] <= 'z')) &&
+        (out[2] == ':' || out[2] == '|')) {
+        out[2] = ':';
+        skip = 1;
+    }
+#endif
+    (void)unc;
+    if (skip) {
+        memmove(out, out + skip, n - skip + 1);
+        n -= skip;
+    }
+    if (n == 0) return 0;
+    if (out[n - 1] != '/') {
+        out[n++] = '/';
+        out[n] = '\0';
+    }
     return 1;
 }
 
