@@ -1,7 +1,8 @@
 """The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
 
   gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
-                                             scene -> tables -> FMU
+                   [--fmi3-outputs array|scalar] [--reference-results DIR]
+                                             scene -> tables -> FMU (DIR: its FMI Cross-Check set)
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
   gearfmu simulate [SCENE] [--backend native|fmu --fmu F] [--stop-time S] [--output-interval S]
@@ -11,6 +12,8 @@
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
   gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--fmi-version 2|3]   SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
+  gearfmu crosscheck FMU DIR [--model NAME] [--rel-tol X]
+                                             any FMU against an FMI Cross-Check set (docs/fmu_import.md)
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -31,7 +34,7 @@ import contextlib
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
-from .common.vocabulary import RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from . import pipeline
@@ -129,7 +132,7 @@ def cmd_build(args) -> int:
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
-                fmi_version=args.fmi_version)
+                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs)
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
@@ -137,7 +140,21 @@ def cmd_build(args) -> int:
     _print_platforms(res.fmu_path)
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
+    if args.reference_results:
+        from .fmu.crosscheck import write_reference_results
+
+        paths = write_reference_results(res.fmu_path, args.reference_results)
+        print(f"reference results (FMI Cross-Check set): {', '.join(p.name for p in paths.values())} in "
+              f"{Path(args.reference_results)}")
     return 0
+
+
+def cmd_crosscheck(args) -> int:
+    from .fmu.crosscheck import main as crosscheck_main
+
+    argv = [args.fmu, args.set_dir] + (["--model", args.model] if args.model else []) + \
+        (["--rel-tol", repr(args.rel_tol)] if args.rel_tol is not None else [])
+    return crosscheck_main(argv)
 
 
 def _print_accuracy(ve) -> None:
@@ -396,6 +413,12 @@ def make_parser() -> argparse.ArgumentParser:
                         "all that the installed compilers can build; docs/standalone.md 'Platforms')")
     b.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
                    help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
+    b.add_argument("--fmi3-outputs", choices=FMI3_OUTPUTS, default=DEFAULT_FMI3_OUTPUTS,
+                   help="FMI 3 FMU: pair_force and load_sharing as arrays (default) or as scalars pair_force_1 .. "
+                        "(for hosts without array support; docs/standalone.md 'FMI 3.0')")
+    b.add_argument("--reference-results", metavar="DIR",
+                   help="also write the FMU's FMI Cross-Check set into DIR: <model>.fmu, _ref.csv, _in.csv, "
+                        "_ref.opt (docs/fmu_import.md 'Reference results')")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
                                          "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
@@ -405,6 +428,15 @@ def make_parser() -> argparse.ArgumentParser:
     _allow_large(b)
     add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
+
+    cc = sub.add_parser("crosscheck", help="run an FMU against an FMI Cross-Check set (<model>_ref.csv, _in.csv, "
+                                           "_ref.opt) and compare; exit 0 passed, 1 failed")
+    cc.add_argument("fmu")
+    cc.add_argument("set_dir")
+    cc.add_argument("--model", help="the set's file prefix (default: the one *_ref.csv in the folder)")
+    cc.add_argument("--rel-tol", type=_tolerance, help="agreement per column, fraction of its range "
+                                                       "(default: the set's RelTol)")
+    cc.set_defaults(func=cmd_crosscheck)
 
     be = sub.add_parser("bench", help="benchmarks: 'bench accuracy' = speed against error (gearfmu.bench)")
     be.add_argument("what", choices=("accuracy",))

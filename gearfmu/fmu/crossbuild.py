@@ -17,17 +17,19 @@ x86_64-linux    x86_64-linux-gnu.2.17  binaries/linux64             .so
 aarch64-linux   aarch64-linux-gnu.2.17 binaries/aarch64-linux       .so
 x86_64-windows  x86_64-windows-gnu   binaries/win64                 .dll
 x86_64-darwin   x86_64-macos.11.0    binaries/darwin64 (fat)        .dylib
-aarch64-darwin  aarch64-macos.11.0   binaries/darwin64 (fat)        .dylib
+aarch64-darwin  aarch64-macos.11.0   binaries/darwin64 (fat) and    .dylib
+                                     binaries/aarch64-darwin
 ==============  ===================  =============================  ========
 
-FMI 2.0 names no folder for 64-bit ARM Linux (its platform names are
-win32/win64/linux32/linux64/darwin32/darwin64); ``aarch64-linux`` is the FMI 3
-tuple, which fmpy's ``supported_platforms`` and the FMI 3 loaders read.  The two
-macOS binaries are joined into one universal ("fat") Mach-O in darwin64, so an
-importer on either Mac loads the same file (:func:`write_fat_macho`).  An FMI 3
-FMU puts every binary under its platform tuple, ``binaries/<key>/`` (FMI 3.0
-section 2.5.1.1), one thin Mach-O per Mac CPU, no universal file.  glibc
-2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
+FMI 2.0 itself names win32/win64/linux32/linux64/darwin32/darwin64 only ("64" = 64-bit x86);
+FMI 2.0.4 and later (section 2.3) add: "For any other platforms the platform tuples defined in the
+FMI 3.0 Specification ... should be used".  So 64-bit ARM Linux is ``aarch64-linux`` (which fmpy's
+``supported_platforms`` and loaders read) and Apple silicon ``aarch64-darwin`` (the arm64 dylib).
+The two macOS binaries are also joined into one universal ("fat") Mach-O in darwin64, so an
+importer that looks only there (fmpy's FMI 2 loader on either Mac) loads the same file
+(:func:`write_fat_macho`).  An FMI 3 FMU puts every binary under its platform tuple,
+``binaries/<key>/`` (FMI 3.0 section 2.5.1.4.1), one thin Mach-O per Mac CPU, no universal file.
+glibc 2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
 """
 from __future__ import annotations
 
@@ -301,6 +303,13 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
             write_fat_macho([darwin[k] for k in sorted(darwin)], fat)
             for k in darwin:
                 report[k]["fat_slices"] = sorted(darwin)
+            if "aarch64-darwin" in darwin:
+                # FMI 2.0.4 and later (section 2.3): a platform FMI 2.0 does not name uses the FMI 3 platform
+                # tuple -- binaries/aarch64-darwin holds the arm64 dylib too (darwin64 = 64-bit x86 by the letter)
+                thin = Path(binaries_dir) / "aarch64-darwin" / (identifier + ".dylib")
+                thin.parent.mkdir(parents=True, exist_ok=True)
+                thin.write_bytes(darwin["aarch64-darwin"])
+                report["aarch64-darwin"]["also_in"] = "aarch64-darwin"
     return report
 
 

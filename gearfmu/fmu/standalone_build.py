@@ -54,7 +54,7 @@ from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
-from ..common.vocabulary import DEFAULT_INTEGRATOR
+from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_INTEGRATOR, FMI3_OUTPUTS
 from . import crossbuild
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
                           KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
@@ -65,7 +65,8 @@ from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, 
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
-from .validation import validation_record
+from .fmudoc import DOC_FILES, documentation_html
+from .validation import VALIDATION_DIR, validation_record
 
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
@@ -273,9 +274,21 @@ def platforms_text(report: Dict[str, dict], fmi_version: int = 2) -> str:
             lines.append(f"{key:16s} NOT BUILT: {r['missing']}; compile sources/ (sources/BUILD.txt)")
         else:
             fat = f" (universal Mach-O with {' + '.join(r['fat_slices'])})" if r.get("fat_slices") else ""
-            lines.append(f"{key:16s} binaries/{r['folder']}/{r['file']}{fat}; {r['compiler']}")
+            also = f" and binaries/{r['also_in']}/{r['file']}" if r.get("also_in") else ""
+            lines.append(f"{key:16s} binaries/{r['folder']}/{r['file']}{fat}{also}; {r['compiler']}")
     lines += ["", f"Compile flags (every platform): {' '.join(STANDALONE_CFLAGS)} (sources/buildflags.txt)."]
     return "\n".join(lines) + "\n"
+
+
+def scalar_names(variables):
+    """The variables with every per-slot element ``name[i]`` renamed ``name_i`` (the FMI 3 FMU with
+    scalar outputs: no name ends in ``[1]``, so neither the model description
+    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gear_model.c mark_arrays) makes
+    arrays of them).  Value references, order and everything else stay."""
+    import re
+    from dataclasses import replace
+
+    return [replace(v, name=re.sub(r"\[(\d+)\]$", r"_\1", v.name)) for v in variables]
 
 
 def _hexf(v) -> str:
@@ -354,7 +367,18 @@ def standalone_model_description(xml: bytes, source_files, platforms_note: Optio
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
 
-# ------------------------------------------------------------ validation record
+def write_documentation(root: Path, *, fmi_version: int, **kw) -> None:
+    """``documentation/index.html`` (FMI 2 also ``_main.html``, the same page) into the FMU folder
+    ``root`` (:func:`gearfmu.fmu.fmudoc.documentation_html`; the validation record read from
+    ``root/resources/validation/record.json`` when the FMU has one)."""
+    rec = root / VALIDATION_DIR / "record.json"
+    page = documentation_html(fmi_version=fmi_version, validation_record=json.loads(rec.read_text())
+                              if rec.is_file() else None, **kw)
+    for rel in DOC_FILES(fmi_version):
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_bytes(page)
+
+
 # --------------------------------------------------------------------- build
 def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair",
                          damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
@@ -365,7 +389,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
                          integrator: Union[int, str] = DEFAULT_INTEGRATOR,
                          platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
-                         fmi_version: int = 2) -> Path:
+                         fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
@@ -379,11 +403,15 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
     tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
     layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
-    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0").  Written under a
-    temporary name beside ``out_path`` and renamed at the end.
+    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``
+    "scalar" makes them scalars ``pair_force_1 .. pair_force_P`` (:func:`scalar_names`), for hosts
+    without array support.  Written under a temporary name beside ``out_path`` and renamed at the end.
     """
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
+    if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
+        raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
+                            f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
     a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
                         damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
                         pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
@@ -397,6 +425,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
 
     spec = load_spec(spec_path)
     variables, temp0 = interface_variables(spec, tables, a.starts(), integrator_optional=True)
+    if fmi3_outputs == "scalar":
+        variables = scalar_names(variables)
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
     identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
@@ -472,6 +502,12 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                                                binary_sources(2), platforms_note=note)
             check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
+        write_documentation(root, fmi_version=fmi_version, model_name=model_name, model_identifier=identifier,
+                            runtime="standalone", generation_tool=md_args["generation_tool"], variables=variables,
+                            description=ET.fromstring(xml).get("description", ""), tables=tables,
+                            parameters=params, envelope=env_rec, scene_text=scene_text,
+                            platforms_text=platforms_text(binaries, fmi_version),
+                            experiment={"start": 0.0, "stop": tstop, "step": dt})
         with fmu_zip(a.out_path) as zout:
             zip_folder(zout, root)
     return a.out_path

@@ -290,6 +290,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
 {
     GF_GUARD(comp, F_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (!gf_check_step_time(c, "fmi2DoStep", currentCommunicationPoint, communicationStepSize)) return fmi2Error;
     return (fmi2Status)gm_do_step(c, currentCommunicationPoint, communicationStepSize);
 }
 

@@ -51,6 +51,9 @@ GF_API int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], si
 GF_API int gf_set_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
                   const double real[], const int integer[], size_t n_values);
 GF_API int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr);
+/* 1 if t is the time the FMU has reached (to round-off; then it becomes the FMU's time), else logs
+ * why, puts the instance into state error and returns 0 (the caller returns Error) */
+GF_API int gf_check_step_time(gf_inst *c, const char *fn, double t, double H);
 /* the FMU state box (one flat block of gm_snap_size bytes behind a size header) */
 GF_API int gf_get_state(gf_inst *c, const char *fn, void **state);
 GF_API int gf_set_state(gf_inst *c, const char *fn, void *state);
