@@ -168,7 +168,8 @@ def _agree_runs(fmus, native, cmd_for, tmp, env=None):
 # ------------------------------------------------------------------ contents
 def test_every_platform_carried(fmus):
     """One FMU, five targets: ELF x86-64 (linux64), ELF AArch64 (aarch64-linux), PE32+ x86-64 (win64),
-    a universal Mach-O x86_64 + arm64 (darwin64); fmpy sees all three FMI 2 platforms and the sources."""
+    a universal Mach-O x86_64 + arm64 (darwin64) and the arm64 one alone (aarch64-darwin); fmpy sees
+    the three FMI 2 platforms and the sources."""
     c = fmus["default"]
     d, ident = c["dir"], c["id"]
     elf = lambda p: (p.read_bytes()[:4], struct.unpack_from("<H", p.read_bytes(), 18)[0])
@@ -177,8 +178,12 @@ def test_every_platform_carried(fmus):
     dll = (d / "binaries/win64" / f"{ident}.dll").read_bytes()
     pe = struct.unpack_from("<I", dll, 0x3C)[0]
     assert dll[:2] == b"MZ" and dll[pe:pe + 4] == b"PE\0\0" and struct.unpack_from("<H", dll, pe + 4)[0] == 0x8664
-    assert (d / "binaries/darwin64" / f"{ident}.dylib").read_bytes()[:4] == b"\xca\xfe\xba\xbe"
-    assert sorted(fmpy.supported_platforms(str(c["fmu"]))) == ["c-code", "darwin64", "linux64", "win64"]
+    fat = (d / "binaries/darwin64" / f"{ident}.dylib").read_bytes()
+    assert fat[:4] == b"\xca\xfe\xba\xbe"
+    # FMI 2.0.4+ section 2.3: Apple silicon under its FMI 3 tuple too -- the fat file's arm64 slice
+    arm = [(off, size) for cpu, _, off, size, _ in _fat_slices(fat) if cpu == 0x0100000C]
+    assert (d / "binaries/aarch64-darwin" / f"{ident}.dylib").read_bytes() == fat[arm[0][0]:arm[0][0] + arm[0][1]]
+    assert {"c-code", "darwin64", "linux64", "win64"} <= set(fmpy.supported_platforms(str(c["fmu"])))
     doc = (d / "documentation" / "platforms.txt").read_text()
     assert "NOT BUILT" not in doc and all(k in doc for k in crossbuild.TARGETS)
     assert "not built" not in c["md"].description

@@ -22,9 +22,10 @@ gearfmu FMU already carries its reference result inside (``resources/validation/
 The reference solution is not the FMU's own output: it is the native numba solver
 (:func:`gearfmu.dynamics.native.simulate`, an implementation of docs/model.md independent of the C
 kernel) on the tables and parameters the FMU carries, stepped with the same communication step
-and the same inputs.  The inputs hold the start values, except a step of the pinion torque half-way
-(between two communication points, so a master that samples the inputs at its communication points
-applies it at one defined step).
+and the same inputs.  The inputs hold the start values, except a ramp of the pinion torque by
+:data:`TORQUE_STEP` over the middle half of the run (linear between the rows, as the rules
+prescribe; no discontinuity, so a master needs no extra communication point and every master that
+samples the inputs at its communication points applies the same values).
 
 :func:`check_reference_results` runs an FMU (any FMU: fmpy's master, the set's inputs and
 experiment) and compares it with ``<model>_ref.csv``: each column within ``RelTol`` of its range,
@@ -59,7 +60,7 @@ REFERENCE_OUTPUTS = ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle",
 REL_TOL = 1e-6
 #: the rules' size limit of one CSV file (bytes)
 MAX_CSV_BYTES = 1_000_000
-#: relative size of the pinion-torque step in ``<model>_in.csv``
+#: relative change of the pinion torque over the ramp of ``<model>_in.csv``
 TORQUE_STEP = 0.1
 
 
@@ -110,10 +111,9 @@ def write_reference_results(fmu_path, out_dir, *, model_name: Optional[str] = No
     T1b = T1 * (1.0 + TORQUE_STEP)
     if axis.size > 1 and not axis[0] <= T1b <= axis[-1]:  # stay inside the torque axis (no clamp)
         T1b = T1 * (1.0 - TORQUE_STEP)
-    k_step = n // 2  # the torque steps between communication points k_step and k_step + 1
-    t_step = (k_step + 0.5) * H
-    torque = np.where(np.arange(n + 1) <= k_step, T1, T1b)
-    kw = dict(stop_time_s=stop, comm_step_s=H, max_step_s=float(p["max_step_s"]), pinion_torque_Nm=torque,
+    ramp_t, ramp_T = [0.0, 0.25 * stop, 0.75 * stop, stop], [T1, T1, T1b, T1b]  # the rows of _in.csv
+    kw = dict(stop_time_s=stop, comm_step_s=H, max_step_s=float(p["max_step_s"]),
+              pinion_torque_Nm=lambda t_s: float(np.interp(t_s, ramp_t, ramp_T)),
               gear_torque_Nm=T2, pinion_speed_start_rad_s=float(p["pinion_speed_start_rad_s"]),
               damping_ratio=float(p["damping_ratio"]),
               damping_model={v: k for k, v in DAMPING_MODELS.items()}[int(p["damping_model"])],
@@ -142,9 +142,7 @@ def write_reference_results(fmu_path, out_dir, *, model_name: Optional[str] = No
     start_value = {"pinion_torque": (T1, T1b), "gear_torque": (T2, T2)}
     if temp is not None:
         start_value.update({k: (float(temp), float(temp)) for k in d.inputs if k not in start_value})
-    in_rows = []
-    for time_s, which in ((0.0, 0), (t_step, 0), (t_step, 1), (stop, 1)):
-        in_rows.append([time_s] + [start_value[k][which] for k in d.inputs])
+    in_rows = [[time_s] + [start_value[k][which] for k in d.inputs] for time_s, which in zip(ramp_t, (0, 0, 1, 1))]
     _csv(paths["in"], ["time", *d.inputs], in_rows)
     opt = [f"StartTime, {0.0!r}", f"StopTime, {stop!r}", f"StepSize, {H!r}", f"RelTol, {REL_TOL!r}"]
     if stride > 1:
@@ -154,8 +152,8 @@ def write_reference_results(fmu_path, out_dir, *, model_name: Optional[str] = No
         f"{name}: FMI Cross-Check set (rules version 4.1, section 9.1.4) of a gearfmu gear-pair FMU.\n"
         f"Reference ({name}_ref.csv): gearfmu's native solver (an implementation of the model independent of\n"
         f"the FMU's C kernel) on the tables and parameters inside the FMU, communication step {H!r} s.\n"
-        f"Inputs ({name}_in.csv): the start values; pinion_torque steps from {T1!r} to {T1b!r} N*m at\n"
-        f"t = {t_step!r} s, between two communication points. A master steps the FMU with StepSize and\n"
+        f"Inputs ({name}_in.csv): the start values; pinion_torque ramps from {T1!r} to {T1b!r} N*m between\n"
+        f"t = {ramp_t[1]!r} s and {ramp_t[2]!r} s (linear between rows). A master steps the FMU with StepSize and\n"
         f"applies the inputs at its communication points; every column then agrees within RelTol of its\n"
         "range. Check any FMU against this set: gearfmu crosscheck <FMU> <this folder>.\n", encoding="utf-8")
     return paths
