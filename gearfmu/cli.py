@@ -35,6 +35,7 @@ import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
+from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from . import pipeline
@@ -141,8 +142,6 @@ def cmd_build(args) -> int:
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     if args.reference_results:
-        from .fmu.crosscheck import write_reference_results
-
         paths = write_reference_results(res.fmu_path, args.reference_results)
         print(f"reference results (FMI Cross-Check set): {', '.join(p.name for p in paths.values())} in "
               f"{Path(args.reference_results)}")
@@ -150,8 +149,6 @@ def cmd_build(args) -> int:
 
 
 def cmd_crosscheck(args) -> int:
-    from .fmu.crosscheck import main as crosscheck_main
-
     argv = [args.fmu, args.set_dir] + (["--model", args.model] if args.model else []) + \
         (["--rel-tol", repr(args.rel_tol)] if args.rel_tol is not None else [])
     return crosscheck_main(argv)

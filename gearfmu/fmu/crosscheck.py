@@ -173,8 +173,8 @@ def check_reference_results(fmu_path, set_dir, *, model_name: Optional[str] = No
     "columns": {name: deviation / range}, "rel_tol", "band_outliers"}``; ``passed`` when every
     column is within ``rel_tol`` (default: the set's RelTol) and fmpy's cross-check band test
     (:func:`fmpy.util.validate_result`) finds no outlier."""
-    import fmpy
-    from fmpy.util import read_csv, validate_result
+    import fmpy  # fmpy: heavy, only to run an FMU
+    from fmpy.util import read_csv, validate_result  # fmpy: the cross-check's CSV reader and band test
 
     set_dir = Path(set_dir)
     if model_name is None:

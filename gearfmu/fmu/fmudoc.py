@@ -23,6 +23,8 @@ import tempfile
 from pathlib import Path
 from typing import Iterable, List, Optional, Sequence
 
+from .modeldesc import FMI3_TYPES, fmi3_variables
+
 __all__ = ["DOC_FILES", "documentation_html", "build_machine_paths"]
 
 
@@ -122,8 +124,6 @@ def documentation_html(*, model_name: str, model_identifier: str, fmi_version: i
       "<th>variability</th><th>type</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>meaning</th>"
       "<th>equation</th></tr>")
     if fmi_version == 3:  # the FMI 3 variables: arrays of the per-slot elements (modeldesc.fmi3_variables)
-        from .modeldesc import FMI3_TYPES, fmi3_variables
-
         rows = [(f"{v3.name}" + (f" [{v3.size}]" if v3.size else ""), v3.value_reference, v3.first,
                  v3.first.description.replace("slot 1", "slot i") if v3.size else v3.first.description,
                  FMI3_TYPES[v3.first.type]) for v3 in fmi3_variables(variables)]

@@ -5,10 +5,12 @@ generic FMI plumbing and the gear model both layers share (``fmi_common.c``, ``g
 the contract between them ``gf_model.h``), the FMU behaviour the pythonfmu runtime shares
 (``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel (``gearfmu/fmu/kernel/``: ``gearkernel.c`` and
 the files beside it, docs/model.md) are compiled at build time
-into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
-sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
-2.0 headers (copied from fmpy's ``c-code`` folder), so any other platform can
-compile it.  The tables sit in ``resources/`` as in the pythonfmu FMU; because
+into ``binaries/<platform>/<modelIdentifier>.so`` from one translation unit
+(``fmi2_all.c`` / ``fmi3_all.c``, every internal function static); the FMU also carries all
+sources (``sources/``, the unit listed in ``<SourceFiles>``), without the FMI headers, which the
+standard has the importer supply (the build uses the standard's FMI 2.0.5 headers,
+``standalone/fmi2_headers``, and fmpy's FMI 3.0.1 ones), so any other platform can compile it
+and several FMUs link into one program (docs/standalone.md "Source code").  The tables sit in ``resources/`` as in the pythonfmu FMU; because
 C has no JSON parser the builder also writes ``resources/gearfmu_standalone.txt``
 (key=value lines: GUID, table dimensions and byte offsets, scalars as C99
 hexadecimal floats -- exact --, the SHA-256 of tables.bin, and the variable
@@ -20,11 +22,12 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch] gkfmu.[ch]
-                                         gearkernel.[ch] gk_*.[ch] fmi2*.h
+    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch]
+                                         gkfmu.[ch] gearkernel.[ch] gk_*.[ch]
                                          BUILD.txt
-                                         CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
+                                         CMakeLists.txt (FMI 3: fmi3_all.c, fmi3_gear.c, buildDescription.xml)
                                          buildflags.txt
+    documentation/index.html             the FMU's documentation (gearfmu.fmu.fmudoc; FMI 2 also _main.html)
     documentation/platforms.txt          which platforms carry a binary, which not and why
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearfmu_standalone.txt     what the C layer reads at instantiation
@@ -45,11 +48,13 @@ import datetime
 import hashlib
 import json
 import platform
+import re
 import shutil
 import sys
 import tempfile
 import uuid
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
@@ -285,9 +290,6 @@ def scalar_names(variables):
     scalar outputs: no name ends in ``[1]``, so neither the model description
     (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gear_model.c mark_arrays) makes
     arrays of them).  Value references, order and everything else stay."""
-    import re
-    from dataclasses import replace
-
     return [replace(v, name=re.sub(r"\[(\d+)\]$", r"_\1", v.name)) for v in variables]
 
 
