@@ -205,14 +205,15 @@ def c_layers(unzipdir, md, comm_s, n_steps, repeat, max_step_s, integrator_code,
     and fmi2GetReal alone, over the same trajectory (its header comment)."""
     import subprocess
 
-    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources
+    from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, file_sources, fmi2_header_dir
 
     unzipdir = Path(unzipdir).resolve()  # the resource URI is file://<absolute path>
     src = unzipdir / "sources"
     exe = Path(tmp) / "fmu_layers"
     flags = [f for f in STANDALONE_CFLAGS if f not in ("-fPIC", "-shared", "-fvisibility=hidden")]
-    files = [str(src / f) for f in binary_sources(2)]
-    subprocess.run(["cc", *flags, f"-I{src}", "-o", str(exe), str(Path(__file__).with_name("fmu_layers.c")),
+    files = [str(src / f) for f in file_sources(2)]  # one by one: fmu_layers.c calls the kernel's functions
+    subprocess.run(["cc", *flags, f"-I{src}", f"-I{fmi2_header_dir()}", "-o", str(exe),
+                    str(Path(__file__).with_name("fmu_layers.c")),
                     *files, "-lm"], check=True, capture_output=True)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     args = [str(exe), str(unzipdir), md.guid, repr(comm_s), str(n_steps), str(repeat),

@@ -1,7 +1,8 @@
 """The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
 
   gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
-                                             scene -> tables -> FMU
+                   [--fmi3-outputs array|scalar] [--reference-results DIR]
+                                             scene -> tables -> FMU (DIR: its FMI Cross-Check set)
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
   gearfmu simulate [SCENE] [--backend native|fmu --fmu F] [--stop-time S] [--output-interval S]
@@ -14,6 +15,8 @@
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
   gearfmu modes    [SCENE] [-o OUT.json] [--json] [--max-speed-rpm N]
                                              natural frequencies, strain energy, Campbell diagram (PNG + JSON)
+  gearfmu crosscheck FMU DIR [--model NAME] [--rel-tol X]
+                                             any FMU against an FMI Cross-Check set (docs/fmu_import.md)
 
 A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): simulate runs the
 native gearbox solver on it, modes gives its modes.
@@ -41,11 +44,12 @@ import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.progress import notice, reporting, ticking
-from .common.vocabulary import RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
+from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
@@ -170,7 +174,7 @@ def cmd_build(args) -> int:
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
-                fmi_version=args.fmi_version)
+                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs)
     cached = _from_cache(res.tables) if not args.tables else ""
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
           f"FMU {res.build_wall_s:.2f} s, "
@@ -180,12 +184,22 @@ def cmd_build(args) -> int:
     print(fmu_summary(res.fmu_path))
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
+    if args.reference_results:
+        paths = write_reference_results(res.fmu_path, args.reference_results)
+        print(f"reference results (FMI Cross-Check set): {', '.join(p.name for p in paths.values())} in "
+              f"{Path(args.reference_results)}")
     return 0
 
 
 def _from_cache(tables) -> str:
     """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
     return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
+
+
+def cmd_crosscheck(args) -> int:
+    argv = [args.fmu, args.set_dir] + (["--model", args.model] if args.model else []) + \
+        (["--rel-tol", repr(args.rel_tol)] if args.rel_tol is not None else [])
+    return crosscheck_main(argv)
 
 
 def _print_accuracy(ve) -> None:
@@ -550,6 +564,12 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
     _fmu_options(b)
+    b.add_argument("--fmi3-outputs", choices=FMI3_OUTPUTS, default=DEFAULT_FMI3_OUTPUTS,
+                   help="FMI 3 FMU: pair_force and load_sharing as arrays (default) or as scalars pair_force_1 .. "
+                        "(for hosts without array support; docs/standalone.md 'FMI 3.0')")
+    b.add_argument("--reference-results", metavar="DIR",
+                   help="also write the FMU's FMI Cross-Check set into DIR: <model>.fmu, _ref.csv, _in.csv, "
+                        "_ref.opt (docs/fmu_import.md 'Reference results')")
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
                                          "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
@@ -560,6 +580,15 @@ def make_parser() -> argparse.ArgumentParser:
     _no_cache(b)
     add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
+
+    cc = sub.add_parser("crosscheck", help="run an FMU against an FMI Cross-Check set (<model>_ref.csv, _in.csv, "
+                                           "_ref.opt) and compare; exit 0 passed, 1 failed")
+    cc.add_argument("fmu")
+    cc.add_argument("set_dir")
+    cc.add_argument("--model", help="the set's file prefix (default: the one *_ref.csv in the folder)")
+    cc.add_argument("--rel-tol", type=_tolerance, help="agreement per column, fraction of its range "
+                                                       "(default: the set's RelTol)")
+    cc.set_defaults(func=cmd_crosscheck)
 
     be = sub.add_parser("bench", help="benchmarks: 'bench accuracy' = speed against error (gearfmu.bench)")
     be.add_argument("what", choices=("accuracy",))

@@ -18,7 +18,7 @@ __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
           tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False,
-          fmi_version: int = 2) -> BuildResult:
+          fmi_version: int = 2, fmi3_outputs: str = "array") -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
     docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
@@ -28,12 +28,14 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
     full-fidelity model over the envelope (``BuildResult.verified_envelope``).
     ``platforms``: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys; None: all available).
+    ``fmi3_outputs``: an FMI 3 FMU's per-slot outputs as arrays ("array") or scalars ("scalar",
+    pair_force_1 .. for hosts without array support; docs/standalone.md "FMI 3.0").
     ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
     The FMU records and checks its envelope (:func:`gearfmu.scene.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or scene.fmu.runtime
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
-    platform_kw(runtime, platforms, fmi_version)
+    platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
     if tables is None:  # refuse an oversized scene before planning or estimating anything
         check_build_cost(scene, allow_large=allow_large)
     plan = None
@@ -57,4 +59,4 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
         verified = None
     return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
                                 verified_envelope=verified, platforms=platforms, allow_large=allow_large,
-                                fmi_version=fmi_version)
+                                fmi_version=fmi_version, fmi3_outputs=fmi3_outputs)

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import __version__
 from .common.progress import notice
-from .common.vocabulary import RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
@@ -108,22 +108,30 @@ def fmu_builder(runtime: str):
     return build_fmu
 
 
-def platform_kw(runtime: str, platforms, fmi_version: int = 2) -> dict:
+def platform_kw(runtime: str, platforms, fmi_version: int = 2,
+                fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> dict:
     """``platforms`` for the builder: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys;
-    None: all available); ``fmi_version`` 3: the standalone FMI 3.0 FMU."""
+    None: all available); ``fmi_version`` 3: the standalone FMI 3.0 FMU, with ``fmi3_outputs``
+    "array" or "scalar" (:data:`gearfmu.common.vocabulary.FMI3_OUTPUTS`)."""
     if fmi_version not in (2, 3) or (fmi_version == 3 and runtime != "standalone"):
         raise ValueError(f"--fmi-version: {fmi_version} needs 2, or 3 with the standalone runtime")
+    if fmi3_outputs not in FMI3_OUTPUTS:
+        raise ValueError(f"--fmi3-outputs: {fmi3_outputs!r} not one of {', '.join(FMI3_OUTPUTS)}")
+    if fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3:
+        raise ValueError(f"--fmi3-outputs: {fmi3_outputs} needs --fmi-version 3 (an FMI 2 FMU has scalars only)")
+    version = {"fmi_version": 3, "fmi3_outputs": fmi3_outputs} if fmi_version == 3 else {}
     if platforms is None:
-        return {"fmi_version": 3} if fmi_version == 3 else {}
+        return version
     if runtime != "standalone":
         raise ValueError("--platforms: only the standalone runtime builds binaries for other platforms "
                          "(use --runtime standalone)")
-    return {"platforms": tuple(platforms), **({"fmi_version": 3} if fmi_version == 3 else {})}
+    return {"platforms": tuple(platforms), **version}
 
 
 def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
                          tables=None, plan=None, verified_envelope: Optional[dict] = None, platforms=None,
-                         allow_large: bool = False, fmi_version: int = 2) -> BuildResult:
+                         allow_large: bool = False, fmi_version: int = 2,
+                         fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
     :func:`gearfmu.pipeline.build`).  ``runtime``: "standalone" or "pythonfmu"; None: the
     scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the scene's physics
@@ -133,7 +141,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     estimate (gearfmu.tables.estimate) exceeds the limits."""
     runtime = runtime or scene.fmu.runtime
     builder = fmu_builder(runtime)
-    extra = platform_kw(runtime, platforms, fmi_version)
+    extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
     est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:

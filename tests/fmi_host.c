@@ -6,7 +6,7 @@
  * initialization -> doStep... -> terminate -> freeInstance).
  *
  * usage: fmi_host <unzipped FMU dir> <modelIdentifier> <guid> <stop_time_s> <step_s>
- *                 <output vrs, comma separated> [--state-check] [vr=value ...]
+ *                 <output vrs, comma separated> [--state-check] [--resource-uri=URI] [vr=value ...]
  *
  * Prints "time,<vr>,<vr>..." then one CSV row per communication point
  * (%.17g).  With --state-check it also saves the FMU state at the middle
@@ -16,12 +16,17 @@
  *
  * The binary loaded is binaries/<platform>/<id>.<ext> for the platform this
  * host is compiled for: linux64 (x86_64 Linux), aarch64-linux, win64 (.dll,
- * LoadLibrary; <unzipped FMU dir> is a Windows path, e.g. Z:/tmp/fmu under
- * Wine), darwin64 (.dylib).
+ * LoadLibraryW; <unzipped FMU dir> is a Windows path, e.g. Z:/tmp/fmu under
+ * Wine), darwin64 (.dylib).  Paths are UTF-8 (on Windows the arguments are read
+ * as UTF-16 from the command line and the DLL is loaded by its UTF-16 path, with
+ * the long-path prefix \\?\ from 250 characters on).  The resource location is
+ * file://<dir>/resources with every byte outside RFC 3986's unreserved set and
+ * '/' ':' percent-encoded (UTF-8), or the URI given by --resource-uri.
  */
 #ifdef _WIN32
 #define __USE_MINGW_ANSI_STDIO 1 /* correctly rounded %.17g with any C runtime */
 #include <windows.h>
+#include <shellapi.h>
 #define FMU_BIN "win64"
 #define FMU_EXT ".dll"
 typedef HMODULE lib_t;
@@ -67,6 +72,25 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
         return 2;                                                             \
     }
 
+/* dir + "/resources" as a file URI, percent-encoded (RFC 3986 section 2.1; RFC 8089) */
+static void resource_uri(const char *dir, char *uri, size_t cap)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    const unsigned char *p = (const unsigned char *)dir;
+    size_t n = (size_t)snprintf(uri, cap, "file://%s", dir[0] == '/' ? "" : "/");
+    for (; *p != '\0' && n + 4 < cap; ++p) {
+        int c = *p == '\\' ? '/' : *p;
+        if ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || strchr("-._~/:", c)) {
+            uri[n++] = (char)c;
+        } else {
+            uri[n++] = '%';
+            uri[n++] = hex[c >> 4];
+            uri[n++] = hex[c & 15];
+        }
+    }
+    snprintf(uri + n, cap - n, "/resources");
+}
+
 #define CHECK(call)                                                           \
     do {                                                                      \
         fmi2Status st_ = (call);                                              \
@@ -78,7 +102,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 
 int main(int argc, char **argv)
 {
-    char path[4096], uri[4200];
+    char path[4096], uri[12400];
     lib_t lib;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c;
@@ -87,20 +111,32 @@ int main(int argc, char **argv)
     double stop, step, *rows;
     char *p;
 
+#ifdef _WIN32
+    {   /* the arguments as UTF-16 (argv is in the ANSI code page), kept as UTF-8 */
+        int wargc, a;
+        LPWSTR *wargv = CommandLineToArgvW(GetCommandLineW(), &wargc);
+        if (wargv == NULL) return 1;
+        argv = (char **)calloc((size_t)wargc + 1, sizeof(char *));
+        for (a = 0; a < wargc; ++a) {
+            int len = WideCharToMultiByte(CP_UTF8, 0, wargv[a], -1, NULL, 0, NULL, NULL);
+            argv[a] = (char *)malloc((size_t)len);
+            WideCharToMultiByte(CP_UTF8, 0, wargv[a], -1, argv[a], len, NULL, NULL);
+        }
+        argc = wargc;
+        LocalFree(wargv);
+    }
+#endif
     if (argc < 7) {
         fprintf(stderr, "usage: %s dir id guid stop step vrs [--state-check] [vr=value ...]\n", argv[0]);
         return 1;
     }
     snprintf(path, sizeof path, "%s/binaries/" FMU_BIN "/%s" FMU_EXT, argv[1], argv[2]);
+    resource_uri(argv[1], uri, sizeof uri);
+    for (argi = 7; argi < argc; ++argi)
+        if (strncmp(argv[argi], "--resource-uri=", 15) == 0) snprintf(uri, sizeof uri, "%s", argv[argi] + 15);
 #ifdef _WIN32
-    /* file:///C:/dir/resources (RFC 8089); LoadLibrary gets backslashes */
-    snprintf(uri, sizeof uri, "file:///%s/resources", argv[1]);
-    for (p = uri; *p != '\0'; ++p)
-        if (*p == '\\') *p = '/';
     for (p = path; *p != '\0'; ++p)
         if (*p == '/') *p = '\\';
-#else
-    snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
 #endif
     stop = atof(argv[4]);
     step = atof(argv[5]);
@@ -109,7 +145,13 @@ int main(int argc, char **argv)
         if (*p == ',') p++;
     }
 #ifdef _WIN32
-    lib = LoadLibraryA(path);
+    {   /* the UTF-16 path, with the long-path prefix when it is long */
+        wchar_t wpath[4200];
+        int off = (strlen(path) >= 250 && path[1] == ':') ? 4 : 0;
+        wcscpy(wpath, L"\\\\?\\");
+        if (MultiByteToWideChar(CP_UTF8, 0, path, -1, wpath + off, 4000) == 0) return 2;
+        lib = LoadLibraryW(wpath);
+    }
     if (lib == NULL) {
         fprintf(stderr, "LoadLibrary %s: error %lu\n", path, (unsigned long)GetLastError());
         return 2;
@@ -148,6 +190,8 @@ int main(int argc, char **argv)
         for (argi = 7; argi < argc; ++argi) {
             if (strcmp(argv[argi], "--state-check") == 0) {
                 state_check = 1;
+            } else if (strncmp(argv[argi], "--resource-uri=", 15) == 0) {
+                continue;
             } else {
                 fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[argi], &p, 10);
                 fmi2Real v;

@@ -17,8 +17,9 @@ import pytest
 FMU = Path(__file__).resolve().parents[1] / "gearfmu" / "fmu"
 C_FOLDERS = (FMU / "kernel", FMU / "standalone", FMU / "runtime")
 
-_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
-_STRING = re.compile(r'"(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\'')
+#: a comment or a string/character literal, matched in one pass from left to right (a "//" inside a
+#: string is no comment, a quote inside a comment no string)
+_COMMENT_OR_STRING = re.compile(r'(/\*.*?\*/|//[^\n]*)|("(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\')', re.S)
 _CALL = re.compile(r"\b([A-Za-z_]\w*)\s*\(")
 _KEYWORDS = {"if", "for", "while", "switch", "return", "sizeof", "defined"}
 
@@ -26,7 +27,7 @@ _KEYWORDS = {"if", "for", "while", "switch", "return", "sizeof", "defined"}
 def _code(text: str):
     """(the code without comments, strings, C++ guards and preprocessor lines, the macro bodies):
     a call written in a macro is a call of the file that defines the macro."""
-    text = _STRING.sub('""', _COMMENT.sub(" ", text)).replace("\\\n", " ")
+    text = _COMMENT_OR_STRING.sub(lambda m: " " if m.group(1) else '""', text).replace("\\\n", " ")
     text = re.sub(r"#ifdef __cplusplus.*?#endif", "", text, flags=re.S)
     lines = text.splitlines()
     macros = " ".join(m.group(1) for ln in lines for m in [re.match(r"\s*#\s*define\s+\w+(?:\([^)]*\))?(.*)", ln)] if m)
@@ -139,3 +140,14 @@ def test_the_plumbing_reaches_the_model_through_the_contract_only():
     used = _definitions_and_calls((FMU / "standalone" / "fmi_common.c").read_text())[1]
     used = {u for u in used if u.startswith("gm_")}
     assert used and used <= declared, used - declared
+
+
+@pytest.mark.parametrize("v", [2, 3])
+def test_the_translation_unit_includes_every_c_file_once(v):
+    """fmi2_all.c / fmi3_all.c, the one file an FMU's build compiles, includes every C file of the
+    binary once, in the order of a file-by-file build (gearfmu.fmu.standalone_build.file_sources)."""
+    from gearfmu.fmu.standalone_build import file_sources
+
+    text = (FMU / "standalone" / f"fmi{v}_all.c").read_text()
+    assert re.findall(r'#include "(\w+\.c)"', text) == list(file_sources(v))
+    assert "#define GF_API GF_UNIT_STATIC" in text and "#define GK_API GF_UNIT_STATIC" in text

@@ -29,7 +29,7 @@ import fmpy.validation
 import numpy as np
 import pytest
 
-from gearfmu.fmu.standalone_build import build_description_flags, build_standalone_fmu, fmi2_header_dir
+from gearfmu.fmu.standalone_build import build_description_flags, build_standalone_fmu, fmi3_header_dir
 from gearfmu.ssp import build_ssp, validate_ssp_dir
 
 from test_platforms import AARCH64_SYSROOT, _macho_exports, need, qemu, wine, zig
@@ -68,7 +68,7 @@ def host(tmp_path_factory):
 
 def _compile_host(tmp, target=None):
     """tests/fmi3_host.c for this machine (gcc) or for a zig target."""
-    src, inc = str(HERE / "fmi3_host.c"), f"-I{fmi2_header_dir()}"
+    src, inc = str(HERE / "fmi3_host.c"), f"-I{fmi3_header_dir()}"
     if target is None:
         exe = tmp / "fmi3_host"
         cmd = [shutil.which("gcc") or "cc", "-std=c99", "-O1", "-Wall", inc, "-o", str(exe), src, "-ldl", "-lm"]
@@ -130,8 +130,7 @@ def test_fmi3_interface_same_names_arrays_and_resources(built):
     bd = build_description_flags(zipfile.ZipFile(c["fmi3"]).read("sources/buildDescription.xml").decode())
     assert "-ffp-contract=off" in bd["cflags"] and "-fno-fast-math" in bd["cflags"]
     assert not [f for f in bd["cflags"] if "fast-math" in f and f != "-fno-fast-math"]
-    assert bd["sources"] == ["fmi3_gear.c", "fmi_common.c", "gear_model.c", "gkfmu.c", "gearkernel.c", "gk_model.c",
-                             "gk_stops.c", "gk_zones.c", "gk_temperature.c", "gk_envelope.c"]
+    assert bd["sources"] == ["fmi3_all.c"]  # the one translation unit (docs/standalone.md "Source code")
     imp = set(zipfile.ZipFile(built["impacts"]["fmi3"]).namelist())
     ext = {"x86_64-windows": ".dll", "x86_64-darwin": ".dylib", "aarch64-darwin": ".dylib"}
     for t in FMI3_TUPLES:
@@ -275,7 +274,7 @@ def test_darwin_binaries_thin_per_tuple(built):
     dylib (MH_DYLIB) of that CPU (0x01000007, 0x0100000C), exporting every fmi3 function of the
     standard's fmi3Functions.h and none of the glue's or kernel's (hidden visibility)."""
     c = built["impacts"]
-    header = (fmi2_header_dir() / "fmi3Functions.h").read_text()
+    header = (fmi3_header_dir() / "fmi3Functions.h").read_text()
     fmi3 = set(re.findall(r"FMI3_Export\s+fmi3\w+TYPE\s+(fmi3\w+)\s*;", header))
     assert len(fmi3) == 75 and {"fmi3DoStep", "fmi3InstantiateCoSimulation"} <= fmi3
     for t, cpu in (("x86_64-darwin", 0x01000007), ("aarch64-darwin", 0x0100000C)):
@@ -299,7 +298,8 @@ def test_build_description_rebuilds_bit_identical(built, host, tmp_path):
     bd = build_description_flags((src / "buildDescription.xml").read_text())
     lib = d / "binaries" / "x86_64-linux" / f"{c['id']}.so"
     lib.unlink()
-    p = subprocess.run([gcc, *bd["cflags"], "-shared", *(f"-I{src / i}" for i in bd["include_dirs"]), "-o", str(lib),
+    p = subprocess.run([gcc, *bd["cflags"], "-shared", *(f"-I{src / i}" for i in bd["include_dirs"]),
+                        f"-I{fmi3_header_dir()}", "-o", str(lib),  # the importer's FMI headers
                         *(str(src / s) for s in bd["sources"]), *(f"-l{x}" for x in bd["libraries"])],
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr

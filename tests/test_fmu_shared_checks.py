@@ -94,15 +94,19 @@ def run_case(path, name, at_init, at_step, step_size=H):
 
 CASES = {
     "pinion_torque NaN at init": ({"pinion_torque": NAN}, {}),
-    "damping_ratio below min": ({"damping_ratio": -0.5}, {}),
     "max_step zero": ({"max_step": 0.0}, {}),
-    "damping_model 3": ({"damping_model": 3}, {}),
-    "integrator 4": ({"integrator": 4}, {}),
     "temperature outside the axis at init": ({"bulk_temperature": 80.0}, {}),
     "torques not finite": ({}, {"pinion_torque": INF, "gear_torque": NAN}),
     "temperature outside the axis": ({}, {"bulk_temperature": 75.0}),
     "temperature NaN": ({}, {"bulk_temperature": NAN}),
     "torque beyond the axis": ({}, {"pinion_torque": 400.0, "gear_torque": 400.0}),
+}
+#: parameters outside the min/max of the model description: the standalone runtime discards them when
+#: set (FMI 2.0.5 section 2.2.7; tests/test_fmu_strict.py), so its kernel layer never sees them
+PARAMETER_RANGE_CASES = {
+    "damping_ratio below min": ({"damping_ratio": -0.5}, {}),
+    "damping_model 3": ({"damping_model": 3}, {}),
+    "integrator 4": ({"integrator": 4}, {}),
     "damping_ratio negative in a step": ({}, {"damping_ratio": -1.0}),
 }
 
@@ -120,6 +124,33 @@ def test_both_runtimes_refuse_bad_input_with_the_same_message(fmus, case):
         assert {st for st, _ in msg_py} == {3}
     else:
         assert st_py == st_sa
+
+
+@pytest.mark.parametrize("case", sorted(PARAMETER_RANGE_CASES))
+def test_standalone_discards_a_parameter_outside_its_range_when_set(fmus, case):
+    at_init, at_step = PARAMETER_RANGE_CASES[case]
+    md = fmpy.read_model_description(str(fmus["standalone"]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(fmus["standalone"])),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="sa")
+    fmu.instantiate(callbacks=_callbacks(log), loggingOn=True)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    values = at_init or at_step
+    if not at_init:
+        fmu.exitInitializationMode()
+    name, x = next(iter(values.items()))
+    setter = fmu.setInteger if name in ("damping_model", "integrator") else fmu.setReal
+    assert _call(setter, [vr[name]], [x]) == 2  # fmi2Discard at the set
+    assert [m for st, m in log if st == 2] == [
+        f"fmi2Set{'Integer' if setter == fmu.setInteger else 'Real'}: {name} = {x:g} is outside its range "
+        f"[{'0' if name != 'damping_ratio' else '0'}, {'1' if name == 'damping_model' else '3' if name == 'integrator' else 'inf'}]"
+        " (min/max of the model description); not set, the call sets nothing"]
+    if at_init:
+        assert _call(fmu.exitInitializationMode) == 0
+    assert _call(fmu.doStep, 0.0, H) == 0  # the old value stays
+    fmu.freeInstance()
 
 
 def _once(msgs):

@@ -40,6 +40,7 @@ def header_prototypes():
     for h in ("gearkernel.h", "gkfmu.h"):
         text = re.sub(r"/\*.*?\*/", " ", (KERNEL / h).read_text(), flags=re.S)
         text = "\n".join(ln for ln in text.splitlines() if not ln.lstrip().startswith("#"))
+        text = re.sub(r"\bGK_API\s+", "", text)  # the storage class (gearkernel.h): empty in the library
         for m in re.finditer(r"([A-Za-z_][\w \t\*]*?)\b(gkf?_\w+)\s*\(([^)]*)\)\s*;", text):
             params = [p.strip() for p in m.group(3).split(",")]
             args = () if params == ["void"] else tuple(_ctype(re.sub(r"\w+$", "", p).strip() or p) for p in params)

@@ -105,7 +105,7 @@ def _compile_host(tmp, target=None):
     else:
         exe = tmp / ("fmi_host.exe" if "windows" in target else "fmi_host_" + target.split("-")[0])
         cmd = [*zig(), "cc", "-target", target, "-std=c99", "-O1", "-Wall", f"-I{fmi2_header_dir()}",
-               "-o", str(exe), src] + ([] if "windows" in target else ["-ldl"])
+               "-o", str(exe), src] + (["-lshell32"] if "windows" in target else ["-ldl"])
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, timeout=1800)
     assert p.returncode == 0, p.stderr
     return exe
@@ -168,7 +168,8 @@ def _agree_runs(fmus, native, cmd_for, tmp, env=None):
 # ------------------------------------------------------------------ contents
 def test_every_platform_carried(fmus):
     """One FMU, five targets: ELF x86-64 (linux64), ELF AArch64 (aarch64-linux), PE32+ x86-64 (win64),
-    a universal Mach-O x86_64 + arm64 (darwin64); fmpy sees all three FMI 2 platforms and the sources."""
+    a universal Mach-O x86_64 + arm64 (darwin64) and the arm64 one alone (aarch64-darwin); fmpy sees
+    the three FMI 2 platforms and the sources."""
     c = fmus["default"]
     d, ident = c["dir"], c["id"]
     elf = lambda p: (p.read_bytes()[:4], struct.unpack_from("<H", p.read_bytes(), 18)[0])
@@ -177,33 +178,102 @@ def test_every_platform_carried(fmus):
     dll = (d / "binaries/win64" / f"{ident}.dll").read_bytes()
     pe = struct.unpack_from("<I", dll, 0x3C)[0]
     assert dll[:2] == b"MZ" and dll[pe:pe + 4] == b"PE\0\0" and struct.unpack_from("<H", dll, pe + 4)[0] == 0x8664
-    assert (d / "binaries/darwin64" / f"{ident}.dylib").read_bytes()[:4] == b"\xca\xfe\xba\xbe"
-    assert sorted(fmpy.supported_platforms(str(c["fmu"]))) == ["c-code", "darwin64", "linux64", "win64"]
+    fat = (d / "binaries/darwin64" / f"{ident}.dylib").read_bytes()
+    assert fat[:4] == b"\xca\xfe\xba\xbe"
+    # FMI 2.0.4+ section 2.3: Apple silicon under its FMI 3 tuple too -- the fat file's arm64 slice
+    arm = [(off, size) for cpu, _, off, size, _ in _fat_slices(fat) if cpu == 0x0100000C]
+    assert (d / "binaries/aarch64-darwin" / f"{ident}.dylib").read_bytes() == fat[arm[0][0]:arm[0][0] + arm[0][1]]
+    assert {"c-code", "darwin64", "linux64", "win64"} <= set(fmpy.supported_platforms(str(c["fmu"])))
     doc = (d / "documentation" / "platforms.txt").read_text()
     assert "NOT BUILT" not in doc and all(k in doc for k in crossbuild.TARGETS)
     assert "not built" not in c["md"].description
 
 
 # ----------------------------------------------------------------- Windows
-def test_win64_binary_under_wine(fmus, native, tmp_path):
-    """The win64 DLL, loaded with LoadLibrary by a win64 build of tests/fmi_host.c under Wine,
-    gives the native linux64 numbers (10 fresh processes per case, exit code 0)."""
+@pytest.fixture(scope="module")
+def wine_run(tmp_path_factory):
+    """(wine, the win64 build of tests/fmi_host.c, the environment of one Wine prefix made for this
+    module; its processes are ended afterwards).  The UTF-8 locale makes Wine read the Unix side's
+    file names and arguments as UTF-8."""
     w = wine()
-    exe = _compile_host(tmp_path, "x86_64-windows-gnu")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
-               WINEDLLOVERRIDES="mscoree,mshtml=")
+    tmp = tmp_path_factory.mktemp("wine")
+    exe = _compile_host(tmp, "x86_64-windows-gnu")
+    env = dict(os.environ, WINEPREFIX=str(tmp / "wineprefix"), WINEDEBUG="-all",
+               WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     server = shutil.which("wineserver") or next((str(p) for p in (Path("/usr/lib/wine/wineserver64"),
                                                                   Path("/usr/lib/wine/wineserver")) if p.is_file()), None)
-    try:  # create the prefix once, outside the timed processes
-        subprocess.run([w, "cmd", "/c", "exit"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                       stderr=subprocess.DEVNULL, timeout=600)
-        worst = _agree_runs(fmus, native, lambda c: [w, str(exe), *_host_args(c, "Z:" + c["dir"].as_posix())],
-                            tmp_path, env=env)
-    finally:
-        if server:  # end this prefix's Wine processes (services started by the runs)
-            subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=120)
+    # create the prefix once, outside the timed processes
+    subprocess.run([w, "cmd", "/c", "exit"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, timeout=600)
+    yield w, exe, env
+    if server:  # end this prefix's Wine processes (services started by the runs)
+        subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, timeout=120)
+
+
+def test_win64_binary_under_wine(fmus, native, wine_run, tmp_path):
+    """The win64 DLL, loaded with LoadLibraryW by a win64 build of tests/fmi_host.c under Wine,
+    gives the native linux64 numbers (10 fresh processes per case, exit code 0)."""
+    w, exe, env = wine_run
+    worst = _agree_runs(fmus, native, lambda c: [w, str(exe), *_host_args(c, "Z:" + c["dir"].as_posix())],
+                        tmp_path, env=env)
     print("win64 under wine: max deviation from native (of range)", worst)
+
+
+#: folder names of a user's temporary folder on a German (and any other) Windows: letters outside
+#: ASCII and the ANSI code page, spaces
+UNICODE_FOLDERS = ("dür mit space", "Zahnräder Prüfstand Ölkühlung Übersetzung", "Straße Größe Maß Çédille Ñandú",
+                   "ωμέγα Δ 漢字 ß ÄÖÜ äöü", "Messung Zahnradpaar 20 zu 31 Übersetzungsverhältnis Ölsorte",
+                   "noch einmal dür mit space")
+
+
+def _run_file(cmd, tmp, name, env=None):
+    """Run cmd with its output in files (Wine's helper processes keep pipes open); (exit code,
+    stdout, stderr)."""
+    with open(tmp / f"{name}.out", "w+", encoding="utf-8") as fo, open(tmp / f"{name}.err", "w+") as fe:
+        rc = subprocess.Popen(cmd, stdout=fo, stderr=fe, stdin=subprocess.DEVNULL, env=env).wait(timeout=600)
+        fo.seek(0)
+        fe.seek(0)
+        return rc, fo.read().replace("\r\n", "\n"), fe.read()
+
+
+def test_win64_from_a_long_non_ascii_path_under_wine(fmus, native, wine_run, tmp_path):
+    """Windows reads a char path in the ANSI code page, so a C runtime's fopen of the UTF-8 resource
+    path fails under a folder named like 'dür mit space' (reference: the fopen/_wfopen contract of
+    the Windows C runtime, which Wine implements).  The FMU unzipped under such folders -- non-ASCII
+    letters of several scripts, spaces, a folder path over 200 characters and file paths over
+    MAX_PATH (260) -- instantiates and runs under Wine, with the resource URI as the host writes it
+    (percent-encoded UTF-8), with the drive's colon and the letters escaped in lower-case hex, and
+    unescaped UTF-8 after file://localhost/; its output is byte for byte the linux64 binary's from
+    the same folder and from a plain one (the same SHA-256)."""
+    import hashlib
+    import urllib.parse
+
+    w, exe, env = wine_run
+    c = fmus["impacts"]
+    deep = tmp_path.joinpath(*UNICODE_FOLDERS)
+    shutil.copytree(c["dir"], deep)
+    win_dir = "Z:" + deep.as_posix()
+    dll = f"{win_dir}/binaries/win64/{c['id']}.dll"
+    assert len(win_dir) > 200 and len(dll) > 260 and len(f"{win_dir}/resources/tables.bin") > 260
+    sha = lambda text: hashlib.sha256(text.encode()).hexdigest()
+    reference = sha(native["impacts"])
+    rc, out, err = _run_file([str(native["exe"]), *_host_args(c, deep)], tmp_path, "linux")
+    assert rc == 0, err
+    assert sha(out) == reference  # linux64 reads the UTF-8 path as it is
+
+    quoted = urllib.parse.quote(deep.as_posix(), safe="/")
+    escaped = "".join(f"%{b:02x}" if b > 127 or chr(b) in " :" else chr(b) for b in deep.as_posix().encode())
+    uris = {"host": None,
+            "escaped drive colon, lower-case hex": f"file:///Z%3a{escaped}/resources",
+            "localhost, unescaped UTF-8": f"file://localhost/Z:{deep.as_posix()}/resources"}
+    assert "%C3%BC" in quoted and "%c3%bc" in uris["escaped drive colon, lower-case hex"]
+    for name, uri in uris.items():
+        extra = [] if uri is None else [f"--resource-uri={uri}"]
+        rc, out, err = _run_file([w, str(exe), *_host_args(c, win_dir), *extra], tmp_path, f"wine{len(extra)}{name[:4]}",
+                                 env=env)
+        assert rc == 0, (name, err[-2000:])
+        assert sha(out) == reference, name
 
 
 # ------------------------------------------------------------- aarch64 Linux
@@ -289,12 +359,13 @@ def test_sources_recipe_rebuilds_bit_identical(fmus, native, tmp_path):
     for f in ("-ffp-contract=off", "-fno-fast-math", "-O2"):
         assert f in flags["cflags"].split() and f in (src / "CMakeLists.txt").read_text()
     b = tmp_path / "cmake"
-    for cmd in ([cmake, "-S", str(src), "-B", str(b), f"-DCMAKE_C_COMPILER={gcc}"], [cmake, "--build", str(b)]):
+    headers = f"-DFMI_HEADERS_DIR={fmi2_header_dir()}"  # the importer's FMI headers (not in sources/)
+    for cmd in ([cmake, "-S", str(src), "-B", str(b), f"-DCMAKE_C_COMPILER={gcc}", headers], [cmake, "--build", str(b)]):
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         assert p.returncode == 0, p.stdout + p.stderr
     by_flags = tmp_path / "flags" / f"{c['id']}.so"
     by_flags.parent.mkdir()
-    p = subprocess.run([gcc, *flags["cflags"].split(), f"-I{src}", "-o", str(by_flags),
+    p = subprocess.run([gcc, *flags["cflags"].split(), f"-I{src}", f"-I{fmi2_header_dir()}", "-o", str(by_flags),
                         *(str(src / s) for s in flags["sources"].split()), *flags["ldflags"].split()],
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr

@@ -23,7 +23,8 @@ import warnings
 __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES", "FILM_TRANSIENT_MODES",
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
            "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
-           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS"]
+           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS", "FMI3_OUTPUTS",
+           "DEFAULT_FMI3_OUTPUTS"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -74,6 +75,11 @@ DEFAULT_INTEGRATOR = "rk4_node"
 GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
+#: how an FMI 3 FMU carries the per-slot outputs (docs/standalone.md "FMI 3.0"): "array" (pair_force,
+#: load_sharing as arrays of the slot count) or "scalar" (pair_force_1 .. pair_force_P, for hosts
+#: without array support)
+FMI3_OUTPUTS = ("array", "scalar")
+DEFAULT_FMI3_OUTPUTS = "array"
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
 DEFAULT_RUNTIME = "standalone"
 

@@ -54,6 +54,8 @@ CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
 KINK_MAX_SLOTS = 32
 #: the FMI 2.0 standard headers the C layers are compiled against
 FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+#: the FMI 3.0 standard headers
+FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 
 
 class FmuBuildError(ValueError):
@@ -65,14 +67,31 @@ class CompilerNotFoundError(FmuBuildError):
 
 
 def fmi2_header_dir() -> Path:
-    """fmpy's copy of the FMI 2.0 standard headers (``fmpy/c-code``)."""
-    import fmpy  # fmpy: only for its FMI 2 headers
+    """The FMI 2.0 standard's headers, unmodified (FMI 2.0.5; ``gearfmu/fmu/standalone/fmi2_headers``,
+    README.txt there).  fmpy's copy (``fmpy/c-code``) ignores ``FMI2_FUNCTION_PREFIX``, so the
+    sources of two FMUs compiled against it cannot link into one program."""
+    d = HERE / "standalone" / "fmi2_headers"
+    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
+    if missing:
+        raise FmuBuildError(f"FMI headers: {missing} not found in {d} (gearfmu installation incomplete)")
+    return d
+
+
+def fmi3_header_dir() -> Path:
+    """The FMI 3.0 standard's headers: fmpy's copy (``fmpy/c-code``), the standard's FMI 3.0.1
+    headers unmodified (tests/test_source_fmus.py checks their prefix macros)."""
+    import fmpy  # fmpy: only for its FMI 3 headers
 
     d = Path(fmpy.__file__).resolve().parent / "c-code"
-    missing = [h for h in FMI2_HEADERS if not (d / h).is_file()]
+    missing = [h for h in FMI3_HEADERS if not (d / h).is_file()]
     if missing:
         raise FmuBuildError(f"FMI headers: {missing} not found in {d} (fmpy installation incomplete)")
     return d
+
+
+def fmi_header_dir(fmi_version: int) -> Path:
+    """The folder of the FMI ``fmi_version`` (2 or 3) standard headers the standalone FMU is compiled with."""
+    return fmi3_header_dir() if fmi_version == 3 else fmi2_header_dir()
 
 
 def find_c_compiler() -> str:

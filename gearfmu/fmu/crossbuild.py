@@ -25,17 +25,19 @@ x86_64-linux    x86_64-linux-gnu.2.17  binaries/linux64             .so
 aarch64-linux   aarch64-linux-gnu.2.17 binaries/aarch64-linux       .so
 x86_64-windows  x86_64-windows-gnu   binaries/win64                 .dll
 x86_64-darwin   x86_64-macos.11.0    binaries/darwin64 (fat)        .dylib
-aarch64-darwin  aarch64-macos.11.0   binaries/darwin64 (fat)        .dylib
+aarch64-darwin  aarch64-macos.11.0   binaries/darwin64 (fat) and    .dylib
+                                     binaries/aarch64-darwin
 ==============  ===================  =============================  ========
 
-FMI 2.0 names no folder for 64-bit ARM Linux (its platform names are
-win32/win64/linux32/linux64/darwin32/darwin64); ``aarch64-linux`` is the FMI 3
-tuple, which fmpy's ``supported_platforms`` and the FMI 3 loaders read.  The two
-macOS binaries are joined into one universal ("fat") Mach-O in darwin64, so an
-importer on either Mac loads the same file (:func:`write_fat_macho`).  An FMI 3
-FMU puts every binary under its platform tuple, ``binaries/<key>/`` (FMI 3.0
-section 2.5.1.1), one thin Mach-O per Mac CPU, no universal file.  glibc
-2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
+FMI 2.0 itself names win32/win64/linux32/linux64/darwin32/darwin64 only ("64" = 64-bit x86);
+FMI 2.0.4 and later (section 2.3) add: "For any other platforms the platform tuples defined in the
+FMI 3.0 Specification ... should be used".  So 64-bit ARM Linux is ``aarch64-linux`` (which fmpy's
+``supported_platforms`` and loaders read) and Apple silicon ``aarch64-darwin`` (the arm64 dylib).
+The two macOS binaries are also joined into one universal ("fat") Mach-O in darwin64, so an
+importer that looks only there (fmpy's FMI 2 loader on either Mac) loads the same file
+(:func:`write_fat_macho`).  An FMI 3 FMU puts every binary under its platform tuple,
+``binaries/<key>/`` (FMI 3.0 section 2.5.1.4.1), one thin Mach-O per Mac CPU, no universal file.
+glibc 2.17 is the oldest glibc the Linux binaries need (the manylinux2014 baseline).
 """
 from __future__ import annotations
 
@@ -180,25 +182,32 @@ def _compile_flags(cflags: Sequence[str]) -> List[str]:
     return [f for f in cflags if f != "-shared"]
 
 
-def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include: Path, tmp: Path) -> Path:
+def _includes(include) -> List[Path]:
+    """The include folders: one path or a sequence of them."""
+    return [Path(include)] if isinstance(include, (str, os.PathLike)) else [Path(d) for d in include]
+
+
+def _object(zig: Sequence[str], key: str, cflags: Sequence[str], source: Path, include, tmp: Path) -> Path:
     """The object file of ``source`` for target ``key``, compiled once and kept in
     :func:`object_cache_dir` under a name that hashes everything the object depends on (zig's
-    version, target, flags, the source and every header of ``include``); a later build with the
+    version, target, flags, the source and every header and C file of the ``include`` folders: a
+    translation unit that includes C files, fmi2_all.c, depends on them); a later build with the
     same inputs links the kept object instead of compiling again."""
     t = TARGETS[key]
     h = hashlib.sha256()
     for part in (zig_version(zig), t.zig, " ".join(_compile_flags(cflags)), source.name):
         h.update(part.encode() + b"\0")
     h.update(source.read_bytes())
-    for hdr in sorted(Path(include).glob("*.h")):
-        h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
+    for d in _includes(include):
+        for hdr in sorted([*Path(d).glob("*.h"), *Path(d).glob("*.c")]):
+            h.update(hdr.name.encode() + b"\0" + hdr.read_bytes())
     cache = object_cache_dir()
     obj = cache / f"{source.stem}-{key}-{h.hexdigest()[:24]}.o"
     if obj.is_file():
         return obj
     out = tmp / obj.name
-    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", f"-I{include}", "-c", "-o", str(out),
-           str(source)]
+    cmd = [*zig, "cc", "-target", t.zig, *_compile_flags(cflags), "-g0", *(f"-I{d}" for d in _includes(include)),
+           "-c", "-o", str(out), str(source)]
     _run(cmd, key, "compilation", tmp)
     try:  # atomic publish: a concurrent build sees either no file or the whole object
         cache.mkdir(parents=True, exist_ok=True)
@@ -219,13 +228,13 @@ def _run(cmd: Sequence[str], key: str, what: str, cwd: Path) -> None:
         raise CrossBuildError(f"platform {key}: {what} failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
 
 
-def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include: Path,
+def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Sequence[Path], include,
                 out_lib: Path) -> List[str]:
     """Build ``out_lib`` for target ``key``: each source compiled to an object
     (:func:`_object`, kept between builds), then linked with ``zig cc -target <t> <cflags> -g0
     -o <lib> <objects> -lm`` (macOS: plus ``-Wl,-install_name,@rpath/<lib>``, a link option).
-    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include> -o <lib>
-    <sources> -lm`` (what the FMU's build recipe records).  Runs in a scratch folder (the Windows
+    Returns the equivalent one-step command ``zig cc -target <t> <cflags> -g0 -I<include>... -o <lib>
+    <sources> -lm`` (what the FMU's build recipe records; ``include``: a folder or a list of them).  Runs in a scratch folder (the Windows
     linker writes an import library and a .pdb beside its output)."""
     t = TARGETS[key]
     out_lib = Path(out_lib)
@@ -238,8 +247,8 @@ def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Se
         _run([*zig, "cc", "-target", t.zig, *cflags, "-g0", "-o", str(tmp_out), *(str(o) for o in objects),
               "-lm", *link], key, "link", tmp)
         shutil.copyfile(tmp_out, out_lib)
-    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", f"-I{include}", "-o", str(tmp_out),
-            *(str(s) for s in sources), "-lm", *link]
+    return [*zig, "cc", "-target", t.zig, *cflags, "-g0", *(f"-I{d}" for d in _includes(include)), "-o",
+            str(tmp_out), *(str(s) for s in sources), "-lm", *link]
 
 
 # ------------------------------------------- one-time preparation of the targets
@@ -352,10 +361,10 @@ def folder(key: str, fmi_version: int = 2) -> str:
 def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
                    cflags: Sequence[str], sources: Sequence[str],
                    host_compile=None, host_cc_first: bool = False, fmi_version: int = 2,
-                   log=None) -> Dict[str, dict]:
+                   log=None, header_dir: Optional[Path] = None) -> Dict[str, dict]:
     """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``
     (:func:`folder`; ``sources``: the names of the binary's C files in ``sources_dir``, in compile
-    order).
+    order; ``header_dir``: the folder of the FMI headers, searched after ``sources_dir``).
 
     Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
     platform and ``{key: {"missing": reason}}`` for each that could not be built
@@ -391,11 +400,12 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
                     cmd, compiler = host_compile(out)
                     report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext,
                                    "compiler": compiler,
-                                   "command": _portable(cmd, src, None)}
+                                   "command": _portable(cmd, src, None, header_dir)}
                 elif key in unprepared:
                     report[key] = {"missing": unprepared[key]}
                 elif zig is not None:
-                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
+                    jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources,
+                                            [src] + ([Path(header_dir)] if header_dir else []), out)
                     report[key] = {}
                 else:
                     report[key] = {"missing": "no cross compiler: the ziglang package (a gearfmu dependency) is "
@@ -415,7 +425,7 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
                     report[key] = {"missing": str(exc).splitlines()[0] + " (details: the build's stderr)"}
                     continue
                 report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext, "compiler": zver,
-                               "command": _portable(cmd, src, zig)}
+                               "command": _portable(cmd, src, zig, header_dir)}
         for key, msg in errors.items():  # the compiler's own words, for whoever has to fix it
             (log or (lambda m: print(m, file=sys.stderr, flush=True)))(f"gearfmu: {msg}")
         if all("missing" in r for r in report.values()):
@@ -429,17 +439,27 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
             write_fat_macho([darwin[k] for k in sorted(darwin)], fat)
             for k in darwin:
                 report[k]["fat_slices"] = sorted(darwin)
+            if "aarch64-darwin" in darwin:
+                # FMI 2.0.4 and later (section 2.3): a platform FMI 2.0 does not name uses the FMI 3 platform
+                # tuple -- binaries/aarch64-darwin holds the arm64 dylib too (darwin64 = 64-bit x86 by the letter)
+                thin = Path(binaries_dir) / "aarch64-darwin" / (identifier + ".dylib")
+                thin.parent.mkdir(parents=True, exist_ok=True)
+                thin.write_bytes(darwin["aarch64-darwin"])
+                report["aarch64-darwin"]["also_in"] = "aarch64-darwin"
     return report
 
 
-def _portable(cmd: Sequence[str], src: Path, zig) -> str:
-    """The command with the scratch paths replaced by names relative to sources/."""
+def _portable(cmd: Sequence[str], src: Path, zig, header_dir: Optional[Path] = None) -> str:
+    """The command with the scratch paths replaced by names relative to sources/ (the FMI headers'
+    folder: ``<FMI headers>``, no path of the build machine)."""
     out = []
     skip = len(zig) if zig else 0
     words = (["zig"] if zig else []) + list(cmd[skip:])
     for i, w in enumerate(words):
         if i > 0 and words[i - 1] == "-o":
             w = "<lib>"
+        elif header_dir is not None and w == f"-I{header_dir}":
+            w = "-I<FMI headers>"
         elif w.startswith("-I"):
             w = "-I."
         elif w.startswith(str(src)):

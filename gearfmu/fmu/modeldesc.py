@@ -29,7 +29,7 @@ import tomllib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 SPEC_FORMAT = "gearfmu-variables"
 SPEC_VERSIONS = (1,)
@@ -64,14 +64,20 @@ FEATURES = ("temperature_axis", "oil_temperature_axis", "gearbox_temperature_axi
 TEMPERATURE_INPUT_FEATURES = {"bulk_temperature": "temperature_axis", "oil_temperature": "oil_temperature_axis",
                               "gearbox_temperature": "gearbox_temperature_axis"}
 
-#: log categories (the ones pythonfmu's wrapper logs with)
+#: log categories (the ones pythonfmu's wrapper logs with; the names FMI 2.0 and FMI 3.0 section
+#: 2.4.5 define, plus logAll), each described with the status of the FMU's FMI version (fmi{v}Warning, ...)
 LOG_CATEGORIES = {
-    "logStatusWarning": "Log messages with fmi2Warning status.",
-    "logStatusDiscard": "Log messages with fmi2Discard status.",
-    "logStatusError": "Log messages with fmi2Error status.",
-    "logStatusFatal": "Log messages with fmi2Fatal status.",
+    "logStatusWarning": "Log messages with fmi{v}Warning status.",
+    "logStatusDiscard": "Log messages with fmi{v}Discard status.",
+    "logStatusError": "Log messages with fmi{v}Error status.",
+    "logStatusFatal": "Log messages with fmi{v}Fatal status.",
     "logAll": "Log all messages.",
 }
+
+
+def log_categories(fmi_version: int = 2) -> Dict[str, str]:
+    """:data:`LOG_CATEGORIES` with the status names of FMI ``fmi_version`` (2 or 3)."""
+    return {name: text.format(v=fmi_version) for name, text in LOG_CATEGORIES.items()}
 
 
 class SpecError(ValueError):
@@ -312,7 +318,7 @@ def _root_element(spec: Spec, attrib: dict, version: Optional[str], generation_d
     return ET.Element("fmiModelDescription", attrib)
 
 
-def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s) -> None:
+def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s, fmi_version: int = 2) -> None:
     """UnitDefinitions (``units``), LogCategories and DefaultExperiment: the same elements in FMI 2.0
     and FMI 3.0 model descriptions."""
     if units:
@@ -324,7 +330,7 @@ def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s) ->
                 ET.SubElement(ue, "BaseUnit", {b: (repr(float(e)) if b in UNIT_SCALING else str(e))
                                                for b, e in exps.items()})
     cats = ET.SubElement(root, "LogCategories")
-    for c, d in LOG_CATEGORIES.items():
+    for c, d in log_categories(fmi_version).items():
         ET.SubElement(cats, "Category", {"name": c, "description": d})
     de = dict(spec.default_experiment)
     if stop_time_s is not None:
@@ -468,7 +474,7 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
         "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
         "hasEventMode": "false", "providesIntermediateUpdate": "false"})
     _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None} | {"s"}, stop_time_s,
-                           step_size_s)
+                           step_size_s, fmi_version=3)
     mv = ET.SubElement(root, "ModelVariables")
     ET.SubElement(mv, "Float64", {"name": "time", "valueReference": str(fmi3_time_vr(variables)),
                                   "causality": "independent", "variability": "continuous", "unit": "s",

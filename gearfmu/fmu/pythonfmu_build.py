@@ -40,6 +40,7 @@ import sys
 import tempfile
 import uuid
 import zipfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Optional, Union
 import sysconfig
@@ -57,7 +58,8 @@ from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER
                           write_scene, write_tables)
 from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
-from .validation import validation_record
+from .fmudoc import DOC_FILES, documentation_html
+from .validation import VALIDATION_DIR, validation_record
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
@@ -276,6 +278,17 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                     zout.writestr(info, zin.read(n))
                 for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
                     zout.writestr(rel, data)
+                page = documentation_html(  # documentation/index.html and _main.html (gearfmu.fmu.fmudoc)
+                    model_name=model_name, model_identifier=identifier, fmi_version=2, runtime="pythonfmu",
+                    generation_tool=f"gearfmu {__version__}", variables=variables,
+                    description=ET.fromstring(xml).get("description", ""), tables=tables,
+                    parameters=a.parameters(temp0), envelope=env_rec, scene_text=scene_text,
+                    validation_record=json.loads(record[f"{VALIDATION_DIR}/record.json"]),
+                    platforms_text=f"binaries/{plat}: gearfmu's loader and pythonfmu's wrapper; the kernel "
+                                   "(resources/) compiled on the build machine (docs/fmu.md)",
+                    experiment={"start": 0.0, "stop": tstop, "step": dt})
+                for rel in DOC_FILES(2):
+                    zout.writestr(rel, page)
     return a.out_path
 
 

@@ -5,10 +5,12 @@ generic FMI plumbing and the gear model both layers share (``fmi_common.c``, ``g
 the contract between them ``gf_model.h``), the FMU behaviour the pythonfmu runtime shares
 (``gearfmu/fmu/kernel/gkfmu.c``) and the C kernel (``gearfmu/fmu/kernel/``: ``gearkernel.c`` and
 the files beside it, docs/model.md) are compiled at build time
-into ``binaries/<platform>/<modelIdentifier>.so``; the FMU also carries all
-sources (``sources/``, listed in ``<SourceFiles>``) with the standard's FMI
-2.0 headers (copied from fmpy's ``c-code`` folder), so any other platform can
-compile it.  The tables sit in ``resources/`` as in the pythonfmu FMU; because
+into ``binaries/<platform>/<modelIdentifier>.so`` from one translation unit
+(``fmi2_all.c`` / ``fmi3_all.c``, every internal function static); the FMU also carries all
+sources (``sources/``, the unit listed in ``<SourceFiles>``), without the FMI headers, which the
+standard has the importer supply (the build uses the standard's FMI 2.0.5 headers,
+``standalone/fmi2_headers``, and fmpy's FMI 3.0.1 ones), so any other platform can compile it
+and several FMUs link into one program (docs/standalone.md "Source code").  The tables sit in ``resources/`` as in the pythonfmu FMU; because
 C has no JSON parser the builder also writes ``resources/gearfmu_standalone.txt``
 (key=value lines: GUID, table dimensions and byte offsets, scalars as C99
 hexadecimal floats -- exact --, the SHA-256 of tables.bin, and the variable
@@ -20,11 +22,12 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch] gkfmu.[ch]
-                                         gearkernel.[ch] gk_*.[ch] fmi2*.h
+    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch]
+                                         gkfmu.[ch] gearkernel.[ch] gk_*.[ch]
                                          BUILD.txt
-                                         CMakeLists.txt (FMI 3: fmi3_gear.c, fmi3*.h, buildDescription.xml)
+                                         CMakeLists.txt (FMI 3: fmi3_all.c, fmi3_gear.c, buildDescription.xml)
                                          buildflags.txt
+    documentation/index.html             the FMU's documentation (gearfmu.fmu.fmudoc; FMI 2 also _main.html)
     documentation/platforms.txt          which platforms carry a binary, which not and why
     resources/tables.json, tables.bin    the tables (gearfmu/tables/mesh_tables.py format)
     resources/gearfmu_standalone.txt     what the C layer reads at instantiation
@@ -45,26 +48,30 @@ import datetime
 import hashlib
 import json
 import platform
+import re
 import shutil
 import sys
 import tempfile
 import uuid
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
-from ..common.vocabulary import DEFAULT_INTEGRATOR
+from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_INTEGRATOR, FMI3_OUTPUTS
 from . import crossbuild
-from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE, KERNEL_HEADERS,  # noqa: F401
-                          KERNEL_SOURCES, CompilerNotFoundError,
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
+                          KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
                           FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
-                          find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
-                          model_description, run_compiler, scene_sha256, write_scene, write_tables, zip_folder)
+                          find_c_compiler, fmi2_header_dir, fmi3_header_dir, fmi_header_dir, fmu_digest, fmu_zip,
+                          interface_variables, model_description, run_compiler, scene_sha256, write_scene,
+                          write_tables, zip_folder)
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
-from .validation import validation_record
+from .fmudoc import DOC_FILES, documentation_html
+from .validation import VALIDATION_DIR, validation_record
 
 HERE = Path(__file__).resolve().parent
 LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
@@ -81,7 +88,9 @@ LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
 FMI3_LAYER_SOURCES = (FMI3_LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
 #: the kernel's C files (build_steps.KERNEL_SOURCES), compiled after the layer's
 KERNEL_SOURCE_NAMES = tuple(p.name for p in KERNEL_SOURCES)
-FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+#: the one file a build of FMI 2 / FMI 3 compiles: it includes the layer's and the kernel's C files, so
+#: that every function but the fmi2* / fmi3* ones is static (docs/standalone.md "Source code")
+UNIT_SOURCES = {2: HERE / "standalone" / "fmi2_all.c", 3: HERE / "standalone" / "fmi3_all.c"}
 FMI_VERSIONS = (2, 3)
 CONFIG_FILE = "gearfmu_standalone.txt"
 CONFIG_FORMAT = "gearfmu-standalone"
@@ -100,36 +109,43 @@ def layer_sources(fmi_version: int = 2) -> tuple:
     return FMI3_LAYER_SOURCES if fmi_version == 3 else LAYER_SOURCES
 
 
-def binary_sources(fmi_version: int = 2) -> tuple:
-    """Every C file of the binary in compile order: :func:`layer_sources`, then the kernel's."""
+def file_sources(fmi_version: int = 2) -> tuple:
+    """Every C file of the binary in compile order, for a build that compiles them one by one
+    (the benchmarks look inside the instance that way): :func:`layer_sources`, then the kernel's."""
     return (*layer_sources(fmi_version), *KERNEL_SOURCE_NAMES)
 
 
+def binary_sources(fmi_version: int = 2) -> tuple:
+    """The C files a build of the binary compiles: the one translation unit ``fmi2_all.c`` /
+    ``fmi3_all.c``, which includes :func:`file_sources` (docs/standalone.md "Source code")."""
+    return (UNIT_SOURCES[3 if fmi_version == 3 else 2].name,)
+
+
 def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
-    """Copy every source the standalone binary of ``fmi_version`` needs into ``dest_dir``."""
+    """Copy every source the standalone binary of ``fmi_version`` needs into ``dest_dir``: the
+    translation unit, the files it includes and their headers.  Not the FMI headers: the standard
+    has the importer supply them (FMI 2.0.5 section 2.3, FMI 3.0 section 2.5.1.3); the build
+    takes them from :func:`fmi_header_dir`."""
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     layer = FMI3_LAYER_SOURCE if fmi_version == 3 else LAYER_SOURCE
-    for src in (layer, *SHARED_SOURCES, *SHARED_HEADERS, *KERNEL_SOURCES, *KERNEL_HEADERS):
+    unit = UNIT_SOURCES[3 if fmi_version == 3 else 2]
+    for src in (unit, layer, *SHARED_SOURCES, *SHARED_HEADERS, *KERNEL_SOURCES, *KERNEL_HEADERS):
         shutil.copy2(src, dest / src.name)
-    hdr = fmi2_header_dir()
-    for h in (FMI3_HEADERS if fmi_version == 3 else FMI2_HEADERS):
-        shutil.copy2(hdr / h, dest / h)
     return dest
 
 
 def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_version: int = 2) -> list:
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
-    ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fvisibility=hidden -I<src>
-    -o <lib> fmi2_gear.c fmi_common.c gear_model.c gkfmu.c gearkernel.c gk_model.c ... -lm``
-    (:func:`binary_sources`; FMI 3: fmi3_gear.c first)
+    ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fno-fast-math -fvisibility=hidden -I<src>
+    -I<FMI headers> -o <lib> fmi2_all.c -lm`` (:func:`binary_sources`; FMI 3: fmi3_all.c)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", "-o", str(out_lib),
+    cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", f"-I{fmi_header_dir(fmi_version)}", "-o", str(out_lib),
            *(str(src / n) for n in binary_sources(fmi_version)), "-lm"]
     run_compiler(cmd, "standalone binary", timeout=300)
     return cmd
@@ -137,16 +153,33 @@ def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_ve
 
 def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
     """``sources/`` build files: BUILD.txt (prose), buildflags.txt (key=value, what a tool
-    reads) and CMakeLists.txt (``cmake -S sources -B b && cmake --build b``), all with the
-    flags of :data:`STANDALONE_CFLAGS`; FMI 3 also buildDescription.xml (:func:`build_description_xml`)."""
+    reads) and CMakeLists.txt (``cmake -S sources -B b -DFMI_HEADERS_DIR=<dir> && cmake --build b``),
+    all with the flags of :data:`STANDALONE_CFLAGS`; FMI 3 also buildDescription.xml
+    (:func:`build_description_xml`).  The FMI headers are the importer's (the standard's rule)."""
     flags = " ".join(STANDALONE_CFLAGS)
+    v = 3 if fmi_version == 3 else 2
     srcs = " ".join(binary_sources(fmi_version))
+    headers = ", ".join(FMI3_HEADERS if v == 3 else FMI2_HEADERS)
+    section = "FMI 3.0 section 2.5.1.3" if v == 3 else "FMI 2.0.5 section 2.3"
+    prefix_section = "FMI 3.0 section 2.2.2" if v == 3 else "FMI 2.0.5 section 2.1.1"
     build_txt = (
-        f"Build the binary of this FMU from these sources (C99, FMI {fmi_version}.0 headers included):\n"
-        f"  cc {flags} -I. -o {identifier}.so {srcs} -lm\n"
-        f"and place it as binaries/<platform>/{identifier}.so (Windows: .dll, macOS: .dylib; the fmi{fmi_version}*\n"
-        "functions are exported unprefixed), or: cmake -S sources -B build && cmake --build build\n"
+        f"Build the binary of this FMU from these sources (C99; FMI {v}.0):\n"
+        f"  cc {flags} -I. -I<FMI headers> -o {identifier}.so {srcs} -lm\n"
+        f"and place it as binaries/<platform>/{identifier}.so (Windows: .dll, macOS: .dylib; the fmi{v}*\n"
+        "functions are exported unprefixed), or:\n"
+        "  cmake -S sources -B build -DFMI_HEADERS_DIR=<FMI headers> && cmake --build build\n"
         "(CMakeLists.txt, same flags). buildflags.txt lists the flags as key=value lines.\n"
+        f"<FMI headers> is the folder of the standard's {headers}: the importer's\n"
+        f"own, which the standard has it supply ({section}); they are not part of sources/.\n"
+        f"{srcs} is the one file to compile: it includes the other C files, and every function in it\n"
+        f"but the fmi{v}* ones is static.\n"
+        "\n"
+        "Source code import / static linking (several FMUs in one program):\n"
+        f"  cc -c -O2 -ffp-contract=off -std=c99 -fno-fast-math -DFMI{v}_FUNCTION_PREFIX={identifier}_ \\\n"
+        f"     -I. -I<FMI headers> -o {identifier}.o {srcs}\n"
+        f"gives {identifier}_fmi{v}DoStep, ... ({prefix_section}: the prefix is the modelIdentifier and '_';\n"
+        "use the standard's unmodified headers, which honour the prefix). No other symbol is external.\n"
+        "\n"
         "The numbers are the same on every platform by construction: -ffp-contract=off (no fused\n"
         "multiply-add), no fast-math, IEEE double arithmetic in source order; the kernel calls only\n"
         "sqrt, floor, ceil and fabs, which IEEE 754 defines exactly.\n")
@@ -155,18 +188,28 @@ def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
         "format=gearfmu-buildflags", "version=1", f"model_identifier={identifier}",
         "language=C99", f"sources={srcs}", "include_dirs=.", f"cflags={flags}", "ldflags=-lm",
         "optimization=-O2", "fp_contract=off", "fast_math=off", "visibility=hidden",
+        f"# the standard's {headers}: supplied by the importer ({section})",
+        f"fmi_headers={' '.join(FMI3_HEADERS if v == 3 else FMI2_HEADERS)}",
+        f"# static linking: -DFMI{v}_FUNCTION_PREFIX=<model_identifier>_ ({prefix_section})",
+        f"function_prefix_macro=FMI{v}_FUNCTION_PREFIX",
         "# MSVC (CMakeLists.txt): /fp:strict never contracts into FMA (/fp:precise does in MSVC before 2022)",
         "msvc_cflags=/O2 /fp:strict",
     ]
     cmake = (
         "# Build the FMU binary from these sources with the flags of buildflags.txt:\n"
-        "#   cmake -S sources -B build && cmake --build build --config Release\n"
+        "#   cmake -S sources -B build -DFMI_HEADERS_DIR=<folder of the FMI headers>\n"
+        "#   cmake --build build --config Release\n"
         "cmake_minimum_required(VERSION 3.10)\n"
         f"project({identifier} C)\n"
+        f"set(FMI_HEADERS_DIR \"\" CACHE PATH \"folder of the standard's {headers} (the importer's, {section})\")\n"
+        f"if(NOT EXISTS \"${{FMI_HEADERS_DIR}}/fmi{v}Functions.h\")\n"
+        f"  message(FATAL_ERROR \"FMI_HEADERS_DIR: give the folder of the FMI {v}.0 headers ({headers}); \"\n"
+        f"                      \"the standard has the importer supply them ({section})\")\n"
+        "endif()\n"
         f"add_library({identifier} SHARED {srcs})\n"
         f"set_target_properties({identifier} PROPERTIES PREFIX \"\" C_STANDARD 99 C_STANDARD_REQUIRED ON\n"
         "                      C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden POSITION_INDEPENDENT_CODE ON)\n"
-        f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}})\n"
+        f"target_include_directories({identifier} PRIVATE ${{CMAKE_CURRENT_SOURCE_DIR}} ${{FMI_HEADERS_DIR}})\n"
         "if(MSVC)\n"
         f"  target_compile_options({identifier} PRIVATE /O2 /fp:strict)\n"
         "else()\n"
@@ -192,7 +235,10 @@ def build_description_xml(identifier: str) -> str:
     bc = ET.SubElement(root, "BuildConfiguration", {
         "modelIdentifier": identifier,
         "description": "every platform: the same flags; no fused multiply-add (-ffp-contract=off) and no "
-                       "fast-math, so every platform computes the same numbers (MSVC: /O2 /fp:strict)"})
+                       "fast-math, so every platform computes the same numbers (MSVC: /O2 /fp:strict). "
+                       "fmi3_all.c includes the other C files; every function in it but the fmi3* ones is "
+                       f"static. Static linking: define FMI3_FUNCTION_PREFIX={identifier}_ (FMI 3.0 section "
+                       "2.2.2); a shared library leaves it undefined. The FMI headers are the importer's."})
     sfs = ET.SubElement(bc, "SourceFileSet", {"language": "C99", "compilerOptions": " ".join(
         f for f in STANDALONE_CFLAGS if f not in ("-shared",))})
     for name in binary_sources(3):
@@ -233,9 +279,18 @@ def platforms_text(report: Dict[str, dict], fmi_version: int = 2) -> str:
             lines.append(f"{key:16s} NOT BUILT: {r['missing']}; compile sources/ (sources/BUILD.txt)")
         else:
             fat = f" (universal Mach-O with {' + '.join(r['fat_slices'])})" if r.get("fat_slices") else ""
-            lines.append(f"{key:16s} binaries/{r['folder']}/{r['file']}{fat}; {r['compiler']}")
+            also = f" and binaries/{r['also_in']}/{r['file']}" if r.get("also_in") else ""
+            lines.append(f"{key:16s} binaries/{r['folder']}/{r['file']}{fat}{also}; {r['compiler']}")
     lines += ["", f"Compile flags (every platform): {' '.join(STANDALONE_CFLAGS)} (sources/buildflags.txt)."]
     return "\n".join(lines) + "\n"
+
+
+def scalar_names(variables):
+    """The variables with every per-slot element ``name[i]`` renamed ``name_i`` (the FMI 3 FMU with
+    scalar outputs: no name ends in ``[1]``, so neither the model description
+    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gear_model.c mark_arrays) makes
+    arrays of them).  Value references, order and everything else stay."""
+    return [replace(v, name=re.sub(r"\[(\d+)\]$", r"_\1", v.name)) for v in variables]
 
 
 def _hexf(v) -> str:
@@ -314,7 +369,18 @@ def standalone_model_description(xml: bytes, source_files, platforms_note: Optio
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
 
-# ------------------------------------------------------------ validation record
+def write_documentation(root: Path, *, fmi_version: int, **kw) -> None:
+    """``documentation/index.html`` (FMI 2 also ``_main.html``, the same page) into the FMU folder
+    ``root`` (:func:`gearfmu.fmu.fmudoc.documentation_html`; the validation record read from
+    ``root/resources/validation/record.json`` when the FMU has one)."""
+    rec = root / VALIDATION_DIR / "record.json"
+    page = documentation_html(fmi_version=fmi_version, validation_record=json.loads(rec.read_text())
+                              if rec.is_file() else None, **kw)
+    for rel in DOC_FILES(fmi_version):
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_bytes(page)
+
+
 # --------------------------------------------------------------------- build
 def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair",
                          damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
@@ -325,7 +391,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                          spec_path=None, cc: Optional[str] = None, validation: bool = True,
                          integrator: Union[int, str] = DEFAULT_INTEGRATOR,
                          platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
-                         fmi_version: int = 2) -> Path:
+                         fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
@@ -339,11 +405,15 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
     tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
     layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
-    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0").  Written under a
-    temporary name beside ``out_path`` and renamed at the end.
+    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``
+    "scalar" makes them scalars ``pair_force_1 .. pair_force_P`` (:func:`scalar_names`), for hosts
+    without array support.  Written under a temporary name beside ``out_path`` and renamed at the end.
     """
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
+    if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
+        raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
+                            f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
     a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
                         damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
                         pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
@@ -357,6 +427,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
 
     spec = load_spec(spec_path)
     variables, temp0 = interface_variables(spec, tables, a.starts(), integrator_optional=True)
+    if fmi3_outputs == "scalar":
+        variables = scalar_names(variables)
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
     identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
@@ -378,8 +450,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         try:
             binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
                                                  cflags=STANDALONE_CFLAGS, sources=binary_sources(fmi_version),
-                                                 host_compile=host_compile,
-                                                 host_cc_first=cc_given, fmi_version=fmi_version)
+                                                 host_compile=host_compile, host_cc_first=cc_given,
+                                                 fmi_version=fmi_version, header_dir=fmi_header_dir(fmi_version))
         except crossbuild.CrossBuildError as exc:
             raise FmuBuildError(str(exc)) from None
         for name, text in build_recipe_files(identifier, fmi_version).items():
@@ -432,6 +504,12 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                                                binary_sources(2), platforms_note=note)
             check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
+        write_documentation(root, fmi_version=fmi_version, model_name=model_name, model_identifier=identifier,
+                            runtime="standalone", generation_tool=md_args["generation_tool"], variables=variables,
+                            description=ET.fromstring(xml).get("description", ""), tables=tables,
+                            parameters=params, envelope=env_rec, scene_text=scene_text,
+                            platforms_text=platforms_text(binaries, fmi_version),
+                            experiment={"start": 0.0, "stop": tstop, "step": dt})
         with fmu_zip(a.out_path) as zout:
             zip_folder(zout, root)
     return a.out_path

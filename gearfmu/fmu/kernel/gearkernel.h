@@ -18,6 +18,15 @@
 extern "C" {
 #endif
 
+/* The storage class of every function of the kernel and its FMU layer (gkfmu.h, gk_internal.h).
+ * Empty by default: the kernel library of the pythonfmu runtime and the tests export them.  The
+ * standalone FMU compiles everything as one translation unit (gearfmu/fmu/standalone/fmi2_all.c,
+ * fmi3_all.c), which defines GK_API as static: then no kernel symbol leaves that unit, and the
+ * sources of several FMUs link into one program (docs/standalone.md "Source code"). */
+#ifndef GK_API
+#define GK_API
+#endif
+
 #define GK_ABI_VERSION 5  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model;
                              5: contact-zone cuts (gk_zone_cuts, gk_set_zone_cuts, gk_model.zone_cuts) */
 
@@ -117,15 +126,15 @@ typedef struct gk_state {
 } gk_state;
 
 /* size of the structs, so that a caller without the header (ctypes) can own them */
-int gk_abi_version(void);
-int gk_sizeof_model(void);
-int gk_sizeof_state(void);
-int gk_n_outputs(int P);
+GK_API int gk_abi_version(void);
+GK_API int gk_sizeof_model(void);
+GK_API int gk_sizeof_state(void);
+GK_API int gk_n_outputs(int P);
 
 /* Fill *m.  The arrays are borrowed (not copied): they must outlive m.
  * Checks dimensions, finiteness and signs of the scalars; damping_ratio is
  * set to 0 (call gk_set_damping). */
-int gk_init(gk_model *m, int P, int n_phi, int n_torque,
+GK_API int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *torque_Nm, const double *k_N_per_m,
             const double *e_m, const double *backlash_half_m,
             double phi_period_rad, double Rb1_m, double Rb2_m,
@@ -141,31 +150,31 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
  * linear interpolation, the default of gk_init); rk4_kink and rk4_node then stop at the cuts. */
 #define GK_ZONE_MIN_CELLS 3.0
 #define GK_ZONE_SNAP 1e-9   /* an edge within this many cells of a node lies on the node */
-int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad,
+GK_API int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad,
                  double in_rad, double out_rad, double *cuts);
-int gk_set_zone_cuts(gk_model *m, const double *cuts);
+GK_API int gk_set_zone_cuts(gk_model *m, const double *cuts);
 
 /* Declare a temperature axis (call after gk_init): k and e are then laid out
  * [n_torque][n_temp][P][n_phi].  temperature_C (degC, borrowed) finite and
  * strictly ascending, n_temp >= 1.  Selects the first slice.  GK_ERR_MODEL otherwise. */
-int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C);
+GK_API int gk_set_temperature_axis(gk_model *m, int n_temp, const double *temperature_C);
 
 /* Select the bulk temperature (degC) for the following steps and outputs:
  * docs/model.md "Temperature axis" (node-wise linear blend of the bracketing
  * slices; exactly one slice at a node).  Non-finite or outside
  * [axis[0], axis[n_temp-1]] (no clamping): GK_ERR_INPUT, selection unchanged. */
-int gk_set_temperature(gk_model *m, double temperature_C);
+GK_API int gk_set_temperature(gk_model *m, double temperature_C);
 
 /* zeta >= 0 finite; model GK_DAMPING_ELASTOBACKLASH or GK_DAMPING_CONTACT_ZONE */
-int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
+GK_API int gk_set_damping(gk_model *m, double damping_ratio, int damping_model);
 
 /* GK_INTEGRATOR_RK4, GK_INTEGRATOR_RK4_KINK, GK_INTEGRATOR_RK4_NODE or GK_INTEGRATOR_RK4_SEG
  * (all but the first need P <= GK_KINK_MAX_SLOTS); GK_ERR_PARAM otherwise. */
-int gk_set_integrator(gk_model *m, int integrator);
+GK_API int gk_set_integrator(gk_model *m, int integrator);
 
 /* Initial state of docs/model.md: theta1 = theta1_0, omega1 = omega1_0, v = 0,
  * x by exactly 200 bisections of the quasi-static balance under F_m = T1/Rb1. */
-int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
+GK_API int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
                   double omega1_0_rad_s, double T1_Nm);
 
 /* One communication step of length H_s with constant inputs T1, T2:
@@ -173,14 +182,14 @@ int gk_initialize(const gk_model *m, gk_state *s, double theta1_0_rad,
  * (classical RK4, or rk4_kink: docs/model.md).  On success
  * writes the outputs (may be NULL) and returns GK_OK; on any error the state
  * is left unchanged and the outputs are not written. */
-int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
+GK_API int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
                double H_s, double h_max_s, double *out);
 
 /* Outputs at state s with pinion torque T1 (selects the torque row). */
-int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out);
+GK_API int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double *out);
 
 /* Number of substeps gk_do_step takes for (H, h_max); 0 if invalid. */
-double gk_substeps(double H_s, double h_max_s);
+GK_API double gk_substeps(double H_s, double h_max_s);
 
 /* ------------------------------------------------------------------------
  * Verified envelope (docs/fmu.md "Verified envelope"): the input ranges over
@@ -209,21 +218,21 @@ typedef struct gk_envelope {
     int kind;                           /* GK_ENV_VERIFIED, _ESTIMATED or _NOT_VERIFIED */
 } gk_envelope;
 
-int gk_sizeof_envelope(void);
+GK_API int gk_sizeof_envelope(void);
 
 /* Empty envelope of the given kind (nothing checked, nothing warned); GK_ERR_PARAM for a bad kind. */
-int gk_envelope_init(gk_envelope *e, int kind);
+GK_API int gk_envelope_init(gk_envelope *e, int kind);
 
 /* Range of quantity q: finite lo <= hi, else GK_ERR_PARAM (and q stays unchecked). */
-int gk_envelope_set(gk_envelope *e, int q, double lo_SI, double hi_SI);
+GK_API int gk_envelope_set(gk_envelope *e, int q, double lo_SI, double hi_SI);
 
 /* Forget the warnings given (fmi2Reset). */
-void gk_envelope_rearm(gk_envelope *e);
+GK_API void gk_envelope_rearm(gk_envelope *e);
 
 /* Compare `value` (SI) of quantity q, the FMU variable `name`, at time t_s with
  * its range.  Returns 1 the first time it is outside (a NaN is not compared:
  * the runtimes reject it elsewhere) and writes the warning into msg[cap]; else 0. */
-int gk_envelope_check(gk_envelope *e, int q, const char *name, double value, double t_s, char *msg, int cap);
+GK_API int gk_envelope_check(gk_envelope *e, int q, const char *name, double value, double t_s, char *msg, int cap);
 
 #ifdef __cplusplus
 }

@@ -83,18 +83,18 @@ GK_INLINE void gki_cell_nodes(gk_mode *md, int N)
 
 /* ------------------------------------------------------------- gk_stops.c */
 /* the node kink flags of m (gearkernel.h "rk4_node"), after any change of its tables or cuts */
-void gki_node_flags(gk_model *m);
+GK_API void gki_node_flags(gk_model *m);
 /* the held segment at a step start (theta1 = th, cell md->nd) and across its end (up) or start */
-void gki_seg_start(const gk_model *m, gk_mode *md, int node, double om, double th);
-void gki_seg_cross(const gk_model *m, gk_mode *md, int up, int node);
+GK_API void gki_seg_start(const gk_model *m, gk_mode *md, int node, double om, double th);
+GK_API void gki_seg_cross(const gk_model *m, gk_mode *md, int up, int node);
 /* the side of every pair's contact-zone cut held in cell md->nd of the segment */
-void gki_zone_sel(const gk_model *m, gk_mode *md);
+GK_API void gki_zone_sel(const gk_model *m, gk_mode *md);
 
 /* ------------------------------------------------------------- gk_zones.c */
 /* the contact-zone cuts of cell i0 over all slots: the smallest above f (at or above with
  * incl) and below 1, 2.0 for none; the largest below f (at or below with incl) and above 0,
  * -1.0 for none */
-double gki_cut_above(const gk_model *m, int i0, double f, int incl);
-double gki_cut_below(const gk_model *m, int i0, double f, int incl);
+GK_API double gki_cut_above(const gk_model *m, int i0, double f, int incl);
+GK_API double gki_cut_below(const gk_model *m, int i0, double f, int incl);
 
 #endif /* GK_INTERNAL_H */

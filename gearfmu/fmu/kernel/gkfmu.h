@@ -61,47 +61,47 @@ typedef struct gkf_fmu {
     char message[GKF_MAX_MESSAGES][GKF_MESSAGE_LEN];
 } gkf_fmu;
 
-int gkf_abi_version(void);
-int gkf_sizeof(void);
+GK_API int gkf_abi_version(void);
+GK_API int gkf_sizeof(void);
 
 /* The words of a kernel status code (GK_ERR_*). */
-const char *gkf_kernel_error(int status);
+GK_API const char *gkf_kernel_error(int status);
 
 /* Empty layer over model m (and envelope env, may be NULL): nothing declared, nothing applied. */
-int gkf_init(gkf_fmu *f, gk_model *m, gk_envelope *env);
+GK_API int gkf_init(gkf_fmu *f, gk_model *m, gk_envelope *env);
 
 /* Declare the variable of `slot`: its name (< GKF_NAME_LEN characters) and min/max. */
-int gkf_declare(gkf_fmu *f, int slot, const char *name, int has_min, double min, int has_max, double max);
+GK_API int gkf_declare(gkf_fmu *f, int slot, const char *name, int has_min, double min, int has_max, double max);
 
 /* The current values, GKF_N of them in slot order (undeclared slots are ignored). */
-int gkf_set_values(gkf_fmu *f, const double *values);
+GK_API int gkf_set_values(gkf_fmu *f, const double *values);
 
 /* Nothing applied, no torque-axis warning given (instantiation, reset). */
-void gkf_reset(gkf_fmu *f);
+GK_API void gkf_reset(gkf_fmu *f);
 
 /* The initial state from the values (docs/model.md): parameter and input checks, integrator,
  * temperature, damping, gk_initialize and gk_outputs into out, the torque-axis and envelope
  * warnings.  1 on success; 0 with the reasons queued (GKF_ERROR). */
-int gkf_initialize(gkf_fmu *f, gk_state *s, double t_s, double *out);
+GK_API int gkf_initialize(gkf_fmu *f, gk_state *s, double t_s, double *out);
 
 /* One communication step from t_s of length H_s with the values: input and step checks,
  * temperature, damping, gk_do_step (outputs into out), the warnings.  1 on success; 0 with
  * the reasons queued (GKF_DISCARD, GKF_ERROR for a damping ratio refused) and s unchanged. */
-int gkf_do_step(gkf_fmu *f, gk_state *s, double t_s, double H_s, double *out);
+GK_API int gkf_do_step(gkf_fmu *f, gk_state *s, double t_s, double H_s, double *out);
 
 /* After an FMU state was restored (values handed over first): the integrator (when
  * `integrator` and declared), the damping ratio zeta applied when zeta_valid, and the
  * torque-axis warning flag.  GK_OK or the kernel's status (nothing queued). */
-int gkf_restore(gkf_fmu *f, int integrator, int zeta_valid, double zeta, int warned_range);
+GK_API int gkf_restore(gkf_fmu *f, int integrator, int zeta_valid, double zeta, int warned_range);
 
-int gkf_zeta_valid(const gkf_fmu *f);
-double gkf_zeta_applied(const gkf_fmu *f);
-int gkf_warned_range(const gkf_fmu *f);
+GK_API int gkf_zeta_valid(const gkf_fmu *f);
+GK_API double gkf_zeta_applied(const gkf_fmu *f);
+GK_API int gkf_warned_range(const gkf_fmu *f);
 
 /* The messages the last gkf_initialize / gkf_do_step queued, in order. */
-int gkf_n_messages(const gkf_fmu *f);
-int gkf_message_level(const gkf_fmu *f, int i);
-const char *gkf_message(const gkf_fmu *f, int i);
+GK_API int gkf_n_messages(const gkf_fmu *f);
+GK_API int gkf_message_level(const gkf_fmu *f, int i);
+GK_API const char *gkf_message(const gkf_fmu *f, int i);
 
 #ifdef __cplusplus
 }

@@ -12,6 +12,7 @@
  * the file:// URI the host gives (fmuResourceLocation).
  */
 #include <math.h>
+#include <stdio.h>
 
 #include "fmi2Functions.h"
 #include "fmi_common.h"
@@ -109,8 +110,11 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
                "stepInProgress, which the synchronous fmi2DoStep never enters");
     if (c == NULL) return NULL;
     if (fmuType != fmi2CoSimulation) return gf_instantiate_error(c, fn, "only Co-Simulation is supported");
-    if (!gf_uri_to_dir(fmuResourceLocation, dir, sizeof dir))
-        return gf_instantiate_error(c, fn, "resource location is not a file:// URI");
+    if (!gf_uri_to_dir(fmuResourceLocation, dir, sizeof dir)) {
+        snprintf(err, sizeof err, "fmuResourceLocation '%.500s' is not a file URI of this machine (file:///path, "
+                 "file://localhost/path or file:/path, RFC 8089)", fmuResourceLocation ? fmuResourceLocation : "(null)");
+        return gf_instantiate_error(c, fn, err);
+    }
     e = gm_instantiate(c, dir, fmuGUID, err, sizeof err);
     if (e != NULL) return gf_instantiate_error(c, fn, e);
     return (fmi2Component)c;
@@ -286,6 +290,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
 {
     GF_GUARD(comp, F_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (!gf_check_step_time(c, "fmi2DoStep", currentCommunicationPoint, communicationStepSize)) return fmi2Error;
     return (fmi2Status)gm_do_step(c, currentCommunicationPoint, communicationStepSize);
 }
 

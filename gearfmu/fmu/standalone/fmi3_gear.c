@@ -510,6 +510,10 @@ FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     fmi3Status st;
     GF_GUARD(instance, F_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (!gf_check_step_time(c, "fmi3DoStep", currentCommunicationPoint, communicationStepSize)) {
+        if (lastSuccessfulTime != NULL) *lastSuccessfulTime = c->time;
+        return fmi3Error;
+    }
     st = (fmi3Status)gm_do_step(c, currentCommunicationPoint, communicationStepSize);
     if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation != NULL) *terminateSimulation = fmi3False;

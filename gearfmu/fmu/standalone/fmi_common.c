@@ -5,6 +5,8 @@
  * and the FMU state box (fmi_common.h).  Nothing here knows gears: the model is
  * called through the contract of gf_model.h only.
  */
+#include <float.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,7 +38,7 @@ void gf_free(gf_inst *c)
 
 gf_inst *gf_instantiate_error(gf_inst *c, const char *fn, const char *msg)
 {
-    gf_log(c, GF_ERROR_STATUS, "logStatusFatal", "%s: %s; refusing to instantiate", fn, msg);
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s; refusing to instantiate", fn, msg);
     gf_free(c);
     return NULL;
 }
@@ -49,21 +51,31 @@ static int hexval(int ch)
     return -1;
 }
 
-/* file:// URI of the resources folder -> local folder path ending in '/' (percent-decoded).
- * Accepts file:///abs, file://localhost/abs and file:/abs (RFC 8089). */
+/* file:// URI of the resources folder (FMI 2.0 fmuResourceLocation, RFC 8089 / RFC 3986) -> local
+ * folder path ending in '/', UTF-8 (the percent-escapes decoded: a URI carries a non-ASCII or
+ * space character as %XX bytes of its UTF-8 encoding).  Accepts file:///path, file://localhost/path
+ * and file:/path; on Windows also a drive letter (file:///C:/dir, file:///C%3A/dir, file:///C|/dir)
+ * and a UNC host (file://server/share/dir -> //server/share/dir).  The path keeps its '/'; the model
+ * opens it through the platform's wide-character API (gear_model.c open_read).  0 if the URI is
+ * not a file URI this platform can open, or the path does not fit. */
 int gf_uri_to_dir(const char *uri, char *out, size_t cap)
 {
     const char *p;
-    size_t n = 0;
-    if (uri == NULL) return 0;
+    size_t n = 0, skip = 0;
+    int unc = 0;
+    if (uri == NULL || cap < 3) return 0;
     if (strncmp(uri, "file://localhost/", 17) == 0) p = uri + 16;
     else if (strncmp(uri, "file:///", 8) == 0) p = uri + 7;
-    else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
-    else return 0;
+    else if (strncmp(uri, "file://", 7) == 0) { /* file://host/path */
 #ifdef _WIN32
-    if (p[0] == '/' && p[1] != '\0' && p[2] == ':') p++; /* /C:/... */
+        p = uri + 5; /* //host/path: a UNC path */
+        unc = 1;
+#else
+        return 0; /* no remote hosts here */
 #endif
-    while (*p != '\0') {
+    } else if (strncmp(uri, "file:/", 6) == 0) p = uri + 5;
+    else return 0;
+    while (*p != '\0' && *p != '?' && *p != '#') {
         int ch = (unsigned char)*p;
         if (ch == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
             ch = hexval(p[1]) * 16 + hexval(p[2]);
@@ -71,15 +83,28 @@ int gf_uri_to_dir(const char *uri, char *out, size_t cap)
         } else {
             p++;
         }
-        if (n + 1 >= cap) return 0;
+        if (ch == 0 || n + 2 >= cap) return 0;
         out[n++] = (char)ch;
     }
-    if (n > 0 && out[n - 1] != '/') {
-        if (n + 1 >= cap) return 0;
-        out[n++] = '/';
-    }
-    if (n >= cap) return 0;
     out[n] = '\0';
+#ifdef _WIN32
+    /* /C:/dir (or /C|/dir) -> C:/dir */
+    if (!unc && n >= 3 && out[0] == '/' && ((out[1] >= 'A' && out[1] <= 'Z') || (out[1] >= 'a' && out[1] <= 'z')) &&
+        (out[2] == ':' || out[2] == '|')) {
+        out[2] = ':';
+        skip = 1;
+    }
+#endif
+    (void)unc;
+    if (skip) {
+        memmove(out, out + skip, n - skip + 1);
+        n -= skip;
+    }
+    if (n == 0) return 0;
+    if (out[n - 1] != '/') {
+        out[n++] = '/';
+        out[n] = '\0';
+    }
     return 1;
 }
 
@@ -167,6 +192,13 @@ int gf_null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const v
     return 0;
 }
 
+/* the length of an array's name: element 1's name without its "[1]" (FMI 3 arrays, gear_model.c) */
+static int array_name_len(const char *name)
+{
+    size_t n = strlen(name);
+    return (int)(n > 3 && strcmp(name + n - 3, "[1]") == 0 ? n - 3 : n);
+}
+
 /* the number of values reference r brings (0: bad, logged) */
 static size_t check_vr(gf_inst *c, const char *fn, unsigned int r, int want_integer, int arrays, long time_vr)
 {
@@ -177,6 +209,15 @@ static size_t check_vr(gf_inst *c, const char *fn, unsigned int r, int want_inte
             return 0;
         }
         return 1;
+    }
+    if ((long)r < (long)c->n_vars && arrays && c->vars[r].array_len == 0) {
+        long first = (long)r;
+        while (first > 0 && c->vars[first].array_len == 0) first--;
+        gf_log(c, GF_WARNING, "logStatusWarning", "%s: value reference %u is element %ld of the array %.*s (value "
+               "reference %ld, %d values), not a variable of its own: ask for the array by the reference of its "
+               "first element, or use an FMU built with scalar outputs (gearfmu build --fmi3-outputs scalar)",
+               fn, r, (long)r - first + 1, array_name_len(c->vars[first].name), c->vars[first].name, first,
+               c->vars[first].array_len);
     }
     if ((long)r >= (long)c->n_vars || (arrays && c->vars[r].array_len == 0)) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: no variable with value reference %u", fn, r);
@@ -207,6 +248,17 @@ static int check_refs(gf_inst *c, const char *fn, const unsigned int vr[], size_
         total += n;
     }
     if (arrays && total != n_values) {
+        /* a host that reads every reference as one value (no array support) lands here: say which
+         * references are arrays, at warning level, which hosts show */
+        for (i = 0; i < nvr; ++i) {
+            long r = (long)vr[i];
+            if (r < (long)c->n_vars && c->vars[r].array_len > 1)
+                gf_log(c, GF_WARNING, "logStatusWarning", "%s: %.*s (value reference %ld) is an array of %d values; "
+                       "nValues must count every element (a host without array support: use an FMU built with "
+                       "scalar outputs, gearfmu build --fmi3-outputs scalar)", fn, array_name_len(c->vars[r].name),
+                       c->vars[r].name, r,
+                       c->vars[r].array_len);
+        }
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the value references have %lu values, nValues is %lu", fn,
                (unsigned long)total, (unsigned long)n_values);
         return 0;
@@ -255,13 +307,51 @@ int gf_set_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nv
     int want_integer = integer != NULL;
     if (gf_null_args(c, fn, nvr, vr, want_integer ? (const void *)integer : (const void *)real)) return GF_ERROR_STATUS;
     if (!check_refs(c, fn, vr, nvr, want_integer, arrays, time_vr, n_values, 1)) return GF_ERROR_STATUS;
-    /* values are stored as given (NaN included); doStep / the initial state check them */
+    /* A parameter outside its min/max (NaN included) is discarded when set, and nothing of the call
+     * is stored (FMI 2.0.5 section 2.2.7: "On a fixed or tunable parameter fmi2Status = fmi2Discard is
+     * returned"; FMI 3.0 the same).  Inputs are stored as given (NaN included); doStep and the
+     * initial state check them. */
+    for (i = 0; i < nvr; ++i) {
+        size_t k, n = arrays ? (size_t)c->vars[vr[i]].array_len : 1;
+        for (k = 0; k < n; ++k, ++j) {
+            const gf_var *v = &c->vars[vr[i] + k];
+            double x = want_integer ? (double)integer[j] : real[j];
+            if (v->causality == GF_PARAMETER && (x != x || (v->has_min && x < v->min) || (v->has_max && x > v->max))) {
+                gf_log(c, GF_DISCARD, "logStatusDiscard", "%s: %s = %.17g is outside its range [%.17g, %.17g] (min/max of "
+                       "the model description); not set, the call sets nothing", fn, v->name, x,
+                       v->has_min ? v->min : -HUGE_VAL, v->has_max ? v->max : HUGE_VAL);
+                return GF_DISCARD;
+            }
+        }
+    }
+    j = 0;
     for (i = 0; i < nvr; ++i) {
         size_t k, n = arrays ? (size_t)c->vars[vr[i]].array_len : 1;
         for (k = 0; k < n; ++k, ++j) c->values[vr[i] + k] = want_integer ? (double)integer[j] : real[j];
     }
     if (nvr > 0) c->dirty = 1;
     return GF_OK;
+}
+
+/* doStep's communication point must be the time the FMU has reached (the start time, the end of the
+ * last step, or the time of a restored FMU state): FMI 2.0.5 section 4.2.2 and FMI 3.0 section 4.2.1
+ * let a step start only there (tc_i+1 = tc_i + hc_i).  A master's arithmetic may differ from the
+ * FMU's in the last bits (t = k*H against t + H), so 64 units in the last place of the time, and a
+ * billionth of the step, are the same time.  Anything else (the issue's 0.5 s, then 0.0 s) is an
+ * Error: the instance goes to state error, from which fmiXSetFMUState or fmiXReset lead back. */
+int gf_check_step_time(gf_inst *c, const char *fn, double t, double H)
+{
+    double tol = 64.0 * DBL_EPSILON * (fabs(t) > fabs(c->time) ? fabs(t) : fabs(c->time));
+    if (H > 0.0 && H < HUGE_VAL) tol += 1e-9 * H;
+    if (t == t && fabs(t - c->time) <= tol) {
+        c->time = t;
+        return 1;
+    }
+    c->mode = GF_ERROR;
+    gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: currentCommunicationPoint = %.17g s is not the time this FMU has "
+           "reached, %.17g s (the start time, the end of the last step, or the time of a restored FMU state); "
+           "the instance is in state error (set an FMU state, reset or free it)", fn, t, c->time);
+    return 0;
 }
 
 int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr)

@@ -24,39 +24,42 @@ typedef struct {
 } gf_call;
 
 /* 1 if call may be called now, else logs why and returns 0 (the caller returns Error) */
-int gf_allowed(gf_inst *c, const gf_call *call);
+GF_API int gf_allowed(gf_inst *c, const gf_call *call);
 /* gf_allowed with its allowed case inline: every FMI call passes here */
 static inline int gf_may_call(gf_inst *c, const gf_call *call)
 {
     return (c != NULL && (c->mode & call->allowed) != 0) || gf_allowed(c, call);
 }
 /* a new instance with its logger (NULL when out of memory) */
-gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_log_fn log, void *host_env,
+GF_API gf_inst *gf_new(int fmi_version, const char *instance_name, int logging_on, gf_log_fn log, void *host_env,
                 void (*host_logger)(void), const char *never_why);
 /* free the instance and what its model allocated */
-void gf_free(gf_inst *c);
+GF_API void gf_free(gf_inst *c);
 /* instantiation failed: log msg (fn: the instantiate function), free, return NULL */
-gf_inst *gf_instantiate_error(gf_inst *c, const char *fn, const char *msg);
+GF_API gf_inst *gf_instantiate_error(gf_inst *c, const char *fn, const char *msg);
 /* file:// URI (FMI 2 resource location) -> local folder path ending in '/'; 0 if not a file URI */
-int gf_uri_to_dir(const char *uri, char *out, size_t cap);
+GF_API int gf_uri_to_dir(const char *uri, char *out, size_t cap);
 /* initialization mode: from here on the outputs follow the values set */
-void gf_enter_init(gf_inst *c);
-int gf_null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const void *value);
+GF_API void gf_enter_init(gf_inst *c);
+GF_API int gf_null_args(gf_inst *c, const char *fn, size_t nvr, const void *vr, const void *value);
 /* get/set over the variable table: nvr value references of type Integer (integer[] given) or Real (real[]); with
  * arrays (FMI 3) a reference names a whole array (its first element) and brings array_len values;
  * n_values: the length of value[] (checked when arrays is set).  time_vr >= 0: that reference is the
  * independent variable time (get only).  Returns GF_OK or GF_ERROR_STATUS (logged). */
-int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
+GF_API int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
                   double real[], int integer[], size_t n_values);
-int gf_set_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
+GF_API int gf_set_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr, int arrays, long time_vr,
                   const double real[], const int integer[], size_t n_values);
-int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr);
+GF_API int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr);
+/* 1 if t is the time the FMU has reached (to round-off; then it becomes the FMU's time), else logs
+ * why, puts the instance into state error and returns 0 (the caller returns Error) */
+GF_API int gf_check_step_time(gf_inst *c, const char *fn, double t, double H);
 /* the FMU state box (one flat block of gm_snap_size bytes behind a size header) */
-int gf_get_state(gf_inst *c, const char *fn, void **state);
-int gf_set_state(gf_inst *c, const char *fn, void *state);
-void gf_free_state(void **state);
-int gf_state_size(gf_inst *c, const char *fn, void *state, size_t *size);
-int gf_serialize_state(gf_inst *c, const char *fn, void *state, unsigned char *buf, size_t size);
-int gf_deserialize_state(gf_inst *c, const char *fn, const unsigned char *buf, size_t size, void **state);
+GF_API int gf_get_state(gf_inst *c, const char *fn, void **state);
+GF_API int gf_set_state(gf_inst *c, const char *fn, void *state);
+GF_API void gf_free_state(void **state);
+GF_API int gf_state_size(gf_inst *c, const char *fn, void *state, size_t *size);
+GF_API int gf_serialize_state(gf_inst *c, const char *fn, void *state, unsigned char *buf, size_t size);
+GF_API int gf_deserialize_state(gf_inst *c, const char *fn, const unsigned char *buf, size_t size, void **state);
 
 #endif /* FMI_COMMON_H */

@@ -162,9 +162,87 @@ static int join_path(const char *dir, const char *fname, char *out, size_t cap)
     return 1;
 }
 
+/* Open a resource file for reading by its UTF-8 path (FMI strings are UTF-8: the decoded
+ * resource URI of FMI 2, the resource path of FMI 3).  POSIX systems take the bytes as they are.
+ * Windows reads a char path in the ANSI code page, so there the path is decoded from UTF-8 into
+ * UTF-16 and opened with _wfopen.  A path of 250 characters or more (MAX_PATH is 260 with the
+ * terminating zero) is given the long-path prefix "\\?\" (X:\dir -> \\?\X:\dir, and
+ * \\server\share -> \\?\UNC\server\share), which lifts that limit; the prefix needs a path
+ * without "." or ".." parts, so such a path is opened without it. */
+#ifdef _WIN32
+#include <wchar.h>
+
+/* UTF-8 -> UTF-16 (RFC 3629, RFC 2781): the number of UTF-16 units written to out (cap units,
+ * out may be NULL to count), -1 if s is not valid UTF-8 */
+static long utf8_to_utf16(const char *s, wchar_t *out, size_t cap)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t n = 0;
+    while (*p != 0) {
+        unsigned long cp;
+        int extra, k;
+        if (*p < 0x80) { cp = *p; extra = 0; }
+        else if ((*p & 0xE0) == 0xC0) { cp = *p & 0x1Fu; extra = 1; }
+        else if ((*p & 0xF0) == 0xE0) { cp = *p & 0x0Fu; extra = 2; }
+        else if ((*p & 0xF8) == 0xF0) { cp = *p & 0x07u; extra = 3; }
+        else return -1;
+        for (k = 1; k <= extra; ++k) {
+            if ((p[k] & 0xC0) != 0x80) return -1;
+            cp = (cp << 6) | (p[k] & 0x3Fu);
+        }
+        if ((extra == 1 && cp < 0x80) || (extra == 2 && cp < 0x800) || (extra == 3 && cp < 0x10000) ||
+            cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
+            return -1; /* overlong, beyond Unicode or a surrogate */
+        p += extra + 1;
+        if (cp >= 0x10000) {
+            if (out != NULL && n + 2 <= cap) {
+                out[n] = (wchar_t)(0xD800 + ((cp - 0x10000) >> 10));
+                out[n + 1] = (wchar_t)(0xDC00 + ((cp - 0x10000) & 0x3FF));
+            }
+            n += 2;
+        } else {
+            if (out != NULL && n + 1 <= cap) out[n] = (wchar_t)cp;
+            n += 1;
+        }
+    }
+    return (long)n;
+}
+
+static FILE *open_read(const char *path)
+{
+    long n = utf8_to_utf16(path, NULL, 0);
+    wchar_t *w, *start;
+    FILE *f;
+    long i;
+    if (n < 0) return NULL;
+    w = (wchar_t *)malloc(sizeof(wchar_t) * ((size_t)n + 9));
+    if (w == NULL) return NULL;
+    start = w + 8; /* the path; a prefix goes in front of it */
+    utf8_to_utf16(path, start, (size_t)n);
+    start[n] = 0;
+    for (i = 0; i < n; ++i)
+        if (start[i] == L'/') start[i] = L'\\';
+    if (n >= 250 && wcsstr(start, L"\\.\\") == NULL && wcsstr(start, L"\\..\\") == NULL) {
+        if (((start[0] >= L'A' && start[0] <= L'Z') || (start[0] >= L'a' && start[0] <= L'z')) && start[1] == L':' &&
+            start[2] == L'\\') {
+            start -= 4; /* X:\... -> \\?\X:\... */
+            memcpy(start, L"\\\\?\\", 4 * sizeof(wchar_t));
+        } else if (start[0] == L'\\' && start[1] == L'\\' && start[2] != L'?' && start[2] != L'.') {
+            start -= 6; /* \\server\share -> \\?\UNC\server\share: "\\?\UNC" replaces the first '\' */
+            memcpy(start, L"\\\\?\\UNC", 7 * sizeof(wchar_t));
+        }
+    }
+    f = _wfopen(start, L"rb");
+    free(w);
+    return f;
+}
+#else
+static FILE *open_read(const char *path) { return fopen(path, "rb"); }
+#endif
+
 static unsigned char *read_file(const char *path, size_t *size)
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = open_read(path);
     unsigned char *buf;
     long len;
     if (f == NULL) return NULL;
@@ -385,7 +463,7 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
             if (q < GK_ENV_N) { /* lo|hi, finite, lo <= hi */
                 if (split_fields(val, f, 2) != 2 || !parse_double(f[0], &cfg->env_lo[q]) ||
                     !parse_double(f[1], &cfg->env_hi[q]) || !(cfg->env_lo[q] <= cfg->env_hi[q])) {
-                    snprintf(err, errcap, "%s: need low|high numbers with low <= high", key);
+                    snprintf(err, errcap, "%.64s: need low|high numbers with low <= high", key);
                     return err;
                 }
                 cfg->env_have[q] = 1;
@@ -538,7 +616,7 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     if (!join_path(res_dir, GF_CONFIG_FILE, path, sizeof path)) return "resource location too long";
     text = read_file(path, &size);
     if (text == NULL) {
-        snprintf(err, errcap, "cannot read resources/%s", GF_CONFIG_FILE);
+        snprintf(err, errcap, "cannot read resources/%s (path %.500s)", GF_CONFIG_FILE, path);
         return err;
     }
     {

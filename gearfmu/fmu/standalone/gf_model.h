@@ -25,6 +25,13 @@
 #include <stddef.h>
 #include <stdio.h>
 
+/* The storage class of the functions the plumbing (fmi_common.h) and the model (gm_*) share:
+ * empty when the files are compiled one by one; static in the one translation unit of the FMU
+ * (fmi2_all.c, fmi3_all.c), where only the fmi2* / fmi3* functions have external linkage. */
+#ifndef GF_API
+#define GF_API
+#endif
+
 #define GF_MAX_NAME 128
 
 enum { GF_OK = 0, GF_WARNING = 1, GF_DISCARD = 2, GF_ERROR_STATUS = 3, GF_FATAL = 4 };
@@ -98,22 +105,22 @@ static inline void gf_log(gf_inst *c, int status, const char *category, const ch
 /* Read the resources in folder res_dir (ending in '/' or '\\'), check token (the GUID /
  * instantiation token), fill the variable table and the outputs, set up the model and its
  * start values (gm_reset); NULL on success, else a message in err. */
-const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap);
+GF_API const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap);
 /* free what gm_instantiate allocated (the instance itself stays) */
-void gm_free(gf_inst *c);
+GF_API void gm_free(gf_inst *c);
 /* back to the start values, state instantiated, time 0 */
-void gm_reset(gf_inst *c);
+GF_API void gm_reset(gf_inst *c);
 /* compute the initial state if the values changed since (logs why not); 1 on success */
-int gm_exit_init(gf_inst *c);
+GF_API int gm_exit_init(gf_inst *c);
 /* in initialization mode, bring the outputs up to date when one of vr[] is an output (logs why not) */
-int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr);
+GF_API int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr);
 /* one communication step: GF_OK or GF_DISCARD (state unchanged, logged) */
-int gm_do_step(gf_inst *c, double t, double H);
+GF_API int gm_do_step(gf_inst *c, double t, double H);
 /* the FMU state snapshot (flat bytes, no pointers) */
-size_t gm_snap_size(const gf_inst *c);
-void gm_snap_write(const gf_inst *c, unsigned char *p);
-int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn);
+GF_API size_t gm_snap_size(const gf_inst *c);
+GF_API void gm_snap_write(const gf_inst *c, unsigned char *p);
+GF_API int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn);
 /* 1 if the bytes carry this FMU's snapshot header (magic, version, tables) */
-int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size);
+GF_API int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size);
 
 #endif /* GF_MODEL_H */
