@@ -2,8 +2,8 @@
 
 A gearfmu FMU records the SHA-256 of most of its members at build time, in four places:
 ``resources/provenance.json`` (the tables, the scene, every binary, every source file; the
-pythonfmu runtime: the kernel library), ``resources/gearfmu_runtime.json`` (pythonfmu runtime:
-the files it loads), ``resources/validation/record.json`` (tables.bin, tables.json, the
+standalone runtime: its configuration file; the pythonfmu runtime: the kernel library),
+``resources/gearfmu_runtime.json`` (pythonfmu runtime: the files it loads), ``resources/validation/record.json`` (tables.bin, tables.json, the
 reference result, the scene) and ``resources/tables.json`` (tables.bin).
 :func:`integrity_problem` compares every recorded checksum with the member (a member altered or
 replaced after the build, even inside a well-formed zip archive, is found), and the provenance's
@@ -53,6 +53,7 @@ def _recorded(docs: Dict[str, dict]) -> List[Tuple[str, str, str]]:
     if prov is not None:
         add("resources/tables.bin", prov.get("tables_sha256"), PROVENANCE)
         add("resources/scene.toml", prov.get("scene_sha256"), PROVENANCE)
+        add("resources/gearfmu_standalone.txt", prov.get("config_sha256"), PROVENANCE)  # standalone runtime
         for r in (_get(prov, "binary", "platforms") or {}).values():
             if isinstance(r, dict) and "sha256" in r:
                 add(f"binaries/{r.get('folder')}/{r.get('file')}", r["sha256"], PROVENANCE)

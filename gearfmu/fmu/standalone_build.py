@@ -482,6 +482,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                        "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
                                           for p in sorted(src.iterdir())}},
             "scene_sha256": scene_sha256(scene_text),
+            # the file the C layer reads at instantiation (gearfmu.fmu.integrity checks it before loading)
+            "config_sha256": hashlib.sha256((res / CONFIG_FILE).read_bytes()).hexdigest(),
             "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(spec.path).name,
         }
         (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")

@@ -40,11 +40,15 @@ class FmuSummary:
         """``runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64,
         aarch64-linux, win64, darwin64 (x86_64 + arm64)``, then the platforms not built and why."""
         plats = []
+        fat = "darwin64" in self.platforms and bool(self.darwin_slices)
         for p in self.platforms:
+            if p == "aarch64-darwin" and fat and self.fmi_version.startswith("2"):
+                continue  # FMI 2: the arm64 slice of darwin64 again, under FMI 3's folder name (said below)
             if p == "darwin64" and self.darwin_slices:
                 cpus = sorted(("arm64" if s.startswith("aarch64") else s.split("-")[0] for s in self.darwin_slices),
                               key=lambda c: c != "x86_64")
-                p += f" ({' + '.join(cpus)})"
+                p += f" ({' + '.join(cpus)}" + ("; arm64 also as aarch64-darwin" if "aarch64-darwin" in
+                                                    self.platforms and self.fmi_version.startswith("2") else "") + ")"
             plats.append(p)
         if self.runtime == "pythonfmu":
             plats = [p + " (the kernel is compiled for the build machine only)" for p in plats]
