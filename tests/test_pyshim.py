@@ -105,6 +105,28 @@ def test_c_host_refusal_names_what_is_missing(two, tmp_path):
     assert REFUSED in e and "shared library" in e and "LD_LIBRARY_PATH" in e and "--runtime standalone" in e
 
 
+def test_gone_environment_is_named_not_a_module(two, tmp_path):
+    """The virtual environment the FMU was built in is deleted (its interpreter, recorded at build
+    time, is gone): the C host gets NULL from fmi2Instantiate, exit status 4, and the logged reason
+    names that environment by a description without a path (Python and numpy versions) and the
+    remedies -- not a module of whatever other Python the search would find (before:
+    "... needs the Python module 'ctypes' ... (No module named '_struct')")."""
+    d = tmp_path / "gone"
+    shutil.copytree(two["a"]["dir"], d)
+    cfg = d / "resources" / "gearfmu_pyshim.txt"
+    env_line = next(ln for ln in cfg.read_text().splitlines() if ln.startswith("environment="))
+    assert "/" not in env_line and f"Python {sys.version.split()[0]} with numpy" in env_line
+    venv = tmp_path / "deleted_venv"
+    lines = [ln for ln in cfg.read_text().splitlines() if not ln.startswith("python_executable")]
+    cfg.write_text("\n".join(lines + [f"python_executable={venv}/bin/python"]) + "\n")
+    env = dict(_clean_env(), PATH="/usr/bin:/bin")  # the search would find the system's Python
+    rc, o, e = _batches([_host_cmd(two, dict(two["a"], dir=d))], env)[0]
+    assert rc == 4, (rc, e[-600:])
+    line = next(ln for ln in e.splitlines() if "fmi2Instantiate" in ln)
+    assert f"the Python environment this FMU was built with ({env_line[len('environment='):]}) is gone" in line
+    assert "--runtime standalone" in line and "module" not in line and str(tmp_path) not in line
+
+
 def _libpython():
     import sysconfig
 
