@@ -674,7 +674,10 @@ void gm_reset(gf_inst *c)
     c->mode = GF_INSTANTIATED;
     d->initialized = 0;
     d->py_mode = GF_INSTANTIATED;
-    if (!d->fresh && begin(c, "fmi2Reset")) { /* pythonfmu re-creates the slave */
+    if (d->dead) { /* no slave to reset: the instance stays in the error state (logged by begin) */
+        begin(c, "fmi2Reset");
+        c->mode = GF_ERROR;
+    } else if (!d->fresh && begin(c, "fmi2Reset")) { /* pythonfmu re-creates the slave */
         if (end(c, W.Reset(d->w)) < GF_ERROR_STATUS) d->fresh = 1;
     }
 }
