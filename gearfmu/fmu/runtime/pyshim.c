@@ -542,7 +542,7 @@ static int read_var(gf_inst *c, char *val, int expect)
     v->has_min = num(f[6], &v->min);
     v->has_max = num(f[7], &v->max);
     if ((f[5][0] && !v->has_start) || (f[6][0] && !v->has_min) || (f[7][0] && !v->has_max)) return 0;
-    if (v->causality == GF_OUTPUT && (v->out_index < 0 || v->is_integer)) return 0;
+    if (v->causality == GF_OUTPUT && (v->out_index < 0 || v->out_index >= 100000 || v->is_integer)) return 0;
     snprintf(v->name, sizeof v->name, "%s", f[8]);
     v->array_len = 1;
     return 1;
