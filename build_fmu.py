@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """Build a gear FMU from a scene, run it through fmpy and the native solver, report.
 
-    python build_fmu.py                      # the default scene -> build/<model>.fmu (all-C runtime)
+    python build_fmu.py                      # the default scene -> build/<model>.fmu (all-C runtime,
+                                             # binaries for linux64, aarch64-linux, win64, darwin64)
     python build_fmu.py SCENE.toml -o OUT.fmu
     python build_fmu.py --runtime pythonfmu  # the Python runtime over the same C kernel
 
-The report: fmpy validation problems, the largest and RMS difference per
+The report: the FMU's runtime, FMI version and platforms (and any platform that
+could not be built, with the reason), fmpy validation problems, the largest and RMS difference per
 output between the FMU and the native solver on the same inputs and steps,
 and the wall time of each.  Add --json for a machine-readable report.
 """
@@ -28,6 +30,7 @@ def main(argv=None) -> int:
 
     from gearfmu.cli import print_report
     from gearfmu.fmu.compare import validate_fmu_against_native
+    from gearfmu.fmu.summary import read_summary
     from gearfmu.pipeline import build, gear_torque_for, load
 
     try:
@@ -39,8 +42,10 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"build_fmu: {exc}", file=sys.stderr)
         return 2
+    summary = read_summary(res.fmu_path)
     if not args.json:
         print(f"built {res.fmu_path}: tables {res.tables_wall_s:.2f} s, FMU packaging {res.build_wall_s:.2f} s")
+        print(summary.line())
     t1 = scene.operating.torque_Nm
     native_kwargs = dict(
         max_step_s=res.max_step_s, pinion_torque_Nm=t1, gear_torque_Nm=gear_torque_for(res.tables, t1),
@@ -52,6 +57,9 @@ def main(argv=None) -> int:
     rep["scene"] = scene.name
     rep["tables_wall_s"] = res.tables_wall_s
     rep["fmu_build_wall_s"] = res.build_wall_s
+    rep["fmu_contents"] = {"summary": summary.line(), "runtime": summary.runtime, "fmi_version": summary.fmi_version,
+                  "needs_execution_tool": summary.needs_execution_tool, "platforms": summary.platforms,
+                  "not_built": summary.missing}
     if args.json:
         print(json.dumps(rep, indent=1))
     else:

@@ -9,6 +9,7 @@ solving every position.  Prints one JSON object.
     options: [--points-per-mesh 64] [--slices 44] [--level 1] [--torques T ...] [--workers 2]
              [--position-nodes K] [--progress] [--accuracy-nodes 5 9 17 33] [--compare-tvms FILE.json]
              [--levels 1 2 3 4]   # + build time, solves, stalls of each level (--save-tvms: one file each)
+             [--models hertz smooth_ehl]   # + mean TVMS of these contact models' tables
     python benchmarks/bench_ehl_tables.py --transient [--levels 1 2]   # film_transient off vs correction
 
 Timing: wall and CPU of the parent, film solves, passes.  Old-path estimate: the distinct
@@ -160,6 +161,8 @@ def main(argv=None) -> int:
     ap.add_argument("--accuracy-nodes", type=int, nargs="+", default=[5, 9, 17, 33])
     ap.add_argument("--levels", type=int, nargs="+", default=None,
                     help="also build the tables of these roughness levels (1-4): time, solves, stalls per level")
+    ap.add_argument("--models", nargs="+", default=None, choices=["hertz", "smooth_ehl"],
+                    help="also build the tables of these contact models (same options): mean TVMS per torque row")
     ap.add_argument("--save-tvms", default=None, help="write the TVMS (P, N) of the first row to this .json")
     ap.add_argument("--compare-tvms", default=None, help="TVMS .json of another run: report the difference")
     ap.add_argument("--transient", action="store_true",
@@ -217,6 +220,8 @@ def main(argv=None) -> int:
                 out["tvms_vs_other"] = {"file": a.compare_tvms, "error": f"shape {ko.shape} != {ktot.shape}"}
     if a.levels:
         out["levels"] = [_level_row(lv, K, a) for lv in a.levels]
+    if a.models:
+        out["models"] = [_model_row(m, a) for m in a.models]
         out["load_average_1min_end"] = os.getloadavg()[0]
     if a.accuracy or a.accuracy_only:
         out["accuracy_film"] = [_film_error(lv, a.accuracy_nodes) for lv in (1, 2)]
@@ -239,6 +244,8 @@ def _level_row(level, K, a):
            "stalled_rough_nodes_interpolated": g.get("stalled_rough_nodes_interpolated"),
            "film_failures": c.get("film_failures", 0), "film_failures_by_status": c.get("film_failures_by_status"),
            "film_failures_by_use": c.get("film_failures_by_use"),
+           "film_mixed_lubrication": c.get("film_mixed_lubrication"),
+           "film_solver_failures": c.get("film_solver_failures"), "build_line": c.get("warning", ""),
            "mean_tvms_N_per_m": [float(v) for v in tab.k_N_per_m.sum(axis=1).mean(axis=1)],
            "load_average_1min": os.getloadavg()[0]}
     if a.save_tvms:
@@ -246,6 +253,28 @@ def _level_row(level, K, a):
         p.with_name(f"{p.stem}_level{level}{p.suffix}").write_text(json.dumps(
             {"torques_Nm": [float(t) for t in tab.torque_Nm], "tvms_N_per_m": tab.k_N_per_m.sum(axis=1).tolist()}))
     return row
+
+
+def _model_row(model, a):
+    """Mean TVMS per torque row of another contact model's tables (default scene, same options)."""
+    import resource
+
+    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.tables.precompute import precompute_tables
+
+    sc = _scene(a.slices, model)
+    env = environment_from_scene(sc, max_workers=a.workers)
+    ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0, c0 = time.perf_counter(), time.process_time()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tab = precompute_tables(sc.pair, sc.mesh, points_per_mesh=a.points_per_mesh, torque_axis_Nm=a.torques,
+                                nominal_torque_Nm=sc.operating.torque_Nm, contact_env=env)
+    ch1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return {"model": model, "wall_s": round(time.perf_counter() - t0, 2),
+            "cpu_s": round(time.process_time() - c0 + (ch1.ru_utime + ch1.ru_stime) - (ch0.ru_utime + ch0.ru_stime), 2),
+            "torques_Nm": [float(t) for t in tab.torque_Nm],
+            "mean_tvms_N_per_m": [float(v) for v in tab.k_N_per_m.sum(axis=1).mean(axis=1)]}
 
 
 def _transient_row(level, K, a):

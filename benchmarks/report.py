@@ -76,6 +76,10 @@ SOURCES = {
     "fractal": ([PY, "benchmarks/bench_fractal.py"], None, "benchmarks/bench_fractal.py"),
     "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "10"], None,
                     "benchmarks/bench_ehl_corners.py --repeats 10"),
+    "ehl_rough": ([PY, "benchmarks/bench_ehl_rough.py"], None, "benchmarks/bench_ehl_rough.py"),
+    "ehl_rough_tables": ([PY, "benchmarks/bench_ehl_tables.py", "--levels", "1", "2", "3", "--models", "hertz",
+                          "smooth_ehl"], None,
+                         "benchmarks/bench_ehl_tables.py --levels 1 2 3 --models hertz smooth_ehl"),
     "seed003_statements": ([PY, "examples/seed003_figures.py", "--quick", "--json", "--out", "{tmp}"], None,
                            "examples/seed003_figures.py --quick --json"),
     "trends": ([PY, "examples/seed000_trends.py", "--json", "--also-policy", "load_sharing", "--out", "{tmp}"],
@@ -96,9 +100,14 @@ SOURCES = {
     "plan_study": ([PY, "examples/plan_study.py", "--json", "--out", "{tmp}"], None,
                    "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
+    "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
+    "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
+    "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
+    "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "integrators", "startup", "plan_study", "plan_scan", "tests"}
+SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_rough_tables", "integrators", "startup", "plan_study", "plan_scan",
+        "tests", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -580,6 +589,16 @@ def sec_ehl(pg: Page):
                        pg.cost("ehl")])
 
 
+def sec_ehl_rough(pg: Page):
+    if "ehl_rough" not in pg.data and "ehl_rough_tables" not in pg.data:
+        pg.missing("ehl_rough", "Rough EHL films")
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_ehl_rough import render as render_rough  # the section's own module (report.py's size)
+
+    render_rough(pg, table, SOURCES["ehl_rough"][2])
+
+
 def sec_trends(pg: Page):
     if pg.missing("trends", "Contact models in the mesh: seed 000 section 5 trends"):
         return
@@ -708,6 +727,59 @@ def sec_dynamics(pg: Page):
             + (table(["case", "integrator", "DTE rel. RMS", "DTE rel. max", "force rel. RMS", "wall s"], body)
                if body else "(no per-case rows in the JSON)")
             + f"\n\nSource: `{SOURCES['hard_cases'][2]}` ({pg.cost('hard_cases')}).\n")
+
+
+def sec_gearbox(pg: Page):
+    if pg.missing("gearbox", "Gearboxes: the native gearbox solver against the scipy reference"):
+        return
+    d = pg.data["gearbox"]
+    body = []
+    for f in d["fronts"]:
+        for m, at in f["wall_at"].items():
+            sp = f["speedup_vs_DOP853"].get(m, {})
+            body.append([f["case"], m, sci(at.get("1e-04")), sci(at.get("1e-06")),
+                         "" if m not in f["speedup_vs_DOP853"] else
+                         " / ".join("n/a" if sp.get(k) is None else f"{sp[k]:.0f} ×" for k in ("1e-04", "1e-06"))])
+
+    def draw(plt):
+        fig, axes = plt.subplots(1, len(d["fronts"]), figsize=(4.2 * len(d["fronts"]), 3.8), squeeze=False)
+        for ax, f in zip(axes[0], d["fronts"]):
+            for m in dict.fromkeys(r["method"] for r in f["rows"]):
+                rs = [r for r in f["rows"] if r["method"] == m and 0 < r.get("dte_rel_rms_err", 0) < 1]
+                if rs:
+                    ax.loglog([r["dte_rel_rms_err"] for r in rs], [r["wall_s"] for r in rs], "o-", ms=3, label=m)
+            ax.set_title(f["case"], fontsize=9)
+            ax.set_xlabel("DTE RMS error / DTE range")
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0][0].set_ylabel("wall time (s)")
+        axes[0][0].legend(fontsize=7)
+        return fig
+
+    img = pg.plot("validation_gearbox.png", draw)
+    ex = d.get("example", {})
+    example = (f"\n\nThe example reducer `{ex['scene']}` ({ex['stages']} stages, {ex['bodies']} bodies, {ex['integrator']}, "
+               f"internal step {sci(ex['step_s'])} s): {num(ex['wall_per_simulated_s'], 3)} s of wall time per simulated "
+               f"second, {ex['ns_per_internal_step']:.0f} ns per internal step ({ex['events']} events in "
+               f"{ex['stop_time_s']:g} s).") if ex else ""
+    pg.parts.append(
+        "## Gearboxes\n\n"
+        "The native gearbox solver (docs/gearbox.md) on the hard cases of `gearfmu/gearbox/cases.py` (a two-stage "
+        "reducer: contact loss in stage 1, the stage-1 mesh frequency on the intermediate-shaft mode, a torque step), "
+        "against its event-located scipy reference at rtol 1e-12 (`gearfmu/gearbox/reference.py`).  Every native "
+        "integrator at 2 to 256 substeps per communication step and the same scipy reference at looser tolerances "
+        "(DOP853 at rtol 1e-4 to 1e-10 and 16 to 64 steps per shortest natural period); wall time of the "
+        "whole call at relative RMS DTE errors 1e-4 and 1e-6 of the worse stage (log-log interpolation along each "
+        "method's front) and the speedup over DOP853 there.\n\n"
+        + table(["case", "method", "wall s at 1e-4", "wall s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
+        + f"\n\n{img}{example}\n\nSource: `{SOURCES['gearbox'][2]}` ({pg.cost('gearbox')}).\n")
+    sp = d.get("summary_min_speedup_vs_DOP853", {})
+    cells = ", ".join(f"{m} ≥ {v['1e-06']:.0f} × DOP853" for m, v in sp.items() if v.get("1e-06"))
+    errs = [r["dte_rel_rms_err"] for f in d["fronts"] for r in f["rows"]
+            if r["method"] == "rk4_node" and r["setting"] == "h=H/64"]
+    diff = (f"DTE RMS error of rk4_node at h=H/64: {sci(min(errs))} … {sci(max(errs))} of the range"
+            if errs else "n/a")
+    pg.summary.append(["gearbox dynamics (two stages, shafts)", "event-located DOP853 (scipy), same equations",
+                       diff, f"at 1e-6: {cells or 'n/a'}"])
 
 
 def sec_arms(pg: Page):
@@ -1159,6 +1231,31 @@ def _g_tests(d):
     return f"{d['wall_s']:.0f} s ({d.get('summary', '')}){extra}", d["wall_s"] <= 300.0
 
 
+def _g_gearbox(d):
+    sp = d["summary_min_speedup_vs_DOP853"]
+    cells = ", ".join(f"{m} " + ("n/a" if v.get("1e-06") is None else f"≥ {v['1e-06']:.0f} ×") for m, v in sp.items())
+    default = _default_integrator()
+    v = sp.get(default, {}).get("1e-06")
+    return (f"{cells} (smallest over the cases {', '.join(f['case'] for f in d['fronts'])}; met judged on the "
+            f"default integrator {default})", None if v is None else v >= 300.0)
+
+
+def _g_cache(d):
+    worst = max(d["ratio"].values())
+    return (f"{100 * worst:.2g} % of the first command's table time ({d['runs'][0]['table_s']:.1f} s, scene "
+            f"{d['scene']})", bool(d["within_goal"]))
+
+
+def _g_estimate(d):
+    n = sum(1 for r in d["scenes"].values() if "ratio" in r)
+    return f"worst {d['worst_ratio']:.2f} × over {n} scenes (time, table and FMU size)", bool(d["within_2x"])
+
+
+def _g_silence(d):
+    return (f"longest {d['worst_s']:.1f} s between two lines; start-up (Python imports) up to "
+            f"{d['worst_startup_s']:.1f} s", d["worst_s"] <= d["goal_s"])
+
+
 def goal_rows(data: dict) -> list:
     """[goal, measured, met] for each speed goal, from whatever benchmark JSON exists."""
     goals = [
@@ -1166,12 +1263,16 @@ def goal_rows(data: dict) -> list:
         ("C kernel per RK4 step ≤ 1.5 × the plain-C proxy at equal flags", "kernels", _g_proxy),
         ("numba native solver per step ≤ 1.3 × the C kernel", "kernels", _g_numba),
         ("rk4 integrators ≥ 300 × faster than DOP853 at 1e-6 relative DTE error", "integrators", _g_dop853),
+        ("native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error", "gearbox", _g_gearbox),
         ("FMU ≤ 3 × native per simulated second", "fmu_speed", _g_fmu_native),
         ("FMU ≥ 50 × real time at 1e-4 relative DTE error (fmpy low-level loop)", "fmu_rtf", _g_rtf),
         ("EHL film ≤ 1 s per point", "ehl_corners", _g_ehl_point),
         ("EHL film ≤ 5 ms per point at the default settings", "ehl_corners", _g_ehl_default),
         ("`gearfmu plan` of the default scene ≤ 60 s", "plan", _g_plan),
         ("test suite ≤ 5 min", "tests", _g_tests),
+        ("second command on a scene: table time < 5 % of the first (table cache)", "table_cache", _g_cache),
+        ("cost estimate within 2 × of the measured table time and sizes", "estimate", _g_estimate),
+        ("no command silent on stderr for more than 2 s", "silence", _g_silence),
     ]
     return [[g, *_goal(data, name, fn)] for g, name, fn in goals]
 
@@ -1181,7 +1282,8 @@ def goals_table(data: dict) -> str:
 
 
 def sec_goals(pg: Page):
-    srcs = ["startup", "kernels", "integrators", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests"]
+    srcs = ["startup", "kernels", "integrators", "gearbox", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
+            "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
         "Each goal beside the value measured by its benchmark (wall or CPU time of one run on the machine "
@@ -1190,8 +1292,71 @@ def sec_goals(pg: Page):
         + "\n\nSources: " + ", ".join(f"`{SOURCES[n][2]}` ({pg.cost(n)})" for n in srcs) + ".\n")
 
 
-SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_load_sharing", "sec_fractal", "sec_trends",
-            "sec_dynamics", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_goals")
+def _mb(b) -> str:
+    return f"{b / 1e6:.3g}"
+
+
+def sec_costs(pg: Page):
+    """The table cache, the cost estimate and the silence of the commands."""
+    pg.parts.append("## Table cache, cost estimate and progress\n")
+    if not pg.missing("table_cache", "Table cache: the second command on a scene"):
+        d = pg.data["table_cache"]
+        first = d["runs"][0]["table_s"]
+        body = [[f"`{r['command']}`", "yes" if r["from_cache"] else "no", f"{r['table_s']:.3g}",
+                 f"{100 * r['table_s'] / first:.3g} %", f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}"] for r in d["runs"]]
+        pg.parts.append(
+            "### Table cache: the second command on a scene\n\n"
+            f"Scene `{d['scene']}`; every command a fresh process, the gearfmu cache empty before the first.  "
+            "Table time: the table step as the command prints it (wall); the command's wall and CPU time "
+            "(process and children) beside it.  Reference: the first command, which computes the tables "
+            "(docs/cli.md \"Table cache\").\n\n"
+            + table(["command", "tables from the cache", "table s", "of the first", "command wall s",
+                     "command CPU s"], body)
+            + f"\n\nSource: `{SOURCES['table_cache'][2]}` ({pg.cost('table_cache')}).\n")
+        pg.summary.append(["table cache (second command)", "the first command's table time",
+                           f"{100 * max(d['ratio'].values()):.2g} % of it", pg.cost("table_cache")])
+    if not pg.missing("estimate", "Cost estimate against the measured cost"):
+        d = pg.data["estimate"]
+        body = []
+        for name, r in d["scenes"].items():
+            if "ratio" not in r:
+                body.append([f"`{name}`", r.get("error", "failed"), "", "", "", "", "", ""])
+                continue
+            e, m, q = r["estimate"], r["measured"], r["ratio"]
+            body.append([f"`{name}`", r["counts"]["contact_model"], f"{e['build_s']:.3g}", f"{m['build_cpu_s']:.3g}",
+                         f"{q['build_time']:.2f}", f"{_mb(e['fmu_bytes'])} / {_mb(m['fmu_bytes'])}",
+                         f"{q['fmu_bytes']:.2f}", f"{q['table_bytes']:.2f}"])
+        pg.parts.append(
+            "### Cost estimate against the measured cost\n\n"
+            "Every example scene, the default scene and the scenes of `benchmarks/scenes/` (a small rough-EHL "
+            "pair, a large helical table over the hunting-tooth cycle, an oil-temperature axis): the estimate "
+            "of `gearfmu.tables.estimate` before anything is computed, against one table build in a fresh process "
+            "(CPU time of the process and its film workers, less sensitive to other load than wall time) and the "
+            "FMU built from those tables.  Goal: every ratio within [0.5, 2] (docs/tables.md \"Cost estimate\").\n\n"
+            + table(["scene", "contact model", "estimated CPU s", "measured CPU s", "time est./meas.",
+                     "FMU MB est. / meas.", "FMU est./meas.", "tables est./meas."], body)
+            + f"\n\nWorst ratio {d['worst_ratio']:.2f} ({'within' if d['within_2x'] else 'NOT within'} 2 ×); "
+            f"{d.get('cpu_count')} CPUs.  Source: `{SOURCES['estimate'][2]}` ({pg.cost('estimate')}).\n")
+        pg.summary.append(["cost estimate (time, sizes)", "measured table build and FMU",
+                           f"within {d['worst_ratio']:.2f} ×", pg.cost("estimate")])
+    if not pg.missing("silence", "Progress: the longest silence of each command"):
+        d = pg.data["silence"]
+        body = [[f"`{sc}`", f"`{cmd}`", f"{r['longest_silence_s']:.2f}", r["before"].replace("|", "/")[:70],
+                 f"{r['startup_s']:.2f}", f"{r['wall_s']:.1f}"]
+                for sc, cmds in d["scenes"].items() for cmd, r in cmds.items()]
+        pg.parts.append(
+            "### Progress: the longest silence of each command\n\n"
+            "Each command in a fresh process, stderr stamped on every write (the table cache empty for each "
+            "scene's first command).  Longest silence: the largest gap between two writes after the first "
+            "(the exit counts), with the line shown during it; start-up: from the process start to its "
+            f"first line.  Goal: ≤ {d['goal_s']:g} s.\n\n"
+            + table(["scene", "command", "longest silence s", "during", "start-up s", "wall s"], body)
+            + f"\n\nSource: `{SOURCES['silence'][2]}` ({pg.cost('silence')}).\n")
+
+
+SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_rough", "sec_load_sharing", "sec_fractal", "sec_trends",
+            "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs",
+            "sec_goals")
 
 
 def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:

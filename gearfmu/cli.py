@@ -9,36 +9,50 @@
   gearfmu validate [SCENE] [--fmu F] [--stop-time S] [--output-interval S] [--tolerance R] [--json]
                                              an FMU against the native solver
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
-  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--fmi-version 2|3]   SSP package with variants
+  gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--runtime R] [--platforms LIST]
+                   [--fmi-version 2|3]       SSP package with variants
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
+  gearfmu modes    [SCENE] [-o OUT.json] [--json] [--max-speed-rpm N]
+                                             natural frequencies, strain energy, Campbell diagram (PNG + JSON)
+
+A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): simulate runs the
+native gearbox solver on it, modes gives its modes.
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
-bad input (an invalid scene, a missing or unusable file, a bad option value,
-an output path that cannot be written).
+bad input (an invalid scene, a missing, damaged or wrong kind of file, a bad
+option value, an output path that cannot be written).  GEARFMU_DEBUG=1 adds
+the traceback behind that line.
 """
 from __future__ import annotations
 
 import argparse
+import io
 import json
+import os
 import sys
 import tempfile
 import time
+import traceback
 from pathlib import Path
-import zipfile
 import contextlib
 
 import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
+from .common.progress import notice, reporting, ticking
 from .common.vocabulary import RUNTIMES
-from .fmu.compare import (native_columns, output_names, run_fmu, validate_fmu_against_native,
+from .contact.base import FLAG_MEANINGS
+from .dynamics.native import write_columns_csv
+from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
-from . import pipeline
+from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
-from .ssp import parse_variant, ssp_from_scene
+from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
+from .tables import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
+from .fmu.summary import fmu_summary
 
 
 class CliError(Exception):
@@ -76,12 +90,37 @@ def _output_file(path, what: str) -> Path:
     return p
 
 
+def _debug() -> bool:
+    """GEARFMU_DEBUG set (and not 0): show the traceback behind a one-line error."""
+    return os.environ.get("GEARFMU_DEBUG", "") not in ("", "0")
+
+
+@contextlib.contextmanager
+def _reading(what: str, path):
+    """Around the reading of a file the user handed over (``what``: the argument).  The readers
+    name the file and the reason; this makes sure of it: a ValueError or OSError whose message
+    does not name the file gets ``what`` and the file in front, and an exception no reader
+    foresaw becomes one line naming the file with a hint (GEARFMU_DEBUG=1: the traceback)."""
+    try:
+        yield
+    except CliError:
+        raise
+    except (ValueError, OSError) as exc:
+        text = _one_line(exc)
+        if path is None or Path(path).name in text:
+            raise
+        raise CliError(f"{what} {path}: {text}") from exc
+    except Exception as exc:  # noqa: BLE001 - last resort for a file a reader did not foresee
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise CliError(f"{what} {path}: cannot be read ({type(exc).__name__}{': ' + first if first else ''}); "
+                       "is it the right kind of file, and intact? (GEARFMU_DEBUG=1 shows where it failed)") from exc
+
+
 def _scene(path):
-    if path is not None:
-        p = _input_file(path, "SCENE")
-        if not p.read_bytes().strip():
-            raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
-    return load(path)
+    with _reading("SCENE", path):
+        if path is not None:
+            _scene_file(path)
+        return load(path)
 
 
 def _positive(name):
@@ -112,7 +151,8 @@ def _tolerance(text):
 def _fmu(path):
     """The FMU of ``--fmu``, opened (CliError naming the file and what is wrong otherwise)."""
     try:
-        return open_fmu(path)
+        with _reading("--fmu", path):
+            return open_fmu(path)
     except FmuMismatchError as exc:
         raise CliError(f"--fmu: {exc}") from None
 
@@ -122,22 +162,30 @@ def cmd_build(args) -> int:
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
     if args.tables:  # imported tables instead of the scene's physics
-
-        tables = load_tables_file(*_tables_args(args.tables, args.tables_meta))
+        paths = _tables_args(args.tables, args.tables_meta)
+        with _reading("--tables", paths[0]):
+            tables = load_tables_file(*paths)
     platforms = None
     if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
                 fmi_version=args.fmi_version)
-    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, "
+    cached = _from_cache(res.tables) if not args.tables else ""
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
+          f"FMU {res.build_wall_s:.2f} s, "
           f"{res.tables.slots} pair slots, max internal step {res.max_step_s:.3g} s)")
     if res.estimate is not None:
         print(f"{res.estimate.summary()}; actual FMU {res.fmu_path.stat().st_size / 1e6:.3g} MB")
-    _print_platforms(res.fmu_path)
+    print(fmu_summary(res.fmu_path))
     _print_accuracy(res.verified_envelope)
     _print_contact(res.tables)
     return 0
+
+
+def _from_cache(tables) -> str:
+    """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
+    return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
 
 
 def _print_accuracy(ve) -> None:
@@ -157,13 +205,6 @@ def _print_accuracy(ve) -> None:
           f"{'within' if ve['within_target'] else 'ABOVE'} the target {ve['dte_target_rel']:g} / "
           f"{ve['mesh_force_target_rel']:g}" + ("" if ve["kind"] != "as-written estimate" else
                                                  " (add [accuracy] to build the planned model instead)"))
-
-
-def _print_platforms(fmu_path) -> None:
-    """The standalone FMU's platform line (documentation/platforms.txt): built and missing binaries."""
-    with zipfile.ZipFile(fmu_path) as z:
-        if "documentation/platforms.txt" in z.namelist():
-            print(z.read("documentation/platforms.txt").decode("utf-8").rstrip())
 
 
 def _tables_args(tables, meta):
@@ -186,16 +227,27 @@ def _tables_args(tables, meta):
 
 def _print_contact(tables) -> None:
     """One line on the contact model the tables were computed with, from their provenance: the
-    environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model."""
+    environment the scene passed (lubricant eta0, pinion speed) for every load-dependent model,
+    and the flagged contact requests, counted per reason with what the tables hold there."""
     c = tables.provenance.get("contact")
     if not c:
         return
-    fails = sum(r.get("failures", 0) for r in c.get("load_iteration", {}).get("rows", []))
+    rows = c.get("load_iteration", {}).get("rows", [])
+    fails = sum(r.get("failures", 0) for r in rows)
+    by = {}
+    for r in rows:
+        for st, n in (r.get("failures_by_status") or {}).items():
+            by[st] = by.get(st, 0) + n
     eta = c.get("eta0_Pas")
+    flagged = ""
+    if fails:
+        why = "; ".join(f"{n} {st}: {FLAG_MEANINGS.get(st, st)}" for st, n in by.items()) or \
+            "contact requests the model could not answer as asked"
+        flagged = (f", {fails} flagged points (flagged = (position, slice load) requests of the load-sharing "
+                   f"iteration, summed over the torque rows: {why}; tables' provenance 'contact.load_iteration')")
     print(f"contact model {c.get('model')}: eta0 {eta if eta is None else format(eta, '.4g')} Pa s, "
           f"pinion speed {c.get('speed_rad_s', float('nan')):.4g} rad/s, {c.get('solves', 0)} contact solves"
-          + (f", {fails} flagged points (tables' provenance 'contact')" if fails else "")
-          + (", helical: normal-section requests per slice" if "helical_normal_section" in c else ""))
+          + flagged + (", helical: normal-section requests per slice" if "helical_normal_section" in c else ""))
 
 
 def cmd_tables(args) -> int:
@@ -209,23 +261,109 @@ def cmd_tables(args) -> int:
     t0 = time.perf_counter()
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     wall = time.perf_counter() - t0
-    tables.save(out)
-    flat, note = tables, ""
-    if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
-        flat = tables.at_temperature(tables.default_temperature_C)
-        note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
-    png = plot_tables(flat, out.with_suffix(".png"))
-    csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
+    with ticking(f"writing {out}, its plot and its CSV form"):
+        tables.save(out)
+        flat, note = tables, ""
+        if tables.has_temperature_axis:  # the plot and the CSV form have no temperature axis
+            flat = tables.at_temperature(tables.default_temperature_C)
+            note = f" at {tables.default_temperature_C:g} degC (the .gtab keeps the temperature axis)"
+        png = plot_tables(flat, out.with_suffix(".png"))
+        csv, meta = tables_to_csv(flat, out.with_suffix(".csv"), sidecar_path(out.with_suffix(".csv")))
     print(f"tables {out} ({tables.slots} slots x {tables.n_phi} angles x {tables.n_torque} torques, "
-          f"{wall:.2f} s); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
+          f"{wall:.2f} s{_from_cache(tables)}); plot {png}; csv {csv} with sidecar {meta}{note} (build --tables {csv})")
     print(f"mean mesh stiffness {tables.k_mean_N_per_m:.4e} N/m, contact ratio {tables.contact_ratio:.4f}")
     _print_contact(tables)
+    return 0
+
+
+def _any_scene(path):
+    """("drivetrain", DrivetrainScene) or ("pair", Scene) of SCENE (docs/gearbox.md)."""
+    with _reading("SCENE", path):
+        if path is not None:
+            _scene_file(path)
+        return drivetrain.load_any(path)
+
+
+def _scene_file(path) -> Path:
+    p = _input_file(path, "SCENE")
+    if not p.read_bytes().strip():
+        raise CliError(f"SCENE: {p} is empty (a scene needs [scene], [gears] and [operating]; docs/scene.md)")
+    return p
+
+
+def _gearbox(kind, scene, args):
+    """The gearbox model of a drivetrain or pair scene (its tables computed; the notes of a drivetrain
+    -- replaced operating points, torque-axis warnings -- on stderr)."""
+    if kind == "drivetrain":
+        for note in scene.notes:
+            print(f"gearfmu: {note}", file=sys.stderr)
+        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        return drivetrain.gearbox_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None))
+    tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+    return drivetrain.pair_model(scene, tables)
+
+
+def _simulate_drivetrain(args, scene) -> int:
+    from .plots import plot_gearbox_simulation  # matplotlib: loaded only by the plotting commands
+
+    if args.backend != "native" or args.fmu:
+        raise CliError("--backend: a drivetrain scene runs with the native gearbox solver only (--backend native)")
+    out = _output_file(args.output or f"out/{scene.model_name}_native.csv", "--output")
+    _output_file(out.with_suffix(".png"), "--output")
+    model = _gearbox("drivetrain", scene, args)
+    res = drivetrain.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
+                                         progress=not args.quiet)
+    res.to_csv(out)
+    png = plot_gearbox_simulation(res, model, out.with_suffix(".png"), title=f"{scene.name} (native gearbox solver)")
+    if "diverged_at_step" in res.info:
+        print(f"gearfmu: the state turned non-finite at step {res.info['diverged_at_step']}; the rows after it are "
+              "NaN", file=sys.stderr)
+    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({len(model.meshes)} stages, {model.n_bodies} bodies, "
+          f"{res.integrator}, step {res.step_s:.3g} s, {res.info['events']} events) in {res.wall_s:.3f} s -> "
+          f"{out}, {png}")
+    return 0
+
+
+def cmd_modes(args) -> int:
+    from .plots import plot_campbell  # matplotlib: loaded only by the plotting commands
+
+    kind, scene = _any_scene(args.scene)
+    name = scene.model_name if kind == "drivetrain" else scene.fmu.model_name
+    out = _output_file(args.output or f"out/{name}_modes.json", "--output")
+    png = _output_file(out.with_suffix(".png"), "--output")
+    with _logs_to_stderr(args.json):
+        model = _gearbox(kind, scene, args)
+    res, cb = drivetrain.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
+    report = {"scene": scene.name, "kind": kind, **res.to_dict(), "campbell": cb}
+    out.write_text(json.dumps(report, indent=1), encoding="utf-8")
+    plot_campbell(cb, png, title=f"{scene.name}: Campbell diagram (modes at {res.reference_torque_Nm:.4g} N*m)")
+    if args.json:
+        print(json.dumps(report, indent=1))
+        return 0
+    print(f"{scene.name}: {model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s); "
+          f"linearised at the mean mesh stiffness, motor torque {res.reference_torque_Nm:.6g} N*m")
+    print(f"{'mode':>4} {'f [Hz]':>10} {'f_d [Hz]':>10} {'zeta':>8}  strain energy (largest shares)")
+    for m in res.modes:
+        if m.rigid:
+            print(f"{m.index:>4} {'rigid':>10}")
+            continue
+        top = sorted(m.energy.items(), key=lambda kv: -kv[1])[:3]
+        shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in top if v >= 0.005)
+        print(f"{m.index:>4} {m.frequency_Hz:>10.5g} {m.damped_frequency_Hz:>10.5g} {m.damping_ratio:>8.4f}  {shares}")
+    pts = cb["interferences"]
+    print(f"interferences of mesh and shaft orders with the modes, motor speed 0 .. {cb['speed_axis_rpm'][1]:.5g} rpm "
+          f"(operating {cb['operating_speed_rpm']:.5g} rpm): {len(pts)}")
+    for p in pts:
+        print(f"  {p['speed_rpm']:>9.5g} rpm  {p['order']} on mode {p['mode']} ({p['frequency_Hz']:.5g} Hz)")
+    print(f"wrote {out}, {png}")
     return 0
 
 
 def cmd_simulate(args) -> int:
     from .plots import plot_simulation  # matplotlib: loaded only by the plotting commands
 
+    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+        return _simulate_drivetrain(args, _any_scene(args.scene)[1])
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
@@ -237,6 +375,7 @@ def cmd_simulate(args) -> int:
     _output_file(out.with_suffix(".png"), "--output")
     if args.backend == "native":
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        notice(f"simulating {stop:g} s with the native solver")
         res = simulate_native(scene, tables, stop_time_s=stop, comm_step_s=step,
                               damping_ratio=args.damping_ratio)
         time_s, cols, slots, wall = res.time_s, native_columns(res, tables.slots), tables.slots, res.wall_s
@@ -249,12 +388,7 @@ def cmd_simulate(args) -> int:
         run = run_fmu(args.fmu, stop_time_s=stop, comm_step_s=step, start_values=sv,
                       names=output_names(slots))
         time_s, cols, wall = run.time_s, run.columns, run.wall_s
-    names = output_names(slots)
-    units = {"pinion_speed": "rad/s", "gear_speed": "rad/s", "pinion_angle": "rad", "gear_angle": "rad",
-             "dte": "m", "mesh_force": "N", "mesh_stiffness": "N/m"}
-    head = ["time [s]"] + [f"{n} [{units.get(n, 'N' if n.startswith('pair_force') else '1')}]" for n in names]
-    np.savetxt(out, np.column_stack([time_s] + [cols[n] for n in names]), delimiter=",",
-               header=",".join(head), comments="")
+    units = output_units(slots)  # the CSV layout of docs/native.md and docs/cli.md
 
     class _R:  # the plot wants attributes
         pass
@@ -263,7 +397,9 @@ def cmd_simulate(args) -> int:
     r.time_s, r.dte, r.mesh_force = time_s, cols["dte"], cols["mesh_force"]
     r.pair_force = np.column_stack([cols[f"pair_force[{i + 1}]"] for i in range(slots)])
     r.load_sharing = np.column_stack([cols[f"load_sharing[{i + 1}]"] for i in range(slots)])
-    png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
+    with ticking(f"writing {out} and its plot"):
+        write_columns_csv(out, {"time": ("s", time_s), **{n: (u, cols[n]) for n, u in units.items()}})
+        png = plot_simulation(r, out.with_suffix(".png"), title=f"{scene.name} ({args.backend})")
     print(f"simulated {stop} s with {args.backend} in {wall:.3f} s -> {out}, {png}")
     return 0
 
@@ -298,10 +434,10 @@ def _validate(args) -> dict:
         fmu_path = fmu.path
         if scene.accuracy is not None:  # build followed the scene's plan: so does the check
             from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, plan_scene(scene))
-        tables = pipeline.compute_tables(scene, progress=False, allow_large=args.allow_large)
+            scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
+        tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     else:
-        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=False,
+        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
                     allow_large=args.allow_large)
         fmu_path, tables = res.fmu_path, res.tables
         if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
@@ -326,10 +462,14 @@ def print_report(rep: dict) -> None:
     print(f"fmpy validation problems: {len(probs)}" + "".join(f"\n  - {p}" for p in probs))
     print(f"{rep['samples']} samples, communication step {rep['comm_step_s']:.3g} s, "
           f"internal step <= {rep['max_step_s']:.3g} s, stop time {rep['stop_time_s']:.3g} s")
-    print(f"{'output':<18}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
+    units = output_units(sum(1 for n in rep["outputs"] if n.startswith("pair_force[")))
+    print(f"{'output':<18}{'unit':<7}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
     for name, v in rep["outputs"].items():
-        print(f"{name:<18}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}{v['range']:>14.4g}"
-              f"{v['rel_max_diff']:>12.2e}")
+        print(f"{name:<18}{units.get(name, '?'):<7}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}"
+              f"{v['range']:>14.4g}{v['rel_max_diff']:>12.2e}")
+    print("differences and range in the output's unit; range = max - min of the native solver's output over "
+          "the run (its largest |value| when it is constant); max/range = max |FMU-native| / range, the "
+          "quantity the tolerance applies to")
     print(f"wall time: native {rep['native_wall_s']:.4f} s, FMU (fmpy) {rep['fmu_wall_s']:.4f} s")
     if "failed" in rep:
         tol = rep.get("tolerance")
@@ -342,8 +482,11 @@ def cmd_ssp(args) -> int:
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.ssp", "--output")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
-    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet, fmi_version=args.fmi_version)
+    platforms = parse_platforms(args.platforms) if args.platforms is not None else None
+    path = ssp_from_scene(scene, out, variants=variants, progress=not args.quiet, fmi_version=args.fmi_version,
+                          runtime=args.runtime, platforms=platforms)
     print(f"wrote {path}")
+    print(f"its FMU ({ssp_fmu_name(path)}): {fmu_summary(io.BytesIO(ssp_fmu_bytes(path)))}")
     return 0
 
 
@@ -364,6 +507,25 @@ def cmd_plan(args) -> int:
               f"(worst: {plan.verification.get('worst')}); see the report", file=sys.stderr)
         return 1
     return 0
+
+
+def _fmu_options(parser) -> None:
+    """--runtime, --platforms, --fmi-version: the FMU options of build and ssp."""
+    parser.add_argument("--runtime", choices=RUNTIMES,
+                        help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
+                             "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
+    parser.add_argument("--platforms", metavar="LIST",
+                        help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
+                             "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
+                             "all five; docs/standalone.md 'Platforms')")
+    parser.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                        help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
+
+
+def _no_cache(parser) -> None:
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute the tables without reading or writing gearfmu's table cache "
+                             "(docs/cli.md 'Table cache')")
 
 
 def _allow_large(parser) -> None:
@@ -387,15 +549,7 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
     b.add_argument("-o", "--output", help="FMU path (default build/<model_name>.fmu)")
     b.add_argument("-q", "--quiet", action="store_true")
-    b.add_argument("--runtime", choices=RUNTIMES,
-                   help="FMU runtime (default: the scene's fmu.runtime, standalone unless set); "
-                        "standalone = FMI layer in C, no Python; pythonfmu = Python layer over the same C kernel")
-    b.add_argument("--platforms", metavar="LIST",
-                   help="standalone runtime: binaries to build, comma-separated (x86_64-linux, aarch64-linux, "
-                        "x86_64-windows, x86_64-darwin, aarch64-darwin, or linux64/win64/darwin64; default: "
-                        "all that the installed compilers can build; docs/standalone.md 'Platforms')")
-    b.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
-                   help="FMI version of the FMU (default 2; 3: FMI 3.0 Co-Simulation, standalone runtime)")
+    _fmu_options(b)
     b.add_argument("--tables", help="tables .csv or .gtab instead of the scene's physics (docs/tables.md 'CSV import')")
     b.add_argument("--tables-meta", help="TOML sidecar with the scalars of a --tables CSV "
                                          "(default: T.meta.toml beside T.csv, as gearfmu tables writes it)")
@@ -403,6 +557,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="skip the estimate of the as-written scene's error against full fidelity (scenes "
                         "without [accuracy]; docs/plan.md)")
     _allow_large(b)
+    _no_cache(b)
     add_scheduler_option(b)
     b.set_defaults(func=cmd_build)
 
@@ -419,6 +574,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", help="table path (default build/<model_name>.gtab)")
     t.add_argument("-q", "--quiet", action="store_true")
     _allow_large(t)
+    _no_cache(t)
     add_scheduler_option(t)
     t.set_defaults(func=cmd_tables)
 
@@ -432,6 +588,7 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", help="CSV path")
     s.add_argument("-q", "--quiet", action="store_true")
     _allow_large(s)
+    _no_cache(s)
     s.set_defaults(func=cmd_simulate)
 
     v = sub.add_parser("validate", help="run an FMU and the native solver on the same inputs and compare")
@@ -443,16 +600,19 @@ def make_parser() -> argparse.ArgumentParser:
                    help=f"largest |FMU - native| allowed, relative to each output's range (default "
                         f"{DEFAULT_TOLERANCE:g}); exit status 1 beyond it")
     v.add_argument("--json", action="store_true", help="print a machine-readable report")
+    v.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     _allow_large(v)
+    _no_cache(v)
     v.set_defaults(func=cmd_validate)
 
     x = sub.add_parser("ssp", help="SSP package: the FMU, a system structure and .ssv parameter sets (variants)")
     x.add_argument("scene", nargs="?", help="scene TOML (default: the default scene)")
-    x.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the packaged FMU")
+    _fmu_options(x)
     x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
     x.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(x)
     x.set_defaults(func=cmd_ssp)
 
     pl = sub.add_parser("plan", help="fidelity plan: each modelling choice's error over the envelope, "
@@ -470,8 +630,21 @@ def make_parser() -> argparse.ArgumentParser:
                     help="also measure the other contact models the scene allows (what-if rows; film tables are slow)")
     pl.add_argument("-o", "--output", help="directory for the FMUs of --fmu (default: a temporary one)")
     pl.add_argument("-q", "--quiet", action="store_true")
+    _no_cache(pl)
     add_scheduler_option(pl)
     pl.set_defaults(func=cmd_plan)
+
+    mo = sub.add_parser("modes", help="natural frequencies, mode shapes, strain energy per mesh and shaft, and "
+                                      "the Campbell diagram (PNG + JSON) of a pair or drivetrain scene")
+    mo.add_argument("scene", nargs="?", help="pair or drivetrain scene TOML (default: the default scene)")
+    mo.add_argument("-o", "--output", help="JSON path (default out/<model_name>_modes.json; the PNG beside it)")
+    mo.add_argument("--json", action="store_true", help="print the report as JSON")
+    mo.add_argument("--max-speed-rpm", type=_positive("--max-speed-rpm"),
+                    help="top of the Campbell diagram's motor speed axis (default 1.25 x the highest speed)")
+    mo.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(mo)
+    _no_cache(mo)
+    mo.set_defaults(func=cmd_modes)
     return p
 
 
@@ -486,9 +659,14 @@ def _one_line(exc: BaseException) -> str:
 def main(argv=None) -> int:
     args = make_parser().parse_args(argv)
     try:
-        with cluster(getattr(args, "scheduler", None)):  # --scheduler: the parallel work on that Dask cluster
+        # --scheduler: the parallel work on that Dask cluster; --no-cache: tables computed afresh;
+        # notices of the long phases on stderr unless -q (the bars follow each command's progress flag)
+        with cluster(getattr(args, "scheduler", None)), table_cache.bypassed(getattr(args, "no_cache", False)), \
+                reporting(not getattr(args, "quiet", False)):
             return args.func(args)
     except (CliError, ValueError, OSError) as exc:  # user-facing: one line, status 2
+        if _debug():
+            traceback.print_exc()
         print(f"gearfmu: {_one_line(exc)}", file=sys.stderr)
         return 2
 

@@ -23,6 +23,7 @@ from .plan_choices import _step_absolute, _thermal_options, table_work
 from .plan_verify import MEASURES, run_errors, steady_phase
 from .tables.zones import mean_total_stiffness_N_per_m
 from .scene.envelope import AccuracyTarget, Envelope
+from .tables import table_cache
 from .tables.precompute import precompute_tables
 
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
@@ -91,17 +92,21 @@ class _Evaluator:
         lo, hi = self.env.torque_range_Nm
         return tuple(lo + (hi - lo) * i / (n - 1) for i in range(n))
 
-    def tables(self, cfg: dict, progress: bool = False):
+    def tables(self, cfg: dict, progress: Optional[bool] = None):
         """(MeshTables, build wall time in s) of a configuration (cached).  Taken from the
         tables of a finer nesting grid when one is cached (:meth:`_from_finer`; its time is
-        the finer build's time scaled by the angle count), else built (``progress``: the
-        table builder's progress on stderr)."""
+        the finer build's time scaled by the angle count), else built or read from gearfmu's
+        table cache (:mod:`gearfmu.tables.table_cache`; the time is then that of the build that
+        computed them) (``progress``: the table builder's progress on stderr; None: the planner's)."""
         key = self.table_key(cfg)
         if not self.tables_ready(cfg):
             t0 = time.perf_counter()
-            tb = precompute_tables(**self.table_args(cfg), progress=progress)
+            tb = table_cache.cached_tables(precompute_tables, self.table_args(cfg), {},
+                                           progress=self.progress if progress is None else progress)
             dt = time.perf_counter() - t0
             self.table_wall_s += dt
+            if "table_cache" in tb.provenance:  # read back: the cost is the computation's
+                dt = float(tb.provenance.get("precompute", {}).get("wall_s", dt))
             self._tables[key] = (tb, dt)
         return self._tables[key]
 
@@ -165,7 +170,8 @@ class _Evaluator:
             kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
 
-            kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts))
+            kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts),
+                                                       progress=self.progress)
         return kw
 
     def tables_at(self, cfg: dict, temperature_C: Optional[float]):

@@ -15,6 +15,7 @@ from typing import List, Optional
 import numpy as np
 
 from .common.vocabulary import TEMPERATURE_INPUTS
+from .fmu.summary import fmu_summary
 from .gear.gearpair import GearDeviations
 from .plan_choices import _thermal_options
 from .plan_report import Plan
@@ -182,7 +183,8 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
         res = build_fmu_from_scene(sc, d / f"{scene.fmu.model_name}_{which}.fmu", runtime=runtime)
         built[which] = res
         fmus[which] = {"fmu_path": str(res.fmu_path), "fmu_bytes": res.fmu_path.stat().st_size,
-                       "table_build_s": res.tables_wall_s, "fmu_build_s": res.build_wall_s,
+                       "contents": fmu_summary(res.fmu_path),
+                       "table_build_s": res.tables_compute_s, "fmu_build_s": res.build_wall_s,
                        "tables_shape": [int(x) for x in np.shape(res.tables.k_N_per_m)],
                        "max_step_s": res.max_step_s, "integrator": sc.solver.integrator}
     if cases is None:

@@ -154,6 +154,15 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def _table(head, rows, widths) -> List[str]:
+    """A text table: the first column left-aligned, the others right-aligned; every column at
+    least its width in ``widths`` and at least two spaces wider than its longest entry (a
+    long value such as ``fractal_mixed`` never runs into its neighbour)."""
+    w = [max(wd, *(len(str(r[i])) + 2 for r in (head, *rows))) for i, wd in enumerate(widths)]
+    return ["".join(f"{str(v):<{w[i]}}" if i == 0 else f"{str(v):>{w[i]}}" for i, v in enumerate(r))
+            for r in (head, *rows)]
+
+
 def format_report(plan: Plan) -> str:
     """The fidelity report as a text table."""
     d = plan.to_dict()
@@ -169,17 +178,18 @@ def format_report(plan: Plan) -> str:
              f"{v['points']} search probes" +
              (f" over [{sr[0]:.6g}, {sr[1]:.6g}] rpm (a one-speed envelope: the band its FMU accepts "
               f"without a warning)" if sr and er[1] <= er[0] else ""), ""]
-    lines.append(f"{'choice':<22}{'full':>12}{'chosen':>12}{'status':>9}{'TVMS':>10}{'DTE':>10}{'force':>10}"
-                 f"{'use':>10}  limited by")
+    rows = []
     for r in d["choices"]:
         c = r["contribution"]
         full, chosen = r["full"], r["chosen"]
         if r["choice"] == "max_step":
             full, chosen = f"{d['full']['max_step_s']:.2g}s", f"{d['chosen']['max_step_s']:.2g}s"
         reduced = r["status"] in ("reduced", "dropped")
-        lines.append(f"{r['choice']:<22}{_fmt(full):>12}{_fmt(chosen):>12}{r['status']:>9}"
-                     f"{_fmt(c['tvms_rel']):>10}{_fmt(c['dte_rel']):>10}{_fmt(c['mesh_force_rel']):>10}"
-                     + (f"{_fmt(c['budget_use']):>10}  {MEASURE_LABELS[c['limit']]}" if reduced else ""))
+        rows.append((r["choice"], _fmt(full), _fmt(chosen), r["status"], _fmt(c["tvms_rel"]), _fmt(c["dte_rel"]),
+                     _fmt(c["mesh_force_rel"]), _fmt(c["budget_use"]) if reduced else "",
+                     MEASURE_LABELS[c["limit"]] if reduced else ""))
+    lines += _table(("choice", "full", "chosen", "status", "TVMS", "DTE", "force", "use", "limited by"), rows,
+                    (22, 12, 12, 9, 10, 10, 10, 10, 12))
     for r in d.get("what_if") or []:
         lines.append(f"{'what-if contact_model':<22}{r['contact_model']:>12}  " +
                      (f"skipped: {r['skipped']}" if r.get("skipped") else
@@ -238,6 +248,8 @@ def format_report(plan: Plan) -> str:
                   f"{_fmt(ff['table_build_s'])} -> {_fmt(fc['table_build_s'])} s, temperature input "
                   f"{next(iter(fv['cases'].values()))['temperature_input']['full']} -> "
                   f"{next(iter(fv['cases'].values()))['temperature_input']['chosen']}",
+                  *(f"  {w} FMU {fv['fmus'][w]['fmu_path']}: {fv['fmus'][w]['contents']}"
+                    for w in ("full", "chosen") if fv["fmus"][w].get("contents")),
                   f"  {'case':<12}{'DTE':>10}{'force':>10}{'use':>7}{'limited by':>11}{'target':>8}{'full':>11}"
                   f"{'chosen':>11}{'gain':>7}  drive"]
         for name, c in fv["cases"].items():

@@ -53,6 +53,7 @@ from pathlib import Path
 from typing import Dict, Mapping, Optional
 
 from .common.checks import finite_number
+from .common.progress import ticking
 from .pipeline import build
 
 NS = {
@@ -340,17 +341,38 @@ def parse_variant(text: str):
 
 
 def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[str, float]]] = None,
-                   progress: bool = False, tables=None, fmi_version: int = 2) -> Path:
-    """Scene -> tables -> FMU -> SSP archive at ``out_path``.  The FMU's runtime is the
-    scene's ``fmu.runtime``; ``tables``: MeshTables to use instead of the scene's physics
-    (as :func:`gearfmu.pipeline.build`); ``fmi_version`` 3: an FMI 3.0 FMU (standalone runtime)."""
+                   progress: bool = False, tables=None, fmi_version: int = 2, runtime: Optional[str] = None,
+                   platforms=None) -> Path:
+    """Scene -> tables -> FMU -> SSP archive at ``out_path``.  ``runtime``: the FMU's runtime
+    ("standalone" or "pythonfmu"; None: the scene's ``fmu.runtime``); ``platforms``: binaries of a
+    standalone FMU (gearfmu.fmu.crossbuild keys; None: all); ``tables``: MeshTables to use instead
+    of the scene's physics (as :func:`gearfmu.pipeline.build`); ``fmi_version`` 3: an FMI 3.0 FMU
+    (standalone runtime)."""
     out_path = Path(out_path)
     if out_path.suffix != ".ssp":
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_fmu_") as d:
         res = build(scene, Path(d) / f"{scene.fmu.model_name}.fmu", progress=progress, tables=tables,
-                    fmi_version=fmi_version)
+                    fmi_version=fmi_version, runtime=runtime, platforms=platforms)
         trange = res.tables.temperature_range_C
         tin = res.tables.temperature_input or "bulk_temperature"
-        return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange, tin),
-                         stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
+        with ticking(f"writing the SSP package {out_path} (every .ssd and .ssv checked against its SSP 1.0 schema)",
+                     enabled=progress or None):
+            return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange,
+                                                                                   tin),
+                             stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
+
+
+def ssp_fmu_name(ssp_path) -> str:
+    """The archive name of the FMU inside an SSP package (``resources/<model>.fmu``)."""
+    with zipfile.ZipFile(ssp_path) as z:
+        names = [n for n in z.namelist() if n.startswith("resources/") and n.endswith(".fmu")]
+    if not names:
+        raise SspError(f"{ssp_path}: no resources/*.fmu in the package")
+    return names[0]
+
+
+def ssp_fmu_bytes(ssp_path) -> bytes:
+    """The FMU inside an SSP package, as bytes."""
+    with zipfile.ZipFile(ssp_path) as z:
+        return z.read(ssp_fmu_name(ssp_path))

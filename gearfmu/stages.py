@@ -14,6 +14,7 @@ from typing import Optional
 import numpy as np
 
 from . import __version__
+from .common.progress import notice
 from .common.vocabulary import RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
@@ -22,7 +23,7 @@ from .fmu.standalone_build import build_standalone_fmu
 from .scene.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
 from .tables.estimate import check_build_cost, estimate_build
-from .tables import precompute
+from .tables import precompute, table_cache
 
 
 def load(scene_path: Optional[str] = None):
@@ -36,11 +37,13 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 
-def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
+def compute_tables(scene, *, progress: bool = False, allow_large: bool = False, cache: Optional[bool] = None):
     """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
     :class:`gearfmu.tables.estimate.BuildTooLargeError` naming the scene keys when the estimated
     tables, FMU or build time exceed the limits of :mod:`gearfmu.tables.estimate`, unless
-    ``allow_large``."""
+    ``allow_large``.  The tables are kept in gearfmu's table cache and read back when the same
+    physics is asked again (:mod:`gearfmu.tables.table_cache`); ``cache`` False computes without
+    it, None follows ``--no-cache`` / ``GEARFMU_NO_TABLE_CACHE``."""
     check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
     prov = {
@@ -51,18 +54,11 @@ def compute_tables(scene, *, progress: bool = False, allow_large: bool = False):
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "contact_model": scene.mesh.contact_model,
     }
+    args = dict(pair=scene.pair, opts=scene.mesh, points_per_mesh=scene.tables.points_per_mesh,
+                torque_axis_Nm=torque_axis, nominal_torque_Nm=scene.operating.torque_Nm,
+                slots=scene.tables.slots, **_contact_kw(scene, progress), thermal=scene.thermal)
     # looked up at call time, so a substitute set on the module is used
-    return precompute.precompute_tables(
-        scene.pair, scene.mesh,
-        points_per_mesh=scene.tables.points_per_mesh,
-        torque_axis_Nm=torque_axis,
-        nominal_torque_Nm=scene.operating.torque_Nm,
-        slots=scene.tables.slots,
-        progress=progress,
-        provenance=prov,
-        **_contact_kw(scene, progress),
-        thermal=scene.thermal,
-    )
+    return table_cache.cached_tables(precompute.precompute_tables, args, prov, progress=progress, use_cache=cache)
 
 
 def _contact_kw(scene, progress: bool) -> dict:
@@ -97,6 +93,9 @@ class BuildResult:
     #: estimate (estimate_accuracy=True, no [accuracy]); None otherwise (docs/plan.md "Verified envelope")
     verified_envelope: Optional[dict] = None
     estimate: object = None  # gearfmu.tables.estimate.BuildEstimate of the scene that was built
+    #: s, the time the tables' computation took: ``tables_wall_s`` when they were computed here, the
+    #: original computation's when they were read from the table cache (gearfmu.tables.table_cache)
+    tables_compute_s: Optional[float] = None
 
 
 def fmu_builder(runtime: str):
@@ -142,6 +141,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     t1 = time.perf_counter()
     h_max = max_step_for(scene, tables)
     t1_Nm = scene.operating.torque_Nm
+    notice(f"building the FMU {out_path} ({runtime} runtime, FMI {fmi_version})", enabled=progress or None)
     path = builder(
         tables, out_path,
         model_name=scene.fmu.model_name,
@@ -159,7 +159,10 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
         integrator=scene.solver.integrator, **extra,
     )
     t2 = time.perf_counter()
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified_envelope, est)
+    computed = t1 - t0
+    if isinstance(tables.provenance, dict) and "table_cache" in tables.provenance:
+        computed = float((tables.provenance.get("precompute") or {}).get("wall_s", computed))
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified_envelope, est, computed)
 
 
 def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,

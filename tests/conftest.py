@@ -10,7 +10,15 @@ tests.  xdist would otherwise re-sort the files by their number of tests, which 
 heavy files (the direct TVMS films, the fresh-process checks) out last; :func:`pytest_configure`
 turns that off.  ``-n 0`` runs the same order in one process.
 """
+import os
+
 import pytest
+
+# The suite computes every table afresh: a test that replaces or counts the table builder, or
+# that reads its progress, must not get tables that another test kept in gearfmu's table cache
+# (gearfmu.tables.table_cache).  Set here, so the command-line processes the tests start inherit
+# it; tests/test_table_cache.py turns the cache on in a folder of its own.
+os.environ["GEARFMU_NO_TABLE_CACHE"] = "1"
 
 #: the test files with the largest cost, in the order they are handed out (measured per file: the
 #: process and child-process CPU time and the wall time, warm numba and object caches; a file that

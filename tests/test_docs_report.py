@@ -101,7 +101,17 @@ def _fixture(d: pathlib.Path):
                        "rows": [{"model": "smooth_ehl", "slices": 4, "points_per_mesh": 8, "k_mean_N_per_mm_um": 14.85,
                                  "rel_diff_iso": 0.1, "over_hertz": 1.07, "ptp_over_mean": 0.057,
                                  "hertz_ptp_over_mean": 0.06, "spur_ptp_over_mean": 0.644}]}
-    for name, data in (("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    gb_rows = [{"method": "rk4_node", "setting": "h=H/64", "wall_s": 0.002, "dte_rel_rms_err": 2e-8},
+               {"method": "solve_ivp-DOP853", "setting": "rtol=1e-06", "wall_s": 1.0, "dte_rel_rms_err": 1e-8}]
+    gearbox = {"fronts": [{"case": "torque_step", "rows": gb_rows,
+                           "wall_at": {"rk4_node": {"1e-04": 0.001, "1e-06": 0.002},
+                                       "solve_ivp-DOP853": {"1e-04": 1.0, "1e-06": 1.0}},
+                           "speedup_vs_DOP853": {"rk4_node": {"1e-04": 1000.0, "1e-06": 500.0}}}],
+               "summary_min_speedup_vs_DOP853": {"rk4_node": {"1e-04": 1000.0, "1e-06": 500.0}},
+               "example": {"scene": "gearbox_two_stage", "stages": 2, "bodies": 6, "integrator": "rk4_node",
+                           "step_s": 2e-6, "stop_time_s": 0.1, "wall_per_simulated_s": 0.4,
+                           "ns_per_internal_step": 600.0, "events": 4500}}
+    for name, data in (("gearbox", gearbox), ("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners),
@@ -174,6 +184,12 @@ def test_report_from_saved_json(tmp_path):
                                                                       for n in ("startup", "integrators", "fmu_rtf")})))}
     assert goals["FMU ≥ 50 × real time at 1e-4 relative DTE error (fmpy low-level loop)"] == "no"
     assert goals["test suite ≤ 5 min"] == "n/a"
+    # gearboxes: the wall times and speedups of the fixture, the example's cost, the goal row
+    assert "| torque_step | rk4_node | 1.00e-03 | 2.00e-03 | 1000 × / 500 × |" in page
+    assert "0.4 s of wall time per simulated second, 600 ns per internal step" in page
+    for where in (page, readme.read_text()):
+        assert ("| native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error | rk4_node ≥ 500 × "
+                "(smallest over the cases torque_step; met judged on the default integrator rk4_node) | yes |") in where
     # sources without JSON are named, not silently dropped; plots are written and linked
     assert "reach 44 × real time (fmpy's low-level loop, 2272 ns per step) and 55 × (raw ctypes pointers" in page
     assert "## Dynamic response against experiment: seed 003 Fig. 3\n\nNot run" in page
@@ -262,3 +278,43 @@ def test_plan_section_from_saved_json(tmp_path):
     assert rep.main(["--from", str(src), "--out", str(out), "--img-dir", str(tmp_path / "img"),
                      "--readme", "none"]) == 0
     assert "; `plan_study` not run (`python benchmarks/report.py --only plan_study`)." in out.read_text()
+
+
+def test_cache_estimate_and_silence_sections_from_saved_json(tmp_path):
+    """The table cache, the cost estimate and the silence of the commands: the numbers of the
+    fixture (ratios 0.02 and 0.03 of a 40 s table build, estimate ratios 1.5 and 0.6, a 1.2 s
+    silence) on the page and in the goals."""
+    rep = _report()
+    src = tmp_path / "json"
+    src.mkdir()
+    cache = {"scene": "s.toml", "goal": 0.05, "within_goal": True, "ratio": {"gearfmu tables s.toml": 0.02,
+                                                                            "gearfmu build s.toml": 0.03},
+             "runs": [{"command": "gearfmu tables s.toml", "table_s": 40.0, "wall_s": 45.0, "cpu_s": 41.0,
+                       "from_cache": False},
+                      {"command": "gearfmu tables s.toml", "table_s": 0.8, "wall_s": 3.0, "cpu_s": 2.0,
+                       "from_cache": True},
+                      {"command": "gearfmu build s.toml", "table_s": 1.2, "wall_s": 9.0, "cpu_s": 8.0,
+                       "from_cache": True}]}
+    row = {"estimate": {"build_s": 3.0, "table_bytes": 2e5, "fmu_bytes": 1.2e6},
+           "measured": {"build_cpu_s": 2.0, "build_wall_s": 2.5, "table_bytes": 2e5, "fmu_bytes": 2e6},
+           "ratio": {"build_time": 1.5, "table_bytes": 1.0, "fmu_bytes": 0.6}, "counts": {"contact_model": "hertz"}}
+    estimate = {"goal": 2.0, "cpu_count": 2, "worst_ratio": 1.67, "within_2x": True, "scenes": {"default": row}}
+    silence = {"goal_s": 2.0, "worst_s": 1.2, "worst_startup_s": 0.9,
+               "scenes": {"default": {"validate": {"longest_silence_s": 1.2, "before": "gearfmu: building | x",
+                                                   "after": "(exit)", "startup_s": 0.9, "wall_s": 4.0,
+                                                   "at_s": 1.0, "stderr_writes": 9, "cpu_s": 3.0, "exit": 0}}}}
+    for name, data in (("table_cache", cache), ("estimate", estimate), ("silence", silence)):
+        (src / f"{name}.json").write_text(json.dumps(data))
+    out = tmp_path / "validation.md"
+    assert rep.main(["--from", str(src), "--out", str(out), "--img-dir", str(tmp_path / "img"),
+                     "--readme", "none"]) in (0, 1)
+    page = out.read_text()
+    assert "| `gearfmu tables s.toml` | yes | 0.8 | 2 % | 3.0 | 2.0 |" in page
+    assert "| `default` | hertz | 3 | 2 | 1.50 | 1.2 / 2 | 0.60 | 1.00 |" in page
+    assert "| `default` | `validate` | 1.20 | gearfmu: building / x | 0.90 | 4.0 |" in page
+    goals = {r[0]: (r[1], r[2]) for r in rep.goal_rows({"table_cache": cache, "estimate": estimate,
+                                                         "silence": silence})}
+    assert goals["second command on a scene: table time < 5 % of the first (table cache)"] == (
+        "3 % of the first command's table time (40.0 s, scene s.toml)", "yes")
+    assert goals["cost estimate within 2 × of the measured table time and sizes"][1] == "yes"
+    assert goals["no command silent on stderr for more than 2 s"][1] == "yes"

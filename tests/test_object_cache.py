@@ -16,7 +16,7 @@ from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources, copy
 @pytest.fixture
 def counted_compiles(monkeypatch, tmp_path):
     if crossbuild.zig_command() is None:
-        pytest.fail("zig C compiler missing: pip install 'gearfmu[cross]'")
+        pytest.fail("zig C compiler missing: pip install . (ziglang is a gearfmu dependency)")
     monkeypatch.setenv("GEARFMU_CACHE_DIR", str(tmp_path / "cache"))
     calls = []
     real = subprocess.run

@@ -87,18 +87,18 @@ def test_cli_tables_simulate_validate(tmp_path):
         assert (tmp_path / "t" / f"default{suffix}").stat().st_size > 0
     r = _run(["-m", "gearfmu.cli", "simulate", "--stop-time", "0.005", "-o", "s/native.csv", "-q"], tmp_path)
     assert r.returncode == 0, r.stderr
-    head = (tmp_path / "s" / "native.csv").read_text().splitlines()[0]
-    assert head.startswith("time [s],pinion_speed [rad/s]") and "pair_force[2] [N]" in head
+    units, head = (tmp_path / "s" / "native.csv").read_text().splitlines()[:2]  # docs/cli.md "simulate"
+    assert units.startswith("# units: s,rad/s") and head.startswith("time,pinion_speed") and "pair_force[2]" in head
     assert (tmp_path / "s" / "native.png").stat().st_size > 0
     r = _run(["-m", "gearfmu.cli", "build", "-o", "b/g.fmu", "-q"], tmp_path)
     assert r.returncode == 0, r.stderr
     r = _run(["-m", "gearfmu.cli", "simulate", "--backend", "fmu", "--fmu", "b/g.fmu", "--stop-time", "0.005",
               "-o", "s/fmu.csv"], tmp_path)
     assert r.returncode == 0, r.stderr
-    a = np.loadtxt(tmp_path / "s" / "native.csv", delimiter=",", skiprows=1)
-    b = np.loadtxt(tmp_path / "s" / "fmu.csv", delimiter=",", skiprows=1)
+    a = np.loadtxt(tmp_path / "s" / "native.csv", delimiter=",", skiprows=2)
+    b = np.loadtxt(tmp_path / "s" / "fmu.csv", delimiter=",", skiprows=2)
     assert a.shape == b.shape
-    col = head.split(",").index("mesh_force [N]")
+    col = head.split(",").index("mesh_force")
     assert np.max(np.abs(a[:, col] - b[:, col])) <= 1e-9 * np.ptp(a[:, col])
     r = _run(["-m", "gearfmu.cli", "validate", "--fmu", "b/g.fmu", "--stop-time", "0.005", "--json"], tmp_path)
     assert r.returncode == 0, r.stderr
@@ -115,6 +115,14 @@ def test_build_fmu_script_reports(tmp_path):
     rep = json.loads(r.stdout)
     assert rep["fmpy_problems"] == [] and rep["max_rel_diff"] <= 1e-9
     assert (tmp_path / "x.fmu").stat().st_size > 0
+    # the README's first command: the standalone FMU with the five binaries (four folders)
+    c = rep["fmu_contents"]
+    assert (c["runtime"], c["fmi_version"], c["needs_execution_tool"], c["not_built"]) == ("standalone", "2.0", False, {})
+    assert sorted(c["platforms"]) == ["aarch64-linux", "darwin64", "linux64", "win64"]
+    r = _run([str(REPO / "build_fmu.py"), "-o", "y.fmu"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert ("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64, "
+            "aarch64-linux, win64, darwin64 (x86_64 + arm64)") in r.stdout.splitlines()
 
 
 def test_cli_bad_scene_names_the_key(tmp_path):

@@ -55,7 +55,7 @@ def need(what, found, install):
 
 
 def zig():
-    return need("zig C compiler", crossbuild.zig_command(), "pip install 'gearfmu[cross]'")
+    return need("zig C compiler", crossbuild.zig_command(), "pip install . (ziglang is a gearfmu dependency)")
 
 
 def wine():

@@ -23,6 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from gearfmu.fmu.compare import FmuMismatchError, open_fmu
 from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.scene.reader import default_scene_path, load_scene
 from gearfmu.tables.mesh_tables import MeshTables, TableError, load_tables
@@ -86,12 +87,15 @@ def _tampered(src, dst, member, change):
             zout.writestr(info, data)
 
 
-@pytest.mark.parametrize("member,change", [
+TAMPERS = pytest.mark.parametrize("member,change", [
     ("resources/tables.json", lambda b: b.replace(b'"slots": 2', b'"slots":  2')),   # one byte more
     ("resources/tables.json", lambda b: b[:-5] + bytes([b[-5] ^ 1]) + b[-4:]),
     ("resources/gearkernel.so", lambda b: b[:200] + bytes([b[200] ^ 0x10]) + b[201:]),
     ("resources/gearfmu_runtime.json", lambda b: b.replace(b'"sha256": {', b'"sha256": {"extra.bin": "00", ')),
 ], ids=["tables.json-space", "tables.json-bitflip", "kernel-bitflip", "runtime-extra-file"])
+
+
+@TAMPERS
 def test_tampered_resource_refused_naming_the_file(fmu2, tmp_path, member, change):
     bad = tmp_path / "bad.fmu"
     _tampered(fmu2, bad, member, change)
@@ -103,6 +107,21 @@ def test_tampered_resource_refused_naming_the_file(fmu2, tmp_path, member, chang
     assert "REFUSED" in p.stdout
     named = "extra.bin" if "runtime" in member else member.split("/")[-1]
     assert named in out and ("checksum" in out or "missing" in out), out[-800:]
+
+
+@TAMPERS
+def test_tampered_resource_refused_by_gearfmu_before_fmpy_loads_it(fmu2, tmp_path, member, change):
+    """gearfmu's own reader of a handed-over FMU (``open_fmu``: validate, simulate --backend fmu)
+    compares every member with the SHA-256 the pythonfmu FMU records (gearfmu_runtime.json,
+    provenance.json, the validation record) before fmpy extracts or loads anything."""
+    bad = tmp_path / "bad.fmu"
+    _tampered(fmu2, bad, member, change)
+    with pytest.raises(FmuMismatchError) as info:
+        open_fmu(bad)
+    msg = str(info.value)
+    named = "extra.bin" if "runtime" in member else member.split("/")[-1]
+    assert str(bad) in msg and named in msg and ("checksum" in msg or "missing" in msg), msg
+    open_fmu(fmu2)  # the intact FMU opens
 
 
 # --------------------------------------------------- out-of-range torque policy

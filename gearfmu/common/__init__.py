@@ -7,5 +7,6 @@ vocabulary    every option string: contact models, damping models, integrators, 
 checks        finite_number: the one input check of the physics and the solvers
 executors     make_executor: in-process, process pool or Dask cluster; cluster(), --scheduler
 progress      progress_bar: the one progress reporter (tqdm on stderr)
+user_files    files a user hands over: read_archive (zip, every member checked), read_text
 ============  ===============================================================================
 """

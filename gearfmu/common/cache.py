@@ -4,7 +4,8 @@ The root is ``$GEARFMU_CACHE_DIR``, else ``$XDG_CACHE_HOME/gearfmu``, else
 ``~/.cache/gearfmu``; each user of the cache has a folder there (``objects``: compiled C
 objects, :mod:`gearfmu.fmu.crossbuild`; ``kernels``: the pythonfmu runtime's compiled kernel,
 :func:`gearfmu.fmu.pythonfmu_build.compile_kernel`; ``validation``: the native reference results of
-the validation record, :mod:`gearfmu.fmu.validation`).
+the validation record, :mod:`gearfmu.fmu.validation`; ``tables``: the tooth-pair tables of a scene,
+:mod:`gearfmu.tables.table_cache`).
 
 An entry is two plain files named by the SHA-256 of its key (a JSON-able dict): ``<digest>.json``
 (the key itself, the caller's metadata and the payload's SHA-256) and ``<digest><suffix>`` (the
@@ -16,14 +17,19 @@ No pickle: keys and metadata are JSON.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
 import warnings
 from pathlib import Path
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional, Sequence, Tuple
 
-__all__ = ["CacheWarning", "cache_root", "cache_dir", "entry_digest", "load_entry", "store_entry"]
+__all__ = ["CacheWarning", "cache_root", "cache_dir", "entry_digest", "load_entry", "store_entry",
+           "package_sources_sha256", "sources_sha256", "entry_path"]
+
+#: gearfmu's package folder (the root of :func:`package_sources_sha256`)
+PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 
 ENTRY_FORMAT = "gearfmu-cache-entry"
 ENTRY_VERSION = 1
@@ -46,6 +52,28 @@ def cache_dir(name: str) -> Path:
     return cache_root() / name
 
 
+def package_sources_sha256(root: Path = PACKAGE_ROOT, parts: Optional[Sequence[str]] = None) -> str:
+    """SHA-256 over the path and bytes of every ``.py`` file under ``root`` (default: the
+    installed gearfmu package), in sorted path order; ``parts``: only the files under these
+    sub-folders of ``root`` (None: all).  Part of the keys of cached results: in a development
+    checkout the version string stays the same while the code changes, and a result of other
+    code must not be read back."""
+    h = hashlib.sha256()
+    root = Path(root)
+    files = sorted(root.rglob("*.py")) if parts is None else sorted(
+        f for part in parts for f in (root / part).rglob("*.py"))
+    for f in files:
+        h.update(f.relative_to(root).as_posix().encode("utf-8") + b"\0")
+        h.update(f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def sources_sha256(parts: Optional[Tuple[str, ...]] = None) -> str:
+    """:func:`package_sources_sha256` of the installed package (computed once per process)."""
+    return package_sources_sha256(PACKAGE_ROOT, parts)
+
+
 def _canonical(key: dict) -> bytes:
     return json.dumps(key, sort_keys=True, separators=(",", ":"), allow_nan=True).encode("utf-8")
 
@@ -53,6 +81,11 @@ def _canonical(key: dict) -> bytes:
 def entry_digest(key: dict) -> str:
     """The SHA-256 (hex) that names the entry of ``key``."""
     return hashlib.sha256(_canonical(key)).hexdigest()
+
+
+def entry_path(folder: Path, key: dict) -> Path:
+    """The head file (``<digest>.json``) of the entry of ``key`` in ``folder``."""
+    return Path(folder) / f"{entry_digest(key)}.json"
 
 
 def load_entry(folder: Path, key: dict, suffix: str, fields: Optional[Dict[str, type]] = None

@@ -23,7 +23,7 @@ import warnings
 __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES", "FILM_TRANSIENT_MODES",
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
            "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
-           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS"]
+           "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -69,6 +69,9 @@ INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}
 #: the default of the native solver, the scene, the FMU builders and the FMU parameter
 #: ``integrator`` alike, so a native run and an FMU built with defaults integrate identically
 DEFAULT_INTEGRATOR = "rk4_node"
+#: the integrators of the gearbox solver (gearfmu.gearbox.native, docs/gearbox.md "Integrators"), a
+#: subset of INTEGRATORS with the same codes; the default is DEFAULT_INTEGRATOR
+GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)

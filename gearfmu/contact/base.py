@@ -183,6 +183,19 @@ class ContactEnvironment:
         return self._flanks
 
 
+#: what each ``status`` of a flagged contact request (``ContactStiffness.failures``) means and
+#: which stiffness the tables hold there; the build and ``gearfmu tables`` print these words
+FLAG_MEANINGS = {
+    "full_film": "film parameter h_min/sigma >= 3, a full film: the mixed-lubrication stiffness, kept there, "
+                 "overstates the asperity contact",
+    "complete_contact": "asperities would touch over the whole nominal area: Hertz stiffness used",
+    "low_film_parameter": "film parameter below the full-film limit: the scene's roughness on_failure model used",
+    "stall": "rough EHL film did not converge: the on_failure model used",
+    "collapse": "rough EHL film collapsed (h <= 0): the on_failure model used",
+    "smooth film failed": "smooth EHL film did not converge: the on_failure model used",
+}
+
+
 @dataclass
 class ContactStiffness:
     """Result of a contact model: ``k_N_per_m`` per request (N/m per slice),

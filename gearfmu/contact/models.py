@@ -53,6 +53,7 @@ from typing import Callable, Dict
 
 import numpy as np
 
+from ..common.progress import progress_bar
 from ..gear.hertz import hertz_stiffness_N_per_m, reduced_modulus_Pa
 from .fractal import slice_contact_stiffness, FractalMeshOptions, FullContactError
 from ..ehl.mesh_film import contact_kinematics, solve_films
@@ -137,7 +138,8 @@ def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
     uniq = list(dict.fromkeys(keys))
     R, u, _ = contact_kinematics(env.geom, np.array([k[0] for k in uniq]), env.omega1_rad_s)
     kmap, notes, full = {}, [], set()
-    for i, (sk, wk) in enumerate(uniq):
+    for i, (sk, wk) in enumerate(progress_bar(uniq, "fractal contact solves", bool(env.progress), unit="solve",
+                                               leave=False)):
         try:
             r = slice_contact_stiffness(spec.D, spec.G_m, float(R[i]), float(u[i]), wk, env.width_m, Es,
                                         env.eta0_Pas, env.alpha_Pa_inv, mo)

@@ -12,11 +12,14 @@ shared.  The per-step order of operations is that of gearkernel.c
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
 from numba import njit
 
+from ..common.jit import cache_is_cold
+from ..common.progress import ticking
 from .integrators import SEG_WORK_BASE, _kink_substep, _mode_sync, _rk4_step, _seg_start, _seg_substep
 from .model_rhs import (
     _CELL_NONE, _cell_nodes, _equilibrium, _node_flags, _seg_flags, _outputs_row, _ptr, _tab, _table_pointers,
@@ -146,6 +149,26 @@ _COMPILED = set()
 NO_CUTS = np.full((2, 1, 1), -1.0)
 
 
+_ANNOUNCING = []  # the open compiling() block, if any (one line for the whole compilation)
+
+
+@contextlib.contextmanager
+def compiling(icode: int = 0):
+    """The block that first calls the native solver's compiled code of integrator code ``icode``
+    (the table arrays, the equilibrium, the driver): one line with the elapsed time on stderr
+    while it runs when numba's cache does not hold the driver yet (the first run after
+    installing or updating gearfmu; :func:`gearfmu.common.progress.ticking`), nothing otherwise."""
+    run = driver_for(icode)
+    cold = not _ANNOUNCING and run not in _COMPILED and cache_is_cold([run])
+    with ticking("compiling the native solver (first run after installing or updating gearfmu, about a minute; "
+                 "kept for later runs)", enabled=None if cold else False):
+        _ANNOUNCING.append(icode)
+        try:
+            yield
+        finally:
+            _ANNOUNCING.pop()
+
+
 def _warmup(icode: int = 0) -> None:
     """Compile (or load from the cache) the driver of integrator code ``icode``
     (:func:`driver_for`) on a tiny problem, so that a run's ``wall_s`` excludes the
@@ -153,6 +176,12 @@ def _warmup(icode: int = 0) -> None:
     run = driver_for(icode)
     if run in _COMPILED:
         return
+    with compiling(icode):
+        _warm(run, icode)
+    _COMPILED.add(run)
+
+
+def _warm(run, icode: int) -> None:
     k = np.ones((2, 1, 4)) * 1e8
     e = np.zeros((2, 1, 4))
     b = np.zeros((1, 4))
@@ -161,4 +190,3 @@ def _warmup(icode: int = 0) -> None:
     run(icode, False, 0.0, 1.0, x0, 0.0, np.ones(2), np.ones(2), 1e-6, 1, 1e-6, 0.1, 0.1, 1.0, 1.0, 1.0,
         k, e, b, tq, 4.0, 0.25, 1.0, 0, np.zeros((2, 4)), np.zeros((2, 1)), np.zeros(2), np.zeros(2),
         np.zeros(2, dtype=np.int64), NO_CUTS, False)
-    _COMPILED.add(run)

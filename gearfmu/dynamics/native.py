@@ -42,7 +42,7 @@ from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS,
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..tables.zones import zone_cuts
 from ..common.checks import finite_number
-from .driver import NO_CUTS, _warmup, driver_for
+from .driver import NO_CUTS, _warmup, compiling, driver_for
 from .integrators import KINK_MAX_SLOTS
 from .model_rhs import _equilibrium, _equilibrium_zoned
 
@@ -59,6 +59,7 @@ __all__ = [
     "choose_max_step_s",
     "equilibrium_dte_m",
     "substeps",
+    "write_columns_csv",
 ]
 
 
@@ -128,14 +129,20 @@ class SimResult:
         return cols
 
     def to_csv(self, path) -> None:
-        """Write a CSV: a '# units:' comment line, a row of FMU variable names, data
-        with 17 significant digits (round-trips float64)."""
-        cols = self.columns()
-        data = np.column_stack([a for _, a in cols.values()])
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
-            fh.write(",".join(cols) + "\n")
-            np.savetxt(fh, data, delimiter=",", fmt="%.17g")
+        """Write :meth:`columns` as a CSV (:func:`write_columns_csv`)."""
+        write_columns_csv(path, self.columns())
+
+
+def write_columns_csv(path, cols) -> None:
+    """The CSV of results (``SimResult.to_csv``, ``gearfmu simulate``): a ``# units:`` comment
+    line (one unit per column), a row of names (the FMU's: ``pair_force[1]`` ...), then the data,
+    comma-separated, 17 significant digits (round-trips float64).  ``cols``: ordered
+    ``{name: (unit, 1-D array)}``."""
+    data = np.column_stack([np.asarray(a, dtype=float) for _, a in cols.values()])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# units: " + ",".join(u for u, _ in cols.values()) + "\n")
+        fh.write(",".join(cols) + "\n")
+        np.savetxt(fh, data, delimiter=",", fmt="%.17g")
 
 
 @dataclass
@@ -460,9 +467,11 @@ def _solve(t, a: RunArguments, icode, sdof, max_step_s, form, info) -> SimResult
     n_sub = substeps(H, _finite("max_step_s", max_step_s, positive=True))
     h = H / n_sub
     c, me = _damping(t, a.damping_ratio)
-    arrays = _arrays(t)
-    th0 = a.pinion_angle_start_rad
-    x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+    with compiling(icode):  # the first run after installing gearfmu compiles all of this: one line
+        arrays = _arrays(t)
+        th0 = a.pinion_angle_start_rad
+        x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+        _warmup(icode)
     return _integrate(t, arrays, icode, sdof, th0, a.speed_rad_s, x0, a.dte_rate_start_m_s, a.pinion_torque_Nm,
                       a.gear_torque_Nm, H, n_sub, h, c, me, DAMPING_MODELS[a.damping_model], a.damping_model,
                       {"form": form, "equivalent_mass_kg": me, **info})

@@ -17,7 +17,9 @@ mesh_film         films along the line of action: kinematics, node solves
 multigrid         the multigrid core: EHLParams, FlatMultigrid (levels, starts, iteration)
 mgcycle           compiled cycles: schedules, convergence loop, option vector
 mgkernels         compiled grid operators: film, coefficients, residual, relaxation, transfers
+iterate           one relaxation setting on one grid: cycles, rough-film Newton, polish, freeze
 coarse_newton     coarsest-grid Newton solve, dense LU
+film_newton       coupled Newton of the finest grid (pressure and H0; rough films)
 polish            block-Newton polish of the pressure-spike region
 grids             grid choice: default grid, coarse-grid and refined retries
 roughness         roughness input: normalisation, band limit

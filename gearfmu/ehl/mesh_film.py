@@ -51,16 +51,17 @@ import math
 import os
 from dataclasses import dataclass
 from typing import List, Optional, Sequence, Tuple
-from concurrent.futures import as_completed
 
 import numpy as np
 
+from . import mgcycle
 from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
 from .solver import solve_line_contact
 from ..common.executors import make_executor, _ManagedExecutor
-from ..common.progress import progress_bar
+from ..common.jit import module_cache_is_cold
+from ..common.progress import notice, progress_bar, wait_refreshing
 
 
 class MeshFilmInputError(EHLInputError):
@@ -278,6 +279,11 @@ def solve_films(env: FilmEnvironment, requests: Sequence[tuple], *, executor=Non
     return [o for r in res for o in r]
 
 
+def _film_solver_cold() -> bool:
+    """True when numba's cache lacks the compiled multigrid cycle of the film solver."""
+    return module_cache_is_cold(mgcycle)
+
+
 def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, executor=None,
                max_workers: Optional[int] = None, progress: bool = False,
                label: str = "EHL films") -> List[list]:
@@ -288,6 +294,9 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     if not chunks:
         return []
     n_cpu = os.cpu_count() or 1
+    if progress and _film_solver_cold():
+        notice("compiling the EHL film solver (first use after installing or updating gearfmu; every worker "
+               "process compiles it, a few minutes; kept for later runs)", enabled=True)
     bar = progress_bar(desc=label, enabled=progress, total=int(sum(counts)), unit="film", leave=False)
     out: List[Optional[list]] = [None] * len(chunks)
     if executor is None:
@@ -298,7 +307,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
     try:
         with ctx as ex:
             futs = {ex.submit(worker, env, c): i for i, c in enumerate(chunks)}
-            for f in as_completed(futs):
+            for f in wait_refreshing(futs, bar):
                 i = futs[f]
                 out[i] = f.result()
                 bar.update(int(counts[i]))

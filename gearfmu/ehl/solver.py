@@ -42,9 +42,11 @@ from .grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL, RETRY_PROGRESS_F
                     refined_grid_intervals)
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .coarse_newton import COARSE_NEWTON_MAX_NODES
-from .multigrid import EHLParams, FlatMultigrid
-from .polish import (POLISH_BELOW_RESIDUAL, POLISH_BEST_BELOW_RESIDUAL,
-                     POLISH_EARLY_BELOW_RESIDUAL, _HIST_KEYS, _polish)
+from .multigrid import EHLParams
+from .iterate import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, ROUGH_NEWTON_AFTER_CYCLES,
+                      ROUGH_NEWTON_RAMP,
+                      STALL_WINDOW, STOP_FILM_CHANGE_CAP, _flat_opts, _iterate_flat)
+from .polish import POLISH_BEST_BELOW_RESIDUAL, _HIST_KEYS, _polish
 from .roughness import _roughness_function, band_limit
 
 #: Reference dimensional case used when only Moes' M and L are given
@@ -132,28 +134,6 @@ RELAXATION_SETTINGS = (
          stick=10.0, gamma="F", coarse_newton=1),
 )
 
-#: Stall test of the compiled solver: a setting stalls when neither the
-#: pressure change nor the scaled residual fell 3x over the last
-#: STALL_WINDOW cycles against all earlier ones (checked from 2 x
-#: STALL_WINDOW cycles on).  12: a window of 8 failed the high-M corner
-#: about 1/3 sooner but cut off slowly converging light-load films (M = 0.85,
-#: L = 16 of tests/test_helical_contact.py, 3x per ~10 cycles).
-STALL_WINDOW = 12
-#: stall window of the frozen-switch continuation (slow but steady
-#: convergence, e.g. Barus M = 10, L = 20: 83 cycles; 8 stopped it early)
-FROZEN_STALL_WINDOW = 12
-
-#: upper limit of the film-change tolerance of ``stop_at_discretisation``: the
-#: FMG levels' error estimate is unreliable at high alpha_eff (3-50x too large
-#: at M = 100, L = 10, docs/ehl.md); the cap bounds the algebraic error left
-#: to a few 1e-4 whatever the estimate
-STOP_FILM_CHANGE_CAP = 3e-4
-
-#: A relaxation setting that stalls with a relative pressure change per cycle
-#: below this value is continued with the switch frozen (``freeze`` option of
-#: :mod:`.multigrid`): the stall is then a switching limit cycle of the
-#: relaxation close to the solution (measured on rough films, docs/ehl.md).
-FREEZE_BELOW_PRESSURE_CHANGE = 1e-3
 
 
 #: Fast path of the default smooth solve (docs/ehl.md), two stages tried in
@@ -218,132 +198,6 @@ PIEZO_CORNER_PLAN = ((0, 6), (0, 9), (1, 6))
 PLAN_POLISH_BELOW_RESIDUAL = 1e-4
 
 
-def _flat_opts(opts):
-    """Option dict with ``load_on_coarse`` mapped to ``load_mode`` and ``order2`` to 0/1."""
-    o = dict(opts)
-    if "load_on_coarse" in o:
-        o["load_mode"] = 1 if o.pop("load_on_coarse") else 0
-    if "order2" in o:
-        o["order2"] = 1 if o["order2"] else 0
-    return o
-
-def _iterate_flat(prm, n_levels, n_coarse, rough_fn, opts, Hc_guess, P_start, max_cycles,
-                  min_cycles, tol_pressure, tol_load, tol_residual, ramp=(1.0,), tol_film=1.0,
-                  fmg=0, stop_at_discretisation=0.0, continuation=True,
-                  stall_window=STALL_WINDOW, stop_residual=math.inf, fmg_coarse_cycles=20,
-                  disc_estimate=None):
-    """Compiled W-cycles (:mod:`.multigrid`) from ``P_start`` (finest grid), a
-    full-multigrid start (``fmg`` > 0 cycles per level, at most
-    ``fmg_coarse_cycles`` on its first sub-hierarchy) or a Hertzian pressure;
-    with roughness the amplitude steps of ``ramp``.  ``stop_residual``: the
-    stop at the discretisation error (``stop_at_discretisation``) also needs the
-    scaled residual below it and the load error below ``tol_load``;
-    ``disc_estimate``: the relative discretisation error of the central film
-    to use without a full-multigrid start (a warm start's from its ``initial``)."""
-    solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **_flat_opts(opts))
-    if rough_fn is not None:
-        solver.base[:] = np.concatenate([0.5 * x ** 2 for x in solver.X])
-    fmg_counts = None
-    tol_disc = 0.0
-    if P_start is None and fmg > 0:
-        fmg_counts = solver.fmg_start(Hc_guess, cycles_per_level=fmg,
-                                      coarse_cycles=fmg_coarse_cycles)
-    elif P_start is None:
-        solver.hertz_start(Hc_guess)
-    else:
-        solver.start(P_start, Hc_guess)
-    hist = {k_: [] for k_ in _HIST_KEYS}
-    if fmg_counts is not None:
-        hist["fmg_cycles_per_level"] = list(fmg_counts)
-        hc = solver.fmg_hc
-        if stop_at_discretisation > 0.0 and len(hc) >= 2 and hc[-1] > 0.0:
-            # Richardson (second order): error of the last FMG level
-            # |H_l - H_(l-1)| / 3, of the finest grid a quarter of that; stop when
-            # the film change per cycle and the load error are below
-            # stop_at_discretisation times that estimate (docs/ehl.md)
-            e_top = abs(hc[-1] - hc[-2]) / 3.0 / hc[-1] / 4.0
-            tol_disc = min(max(stop_at_discretisation * e_top, 1e-8), STOP_FILM_CHANGE_CAP)
-            hist["stopped_at_discretisation"] = [e_top, tol_disc]
-    elif stop_at_discretisation > 0.0 and disc_estimate is not None and disc_estimate > 0.0:
-        tol_disc = min(max(stop_at_discretisation * disc_estimate, 1e-8), STOP_FILM_CHANGE_CAP)
-        hist["stopped_at_discretisation"] = [disc_estimate, tol_disc]
-    stages = list(ramp) if rough_fn is not None else [None]
-    if rough_fn is not None and P_start is None:
-        stages = [0.0] + stages
-    it = 0
-    converged = False
-    for a in stages:
-        if a is not None:
-            solver.set_roughness_scale(a)
-        converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=min_cycles,
-                                          tol_pressure=tol_pressure, tol_load=tol_load,
-                                          tol_residual=tol_residual, tol_film=tol_film,
-                                          stall_window=stall_window,
-                                          tol_discretisation=tol_disc,
-                                          tol_discretisation_residual=stop_residual,
-                                          tol_discretisation_load=(tol_load if stop_residual
-                                                                   < math.inf else math.inf))
-        it += nc
-        for k_ in _HIST_KEYS:
-            hist[k_].extend(h[k_])
-        if not converged and nc >= max_cycles:
-            # stopped by the caller's cycle limit, not stalled: no polish either
-            hist["hit_max_cycles"] = [float(nc)]
-        if not continuation:
-            break
-        last_dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
-        last_res = h["reynolds_residual"][-1] if h["reynolds_residual"] else float("nan")
-        if (not converged and math.isfinite(last_res) and last_res < POLISH_EARLY_BELOW_RESIDUAL
-                and "hit_max_cycles" not in hist
-                and solver.opts.get("order2", 1) and not solver.opts.get("defect", 0)):
-            # stalled just above the tolerance: block-Newton polish first; if it
-            # fails, the state is restored and the path continues exactly as
-            # without it (frozen switch, docs/ehl.md)
-            saved = (solver.P.copy(), solver.H.copy(), solver.H0.copy(), solver.mode.copy())
-            ok, nr, ph = _polish(solver, tol_pressure, tol_load, tol_residual, tol_film,
-                                 max_cycles)
-            hist["newton_polish_early_rounds"] = [nr]
-            if ok:
-                converged = True
-                hist["newton_polish_from_cycle"] = [it]
-                hist["newton_polish_rounds"] = [nr]
-                it += nr
-                for k_ in _HIST_KEYS:
-                    hist[k_].extend(ph[k_])
-            else:
-                solver.P[:], solver.H[:], solver.H0[:], solver.mode[:] = saved
-        if not converged and math.isfinite(last_dp) and last_dp < FREEZE_BELOW_PRESSURE_CHANGE:
-            # limit cycle close to the solution: continue with the Gauss-Seidel /
-            # Jacobi choice of every finest-grid node frozen (docs/ehl.md)
-            solver.opts["freeze"] = 1
-            converged, nc, h = solver.iterate(max_cycles=max_cycles, min_cycles=1,
-                                              tol_pressure=tol_pressure, tol_load=tol_load,
-                                              tol_residual=tol_residual, tol_film=tol_film,
-                                              stall_window=FROZEN_STALL_WINDOW)
-            solver.opts["freeze"] = 0
-            hist["frozen_switch_from_cycle"] = [it]
-            it += nc
-            for k_ in _HIST_KEYS:
-                hist[k_].extend(h[k_])
-        last_res = hist["reynolds_residual"][-1] if hist["reynolds_residual"] else float("nan")
-        if (not converged and math.isfinite(last_res) and last_res < POLISH_BELOW_RESIDUAL
-                and "hit_max_cycles" not in hist and "newton_polish_rounds" not in hist
-                and "newton_polish_early_rounds" not in hist   # failed once on this setting
-                and solver.opts.get("order2", 1) and not solver.opts.get("defect", 0)):
-            # close to the solution but stalled on the spike region: block-Newton
-            # polish (docs/ehl.md)
-            converged, nc, h = _polish(solver, tol_pressure, tol_load, tol_residual, tol_film,
-                                       max_cycles)
-            hist["newton_polish_from_cycle"] = [it]
-            hist["newton_polish_rounds"] = [nc]
-            it += nc
-            for k_ in _HIST_KEYS:
-                hist[k_].extend(h[k_])
-        if not converged:
-            break
-    return solver, hist, converged, it
-
-
 def _finite_positive(name, v, allow_zero=False):
     return finite_number(name, v, positive=not allow_zero, nonneg=allow_zero, error=EHLInputError)
 
@@ -374,6 +228,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        initial: Optional["LineContactResult"] = None,
                        roughness_min_wavelength_dX: float = 8.0,
                        solver: str = "compiled", stop_at_discretisation: float = 0.0,
+                       newton_after_cycles: Optional[int] = None,
                        **multigrid_options) -> LineContactResult:
     """Solve the steady isothermal line-contact EHL problem (seed 000 eq 2-7).
 
@@ -397,7 +252,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     earlier, at its estimated discretisation error (below).
     With roughness the smooth solution is computed first and then continued
     through the amplitude steps ``roughness_ramp`` (last must be 1; default
-    (1.0,): one step -- finer ramps did not help in the cases tried).
+    (1.0,): one step; a rough film that does not converge in one step is
+    solved again in the steps :data:`.iterate.ROUGH_NEWTON_RAMP`, see ``newton_after_cycles``).
     ``viscosity``: "roelands" (seed 000 eq 5, default) or "barus"
     (exp(alpha p), the law behind Moes' fit; used by the validation tests).  Film collapse (h <= 0): :class:`FilmCollapseError`.
 
@@ -414,6 +270,12 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
       the relaxation limit-cycle.  ``result.roughness_m`` is the filtered
       profile actually used.
     * ``solver``: "compiled" (the only value; :mod:`.multigrid`).
+    * ``newton_after_cycles`` (rough films; None: :data:`.iterate.ROUGH_NEWTON_AFTER_CYCLES`,
+      0: off): the coupled Newton of the finest grid (:mod:`.film_newton`) after
+      that many cycles with the roughness in place (docs/ehl.md "Rough films";
+      ``residuals["coupled_newton_steps"]``); where that fails, once more with the
+      roughness in the amplitude steps :data:`.iterate.ROUGH_NEWTON_RAMP`
+      (``residuals["roughness_ramp_retry"]``).
     * ``tol_film``: also require the relative change per cycle of the
       central and minimum film below this (default 1: off; compiled solver).
     * ``fmg_cycles`` (compiled solver, smooth solves without ``initial``):
@@ -561,6 +423,10 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     if not math.isfinite(sad) or sad < 0.0 or (sad > 0.0 and fmg_cycles == 0):
         raise EHLInputError(f"stop_at_discretisation={stop_at_discretisation!r}: must be "
                             ">= 0 and needs fmg_cycles > 0 (the estimate comes from the FMG levels)")
+    newton_after = (ROUGH_NEWTON_AFTER_CYCLES if newton_after_cycles is None
+                    else int(newton_after_cycles))
+    if newton_after < 0:
+        raise EHLInputError(f"newton_after_cycles={newton_after_cycles!r}: must be >= 0")
     if multigrid_options:
         attempts = [dict(multigrid_options)]
     else:
@@ -608,7 +474,16 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
             P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
             tol_load, tol_residual, tuple(roughness_ramp), tol_film,
             fmg=fmg_cycles if rough_fn is None else 0,
-            stop_at_discretisation=float(stop_at_discretisation))
+            stop_at_discretisation=float(stop_at_discretisation), newton_after=newton_after)
+        if not conv and rough_fn is not None and newton_after > 0 and len(roughness_ramp) == 1:
+            # the roughness in steps, coupled Newton on each (docs/ehl.md "Rough films")
+            s2, h2, conv, it2 = _iterate_flat(
+                prm, n_levels_, n_coarse_, rough_fn, opts_, Hc_guess,
+                P_start if k_att == 0 else None, max_cycles, min_cycles, tol_pressure,
+                tol_load, tol_residual, ROUGH_NEWTON_RAMP, tol_film, newton_after=newton_after)
+            if conv:
+                s_obj, h_, it_ = s2, h2, it_ + it2
+                h_["roughness_ramp_retry"] = list(ROUGH_NEWTON_RAMP)
         if conv:
             return True, s_obj, h_, it_
         rr = h_["reynolds_residual"]

@@ -7,10 +7,12 @@ take identical RK4 substeps and should agree to round-off.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
+import sys
 import time
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional
@@ -22,8 +24,11 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from ..common.user_files import ArchiveError, archive_kind, read_archive
+from ..common.progress import progress_bar, reporting_enabled, ticking
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import simulate
+from .integrity import RECORDS, integrity_problem, platform_problem
 from .modeldesc import expand_variables, features_of, load_spec
 
 #: default agreement criterion of ``gearfmu validate``: largest |FMU - native| of every output
@@ -36,6 +41,11 @@ class FmuMismatchError(ValueError):
     tables, or another slot count / variable set.  The message names the file and the reason."""
 
 
+class FmuRunError(ValueError):
+    """fmpy could not load or run the FMU (its binary does not load here, it refused to
+    instantiate or a step failed); the message names the file and fmpy's reason."""
+
+
 SCALAR_OUTPUTS = ("pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "dte",
                   "mesh_force", "mesh_stiffness")
 
@@ -46,6 +56,13 @@ def output_names(slots: int) -> List[str]:
     names += [f"pair_force[{i + 1}]" for i in range(slots)]
     names += [f"load_sharing[{i + 1}]" for i in range(slots)]
     return names
+
+
+def output_units(slots: int) -> Dict[str, str]:
+    """The unit of every output of :func:`output_names` (the FMU's, from
+    modeldescription/variables.toml; "1" for a dimensionless one)."""
+    units = {v.name: v.unit or "1" for v in expand_variables(load_spec(), slots)}
+    return {n: units[n] for n in output_names(slots)}
 
 
 def native_columns(result, slots: int) -> Dict[str, np.ndarray]:
@@ -87,35 +104,47 @@ class FmuFile:
 
 
 def open_fmu(path) -> FmuFile:
-    """Open ``path`` as an FMU; FmuMismatchError naming the file and what is wrong when it is
-    not one (missing, a directory, not a zip archive, no or unreadable modelDescription.xml)."""
+    """Open ``path`` as an FMU to run here; FmuMismatchError naming the file and what is wrong
+    otherwise: missing, a directory, empty, not a zip archive (an SSP package or a table file is
+    called by its name), a damaged archive (truncated; a member failing its CRC-32, cut short or
+    not decompressible), no or unreadable modelDescription.xml, not Co-Simulation, a member
+    that does not match the SHA-256 the FMU recorded at build time or a GUID that is not its
+    own (:mod:`gearfmu.fmu.integrity`), no binary for this platform."""
     from fmpy import read_model_description  # fmpy: heavy, only to read an FMU
 
     p = Path(path)
-    if not p.exists():
-        raise FmuMismatchError(f"{p}: file not found")
-    if not p.is_file():
-        raise FmuMismatchError(f"{p}: not an FMU (a directory, not a file)")
-    if not zipfile.is_zipfile(p):
-        raise FmuMismatchError(f"{p}: not an FMU (not a zip archive)")
     try:
-        with zipfile.ZipFile(p) as z:
-            names = set(z.namelist())
-            if "modelDescription.xml" not in names:
-                raise FmuMismatchError(f"{p}: not an FMU (no modelDescription.xml in the archive)")
-            record = json.loads(z.read(_RECORD).decode("utf-8")) if _RECORD in names else None
-            scene = z.read(_RECORD_SCENE).decode("utf-8") if _RECORD_SCENE in names else None
-    except (zipfile.BadZipFile, OSError, ValueError) as exc:
-        if isinstance(exc, FmuMismatchError):
-            raise
-        raise FmuMismatchError(f"{p}: damaged FMU archive ({exc})") from None
+        arc = read_archive(p, "FMU", keep=(_RECORD, _RECORD_SCENE) + RECORDS)
+    except ArchiveError as exc:
+        raise FmuMismatchError(str(exc)) from None
+    if "modelDescription.xml" not in arc.names:
+        kind = archive_kind(arc.names)
+        if kind == "an SSP package":
+            inner = [n for n in arc.names if n.lower().endswith(".fmu")]
+            raise FmuMismatchError(f"{p}: an SSP package, not an FMU; the FMU inside it is "
+                                   f"{', '.join(inner) or '(none)'}: extract it and give that")
+        raise FmuMismatchError(f"{p}: {kind}, not an FMU (no modelDescription.xml in the archive)"
+                               if kind else f"{p}: not an FMU (no modelDescription.xml in the archive)")
+    try:
+        record = json.loads(arc.data[_RECORD].decode("utf-8")) if _RECORD in arc.data else None
+        scene = arc.data[_RECORD_SCENE].decode("utf-8") if _RECORD_SCENE in arc.data else None
+    except ValueError as exc:  # not UTF-8, not JSON
+        raise FmuMismatchError(f"{p}: altered FMU: its validation record cannot be read ({exc})") from None
     try:
         md = read_model_description(str(p))
     except Exception as exc:  # noqa: BLE001 - fmpy raises plain exceptions for invalid XML
-        raise FmuMismatchError(f"{p}: modelDescription.xml cannot be read ({str(exc).splitlines()[0]})") from None
+        raise FmuMismatchError(f"{p}: modelDescription.xml cannot be read ({_first_line(exc)})") from None
     if getattr(md, "coSimulation", None) is None:
         raise FmuMismatchError(f"{p}: not a Co-Simulation FMU (no <CoSimulation> in modelDescription.xml)")
+    problem = integrity_problem(arc, md) or platform_problem(arc.names, md)
+    if problem:
+        raise FmuMismatchError(f"{p}: {problem}")
     return FmuFile(p, md, record if isinstance(record, dict) else None, scene)
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def _scene_name(text: Optional[str]) -> str:
@@ -144,7 +173,8 @@ def check_fmu_matches(fmu: FmuFile, *, scene_text: Optional[str] = None, scene_l
                 "or build the FMU from this scene")
     if tables is None:
         return
-    tsha = (rec.get("tables") or {}).get("tables_bin_sha256")
+    trec = rec.get("tables")
+    tsha = trec.get("tables_bin_sha256") if isinstance(trec, dict) else None
     if tsha is not None:
         have = hashlib.sha256(tables.to_bytes()[1]).hexdigest()
         if have != tsha:
@@ -164,6 +194,26 @@ def check_fmu_matches(fmu: FmuFile, *, scene_text: Optional[str] = None, scene_l
             f"missing from it {missing[:6]}{' ...' if len(missing) > 6 else ''}")
 
 
+class _LogTee(io.TextIOBase):
+    """Passes what fmpy prints (the FMU's log: "[ERROR] message") through to ``out`` and keeps
+    the last error or fatal message, to name it when the run fails."""
+
+    def __init__(self, out):
+        self.out, self._last = out, None
+
+    def write(self, s):
+        for line in s.splitlines():
+            if line.startswith(("[ERROR] ", "[FATAL] ")):
+                self._last = line.split("] ", 1)[1].strip()
+        return self.out.write(s)
+
+    def flush(self):
+        self.out.flush()
+
+    def last_error(self) -> Optional[str]:
+        return self._last
+
+
 @dataclass
 class FmuRun:
     time_s: np.ndarray
@@ -173,15 +223,36 @@ class FmuRun:
 
 def run_fmu(fmu_path, *, stop_time_s: float, comm_step_s: float, start_values=None,
             names=None) -> FmuRun:
-    """Simulate an FMU with fmpy at a fixed communication step."""
+    """Simulate an FMU with fmpy at a fixed communication step; FmuRunError naming the file when
+    fmpy cannot load or run it."""
     import fmpy  # fmpy: heavy, only to run an FMU
 
-    fmi3 = fmpy.read_model_description(str(fmu_path)).fmiVersion.startswith("3")
-    if fmi3 and names is not None:  # FMI 3: the elements pair_force[i] are the array pair_force
-        names = list(dict.fromkeys(n.split("[", 1)[0] for n in names))
-    t0 = time.perf_counter()
-    res = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time_s, output_interval=comm_step_s,
-                            start_values=dict(start_values or {}), output=names)
+    log = _LogTee(sys.stdout)
+    bar = None
+    try:
+        fmi3 = fmpy.read_model_description(str(fmu_path)).fmiVersion.startswith("3")
+        if fmi3 and names is not None:  # FMI 3: the elements pair_force[i] are the array pair_force
+            names = list(dict.fromkeys(n.split("[", 1)[0] for n in names))
+        steps = max(1, int(round(stop_time_s / comm_step_s)))
+        bar = progress_bar(desc=f"gearfmu: {Path(fmu_path).name} through fmpy", enabled=reporting_enabled(),
+                           total=steps, unit="step", leave=False)
+
+        def step_finished(time_s, recorder):  # fmpy calls it after every communication step
+            bar.update(1)
+            return True
+
+        t0 = time.perf_counter()
+        with contextlib.redirect_stdout(log):
+            res = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time_s, output_interval=comm_step_s,
+                                    start_values=dict(start_values or {}), output=names,
+                                    step_finished=step_finished if not bar.disable else None)
+    except Exception as exc:  # noqa: BLE001 - fmpy raises Exception, FMICallException, OSError (loader)
+        said = log.last_error()
+        raise FmuRunError(f"{fmu_path}: fmpy could not run the FMU ({_first_line(exc)}"
+                          + (f"; the FMU logged: {said})" if said else ")")) from exc
+    finally:
+        if bar is not None:
+            bar.close()
     wall = time.perf_counter() - t0
     cols = {}
     for n in res.dtype.names:
@@ -253,7 +324,8 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
     if not (tolerance >= 0 and tolerance < float("inf")):
         raise FmuMismatchError(f"tolerance: must be finite and >= 0, got {tolerance!r}")
     check_fmu_matches(open_fmu(fmu_path), scene_text=scene_text, tables=tables)
-    problems = [str(p) for p in validate_fmu(str(fmu_path))]
+    with ticking(f"checking {Path(fmu_path).name} with fmpy's validation"):
+        problems = [str(p) for p in validate_fmu(str(fmu_path))]
     if "integrator" not in native_kwargs:
         integ = fmu_integrator(fmu_path, start_values)
         if integ is not None:
@@ -263,9 +335,10 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
                   start_values=start_values, names=names)
     simulate(tables, **dict(native_kwargs, stop_time_s=min(stop_time_s, 10 * comm_step_s),
                             comm_step_s=comm_step_s))  # JIT warm-up, not timed
-    t0 = time.perf_counter()
-    nat = simulate(tables, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
-    native_wall = time.perf_counter() - t0
+    with ticking(f"native solver over {stop_time_s:g} s"):
+        t0 = time.perf_counter()
+        nat = simulate(tables, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
+        native_wall = time.perf_counter() - t0
     per = diff_report(native_columns(nat, tables.slots), fmu.columns)
     return {
         "fmu": str(fmu_path),

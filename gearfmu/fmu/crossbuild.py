@@ -1,11 +1,19 @@
 """Binaries of the standalone FMU for every desktop platform (docs/standalone.md "Platforms").
 
-One compiler for all targets: zig's bundled clang (the ``ziglang`` package,
-``python -m ziglang cc``; the optional extra ``gearfmu[cross]``), with the same
-flags for every target (:data:`gearfmu.fmu.standalone_build.STANDALONE_CFLAGS`:
-``-O2``, ``-ffp-contract=off``, ``-fno-fast-math``, C99, hidden visibility).
-Without zig only the build machine's own platform is compiled, with the host C
-compiler; the FMU then says which platforms it lacks.
+One compiler for all targets: zig's bundled clang (the ``ziglang`` package, a
+dependency of gearfmu, ``python -m ziglang cc``), with the same flags for every
+target (:data:`gearfmu.fmu.standalone_build.STANDALONE_CFLAGS`: ``-O2``,
+``-ffp-contract=off``, ``-fno-fast-math``, C99, hidden visibility).  Without zig
+(a Python where the ``ziglang`` package cannot be installed) only the build
+machine's own platform is compiled, with the host C compiler; the FMU then says
+which platforms it lacks and why, and so does the build's output.
+
+The first link for a target makes zig build that target's C runtime (libc stubs,
+compiler-rt; for Windows the whole MinGW runtime) into zig's global cache, once per
+zig version.  :func:`prepare_targets` does that up front with a line per target on
+stderr (and a note in zig's cache that it is done), so a first build is never a
+silent minute; a target whose runtime cannot be built is left out of the FMU with
+the reason.
 
 Platform keys are the FMI 3 platform tuples; the folder is FMI 2's name where
 FMI 2 has one:
@@ -35,12 +43,14 @@ import functools
 import hashlib
 import importlib.util
 import os
+import re
 import shutil
 import struct
 import subprocess
 import sys
 import tempfile
-from concurrent.futures import ThreadPoolExecutor
+import time
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -48,6 +58,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import platform as _platform
 
 from ..common.cache import cache_dir
+from ..common.progress import progress_bar, reporting_enabled, wait_refreshing
 
 
 @dataclass(frozen=True)
@@ -73,6 +84,17 @@ MACHO_ALIGN = {0x01000007: 12, 0x0100000C: 14}
 
 class CrossBuildError(ValueError):
     """A platform could not be compiled; the message names it."""
+
+
+#: rough size of each target's one-time C-runtime preparation by zig, for the message that
+#: announces it (the Windows target builds the whole MinGW C runtime, the others link stubs)
+PREPARE_ESTIMATE = {"x86_64-windows": "a minute or more"}
+PREPARE_ESTIMATE_DEFAULT = "a few seconds"
+#: how often a preparation still under way is reported (s)
+PREPARE_HEARTBEAT_S = 20.0
+#: the library a preparation links: one exported function (a Mach-O library that exports
+#: nothing makes zig's linker fail)
+PROBE_SOURCE = '__attribute__((visibility("default"))) int gearfmu_probe(void) { return 0; }\n'
 
 
 def parse_platforms(text: Optional[str]) -> Tuple[str, ...]:
@@ -126,6 +148,25 @@ def _zig_version(zig: Tuple[str, ...]) -> str:
                                        timeout=120).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "zig (version unknown)"
+
+
+def zig_global_cache_dir(zig: Sequence[str]) -> Optional[Path]:
+    """zig's global cache folder (``zig env``: JSON in older zig, ZON in newer; both give
+    ``global_cache_dir`` as a quoted string), None when zig does not say."""
+    env = tuple(os.environ.get(k) for k in ("ZIG_GLOBAL_CACHE_DIR", "XDG_CACHE_HOME", "LOCALAPPDATA", "HOME"))
+    return _zig_global_cache_dir(tuple(zig), env)
+
+
+@functools.lru_cache(maxsize=None)
+def _zig_global_cache_dir(zig: Tuple[str, ...], _env: tuple) -> Optional[Path]:
+    """(``_env``: the variables zig's choice depends on, so that the answer is asked again
+    when one of them changes)"""
+    try:
+        out = subprocess.run([*zig, "env"], capture_output=True, text=True, timeout=120).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    m = re.search(r'global_cache_dir"?\s*[:=]\s*"((?:[^"\\]|\\.)*)"', out)
+    return Path(m.group(1).replace("\\\\", "\\")) if m else None
 
 
 def object_cache_dir() -> Path:
@@ -201,6 +242,71 @@ def zig_compile(zig: Sequence[str], key: str, cflags: Sequence[str], sources: Se
             *(str(s) for s in sources), "-lm", *link]
 
 
+# ------------------------------------------- one-time preparation of the targets
+def _prepared_stamp(zig: Sequence[str], key: str, cflags: Sequence[str]) -> Optional[Path]:
+    """The note that zig's C runtime of target ``key`` is built, kept in zig's own global cache
+    (so that it goes when that cache is cleared); None when zig names no cache folder."""
+    root = zig_global_cache_dir(zig)
+    if root is None:
+        return None
+    h = hashlib.sha256("\0".join((zig_version(zig), TARGETS[key].zig, *cflags)).encode()).hexdigest()[:24]
+    return root / "gearfmu-prepared" / f"{key}-{h}"
+
+
+def _probe_link(zig: Sequence[str], key: str, cflags: Sequence[str]) -> None:
+    """Link a one-function library for ``key`` with the flags of the real link (zig builds the
+    target's C runtime on the way); CrossBuildError with zig's last error line when it fails."""
+    t = TARGETS[key]
+    with tempfile.TemporaryDirectory(prefix="gearfmu_zigprep_") as tmp:
+        src = Path(tmp) / "gearfmu_probe.c"
+        src.write_text(PROBE_SOURCE)
+        link = ["-Wl,-install_name,@rpath/gearfmu_probe" + t.ext] if key.endswith("-darwin") else []
+        cmd = [*zig, "cc", "-target", t.zig, *cflags, "-g0", "-o", str(Path(tmp) / ("gearfmu_probe" + t.ext)),
+               str(src), "-lm", *link]
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=3600, cwd=tmp)
+        except (OSError, subprocess.SubprocessError) as exc:
+            raise CrossBuildError(f"zig cannot run ({exc})") from None
+        if p.returncode != 0:
+            lines = [ln.strip() for ln in p.stderr.splitlines() if ln.strip()]
+            raise CrossBuildError(f"zig cannot link for {t.zig} (exit status {p.returncode}"
+                                  + (f": {lines[-1]}" if lines else "") + ")")
+
+
+def prepare_targets(zig: Sequence[str], keys: Sequence[str], cflags: Sequence[str], *, log=None) -> Dict[str, str]:
+    """Have zig build the C runtime of every target in ``keys`` that it has not built yet (once
+    per zig version and cache), one target at a time (zig builds a runtime on all cores), each
+    announced on ``log`` (default: stderr) with its rough duration, reported every
+    :data:`PREPARE_HEARTBEAT_S` s while it runs and when it is ready.  Returns ``{key: reason}``
+    for the targets zig cannot link for (they cannot be built; the rest can)."""
+    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    stamps = {k: _prepared_stamp(zig, k, cflags) for k in keys}
+    todo = [k for k in keys if stamps[k] is None or not stamps[k].is_file()]
+    todo.sort(key=lambda k: k in PREPARE_ESTIMATE)  # the quick ones first
+    failed: Dict[str, str] = {}
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        for key in todo:
+            log(f"gearfmu: preparing zig's {key} C runtime (one time per zig version, "
+                f"{PREPARE_ESTIMATE.get(key, PREPARE_ESTIMATE_DEFAULT)}) ...")
+            t0 = time.perf_counter()
+            job = pool.submit(_probe_link, zig, key, cflags)
+            while not wait([job], timeout=PREPARE_HEARTBEAT_S).done:
+                log(f"gearfmu: still preparing zig's {key} C runtime ({time.perf_counter() - t0:.0f} s) ...")
+            try:
+                job.result()
+            except CrossBuildError as exc:
+                failed[key] = str(exc)
+                log(f"gearfmu: {key}: {exc}; the FMU will not carry {key}")
+                continue
+            log(f"gearfmu: zig's {key} C runtime ready ({time.perf_counter() - t0:.0f} s)")
+            try:
+                stamps[key].parent.mkdir(parents=True, exist_ok=True)
+                stamps[key].write_text(f"{zig_version(zig)} {TARGETS[key].zig} {' '.join(cflags)}\n")
+            except (OSError, AttributeError):
+                pass  # no or an unwritable zig cache: the next build checks again (quickly, zig has it)
+    return failed
+
+
 # ------------------------------------------------------------- Mach-O fat files
 def macho_cpu(data: bytes) -> Tuple[int, int]:
     """(cputype, cpusubtype) of a thin 64-bit little-endian Mach-O (magic 0xFEEDFACF)."""
@@ -245,16 +351,20 @@ def folder(key: str, fmi_version: int = 2) -> str:
 
 def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, identifier: str, *,
                    cflags: Sequence[str], sources: Sequence[str],
-                   host_compile=None, host_cc_first: bool = False, fmi_version: int = 2) -> Dict[str, dict]:
+                   host_compile=None, host_cc_first: bool = False, fmi_version: int = 2,
+                   log=None) -> Dict[str, dict]:
     """Compile every platform in ``keys`` into ``binaries_dir/<folder>/<identifier><ext>``
     (:func:`folder`; ``sources``: the names of the binary's C files in ``sources_dir``, in compile
     order).
 
     Returns ``{key: {"folder", "file", "compiler", "command"}}`` for each built
     platform and ``{key: {"missing": reason}}`` for each that could not be built
-    (no zig).  ``host_compile(out_lib) -> (command, compiler)`` compiles the
+    (no zig; zig cannot link for the target; the compilation failed: the reason
+    says which).  ``host_compile(out_lib) -> (command, compiler)`` compiles the
     build machine's platform when zig is absent, or always with ``host_cc_first``
-    (the caller named its own C compiler)."""
+    (the caller named its own C compiler).  The targets zig has not prepared yet
+    are prepared first (:func:`prepare_targets`, messages on ``log``, default stderr).
+    CrossBuildError only when no platform at all could be built."""
     zig = zig_command()
     src = Path(sources_dir)
     sources = [src / n for n in sources]
@@ -263,27 +373,54 @@ def build_binaries(keys: Sequence[str], sources_dir: Path, binaries_dir: Path, i
     hk = host_key()
     zver = zig_version(zig) if zig else None
     darwin: Dict[str, bytes] = {}
+    use_host = {k for k in keys if k == hk and host_compile is not None and (zig is None or host_cc_first)}
+    unprepared: Dict[str, str] = {}
+    if zig is not None:
+        unprepared = prepare_targets(zig, [k for k in keys if k not in use_host], cflags, log=log)
+    errors: Dict[str, str] = {}
     with tempfile.TemporaryDirectory(prefix="gearfmu_xbuild_") as tmp:
         outs, jobs = {}, {}
-        with ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
+        bar = progress_bar(desc="gearfmu: FMU binaries", enabled=reporting_enabled(), total=len(keys),
+                           unit="platform", leave=False)
+        with bar, ThreadPoolExecutor(max_workers=max(1, min(len(keys), os.cpu_count() or 1))) as pool:
             for key in keys:  # the zig compilations run side by side (one process each)
                 t = TARGETS[key]
                 outs[key] = out = (Path(tmp) / key if key.endswith("-darwin") and fat_mac else
                                    Path(binaries_dir) / folder(key, fmi_version)) / (identifier + t.ext)
-                if key == hk and host_compile is not None and (zig is None or host_cc_first):
+                if key in use_host:
                     cmd, compiler = host_compile(out)
                     report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext,
                                    "compiler": compiler,
                                    "command": _portable(cmd, src, None)}
+                elif key in unprepared:
+                    report[key] = {"missing": unprepared[key]}
                 elif zig is not None:
                     jobs[key] = pool.submit(zig_compile, zig, key, cflags, sources, src, out)
                     report[key] = {}
                 else:
-                    report[key] = {"missing": "no cross compiler (install gearfmu[cross]: the ziglang package)"}
+                    report[key] = {"missing": "no cross compiler: the ziglang package (a gearfmu dependency) is "
+                                              "not installed in this Python"}
+                if key not in jobs:
+                    bar.update(1)
+            names = {job: key for key, job in jobs.items()}
+            for job in wait_refreshing(list(jobs.values()), bar):  # the elapsed time moves while zig runs
+                bar.set_postfix_str(names[job], refresh=False)
+                bar.update(1)
             for key, job in jobs.items():
                 t = TARGETS[key]
+                try:
+                    cmd = job.result()
+                except CrossBuildError as exc:
+                    errors[key] = str(exc)
+                    report[key] = {"missing": str(exc).splitlines()[0] + " (details: the build's stderr)"}
+                    continue
                 report[key] = {"folder": folder(key, fmi_version), "file": identifier + t.ext, "compiler": zver,
-                               "command": _portable(job.result(), src, zig)}
+                               "command": _portable(cmd, src, zig)}
+        for key, msg in errors.items():  # the compiler's own words, for whoever has to fix it
+            (log or (lambda m: print(m, file=sys.stderr, flush=True)))(f"gearfmu: {msg}")
+        if all("missing" in r for r in report.values()):
+            raise CrossBuildError("no platform could be built: " + "; ".join(
+                f"{k}: {r['missing']}" for k, r in report.items()))
         for key in keys:
             if fat_mac and key.endswith("-darwin") and "missing" not in report[key]:
                 darwin[key] = outs[key].read_bytes()
@@ -314,11 +451,25 @@ def _portable(cmd: Sequence[str], src: Path, zig) -> str:
 
 
 def platform_summary(report: Dict[str, dict]) -> str:
-    """One line: which platforms the FMU carries and which it lacks (and why)."""
+    """One line: which platforms the FMU carries and which it lacks, each with its reason."""
     have = [k for k, r in report.items() if "missing" not in r]
-    lacks = [k for k, r in report.items() if "missing" in r]
     line = "binaries: " + (", ".join(f"{k} (binaries/{report[k]['folder']})" for k in have) or "none")
+    lacks = missing_platforms(report)
     if lacks:
-        line += "; not built: " + ", ".join(lacks) + " -- " + report[lacks[0]]["missing"] + \
-                "; those platforms compile sources/ (sources/BUILD.txt)"
+        reasons = _by_reason(lacks)
+        line += "; not built: " + ", ".join(lacks) + " -- " + (next(iter(reasons)) if len(reasons) == 1 else "; ".join(
+            f"{', '.join(ks)}: {why}" for why, ks in reasons.items())) + \
+            "; those platforms compile sources/ (sources/BUILD.txt)"
     return line
+
+
+def missing_platforms(report: Dict[str, dict]) -> Dict[str, str]:
+    """``{key: reason}`` of the platforms a build report lacks."""
+    return {k: r["missing"] for k, r in report.items() if "missing" in r}
+
+
+def _by_reason(lacks: Dict[str, str]) -> Dict[str, List[str]]:
+    out: Dict[str, List[str]] = {}
+    for k, why in lacks.items():
+        out.setdefault(why, []).append(k)
+    return out

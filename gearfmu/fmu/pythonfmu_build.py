@@ -47,6 +47,7 @@ import sysconfig
 
 from .. import __version__
 from ..common.cache import cache_dir
+from ..common.progress import ticking
 from ..common.vocabulary import DEFAULT_INTEGRATOR
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
@@ -121,7 +122,8 @@ def compile_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
     if kept is not None and kept.is_file():
         shutil.copy2(kept, lib)
         return lib
-    run_compiler([cc, *CFLAGS, "-o", str(lib), *(str(f) for f in KERNEL_LIBRARY_SOURCES), "-lm"], "kernel")
+    with ticking(f"compiling the FMU's C kernel ({Path(cc).name}; kept for later builds)"):
+        run_compiler([cc, *CFLAGS, "-o", str(lib), *(str(f) for f in KERNEL_LIBRARY_SOURCES), "-lm"], "kernel")
     if kept is not None:
         try:  # atomic publish: a concurrent build sees either no file or the whole library
             kept.parent.mkdir(parents=True, exist_ok=True)

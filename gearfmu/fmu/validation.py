@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import datetime
-import functools
 import hashlib
 import importlib.metadata
 import inspect
@@ -16,11 +15,11 @@ import io
 import json
 import platform
 import sys
-from pathlib import Path
 from typing import Dict, Optional
 
 from .. import __version__
-from ..common.cache import cache_dir, load_entry, store_entry
+from ..common.cache import cache_dir, load_entry, package_sources_sha256, sources_sha256, store_entry  # noqa: F401
+from ..common.progress import ticking
 from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
 from ..dynamics.native import simulate
 from ..tables.mesh_tables import MeshTables
@@ -37,21 +36,8 @@ REFERENCE_CACHE = "validation"
 _SOLVER_PACKAGES = ("numpy", "numba")
 
 
-def package_sources_sha256(root: Path = Path(__file__).resolve().parents[1]) -> str:
-    """SHA-256 over the path and bytes of every ``.py`` file under ``root`` (default: the
-    installed gearfmu package), in sorted path order.  Part of a cached reference result's key:
-    in a development checkout the version string stays the same while the solver's code
-    changes, and a result of other code must not be read back."""
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(f.relative_to(root).as_posix().encode("utf-8") + b"\0")
-        h.update(f.read_bytes() + b"\0")
-    return h.hexdigest()
-
-
-@functools.lru_cache(maxsize=1)
 def _sources_sha256() -> str:
-    return package_sources_sha256()
+    return sources_sha256()
 
 
 def _versions() -> Dict[str, Optional[str]]:
@@ -150,7 +136,9 @@ def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
     hit = load_entry(folder, key, ".csv", fields={"substeps": int, "rows": int, "native_wall_s": float})
     if hit is not None:
         return hit[1], hit[0]
-    res = simulate(tables, **sim_kw)
+    with ticking(f"validation record: native reference run over {sim_kw['stop_time_s']:g} s "
+                 "(kept for later builds)"):
+        res = simulate(tables, **sim_kw)
     cols = native_columns(res, tables.slots)
     names = output_names(tables.slots)
     buf = io.StringIO()

@@ -35,6 +35,7 @@ from typing import Any, Optional, Tuple
 
 import numpy as np
 
+from ..common.user_files import read_text
 from .options import RPM_TO_RAD_S
 
 __all__ = ["EnvelopeError", "DutyCycle", "Envelope", "AccuracyTarget", "load_duty_cycle_csv",
@@ -260,11 +261,13 @@ def load_duty_cycle_csv(path) -> DutyCycle:
     naming the column / row and the reason."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = read_text(p, "a duty-cycle CSV", EnvelopeError)
     except FileNotFoundError:
         raise EnvelopeError(f"duty_cycle_csv: file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise EnvelopeError(f"duty_cycle_csv: cannot read {p}: {exc}") from None
+    except OSError as exc:
+        raise EnvelopeError(f"duty_cycle_csv: cannot read {p}: {exc.strerror or exc}") from None
+    except EnvelopeError as exc:  # not text: a zip archive, a binary file, not UTF-8
+        raise EnvelopeError(f"duty_cycle_csv: {exc}") from None
     rows = [r for r in csv.reader(line for line in text.splitlines() if line.strip() and
                                   not line.lstrip().startswith("#"))]
     if not rows:

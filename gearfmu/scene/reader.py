@@ -39,6 +39,7 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as _toml  # type: ignore[no-redef]
 
+from ..common.user_files import read_text
 from ..common.vocabulary import (CONTACT_MODELS, DAMPING_MODELS, DEFAULT_RUNTIME, INTEGRATORS,
                                  LUBRICATED_CONTACT_MODELS, RUNTIMES)
 from ..ehl.lubricant import walther_kinematic_viscosity_cSt
@@ -174,11 +175,13 @@ def load_scene(source: Union[str, Path, Mapping, None] = None) -> Scene:
     elif isinstance(source, Path) or (isinstance(source, str) and "\n" not in source and "=" not in source):
         path = Path(source)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = read_text(path, "a TOML scene")
         except FileNotFoundError:
             raise SceneError([("<file>", f"scene file not found: {path}")]) from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SceneError([("<file>", f"cannot read scene file {path}: {exc}")]) from None
+        except OSError as exc:
+            raise SceneError([("<file>", f"cannot read scene file {path}: {exc.strerror or exc}")]) from None
+        except ValueError as exc:  # not text: a zip archive, a binary file, not UTF-8
+            raise SceneError([("<file>", f"scene file {exc}")]) from None
         source_path = str(path)
     elif isinstance(source, str):
         text = source

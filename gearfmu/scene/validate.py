@@ -82,10 +82,16 @@ def _is_number(v: Any) -> bool:
 
 
 class Reader:
-    """Collects problems while reading tables of a parsed scene."""
+    """Collects problems while reading tables of a parsed scene.  ``schema`` and ``subtables``
+    (default :data:`~gearfmu.scene.schema.SCHEMA` and ``SUBTABLES``, the gear-pair scene) are the
+    tables and keys it reads against (the drivetrain scene has its own,
+    :mod:`gearfmu.scene.drivetrain`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, schema: Optional[Mapping[str, Tuple[Key, ...]]] = None,
+                 subtables: Optional[Mapping[str, Tuple[str, ...]]] = None) -> None:
         self.problems: List[Tuple[str, str]] = []
+        self.schema = SCHEMA if schema is None else schema
+        self.subtables = SUBTABLES if subtables is None else subtables
 
     def add(self, path: str, reason: str) -> None:
         self.problems.append((path, reason))
@@ -181,10 +187,10 @@ class Reader:
 
     # ---------------------------------------------------------- tables
     def table(self, data: Any, path: str, *, required: bool = False) -> Dict[str, Any]:
-        """Read the table at ``path`` (schema ``SCHEMA[path]``): returns key ->
+        """Read the table at ``path`` (schema ``self.schema[path]``): returns key ->
         SI value (defaults filled in, None where invalid or absent)."""
-        keys = SCHEMA.get(path, ())
-        subs = SUBTABLES.get(path, ())
+        keys = self.schema.get(path, ())
+        subs = self.subtables.get(path, ())
         out: Dict[str, Any] = {k.name: None for k in keys}
         if data is None:
             if required:

@@ -120,8 +120,12 @@ class _ContactIteration:
         width = self.width if self.helical is None else self.width * self.helical.frac[idx]
         ls = iterate_load_sharing(slice_loads_N(self.k_hertz, self.e, self.E, F), self.e, self.E, F, idx, width,
                                   floor, solve, mesh_stiffness, what=f"{self.model.name} at torque {torque_Nm:g} N m")
+        by_status = {}
+        for f in failures.values():
+            by_status[f["status"]] = by_status.get(f["status"], 0) + 1
         self.records.append(dict(torque_Nm=float(torque_Nm), passes=ls.passes, load_change=ls.load_change,
-                                 failures=len(failures), failure_list=list(failures.values())))
+                                 failures=len(failures), failures_by_status=dict(sorted(by_status.items())),
+                                 failure_list=list(failures.values())))
         return ls.k_slice_N_per_m
 
 
@@ -239,19 +243,77 @@ def contact_provenance(ci, axis_note) -> dict:
         out["film_failures_first"] = [
             {"torque_Nm": rec["torque_Nm"], **f} for rec in ci.records for f in rec["failure_list"]][:20]
         if fails:
-            lam = [f["film_parameter"] for f in fails if np.isfinite(f["film_parameter"])]
-            names = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
-                     "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
-                     "smooth_ehl": "smooth film (rough solve failed at a full-film lambda)"}
             uses = {}
             for f in fails:
                 uses[f.get("used", r.on_failure)] = uses.get(f.get("used", r.on_failure), 0) + 1
             out["film_failures_by_use"] = uses
-            rng = f" (lambda = h_min/sigma {min(lam):.3g}..{max(lam):.3g})" if lam else ""
-            msg = (f"rough_ehl: film parameter below {r.full_film_parameter:g} or rough film failed at "
-                   f"{len(fails)} (position, slice, torque) points{rng}; used there: "
-                   + ", ".join(f"{names.get(k, k)} at {v}" for k, v in sorted(uses.items()))
-                   + " (tables' provenance 'contact.film_failures_first')")
+        grid = out.get("film_grid") or {}
+        out.update(film_failure_kinds(fails, r, grid.get("stalled_rough_nodes_interpolated", 0)))
+        msg = film_failure_line(out, r)
+        if msg:
             out["warning"] = msg
             warnings.warn(msg)
     return out
+
+
+_USE_NAMES = {"fractal_mixed": "seed 001 fractal mixed-lubrication stiffness", "hertz": "Hertz stiffness",
+              "load_sharing": "film-asperity load sharing (Johnson, Greenwood & Poon 1972)",
+              "smooth_ehl": "smooth film"}
+
+
+def _kind(points) -> dict:
+    lam = [f["film_parameter"] for f in points if np.isfinite(f["film_parameter"])]
+    used = {}
+    for f in points:
+        used[f.get("used", "")] = used.get(f.get("used", ""), 0) + 1
+    return {"points": len(points),
+            "by_status": {st: sum(1 for f in points if f["status"] == st)
+                          for st in sorted({f["status"] for f in points})},
+            "lambda_range": [min(lam), max(lam)] if lam else None, "used": used}
+
+
+def film_failure_kinds(fails, spec, grid_nodes_interpolated: int = 0) -> dict:
+    """The (position, slice, torque) points without a rough film, by kind
+    (docs/ehl_mesh.md): ``film_mixed_lubrication`` -- film parameter below the
+    full-film limit (status 'low_film_parameter'; expected: seed 000's full film
+    does not hold there) -- and ``film_solver_failures`` -- the rough film
+    failed although the film parameter is in the full-film range (stall,
+    collapse, smooth film failed: a defect of the solver), each with its count,
+    statuses, film-parameter range and what replaced it; the latter also counts
+    the film-grid nodes whose stalled rough film was interpolated from their
+    neighbours (``grid_nodes_interpolated``)."""
+    mixed = [f for f in fails if f["status"] == "low_film_parameter"]
+    solver = [f for f in fails if f["status"] != "low_film_parameter"]
+    out = {"film_mixed_lubrication": {**_kind(mixed), "full_film_parameter": spec.full_film_parameter},
+           "film_solver_failures": {**_kind(solver), "grid_nodes_interpolated": int(grid_nodes_interpolated)}}
+    return out
+
+
+def film_failure_line(c: dict, spec) -> str:
+    """One build line on the points without a rough film, each kind counted
+    apart (empty when there are none)."""
+    mixed, bad = c["film_mixed_lubrication"], c["film_solver_failures"]
+    parts = []
+
+    def used(k):
+        return ", ".join(f"{_USE_NAMES.get(u, u)} at {v}" for u, v in sorted(k["used"].items()))
+
+    def rng(k):
+        lr = k["lambda_range"]
+        return f" (lambda = h_min/sigma {lr[0]:.3g}..{lr[1]:.3g})" if lr else ""
+
+    if mixed["points"]:
+        parts.append(f"film parameter below {spec.full_film_parameter:g} (mixed lubrication, expected) at "
+                     f"{mixed['points']} (position, slice, torque) points{rng(mixed)}; used there: {used(mixed)}")
+    if bad["points"] or bad["grid_nodes_interpolated"]:
+        st = ", ".join(f"{k} {v}" for k, v in bad["by_status"].items())
+        txt = (f"rough film failed at a full-film lambda (solver failure) at {bad['points']} points"
+               + (f" ({st}){rng(bad)}; used there: {used(bad)}" if bad["points"] else ""))
+        if bad["grid_nodes_interpolated"]:
+            txt += (f"; {bad['grid_nodes_interpolated']} film-grid nodes stalled and took their neighbours' "
+                    "rough/smooth ratio")
+        parts.append(txt)
+    if not parts:
+        return ""
+    return "rough_ehl: " + "; ".join(parts) + " (tables' provenance 'contact.film_mixed_lubrication', " \
+        "'contact.film_solver_failures')"

@@ -42,6 +42,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
+from ..common.user_files import ArchiveError, archive_kind, read_archive
 from ..common.vocabulary import TEMPERATURE_INPUTS  # noqa: F401 (used here and by precompute)
 
 FORMAT_NAME = "gearfmu-tables"
@@ -407,10 +408,25 @@ class MeshTables:
 
     @classmethod
     def from_bytes(cls, meta_bytes: bytes, binary: bytes, source: str = "tables") -> "MeshTables":
+        """Tables from the contents of tables.json and tables.bin; TableError naming
+        ``source``, the file and the reason for anything that does not read back (not JSON,
+        another format or version, a checksum mismatch, missing or malformed entries)."""
         try:
             meta = json.loads(meta_bytes.decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise TableError(f"{source}/tables.json: not valid JSON ({exc})") from None
+        if not isinstance(meta, dict):
+            raise TableError(f"{source}/tables.json: holds a JSON {type(meta).__name__}, not an object")
+        try:
+            return cls._from_meta(meta, binary, source)
+        except TableError:
+            raise
+        except (KeyError, TypeError, AttributeError, IndexError, ValueError) as exc:
+            what = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+            raise TableError(f"{source}/tables.json: malformed table description ({what})") from None
+
+    @classmethod
+    def _from_meta(cls, meta: dict, binary: bytes, source: str) -> "MeshTables":
         if meta.get("format") != FORMAT_NAME:
             raise TableError(f"{source}/tables.json: format is {meta.get('format')!r}, expected {FORMAT_NAME!r}")
         version = meta.get("version")
@@ -589,9 +605,13 @@ def load_tables(path) -> MeshTables:
         except FileNotFoundError as exc:
             raise TableError(f"{p}: missing {Path(exc.filename).name}") from None
     try:
-        with zipfile.ZipFile(p) as zf:
-            return MeshTables.from_bytes(zf.read("tables.json"), zf.read("tables.bin"), str(p))
-    except zipfile.BadZipFile:
-        raise TableError(f"{p}: not a gearfmu table file (.gtab zip archive)") from None
-    except KeyError as exc:
-        raise TableError(f"{p}: archive lacks {exc.args[0]}") from None
+        arc = read_archive(p, "table file (.gtab)", keep=("tables.json", "tables.bin"))
+    except ArchiveError as exc:
+        raise TableError(str(exc)) from None
+    kind = archive_kind(arc.names)
+    if kind in ("an FMU", "an SSP package"):
+        raise TableError(f"{p}: {kind}, not a table file (.gtab or .csv)")
+    missing = [n for n in ("tables.json", "tables.bin") if n not in arc.data]
+    if missing:
+        raise TableError(f"{p}: not a gearfmu table file (.gtab): the zip archive lacks {' and '.join(missing)}")
+    return MeshTables.from_bytes(arc.data["tables.json"], arc.data["tables.bin"], str(p))

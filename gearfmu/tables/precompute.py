@@ -210,7 +210,9 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     rb1 = float(geom.rb1_m)
     nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
     rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
-    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step")
+    # no time left: with a lubricated contact model the first rows build the film grid the later reuse
+    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step",
+                       eta=opts.contact_model == "hertz", leave=False)
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
     if opts.contact_model != "hertz":

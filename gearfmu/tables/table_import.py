@@ -32,6 +32,7 @@ import math
 from pathlib import Path
 import numpy as np
 
+from ..common.user_files import read_text
 from .mesh_tables import MeshTables, TableError, load_tables
 from .synthetic import tables_from_arrays
 
@@ -88,7 +89,7 @@ def read_meta(path) -> dict:
     if not p.exists():
         raise TableImportError(f"{p}: file not found")
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        data = tomllib.loads(read_text(p, "a TOML sidecar", TableImportError))
     except tomllib.TOMLDecodeError as exc:
         raise TableImportError(f"{p}: not valid TOML ({exc})") from None
     flat = {}
@@ -130,7 +131,7 @@ def _read_csv(path):
     """(header list, data (n, m) float array, file line number of each row)."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = read_text(p, "a CSV table", TableImportError)
     except FileNotFoundError:
         raise TableImportError(f"{p}: file not found") from None
     header, rows, lines = None, [], []
