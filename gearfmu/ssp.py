@@ -7,33 +7,38 @@ variant), further ``.ssd`` files (other variants, SSP 1.0 section 3), and
 5 and 6).  :func:`build_ssp` writes
 
 ```
-SystemStructure.ssd            the system with the first parameter set (e.g. nominal)
-<variant>.ssd                  the same system with the variant's parameter set
-<variant>_closed.ssd           the component alone with the variant's values (no system connectors)
+SystemStructure.ssd            the system, the first parameter set (e.g. nominal) in force
+<variant>.ssd                  the same system with the variant's parameter set alone
 resources/<model>.fmu          the gear FMU
-resources/<variant>.ssv        one ParameterSet per variant, names gear.<variable>
+resources/<variant>.ssv        one ParameterSet per variant (named after it), the FMU's variable names
 ```
 
-The system ``drivetrain`` holds one component ``gear`` (the FMU, every input,
-output and parameter as a connector; SI units from the FMU's UnitDefinitions)
-and exposes every FMU input and output as a system connector of the same full
-name, wired to the component; the system's inputs get start values by an
-inline binding and the variant's ``.ssv`` is bound at the system level.  Why
-one .ssd per variant, the qualified names and the closed files (masters that
-cannot connect system connectors): docs/robustness.md "SSP packages".  Every
-XML file is checked against the SSP 1.0 XSD shipped with pyssp-standard
-before the archive is written; a package that fails the check is never
-written.
+The system ``drivetrain`` holds one component ``gear`` (the FMU) whose connectors
+are the FMU's outputs, by their full names (SI units from the FMU's UnitDefinitions);
+its inputs are not connectors, so they keep the start values the parameter set
+gives them, and its parameters are set by the parameter sets (a parameter binding
+reaches every variable of the FMU by name).  Nothing connects to the system itself,
+which is the one form every SSP engine tried opens as is: fmpy, libcosim and ecos
+(ecos and libcosim refuse a connection to a system connector; fmpy writes 0 into a
+component input that nothing drives, and reports a parameter connector as 0).  Each parameter set is bound on the component: a ``<variant>.ssd``
+binds its own set; ``SystemStructure.ssd`` binds every set, the first one first
+and again last, so that an engine that applies all bindings in order (SSP 1.0)
+ends with the first set, an engine that takes the component's first binding
+(libcosim) gets it too, and an engine that chooses a set by its name (ecos)
+finds them all.  Every set names the same variables, so that applying one set
+over another gives that set.  How each engine selects a variant:
+docs/fmu_import.md "SSP packages".  Every XML file is checked against the SSP
+1.0 XSD shipped with pyssp-standard before the archive is written; a package
+that fails the check is never written.
 
-Variants are named sets of parameter values of the FMU (for example two
-damping ratios).  Choices (docs/robustness.md "SSP"): with no explicit
-variants, :func:`ssp_from_scene` makes ``nominal`` (the scene's damping
-ratio), ``damping_low`` (half of it) and ``damping_high`` (twice it, at most
-1); when the FMU has the ``bulk_temperature`` input (tables with a temperature
-axis) also ``temperature_low`` / ``temperature_high`` at the ends of the axis
-(the input's start value is bound like a parameter).  Parameter values are checked against
-the FMU's modelDescription (name, causality parameter, min/max) and the error
-names the variant and the parameter.
+Variants are named sets of parameter values and input start values of the FMU
+(for example two damping ratios).  Choices (docs/robustness.md "SSP"): with no
+explicit variants, :func:`ssp_from_scene` makes ``nominal`` (the scene's damping
+ratio), ``damping_low`` (half of it) and ``damping_high`` (twice it, at most 1);
+when the FMU has a temperature input (tables with a temperature axis) also
+``temperature_low`` / ``temperature_high`` at the ends of the axis.  Values are
+checked against the FMU's modelDescription (name, causality parameter or input,
+min/max, Integer) and the error names the variant and the parameter.
 """
 from __future__ import annotations
 
@@ -64,10 +69,8 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
 
 #: names of the system and of its one component (the gear FMU) in every .ssd
 SYSTEM, COMPONENT = "drivetrain", "gear"
-#: file-name suffix of the closed system of a variant (``<variant>_closed.ssd``)
-CLOSED = "_closed"
 
-#: inputs a variant may set (their start value), besides parameters
+#: the temperature inputs (their start value is a variant's, like a parameter's; any FMU input may be)
 VARIANT_INPUTS = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
 
@@ -102,21 +105,20 @@ def check_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str,
     """Check variant names and parameter values against the FMU's model description."""
     if not variants:
         raise SspError("variants: at least one named parameter set is needed")
-    params = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
-    # the temperature input (tables with a temperature axis) takes a start value per variant too
-    params.update({v.name: v for v in md.modelVariables if v.causality == "input" and v.name in VARIANT_INPUTS})
+    # parameters, and the start values of inputs (the system does not drive them: docs/fmu_import.md)
+    params = {v.name: v for v in md.modelVariables if v.causality in ("parameter", "input")}
     out = {}
     for name, values in variants.items():
-        if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure" \
-                or name.endswith(CLOSED):
+        if not isinstance(name, str) or not _NAME.match(name) or name == "SystemStructure":
             raise SspError(f"variants: name {name!r} must be a letter then letters, digits or _ (max 64), "
-                           f"not 'SystemStructure' and not ending in {CLOSED!r}")
+                           f"not 'SystemStructure'")
         if not values:
             raise SspError(f"variants.{name}: no parameter values")
         checked = {}
         for p, val in values.items():
             if p not in params:
-                raise SspError(f"variants.{name}.{p}: not a parameter of the FMU (parameters: {sorted(params)})")
+                raise SspError(f"variants.{name}.{p}: not a parameter or input of the FMU "
+                               f"(parameters and inputs: {sorted(params)})")
             var = params[p]
             x = finite_number(f"variants.{name}.{p}", val, error=SspError)
             if var.min is not None and x < float(var.min) or var.max is not None and x > float(var.max):
@@ -141,23 +143,32 @@ def _value_element(parent, prefix: str, var, x) -> None:
         ET.SubElement(parent, _q(prefix, "Real"), attrs)
 
 
-def _parameter_set(parent, name: str, values: Mapping[str, float], md, prefix: str = "") -> ET.Element:
-    """``ssv:ParameterSet`` under ``parent`` (None: a root element); parameter names ``prefix + name``."""
-    attrs = {"version": "1.0", "name": name}
-    root = ET.Element(_q("ssv", "ParameterSet"), attrs) if parent is None else \
-        ET.SubElement(parent, _q("ssv", "ParameterSet"), attrs)
-    params = ET.SubElement(root, _q("ssv", "Parameters"))
+def complete_variants(md, variants: Mapping[str, Mapping[str, float]]) -> Dict[str, Dict[str, float]]:
+    """Every variant with a value for every variable that any variant names: the first variant's
+    value, else the FMU's start value.  Then applying one set over another gives that set."""
     var = {v.name: v for v in md.modelVariables}
-    for p, x in values.items():
-        _value_element(ET.SubElement(params, _q("ssv", "Parameter"), {"name": prefix + p}), "ssv", var[p], x)
-    return root
+    first = next(iter(variants.values()))
+    names = list(dict.fromkeys(p for values in variants.values() for p in values))
+
+    def default(p):
+        if p in first:
+            return first[p]
+        start = var[p].start
+        if start is None:
+            raise SspError(f"variants: {p} has no start value in the FMU; give it in every variant")
+        return int(start) if _is_integer(var[p]) else float(start)
+
+    return {name: {p: values[p] if p in values else default(p) for p in names} for name, values in variants.items()}
 
 
 def _ssv_xml(name: str, values: Mapping[str, float], md) -> bytes:
-    """The variant's .ssv: names are the system-level hierarchical names ``gear.<variable>``
-    (SSP 1.0 ParameterBinding: element name, a dot, the variable name), so that the set
-    reaches the component from the system of any of the package's .ssd files."""
-    root = _parameter_set(None, name, values, md, prefix=COMPONENT + ".")
+    """The variant's .ssv: a ParameterSet named after the variant with the FMU's variable names
+    (a parameter set of the component, bound on it: SSP 1.0 ParameterBinding)."""
+    root = ET.Element(_q("ssv", "ParameterSet"), {"version": "1.0", "name": name})
+    params = ET.SubElement(root, _q("ssv", "Parameters"))
+    var = {v.name: v for v in md.modelVariables}
+    for p, x in values.items():
+        _value_element(ET.SubElement(params, _q("ssv", "Parameter"), {"name": p}), "ssv", var[p], x)
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)
 
 
@@ -171,57 +182,26 @@ def _connector(parent, var, kind: str, used_units: set) -> None:
             used_units.add(var.unit)
 
 
-def _inline_binding(parent, name: str, values: Mapping[str, float], md) -> None:
-    b = ET.SubElement(parent, _q("ssd", "ParameterBinding"))
-    _parameter_set(ET.SubElement(b, _q("ssd", "ParameterValues")), name, values, md)
-
-
-def _ssd_xml(ssd_name: str, variant: str, values: Mapping[str, float], fmu_rel: str, ssv_rel: str, md, units,
-             stop_time_s: float, description: str, *, closed: bool) -> bytes:
-    """One .ssd of the package.
-
-    Open (``closed=False``): the system ``drivetrain`` has one connector per FMU
-    input and output (same full name, type and unit), each wired to the
-    component's connector of that name; the system's inputs get start values
-    (the FMU's, or the variant's for a variant input) by an inline binding,
-    and the variant's .ssv is bound at the system level (names ``gear.<v>``).
-    Closed: no system connectors (the FMU's inputs keep their start values),
-    the variant's values bound inline on the component with the FMU's names
-    -- for masters that cannot connect system connectors (docs/robustness.md).
-    """
+def _ssd_xml(ssd_name: str, sources, fmu_rel: str, md, units, stop_time_s: float, description: str) -> bytes:
+    """One .ssd of the package: the system ``drivetrain`` with the component ``gear`` (the FMU),
+    whose connectors are the FMU's outputs, and one ParameterBinding on the
+    component per .ssv of ``sources`` (archive paths, in order).  No system connectors and no
+    connections: the form fmpy, libcosim and ecos all open (module docstring)."""
     root = ET.Element(_q("ssd", "SystemStructureDescription"),
                       {"version": "1.0", "name": ssd_name, "generationTool": "gearfmu",
                        "description": description})
     system = ET.SubElement(root, _q("ssd", "System"), {"name": SYSTEM})
     used_units: set = set()
-    io = [v for v in md.modelVariables if v.causality in ("input", "output")]
-    if not closed:
-        sconns = ET.SubElement(system, _q("ssd", "Connectors"))
-        for v in io:
-            _connector(sconns, v, v.causality, used_units)
-        binds = ET.SubElement(system, _q("ssd", "ParameterBindings"))
-        starts = {v.name: values.get(v.name, float(v.start) if not _is_integer(v) else int(v.start))
-                  for v in io if v.causality == "input" and v.start is not None}
-        if starts:
-            _inline_binding(binds, f"{variant}_inputs", starts, md)
-        ET.SubElement(binds, _q("ssd", "ParameterBinding"), {"source": ssv_rel})
     elements = ET.SubElement(system, _q("ssd", "Elements"))
     comp = ET.SubElement(elements, _q("ssd", "Component"),
                          {"name": COMPONENT, "type": "application/x-fmu-sharedlibrary", "source": fmu_rel})
     conns = ET.SubElement(comp, _q("ssd", "Connectors"))
     for v in md.modelVariables:
-        if v.causality in ("input", "output", "parameter"):
+        if v.causality == "output":
             _connector(conns, v, v.causality, used_units)
-    if closed:
-        _inline_binding(ET.SubElement(comp, _q("ssd", "ParameterBindings")), variant, values, md)
-    else:
-        wires = ET.SubElement(system, _q("ssd", "Connections"))
-        for v in io:
-            if v.causality == "input":
-                attrs = {"startConnector": v.name, "endElement": COMPONENT, "endConnector": v.name}
-            else:
-                attrs = {"startElement": COMPONENT, "startConnector": v.name, "endConnector": v.name}
-            ET.SubElement(wires, _q("ssd", "Connection"), attrs)
+    binds = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
+    for src in sources:
+        ET.SubElement(binds, _q("ssd", "ParameterBinding"), {"source": src})
     if used_units:
         ue = ET.SubElement(root, _q("ssd", "Units"))
         for u in sorted(used_units):
@@ -273,23 +253,26 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
     if not (math.isfinite(stop_time_s) and stop_time_s > 0):
         raise SspError(f"stop_time_s: must be finite and > 0, got {stop_time_s!r}")
     fmu_rel = f"resources/{fmu_path.stem}.fmu"
+    complete = complete_variants(md, checked)
+    names = list(complete)
+    ssv = {name: f"resources/{name}.ssv" for name in names}
     with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_") as tmpd:
         stage = Path(tmpd)
         (stage / "resources").mkdir()
         shutil.copy2(fmu_path, stage / fmu_rel)
-        for i, (name, values) in enumerate(checked.items()):
-            ssv_rel = f"resources/{name}.ssv"
-            (stage / ssv_rel).write_bytes(_ssv_xml(name, values, md))
+        for name, values in complete.items():
+            (stage / ssv[name]).write_bytes(_ssv_xml(name, values, md))
             desc = (f"gear pair {md.modelName}, parameter set {name!r}: "
-                    + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
-            ssd = _ssd_xml(f"{system_name}_{name}", name, values, fmu_rel, ssv_rel, md, units, stop_time_s, desc,
-                           closed=False)
-            (stage / f"{name}.ssd").write_bytes(ssd)
-            if i == 0:
-                (stage / "SystemStructure.ssd").write_bytes(ssd)
-            closed = _ssd_xml(f"{system_name}_{name}{CLOSED}", name, values, fmu_rel, ssv_rel, md, units,
-                              stop_time_s, desc + " (closed system: no system connectors)", closed=True)
-            (stage / f"{name}{CLOSED}.ssd").write_bytes(closed)
+                    + ", ".join(f"{k} = {v!r}" for k, v in checked[name].items()))
+            (stage / f"{name}.ssd").write_bytes(
+                _ssd_xml(f"{system_name}_{name}", [ssv[name]], fmu_rel, md, units, stop_time_s, desc))
+        # the first set first (libcosim's default) and last (in force where all bindings apply in order),
+        # the others between (ecos selects a set by name)
+        order = [names[0], *names[1:], names[0]] if len(names) > 1 else names
+        desc = (f"gear pair {md.modelName}, parameter set {names[0]!r} in force; parameter sets "
+                + ", ".join(repr(n) for n in names) + " (one .ssd each)")
+        (stage / "SystemStructure.ssd").write_bytes(
+            _ssd_xml(system_name, [ssv[n] for n in order], fmu_rel, md, units, stop_time_s, desc))
         validate_ssp_dir(stage)
         out_path.parent.mkdir(parents=True, exist_ok=True)
         part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
@@ -303,6 +286,22 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
             if part.exists():
                 part.unlink()
     return out_path
+
+
+def fmpy_parameter_set(ssp_path, variant: str):
+    """The variant's parameter set for fmpy's SSP master
+    (``fmpy.ssp.simulation.simulate_ssp(ssp, parameter_set=...)``): ``resources/<variant>.ssv``
+    with its names made the system's hierarchical names ``gear.<variable>`` (SSP 1.0), which
+    that master expects; it applies no binding of the .ssd itself."""
+    from fmpy.ssp.ssd import read_ssv  # fmpy: heavy, only for fmpy's master
+
+    with zipfile.ZipFile(ssp_path) as z:
+        if f"resources/{variant}.ssv" not in z.namelist():
+            raise SspError(f"variant: {variant!r} is not a parameter set of {ssp_path}")
+    ps = read_ssv(str(ssp_path), resource=f"resources/{variant}.ssv")
+    for par in ps.parameters:
+        par.name = f"{COMPONENT}.{par.name}"
+    return ps
 
 
 def default_variants(damping_ratio: float, temperature_range_C=None,

@@ -1,6 +1,7 @@
 """Fuzz the gearfmu FMU through fmpy's low-level FMI 2.0 API.
 
-Random sequences of FMI calls -- out of order, NaN/inf/huge/negative inputs
+Random sequences of FMI calls -- out of order (a third of the draws follow the legal order, so
+that the deep states are reached), NaN/inf/huge/negative inputs
 and parameters, zero/negative/non-finite/huge communication steps, calls
 after terminate, repeated reset, FMU state get/set/free/serialize/deserialize
 in any order, corrupted serialized states, invalid value references -- against
@@ -20,10 +21,16 @@ arrays, truncated and corrupted serialized states.  It counts, besides crashes
 and unlogged refusals, the calls the FMU refused as an illegal call sequence
 (its state table) and the sequences that broke the order at least once.
 
+Both runtimes answer through one FMI layer (docs/fmu.md "The binary"); ``--compare`` runs the
+same sequences (FMU-state calls left out) on both through fmpy and names the seeds whose
+statuses, messages or values differ.
+
 Usage::
 
     python tests/fuzz_fmu.py --sequences 10000 --json [--batch 50] [--seed 0] [--jobs 2]
     python tests/fuzz_fmu.py --runtime standalone --sequences 10000 --json [--batch 2500]
+    python tests/fuzz_fmu.py --runtime pythonfmu --host c --sequences 10000 --json
+    python tests/fuzz_fmu.py --compare --sequences 2000 --json
 
 prints ``{"sequences", "host_crashes", "fmi_errors", "fmi_fatal", ...}``.
 Importable: :func:`run_fuzz` and :func:`run_c_fuzz` (used by tests/test_fuzz.py),
@@ -77,12 +84,24 @@ def build_fuzz_fmu(directory, runtime: str = "pythonfmu") -> Path:
 
 
 # ---------------------------------------------------------------- the child
-def _child(fmu_path: str, seeds: list[int]) -> None:
-    """Run the sequences ``seeds``; print one JSON line per finished sequence."""
+#: the legal order of FMI 2.0 Co-Simulation calls, which a third of the draws follow
+LEGAL_ORDER = ("setup", "enter", "setreal", "exit", "step", "get", "step", "get", "terminate")
+#: the operations on FMU states, left out of a traced run (the two runtimes' states differ in layout)
+STATE_OPS = ("getstate", "setstate", "freestate", "serialize", "deserialize")
+
+
+def _child(fmu_path: str, seeds: list[int], trace: bool = False) -> None:
+    """Run the sequences ``seeds``; print one JSON line per finished sequence.  ``trace``: leave
+    out the FMU-state operations and add ``trace``, the SHA-256 of every call's name, status,
+    messages other than fmi2OK ones, and values read (the record two runtimes must agree on)."""
+    import hashlib
+
     import fmpy
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
     from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+    from fmpy.logging import addLoggerProxy
+    from ctypes import byref
 
     md = fmpy.read_model_description(fmu_path)
     unzip = fmpy.extract(fmu_path)
@@ -92,7 +111,7 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
     ints = [v.valueReference for v in md.modelVariables if v.type == "Integer"]
     all_real = [v.valueReference for v in reals]
     log = []
-    trace = bool(os.environ.get("GEARFMU_FUZZ_TRACE"))
+    trace_env = bool(os.environ.get("GEARFMU_FUZZ_TRACE"))
 
     def logger(env, instance, status, category, message):
         log.append((int(status), (category or b"").decode("utf-8", "replace"),
@@ -102,6 +121,7 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
     callbacks.logger = fmi2CallbackLoggerTYPE(logger)
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+    addLoggerProxy(byref(callbacks))  # the message is a printf format (FMI 2.0 section 2.1.5): formatted
 
     for seed in seeds:
         rng = random.Random(seed)
@@ -110,6 +130,7 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
         fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                         instanceName=f"fuzz{seed}")
         states, blobs = [], []
+        digest = hashlib.sha256()
         t = 0.0
         logging_on = True  # the host may switch logging off (fmi2SetDebugLogging); then refusals are silent
 
@@ -117,7 +138,7 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
             nonlocal t
             del log[:]
             counts["calls"] += 1
-            if trace:
+            if trace_env:
                 print(f"CALL {name}{args!r:.100}", file=sys.stderr, flush=True)
             try:
                 r = fn(*args)
@@ -126,8 +147,11 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
                 status, r = int(exc.status), None
             key = {OK: "ok", WARNING: "warning", DISCARD: "discard", ERROR: "error", FATAL: "fatal"}.get(status, "error")
             counts[key] += 1
-            if trace:
+            if trace_env:
                 print(f"{name}{args!r:.100} -> {status} {log!r:.300}", file=sys.stderr, flush=True)
+            if trace:
+                digest.update(repr((name, status, [(s, m) for s, _, m in log if s > OK],
+                                    r if name in ("get", "getint", "badvr") else None)).encode())
             if status >= DISCARD and logging_on and not any(s >= WARNING and m for s, _, m in log):
                 counts["unlogged_refusals"] += 1
                 if len(counts["unlogged_examples"]) < 3:
@@ -143,10 +167,17 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
             print(json.dumps({"seed": seed, **counts}), flush=True)
             continue
         fatal = False
+        legal = 0
         for _ in range(rng.randint(5, 40)):
-            op = rng.choice(["setup", "enter", "exit", "step", "step", "step", "step", "setreal", "setreal",
-                             "setint", "get", "getint", "getstate", "setstate", "freestate", "serialize",
-                             "deserialize", "terminate", "reset", "badvr", "debug"])
+            if rng.random() < 1 / 3:  # a third of the draws: the next call of the legal order (deep states)
+                op = LEGAL_ORDER[legal % len(LEGAL_ORDER)]
+                legal += 1
+            else:
+                op = rng.choice(["setup", "enter", "exit", "step", "step", "step", "step", "setreal", "setreal",
+                                 "setint", "get", "getint", "getstate", "setstate", "freestate", "serialize",
+                                 "deserialize", "terminate", "reset", "badvr", "debug"])
+            if trace and op in STATE_OPS:
+                continue
             if op == "setup":
                 st, _ = call(op, fmu.setupExperiment, None, rng.choice([0.0, t, -1.0, 1e300]))
             elif op == "enter":
@@ -225,27 +256,31 @@ def _child(fmu_path: str, seeds: list[int]) -> None:
                 fmu.freeInstance()
             except Exception:  # noqa: BLE001
                 counts["error"] += 1
+        if trace:
+            counts["trace"] = digest.hexdigest()
         print(json.dumps({"seed": seed, **counts}), flush=True)
 
 
 # --------------------------------------------------------------- the parent
 def run_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 50, jobs: int = 2,
-             timeout_s: float = 600.0, progress: bool = False) -> dict:
+             timeout_s: float = 600.0, progress: bool = False, trace: bool = False) -> dict:
     """Run ``sequences`` sequences (seeds first_seed ...) in child processes of
-    ``batch`` sequences each, ``jobs`` at a time; return the summary dict."""
+    ``batch`` sequences each, ``jobs`` at a time; return the summary dict.  ``trace``: without
+    the FMU-state operations, and the summary's ``traces`` maps each seed to the digest of its
+    calls (statuses, messages, values read; :func:`_child`)."""
     pending = [list(range(s, min(s + batch, first_seed + sequences)))
                for s in range(first_seed, first_seed + sequences, batch)]
     totals = {"sequences": 0, "host_crashes": 0, "fmi_errors": 0, "fmi_fatal": 0, "fmi_discards": 0,
               "fmi_warnings": 0, "calls": 0, "unlogged_refusals": 0, "logged_errors_on_ok": 0,
-              "crashes": [], "unlogged_examples": []}
+              "crashes": [], "unlogged_examples": [], "traces": {}}
     running = []
     t0 = time.time()
     while pending or running:
         while pending and len(running) < jobs:
             seeds = pending.pop(0)
             p = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--child", str(fmu_path),
-                                  ",".join(map(str, seeds))], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                 text=True)
+                                  ",".join(map(str, seeds))] + (["--trace"] if trace else []),
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             running.append((p, seeds, time.time()))
         time.sleep(0.02)
         for item in list(running):
@@ -265,6 +300,8 @@ def run_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 50, 
                 if not isinstance(rec, dict) or "seed" not in rec:
                     continue
                 done.append(rec["seed"])
+                if "trace" in rec:
+                    totals["traces"][rec["seed"]] = rec["trace"]
                 totals["sequences"] += 1
                 totals["calls"] += rec["calls"]
                 totals["fmi_errors"] += rec["error"]
@@ -371,28 +408,48 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="child processes at a time")
     ap.add_argument("--fmu", help="FMU to fuzz (default: build a small one)")
     ap.add_argument("--runtime", choices=("pythonfmu", "standalone"), default="pythonfmu",
-                    help="standalone: fuzz the all-C FMU with the C host tests/fmi_fuzz.c (--batch default 2500)")
+                    help="the FMU's runtime (standalone: fuzzed by the C host unless --host fmpy)")
+    ap.add_argument("--host", choices=("fmpy", "c"),
+                    help="fmpy's low-level API or the C host tests/fmi_fuzz.c (--batch default 2500); "
+                         "default: fmpy for pythonfmu, c for standalone")
+    ap.add_argument("--compare", action="store_true",
+                    help="both runtimes through fmpy, FMU-state calls left out: the seeds whose calls differ")
     ap.add_argument("--json", action="store_true", help="print the summary as JSON")
     ap.add_argument("--child", nargs=2, metavar=("FMU", "SEEDS"), help=argparse.SUPPRESS)
+    ap.add_argument("--trace", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
-        _child(a.child[0], [int(s) for s in a.child[1].split(",")])
+        _child(a.child[0], [int(s) for s in a.child[1].split(",")], trace=a.trace)
         return 0
+    host = a.host or ("c" if a.runtime == "standalone" and not a.compare else "fmpy")
     if a.batch is None:
-        a.batch = 2500 if a.runtime == "standalone" else 50
+        a.batch = 2500 if host == "c" else 50
     if a.sequences < 1 or a.batch < 1 or a.jobs < 1:
         ap.error("--sequences, --batch and --jobs must be >= 1")
+    if a.compare and (a.fmu or host == "c"):
+        ap.error("--compare builds both FMUs and fuzzes them through fmpy")
     with tempfile.TemporaryDirectory(prefix="gearfmu_fuzz_") as d:
-        fmu = a.fmu or str(build_fuzz_fmu(d, a.runtime))
-        if a.runtime == "standalone":
+        if a.compare:
+            runs = {rt: run_fuzz(build_fuzz_fmu(Path(d) / rt, rt), a.sequences, first_seed=a.first_seed,
+                                 batch=a.batch, jobs=a.jobs, progress=True, trace=True)
+                    for rt in ("pythonfmu", "standalone")}
+            t_py, t_sa = runs["pythonfmu"].pop("traces"), runs["standalone"].pop("traces")
+            res = {"sequences": a.sequences, "compared": len(set(t_py) & set(t_sa)),
+                   "differing_seeds": sorted(k for k in t_py if t_sa.get(k) != t_py[k]), **runs}
+        elif host == "c":
+            fmu = a.fmu or str(build_fuzz_fmu(d, a.runtime))
             res = run_c_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
         else:
+            fmu = a.fmu or str(build_fuzz_fmu(d, a.runtime))
             res = run_fuzz(fmu, a.sequences, first_seed=a.first_seed, batch=a.batch, jobs=a.jobs, progress=True)
+            res.pop("traces")
     if a.json:
         print(json.dumps(res))
     else:
         for k, v in res.items():
             print(f"{k}: {v}")
+    if a.compare:
+        return 0 if not res["differing_seeds"] and all(r["host_crashes"] == 0 for r in runs.values()) else 1
     return 0 if res["host_crashes"] == 0 else 1
 
 

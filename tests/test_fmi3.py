@@ -311,7 +311,7 @@ def test_build_description_rebuilds_bit_identical(built, host, tmp_path):
 # ---------------------------------------------------------------------- SSP
 def test_ssp_of_an_fmi3_fmu_is_schema_valid(built, tmp_path):
     """gearfmu.ssp packages the FMI 3 FMU: every .ssd/.ssv valid against the SSP 1.0 XSD, one
-    connector per FMI 3 input/output (the arrays by their name), Int32 parameters as Integer.
+    connector per FMI 3 output (the arrays by their name), Int32 parameters as Integer.
     fmpy's SSP master runs FMI 2 components only, so the package is not simulated here."""
     c = built["default"]
     out = build_ssp(c["fmi3"], tmp_path / "g3.ssp", {"nominal": {"damping_ratio": 0.05},

@@ -16,7 +16,12 @@ References:
   initializes A completely first and then B gets.
 * FMI 2.0 section 4.2.4 table of allowed calls: a call out of order is
   fmi2Error; a setup without an initial state makes fmi2ExitInitializationMode
-  return fmi2Error (C runtime).
+  return fmi2Error; section 2.2.7 (causality, variability): an output, and a fixed
+  parameter after initialization, cannot be set; section 2.1.5: fmi2Error and fmi2Discard
+  are reported through the logger "whether or not logging is on" ... is the FMU's choice,
+  here: a message with a status other than fmi2OK always reaches the host.  Both runtimes
+  share one FMI layer (docs/fmu.md "The binary"), so every test of the call order runs on
+  both with the same expectations, words included.
 """
 from dataclasses import replace
 
@@ -58,7 +63,7 @@ def fmus(tmp_path_factory):
 class Inst:
     """One instance through fmpy's FMU2Slave, recording (status, message) of every log call."""
 
-    def __init__(self, path, name):
+    def __init__(self, path, name, logging_on=True):
         self.md = fmpy.read_model_description(str(path))
         self.log = []
         self._cb = cb = _callbacks(self.log)
@@ -66,7 +71,7 @@ class Inst:
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
-        self.fmu.instantiate(callbacks=cb, loggingOn=True)
+        self.fmu.instantiate(callbacks=cb, loggingOn=logging_on)
         self.fmu.setupExperiment(startTime=0.0)
 
     def set(self, **kw):
@@ -199,7 +204,7 @@ def test_two_fmu_chain_same_with_or_without_passing_in_init(fmus, runtime):
     assert with_init[0, 5] > 0  # B starts loaded (mesh_force), not from a zero torque
 
 
-# ------------------------------------------------------------ C state machine
+# ------------------------------------- the FMI state machine: both runtimes, one expectation
 def _status(call, *args):
     try:
         call(*args)
@@ -208,10 +213,12 @@ def _status(call, *args):
         return exc.status
 
 
-def test_exit_fails_on_a_bad_setup(fmus):
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_exit_fails_on_a_bad_setup(fmus, runtime):
     """A NaN pinion torque at exit: fmi2ExitInitializationMode returns fmi2Error with the
-    reason logged; the instance is then in the error state (doStep refused, reset works)."""
-    s = Inst(fmus["standalone"], "bad")
+    reason logged; the instance is then in the error state (doStep refused, outputs not served
+    as if initialized, reset works)."""
+    s = Inst(fmus[runtime], "bad")
     s.fmu.enterInitializationMode()
     s.set(pinion_torque=float("nan"))
     assert _status(s.fmu.exitInitializationMode) == 3
@@ -228,22 +235,97 @@ def test_exit_fails_on_a_bad_setup(fmus):
     s.close()
 
 
-@pytest.mark.parametrize("call, state", [
-    (lambda f: f.doStep(0.0, H), "instantiated"),
-    (lambda f: f.exitInitializationMode(), "instantiated"),
-    (lambda f: f.getReal([2]), "instantiated"),
-    (lambda f: f.terminate(), "instantiated"),
-])
-def test_out_of_order_call_refused_and_logged(fmus, call, state):
-    s = Inst(fmus["standalone"], "order")
+@pytest.mark.parametrize("runtime", RUNTIMES)
+@pytest.mark.parametrize("call, state, before", [
+    (lambda f: f.doStep(0.0, H), "instantiated", ()),
+    (lambda f: f.exitInitializationMode(), "instantiated", ()),
+    (lambda f: f.getReal([2]), "instantiated", ()),
+    (lambda f: f.terminate(), "instantiated", ()),
+    (lambda f: f.enterInitializationMode(), "initializationMode", ("enter",)),
+    (lambda f: f.setupExperiment(startTime=0.0), "initializationMode", ("enter",)),
+    (lambda f: f.doStep(0.0, H), "initializationMode", ("enter",)),
+    (lambda f: f.exitInitializationMode(), "stepComplete", ("enter", "exit")),
+    (lambda f: f.enterInitializationMode(), "stepComplete", ("enter", "exit")),
+], ids=["step-before-init", "exit-before-enter", "get-before-enter", "terminate-before-init", "enter-twice",
+        "setup-in-init", "step-in-init", "exit-twice", "enter-after-exit"])
+def test_out_of_order_call_refused_and_logged(fmus, runtime, call, state, before):
+    s = Inst(fmus[runtime], "order")
+    for step in before:
+        getattr(s.fmu, step + "InitializationMode")()
     n = len(s.log)
     assert _status(call, s.fmu) == 3
     assert len(s.log) == n + 1 and s.log[-1][0] == 3
     assert "illegal call sequence" in s.log[-1][1] and f"state {state}" in s.log[-1][1]
     # the instance is unharmed: the normal sequence still works
-    s.fmu.enterInitializationMode()
-    s.fmu.exitInitializationMode()
+    if "enter" not in before:
+        s.fmu.enterInitializationMode()
+    if "exit" not in before:
+        s.fmu.exitInitializationMode()
     s.fmu.doStep(0.0, H)
     s.fmu.terminate()
     assert _status(s.fmu.setReal, [0], [1.0]) == 3 and "state terminated" in s.log[-1][1]
+    assert _status(s.fmu.doStep, H, H) == 3 and "state terminated" in s.log[-1][1]
     s.close()
+
+
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_refused_sets_and_gets_are_errors_with_the_same_words(fmus, runtime):
+    """An output, a fixed parameter after initialization, an unknown value reference, a value of
+    the wrong type: each refused with fmi2Error, one logged line naming the function and the
+    variable, nothing changed; a tunable parameter and an input may be set between steps."""
+    s = Inst(fmus[runtime], "refuse")
+    vr = s.vr
+    s.fmu.enterInitializationMode()
+    s.fmu.setReal([vr["max_step"]], [2e-5])  # fixed: settable until the end of initialization
+    s.fmu.exitInitializationMode()
+    before = s.get()
+    cases = [
+        (s.fmu.setReal, [vr["max_step"]], [1e-3], "fmi2SetReal: max_step cannot be set now "
+                                                 "(causality/variability forbid it)"),
+        (s.fmu.setInteger, [vr["damping_model"]], [1], "fmi2SetInteger: damping_model cannot be set now "
+                                                      "(causality/variability forbid it)"),
+        (s.fmu.setReal, [vr["mesh_force"]], [1.0], "fmi2SetReal: mesh_force cannot be set now "
+                                                  "(causality/variability forbid it)"),
+        (s.fmu.setReal, [999], [1.0], "fmi2SetReal: no variable with value reference 999"),
+        (s.fmu.getReal, [999], None, "fmi2GetReal: no variable with value reference 999"),
+        (s.fmu.getInteger, [vr["mesh_force"]], None, "fmi2GetInteger: mesh_force is not of type Integer"),
+        (s.fmu.setReal, [vr["integrator"]], [1.0], "fmi2SetReal: integrator is not of type Real"),
+    ]
+    for fn, refs, values, words in cases:
+        n = len(s.log)
+        args = (refs,) if values is None else (refs, values)
+        assert _status(fn, *args) == 3, words
+        assert s.log[n:] == [(3, words)]
+    assert np.array_equal(s.get(), before)
+    assert s.fmu.getReal([vr["max_step"]]) == [2e-5]
+    n = len(s.log)
+    s.set(damping_ratio=0.1, pinion_torque=120.0)  # tunable and input: accepted
+    s.fmu.doStep(0.0, H)
+    assert s.fmu.getReal([vr["damping_ratio"], vr["pinion_torque"]]) == [0.1, 120.0]
+    assert not any(st >= 2 for st, _ in s.log[n:]), s.log[n:]
+    s.fmu.terminate()
+    s.close()
+
+
+@pytest.mark.parametrize("runtime", RUNTIMES)
+@pytest.mark.parametrize("logging_on", [True, False], ids=["logging-on", "logging-off"])
+def test_refusals_and_warnings_reach_the_host_whatever_the_logging(fmus, runtime, logging_on):
+    """With logging off (fmi2Instantiate loggingOn = false) a discarded step, a refused call and a
+    warning still log their line; only fmi2OK messages follow the switch."""
+    s = Inst(fmus[runtime], "quiet", logging_on=logging_on)
+    s.fmu.enterInitializationMode()
+    s.fmu.exitInitializationMode()
+    s.set(pinion_torque=float("inf"))
+    assert _status(s.fmu.doStep, 0.0, H) == 2
+    assert s.log[-1] == (2, "pinion_torque = inf at t = 0.0 s: not finite; step rejected, state unchanged")
+    assert _status(s.fmu.getReal, [999]) == 3 and s.log[-1][0] == 3
+    s.set(pinion_torque=400.0)  # beyond the torque axis [50, 150] N.m: clamped, and outside the envelope
+    n = len(s.log)
+    assert _status(s.fmu.doStep, 0.0, H) == 0
+    assert {st for st, _ in s.log[n:]} == {1}
+    text = " ".join(m for _, m in s.log[n:])
+    assert "outside the tables' torque axis" in text and "outside the range this FMU was built for" in text
+    s.fmu.terminate()
+    s.close()
+    # fmi2OK messages (instantiation) only with logging on
+    assert {st for st, _ in s.log} - {0} == {1, 2, 3} and (0 in {st for st, _ in s.log}) == logging_on

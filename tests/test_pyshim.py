@@ -105,6 +105,87 @@ def test_c_host_refusal_names_what_is_missing(two, tmp_path):
     assert REFUSED in e and "shared library" in e and "LD_LIBRARY_PATH" in e and "--runtime standalone" in e
 
 
+def test_gone_environment_is_named_not_a_module(two, tmp_path):
+    """The virtual environment the FMU was built in is deleted (its interpreter, recorded at build
+    time, is gone): the C host gets NULL from fmi2Instantiate, exit status 4, and the logged reason
+    names that environment by a description without a path (Python and numpy versions) and the
+    remedies -- not a module of whatever other Python the search would find (before:
+    "... needs the Python module 'ctypes' ... (No module named '_struct')")."""
+    d = tmp_path / "gone"
+    shutil.copytree(two["a"]["dir"], d)
+    cfg = d / "resources" / "gearfmu_pyshim.txt"
+    env_line = next(ln for ln in cfg.read_text().splitlines() if ln.startswith("environment="))
+    assert "/" not in env_line and f"Python {sys.version.split()[0]} with numpy" in env_line
+    venv = tmp_path / "deleted_venv"
+    lines = [ln for ln in cfg.read_text().splitlines() if not ln.startswith("python_executable")]
+    cfg.write_text("\n".join(lines + [f"python_executable={venv}/bin/python"]) + "\n")
+    env = dict(_clean_env(), PATH="/usr/bin:/bin")  # the search would find the system's Python
+    rc, o, e = _batches([_host_cmd(two, dict(two["a"], dir=d))], env)[0]
+    assert rc == 4, (rc, e[-600:])
+    line = next(ln for ln in e.splitlines() if "fmi2Instantiate" in ln)
+    assert f"the Python environment this FMU was built with ({env_line[len('environment='):]}) is gone" in line
+    assert "--runtime standalone" in line and "module" not in line and str(tmp_path) not in line
+
+
+FATAL_HOST = textwrap.dedent("""
+    import sys
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave
+    sys.path.insert(0, sys.argv[3])
+    from test_standalone import _callbacks
+    log = []
+    md = fmpy.read_model_description(sys.argv[1] + "/modelDescription.xml")
+    s = FMU2Slave(guid=md.guid, unzipDirectory=sys.argv[1], modelIdentifier=sys.argv[2], instanceName="fatal")
+    s.instantiate(callbacks=_callbacks(log), loggingOn=True)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    def status(f, *a):
+        try:
+            f(*a)
+            return 0
+        except FMICallException as exc:
+            return exc.status
+    print("STEP", status(s.doStep, 0.0, 1e-4), flush=True)
+    print("AGAIN", status(s.doStep, 0.0, 1e-4), flush=True)
+    print("GET", status(s.getReal, [7]), flush=True)
+    print("RESET", status(s.reset), flush=True)
+    print("EXIT", status(s.enterInitializationMode), flush=True)
+    s.freeInstance()
+    for st, m in log:
+        print("LOG", st, m.replace(chr(10), " "), flush=True)
+    print("END", flush=True)
+""")
+
+
+def test_a_fatal_slave_is_never_called_again(two, tmp_path):
+    """A slave whose do_step raises (pythonfmu's wrapper then returns fmi2Fatal and releases the
+    slave, keeping its pointers): the step returns fmi2Fatal with the exception logged; the
+    instance is in the error state, its slave is not called again (a step is refused as an
+    illegal call sequence, a reset cannot bring it back), gets are served, fmi2FreeInstance
+    leaves the released slave alone, and the host exits 0."""
+    d = tmp_path / "fatal"
+    shutil.copytree(two["a"]["dir"], d)
+    slave = d / "resources" / f"{two['a']['id']}.py"
+    text = slave.read_text()
+    head = "    def do_step(self, current_time, step_size):\n"
+    assert text.count(head) == 1
+    slave.write_text(text.replace(head, head + "        raise RuntimeError('slave broken on purpose')\n"))
+    script = tmp_path / "host.py"
+    script.write_text(FATAL_HOST)
+    p = subprocess.run([sys.executable, str(script), str(d), two["a"]["id"], HERE], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0 and "END" in p.stdout, (p.returncode, p.stdout[-600:], p.stderr[-600:])
+    got = dict(line.split() for line in p.stdout.splitlines() if line.split()[0] in ("STEP", "AGAIN", "GET",
+                                                                                       "RESET", "EXIT"))
+    assert got == {"STEP": "4", "AGAIN": "3", "GET": "0", "RESET": "0", "EXIT": "3"}
+    logs = [line for line in p.stdout.splitlines() if line.startswith("LOG ")]
+    assert any("slave broken on purpose" in line for line in logs)
+    assert any("fmi2DoStep: illegal call sequence: not allowed in state error" in line for line in logs)
+    assert any("fmi2Reset: the Python slave of this instance ended with fmi2Fatal" in line for line in logs)
+
+
 def _libpython():
     import sysconfig
 

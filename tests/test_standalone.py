@@ -318,8 +318,11 @@ def test_libcosimpy_master(built, key):
 #: every callback struct _callbacks registered: fmpy's logger proxy keeps the last registered
 #: logger in one process-wide slot (s_logger in fmpy/logging), which fmpy's default callbacks
 #: (fmpy.simulate_fmu without a logger) also call -- a freed one there crashes the process the
-#: first time a later FMU logs anything (a warning, docs/fmu.md "Verified envelope")
+#: first time a later FMU logs anything (a warning, docs/fmu.md "Verified envelope").  The slot
+#: holds the logger registered last, so every instance's messages reach it: each set of callbacks
+#: carries its own componentEnvironment, by which the messages go to their list (_LOGS)
 _KEPT_CALLBACKS = []
+_LOGS = {}
 
 
 def _callbacks(msgs):
@@ -332,12 +335,16 @@ def _callbacks(msgs):
     from ctypes import byref
 
     def logger(env, inst, status, cat, msg):
-        msgs.append((status, msg.decode() if isinstance(msg, bytes) else str(msg)))
+        if env in _LOGS:  # (another host's callbacks, e.g. fmpy.simulate_fmu's defaults, have none)
+            _LOGS[env].append((status, msg.decode() if isinstance(msg, bytes) else str(msg)))
 
+    key = len(_KEPT_CALLBACKS) + 1
+    _LOGS[key] = msgs
     cb = fmi2CallbackFunctions()
     cb.logger = fmi2CallbackLoggerTYPE(logger)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    cb.componentEnvironment = key
     addLoggerProxy(byref(cb))
     _KEPT_CALLBACKS.append(cb)
     return cb

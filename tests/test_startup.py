@@ -207,7 +207,7 @@ def test_the_ssp_schema_check_parses_each_schema_once_and_still_refuses_invalid_
     with zipfile.ZipFile(ssp) as z:
         z.extractall(d)
     validate_ssp_dir(d)  # as written: valid
-    for rel, tag in (("resources/soft.ssv", b"<ssv:ParameterSet "), ("soft_closed.ssd", b"<ssd:SystemStructureDescription ")):
+    for rel, tag in (("resources/soft.ssv", b"<ssv:ParameterSet "), ("soft.ssd", b"<ssd:SystemStructureDescription ")):
         f = d / rel
         good = f.read_bytes()
         assert good.count(tag) == 1

@@ -11,12 +11,13 @@ refusal of foreign or corrupted states (logged, state unchanged).
 import numpy as np
 import fmpy
 import pytest
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
 
 from gearfmu.fmu.pythonfmu_build import build_fmu
 
 from test_fmu import make_tables
+from test_standalone import _callbacks
 
 H = 1e-4
 OUTS = ["dte", "mesh_force", "pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "mesh_stiffness",
@@ -39,11 +40,7 @@ class Inst:
     def __init__(self, path, name):
         self.md = fmpy.read_model_description(str(path))
         self.log = []
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: self.log.append((status, msg.decode())))
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        self._cb = cb
+        self._cb = cb = _callbacks(self.log)  # formats the FMU's printf-style messages
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=fmpy.extract(str(path)),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -153,15 +150,37 @@ def test_state_before_initialisation_and_after_terminate(fmus):
     x.fmu.setFMUstate(st)
     with pytest.raises(Exception):
         x.fmu.doStep(10 * H, H)
-    assert any("after fmi2Terminate" in m for _, m in x.log)
+    assert x.log[-1] == (3, "fmi2DoStep: illegal call sequence: not allowed in state terminated "
+                            "(allowed in: stepComplete)")
     for s in (s0, st):
         x.fmu.freeFMUstate(s)
     x.fmu.freeInstance()
 
 
+def _status(call, *args):
+    try:
+        return 0, call(*args)
+    except FMICallException as exc:
+        return exc.status, None
+
+
+def _reseal(blob: bytes) -> bytes:
+    """The state with the FMI layer's checksum computed again (FNV-1a 64 over the whole state with
+    its checksum field, bytes 32-40 of the header, read as 0; gearfmu/fmu/runtime/pyshim.c)."""
+    b = bytearray(blob)
+    b[32:40] = bytes(8)
+    h = 14695981039346656037
+    for x in b:
+        h = ((h ^ x) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    b[32:40] = h.to_bytes(8, "little")
+    return bytes(b)
+
+
 def test_foreign_and_corrupted_states_are_refused_with_log(fmus):
-    """A state of a different FMU, a one-bit-flipped state, a truncated state and
-    garbage: each refused with a logged reason, the instance continues unchanged."""
+    """A state of a different FMU, a one-bit-flipped state, a truncated state and garbage: each
+    refused by fmi2DeSerializeFMUstate (fmi2Error) with the reason logged; a state whose checksum
+    of the FMI layer is right but whose slave part is corrupted is refused by fmi2SetFMUstate
+    (fmi2Error, the slave's reason); the instance continues unchanged."""
     a = Inst(fmus["a"], "s6")
     b = Inst(fmus["b"], "s7")
     b.steps(0, 5)
@@ -174,14 +193,25 @@ def test_foreign_and_corrupted_states_are_refused_with_log(fmus):
     a.fmu.setFMUstate(sa)
     flipped = bytearray(blob_a)
     flipped[len(flipped) // 2] ^= 4
-    cases = {"different FMU": blob_b, "checksum": bytes(flipped), "too short": blob_a[:20],
-             "magic": b"x" * len(blob_a)}
-    for reason, blob in cases.items():
+    not_ours = "fmi2DeSerializeFMUstate: not a state of this FMU"
+    size = f"this FMU's state has {len(blob_a)}"
+    assert len(blob_b) != len(blob_a)  # three pair slots against two
+    cases = {"different FMU": (blob_b, f"fmi2DeSerializeFMUstate: {len(blob_b)} bytes, {size}"),
+             "one bit flipped": (bytes(flipped), not_ours),
+             "too short": (blob_a[:20], f"fmi2DeSerializeFMUstate: 20 bytes, {size}"),
+             "garbage": (b"x" * len(blob_a), not_ours)}
+    for reason, (blob, words) in cases.items():
         a.log.clear()
-        s = a.fmu.deSerializeFMUstate(blob)
-        a.fmu.setFMUstate(s)
-        a.fmu.freeFMUstate(s)
-        assert any(st == 3 and "fmi2SetFMUstate refused" in m and reason in m for st, m in a.log), (reason, a.log)
+        assert _status(a.fmu.deSerializeFMUstate, blob) == (3, None), reason
+        assert a.log == [(3, words)], (reason, a.log)
+    slave_flipped = bytearray(blob_a)
+    slave_flipped[-40] ^= 1  # in the slave's part, before its SHA-256
+    a.log.clear()
+    st, s = _status(a.fmu.deSerializeFMUstate, _reseal(bytes(slave_flipped)))
+    assert st == 0
+    assert _status(a.fmu.setFMUstate, s)[0] == 3
+    assert a.log == [(3, "fmi2SetFMUstate refused: state checksum mismatch (bytes corrupted); instance state unchanged")]
+    a.fmu.freeFMUstate(s)
     assert np.array_equal(a.steps(5, 10), ref)
     for inst, s in ((a, sa), (b, sb)):
         inst.fmu.freeFMUstate(s)

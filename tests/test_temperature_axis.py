@@ -346,9 +346,9 @@ def test_ssp_temperature_variants(fmus, tmp_path):
     with zipfile.ZipFile(p) as z:
         ssv = z.read("resources/temperature_high.ssv").decode()
         ssd = z.read("temperature_high.ssd").decode()
-    # the .ssv targets the component by name; the system's input connector starts at the variant's value
-    assert 'name="gear.bulk_temperature"' in ssv and 'value="70.0"' in ssv and 'unit="degC"' in ssv
-    assert '<ssv:Parameter name="bulk_temperature"><ssv:Real value="70.0" unit="degC" />' in ssd
+    # the variant's set gives the input its start value by the FMU's name, bound on the component
+    assert '<ssv:Parameter name="bulk_temperature"><ssv:Real value="70.0" unit="degC" />' in ssv
+    assert 'source="resources/temperature_high.ssv"' in ssd
 
 
 # --------------------------------------------------- scene -> tables (seed 004)

@@ -286,6 +286,28 @@ def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_op
     return temperature_input(apply_start_values(variables, starts), tables)
 
 
+def variable_table_lines(variables) -> list:
+    """The variable table the C FMI layer reads (both runtimes: ``gearfmu_standalone.txt`` and the
+    pythonfmu loader's ``gearfmu_pyshim.txt``): ``n_vars=N``, then one
+    ``var=vr|causality|variability|type|output_index|start|min|max|name`` line per variable in
+    value-reference order; numbers of Real variables as C99 hexadecimal literals (exact), of
+    Integer ones as integers, empty when absent."""
+    def number(v, typ):
+        if v is None:
+            return ""
+        return str(int(v)) if typ == "Integer" else float(v).hex()
+
+    lines = [f"n_vars={len(variables)}"]
+    for v in variables:
+        if "|" in v.name:
+            raise FmuBuildError(f"variable {v.name!r}: '|' not allowed in names")
+        oi = "" if v.output_index is None else str(int(v.output_index))
+        lines.append("var=" + "|".join([str(v.value_reference), v.causality, v.variability, v.type, oi,
+                                        number(v.start, v.type), number(v.min, v.type), number(v.max, v.type),
+                                        v.name]))
+    return lines
+
+
 def model_description(spec, variables, fmi_version: int, **md_args) -> bytes:
     """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``."""
     if fmi_version == 3:

@@ -41,6 +41,7 @@ import tempfile
 import uuid
 import zipfile
 import xml.etree.ElementTree as ET
+from importlib.metadata import version
 from pathlib import Path
 from typing import Optional, Union
 import sysconfig
@@ -55,7 +56,7 @@ from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER
                           check_build_arguments, check_output_arguments, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
-                          write_scene, write_tables)
+                          variable_table_lines, write_scene, write_tables)
 from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
@@ -69,8 +70,12 @@ SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
 KERNEL_API = HERE / "runtime" / "kernel_api.py"
 TEMPLATE_KERNEL_API = "gearfmu_kernel_api"
 PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
+#: the binary's C files: the loader and model of the Python slave (pyshim.c) under the standalone
+#: runtime's FMI 2.0 layer and plumbing (docs/fmu.md "The binary"), and the headers they include
+PYSHIM_SOURCES = (PYSHIM_SOURCE, HERE / "standalone" / "fmi2_gear.c", HERE / "standalone" / "fmi_common.c")
+PYSHIM_HEADERS = (HERE / "standalone" / "fmi_common.h", HERE / "standalone" / "gf_model.h")
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
-#: the loader's compile flags (docs/fmu.md "The binary"); it links no Python
+#: the binary's compile flags (docs/fmu.md "The binary"); it links no Python
 PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
 
@@ -208,13 +213,15 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
         shim = compile_pyshim(tmp / "shim", identifier, cc=cc)
-        (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so"), encoding="utf-8")
+        (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so", guid=guid,
+                                                         variables=variables), encoding="utf-8")
         shim_src = stage / "pyshim_src"
         shim_src.mkdir()
-        shutil.copy2(PYSHIM_SOURCE, shim_src / PYSHIM_SOURCE.name)
+        for f in (*PYSHIM_SOURCES, *PYSHIM_HEADERS):
+            shutil.copy2(f, shim_src / f.name)
         (shim_src / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(PYSHIM_CFLAGS)} -I<FMI 2.0 headers> -o <modelIdentifier>.so "
-            f"pyshim.c -ldl -lpthread\n", encoding="utf-8")
+            f"{Path(cc).name} {' '.join(PYSHIM_CFLAGS)} -I. -I<FMI 2.0 headers> -o <modelIdentifier>.so "
+            f"{' '.join(f.name for f in PYSHIM_SOURCES)} -ldl -lpthread\n", encoding="utf-8")
         files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json",
                                      PYSHIM_CONFIG)]
         scene_file = write_scene(stage, scene_text)
@@ -293,11 +300,11 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
 
 
 def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:
-    """Compile the loader ``gearfmu/fmu/runtime/pyshim.c`` as ``<identifier>.so`` in ``dest_dir``.
-
-    It becomes the FMU's binary and loads libpython and pythonfmu's wrapper on
-    the first ``fmi2Instantiate`` (docs/fmu.md "The binary").  Linux only: on
-    other systems returns None and the FMU keeps pythonfmu's wrapper as its binary.
+    """Compile the FMU's binary ``<identifier>.so`` in ``dest_dir``: the standalone runtime's FMI
+    2.0 layer and plumbing over the model of ``gearfmu/fmu/runtime/pyshim.c``, which loads
+    libpython and pythonfmu's wrapper on the first ``fmi2Instantiate`` and runs the Python slave
+    through it (docs/fmu.md "The binary").  Linux only: on other systems returns None and the
+    FMU keeps pythonfmu's wrapper as its binary.
     """
     if platform.system() != "Linux":
         return None  # elsewhere pythonfmu's wrapper stays the FMU's binary
@@ -305,15 +312,23 @@ def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Op
     dest = Path(dest_dir)
     dest.mkdir(parents=True, exist_ok=True)
     lib = dest / f"{identifier}.so"
-    run_compiler([cc, *PYSHIM_CFLAGS, f"-I{fmi2_header_dir()}", "-o", str(lib), str(PYSHIM_SOURCE), "-ldl",
-                  "-lpthread"], "pyshim")
+    run_compiler([cc, *PYSHIM_CFLAGS, f"-I{PYSHIM_HEADERS[0].parent}", f"-I{fmi2_header_dir()}", "-o", str(lib),
+                  *(str(f) for f in PYSHIM_SOURCES), "-ldl", "-lpthread"], "pyshim")
     return lib
 
 
-def pyshim_config(wrapper_name: str) -> str:
-    """``resources/gearfmu_pyshim.txt``: the Python of this build (version, shared
-    library, executable, whose environment provides numpy) and the wrapper's
-    file name, one ``key=value`` a line."""
+def python_environment() -> str:
+    """What the Python environment of this build is, without a path: the interpreter's version,
+    whether it is a virtual environment, and the versions of the modules the FMU needs."""
+    kind = "a virtual environment of Python" if sys.prefix != sys.base_prefix else "Python"
+    return f"{kind} {sys.version.split()[0]} with numpy {version('numpy')} and pythonfmu {version('pythonfmu')}"
+
+
+def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
+    """``resources/gearfmu_pyshim.txt``: the Python of this build (version, shared library,
+    executable, whose environment provides numpy, and a description of that environment without
+    a path), the wrapper's file name, the GUID and the variable table the FMI layer serves
+    (:func:`~gearfmu.fmu.build_steps.variable_table_lines`), one ``key=value`` a line."""
     ver = f"{sys.version_info.major}.{sys.version_info.minor}"
     soname = sysconfig.get_config_var("INSTSONAME") or f"libpython{ver}.so.1.0"
     libdir = sysconfig.get_config_var("LIBDIR") or ""
@@ -323,7 +338,8 @@ def pyshim_config(wrapper_name: str) -> str:
     if not soname.endswith(".so") and ".so." not in soname:  # a static libpython: ask the loader by name
         soname = f"libpython{ver}.so.1.0"
     return (f"python_version={ver}\nlibpython={path}\nlibpython_soname={soname}\n"
-            f"python_executable={sys.executable}\nwrapper={wrapper_name}\n")
+            f"python_executable={sys.executable}\nwrapper={wrapper_name}\n"
+            f"environment={python_environment()}\nguid={guid}\n" + "\n".join(variable_table_lines(variables)) + "\n")
 
 
 def _platform_dir() -> str:

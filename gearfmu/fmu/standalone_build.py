@@ -65,7 +65,8 @@ from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, 
                           KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
                           FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
                           find_c_compiler, fmi2_header_dir, fmi3_header_dir, fmi_header_dir, fmu_digest, fmu_zip,
-                          interface_variables, model_description, run_compiler, scene_sha256, write_scene,
+                          interface_variables, model_description, run_compiler, scene_sha256, variable_table_lines,
+                          write_scene,
                           write_tables, zip_folder)
 from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
@@ -298,12 +299,6 @@ def _hexf(v) -> str:
     return float(v).hex()
 
 
-def _cfg_num(v, typ: str) -> str:
-    if v is None:
-        return ""
-    return str(int(v)) if typ == "Integer" else _hexf(v)
-
-
 def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
                 meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None) -> str:
     """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md).
@@ -336,14 +331,7 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
         for q in ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"):
             if envelope.get(q) is not None:
                 lines.append(f"envelope.{q}={_hexf(envelope[q][0])}|{_hexf(envelope[q][1])}")
-    lines.append(f"n_vars={len(variables)}")
-    for v in variables:
-        if "|" in v.name:
-            raise FmuBuildError(f"variable {v.name!r}: '|' not allowed in names")
-        oi = "" if v.output_index is None else str(int(v.output_index))
-        lines.append("var=" + "|".join([str(v.value_reference), v.causality, v.variability, v.type, oi,
-                                        _cfg_num(v.start, v.type), _cfg_num(v.min, v.type),
-                                        _cfg_num(v.max, v.type), v.name]))
+    lines += variable_table_lines(variables)
     return "\n".join(lines) + "\n"
 
 

@@ -297,10 +297,8 @@ class GearFmuSlave(Fmi2Slave):
             ok = False
         if ok:
             self._dirty = False
-        else:
+        else:  # the reasons are logged (status error); the FMI layer refuses the get (docs/fmu.md)
             self._out[:] = float("nan")
-            self.log("the initial outputs cannot be computed from the values set (reasons above); "
-                     "outputs are NaN", Fmi2Status.error)
 
     def exit_initialization_mode(self):
         # never raise here (pythonfmu 0.7.0 would turn it into fmi2Fatal and free the slave):

@@ -1,12 +1,19 @@
 /*
  * pyshim.c -- the FMI 2.0 binary of a gearfmu FMU built with the pythonfmu
- * runtime (docs/fmu.md "The binary: a loader in front of pythonfmu's wrapper").
+ * runtime (docs/fmu.md "The binary: the standalone FMI layer over the Python slave").
  *
- * pythonfmu's FMI wrapper needs the Python interpreter's symbols when it is
- * loaded, starts the interpreter behind a lock of its own (one per FMU, since
- * every FMU carries its own copy of the wrapper) and crashes on any failure
- * of the slave's import.  This library has no link-time dependency on Python:
- * it exports the fmi2* functions, and on the first fmi2Instantiate
+ * The binary is the standalone runtime's FMI 2.0 layer (../standalone/fmi2_gear.c) and
+ * plumbing (../standalone/fmi_common.c) -- the table of allowed calls, the checks of every
+ * get/set, the statuses and the messages -- over a model (the contract ../standalone/gf_model.h)
+ * that is the Python slave of this FMU, reached through pythonfmu's FMI wrapper.  So both
+ * runtimes give one FMI behaviour: the same state machine, refusals, statuses and words, and
+ * the same logging rule (a message whose status is not OK reaches the host whether or not
+ * logging is on).  This file is that model, and the loader that makes the wrapper loadable.
+ *
+ * The loader.  pythonfmu's FMI wrapper needs the Python interpreter's symbols when it is
+ * loaded, starts the interpreter behind a lock of its own (one per FMU, since every FMU
+ * carries its own copy of the wrapper) and crashes on any failure of the slave's import.
+ * This library has no link-time dependency on Python; on the first fmi2Instantiate it
  *
  *  1. finds libpython: already in the process (dlsym(RTLD_DEFAULT,
  *     "Py_IsInitialized")), else the path recorded at build time in
@@ -20,19 +27,31 @@
  *     that flag is set before site-packages is on sys.path;
  *  3. imports the modules the slave needs from outside the FMU (ctypes,
  *     numpy) and refuses to instantiate, with a message through the host's
- *     logger, if one is missing;
+ *     logger, if one is missing; when the Python environment the FMU was built
+ *     with is gone, no interpreter is started and the message names that environment;
  *  4. loads pythonfmu's wrapper, shipped beside this library under another
- *     name, and forwards every fmi2 call to it;
+ *     name, and binds its functions;
  *  5. registers an exit handler that releases the wrapper's interpreter state
  *     before the wrapper's own static destructor runs (the order pythonfmu's
  *     library gets wrong at process exit).
  *
- * Any failure returns NULL from fmi2Instantiate with a logged message; no
+ * The model (gm_* below).  The plumbing keeps the variable table, the values and the
+ * outputs; the model hands the values to the slave before the calls that use them (the
+ * initial state, a step), takes the outputs back after them, and turns what the slave says
+ * into the contract's answers: the wrapper's fmi2Discard from do_step, and a message the slave
+ * logged with status fmi2Error during a call (its reason for refusing: no initial state, a
+ * refused FMU state).  The wrapper is given this file's logger with its logging always on;
+ * every message goes through gf_log, which applies the plumbing's rule.
+ *
+ * Any failure of the loader returns NULL from fmi2Instantiate with a logged message; no
  * failure path reaches the wrapper.  Linux only (dlopen, flock).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
@@ -46,6 +65,7 @@
 #include <wchar.h>
 
 #include "fmi2Functions.h"
+#include "gf_model.h"
 
 #define CONFIG_FILE "gearfmu_pyshim.txt"
 #define EXPORT __attribute__((visibility("default")))
@@ -88,8 +108,12 @@ static pthread_mutex_t load_mutex = PTHREAD_MUTEX_INITIALIZER;
 
 typedef struct {
     char python_version[32], libpython[PATH_MAX], libpython_soname[128], python_executable[PATH_MAX],
-        wrapper[256];
+        wrapper[256], environment[256];
 } shim_config;
+
+/* where the interpreter of this process comes from (the words of the loader's messages) */
+enum { ENV_HOST, ENV_BUILT, ENV_GONE, ENV_UNKNOWN };
+static int env_origin = ENV_HOST;
 
 static void fail(char *err, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void fail(char *err, size_t n, const char *fmt, ...)
@@ -118,6 +142,7 @@ static int read_config(const char *path, shim_config *cfg, char *err, size_t n)
 #define KEY(k)                                                                  \
     if (strcmp(line, #k) == 0) snprintf(cfg->k, sizeof cfg->k, "%s", eq);
         KEY(python_version) KEY(libpython) KEY(libpython_soname) KEY(python_executable) KEY(wrapper)
+        KEY(environment)
 #undef KEY
     }
     fclose(f);
@@ -219,8 +244,23 @@ static int start_interpreter(const shim_config *cfg, char *err, size_t n)
     }
     if (!py.IsInitialized()) {
         /* the Python environment the FMU was built with (its site-packages hold numpy) */
-        if (py.SetProgramName != NULL && py.DecodeLocale != NULL && cfg->python_executable[0] != '\0' &&
-            access(cfg->python_executable, X_OK) == 0) {
+        env_origin = cfg->python_executable[0] == '\0' ? ENV_UNKNOWN
+                     : access(cfg->python_executable, X_OK) == 0 ? ENV_BUILT : ENV_GONE;
+        if (env_origin == ENV_GONE) {
+            /* no other Python in its place: whichever the search would find may lack numpy, or
+             * even its own standard library, and a Python that cannot start aborts the process
+             * (the lock file stays: a loader waiting on it may start the interpreter next) */
+            flock(fd, LOCK_UN);
+            close(fd);
+            fail(err, n,
+                 "the Python environment this FMU was built with (%s) is gone: its interpreter is no longer "
+                 "where the FMU was built, and no other Python is started in its place; recreate that "
+                 "environment where it was (or rebuild the FMU in another one), or rebuild the FMU with "
+                 "--runtime standalone (no Python needed)",
+                 cfg->environment[0] ? cfg->environment : cfg->python_version);
+            return -1;
+        }
+        if (py.SetProgramName != NULL && py.DecodeLocale != NULL && env_origin == ENV_BUILT) {
             static wchar_t *program = NULL; /* must outlive the interpreter */
             if (program == NULL) program = py.DecodeLocale(cfg->python_executable, NULL);
             if (program != NULL) py.SetProgramName(program);
@@ -239,8 +279,10 @@ static int start_interpreter(const shim_config *cfg, char *err, size_t n)
     return 0;
 }
 
-/* 3. The modules the slave imports from outside the FMU. */
-static int check_modules(char *err, size_t n)
+/* 3. The modules the slave imports from outside the FMU.  When this loader started the
+ * interpreter without the environment the FMU was built with (none is recorded), a failed
+ * import says so: that is the cause, whatever module fails first. */
+static int check_modules(const shim_config *cfg, char *err, size_t n)
 {
     static const char *const needed[] = {"ctypes", "numpy"};
     size_t i;
@@ -256,11 +298,20 @@ static int check_modules(char *err, size_t n)
             if (v != NULL) s = py.ObjectStr(v);
             if (s != NULL) why = py.UnicodeAsUTF8(s);
             const char *ver = py.GetVersion();
-            fail(err, n,
-                 "the pythonfmu runtime needs the Python module '%s', which cannot be imported in the "
-                 "Python %.*s running in this process (%s): install it into that Python, or "
-                 "rebuild the FMU with --runtime standalone (no Python needed)",
-                 needed[i], (int)strcspn(ver, " "), ver, why ? why : "import failed");
+            if (env_origin == ENV_UNKNOWN)
+                fail(err, n,
+                     "the Python environment this FMU was built with (%s) is not found (the FMU records no "
+                     "interpreter): the Python %.*s started in its place cannot import '%s' (%s); run the FMU "
+                     "where Python %s with numpy is the default Python, or rebuild the FMU with --runtime "
+                     "standalone (no Python needed)",
+                     cfg->environment[0] ? cfg->environment : "not recorded", (int)strcspn(ver, " "), ver,
+                     needed[i], why ? why : "import failed", cfg->python_version);
+            else
+                fail(err, n,
+                     "the pythonfmu runtime needs the Python module '%s', which cannot be imported in the "
+                     "Python %.*s running in this process (%s): install it into that Python, or "
+                     "rebuild the FMU with --runtime standalone (no Python needed)",
+                     needed[i], (int)strcspn(ver, " "), ver, why ? why : "import failed");
             if (s != NULL) py.DecRef(s);
             if (t != NULL) py.DecRef(t);
             if (v != NULL) py.DecRef(v);
@@ -299,7 +350,7 @@ static int load(char *err, size_t n)
     if (find_libpython(&cfg, &h, err, n) != 0) return -1;
     if (bind_python(h, err, n) != 0) return -1;
     if (start_interpreter(&cfg, err, n) != 0) return -1;
-    if (check_modules(err, n) != 0) return -1;
+    if (check_modules(&cfg, err, n) != 0) return -1;
     snprintf(path, sizeof path, "%s/%s", bindir, cfg.wrapper);
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (lib == NULL) {
@@ -320,81 +371,474 @@ static int load(char *err, size_t n)
     return 0;
 }
 
-/* ---- exported FMI 2.0 functions ---- */
 
-EXPORT const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-EXPORT const char *fmi2GetVersion(void) { return fmi2Version; }
+/* ====================================================================================== */
+/* The model of the contract gf_model.h: the Python slave behind pythonfmu's wrapper.     */
+/* ====================================================================================== */
 
-EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
-                                     fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
-                                     fmi2Boolean visible, fmi2Boolean loggingOn)
+#define SNAP_MAGIC 0x50464d55u /* "UMFP" */
+#define SNAP_VERSION 1u
+
+struct gm_data {
+    fmi2Component w;          /* the wrapper's instance (NULL: none) */
+    fmi2CallbackFunctions cb; /* given to the wrapper, which keeps a pointer to it */
+    int worst;                /* the worst status the slave logged during the current call */
+    int capture;              /* instantiation: keep the wrapper's messages in `said` instead of logging them */
+    char said[512];
+    int dead;                 /* the wrapper returned fmi2Fatal: its instance is never touched again */
+    int fresh;                /* the slave is as constructed (nothing handed to it since) */
+    int py_mode;              /* the FMI state the slave has seen: GF_INSTANTIATED, GF_INIT_MODE, GF_STEP_MODE */
+    int initialized;          /* the initial state was computed from the current values */
+    unsigned int *vr_real, *vr_int, *vr_out;
+    double *buf;              /* one value per variable: the values handed over, the outputs taken back */
+    int *ibuf;
+    int n_real, n_int, n_outvars;
+    size_t py_state_size;     /* bytes of the slave's serialized state (0: not asked yet) */
+    uint64_t tag;             /* FNV-1a of the GUID: a snapshot fits this FMU only */
+};
+
+/* The FMU state: this header, the values, the outputs, the slave's serialized state (it holds
+ * the kernel state; its own checksum and fingerprint), all under one FNV-1a 64 checksum. */
+typedef struct {
+    uint32_t magic, version, n_vars, n_out;
+    uint64_t tag, py_size, check;
+    int32_t mode, dirty, initialized, py_mode;
+    double time;
+} snap_header;
+
+static uint64_t fnv1a(uint64_t h, const unsigned char *p, size_t n)
 {
-    char err[2048] = "";
-    int ok;
+    size_t i;
+    for (i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+/* the slave's messages: through gf_log (the plumbing's logging rule), the worst status kept */
+static void py_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                      fmi2String message, ...)
+{
+    static const char *const by_status[5] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
+                                             "logStatusFatal"};
+    gf_inst *c = (gf_inst *)env;
+    int st = (int)status;
+    (void)name;
+    if (c == NULL || c->data == NULL) return;
+    if (st < GF_OK || st > GF_FATAL) st = GF_ERROR_STATUS;
+    if (st > c->data->worst) c->data->worst = st;
+    if (c->data->capture) { /* the wrapper's text "Fatal py exception encountered: <where>\n<repr>": the repr */
+        const char *nl = message != NULL ? strchr(message, '\n') : NULL;
+        if (st >= GF_ERROR_STATUS) snprintf(c->data->said, sizeof c->data->said, "%s", nl ? nl + 1 : message);
+        return;
+    }
+    /* the wrapper passes the text as the format: it is logged as text */
+    gf_log(c, st, category != NULL && category[0] != '\0' ? category : by_status[st], "%s",
+           message != NULL ? message : "");
+}
+
+/* before a call of the wrapper: 0 (logged) if the slave is gone */
+static int begin(gf_inst *c, const char *fn)
+{
+    if (c->data->dead || c->data->w == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError",
+               "%s: the Python slave of this instance ended with fmi2Fatal (reason above); only fmi2FreeInstance "
+               "may follow", fn);
+        return 0;
+    }
+    c->data->worst = GF_OK;
+    return 1;
+}
+
+/* after a call of the wrapper: the worse of its status and what the slave logged */
+static int end(gf_inst *c, fmi2Status st)
+{
+    if (st == fmi2Fatal) {
+        c->data->dead = 1;
+        c->mode = GF_ERROR;
+    }
+    return (int)st > c->data->worst ? (int)st : c->data->worst;
+}
+
+static int as_int(double x) { return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1; }
+
+/* the values of the plumbing to the slave (when one changed since they were last handed over) */
+static int hand_over(gf_inst *c, const char *fn)
+{
+    gm_data *d = c->data;
+    int i, st;
+    if (!c->dirty && !d->fresh) return GF_OK;
+    if (!begin(c, fn)) return GF_ERROR_STATUS;
+    d->fresh = 0;
+    for (i = 0; i < d->n_real; ++i) d->buf[i] = c->values[d->vr_real[i]];
+    for (i = 0; i < d->n_int; ++i) d->ibuf[i] = as_int(c->values[d->vr_int[i]]);
+    st = end(c, W.SetReal(d->w, d->vr_real, (size_t)d->n_real, d->buf));
+    if (st < GF_ERROR_STATUS && d->n_int > 0) st = end(c, W.SetInteger(d->w, d->vr_int, (size_t)d->n_int, d->ibuf));
+    return st;
+}
+
+/* the slave's outputs to the plumbing; the status of the call */
+static int take_outputs(gf_inst *c, const char *fn)
+{
+    gm_data *d = c->data;
+    int i, st;
+    if (!begin(c, fn)) return GF_ERROR_STATUS;
+    st = end(c, W.GetReal(d->w, d->vr_out, (size_t)d->n_outvars, d->buf));
+    if (st < GF_ERROR_STATUS)
+        for (i = 0; i < d->n_outvars; ++i) c->out[c->vars[d->vr_out[i]].out_index] = d->buf[i];
+    return st;
+}
+
+/* the slave in initialization mode (it computes its outputs there from the values handed over) */
+static int slave_in_init(gf_inst *c, const char *fn)
+{
+    gm_data *d = c->data;
+    int st;
+    if (d->py_mode != GF_INSTANTIATED) return GF_OK;
+    if (!begin(c, fn)) return GF_ERROR_STATUS;
+    d->fresh = 0;
+    st = end(c, W.SetupExperiment(d->w, fmi2False, 0.0, c->time, fmi2False, 0.0));
+    if (st < GF_ERROR_STATUS) st = end(c, W.EnterInitializationMode(d->w));
+    if (st < GF_ERROR_STATUS) d->py_mode = GF_INIT_MODE;
+    return st;
+}
+
+/* ---- the variable table: n_vars= and var= lines of resources/gearfmu_pyshim.txt, the format of
+ * the standalone runtime's (vr|causality|variability|type|output_index|start|min|max|name) ---- */
+static int num(const char *s, double *v)
+{
+    char *e;
+    if (*s == '\0') return 0;
+    *v = strtod(s, &e);
+    return *e == '\0';
+}
+
+static int read_var(gf_inst *c, char *val, int expect)
+{
+    char *f[9], *q = val;
+    int k = 0;
+    long vr, oi;
+    gf_var *v;
+    f[k++] = q;
+    for (; *q != '\0'; ++q)
+        if (*q == '|') {
+            if (k == 9) return 0;
+            *q = '\0';
+            f[k++] = q + 1;
+        }
+    if (k != 9) return 0;
+    vr = strtol(f[0], &q, 10);
+    if (*q != '\0' || vr != expect || vr >= c->n_vars) return 0;
+    v = &c->vars[vr];
+    v->causality = strcmp(f[1], "parameter") == 0 ? GF_PARAMETER : strcmp(f[1], "input") == 0 ? GF_INPUT
+                   : strcmp(f[1], "output") == 0 ? GF_OUTPUT : GF_OTHER;
+    v->variability = strcmp(f[2], "fixed") == 0 ? GF_FIXED : strcmp(f[2], "tunable") == 0 ? GF_TUNABLE
+                     : strcmp(f[2], "continuous") == 0 ? GF_CONTINUOUS : GF_OTHER_VAR;
+    if (strcmp(f[3], "Integer") == 0) v->is_integer = 1;
+    else if (strcmp(f[3], "Real") == 0) v->is_integer = 0;
+    else return 0;
+    oi = strtol(f[4], &q, 10);
+    if (f[4][0] != '\0' && *q != '\0') return 0;
+    v->out_index = f[4][0] == '\0' ? -1 : (int)oi;
+    v->has_start = num(f[5], &v->start);
+    v->has_min = num(f[6], &v->min);
+    v->has_max = num(f[7], &v->max);
+    if ((f[5][0] && !v->has_start) || (f[6][0] && !v->has_min) || (f[7][0] && !v->has_max)) return 0;
+    if (v->causality == GF_OUTPUT && (v->out_index < 0 || v->out_index >= 100000 || v->is_integer)) return 0;
+    snprintf(v->name, sizeof v->name, "%s", f[8]);
+    v->array_len = 1;
+    return 1;
+}
+
+static const char *read_table(gf_inst *c, const char *res_dir, char *guid, size_t guid_cap, char *err, size_t cap)
+{
+    char path[PATH_MAX + 64], line[4096];
+    int seen = 0, i;
+    FILE *f;
+    snprintf(path, sizeof path, "%s%s", res_dir, CONFIG_FILE);
+    if ((f = fopen(path, "r")) == NULL) {
+        snprintf(err, cap, "cannot read resources/%s (%s); the FMU is incomplete, rebuild it", CONFIG_FILE,
+                 strerror(errno));
+        return err;
+    }
+    guid[0] = '\0';
+    while (fgets(line, sizeof line, f) != NULL) {
+        char *val = strchr(line, '=');
+        if (val == NULL) continue;
+        *val++ = '\0';
+        val[strcspn(val, "\r\n")] = '\0';
+        if (strcmp(line, "guid") == 0) {
+            snprintf(guid, guid_cap, "%s", val);
+        } else if (strcmp(line, "n_vars") == 0 && c->vars == NULL) {
+            long n = strtol(val, NULL, 10);
+            if (n < 1 || n > 100000) break;
+            c->n_vars = (int)n;
+            c->vars = (gf_var *)calloc((size_t)n, sizeof(gf_var));
+            c->values = (double *)calloc((size_t)n, sizeof(double));
+            if (c->vars == NULL || c->values == NULL) break;
+        } else if (strcmp(line, "var") == 0) {
+            if (c->vars == NULL || !read_var(c, val, seen)) break;
+            seen++;
+        }
+    }
+    fclose(f);
+    if (c->vars == NULL || seen != c->n_vars || guid[0] == '\0') {
+        snprintf(err, cap, "resources/%s: no valid variable table (guid, n_vars, then var lines of vr 0, 1, ... "
+                 "in order); the FMU is incomplete, rebuild it", CONFIG_FILE);
+        return err;
+    }
+    for (i = 0; i < c->n_vars; ++i)
+        if (c->vars[i].causality == GF_OUTPUT && c->vars[i].out_index + 1 > c->n_out) c->n_out = c->vars[i].out_index + 1;
+    return NULL;
+}
+
+const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap)
+{
+    char guid[128], uri[PATH_MAX + 16];
+    const char *e;
+    gm_data *d;
+    int ok, i;
     pthread_mutex_lock(&load_mutex);
-    ok = loaded || load(err, sizeof err) == 0;
+    ok = loaded || load(err, errcap) == 0;
     if (ok) loaded = 1;
     pthread_mutex_unlock(&load_mutex);
-    if (!ok) {
-        if (functions != NULL && functions->logger != NULL)
-            functions->logger(functions->componentEnvironment, instanceName ? instanceName : "?", fmi2Error,
-                              "logStatusError", "%s", err);
-        return NULL;
+    if (!ok) return err;
+    d = c->data = (gm_data *)calloc(1, sizeof(gm_data));
+    if (d == NULL) return "out of memory";
+    if ((e = read_table(c, res_dir, guid, sizeof guid, err, errcap)) != NULL) return e;
+    if (token == NULL || strcmp(token, guid) != 0) return "GUID differs from the one this FMU was built with";
+    c->out = (double *)calloc((size_t)(c->n_out > 0 ? c->n_out : 1), sizeof(double));
+    d->vr_real = (unsigned int *)calloc((size_t)c->n_vars, sizeof(unsigned int));
+    d->vr_int = (unsigned int *)calloc((size_t)c->n_vars, sizeof(unsigned int));
+    d->vr_out = (unsigned int *)calloc((size_t)c->n_vars, sizeof(unsigned int));
+    d->buf = (double *)calloc((size_t)c->n_vars, sizeof(double));
+    d->ibuf = (int *)calloc((size_t)c->n_vars, sizeof(int));
+    if (c->out == NULL || d->vr_real == NULL || d->vr_int == NULL || d->vr_out == NULL || d->buf == NULL ||
+        d->ibuf == NULL)
+        return "out of memory";
+    for (i = 0; i < c->n_vars; ++i) {
+        if (c->vars[i].causality == GF_OUTPUT) d->vr_out[d->n_outvars++] = (unsigned int)i;
+        else if (c->vars[i].is_integer) d->vr_int[d->n_int++] = (unsigned int)i;
+        else d->vr_real[d->n_real++] = (unsigned int)i;
     }
-    return W.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions, visible, loggingOn);
+    d->tag = fnv1a(14695981039346656037ull, (const unsigned char *)guid, strlen(guid));
+    d->cb.logger = py_logger;
+    d->cb.allocateMemory = calloc;
+    d->cb.freeMemory = free;
+    d->cb.componentEnvironment = c;
+    snprintf(uri, sizeof uri, "file://%s", res_dir);
+    d->capture = 1;
+    d->w = W.Instantiate(c->instance_name, fmi2CoSimulation, token, uri, &d->cb, fmi2False, fmi2True);
+    d->capture = 0;
+    if (d->w == NULL) {
+        snprintf(err, errcap, "the Python slave refused to start: %s", d->said[0] ? d->said : "no reason given");
+        return err;
+    }
+    d->fresh = 1;
+    gm_reset(c);
+    gf_log(c, GF_OK, "logAll", "instantiated: %d variables, the Python slave started (tables SHA-256 ok)", c->n_vars);
+    return NULL;
 }
 
-/* A component exists only after a successful fmi2Instantiate, so W is bound whenever c is
- * a component; a call without one is refused instead of reaching a NULL pointer. */
-#define READY(c) (loaded && (c) != NULL)
-
-EXPORT void fmi2FreeInstance(fmi2Component c)
+void gm_free(gf_inst *c)
 {
-    if (READY(c)) W.FreeInstance(c);
+    gm_data *d;
+    if (c == NULL) return;
+    d = c->data;
+    /* after fmi2Fatal the wrapper has released the slave but kept its pointers: its instance is
+     * left alone (freeing it would release them again) */
+    if (d != NULL && d->w != NULL && !d->dead) W.FreeInstance(d->w);
+    if (d != NULL) {
+        free(d->vr_real);
+        free(d->vr_int);
+        free(d->vr_out);
+        free(d->buf);
+        free(d->ibuf);
+        free(d);
+    }
+    free(c->vars);
+    free(c->values);
+    free(c->out);
+    c->data = NULL;
+    c->vars = NULL;
+    c->values = c->out = NULL;
+    c->n_vars = c->n_out = 0;
 }
 
-#define FWD(name, params, args)                                                      \
-    EXPORT fmi2Status fmi2##name params                                              \
-    {                                                                                \
-        if (!READY(c)) return fmi2Error;                                             \
-        return W.name args;                                                          \
+void gm_reset(gf_inst *c)
+{
+    gm_data *d = c->data;
+    int i;
+    for (i = 0; i < c->n_vars; ++i) c->values[i] = c->vars[i].has_start ? c->vars[i].start : 0.0;
+    for (i = 0; i < c->n_out; ++i) c->out[i] = 0.0;
+    c->dirty = 1;
+    c->time = 0.0;
+    c->mode = GF_INSTANTIATED;
+    d->initialized = 0;
+    d->py_mode = GF_INSTANTIATED;
+    if (d->dead) { /* no slave to reset: the instance stays in the error state (logged by begin) */
+        begin(c, "fmi2Reset");
+        c->mode = GF_ERROR;
+    } else if (!d->fresh && begin(c, "fmi2Reset")) { /* pythonfmu re-creates the slave */
+        if (end(c, W.Reset(d->w)) < GF_ERROR_STATUS) d->fresh = 1;
     }
+}
 
-FWD(SetDebugLogging, (fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cat[]), (c, on, n, cat))
-FWD(SetupExperiment, (fmi2Component c, fmi2Boolean td, fmi2Real tol, fmi2Real t0, fmi2Boolean sd, fmi2Real t1),
-    (c, td, tol, t0, sd, t1))
-FWD(EnterInitializationMode, (fmi2Component c), (c))
-FWD(ExitInitializationMode, (fmi2Component c), (c))
-FWD(Terminate, (fmi2Component c), (c))
-FWD(Reset, (fmi2Component c), (c))
-FWD(GetReal, (fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]), (c, vr, n, v))
-FWD(GetInteger, (fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[]), (c, vr, n, v))
-FWD(GetBoolean, (fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean v[]), (c, vr, n, v))
-FWD(GetString, (fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]), (c, vr, n, v))
-FWD(SetReal, (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real v[]), (c, vr, n, v))
-FWD(SetInteger, (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer v[]), (c, vr, n, v))
-FWD(SetBoolean, (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Boolean v[]), (c, vr, n, v))
-FWD(SetString, (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]), (c, vr, n, v))
-FWD(GetFMUstate, (fmi2Component c, fmi2FMUstate *s), (c, s))
-FWD(SetFMUstate, (fmi2Component c, fmi2FMUstate s), (c, s))
-FWD(FreeFMUstate, (fmi2Component c, fmi2FMUstate *s), (c, s))
-FWD(SerializedFMUstateSize, (fmi2Component c, fmi2FMUstate s, size_t *size), (c, s, size))
-FWD(SerializeFMUstate, (fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t size), (c, s, b, size))
-FWD(DeSerializeFMUstate, (fmi2Component c, const fmi2Byte b[], size_t size, fmi2FMUstate *s), (c, b, size, s))
-FWD(GetDirectionalDerivative,
-    (fmi2Component c, const fmi2ValueReference u[], size_t nu, const fmi2ValueReference z[], size_t nz,
-     const fmi2Real dv[], fmi2Real dz[]),
-    (c, u, nu, z, nz, dv, dz))
-FWD(SetRealInputDerivatives,
-    (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer order[], const fmi2Real v[]),
-    (c, vr, n, order, v))
-FWD(GetRealOutputDerivatives,
-    (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer order[], fmi2Real v[]),
-    (c, vr, n, order, v))
-FWD(DoStep, (fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior), (c, t, h, noSetPrior))
-FWD(CancelStep, (fmi2Component c), (c))
-FWD(GetStatus, (fmi2Component c, const fmi2StatusKind s, fmi2Status *v), (c, s, v))
-FWD(GetRealStatus, (fmi2Component c, const fmi2StatusKind s, fmi2Real *v), (c, s, v))
-FWD(GetIntegerStatus, (fmi2Component c, const fmi2StatusKind s, fmi2Integer *v), (c, s, v))
-FWD(GetBooleanStatus, (fmi2Component c, const fmi2StatusKind s, fmi2Boolean *v), (c, s, v))
-FWD(GetStringStatus, (fmi2Component c, const fmi2StatusKind s, fmi2String *v), (c, s, v))
+int gm_exit_init(gf_inst *c)
+{
+    static const char *const fn = "fmi2ExitInitializationMode";
+    gm_data *d = c->data;
+    if (slave_in_init(c, fn) >= GF_ERROR_STATUS || hand_over(c, fn) >= GF_ERROR_STATUS || !begin(c, fn)) return 0;
+    d->fresh = 0;
+    /* the slave computes the initial state (or keeps the one its outputs already show); a failure
+     * is logged by it with status fmi2Error */
+    if (end(c, W.ExitInitializationMode(d->w)) >= GF_ERROR_STATUS) {
+        d->initialized = 0;
+        return 0;
+    }
+    d->py_mode = GF_STEP_MODE;
+    if (take_outputs(c, fn) >= GF_ERROR_STATUS) return 0;
+    d->initialized = 1;
+    c->dirty = 0;
+    return 1;
+}
+
+int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr)
+{
+    size_t i;
+    int want = 0;
+    if (c->mode != GF_INIT_MODE || !c->dirty) return 1;
+    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].causality == GF_OUTPUT;
+    if (!want) return 1;
+    if (slave_in_init(c, fn) >= GF_ERROR_STATUS || hand_over(c, fn) >= GF_ERROR_STATUS ||
+        take_outputs(c, fn) >= GF_ERROR_STATUS) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial outputs cannot be computed from the values set "
+               "(reasons above)", fn);
+        return 0;
+    }
+    c->dirty = 0;
+    return 1;
+}
+
+int gm_do_step(gf_inst *c, double t, double H)
+{
+    static const char *const fn = "fmi2DoStep";
+    gm_data *d = c->data;
+    int st;
+    if (isfinite(t)) c->time = t;
+    if (hand_over(c, fn) >= GF_ERROR_STATUS) return c->data->dead ? GF_FATAL : GF_DISCARD;
+    c->dirty = 0;
+    if (!begin(c, fn)) return GF_ERROR_STATUS;
+    d->fresh = 0;
+    st = (int)W.DoStep(d->w, c->time, H, fmi2True);
+    if (st == fmi2Fatal) {
+        end(c, fmi2Fatal);
+        return GF_FATAL;
+    }
+    if (st != fmi2OK) return GF_DISCARD; /* the slave logged why; state unchanged */
+    if (take_outputs(c, fn) >= GF_ERROR_STATUS) return c->data->dead ? GF_FATAL : GF_DISCARD;
+    c->time = c->time + H;
+    return GF_OK;
+}
+
+/* ------------------------------------------------------------ FMU state */
+/* the size of the slave's serialized state, asked once */
+static size_t py_size(const gf_inst *c, const char *fn)
+{
+    gf_inst *cc = (gf_inst *)c; /* the slave is asked; the instance's FMI state does not change */
+    gm_data *d = c->data;
+    fmi2FMUstate s = NULL;
+    size_t n = 0;
+    if (d->py_state_size > 0 || !begin(cc, fn)) return d->py_state_size;
+    if (end(cc, W.GetFMUstate(d->w, &s)) < GF_ERROR_STATUS && s != NULL) {
+        if (end(cc, W.SerializedFMUstateSize(d->w, s, &n)) < GF_ERROR_STATUS) d->py_state_size = n;
+        if (!d->dead) W.FreeFMUstate(d->w, &s);
+    }
+    return d->py_state_size;
+}
+
+size_t gm_snap_size(const gf_inst *c)
+{
+    return sizeof(snap_header) + sizeof(double) * ((size_t)c->n_vars + (size_t)c->n_out) + py_size(c, "fmi2GetFMUstate");
+}
+
+void gm_snap_write(const gf_inst *c, unsigned char *p)
+{
+    gm_data *d = c->data;
+    snap_header h;
+    size_t np = py_size(c, "fmi2GetFMUstate"), n = 0, at = sizeof h + sizeof(double) * ((size_t)c->n_vars + (size_t)c->n_out);
+    fmi2FMUstate s = NULL;
+    memset(&h, 0, sizeof h);
+    h.magic = SNAP_MAGIC;
+    h.version = SNAP_VERSION;
+    h.n_vars = (uint32_t)c->n_vars;
+    h.n_out = (uint32_t)c->n_out;
+    h.tag = d->tag;
+    h.py_size = np;
+    h.mode = c->mode;
+    h.dirty = c->dirty;
+    h.initialized = d->initialized;
+    h.py_mode = d->py_mode;
+    h.time = c->time;
+    memcpy(p, &h, sizeof h);
+    memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
+    memcpy(p + sizeof h + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
+    memset(p + at, 0, np); /* a slave that cannot give its state leaves zeros, which it refuses on restore */
+    if (np > 0 && begin((gf_inst *)c, "fmi2GetFMUstate") &&
+        end((gf_inst *)c, W.GetFMUstate(d->w, &s)) < GF_ERROR_STATUS && s != NULL) {
+        if (end((gf_inst *)c, W.SerializedFMUstateSize(d->w, s, &n)) < GF_ERROR_STATUS && n == np)
+            end((gf_inst *)c, W.SerializeFMUstate(d->w, s, (fmi2Byte *)(p + at), n));
+        if (!d->dead) W.FreeFMUstate(d->w, &s);
+    }
+    h.check = fnv1a(14695981039346656037ull, p, sizeof h + (at - sizeof h) + np);
+    memcpy(p + offsetof(snap_header, check), &h.check, sizeof h.check);
+}
+
+int gm_snap_is_ours(const gf_inst *c, const unsigned char *p, size_t size)
+{
+    snap_header h;
+    uint64_t zero = 0, sum;
+    if (size < sizeof h) return 0;
+    memcpy(&h, p, sizeof h);
+    if (h.magic != SNAP_MAGIC || h.version != SNAP_VERSION || h.tag != c->data->tag ||
+        h.n_vars != (uint32_t)c->n_vars || h.n_out != (uint32_t)c->n_out ||
+        size != sizeof h + sizeof(double) * ((size_t)c->n_vars + (size_t)c->n_out) + h.py_size)
+        return 0;
+    sum = fnv1a(14695981039346656037ull, p, offsetof(snap_header, check));
+    sum = fnv1a(sum, (const unsigned char *)&zero, sizeof zero);
+    sum = fnv1a(sum, p + offsetof(snap_header, check) + sizeof zero, size - offsetof(snap_header, check) - sizeof zero);
+    return sum == h.check;
+}
+
+int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn)
+{
+    gm_data *d = c->data;
+    snap_header h;
+    fmi2FMUstate s = NULL;
+    size_t at;
+    int st;
+    if (!gm_snap_is_ours(c, p, size)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: not a state of this FMU (header mismatch)", fn);
+        return 0;
+    }
+    memcpy(&h, p, sizeof h);
+    if ((h.mode & GF_ANY_STATE) == 0 || (h.mode & (h.mode - 1)) != 0 || (h.initialized & ~1) != 0 ||
+        (h.dirty & ~1) != 0 || (h.py_mode != GF_INSTANTIATED && h.py_mode != GF_INIT_MODE && h.py_mode != GF_STEP_MODE)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has an invalid FMI state %d", fn, (int)h.mode);
+        return 0;
+    }
+    /* the slave first: it checks its part (checksum, fingerprint) and refuses with its reason */
+    at = sizeof h + sizeof(double) * ((size_t)c->n_vars + (size_t)c->n_out);
+    if (!begin(c, fn)) return 0;
+    d->fresh = 0;
+    st = end(c, W.DeSerializeFMUstate(d->w, (const fmi2Byte *)(p + at), (size_t)h.py_size, &s));
+    if (st < GF_ERROR_STATUS && s != NULL) st = end(c, W.SetFMUstate(d->w, s));
+    if (s != NULL && !d->dead) W.FreeFMUstate(d->w, &s);
+    if (st >= GF_ERROR_STATUS) return 0;
+    c->mode = h.mode;
+    c->dirty = h.dirty;
+    c->time = h.time;
+    d->initialized = h.initialized;
+    d->py_mode = h.py_mode;
+    memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
+    memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
+    return 1;
+}

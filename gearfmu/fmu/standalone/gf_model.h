@@ -15,6 +15,12 @@
  *                  through gf_log to the logger the FMI layer put into the instance;
  *   fmi2_gear.c, fmi3_gear.c  the FMI 2.0 and 3.0 layers over both.
  *
+ * A second model implements this contract: ../runtime/pyshim.c, the Python slave of the pythonfmu
+ * runtime under the same fmi2_gear.c and fmi_common.c (docs/fmu.md "The binary").  A check of the
+ * FMI calls themselves (call order, value references, causality and variability, ranges, the
+ * time of a step) written in the layers or the plumbing applies to both runtimes; one written in
+ * gear_model.c applies to the standalone runtime only.
+ *
  * Status codes (GF_OK .. GF_FATAL) have the numbering of both fmi2Status and fmi3Status
  * (OK 0, Warning 1, Discard 2, Error 3, Fatal 4), so a layer casts.
  */
