@@ -273,12 +273,14 @@ def temperature_input(variables, tables: MeshTables):
     return out, start
 
 
-def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_optional: bool = False):
+def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_optional: bool = False,
+                        features: tuple = ()):
     """The spec's variables for these tables with ``starts`` applied and the temperature input
     (:func:`temperature_input`); returns (variables, temperature start degC or None).
     ``integrator_optional``: a spec without an ``integrator`` parameter is accepted when the
-    integrator is rk4 (0), the one the runtime then uses."""
-    variables = expand_variables(spec, tables.slots, features_of(tables))
+    integrator is rk4 (0), the one the runtime then uses.  ``features``: spec features besides the
+    tables' own (Model Exchange's, gearfmu.fmu.modeldesc.ME_FEATURES)."""
+    variables = expand_variables(spec, tables.slots, features_of(tables) + tuple(features))
     if integrator_optional and not any(v.name == "integrator" for v in variables):
         if starts.get("integrator", 0) != 0:
             raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")

@@ -941,3 +941,340 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     if (out != NULL) return gk_outputs(m, s, T1_Nm, out);
     return GK_OK;
 }
+
+/* ---------------------------------------------------------- Model Exchange
+ * docs/model.md "Model Exchange": the host integrates [theta1, omega1, x, v]; the mode (per pair
+ * region, elastobacklash branch and contact-zone flag; with node events the table segment) is held
+ * between events and decided anew from the state at each event.  The lookup is the plain one in the
+ * cell of theta1 (with node events: clamped to the held segment, the end cells' lines extended),
+ * except that a pair out of its contact zone has k = 0 and a pair in it takes the in-zone line of
+ * a cell that holds one of its edges. */
+
+/* x on the nearest node when within GK_ZONE_SNAP cells (gk_zones.c zone_wrap, without the wrap) */
+static double me_snap(double x)
+{
+    double rn = floor(x + 0.5);
+    return (fabs(x - rn) <= GK_ZONE_SNAP) ? rn : x;
+}
+
+/* Signed distance (node units) from s to the nearest edge of slot j's contact zones: > 0 inside a
+ * zone, < 0 outside; *inside = 1 when in <= s < out for one of them.  Global pair n has the zone
+ * [q N + snap(mm ppm + in), q N + snap(mm ppm + out)), q = floor(n / n_mesh), mm = n - q n_mesh, and
+ * belongs to slot mm mod P (gk_zone_cuts); the pairs within 2P meshes of s are looked at. */
+static double me_zone_distance(const gk_model *m, int j, double s, int *inside)
+{
+    double nm = m->zone_n_mesh, ppm = m->zone_ppm, best = -HUGE_VAL, n;
+    double n0 = floor((s - m->zone_out) / ppm) - 2.0 * m->P, n1 = floor((s - m->zone_in) / ppm) + 2.0 * m->P;
+    *inside = 0;
+    for (n = n0; n <= n1; n += 1.0) {
+        double q = floor(n / nm), mm = n - q * nm, in, out, g;
+        if ((long long)mm % m->P != j) continue;
+        in = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_in);
+        out = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_out);
+        g = (s - in < out - s) ? s - in : out - s;
+        if (g > best) best = g;
+        if (in <= s && s < out) *inside = 1;
+    }
+    return (best == -HUGE_VAL) ? -(double)m->n_phi : best;
+}
+
+/* a node the held segment stops at (node events): rk4_seg's stops (GK_ME_NODES_KINKS) or rk4_node's */
+static int me_node_stop(const gk_model *m, double n, int node_events)
+{
+    if (m->n_phi > GK_NODE_FLAGS_MAX) return 1;
+    return (m->node_kink[gki_node_index(m->n_phi, n)] & (node_events == GK_ME_NODES_KINKS ? 2 : 1)) != 0;
+}
+
+/* the segment [lo, hi) of stops around s: lo the last stop at or below floor(s), hi the first above */
+static void me_segment(const gk_model *m, gk_me *me, double s)
+{
+    double c = floor(s), q;
+    int k, N = m->n_phi;
+    me->seg_lo = c + 1.0 - N;
+    for (q = c, k = 0; k < N; ++k, q -= 1.0)
+        if (me_node_stop(m, q, me->node_events)) { me->seg_lo = q; break; }
+    me->seg_hi = c + N;
+    for (q = c + 1.0, k = 0; k < N; ++k, q += 1.0)
+        if (me_node_stop(m, q, me->node_events)) { me->seg_hi = q; break; }
+}
+
+/* the cell of theta1 = th (with node events clamped to the held segment) */
+GK_INLINE void me_cell(const gk_model *m, const gk_me *me, double th, gk_ph *c)
+{
+    double cc;
+    if (me->node_events == GK_ME_NODES_NONE) {
+        phi_cell(m, th, c);
+        return;
+    }
+    cc = floor(th * m->inv_dphi);
+    if (!(cc >= me->seg_lo)) cc = me->seg_lo;
+    if (cc > me->seg_hi - 1.0) cc = me->seg_hi - 1.0;
+    c->i0 = gki_node_index(m->n_phi, cc);
+    c->i1 = (c->i0 + 1 == m->n_phi) ? 0 : c->i0 + 1;
+    c->nd = GK_CELL_NONE;
+    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
+}
+
+/* k, e, de/dphi, b of pair j with its contact-zone flag held; 0 (and k = 0) when it is out of its zone */
+GK_INLINE int me_tables(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, double *kv,
+                        double *ev, double *es, double *bv)
+{
+    int sel = -1;
+    if (m->zone_n_mesh > 0.0 && !me->zin[j]) {
+        slot_tables(m, t, c, j, -1, kv, ev, es, bv);
+        *kv = 0.0;
+        return 0;
+    }
+    if (m->zone_cuts != NULL) {
+        size_t r = (size_t)j * m->n_phi + c->i0;
+        double lo = m->zone_cuts[r];
+        if (lo >= 0.0) sel = (c->w < 0.5 * (lo + m->zone_cuts[(size_t)m->P * m->n_phi + r])) ? 0 : 2;
+    }
+    slot_tables(m, t, c, j, sel, kv, ev, es, bv);
+    return 1;
+}
+
+/* contact_zone: the pair is damped (k > 0 in its zone; without zone edges at the middle of the cell) */
+GK_INLINE int me_kpos(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, int active)
+{
+    gk_ph half;
+    double km, em, esm, bm;
+    if (m->damping_model != GK_DAMPING_CONTACT_ZONE || !active) return 0;
+    if (m->zone_n_mesh > 0.0) return me->zin[j];
+    half = *c;
+    half.w = 0.5;
+    slot_tables(m, t, &half, j, -1, &km, &em, &esm, &bm);
+    return km > 0.0;
+}
+
+/* guard q of pair j as pair_guard, in metres: the force guards divided by k_mean (inv_k) */
+GK_INLINE double me_guard(int q, double kv, double ev, double es, double bv, double x, double v, double om,
+                          double c, int model, int reg, int sub, double inv_k)
+{
+    double d = x - ev, fc, fd;
+    if (reg == 0) {
+        if (q == 0) return bv - d;
+        if (q == 1) return d + bv;
+        return 1.0;
+    }
+    if (q == 0) return (reg == 1) ? d - bv : -(d + bv);
+    if (model != GK_DAMPING_ELASTOBACKLASH) return 1.0;
+    fc = kv * ((reg == 1) ? d - bv : d + bv) * inv_k;
+    fd = c * (v - es * om) * inv_k;
+    if (reg == 1) {
+        if (sub == 0) return (q == 1) ? fd - fc : 1.0;
+        if (sub == 1) return (q == 1) ? fc - fd : fc + fd;
+        return (q == 1) ? -(fc + fd) : 1.0;
+    }
+    if (sub == 0) return (q == 1) ? fc - fd : 1.0;
+    if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
+    return (q == 1) ? fc + fd : 1.0;
+}
+
+static int me_check(const gk_model *m, const gk_me *me, const gk_state *s)
+{
+    if (m == NULL || me == NULL || s == NULL) return GK_ERR_MODEL;
+    if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+    if (!isfinite(s->theta1_rad) || !isfinite(s->omega1_rad_s) || !isfinite(s->x_m) || !isfinite(s->v_m_s))
+        return GK_ERR_NONFINITE;
+    return GK_OK;
+}
+
+int gk_me_n_indicators(const gk_model *m, int node_events)
+{
+    if (m == NULL) return 0;
+    return 3 * m->P + ((m->zone_n_mesh > 0.0) ? m->P : 0) + ((node_events != GK_ME_NODES_NONE) ? 2 : 0);
+}
+
+static double me_force(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *pf,
+                       double *kmesh);
+static void me_rhs(const gk_model *m, const gk_state *s, double F, double T1, double T2, double *dx);
+
+/* the mode from state s (gk_me_update) */
+static void me_decide(const gk_model *m, gk_me *me, const gk_tq *t, const gk_state *s)
+{
+    gk_ph c = GK_PH_NONE;
+    double sv = s->theta1_rad * m->inv_dphi;
+    int j;
+    if (me->node_events != GK_ME_NODES_NONE) me_segment(m, me, sv);
+    if (m->zone_n_mesh > 0.0)
+        for (j = 0; j < m->P; ++j) me_zone_distance(m, j, sv, &me->zin[j]);
+    me_cell(m, me, s->theta1_rad, &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv, d;
+        if (!me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv)) {
+            me->reg[j] = 0;
+            me->sub[j] = 0;
+            continue;
+        }
+        d = s->x_m - ev;
+        me->reg[j] = (d > bv) ? 1 : (d < -bv) ? -1 : 0;
+        me->sub[j] = (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+                         ? decide_sub(me->reg[j], kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m)
+                         : 0;
+    }
+}
+
+/* The mode anew at an event (docs/model.md "Model Exchange"): decided at the state, then again at the
+ * state a moment ahead, y + delta*f(y) with f in the mode decided first and delta = 1e-9 of the
+ * natural period 2 pi sqrt(m_e/k_mean) (the choice of gearfmu.dynamics.reference), so that a guard
+ * the host's root finder left at zero, or a hair short of it, takes the side it moves to. */
+int gk_me_update(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int *changed)
+{
+    gk_tq t;
+    gk_me old;
+    gk_state ahead;
+    double dx[4], delta;
+    int j, st = me_check(m, me, s), diff = 0;
+    if (st != GK_OK) return st;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    old = *me;
+    t = torque_bracket(m, T1_Nm);
+    me_decide(m, me, &t, s);
+    me_rhs(m, s, me_force(m, me, &t, s, NULL, NULL), T1_Nm, T2_Nm, dx);
+    delta = 1e-9 * 6.283185307179586 * sqrt(m->m_e_kg / m->k_mean_N_per_m);
+    ahead.theta1_rad = s->theta1_rad + delta * dx[0];
+    ahead.omega1_rad_s = s->omega1_rad_s + delta * dx[1];
+    ahead.x_m = s->x_m + delta * dx[2];
+    ahead.v_m_s = s->v_m_s + delta * dx[3];
+    if (isfinite(ahead.theta1_rad) && isfinite(ahead.omega1_rad_s) && isfinite(ahead.x_m) && isfinite(ahead.v_m_s))
+        me_decide(m, me, &t, &ahead);
+    for (j = 0; j < m->P; ++j)
+        diff |= me->reg[j] != old.reg[j] || me->sub[j] != old.sub[j] || me->zin[j] != old.zin[j];
+    diff |= me->seg_lo != old.seg_lo || me->seg_hi != old.seg_hi;
+    if (changed != NULL) *changed = diff;
+    return GK_OK;
+}
+
+int gk_me_init(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int node_events)
+{
+    int j;
+    if (me == NULL) return GK_ERR_MODEL;
+    if (node_events != GK_ME_NODES_NONE && node_events != GK_ME_NODES_KINKS && node_events != GK_ME_NODES_ALL)
+        return GK_ERR_PARAM;
+    me->node_events = node_events;
+    for (j = 0; j < GK_KINK_MAX_SLOTS; ++j) me->reg[j] = me->sub[j] = me->zin[j] = 0;
+    me->seg_lo = me->seg_hi = 0.0;
+    return gk_me_update(m, me, s, T1_Nm, T2_Nm, NULL);
+}
+
+/* the total force with the mode held; per pair (pf) and the stiffness of the pairs in contact */
+static double me_force(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *pf,
+                       double *kmesh)
+{
+    gk_ph c = GK_PH_NONE;
+    double F = 0.0, ks = 0.0;
+    int j;
+    me_cell(m, me, s->theta1_rad, &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv, Fj = 0.0;
+        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv);
+        if (active) {
+            Fj = pair_force_locked(kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m,
+                                   m->damping_model, me->reg[j], me->sub[j], me_kpos(m, t, me, &c, j, active));
+            if (me->reg[j] != 0) ks += kv;
+        }
+        if (pf != NULL) pf[j] = Fj;
+        F += Fj;
+    }
+    if (kmesh != NULL) *kmesh = ks;
+    return F;
+}
+
+static void me_rhs(const gk_model *m, const gk_state *s, double F, double T1, double T2, double *dx)
+{
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    dx[0] = s->omega1_rad_s;
+    dx[1] = (T1 - Rb1 * F) * m->inv_I1;
+    dx[2] = s->v_m_s;
+    dx[3] = Rb1 * (T1 - Rb1 * F) * m->inv_I1 - Rb2 * (Rb2 * F - T2) * m->inv_I2;
+}
+
+int gk_me_derivatives(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
+                      double *dx)
+{
+    gk_tq t;
+    int st = me_check(m, me, s);
+    if (st != GK_OK) return st;
+    if (dx == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    t = torque_bracket(m, T1_Nm);
+    me_rhs(m, s, me_force(m, me, &t, s, NULL, NULL), T1_Nm, T2_Nm, dx);
+    return GK_OK;
+}
+
+/* every indicator into z with room for all (3P guards, P zones, 2 segment ends; those the model
+ * does not have 1.0) */
+static void me_all_indicators(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *z)
+{
+    gk_ph c = GK_PH_NONE;
+    double sv = s->theta1_rad * m->inv_dphi, len = m->Rb1_m * m->dphi_rad, inv_k = 1.0 / m->k_mean_N_per_m;
+    int j, q, P = m->P;
+    me_cell(m, me, s->theta1_rad, &c);
+    for (j = 0; j < P; ++j) {
+        double kv, ev, es, bv;
+        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv), inside;
+        for (q = 0; q < 3; ++q)
+            z[q * P + j] = active ? me_guard(q, kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m,
+                                             m->damping_model, me->reg[j], me->sub[j], inv_k)
+                                  : 1.0;
+        if (m->zone_n_mesh > 0.0) {
+            double g = me_zone_distance(m, j, sv, &inside) * len;
+            z[3 * P + j] = me->zin[j] ? g : -g;
+        } else {
+            z[3 * P + j] = 1.0;
+        }
+    }
+    z[4 * P] = (me->node_events != GK_ME_NODES_NONE) ? (sv - me->seg_lo) * len : 1.0;
+    z[4 * P + 1] = (me->node_events != GK_ME_NODES_NONE) ? (me->seg_hi - sv) * len : 1.0;
+}
+
+int gk_me_indicators(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double *z)
+{
+    gk_tq t;
+    double all[4 * GK_KINK_MAX_SLOTS + 2];
+    int st = me_check(m, me, s), P, n = 0, j;
+    if (st != GK_OK) return st;
+    if (z == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm)) return GK_ERR_INPUT;
+    P = m->P;
+    t = torque_bracket(m, T1_Nm);
+    me_all_indicators(m, me, &t, s, all);
+    for (j = 0; j < 3 * P; ++j) z[n++] = all[j];
+    if (m->zone_n_mesh > 0.0)
+        for (j = 0; j < P; ++j) z[n++] = all[3 * P + j];
+    if (me->node_events != GK_ME_NODES_NONE) {
+        z[n++] = all[4 * P];
+        z[n++] = all[4 * P + 1];
+    }
+    return GK_OK;
+}
+
+int gk_me_outputs(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, double *out,
+                  double *me_out)
+{
+    gk_tq t;
+    double F, km;
+    int j, P, st = me_check(m, me, s);
+    if (st != GK_OK) return st;
+    if (out == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    P = m->P;
+    t = torque_bracket(m, T1_Nm);
+    F = me_force(m, me, &t, s, out + GK_OUT_PAIR_FORCE, &km);
+    out[GK_OUT_PINION_ANGLE] = s->theta1_rad;
+    out[GK_OUT_PINION_SPEED] = s->omega1_rad_s;
+    out[GK_OUT_GEAR_ANGLE] = (s->theta1_rad * m->Rb1_m - s->x_m) / m->Rb2_m;
+    out[GK_OUT_GEAR_SPEED] = (s->omega1_rad_s * m->Rb1_m - s->v_m_s) / m->Rb2_m;
+    out[GK_OUT_DTE] = s->x_m;
+    out[GK_OUT_MESH_FORCE] = F;
+    out[GK_OUT_MESH_STIFFNESS] = km;
+    for (j = 0; j < P; ++j)
+        out[GK_OUT_PAIR_FORCE + P + j] = (F != 0.0) ? out[GK_OUT_PAIR_FORCE + j] / F : 0.0;
+    if (me_out != NULL) {
+        me_out[GK_ME_OUT_V] = s->v_m_s;
+        me_rhs(m, s, F, T1_Nm, T2_Nm, me_out + GK_ME_OUT_DERIVATIVES);
+        me_all_indicators(m, me, &t, s, me_out + GK_ME_OUT_INDICATORS);
+    }
+    return GK_OK;
+}
