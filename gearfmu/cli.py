@@ -1,7 +1,8 @@
-"""The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
+"""The gearfmu command line: spur and helical gear pairs to FMI 2.0/3.0 Co-Simulation and Model Exchange FMUs.
 
   gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
-                   [--fmi3-outputs array|scalar] [--reference-results DIR]
+                   [--fmi3-outputs array|scalar] [--interface both|cs|me] [--me-node-events none|kinks|all]
+                   [--reference-results DIR]
                                              scene -> tables -> FMU (DIR: its FMI Cross-Check set)
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
@@ -44,7 +45,7 @@ import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.progress import notice, reporting, ticking
-from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS, RUNTIMES
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
@@ -174,7 +175,8 @@ def cmd_build(args) -> int:
         platforms = parse_platforms(args.platforms)
     res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
                 estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
-                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs)
+                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs, interface=args.interface,
+                me_node_events=args.me_node_events)
     cached = _from_cache(res.tables) if not args.tables else ""
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
           f"FMU {res.build_wall_s:.2f} s, "
@@ -567,6 +569,13 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--fmi3-outputs", choices=FMI3_OUTPUTS, default=DEFAULT_FMI3_OUTPUTS,
                    help="FMI 3 FMU: pair_force and load_sharing as arrays (default) or as scalars pair_force_1 .. "
                         "(for hosts without array support; docs/standalone.md 'FMI 3.0')")
+    b.add_argument("--interface", choices=FMU_INTERFACES,
+                   help="standalone runtime: the FMI interfaces of the FMU: both (default; Co-Simulation and Model "
+                        "Exchange in one FMU), cs or me; the pythonfmu runtime offers cs only (docs/standalone.md "
+                        "'Model Exchange')")
+    b.add_argument("--me-node-events", choices=ME_NODE_EVENTS,
+                   help="Model Exchange: events at the table nodes: kinks (default; the nodes where the tables kink "
+                        "hard), all (every node where they bend) or none (docs/model.md 'Model Exchange')")
     b.add_argument("--reference-results", metavar="DIR",
                    help="also write the FMU's FMI Cross-Check set into DIR: <model>.fmu, _ref.csv, _in.csv, "
                         "_ref.opt (docs/fmu_import.md 'Reference results')")

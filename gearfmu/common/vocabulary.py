@@ -86,11 +86,12 @@ DEFAULT_FMI3_OUTPUTS = "array"
 #: pythonfmu runtime offers Co-Simulation only)
 FMU_INTERFACES = ("cs", "me", "both")
 DEFAULT_FMU_INTERFACE = "both"
-#: Model Exchange's table-node events (docs/model.md "Model Exchange"): none (the default: the
-#: host's solver steps over the table nodes), the big kinks (rk4_seg's stops) or every node where
-#: the tables bend (rk4_node's)
+#: Model Exchange's table-node events (docs/model.md "Model Exchange"): none (the host's solver
+#: steps over every table node), the big kinks (the default: rk4_seg's stops, a few per mesh
+#: period; measured by benchmarks/bench_me.py, docs/validation.md) or every node where the tables
+#: bend (rk4_node's)
 ME_NODE_EVENTS = ("none", "kinks", "all")
-DEFAULT_ME_NODE_EVENTS = "none"
+DEFAULT_ME_NODE_EVENTS = "kinks"
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
 DEFAULT_RUNTIME = "standalone"
 

@@ -554,7 +554,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                             description=ET.fromstring(xml).get("description", ""), tables=tables,
                             parameters=params, envelope=env_rec, scene_text=scene_text,
                             platforms_text=platforms_text(binaries, fmi_version),
-                            experiment={"start": 0.0, "stop": tstop, "step": dt})
+                            experiment={"start": 0.0, "stop": tstop, "step": dt},
+                            interfaces=INTERFACE_ELEMENTS[interface])
         with fmu_zip(a.out_path) as zout:
             zip_folder(zout, root)
     return a.out_path

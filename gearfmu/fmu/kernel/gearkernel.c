@@ -965,8 +965,13 @@ static double me_zone_distance(const gk_model *m, int j, double s, int *inside)
 {
     double nm = m->zone_n_mesh, ppm = m->zone_ppm, best = -HUGE_VAL, n;
     double n0 = floor((s - m->zone_out) / ppm) - 2.0 * m->P, n1 = floor((s - m->zone_in) / ppm) + 2.0 * m->P;
+    int k;
     *inside = 0;
-    for (n = n0; n <= n1; n += 1.0) {
+    if (!(fabs(s) < GK_CELL_LIMIT)) {   /* beyond 2^52 cells (or NaN) the pairs cannot be told apart */
+        *inside = 1;
+        return 1.0;
+    }
+    for (n = n0, k = 0; n <= n1 && k < 64 * GK_KINK_MAX_SLOTS; n += 1.0, ++k) {
         double q = floor(n / nm), mm = n - q * nm, in, out, g;
         if ((long long)mm % m->P != j) continue;
         in = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_in);
