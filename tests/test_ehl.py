@@ -307,6 +307,28 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     assert retry_made_progress([8e-4, 9e-4, 9e-5])
 
 
+def test_convergence_error_poses_the_failed_problem_again():
+    # A failure seen in a long run must be repeatable on its own: the message gives M and L in
+    # full precision (rounded to 4 digits it names a neighbouring problem, which may converge:
+    # Barus L = 22.0 fails at M = 5.5 and converges at M = 5.75) and the error carries
+    # ``problem``, the keyword arguments that pose the same problem again.  Reference: the
+    # solver's determinism -- the same problem stalls with the same residual history.
+    M, L, kw = 20.000000001, 10.0, dict(max_cycles=2, tol_residual=1e-12)
+    with pytest.raises(EHLConvergenceError) as e1:
+        solve_line_contact(M=M, L=L, viscosity="barus", compressible=False, n_nodes=513, **kw)
+    assert f"M={M!r}, L={L!r}, barus, incompressible" in str(e1.value)
+    assert e1.value.problem == dict(M=M, L=L, rho0_kg_m3=870.0, viscosity="barus", compressible=False,
+                                    x_in=-4.5, x_out=1.5, n_nodes=513)
+    with pytest.raises(EHLConvergenceError) as e2:
+        solve_line_contact(**e1.value.problem, **kw)
+    assert e2.value.history == e1.value.history
+    dim = dict(R_m=0.02, E_Pa=2.26e11, w_N_per_m=2e5, u_m_s=5.0, eta0_Pas=0.04, alpha_Pa_inv=2.2e-8)
+    with pytest.raises(EHLConvergenceError) as e3:
+        solve_line_contact(**dim, **kw)
+    assert e3.value.problem == dict(dim, rho0_kg_m3=870.0, viscosity="roelands", compressible=True,
+                                    x_in=-4.5, x_out=1.5)
+
+
 # --------------------------------------------------------------------------- film stiffness
 def test_bulk_modulus_is_tait_tangent_modulus_with_right_limits():
     # Reference: isothermal Tait equation V/V0 = 1 - ln(1 + p (1+B0')/B0)/(1+B0')

@@ -327,6 +327,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     the stated tolerances; otherwise :class:`EHLConvergenceError`.
     """
     t_start = time.perf_counter()
+    # as given (EHLConvergenceError.problem)
+    grid_given = dict(n_nodes=n_nodes, n_coarse=n_coarse, moes=M is not None or L is not None)
     # no tolerance given: the fast path may stop at the discretisation error (docs/ehl.md)
     default_tolerances = tol_pressure is None and tol_load is None and tol_residual is None
     tol_pressure = DEFAULT_TOL_PRESSURE if tol_pressure is None else float(tol_pressure)
@@ -647,15 +649,26 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         b_ = min(fin, key=lambda t_: t_[3]) if fin else None
         best_txt = (f"; best stalled scaled residual {b_[3]:.2e} (attempt {b_[2]}, "
                     f"{b_[0]}/{b_[1]} intervals)" if b_ else "")
+        # the problem exactly as solved (full precision: a rounded M or L names a
+        # neighbouring problem, which may well converge)
+        problem = (dict(M=M, L=L, rho0_kg_m3=rho0_kg_m3) if grid_given["moes"] else
+                   dict(R_m=R_m, E_Pa=E_Pa, w_N_per_m=w_N_per_m, u_m_s=u_m_s, eta0_Pas=eta0_Pas,
+                        alpha_Pa_inv=alpha_Pa_inv, rho0_kg_m3=rho0_kg_m3))
+        problem.update(viscosity=viscosity, compressible=bool(compressible), x_in=float(x_in),
+                       x_out=float(x_out))
+        problem.update({k_: grid_given[k_] for k_ in ("n_nodes", "n_coarse") if grid_given[k_] is not None})
         raise EHLConvergenceError(
-            f"EHL multigrid did not converge in {it} W-cycles (M={M:.4g}, L={L:.4g}): "
+            f"EHL multigrid did not converge in {it} W-cycles (M={M!r}, L={L!r}, "
+            f"{viscosity}, {'compressible' if compressible else 'incompressible'}"
+            f"{', rough' if rfun is not None else ''}): "
             f"residual '{name}' stalled at {val:.3e} (tolerance {tol:.1e}); "
             f"reynolds_residual={last['reynolds_residual']:.3e}{best_txt}; "
             f"{len(tried)} setting(s) on {len({t_[:2] for t_ in tried})} grid(s) tried in "
             f"{time.perf_counter() - t_start:.2f} s"
             + "".join(f"; {x}" for x in skipped),
             residual_name=name, value=val, history=hist,
-            best_residual=b_[3] if b_ else float("nan"), attempts=tried, skipped=skipped)
+            best_residual=b_[3] if b_ else float("nan"), attempts=tried, skipped=skipped,
+            problem=problem)
 
     # central film: linear interpolation at X = 0
     h_c = float(np.interp(0.0, X, h_m))
