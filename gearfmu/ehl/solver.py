@@ -500,7 +500,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         tried.append((n_nodes_ - 1, n_coarse_, k_att,
                       float(rr[-1]) if rr and math.isfinite(rr[-1]) else math.inf))
         if (rfun is None and newton_after > 0 and rr and math.isfinite(rr[-1])
-                and n_nodes_ <= NEWTON_MAX_NODES):
+                and n_nodes_ <= NEWTON_MAX_NODES and "hit_max_cycles" not in h_):
+            # (a setting stopped by the caller's cycle limit has not stalled: no Newton either)
             stalled.append((float(rr[-1]), k_grid, k_att, s_obj, h_, opts_, it_))
         # remember the last attempt that ended with a collapsed film (h <= 0):
         # if no attempt converges, that is reported (FilmCollapseError) rather
