@@ -77,6 +77,7 @@ SOURCES = {
     "ehl_corners": ([PY, "benchmarks/bench_ehl_corners.py", "--repeats", "10"], None,
                     "benchmarks/bench_ehl_corners.py --repeats 10"),
     "ehl_rough": ([PY, "benchmarks/bench_ehl_rough.py"], None, "benchmarks/bench_ehl_rough.py"),
+    "ehl_moes": ([PY, "benchmarks/bench_ehl_moes.py"], None, "benchmarks/bench_ehl_moes.py"),
     "ehl_rough_tables": ([PY, "benchmarks/bench_ehl_tables.py", "--levels", "1", "2", "3", "--models", "hertz",
                           "smooth_ehl"], None,
                          "benchmarks/bench_ehl_tables.py --levels 1 2 3 --models hertz smooth_ehl"),
@@ -106,8 +107,8 @@ SOURCES = {
     "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_rough_tables", "integrators", "startup", "plan_study", "plan_scan",
-        "tests", "gearbox", "silence"}
+SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup", "plan_study",
+        "plan_scan", "tests", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -597,6 +598,15 @@ def sec_ehl_rough(pg: Page):
     from report_ehl_rough import render as render_rough  # the section's own module (report.py's size)
 
     render_rough(pg, table, SOURCES["ehl_rough"][2])
+
+
+def sec_ehl_moes(pg: Page):
+    if pg.missing("ehl_moes", "Smooth EHL film against Moes' fit"):
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_ehl_moes import render as render_moes  # the section's own module (report.py's size)
+
+    render_moes(pg, table, SOURCES["ehl_moes"][2])
 
 
 def sec_trends(pg: Page):
@@ -1354,9 +1364,9 @@ def sec_costs(pg: Page):
             + f"\n\nSource: `{SOURCES['silence'][2]}` ({pg.cost('silence')}).\n")
 
 
-SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_rough", "sec_load_sharing", "sec_fractal", "sec_trends",
-            "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs",
-            "sec_goals")
+SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_moes", "sec_ehl_rough", "sec_load_sharing",
+            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_arms", "sec_seed003_statements", "sec_plan",
+            "sec_fmu", "sec_costs", "sec_goals")
 
 
 def render(data: dict, runs: dict, out: Path, img_dir: Path, failed: list = None) -> str:
