@@ -22,7 +22,7 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch]
+    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch] gf_resources.[ch]
                                          gkfmu.[ch] gearkernel.[ch] gk_*.[ch]
                                          BUILD.txt
                                          CMakeLists.txt (FMI 3: fmi3_all.c, fmi3_gear.c, buildDescription.xml)
@@ -79,11 +79,12 @@ LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
 FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
 #: the generic FMI plumbing and the gear model both FMI layers share, and the FMU behaviour over the
 #: kernel the pythonfmu runtime calls too (gkfmu.h)
-SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c", FMU_LAYER_SOURCE)
+SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c",
+                  HERE / "standalone" / "gf_resources.c", FMU_LAYER_SOURCE)
 #: their headers: the model contract (gf_model.h, as the Reference-FMUs' model.h), the plumbing's API,
-#: the gear model's data, the FMU layer's API
+#: the gear model's data, the reading of the resources, the FMU layer's API
 SHARED_HEADERS = (HERE / "standalone" / "gf_model.h", HERE / "standalone" / "fmi_common.h",
-                  HERE / "standalone" / "gear_model.h", FMU_LAYER_HEADER)
+                  HERE / "standalone" / "gear_model.h", HERE / "standalone" / "gf_resources.h", FMU_LAYER_HEADER)
 #: the C files of the FMI 2 binary besides the kernel, in compile order
 LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
 FMI3_LAYER_SOURCES = (FMI3_LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
@@ -289,7 +290,7 @@ def platforms_text(report: Dict[str, dict], fmi_version: int = 2) -> str:
 def scalar_names(variables):
     """The variables with every per-slot element ``name[i]`` renamed ``name_i`` (the FMI 3 FMU with
     scalar outputs: no name ends in ``[1]``, so neither the model description
-    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gear_model.c mark_arrays) makes
+    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gf_resources.c gfr_mark_arrays) makes
     arrays of them).  Value references, order and everything else stay."""
     return [replace(v, name=re.sub(r"\[(\d+)\]$", r"_\1", v.name)) for v in variables]
 
