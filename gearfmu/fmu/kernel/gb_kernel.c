@@ -20,6 +20,7 @@ struct gb_work {
     gk_ph ph[GB_MAX_MESHES];        /* rk4: the cell carried from one evaluation to the next */
     gk_mode md[GB_MAX_MESHES];      /* rk4_kink, rk4_node: the mode held */
     double tau[GB_MAX_BODIES];      /* torques on the bodies */
+    double u[GB_MAX_BODIES], du[GB_MAX_BODIES];   /* every body's deviation and its rate (0 for body 0) */
     double y[GB_MAX_STATE], f0[GB_MAX_STATE], y1[GB_MAX_STATE], f1[GB_MAX_STATE], yt[GB_MAX_STATE];
     double tmp[GB_MAX_STATE], acc[GB_MAX_STATE], kk[GB_MAX_STATE];
     long events;
@@ -171,37 +172,46 @@ GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *d
                       const int locked)
 {
     int n = gb->n, i, s, m;
-    double *tau = w->tau, a0;
-    for (i = 0; i < n; ++i) tau[i] = 0.0;
+    double *tau = w->tau, *u = w->u, *du = w->du, a0;
+    u[0] = 0.0;   /* body 0 has no deviation (kernels._u) */
+    du[0] = 0.0;
+    tau[0] = 0.0;
+    for (i = 1; i < n; ++i) {
+        u[i] = y[2 * i];
+        du[i] = y[2 * i + 1];
+        tau[i] = 0.0;
+    }
     tau[0] += t_in;
     tau[gb->load_body] -= t_out;
     for (s = 0; s < gb->n_shaft; ++s) {
         int a = gb->shaft_a[s], b = gb->shaft_b[s];
-        double ts = gb->shaft_k[s] * (body_u(y, 0, a) - body_u(y, 0, b)) +
-                    gb->shaft_c[s] * (body_u(y, 1, a) - body_u(y, 1, b));
+        double ts = gb->shaft_k[s] * (u[a] - u[b]) + gb->shaft_c[s] * (du[a] - du[b]);
         tau[a] -= ts;
         tau[b] += ts;
     }
     for (m = 0; m < gb->n_mesh; ++m) {
         const gb_mesh *me = &gb->mesh[m];
         const gk_model *pm = me->pair;
-        double loc[4], fm;
-        mesh_local(me, y, loc);
+        int p = me->p, q = me->q;
+        double rb1 = pm->Rb1_m, rb2 = pm->Rb2_m, fm;
+        /* the mesh's local state (mesh_local) */
+        double th = me->g_p * y[0] + u[p], om = me->g_p * y[1] + du[p];
+        double x = rb1 * u[p] - rb2 * u[q], v = rb1 * du[p] - rb2 * du[q];
         if (locked) {   /* kernels._mesh_locked: the force loop of deriv_locked */
             const gk_mode *md = &w->md[m];
             int j;
             fm = 0.0;
             for (j = 0; j < pm->P; ++j) {
                 double kv, ev, es, bv;
-                locked_tables(pm, &w->tq[m], md, loc[0], j, &kv, &ev, &es, &bv);
-                fm += pair_force_locked(kv, ev, es, bv, loc[2], loc[3], loc[1], pm->c_Ns_per_m, pm->damping_model,
-                                        md->reg[j], md->sub[j], md->kpos[j]);
+                locked_tables(pm, &w->tq[m], md, th, j, &kv, &ev, &es, &bv);
+                fm += pair_force_locked(kv, ev, es, bv, x, v, om, pm->c_Ns_per_m, pm->damping_model, md->reg[j],
+                                        md->sub[j], md->kpos[j]);
             }
         } else {
-            fm = mesh_force(pm, &w->tq[m], &w->ph[m], loc[0], loc[1], loc[2], loc[3], NULL, NULL);
+            fm = mesh_force(pm, &w->tq[m], &w->ph[m], th, om, x, v, NULL, NULL);
         }
-        tau[me->p] -= pm->Rb1_m * fm;
-        tau[me->q] += pm->Rb2_m * fm;
+        tau[p] -= rb1 * fm;
+        tau[q] += rb2 * fm;
     }
     a0 = tau[0] * gb->inv_I[0];
     dy[0] = y[1];
