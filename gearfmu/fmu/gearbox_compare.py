@@ -30,8 +30,8 @@ def step_fmu(fmu_path, names: Sequence[str], *, stop_time_s: float, comm_step_s:
     read the Real outputs ``names`` (FMI 2 names; an FMI 3 array ``x`` of n elements is read as
     ``x[1]`` .. ``x[n]``) at every communication point; FmuRunError naming the file when a call fails."""
     import fmpy  # fmpy: heavy, only to run an FMU
-    from fmpy.fmi2 import FMU2Slave
-    from fmpy.fmi3 import FMU3Slave
+    from fmpy.fmi2 import FMU2Slave  # fmpy: heavy, only to run an FMU
+    from fmpy.fmi3 import FMU3Slave  # fmpy: heavy, only to run an FMU
 
     md = fmpy.read_model_description(str(fmu_path))
     fmi3 = md.fmiVersion.startswith("3")
