@@ -3,13 +3,16 @@ references its C code did not produce.
 
 * The native gearbox solver (numba, gearfmu/gearbox/kernels.py), an implementation of the same
   equations in another language: on the example reducer and on a hard case (contact loss and
-  back-flank impacts in stage 1 while stage 2 carries load), all three integrators, the FMU stepped
+  impacts in stage 1 while stage 2 carries load), all three integrators, the FMU stepped
   at exactly the native communication step: every output within 1e-9 of its range.
 * The linear limit (constant mesh stiffness, no errors, no backlash, contact_zone force law): the
   response to a torque step from the static state is the matrix exponential of the first-order
   system with M, K, C assembled element by element in tests/test_gearbox_modes.py and
   tests/test_gearbox_native.py, the static state worked out by hand here: within 1e-6 of each
   signal's range.
+* The kernel's right-hand side gb_derivatives (the form a Model Exchange host integrates) in the
+  linear limit: the accelerations -M^-1 (K theta + C omega - f) with the hand-assembled M, K, C,
+  mapped to the deviation state.
 * The pair FMU (gear_model.c over gearkernel.c, another C model in other state variables): one stage
   without shafts reproduces it on the pair hard cases of gearfmu.bench to 1e-9 of the range.
 * The FMI 2 FMU of the same gearbox for its FMI 3 twin (bit for bit); the linux64 binary run by
@@ -464,3 +467,88 @@ def test_cli_build_validate_and_refusals(tmp_path):
     p = gearfmu("validate", str(EXAMPLE), "--fmu", str(out), "--stop-time", "0.01", "-q")
     assert p.returncode == 0, p.stdout + p.stderr
     assert "PASSED: every output within 1e-09 of its range" in p.stdout and "intermediate_shaft.torque" in p.stdout
+
+
+# ------------------------------------------- the right-hand side of the kernel
+def _kernel_library(tmp):
+    """gb_kernel.c and the pair kernel's files as a shared library (every function exported)."""
+    import ctypes
+    import shutil
+
+    from gearfmu.fmu.build_steps import CFLAGS, KERNEL_DIR, KERNEL_SOURCES
+
+    lib = tmp / "libgb.so"
+    subprocess.run([shutil.which("gcc") or "cc", *CFLAGS, "-o", str(lib), str(KERNEL_DIR / "gb_kernel.c"),
+                    *map(str, KERNEL_SOURCES), "-lm"], check=True, capture_output=True, text=True)
+    L = ctypes.CDLL(str(lib))
+    for f in ("gk_init", "gk_set_damping", "gb_init", "gb_add_mesh", "gb_add_shaft", "gb_derivatives"):
+        getattr(L, f).restype = ctypes.c_int
+    D, P = ctypes.c_double, ctypes.c_void_p
+    L.gk_init.argtypes = [P, ctypes.c_int, ctypes.c_int, ctypes.c_int, P, P, P, P] + [D] * 6
+    L.gk_set_damping.argtypes = [P, D, ctypes.c_int]
+    L.gb_init.argtypes = [P, ctypes.c_int, P, P, ctypes.c_int, ctypes.c_int, ctypes.c_int]
+    L.gb_add_mesh.argtypes = [P, P, ctypes.c_int, ctypes.c_int, ctypes.c_int]
+    L.gb_add_shaft.argtypes = [P, ctypes.c_int, ctypes.c_int, D, D, ctypes.c_int]
+    L.gb_derivatives.argtypes = [P, P, D, P, D, D, P]
+    return L
+
+
+def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
+    """gb_derivatives(t, y) of the linear gearbox (constant mesh stiffness, no error, no backlash,
+    contact_zone: F = k x + c v) at a state far from equilibrium equals the accelerations of the
+    hand-assembled M, K, C (tests/test_gearbox_modes.py, tests/test_gearbox_native.py) mapped to the
+    deviation state: psi'' = alpha_0, u_i'' = alpha_i - g_i alpha_0, to 1e-9 of the largest."""
+    L = _kernel_library(tmp_path)
+    model = linear_gearbox()
+    keep = []
+    pairs = []
+    for mesh in model.meshes:
+        t = mesh.tables
+        arrs = [np.ascontiguousarray(a, dtype=float) for a in (t.torque_Nm, t.k_N_per_m, t.e_m, t.backlash_half_m)]
+        pm = np.zeros(L.gk_sizeof_model() // 8 + 1)
+        keep += arrs + [pm]
+        assert L.gk_init(pm.ctypes.data, t.slots, t.n_phi, t.n_torque, *(a.ctypes.data for a in arrs),
+                         t.phi_period_rad, t.base_radius_pinion_m, t.base_radius_gear_m, t.inertia_pinion_kgm2,
+                         t.inertia_gear_kgm2, t.k_mean_N_per_m) == 0
+        assert L.gk_set_damping(pm.ctypes.data, mesh.damping_ratio, 1) == 0
+        pairs.append(pm)
+    gb = np.zeros(L.gb_sizeof_model() // 8 + 1)
+    work = np.zeros(L.gb_sizeof_work() // 8 + 1)
+    inv_i = 1.0 / model.inertia_kgm2
+    g = np.ascontiguousarray(model.g)
+    assert L.gb_init(gb.ctypes.data, model.n_bodies, inv_i.ctypes.data, g.ctypes.data, int(model.load_body), 1, 1) == 0
+    for m, pm in enumerate(pairs):
+        p, q = model.mesh_bodies[m]
+        assert L.gb_add_mesh(gb.ctypes.data, pm.ctypes.data, int(p), int(q), 1) == 0
+    for s, (a, b) in enumerate(model.shaft_bodies):
+        assert L.gb_add_shaft(gb.ctypes.data, int(a), int(b), model.shaft_k_Nm_per_rad[s],
+                              model.shaft_c_Nms_per_rad[s], 1) == 0
+    rng = np.random.default_rng(31)
+    n = model.n_bodies
+    y = np.zeros(2 * n)
+    y[0], y[1] = 0.37, 280.0
+    y[2::2] = rng.normal(0.0, 1e-4, n - 1)     # deviations of a few 1e-4 rad
+    y[3::2] = rng.normal(0.0, 0.5, n - 1)      # and their rates
+    dy = np.zeros(2 * n)
+    T_in, T_out = 230.0, 900.0
+    assert L.gb_derivatives(gb.ctypes.data, work.ctypes.data, 0.0, y.ctypes.data, T_in, T_out, dy.ctypes.data) == 0
+    # the reference in absolute angles, chain [motor, p1, g1, p2, g2, load]
+    order = [model.part_body[x] for x in ("motor", "s1.pinion", "s1.gear", "s2.pinion", "s2.gear", "load")]
+    u = np.concatenate([[0.0], y[2::2]])
+    du = np.concatenate([[0.0], y[3::2]])
+    th = (model.g * y[0] + u)[order]
+    om = (model.g * y[1] + du)[order]
+    M, K = hand_matrices()
+    C = hand_damping()
+    f = np.zeros(6)
+    f[0], f[5] = T_in, -T_out
+    alpha = np.linalg.solve(M, f - K @ th - C @ om)
+    a_body = np.zeros(n)
+    a_body[order] = alpha
+    want = np.zeros(2 * n)
+    want[0], want[1] = y[1], a_body[0]
+    want[2::2] = y[3::2]
+    want[3::2] = a_body[1:] - model.g[1:] * a_body[0]
+    scale = np.max(np.abs(want[1::2]))
+    assert np.max(np.abs(dy[1::2] - want[1::2])) <= 1e-9 * scale, (dy, want)
+    assert np.array_equal(dy[0::2], want[0::2])

@@ -27,6 +27,7 @@ struct gb_work {
 };
 
 int gb_abi_version(void) { return GB_ABI_VERSION; }
+int gb_sizeof_model(void) { return (int)sizeof(gb_model); }
 int gb_sizeof_work(void) { return (int)sizeof(gb_work); }
 long gb_events(const gb_work *w) { return w != NULL ? w->events : 0; }
 

@@ -69,6 +69,7 @@ typedef struct gb_state {
 typedef struct gb_work gb_work;
 
 GK_API int gb_abi_version(void);
+GK_API int gb_sizeof_model(void);
 GK_API int gb_sizeof_work(void);
 /* the events located by the last gb_do_step (rk4_kink, rk4_node) */
 GK_API long gb_events(const gb_work *w);
