@@ -58,7 +58,7 @@ from .tables import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
 from .fmu.gearbox_build import variables_of_fmu
-from .fmu.gearbox_compare import validate_gearbox_fmu
+from .fmu.gearbox_compare import check_gearbox_fmu_matches, validate_gearbox_fmu
 from .fmu.summary import fmu_summary
 
 
@@ -475,6 +475,7 @@ def _validate_drivetrain(args) -> dict:
     fmu_path = None
     if args.fmu:
         fmu = _fmu(args.fmu)
+        check_gearbox_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
         fmu_path = fmu.path
         tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         model = drivetrain.gearbox_model(scene, tables)

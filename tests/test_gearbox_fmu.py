@@ -467,6 +467,13 @@ def test_cli_build_validate_and_refusals(tmp_path):
     p = gearfmu("validate", str(EXAMPLE), "--fmu", str(out), "--stop-time", "0.01", "-q")
     assert p.returncode == 0, p.stdout + p.stderr
     assert "PASSED: every output within 1e-09 of its range" in p.stdout and "intermediate_shaft.torque" in p.stdout
+    # a gear-pair FMU is refused for a drivetrain scene, and the gearbox FMU for a pair scene, each in one line
+    t, kw = hard_case("single_sided_impacts")
+    pair = build_standalone_fmu(t, tmp_path / "pair.fmu", validation=False, platforms=HOST)
+    p = gearfmu("validate", str(EXAMPLE), "--fmu", str(pair), "-q")
+    assert p.returncode == 2 and "is a gear-pair FMU, not a gearbox FMU" in p.stderr, p.stderr
+    p = gearfmu("validate", str(REPO / "examples" / "scenes" / "seed000_table1.toml"), "--fmu", str(out), "-q")
+    assert p.returncode == 2 and "was built from scene 'gearbox_two_stage'" in p.stderr, p.stderr
 
 
 # ------------------------------------------- the right-hand side of the kernel

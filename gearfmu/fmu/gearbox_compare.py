@@ -96,11 +96,12 @@ def step_fmu(fmu_path, names: Sequence[str], *, stop_time_s: float, comm_step_s:
     return FmuRun(np.arange(n_steps + 1) * comm_step_s, {n: a[:, i] for i, n in enumerate(names)}, wall)
 
 
-def check_gearbox_fmu_matches(fmu: FmuFile, model: GearboxModel, variables, *, scene_text: Optional[str] = None,
-                              scene_label: str = "SCENE") -> None:
+def check_gearbox_fmu_matches(fmu: FmuFile, model: Optional[GearboxModel] = None, variables=None, *,
+                              scene_text: Optional[str] = None, scene_label: str = "SCENE") -> None:
     """Refuse (FmuMismatchError, naming both) an FMU that is not a gearbox FMU, was built from another
     drivetrain scene than ``scene_text``, carries other tables of a stage than ``model``'s, or has other
-    variables than ``variables``.  Nothing is simulated."""
+    variables than ``variables``; checks only what is given (the kind and the scene need no tables).
+    Nothing is simulated."""
     rec = fmu.record or {}
     if rec.get("model") != "gearbox" and not any(v.name.endswith(".dte") for v in fmu.model_description.modelVariables):
         raise FmuMismatchError(f"{fmu.path} is a gear-pair FMU, not a gearbox FMU; {scene_label} is a drivetrain "
@@ -112,13 +113,15 @@ def check_gearbox_fmu_matches(fmu: FmuFile, model: GearboxModel, variables, *, s
             raise FmuMismatchError(f"{fmu.path} was built from another drivetrain scene (sha256 {want_sha[:12]}) than "
                                    f"{scene_label} (sha256 {have[:12]}); give the scene the FMU was built from or "
                                    "build the FMU from this scene")
-    for m in model.meshes:
+    for m in (model.meshes if model is not None else ()):
         tsha = ((rec.get("stages") or {}).get(m.name) or {}).get("tables_bin_sha256")
         if tsha is not None:
             have = hashlib.sha256(m.tables.to_bytes()[1]).hexdigest()
             if have != tsha:
                 raise FmuMismatchError(f"{fmu.path} carries other tables of stage {m.name!r} (sha256 {tsha[:12]}) than "
                                        f"{scene_label} gives (sha256 {have[:12]})")
+    if variables is None:
+        return
     want = {v.name for v in variables}
     have = set(fmu.variable_names)
     if want != have:
