@@ -377,7 +377,7 @@ static const char *load_stage(gf_inst *c, const char *res_dir, const gb_stage_cf
         return err;
     }
     gfr_sha_update(tag, (const unsigned char *)hex, 64);
-    if (P < 1 || N < 2 || NT < 1 || P > GK_KINK_MAX_SLOTS * 32 || N > 100000000L / P || NT > 10000) {
+    if (P < 1 || N < 2 || NT < 1 || P > 1000 || N > 100000000L / P || NT > 10000) {
         snprintf(err, errcap, "stage %.60s: table dimensions out of range", s->name);
         return err;
     }
@@ -557,6 +557,16 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
 /* ------------------------------------------------------------ behaviour */
 static double val(const gf_inst *c, int vr) { return vr >= 0 ? c->values[vr] : 0.0; }
 
+/* an Integer parameter's value as one of the codes 0 .. n-1; -1 if it is not one (never a cast of an
+ * arbitrary double) */
+static int code_of(double x, int n)
+{
+    int i;
+    for (i = 0; i < n; ++i)
+        if (x == (double)i) return i;
+    return -1;
+}
+
 /* 1 (with the reason logged at `status`) when parameter/input vr is not finite or outside its min/max */
 static int bad_value(gf_inst *c, int vr, int status, const char *tail)
 {
@@ -590,7 +600,7 @@ static int apply_damping(gf_inst *c)
         int st;
         if (d->zeta_valid && zeta == d->zeta_applied[m]) continue;
         if (bad_value(c, d->vr_zeta[m], GF_ERROR_STATUS, "; rejected")) return 0;
-        st = gk_set_damping(d->pair[m], zeta, (int)val(c, d->vr_dm[m]));
+        st = gk_set_damping(d->pair[m], zeta, code_of(val(c, d->vr_dm[m]), 2));
         if (st != GK_OK) {
             char a[GB_NUM];
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: refused by the kernel (status %d)",
@@ -644,7 +654,7 @@ static int init_state(gf_inst *c)
     for (m = 0; m < d->n_stage; ++m) {
         double dm = val(c, d->vr_dm[m]);
         bad |= bad_value(c, d->vr_zeta[m], GF_ERROR_STATUS, tail);
-        if (!bad && dm != 0.0 && dm != 1.0) {
+        if (!bad && code_of(dm, 2) < 0) {
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: must be 0 (elastobacklash) or 1 (contact_zone)%s",
                    c->vars[d->vr_dm[m]].name, num(dm, a), tail);
             bad = 1;
@@ -657,13 +667,13 @@ static int init_state(gf_inst *c)
         bad = 1;
     }
     ig = val(c, d->vr_integrator);
-    if (!bad && ig != 0.0 && ig != 1.0 && ig != 2.0) {
+    if (!bad && code_of(ig, 3) < 0) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)%s",
                c->vars[d->vr_integrator].name, num(ig, a), tail);
         bad = 1;
     }
     if (bad) return 0;
-    st = gb_set_integrator(d->gb, (int)ig);
+    st = gb_set_integrator(d->gb, code_of(ig, 3));
     if (st != GK_OK) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: refused by the kernel (a stage has more than %d "
                "slots)%s", c->vars[d->vr_integrator].name, num(ig, a), GK_KINK_MAX_SLOTS, tail);
@@ -806,8 +816,7 @@ int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn
     d->initialized = h.initialized;
     d->zeta_valid = 0;
     if (d->initialized) {   /* the integrator and the damping are derived from the restored values */
-        double ig = val(c, d->vr_integrator);
-        if ((ig != 0.0 && ig != 1.0 && ig != 2.0) || gb_set_integrator(d->gb, (int)ig) != GK_OK || !apply_damping(c)) {
+        if (gb_set_integrator(d->gb, code_of(val(c, d->vr_integrator), 3)) != GK_OK || !apply_damping(c)) {
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state's integrator or damping is refused", fn);
             return 0;
         }
