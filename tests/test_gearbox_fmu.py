@@ -211,6 +211,13 @@ def test_fmpy_validates_both_versions_and_the_interface(example):
     assert not [n for n in names if n.startswith("sources/") and n.startswith("sources/fmi2F")]
     for word in ("stage1", "stage2", "intermediate_shaft", "output_shaft", "Validation record"):
         assert word in page
+    # no file of the FMU holds a path of the build machine (tests/test_fmu_strict.py for the pair FMU)
+    from gearfmu.fmu.fmudoc import build_machine_paths
+
+    d = example["dir"] / "unzipped"
+    with zipfile.ZipFile(example[2]) as z:
+        z.extractall(d)
+    assert build_machine_paths(d) == []
 
 
 def test_tampered_stage_tables_refused(example, tmp_path):
