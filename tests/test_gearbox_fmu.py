@@ -512,6 +512,8 @@ def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     contact_zone: F = k x + c v) at a state far from equilibrium equals the accelerations of the
     hand-assembled M, K, C (tests/test_gearbox_modes.py, tests/test_gearbox_native.py) mapped to the
     deviation state: psi'' = alpha_0, u_i'' = alpha_i - g_i alpha_0, to 1e-9 of the largest."""
+    import ctypes
+
     L = _kernel_library(tmp_path)
     model = linear_gearbox()
     keep = []
@@ -537,6 +539,15 @@ def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     for s, (a, b) in enumerate(model.shaft_bodies):
         assert L.gb_add_shaft(gb.ctypes.data, int(a), int(b), model.shaft_k_Nm_per_rad[s],
                               model.shaft_c_Nms_per_rad[s], 1) == 0
+    # the output layout the interface spec's indices are relative to: Python's and C's the same
+    from gearfmu.fmu.gearbox_interface import mesh_offset, n_outputs, shaft_offset
+
+    for f, args in (("gb_mesh_offset", [ctypes.c_void_p, ctypes.c_int]), ("gb_shaft_offset", [ctypes.c_void_p]),
+                    ("gb_n_outputs", [ctypes.c_void_p])):
+        getattr(L, f).restype = ctypes.c_int
+        getattr(L, f).argtypes = args
+    assert [L.gb_mesh_offset(gb.ctypes.data, m) for m in range(2)] == [mesh_offset(model, m) for m in range(2)]
+    assert L.gb_shaft_offset(gb.ctypes.data) == shaft_offset(model) and L.gb_n_outputs(gb.ctypes.data) == n_outputs(model)
     rng = np.random.default_rng(31)
     n = model.n_bodies
     y = np.zeros(2 * n)

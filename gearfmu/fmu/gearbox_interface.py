@@ -11,8 +11,9 @@ and descriptions; this module
   ``per = "stage"`` for every stage (``stage1.dte``, ``stage1.pair_force[2]``), ``per = "shaft"`` for
   every elastic shaft (``input_shaft.torque``), with the absolute position of each output in the
   gearbox kernel's output vector (gbkernel.h: :func:`mesh_offset`, :func:`shaft_offset`),
-* names the outputs the native gearbox solver gives for the same quantities
-  (:func:`native_outputs`: the FMU's names are the native solver's columns).
+* sets the start values of a build (:func:`apply_starts`).
+
+The FMU's output names are the native gearbox solver's columns (gearfmu.gearbox.native.output_units).
 """
 from __future__ import annotations
 
@@ -20,15 +21,15 @@ import math
 import tomllib
 from dataclasses import replace
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Sequence
 
 from ..gearbox.model import GearboxModel
 from .modeldesc import (BASE_UNITS, CAUSALITIES, INITIALS, TYPES, UNIT_SCALING, VARIABILITIES, Spec, SpecError,
                         Variable)
 
 __all__ = ["GEARBOX_SPEC_FORMAT", "FEATURES", "DEFAULT_GEARBOX_SPEC_PATH", "load_gearbox_spec", "features_of",
-           "gearbox_variables", "mesh_offset", "shaft_offset", "n_outputs", "output_names", "native_outputs",
-           "stage_parameter", "apply_starts", "variable_named"]
+           "gearbox_variables", "mesh_offset", "shaft_offset", "n_outputs", "output_names", "stage_parameter",
+           "apply_starts"]
 
 GEARBOX_SPEC_FORMAT = "gearfmu-gearbox-variables"
 SPEC_VERSIONS = (1,)
@@ -226,17 +227,6 @@ def output_names(variables: Sequence[Variable]) -> List[str]:
     return [v.name for v in variables if v.causality == "output"]
 
 
-def native_outputs(variables: Sequence[Variable], native_columns: Dict[str, object]) -> Dict[str, str]:
-    """FMU output name -> native column (gearfmu.gearbox.native.GearboxResult) of the same quantity:
-    the FMU's names are the native solver's; SpecError naming an output the solver does not give."""
-    out = {}
-    for name in output_names(variables):
-        if name not in native_columns:
-            raise SpecError(f"{name}: an output of the gearbox spec without a column of the native gearbox solver")
-        out[name] = name
-    return out
-
-
 def apply_starts(variables: Sequence[Variable], starts: Dict[str, float]) -> List[Variable]:
     """Start values of the build (``starts``: name -> value; SpecError for a name that is not a
     variable with a start value, or a value outside its min/max)."""
@@ -256,8 +246,3 @@ def apply_starts(variables: Sequence[Variable], starts: Dict[str, float]) -> Lis
             v = replace(v, start=val)
         out.append(v)
     return out
-
-
-def variable_named(variables: Sequence[Variable], name: str) -> Optional[Variable]:
-    """The variable called ``name`` (None if the FMU has none)."""
-    return next((v for v in variables if v.name == name), None)
