@@ -485,25 +485,25 @@ def test_cli_build_validate_and_refusals(tmp_path):
 
 # ------------------------------------------- the right-hand side of the kernel
 def _kernel_library(tmp):
-    """gb_kernel.c and the pair kernel's files as a shared library (every function exported)."""
+    """gb_kernel.c and the pair kernel's library (every function exported); the pair kernel's functions
+    bound by gearfmu.fmu.runtime.kernel_api (their one declaration), the gearbox kernel's here."""
     import ctypes
     import shutil
 
-    from gearfmu.fmu.build_steps import CFLAGS, KERNEL_DIR, KERNEL_SOURCES
+    from gearfmu.fmu.build_steps import CFLAGS, KERNEL_DIR, KERNEL_LIBRARY_SOURCES
+    from gearfmu.fmu.runtime.kernel_api import load_kernel
 
     lib = tmp / "libgb.so"
     subprocess.run([shutil.which("gcc") or "cc", *CFLAGS, "-o", str(lib), str(KERNEL_DIR / "gb_kernel.c"),
-                    *map(str, KERNEL_SOURCES), "-lm"], check=True, capture_output=True, text=True)
-    L = ctypes.CDLL(str(lib))
-    for f in ("gk_init", "gk_set_damping", "gb_init", "gb_add_mesh", "gb_add_shaft", "gb_derivatives"):
-        getattr(L, f).restype = ctypes.c_int
-    D, P = ctypes.c_double, ctypes.c_void_p
-    L.gk_init.argtypes = [P, ctypes.c_int, ctypes.c_int, ctypes.c_int, P, P, P, P] + [D] * 6
-    L.gk_set_damping.argtypes = [P, D, ctypes.c_int]
-    L.gb_init.argtypes = [P, ctypes.c_int, P, P, ctypes.c_int, ctypes.c_int, ctypes.c_int]
-    L.gb_add_mesh.argtypes = [P, P, ctypes.c_int, ctypes.c_int, ctypes.c_int]
-    L.gb_add_shaft.argtypes = [P, ctypes.c_int, ctypes.c_int, D, D, ctypes.c_int]
-    L.gb_derivatives.argtypes = [P, P, D, P, D, D, P]
+                    *map(str, KERNEL_LIBRARY_SOURCES), "-lm"], check=True, capture_output=True, text=True)
+    L = load_kernel(lib)
+    D, P, I = ctypes.c_double, ctypes.c_void_p, ctypes.c_int
+    for name, args in (("gb_sizeof_model", []), ("gb_sizeof_work", []), ("gb_init", [P, I, P, P, I, I, I]),
+                       ("gb_add_mesh", [P, P, I, I, I]), ("gb_add_shaft", [P, I, I, D, D, I]),
+                       ("gb_derivatives", [P, P, D, P, D, D, P]), ("gb_mesh_offset", [P, I]),
+                       ("gb_shaft_offset", [P]), ("gb_n_outputs", [P])):
+        getattr(L, name).restype = I
+        getattr(L, name).argtypes = args
     return L
 
 
@@ -512,8 +512,6 @@ def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     contact_zone: F = k x + c v) at a state far from equilibrium equals the accelerations of the
     hand-assembled M, K, C (tests/test_gearbox_modes.py, tests/test_gearbox_native.py) mapped to the
     deviation state: psi'' = alpha_0, u_i'' = alpha_i - g_i alpha_0, to 1e-9 of the largest."""
-    import ctypes
-
     L = _kernel_library(tmp_path)
     model = linear_gearbox()
     keep = []
@@ -542,10 +540,6 @@ def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     # the output layout the interface spec's indices are relative to: Python's and C's the same
     from gearfmu.fmu.gearbox_interface import mesh_offset, n_outputs, shaft_offset
 
-    for f, args in (("gb_mesh_offset", [ctypes.c_void_p, ctypes.c_int]), ("gb_shaft_offset", [ctypes.c_void_p]),
-                    ("gb_n_outputs", [ctypes.c_void_p])):
-        getattr(L, f).restype = ctypes.c_int
-        getattr(L, f).argtypes = args
     assert [L.gb_mesh_offset(gb.ctypes.data, m) for m in range(2)] == [mesh_offset(model, m) for m in range(2)]
     assert L.gb_shaft_offset(gb.ctypes.data) == shaft_offset(model) and L.gb_n_outputs(gb.ctypes.data) == n_outputs(model)
     rng = np.random.default_rng(31)
