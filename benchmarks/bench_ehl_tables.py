@@ -47,7 +47,7 @@ def _scene(slices, model="rough_ehl"):
 
 def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"):
     from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=K,
                                                                         film_transient=transient),
@@ -260,7 +260,7 @@ def _model_row(model, a):
     import resource
 
     from gearfmu.contact.models import environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     sc = _scene(a.slices, model)
     env = environment_from_scene(sc, max_workers=a.workers)

@@ -22,8 +22,8 @@ from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .scene.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
-from .tables.estimate import check_build_cost, estimate_build
-from .tables import precompute, table_cache
+from .assembly.estimate import check_build_cost, estimate_build
+from .assembly import precompute, table_cache
 
 
 def load(scene_path: Optional[str] = None):

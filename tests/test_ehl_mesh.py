@@ -19,7 +19,7 @@ from gearfmu.contact.models import (CONTACT_MODELS, ContactModelError, Roughness
 from gearfmu.ehl.fits import dowson_higginson_min_film
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 from gearfmu.gear.geometry import pair_geometry
-from gearfmu.tables.precompute import precompute_tables
+from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import SceneError, load_scene
 from gearfmu.gear.stiffness import slot_stiffness
 

@@ -1,4 +1,4 @@
-"""The cost estimate and the guard before expensive work (gearfmu.tables.estimate).
+"""The cost estimate and the guard before expensive work (gearfmu.assembly.estimate).
 
 A scene inside every documented key range (points_per_mesh = 100000, torque_points = 1000) asks
 for tables of several GB; it must be refused before anything is computed, with a message that
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from gearfmu.tables import estimate
+from gearfmu.assembly import estimate
 from gearfmu import pipeline
 from gearfmu.cli import main
 from gearfmu.scene.reader import default_scene_path
@@ -28,7 +28,7 @@ class _Computed(Exception):
 @pytest.fixture
 def no_precompute(monkeypatch):
     """Any table computation raises _Computed instead of running."""
-    import gearfmu.tables.precompute as pc
+    import gearfmu.assembly.precompute as pc
 
     def stub(*a, **k):
         raise _Computed()

@@ -25,7 +25,7 @@ import pytest
 
 from gearfmu.gear.gearpair import MeshModelOptions
 from gearfmu.gear.geometry import pair_geometry, transverse_equivalent
-from gearfmu.tables.precompute import precompute_tables
+from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import load_scene
 from gearfmu.gear.stiffness import helical_slot_stiffness, slot_stiffness
 
@@ -72,7 +72,7 @@ def test_helical_contact_requests_with_hertz_reproduce_the_helical_slices():
     # must give helical_slot_stiffness's slices (the independent Hertz path) to round-off
     from gearfmu.contact.models import ContactEnvironment, get_contact_model
     from gearfmu.ehl.mesh_film import contact_kinematics
-    from gearfmu.tables.precompute import _HelicalContactView
+    from gearfmu.assembly.precompute import _HelicalContactView
 
     pair = helical()
     g = pair_geometry(pair)

@@ -359,7 +359,7 @@ def test_level4_tables_lie_between_hertz_and_smooth():
     relieved (thicker) film plus the asperities, softer than the smooth film but far stiffer than
     Hertz -- and load_sharing < fractal_mixed (seed 001's K_n, docs/ehl_mesh.md, is above the film);
     the TVMS rises with torque as for the smooth film (seed 000 Fig. 15)."""
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     def mean_tvms(model, pol=None):
         opts = dataclasses.replace(SCENE.mesh, contact_model=model, slices=2)

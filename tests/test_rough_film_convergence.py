@@ -23,7 +23,7 @@ from gearfmu.ehl.film_newton import _terms, jacobian
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_node_films, solve_slice_film
 from gearfmu.ehl.solver import solve_line_contact
 from gearfmu.scene.reader import load_scene
-from gearfmu.tables.contact_rows import film_failure_kinds, film_failure_line
+from gearfmu.assembly.contact_rows import film_failure_kinds, film_failure_line
 
 W_NODE = 89577.25357541349     # N/m: the lowest rough load column of the default tables
 

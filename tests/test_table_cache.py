@@ -1,6 +1,6 @@
-"""The table cache (gearfmu.tables.table_cache): a scene's tables computed once, read back after.
+"""The table cache (gearfmu.assembly.table_cache): a scene's tables computed once, read back after.
 
-References: the table builder itself (gearfmu.tables.precompute.precompute_tables) -- a table
+References: the table builder itself (gearfmu.assembly.precompute.precompute_tables) -- a table
 read from the cache must equal a fresh computation bit for bit, and the number of its calls
 tells a hit from a miss; the scene text (the FMU's validation record names the scene by its
 SHA-256, gearfmu.fmu.compare.check_fmu_matches).  The key must follow exactly what changes the
@@ -20,7 +20,7 @@ from gearfmu import pipeline
 from gearfmu.cli import main
 from gearfmu.common.cache import CacheWarning
 from gearfmu.scene.reader import default_scene_path, load_scene
-from gearfmu.tables import precompute, table_cache
+from gearfmu.assembly import precompute, table_cache
 from gearfmu.tables.mesh_tables import load_tables
 
 DEFAULT = default_scene_path().read_text()

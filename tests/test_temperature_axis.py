@@ -402,7 +402,7 @@ OIL_TEXT = ((REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
 
 def _oil_tables(text):
     from gearfmu.contact.models import environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     sc = load_scene(text)
     return sc, precompute_tables(sc.pair, sc.mesh, points_per_mesh=sc.tables.points_per_mesh,
@@ -557,7 +557,7 @@ def test_bulk_and_oil_axis_is_gears_and_oil_at_one_temperature(oil):
 
 def test_oil_axis_refused_without_a_lubricated_contact_model():
     """Hertz contact uses no lubricant: the scene reader and the table builder refuse an oil axis."""
-    from gearfmu.tables.precompute import PrecomputeInputError, precompute_tables
+    from gearfmu.assembly.precompute import PrecomputeInputError, precompute_tables
     from gearfmu.scene.reader import SceneError
 
     hertz = (REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()

@@ -49,7 +49,7 @@ FILM_TRANSIENT_SLICES = 4
 #: A B(<p_m>)/<h_m> (the table's CHOICE, seed 000's "central OFT" explanation) and (a)
 #: "mean_of_k" = <A B(p_m)/h_m>
 FILM_TRANSIENT_REDUCTIONS = ("k_of_means", "mean_of_k")
-#: start of the transient runs of ``film_transient = "film"`` (as gearfmu.tables.direct_tvms):
+#: start of the transient runs of ``film_transient = "film"`` (as gearfmu.assembly.direct_tvms):
 #: the steady frozen-roughness film, or -- where that solve stalls (most level 3-4 nodes) --
 #: the smooth film with the roughness ramped in over ramp_T = 1 b/u_s
 #: (:func:`gearfmu.ehl.transient.solve_line_contact_transient`); window: the solver's default,

@@ -194,7 +194,7 @@ class RoughFilmGrid:
                     kw = flank_slice_case(env, float(self.s_nodes[k]), wj, int(n))
                     if fenv.n_nodes is not None:
                         kw["n_nodes"] = int(fenv.n_nodes)
-                    if film_mode:     # as gearfmu.tables.direct_tvms: frozen start, smooth start + ramp if it stalls
+                    if film_mode:     # as gearfmu.assembly.direct_tvms: frozen start, smooth start + ramp if it stalls
                         kw["start"] = FILM_TRANSIENT_START
                     cases.append(kw)
                 chunks.append(cases)

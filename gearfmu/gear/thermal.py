@@ -81,7 +81,7 @@ pressure-viscosity coefficient alpha is kept at its scene value at every oil
 temperature (no alpha(T) law in the seeds or the scene; film thickness goes as
 alpha^0.54 in Dowson-Higginson, so a falling alpha would thin the hot film a
 little more).  The tables' oil temperature axis (``[thermal] axis_quantity =
-"oil"``, :func:`gearfmu.tables.precompute.oil_axis_eta0_Pas`) feeds eta0(T) of this law
+"oil"``, :func:`gearfmu.assembly.precompute.oil_axis_eta0_Pas`) feeds eta0(T) of this law
 into the lubricated contact model's ``ContactEnvironment`` and rebuilds the
 tables at every axis temperature (docs/thermal.md "Oil temperature axis").
 

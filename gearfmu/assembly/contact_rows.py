@@ -1,8 +1,8 @@
 """Torque rows of the tables with a load-dependent contact model: the slice stiffness of each row
 from the contact model's stiffness at that row's slice loads, iterated with the loaded mesh
-(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`; docs/ehl_mesh.md), for spur pairs and
+(:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`; docs/ehl_mesh.md), for spur pairs and
 slice by slice on the normal section of helical pairs (docs/helical.md).  Used by
-:func:`gearfmu.tables.precompute.precompute_tables`.  SI units.
+:func:`gearfmu.assembly.precompute.precompute_tables`.  SI units.
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from .load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SL
 
 class PrecomputeInputError(ValueError):
     """Bad input to the table precomputation (names the field and the reason); raised here and by
-    :mod:`gearfmu.tables.precompute`, which exports it."""
+    :mod:`gearfmu.assembly.precompute`, which exports it."""
 
 
 def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
@@ -93,7 +93,7 @@ class _ContactIteration:
 
     def k_slice(self, torque_Nm: float, rb1: float):
         """(P, NS, N) slice stiffness of the torque row ``torque_Nm`` (N m): the load-sharing
-        iteration (:func:`gearfmu.tables.load_iteration.iterate_load_sharing`) from the Hertz
+        iteration (:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`) from the Hertz
         slice loads, the films of the row's slice loads from the contact model."""
         F = torque_Nm / rb1
         F_eval = F if F > 0 else self.nominal_F

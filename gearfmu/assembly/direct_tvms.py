@@ -14,7 +14,7 @@ combined with the tooth and foundation compliances exactly as the tables combine
 (:func:`gearfmu.contact.models.tooth_compliances`, :func:`gearfmu.contact.models.sliced_mesh_stiffness`,
 :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`).  The load of each slice is iterated with the
 load-dependent contact stiffness by the table builder's iteration
-(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`: start from the Hertz slice loads,
+(:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`: start from the Hertz slice loads,
 load floor 0.5 F/b, a request is re-solved when its load moved by more than 1e-4 of itself,
 stop when no slice load changes by more than ``LOAD_ITERATION_TOL`` = 1e-3 of F/NS, at most
 ``LOAD_ITERATION_MAX`` passes).

@@ -5,7 +5,7 @@ that would take hours or gigabytes is refused before the first table row
 (:func:`check_build_cost`; override with ``allow_large=True`` in the Python API or
 ``--allow-large`` on the command line).  docs/tables.md "Cost estimate" describes the model.
 
-The model counts the work the table builder (:mod:`gearfmu.tables.precompute`) will do
+The model counts the work the table builder (:mod:`gearfmu.assembly.precompute`) will do
 (:func:`work_counts`) and prices each kind with a constant measured once on a reference machine
 (benchmarks/bench_estimate.py prints estimate against measurement for every example scene;
 the constants are model constants, fixed here, not measurements that follow the machine):

@@ -22,8 +22,9 @@ from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, 
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
 from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
 from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
-from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
-from .zones import mean_total_stiffness_N_per_m
+from ..common.vocabulary import TEMPERATURE_INPUTS
+from ..tables.mesh_tables import MeshTables, stack_temperatures
+from ..tables.zones import mean_total_stiffness_N_per_m
 from ..common.progress import progress_bar
 from ..contact.models import get_contact_model
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
