@@ -67,7 +67,7 @@ def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"
 
 def _cold_solve_time(sc, level, n=12):
     """Mean CPU time (s) of one cold rough solve (old path) at table positions, in-process."""
-    from gearfmu.contact.models import RoughnessSpec, _rough_profile, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec, rough_profile, environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level))
@@ -79,7 +79,7 @@ def _cold_solve_time(sc, level, n=12):
     c0 = time.process_time()
     for i in range(n):
         solve_slice_film(fenv, float(R[i]), float(u[i]), w,
-                         _rough_profile(env, fenv, fl, float(s[i]), i % env.n_slices, w, float(R[i])))
+                         rough_profile(env, fenv, fl, float(s[i]), i % env.n_slices, w, float(R[i])))
     return (time.process_time() - c0) / n
 
 

@@ -77,8 +77,8 @@ import numpy as np
 
 from ..ehl.errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .load_iteration import UNLOADED_SLICE_LOAD_SHARE, iterate_load_sharing, slice_loads_N
-from ..contact.models import (film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m,
-                              _rough_profile)
+from ..contact.models import film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m
+from ..contact.rough_ehl import rough_profile
 from ..ehl.mesh_film import solve_node_films, solve_slice_film, contact_kinematics, map_chunks
 from ..ehl import transient as ehl_transient
 from ..ehl.transient import flank_slice_case
@@ -391,7 +391,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
                 kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
                 items.append(("transient", kw, float(st.T_average), st.reduction))
             elif model == "rough_steady":
-                prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
+                prof = rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
                 items.append(("steady", fenv, R, u, w_k, prof))
             else:
                 items.append(("steady", fenv, R, u, w_k, None))

@@ -20,8 +20,8 @@ from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from ..gear.loaded_mesh import loaded_static_mesh
 from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
-from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
-from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
+from .contact_rows import (ContactIteration, PrecomputeInputError, contact_provenance, normal_section_provenance,
+                           per_slice_stiffness)
 from ..common.vocabulary import TEMPERATURE_INPUTS
 from ..tables.mesh_tables import MeshTables, stack_temperatures
 from ..tables.zones import mean_total_stiffness_N_per_m
@@ -122,7 +122,7 @@ def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_pe
             k_tile = k_slice.sum(axis=1)
         else:
             ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
-            k_tile, k_slice = _per_slice(ss, NS, reps)
+            k_tile, k_slice = per_slice_stiffness(ss, NS, reps)
         lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
         if crowned:
             k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
@@ -217,7 +217,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
     if opts.contact_model != "hertz":
-        contact_it = _ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
+        contact_it = ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
                                        nominal_torque_Nm / rb1)
         contact_it.set_load_range(rows, rb1)
     ss_cache = None
@@ -229,7 +229,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
                                                                      float(nominal_torque_Nm))
         e_slot = stiffness_weighted_pair_error_m(
-            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
+            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), per_slice_stiffness(ss_w, NS, reps)[1])
         if contact_it is not None:  # the load iteration uses the pair error of the helical pair
             contact_it.e = e_slot
     _step(bar, f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
@@ -261,7 +261,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     if contact_it is not None:
         prov["contact"] = contact_provenance(contact_it, axis_note)
         if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
-            prov["contact"].update(contact_it.helical.provenance())
+            prov["contact"].update(normal_section_provenance(contact_it.helical))
     tables = MeshTables(
         torque_Nm=np.ascontiguousarray(torques, dtype=float),
         k_N_per_m=k_arr,
@@ -350,7 +350,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
         ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
-        k_tile, k_slice = _per_slice(ss, int(opts.slices), reps)
+        k_tile, k_slice = per_slice_stiffness(ss, int(opts.slices), reps)
         th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), states=states,
                                     standard_temperature_C=t0, slots=slots, n_per_mesh=points_per_mesh,
                                     law=law, geom=geom)

@@ -172,6 +172,11 @@ class ContactEnvironment:
                                alpha_Pa_inv=self.alpha_Pa_inv, rho0_kg_m3=self.rho0_kg_m3,
                                width_m=self.width_m, n_nodes=self.ehl_nodes)
 
+    def film_grid_summary(self) -> Optional[dict]:
+        """The summary of the rough film grid the contact model solved on this environment
+        (:meth:`gearfmu.contact.rough_ehl.RoughFilmGrid.summary`); None when there is none."""
+        return None if self._grid is None else self._grid.summary()
+
     def flanks(self):
         """The sampled flank roughness (made once, cached)."""
         if self._flanks is None:

@@ -66,7 +66,7 @@ from .base import (  # noqa: F401
                    FILM_TRANSIENT_START, RoughnessSpec, ContactEnvironment, ContactStiffness, ContactModel,
                    _check, _key, composite_sigma_m, film_parameter)
 from .rough_ehl import (  # noqa: F401
-                        _rough_profile, RoughFilmGrid, fill_stalled_ratio, transient_slices,
+                        rough_profile, RoughFilmGrid, fill_stalled_ratio, transient_slices,
                         _transient_node_chunk, transient_node_correction, transient_node_film, _mixed_or_nan,
                         _grid_key, film_grid, film_failure_stiffness, load_sharing_stiffness,
                         rough_ehl_model, _smooth_film_k)
