@@ -54,7 +54,8 @@ WAVELENGTHS_B = (0.06, 0.08, 0.1, 0.15, 0.25, 0.4, 0.7)
 
 
 def _env(level):
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.scene.reader import load_scene
 
     sc = load_scene(None)

@@ -54,7 +54,7 @@ def child(scene_path, out_dir: Path, time_only: bool = False) -> dict:
     """Measure one scene in this process (run as ``--child``; ``time_only``: the table build alone)."""
     from gearfmu.pipeline import compute_tables, load
     from gearfmu.stages import build_fmu_from_scene
-    from gearfmu.assembly.estimate import estimate_build, work_counts
+    from gearfmu.scene.physics import estimate_build, work_counts
 
     scene = load(scene_path)
     est = estimate_build(scene)

@@ -61,7 +61,8 @@ def _failed_nodes(env, grid_row) -> list:
 
 
 def main(argv=None) -> int:
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.precompute import precompute_tables
     from gearfmu.scene.reader import load_scene
 

@@ -56,7 +56,8 @@ SPEEDS = (1000.0, 2000.0, 4000.0)    # rpm (Fig. 14)
 
 
 def run(ppm: int, slices: int, out: Path, log=print, policies=(), transient_levels=()) -> dict:
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.precompute import precompute_tables
     from gearfmu.scene.reader import load_scene
 
@@ -168,7 +169,8 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
     """Seed 000 Figs. 12-13 read at the TVMS level, without tables: TVMS (N/m) of every model of
     DIRECT_CASES at the pitch point and the middle of the double-tooth zone
     (gearfmu.assembly.direct_tvms.direct_mesh_stiffness); writes direct_tvms.json and direct_tvms.png."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene, film_parameter
+    from gearfmu.contact.models import RoughnessSpec, film_parameter
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
                                          pair_positions_m)
     from gearfmu.ehl.mesh_film import contact_kinematics
@@ -250,7 +252,8 @@ def run_direct_speed_torque(out: Path, slices: int = 2, n_nodes: int = 257, T_av
     full-film assumption (check_film_parameter=False; the screen's Lambda is recorded); writes
     direct_tvms_speed_torque.json and direct_tvms_speed_torque.png.  A film that fails leaves
     that point null with the reason (tests/test_direct_tvms_speed_torque.py asserts the orderings)."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.direct_tvms import DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness
     from gearfmu.gear.geometry import pair_geometry
     from gearfmu.scene.reader import load_scene
@@ -417,7 +420,8 @@ def _figures(base, curves, out: Path, slices: int) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_slice_film
     from gearfmu.gear.geometry import pair_geometry
 

@@ -20,7 +20,8 @@ from .gearbox.native import GearboxResult, simulate as simulate_gearbox
 from .pipeline import compute_tables, load
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
-from .assembly.estimate import BuildTooLargeError, check_build_cost
+from .assembly.estimate import BuildTooLargeError
+from .scene.physics import check_build_cost
 
 __all__ = ["load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model", "simulate_drivetrain", "modes_report",
            "PAIR_MESH_NAME"]

@@ -16,7 +16,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .contact.models import environment_from_scene
+from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .plan_choices import _step_absolute, _thermal_options, table_work

@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+from gearfmu.contact.models import RoughnessSpec
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.assembly.direct_tvms import TransientFilmSettings, direct_mesh_stiffness
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene

@@ -159,7 +159,7 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
     import zipfile
 
     from gearfmu.cli import main
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.tables.mesh_tables import load_tables
 
     text = (SEED001.read_text().replace('contact_model = "hertz"', 'contact_model = "fractal_mixed"')

@@ -17,8 +17,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 from scipy.special import erfc
 
-from gearfmu.contact.models import (ContactModelError, RoughnessSpec, _smooth_film_k, environment_from_scene,
-                                    film_parameter, load_sharing_stiffness)
+from gearfmu.contact.models import (ContactModelError, RoughnessSpec, _smooth_film_k, film_parameter,
+                                    load_sharing_stiffness)
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.ehl.fits import moes_central_film
 from gearfmu.ehl.film_stiffness import film_stiffness_N_per_m
 from gearfmu.ehl.mesh_film import contact_kinematics

@@ -23,7 +23,7 @@ from gearfmu.plan_choices import PLAN_TABLE_BUILD_S, _choices, _reference_points
 from gearfmu.plan_evaluator import _Evaluator
 from gearfmu.scene.envelope import accuracy_of, envelope_of
 from gearfmu.scene.reader import load_scene
-from gearfmu.assembly.estimate import estimate_build
+from gearfmu.scene.physics import estimate_build
 from gearfmu.assembly.precompute import precompute_tables
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,7 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, rough_profile, environment_from_scene, film_parameter
+from gearfmu.contact.models import RoughnessSpec, rough_profile, film_parameter
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.contact.rough_ehl import RoughFilmGrid
 from gearfmu.ehl.film_newton import _terms, jacobian
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_node_films, solve_slice_film

@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import (RoughnessSpec, rough_profile, _smooth_film_k, environment_from_scene,
-                                    film_grid, rough_ehl_model)
+from gearfmu.contact.models import RoughnessSpec, rough_profile, _smooth_film_k, film_grid, rough_ehl_model
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
 from gearfmu.ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_node_films
 from gearfmu.ehl.solver import solve_line_contact

@@ -401,7 +401,7 @@ OIL_TEXT = ((REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
 
 
 def _oil_tables(text):
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.precompute import precompute_tables
 
     sc = load_scene(text)
@@ -429,7 +429,7 @@ def test_oil_axis_film_thickness_follows_dowson_higginson_and_moes(oil):
     within 3 %; h_min itself within 15 % of Dowson-Higginson (seed 000 test tolerance)."""
     import dataclasses
 
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film, moes_parameters
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
     from gearfmu.gear.geometry import pair_geometry

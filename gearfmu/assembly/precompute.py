@@ -158,7 +158,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     Load-dependent contact models (``opts.contact_model`` 'smooth_ehl',
     'rough_ehl', :mod:`gearfmu.contact.models`) need ``contact_env`` (a
     :class:`gearfmu.contact.models.ContactEnvironment`, e.g. from
-    :func:`gearfmu.contact.models.environment_from_scene`); every torque row
+    :func:`gearfmu.scene.physics.environment_from_scene`); every torque row
     then holds the slice stiffness with the contact stiffness at that row's
     slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
     torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
@@ -297,7 +297,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
 
 def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
                    points_per_mesh, reps, progress, contact_env, nominal_torque_Nm) -> MeshTables:
-    """The ``[thermal]`` options (:class:`gearfmu.scene.reader.ThermalOptions`) applied to
+    """The ``[thermal]`` options (:class:`gearfmu.gear.thermal.ThermalOptions`) applied to
     single-temperature tables: a temperature axis whose meaning is
     ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
     "bulk_and_oil": :func:`_add_oil_temperature_axis`), else the gears' thermal
@@ -438,7 +438,7 @@ def oil_axis_eta0_Pas(lubricant, temperatures_C) -> np.ndarray:
     """eta0 (Pa s) at each oil temperature (degC) of an oil temperature axis: the
     lubricant's Walther / ASTM D341 law times its (constant) density,
     :func:`gearfmu.gear.thermal.oil_dynamic_viscosity_Pas`.  ``lubricant``: a
-    :class:`gearfmu.scene.reader.Lubricant` with both kinematic viscosities."""
+    :class:`gearfmu.ehl.lubricant.Lubricant` with both kinematic viscosities."""
     if lubricant is None:
         raise PrecomputeInputError("lubricant: an oil temperature axis needs the lubricant's viscosity-temperature "
                                    "law (thermal.lubricant, set by the scene reader from [lubricant])")
