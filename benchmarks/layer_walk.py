@@ -31,10 +31,12 @@ Prints one JSON object: per scene and in total (union over the scenes) the three
 list of moves back up a layer.  ``--checkout DIR`` measures another checkout of gearfmu (its
 ``pyproject.toml`` and package; e.g. the unchanged tree before a refactoring);
 ``--fresh-cache`` runs with an empty gearfmu cache folder (compiled objects and kernels built
-again: slower, but the files entered and moves do not depend on what an earlier run left).
+again: slower, but the files entered and moves do not depend on what an earlier run left);
+``--tables-only`` follows the scene through ``pipeline.compute_tables`` (the cost guard and the
+tables: where a scene's physics options are read) instead of the whole build.
 
     python benchmarks/layer_walk.py [--checkout DIR] [--scenes default,rough_ehl,helical_ehl,oil_axis]
-                                    [--fresh-cache]
+                                    [--fresh-cache] [--tables-only]
 """
 from __future__ import annotations
 
@@ -109,14 +111,26 @@ class Layers:
 
 
 def walk(checkout: Path = ROOT, scenes=("default", "rough_ehl", "helical_ehl", "oil_axis"),
-         fresh_cache: bool = False) -> dict:
-    """The measurement (module doc) of ``checkout``; its gearfmu must be the one imported."""
-    checkout = Path(checkout).resolve()
-    if str(checkout) not in sys.path[:1]:
-        sys.path.insert(0, str(checkout))
+         fresh_cache: bool = False, tables_only: bool = False) -> dict:
+    """The measurement (module doc) of ``checkout``; its gearfmu must be the one imported.  The
+    environment variables it sets (table cache off, cache folder) are restored after."""
+    saved = {k: os.environ.get(k) for k in ("GEARFMU_NO_TABLE_CACHE", "GEARFMU_CACHE_DIR")}
     os.environ["GEARFMU_NO_TABLE_CACHE"] = "1"
     if fresh_cache:
         os.environ["GEARFMU_CACHE_DIR"] = tempfile.mkdtemp(prefix="gearfmu_layer_walk_")
+    try:
+        return _walk(Path(checkout).resolve(), scenes, tables_only)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _walk(checkout: Path, scenes, tables_only: bool) -> dict:
+    if str(checkout) not in sys.path[:1]:
+        sys.path.insert(0, str(checkout))
     import gearfmu
     from gearfmu import pipeline
     pkg = Path(gearfmu.__file__).resolve().parent
@@ -148,7 +162,8 @@ def walk(checkout: Path = ROOT, scenes=("default", "rough_ehl", "helical_ehl", "
         return Path(f).relative_to(pkg).as_posix()
 
     default_text = (pkg / "scene" / "data" / "default_scene.toml").read_text()
-    out = {"checkout": str(checkout), "scenes": {}}
+    out = {"checkout": str(checkout), "followed": "pipeline.compute_tables" if tables_only else "pipeline.build",
+           "scenes": {}}
     all_files, all_moves, all_up = set(), set(), set()
     for name in scenes:
         files, moves, up = set(), set(), set()
@@ -192,7 +207,10 @@ def walk(checkout: Path = ROOT, scenes=("default", "rough_ehl", "helical_ehl", "
             print(f"layer walk: {name} ...", file=sys.stderr, flush=True)
             sys.setprofile(profile)
             try:
-                pipeline.build(scene, Path(d) / f"{name}.fmu", allow_large=True)
+                if tables_only:
+                    pipeline.compute_tables(scene)
+                else:
+                    pipeline.build(scene, Path(d) / f"{name}.fmu", allow_large=True)
             finally:
                 sys.setprofile(None)
         out["scenes"][name] = {"files_entered": len(files), "moves_between_files": len(moves),
@@ -211,12 +229,13 @@ def main(argv=None) -> int:
     ap.add_argument("--checkout", type=Path, default=ROOT, help="the gearfmu checkout to measure")
     ap.add_argument("--scenes", default="default,rough_ehl,helical_ehl,oil_axis")
     ap.add_argument("--fresh-cache", action="store_true", help="an empty gearfmu cache folder")
+    ap.add_argument("--tables-only", action="store_true", help="follow the scene through compute_tables only")
     args = ap.parse_args(argv)
     scenes = args.scenes.split(",")
     bad = [s for s in scenes if s != "default" and s not in SCENES]
     if bad:
         ap.error(f"--scenes: unknown {', '.join(bad)} (default, {', '.join(SCENES)})")
-    print(json.dumps(walk(args.checkout, scenes, args.fresh_cache), indent=1))
+    print(json.dumps(walk(args.checkout, scenes, args.fresh_cache, args.tables_only), indent=1))
     return 0
 
 
