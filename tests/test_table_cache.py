@@ -179,6 +179,22 @@ def test_a_code_or_version_change_computes_again(cache, stub_builder, monkeypatc
     assert len(stub_builder) == 3
 
 
+def test_the_source_checksum_covers_every_package_the_table_builder_runs():
+    """The key's checksum (table_cache.PHYSICS_PARTS) covers the sources of every gearfmu package
+    the table builder and the argument types it is keyed on load: a code change in any of them
+    computes the tables again.  Reference: the modules a fresh interpreter has loaded after
+    importing the builder, the cache and the scene's physics options (sys.modules)."""
+    import subprocess
+    import sys
+    code = ("import sys, gearfmu.assembly.precompute, gearfmu.assembly.table_cache, gearfmu.scene.physics; "
+            "print(' '.join(sorted({m.split('.')[1] for m in sys.modules if m.startswith('gearfmu.')})))")
+    loaded = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+                 .stdout.split())
+    loaded -= {"scene"}  # the scene reads the arguments; their values are in the key (canonical)
+    assert {"assembly", "tables", "gear", "contact", "ehl", "common"} <= loaded
+    assert loaded <= set(table_cache.PHYSICS_PARTS), loaded - set(table_cache.PHYSICS_PARTS)
+
+
 def _corrupt(folder, how):
     head = next(folder.glob("*.json"))
     body = head.with_suffix(".gtab")
