@@ -1398,7 +1398,7 @@ def sec_costs(pg: Page):
             "### Cost estimate against the measured cost\n\n"
             "Every example scene, the default scene and the scenes of `benchmarks/scenes/` (a small rough-EHL "
             "pair, a large helical table over the hunting-tooth cycle, an oil-temperature axis): the estimate "
-            "of `gearfmu.tables.estimate` before anything is computed, against one table build in a fresh process "
+            "of `gearfmu.assembly.estimate` before anything is computed, against one table build in a fresh process "
             "(CPU time of the process and its film workers, less sensitive to other load than wall time) and the "
             "FMU built from those tables.  Goal: every ratio within [0.5, 2] (docs/tables.md \"Cost estimate\").\n\n"
             + table(["scene", "contact model", "estimated CPU s", "measured CPU s", "time est./meas.",

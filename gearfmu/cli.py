@@ -54,7 +54,7 @@ from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
-from .tables import table_cache
+from .assembly import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
 from .fmu.gearbox_build import variables_of_fmu
@@ -222,7 +222,7 @@ def cmd_build(args) -> int:
 
 
 def _from_cache(tables) -> str:
-    """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
+    """' from the table cache' when the tables were read back (gearfmu.assembly.table_cache)."""
     return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
 
 
@@ -607,7 +607,7 @@ def _no_cache(parser) -> None:
 
 def _allow_large(parser) -> None:
     parser.add_argument("--allow-large", action="store_true",
-                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
+                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.assembly.estimate)")
 
 
 def cmd_bench(args) -> int:

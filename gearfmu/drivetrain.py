@@ -28,7 +28,8 @@ from .gearbox.native import GearboxResult, choose_max_step_s, simulate as simula
 from .pipeline import compute_tables, load
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
-from .tables.estimate import BuildTooLargeError, check_build_cost
+from .assembly.estimate import BuildTooLargeError
+from .scene.physics import check_build_cost
 
 __all__ = ["load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model", "simulate_drivetrain", "modes_report",
            "PAIR_MESH_NAME", "fmu_settings", "build_drivetrain_fmu", "DrivetrainBuild", "check_fmu_runtime"]
@@ -54,7 +55,7 @@ def _flat(tables):
 
 def stage_tables(scene: DrivetrainScene, *, progress: bool = False, allow_large: bool = False) -> List:
     """Every stage's MeshTables (in stage order), each at its drivetrain operating point.  The
-    cost estimate of every stage is checked first (gearfmu.tables.estimate): a stage over the
+    cost estimate of every stage is checked first (gearfmu.assembly.estimate): a stage over the
     limits raises BuildTooLargeError naming the stage before any table is computed."""
     for s in scene.stages:
         try:
