@@ -24,55 +24,18 @@
  * conversion (docs/model.md "Table lookup"), so the RK4 loop calls no libm
  * function.
  *
- * The kernel's other files (gk_internal.h says which holds what): the table lookup
- * (gk_lookup.h, inlined here), the model and its setters (gk_model.c), the stops of the event
- * integrators (gk_stops.c), the contact-zone cuts (gk_zones.c), the temperature axis
- * (gk_temperature.c) and the verified envelope (gk_envelope.c).  This file is the hot path:
- * the forces, RK4, the right-hand sides with the contact mode held, the guards, the one
- * event-location loop of rk4_kink, rk4_node and rk4_seg, and the public step functions.
+ * The kernel's other files (gk_internal.h says which holds what): the per-mesh pieces of the
+ * model (gk_pair.h: the mesh force, the force law and guards with the mode held, the mode
+ * decisions, the root finder; shared with the gearbox kernel), the table lookup (gk_lookup.h,
+ * inlined here), the model and its setters (gk_model.c), the stops of the event integrators
+ * (gk_stops.c), the contact-zone cuts (gk_zones.c), the temperature axis (gk_temperature.c) and
+ * the verified envelope (gk_envelope.c).  This file is the hot path: RK4, the right-hand sides
+ * with the contact mode held, the rk4_seg pieces, the one event-location loop of rk4_kink,
+ * rk4_node and rk4_seg, and the public step functions.
  *
  * No globals, no allocation, no abort: every function returns a status.
  */
-#include "gk_lookup.h"
-
-/* ----------------------------------------------------------------- forces */
-
-/* Total mesh force F at (theta1, omega1, x, v) in cell c (updated to theta1);
- * optionally per-pair forces (pf[P]) and the stiffness of the pairs in contact
- * (*kmesh). */
-GK_INLINE double mesh_force(const gk_model *m, const gk_tq *t, gk_ph *c, double theta1, double omega1,
-                                double x, double v, double *pf, double *kmesh)
-{
-    double F = 0.0, ks = 0.0;
-    int j;
-    phi_cell(m, theta1, c);
-    for (j = 0; j < m->P; ++j) {
-        double k, e, es, b, d, fc, fd, Fj;
-        int region;
-        slot_tables(m, t, c, j, -1, &k, &e, &es, &b);
-        d = x - e;                             /* seed 003 eq 6 */
-        if (d > b) { fc = k * (d - b); region = 1; }
-        else if (d < -b) { fc = k * (d + b); region = -1; }
-        else { fc = 0.0; region = 0; }
-        fd = m->c_Ns_per_m * (v - es * omega1);
-        if (m->damping_model == GK_DAMPING_CONTACT_ZONE) {
-            Fj = (k > 0.0) ? fc + fd : 0.0;
-        } else if (region == 1) {
-            double a = fc + ((fc < fd) ? fc : fd);
-            Fj = (a > 0.0) ? a : 0.0;
-        } else if (region == -1) {
-            double a = fc + ((fc > fd) ? fc : fd);
-            Fj = (a < 0.0) ? a : 0.0;
-        } else {
-            Fj = 0.0;
-        }
-        if (region != 0) ks += k;
-        if (pf != NULL) pf[j] = Fj;
-        F += Fj;
-    }
-    if (kmesh != NULL) *kmesh = ks;
-    return F;
-}
+#include "gk_pair.h"
 
 GK_INLINE void deriv(const gk_model *m, const gk_tq *t, gk_ph *c, double T1, double T2,
                          const double *y, double *dy)
@@ -104,112 +67,6 @@ GK_INLINE void rk4_update(double *y, double h, const double *k1, const double *k
     y[1] = y[1] + h6 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
     y[2] = y[2] + h6 * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]);
     y[3] = y[3] + h6 * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]);
-}
-
-/* --------------------------------------------------------------- rk4_kink
- * docs/model.md "rk4_kink": the mode (table cell nd and, per pair, region reg,
- * elastobacklash sub-mode sub, contact_zone flag kpos) is held during each RK4
- * step; guards (>= 0 while the mode holds) are tested at the step end, the
- * earliest zero is located on the cubic Hermite interpolant of the step, the
- * step is retaken exactly to it and the mode switched there.  Same arithmetic
- * as gearfmu/dynamics/native.py (_kink_substep and friends). */
-
-#define KINK_TOL_S 1e-12
-#define KINK_MAX_IT 60
-
-/* k, e, de/dphi, b of slot j at angle th with the cell held */
-GK_INLINE void locked_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, double th, int j,
-                          double *k, double *e, double *es, double *b)
-{
-    gk_ph c;
-    c.nd = GK_CELL_NONE;
-    c.i0 = md->i0;
-    c.i1 = md->i1;
-    c.w = (th - md->nd * m->dphi_rad) * m->inv_dphi;
-    slot_tables(m, t, &c, j, md->zsel[j], k, e, es, b);
-}
-
-GK_INLINE double pair_force_locked(double kv, double ev, double es, double bv, double x, double v,
-                                double om, double c, int model, int reg, int sub, int kpos)
-{
-    double de = es * om, d = x - ev, fc, fd;
-    if (reg == 1) fc = kv * (d - bv);
-    else if (reg == -1) fc = kv * (d + bv);
-    else fc = 0.0;
-    fd = c * (v - de);
-    if (model == GK_DAMPING_ELASTOBACKLASH) {
-        if (reg == 0 || sub == 2) return 0.0;
-        if (sub == 0) return fc + fc;
-        return fc + fd;
-    }
-    if (kpos != 0) return fc + fd;
-    return 0.0;
-}
-
-GK_INLINE double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
-                         double om, double c, int model, int reg, int sub)
-{
-    double d = x - ev, fc, fd;
-    if (reg == 0) {
-        if (q == 0) return bv - d;
-        if (q == 1) return d + bv;
-        return 1.0;
-    }
-    if (q == 0) {
-        if (reg == 1) return d - bv;
-        return -(d + bv);
-    }
-    if (model != GK_DAMPING_ELASTOBACKLASH) return 1.0;
-    if (reg == 1) fc = kv * (d - bv);
-    else fc = kv * (d + bv);
-    fd = c * (v - es * om);
-    if (reg == 1) {
-        if (sub == 0) return (q == 1) ? fd - fc : 1.0;
-        if (sub == 1) return (q == 1) ? fc - fd : fc + fd;
-        return (q == 1) ? -(fc + fd) : 1.0;
-    }
-    if (sub == 0) return (q == 1) ? fc - fd : 1.0;
-    if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
-    return (q == 1) ? fc + fd : 1.0;
-}
-
-GK_INLINE int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
-                      double om, double c)
-{
-    double d, fd, fc;
-    if (reg == 0) return 0;
-    d = x - ev;
-    fd = c * (v - es * om);
-    if (reg == 1) {
-        fc = kv * (d - bv);
-        if (fc < fd) return 0;
-        if (fc + fd < 0.0) return 2;
-        return 1;
-    }
-    fc = kv * (d + bv);
-    if (fc > fd) return 0;
-    if (fc + fd > 0.0) return 2;
-    return 1;
-}
-
-/* the mode change of pair j when its guard q reached zero (integrators._switch_pair); kv..bv:
- * the pair's table values at the state y, read only when the pair enters contact under
- * the elastobacklash model */
-GK_INLINE void switch_pair(const gk_model *m, gk_mode *md, int j, int q, double kv, double ev, double es,
-                           double bv, const double *y)
-{
-    if (md->reg[j] == 0) {
-        md->reg[j] = (q == 0) ? 1 : -1;
-        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
-            md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
-    } else if (q == 0) {
-        md->reg[j] = 0;
-        md->sub[j] = 0;
-    } else if (md->sub[j] == 1) {
-        md->sub[j] = (q == 1) ? 0 : 2;
-    } else {
-        md->sub[j] = 1;
-    }
 }
 
 GK_INLINE void deriv_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, double T1, double T2,
@@ -245,100 +102,6 @@ GK_INLINE void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, 
     axpy4(sum, 1.0, k, sum);                /* + k4 */
     h6 = h / 6.0;
     axpy4(y, h6, sum, yn);
-}
-
-/* guard gi at state y: 0 cell start, 1 cell end, 2 + 3 j + q guard q of pair j */
-GK_INLINE double guard_at(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y)
-{
-    int j, q;
-    double kv, ev, es, bv;
-    if (gi == 0) return y[0] - md->lo * m->dphi_rad;
-    if (gi == 1) return md->hi * m->dphi_rad - y[0];
-    j = (gi - 2) / 3;
-    q = (gi - 2) - 3 * j;
-    locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
-    return pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model,
-                      md->reg[j], md->sub[j]);
-}
-
-/* the cubic Hermite interpolant at fraction s of a step of length tau from (y0, f0) to (y1, f1) */
-GK_INLINE void hermite_point(double s, const double *y0, const double *f0, const double *y1, const double *f1,
-                             double tau, double *yy)
-{
-    double u = 1.0 - s;
-    double h00 = (1.0 + 2.0 * s) * u * u, h10 = s * u * u;
-    double h01 = s * s * (3.0 - 2.0 * s), h11 = s * s * (s - 1.0);
-    int q;
-    for (q = 0; q < 4; ++q)
-        yy[q] = ((h00 * y0[q] + h10 * (tau * f0[q])) + h01 * y1[q]) + h11 * (tau * f1[q]);
-}
-
-/* kpos of every pair for the held cell and the sub-modes of pairs in contact;
- * with from_state also the regions */
-static void mode_sync(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y, int from_state)
-{
-    int j;
-    gk_ph half;
-    half.nd = GK_CELL_NONE;
-    half.i0 = md->i0;
-    half.i1 = md->i1;
-    half.w = 0.5;
-    for (j = 0; j < m->P; ++j) {
-        double km, em, esm, bm, kv, ev, es, bv;
-        slot_tables(m, t, &half, j, md->zsel[j], &km, &em, &esm, &bm);
-        md->kpos[j] = (km > 0.0) ? 1 : 0;
-        locked_tables(m, t, md, y[0], j, &kv, &ev, &es, &bv);
-        if (from_state) {
-            double d = y[2] - ev;
-            if (d > bv) md->reg[j] = 1;
-            else if (d < -bv) md->reg[j] = -1;
-            else md->reg[j] = 0;
-        }
-        if (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
-            md->sub[j] = decide_sub(md->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m);
-        else
-            md->sub[j] = 0;
-    }
-}
-
-static void mode_from_state(const gk_model *m, const gk_tq *t, gk_mode *md, const double *y, int node)
-{
-    md->nd = floor(y[0] * m->inv_dphi);
-    gki_cell_nodes(md, m->n_phi);
-    gki_seg_start(m, md, node, y[1], y[0]);
-    gki_zone_sel(m, md);
-    mode_sync(m, t, md, y, 1);
-}
-
-/* rk4_node: time to the flagged table node ahead of theta1 (the held segment's
- * end hi for om > 0, start lo for om < 0) predicted from the step's first
- * stage, theta1(tau) = th + tau*(om + 0.5*fb*tau); linear start, two
- * Newton iterations; -1 when there is no prediction (as _node_time in
- * gearfmu/dynamics/integrators.py). */
-static double node_time(double th, double om, double fb, double rem, double lo, double hi, double dphi)
-{
-    double dist, tau;
-    int it;
-    if (om > 0.0) dist = hi * dphi - th;
-    else if (om < 0.0) dist = lo * dphi - th;
-    else return -1.0;
-    tau = dist / om;
-    for (it = 0; it < 2; ++it) {
-        double d = om + fb * tau;
-        if (!(d * om > 0.0)) return -1.0;
-        tau = tau - (tau * (om + 0.5 * fb * tau) - dist) / d;
-    }
-    if (tau > 0.0 && tau < rem) return tau;
-    return -1.0;
-}
-
-/* 1 when no pair guard is negative at y (cell held) */
-static int pairs_hold(const gk_model *m, const gk_tq *t, const gk_mode *md, const double *y)
-{
-    int gi, n_guard = 2 + 3 * m->P;
-    for (gi = 2; gi < n_guard; ++gi)
-        if (guard_at(m, t, md, gi, y) < 0.0) return 0;
-    return 1;
 }
 
 /* --------------------------------------------------------------- rk4_seg
@@ -533,32 +296,22 @@ static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, i
                          const double *y0, const double *f0, const double *y1, const double *f1, double tau,
                          int seg, double gw, double gv)
 {
-    double ga = seg ? guard_seg(m, t, md, gi, y0, gw, gv) : guard_at(m, t, md, gi, y0);
-    double gb = g_end, a = 0.0, b = 1.0, s, gs, yy[4];
-    int side = 0, it;
-    if (!(ga > 0.0)) return 0.0;
+    gk_root r;
+    double s, yy[4];
+    int it;
+    if (!seg) return held_guard_root(m, t, md, gi, g_end, y0, f0, y1, f1, tau);
+    r.ga = guard_seg(m, t, md, gi, y0, gw, gv);
+    if (!(r.ga > 0.0)) return 0.0;
+    r.a = 0.0;
+    r.b = 1.0;
+    r.gb = g_end;
+    r.side = 0;
     for (it = 0; it < KINK_MAX_IT; ++it) {
-        s = (a * gb - b * ga) / (gb - ga);
-        if (!(s > a && s < b)) s = 0.5 * (a + b);
+        s = root_next(&r);
         hermite_point(s, y0, f0, y1, f1, tau, yy);
-        gs = seg ? guard_seg(m, t, md, gi, yy, gw, gv) : guard_at(m, t, md, gi, yy);
-        if (gs < 0.0) {
-            b = s;
-            gb = gs;
-            if (side == -1) ga = 0.5 * ga;
-            side = -1;
-        } else if (gs == 0.0) {
-            b = s;
-            break;
-        } else {
-            a = s;
-            ga = gs;
-            if (side == 1) gb = 0.5 * gb;
-            side = 1;
-        }
-        if (b - a <= KINK_TOL_S) break;
+        if (root_update(&r, s, guard_seg(m, t, md, gi, yy, gw, gv))) break;
     }
-    return b;
+    return r.b;
 }
 
 /* the state (theta1, omega1, x, v) of the shifted state y, in place (integrators._seg_true) */
@@ -943,138 +696,9 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
 }
 
 /* ---------------------------------------------------------- Model Exchange
- * docs/model.md "Model Exchange": the host integrates [theta1, omega1, x, v]; the mode (per pair
- * region, elastobacklash branch and contact-zone flag; with node events the table segment) is held
- * between events and decided anew from the state at each event.  The lookup is the plain one in the
- * cell of theta1 (with node events: clamped to the held segment, the end cells' lines extended),
- * except that a pair out of its contact zone has k = 0 and a pair in it takes the in-zone line of
- * a cell that holds one of its edges. */
-
-/* x on the nearest node when within GK_ZONE_SNAP cells (gk_zones.c zone_wrap, without the wrap) */
-static double me_snap(double x)
-{
-    double rn = floor(x + 0.5);
-    return (fabs(x - rn) <= GK_ZONE_SNAP) ? rn : x;
-}
-
-/* Signed distance (node units) from s to the nearest edge of slot j's contact zones: > 0 inside a
- * zone, < 0 outside; *inside = 1 when in <= s < out for one of them.  Global pair n has the zone
- * [q N + snap(mm ppm + in), q N + snap(mm ppm + out)), q = floor(n / n_mesh), mm = n - q n_mesh, and
- * belongs to slot mm mod P (gk_zone_cuts); the pairs within 2P meshes of s are looked at. */
-static double me_zone_distance(const gk_model *m, int j, double s, int *inside)
-{
-    double nm = m->zone_n_mesh, ppm = m->zone_ppm, best = -HUGE_VAL, n;
-    double n0 = floor((s - m->zone_out) / ppm) - 2.0 * m->P, n1 = floor((s - m->zone_in) / ppm) + 2.0 * m->P;
-    int k;
-    *inside = 0;
-    if (!(fabs(s) < GK_CELL_LIMIT)) {   /* beyond 2^52 cells (or NaN) the pairs cannot be told apart */
-        *inside = 1;
-        return 1.0;
-    }
-    for (n = n0, k = 0; n <= n1 && k < 64 * GK_KINK_MAX_SLOTS; n += 1.0, ++k) {
-        double q = floor(n / nm), mm = n - q * nm, in, out, g;
-        if ((long long)mm % m->P != j) continue;
-        in = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_in);
-        out = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_out);
-        g = (s - in < out - s) ? s - in : out - s;
-        if (g > best) best = g;
-        if (in <= s && s < out) *inside = 1;
-    }
-    return (best == -HUGE_VAL) ? -(double)m->n_phi : best;
-}
-
-/* a node the held segment stops at (node events): rk4_seg's stops (GK_ME_NODES_KINKS) or rk4_node's */
-static int me_node_stop(const gk_model *m, double n, int node_events)
-{
-    if (m->n_phi > GK_NODE_FLAGS_MAX) return 1;
-    return (m->node_kink[gki_node_index(m->n_phi, n)] & (node_events == GK_ME_NODES_KINKS ? 2 : 1)) != 0;
-}
-
-/* the segment [lo, hi) of stops around s: lo the last stop at or below floor(s), hi the first above */
-static void me_segment(const gk_model *m, gk_me *me, double s)
-{
-    double c = floor(s), q;
-    int k, N = m->n_phi;
-    me->seg_lo = c + 1.0 - N;
-    for (q = c, k = 0; k < N; ++k, q -= 1.0)
-        if (me_node_stop(m, q, me->node_events)) { me->seg_lo = q; break; }
-    me->seg_hi = c + N;
-    for (q = c + 1.0, k = 0; k < N; ++k, q += 1.0)
-        if (me_node_stop(m, q, me->node_events)) { me->seg_hi = q; break; }
-}
-
-/* the cell of theta1 = th (with node events clamped to the held segment) */
-GK_INLINE void me_cell(const gk_model *m, const gk_me *me, double th, gk_ph *c)
-{
-    double cc;
-    if (me->node_events == GK_ME_NODES_NONE) {
-        phi_cell(m, th, c);
-        return;
-    }
-    cc = floor(th * m->inv_dphi);
-    if (!(cc >= me->seg_lo)) cc = me->seg_lo;
-    if (cc > me->seg_hi - 1.0) cc = me->seg_hi - 1.0;
-    c->i0 = gki_node_index(m->n_phi, cc);
-    c->i1 = (c->i0 + 1 == m->n_phi) ? 0 : c->i0 + 1;
-    c->nd = GK_CELL_NONE;
-    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
-}
-
-/* k, e, de/dphi, b of pair j with its contact-zone flag held; 0 (and k = 0) when it is out of its zone */
-GK_INLINE int me_tables(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, double *kv,
-                        double *ev, double *es, double *bv)
-{
-    int sel = -1;
-    if (m->zone_n_mesh > 0.0 && !me->zin[j]) {
-        slot_tables(m, t, c, j, -1, kv, ev, es, bv);
-        *kv = 0.0;
-        return 0;
-    }
-    if (m->zone_cuts != NULL) {
-        size_t r = (size_t)j * m->n_phi + c->i0;
-        double lo = m->zone_cuts[r];
-        if (lo >= 0.0) sel = (c->w < 0.5 * (lo + m->zone_cuts[(size_t)m->P * m->n_phi + r])) ? 0 : 2;
-    }
-    slot_tables(m, t, c, j, sel, kv, ev, es, bv);
-    return 1;
-}
-
-/* contact_zone: the pair is damped (k > 0 in its zone; without zone edges at the middle of the cell) */
-GK_INLINE int me_kpos(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, int active)
-{
-    gk_ph half;
-    double km, em, esm, bm;
-    if (m->damping_model != GK_DAMPING_CONTACT_ZONE || !active) return 0;
-    if (m->zone_n_mesh > 0.0) return me->zin[j];
-    half = *c;
-    half.w = 0.5;
-    slot_tables(m, t, &half, j, -1, &km, &em, &esm, &bm);
-    return km > 0.0;
-}
-
-/* guard q of pair j as pair_guard, in metres: the force guards divided by k_mean (inv_k) */
-GK_INLINE double me_guard(int q, double kv, double ev, double es, double bv, double x, double v, double om,
-                          double c, int model, int reg, int sub, double inv_k)
-{
-    double d = x - ev, fc, fd;
-    if (reg == 0) {
-        if (q == 0) return bv - d;
-        if (q == 1) return d + bv;
-        return 1.0;
-    }
-    if (q == 0) return (reg == 1) ? d - bv : -(d + bv);
-    if (model != GK_DAMPING_ELASTOBACKLASH) return 1.0;
-    fc = kv * ((reg == 1) ? d - bv : d + bv) * inv_k;
-    fd = c * (v - es * om) * inv_k;
-    if (reg == 1) {
-        if (sub == 0) return (q == 1) ? fd - fc : 1.0;
-        if (sub == 1) return (q == 1) ? fc - fd : fc + fd;
-        return (q == 1) ? -(fc + fd) : 1.0;
-    }
-    if (sub == 0) return (q == 1) ? fc - fd : 1.0;
-    if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
-    return (q == 1) ? fc + fd : 1.0;
-}
+ * docs/model.md "Model Exchange": the host integrates [theta1, omega1, x, v]; the per-mesh pieces
+ * (the mode held between events and decided anew at each, the force and the indicators with it
+ * held) are gk_pair.h's, shared with the gearbox kernel; here the pair's equations of motion. */
 
 static int me_check(const gk_model *m, const gk_me *me, const gk_state *s)
 {
@@ -1085,39 +709,28 @@ static int me_check(const gk_model *m, const gk_me *me, const gk_state *s)
     return GK_OK;
 }
 
+/* the state as the per-mesh pieces take it */
+GK_INLINE void me_y(const gk_state *s, double *y)
+{
+    y[0] = s->theta1_rad;
+    y[1] = s->omega1_rad_s;
+    y[2] = s->x_m;
+    y[3] = s->v_m_s;
+}
+
 int gk_me_n_indicators(const gk_model *m, int node_events)
 {
     if (m == NULL) return 0;
-    return 3 * m->P + ((m->zone_n_mesh > 0.0) ? m->P : 0) + ((node_events != GK_ME_NODES_NONE) ? 2 : 0);
+    return me_n_indicators(m, node_events);
 }
 
-static double me_force(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *pf,
-                       double *kmesh);
-static void me_rhs(const gk_model *m, const gk_state *s, double F, double T1, double T2, double *dx);
-
-/* the mode from state s (gk_me_update) */
-static void me_decide(const gk_model *m, gk_me *me, const gk_tq *t, const gk_state *s)
+static void me_rhs(const gk_model *m, const double *y, double F, double T1, double T2, double *dx)
 {
-    gk_ph c = GK_PH_NONE;
-    double sv = s->theta1_rad * m->inv_dphi;
-    int j;
-    if (me->node_events != GK_ME_NODES_NONE) me_segment(m, me, sv);
-    if (m->zone_n_mesh > 0.0)
-        for (j = 0; j < m->P; ++j) me_zone_distance(m, j, sv, &me->zin[j]);
-    me_cell(m, me, s->theta1_rad, &c);
-    for (j = 0; j < m->P; ++j) {
-        double kv, ev, es, bv, d;
-        if (!me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv)) {
-            me->reg[j] = 0;
-            me->sub[j] = 0;
-            continue;
-        }
-        d = s->x_m - ev;
-        me->reg[j] = (d > bv) ? 1 : (d < -bv) ? -1 : 0;
-        me->sub[j] = (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
-                         ? decide_sub(me->reg[j], kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m)
-                         : 0;
-    }
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    dx[0] = y[1];
+    dx[1] = (T1 - Rb1 * F) * m->inv_I1;
+    dx[2] = y[3];
+    dx[3] = Rb1 * (T1 - Rb1 * F) * m->inv_I1 - Rb2 * (Rb2 * F - T2) * m->inv_I2;
 }
 
 /* The mode anew at an event (docs/model.md "Model Exchange"): decided at the state, then again at the
@@ -1128,130 +741,59 @@ int gk_me_update(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, 
 {
     gk_tq t;
     gk_me old;
-    gk_state ahead;
-    double dx[4], delta;
-    int j, st = me_check(m, me, s), diff = 0;
+    double y[4], dx[4], ahead[4], delta;
+    int q, st = me_check(m, me, s), finite = 1;
     if (st != GK_OK) return st;
     if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
     old = *me;
+    me_y(s, y);
     t = torque_bracket(m, T1_Nm);
-    me_decide(m, me, &t, s);
-    me_rhs(m, s, me_force(m, me, &t, s, NULL, NULL), T1_Nm, T2_Nm, dx);
-    delta = 1e-9 * 6.283185307179586 * sqrt(m->m_e_kg / m->k_mean_N_per_m);
-    ahead.theta1_rad = s->theta1_rad + delta * dx[0];
-    ahead.omega1_rad_s = s->omega1_rad_s + delta * dx[1];
-    ahead.x_m = s->x_m + delta * dx[2];
-    ahead.v_m_s = s->v_m_s + delta * dx[3];
-    if (isfinite(ahead.theta1_rad) && isfinite(ahead.omega1_rad_s) && isfinite(ahead.x_m) && isfinite(ahead.v_m_s))
-        me_decide(m, me, &t, &ahead);
-    for (j = 0; j < m->P; ++j)
-        diff |= me->reg[j] != old.reg[j] || me->sub[j] != old.sub[j] || me->zin[j] != old.zin[j];
-    diff |= me->seg_lo != old.seg_lo || me->seg_hi != old.seg_hi;
-    if (changed != NULL) *changed = diff;
+    me_decide(m, me, &t, y);
+    me_rhs(m, y, me_force(m, me, &t, y, NULL, NULL), T1_Nm, T2_Nm, dx);
+    delta = me_ahead_time(m);
+    for (q = 0; q < 4; ++q) {
+        ahead[q] = y[q] + delta * dx[q];
+        finite &= isfinite(ahead[q]) != 0;
+    }
+    if (finite) me_decide(m, me, &t, ahead);
+    if (changed != NULL) *changed = me_differs(m, me, &old);
     return GK_OK;
 }
 
 int gk_me_init(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int node_events)
 {
-    int j;
     if (me == NULL) return GK_ERR_MODEL;
-    if (node_events != GK_ME_NODES_NONE && node_events != GK_ME_NODES_KINKS && node_events != GK_ME_NODES_ALL)
-        return GK_ERR_PARAM;
-    me->node_events = node_events;
-    for (j = 0; j < GK_KINK_MAX_SLOTS; ++j) me->reg[j] = me->sub[j] = me->zin[j] = 0;
-    me->seg_lo = me->seg_hi = 0.0;
+    if (!me_clear(me, node_events)) return GK_ERR_PARAM;
     return gk_me_update(m, me, s, T1_Nm, T2_Nm, NULL);
-}
-
-/* the total force with the mode held; per pair (pf) and the stiffness of the pairs in contact */
-static double me_force(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *pf,
-                       double *kmesh)
-{
-    gk_ph c = GK_PH_NONE;
-    double F = 0.0, ks = 0.0;
-    int j;
-    me_cell(m, me, s->theta1_rad, &c);
-    for (j = 0; j < m->P; ++j) {
-        double kv, ev, es, bv, Fj = 0.0;
-        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv);
-        if (active) {
-            Fj = pair_force_locked(kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m,
-                                   m->damping_model, me->reg[j], me->sub[j], me_kpos(m, t, me, &c, j, active));
-            if (me->reg[j] != 0) ks += kv;
-        }
-        if (pf != NULL) pf[j] = Fj;
-        F += Fj;
-    }
-    if (kmesh != NULL) *kmesh = ks;
-    return F;
-}
-
-static void me_rhs(const gk_model *m, const gk_state *s, double F, double T1, double T2, double *dx)
-{
-    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
-    dx[0] = s->omega1_rad_s;
-    dx[1] = (T1 - Rb1 * F) * m->inv_I1;
-    dx[2] = s->v_m_s;
-    dx[3] = Rb1 * (T1 - Rb1 * F) * m->inv_I1 - Rb2 * (Rb2 * F - T2) * m->inv_I2;
 }
 
 int gk_me_derivatives(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
                       double *dx)
 {
     gk_tq t;
+    double y[4];
     int st = me_check(m, me, s);
     if (st != GK_OK) return st;
     if (dx == NULL) return GK_ERR_MODEL;
     if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    me_y(s, y);
     t = torque_bracket(m, T1_Nm);
-    me_rhs(m, s, me_force(m, me, &t, s, NULL, NULL), T1_Nm, T2_Nm, dx);
+    me_rhs(m, y, me_force(m, me, &t, y, NULL, NULL), T1_Nm, T2_Nm, dx);
     return GK_OK;
-}
-
-/* every indicator into z with room for all (3P guards, P zones, 2 segment ends; those the model
- * does not have 1.0) */
-static void me_all_indicators(const gk_model *m, const gk_me *me, const gk_tq *t, const gk_state *s, double *z)
-{
-    gk_ph c = GK_PH_NONE;
-    double sv = s->theta1_rad * m->inv_dphi, len = m->Rb1_m * m->dphi_rad, inv_k = 1.0 / m->k_mean_N_per_m;
-    int j, q, P = m->P;
-    me_cell(m, me, s->theta1_rad, &c);
-    for (j = 0; j < P; ++j) {
-        double kv, ev, es, bv;
-        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv), inside;
-        for (q = 0; q < 3; ++q)
-            z[q * P + j] = active ? me_guard(q, kv, ev, es, bv, s->x_m, s->v_m_s, s->omega1_rad_s, m->c_Ns_per_m,
-                                             m->damping_model, me->reg[j], me->sub[j], inv_k)
-                                  : 1.0;
-        if (m->zone_n_mesh > 0.0) {
-            double g = me_zone_distance(m, j, sv, &inside) * len;
-            z[3 * P + j] = me->zin[j] ? g : -g;
-        } else {
-            z[3 * P + j] = 1.0;
-        }
-    }
-    z[4 * P] = (me->node_events != GK_ME_NODES_NONE) ? (sv - me->seg_lo) * len : 1.0;
-    z[4 * P + 1] = (me->node_events != GK_ME_NODES_NONE) ? (me->seg_hi - sv) * len : 1.0;
 }
 
 int gk_me_indicators(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double *z)
 {
     gk_tq t;
-    double all[4 * GK_KINK_MAX_SLOTS + 2];
-    int st = me_check(m, me, s), P, n = 0, j;
+    double all[4 * GK_KINK_MAX_SLOTS + 2], y[4];
+    int st = me_check(m, me, s);
     if (st != GK_OK) return st;
     if (z == NULL) return GK_ERR_MODEL;
     if (!isfinite(T1_Nm)) return GK_ERR_INPUT;
-    P = m->P;
+    me_y(s, y);
     t = torque_bracket(m, T1_Nm);
-    me_all_indicators(m, me, &t, s, all);
-    for (j = 0; j < 3 * P; ++j) z[n++] = all[j];
-    if (m->zone_n_mesh > 0.0)
-        for (j = 0; j < P; ++j) z[n++] = all[3 * P + j];
-    if (me->node_events != GK_ME_NODES_NONE) {
-        z[n++] = all[4 * P];
-        z[n++] = all[4 * P + 1];
-    }
+    me_all_indicators(m, me, &t, y, all);
+    me_pack_indicators(m, me, all, z);
     return GK_OK;
 }
 
@@ -1259,14 +801,15 @@ int gk_me_outputs(const gk_model *m, const gk_me *me, const gk_state *s, double 
                   double *me_out)
 {
     gk_tq t;
-    double F, km;
+    double F, km, y[4];
     int j, P, st = me_check(m, me, s);
     if (st != GK_OK) return st;
     if (out == NULL) return GK_ERR_MODEL;
     if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
     P = m->P;
+    me_y(s, y);
     t = torque_bracket(m, T1_Nm);
-    F = me_force(m, me, &t, s, out + GK_OUT_PAIR_FORCE, &km);
+    F = me_force(m, me, &t, y, out + GK_OUT_PAIR_FORCE, &km);
     out[GK_OUT_PINION_ANGLE] = s->theta1_rad;
     out[GK_OUT_PINION_SPEED] = s->omega1_rad_s;
     out[GK_OUT_GEAR_ANGLE] = (s->theta1_rad * m->Rb1_m - s->x_m) / m->Rb2_m;
@@ -1278,8 +821,8 @@ int gk_me_outputs(const gk_model *m, const gk_me *me, const gk_state *s, double 
         out[GK_OUT_PAIR_FORCE + P + j] = (F != 0.0) ? out[GK_OUT_PAIR_FORCE + j] / F : 0.0;
     if (me_out != NULL) {
         me_out[GK_ME_OUT_V] = s->v_m_s;
-        me_rhs(m, s, F, T1_Nm, T2_Nm, me_out + GK_ME_OUT_DERIVATIVES);
-        me_all_indicators(m, me, &t, s, me_out + GK_ME_OUT_INDICATORS);
+        me_rhs(m, y, F, T1_Nm, T2_Nm, me_out + GK_ME_OUT_DERIVATIVES);
+        me_all_indicators(m, me, &t, y, me_out + GK_ME_OUT_INDICATORS);
     }
     return GK_OK;
 }
