@@ -11,7 +11,9 @@ gearfmu.bench.HARD_CASES):
   the relative one times the FMU's nominal state values) at rtol 1e-4, 1e-6, 1e-8, for each choice
   of table-node events (none, the big kinks, every bent node; ``gearfmu build --me-node-events``);
 * the native solver (rk4_node) at the scene's internal step, for the cost of the same run in C
-  inside numba.
+  inside numba;
+* the same standalone FMU as FMI 2 Co-Simulation (its own rk4_node at the same internal step) run by
+  fmpy at the communication step, for the cost of Model Exchange against Co-Simulation in one host.
 
 Each row: the largest and the RMS difference of the DTE and of the mesh force over the
 communication instants, relative to the reference's range; the number of events the host handled;
@@ -88,6 +90,20 @@ def run_case(name: str, rtols, tmp: Path) -> dict:
     rows = [dict(host="native rk4_node", setting=f"h={h:.3g} s", wall_s=nat_wall, events=None,
                  **errors(nat.dte, nat.mesh_force, ref))]
     import fmpy
+    say(f"{name}: the Co-Simulation FMU (rk4_node inside, h = {h:.3g} s)")
+    cs = build_standalone_fmu(tables, tmp / f"{name}_cs.fmu", pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
+                              pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2, damping_ratio=kw["damping_ratio"],
+                              damping_model=kw.get("damping_model", "elastobacklash"),
+                              pinion_angle_start_rad=kw.get("pinion_angle_start_rad", 0.0), max_step_s=h,
+                              stop_time_s=stop, output_interval_s=H, platforms=["x86_64-linux"], validation=False,
+                              interface="cs")
+    fmpy.simulate_fmu(str(cs), fmi_type="CoSimulation", stop_time=stop, output_interval=H, output=["dte"],
+                      logger=quiet)   # the files extracted and the library loaded once before the timed run
+    t0 = time.perf_counter()
+    res = fmpy.simulate_fmu(str(cs), fmi_type="CoSimulation", stop_time=stop, output_interval=H,
+                            output=["dte", "mesh_force"], logger=quiet)
+    rows.append(dict(host="fmpy Co-Simulation", setting=f"rk4_node h={h:.3g} s", wall_s=time.perf_counter() - t0,
+                     events=None, **errors(res["dte"], res["mesh_force"], ref)))
     for ne in ME_NODE_EVENTS:
         say(f"{name}: FMU with node events {ne!r}")
         path = build_standalone_fmu(tables, tmp / f"{name}_{ne}.fmu", pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
