@@ -51,7 +51,7 @@ from .fmu.compare import (native_columns, output_names, output_units, run_fmu, v
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import drivetrain, pipeline
-from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
+from .pipeline import load, build, simulate_native
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
 from .tables import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
@@ -450,22 +450,18 @@ def _validate(args) -> dict:
             from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
             scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        settings = pipeline.run_settings(scene, tables)
     else:
         res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
                     allow_large=args.allow_large)
-        fmu_path, tables = res.fmu_path, res.tables
+        fmu_path, tables, settings = res.fmu_path, res.tables, res.settings
         if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
             from .plan import planned_scene  # the planner: loaded only for scenes with [accuracy]
             scene = planned_scene(scene, res.plan)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
-    t1 = scene.operating.torque_Nm
-    native_kwargs = dict(
-        max_step_s=max_step_for(scene, tables), pinion_torque_Nm=t1,
-        gear_torque_Nm=gear_torque_for(tables, t1), pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        damping_ratio=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model)
-    rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
-                                      comm_step_s=step, tolerance=args.tolerance, scene_text=text)
+    rep = validate_fmu_against_native(fmu_path, tables, settings, stop_time_s=stop, comm_step_s=step,
+                                      tolerance=args.tolerance, scene_text=text)
     rep["scene"] = scene.name
     return rep
 

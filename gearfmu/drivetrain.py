@@ -14,6 +14,7 @@ from __future__ import annotations
 import sys
 from typing import List, Optional, Tuple, Union
 
+from .common.settings import GearboxRunSettings
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
 from .gearbox.native import GearboxResult, simulate as simulate_gearbox
@@ -22,8 +23,8 @@ from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetra
 from .scene.options import RPM_TO_RAD_S, Scene
 from .tables.estimate import BuildTooLargeError, check_build_cost
 
-__all__ = ["load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model", "simulate_drivetrain", "modes_report",
-           "PAIR_MESH_NAME"]
+__all__ = ["load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model", "gearbox_run_settings",
+           "simulate_drivetrain", "modes_report", "PAIR_MESH_NAME"]
 
 #: the mesh name of a single pair scene seen as a gearbox (parts ``pair.pinion``, ``pair.gear``)
 PAIR_MESH_NAME = "pair"
@@ -80,25 +81,38 @@ def pair_model(scene: Scene, tables, *, damping_ratio: Optional[float] = None) -
     return build_gearbox([mesh], motor=f"{PAIR_MESH_NAME}.pinion", load=f"{PAIR_MESH_NAME}.gear")
 
 
+def gearbox_run_settings(scene: DrivetrainScene) -> GearboxRunSettings:
+    """The run settings of a drivetrain scene (:class:`gearfmu.common.settings.GearboxRunSettings`):
+    ``[run]`` stop time and output interval, ``[solver]`` integrator and step bound (None: "auto"),
+    the motor's start speed and torque, the load's torque (given, else -- when the motor is no torque
+    input -- the balancing torque, else None: the balance of the motor's at every step); an end
+    that is no torque input takes 0."""
+    m, ld = scene.motor, scene.load
+    load = ld.torque_Nm if ld.torque_Nm is not None else (None if m.torque_input else scene.load_torque_Nm)
+    return GearboxRunSettings(stop_time_s=scene.stop_time_s, output_interval_s=scene.output_interval_s,
+                              max_step_s=scene.max_step_s, integrator=scene.integrator,
+                              motor_speed_start_rad_s=m.speed_rad_s,
+                              motor_torque_start_Nm=m.torque_Nm if m.torque_input else 0.0,
+                              load_torque_start_Nm=load if ld.torque_input else 0.0)
+
+
 def simulate_drivetrain(scene: DrivetrainScene, model: GearboxModel, *, stop_time_s: Optional[float] = None,
                         comm_step_s: Optional[float] = None, max_step_s: Optional[float] = None,
                         motor_torque_Nm=None, load_torque_Nm=None, integrator: Optional[str] = None,
                         progress: bool = False) -> GearboxResult:
-    """Run the native gearbox solver with the scene's settings (each overridable).  Without a load
-    torque (argument or ``load.torque_Nm``) the load balances the motor torque at every step."""
-    tm = scene.motor.torque_Nm if motor_torque_Nm is None else motor_torque_Nm
-    if load_torque_Nm is None and scene.load.torque_Nm is not None:
-        load_torque_Nm = scene.load.torque_Nm
-    if load_torque_Nm is None and not scene.motor.torque_input:
-        load_torque_Nm = scene.load_torque_Nm
-    return simulate_gearbox(
-        model, stop_time_s=scene.stop_time_s if stop_time_s is None else stop_time_s,
-        comm_step_s=scene.output_interval_s if comm_step_s is None else comm_step_s,
-        max_step_s=scene.max_step_s if max_step_s is None else max_step_s,
-        motor_torque_Nm=tm if scene.motor.torque_input else 0.0,
-        load_torque_Nm=load_torque_Nm if scene.load.torque_input else 0.0,
-        motor_speed_start_rad_s=scene.motor.speed_rad_s,
-        integrator=scene.integrator if integrator is None else integrator, progress=progress)
+    """Run the native gearbox solver with the scene's settings (:func:`gearbox_run_settings`; each
+    overridable).  Without a load torque (argument or ``load.torque_Nm``) the load balances the
+    motor torque at every step."""
+    s = gearbox_run_settings(scene)
+    inputs = {}
+    if motor_torque_Nm is not None:
+        inputs["motor_torque_Nm"] = motor_torque_Nm if scene.motor.torque_input else 0.0
+    if load_torque_Nm is not None:
+        inputs["load_torque_Nm"] = load_torque_Nm if scene.load.torque_input else 0.0
+    elif motor_torque_Nm is not None:  # a motor input alone: the load as the scene says (None: its balance)
+        inputs["load_torque_Nm"] = s.load_torque_start_Nm
+    return simulate_gearbox(model, s, stop_time_s=stop_time_s, comm_step_s=comm_step_s, max_step_s=max_step_s,
+                            integrator=integrator, progress=progress, **inputs)
 
 
 def modes_report(kind: str, scene, model: GearboxModel, *,

@@ -9,10 +9,10 @@ from __future__ import annotations
 from typing import Optional
 
 from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
-                     max_step_for, platform_kw, simulate_native)
+                     max_step_for, platform_kw, run_settings, simulate_native)
 from .tables.estimate import check_build_cost
 
-__all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for",
+__all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for", "run_settings",
            "simulate_native"]
 
 

@@ -23,6 +23,7 @@ from .plan_choices import _step_absolute, _thermal_options, table_work
 from .plan_verify import MEASURES, run_errors, steady_phase
 from .tables.zones import mean_total_stiffness_N_per_m
 from .scene.envelope import AccuracyTarget, Envelope
+from .stages import run_settings
 from .tables import table_cache
 from .tables.precompute import precompute_tables
 
@@ -61,6 +62,8 @@ class _Evaluator:
 
     def __init__(self, scene, env: Envelope, acc: AccuracyTarget, progress: bool):
         self.scene, self.env, self.acc, self.progress = scene, env, acc, progress
+        #: the scene's run settings (its damping); every run sets its own experiment, inputs and integration
+        self.settings = run_settings(scene)
         self._tables: Dict[tuple, tuple] = {}
         self._factors: Dict[tuple, object] = {}  # (table key, degC) -> tables at that temperature
         self._runs: Dict[tuple, dict] = {}
@@ -241,10 +244,8 @@ class _Evaluator:
         self.native_runs += 1
         mesh_s = tb.mesh_period_rad / w
         n = int(self.acc.run_mesh_periods)
-        res = simulate(tb, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
-                       pinion_torque_Nm=T, pinion_speed_start_rad_s=w,
-                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
-                       integrator=cfg["integrator"])
+        res = simulate(tb, self.settings, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
+                       pinion_torque_Nm=T, pinion_speed_start_rad_s=w, integrator=cfg["integrator"])
         out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s,
                "work": run_work(res, cfg["integrator"])}
         self._runs[key] = out
@@ -259,10 +260,9 @@ class _Evaluator:
         tb, _ = self.tables(cfg)
         temp = case.temperature_C if (tb.has_temperature_axis and case.temperature_C is not None) else None
         self.native_runs += 1
-        res = simulate(tb, stop_time_s=case.stop_time_s, comm_step_s=case.comm_step_s, max_step_s=self.step(cfg),
-                       pinion_torque_Nm=case.pinion_torque_Nm, gear_torque_Nm=case.gear_torque_Nm,
-                       pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
-                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
+        res = simulate(tb, self.settings, stop_time_s=case.stop_time_s, comm_step_s=case.comm_step_s,
+                       max_step_s=self.step(cfg), pinion_torque_Nm=case.pinion_torque_Nm,
+                       gear_torque_Nm=case.gear_torque_Nm, pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
                        integrator=cfg["integrator"], bulk_temperature_C=temp)
         out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": case.stop_time_s,
                "work": run_work(res, cfg["integrator"])}

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import __version__
 from .common.progress import notice
+from .common.settings import RunSettings
 from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
 from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
@@ -68,6 +69,22 @@ def _contact_kw(scene, progress: bool) -> dict:
     return {"contact_env": environment_from_scene(scene, progress=progress)}
 
 
+def run_settings(scene, tables=None) -> RunSettings:
+    """The run settings of a scene on its tables (:class:`gearfmu.common.settings.RunSettings`),
+    built once for the FMU, the native run and the validation: ``[fmu]`` stop time, output
+    interval and damping ratio, ``[solver]`` integrator, step bound (:func:`max_step_for`) and
+    damping model, ``[operating]`` start speed and pinion torque, the balancing gear torque
+    (:func:`gear_torque_for`).  Without ``tables``: the scene's own step bound (None when
+    "auto") and no gear torque (the balance on the tables the run takes)."""
+    t1_Nm = scene.operating.torque_Nm
+    return RunSettings(stop_time_s=scene.fmu.stop_time_s, output_interval_s=scene.fmu.output_interval_s,
+                       max_step_s=scene.solver.max_step_s if tables is None else max_step_for(scene, tables),
+                       integrator=scene.solver.integrator, damping_ratio=scene.fmu.damping_ratio,
+                       damping_model=scene.solver.damping_model, pinion_speed_start_rad_s=scene.operating.speed_rad_s,
+                       pinion_torque_start_Nm=t1_Nm,
+                       gear_torque_start_Nm=None if tables is None else gear_torque_for(tables, t1_Nm))
+
+
 def max_step_for(scene, tables) -> float:
     """The internal step bound: the scene's ``solver.max_step_s`` or the automatic choice."""
     if scene.solver.max_step_s is not None:
@@ -96,6 +113,8 @@ class BuildResult:
     #: s, the time the tables' computation took: ``tables_wall_s`` when they were computed here, the
     #: original computation's when they were read from the table cache (gearfmu.tables.table_cache)
     tables_compute_s: Optional[float] = None
+    #: the run settings the FMU was built with (:func:`run_settings`; its start values and DefaultExperiment)
+    settings: Optional[RunSettings] = None
 
 
 def fmu_builder(runtime: str):
@@ -147,45 +166,24 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     if tables is None:
         tables = compute_tables(scene, progress=progress, allow_large=allow_large)
     t1 = time.perf_counter()
-    h_max = max_step_for(scene, tables)
-    t1_Nm = scene.operating.torque_Nm
+    settings = run_settings(scene, tables)
     notice(f"building the FMU {out_path} ({runtime} runtime, FMI {fmi_version})", enabled=progress or None)
-    path = builder(
-        tables, out_path,
-        model_name=scene.fmu.model_name,
-        damping_ratio=scene.fmu.damping_ratio,
-        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        pinion_torque_start_Nm=t1_Nm,
-        gear_torque_start_Nm=gear_torque_for(tables, t1_Nm),
-        max_step_s=h_max,
-        damping_model=scene.solver.damping_model,
-        stop_time_s=scene.fmu.stop_time_s,
-        output_interval_s=scene.fmu.output_interval_s,
-        scene_text=scene.text,
-        envelope=fmu_envelope_record(tables, verified_envelope,
-                                     speed_range_rad_s=scene.operating.speed_range_rad_s),
-        integrator=scene.solver.integrator, **extra,
-    )
+    path = builder(tables, out_path, settings, model_name=scene.fmu.model_name, scene_text=scene.text,
+                   envelope=fmu_envelope_record(tables, verified_envelope,
+                                                speed_range_rad_s=scene.operating.speed_range_rad_s), **extra)
     t2 = time.perf_counter()
     computed = t1 - t0
     if isinstance(tables.provenance, dict) and "table_cache" in tables.provenance:
         computed = float((tables.provenance.get("precompute") or {}).get("wall_s", computed))
-    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, h_max, plan, verified_envelope, est, computed)
+    return BuildResult(Path(path), tables, t1 - t0, t2 - t1, settings.max_step_s, plan, verified_envelope, est,
+                       computed, settings)
 
 
 def simulate_native(scene, tables, *, stop_time_s=None, comm_step_s=None, max_step_s=None,
                     damping_ratio=None, pinion_torque_Nm=None, gear_torque_Nm=None):
-    """Run the native (numba) solver on a scene's tables with the scene's settings."""
-    t1_Nm = scene.operating.torque_Nm if pinion_torque_Nm is None else pinion_torque_Nm
-    return simulate(
-        tables,
-        stop_time_s=scene.fmu.stop_time_s if stop_time_s is None else stop_time_s,
-        comm_step_s=scene.fmu.output_interval_s if comm_step_s is None else comm_step_s,
-        max_step_s=max_step_for(scene, tables) if max_step_s is None else max_step_s,
-        pinion_torque_Nm=t1_Nm,
-        gear_torque_Nm=gear_torque_for(tables, t1_Nm) if gear_torque_Nm is None else gear_torque_Nm,
-        pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        damping_ratio=scene.fmu.damping_ratio if damping_ratio is None else damping_ratio,
-        damping_model=scene.solver.damping_model,
-        integrator=scene.solver.integrator,
-    )
+    """Run the native (numba) solver on a scene's tables with the scene's settings
+    (:func:`run_settings`); the keyword arguments given replace them (a pinion torque given
+    without a gear torque: its balancing load)."""
+    return simulate(tables, run_settings(scene, tables), stop_time_s=stop_time_s, comm_step_s=comm_step_s,
+                    max_step_s=max_step_s, damping_ratio=damping_ratio, pinion_torque_Nm=pinion_torque_Nm,
+                    gear_torque_Nm=gear_torque_Nm)

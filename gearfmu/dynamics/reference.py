@@ -51,8 +51,9 @@ Choices (not in the papers)
 Public API
 ----------
 ``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
-takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``;
-checked by the same :func:`gearfmu.dynamics.native.run_arguments`)
+takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (without
+``max_step_s``; checked by the same :class:`gearfmu.common.settings.RunSettings` and
+:func:`gearfmu.dynamics.native.run_inputs`)
 plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one constant
 ``bulk_temperature_C``, the slice ``tables.at_temperature`` gives), and returns a
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
@@ -72,7 +73,9 @@ from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
-from .native import InputLike, NativeInputError, _at_temperature, _finite, _result, run_arguments
+from ..common.settings import RunSettings, checked
+from .native import (InputLike, NativeInputError, _at_temperature, _finite, _result, resolve_settings, run_inputs,
+                     start_state)
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
 
@@ -492,15 +495,16 @@ def _temperature_slice(tables: MeshTables, bulk_temperature_C) -> MeshTables:
 
 def simulate_reference(
     tables: MeshTables,
+    settings: Optional[RunSettings] = None,
     *,
-    stop_time_s: float,
-    comm_step_s: float,
-    pinion_torque_Nm: InputLike,
+    stop_time_s: Optional[float] = None,
+    comm_step_s: Optional[float] = None,
+    pinion_torque_Nm: Optional[InputLike] = None,
     gear_torque_Nm: Optional[InputLike] = None,
-    pinion_speed_start_rad_s: float,
-    damping_ratio: float,
-    damping_model: str = "elastobacklash",
-    pinion_angle_start_rad: float = 0.0,
+    pinion_speed_start_rad_s: Optional[float] = None,
+    damping_ratio: Optional[float] = None,
+    damping_model: Optional[str] = None,
+    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
     rtol: float = 1e-10,
@@ -510,11 +514,12 @@ def simulate_reference(
     max_segments: int = 5_000_000,
     progress: bool = False,
     max_step_s: Optional[float] = None,
+    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[float] = None,
 ):
     """Event-located solve_ivp reference of docs/model.md (two-inertia form).
 
-    Same arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
+    Same settings, arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
     (torques in N*m held over each communication step; ``gear_torque_Nm``
     None = T1*Rb2/Rb1), plus ``rtol`` (solve_ivp rtol), ``atol_scale``
     (multiplies the per-state absolute tolerances rtol*scale, see module
@@ -522,25 +527,26 @@ def simulate_reference(
     ``steps_per_period`` (the largest step is the shortest natural period
     2 pi/sqrt(max k_total/m_e) over this number, so that no contact or clamp
     indicator crosses and returns inside one step unseen).
-    ``max_step_s`` is accepted and ignored (the reference chooses its steps).
+    ``max_step_s`` and ``integrator`` (and the settings' fields of the same names) are accepted
+    and ignored (the reference chooses its steps).
     ``bulk_temperature_C`` (degC, one constant value; tables with a temperature axis
     only): the run uses ``tables.at_temperature`` (None: ``default_temperature_C``),
     the slice :func:`gearfmu.dynamics.native.simulate` runs on at that temperature.
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
+    s = checked(settings, ReferenceInputError, RunSettings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
+                damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad)
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
     tables = _temperature_slice(tables, bulk_temperature_C)
     tables.validate()
-    a = run_arguments(tables, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
-                      stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,
-                      gear_torque_Nm=gear_torque_Nm, damping_ratio=damping_ratio, damping_model=damping_model,
-                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
-                      dte_rate_start_m_s=dte_rate_start_m_s, error=ReferenceInputError)
+    s = resolve_settings(tables, s)
+    n_steps, t1s, t2s = run_inputs(tables, s, pinion_torque_Nm, gear_torque_Nm, error=ReferenceInputError)
+    x_start, v0 = start_state(dte_start_m, dte_rate_start_m_s, error=ReferenceInputError)
     rtol = _finite("rtol", rtol, positive=True, error=ReferenceInputError)
-    H, n_steps, zeta, damping_model = a.comm_step_s, a.n_steps, a.damping_ratio, a.damping_model
-    w0, th0, v0 = a.speed_rad_s, a.pinion_angle_start_rad, a.dte_rate_start_m_s
-    t1s, t2s = a.pinion_torque_Nm, a.gear_torque_Nm
+    H, zeta, damping_model = s.output_interval_s, s.damping_ratio, s.damping_model
+    w0, th0 = s.pinion_speed_start_rad_s, s.pinion_angle_start_rad
     rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
     I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
     me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
@@ -558,7 +564,7 @@ def simulate_reference(
         return rows_cache[key]
 
     r0 = rows_for(t1s[0])
-    if a.dte_start_m is None:
+    if x_start is None:
         Phi = r0.N * r0.dphi
         phim = th0 - Phi * math.floor(th0 / Phi)
         s = phim / r0.dphi
@@ -574,7 +580,7 @@ def simulate_reference(
         if not math.isfinite(x0):
             raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
     else:
-        x0 = a.dte_start_m
+        x0 = x_start
 
     # absolute tolerances (module docstring)
     xs = max(abs(t1s).max() / rb1 / km, float(np.max(tables.backlash_half_m)),

@@ -23,8 +23,8 @@ Initial state: the quasi-static equilibrium of :meth:`gearfmu.gearbox.model.Gear
 computed here with the exact leftmost root of each mesh's piecewise-linear static force
 (``equilibrium_dte_exact_m``) instead of the kernels' bisection.
 
-``simulate_reference(model, ...)`` takes the arguments of :func:`gearfmu.gearbox.native.simulate`
-(without ``max_step_s`` and ``integrator``) plus ``rtol``, ``method``, ``steps_per_period`` and
+``simulate_reference(model, settings, ...)`` takes the settings and arguments of
+:func:`gearfmu.gearbox.native.simulate` (without ``max_step_s`` and ``integrator``) plus ``rtol``, ``method``, ``steps_per_period`` and
 returns a :class:`gearfmu.gearbox.native.GearboxResult` with the same columns.
 """
 from __future__ import annotations
@@ -40,7 +40,8 @@ from scipy.integrate import solve_ivp
 from ..common.progress import progress_bar
 from ..dynamics.reference import _forces_model, _Rows, _Segment, equilibrium_dte_exact_m
 from .model import GearboxModel
-from .native import GearboxInputError, GearboxResult, InputLike, columns, run_arguments
+from ..common.settings import GearboxRunSettings
+from .native import GearboxInputError, GearboxResult, InputLike, checked_settings, columns, run_inputs
 
 __all__ = ["simulate_reference"]
 
@@ -72,23 +73,25 @@ def _lookup_values(rows: _Rows, theta: float):
     return lerp(rows.K), lerp(rows.E), lerp(rows.B)
 
 
-def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: float,
-                       motor_torque_Nm: InputLike, load_torque_Nm: Optional[InputLike] = None,
-                       motor_speed_start_rad_s: float, motor_angle_start_rad: float = 0.0, initial_state=None,
-                       rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
+def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSettings] = None, *,
+                       stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
+                       motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
+                       motor_speed_start_rad_s: Optional[float] = None, motor_angle_start_rad: Optional[float] = None,
+                       initial_state=None, rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
                        steps_per_period: float = 64.0, max_segments: int = 5_000_000,
                        progress: bool = False) -> GearboxResult:
-    """Event-located solve_ivp reference of the gearbox model (module docstring); arguments as
-    :func:`gearfmu.gearbox.native.simulate`, plus ``rtol`` (solve_ivp), ``atol_scale`` (times the
-    per-state absolute tolerances rtol*scale), ``method`` and ``steps_per_period`` (the largest step
-    is the shortest natural period of the linearisation with every mesh at its largest total
-    stiffness, over this number).  ``wall_s`` is the whole run."""
-    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                      motor_angle_start_rad, initial_state)
+    """Event-located solve_ivp reference of the gearbox model (module docstring); settings and
+    arguments as :func:`gearfmu.gearbox.native.simulate` (its step bound and integrator unused),
+    plus ``rtol`` (solve_ivp), ``atol_scale`` (times the per-state absolute tolerances rtol*scale),
+    ``method`` and ``steps_per_period`` (the largest step is the shortest natural period of the
+    linearisation with every mesh at its largest total stiffness, over this number).  ``wall_s`` is
+    the whole run."""
+    rs = checked_settings(model, settings, GearboxInputError, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                           motor_speed_start_rad_s=motor_speed_start_rad_s, motor_angle_start_rad=motor_angle_start_rad)
+    n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, rs, motor_torque_Nm, load_torque_Nm, initial_state)
     if not (rtol > 0 and math.isfinite(rtol)):
         raise GearboxInputError(f"rtol: must be a positive number, got {rtol!r}")
-    H, n_steps, t_in, t_out, t_ref = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
-        a.reference_torque_Nm
+    H = rs.output_interval_s
     n, nm = model.n_bodies, len(model.meshes)
     I, g = model.inertia_kgm2, model.g
     lb = model.load_body
@@ -106,9 +109,9 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
         return cache[key]
 
     # ---- initial state: walk the tree, each mesh at its exact static root
-    if a.initial_state is None:
+    if y_given is None:
         y0 = np.zeros(2 * n)
-        y0[0], y0[1] = a.angle_rad, a.speed_rad_s
+        y0[0], y0[1] = rs.motor_angle_start_rad, rs.motor_speed_start_rad_s
         u = np.zeros(n)
         ts = model.shaft_static_torques_Nm(float(t_ref[0]))
         tm = model.stage_torques_Nm(float(t_ref[0]))
@@ -117,14 +120,14 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
                 u[down] = u[up] - ts[e] / model.shaft_k_Nm_per_rad[e]
                 continue
             p, q = model.mesh_bodies[e]
-            K, E, B = _lookup_values(rows_for(e, t_ref[0]), g[p] * a.angle_rad + u[p])
+            K, E, B = _lookup_values(rows_for(e, t_ref[0]), g[p] * rs.motor_angle_start_rad + u[p])
             x = equilibrium_dte_exact_m(K, E, B, tm[e] / model.mesh_rb_m[e, 0])
             if not math.isfinite(x):
                 raise GearboxInputError(f"motor_angle_start_rad: no pair of mesh {model.meshes[e].name!r} in contact")
             u[q] = (model.mesh_rb_m[e, 0] * u[p] - x) / model.mesh_rb_m[e, 1]
         y0[2::2] = u[1:]
     else:
-        y0 = a.initial_state.copy()
+        y0 = y_given.copy()
 
     # ---- scales: tolerances, largest step, the look-ahead of the mode choice
     kmax = [float(np.max(m.tables.k_N_per_m.sum(axis=1))) for m in model.meshes]
@@ -141,7 +144,7 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
     us = max(max(xs), float(np.max(np.abs(y0[2::2]))) if n > 1 else 0.0, 1e-12)
     psi_s = min(float(m.tables.mesh_period_rad) / g[model.mesh_bodies[i, 0]] for i, m in enumerate(model.meshes))
     scale = np.empty(2 * n)
-    scale[0], scale[1] = psi_s, max(abs(a.speed_rad_s), 1.0)
+    scale[0], scale[1] = psi_s, max(abs(rs.motor_speed_start_rad_s), 1.0)
     scale[2::2], scale[3::2] = us, us * w_max
     atol = rtol * atol_scale * scale
 
