@@ -31,7 +31,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     ``fmi3_outputs``: an FMI 3 FMU's per-slot outputs as arrays ("array") or scalars ("scalar",
     pair_force_1 .. for hosts without array support; docs/standalone.md "FMI 3.0").
     ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
-    The FMU records and checks its envelope (:func:`gearfmu.scene.envelope.fmu_envelope_record`: the verified
+    The FMU records and checks its envelope (:func:`gearfmu.fmu.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or scene.fmu.runtime
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed

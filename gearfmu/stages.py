@@ -21,7 +21,7 @@ from .contact.models import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
-from .scene.envelope import fmu_envelope_record
+from .fmu.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
 from .tables.estimate import check_build_cost, estimate_build
 from .tables import precompute, table_cache

@@ -9,8 +9,8 @@ and the standalone C runtime, :mod:`gearfmu.fmu.standalone_build`).
   runtimes call), :func:`find_c_compiler`, :func:`run_compiler`;
 * the interface: :func:`interface_variables` (modeldescription/variables.toml expanded for
   these tables, start values applied, the temperature input), :func:`model_description`;
-* the resources: :func:`write_tables`, :func:`write_scene`, :func:`envelope_json`, the
-  validation record (:func:`gearfmu.fmu.validation.validation_record`);
+* the resources: :func:`write_tables`, :func:`write_scene`, the envelope record
+  (:mod:`gearfmu.fmu.envelope`), the validation record (:func:`gearfmu.fmu.validation.validation_record`);
 * the FMU file: :func:`fmu_digest` (the identifier's hash), :func:`fmu_zip` (written under a
   temporary name beside the target and renamed at the end), :func:`zip_folder`.
 """
@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import os
 import shutil
 import subprocess
@@ -269,11 +268,6 @@ def write_scene(res_dir: Path, scene_text: Optional[str]) -> Optional[Path]:
 
 def scene_sha256(scene_text: Optional[str]) -> Optional[str]:
     return None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest()
-
-
-def envelope_json(env_rec: dict) -> str:
-    """``resources/envelope.json`` (:func:`gearfmu.scene.envelope.fmu_envelope_record`)."""
-    return json.dumps(env_rec, indent=1)
 
 
 # ----------------------------------------------------------------- the file

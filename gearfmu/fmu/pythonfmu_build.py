@@ -53,7 +53,7 @@ from ..common.settings import RunSettings
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
                           KERNEL_LIBRARY_SOURCES, CompilerNotFoundError, FmuBuildError, check_arguments,
-                          check_output_arguments, compiler_version, envelope_json,
+                          check_output_arguments, compiler_version,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
                           model_description, record_parameters, run_compiler, scene_sha256, sha256_file,
                           start_values, temperature_input, variable_table_lines, write_scene, write_tables)
@@ -61,7 +61,7 @@ from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
 from .validation import VALIDATION_DIR, validation_record
-from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
+from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
@@ -172,7 +172,7 @@ def build_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = No
     ``integrator``: "rk4" (0), "rk4_kink" (1), "rk4_node" (2, the default,
     :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`; docs/model.md "Integration",
     docs/native.md "rk4_node") or "rk4_seg" (3, docs/model.md "rk4_seg"; FMU parameter ``integrator``).
-    ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,
+    ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the tables' own range,
     "not verified"), checked at run time and recorded (docs/fmu.md "Verified envelope").
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the

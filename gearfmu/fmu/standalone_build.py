@@ -34,7 +34,7 @@ FMU layout (docs/standalone.md)::
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
     resources/validation/                the validation record (:func:`validation_record`)
-    resources/envelope.json              the verified envelope (gearfmu.scene.envelope.fmu_envelope_record)
+    resources/envelope.json              the verified envelope (gearfmu.fmu.envelope.fmu_envelope_record)
 
 :func:`validation_record` is shared with the pythonfmu builder
 (:func:`gearfmu.fmu.pythonfmu_build.build_fmu`): every FMU carries its scene, package and
@@ -64,11 +64,11 @@ from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS
 from . import crossbuild
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
                           KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
-                          FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
+                          FmuBuildError, check_arguments, check_model_description, compiler_version,
                           find_c_compiler, fmi2_header_dir, fmi3_header_dir, fmi_header_dir, fmu_digest, fmu_zip,
                           interface_variables, model_description, record_parameters, run_compiler, scene_sha256,
                           start_values, variable_table_lines, write_scene, write_tables, zip_folder)
-from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
+from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
@@ -302,7 +302,7 @@ def _hexf(v) -> str:
 def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
                 meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None) -> str:
     """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md).
-    ``envelope``: :func:`gearfmu.scene.envelope.runtime_envelope` (``envelope.kind`` and
+    ``envelope``: :func:`gearfmu.fmu.envelope.runtime_envelope` (``envelope.kind`` and
     ``envelope.<quantity>=low|high`` lines; none: nothing is checked)."""
     meta = json.loads(meta_bytes.decode("utf-8"))
     sc = meta["scalars"]
@@ -392,7 +392,7 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
     compiler only the build machine's platform is compiled (with ``cc`` or the
     host C compiler), and documentation/platforms.txt and the model description
     say which platforms are missing.  ``cc`` given: the build machine's platform
-    is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
+    is compiled with it.  ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the
     tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
     layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
     platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``

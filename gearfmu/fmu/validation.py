@@ -66,7 +66,7 @@ def validation_record(tables: MeshTables, settings: RunSettings, *, runtime: str
     max_step --, at the temperature input's start value ``temperature_start_C`` (degC) when the
     tables have a temperature axis, so the FMU reproduces it to round-off when a master steps it at
     stepSize) and ``scene.toml`` when a scene was given; ``envelope``
-    (:func:`gearfmu.scene.envelope.fmu_envelope_record`, the FMU's ``resources/envelope.json``)
+    (:func:`gearfmu.fmu.envelope.fmu_envelope_record`, the FMU's ``resources/envelope.json``)
     goes into record.json as ``envelope``.  ``parameters`` in record.json:
     :func:`gearfmu.fmu.build_steps.record_parameters`.  The pattern follows the Modelica
     Reference-FMUs, which carry their reference result CSV inside the FMU.
