@@ -50,7 +50,7 @@ from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from .fmu.crosscheck import main as crosscheck_main, write_reference_results
-from . import drivetrain, pipeline
+from . import pipeline
 from .pipeline import load, build, simulate_native
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
 from .tables import table_cache
@@ -295,7 +295,7 @@ def _any_scene(path):
     with _reading("SCENE", path):
         if path is not None:
             _scene_file(path)
-        return drivetrain.load_any(path)
+        return pipeline.load_any(path)
 
 
 def _scene_file(path) -> Path:
@@ -311,10 +311,10 @@ def _gearbox(kind, scene, args):
     if kind == "drivetrain":
         for note in scene.notes:
             print(f"gearfmu: {note}", file=sys.stderr)
-        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        return drivetrain.gearbox_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None))
+        tables = pipeline.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        return pipeline.gearbox_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None))
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-    return drivetrain.pair_model(scene, tables)
+    return pipeline.pair_model(scene, tables)
 
 
 def _simulate_drivetrain(args, scene) -> int:
@@ -325,7 +325,7 @@ def _simulate_drivetrain(args, scene) -> int:
     out = _output_file(args.output or f"out/{scene.model_name}_native.csv", "--output")
     _output_file(out.with_suffix(".png"), "--output")
     model = _gearbox("drivetrain", scene, args)
-    res = drivetrain.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
+    res = pipeline.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
                                          progress=not args.quiet)
     res.to_csv(out)
     png = plot_gearbox_simulation(res, model, out.with_suffix(".png"), title=f"{scene.name} (native gearbox solver)")
@@ -347,7 +347,7 @@ def cmd_modes(args) -> int:
     png = _output_file(out.with_suffix(".png"), "--output")
     with _logs_to_stderr(args.json):
         model = _gearbox(kind, scene, args)
-    res, cb = drivetrain.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
+    res, cb = pipeline.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
     report = {"scene": scene.name, "kind": kind, **res.to_dict(), "campbell": cb}
     out.write_text(json.dumps(report, indent=1), encoding="utf-8")
     plot_campbell(cb, png, title=f"{scene.name}: Campbell diagram (modes at {res.reference_torque_Nm:.4g} N*m)")
@@ -376,7 +376,7 @@ def cmd_modes(args) -> int:
 def cmd_simulate(args) -> int:
     from .plots import plot_simulation  # matplotlib: loaded only by the plotting commands
 
-    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
         return _simulate_drivetrain(args, _any_scene(args.scene)[1])
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
@@ -440,24 +440,24 @@ def cmd_validate(args) -> int:
 
 
 def _validate(args) -> dict:
+    from .plan import resolve  # the planner: loaded by the commands that build, not at startup
+
     scene = _scene(args.scene)
     text = scene.text
     if args.fmu:
         fmu = _fmu(args.fmu)
         check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
+    # the scene the FMU is built from: its plan's when it has [accuracy] (as `gearfmu build`)
+    scene, plan, verified = resolve(scene, progress=not args.quiet, allow_large=args.allow_large)
+    if args.fmu:
         fmu_path = fmu.path
-        if scene.accuracy is not None:  # build followed the scene's plan: so does the check
-            from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
         settings = pipeline.run_settings(scene, tables)
     else:
-        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
-                    allow_large=args.allow_large)
+        res = pipeline.build_fmu_from_scene(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"),
+                                            progress=not args.quiet, plan=plan, verified_envelope=verified,
+                                            allow_large=args.allow_large)
         fmu_path, tables, settings = res.fmu_path, res.tables, res.settings
-        if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
-            from .plan import planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, res.plan)
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
     rep = validate_fmu_against_native(fmu_path, tables, settings, stop_time_s=stop, comm_step_s=step,

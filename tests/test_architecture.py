@@ -22,7 +22,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGE = REPO / "gearfmu"
 
 #: packages that may be imported inside a function (heavy and needed only by some calls);
-#: gearfmu.plots loads matplotlib, gearfmu.bench scipy.integrate; gearfmu.plan is needed only to plan;
+#: gearfmu.plots loads matplotlib, gearfmu.bench scipy.integrate; gearfmu.plan is loaded by the commands that build or plan;
 #: the scipy subpackages are needed only by the contact models and solvers that call them
 LAZY_OK = {"fmpy", "matplotlib", "distributed", "dask", "tqdm", "pythonfmu", "pyssp_standard", "libcosimpy",
            "plots", "gearfmu.plots", "bench", "plan", "xmlschema", "scipy.optimize", "scipy.special", "scipy.integrate",

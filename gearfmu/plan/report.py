@@ -9,10 +9,10 @@ from typing import Dict, List
 
 import numpy as np
 
-from .plan_choices import Choice
-from .plan_verify import ERROR_DEFINITION, MEASURE_LABELS, MEASURES, budget_use, limiting_measure, target_of
-from .scene.envelope import AccuracyTarget, Envelope, VerifiedEnvelope
-from .tables.estimate import BuildEstimate
+from .choices import Choice
+from .verify import ERROR_DEFINITION, MEASURE_LABELS, MEASURES, budget_use, limiting_measure, target_of
+from ..scene.envelope import AccuracyTarget, Envelope, VerifiedEnvelope
+from ..tables.estimate import BuildEstimate
 
 # ============================================================== the plan
 @dataclass
@@ -35,7 +35,7 @@ class Plan:
     fmu_verification: dict = field(default_factory=dict)  # verify_fmus() when measured (plan --fmu)
     what_if: List[dict] = field(default_factory=list)  # other contact models: measured or skipped, never "full"
     verified_envelope: dict = field(default_factory=dict)  # gearfmu.scene.envelope.VerifiedEnvelope.to_dict()
-    skipped: List[dict] = field(default_factory=list)  # gearfmu.plan_choices.skipped_choices: not measured, and why
+    skipped: List[dict] = field(default_factory=list)  # gearfmu.plan.choices.skipped_choices: not measured, and why
 
     @property
     def within_target(self) -> bool:
