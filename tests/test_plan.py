@@ -617,3 +617,40 @@ def test_greedy_candidate_is_the_cheapest_fitting_level_not_the_first():
     c.measured = {0: m(math.inf), 1: m(0.1)}
     assert cheapest_fit(c, 3, 0.5, acc, cost.get)[1] == 1
     assert cheapest_fit(c, 1, 0.5, acc, cost.get) is None
+
+
+def test_resolve_is_what_a_build_builds(small, monkeypatch):
+    """gearfmu.plan.resolve, the one rule of `gearfmu build` and `gearfmu validate`: a scene with
+    [accuracy] -> its planned scene, the plan and the plan's verified envelope (a plan not within
+    its target refused); without it -> the scene as written, no plan, and the as-written estimate
+    only when asked (an estimate that fails is recorded with its reason); an oversized scene is
+    refused before anything is planned."""
+    import dataclasses
+
+    import gearfmu.plan.planner as planner
+    from gearfmu.plan import PlanError, resolve
+    from gearfmu.tables.estimate import BuildTooLargeError
+
+    scene, plan, _ = small
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: plan)
+    built, got, verified = resolve(scene)
+    assert got is plan and verified == plan.verified_envelope and built == planned_scene(scene, plan)
+    assert built.accuracy is None
+    bad = dataclasses.replace(plan, verification=dict(plan.verification, within_target=False, refused="budget"))
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: bad)
+    with pytest.raises(PlanError, match=r"accuracy: the fidelity plan of scene .* \(budget\)"):
+        resolve(scene)
+    plain = dataclasses.replace(scene, accuracy=None)
+    assert resolve(plain) == (plain, None, None)
+
+    def fails(s, progress=False):
+        raise ValueError("no envelope point")
+    monkeypatch.setattr(planner, "estimate_as_written", fails)
+    assert resolve(plain, estimate_accuracy=True) == (
+        plain, None, {"kind": "as-written estimate", "error": "ValueError: no envelope point"})
+    huge = dataclasses.replace(plain, tables=dataclasses.replace(plain.tables, points_per_mesh=1_000_000),
+                               mesh=dataclasses.replace(plain.mesh, slices=1000))
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: pytest.fail("planned an oversized scene"))
+    with pytest.raises(BuildTooLargeError):
+        resolve(dataclasses.replace(huge, accuracy=scene.accuracy))
+    assert resolve(huge, allow_large=True)[0] is huge

@@ -299,3 +299,12 @@ def test_build_refuses_a_plan_that_is_not_within_target(tmp_path, monkeypatch, c
     assert main(["build", str(p), "-o", str(tmp_path / "y.fmu"), "-q"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "accuracy: the fidelity plan" in err
+    # `gearfmu validate --fmu` resolves the scene as build does (gearfmu.plan.resolve): an FMU of this
+    # scene's text (built as written, so that the scene check passes) is not validated against a
+    # refused plan
+    from gearfmu.stages import build_fmu_from_scene
+
+    fmu = build_fmu_from_scene(scene, tmp_path / "as_written.fmu").fmu_path
+    assert main(["validate", str(p), "--fmu", str(fmu), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "accuracy: the fidelity plan" in err
