@@ -85,3 +85,18 @@ def test_automatic_values_resolved_once_for_the_solver_and_the_builders():
     assert res.step_s * res.substeps == pytest.approx(r.output_interval_s, rel=1e-15)
     assert res.substeps == math.ceil(r.output_interval_s / r.max_step_s * (1 - 1e-12))
     assert res.gear_torque[0] == r.gear_torque_start_Nm
+
+
+def test_a_bad_setting_is_named_by_the_argument_the_caller_gave():
+    """The solvers' keyword ``comm_step_s`` sets ``output_interval_s``, ``omega1_rad_s`` the start
+    speed of the SDOF form: the message names the argument given, not the field behind it."""
+    from gearfmu.dynamics.native import simulate_sdof
+
+    t = rectangular_wave_tables(2.5e8)
+    run = dict(stop_time_s=1e-3, pinion_torque_Nm=1.0, damping_ratio=0.02)
+    with pytest.raises(NativeInputError, match=r"^comm_step_s: must be > 0"):
+        simulate(t, comm_step_s=-1e-4, pinion_speed_start_rad_s=10.0, **run)
+    with pytest.raises(NativeInputError, match=r"^omega1_rad_s: must be finite"):
+        simulate_sdof(t, comm_step_s=1e-4, omega1_rad_s=math.nan, **run)
+    with pytest.raises(RunSettingsError, match=r"^output_interval_s: must be > 0"):
+        RunSettings(output_interval_s=-1e-4)

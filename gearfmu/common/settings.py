@@ -33,7 +33,7 @@ from .vocabulary import (DAMPING_MODELS, DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRAT
                          current_spelling)
 
 __all__ = ["RunSettingsError", "RunBase", "RunSettings", "GearboxRunSettings", "checked", "field_names",
-           "default_output_interval_s", "OUTPUT_SAMPLES_PER_MESH"]
+           "default_output_interval_s", "OUTPUT_SAMPLES_PER_MESH", "SOLVER_ARGUMENTS"]
 
 #: samples per mesh period of a defaulted output (communication) interval
 OUTPUT_SAMPLES_PER_MESH = 20
@@ -188,10 +188,17 @@ class GearboxRunSettings(RunBase):
         yield "load_torque_start_Nm", _number("load_torque_start_Nm", self.load_torque_start_Nm, optional=True)
 
 
-def checked(settings: Optional[RunBase], error=RunSettingsError, kind=RunSettings, **changes) -> RunBase:
+#: the keyword arguments of the solvers that set a field under another name (field -> argument)
+SOLVER_ARGUMENTS = {"output_interval_s": "comm_step_s"}
+
+
+def checked(settings: Optional[RunBase], error=RunSettingsError, kind=RunSettings, names: Optional[dict] = None,
+            **changes) -> RunBase:
     """``settings`` (None: the defaults of ``kind``) with the fields of ``changes`` whose value is
     not None, as a checked settings object; a bad value raises ``error`` (a ValueError subclass,
-    the caller's own) naming the field.  Unchanged settings are returned as they are."""
+    the caller's own) naming the field -- by the caller's argument name when ``names`` (field ->
+    argument) gives one and the value came from that argument.  Unchanged settings are returned
+    as they are."""
     if settings is None:
         settings = kind()
     elif not isinstance(settings, kind):
@@ -202,9 +209,13 @@ def checked(settings: Optional[RunBase], error=RunSettingsError, kind=RunSetting
     try:
         return dataclasses.replace(settings, **given)
     except RunSettingsError as exc:
-        if error is RunSettingsError:
+        msg = str(exc)
+        field = msg.split(":", 1)[0]
+        if names and field in names and field in given:
+            msg = names[field] + msg[len(field):]
+        if error is RunSettingsError and msg == str(exc):
             raise
-        raise error(str(exc)) from None
+        raise error(msg) from None
 
 
 def field_names(kind=RunSettings) -> Tuple[str, ...]:

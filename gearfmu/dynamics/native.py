@@ -43,7 +43,7 @@ from typing import Callable, Optional, Union
 import numpy as np
 
 from ..common.checks import finite_number
-from ..common.settings import RunSettings, checked
+from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
 from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..tables.zones import zone_cuts
@@ -370,10 +370,11 @@ def resolve_settings(tables: MeshTables, settings: RunSettings, *,
     return dataclasses.replace(s, **changes) if changes else s
 
 
-def _settings(settings, error=NativeInputError, **changes) -> RunSettings:
+def _settings(settings, error=NativeInputError, names=SOLVER_ARGUMENTS, **changes) -> RunSettings:
     """The run's settings: ``settings`` (None: the :class:`RunSettings` defaults) with the
-    keyword arguments given (not None) in place of its fields, checked (``error`` naming the field)."""
-    return checked(settings, error, RunSettings, **changes)
+    keyword arguments given (not None) in place of its fields, checked (``error`` naming the
+    argument, ``names``: field -> argument name)."""
+    return checked(settings, error, RunSettings, names, **changes)
 
 
 def run_inputs(tables: MeshTables, s: RunSettings, pinion_torque_Nm, gear_torque_Nm, error=NativeInputError):
@@ -591,7 +592,8 @@ def simulate_sdof(
     ``bulk_temperature_C`` (degC, constant; tables with a temperature axis):
     the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).
     """
-    s = _settings(settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
+    s = _settings(settings, names=dict(SOLVER_ARGUMENTS, pinion_speed_start_rad_s="omega1_rad_s"),
+                  stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
                   pinion_speed_start_rad_s=omega1_rad_s, damping_ratio=damping_ratio, damping_model=damping_model,
                   pinion_angle_start_rad=pinion_angle_start_rad, integrator=integrator)
     if isinstance(tables, MeshTables) and tables.has_temperature_axis:

@@ -59,7 +59,10 @@ plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one c
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
 derived outputs by the same rule;
 ``step_s`` is 0, ``substeps`` the number of segments, ``info`` counts segments,
-events and right-hand-side calls).
+events and right-hand-side calls).  The gearbox reference (:mod:`gearfmu.gearbox.reference`)
+takes its per-mesh pieces from here: :class:`TableRows` (the tables at one torque, kink nodes,
+zone lines), :class:`TableSegment` (one piece, its modes, right-hand side and events) and
+:func:`pair_forces` (the per-pair forces of a state).
 """
 from __future__ import annotations
 
@@ -73,11 +76,12 @@ from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
-from ..common.settings import RunSettings, checked
+from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
 from .native import (InputLike, NativeInputError, _at_temperature, _finite, _result, resolve_settings, run_inputs,
                      start_state)
 
-__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
+__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes", "TableRows",
+           "TableSegment", "pair_forces"]
 
 KINK_REL_TOL = 1e-13
 
@@ -86,7 +90,7 @@ class ReferenceInputError(ValueError):
     """Bad argument to the reference integrator; the message names the argument."""
 
 
-class _Rows:
+class TableRows:
     """Tables at one pinion torque: K, E, B (P, N) on the phi grid, and the kink nodes."""
 
     def __init__(self, tables: MeshTables, t1: float):
@@ -283,7 +287,7 @@ def _pair_force(k, d, b, fd, model):
     return (fc + fd if k > 0.0 else 0.0), side
 
 
-def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
+def pair_forces(theta, omega, x, v, rows: TableRows, c, model):
     """Per-pair forces (N), contact states and stiffnesses at one state, by the
     literal formulas of docs/model.md (lookup, force law): used for outputs."""
     N, dphi = rows.N, rows.dphi
@@ -315,11 +319,11 @@ def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
 
 
 # -------------------------------------------------------------- segments
-class _Segment:
+class TableSegment:
     """One table piece: linear k, e, b per active pair in theta (relative to the
     piece start), the mode of every active pair, the smooth RHS and the events."""
 
-    def __init__(self, rows: _Rows, piece, theta_base, T1, T2, par):
+    def __init__(self, rows: TableRows, piece, theta_base, T1, T2, par):
         self.rows, self.piece, self.theta_base = rows, piece, theta_base
         self.T1, self.T2 = T1, T2
         self.rb1, self.rb2, self.i1, self.i2, self.c, self.model = par
@@ -334,7 +338,7 @@ class _Segment:
         ia1 = (ia + 1) % rows.N
         pairs = []
         if piece is not None and rows.zones is not None:
-            ia = ia1 = None  # the lines of docs/model.md "Contact-zone edges" (_Rows.coeffs)
+            ia = ia1 = None  # the lines of docs/model.md "Contact-zone edges" (TableRows.coeffs)
             umid = 0.5 * (piece[0] + piece[1])
             for j in range(rows.P):
                 (ka, kb), (ea, eb), (ba, bb), base, inz = rows.coeffs(j, umid)
@@ -534,7 +538,8 @@ def simulate_reference(
     the slice :func:`gearfmu.dynamics.native.simulate` runs on at that temperature.
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
-    s = checked(settings, ReferenceInputError, RunSettings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+    s = checked(settings, ReferenceInputError, RunSettings, SOLVER_ARGUMENTS, stop_time_s=stop_time_s,
+                output_interval_s=comm_step_s,
                 pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
                 damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad)
     if not isinstance(tables, MeshTables):
@@ -560,7 +565,7 @@ def simulate_reference(
     def rows_for(t1):
         key = float(t1) if tables.n_torque > 1 else 0.0
         if key not in rows_cache:
-            rows_cache[key] = _Rows(tables, key)
+            rows_cache[key] = TableRows(tables, key)
         return rows_cache[key]
 
     r0 = rows_for(t1s[0])
@@ -608,7 +613,7 @@ def simulate_reference(
     stiff = np.full(n_steps + 1, np.nan)
 
     def out_row(i, y, rows):
-        F, st, kk = _forces_model(y[0], y[1], y[2], y[3], rows, c, damping_model)
+        F, st, kk = pair_forces(y[0], y[1], y[2], y[3], rows, c, damping_model)
         state[i] = y
         pair[i] = F
         force[i] = F.sum()
@@ -632,7 +637,7 @@ def simulate_reference(
         forced = None
         zero_len = 0
         while t < t_end:
-            seg = _Segment(rows, piece, theta, t1s[k], t2s[k], par)
+            seg = TableSegment(rows, piece, theta, t1s[k], t2s[k], par)
             y = np.array([0.0, y_rest[0], y_rest[1], y_rest[2]])
             # modes: indicators read a little ahead along the true field (choice, docstring)
             ya = y + delta * seg.deriv(y, seg.force_general(y))

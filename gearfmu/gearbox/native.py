@@ -26,7 +26,7 @@ import numpy as np
 
 from ..common.checks import finite_number
 from ..common.progress import progress_bar
-from ..common.settings import GearboxRunSettings, checked, default_output_interval_s
+from ..common.settings import SOLVER_ARGUMENTS, GearboxRunSettings, checked, default_output_interval_s
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
                                write_columns_csv)
@@ -244,7 +244,7 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
 
 def checked_settings(model, settings, error=GearboxInputError, **changes) -> GearboxRunSettings:
     """The run's checked settings (``settings`` with the changes given), the output interval set."""
-    s = checked(settings, error, GearboxRunSettings, **changes)
+    s = checked(settings, error, GearboxRunSettings, SOLVER_ARGUMENTS, **changes)
     if s.output_interval_s is None and isinstance(model, GearboxModel):
         s = dataclasses.replace(s, output_interval_s=default_output_interval(model, s))
     return s

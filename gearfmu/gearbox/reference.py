@@ -5,8 +5,8 @@ The equations of docs/gearbox.md "Model", written again in plain Python -- no nu
 scipy's ``solve_ivp`` (DOP853 by default, rtol 1e-10), so that no integrator setting of this
 project is tuned against it.  Every mesh is the pair model of docs/model.md on its stage's tables,
 represented by the pair reference's table pieces and per-pair force law
-(:mod:`gearfmu.dynamics.reference`: ``_Rows`` for the table pieces, kink nodes and contact-zone
-lines, ``_Segment`` for one piece's linear tables, the per-pair contact and damping modes, their
+(:mod:`gearfmu.dynamics.reference`: ``TableRows`` for the table pieces, kink nodes and contact-zone
+lines, ``TableSegment`` for one piece's linear tables, the per-pair contact and damping modes, their
 force and their switching indicators).
 
 Segments: inside one segment every mesh keeps its table piece (between two kink nodes of its
@@ -38,7 +38,7 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..dynamics.reference import _forces_model, _Rows, _Segment, equilibrium_dte_exact_m
+from ..dynamics.reference import TableRows, TableSegment, equilibrium_dte_exact_m, pair_forces
 from .model import GearboxModel
 from ..common.settings import GearboxRunSettings
 from .native import GearboxInputError, GearboxResult, InputLike, checked_settings, columns, run_inputs
@@ -58,7 +58,7 @@ def _local(model: GearboxModel, m: int, y, psi_rel_index=True):
     return (gp * y[0] + up, gp * y[1] + dup, rb_p * up - rb_q * uq, rb_p * dup - rb_q * duq)
 
 
-def _lookup_values(rows: _Rows, theta: float):
+def _lookup_values(rows: TableRows, theta: float):
     """k, e, b of every slot at pinion angle theta by docs/model.md (plain, or the zone lines)."""
     s = theta / rows.dphi
     if rows.zones is not None:
@@ -105,7 +105,7 @@ def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSetting
         tq = float(tr / g[model.mesh_bodies[m, 0]]) if on_path[m] else 0.0
         key = (m, tq if model.meshes[m].tables.n_torque > 1 else 0.0)
         if key not in cache:
-            cache[key] = _Rows(model.meshes[m].tables, key[1])
+            cache[key] = TableRows(model.meshes[m].tables, key[1])
         return cache[key]
 
     # ---- initial state: walk the tree, each mesh at its exact static root
@@ -164,7 +164,7 @@ def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSetting
         for m in range(nm):
             th, om, x, v = _local(model, m, y)
             th = g[model.mesh_bodies[m, 0]] * psi + (th - g[model.mesh_bodies[m, 0]] * y[0])
-            F, st, kk = _forces_model(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
+            F, st, kk = pair_forces(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
             out_pair[i, pair_off[m]:pair_off[m + 1]] = F
             out_mesh[i, 4 * m:4 * m + 4] = (x, v, F.sum(), kk[st != 0].sum())
         for s in range(len(model.shafts)):
@@ -217,7 +217,7 @@ def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSetting
         forced = None
         zero_len = 0
         while t < t_end:
-            segs = [_Segment(rows[m], pieces[m], g[model.mesh_bodies[m, 0]] * psi, T1, T2, pars[m])
+            segs = [TableSegment(rows[m], pieces[m], g[model.mesh_bodies[m, 0]] * psi, T1, T2, pars[m])
                     for m in range(nm)]
             gen = [segs[m].force_general(_local(model, m, y)) for m in range(nm)]
             ya = y + delta * deriv(y, gen, T1, T2)
