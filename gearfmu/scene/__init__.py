@@ -10,8 +10,7 @@ Module        Contents
 ============  ===================================================================
 reader        load_scene, default_scene_path: parse, check and build a Scene
 options       Scene, SceneError and the SI option dataclasses (OperatingPoint,
-              TableOptions, SolverOptions, FmuOptions, Lubricant, ThermalOptions);
-              default_output_interval_s
+              TableOptions, SolverOptions, FmuOptions, Lubricant, ThermalOptions)
 schema        SCHEMA: every table and key (type, unit, default, range, SI scale)
 validate      Reader (key-by-key checks collecting every problem), the checks
               across sections and the geometry check
