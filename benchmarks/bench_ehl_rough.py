@@ -1,8 +1,8 @@
 """Benchmark: rough and wavy EHL films against convergence, grids and the literature.  Prints
 one JSON object (sections below; docs/ehl.md "Rough films" records what it measured).
 
-    python benchmarks/bench_ehl_rough.py [--sections solves grid waviness moes] [--levels 1 2 3]
-                                         [--slice-step 4] [--moes-points 64] [--moes-seed 2024]
+    python benchmarks/bench_ehl_rough.py [--sections solves grid waviness] [--levels 1 2 3]
+                                         [--slice-step 4]
 
 * ``solves``: the rough films of the default scene's film grid (seed 000 Table 1 pair, its oil,
   2000 rpm; 9 positions over the path of contact x loads 0.25, 0.5, 1, 2 x the nominal line
@@ -27,11 +27,7 @@ one JSON object (sections below; docs/ehl.md "Rough films" records what it measu
   with eta, B (Dowson-Higginson tangent bulk modulus) and h the means of the smooth film over
   |X| <= 0.5 (Hooke, C.J., 2006, "Roughness in rolling-sliding elastohydrodynamic lubricated
   contacts", Proc. IMechE Part J, doi:10.1243/13506501JET146, eqs 11-14).
-* ``moes``: the smooth solver's central film against Moes' (1992) fit on a seeded random grid
-  (M log-uniform on 5..1000, L uniform on 0..20; Barus viscosity, incompressible, as the fit
-  assumes), default grid and options; for every point beyond 3 % the same point on a 4x finer
-  grid and with the inlet at -8 b instead of -4.5 b (is the difference the solver's grid or
-  inlet, or the fit?).
+(The smooth film against Moes' fit: benchmarks/bench_ehl_moes.py.)
 """
 from __future__ import annotations
 
@@ -54,7 +50,8 @@ WAVELENGTHS_B = (0.06, 0.08, 0.1, 0.15, 0.25, 0.4, 0.7)
 
 
 def _env(level):
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.scene.reader import load_scene
 
     sc = load_scene(None)
@@ -71,7 +68,7 @@ def _args(fenv, R, u, w):
 
 
 def section_solves(levels, slice_step, log):
-    from gearfmu.contact.models import _rough_profile, film_parameter
+    from gearfmu.contact.models import rough_profile, film_parameter
     from gearfmu.contact.rough_ehl import RoughFilmGrid
     from gearfmu.ehl.errors import EHLConvergenceError, FilmCollapseError
     from gearfmu.ehl.mesh_film import ROUGH_WARM_SETTINGS, contact_kinematics
@@ -97,7 +94,7 @@ def section_solves(levels, slice_step, log):
                 a = _args(fenv, float(R[k]), float(u[k]), w)
                 sm = solve_line_contact(*a)
                 for n in range(0, env.n_slices, slice_step):
-                    prof = _rough_profile(env, fenv, fl, float(s_nodes[k]), n, w, float(R[k]))
+                    prof = rough_profile(env, fenv, fl, float(s_nodes[k]), n, w, float(R[k]))
                     row["nodes"] += 1
                     row["full_film_nodes"] += lam >= 3.0
                     lams.append(lam)
@@ -207,7 +204,7 @@ def _spikes(a, prof, sm, n_cycles=24):
 
 
 def section_grid(levels, log):
-    from gearfmu.contact.models import _rough_profile, film_parameter
+    from gearfmu.contact.models import rough_profile, film_parameter
     from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
     from gearfmu.ehl.mesh_film import contact_kinematics
     from gearfmu.ehl.solver import solve_line_contact
@@ -219,7 +216,7 @@ def section_grid(levels, log):
         s = float(env.geom.s_pitch_m)
         w = _nominal_w(sc, env)
         R, u, _ = (float(np.ravel(v)[0]) for v in contact_kinematics(env.geom, np.array([s]), env.omega1_rad_s))
-        prof = _rough_profile(env, fenv, fl, s, 0, w, R)
+        prof = rough_profile(env, fenv, fl, s, 0, w, R)
         lam = float(film_parameter(env, np.array([s]), np.array([w]))[0])
         rows = []
         for n in GRIDS:
@@ -292,47 +289,12 @@ def section_waviness(log):
             "rows": rows}
 
 
-def section_moes(points, seed, log):
-    from gearfmu.ehl.fits import moes_central_film
-    from gearfmu.ehl.solver import solve_line_contact
-
-    rng = np.random.default_rng(seed)
-    Ms = 10 ** rng.uniform(math.log10(5.0), 3.0, points)
-    Ls = rng.uniform(0.0, 20.0, points)
-    rows = []
-    for M, L in zip(Ms, Ls):
-        t0 = time.process_time()
-        try:
-            r = solve_line_contact(M=float(M), L=float(L), viscosity="barus", compressible=False)
-            dev = r.H_central_moes / moes_central_film(M, L) - 1.0
-            row = {"M": float(M), "L": float(L), "dev": dev, "cpu_s": time.process_time() - t0,
-                   "n_intervals": int(r.X.size - 1)}
-        except Exception as exc:  # noqa: BLE001 -- a failed point is a result
-            row = {"M": float(M), "L": float(L), "dev": None, "error": str(exc)[:200]}
-        if row.get("dev") is not None and abs(row["dev"]) > 0.03:
-            for key, kw in (("dev_grid_x4", dict(n_nodes=4 * row["n_intervals"] + 1)),
-                            ("dev_inlet_8b", dict(x_in=-8.0))):
-                try:
-                    r2 = solve_line_contact(M=float(M), L=float(L), viscosity="barus", compressible=False, **kw)
-                    row[key] = r2.H_central_moes / moes_central_film(M, L) - 1.0
-                except Exception as exc:  # noqa: BLE001
-                    row[key] = None
-        rows.append(row)
-        log(f"moes M={M:.4g} L={L:.3g}: {row.get('dev')}")
-    devs = [abs(r["dev"]) for r in rows if r.get("dev") is not None]
-    return {"seed": seed, "points": points, "rows": rows,
-            "within_3pct": sum(1 for d in devs if d <= 0.03), "failed": sum(1 for r in rows if r.get("dev") is None),
-            "max_abs_dev": max(devs) if devs else None, "mean_abs_dev": float(np.mean(devs)) if devs else None}
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--sections", nargs="+", default=["solves", "grid", "waviness", "moes"],
-                    choices=["solves", "grid", "waviness", "moes"])
+    ap.add_argument("--sections", nargs="+", default=["solves", "grid", "waviness"],
+                    choices=["solves", "grid", "waviness"])
     ap.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--slice-step", type=int, default=4)
-    ap.add_argument("--moes-points", type=int, default=64)
-    ap.add_argument("--moes-seed", type=int, default=2024)
     a = ap.parse_args(argv)
 
     def log(msg):
@@ -345,8 +307,6 @@ def main(argv=None) -> int:
         out["grid"] = section_grid(a.levels, log)
     if "waviness" in a.sections:
         out["waviness"] = section_waviness(log)
-    if "moes" in a.sections:
-        out["moes"] = section_moes(a.moes_points, a.moes_seed, log)
     out["wall_s"] = time.perf_counter() - t0
     print(json.dumps(out))
     return 0

@@ -59,16 +59,6 @@ def _tables_part(t, table, cost):
     return out + f"\n\nSource: `python benchmarks/bench_ehl_tables.py --levels 1 2 3 --models hertz smooth_ehl` ({cost}).\n"
 
 
-def _moes_note(over) -> str:
-    fine = [r for r in over if r.get("dev_grid_x4") is not None and abs(r["dev_grid_x4"]) <= 0.03]
-    rest = [r for r in over if r not in fine]
-    keep = [r for r in rest if all(r.get(k) is None or abs(r[k]) > 0.03 for k in ("dev_grid_x4", "dev_inlet_8b"))]
-    return (f"\n\nOf these {len(over)} points, {len(fine)} are within 3 % on the 4x finer grid (the default "
-            f"grid's discretisation error adds to the difference there); {len(keep)} keep more than 3 % on the "
-            "finer grid and with the longer inlet: there the converged equations differ from the fit by that much, "
-            "which no grid or inlet choice of the solver removes.\n")
-
-
 def render(pg, table, source_label):
     """Append the section to ``pg`` (a report Page); ``table`` is the report's table helper."""
     parts = ["## Rough EHL films\n\n"
@@ -160,21 +150,6 @@ def render(pg, table, source_label):
             "(least-squares sinusoid of the waviness' wavelength) over the undeformed amplitude.\n\n"
             + table(["λ/b", "A_d/A_i ours", "Hooke (2006)", "difference", "C", "Q"], rows)
             + f"\n\nLargest difference {100 * worst:.1f} % over {len(rows)} wavelengths.\n")
-    m = d.get("moes")
-    if m:
-        over = [r for r in m["rows"] if r.get("dev") is not None and abs(r["dev"]) > 0.03]
-        fails = [r for r in m["rows"] if r.get("dev") is None]
-        parts.append(
-            "### Smooth film against Moes' fit on a random grid\n\n"
-            f"{m['points']} points, seed {m['seed']}: M log-uniform on 5..1000, L uniform on 0..20, Barus "
-            "viscosity and incompressible lubricant (the fit's assumptions), default grid and options.  "
-            f"Within 3 %: {m['within_3pct']} of {m['points']}; largest |deviation| {100 * m['max_abs_dev']:.2f} %, "
-            f"mean |deviation| {100 * m['mean_abs_dev']:.2f} %; failed solves: {m['failed']}.\n\n"
-            + (table(["M", "L", "vs Moes (default grid)", "4x finer grid", "inlet at -8 b"],
-                     [[_f(r["M"], 4), _f(r["L"], 3), _p(r["dev"]), _p(r.get("dev_grid_x4")),
-                       _p(r.get("dev_inlet_8b"))] for r in over])
-               + _moes_note(over) if over else "")
-            + ("".join(f"\nFailed: M = {r['M']:.4g}, L = {r['L']:.3g}: {r.get('error')}" for r in fails)))
     parts.append(f"\nSource: `{source_label}` ({pg.cost('ehl_rough')}).\n")
     pg.parts.append("\n".join(parts))
     if g:
@@ -186,7 +161,3 @@ def render(pg, table, source_label):
         pg.summary.append(["stationary waviness amplitude reduction", "Hooke (2006) parallel-film theory",
                            f"max {100 * max(abs(r['rel_diff']) for r in w['rows']):.1f} % over "
                            f"{len(w['rows'])} wavelengths", pg.cost("ehl_rough")])
-    if m:
-        pg.summary.append(["smooth central film, random (M, L) grid", "Moes (1992) fit",
-                           f"{m['within_3pct']} of {m['points']} within 3 %, max {_p(m['max_abs_dev'])}",
-                           pg.cost("ehl_rough")])

@@ -1,8 +1,8 @@
 """The public entry points of the main job on a scene: scene -> (plan) -> tables -> FMU, the native
-run beside it, and a drivetrain scene's gearbox.
+run beside it, and a drivetrain scene's gearbox (its native run and its gearbox FMU).
 
 The stages themselves -- a pair scene's tables, run settings, FMU and native run, a drivetrain
-scene's stage tables, gearbox model, run and modes -- live in :mod:`gearfmu.stages` (re-exported
+scene's stage tables, gearbox model, run, modes and gearbox FMU -- live in :mod:`gearfmu.stages` (re-exported
 here) and never plan.  This module puts the planner in front: :func:`build` builds what
 :func:`gearfmu.plan.resolve` says a scene needs (its fidelity plan when it has an
 ``[accuracy]`` section, else the scene as written).
@@ -11,14 +11,16 @@ from __future__ import annotations
 
 from typing import Optional
 
-from .stages import (PAIR_MESH_NAME, BuildResult, build_fmu_from_scene, compute_tables, fmu_builder,  # noqa: F401
-                     gear_torque_for, gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any,
+from .stages import (PAIR_MESH_NAME, BuildResult, DrivetrainBuild, build_drivetrain_fmu,  # noqa: F401
+                     build_fmu_from_scene, check_gearbox_fmu_runtime, compute_tables, fmu_builder, gear_torque_for,
+                     gearbox_fmu_settings, gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any,
                      max_step_for, modes_report, pair_model, platform_kw, run_settings, simulate_drivetrain,
                      simulate_native, stage_tables)
 
 __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for", "run_settings",
            "simulate_native", "load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model",
-           "gearbox_run_settings", "simulate_drivetrain", "modes_report", "PAIR_MESH_NAME"]
+           "gearbox_run_settings", "simulate_drivetrain", "modes_report", "PAIR_MESH_NAME", "gearbox_fmu_settings",
+           "build_drivetrain_fmu", "DrivetrainBuild", "check_gearbox_fmu_runtime"]
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
@@ -36,7 +38,7 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     ``platforms``: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys; None: all available).
     ``fmi3_outputs``: an FMI 3 FMU's per-slot outputs as arrays ("array") or scalars ("scalar",
     pair_force_1 .. for hosts without array support; docs/standalone.md "FMI 3.0").
-    ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
+    ``allow_large``: build even when the estimate (gearfmu.assembly.estimate) exceeds the limits.
     The FMU records and checks its envelope (:func:`gearfmu.fmu.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or scene.fmu.runtime

@@ -8,7 +8,9 @@ native run), its FMU (:func:`build_fmu_from_scene`, the scene as it is) and its 
 a pair scene, :func:`stage_tables` computes every stage's tables at its operating point,
 :func:`gearbox_model` builds the gearbox, :func:`gearbox_run_settings` and
 :func:`simulate_drivetrain` run it, :func:`modes_report` gives its modes and Campbell data
-(:func:`pair_model`: a pair scene as the two-body gearbox).
+(:func:`pair_model`: a pair scene as the two-body gearbox), :func:`gearbox_fmu_settings` and
+:func:`build_drivetrain_fmu` build its gearbox FMU (:mod:`gearfmu.fmu.gearbox_build`;
+docs/gearbox.md "The gearbox FMU").
 
 The planner (:mod:`gearfmu.plan`) builds its planned scenes with these stages, so they never
 plan; :mod:`gearfmu.pipeline` puts the planner in front of them (``gearfmu build``).
@@ -19,7 +21,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import List, Optional, Tuple, Union
+from typing import List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -27,19 +29,22 @@ from . import __version__
 from .common.progress import notice
 from .common.settings import GearboxRunSettings, RunSettings
 from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
-from .contact.models import environment_from_scene
+from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
+from .fmu.build_steps import FmuBuildError
+from .fmu.gearbox_build import GearboxFmuSettings, build_gearbox_fmu, gearbox_settings
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .fmu.envelope import fmu_envelope_record
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
-from .gearbox.native import GearboxResult, simulate as simulate_gearbox
+from .gearbox.native import GearboxResult, choose_max_step_s as gearbox_max_step_s, simulate as simulate_gearbox
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
 from .scene.reader import default_scene_path, load_scene
-from .tables.estimate import BuildTooLargeError, check_build_cost, estimate_build
-from .tables import precompute, table_cache
+from .scene.physics import check_build_cost, estimate_build
+from .assembly import precompute, table_cache
+from .assembly.estimate import BuildTooLargeError
 
 
 def load(scene_path: Optional[str] = None):
@@ -55,10 +60,10 @@ def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
 
 def compute_tables(scene, *, progress: bool = False, allow_large: bool = False, cache: Optional[bool] = None):
     """Precompute the tooth-pair tables of a scene (timed).  Refuses with a
-    :class:`gearfmu.tables.estimate.BuildTooLargeError` naming the scene keys when the estimated
-    tables, FMU or build time exceed the limits of :mod:`gearfmu.tables.estimate`, unless
+    :class:`gearfmu.assembly.estimate.BuildTooLargeError` naming the scene keys when the estimated
+    tables, FMU or build time exceed the limits of :mod:`gearfmu.assembly.estimate`, unless
     ``allow_large``.  The tables are kept in gearfmu's table cache and read back when the same
-    physics is asked again (:mod:`gearfmu.tables.table_cache`); ``cache`` False computes without
+    physics is asked again (:mod:`gearfmu.assembly.table_cache`); ``cache`` False computes without
     it, None follows ``--no-cache`` / ``GEARFMU_NO_TABLE_CACHE``."""
     check_build_cost(scene, allow_large=allow_large)
     torque_axis = scene.operating.torque_axis_Nm() if hasattr(scene.operating, "torque_axis_Nm") else None
@@ -124,9 +129,9 @@ class BuildResult:
     #: gearfmu.scene.envelope.VerifiedEnvelope as a dict: the plan's verified envelope, or the as-written
     #: estimate (estimate_accuracy=True, no [accuracy]); None otherwise (docs/plan.md "Verified envelope")
     verified_envelope: Optional[dict] = None
-    estimate: object = None  # gearfmu.tables.estimate.BuildEstimate of the scene that was built
+    estimate: object = None  # gearfmu.assembly.estimate.BuildEstimate of the scene that was built
     #: s, the time the tables' computation took: ``tables_wall_s`` when they were computed here, the
-    #: original computation's when they were read from the table cache (gearfmu.tables.table_cache)
+    #: original computation's when they were read from the table cache (gearfmu.assembly.table_cache)
     tables_compute_s: Optional[float] = None
     #: the run settings the FMU was built with (:func:`run_settings`; its start values and DefaultExperiment)
     settings: Optional[RunSettings] = None
@@ -172,7 +177,7 @@ def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Op
     (e.g. imported from CSV, gearfmu.tables.table_import); the scene then only gives the FMU
     and operating settings.  ``plan``, ``verified_envelope``: kept in the result.
     ``platforms``: binaries of a standalone FMU.  ``allow_large``: build even when the
-    estimate (gearfmu.tables.estimate) exceeds the limits."""
+    estimate (gearfmu.assembly.estimate) exceeds the limits."""
     runtime = runtime or scene.fmu.runtime
     builder = fmu_builder(runtime)
     extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
@@ -226,7 +231,7 @@ def _flat(tables):
 
 def stage_tables(scene: DrivetrainScene, *, progress: bool = False, allow_large: bool = False) -> List:
     """Every stage's MeshTables (in stage order), each at its drivetrain operating point.  The
-    cost estimate of every stage is checked first (gearfmu.tables.estimate): a stage over the
+    cost estimate of every stage is checked first (gearfmu.assembly.estimate): a stage over the
     limits raises BuildTooLargeError naming the stage before any table is computed."""
     for s in scene.stages:
         try:
@@ -312,3 +317,60 @@ def modes_report(kind: str, scene, model: GearboxModel, *,
     top = 1.25 * w_max / RPM_TO_RAD_S if max_speed_rpm is None else float(max_speed_rpm)
     cb = campbell(model, res, top, operating_speed_rpm=w / RPM_TO_RAD_S)
     return res, cb
+
+
+def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> GearboxFmuSettings:
+    """The start values and DefaultExperiment of a drivetrain scene's gearbox FMU: the scene's motor
+    torque and load torque (an end that is no torque input takes 0), motor speed, the integrator and
+    largest internal step (``"auto"``: :func:`gearfmu.gearbox.native.choose_max_step_s` at 1.5 x the
+    motor speed, as the native solver chooses it), the run's stop time and output interval."""
+    t_in = scene.motor.torque_Nm if scene.motor.torque_input else 0.0
+    t_out = scene.load_torque_Nm if scene.load.torque_input else 0.0
+    w0 = scene.motor.speed_rad_s
+    h = scene.max_step_s
+    if h is None:
+        h = gearbox_max_step_s(model, max(1.5 * abs(w0), 1.0),
+                               reference_torque_Nm=model.reference_torque_Nm(t_in, t_out))
+    return gearbox_settings(model, motor_torque_Nm=t_in, load_torque_Nm=t_out, motor_speed_start_rad_s=w0,
+                            max_step_s=h, integrator=scene.integrator, stop_time_s=scene.stop_time_s,
+                            output_interval_s=scene.output_interval_s)
+
+
+def check_gearbox_fmu_runtime(runtime: Optional[str]) -> None:
+    """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the default)."""
+    if runtime not in (None, "standalone"):
+        raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
+                            "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
+                            "--runtime standalone")
+
+
+@dataclass
+class DrivetrainBuild:
+    """What :func:`build_drivetrain_fmu` built: the FMU, the gearbox model and the FMU's settings, the
+    wall times of the tables and of the FMU (s)."""
+
+    fmu_path: Path
+    model: GearboxModel
+    settings: GearboxFmuSettings
+    tables_wall_s: float
+    build_wall_s: float
+
+
+def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
+                         platforms: Optional[Sequence[str]] = None, fmi_version: int = 2,
+                         fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, allow_large: bool = False,
+                         validation: bool = True) -> DrivetrainBuild:
+    """Drivetrain scene -> every stage's tables -> the gearbox FMU at ``out_path`` (the standalone C
+    runtime, FMI ``fmi_version`` 2 or 3).  ``runtime`` "pythonfmu" is refused (FmuBuildError): a
+    gearbox FMU is C only.  The stages' notes go to stderr with ``progress``."""
+    check_gearbox_fmu_runtime(runtime)
+    t0 = time.perf_counter()
+    tables = stage_tables(scene, progress=progress, allow_large=allow_large)
+    model = gearbox_model(scene, tables)
+    t1 = time.perf_counter()
+    settings = gearbox_fmu_settings(scene, model)
+    stage_texts = {s.name: s.scene.text for s in scene.stages if getattr(s.scene, "text", None)}
+    path = build_gearbox_fmu(model, out_path, settings=settings, model_name=scene.model_name, scene_text=scene.text,
+                             stage_scene_texts=stage_texts, platforms=platforms, fmi_version=fmi_version,
+                             fmi3_outputs=fmi3_outputs, validation=validation)
+    return DrivetrainBuild(Path(path), model, settings, t1 - t0, time.perf_counter() - t1)

@@ -20,12 +20,16 @@ class EHLConvergenceError(EHLError):
     (finest-grid intervals, coarsest-grid intervals, attempt index -- the index
     into the relaxation settings in the order tried --, final scaled residual) per
     setting tried; ``skipped``, why settings or retry grids were
-    not tried (fail fast, docs/ehl.md).
+    not tried (fail fast, docs/ehl.md); ``problem``, the keyword arguments of
+    :func:`gearfmu.ehl.solve_line_contact` that pose the same problem again in
+    full precision (dimensional inputs, laws, domain, a grid given by the caller;
+    not the roughness or the solver options), so that a failure seen in a long
+    run can be repeated on its own (the message's M and L are in full precision too).
     """
 
     def __init__(self, message: str, residual_name: str = "", value: float = float("nan"),
                  history=None, best_residual: float = float("nan"), attempts=None,
-                 skipped=None):
+                 skipped=None, problem=None):
         super().__init__(message)
         self.residual_name = residual_name
         self.value = value
@@ -33,6 +37,7 @@ class EHLConvergenceError(EHLError):
         self.best_residual = best_residual
         self.attempts = list(attempts or [])
         self.skipped = list(skipped or [])
+        self.problem = dict(problem or {})
 
 
 class FilmCollapseError(EHLError):

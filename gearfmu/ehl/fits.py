@@ -44,6 +44,49 @@ def moes_central_film(M: float, L: float) -> float:
     return (term1 + term2) ** (1.0 / s)
 
 
+def martin_rigid_isoviscous(xi_in: float = -math.inf):
+    """Rigid cylinder on a plane, isoviscous lubricant, Reynolds (Swift-Stieber) outlet condition:
+    the load coefficient c = h0 w / (eta0 u_m R) and the outlet position xi_out, xi = x/sqrt(2 R h0).
+
+    Martin, H.M., "Lubrication of gear teeth", Engineering 102 (1916) 119-121; with the Reynolds
+    outlet condition p = dp/dx = 0 (Hamrock, Schmid & Jacobson, *Fundamentals of Fluid Film
+    Lubrication*, 2004, ch. 8 and 19: h_min/R = 4.9 U/W, U on the mean speed u_m).  With
+    x = sqrt(2 R h0) tan(g), h = h0 sec^2(g), the Reynolds equation h^3 p' = 12 eta0 u_m (h - h*)
+    integrates in closed form: the outlet angle g* solves
+    F(g*) - F(g_in) = 0, F(g) = g/2 + sin(2g)/4 - k (3g/8 + sin(2g)/4 + sin(4g)/32), k = sec^2(g*),
+    and the load is w = 24 (eta0 u_m R / h0) I with
+    I = [sin^2(g)/2 + k cos^4(g)/4] at g_in minus the same at g* (by parts, p(g_in) = p(g*) = 0).
+    ``xi_in``: the inlet (pressure zero) in units of sqrt(2 R h0); -inf is Martin's fully flooded
+    case, c = 6 cos^2(g*) = 4.8950, xi_out = 0.4751.  The central film in Moes' scaling is then
+    H = (h0/R)(2U)^(-1/2) = c / (2 M) (Moes' fit has 3/M as its rigid-isoviscous asymptote).
+    """
+    xi_in = float(xi_in)
+    if math.isnan(xi_in) or xi_in >= -1.0:
+        raise EHLInputError(f"xi_in must be < -1 (upstream of the gap minimum), got {xi_in!r}")
+    g_in = -0.5 * math.pi if math.isinf(xi_in) else math.atan(xi_in)
+
+    def F(g, k):
+        return 0.5 * g + 0.25 * math.sin(2 * g) - k * (0.375 * g + 0.25 * math.sin(2 * g)
+                                                       + math.sin(4 * g) / 32.0)
+
+    def gap(gs):   # flow balance between the inlet and the outlet angle gs
+        k = 1.0 / math.cos(gs) ** 2
+        return F(gs, k) - F(g_in, k)
+
+    lo, hi = 1e-9, 0.5 * math.pi - 1e-9   # gap > 0 at lo (pressure still rising), < 0 at hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if gap(mid) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    gs = 0.5 * (lo + hi)
+    k = 1.0 / math.cos(gs) ** 2
+    I = (0.5 * math.sin(g_in) ** 2 + 0.25 * k * math.cos(g_in) ** 4
+         - 0.5 * math.sin(gs) ** 2 - 0.25 * k * math.cos(gs) ** 4)
+    return 24.0 * I, math.tan(gs)
+
+
 def dowson_higginson_min_film(W: float, U: float, G: float) -> float:
     """Dowson & Higginson minimum film h_min/R = 2.65 U^0.70 G^0.54 W^-0.13.
 

@@ -249,12 +249,14 @@ _SCHEDULES: dict = {}
 
 
 def cached_schedule(n_levels: int, gamma=2) -> np.ndarray:
-    """:func:`w_schedule`, built once per (n_levels, gamma) (the compiled
-    cycles only read it)."""
+    """:func:`w_schedule`, built once per (n_levels, gamma) and read-only (the compiled
+    cycles only read it; a write would change every later solve)."""
     key = (int(n_levels), gamma)
     s = _SCHEDULES.get(key)
     if s is None:
-        s = _SCHEDULES[key] = w_schedule(n_levels, gamma)
+        s = w_schedule(n_levels, gamma)
+        s.flags.writeable = False     # shared by every solve with these levels
+        _SCHEDULES[key] = s
     return s
 
 

@@ -55,7 +55,7 @@ DISC_TOLERANCES = dict(tol_pressure=1e-3, tol_load=1e-4, tol_residual=1e-4)
 #: grid constants (node positions, kernel coefficients, kernel spectra, FFT
 #: twiddles) per grid hierarchy, shared by every :class:`FlatMultigrid` on the
 #: same grid (building them is a noticeable part of a small solve);
-#: read-only after construction
+#: read-only arrays (numpy flag), so that no solve can change them for the solves after it
 _GRID_CACHE: dict = {}
 _GRID_CACHE_SIZE = 64
 
@@ -124,10 +124,14 @@ def _layout(n_levels, n_coarse, x_in, x_out):
     cached = _GRID_CACHE.get(gkey)
     if cached is None:
         cached = _grid_constants(ns, ms, off, moff, toff, x_in, x_out)
+        for a in (*cached[0], *cached[1:]):
+            a.flags.writeable = False    # shared by every solver on this grid: never written
         if len(_GRID_CACHE) >= _GRID_CACHE_SIZE:
             _GRID_CACHE.pop(next(iter(_GRID_CACHE)))
         _GRID_CACHE[gkey] = cached
     base0 = np.concatenate([0.5 * x ** 2 for x in cached[0]])
+    base0.flags.writeable = False
+    iarr.flags.writeable = False
     lay = (ns, int(off[-1]), max(max(ms), 1), iarr, cached, base0)
     if len(_LAYOUT_CACHE) >= _GRID_CACHE_SIZE:
         _LAYOUT_CACHE.pop(next(iter(_LAYOUT_CACHE)))

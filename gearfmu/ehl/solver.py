@@ -43,6 +43,7 @@ from .grids import (RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL, RETRY_PROGRESS_F
 from .lubricant import ROELANDS_LN_ETA_INF, ROELANDS_P0_PA, DH_C1_PA
 from .coarse_newton import COARSE_NEWTON_MAX_NODES
 from .multigrid import EHLParams
+from .film_newton import NEWTON_MAX_NODES, coupled_newton
 from .iterate import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, ROUGH_NEWTON_AFTER_CYCLES,
                       ROUGH_NEWTON_RAMP,
                       STALL_WINDOW, STOP_FILM_CHANGE_CAP, _flat_opts, _iterate_flat)
@@ -98,6 +99,12 @@ class LineContactResult:
         """Alias of ``h_min_m`` (m)."""
         return self.h_min_m
 
+
+#: Smooth films that stall on every setting and grid: the coupled Newton
+#: (:func:`.film_newton.coupled_newton`) from at most this many stalled states (lowest
+#: scaled residual first) on finest grids of at most NEWTON_MAX_NODES nodes, before
+#: :class:`EHLConvergenceError` (docs/ehl.md "Robustness path").
+SMOOTH_NEWTON_STATES = 4
 
 #: Relaxation settings tried in turn by the compiled solver (see docs/ehl.md):
 #: (0) Venner & Lubrecht's arrangement (switch 0.3, GS/Jacobi under-relaxation
@@ -327,6 +334,8 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     the stated tolerances; otherwise :class:`EHLConvergenceError`.
     """
     t_start = time.perf_counter()
+    # as given (EHLConvergenceError.problem)
+    grid_given = dict(n_nodes=n_nodes, n_coarse=n_coarse, moes=M is not None or L is not None)
     # no tolerance given: the fast path may stop at the discretisation error (docs/ehl.md)
     default_tolerances = tol_pressure is None and tol_load is None and tol_residual is None
     tol_pressure = DEFAULT_TOL_PRESSURE if tol_pressure is None else float(tol_pressure)
@@ -463,6 +472,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     tried = []          # (grid intervals, coarsest intervals, setting, final scaled residual)
     skipped = []        # why settings or grids were skipped (fail fast)
     done = {}           # (grid, setting) tried -> its stalled state for the polish, or None
+    stalled = []        # smooth stalled states on grids the coupled Newton takes (last resort)
 
     def run(k_grid, k_att):
         """One relaxation setting on one grid; records a failure in ``tried``."""
@@ -489,6 +499,10 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         rr = h_["reynolds_residual"]
         tried.append((n_nodes_ - 1, n_coarse_, k_att,
                       float(rr[-1]) if rr and math.isfinite(rr[-1]) else math.inf))
+        if (rfun is None and newton_after > 0 and rr and math.isfinite(rr[-1])
+                and n_nodes_ <= NEWTON_MAX_NODES and "hit_max_cycles" not in h_):
+            # (a setting stopped by the caller's cycle limit has not stalled: no Newton either)
+            stalled.append((float(rr[-1]), k_grid, k_att, s_obj, h_, opts_, it_))
         # remember the last attempt that ended with a collapsed film (h <= 0):
         # if no attempt converges, that is reported (FilmCollapseError) rather
         # than the stall of whichever setting happened to run last
@@ -612,6 +626,25 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                 converged = True
         if converged:
             break
+    if not converged and stalled:
+        # last resort for a smooth film that every setting, polish and grid left stalled: the
+        # coupled Newton of the finest grid (film_newton.py) from the stalled states, lowest
+        # residual first (Barus M = 5.5, L = 22: all ten settings stall at pressure changes of
+        # 1e-2, the Newton converges from eight of their states to the same film)
+        for _, b_grid, b_att, b_obj, b_hist, b_opts, b_it in sorted(
+                stalled, key=lambda t_: t_[:3])[:SMOOTH_NEWTON_STATES]:
+            ok, ns, nh = coupled_newton(b_obj, tol_pressure, tol_load, tol_residual)
+            if ok and tol_film < 1.0 and not (nh["film_change"] and nh["film_change"][-1] < tol_film):
+                ok = False
+            if ok:
+                for k_ in _HIST_KEYS:
+                    b_hist[k_].extend(nh[k_])
+                b_hist["coupled_newton_from_cycle"] = [float(b_it)]
+                b_hist["coupled_newton_steps"] = [float(ns)]
+                solver_obj, hist, opts, k_att, k_grid, it = b_obj, b_hist, b_opts, b_att, b_grid, b_it + ns
+                n_nodes, n_coarse, n_levels = grids[k_grid]
+                converged = True
+                break
     if not converged and collapsed is not None:
         solver_obj, hist, opts, k_att, k_grid, it = collapsed
     if len(grids) > n_default:
@@ -647,15 +680,26 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
         b_ = min(fin, key=lambda t_: t_[3]) if fin else None
         best_txt = (f"; best stalled scaled residual {b_[3]:.2e} (attempt {b_[2]}, "
                     f"{b_[0]}/{b_[1]} intervals)" if b_ else "")
+        # the problem exactly as solved (full precision: a rounded M or L names a
+        # neighbouring problem, which may well converge)
+        problem = (dict(M=M, L=L, rho0_kg_m3=rho0_kg_m3) if grid_given["moes"] else
+                   dict(R_m=R_m, E_Pa=E_Pa, w_N_per_m=w_N_per_m, u_m_s=u_m_s, eta0_Pas=eta0_Pas,
+                        alpha_Pa_inv=alpha_Pa_inv, rho0_kg_m3=rho0_kg_m3))
+        problem.update(viscosity=viscosity, compressible=bool(compressible), x_in=float(x_in),
+                       x_out=float(x_out))
+        problem.update({k_: grid_given[k_] for k_ in ("n_nodes", "n_coarse") if grid_given[k_] is not None})
         raise EHLConvergenceError(
-            f"EHL multigrid did not converge in {it} W-cycles (M={M:.4g}, L={L:.4g}): "
+            f"EHL multigrid did not converge in {it} W-cycles (M={M!r}, L={L!r}, "
+            f"{viscosity}, {'compressible' if compressible else 'incompressible'}"
+            f"{', rough' if rfun is not None else ''}): "
             f"residual '{name}' stalled at {val:.3e} (tolerance {tol:.1e}); "
             f"reynolds_residual={last['reynolds_residual']:.3e}{best_txt}; "
             f"{len(tried)} setting(s) on {len({t_[:2] for t_ in tried})} grid(s) tried in "
             f"{time.perf_counter() - t_start:.2f} s"
             + "".join(f"; {x}" for x in skipped),
             residual_name=name, value=val, history=hist,
-            best_residual=b_[3] if b_ else float("nan"), attempts=tried, skipped=skipped)
+            best_residual=b_[3] if b_ else float("nan"), attempts=tried, skipped=skipped,
+            problem=problem)
 
     # central film: linear interpolation at X = 0
     h_c = float(np.interp(0.0, X, h_m))

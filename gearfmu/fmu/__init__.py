@@ -1,9 +1,9 @@
 """FMUs from tables: model description, one builder per runtime, runtime, C sources.
 
-Imports :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics` (the run settings' automatic values and
-the validation record) and :mod:`gearfmu.common` (the run settings); never the scene nor the
-physics packages (pyproject.toml's contracts).  :mod:`gearfmu.fmu.runtime` imports nothing from
-gearfmu.
+Imports :mod:`gearfmu.gearbox` (the gearbox FMU), :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics`
+(the run settings' automatic values and the validation record) and :mod:`gearfmu.common` (the run
+settings); never the scene nor the physics packages (pyproject.toml's contracts).
+:mod:`gearfmu.fmu.runtime` imports nothing from gearfmu.
 
 ==================  =========================================================
 Module              Contents
@@ -23,7 +23,12 @@ summary             one line on an FMU file: runtime, FMI version, platforms
 integrity           an FMU handed over: intact, and can it run here
 compare             an FMU against the native solver (gearfmu validate)
 crosscheck          FMI Cross-Check reference results, any FMU against them
+gearbox_interface   a gearbox FMU's variables from modeldescription/gearbox.toml
+gearbox_build       build_gearbox_fmu: one FMU for a whole gearbox, in C
+gearbox_validation  the gearbox FMU's validation record (native gearbox solver)
+gearbox_compare     a gearbox FMU against the native gearbox solver
+gearbox_doc         the gearbox FMU's documentation page
 runtime/            the FMU-side Python (pythonfmu) and the C loader
-kernel/, standalone/ the C kernel and the FMI layers in C
+kernel/, standalone/ the C kernels and the FMI layers in C
 ==================  =========================================================
 """

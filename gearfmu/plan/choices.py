@@ -20,7 +20,7 @@ from ..gear.meshing_errors import pair_table_mesh_count
 from ..gear.stiffness import required_slots
 from ..scene.envelope import AccuracyTarget, Envelope
 from ..scene.reader import ThermalOptions
-from ..tables.estimate import estimate_build
+from ..scene.physics import estimate_build
 
 #: the integrator levels the planner measures, the last the full model's: rk4 (cheapest),
 #: rk4_seg (stops only at contact-zone edges, big kinks and contact events: cheaper than rk4_node
@@ -41,7 +41,7 @@ _PPM_LEVELS = (16, 32, 64, 128, 256)
 _TORQUE_LEVELS = (1, 2, 3, 5, 9)
 _STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
 _THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a scene axis (CHOICE)
-#: plan-time budget of one reference table build, in s of gearfmu.tables.estimate's model (CHOICE):
+#: plan-time budget of one reference table build, in s of gearfmu.assembly.estimate's model (CHOICE):
 #: the full-fidelity points per mesh are the finest level whose estimate fits, never below the scene's
 PLAN_TABLE_BUILD_S = 60.0
 #: when the reference build is above PLAN_TABLE_BUILD_S: the table work (slices x angles x torque rows x
@@ -159,7 +159,7 @@ def choices_of(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
 def reference_points_per_mesh(scene) -> Tuple[int, str]:
     """(points per mesh of the full-fidelity reference, "" or why it is below 256).  The
     finest of the levels from the scene's own up to max(256, scene's) whose table build the
-    cost model of :func:`gearfmu.tables.estimate.estimate_build` puts within
+    cost model of :func:`gearfmu.scene.physics.estimate_build` puts within
     :data:`PLAN_TABLE_BUILD_S` (the scene's own when none does): the film and fractal contact
     models solve per angle and torque row, so their fine tables take minutes to hours."""
     ppm = int(scene.tables.points_per_mesh)
@@ -188,7 +188,7 @@ def table_work(cfg: dict) -> float:
 
 def reference_is_expensive(scene, full: dict) -> bool:
     """True when the full-fidelity reference tables are estimated above :data:`PLAN_TABLE_BUILD_S`
-    (:func:`gearfmu.tables.estimate.estimate_build`): then the per-choice levels get a table budget."""
+    (:func:`gearfmu.scene.physics.estimate_build`): then the per-choice levels get a table budget."""
     sc = replace(scene, mesh=replace(scene.mesh, slices=int(full["slices"])),
                  tables=replace(scene.tables, points_per_mesh=int(full["points_per_mesh"])))
     return estimate_build(sc).build_s > PLAN_TABLE_BUILD_S

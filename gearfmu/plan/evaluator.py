@@ -16,7 +16,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from ..contact.models import environment_from_scene
+from ..scene.physics import environment_from_scene
 from ..dynamics.native import choose_max_step_s, simulate
 from ..gear.gearpair import GearDeviations
 from .choices import step_absolute, thermal_options, table_work
@@ -24,8 +24,8 @@ from .verify import MEASURES, run_errors, steady_phase
 from ..tables.zones import mean_total_stiffness_N_per_m
 from ..scene.envelope import AccuracyTarget, Envelope
 from ..stages import run_settings
-from ..tables import table_cache
-from ..tables.precompute import precompute_tables
+from ..assembly import table_cache
+from ..assembly.precompute import precompute_tables
 
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
 #: RK4 steps that one event of the native solver costs, by integrator (CHOICE, docs/plan.md "Cost model"):
@@ -99,7 +99,7 @@ class Evaluator:
         """(MeshTables, build wall time in s) of a configuration (cached).  Taken from the
         tables of a finer nesting grid when one is cached (:meth:`_from_finer`; its time is
         the finer build's time scaled by the angle count), else built or read from gearfmu's
-        table cache (:mod:`gearfmu.tables.table_cache`; the time is then that of the build that
+        table cache (:mod:`gearfmu.assembly.table_cache`; the time is then that of the build that
         computed them) (``progress``: the table builder's progress on stderr; None: the planner's)."""
         key = self.table_key(cfg)
         if not self.tables_ready(cfg):
@@ -163,7 +163,7 @@ class Evaluator:
         return out.validate(), dt / s
 
     def table_args(self, cfg: dict) -> dict:
-        """Arguments of :func:`gearfmu.tables.precompute.precompute_tables` for a configuration."""
+        """Arguments of :func:`gearfmu.assembly.precompute.precompute_tables` for a configuration."""
         opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
         pair = self.pair(cfg["tooth_specific_errors"])
         kw = dict(pair=pair, opts=opts, points_per_mesh=int(cfg["points_per_mesh"]),

@@ -17,7 +17,7 @@ from typing import Dict, List, Optional, Tuple
 
 from ..dynamics.native import choose_max_step_s
 from ..scene.envelope import PLAN_CHOICES, AccuracyTarget, VerifiedEnvelope, accuracy_of, envelope_of
-from ..tables.estimate import check_build_cost, estimate_build
+from ..scene.physics import check_build_cost, estimate_build
 from .choices import (LEVELS_NOT_COST_ORDERED, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, choices_of, min_slots,
                       reference_is_expensive, scene_has_thermal, skipped_choices, step_absolute, table_work,
                       thermal_options, what_if_contact)
@@ -373,7 +373,7 @@ def resolve(scene, *, progress: bool = False, estimate_accuracy: bool = False,
     """(the scene to build, its plan or None, its verified envelope or None): what ``gearfmu build``
     builds for a scene and ``gearfmu validate`` checks (docs/plan.md).
 
-    An oversized scene is refused first (:func:`gearfmu.tables.estimate.check_build_cost`,
+    An oversized scene is refused first (:func:`gearfmu.scene.physics.check_build_cost`,
     ``BuildTooLargeError``, unless ``allow_large``).  A scene with ``[accuracy]`` is built as its
     fidelity plan says (:func:`plan_scene`; :func:`planned_scene`, the plan's verified envelope);
     a plan that is not within its target is refused with :class:`PlanError`.  Without it, the
