@@ -184,7 +184,7 @@ def _build_drivetrain(args) -> int:
     m = res.model
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, gearbox of "
           f"{len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies, "
-          f"{res.settings.integrator_name}, max internal step {res.settings.max_step_s:.3g} s)")
+          f"{res.settings.integrator}, max internal step {res.settings.max_step_s:.3g} s)")
     print(fmu_summary(res.fmu_path))
     return 0
 

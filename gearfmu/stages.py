@@ -32,13 +32,13 @@ from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
 from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.build_steps import FmuBuildError
-from .fmu.gearbox_build import GearboxFmuSettings, build_gearbox_fmu, gearbox_settings
+from .fmu.gearbox_build import build_gearbox_fmu, gearbox_settings
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .fmu.envelope import fmu_envelope_record
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
-from .gearbox.native import GearboxResult, choose_max_step_s as gearbox_max_step_s, simulate as simulate_gearbox
+from .gearbox.native import GearboxResult, simulate as simulate_gearbox
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
 from .scene.reader import default_scene_path, load_scene
@@ -319,21 +319,14 @@ def modes_report(kind: str, scene, model: GearboxModel, *,
     return res, cb
 
 
-def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> GearboxFmuSettings:
-    """The start values and DefaultExperiment of a drivetrain scene's gearbox FMU: the scene's motor
-    torque and load torque (an end that is no torque input takes 0), motor speed, the integrator and
-    largest internal step (``"auto"``: :func:`gearfmu.gearbox.native.choose_max_step_s` at 1.5 x the
-    motor speed, as the native solver chooses it), the run's stop time and output interval."""
-    t_in = scene.motor.torque_Nm if scene.motor.torque_input else 0.0
-    t_out = scene.load_torque_Nm if scene.load.torque_input else 0.0
-    w0 = scene.motor.speed_rad_s
-    h = scene.max_step_s
-    if h is None:
-        h = gearbox_max_step_s(model, max(1.5 * abs(w0), 1.0),
-                               reference_torque_Nm=model.reference_torque_Nm(t_in, t_out))
-    return gearbox_settings(model, motor_torque_Nm=t_in, load_torque_Nm=t_out, motor_speed_start_rad_s=w0,
-                            max_step_s=h, integrator=scene.integrator, stop_time_s=scene.stop_time_s,
-                            output_interval_s=scene.output_interval_s)
+def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> GearboxRunSettings:
+    """The run settings of a drivetrain scene's gearbox FMU (its start values and DefaultExperiment):
+    :func:`gearbox_run_settings` with the load's start torque a number (the given one, else the
+    balancing torque; 0 for an end that is no torque input) and the automatic values resolved by
+    :func:`gearfmu.fmu.gearbox_build.gearbox_settings` (``"auto"`` step: the native solver's choice
+    at 1.5 x the motor speed, linearised at the start torques)."""
+    return gearbox_settings(model, gearbox_run_settings(scene),
+                            load_torque_start_Nm=scene.load_torque_Nm if scene.load.torque_input else 0.0)
 
 
 def check_gearbox_fmu_runtime(runtime: Optional[str]) -> None:
@@ -351,7 +344,7 @@ class DrivetrainBuild:
 
     fmu_path: Path
     model: GearboxModel
-    settings: GearboxFmuSettings
+    settings: GearboxRunSettings
     tables_wall_s: float
     build_wall_s: float
 
