@@ -59,6 +59,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
+import numpy as np
+
 from .. import __version__
 from ..common.settings import RunSettings
 from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
@@ -330,7 +332,6 @@ def me_nominals(tables: MeshTables, pinion_speed_rad_s: float, pinion_torque_Nm:
     speed (at least 1 rad/s); the largest of the static deflection, the backlash and the meshing
     error range (at least 1e-9 m); that times omega_n = sqrt(k_mean/m_e).  A host's absolute
     tolerance is its relative tolerance times these (fmpy's CVode)."""
-    import numpy as np
     e = np.asarray(tables.e_m, float)
     x = max(abs(pinion_torque_Nm) / (tables.base_radius_pinion_m * tables.k_mean_N_per_m),
             float(np.max(np.abs(tables.backlash_half_m))), float(np.max(e) - np.min(e)), 1e-9)
