@@ -203,13 +203,17 @@ def test_linear_limit_against_matrix_exponential(tmp_path):
         assert np.max(np.abs(got - ref)) <= 1e-6 * np.ptp(ref), np.max(np.abs(got - ref)) / np.ptp(ref)
 
 
-def test_contact_loss_against_the_native_gearbox_solver(tmp_path):
-    """Stage 1 loses contact and impacts while stage 2 carries load: the host over gb_me_* (DOP853, rtol
-    1e-10, every contact change an event, no table-node events) and the native gearbox solver (rk4_node
-    at 1/64 of the communication step) agree on both stages' DTE and mesh force to 1e-4 of the range."""
+@pytest.mark.parametrize("node_events,rtol", [(NODES_NONE, 1e-10), (NODES_KINKS, 1e-12)])
+def test_contact_loss_against_the_native_gearbox_solver(tmp_path, node_events, rtol):
+    """Stage 1 loses contact and impacts while stage 2 carries load: the host over gb_me_* (DOP853, every
+    contact change an event; with the big table kinks as events too) and the native gearbox solver
+    (rk4_node at 1/64 of the communication step) agree on both stages' DTE and mesh force to 1e-4 of the
+    range.  The case has grazing contacts, where a tiny difference decides whether a pair touches: with
+    node events the host's restarts move its steps, and at rtol 1e-10 one grazing contact near the end
+    goes the other way (measured: 6e-2 from there on), at 1e-12 it does not."""
     L = _kernel_library(tmp_path)
     model, kw = gearbox_case("contact_loss", 30)
-    kg = KernelGearbox(L, model, NODES_NONE)
+    kg = KernelGearbox(L, model, node_events)
     T_in = float(kw["motor_torque_Nm"])
     T_out = model.balancing_load_torque_Nm(T_in)
     y0 = model.static_state(T_in, kw["motor_speed_start_rad_s"], kw["motor_angle_start_rad"])
@@ -217,7 +221,7 @@ def test_contact_loss_against_the_native_gearbox_solver(tmp_path):
                    load_torque_Nm=T_out, motor_speed_start_rad_s=kw["motor_speed_start_rad_s"], initial_state=y0,
                    max_step_s=kw["comm_step_s"] / 64, integrator="rk4_node")
     times = np.asarray(nat.time_s)
-    out, n_ev = run_host(kg, y0, T_in, T_out, times, 1e-10)
+    out, n_ev = run_host(kg, y0, T_in, T_out, times, rtol)
     worst = {}
     for m, name in enumerate(mesh.name for mesh in model.meshes):
         o = L.gb_mesh_offset(kg.gb.ctypes.data, m)
