@@ -392,7 +392,8 @@ def ssp_fmu_bytes(ssp_path) -> bytes:
 def gearbox_ssp(model, out_path, *, coupling: Optional[str] = None, motor_torque_Nm: float,
                 load_torque_Nm: Optional[float] = None, motor_speed_rad_s: float, max_step_s: float,
                 integrator: Optional[str] = None, stop_time_s: float, comm_step_s: float, name: str = "gearbox",
-                description: str = "", fmi_version: int = 2, platforms=None, progress: bool = False) -> Path:
+                description: str = "", fmi_version: int = 2, platforms=None, progress: bool = False,
+                flange_order: int = 2) -> Path:
     """An SSP of stage FMUs for the gearbox ``model`` (gearfmu.gearbox.model.GearboxModel) at ``out_path``:
     one FMU per stage and per end body (and per shaft with ``coupling`` "shaft"), joined at the elastic
     shafts through OSP angular mechanical ports (docs/gearbox.md "The SSP of stage FMUs"); every .ssd
@@ -407,7 +408,7 @@ def gearbox_ssp(model, out_path, *, coupling: Optional[str] = None, motor_torque
             raise SspError(f"{key}: must be finite and > 0, got {v!r}")
     comp = compose(model, coupling=coupling or DEFAULT_SSP_COUPLING, motor_torque_Nm=motor_torque_Nm,
                    load_torque_Nm=load_torque_Nm, motor_speed_rad_s=motor_speed_rad_s, max_step_s=max_step_s,
-                   integrator=integrator or DEFAULT_INTEGRATOR)
+                   integrator=integrator or DEFAULT_INTEGRATOR, flange_order=flange_order)
     with tempfile.TemporaryDirectory(prefix="gearfmu_gbssp_") as tmpd:
         stage = Path(tmpd)
         with ticking(f"building {len(comp.components)} FMUs ({', '.join(c.name for c in comp.components)})",
@@ -420,17 +421,19 @@ def gearbox_ssp(model, out_path, *, coupling: Optional[str] = None, motor_torque
     return out_path
 
 
-def ssp_from_drivetrain(scene, out_path, *, coupling: Optional[str] = None, fmi_version: int = 2, platforms=None,
-                        progress: bool = False, allow_large: bool = False, model=None) -> Path:
+def ssp_from_drivetrain(scene, out_path, *, coupling: Optional[str] = None, comm_step_s: Optional[float] = None,
+                        fmi_version: int = 2, platforms=None, progress: bool = False, allow_large: bool = False,
+                        model=None) -> Path:
     """Drivetrain scene -> every stage's tables -> gearbox model -> the SSP of stage FMUs at ``out_path``
-    (:func:`gearbox_ssp` with the scene's start values, integrator, internal step and run; ``model``: the
-    GearboxModel when already built)."""
+    (:func:`gearbox_ssp` with the scene's start values, integrator, internal step and run; ``comm_step_s``
+    None: the scene's output interval; ``model``: the GearboxModel when already built)."""
     if model is None:
         model = dt.gearbox_model(scene, dt.stage_tables(scene, progress=progress, allow_large=allow_large))
     s = dt.fmu_settings(scene, model)
     return gearbox_ssp(model, out_path, coupling=coupling, motor_torque_Nm=s.motor_torque_Nm,
                        load_torque_Nm=s.load_torque_Nm, motor_speed_rad_s=s.motor_speed_rad_s,
                        max_step_s=s.max_step_s, integrator=s.integrator_name, stop_time_s=s.stop_time_s,
-                       comm_step_s=s.output_interval_s, name=scene.model_name,
+                       comm_step_s=s.output_interval_s if comm_step_s is None else comm_step_s,
+                       name=scene.model_name,
                        description=f"{scene.name}: SSP of stage FMUs", fmi_version=fmi_version, platforms=platforms,
                        progress=progress)

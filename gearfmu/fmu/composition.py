@@ -113,11 +113,12 @@ def _rigid_links(parts: Sequence[str], tag: str) -> List[Shaft]:
 
 def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_torque_Nm: float,
             load_torque_Nm: Optional[float] = None, motor_speed_rad_s: float, motor_angle_rad: float = 0.0,
-            max_step_s: float, integrator: str = DEFAULT_INTEGRATOR) -> Composition:
+            max_step_s: float, integrator: str = DEFAULT_INTEGRATOR, flange_order: int = 2) -> Composition:
     """Cut ``model`` into its stage and element components for ``coupling`` (module docstring), every
     component starting from the gearbox's quasi-static state under the start torques (N*m) at the motor
     speed (rad/s) and angle (rad); ``load_torque_Nm`` None: the balancing one.  Every stage integrates
-    with ``integrator`` and the largest internal step ``max_step_s`` (s) of the monolithic gearbox.
+    with ``integrator`` and the largest internal step ``max_step_s`` (s) of the monolithic gearbox;
+    ``flange_order``: how a flange moves over a step (:class:`gearfmu.fmu.stage_build.StageSpec`).
     CompositionError naming the shaft or stage that cannot be cut."""
     if coupling not in SSP_COUPLINGS:
         raise CompositionError(f"coupling: {coupling!r} not one of {SSP_COUPLINGS}")
@@ -216,7 +217,8 @@ def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_
         spec = StageSpec(name=name, model=sub, flanges=tuple(model.shafts[s].name for s in flanges),
                          motor_input=motor_input, load_input=load_input, reference_torque_Nm=t_in,
                          reference_speed_rad_s=float(omega0[b0]), reference_angle_rad=float(theta0[b0]),
-                         load_torque_Nm=t_out, max_step_s=float(max_step_s), integrator=integrator)
+                         load_torque_Nm=t_out, max_step_s=float(max_step_s), integrator=integrator,
+                         flange_order=flange_order)
         components.append(Component(name, "stage", spec))
         for col in ("dte", "dte_rate", "mesh_force", "mesh_stiffness"):
             outputs[f"{name}.{col}"] = (name, f"{name}.{col}")

@@ -7,7 +7,7 @@ SSP 1.0 schema and zips)::
                                          (every output, every input a connection drives), the connections;
                                          DefaultExperiment with libcosim's fixed-step annotation
     OspSystemStructure.xml               the same system for the Open Simulation Platform (libcosim):
-                                         simulators, the connections grouped into power bonds
+                                         simulators, every power bond a connection of two ports
     resources/<component>.fmu           the stage, body and shaft FMUs
     resources/<component>_OspModelDescription.xml
                                          the component's mechanical ports, each an OSP
@@ -139,38 +139,38 @@ def osp_model_description_xml(comp: Composition, component: str, units: Dict[str
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)
 
 
-def osp_system_xml(comp: Composition, *, step_size_s: float, stop_time_s: Optional[float] = None,
-                   ecco: Optional[Dict[str, float]] = None) -> bytes:
-    """``OspSystemStructure.xml`` (libcosim's format): the simulators (the FMUs in resources/), every
-    connection, those of a power bond marked with its name and each end's causality.  ``ecco``: the
-    parameters of libcosim's energy-conserving algorithm (EccoConfiguration element names), else the
-    fixed-step algorithm at ``step_size_s``."""
+def osp_system_xml(comp: Composition, *, step_size_s: float, stop_time_s: Optional[float] = None) -> bytes:
+    """``OspSystemStructure.xml`` (libcosim's format): the simulators (the FMUs in resources/), the fixed-step
+    algorithm at ``step_size_s``, every power bond as a VariableGroupConnection of the two ports'
+    AngularMechanicalPort groups (the components' OspModelDescription files), every other link as a
+    VariableConnection.  The bonds carry no ``powerBond`` attribute: libcosim refuses a configuration
+    with more than one (its check of the bond names runs after the first bond); its ECCO algorithm takes
+    the bonds from :func:`gearfmu.fmu.ssp_engines.run_libcosim` instead."""
     ns = f"{{{OSP_SS_NS}}}"
     root = ET.Element(f"{ns}OspSystemStructure", {"version": "0.1"})
     ET.SubElement(root, f"{ns}StartTime").text = "0.0"
     if stop_time_s is not None:
         ET.SubElement(root, f"{ns}EndTime").text = repr(float(stop_time_s))
     ET.SubElement(root, f"{ns}BaseStepSize").text = repr(float(step_size_s))
-    ET.SubElement(root, f"{ns}Algorithm").text = "ecco" if ecco else "fixedStep"
+    ET.SubElement(root, f"{ns}Algorithm").text = "fixedStep"
     sims = ET.SubElement(root, f"{ns}Simulators")
     for c in comp.components:
         ET.SubElement(sims, f"{ns}Simulator", {"name": c.name, "source": f"resources/{c.name}.fmu"})
     conns = ET.SubElement(root, f"{ns}Connections")
-    bond_of = {}
+    in_bond = set()
     for b in comp.bonds:
         tin, tout = (b.a, b.b) if b.a.torque_is_input else (b.b, b.a)
-        bond_of[(tout.component, tout.torque, tin.component, tin.torque)] = b.name
-        bond_of[(tin.component, tin.speed, tout.component, tout.speed)] = b.name
+        in_bond |= {(tout.component, tout.torque, tin.component, tin.torque),
+                    (tin.component, tin.speed, tout.component, tout.speed)}
     for ln in comp.links:
-        name = bond_of.get((ln.source, ln.source_var, ln.target, ln.target_var))
-        vc = ET.SubElement(conns, f"{ns}VariableConnection", {"powerBond": name} if name else {})
-        ET.SubElement(vc, f"{ns}Variable", {"simulator": ln.target, "name": ln.target_var, "causality": "input"})
-        ET.SubElement(vc, f"{ns}Variable", {"simulator": ln.source, "name": ln.source_var, "causality": "output"})
-    if ecco:
-        ec = ET.SubElement(root, f"{ns}EccoConfiguration")
-        for key in ("SafetyFactor", "StepSize", "MinimumStepSize", "MaximumStepSize", "MinimumChangeRate",
-                    "MaximumChangeRate", "ProportionalGain", "IntegralGain", "RelativeTolerance", "AbsoluteTolerance"):
-            ET.SubElement(ec, f"{ns}{key}").text = repr(float(ecco[key]))
+        if (ln.source, ln.source_var, ln.target, ln.target_var) not in in_bond:
+            vc = ET.SubElement(conns, f"{ns}VariableConnection")
+            ET.SubElement(vc, f"{ns}Variable", {"simulator": ln.target, "name": ln.target_var})
+            ET.SubElement(vc, f"{ns}Variable", {"simulator": ln.source, "name": ln.source_var})
+    for b in comp.bonds:
+        gc = ET.SubElement(conns, f"{ns}VariableGroupConnection")
+        for port in (b.a, b.b):
+            ET.SubElement(gc, f"{ns}VariableGroup", {"simulator": port.component, "name": b.name})
     ET.indent(root, space="  ")
     ET.register_namespace("", OSP_SS_NS)
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)

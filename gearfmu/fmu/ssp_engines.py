@@ -28,12 +28,12 @@ from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["SspRun", "run_fmpy", "run_libcosim", "energy_residual", "ECCO_DEFAULTS", "bonds_of"]
+__all__ = ["SspRun", "run_fmpy", "run_libcosim", "energy_residual", "bond_outputs", "ECCO_DEFAULTS", "bonds_of",
+           "read_system"]
 
-#: libcosim's ECCO parameters (OspSystemStructure EccoConfiguration) used unless given: the values of
-#: libcosim's own example (tests/data/fmi2/quarter_truck) with the step bounds and tolerances set per run
-ECCO_DEFAULTS = {"SafetyFactor": 0.8, "MinimumChangeRate": 0.2, "MaximumChangeRate": 1.5, "ProportionalGain": 0.2,
-                 "IntegralGain": 0.15}
+#: libcosim's ECCO parameters (libcosimpy EccoParams) used unless given: libcosimpy's defaults for the
+#: controller, the change rates of libcosim's own ECCO example; the step bounds and tolerances are set per run
+ECCO_DEFAULTS = {"safety_factor": 0.8, "min_change_rate": 0.2, "max_change_rate": 1.5, "p_gain": 0.2, "i_gain": 0.15}
 NS_PER_S = 1_000_000_000
 
 
@@ -52,15 +52,32 @@ class SspRun:
         return self.values[key]
 
 
-def run_fmpy(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequence[Tuple[str, str]]) -> SspRun:
+@dataclass
+class _Parameter:
+    name: str
+    value: float
+
+
+@dataclass
+class _ParameterSet:
+    parameters: list
+
+
+def run_fmpy(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequence[Tuple[str, str]],
+             start_values: Optional[Dict[Tuple[str, str], float]] = None) -> SspRun:
     """Run the SSP in fmpy's SSP master for ``stop_time_s`` at the communication step ``step_s``; the
-    ``outputs`` (component, variable) at t_k = k H, k = 1 .. round(stop/H)."""
+    ``outputs`` (component, variable) at t_k = k H, k = 1 .. round(stop/H).  ``start_values``: values
+    set before the initialization ({(component, parameter or unconnected input): value}; fmpy applies
+    them as a parameter set)."""
     from fmpy.ssp.simulation import simulate_ssp  # fmpy's SSP master: heavy, only to run it
 
     n = int(round(stop_time_s / step_s))
+    pset = None
+    if start_values:
+        pset = _ParameterSet([_Parameter(f"{c}.{v}", float(x)) for (c, v), x in start_values.items()])
     t0 = time.perf_counter()
     # fmpy's loop adds the step to the time; a little less than n steps' end keeps it from one step more
-    res = simulate_ssp(str(ssp_path), stop_time=(n - 0.5) * step_s, step_size=step_s)
+    res = simulate_ssp(str(ssp_path), stop_time=(n - 0.5) * step_s, step_size=step_s, parameter_set=pset)
     wall = time.perf_counter() - t0
     if len(res) != n:
         raise RuntimeError(f"fmpy: {len(res)} communication steps, expected {n}")
@@ -70,107 +87,156 @@ def run_fmpy(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequence[T
     return SspRun("fmpy", np.arange(1, n + 1) * step_s, np.full(n, step_s), values, wall)
 
 
-def bonds_of(osp_system: Path):
-    """The power bonds of an OspSystemStructure.xml: {bond: [(input simulator, input, output simulator,
-    output)]}."""
-    root = ET.parse(osp_system).getroot()
-    out: Dict[str, list] = {}
-    for vc in root.iter():
-        if vc.tag.endswith("VariableConnection") and vc.get("powerBond"):
-            ends = {v.get("causality"): (v.get("simulator"), v.get("name")) for v in vc if v.tag.endswith("Variable")}
-            out.setdefault(vc.get("powerBond"), []).append((*ends["input"], *ends["output"]))
-    return out
+def read_system(folder) -> dict:
+    """The system of an extracted SSP of stage FMUs: {"links": [(source, output, target, input)],
+    "bonds": {bond: {"torque_in": (component, torque, speed), "torque_out": (component, torque, speed)}},
+    "fmus": {component: path}} from its SystemStructure.ssd, OspSystemStructure.xml and the components'
+    OspModelDescription files (the AngularMechanicalPort groups)."""
+    folder = Path(folder)
+    ssd = ET.parse(folder / "SystemStructure.ssd").getroot()
+    kinds, fmus, links = {}, {}, []
+    for el in ssd.iter():
+        tag = el.tag.rsplit("}", 1)[-1]
+        if tag == "Component":
+            fmus[el.get("name")] = folder / el.get("source")
+            for cn in el.iter():
+                if cn.tag.endswith("}Connector"):
+                    kinds[(el.get("name"), cn.get("name"))] = cn.get("kind")
+        elif tag == "Connection":
+            links.append((el.get("startElement"), el.get("startConnector"), el.get("endElement"), el.get("endConnector")))
+    osp = ET.parse(folder / "OspSystemStructure.xml").getroot()
+    bonds: Dict[str, dict] = {}
+    for gc in osp.iter():
+        if not gc.tag.endswith("}VariableGroupConnection"):
+            continue
+        name = None
+        for g in gc:
+            comp, name = g.get("simulator"), g.get("name")
+            md = ET.parse(folder / "resources" / f"{comp}_OspModelDescription.xml").getroot()
+            port = next(e for e in md.iter() if e.tag.endswith("}AngularMechanicalPort") and e.get("name") == name)
+            torque = next(v.get("ref") for e in port if e.tag.endswith("}Torque") for v in e)
+            speed = next(v.get("ref") for e in port if e.tag.endswith("}AngularVelocity") for v in e)
+            side = "torque_in" if kinds.get((comp, torque)) == "input" else "torque_out"
+            bonds.setdefault(name, {})[side] = (comp, torque, speed)
+    return {"links": links, "bonds": bonds, "fmus": fmus}
+
+
+def bonds_of(ssp_path) -> Dict[str, dict]:
+    """The power bonds of an SSP archive of stage FMUs (:func:`read_system`)."""
+    with tempfile.TemporaryDirectory(prefix="gearfmu_ssp_read_") as tmp:
+        with zipfile.ZipFile(ssp_path) as z:
+            for n in z.namelist():
+                if not n.endswith(".fmu"):
+                    z.extract(n, tmp)
+        return read_system(tmp)["bonds"]
 
 
 def run_libcosim(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequence[Tuple[str, str]],
-                 ecco: Optional[Dict[str, float]] = None) -> SspRun:
+                 ecco: Optional[Dict[str, float]] = None,
+                 start_values: Optional[Dict[Tuple[str, str], float]] = None) -> SspRun:
     """Run the SSP in libcosim (libcosimpy) for ``stop_time_s``: from ``SystemStructure.ssd`` at the fixed
-    step ``step_s``, or with ``ecco`` (EccoConfiguration values: at least RelativeTolerance,
-    AbsoluteTolerance, MinimumStepSize, MaximumStepSize; the first step ``step_s``) from the
-    archive's OspSystemStructure.xml with libcosim's ECCO algorithm.  The ``outputs`` at every
-    communication point libcosim reaches."""
+    step ``step_s``, or with ``ecco`` (EccoParams fields of libcosimpy, at least rel_tolerance,
+    abs_tolerance, min_step_size, max_step_size in s; the first step ``step_s``): libcosim's ECCO
+    algorithm over the archive's FMUs, links and power bonds (:func:`read_system`).  The ``outputs`` at
+    every communication point libcosim reaches.  ``start_values``: as :func:`run_fmpy`'s (libcosim's
+    initial values)."""
+    from libcosimpy.CosimAlgorithm import CosimAlgorithm, EccoParams  # libcosim: only to run it
     from libcosimpy.CosimEnums import CosimVariableType  # libcosim: loads its C library, only to run it
     from libcosimpy.CosimExecution import CosimExecution  # libcosim: only to run it
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level  # libcosim: only to run it
     from libcosimpy.CosimObserver import CosimObserver  # libcosim: only to run it
+    from libcosimpy.CosimSlave import CosimLocalSlave  # libcosim: only to run it
 
     log_output_level(CosimLogLevel.ERROR)
     h_ns = int(round(step_s * NS_PER_S))
     if h_ns < 1:
         raise ValueError(f"step_s: {step_s!r} is below libcosim's 1 ns")
     stop_ns = int(round(stop_time_s / step_s)) * h_ns
+    h_min = float((ecco or {}).get("min_step_size", step_s))
+    n_max = int(stop_ns // max(1, int(h_min * NS_PER_S))) + 16
     tmp = tempfile.mkdtemp(prefix="gearfmu_cosim_")
+    alg = None
     try:
         if ecco is None:
             ex = CosimExecution.from_ssp_file(str(ssp_path), step_size=h_ns)
         else:
             with zipfile.ZipFile(ssp_path) as z:
                 z.extractall(tmp)
-            osp = Path(tmp) / "OspSystemStructure.xml"
-            tree = ET.parse(osp)
-            root = tree.getroot()
-            ns = root.tag[:root.tag.index("}") + 1] if root.tag.startswith("{") else ""
-            root.find(f"{ns}Algorithm").text = "ecco"
-            ec = ET.SubElement(root, f"{ns}EccoConfiguration")
-            params = dict(ECCO_DEFAULTS, StepSize=step_s, **ecco)
-            for key in ("SafetyFactor", "StepSize", "MinimumStepSize", "MaximumStepSize", "MinimumChangeRate",
-                        "MaximumChangeRate", "ProportionalGain", "IntegralGain", "RelativeTolerance",
-                        "AbsoluteTolerance"):
-                ET.SubElement(ec, f"{ns}{key}").text = repr(float(params[key]))
-            ET.register_namespace("", ns[1:-1])
-            tree.write(osp, xml_declaration=True, encoding="utf-8")
-            ex = CosimExecution.from_osp_config_file(str(osp))
-        obs = CosimObserver.create_time_series(buffer_size=int(stop_ns // max(1, int(
-            (ecco or {}).get("MinimumStepSize", step_s) * NS_PER_S))) + 16)
+            system = read_system(tmp)
+            alg = CosimAlgorithm.create_ecco_algorithm(EccoParams(**dict(ECCO_DEFAULTS, step_size=step_s, **ecco)))
+            ex = CosimExecution.from_algorithm(alg)
+            idx = {name: ex.add_local_slave(CosimLocalSlave(str(path), name)) for name, path in system["fmus"].items()}
+            vrs = {name: {v.name.decode(): v.reference for v in ex.slave_variables(i)} for name, i in idx.items()}
+            for src, out, dst, inp in system["links"]:
+                ex.connect_real_variables(idx[src], vrs[src][out], idx[dst], vrs[dst][inp])
+            for bond in system["bonds"].values():
+                (ca, ta, sa), (cb, tb, sb) = bond["torque_in"], bond["torque_out"]
+                if alg.add_power_bond(idx[ca], vrs[ca][sa], vrs[ca][ta], idx[cb], vrs[cb][tb], vrs[cb][sb]) != 0:
+                    raise RuntimeError(f"libcosim: power bond {ca}.{ta} / {cb}.{tb} refused")
+        for (comp, var), x in (start_values or {}).items():
+            i = ex.slave_index_from_instance_name(comp)
+            vr = {v.name.decode(): v.reference for v in ex.slave_variables(i)} if i is not None else {}
+            if var not in vr:
+                raise KeyError(f"libcosim: no variable {comp}.{var}")
+            ex.real_initial_value(i, vr[var], float(x))
+        obs = CosimObserver.create_time_series(buffer_size=n_max)
         ex.add_observer(obs)
+        if ecco is not None:   # ECCO reads the bonds' inputs too: an observed variable is one libcosim can get
+            for bond in system["bonds"].values():
+                for comp, var in ((bond["torque_in"][0], bond["torque_in"][1]), (bond["torque_out"][0], bond["torque_out"][2])):
+                    obs.start_time_series(idx[comp], vrs[comp][var], CosimVariableType.REAL)
         refs = []
         for comp, var in outputs:
-            idx = ex.slave_index_from_instance_name(comp)
-            if idx is None:
+            i = ex.slave_index_from_instance_name(comp)
+            if i is None:
                 raise KeyError(f"libcosim: no component {comp!r}")
-            vr = {v.name.decode(): v.reference for v in ex.slave_variables(idx)}
+            vr = {v.name.decode(): v.reference for v in ex.slave_variables(i)}
             if var not in vr:
                 raise KeyError(f"libcosim: {comp} has no variable {var!r}")
-            refs.append((idx, vr[var]))
-            obs.start_time_series(idx, vr[var], CosimVariableType.REAL)
+            refs.append((i, vr[var]))
+            obs.start_time_series(i, vr[var], CosimVariableType.REAL)
         t0 = time.perf_counter()
         if not ex.simulate_until(stop_ns):
-            raise RuntimeError("libcosim: the simulation stopped with an error")
+            from libcosimpy._internal import get_last_error_message  # libcosim: its last error, only then
+            raise RuntimeError(f"libcosim: the simulation stopped with an error ({get_last_error_message()})")
         wall = time.perf_counter() - t0
         values, times = {}, None
-        n_max = obs_len = int(stop_ns // max(1, int((ecco or {}).get("MinimumStepSize", step_s) * NS_PER_S))) + 16
-        for (comp, var), (idx, vr) in zip(outputs, refs):
-            tp, steps, samples = obs.time_series_real_samples(idx, vr, 1, n_max)
+        for (comp, var), (i, vr) in zip(outputs, refs):
+            tp, steps, samples = obs.time_series_real_samples(i, vr, 1, n_max)
             values[(comp, var)] = np.asarray(samples, dtype=float)
             times = np.asarray(tp, dtype=np.int64)
-        del obs_len
         t = times / NS_PER_S
         return SspRun("libcosim" + ("-ecco" if ecco else ""), t, np.diff(np.concatenate([[0.0], t])), values, wall)
     finally:
+        del alg
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def energy_residual(run: SspRun, bonds: Dict[str, list]) -> Dict[str, dict]:
+def energy_residual(run: SspRun, bonds: Dict[str, dict]) -> Dict[str, dict]:
     """Per power bond (``bonds``: :func:`bonds_of`), from the exchanged values at the communication points:
     the energy residual sum_k H_k |T_k w_(k+1) - w_k T_(k+1)| (J) -- at each step's end the power the
-    torque side computes (the torque it held times the speed it reached) minus the power the speed side
-    computes (the speed it held times the torque it returned), libcosim ECCO's power residual -- and the
-    energy through the bond, sum_k H_k |T_k w_k| (J).  The run must hold both variables of every bond."""
+    side that holds the torque computes (the torque it held times the speed it reached) minus the power
+    the other side computes (the speed it held times the torque it returned): libcosim ECCO's power
+    residual (Sadjina & Pedersen 2020) -- and the energy through the bond, sum_k H_k |T_k w_k| (J).  The
+    run must hold the torque output and the speed output of every bond."""
     out = {}
-    for name, conns in bonds.items():
-        torque = speed = None
-        for in_sim, in_var, out_sim, out_var in conns:
-            key = (out_sim, out_var)
+    for name, bond in bonds.items():
+        ca, _, sa = bond["torque_in"]
+        cb, tb, _ = bond["torque_out"]
+        for key in ((ca, sa), (cb, tb)):
             if key not in run.values:
-                raise KeyError(f"energy_residual: the run lacks {out_sim}.{out_var} of bond {name}")
-            if "torque" in out_var:
-                torque = run.values[key]
-            else:
-                speed = run.values[key]
-        if torque is None or speed is None:
-            raise KeyError(f"energy_residual: bond {name} has no torque or no speed connection")
+                raise KeyError(f"energy_residual: the run lacks {key[0]}.{key[1]} of bond {name}")
+        torque, speed = run.values[(cb, tb)], run.values[(ca, sa)]
         h = run.step_s[1:]
         res = float(np.sum(h * np.abs(torque[:-1] * speed[1:] - speed[:-1] * torque[1:])))
         through = float(np.sum(h * np.abs(torque[:-1] * speed[:-1])))
         out[name] = {"residual_J": res, "transmitted_J": through, "relative": res / through if through else 0.0}
     return out
+
+
+def bond_outputs(bonds: Dict[str, dict]) -> list:
+    """The (component, variable) outputs :func:`energy_residual` needs."""
+    out = []
+    for bond in bonds.values():
+        out += [(bond["torque_in"][0], bond["torque_in"][2]), (bond["torque_out"][0], bond["torque_out"][1])]
+    return sorted(set(out))

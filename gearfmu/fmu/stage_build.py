@@ -69,6 +69,7 @@ class StageSpec:
     max_step_s: float
     integrator: str = DEFAULT_INTEGRATOR
     description: str = ""
+    flange_order: int = 2
 
     @property
     def flange_parts(self) -> Tuple[str, ...]:
@@ -94,6 +95,11 @@ FIRST_STEP_DESCRIPTION = (
     "1: in the first communication step the flanges move as the initial state says and the torques from "
     "neighbouring FMUs hold their start values (the neighbours' initial outputs), as a master that transfers the "
     "initial outputs gives them; for masters that start every connection at 0 (fmpy's SSP master). 0: the values set")
+
+FLANGE_ORDER_DESCRIPTION = (
+    "How a flange moves over a communication step: 1 at the speed received; 2 (default) with the acceleration of "
+    "the last two speeds received as well (the step cut into the integrator's substeps, the flange on the "
+    "parabola)")
 
 
 def port_inputs(spec) -> Tuple[str, ...]:
@@ -132,6 +138,12 @@ def stage_variables(spec: StageSpec) -> List[Variable]:
     out.append(Variable(name="first_step_start_values", value_reference=len(out), type="Integer",
                         causality="parameter", variability="fixed", initial="exact", unit=None,
                         description=FIRST_STEP_DESCRIPTION, start=1, min=0, max=1, output_index=None))
+    if spec.flanges:
+        if spec.flange_order not in (1, 2):
+            raise FmuBuildError(f"{spec.name}.flange_order: must be 1 or 2, got {spec.flange_order!r}")
+        out.append(Variable(name="flange_order", value_reference=len(out), type="Integer", causality="parameter",
+                            variability="fixed", initial="exact", unit=None, description=FLANGE_ORDER_DESCRIPTION,
+                            start=int(spec.flange_order), min=1, max=2, output_index=None))
     k0 = n_outputs(model)
     for k, (shaft, part) in enumerate(zip(spec.flanges, spec.flange_parts)):
         speed0 = _part_speed(spec, part)
@@ -174,6 +186,8 @@ def stage_config_text(spec: StageSpec, variables: Sequence[Variable], stage_byte
     vr = {v.name: v.value_reference for v in variables}
     lines = [f"extra_outputs={len(spec.flanges)}", f"vr.first_step_start_values={vr['first_step_start_values']}"]
     lines += [f"port_torque={vr[name]}" for name in port_inputs(spec)]
+    if spec.flanges:
+        lines.append(f"vr.flange_order={vr['flange_order']}")
     k0 = n_outputs(spec.model)
     for k, (shaft, part) in enumerate(zip(spec.flanges, spec.flange_parts)):
         s = next(i for i, sh in enumerate(spec.model.shafts) if sh.name == shaft)

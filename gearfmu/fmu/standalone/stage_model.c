@@ -67,7 +67,7 @@ static const char *read_flanges(gf_inst *c, const char *text, char *err, size_t 
     const char *p = text;
     int k;
     memset(fl, 0, sizeof *fl);
-    fl->vr_first_start = -1;
+    fl->vr_first_start = fl->vr_order = -1;
     while (*p != '\0') {
         size_t n = strcspn(p, "\n");
         long v[4];
@@ -98,6 +98,12 @@ static const char *read_flanges(gf_inst *c, const char *text, char *err, size_t 
                     return err;
                 }
                 fl->vr_port[fl->n_port++] = (int)v[0];
+            } else if (strncmp(line, "vr.flange_order=", 16) == 0) {
+                if (!parse_ints(line + 16, v, 1) || !vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
+                    snprintf(err, errcap, "vr.flange_order: not a parameter");
+                    return err;
+                }
+                fl->vr_order = (int)v[0];
             } else if (strncmp(line, "vr.first_step_start_values=", 27) == 0) {
                 if (!parse_ints(line + 27, v, 1) || !vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
                     snprintf(err, errcap, "vr.first_step_start_values: not a parameter");
@@ -109,8 +115,8 @@ static const char *read_flanges(gf_inst *c, const char *text, char *err, size_t 
         p += n;
         if (*p == '\n') p++;
     }
-    if (fl->vr_first_start < 0) {
-        snprintf(err, errcap, "vr.first_step_start_values missing");
+    if (fl->vr_first_start < 0 || (fl->n > 0 && fl->vr_order < 0)) {
+        snprintf(err, errcap, "vr.first_step_start_values or (with flanges) vr.flange_order missing");
         return err;
     }
     for (k = 0; k < fl->n; ++k)
@@ -170,18 +176,25 @@ static void body_motion(const gb_model *gb, const gb_state *s, int b, double *th
     *omega = b == 0 ? s->y[1] : gb->g[b] * s->y[1] + s->y[2 * b + 1];
 }
 
-/* the flanges' torque outputs after a step of H (0: at the initial state) */
-static void flange_outputs(gf_inst *c, double H)
+/* the flanges' torque outputs after a step of H (0: at the initial state), the flanges at speeds w_end:
+ * the shaft torque at the end of the step, T = k (theta_a - theta_b) + c (w_a - w_b) (it replaces the
+ * kernel's, which saw the flange at the speed of the last substep), and the torque the shaft transmits
+ * predicted for the middle of the next step, T + (H/2) k (w_a - w_b) */
+static void flange_outputs(gf_inst *c, double H, const double *w_end)
 {
     const gb_model *gb = c->data->gb;
     st_flanges *fl = flanges(c);
     int k;
     for (k = 0; k < fl->n; ++k) {
         int s = fl->shaft[k], a = gb->shaft_a[s], b = gb->shaft_b[s];
-        double ta, wa, tb, wb;
+        double ta, wa, tb, wb, T;
         body_motion(gb, &c->data->state, a, &ta, &wa);
         body_motion(gb, &c->data->state, b, &tb, &wb);
-        c->out[fl->out_torque[k]] = c->out[gb_shaft_offset(gb) + s] + 0.5 * H * gb->shaft_k[s] * (wa - wb);
+        if (a == fl->body[k]) wa = w_end[k];
+        else wb = w_end[k];
+        T = gb->shaft_k[s] * (ta - tb) + gb->shaft_c[s] * (wa - wb);
+        if (H > 0.0) c->out[gb_shaft_offset(gb) + s] = T;
+        c->out[fl->out_torque[k]] = (H > 0.0 ? T : c->out[gb_shaft_offset(gb) + s]) + 0.5 * H * gb->shaft_k[s] * (wa - wb);
     }
 }
 
@@ -192,7 +205,7 @@ static void flanges_from_state(gf_inst *c)
     int k;
     for (k = 0; k < fl->n; ++k) body_motion(c->data->gb, &c->data->state, fl->body[k], &fl->theta[k], &fl->omega[k]);
     fl->h_prev = 0.0;
-    flange_outputs(c, 0.0);
+    flange_outputs(c, 0.0, fl->omega);
 }
 
 int gm_exit_init(gf_inst *c)
@@ -210,13 +223,46 @@ int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size
     return 1;
 }
 
+/* the flanges at angles theta[] and speeds w[]: the reference body first (the other bodies keep their
+ * absolute motion), then a flange at the load body */
+static void set_flanges(gf_inst *c, const double *theta, const double *w)
+{
+    gm_data *d = c->data;
+    st_flanges *fl = flanges(c);
+    double *y = d->state.y;
+    int k, i;
+    for (k = 0; k < fl->n; ++k)
+        if (fl->body[k] == 0) {
+            double dpsi = y[0] - theta[k], dom = y[1] - w[k];
+            for (i = 1; i < d->gb->n; ++i) {
+                y[2 * i] += d->gb->g[i] * dpsi;
+                y[2 * i + 1] += d->gb->g[i] * dom;
+            }
+            y[0] = theta[k];
+            y[1] = w[k];
+        }
+    for (k = 0; k < fl->n; ++k)
+        if (fl->body[k] != 0) {
+            int b = fl->body[k];
+            y[2 * b] = theta[k] - d->gb->g[b] * y[0];
+            y[2 * b + 1] = w[k] - d->gb->g[b] * y[1];
+        }
+}
+
+/* One communication step.  The flange's angle at its start by the trapezoidal rule, its speed the input
+ * (first step: the initial state's); over the step it turns at that speed (flange_order 1), or with the
+ * acceleration of the last two speeds received (flange_order 2): then the step is cut into the substeps
+ * of the integrator, n = ceil(H/max_step), the flange on the parabola at each substep's start and turning
+ * at its chord's speed over it. */
 int gm_do_step(gf_inst *c, double t, double H)
 {
     gm_data *d = c->data;
     st_flanges *fl = flanges(c), fl0;
     gb_state s0;
-    double w[ST_MAX_FLANGES], held[2], *y;
-    int k, i, st, bad = 0, first;
+    double w[ST_MAX_FLANGES], acc[ST_MAX_FLANGES], th[ST_MAX_FLANGES], wc[ST_MAX_FLANGES], w_end[ST_MAX_FLANGES];
+    double held[2], hmax;
+    long n_sub = 1, j;
+    int k, st = GF_OK, bad = 0, first, quad;
     if (!d->initialized) {
         if (isfinite(t)) c->time = t;
         if (!init_state(c)) return GF_DISCARD;
@@ -227,43 +273,44 @@ int gm_do_step(gf_inst *c, double t, double H)
         bad |= bad_value(c, fl->vr_speed[k], GF_DISCARD, "; step rejected, state unchanged");
         w[k] = first ? fl->omega[k] : val(c, fl->vr_speed[k]);
     }
+    if (fl->n > 0) bad |= bad_value(c, fl->vr_order, GF_DISCARD, "; step rejected, state unchanged");
     if (bad) return GF_DISCARD;
     if (!(isfinite(H) && H > 0.0)) return gbm_do_step(c, t, H);   /* rejected there, with its message */
+    quad = fl->n > 0 && val(c, fl->vr_order) == 2.0 && fl->h_prev > 0.0;
+    hmax = val(c, d->vr_hmax);
+    if (quad && hmax > 0.0 && H / hmax < 1e8) n_sub = (long)ceil(H / hmax * (1.0 - 1e-12));
+    if (n_sub < 1) n_sub = 1;
     s0 = d->state;
     fl0 = *fl;
-    for (k = 0; k < fl->n; ++k)
+    for (k = 0; k < fl->n; ++k) {
         if (fl->h_prev > 0.0) fl->theta[k] = fl->theta[k] + fl->h_prev * 0.5 * (fl->omega[k] + w[k]);
-    y = d->state.y;
-    for (k = 0; k < fl->n; ++k)   /* the reference body first: the other bodies keep their absolute motion */
-        if (fl->body[k] == 0) {
-            double dpsi = y[0] - fl->theta[k], dom = y[1] - w[k];
-            for (i = 1; i < d->gb->n; ++i) {
-                y[2 * i] += d->gb->g[i] * dpsi;
-                y[2 * i + 1] += d->gb->g[i] * dom;
-            }
-            y[0] = fl->theta[k];
-            y[1] = w[k];
-        }
-    for (k = 0; k < fl->n; ++k)
-        if (fl->body[k] != 0) {
-            int b = fl->body[k];
-            y[2 * b] = fl->theta[k] - d->gb->g[b] * y[0];
-            y[2 * b + 1] = w[k] - d->gb->g[b] * y[1];
-        }
+        acc[k] = quad ? (w[k] - fl->omega[k]) / fl->h_prev : 0.0;
+        w_end[k] = w[k] + acc[k] * H;
+    }
     for (k = 0; k < fl->n_port; ++k) {   /* the first step: the ports' torques at their start values */
         held[k] = c->values[fl->vr_port[k]];
         if (first) c->values[fl->vr_port[k]] = c->vars[fl->vr_port[k]].start;
     }
-    st = gbm_do_step(c, t, H);
+    for (j = 0; j < n_sub && st == GF_OK; ++j) {
+        double t0 = H * (double)j / (double)n_sub, t1 = j + 1 == n_sub ? H : H * (double)(j + 1) / (double)n_sub;
+        for (k = 0; k < fl->n; ++k) {
+            th[k] = fl->theta[k] + w[k] * t0 + 0.5 * acc[k] * t0 * t0;
+            wc[k] = w[k] + 0.5 * acc[k] * (t0 + t1);
+        }
+        set_flanges(c, th, wc);
+        st = gbm_do_step(c, t + t0, t1 - t0);
+    }
     for (k = 0; k < fl->n_port; ++k) c->values[fl->vr_port[k]] = held[k];
     if (st != GF_OK) {
         d->state = s0;
         *fl = fl0;
+        c->time = t;
         return st;
     }
+    c->time = t + H;
     for (k = 0; k < fl->n; ++k) fl->omega[k] = w[k];
     fl->h_prev = H;
-    flange_outputs(c, H);
+    flange_outputs(c, H, w_end);
     return GF_OK;
 }
 

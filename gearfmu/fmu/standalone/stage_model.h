@@ -25,6 +25,7 @@ typedef struct {
     double omega[ST_MAX_FLANGES];     /* the speed received there (rad/s) */
     double h_prev;                    /* the step that followed it (s; 0: none yet) */
     int vr_first_start;               /* parameter: 1 = the first step holds the port inputs at their starts */
+    int vr_order;                     /* parameter: the flange's motion over a step, 1 linear, 2 quadratic */
     int n_port;
     int vr_port[2];                   /* the torque inputs that come from neighbouring FMUs */
 } st_flanges;
