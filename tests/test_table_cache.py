@@ -366,3 +366,20 @@ def test_a_build_from_kept_tables_reports_the_computation_time(cache, tmp_path):
     assert "table_cache" not in first.tables.provenance and "table_cache" in second.tables.provenance
     assert first.tables_compute_s == first.tables_wall_s
     assert second.tables_compute_s == first.tables.provenance["precompute"]["wall_s"]
+
+
+def test_an_fmu_from_kept_tables_holds_no_path_of_the_build_machine(cache, computed, tmp_path):
+    """An FMU is sent to other teams: no file in it may name a folder of the machine that built
+    it.  The second build reads its tables from the cache; neither the cache folder nor the build
+    folder may appear in any member of the FMU (before: the provenance note named the cache
+    folder)."""
+    scene = load_scene(DEFAULT)
+    pipeline.compute_tables(scene)
+    res = pipeline.build(scene, tmp_path / "kept.fmu")
+    assert len(computed) == 1, "the build computed the tables again instead of reading the cache"
+    machine_paths = {str(cache), str(cache.parent), str(tmp_path)}
+    with zipfile.ZipFile(res.fmu_path) as z:
+        for member in z.namelist():
+            data = z.read(member)
+            for p in machine_paths:
+                assert p.encode() not in data, f"{member} names the build machine's folder {p}"

@@ -22,10 +22,16 @@ FMU layout (docs/fmu.md)::
     resources/kernel_src/                the kernel's sources (gearkernel.c|h, gk_*.c|h, gkfmu.c|h) and
                                          the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
-    resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
+    resources/gearfmu_pyshim.txt         the Python version, the id of the build's Python record,
+                                         the wrapper's name, the variable table (no path)
     resources/pyshim_src/                the loader's source and its compile command
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
+
+The paths of the build's Python (its executable and shared library) are not in the FMU: they go
+to a record outside it, ``<gearfmu cache>/pythons/<id>.txt`` (:func:`record_build_python`), which
+the loader reads on this machine; elsewhere ``$GEARFMU_PYTHON`` names the Python to use
+(docs/fmu.md "The binary").
 """
 from __future__ import annotations
 
@@ -75,6 +81,12 @@ PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
 PYSHIM_SOURCES = (PYSHIM_SOURCE, HERE / "standalone" / "fmi2_gear.c", HERE / "standalone" / "fmi_common.c")
 PYSHIM_HEADERS = (HERE / "standalone" / "fmi_common.h", HERE / "standalone" / "gf_model.h")
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
+#: the folder of gearfmu's cache (:func:`gearfmu.common.cache.cache_dir`) holding the records of
+#: the Pythons pythonfmu FMUs were built with, and the first line of a record (pyshim.c reads both)
+PYTHON_RECORDS = "pythons"
+PYTHON_RECORD_FORMAT = "format=gearfmu-python-record 1"
+#: the environment variable naming the Python executable the loader starts instead (pyshim.c)
+PYTHON_OVERRIDE_VARIABLE = "GEARFMU_PYTHON"
 #: the binary's compile flags (docs/fmu.md "The binary"); it links no Python
 PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
@@ -213,6 +225,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
         shim = compile_pyshim(tmp / "shim", identifier, cc=cc)
+        if shim is not None:  # the loader's record of this build's Python, outside the FMU
+            record_build_python()
         (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so", guid=guid,
                                                          variables=variables), encoding="utf-8")
         shim_src = stage / "pyshim_src"
@@ -324,11 +338,9 @@ def python_environment() -> str:
     return f"{kind} {sys.version.split()[0]} with numpy {version('numpy')} and pythonfmu {version('pythonfmu')}"
 
 
-def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
-    """``resources/gearfmu_pyshim.txt``: the Python of this build (version, shared library,
-    executable, whose environment provides numpy, and a description of that environment without
-    a path), the wrapper's file name, the GUID and the variable table the FMI layer serves
-    (:func:`~gearfmu.fmu.build_steps.variable_table_lines`), one ``key=value`` a line."""
+def _libpython() -> tuple:
+    """(version "3.X", path of this Python's shared library or "" when it has none, the soname the
+    dynamic loader is asked for)."""
     ver = f"{sys.version_info.major}.{sys.version_info.minor}"
     soname = sysconfig.get_config_var("INSTSONAME") or f"libpython{ver}.so.1.0"
     libdir = sysconfig.get_config_var("LIBDIR") or ""
@@ -337,8 +349,65 @@ def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
         path = ""
     if not soname.endswith(".so") and ".so." not in soname:  # a static libpython: ask the loader by name
         soname = f"libpython{ver}.so.1.0"
-    return (f"python_version={ver}\nlibpython={path}\nlibpython_soname={soname}\n"
-            f"python_executable={sys.executable}\nwrapper={wrapper_name}\n"
+    return ver, path, soname
+
+
+def python_record() -> tuple:
+    """(id, text) of the record of this build's Python that the loader reads outside the FMU:
+    ``format=gearfmu-python-record 1``, then ``python_version``, ``python_executable``,
+    ``libpython`` (absolute paths; empty when there is no shared library) and ``environment``
+    (:func:`python_environment`), one ``key=value`` a line.  The id is the first 16 hex digits of
+    the SHA-256 of the version and the two paths: one record per Python environment, shared by
+    every FMU built in it, and a new one when the environment at a path changes its Python."""
+    ver, path, _ = _libpython()
+    rid = hashlib.sha256(f"{ver}\0{sys.executable}\0{path}".encode("utf-8", "surrogateescape")).hexdigest()[:16]
+    return rid, (f"{PYTHON_RECORD_FORMAT}\npython_version={ver}\npython_executable={sys.executable}\n"
+                 f"libpython={path}\nenvironment={python_environment()}\n")
+
+
+_UNWRITABLE_SAID = False
+
+
+def record_build_python() -> Optional[Path]:
+    """Write :func:`python_record` to ``<gearfmu cache>/pythons/<id>.txt`` (written beside, then
+    renamed: a reader sees the old record or the new one, never a part); return its path.  A
+    folder that cannot be written (or a Python without an executable's path) is no failure of the
+    build: None, and one line on stderr (once per process) saying that the FMU then runs in Python hosts, and in a C host with
+    ``$GEARFMU_PYTHON`` set."""
+    global _UNWRITABLE_SAID
+    rid, text = python_record()
+    path = cache_dir(PYTHON_RECORDS) / f"{rid}.txt"
+    part = path.with_name(f"{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.part")
+    try:
+        if not sys.executable or any(c in p for p in (sys.executable, _libpython()[1]) for c in "\r\n"):
+            raise OSError("this Python names no executable (sys.executable), or its path holds a line break")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part.write_bytes(text.encode("utf-8", "surrogateescape"))
+        os.replace(part, path)
+        return path
+    except OSError as exc:
+        if not _UNWRITABLE_SAID:
+            _UNWRITABLE_SAID = True
+            print(f"gearfmu: cannot write the record of this build's Python ({path}: "
+                  f"{exc.strerror or exc}); the pythonfmu FMU runs in Python hosts, and in a C host with "
+                  f"{PYTHON_OVERRIDE_VARIABLE} set to this Python's executable (docs/fmu.md)", file=sys.stderr)
+        return None
+    finally:
+        try:
+            part.unlink()
+        except OSError:
+            pass
+
+
+def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
+    """``resources/gearfmu_pyshim.txt``: the Python version of this build, the soname of its shared
+    library, the id of its record (:func:`python_record`), a description of its environment, the
+    wrapper's file name, the GUID and the variable table the FMI layer serves
+    (:func:`~gearfmu.fmu.build_steps.variable_table_lines`), one ``key=value`` a line.  No path:
+    where the build's Python is lives in the record, outside the FMU."""
+    ver, _, soname = _libpython()
+    rid, _ = python_record()
+    return (f"python_version={ver}\nlibpython_soname={soname}\npython_record={rid}\nwrapper={wrapper_name}\n"
             f"environment={python_environment()}\nguid={guid}\n" + "\n".join(variable_table_lines(variables)) + "\n")
 
 
