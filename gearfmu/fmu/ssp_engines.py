@@ -11,7 +11,7 @@
   the initial outputs during initialization.
 
 Both return a :class:`SspRun`: the communication points (s), the outputs asked for by (component,
-variable), the wall time (s).  :func:`energy_residual` is the energy the coupling creates or destroys
+variable), the wall and process CPU time of the simulation (s; fmpy's includes unpacking the FMUs).  :func:`energy_residual` is the energy the coupling creates or destroys
 at the power bonds, from the exchanged values (the residual libcosim's ECCO controls).
 """
 from __future__ import annotations
@@ -40,13 +40,14 @@ NS_PER_S = 1_000_000_000
 @dataclass
 class SspRun:
     """The outputs of a run at its communication points ``time_s`` (after each step; the steps' lengths
-    ``step_s``), by (component, variable); the wall time of the run (s)."""
+    ``step_s``), by (component, variable); the wall time and the process CPU time of the run (s)."""
 
     engine: str
     time_s: np.ndarray
     step_s: np.ndarray
     values: Dict[Tuple[str, str], np.ndarray]
     wall_s: float
+    cpu_s: float = 0.0
 
     def __getitem__(self, key: Tuple[str, str]) -> np.ndarray:
         return self.values[key]
@@ -75,16 +76,16 @@ def run_fmpy(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequence[T
     pset = None
     if start_values:
         pset = _ParameterSet([_Parameter(f"{c}.{v}", float(x)) for (c, v), x in start_values.items()])
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     # fmpy's loop adds the step to the time; a little less than n steps' end keeps it from one step more
     res = simulate_ssp(str(ssp_path), stop_time=(n - 0.5) * step_s, step_size=step_s, parameter_set=pset)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     if len(res) != n:
         raise RuntimeError(f"fmpy: {len(res)} communication steps, expected {n}")
     values = {}
     for comp, var in outputs:
         values[(comp, var)] = np.asarray(res[f"{comp}.{var}"], dtype=float)
-    return SspRun("fmpy", np.arange(1, n + 1) * step_s, np.full(n, step_s), values, wall)
+    return SspRun("fmpy", np.arange(1, n + 1) * step_s, np.full(n, step_s), values, wall, cpu)
 
 
 def read_system(folder) -> dict:
@@ -195,18 +196,19 @@ def run_libcosim(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequen
                 raise KeyError(f"libcosim: {comp} has no variable {var!r}")
             refs.append((i, vr[var]))
             obs.start_time_series(i, vr[var], CosimVariableType.REAL)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         if not ex.simulate_until(stop_ns):
             from libcosimpy._internal import get_last_error_message  # libcosim: its last error, only then
             raise RuntimeError(f"libcosim: the simulation stopped with an error ({get_last_error_message()})")
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         values, times = {}, None
         for (comp, var), (i, vr) in zip(outputs, refs):
             tp, steps, samples = obs.time_series_real_samples(i, vr, 1, n_max)
             values[(comp, var)] = np.asarray(samples, dtype=float)
             times = np.asarray(tp, dtype=np.int64)
         t = times / NS_PER_S
-        return SspRun("libcosim" + ("-ecco" if ecco else ""), t, np.diff(np.concatenate([[0.0], t])), values, wall)
+        return SspRun("libcosim" + ("-ecco" if ecco else ""), t, np.diff(np.concatenate([[0.0], t])), values, wall,
+                      cpu)
     finally:
         del alg
         shutil.rmtree(tmp, ignore_errors=True)
