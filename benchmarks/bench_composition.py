@@ -31,6 +31,7 @@ between the two steps around it), and the monolithic FMU's cost at the scene's c
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -119,7 +120,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     steps = [float(x) for x in args.steps.split(",")]
 
-    from gearfmu import drivetrain
+    from gearfmu import pipeline
     from gearfmu.fmu.composition import compose
     from gearfmu.fmu.crossbuild import host_key
     from gearfmu.fmu.gearbox_build import build_gearbox_fmu
@@ -127,18 +128,18 @@ def main(argv=None) -> int:
     from gearfmu.fmu.ssp_engines import bond_outputs, bonds_of, energy_residual, run_fmpy, run_libcosim
     from gearfmu.ssp import gearbox_ssp
 
-    scene = drivetrain.load_drivetrain(args.scene)
-    model = drivetrain.gearbox_model(scene, drivetrain.stage_tables(scene))
-    s = drivetrain.fmu_settings(scene, model)
+    _, scene = pipeline.load_any(args.scene)
+    model = pipeline.gearbox_model(scene, pipeline.stage_tables(scene))
+    s = pipeline.gearbox_fmu_settings(scene, model)
     sim = args.sim
     stages = [m.name for m in model.meshes]
     cols = [f"{m}.{q}" for m in stages for q in ("dte", "mesh_force")]
-    kw = dict(motor_torque_Nm=s.motor_torque_Nm, load_torque_Nm=s.load_torque_Nm, motor_speed_rad_s=s.motor_speed_rad_s,
-              max_step_s=s.max_step_s, integrator=s.integrator_name)
+    kw = dict(motor_torque_Nm=s.motor_torque_start_Nm, load_torque_Nm=s.load_torque_start_Nm,
+              motor_speed_rad_s=s.motor_speed_start_rad_s, max_step_s=s.max_step_s, integrator=s.integrator)
     print(f"bench_composition: {scene.name}, {sim:g} s simulated, steps {steps}", file=sys.stderr)
-    ref = drivetrain.simulate_drivetrain(scene, model, stop_time_s=sim, comm_step_s=1e-6)
+    ref = pipeline.simulate_drivetrain(scene, model, stop_time_s=sim, comm_step_s=1e-6)
     out = {"scene": scene.name, "sim_s": sim, "steps_s": steps, "repeat": args.repeat, "max_step_s": s.max_step_s,
-           "integrator": s.integrator_name, "scene_comm_step_s": s.output_interval_s,
+           "integrator": s.integrator, "scene_comm_step_s": s.output_interval_s,
            "reference": "native gearbox solver at a 1e-6 s communication step",
            "error": "RMS(x - x_native) / peak-to-peak(x_native) at the run's communication points",
            "cost": "wall time and process CPU time per simulated second, each the best of the runs", "forms": {}}
@@ -200,7 +201,7 @@ def main(argv=None) -> int:
             if "mean_step_s" in out["forms"]["flange/libcosim-ecco"][-1]:
                 out["forms"]["flange/libcosim-ecco"][-1]["step_s"] = out["forms"]["flange/libcosim-ecco"][-1]["mean_step_s"]
         # ---------------------------------------------------------------- the monolithic gearbox FMU
-        gb = build_gearbox_fmu(model, tmp / "gearbox.fmu", settings=type(s)(**{**vars(s), "stop_time_s": sim}),
+        gb = build_gearbox_fmu(model, tmp / "gearbox.fmu", settings=dataclasses.replace(s, stop_time_s=sim),
                                model_name="bench_gearbox", platforms=plat, validation=False)
         names = cols
 

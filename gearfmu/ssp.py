@@ -52,7 +52,7 @@ import zipfile
 from pathlib import Path
 from typing import Dict, Mapping, Optional
 
-from . import drivetrain as dt
+from . import stages as st
 from .common.checks import finite_number
 from .common.progress import ticking
 from .common.vocabulary import DEFAULT_INTEGRATOR, DEFAULT_SSP_COUPLING
@@ -368,9 +368,9 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
         tin = res.tables.temperature_input or "bulk_temperature"
         with ticking(f"writing the SSP package {out_path} (every .ssd and .ssv checked against its SSP 1.0 schema)",
                      enabled=progress or None):
-            return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange,
+            return build_ssp(res.fmu_path, out_path, variants or default_variants(res.settings.damping_ratio, trange,
                                                                                    tin),
-                             stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
+                             stop_time_s=res.settings.stop_time_s, system_name=scene.fmu.model_name)
 
 
 def ssp_fmu_name(ssp_path) -> str:
@@ -425,15 +425,15 @@ def ssp_from_drivetrain(scene, out_path, *, coupling: Optional[str] = None, comm
                         fmi_version: int = 2, platforms=None, progress: bool = False, allow_large: bool = False,
                         model=None) -> Path:
     """Drivetrain scene -> every stage's tables -> gearbox model -> the SSP of stage FMUs at ``out_path``
-    (:func:`gearbox_ssp` with the scene's start values, integrator, internal step and run; ``comm_step_s``
-    None: the scene's output interval; ``model``: the GearboxModel when already built)."""
+    (:func:`gearbox_ssp` with the gearbox FMU's run settings of the scene: start values, integrator,
+    internal step and run; ``comm_step_s`` None: the scene's output interval; ``model``: the GearboxModel
+    when already built)."""
     if model is None:
-        model = dt.gearbox_model(scene, dt.stage_tables(scene, progress=progress, allow_large=allow_large))
-    s = dt.fmu_settings(scene, model)
-    return gearbox_ssp(model, out_path, coupling=coupling, motor_torque_Nm=s.motor_torque_Nm,
-                       load_torque_Nm=s.load_torque_Nm, motor_speed_rad_s=s.motor_speed_rad_s,
-                       max_step_s=s.max_step_s, integrator=s.integrator_name, stop_time_s=s.stop_time_s,
+        model = st.gearbox_model(scene, st.stage_tables(scene, progress=progress, allow_large=allow_large))
+    s = st.gearbox_fmu_settings(scene, model)
+    return gearbox_ssp(model, out_path, coupling=coupling, motor_torque_Nm=s.motor_torque_start_Nm,
+                       load_torque_Nm=s.load_torque_start_Nm, motor_speed_rad_s=s.motor_speed_start_rad_s,
+                       max_step_s=s.max_step_s, integrator=s.integrator, stop_time_s=s.stop_time_s,
                        comm_step_s=s.output_interval_s if comm_step_s is None else comm_step_s,
-                       name=scene.model_name,
-                       description=f"{scene.name}: SSP of stage FMUs", fmi_version=fmi_version, platforms=platforms,
-                       progress=progress)
+                       name=scene.model_name, description=f"{scene.name}: SSP of stage FMUs",
+                       fmi_version=fmi_version, platforms=platforms, progress=progress)

@@ -34,7 +34,7 @@ import scipy.linalg
 from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
-from gearfmu import drivetrain
+from gearfmu import pipeline
 from gearfmu.fmu.composition import CompositionError, compose
 from gearfmu.fmu.crossbuild import host_key
 from gearfmu.fmu.element_build import BodyElement, ShaftElement, TorqueInput, build_element_fmu
@@ -68,14 +68,14 @@ def linear(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def example(tmp_path_factory):
-    scene = drivetrain.load_drivetrain(EXAMPLE)
-    model = drivetrain.gearbox_model(scene, drivetrain.stage_tables(scene))
-    s = drivetrain.fmu_settings(scene, model)
+    _, scene = pipeline.load_any(EXAMPLE)
+    model = pipeline.gearbox_model(scene, pipeline.stage_tables(scene))
+    s = pipeline.gearbox_fmu_settings(scene, model)
     d = tmp_path_factory.mktemp("example")
     from gearfmu.ssp import ssp_from_drivetrain
     path = ssp_from_drivetrain(scene, d / "example.ssp", comm_step_s=2e-5, platforms=HOST, model=model)
-    comp = compose(model, motor_torque_Nm=s.motor_torque_Nm, load_torque_Nm=s.load_torque_Nm,
-                   motor_speed_rad_s=s.motor_speed_rad_s, max_step_s=s.max_step_s, integrator=s.integrator_name)
+    comp = compose(model, motor_torque_Nm=s.motor_torque_start_Nm, load_torque_Nm=s.load_torque_start_Nm,
+                   motor_speed_rad_s=s.motor_speed_start_rad_s, max_step_s=s.max_step_s, integrator=s.integrator)
     return {"scene": scene, "model": model, "ssp": path, "comp": comp, "dir": d}
 
 
@@ -176,7 +176,7 @@ COLS = ("stage1.dte", "stage2.dte", "stage1.mesh_force", "stage2.mesh_force")
 
 
 def _example_errors(example, run, T):
-    ref = drivetrain.simulate_drivetrain(example["scene"], example["model"], stop_time_s=T, comm_step_s=1e-6)
+    ref = pipeline.simulate_drivetrain(example["scene"], example["model"], stop_time_s=T, comm_step_s=1e-6)
     out = {}
     for c in COLS:
         y = np.interp(run.time_s, ref.time_s, ref[c])

@@ -55,19 +55,19 @@ import sysconfig
 from .. import __version__
 from ..common.cache import cache_dir
 from ..common.progress import ticking
-from ..common.vocabulary import DEFAULT_INTEGRATOR
+from ..common.settings import RunSettings
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
-                          KERNEL_LIBRARY_SOURCES, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
-                          check_build_arguments, check_output_arguments, compiler_version, envelope_json,
+                          KERNEL_LIBRARY_SOURCES, CompilerNotFoundError, FmuBuildError, check_arguments,
+                          check_output_arguments, compiler_version,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
-                          model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
-                          variable_table_lines, write_scene, write_tables)
+                          model_description, record_parameters, run_compiler, scene_sha256, sha256_file,
+                          start_values, temperature_input, variable_table_lines, write_scene, write_tables)
 from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
 from .validation import VALIDATION_DIR, validation_record
-from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
+from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
@@ -161,41 +161,47 @@ def _slave_text(template: str, class_name: str, kernel_api: str) -> str:
     return text
 
 
-def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
-              pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
-              gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
-              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
-              output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = DEFAULT_INTEGRATOR,
-              envelope: Optional[dict] = None) -> Path:
+def build_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None, *, model_name: str = "gearpair",
+              scene_text: Optional[str] = None, spec_path=None, cc: Optional[str] = None,
+              envelope: Optional[dict] = None,
+              damping_ratio: Optional[float] = None, pinion_speed_start_rad_s: Optional[float] = None,
+              pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
+              max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
+              stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
+              pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
-    Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
-    ``gear_torque_start_Nm`` None means the static balance
-    ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
-    "elastobacklash", 1 or "contact_zone" (docs/model.md).  ``integrator``: 0 or
-    "rk4", 1 or "rk4_kink", 2 or "rk4_node" (default, :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`;
-    docs/model.md "Integration", docs/native.md "rk4_node"), 3 or "rk4_seg" (docs/model.md "rk4_seg"; FMU
-    parameter ``integrator``).  ``stop_time_s`` and
-    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
-    None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
-    ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,
+    ``settings``: the run settings (:class:`gearfmu.common.settings.RunSettings`; None: its
+    defaults): the start values of the FMU's parameters and inputs and its DefaultExperiment
+    (``stop_time_s``, ``output_interval_s``: stopTime, stepSize).  The keyword arguments of the
+    same names, when given, replace its fields.  Units: damping_ratio (1), speeds rad/s, torques
+    N*m, times s, angles rad.  Automatic values are resolved on the tables as the native solver
+    resolves them (:func:`gearfmu.dynamics.native.resolve_settings`): ``gear_torque_start_Nm``
+    None means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``, ``max_step_s`` None the
+    automatic step at 1.5 x the start speed, ``output_interval_s`` None
+    :func:`gearfmu.common.settings.default_output_interval_s` at the start speed.
+    ``damping_model``: "elastobacklash" (0) or "contact_zone" (1) (docs/model.md).
+    ``integrator``: "rk4" (0), "rk4_kink" (1), "rk4_node" (2, the default,
+    :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`; docs/model.md "Integration",
+    docs/native.md "rk4_node") or "rk4_seg" (3, docs/model.md "rk4_seg"; FMU parameter ``integrator``).
+    ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the tables' own range,
     "not verified"), checked at run time and recorded (docs/fmu.md "Verified envelope").
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
     """
-    a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
-                        damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
-                        pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
-                        gear_torque_start_Nm=gear_torque_start_Nm, max_step_s=max_step_s, stop_time_s=stop_time_s,
-                        output_interval_s=output_interval_s, damping_model=damping_model)
-    tstop, dt = a.stop_time_s, a.output_interval_s
+    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
+                                  damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
+                                  pinion_angle_start_rad=pinion_angle_start_rad,
+                                  pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+                                  max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+                                  damping_model=damping_model, integrator=integrator)
+    tstop, dt = s.stop_time_s, s.output_interval_s
     spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, a.starts())
+    variables, temp0 = interface_variables(spec, tables, start_values(s))
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
-    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
+    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
     identifier = f"gearfmu_{suffix}"       # module name and modelIdentifier
     class_name = f"GearFmu_{suffix}"
     guid = "{" + str(uuid.uuid4()) + "}"
@@ -241,7 +247,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         scene_file = write_scene(stage, scene_text)
         if scene_file is not None:
             files.append(scene_file)
-        parameters = dict(a.parameters(), stop_time_s=tstop, output_interval_s=dt)
+        parameters = dict(record_parameters(s), stop_time_s=tstop, output_interval_s=dt)
         if temp0 is not None:  # after the experiment times (the record's key order)
             parameters["bulk_temperature_start_C"] = temp0
         provenance = {
@@ -272,9 +278,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         _pythonfmu_build(script, raw_fmu, [*files, api, src_dir, shim_src])
 
         record = validation_record(
-            tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
-            parameters=a.parameters(temp0), scene_text=scene_text, compiler=provenance["kernel"]["compiler"],
-            envelope=env_rec)
+            tables, s, runtime="pythonfmu", model_identifier=identifier, temperature_start_C=temp0,
+            scene_text=scene_text, compiler=provenance["kernel"]["compiler"], envelope=env_rec)
         record[ENVELOPE_FILE] = envelope_json(env_rec).encode("utf-8")
 
         with zipfile.ZipFile(raw_fmu) as zin:
@@ -284,7 +289,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                                     generation_tool=f"gearfmu {__version__}", generation_date=now,
                                     version=__version__, description_note=envelope_note(env_rec))
             plat = _platform_dir()
-            with fmu_zip(a.out_path) as zout:
+            with fmu_zip(out_path) as zout:
                 zout.writestr("modelDescription.xml", xml)
                 for info in zin.infolist():
                     n = info.filename
@@ -303,14 +308,14 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                     model_name=model_name, model_identifier=identifier, fmi_version=2, runtime="pythonfmu",
                     generation_tool=f"gearfmu {__version__}", variables=variables,
                     description=ET.fromstring(xml).get("description", ""), tables=tables,
-                    parameters=a.parameters(temp0), envelope=env_rec, scene_text=scene_text,
+                    parameters=record_parameters(s, temp0), envelope=env_rec, scene_text=scene_text,
                     validation_record=json.loads(record[f"{VALIDATION_DIR}/record.json"]),
                     platforms_text=f"binaries/{plat}: gearfmu's loader and pythonfmu's wrapper; the kernel "
                                    "(resources/) compiled on the build machine (docs/fmu.md)",
                     experiment={"start": 0.0, "stop": tstop, "step": dt})
                 for rel in DOC_FILES(2):
                     zout.writestr(rel, page)
-    return a.out_path
+    return out_path
 
 
 def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:

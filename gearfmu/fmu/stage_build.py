@@ -112,7 +112,8 @@ def stage_variables(spec: StageSpec) -> List[Variable]:
     model = spec.model
     if spec.integrator not in GEARBOX_INTEGRATORS:
         raise FmuBuildError(f"{spec.name}.integrator: {spec.integrator!r} not one of {GEARBOX_INTEGRATORS}")
-    settings = gearbox_settings(model, motor_torque_Nm=spec.reference_torque_Nm, load_torque_Nm=spec.load_torque_Nm,
+    settings = gearbox_settings(model, None, motor_torque_start_Nm=spec.reference_torque_Nm,
+                                load_torque_start_Nm=spec.load_torque_Nm,
                                 motor_speed_start_rad_s=spec.reference_speed_rad_s,
                                 motor_angle_start_rad=spec.reference_angle_rad, max_step_s=spec.max_step_s,
                                 integrator=spec.integrator, stop_time_s=1.0, output_interval_s=1.0)
