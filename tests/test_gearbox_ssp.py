@@ -1,6 +1,6 @@
 """The SSP of stage FMUs (``gearfmu ssp DRIVETRAIN.toml``, docs/gearbox.md "The SSP of stage FMUs"), run in
-fmpy's SSP master (``fmpy.ssp.simulation.simulate_ssp``) and in libcosim (libcosimpy), against references
-no code here produced:
+fmpy's SSP master (``fmpy.ssp.simulation.simulate_ssp``) and in libcosim (libcosimpy) -- and once in ecos
+(ecospy), which gives libcosim's numbers -- against references no code here produced:
 
 * the linear limit (constant mesh stiffness, no errors, no backlash; the two-stage chain of
   tests/test_gearbox_modes.py): the forced response to a motor-torque step from the static state against
@@ -19,6 +19,7 @@ The structure of the package (connections, the OSP angular mechanical ports), th
 body under constant torque: the closed form; a shaft: its integration rule by hand), the FMI 3 FMUs and
 bad input are checked besides.
 """
+import json
 import math
 import subprocess
 import sys
@@ -229,6 +230,39 @@ def test_fmpy_first_step_without_the_start_values_is_off(example):
         assert np.max(np.abs(good[o] - cosim[o])) <= 1e-9 * np.ptp(good[o]), o
     dte = example["comp"].outputs["stage1.dte"]
     assert np.sqrt(np.mean((bad[dte] - good[dte]) ** 2)) / np.ptp(good[dte]) > 1e-2
+
+
+ECOS_RUN = """
+import ctypes, json, os, sys
+ctypes.CDLL(os.path.join(sys.prefix, "lib", "libtbb.so.12"), mode=ctypes.RTLD_GLOBAL)  # ecospy's libtbb (test extra)
+from ecospy import EcosLib, EcosSimulation
+EcosLib.set_log_level("err")
+path, h, n, names = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), json.loads(sys.argv[4])
+rows = []
+with EcosSimulation(ssp_path=path, step_size=h) as sim:
+    sim.init()
+    for k in range(n):
+        sim.step()
+        rows.append([sim.get_real(c + "::" + v) for c, v in names])
+    sim.terminate()
+print("RESULT " + json.dumps(rows))
+"""
+
+
+def test_example_runs_in_ecos_as_in_libcosim(example, tmp_path):
+    """A third SSP engine, ecos (ecospy, a fresh process): the package as it is written gives libcosim's numbers
+    to 1e-9 of the range (both transfer the initial outputs and step at a fixed step)."""
+    T, H = 0.004, 2e-5
+    outs = [example["comp"].outputs[c] for c in COLS]
+    script = tmp_path / "ecos_run.py"
+    script.write_text(ECOS_RUN)
+    p = subprocess.run([sys.executable, str(script), str(example["ssp"]), repr(H), str(int(round(T / H))),
+                        json.dumps([list(o) for o in outs])], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-800:]
+    rows = np.array(json.loads(next(ln for ln in p.stdout.splitlines() if ln.startswith("RESULT "))[7:]))
+    ref = run_libcosim(example["ssp"], stop_time_s=T, step_s=H, outputs=outs)
+    for i, o in enumerate(outs):
+        assert np.max(np.abs(rows[:, i] - ref[o])) <= 1e-9 * np.ptp(ref[o]), o
 
 
 # ------------------------------------------------------------------ the package
