@@ -460,8 +460,9 @@ def test_ends_joined_rigidly_to_the_stages(tmp_path):
     reference body and the load torque the last stage's gear (their inertias added to those bodies), only the
     intermediate shaft is cut.  Against the native gearbox solver on the same model, both from the static state
     under 150 N*m with the load at 1000 N*m (not the balancing 1680 N*m: the gearbox accelerates and its
-    deflections ring), H = 1e-5 s: every output within 5e-4 of its range (measured 2.5e-4).  (A torque step at t = 0 would need the
-    stage's motor torque set after its initialization: set before, it is the torque of its initial state.)"""
+    deflections ring), H = 1e-5 s: every output within 5e-4 of its range (measured 2.5e-4).  (A torque step at
+    t = 0 would need the stage's motor torque set after its initialization: set before, it is the torque of its
+    initial state.)"""
     from gearfmu.gearbox.native import simulate
 
     meshes = [Mesh("s1", const_tables(**S1), 0.05, "contact_zone"), Mesh("s2", const_tables(**S2), 0.05, "contact_zone")]

@@ -252,7 +252,8 @@ def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_
             inner = next(n for n, own in assigned.items() if s in own)
             fb = a if owner[b] == inner else b
             y = owner[fb]
-            links += [Link(inner, f"{sh}.port_torque", y, f"{sh}.torque"), Link(y, speed_var(fb), inner, f"{sh}.flange_speed")]
+            links += [Link(inner, f"{sh}.port_torque", y, f"{sh}.torque"),
+                      Link(y, speed_var(fb), inner, f"{sh}.flange_speed")]
             bonds.append(Bond(sh, Port(y, f"{sh}.torque", speed_var(fb), True),
                               Port(inner, f"{sh}.port_torque", f"{sh}.flange_speed", False)))
         else:

@@ -3,15 +3,18 @@
 * :func:`run_fmpy`: fmpy's SSP master (``fmpy.ssp.simulation.simulate_ssp``): fixed communication step,
   every component stepped from the values of the last communication point (Jacobi), the outputs read
   after the step.  It starts every connection at 0: in the first step each driven input is 0, not the
-  neighbour's initial output (docs/gearbox.md "The SSP of stage FMUs" says what that costs).
+  neighbour's initial output (the FMUs' first_step_start_values holds their start values instead;
+  docs/gearbox.md "The SSP of stage FMUs").
 * :func:`run_libcosim`: the Open Simulation Platform's libcosim (libcosimpy), from the archive's
-  ``SystemStructure.ssd`` at a fixed step, or from its ``OspSystemStructure.xml`` with the
-  energy-conserving algorithm ECCO (Sadjina & Pedersen 2020; libcosim's ``ecco_algorithm``), which
-  changes the step to keep the power residual of the bonds within its tolerances.  libcosim transfers
-  the initial outputs during initialization.
+  ``SystemStructure.ssd`` at a fixed step, or with the energy-conserving algorithm ECCO (Sadjina &
+  Pedersen 2020; libcosim's ``ecco_algorithm``), which changes the step to keep the power residual of
+  the bonds within its tolerances: the archive's FMUs, connections and bonds (:func:`read_system`) set
+  up in code, since libcosim refuses an OspSystemStructure.xml with more than one power bond.
+  libcosim transfers the initial outputs during initialization.
 
 Both return a :class:`SspRun`: the communication points (s), the outputs asked for by (component,
-variable), the wall and process CPU time of the simulation (s; fmpy's includes unpacking the FMUs).  :func:`energy_residual` is the energy the coupling creates or destroys
+variable), the wall and process CPU time of the simulation (s; fmpy's includes unpacking the FMUs).
+:func:`energy_residual` is the energy the coupling creates or destroys
 at the power bonds, from the exchanged values (the residual libcosim's ECCO controls).
 """
 from __future__ import annotations
@@ -184,7 +187,8 @@ def run_libcosim(ssp_path, *, stop_time_s: float, step_s: float, outputs: Sequen
         ex.add_observer(obs)
         if ecco is not None:   # ECCO reads the bonds' inputs too: an observed variable is one libcosim can get
             for bond in system["bonds"].values():
-                for comp, var in ((bond["torque_in"][0], bond["torque_in"][1]), (bond["torque_out"][0], bond["torque_out"][2])):
+                tin, tout = bond["torque_in"], bond["torque_out"]
+                for comp, var in ((tin[0], tin[1]), (tout[0], tout[2])):
                     obs.start_time_series(idx[comp], vrs[comp][var], CosimVariableType.REAL)
         refs = []
         for comp, var in outputs:
