@@ -27,7 +27,7 @@ import pytest
 from gearfmu.ehl import solve_line_contact
 from gearfmu.ehl.mgkernels import _coef, _residual
 from gearfmu.ehl.multigrid import FlatMultigrid
-from gearfmu.ehl.solver import _flat_opts
+from gearfmu.ehl.iterate import _flat_opts
 
 
 def _flat_from_result(res, prm_from):

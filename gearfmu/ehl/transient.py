@@ -31,7 +31,7 @@ finest-grid right-hand side.  Each step: warm start from the previous step (P an
 extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
 step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
-:data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
+:data:`.attempts.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
 setting is re-solved as 2, then 4 BDF2 sub-steps (roughness at the sub-step
 times; rough flanks stall on limit cycles / residual floors at asperity
 pressure spikes, docs/ehl_transient.md), and only if that fails too raises
@@ -66,13 +66,14 @@ from .mgcycle import OPT_DEFAULTS
 from .transient_inputs import (TransientLubricant, TransientNumerics, TransientOperating,
                                _transient_inputs)
 from .multigrid import EHLParams, FlatMultigrid
-from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS, STALL_WINDOW,
-                     LineContactResult, _flat_opts, solve_line_contact, solve_line_contact as _steady)
+from .attempts import RELAXATION_SETTINGS
+from .iterate import FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, STALL_WINDOW, _flat_opts
+from .solver import LineContactResult, solve_line_contact, solve_line_contact as _steady
 from .mesh_film import contact_kinematics, involute_arc_length_m
 
 #: Relaxation settings of the time steps, tried in this order (the one that
 #: converged last is tried first at the next step), then the steady
-#: :data:`.solver.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
+#: :data:`.attempts.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
 #: waviness 0.1 H_c, lambda = 0.5 b (docs/ehl_transient.md):
 #: the steady default (dipole distribution ``dist=0``) diverges within 2-5
 #: steps once c_t > 0 (the time term sees the dipole's 1/r far field) and the
