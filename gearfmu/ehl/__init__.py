@@ -16,6 +16,8 @@ attempts          the chain of attempts of a steady solve: fast path, corner pla
                   settings per grid with polish, coupled Newton from stalled states
 transient         transient solver, roughness moving with the surfaces
 transient_inputs  input groups of the transient solver (operating, lubricant, numerics)
+transient_steps   time levels of the transient solver: moving roughness, schemes, settings
+                  in turn, sub-step rescue
 mesh_film         films along the line of action: kinematics, node solves
 multigrid         the multigrid core: EHLParams, FlatMultigrid (levels, starts, iteration)
 mgcycle           compiled cycles: schedules, convergence loop, option vector
