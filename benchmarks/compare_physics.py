@@ -35,6 +35,7 @@ refactoring with it.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import math
 import re
@@ -304,6 +305,9 @@ def _direct(arrays, checkout: Path):
                                      max_workers=1)
         kw = dict(kw)
         T = kw.pop("torque_Nm", 2000.0)
+        if "e_pair_m" in kw and "loading" in inspect.signature(direct_mesh_stiffness).parameters:
+            from gearfmu.assembly.direct_tvms import PairLoading      # the errors as one argument
+            kw["loading"] = PairLoading(kw.pop("e_pair_m"), kw.pop("crowning_m"))
         _record(arrays, f"direct.{model}_{level}_{len(arrays)}", direct_mesh_stiffness, env, sc.mesh, s, T, model,
                 transient=st, max_workers=1, **kw)
 
