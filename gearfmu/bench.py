@@ -29,6 +29,7 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from .common.settings import RunSettings
 from .common.vocabulary import DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, INTEGRATORS
 from .dynamics.native import simulate
 from .dynamics.reference import simulate_reference
@@ -37,7 +38,8 @@ from .fmu.pythonfmu_build import build_fmu
 from .pipeline import compute_tables, load
 from .tables.synthetic import KB_BACKLASH_HALF_M, rectangular_wave_tables
 
-__all__ = ["HARD_CASES", "hard_case", "rel_errors", "accuracy_benchmark", "plot_pareto", "native_integrators"]
+__all__ = ["HARD_CASES", "hard_case", "case_settings", "rel_errors", "accuracy_benchmark", "plot_pareto",
+           "native_integrators"]
 
 
 def _kb(**kw):
@@ -166,13 +168,17 @@ def native_integrators():
     return "integrator", list(INTEGRATORS)
 
 
-def _fmu_build(tables, kw, max_step_s, workdir, integrator):
-    return build_fmu(tables, Path(workdir) / "bench.fmu", model_name="bench", damping_ratio=kw["damping_ratio"],
-                     integrator=integrator,
-                     pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
-                     pinion_torque_start_Nm=float(kw["pinion_torque_Nm"]), max_step_s=max_step_s,
-                     damping_model=kw.get("damping_model", DEFAULT_DAMPING_MODEL), stop_time_s=kw["stop_time_s"],
-                     output_interval_s=kw["comm_step_s"], pinion_angle_start_rad=kw.get("pinion_angle_start_rad", 0.0))
+def case_settings(kw: dict):
+    """(:class:`gearfmu.common.settings.RunSettings`, pinion torque input) of a hard case's
+    keyword arguments (:func:`hard_case`): the settings' start torque is the input's first value."""
+    torque = kw["pinion_torque_Nm"]
+    start = float(torque) if np.ndim(torque) == 0 else float(np.asarray(torque, dtype=float)[0])
+    settings = RunSettings(stop_time_s=kw["stop_time_s"], output_interval_s=kw["comm_step_s"],
+                           damping_ratio=kw["damping_ratio"],
+                           damping_model=kw.get("damping_model", DEFAULT_DAMPING_MODEL),
+                           pinion_speed_start_rad_s=kw["pinion_speed_start_rad_s"],
+                           pinion_angle_start_rad=kw.get("pinion_angle_start_rad", 0.0), pinion_torque_start_Nm=start)
+    return settings, torque
 
 
 def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16, 32, 64, 128, 256),
@@ -191,19 +197,20 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
     H = kw["comm_step_s"]
     Tm = 4 * H
     say(f"case {case}: {int(round(kw['stop_time_s'] / H))} comm steps of {H:.3g} s; reference rtol {ref_rtol:g}")
+    settings, torque = case_settings(kw)
     t0 = time.perf_counter()
-    ref = simulate_reference(tables, rtol=ref_rtol, steps_per_period=128, **kw)
+    ref = simulate_reference(tables, settings, pinion_torque_Nm=torque, rtol=ref_rtol, steps_per_period=128)
     ref_wall = time.perf_counter() - t0
     rows = []
     pname, integrators = native_integrators()
-    simulate(tables, **dict(kw, stop_time_s=H, max_step_s=H))  # JIT warm-up
+    simulate(tables, settings, stop_time_s=H, max_step_s=H, pinion_torque_Nm=torque if np.ndim(torque) == 0
+             else np.asarray(torque)[:1])  # JIT warm-up
     for integ in integrators:
-        extra = {pname: integ} if pname else {}
         for n in substeps:
             best = math.inf
             for _ in range(3):  # best of three (shared machine)
                 t0 = time.perf_counter()
-                res = simulate(tables, max_step_s=H / n, **extra, **kw)
+                res = simulate(tables, settings, max_step_s=H / n, integrator=integ, pinion_torque_Nm=torque)
                 best = min(best, time.perf_counter() - t0)
             rows.append(dict(method=f"native-{integ}", setting=f"h=H/{n}", step_s=H / n, wall_s=best,
                              **rel_errors(res, ref)))
@@ -213,7 +220,8 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
         hmax = H / fmu_substeps
         say("building the FMU (C kernel, once; the communication step is the master's choice)")
 
-        fmu = _fmu_build(tables, kw, hmax, wd, DEFAULT_INTEGRATOR)  # the FMU as built by default
+        fmu = build_fmu(tables, Path(wd) / "bench.fmu", settings, model_name="bench", max_step_s=hmax,
+                        integrator=DEFAULT_INTEGRATOR)  # the FMU as built by default
         for m in fmu_comm_mesh_periods:
             Hc = m * Tm
             nsteps = kw["stop_time_s"] / Hc
@@ -231,7 +239,8 @@ def accuracy_benchmark(case: str = "single_sided_impacts", *, substeps=(4, 8, 16
     for method in ("DOP853", "Radau"):
         for rt in rtols:
             t0 = time.perf_counter()
-            res = simulate_reference(tables, rtol=rt, method=method, steps_per_period=8, **kw)
+            res = simulate_reference(tables, settings, pinion_torque_Nm=torque, rtol=rt, method=method,
+                                     steps_per_period=8)
             wall = time.perf_counter() - t0
             rows.append(dict(method=f"solve_ivp-{method}", setting=f"rtol={rt:g}", wall_s=wall,
                              **rel_errors(res, ref)))

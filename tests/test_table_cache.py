@@ -335,8 +335,8 @@ def _write(path, text) -> str:
 def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
     """A second plan of the same scene reads the tables of its configurations from the cache; the
     cost it records for them stays the computation's time (the planner compares costs)."""
-    from gearfmu import plan_evaluator
-    from gearfmu.plan_choices import _choices
+    from gearfmu.plan import evaluator as plan_evaluator
+    from gearfmu.plan.choices import choices_of
     from gearfmu.scene.envelope import accuracy_of, envelope_of
 
     calls = []
@@ -349,9 +349,9 @@ def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
     monkeypatch.setattr(plan_evaluator, "precompute_tables", counted)
     scene = load_scene(DEFAULT)
     env, acc = envelope_of(scene), accuracy_of(scene)
-    full = {n: c.full for n, c in _choices(scene, env, acc).items()}
-    tb1, dt1 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
-    tb2, dt2 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
+    full = {n: c.full for n, c in choices_of(scene, env, acc).items()}
+    tb1, dt1 = plan_evaluator.Evaluator(scene, env, acc, False).tables(full)
+    tb2, dt2 = plan_evaluator.Evaluator(scene, env, acc, False).tables(full)
     assert len(calls) == 1 and _same_arrays(tb1, tb2)
     assert dt2 == tb1.provenance["precompute"]["wall_s"] and "table_cache" in tb2.provenance
 
