@@ -345,7 +345,10 @@ def _gearbox(arrays, checkout: Path):
     model, kw = gearbox_case("intermediate_shaft_resonance", mesh_periods=4)
     _record(arrays, "gearbox.resonance_rk45", simulate_reference, model, **kw, method="RK45", rtol=1e-8,
             atol_scale=10.0, steps_per_period=32.0)
-    from gearfmu import drivetrain
+    try:
+        from gearfmu import drivetrain          # the drivetrain orchestration (older trees)
+    except ImportError:
+        from gearfmu import stages as drivetrain
     scene = drivetrain.load_any(checkout / "examples" / "scenes" / "gearbox_two_stage.toml")[1]
     tables = drivetrain.stage_tables(scene, allow_large=True)
     model = drivetrain.gearbox_model(scene, tables)
