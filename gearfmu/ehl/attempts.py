@@ -32,7 +32,7 @@ import numpy as np
 from .coarse_newton import COARSE_NEWTON_MAX_NODES
 from .film_newton import NEWTON_MAX_NODES, coupled_newton
 from .grids import RETRY_BELOW_RESIDUAL, RETRY_CLOSE_RESIDUAL, RETRY_PROGRESS_FACTOR
-from .iterate import ROUGH_NEWTON_RAMP, CycleSettings, _extend, iterate_setting
+from .iterate import ROUGH_NEWTON_RAMP, CycleSettings, extend_history, iterate_setting
 from .multigrid import EHLParams, FlatMultigrid
 from .polish import POLISH_BEST_BELOW_RESIDUAL, _polish
 
@@ -257,7 +257,7 @@ class SteadyWalk:
         if ok:
             a.hist["newton_polish_from_cycle"] = [a.cycles]
             a.hist["newton_polish_rounds"] = [nr]
-            _extend(a.hist, ph)
+            extend_history(a.hist, ph)
             a.cycles += nr
             a.converged = True
         return ok
@@ -404,7 +404,7 @@ def coupled_newton_from_stalled_states(walk: SteadyWalk) -> Optional[Attempt]:
         if ok and c.tol_film < 1.0 and not (nh["film_change"] and nh["film_change"][-1] < c.tol_film):
             ok = False
         if ok:
-            _extend(a.hist, nh)
+            extend_history(a.hist, nh)
             a.hist["coupled_newton_from_cycle"] = [float(a.cycles)]
             a.hist["coupled_newton_steps"] = [float(ns)]
             a.cycles += ns

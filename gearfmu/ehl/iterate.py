@@ -58,7 +58,7 @@ ROUGH_NEWTON_AFTER_CYCLES = 8
 ROUGH_NEWTON_RAMP = (0.5, 1.0)
 
 
-def _flat_opts(opts):
+def flat_options(opts):
     """Option dict with ``load_on_coarse`` mapped to ``load_mode`` and ``order2`` to 0/1."""
     o = dict(opts)
     if "load_on_coarse" in o:
@@ -111,7 +111,7 @@ def iterate_setting(prm, grid, rough_fn, opts, Hc_guess, P_start, cycles: CycleS
     amplitude steps of ``cycles.ramp``, each stage continued where it stalls
     (:func:`_continue_stalled_stage`).  Returns (solver, history, converged, cycles run)."""
     n_levels, n_coarse = grid
-    solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **_flat_opts(opts))
+    solver = FlatMultigrid(prm, n_levels, n_coarse, rough_fn, **flat_options(opts))
     if rough_fn is not None:
         solver.base[:] = np.concatenate([0.5 * x ** 2 for x in solver.X])
     hist = {k_: [] for k_ in _HIST_KEYS}
@@ -141,7 +141,7 @@ def iterate_setting(prm, grid, rough_fn, opts, Hc_guess, P_start, cycles: CycleS
                                           tol_discretisation_load=(cycles.tol_load if cycles.stop_residual
                                                                    < math.inf else math.inf))
         it += nc
-        _extend(hist, h)
+        extend_history(hist, h)
         if not converged and nc >= cycles.max_cycles:
             # stopped by the caller's cycle limit, not stalled: no polish either
             hist["hit_max_cycles"] = [float(nc)]
@@ -154,7 +154,7 @@ def iterate_setting(prm, grid, rough_fn, opts, Hc_guess, P_start, cycles: CycleS
     return solver, hist, converged, it
 
 
-def _extend(hist, h):
+def extend_history(hist, h):
     """Append the per-cycle histories ``h`` to ``hist``."""
     for k_ in _HIST_KEYS:
         hist[k_].extend(h[k_])
@@ -218,7 +218,7 @@ def _continue_stalled_stage(solver, hist, h, it, cycles: CycleSettings):
             hist["newton_polish_from_cycle"] = [it]
             hist["newton_polish_rounds"] = [nr]
             it += nr
-            _extend(hist, ph)
+            extend_history(hist, ph)
         else:
             solver.P[:], solver.H[:], solver.H0[:], solver.mode[:] = saved
     if not converged and math.isfinite(last_dp) and last_dp < FREEZE_BELOW_PRESSURE_CHANGE:
@@ -230,7 +230,7 @@ def _continue_stalled_stage(solver, hist, h, it, cycles: CycleSettings):
         solver.opts["freeze"] = 0
         hist["frozen_switch_from_cycle"] = [it]
         it += nc
-        _extend(hist, h)
+        extend_history(hist, h)
     last_res = hist["reynolds_residual"][-1] if hist["reynolds_residual"] else float("nan")
     if (not converged and math.isfinite(last_res) and last_res < POLISH_BELOW_RESIDUAL
             and "newton_polish_rounds" not in hist
@@ -240,7 +240,7 @@ def _continue_stalled_stage(solver, hist, h, it, cycles: CycleSettings):
         hist["newton_polish_from_cycle"] = [it]
         hist["newton_polish_rounds"] = [nc]
         it += nc
-        _extend(hist, h)
+        extend_history(hist, h)
     return converged, it
 
 

@@ -66,7 +66,7 @@ from .transient_inputs import (TransientLubricant, TransientNumerics, TransientO
                                _transient_inputs)
 from .multigrid import EHLParams, FlatMultigrid
 from .attempts import RELAXATION_SETTINGS
-from .iterate import _flat_opts
+from .iterate import flat_options
 from .solver import LineContactResult, solve_line_contact, solve_line_contact as _steady
 from .mesh_film import contact_kinematics, involute_arc_length_m
 from .transient_steps import SUBSTEP_SPLITS, MovingSurfaces, StepSettings, TimeStepper
@@ -365,7 +365,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     u_s = steady.inputs["u_m_s"]
     scale_H = R / b_m ** 2
     first = dict(steady.residuals["settings"])
-    solver = FlatMultigrid(prm, n_levels, n_coarse, None, **_flat_opts(first))
+    solver = FlatMultigrid(prm, n_levels, n_coarse, None, **flat_options(first))
     dT, scheme, n_steps = _time_steps(num, ch.surfaces, float(solver.dx[solver.top]), ramp)
     dt_s = dT * b_m / u_s
     order = _settings_order(num.relaxation_settings)

@@ -16,7 +16,7 @@ from typing import Optional, Sequence, Union
 
 import numpy as np
 
-from .iterate import FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, STALL_WINDOW, _flat_opts
+from .iterate import FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, STALL_WINDOW, flat_options
 from .mgcycle import OPT_DEFAULTS
 
 #: sub-step rescue of a step that stalled on every relaxation setting: the step
@@ -130,7 +130,7 @@ class TimeStepper:
         tried = [self.cur] + [k for k in range(len(st.order)) if k != self.cur]
         for k in tried:
             o = dict(OPT_DEFAULTS)
-            o.update(_flat_opts(st.order[k]))
+            o.update(flat_options(st.order[k]))
             solver.opts.clear()
             solver.opts.update(o)
             sl = solver._sl(top)
