@@ -290,7 +290,10 @@ class SteadyWalk:
 def fast_path(walk: SteadyWalk) -> Optional[Attempt]:
     """Smooth solves with the default options where the coarsest grid is small enough for its
     Newton solve: :data:`FAST_SETTING`, then :data:`FAST_ROBUST_SETTING` (a warm start only the
-    latter, from ``initial``), each from a fresh start on the default grid, without continuation
+    latter, from ``initial``) -- Venner & Lubrecht's relaxation with F-cycles, the coarsest grid
+    solved by Newton steps and, after each cycle, Newton steps on the block around the largest
+    scaled residual (local relaxation at the pressure spike, after Brandt 1984) -- each from a
+    fresh start on the default grid, without continuation
     (a stall falls through to the next step); with no tolerance given they stop at the
     discretisation error (:data:`FAST_STOP_FRACTION`; a warm start on the same grid uses the
     estimate of ``initial``).  Marks ``fast_path`` and ``fast_path_stage``; the relaxation
