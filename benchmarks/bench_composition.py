@@ -181,9 +181,9 @@ def main(argv=None) -> int:
         plat = (host_key(),)
         ssps, comps = {}, {}
         for form, coupling, order in (("flange", "flange", 2), ("flange_linear", "flange", 1), ("shaft", "shaft", 2)):
-            ssps[form] = gearbox_ssp(model, tmp / f"{form}.ssp", coupling=coupling, stop_time_s=sim,
-                                     comm_step_s=s.output_interval_s, platforms=plat, flange_order=order, **kw)
             comps[form] = compose(model, coupling=coupling, flange_order=order, **kw)
+            ssps[form] = gearbox_ssp(comps[form], tmp / f"{form}.ssp", stop_time_s=sim,
+                                     comm_step_s=s.output_interval_s, platforms=plat)
         bonds = {f: bonds_of(p) for f, p in ssps.items()}
         outs = {f: [c.outputs[col] for col in cols] + bond_outputs(bonds[f]) for f, c in comps.items()}
         for h in steps:

@@ -389,26 +389,20 @@ def ssp_fmu_bytes(ssp_path) -> bytes:
 
 
 # ------------------------------------------------------------------ gearboxes
-def gearbox_ssp(model, out_path, *, coupling: Optional[str] = None, motor_torque_Nm: float,
-                load_torque_Nm: Optional[float] = None, motor_speed_rad_s: float, max_step_s: float,
-                integrator: Optional[str] = None, stop_time_s: float, comm_step_s: float, name: str = "gearbox",
-                description: str = "", fmi_version: int = 2, platforms=None, progress: bool = False,
-                flange_order: int = 2) -> Path:
-    """An SSP of stage FMUs for the gearbox ``model`` (gearfmu.gearbox.model.GearboxModel) at ``out_path``:
-    one FMU per stage and per end body (and per shaft with ``coupling`` "shaft"), joined at the elastic
-    shafts through OSP angular mechanical ports (docs/gearbox.md "The SSP of stage FMUs"); every .ssd
-    checked against the SSP 1.0 schema before the archive is written.  Start values: the gearbox's
-    quasi-static state under the torques (N*m) at the motor speed (rad/s); ``max_step_s`` and
-    ``integrator``: every stage's; ``comm_step_s``: the communication step the system is annotated with."""
+def gearbox_ssp(comp, out_path, *, stop_time_s: float, comm_step_s: float, name: str = "gearbox",
+                description: str = "", fmi_version: int = 2, platforms=None, progress: bool = False) -> Path:
+    """The SSP of stage FMUs of the composition ``comp`` (:func:`gearfmu.fmu.composition.compose`: the
+    gearbox cut into its stage and element components for a coupling, with their start values) at
+    ``out_path``: one FMU per stage and per end body (and per shaft with the "shaft" coupling), joined at
+    the elastic shafts through OSP angular mechanical ports (docs/gearbox.md "The SSP of stage FMUs");
+    every .ssd checked against the SSP 1.0 schema before the archive is written.  ``stop_time_s`` and
+    ``comm_step_s`` (s): the run and the communication step the system is annotated with."""
     out_path = Path(out_path)
     if out_path.suffix != ".ssp":
         raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
     for key, v in (("stop_time_s", stop_time_s), ("comm_step_s", comm_step_s)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise SspError(f"{key}: must be finite and > 0, got {v!r}")
-    comp = compose(model, coupling=coupling or DEFAULT_SSP_COUPLING, motor_torque_Nm=motor_torque_Nm,
-                   load_torque_Nm=load_torque_Nm, motor_speed_rad_s=motor_speed_rad_s, max_step_s=max_step_s,
-                   integrator=integrator or DEFAULT_INTEGRATOR, flange_order=flange_order)
     with tempfile.TemporaryDirectory(prefix="gearfmu_gbssp_") as tmpd:
         stage = Path(tmpd)
         with ticking(f"building {len(comp.components)} FMUs ({', '.join(c.name for c in comp.components)})",
@@ -431,9 +425,10 @@ def ssp_from_drivetrain(scene, out_path, *, coupling: Optional[str] = None, comm
     if model is None:
         model = st.gearbox_model(scene, st.stage_tables(scene, progress=progress, allow_large=allow_large))
     s = st.gearbox_fmu_settings(scene, model)
-    return gearbox_ssp(model, out_path, coupling=coupling, motor_torque_Nm=s.motor_torque_start_Nm,
-                       load_torque_Nm=s.load_torque_start_Nm, motor_speed_rad_s=s.motor_speed_start_rad_s,
-                       max_step_s=s.max_step_s, integrator=s.integrator, stop_time_s=s.stop_time_s,
+    comp = compose(model, coupling=coupling or DEFAULT_SSP_COUPLING, motor_torque_Nm=s.motor_torque_start_Nm,
+                   load_torque_Nm=s.load_torque_start_Nm, motor_speed_rad_s=s.motor_speed_start_rad_s,
+                   max_step_s=s.max_step_s, integrator=s.integrator or DEFAULT_INTEGRATOR)
+    return gearbox_ssp(comp, out_path, stop_time_s=s.stop_time_s,
                        comm_step_s=s.output_interval_s if comm_step_s is None else comm_step_s,
                        name=scene.model_name, description=f"{scene.name}: SSP of stage FMUs",
                        fmi_version=fmi_version, platforms=platforms, progress=progress)

@@ -62,9 +62,10 @@ def linear(tmp_path_factory):
     model = linear_gearbox()
     hmax = choose_max_step_s(model, 1.5 * W0, reference_torque_Nm=T0)
     kw = dict(motor_torque_Nm=T0, load_torque_Nm=TL, motor_speed_rad_s=W0, max_step_s=hmax)
-    path = gearbox_ssp(model, tmp_path_factory.mktemp("linear") / "linear.ssp", integrator="rk4", stop_time_s=0.02,
-                       comm_step_s=1e-5, platforms=HOST, **kw)
-    return {"model": model, "ssp": path, "comp": compose(model, integrator="rk4", **kw)}
+    comp = compose(model, integrator="rk4", **kw)
+    path = gearbox_ssp(comp, tmp_path_factory.mktemp("linear") / "linear.ssp", stop_time_s=0.02,
+                       comm_step_s=1e-5, platforms=HOST)
+    return {"model": model, "ssp": path, "comp": comp}
 
 
 @pytest.fixture(scope="module")
@@ -474,7 +475,7 @@ def test_ends_joined_rigidly_to_the_stages(tmp_path):
     comp = compose(model, **kw)
     assert sorted(c.name for c in comp.components) == ["s1", "s2"]
     assert comp.component("s1").spec.motor_input == "motor_torque" and comp.component("s2").spec.load_input == "load_torque"
-    path = gearbox_ssp(model, tmp_path / "rigid_ends.ssp", stop_time_s=0.01, comm_step_s=1e-5, platforms=HOST, **kw)
+    path = gearbox_ssp(comp, tmp_path / "rigid_ends.ssp", stop_time_s=0.01, comm_step_s=1e-5, platforms=HOST)
     T, H = 0.01, 1e-5
     names = ["s1.dte", "s2.dte", "load_speed"]
     run = run_libcosim(path, stop_time_s=T, step_s=H, outputs=[comp.outputs[n] for n in names])

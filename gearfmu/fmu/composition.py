@@ -111,6 +111,53 @@ def _rigid_links(parts: Sequence[str], tag: str) -> List[Shaft]:
     return [Shaft(f"{tag}~{i}", parts[i], parts[i + 1], None) for i in range(len(parts) - 1)]
 
 
+def _owners(model: GearboxModel) -> Dict[int, str]:
+    """The component that holds each body of ``model``: its stage's name, "motor" or "load";
+    CompositionError where a body is joined rigidly to two stages or belongs to none."""
+    n = model.n_bodies
+    owner: Dict[int, str] = {}
+    for m, mesh in enumerate(model.meshes):
+        for b in model.mesh_bodies[m]:
+            if int(b) in owner:
+                other = owner[int(b)]
+                raise CompositionError(
+                    f"stage {mesh.name}: its body {model.body_name(int(b))} is joined rigidly to stage {other}: an SSP "
+                    "of stage FMUs cuts the gearbox at its elastic shafts; give that shaft a stiffness (or build the "
+                    "gearbox as one FMU)")
+            owner[int(b)] = mesh.name
+    owner.setdefault(0, "motor")
+    owner.setdefault(model.load_body, "load")
+    if len(owner) != n:
+        raise CompositionError(f"bodies: {n} bodies but only motor, load and the stages' bodies can be cut into "
+                               "components")
+    return owner
+
+
+def _end_bodies(model: GearboxModel, owner: Dict[int, str], tm: float, tl: float, ts, theta0, omega0
+                ) -> List[Component]:
+    """The body components of the motor and the load where no stage holds them: their inertia, start
+    angle (rad) and speed (rad/s), and the torques on them (motor torque tm, load torque tl in N*m,
+    the shafts' static torques ts as port inputs)."""
+    components: List[Component] = []
+    for end, body in (("motor", 0), ("load", model.load_body)):
+        if owner[body] != end:
+            continue
+        torques = []
+        if end == "motor" and model.motor_torque_input:
+            torques.append(TorqueInput("motor_torque", 1, tm, "Motor torque"))
+        for s in range(len(model.shafts)):
+            a, b = (int(x) for x in model.shaft_bodies[s])
+            if body in (a, b):
+                torques.append(TorqueInput(f"{model.shafts[s].name}.torque", -1 if body == a else 1, float(ts[s]),
+                                           f"Torque of {model.shafts[s].name} (positive driving away from the motor)",
+                                           port=True))
+        if end == "load" and model.load_torque_input:
+            torques.append(TorqueInput("load_torque", -1, tl, "Load torque"))
+        components.append(Component(end, "body", BodyElement(end, float(model.inertia_kgm2[body]), float(theta0[body]),
+                                                             float(omega0[body]), tuple(torques))))
+    return components
+
+
 def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_torque_Nm: float,
             load_torque_Nm: Optional[float] = None, motor_speed_rad_s: float, motor_angle_rad: float = 0.0,
             max_step_s: float, integrator: str = DEFAULT_INTEGRATOR, flange_order: int = 2) -> Composition:
@@ -132,21 +179,7 @@ def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_
     omega0 = np.array([y0[1]] + [model.g[i] * y0[1] + y0[2 * i + 1] for i in range(1, n)])
     ts = model.shaft_static_torques_Nm(t_ref)
 
-    owner: Dict[int, str] = {}
-    for m, mesh in enumerate(model.meshes):
-        for b in model.mesh_bodies[m]:
-            if int(b) in owner:
-                other = owner[int(b)]
-                raise CompositionError(
-                    f"stage {mesh.name}: its body {model.body_name(int(b))} is joined rigidly to stage {other}: an SSP "
-                    "of stage FMUs cuts the gearbox at its elastic shafts; give that shaft a stiffness (or build the "
-                    "gearbox as one FMU)")
-            owner[int(b)] = mesh.name
-    owner.setdefault(0, "motor")
-    owner.setdefault(model.load_body, "load")
-    if len(owner) != n:
-        raise CompositionError(f"bodies: {n} bodies but only motor, load and the stages' bodies can be cut into "
-                               "components")
+    owner = _owners(model)
     stages = {mesh.name: m for m, mesh in enumerate(model.meshes)}
 
     # which stage holds which shaft (flange coupling): the stage of the body the shaft drives, else its driver
@@ -227,23 +260,7 @@ def compose(model: GearboxModel, *, coupling: str = DEFAULT_SSP_COUPLING, motor_
                 outputs[f"{name}.{col}[{i + 1}]"] = (name, f"{name}.{col}[{i + 1}]")
         for s in flanges:
             outputs[f"{model.shafts[s].name}.torque"] = (name, f"{model.shafts[s].name}.torque")
-    # ------------------------------------------------------------------ end bodies
-    for end, body in (("motor", 0), ("load", model.load_body)):
-        if owner[body] != end:
-            continue
-        torques = []
-        if end == "motor" and model.motor_torque_input:
-            torques.append(TorqueInput("motor_torque", 1, tm, "Motor torque"))
-        for s in range(len(model.shafts)):
-            a, b = (int(x) for x in model.shaft_bodies[s])
-            if body in (a, b):
-                torques.append(TorqueInput(f"{model.shafts[s].name}.torque", -1 if body == a else 1, float(ts[s]),
-                                           f"Torque of {model.shafts[s].name} (positive driving away from the motor)",
-                                           port=True))
-        if end == "load" and model.load_torque_input:
-            torques.append(TorqueInput("load_torque", -1, tl, "Load torque"))
-        components.append(Component(end, "body", BodyElement(end, float(model.inertia_kgm2[body]), float(theta0[body]),
-                                                             float(omega0[body]), tuple(torques))))
+    components += _end_bodies(model, owner, tm, tl, ts, theta0, omega0)
     # ------------------------------------------------------------------ shafts, links, bonds
     for s, (a, b) in enumerate(model.shaft_bodies):
         a, b = int(a), int(b)

@@ -238,15 +238,37 @@ def _doc_html(title: str, description: str, variables: Sequence[Variable], notes
     return text.encode("utf-8")
 
 
-def build_unit_fmu(out_path, *, unit: Path, files: Sequence[Path], spec: Spec, variables: Sequence[Variable],
-                   description: str, model_name: str, identifier: str, guid: str, resources: Dict[str, bytes],
-                   fmi_version: int, platforms: Optional[Sequence[str]], stop_time_s: float, step_size_s: float,
-                   generation_tool: str, notes: Sequence[str] = (), provenance: Optional[dict] = None,
-                   cc: Optional[str] = None) -> Path:
-    """Pack a standalone FMU of the runtime: ``unit`` (the one C file to compile) and the ``files`` it
-    includes into sources/, its binaries for ``platforms`` (crossbuild keys; None: all), the model
-    description of ``variables`` (the ``spec``'s units and experiment, ``description``), a documentation
-    page, ``resources`` ({path under resources/: bytes}) and resources/provenance.json."""
+@dataclass(frozen=True)
+class UnitFmu:
+    """What a standalone FMU of one C translation unit holds: ``unit`` (the one C file to compile)
+    and the ``files`` it includes (into sources/), the model description of ``variables`` (the
+    ``spec``'s units and experiment, ``description``, ``model_name``, ``identifier``, ``guid``,
+    ``generation_tool``), ``resources`` ({path under resources/: bytes}), the documentation
+    page's ``notes`` and the ``provenance`` added to resources/provenance.json."""
+
+    unit: Path
+    files: Sequence[Path]
+    spec: Spec
+    variables: Sequence[Variable]
+    description: str
+    model_name: str
+    identifier: str
+    guid: str
+    resources: Dict[str, bytes]
+    generation_tool: str
+    notes: Sequence[str] = ()
+    provenance: Optional[dict] = None
+
+
+def build_unit_fmu(out_path, fmu: UnitFmu, *, fmi_version: int, platforms: Optional[Sequence[str]],
+                   stop_time_s: float, step_size_s: float, cc: Optional[str] = None) -> Path:
+    """Pack the standalone FMU ``fmu`` (:class:`UnitFmu`) at ``out_path``: its sources, its binaries
+    for ``platforms`` (crossbuild keys; None: all) compiled for FMI ``fmi_version``, its model
+    description (default experiment ``stop_time_s``, ``step_size_s`` in s), a documentation page,
+    its resources and resources/provenance.json; ``cc``: the host compiler (None: found)."""
+    unit, files, variables, identifier, guid = fmu.unit, fmu.files, fmu.variables, fmu.identifier, fmu.guid
+    description, model_name, resources = fmu.description, fmu.model_name, fmu.resources
+    spec = fmu.spec
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
     out_path = Path(out_path)
@@ -294,10 +316,10 @@ def build_unit_fmu(out_path, *, unit: Path, files: Sequence[Path], spec: Spec, v
                 "files_sha256": {f"resources/{rel}": hashlib.sha256(d).hexdigest() for rel, d in resources.items()},
                 "binary": {"flags": list(STANDALONE_CFLAGS), "platforms": binaries,
                            "compiler": "; ".join(sorted({r["compiler"] for r in built.values()})) or None},
-                **(provenance or {})}
+                **(fmu.provenance or {})}
         (res / "provenance.json").write_text(json.dumps(prov, indent=1, default=str), encoding="utf-8")
         md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid, stop_time_s=stop_time_s,
-                       step_size_s=step_size_s, generation_tool=generation_tool, generation_date=now,
+                       step_size_s=step_size_s, generation_tool=fmu.generation_tool, generation_date=now,
                        version=__version__)
         note = crossbuild.platform_summary(binaries)
         if fmi_version == 3:
@@ -307,7 +329,7 @@ def build_unit_fmu(out_path, *, unit: Path, files: Sequence[Path], spec: Spec, v
                                                platforms_note=note)
             check_model_description(xml, variables)
         (root / "modelDescription.xml").write_bytes(xml)
-        page = _doc_html(model_name, description, variables, notes)
+        page = _doc_html(model_name, description, variables, fmu.notes)
         for rel in DOC_FILES(fmi_version):
             (root / rel).write_bytes(page)
         with fmu_zip(out_path) as zout:
@@ -329,12 +351,12 @@ def build_element_fmu(element: Element, out_path, *, fmi_version: int = 2, platf
     unit = ELEMENT_UNITS[fmi_version] if fmi_version in ELEMENT_UNITS else ELEMENT_UNITS[2]
     files = (LAYERS.get(fmi_version, LAYERS[2]), *ELEMENT_SOURCES, *ELEMENT_HEADERS)
     config = element_config_text(element, variables, guid=guid)
-    return build_unit_fmu(
-        out_path, unit=unit, files=files, spec=spec, variables=variables,
+    fmu = UnitFmu(
+        unit=unit, files=files, spec=spec, variables=variables,
         description=str(spec.model.get(f"description_{element.kind}", "")), model_name=element.name,
-        identifier=identifier, guid=guid, resources={CONFIG_FILE: config.encode("utf-8")}, fmi_version=fmi_version,
-        platforms=platforms, stop_time_s=stop_time_s, step_size_s=step_size_s,
+        identifier=identifier, guid=guid, resources={CONFIG_FILE: config.encode("utf-8")},
         generation_tool=f"gearfmu {__version__} (standalone runtime, {element.kind} element)",
         provenance={"model": f"element:{element.kind}", "element": {k: v for k, v in vars(element).items()
-                                                                    if k != "torques"}},
-        cc=cc)
+                                                                    if k != "torques"}})
+    return build_unit_fmu(out_path, fmu, fmi_version=fmi_version, platforms=platforms, stop_time_s=stop_time_s,
+                          step_size_s=step_size_s, cc=cc)

@@ -34,7 +34,7 @@ from .. import __version__
 from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS, INTEGRATORS
 from ..gearbox.model import GearboxModel
 from .build_steps import KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, variable_table_lines
-from .element_build import build_unit_fmu
+from .element_build import UnitFmu, build_unit_fmu
 from .gearbox_build import (GEARBOX_HEADERS, GEARBOX_SOURCES, STANDALONE_DIR, config_text, stage_folder,
                             start_values, gearbox_settings)
 from .gearbox_interface import apply_starts, gearbox_variables, load_gearbox_spec, n_outputs
@@ -222,11 +222,11 @@ def build_stage_fmu(spec: StageSpec, out_path, *, fmi_version: int = 2, platform
         f"Stage {mesh.name} of a gearbox for an SSP of stage FMUs: the multi-pair mesh model of seed 003 eq 1-6 on "
         f"the stage's tables with {len(spec.model.shafts)} shaft(s) to {len(spec.flanges)} flange(s) "
         "(docs/gearbox.md), FMI Co-Simulation")
-    return build_unit_fmu(
-        out_path, unit=STAGE_UNITS[v], files=files, spec=load_gearbox_spec(), variables=variables,
+    fmu = UnitFmu(
+        unit=STAGE_UNITS[v], files=files, spec=load_gearbox_spec(), variables=variables,
         description=description, model_name=spec.name, identifier=identifier, guid=guid, resources=resources,
-        fmi_version=fmi_version, platforms=platforms, stop_time_s=stop_time_s, step_size_s=step_size_s,
         generation_tool=f"gearfmu {__version__} (standalone runtime, stage of a gearbox SSP)",
         provenance={"model": "stage", "stage": mesh.name, "flanges": list(spec.flanges),
-                    "integrator": INTEGRATORS[spec.integrator], "max_step_s": spec.max_step_s},
-        cc=cc)
+                    "integrator": INTEGRATORS[spec.integrator], "max_step_s": spec.max_step_s})
+    return build_unit_fmu(out_path, fmu, fmi_version=fmi_version, platforms=platforms, stop_time_s=stop_time_s,
+                          step_size_s=step_size_s, cc=cc)
