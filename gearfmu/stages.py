@@ -343,12 +343,18 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
                             load_torque_start_Nm=scene.load_torque_Nm if scene.load.torque_input else 0.0)
 
 
-def check_gearbox_fmu_runtime(runtime: Optional[str]) -> None:
-    """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the default)."""
+def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] = None,
+                              me_node_events: Optional[str] = None) -> None:
+    """A gearbox FMU has the standalone C runtime and Co-Simulation only: FmuBuildError for any other
+    ``runtime`` (None: the default), an ``interface`` other than "cs" or any ``me_node_events``."""
     if runtime not in (None, "standalone"):
         raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
                             "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
                             "--runtime standalone")
+    if interface not in (None, "cs") or me_node_events is not None:
+        raise FmuBuildError(f"{'--interface' if interface not in (None, 'cs') else '--me-node-events'}: a gearbox "
+                            "FMU offers Co-Simulation only (Model Exchange: the gear-pair FMU; docs/standalone.md "
+                            "'Model Exchange')")
 
 
 @dataclass
