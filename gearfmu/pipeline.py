@@ -54,5 +54,5 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
                                         allow_large=allow_large)
     return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
                                 verified_envelope=verified, platforms=platforms, allow_large=allow_large,
-                                fmi_version=fmi_version, fmi3_outputs=fmi3_outputs, interface=interface,
-                                me_node_events=me_node_events)
+                                fmi_version=fmi_version, fmi3_outputs=fmi3_outputs,
+                                model_exchange={"interface": interface, "me_node_events": me_node_events})

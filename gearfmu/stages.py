@@ -182,19 +182,20 @@ def platform_kw(runtime: str, platforms, fmi_version: int = 2,
 
 def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
                          tables=None, plan=None, verified_envelope: Optional[dict] = None, platforms=None,
-                         allow_large: bool = False, fmi_version: int = 2,
-                         fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, interface: Optional[str] = None,
-                         me_node_events: Optional[str] = None) -> BuildResult:
+                         allow_large: bool = False, fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
+                         model_exchange: Optional[dict] = None) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
     :func:`gearfmu.pipeline.build`).  ``runtime``: "standalone" or "pythonfmu"; None: the
     scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the scene's physics
     (e.g. imported from CSV, gearfmu.tables.table_import); the scene then only gives the FMU
     and operating settings.  ``plan``, ``verified_envelope``: kept in the result.
     ``platforms``: binaries of a standalone FMU.  ``allow_large``: build even when the
-    estimate (gearfmu.assembly.estimate) exceeds the limits."""
+    estimate (gearfmu.assembly.estimate) exceeds the limits.  ``model_exchange``: the
+    ``interface`` and ``me_node_events`` of a standalone FMU (:func:`platform_kw`; None or a
+    value None: the builder's defaults)."""
     runtime = runtime or scene.fmu.runtime
     builder = fmu_builder(runtime)
-    extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs, interface, me_node_events)
+    extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs, **(model_exchange or {}))
     est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:

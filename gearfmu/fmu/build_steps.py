@@ -24,6 +24,7 @@ import subprocess
 import uuid
 import zipfile
 from dataclasses import replace
+from xml.sax.saxutils import escape as xml_escape
 from pathlib import Path
 from typing import Optional, Tuple
 
@@ -235,10 +236,22 @@ def variable_table_lines(variables) -> list:
     return lines
 
 
-def model_description(spec, variables, fmi_version: int, **md_args) -> bytes:
-    """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``."""
+def _with_platforms_note(xml: bytes, note: Optional[str]) -> bytes:
+    """``xml`` with `` [note]`` appended to the root element's description (which binaries it carries)."""
+    if not note:
+        return xml
+    start = xml.index(b"<fmiModelDescription")
+    a = xml.index(b' description="', start) + len(b' description="')
+    b = xml.index(b'"', a)
+    text = xml_escape(note, {'"': "&quot;"}).encode("utf-8")
+    return xml[:a] + (xml[a:b].rstrip() + b" [" + text + b"]").lstrip() + xml[b:]
+
+
+def model_description(spec, variables, fmi_version: int, platforms_note: Optional[str] = None, **md_args) -> bytes:
+    """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``;
+    FMI 3: ``platforms_note`` appended to the description."""
     if fmi_version == 3:
-        xml = model_description_xml3(spec, variables, **md_args)
+        xml = _with_platforms_note(model_description_xml3(spec, variables, **md_args), platforms_note)
         check_model_description3(xml, variables)
     else:
         xml = model_description_xml(spec, variables, **md_args)

@@ -537,8 +537,7 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
                            model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                            step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
                            generation_date: Optional[str] = None, version: Optional[str] = None,
-                           description_note: Optional[str] = None,
-                           platforms_note: Optional[str] = None, interfaces: Sequence[str] = ("cs",)) -> bytes:
+                           description_note: Optional[str] = None, interfaces: Sequence[str] = ("cs",)) -> bytes:
     """The FMI 3.0 Co-Simulation ``modelDescription.xml`` of the standalone runtime (FMI 3.0
     standard section 2.4: ModelVariables 2.4.7 with arrays (``<Dimension start=P>``, the slot
     count fixed at build), ModelStructure 2.4.8 by value reference).  The same variables, names and
@@ -548,8 +547,6 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
     interfaces = _check_interfaces(interfaces)
     desc = _with_note(_interfaces_text(str(spec.model.get("description", "")).replace("FMI 2.0", "FMI 3.0"),
                                        interfaces), description_note)
-    if platforms_note:
-        desc = (desc.rstrip() + " [" + platforms_note + "]").lstrip()
     attrib = {"fmiVersion": "3.0", "modelName": model_name, "instantiationToken": guid, "description": desc,
               "generationTool": generation_tool, "variableNamingConvention": "structured"}
     root = _root_element(spec, attrib, version, generation_date)
