@@ -77,8 +77,8 @@ from scipy.integrate import solve_ivp
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
 from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
-from .native import (InputLike, NativeInputError, _at_temperature, _finite, _result, resolve_settings, run_inputs,
-                     start_state)
+from .native import (InputLike, NativeInputError, SimResult, _at_temperature, _finite, derived_outputs,
+                     resolve_settings, run_inputs, start_state)
 
 __all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes", "TableRows",
            "TableSegment", "pair_forces"]
@@ -694,5 +694,7 @@ def simulate_reference(
             "rhs_calls": nfev, "equivalent_mass_kg": me}
     if diverged is not None:
         info["diverged_at_step"] = int(diverged)
-    return _result(tables, np.arange(n_steps + 1) * H, state, pair, force, stiff, t1s, t2s, 0.0, n_seg, c,
-                   damping_model, wall, info)
+    return SimResult(time_s=np.arange(n_steps + 1) * H, **derived_outputs(tables, state, pair, force),
+                     mesh_force=force, pair_force=pair, mesh_stiffness=stiff, pinion_torque=t1s, gear_torque=t2s,
+                     step_s=0.0, substeps=n_seg, damping_Ns_per_m=c, damping_model=damping_model, wall_s=wall,
+                     info=info)
