@@ -50,11 +50,12 @@ Choices (not in the papers)
 
 Public API
 ----------
-``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
-takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (without
-``max_step_s``; checked by the same :class:`gearfmu.common.settings.RunSettings` and
-:func:`gearfmu.dynamics.native.run_inputs`)
-plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one constant
+``simulate_reference(tables, settings, *, pinion_torque_Nm, ..., accuracy)``
+takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (its step bound and
+integrator unused; checked by the same :class:`gearfmu.common.settings.RunSettings` and
+:func:`gearfmu.dynamics.native.run_inputs`) plus its accuracy, a :class:`ReferenceAccuracy`
+(``rtol``, ``atol_scale``, ``method``, ``steps_per_period``, ``max_segments``; each also a
+keyword; the gearbox reference takes the same type) (tables with a temperature axis: one constant
 ``bulk_temperature_C``, the slice ``tables.at_temperature`` gives), and returns a
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
 derived outputs by the same rule;
