@@ -26,7 +26,6 @@ MAX_PARAMETERS = 12
 
 #: (file below gearfmu/, function) that break a rule today, in the dynamics and the FMU layer
 BEING_SPLIT = {
-    ("fmu/fmudoc.py", "documentation_html"),
     ("fmu/pythonfmu_build.py", "build_fmu"),
     ("fmu/standalone_build.py", "build_standalone_fmu"),
 }
