@@ -104,14 +104,15 @@ SOURCES = {
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
     "gearbox_fmu": ([PY, "benchmarks/bench_gearbox_fmu.py", "--sim", "0.5"], None,
                     "benchmarks/bench_gearbox_fmu.py --sim 0.5"),
+    "me": ([PY, "benchmarks/bench_me.py"], None, "benchmarks/bench_me.py"),
     "composition": ([PY, "benchmarks/bench_composition.py"], None, "benchmarks/bench_composition.py"),
     "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
     "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
     "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup", "plan_study",
-        "plan_scan", "tests", "gearbox", "silence"}
+SLOW = {"me", "trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup",
+        "plan_study", "plan_scan", "tests", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -793,6 +794,15 @@ def sec_gearbox(pg: Page):
             if errs else "n/a")
     pg.summary.append(["gearbox dynamics (two stages, shafts)", "event-located DOP853 (scipy), same equations",
                        diff, f"at 1e-6: {cells or 'n/a'}"])
+
+
+def sec_me(pg: Page):
+    if pg.missing("me", "Model Exchange against the event-located reference"):
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_me import render as render_me  # the section's own module (report.py's size)
+
+    render_me(pg, table, SOURCES["me"][2])
 
 
 def sec_gearbox_fmu(pg: Page):
@@ -1530,7 +1540,7 @@ def sec_costs(pg: Page):
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_moes", "sec_ehl_rough", "sec_load_sharing",
             "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_composition",
-            "sec_arms",
+            "sec_me", "sec_arms",
             "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs", "sec_goals")
 
 

@@ -1,7 +1,7 @@
-"""The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
+"""The gearfmu command line: spur and helical gear pairs to FMI 2.0/3.0 Co-Simulation and Model Exchange FMUs.
 
   gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
-                   [--fmi3-outputs array|scalar] [--reference-results DIR]
+                   [--fmi3-outputs array|scalar] [--interface both|cs|me] [--me-node-events E] [--reference-results DIR]
                                              scene -> tables -> FMU (DIR: its FMI Cross-Check set)
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
@@ -47,7 +47,8 @@ import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.progress import notice, reporting, ticking
-from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_SSP_COUPLING, FMI3_OUTPUTS, RUNTIMES, SSP_COUPLINGS
+from .common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_SSP_COUPLING, FMI3_OUTPUTS, FMU_INTERFACES,
+                                ME_NODE_EVENTS, RUNTIMES, SSP_COUPLINGS)
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
@@ -168,7 +169,7 @@ def _fmu(path):
 
 def _build_drivetrain(args) -> int:
     """gearfmu build DRIVETRAIN.toml: the gearbox FMU (docs/gearbox.md "The gearbox FMU")."""
-    pipeline.check_gearbox_fmu_runtime(args.runtime)
+    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
     _, scene = _any_scene(args.scene)
     for given, option in ((args.tables, "--tables"), (args.tables_meta, "--tables-meta"),
                           (args.reference_results, "--reference-results")):
@@ -204,9 +205,9 @@ def cmd_build(args) -> int:
     platforms = None
     if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
-    res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
-                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
-                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs)
+    res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables, platforms=platforms,
+                estimate_accuracy=not args.no_estimate, allow_large=args.allow_large, fmi_version=args.fmi_version,
+                fmi3_outputs=args.fmi3_outputs, interface=args.interface, me_node_events=args.me_node_events)
     cached = _from_cache(res.tables) if not args.tables else ""
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
           f"FMU {res.build_wall_s:.2f} s, "
@@ -557,7 +558,7 @@ def _ssp_drivetrain(args) -> int:
     """gearfmu ssp DRIVETRAIN.toml: an SSP of stage FMUs (docs/gearbox.md "The SSP of stage FMUs")."""
     if args.variant:
         raise CliError("--variant: for a gear-pair scene's SSP; a drivetrain scene's SSP holds one FMU per stage")
-    pipeline.check_gearbox_fmu_runtime(args.runtime)
+    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
     _, scene = _any_scene(args.scene)
     out = _output_file(args.output or f"build/{scene.model_name}.ssp", "--output")
     platforms = parse_platforms(args.platforms) if args.platforms is not None else None
@@ -652,6 +653,9 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--fmi3-outputs", choices=FMI3_OUTPUTS, default=DEFAULT_FMI3_OUTPUTS,
                    help="FMI 3 FMU: pair_force and load_sharing as arrays (default) or as scalars pair_force_1 .. "
                         "(for hosts without array support; docs/standalone.md 'FMI 3.0')")
+    b.add_argument("--interface", choices=FMU_INTERFACES, help="standalone runtime: the FMI interfaces: both "
+                   "(default; Co-Simulation and Model Exchange), cs or me (docs/standalone.md 'Model Exchange')")
+    b.add_argument("--me-node-events", choices=ME_NODE_EVENTS, help="Model Exchange's node events (docs/model.md)")
     b.add_argument("--reference-results", metavar="DIR",
                    help="also write the FMU's FMI Cross-Check set into DIR: <model>.fmu, _ref.csv, _in.csv, "
                         "_ref.opt (docs/fmu_import.md 'Reference results')")
