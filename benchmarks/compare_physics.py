@@ -34,7 +34,8 @@ OUT.npz (no pickle; strings as unicode arrays):
 * ``pair_reference``: :func:`gearfmu.dynamics.reference.simulate_reference` on hard cases (DOP853,
   Radau, tighter tolerances, a settings object, a temperature axis, a given start state); errors;
 * ``fmudoc``: the documentation page (``documentation/index.html``, FMI 2 also ``_main.html``) of
-  standalone FMUs (FMI 2, FMI 3 with arrays and with scalars) and of a pythonfmu FMU of one set of
+  standalone FMUs (FMI 2, FMI 3 with arrays and with scalars, Co-Simulation only where the tree
+  offers Model Exchange) and of a pythonfmu FMU of one set of
   tables (the random part of the modelIdentifier replaced by a mark), and
   :func:`gearfmu.fmu.fmudoc.documentation_html` on written inputs (an envelope, no validation record,
   no scene).
@@ -490,10 +491,15 @@ def _fmudoc(arrays):
     with tempfile.TemporaryDirectory() as d:
         fmus = {}
         for name, kw in (("standalone2", dict(fmi_version=2)), ("standalone3", dict(fmi_version=3)),
-                         ("standalone3_scalar", dict(fmi_version=3, fmi3_outputs="scalar"))):
+                         ("standalone3_scalar", dict(fmi_version=3, fmi3_outputs="scalar")),
+                         ("standalone2_cs", dict(fmi_version=2, interface="cs"))):
             print(f"fmudoc.{name}", file=sys.stderr, flush=True)
-            fmus[name] = build_standalone_fmu(tables, Path(d) / f"{name}.fmu", settings, model_name=f"doc_{name}",
-                                              scene_text=scene, platforms=[host_key()], **kw)
+            try:
+                fmus[name] = build_standalone_fmu(tables, Path(d) / f"{name}.fmu", settings,
+                                                  model_name=f"doc_{name}", scene_text=scene,
+                                                  platforms=[host_key()], **kw)
+            except TypeError:       # a tree without that option (interface: Model Exchange)
+                continue
         print("fmudoc.pythonfmu", file=sys.stderr, flush=True)
         fmus["pythonfmu"] = build_fmu(tables, Path(d) / "pythonfmu.fmu", settings, model_name="doc_pythonfmu")
         for name, path in fmus.items():
@@ -507,13 +513,19 @@ def _fmudoc(arrays):
                           300.0, None, None, None),
                  Variable("pair_force[1]", 1, "Real", "output", "continuous", None, "N", "force of slot 1", None,
                           0.0, None, 0)]
+    written = dict(model_name="w<r>itten", model_identifier="written", runtime="standalone",
+                   generation_tool="gearfmu test", variables=variables, description="a & b", tables=tables,
+                   parameters={"damping_ratio": 0.02, "integrator": 2},
+                   envelope={"status": "verified", "worst_at": [1, 2]}, scene_text=None, validation_record=None,
+                   platforms_text="x86_64-linux", experiment={"start": 0.0, "stop": 0.01, "step": 1e-4})
     for fmi in (2, 3):
-        _record(arrays, f"fmudoc.written{fmi}", lambda fmi=fmi: np.frombuffer(documentation_html(
-            model_name="w<r>itten", model_identifier="written", fmi_version=fmi, runtime="standalone",
-            generation_tool="gearfmu test", variables=variables, description="a & b", tables=tables,
-            parameters={"damping_ratio": 0.02, "integrator": 2}, envelope={"status": "verified", "worst_at": [1, 2]},
-            scene_text=None, validation_record=None, platforms_text="x86_64-linux",
-            experiment={"start": 0.0, "stop": 0.01, "step": 1e-4}), dtype=np.uint8))
+        _record(arrays, f"fmudoc.written{fmi}", lambda fmi=fmi: np.frombuffer(
+            documentation_html(fmi_version=fmi, **written), dtype=np.uint8))
+    try:
+        page = documentation_html(fmi_version=3, interfaces=("me",), **written)
+    except TypeError:               # a tree without Model Exchange
+        return
+    arrays["fmudoc.written3_me"] = np.frombuffer(page, dtype=np.uint8)
 
 
 def run(checkout: Path, out: Path, only) -> int:
