@@ -25,7 +25,20 @@ OUT.npz (no pickle; strings as unicode arrays):
 * ``synthetic``: :func:`gearfmu.tables.synthetic.tables_from_arrays` and
   :func:`rectangular_wave_tables`;
 * ``gearbox``: :func:`gearfmu.gearbox.reference.simulate_reference` on the hard cases and on the
-  example gearbox examples/scenes/gearbox_two_stage.toml.
+  example gearbox examples/scenes/gearbox_two_stage.toml;
+* ``native``: :func:`gearfmu.dynamics.native.simulate` with every integrator and both damping laws
+  on the hard cases of :mod:`gearfmu.bench` (impacts on one and both flanks, backlash, torque steps,
+  the default scene's tables), on tables with a torque axis and contact-zone edges and on tables
+  with a temperature axis, with a settings object, a given start state and a diverging run;
+  :func:`gearfmu.dynamics.native.simulate_sdof` with every integrator; input errors;
+* ``pair_reference``: :func:`gearfmu.dynamics.reference.simulate_reference` on hard cases (DOP853,
+  Radau, tighter tolerances, a settings object, a temperature axis, a given start state); errors;
+* ``fmudoc``: the documentation page (``documentation/index.html``, FMI 2 also ``_main.html``) of
+  standalone FMUs (FMI 2, FMI 3 with arrays and with scalars, Co-Simulation only where the tree
+  offers Model Exchange) and of a pythonfmu FMU of one set of
+  tables (the random part of the modelIdentifier replaced by a mark), and
+  :func:`gearfmu.fmu.fmudoc.documentation_html` on written inputs (an envelope, no validation record,
+  no scene).
 
 Wall and CPU times are left out.  ``diff`` prints every array that differs (or is in one file
 only) and exits with status 1 when any does, 0 when every array is identical bit for bit.
@@ -45,7 +58,8 @@ from pathlib import Path
 
 import numpy as np
 
-GROUPS = ("steady", "transient", "tables", "direct", "synthetic", "gearbox")
+GROUPS = ("steady", "transient", "tables", "direct", "synthetic", "gearbox", "native", "pair_reference",
+          "fmudoc")
 
 #: smooth steady films at Moes (M, L): the fast path, high load, the piezoviscous corner
 STEADY_ML = [(5.0, 0.0), (20.0, 5.0), (100.0, 10.0), (500.0, 10.0), (50.0, 20.0), (1000.0, 5.0)]
@@ -358,6 +372,162 @@ def _gearbox(arrays, checkout: Path):
             comm_step_s=period / 4, motor_torque_Nm=scene.motor.torque_Nm, motor_speed_start_rad_s=w)
 
 
+def _pair_tables():
+    """{name: tables} of the pair model beyond the hard cases: a torque axis with contact-zone
+    edges and backlash, and a temperature axis."""
+    from gearfmu.tables.mesh_tables import stack_temperatures
+    from gearfmu.tables.synthetic import rectangular_wave_tables, tables_from_arrays
+    zoned = rectangular_wave_tables(2.5e8, contact_ratio=1.6, backlash_half_m=5e-6, zone_edges=True,
+                                    points_per_mesh=32, pair_error_m=lambda slot, u: 2e-6 * np.sin(np.pi * u))
+    k = np.stack([0.8 * zoned.k_N_per_m[0], zoned.k_N_per_m[0], 1.2 * zoned.k_N_per_m[0]])
+    e = np.stack([zoned.e_m[0], 0.5 * zoned.e_m[0], 0.2 * zoned.e_m[0]])
+    torque_axis = tables_from_arrays(zoned.phi_period_rad, zoned.mesh_period_rad, k, e, 5e-6,
+                                     torque_Nm=[50.0, 300.0, 900.0], contact_ratio=1.6,
+                                     engagement_in_rad=float(zoned.engagement_in_rad),
+                                     engagement_out_rad=float(zoned.engagement_out_rad),
+                                     teeth_pinion=zoned.teeth_pinion, teeth_gear=zoned.teeth_gear)
+    plain = rectangular_wave_tables(2.0e8, points_per_mesh=32)
+    temperature = stack_temperatures([plain, rectangular_wave_tables(1.6e8, points_per_mesh=32)], [30.0, 90.0],
+                                     temperature_reference_C=30.0)
+    return {"zoned": zoned, "torque_axis": torque_axis, "temperature_axis": temperature}
+
+
+def _native(arrays):
+    """The native pair solver (module docstring, group ``native``)."""
+    from gearfmu.bench import HARD_CASES, case_settings, hard_case
+    from gearfmu.common.vocabulary import DAMPING_MODELS, INTEGRATORS
+    from gearfmu.dynamics import native
+    for case in HARD_CASES:
+        tables, kw = hard_case(case)
+        for integrator in INTEGRATORS:
+            for model in DAMPING_MODELS:
+                _record(arrays, f"native.{case}.{integrator}.{model}", native.simulate, tables,
+                        **dict(kw, integrator=integrator, damping_model=model))
+        settings, torque = case_settings(kw)
+        _record(arrays, f"native.{case}.settings", native.simulate, tables, settings, pinion_torque_Nm=torque)
+        w = kw["pinion_speed_start_rad_s"]
+        for integrator in INTEGRATORS:
+            _record(arrays, f"native.{case}.sdof.{integrator}", native.simulate_sdof, tables, omega1_rad_s=w,
+                    stop_time_s=kw["stop_time_s"], comm_step_s=kw["comm_step_s"], pinion_torque_Nm=kw["pinion_torque_Nm"],
+                    damping_ratio=kw["damping_ratio"], pinion_angle_start_rad=kw["pinion_angle_start_rad"]
+                    if "pinion_angle_start_rad" in kw else None, integrator=integrator)
+    extra = _pair_tables()
+    H = extra["zoned"].mesh_period_rad / 150.0 / 8
+    run = dict(stop_time_s=240 * H, comm_step_s=H, pinion_speed_start_rad_s=150.0, damping_ratio=0.03)
+    steps = np.where(np.arange(240) < 120, 80.0, 600.0)
+    for integrator in INTEGRATORS:
+        for name in ("zoned", "torque_axis"):
+            _record(arrays, f"native.{name}.{integrator}", native.simulate, extra[name], pinion_torque_Nm=steps,
+                    gear_torque_Nm=lambda t: 70.0 + 1e4 * t, integrator=integrator, max_step_s=H / 3, **run)
+        _record(arrays, f"native.temperature_axis.{integrator}", native.simulate, extra["temperature_axis"],
+                pinion_torque_Nm=200.0, bulk_temperature_C=np.where(np.arange(240) < 100, 40.0, 75.0),
+                integrator=integrator, **run)
+        _record(arrays, f"native.temperature_axis.sdof.{integrator}", native.simulate_sdof, extra["temperature_axis"],
+                omega1_rad_s=150.0, stop_time_s=240 * H, comm_step_s=H, bulk_temperature_C=60.0,
+                integrator=integrator, damping_model="elastobacklash")
+    _record(arrays, "native.start_state", native.simulate, extra["zoned"], dte_start_m=3e-6, dte_rate_start_m_s=-0.01,
+            pinion_angle_start_rad=0.013, **run)
+    _record(arrays, "native.diverged", native.simulate, extra["zoned"], pinion_torque_Nm=200.0, max_step_s=1.0,
+            integrator="rk4", **dict(run, comm_step_s=8 * H, stop_time_s=400 * 8 * H))
+    for name, kw in (("settings", dict(settings="no")), ("stop", dict(stop_time_s=1.05 * H, comm_step_s=H)),
+                     ("torque", dict(run, pinion_torque_Nm=np.ones(3))), ("ratio", dict(run, damping_ratio=-1.0)),
+                     ("integrator", dict(run, integrator="euler")), ("model", dict(run, damping_model="x")),
+                     ("temperature", dict(run, bulk_temperature_C=30.0)), ("step", dict(run, max_step_s=0.0)),
+                     ("dte", dict(run, dte_start_m=float("nan"))), ("speed", dict(run, pinion_speed_start_rad_s="x"))):
+        _record(arrays, f"native.input_{name}", native.simulate, extra["zoned"], **kw)
+        sd = {("omega1_rad_s" if k == "pinion_speed_start_rad_s" else k): v for k, v in kw.items()
+              if k != "gear_torque_Nm"}
+        _record(arrays, f"native.sdof_input_{name}", native.simulate_sdof, extra["zoned"], **sd)
+
+
+def _pair_reference(arrays):
+    """The pair reference (module docstring, group ``pair_reference``)."""
+    from gearfmu.bench import case_settings, hard_case
+    from gearfmu.dynamics.reference import simulate_reference
+    for case in ("single_sided_impacts", "double_sided_impacts", "torque_steps"):
+        tables, kw = hard_case(case)
+        kw = dict(kw, stop_time_s=kw["comm_step_s"] * 4 * 4)
+        if np.ndim(kw["pinion_torque_Nm"]):
+            kw["pinion_torque_Nm"] = np.asarray(kw["pinion_torque_Nm"])[::9][:16]
+        _record(arrays, f"pair_reference.{case}", simulate_reference, tables, **kw)
+        _record(arrays, f"pair_reference.{case}.elastobacklash", simulate_reference, tables,
+                **dict(kw, damping_model="elastobacklash"))
+        settings, torque = case_settings(kw)
+        _record(arrays, f"pair_reference.{case}.settings", simulate_reference, tables, settings,
+                pinion_torque_Nm=torque, rtol=1e-12, steps_per_period=128)
+    tables, kw = hard_case("heavy_load")
+    kw = dict(kw, stop_time_s=kw["comm_step_s"] * 8)
+    _record(arrays, "pair_reference.heavy_load.radau", simulate_reference, tables, method="Radau", rtol=1e-8,
+            atol_scale=10.0, max_step_s=1.0, integrator="rk4", **kw)
+    extra = _pair_tables()
+    H = extra["zoned"].mesh_period_rad / 150.0 / 8
+    run = dict(stop_time_s=16 * H, comm_step_s=H, pinion_speed_start_rad_s=150.0, damping_ratio=0.03)
+    _record(arrays, "pair_reference.torque_axis", simulate_reference, extra["torque_axis"], pinion_torque_Nm=300.0,
+            **run)
+    _record(arrays, "pair_reference.temperature_axis", simulate_reference, extra["temperature_axis"],
+            pinion_torque_Nm=200.0, bulk_temperature_C=50.0, **run)
+    _record(arrays, "pair_reference.start_state", simulate_reference, extra["zoned"], dte_start_m=3e-6,
+            dte_rate_start_m_s=-0.01, **run)
+    for name, kw in (("rtol", dict(run, rtol=0.0)), ("tables", dict(run, tables="no")),
+                     ("ratio", dict(run, damping_ratio=float("nan"))), ("dte", dict(run, dte_start_m="x")),
+                     ("temperature", dict(run, bulk_temperature_C=30.0)), ("settings", dict(settings=3))):
+        t = kw.pop("tables", extra["zoned"])
+        _record(arrays, f"pair_reference.input_{name}", simulate_reference, t, **kw)
+
+
+def _fmudoc(arrays):
+    """The FMUs' documentation pages (module docstring, group ``fmudoc``)."""
+    import zipfile
+    from gearfmu.common.settings import RunSettings
+    from gearfmu.fmu.crossbuild import host_key
+    from gearfmu.fmu.fmudoc import documentation_html
+    from gearfmu.fmu.modeldesc import Variable
+    from gearfmu.fmu.pythonfmu_build import build_fmu
+    from gearfmu.fmu.standalone_build import build_standalone_fmu
+    tables = _pair_tables()["torque_axis"]
+    settings = RunSettings(stop_time_s=0.01, output_interval_s=1e-4, pinion_speed_start_rad_s=150.0,
+                           pinion_torque_start_Nm=300.0)
+    scene = "[operating]\nspeed_rpm = 1432.4  # a <scene> & its text\n"
+    with tempfile.TemporaryDirectory() as d:
+        fmus = {}
+        for name, kw in (("standalone2", dict(fmi_version=2)), ("standalone3", dict(fmi_version=3)),
+                         ("standalone3_scalar", dict(fmi_version=3, fmi3_outputs="scalar")),
+                         ("standalone2_cs", dict(fmi_version=2, interface="cs"))):
+            print(f"fmudoc.{name}", file=sys.stderr, flush=True)
+            try:
+                fmus[name] = build_standalone_fmu(tables, Path(d) / f"{name}.fmu", settings,
+                                                  model_name=f"doc_{name}", scene_text=scene,
+                                                  platforms=[host_key()], **kw)
+            except TypeError:       # a tree without that option (interface: Model Exchange)
+                continue
+        print("fmudoc.pythonfmu", file=sys.stderr, flush=True)
+        fmus["pythonfmu"] = build_fmu(tables, Path(d) / "pythonfmu.fmu", settings, model_name="doc_pythonfmu")
+        for name, path in fmus.items():
+            with zipfile.ZipFile(path) as z:
+                # the modelIdentifier ends in a random part (one per build): replaced by a mark
+                ident = re.search(rb'modelIdentifier="([^"]+)"', z.read("modelDescription.xml")).group(1)
+                for rel in sorted(n for n in z.namelist() if n.startswith("documentation/") and n.endswith(".html")):
+                    page = z.read(rel).replace(ident, b"MODEL_IDENTIFIER")
+                    arrays[f"fmudoc.{name}.{rel}"] = np.frombuffer(page, dtype=np.uint8)
+    variables = [Variable("pinion_torque", 0, "Real", "input", "continuous", None, "N.m", "pinion torque <T1>",
+                          300.0, None, None, None),
+                 Variable("pair_force[1]", 1, "Real", "output", "continuous", None, "N", "force of slot 1", None,
+                          0.0, None, 0)]
+    written = dict(model_name="w<r>itten", model_identifier="written", runtime="standalone",
+                   generation_tool="gearfmu test", variables=variables, description="a & b", tables=tables,
+                   parameters={"damping_ratio": 0.02, "integrator": 2},
+                   envelope={"status": "verified", "worst_at": [1, 2]}, scene_text=None, validation_record=None,
+                   platforms_text="x86_64-linux", experiment={"start": 0.0, "stop": 0.01, "step": 1e-4})
+    for fmi in (2, 3):
+        _record(arrays, f"fmudoc.written{fmi}", lambda fmi=fmi: np.frombuffer(
+            documentation_html(fmi_version=fmi, **written), dtype=np.uint8))
+    try:
+        page = documentation_html(fmi_version=3, interfaces=("me",), **written)
+    except TypeError:               # a tree without Model Exchange
+        return
+    arrays["fmudoc.written3_me"] = np.frombuffer(page, dtype=np.uint8)
+
+
 def run(checkout: Path, out: Path, only) -> int:
     sys.path.insert(0, str(checkout))
     import gearfmu
@@ -377,6 +547,12 @@ def run(checkout: Path, out: Path, only) -> int:
             _synthetic(arrays)
         elif group == "gearbox":
             _gearbox(arrays, checkout)
+        elif group == "native":
+            _native(arrays)
+        elif group == "pair_reference":
+            _pair_reference(arrays)
+        elif group == "fmudoc":
+            _fmudoc(arrays)
     np.savez(out, **arrays)
     print(json.dumps({"gearfmu": gearfmu.__file__, "arrays": len(arrays), "file": str(out)}))
     return 0

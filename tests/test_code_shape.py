@@ -26,13 +26,6 @@ MAX_PARAMETERS = 12
 
 #: (file below gearfmu/, function) that break a rule today, in the dynamics and the FMU layer
 BEING_SPLIT = {
-    ("dynamics/native.py", "_result"),
-    ("dynamics/native.py", "_finish"),
-    ("dynamics/native.py", "_integrate"),
-    ("dynamics/native.py", "simulate"),
-    ("dynamics/native.py", "simulate_sdof"),
-    ("dynamics/reference.py", "simulate_reference"),
-    ("fmu/fmudoc.py", "documentation_html"),
     ("fmu/pythonfmu_build.py", "build_fmu"),
     ("fmu/standalone_build.py", "build_standalone_fmu"),
 }

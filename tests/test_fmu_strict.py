@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
-from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
+from fmpy.fmi3 import FMU3Slave
 
 from gearfmu.fmu.fmudoc import build_machine_paths
 from gearfmu.fmu.standalone_build import build_standalone_fmu
@@ -253,3 +253,32 @@ def test_every_fmu_documents_itself(fmus, key):
     assert '<script>alert("x")</script> & "quotes"' in text   # the scene, as text
     assert "Provenance of the tables" in text and "reference_result.csv" in text and "status" in text
     assert build_machine_paths(c["dir"]) == []
+
+
+def test_the_page_of_a_documented_fmu_is_the_page_of_its_fields():
+    """documentation_html takes what the page documents as one DocumentedFmu or as its fields by
+    keyword (the builders' call): the same bytes; both at once, or a field missing, is a
+    TypeError.  The page is read back by Python's html.parser: the written names are escaped
+    text, the FMI 3 page has the independent variable ``time``."""
+    import dataclasses
+
+    from gearfmu.fmu.fmudoc import DocumentedFmu, documentation_html
+    from gearfmu.fmu.modeldesc import Variable
+
+    variables = [Variable("pinion_torque", 0, "Real", "input", "continuous", None, "N.m", "pinion <torque>", 1.0,
+                          None, None, None)]
+    fields = dict(model_name="a<b>", model_identifier="ab", fmi_version=3, runtime="standalone",
+                  generation_tool="gearfmu", variables=variables, description="d & e", tables=make_tables(),
+                  parameters={"damping_ratio": 0.02}, envelope=None, scene_text=None, validation_record=None,
+                  platforms_text="x86_64-linux", experiment={"start": 0.0, "stop": 0.1, "step": 1e-3})
+    page = documentation_html(DocumentedFmu(**fields))
+    assert page == documentation_html(**fields)
+    p = _Page()
+    p.feed(page.decode("utf-8"))
+    text = "".join(p.text)
+    assert "a<b>" in text and "pinion <torque>" in text and "Simulation time" in text and "d & e" in text
+    assert page != documentation_html(dataclasses.replace(DocumentedFmu(**fields), fmi_version=2))
+    with pytest.raises(TypeError):
+        documentation_html(DocumentedFmu(**fields), model_name="x")
+    with pytest.raises(TypeError):
+        documentation_html(**{k: v for k, v in fields.items() if k != "tables"})

@@ -445,6 +445,38 @@ def test_inputs_csv_and_errors(tmp_path):
         tables_from_arrays(k_N_per_m=-np.ones((2, 8)))
 
 
+
+def test_settings_keywords_are_the_settings_fields_and_nothing_else():
+    """The run-settings keywords of simulate / simulate_sdof (stop_time_s, comm_step_s, ...) are
+    the RunSettings fields they name, bit for bit the same run as the settings object; a keyword
+    that is none of them is the TypeError Python raises for an unknown keyword argument (the
+    message of a module-level function), and simulate_sdof takes its speed as
+    omega1_rad_s only."""
+    import dataclasses
+
+    from gearfmu.common.settings import RunSettings
+
+    tb = rectangular_wave_tables(2e8, contact_ratio=1.5, points_per_mesh=16, backlash_half_m=2e-6)
+    kw = dict(stop_time_s=1e-3, comm_step_s=1e-4, max_step_s=2.5e-5, pinion_speed_start_rad_s=100.0,
+              damping_ratio=0.05, damping_model="elastobacklash", pinion_angle_start_rad=0.01, integrator="rk4_kink")
+    s = RunSettings(stop_time_s=1e-3, output_interval_s=1e-4, max_step_s=2.5e-5, pinion_speed_start_rad_s=100.0,
+                    damping_ratio=0.05, damping_model="elastobacklash", pinion_angle_start_rad=0.01,
+                    integrator="rk4_kink", pinion_torque_start_Nm=30.0)
+    a = simulate(tb, pinion_torque_Nm=30.0, **kw)
+    b = simulate(tb, s)
+    c = simulate(tb, dataclasses.replace(s, damping_ratio=0.5), pinion_torque_Nm=30.0, damping_ratio=0.05)
+    for r in (b, c):
+        for name in ("dte", "pinion_speed", "pair_force", "mesh_stiffness"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(r, name))
+    sd = simulate_sdof(tb, omega1_rad_s=100.0, pinion_torque_Nm=30.0,
+                       **{k: v for k, v in kw.items() if k != "pinion_speed_start_rad_s"})
+    np.testing.assert_array_equal(sd.dte, simulate_sdof(tb, s).dte)
+
+    for solver, word in ((simulate, "comm_step"), (simulate_sdof, "rtol"), (simulate_sdof, "pinion_speed_start_rad_s")):
+        with pytest.raises(TypeError) as got:
+            solver(tb, **{word: 1e-4})
+        assert str(got.value) == f"{solver.__name__}() got an unexpected keyword argument {word!r}", got.value
+
 def test_tables_changed_in_place_between_runs_are_checked_and_used_again():
     """simulate skips MeshTables.validate for the same tables object only while nothing validate
     reads has changed: a value made invalid in place (array element, optional array, scalar,

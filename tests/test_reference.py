@@ -43,7 +43,6 @@ def test_damped_oscillator_closed_form():
     err = np.max(np.abs(r.dte - x)) / x0
     assert err < 1e-9, err  # measured 2e-11
     # mesh force F = k x + c v with c = 2 zeta sqrt(k m_e)
-    v = np.gradient(x, ts)  # only to check the force law's sign and size, not tight
     assert np.max(np.abs(r.mesh_force - (k * r.dte + 2 * zeta * math.sqrt(k * ME) * r.dte_rate))) < 1e-6 * k * x0
 
 
@@ -133,6 +132,41 @@ def test_bad_input_names_the_argument():
     with pytest.raises(ReferenceInputError, match="tables"):
         simulate_reference("nope", **base)
 
+
+
+def test_accuracy_object_is_the_keywords_and_the_gearbox_one():
+    """The accuracy of the reference is one ReferenceAccuracy, the gearbox reference's too: given
+    as an object or field by field as keywords, the same run bit for bit; a bad field is one line
+    naming it (the pair's error class, the gearbox's GearboxInputError), an unknown keyword the
+    TypeError Python raises for one."""
+    from gearfmu.dynamics.reference import ReferenceAccuracy
+    from gearfmu.gearbox.cases import gearbox_case
+    from gearfmu.gearbox.native import GearboxInputError
+    from gearfmu.gearbox.reference import ReferenceAccuracy as GearboxAccuracy, simulate_reference as gearbox_reference
+
+    assert GearboxAccuracy is ReferenceAccuracy
+    t = constant_tables(1e8, b=1e-6)
+    base = dict(stop_time_s=1e-3, comm_step_s=1e-4, pinion_torque_Nm=1.0, pinion_speed_start_rad_s=1.0,
+                damping_ratio=0.01)
+    a = simulate_reference(t, rtol=1e-8, atol_scale=10.0, method="RK45", steps_per_period=16.0, **base)
+    b = simulate_reference(t, accuracy=ReferenceAccuracy(rtol=1e-8, atol_scale=10.0, method="RK45",
+                                                         steps_per_period=16.0), **base)
+    c = simulate_reference(t, accuracy=ReferenceAccuracy(rtol=1e-3, method="RK45", steps_per_period=16.0),
+                           rtol=1e-8, atol_scale=10.0, **base)
+    for r in (b, c):
+        np.testing.assert_array_equal(a.dte, r.dte)
+        assert r.info["method"] == "RK45" and r.info["rtol"] == 1e-8
+    for bad in (dict(rtol=0.0), dict(rtol=float("nan")), dict(accuracy="tight")):
+        with pytest.raises(ReferenceInputError, match=next(iter(bad))) as info:
+            simulate_reference(t, **bad, **base)
+        assert "\n" not in str(info.value)
+    with pytest.raises(ReferenceInputError, match="rtol: must be > 0"):
+        ReferenceAccuracy(rtol=-1e-6)
+    with pytest.raises(TypeError, match="simulate_reference\\(\\) got an unexpected keyword argument 'tol'"):
+        simulate_reference(t, tol=1e-6, **base)
+    model, kw = gearbox_case("torque_step", mesh_periods=1)
+    with pytest.raises(GearboxInputError, match="rtol: must be > 0"):
+        gearbox_reference(model, rtol=0.0, **kw)
 
 def test_temperature_axis_selects_the_slice_as_the_native_solver_does():
     """Tables with a temperature axis (two constant-k slices, 3e8 N/m at 30 degC and

@@ -27,7 +27,10 @@ Public API
 * :func:`resolve_settings` -- a run's :class:`gearfmu.common.settings.RunSettings` with its
   automatic values (output interval, step bound, balancing gear torque) resolved on the tables,
   the rule the FMU builders share.
-* :class:`SimResult` -- result arrays, ``to_csv``, ``wall_s``.
+* :class:`SimResult` -- result arrays, ``to_csv``, ``wall_s``; :func:`derived_outputs` -- the
+  outputs derived from a run's rows (gear speed and angle, load sharing), shared with the reference.
+* :data:`SETTINGS_KEYWORDS`, :func:`settings_changes` -- the keyword arguments of the solvers that
+  set a run setting (``comm_step_s`` sets ``output_interval_s``).
 
 Details and choices: docs/native.md.
 """
@@ -69,6 +72,10 @@ __all__ = [
     "whole_steps",
     "input_series",
     "write_columns_csv",
+    "derived_outputs",
+    "settings_changes",
+    "SETTINGS_KEYWORDS",
+    "SDOF_SETTINGS_KEYWORDS",
 ]
 
 
@@ -421,11 +428,14 @@ def _initial_x(t, arrays, theta1, t1, dte_start_m):
     return x0
 
 
-def _result(t, time_s, state, pair, force, stiff, t1s, t2s, step_s, n_sub, c, damping_model, wall, info) -> SimResult:
-    """A :class:`SimResult` from the rows of the state [theta1, omega1, x, v], the pair forces,
-    mesh force and stiffness: the gear speed and angle and the load sharing are derived as
-    docs/model.md "Outputs" defines them (also used by gearfmu.dynamics.reference)."""
-    rb1, rb2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
+def derived_outputs(tables: MeshTables, state, pair, force) -> dict:
+    """The outputs a run derives from its rows (docs/model.md "Outputs"), as :class:`SimResult`
+    fields: of the state rows [theta1, omega1, x, v] (``state``, (n, 4)) the pinion angle and
+    speed, the DTE and its rate, and the gear's angle and speed (theta1*Rb1 - x)/Rb2,
+    (omega1*Rb1 - v)/Rb2; the load sharing ``pair``/``force`` of each pair where the mesh force is
+    not 0 (else 0; NaN rows stay NaN).  Shared by the native solver and the reference
+    (:mod:`gearfmu.dynamics.reference`)."""
+    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
     cols = state.T.copy()  # the four columns [theta1, omega1, x, v] as contiguous rows, one block
     th, om, x, v = cols
     gear_angle, gear_speed = (cols[:2] * rb1 - cols[2:]) / rb2  # (th*Rb1 - x)/Rb2, (om*Rb1 - v)/Rb2
@@ -433,93 +443,103 @@ def _result(t, time_s, state, pair, force, stiff, t1s, t2s, step_s, n_sub, c, da
     ls = np.zeros(pair.shape)  # pair / force where force != 0 (NaN rows stay NaN), else 0
     with np.errstate(invalid="ignore", divide="ignore"):
         np.divide(pair, f, out=ls, where=f != 0.0)
-    return SimResult(
-        time_s=time_s, pinion_speed=om, gear_speed=gear_speed,
-        pinion_angle=th, gear_angle=gear_angle, dte=x, dte_rate=v,
-        mesh_force=force, pair_force=pair, load_sharing=ls, mesh_stiffness=stiff,
-        pinion_torque=t1s, gear_torque=t2s, step_s=step_s, substeps=n_sub, damping_Ns_per_m=c,
-        damping_model=damping_model, wall_s=wall, info=info)
+    return dict(pinion_speed=om, gear_speed=gear_speed, pinion_angle=th, gear_angle=gear_angle, dte=x, dte_rate=v,
+                load_sharing=ls)
 
 
-def _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, done, info):
-    info = dict(info, completed_steps=int(done))
-    if done < state.shape[0] - 1:
-        info["diverged_at_step"] = int(done)
-    return _result(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall, info)
-
-
-def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c, me, model, damping_model,
-               info):
-    """Run the compiled driver (gearfmu.dynamics.driver) on the tables' ``arrays``
-    (:func:`_arrays`) from the initial state (theta1, omega1, x, v) =
-    (th0, w0, x0, v0) and wrap its arrays in a SimResult."""
-    n = t1s.shape[0]
-    k, e, b, tq, inv_dphi, dphi, cuts = arrays
-    p = k.shape[1]
-    out = np.empty(n * (6 + p))  # the output rows in one NaN block (rows left unwritten stay NaN)
+def _output_rows(n: int, p: int):
+    """(state (n, 4), pair force (n, p), mesh force (n,), stiffness (n,)): the rows the driver
+    writes, views of one block filled with NaN (rows left unwritten stay NaN)."""
+    out = np.empty(n * (6 + p))
     out.fill(np.nan)
-    state = out[:4 * n].reshape(n, 4)
-    pair = out[4 * n:(4 + p) * n].reshape(n, p)
-    force = out[(4 + p) * n:(5 + p) * n]
-    stiff = out[(5 + p) * n:]
-    events = np.zeros(n, dtype=np.int64)
-    _warmup(icode)
-    t_start = _time.perf_counter()
-    done = driver_for(icode)(icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
-                float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2), me,
-                k, e, b, tq, inv_dphi, dphi, c, model, state, pair, force, stiff, events,
-                NO_CUTS if cuts is None else cuts, cuts is not None)
-    wall = _time.perf_counter() - t_start
-    time_s = np.arange(n) * H
-    return _finish(t, time_s, state, pair, force, stiff, t1s, t2s, h, n_sub, c, damping_model, wall,
-                   done, dict(info, events=int(events.sum())))
+    return (out[:4 * n].reshape(n, 4), out[4 * n:(4 + p) * n].reshape(n, p), out[(4 + p) * n:(5 + p) * n],
+            out[(5 + p) * n:])
 
 
-def _solve(t, s: RunSettings, t1s, t2s, x0, v0, icode, sdof, form, info) -> SimResult:
-    """The run of :func:`simulate` (``sdof`` False) or :func:`simulate_sdof` (True) on checked
-    tables ``t``, resolved settings ``s`` (:func:`resolve_settings`), the torque inputs (one
-    value per communication step, :func:`run_inputs`) and the start state (x0 None: the
-    equilibrium): substeps of at most ``s.max_step_s``, damping, initial state, the compiled
-    driver; ``info`` follows form and equivalent mass."""
+def _integrate(t, arrays, s: RunSettings, icode, sdof, y0, t1s, t2s, info) -> SimResult:
+    """The run on the compiled driver (gearfmu.dynamics.driver): on the tables ``t`` and their
+    ``arrays`` (:func:`_arrays`) with resolved settings ``s``, integrator ``icode`` and form
+    ``sdof``, from the start state ``y0`` = (theta1, omega1, x, v) under the torque inputs (one
+    value per communication step).  The communication step H in substeps of at most
+    ``s.max_step_s``, the damping coefficient, the output rows, the driver, then the result with
+    the derived outputs; ``info`` gains the equivalent mass, the events located and the steps
+    completed (and where the state diverged)."""
     H = s.output_interval_s
     n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
     c, me = _damping(t, s.damping_ratio)
+    n = t1s.shape[0]
+    k, e, b, tq, inv_dphi, dphi, cuts = arrays
+    state, pair, force, stiff = _output_rows(n, k.shape[1])
+    events = np.zeros(n, dtype=np.int64)
+    _warmup(icode)
+    t_start = _time.perf_counter()
+    done = driver_for(icode)(icode, sdof, *y0, t1s, t2s, H, n_sub, h, float(t.base_radius_pinion_m),
+                             float(t.base_radius_gear_m), float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2),
+                             me, k, e, b, tq, inv_dphi, dphi, c, DAMPING_MODELS[s.damping_model], state, pair, force,
+                             stiff, events, NO_CUTS if cuts is None else cuts, cuts is not None)
+    wall = _time.perf_counter() - t_start
+    info = {"form": info.pop("form"), "equivalent_mass_kg": me, **info, "events": int(events.sum()),
+            "completed_steps": int(done)}
+    if done < n - 1:
+        info["diverged_at_step"] = int(done)
+    return SimResult(time_s=np.arange(n) * H, **derived_outputs(t, state, pair, force), mesh_force=force,
+                     pair_force=pair, mesh_stiffness=stiff, pinion_torque=t1s, gear_torque=t2s, step_s=h,
+                     substeps=n_sub, damping_Ns_per_m=c, damping_model=s.damping_model, wall_s=wall, info=info)
+
+
+def _solve(t, s: RunSettings, t1s, t2s, x0, v0, icode, sdof, info) -> SimResult:
+    """The run of :func:`simulate` (``sdof`` False) or :func:`simulate_sdof` (True) on checked
+    tables ``t``, resolved settings ``s`` (:func:`resolve_settings`), the torque inputs (one
+    value per communication step, :func:`run_inputs`) and the start state (x0 None: the
+    equilibrium, docs/model.md "Initial state"), then :func:`_integrate`; ``info`` starts with
+    the form."""
     with compiling(icode):  # the first run after installing gearfmu compiles all of this: one line
         arrays = _arrays(t)
         th0 = s.pinion_angle_start_rad
         x0 = _initial_x(t, arrays, th0, t1s[0], x0)
         _warmup(icode)
-    return _integrate(t, arrays, icode, sdof, th0, s.pinion_speed_start_rad_s, x0, v0, t1s, t2s, H, n_sub, h, c, me,
-                      DAMPING_MODELS[s.damping_model], s.damping_model, {"form": form, "equivalent_mass_kg": me, **info})
+    return _integrate(t, arrays, s, icode, sdof, (th0, s.pinion_speed_start_rad_s, x0, v0), t1s, t2s, dict(info))
+
+
+#: the keyword arguments of :func:`simulate` that set a field of its run settings (argument -> field)
+SETTINGS_KEYWORDS = {SOLVER_ARGUMENTS.get(f, f): f for f in (
+    "stop_time_s", "output_interval_s", "max_step_s", "pinion_speed_start_rad_s", "damping_ratio", "damping_model",
+    "pinion_angle_start_rad", "integrator")}
+#: those of :func:`simulate_sdof` (the prescribed speed is its argument ``omega1_rad_s``)
+SDOF_SETTINGS_KEYWORDS = {a: f for a, f in SETTINGS_KEYWORDS.items() if f != "pinion_speed_start_rad_s"}
+
+
+def settings_changes(function: str, keywords: dict, allowed: dict = SETTINGS_KEYWORDS) -> dict:
+    """{field: value} of the run-settings keyword arguments ``keywords`` of a call of ``function``
+    (its name); a keyword that is none of ``allowed`` (argument -> field) is a TypeError, the one
+    Python raises for an unknown keyword argument."""
+    for name in keywords:
+        if name not in allowed:
+            raise TypeError(f"{function}() got an unexpected keyword argument {name!r}")
+    return {allowed[name]: value for name, value in keywords.items()}
 
 
 def simulate(
     tables: MeshTables,
     settings: Optional[RunSettings] = None,
     *,
-    stop_time_s: Optional[float] = None,
-    comm_step_s: Optional[float] = None,
-    max_step_s: Optional[float] = None,
     pinion_torque_Nm: Optional[InputLike] = None,
     gear_torque_Nm: Optional[InputLike] = None,
-    pinion_speed_start_rad_s: Optional[float] = None,
-    damping_ratio: Optional[float] = None,
-    damping_model: Optional[str] = None,
-    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
-    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[InputLike] = None,
+    **settings_fields,
 ) -> SimResult:
     """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
 
     ``settings``: the run's :class:`gearfmu.common.settings.RunSettings` (None: its defaults);
-    the keyword arguments of the same meaning, when given, replace its fields: ``stop_time_s``,
-    ``comm_step_s`` (the communication step H = ``output_interval_s``; None: the default interval
-    at the start speed), ``max_step_s`` (None: :func:`choose_max_step_s` at 1.5 x the start speed,
-    at least 1 rad/s), ``pinion_speed_start_rad_s``, ``damping_ratio``, ``damping_model``,
-    ``pinion_angle_start_rad``, ``integrator``.
+    the keyword arguments of the same meaning (:data:`SETTINGS_KEYWORDS`), when given and not
+    None, replace its fields: ``stop_time_s`` (s), ``comm_step_s`` (the communication step
+    H = ``output_interval_s``, s; None: the default interval at the start speed), ``max_step_s``
+    (s; None: :func:`choose_max_step_s` at 1.5 x the start speed, at least 1 rad/s),
+    ``pinion_speed_start_rad_s`` (rad/s), ``damping_ratio``, ``damping_model``,
+    ``pinion_angle_start_rad`` (rad), ``integrator``; any other keyword is a TypeError.
     Inputs (N*m) are a float, an array with one value per communication step
     (n or n+1 values; value k is held over [t_k, t_k+H)), or a callable of
     time t_k (s); ``pinion_torque_Nm`` None: the settings' start torque held.
@@ -542,9 +562,7 @@ def simulate(
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
     """
-    s = _settings(settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
-                  pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
-                  damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad, integrator=integrator)
+    s = _settings(settings, **settings_changes("simulate", settings_fields))
     temperature_axis = isinstance(tables, MeshTables) and tables.has_temperature_axis
     if temperature_axis:
         t = _validated(tables)
@@ -558,7 +576,8 @@ def simulate(
     x0, v0 = start_state(dte_start_m, dte_rate_start_m_s)
     if temperature_axis:
         return _simulate_temperature_axis(t, s, n_steps, t1s, t2s, x0, v0, bulk_temperature_C)
-    return _solve(t, s, t1s, t2s, x0, v0, icode, False, "two-inertia (docs/model.md)", {"integrator": s.integrator})
+    return _solve(t, s, t1s, t2s, x0, v0, icode, False, {"form": "two-inertia (docs/model.md)",
+                                                         "integrator": s.integrator})
 
 
 def simulate_sdof(
@@ -566,17 +585,11 @@ def simulate_sdof(
     settings: Optional[RunSettings] = None,
     *,
     omega1_rad_s: Optional[float] = None,
-    stop_time_s: Optional[float] = None,
-    comm_step_s: Optional[float] = None,
-    max_step_s: Optional[float] = None,
     pinion_torque_Nm: Optional[InputLike] = None,
-    damping_ratio: Optional[float] = None,
-    damping_model: Optional[str] = None,
-    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
-    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[float] = None,
+    **settings_fields,
 ) -> SimResult:
     """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
 
@@ -584,7 +597,8 @@ def simulate_sdof(
     ``pinion_speed_start_rad_s``): theta1 = theta1_0 + omega1*t; states [x (m), v (m/s)];
     m_e dv/dt + F = F_m with F_m = T1/Rb1 and F the same per-pair force sum as
     :func:`simulate` (de_j = slope*omega1).  Settings and keyword arguments as :func:`simulate`
-    (``max_step_s`` None: :func:`choose_max_step_s` at the speed, at least 1 rad/s).
+    (:data:`SDOF_SETTINGS_KEYWORDS`: the speed is ``omega1_rad_s``; ``max_step_s`` None:
+    :func:`choose_max_step_s` at the speed, at least 1 rad/s).
     Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
     ``integrator`` 'rk4_kink' (and 'rk4_node', 'rk4_seg') integrates theta1 as a state with omega1' = 0
@@ -593,9 +607,8 @@ def simulate_sdof(
     the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).
     """
     s = _settings(settings, names=dict(SOLVER_ARGUMENTS, pinion_speed_start_rad_s="omega1_rad_s"),
-                  stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
-                  pinion_speed_start_rad_s=omega1_rad_s, damping_ratio=damping_ratio, damping_model=damping_model,
-                  pinion_angle_start_rad=pinion_angle_start_rad, integrator=integrator)
+                  pinion_speed_start_rad_s=omega1_rad_s,
+                  **settings_changes("simulate_sdof", settings_fields, SDOF_SETTINGS_KEYWORDS))
     if isinstance(tables, MeshTables) and tables.has_temperature_axis:
         tables = _at_temperature(tables, tables.default_temperature_C if bulk_temperature_C is None
                                  else bulk_temperature_C)
@@ -608,8 +621,8 @@ def simulate_sdof(
     # the gear torque: the balance of the pinion's (recorded; the prescribed speed makes it act on nothing)
     _, t1s, t2s = run_inputs(t, s, s.pinion_torque_start_Nm if pinion_torque_Nm is None else pinion_torque_Nm, None)
     x0, v0 = start_state(dte_start_m, dte_rate_start_m_s)
-    return _solve(t, s, t1s, t2s, x0, v0, icode, True, "time-indexed SDOF (seed 003 eq 3-6)",
-                  {"omega1_rad_s": w, "integrator": s.integrator})
+    return _solve(t, s, t1s, t2s, x0, v0, icode, True, {"form": "time-indexed SDOF (seed 003 eq 3-6)",
+                                                        "omega1_rad_s": w, "integrator": s.integrator})
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:

@@ -50,11 +50,12 @@ Choices (not in the papers)
 
 Public API
 ----------
-``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
-takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (without
-``max_step_s``; checked by the same :class:`gearfmu.common.settings.RunSettings` and
-:func:`gearfmu.dynamics.native.run_inputs`)
-plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one constant
+``simulate_reference(tables, settings, *, pinion_torque_Nm, ..., accuracy)``
+takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (its step bound and
+integrator unused; checked by the same :class:`gearfmu.common.settings.RunSettings` and
+:func:`gearfmu.dynamics.native.run_inputs`) plus its accuracy, a :class:`ReferenceAccuracy`
+(``rtol``, ``atol_scale``, ``method``, ``steps_per_period``, ``max_segments``; each also a
+keyword; the gearbox reference takes the same type) (tables with a temperature axis: one constant
 ``bulk_temperature_C``, the slice ``tables.at_temperature`` gives), and returns a
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
 derived outputs by the same rule;
@@ -69,6 +70,8 @@ from __future__ import annotations
 import bisect
 import math
 import time as _time
+from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 from typing import Optional
 
 import numpy as np
@@ -77,11 +80,11 @@ from scipy.integrate import solve_ivp
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
 from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
-from .native import (InputLike, NativeInputError, _at_temperature, _finite, _result, resolve_settings, run_inputs,
-                     start_state)
+from .native import (InputLike, NativeInputError, SimResult, _at_temperature, _finite, derived_outputs,
+                     resolve_settings, run_inputs, settings_changes, start_state)
 
-__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes", "TableRows",
-           "TableSegment", "pair_forces"]
+__all__ = ["ReferenceInputError", "ReferenceAccuracy", "ACCURACY_FIELDS", "reference_accuracy", "simulate_reference",
+           "equilibrium_dte_exact_m", "kink_nodes", "TableRows", "TableSegment", "pair_forces"]
 
 KINK_REL_TOL = 1e-13
 
@@ -483,6 +486,50 @@ class TableSegment:
         return evs
 
 
+# --------------------------------------------------------------- accuracy
+@dataclass(frozen=True)
+class ReferenceAccuracy:
+    """How a reference integrates (this pair reference and :mod:`gearfmu.gearbox.reference`):
+    solve_ivp's ``method`` and relative tolerance ``rtol`` (> 0), the absolute tolerance of each
+    state rtol * ``atol_scale`` * its physical scale, the largest step the shortest natural period
+    (the pair's at its largest total stiffness; the gearbox's linearisation with every mesh at its
+    largest) over ``steps_per_period``, and at most ``max_segments`` segments.  Checked when made
+    (ReferenceInputError naming the field)."""
+
+    rtol: float = 1e-10
+    atol_scale: float = 1.0
+    method: str = "DOP853"
+    steps_per_period: float = 64.0
+    max_segments: int = 5_000_000
+
+    def __post_init__(self):
+        object.__setattr__(self, "rtol", _finite("rtol", self.rtol, positive=True, error=ReferenceInputError))
+
+
+#: the field names of :class:`ReferenceAccuracy` (each also a keyword of the references)
+ACCURACY_FIELDS = tuple(f.name for f in dataclass_fields(ReferenceAccuracy))
+
+
+def reference_accuracy(accuracy: Optional[ReferenceAccuracy], fields: dict, error=ReferenceInputError,
+                       function: str = "simulate_reference") -> ReferenceAccuracy:
+    """``accuracy`` (None: the defaults) with the fields given as keywords (``fields``) in place,
+    checked; ``error`` (the caller's ValueError class) names the field, or a keyword that is no
+    field (not an argument of ``function``)."""
+    if accuracy is None:
+        accuracy = ReferenceAccuracy()
+    elif not isinstance(accuracy, ReferenceAccuracy):
+        raise error(f"accuracy: expected ReferenceAccuracy, got {type(accuracy).__name__}")
+    unknown = sorted(set(fields) - set(ACCURACY_FIELDS))
+    if unknown:
+        raise error(f"{unknown[0]}: not an argument of {function}")
+    try:
+        return replace(accuracy, **fields) if fields else accuracy
+    except ReferenceInputError as exc:
+        if error is ReferenceInputError:
+            raise
+        raise error(str(exc)) from None
+
+
 # ------------------------------------------------------------------- main
 def _temperature_slice(tables: MeshTables, bulk_temperature_C) -> MeshTables:
     """The single-temperature tables the reference runs on (docs/model.md "Temperature axis")."""
@@ -497,51 +544,212 @@ def _temperature_slice(tables: MeshTables, bulk_temperature_C) -> MeshTables:
         raise ReferenceInputError(str(exc)) from None
 
 
+class _Rows:
+    """The output rows of a run, one per communication instant: the state [theta1, omega1, x, v],
+    the pair forces, the mesh force and the stiffness of the pairs in contact (NaN where the run
+    did not reach)."""
+
+    def __init__(self, n: int, slots: int):
+        self.state = np.full((n, 4), np.nan)
+        self.pair = np.full((n, slots), np.nan)
+        self.force = np.full(n, np.nan)
+        self.stiff = np.full(n, np.nan)
+
+    def write(self, i: int, y, rows: TableRows, c: float, model: str) -> None:
+        """Row ``i`` of the state ``y``, its forces by the literal formulas (:func:`pair_forces`)."""
+        F, st, kk = pair_forces(y[0], y[1], y[2], y[3], rows, c, model)
+        self.state[i] = y
+        self.pair[i] = F
+        self.force[i] = F.sum()
+        self.stiff[i] = kk[st != 0].sum()
+
+
+class _PairReference:
+    """The reference's integration of one run (module docstring): the table rows per torque, the
+    damping, the tolerances and step limits (:meth:`set_scales`), and the state -- the pinion angle
+    ``theta`` at the segment start, (omega1, x, v) ``y_rest``, the table ``piece`` -- carried through
+    the segments of each communication step (:meth:`step`)."""
+
+    def __init__(self, tables: MeshTables, s: RunSettings, acc: ReferenceAccuracy):
+        self.tables, self.acc = tables, acc
+        rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
+        I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
+        self.me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
+        self.km = float(tables.k_mean_N_per_m)
+        self.c = 2.0 * s.damping_ratio * math.sqrt(self.km * self.me)  # docs/model.md, seed 003 eq 7-9
+        self.wn = math.sqrt(self.km / self.me)
+        self.model = s.damping_model
+        self.par = (rb1, rb2, I1, I2, self.c, self.model)
+        self.rows_cache = {}
+        self.piece = self.prev_rows = self.first_step = None
+        self.n_seg = self.n_ev = self.nfev = 0
+        self.theta, self.y_rest = 0.0, None
+
+    def rows_for(self, t1) -> TableRows:
+        """The table rows at pinion torque ``t1`` (kept)."""
+        key = float(t1) if self.tables.n_torque > 1 else 0.0
+        if key not in self.rows_cache:
+            self.rows_cache[key] = TableRows(self.tables, key)
+        return self.rows_cache[key]
+
+    def initial_x(self, th0: float, t1: float, x_start) -> float:
+        """``x_start``, or when None the exact leftmost root of the static force at the pinion angle
+        ``th0`` under ``t1`` (module docstring; docs/model.md "Contact-zone edges" for the lines)."""
+        if x_start is not None:
+            return x_start
+        r0 = self.rows_for(t1)
+        rb1 = self.par[0]
+        Phi = r0.N * r0.dphi
+        phim = th0 - Phi * math.floor(th0 / Phi)
+        u = phim / r0.dphi
+        i0 = min(max(int(math.floor(u)), 0), r0.N - 1)
+        w = u - i0
+        i1 = (i0 + 1) % r0.N
+        lerp = lambda A: A[:, i0] + w * (A[:, i1] - A[:, i0])
+        if r0.zones is None:
+            x0 = equilibrium_dte_exact_m(lerp(r0.K), lerp(r0.E), lerp(r0.B), t1 / rb1)
+        else:
+            vals = r0.values_at(u)
+            x0 = equilibrium_dte_exact_m(vals[0], vals[1], vals[3], t1 / rb1)
+        if not math.isfinite(x0):
+            raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
+        return x0
+
+    def set_scales(self, t1s, x0: float, w0: float) -> None:
+        """The absolute tolerance per state (module docstring), the look-ahead ``delta`` of the mode
+        choice and the largest step ``h_cap``: 1/steps_per_period of the shortest natural period
+        (stiffest mesh), so an indicator cannot cross a boundary and come back inside one step
+        unseen (events are detected by sign changes between steps)."""
+        t, acc, wn = self.tables, self.acc, self.wn
+        xs = max(abs(t1s).max() / self.par[0] / self.km, float(np.max(t.backlash_half_m)), float(np.ptp(t.e_m)),
+                 abs(x0), 1e-9)
+        scale = np.array([t.mesh_period_rad, max(abs(w0), 1.0), xs, xs * wn])
+        self.atol = acc.rtol * acc.atol_scale * scale
+        self.delta = 1e-9 * min(2 * math.pi / wn, t.mesh_period_rad / max(abs(w0), 1.0))
+        wmax = math.sqrt(float(np.max(t.k_N_per_m.sum(axis=1))) / self.me)
+        self.h_cap = 2.0 * math.pi / max(wmax, wn) / float(acc.steps_per_period)
+
+    def seg_cap(self, seg: TableSegment, omega: float) -> float:
+        """The largest step in ``seg``: ``h_cap``, and at most 16/steps_per_period of the time to
+        cross the table piece, so short pieces (one-node ramps of k and e, where de/dt is large) are
+        resolved too."""
+        if seg.node_hi is None or omega == 0.0:
+            return self.h_cap
+        dur = (seg.node_hi - seg.node_lo) / abs(omega)
+        return min(self.h_cap, dur * 16.0 / float(self.acc.steps_per_period))
+
+    def step(self, span, T1: float, T2: float, rows: TableRows) -> bool:
+        """One communication step ``span`` = (t, t_end) at torques T1, T2 on the table ``rows``: the
+        piece where the rows changed, then segments from event to event until t_end
+        (:meth:`segment`).  False where solve_ivp failed or the state turned non-finite."""
+        t, t_end = span
+        if rows is not self.prev_rows or self.piece is None:
+            self.piece = rows.piece_of(self.theta, self.y_rest[0])
+            self.prev_rows = rows
+        forced = None
+        zero_len = 0
+        while t < t_end:
+            done = self.segment(rows, (t, t_end), T1, T2, forced)
+            if done is None:
+                return False
+            t_new, forced, event = done
+            if event:
+                zero_len = zero_len + 1 if t_new <= t else 0
+                if zero_len > 50:
+                    raise RuntimeError(f"reference: no progress at t = {t!r} s (mode chattering)")
+            t = t_new if event else t_end
+            if not np.all(np.isfinite(self.y_rest)) or not math.isfinite(self.theta):
+                return False
+            if self.n_seg > self.acc.max_segments:
+                raise RuntimeError(f"reference: more than max_segments={self.acc.max_segments} segments")
+        return True
+
+    def segment(self, rows: TableRows, span, T1: float, T2: float, forced):
+        """One segment from ``span`` = (t, t_end) on the current piece, the modes read a little
+        ahead along the true field (``forced``: the mode of the pair whose indicator ended the last
+        segment), integrated by solve_ivp to the first event or to t_end; the state moves there (on
+        a node event the angle snaps onto the node and the piece moves on).  Returns (time reached,
+        the pair mode to force next, an event ended it), None where solve_ivp failed."""
+        t, t_end = span
+        acc, y_rest = self.acc, self.y_rest
+        seg = TableSegment(rows, self.piece, self.theta, T1, T2, self.par)
+        y = np.array([0.0, y_rest[0], y_rest[1], y_rest[2]])
+        ya = y + self.delta * seg.deriv(y, seg.force_general(y))
+        modes = seg.mode_from(ya, forced)
+        evs = seg.events(modes)
+        sol = solve_ivp(seg.rhs_factory(modes), (t, t_end), y, method=acc.method, rtol=acc.rtol, atol=self.atol,
+                        events=[e for e, _ in evs] or None, max_step=self.seg_cap(seg, y_rest[0]),
+                        first_step=None if not self.first_step else min(self.first_step, t_end - t))
+        self.n_seg += 1
+        self.nfev += seg.nfev
+        if sol.status == -1:
+            return None
+        if len(sol.t) >= 3:
+            self.first_step = float(sol.t[-2] - sol.t[-3])
+        t_new = float(sol.t[-1])
+        yn = sol.y[:, -1]
+        forced = None
+        if sol.status == 1:  # an event: which one fired first
+            self.n_ev += 1
+            hit = [i for i, te in enumerate(sol.t_events) if len(te)]
+            i = min(hit, key=lambda i: sol.t_events[i][0])
+            tag = evs[i][1]
+            t_new = float(sol.t_events[i][0])
+            yn = sol.y_events[i][0]
+            if tag[0] == "node":
+                piece = self.piece
+                if tag[1] > 0:
+                    node, self.piece = piece[1], (piece[1], rows.next_kink(piece[1]))
+                else:
+                    node, self.piece = piece[0], (rows.prev_kink(piece[0]), piece[0])
+                self.theta = node * rows.dphi  # snap onto the node
+            else:
+                self.theta = self.theta + float(yn[0])
+                forced = (tag[1], tag[2], tag[3])
+        else:
+            self.theta = self.theta + float(yn[0])
+        self.y_rest = np.array(yn[1:4], dtype=float)
+        return t_new, forced, sol.status == 1
+
+
 def simulate_reference(
     tables: MeshTables,
     settings: Optional[RunSettings] = None,
     *,
-    stop_time_s: Optional[float] = None,
-    comm_step_s: Optional[float] = None,
     pinion_torque_Nm: Optional[InputLike] = None,
     gear_torque_Nm: Optional[InputLike] = None,
-    pinion_speed_start_rad_s: Optional[float] = None,
-    damping_ratio: Optional[float] = None,
-    damping_model: Optional[str] = None,
-    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
-    rtol: float = 1e-10,
-    atol_scale: float = 1.0,
-    method: str = "DOP853",
-    steps_per_period: float = 64.0,
-    max_segments: int = 5_000_000,
-    progress: bool = False,
-    max_step_s: Optional[float] = None,
-    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[float] = None,
-):
+    accuracy: Optional[ReferenceAccuracy] = None,
+    progress: bool = False,
+    **fields,
+) -> SimResult:
     """Event-located solve_ivp reference of docs/model.md (two-inertia form).
 
     Same settings, arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
-    (torques in N*m held over each communication step; ``gear_torque_Nm``
-    None = T1*Rb2/Rb1), plus ``rtol`` (solve_ivp rtol), ``atol_scale``
-    (multiplies the per-state absolute tolerances rtol*scale, see module
-    docstring), ``method`` ("DOP853" or "Radau", "RK45", ...) and
-    ``steps_per_period`` (the largest step is the shortest natural period
-    2 pi/sqrt(max k_total/m_e) over this number, so that no contact or clamp
-    indicator crosses and returns inside one step unseen).
-    ``max_step_s`` and ``integrator`` (and the settings' fields of the same names) are accepted
-    and ignored (the reference chooses its steps).
+    (its run-settings keywords :data:`gearfmu.dynamics.native.SETTINGS_KEYWORDS`; torques in N*m
+    held over each communication step; ``gear_torque_Nm`` None = T1*Rb2/Rb1); ``max_step_s`` and
+    ``integrator`` (and the settings' fields of the same names) are accepted and ignored (the
+    reference chooses its steps).  ``accuracy``: a :class:`ReferenceAccuracy` (None: its
+    defaults); each of its fields may be given as a keyword instead: ``rtol`` (solve_ivp rtol),
+    ``atol_scale`` (multiplies the per-state absolute tolerances rtol*scale, see module
+    docstring), ``method`` ("DOP853" or "Radau", "RK45", ...), ``steps_per_period`` (the largest
+    step is the shortest natural period 2 pi/sqrt(max k_total/m_e) over this number, so that no
+    contact or clamp indicator crosses and returns inside one step unseen), ``max_segments``.
     ``bulk_temperature_C`` (degC, one constant value; tables with a temperature axis
     only): the run uses ``tables.at_temperature`` (None: ``default_temperature_C``),
     the slice :func:`gearfmu.dynamics.native.simulate` runs on at that temperature.
+    Steps: the checks, the initial state (:meth:`_PairReference.initial_x`), the scales of the
+    tolerances and steps (:meth:`_PairReference.set_scales`), then per communication step the
+    segments between events (:meth:`_PairReference.step`).
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
-    s = checked(settings, ReferenceInputError, RunSettings, SOLVER_ARGUMENTS, stop_time_s=stop_time_s,
-                output_interval_s=comm_step_s,
-                pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
-                damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad)
+    acc_fields = {k: fields.pop(k) for k in ACCURACY_FIELDS if k in fields}
+    changes = settings_changes("simulate_reference", fields)
+    changes.pop("max_step_s", None)
+    changes.pop("integrator", None)
+    s = checked(settings, ReferenceInputError, RunSettings, SOLVER_ARGUMENTS, **changes)
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
     tables = _temperature_slice(tables, bulk_temperature_C)
@@ -549,150 +757,29 @@ def simulate_reference(
     s = resolve_settings(tables, s)
     n_steps, t1s, t2s = run_inputs(tables, s, pinion_torque_Nm, gear_torque_Nm, error=ReferenceInputError)
     x_start, v0 = start_state(dte_start_m, dte_rate_start_m_s, error=ReferenceInputError)
-    rtol = _finite("rtol", rtol, positive=True, error=ReferenceInputError)
-    H, zeta, damping_model = s.output_interval_s, s.damping_ratio, s.damping_model
-    w0, th0 = s.pinion_speed_start_rad_s, s.pinion_angle_start_rad
-    rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
-    I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
-    me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
-    km = float(tables.k_mean_N_per_m)
-    c = 2.0 * zeta * math.sqrt(km * me)  # docs/model.md, seed 003 eq 7-9
-    wn = math.sqrt(km / me)
-    par = (rb1, rb2, I1, I2, c, damping_model)
-
-    rows_cache = {}
-
-    def rows_for(t1):
-        key = float(t1) if tables.n_torque > 1 else 0.0
-        if key not in rows_cache:
-            rows_cache[key] = TableRows(tables, key)
-        return rows_cache[key]
-
-    r0 = rows_for(t1s[0])
-    if x_start is None:
-        Phi = r0.N * r0.dphi
-        phim = th0 - Phi * math.floor(th0 / Phi)
-        s = phim / r0.dphi
-        i0 = min(max(int(math.floor(s)), 0), r0.N - 1)
-        w = s - i0
-        i1 = (i0 + 1) % r0.N
-        lerp = lambda A: A[:, i0] + w * (A[:, i1] - A[:, i0])
-        if r0.zones is None:
-            x0 = equilibrium_dte_exact_m(lerp(r0.K), lerp(r0.E), lerp(r0.B), t1s[0] / rb1)
-        else:  # docs/model.md "Contact-zone edges"
-            vals = r0.values_at(s)
-            x0 = equilibrium_dte_exact_m(vals[0], vals[1], vals[3], t1s[0] / rb1)
-        if not math.isfinite(x0):
-            raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
-    else:
-        x0 = x_start
-
-    # absolute tolerances (module docstring)
-    xs = max(abs(t1s).max() / rb1 / km, float(np.max(tables.backlash_half_m)),
-             float(np.ptp(tables.e_m)), abs(x0), 1e-9)
-    scale = np.array([tables.mesh_period_rad, max(abs(w0), 1.0), xs, xs * wn])
-    atol = rtol * atol_scale * scale
-    delta = 1e-9 * min(2 * math.pi / wn, tables.mesh_period_rad / max(abs(w0), 1.0))
-    # largest step: 1/steps_per_period of the shortest natural period (stiffest mesh), so an
-    # indicator cannot cross a boundary and come back inside one step unseen (events are
-    # detected by sign changes between steps)
-    wmax = math.sqrt(float(np.max(tables.k_N_per_m.sum(axis=1))) / me)
-    h_cap = 2.0 * math.pi / max(wmax, wn) / float(steps_per_period)
-
-    def seg_cap(seg, omega):
-        # and at most 1/(steps_per_period/16) of the time to cross the table piece, so short
-        # pieces (one-node ramps of k and e, where de/dt is large) are resolved too
-        if seg.node_hi is None or omega == 0.0:
-            return h_cap
-        dur = (seg.node_hi - seg.node_lo) / abs(omega)
-        return min(h_cap, dur * 16.0 / float(steps_per_period))
-
-    state = np.full((n_steps + 1, 4), np.nan)
-    pair = np.full((n_steps + 1, tables.slots), np.nan)
-    force = np.full(n_steps + 1, np.nan)
-    stiff = np.full(n_steps + 1, np.nan)
-
-    def out_row(i, y, rows):
-        F, st, kk = pair_forces(y[0], y[1], y[2], y[3], rows, c, damping_model)
-        state[i] = y
-        pair[i] = F
-        force[i] = F.sum()
-        stiff[i] = kk[st != 0].sum()
-
-    out_row(0, (th0, w0, x0, v0), r0)
-    theta, y_rest = th0, np.array([w0, x0, v0])
-    n_seg = n_ev = nfev = 0
-    first_step = None
-    piece = None
-    prev_rows = None
-    forced = None
+    acc = reference_accuracy(accuracy, acc_fields)
+    H, w0, th0 = s.output_interval_s, s.pinion_speed_start_rad_s, s.pinion_angle_start_rad
+    ref = _PairReference(tables, s, acc)
+    x0 = ref.initial_x(th0, t1s[0], x_start)
+    ref.set_scales(t1s, x0, w0)
+    out = _Rows(n_steps + 1, tables.slots)
+    out.write(0, (th0, w0, x0, v0), ref.rows_for(t1s[0]), ref.c, ref.model)
+    ref.theta, ref.y_rest = th0, np.array([w0, x0, v0])
     t_wall = _time.perf_counter()
     diverged = None
     for k in progress_bar(range(n_steps), "reference", progress, unit="step"):
-        rows = rows_for(t1s[k])
-        if rows is not prev_rows or piece is None:
-            piece = rows.piece_of(theta, y_rest[0])
-            prev_rows = rows
-        t, t_end = k * H, (k + 1) * H
-        forced = None
-        zero_len = 0
-        while t < t_end:
-            seg = TableSegment(rows, piece, theta, t1s[k], t2s[k], par)
-            y = np.array([0.0, y_rest[0], y_rest[1], y_rest[2]])
-            # modes: indicators read a little ahead along the true field (choice, docstring)
-            ya = y + delta * seg.deriv(y, seg.force_general(y))
-            modes = seg.mode_from(ya, forced)
-            evs = seg.events(modes)
-            sol = solve_ivp(seg.rhs_factory(modes), (t, t_end), y, method=method, rtol=rtol, atol=atol,
-                            events=[e for e, _ in evs] or None, max_step=seg_cap(seg, y_rest[0]),
-                            first_step=None if not first_step else min(first_step, t_end - t))
-            n_seg += 1
-            nfev += seg.nfev
-            if sol.status == -1:
-                diverged = k
-                break
-            if len(sol.t) >= 3:
-                first_step = float(sol.t[-2] - sol.t[-3])
-            t_new = float(sol.t[-1])
-            yn = sol.y[:, -1]
-            forced = None
-            if sol.status == 1:  # an event: which one fired first
-                n_ev += 1
-                hit = [i for i, te in enumerate(sol.t_events) if len(te)]
-                i = min(hit, key=lambda i: sol.t_events[i][0])
-                tag = evs[i][1]
-                t_new = float(sol.t_events[i][0])
-                yn = sol.y_events[i][0]
-                if tag[0] == "node":
-                    if tag[1] > 0:
-                        node, piece = piece[1], (piece[1], rows.next_kink(piece[1]))
-                    else:
-                        node, piece = piece[0], (rows.prev_kink(piece[0]), piece[0])
-                    theta = node * rows.dphi  # snap onto the node
-                else:
-                    theta = theta + float(yn[0])
-                    forced = (tag[1], tag[2], tag[3])
-                zero_len = zero_len + 1 if t_new <= t else 0
-                if zero_len > 50:
-                    raise RuntimeError(f"reference: no progress at t = {t!r} s (mode chattering)")
-            else:
-                theta = theta + float(yn[0])
-            y_rest = np.array(yn[1:4], dtype=float)
-            t = t_new if sol.status == 1 else t_end
-            if not np.all(np.isfinite(y_rest)) or not math.isfinite(theta):
-                diverged = k
-                break
-            if n_seg > max_segments:
-                raise RuntimeError(f"reference: more than max_segments={max_segments} segments")
-        if diverged is not None:
+        rows = ref.rows_for(t1s[k])
+        if not ref.step((k * H, (k + 1) * H), t1s[k], t2s[k], rows):
+            diverged = k
             break
-        out_row(k + 1, (theta, y_rest[0], y_rest[1], y_rest[2]), rows)
+        out.write(k + 1, (ref.theta, ref.y_rest[0], ref.y_rest[1], ref.y_rest[2]), rows, ref.c, ref.model)
     wall = _time.perf_counter() - t_wall
-
-    info = {"form": "two-inertia (docs/model.md), event-located solve_ivp reference",
-            "method": method, "rtol": rtol, "max_step_s": h_cap, "atol": atol.tolist(), "segments": n_seg, "events": n_ev,
-            "rhs_calls": nfev, "equivalent_mass_kg": me}
+    info = {"form": "two-inertia (docs/model.md), event-located solve_ivp reference", "method": acc.method,
+            "rtol": acc.rtol, "max_step_s": ref.h_cap, "atol": ref.atol.tolist(), "segments": ref.n_seg,
+            "events": ref.n_ev, "rhs_calls": ref.nfev, "equivalent_mass_kg": ref.me}
     if diverged is not None:
         info["diverged_at_step"] = int(diverged)
-    return _result(tables, np.arange(n_steps + 1) * H, state, pair, force, stiff, t1s, t2s, 0.0, n_seg, c,
-                   damping_model, wall, info)
+    return SimResult(time_s=np.arange(n_steps + 1) * H, **derived_outputs(tables, out.state, out.pair, out.force),
+                     mesh_force=out.force, pair_force=out.pair, mesh_stiffness=out.stiff, pinion_torque=t1s,
+                     gear_torque=t2s, step_s=0.0, substeps=ref.n_seg, damping_Ns_per_m=ref.c, damping_model=ref.model,
+                     wall_s=wall, info=info)

@@ -25,15 +25,13 @@ computed here with the exact leftmost root of each mesh's piecewise-linear stati
 
 ``simulate_reference(model, settings, ...)`` takes the settings and arguments of
 :func:`gearfmu.gearbox.native.simulate` (without ``max_step_s`` and ``integrator``) plus its
-accuracy (:class:`ReferenceAccuracy`: ``rtol``, ``method``, ``steps_per_period``, ...) and
-returns a :class:`gearfmu.gearbox.native.GearboxResult` with the same columns.
+accuracy (:class:`ReferenceAccuracy`, the pair reference's: ``rtol``, ``method``, ``steps_per_period``,
+...) and returns a :class:`gearfmu.gearbox.native.GearboxResult` with the same columns.
 """
 from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass, replace
-from dataclasses import fields as dataclass_fields
 from typing import Optional
 
 import numpy as np
@@ -41,7 +39,8 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..dynamics.reference import TableRows, TableSegment, equilibrium_dte_exact_m, pair_forces
+from ..dynamics.reference import (ReferenceAccuracy, TableRows, TableSegment, equilibrium_dte_exact_m, pair_forces,
+                                 reference_accuracy)
 from .model import GearboxModel
 from ..common.settings import GearboxRunSettings
 from .native import GearboxInputError, GearboxResult, InputLike, checked_settings, columns, run_inputs
@@ -76,23 +75,6 @@ def _lookup_values(rows: TableRows, theta: float):
     return lerp(rows.K), lerp(rows.E), lerp(rows.B)
 
 
-@dataclass(frozen=True)
-class ReferenceAccuracy:
-    """How the reference integrates: solve_ivp's ``method`` and relative tolerance ``rtol``, the
-    absolute tolerance of each state rtol * ``atol_scale`` * its physical scale, the largest step
-    the shortest natural period of the linearisation with every mesh at its largest total
-    stiffness over ``steps_per_period``, and at most ``max_segments`` segments."""
-
-    rtol: float = 1e-10
-    atol_scale: float = 1.0
-    method: str = "DOP853"
-    steps_per_period: float = 64.0
-    max_segments: int = 5_000_000
-
-
-_ACCURACY_FIELDS = frozenset(f.name for f in dataclass_fields(ReferenceAccuracy))
-
-
 def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSettings] = None, *,
                        stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
                        motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
@@ -109,7 +91,7 @@ def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSetting
     rs = checked_settings(model, settings, GearboxInputError, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
                            motor_speed_start_rad_s=motor_speed_start_rad_s, motor_angle_start_rad=motor_angle_start_rad)
     n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, rs, motor_torque_Nm, load_torque_Nm, initial_state)
-    acc = _accuracy(accuracy, accuracy_fields)
+    acc = reference_accuracy(accuracy, accuracy_fields, GearboxInputError)
     ref = _Reference(model, acc)
     y0 = ref.initial_state(rs, t_ref, y_given)
     ref.set_scales(t_ref, y0, rs.motor_speed_start_rad_s)
@@ -137,22 +119,6 @@ def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSetting
     cols = columns(model, out.pair_off, out.body, out.mesh, out.pair, out.shaft, t_in, t_out)
     return GearboxResult(time_s=np.arange(n_steps + 1) * H, columns=cols, step_s=0.0, substeps=ref.n_seg,
                          integrator=f"reference {acc.method}", wall_s=wall, state=state, info=info)
-
-
-def _accuracy(accuracy: Optional[ReferenceAccuracy], fields: dict) -> ReferenceAccuracy:
-    """``accuracy`` (None: the defaults) with the keyword form applied, checked."""
-    if accuracy is None:
-        accuracy = ReferenceAccuracy()
-    elif not isinstance(accuracy, ReferenceAccuracy):
-        raise GearboxInputError(f"accuracy: expected ReferenceAccuracy, got {type(accuracy).__name__}")
-    unknown = sorted(set(fields) - _ACCURACY_FIELDS)
-    if unknown:
-        raise GearboxInputError(f"{unknown[0]}: not an argument of simulate_reference")
-    acc = replace(accuracy, **fields) if fields else accuracy
-    rtol = acc.rtol
-    if not (rtol > 0 and math.isfinite(rtol)):
-        raise GearboxInputError(f"rtol: must be a positive number, got {rtol!r}")
-    return acc
 
 
 class _Outputs:
