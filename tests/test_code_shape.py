@@ -33,8 +33,6 @@ BEING_SPLIT = {
     ("dynamics/native.py", "simulate_sdof"),
     ("dynamics/reference.py", "simulate_reference"),
     ("fmu/fmudoc.py", "documentation_html"),
-    ("fmu/pythonfmu_build.py", "build_fmu"),
-    ("fmu/standalone_build.py", "build_standalone_fmu"),
 }
 
 _JIT = re.compile(r"\b(njit|jit)\b")
