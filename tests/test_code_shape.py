@@ -26,8 +26,6 @@ MAX_PARAMETERS = 12
 
 #: (file below gearfmu/, function) that break a rule today, in the dynamics and the FMU layer
 BEING_SPLIT = {
-    ("fmu/pythonfmu_build.py", "build_fmu"),
-    ("fmu/standalone_build.py", "build_standalone_fmu"),
 }
 
 _JIT = re.compile(r"\b(njit|jit)\b")

@@ -36,7 +36,9 @@ from gearfmu.fmu.compare import native_columns, output_names
 from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.dynamics.native import simulate
 from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
-from gearfmu.fmu.standalone_build import build_standalone_fmu, fmi2_header_dir
+from gearfmu.fmu.build_steps import FmuBuildError
+from gearfmu.fmu.standalone_build import (StandaloneOptions, build_standalone_fmu, fmi2_header_dir,
+                                           standalone_options)
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
 HERE = Path(__file__).resolve().parent
@@ -562,3 +564,31 @@ def test_cli_default_runtime_is_standalone(tmp_path):
     md = fmpy.read_model_description(str(out))
     assert md.coSimulation.needsExecutionTool is False and md.buildConfigurations
     assert fmpy.validation.validate_fmu(str(out)) == []
+
+
+def test_options_as_object_or_keywords_are_checked_alike(tmp_path):
+    """The kind of FMU comes as :class:`StandaloneOptions` or as its fields given as keywords
+    (beside the run settings' fields): a bad value is refused the same way both ways, by one
+    line naming the field, before anything is compiled and without leaving a file; a keyword
+    that is neither an option nor a run setting is a TypeError naming it."""
+    t = impact_tables()
+    out = tmp_path / "x.fmu"
+    for kw, field in (({"fmi_version": 4}, "fmi_version"), ({"interface": "co-sim"}, "interface"),
+                      ({"me_node_events": "every"}, "me_node_events"),
+                      ({"fmi3_outputs": "scalar"}, "fmi3_outputs"),    # scalars need FMI 3
+                      ({"platforms": ("x86_64-plan9",)}, "platforms")):
+        with pytest.raises(FmuBuildError, match=f"^{field}: "):
+            build_standalone_fmu(t, out, **kw)
+        with pytest.raises(FmuBuildError, match=f"^{field}: "):
+            build_standalone_fmu(t, out, None, StandaloneOptions(**kw))
+    with pytest.raises(FmuBuildError, match="^damping_ratio: "):   # a run setting beside an option
+        build_standalone_fmu(t, out, None, StandaloneOptions(fmi_version=3), damping_ratio=-1.0, interface="cs")
+    with pytest.raises(FmuBuildError, match="^options: expected StandaloneOptions"):
+        build_standalone_fmu(t, out, None, {"fmi_version": 3})
+    with pytest.raises(TypeError, match="fmi_verison"):
+        build_standalone_fmu(t, out, fmi_verison=3)
+    assert list(tmp_path.iterdir()) == []
+    o = StandaloneOptions(fmi_version=3, fmi3_outputs="scalar", platforms=["x86_64-linux"])
+    assert o.platform_keys() == ("x86_64-linux",)
+    assert standalone_options(o, interface="cs") == StandaloneOptions(
+        fmi_version=3, fmi3_outputs="scalar", platforms=["x86_64-linux"], interface="cs")

@@ -10,10 +10,12 @@ Module              Contents
 ==================  =========================================================
 build_steps         what both builders share: checked arguments and run
                     settings, kernel sources and flags, interface
-                    variables, resources, the FMU file
+                    variables, resources, the FMU file, BuildInputs
+                    (what one build knows before it writes a file)
 modeldesc           modelDescription.xml from modeldescription/variables.toml
 pythonfmu_build     build_fmu: the pythonfmu runtime; compile flags, kernel
-standalone_build    build_standalone_fmu: FMI 2.0 or 3.0 in C, no Python
+standalone_build    build_standalone_fmu: FMI 2.0 or 3.0 in C, no Python;
+                    StandaloneOptions (FMI version, interfaces, platforms)
 crossbuild          standalone binaries for every desktop platform (zig cc)
 envelope            the FMU's envelope record (resources/envelope.json): the
                     range it states and checks, verified or not

@@ -12,7 +12,9 @@ and the standalone C runtime, :mod:`gearfmu.fmu.standalone_build`).
 * the resources: :func:`write_tables`, :func:`write_scene`, the envelope record
   (:mod:`gearfmu.fmu.envelope`), the validation record (:func:`gearfmu.fmu.validation.validation_record`);
 * the FMU file: :func:`fmu_digest` (the identifier's hash), :func:`fmu_zip` (written under a
-  temporary name beside the target and renamed at the end), :func:`zip_folder`.
+  temporary name beside the target and renamed at the end), :func:`zip_folder`;
+* what a build knows before it writes a file: :class:`BuildInputs` (the checked tables and
+  settings, the interface, the envelope record, the tables' bytes, the identifier and GUID).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ import shutil
 import subprocess
 import uuid
 import zipfile
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from xml.sax.saxutils import escape as xml_escape
 from pathlib import Path
 from typing import Optional, Tuple
@@ -31,7 +33,6 @@ from typing import Optional, Tuple
 from ..common.settings import RunSettings, checked
 from ..dynamics.native import integrator_code, resolve_settings
 from ..tables.mesh_tables import MeshTables
-from .runtime.kernel_api import FMU_LAYER_ABI_VERSION, KERNEL_ABI_VERSION  # noqa: F401 (the table's versions)
 from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
                         features_of, model_description_xml, model_description_xml3)
 
@@ -310,3 +311,44 @@ def zip_folder(zout: zipfile.ZipFile, root: Path) -> None:
         rel = p.relative_to(root).as_posix()
         if p.is_file() and rel != "modelDescription.xml":
             zout.write(p, rel)
+
+
+# ----------------------------------------------------------------- one build
+@dataclass(frozen=True)
+class BuildInputs:
+    """What one FMU build knows before it writes a file, checked and resolved: the ``tables``,
+    the run ``settings`` resolved on them (:func:`check_arguments`), the ``model_name``, the
+    ``scene_text`` (None: no scene), the interface ``spec`` and its ``variables`` with the start
+    values applied (:func:`interface_variables`), the ``temperature_start_C`` of the temperature
+    input (degC; None without a temperature axis), the ``envelope`` record
+    (:func:`gearfmu.fmu.envelope.fmu_envelope_record`), the tables' bytes (``meta_bytes``
+    tables.json, ``bin_bytes`` tables.bin), the ``identifier`` (modelIdentifier) and the ``guid``."""
+
+    tables: MeshTables
+    settings: RunSettings
+    model_name: str
+    scene_text: Optional[str]
+    spec: object
+    variables: list
+    temperature_start_C: Optional[float]
+    envelope: dict
+    meta_bytes: bytes
+    bin_bytes: bytes
+    identifier: str
+    guid: str
+
+    @property
+    def experiment(self) -> dict:
+        """The DefaultExperiment: start, stop time and step size (s)."""
+        return {"start": 0.0, "stop": self.settings.stop_time_s, "step": self.settings.output_interval_s}
+
+
+def new_identifier(prefix: str, meta_bytes: bytes, bin_bytes: bytes, model_name: str, s: RunSettings) -> str:
+    """``<prefix>_<12 digits of fmu_digest>_<8 random hex digits>``: the FMU's modelIdentifier (and
+    module name); the random part keeps two builds of the same model apart in one process."""
+    return f"{prefix}_{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
+
+
+def new_guid() -> str:
+    """A new GUID in braces (the model description's guid / instantiationToken)."""
+    return "{" + str(uuid.uuid4()) + "}"

@@ -49,20 +49,19 @@ import zipfile
 import xml.etree.ElementTree as ET
 from importlib.metadata import version
 from pathlib import Path
-from typing import Optional, Union
+from typing import Optional
 import sysconfig
 
 from .. import __version__
 from ..common.cache import cache_dir
 from ..common.progress import ticking
 from ..common.settings import RunSettings
-from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
-                          FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
-                          KERNEL_LIBRARY_SOURCES, CompilerNotFoundError, FmuBuildError, check_arguments,
-                          check_output_arguments, compiler_version,
-                          find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
-                          model_description, record_parameters, run_compiler, scene_sha256, sha256_file,
-                          start_values, temperature_input, variable_table_lines, write_scene, write_tables)
+from .build_steps import (CFLAGS, KERNEL_DIR, KERNEL_LIBRARY_HEADERS, KERNEL_LIBRARY_SOURCES, BuildInputs,
+                          FmuBuildError, check_arguments, compiler_version, find_c_compiler, fmi2_header_dir,
+                          fmu_zip, interface_variables, model_description, new_guid, new_identifier,
+                          record_parameters, run_compiler, scene_sha256, sha256_file, start_values,
+                          variable_table_lines, write_scene, write_tables)
+from .runtime.kernel_api import FMU_LAYER_ABI_VERSION, KERNEL_ABI_VERSION
 from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
@@ -163,18 +162,14 @@ def _slave_text(template: str, class_name: str, kernel_api: str) -> str:
 
 def build_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None, *, model_name: str = "gearpair",
               scene_text: Optional[str] = None, spec_path=None, cc: Optional[str] = None,
-              envelope: Optional[dict] = None,
-              damping_ratio: Optional[float] = None, pinion_speed_start_rad_s: Optional[float] = None,
-              pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
-              max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
-              stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
-              pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None) -> Path:
+              envelope: Optional[dict] = None, **setting_changes) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
     ``settings``: the run settings (:class:`gearfmu.common.settings.RunSettings`; None: its
     defaults): the start values of the FMU's parameters and inputs and its DefaultExperiment
-    (``stop_time_s``, ``output_interval_s``: stopTime, stepSize).  The keyword arguments of the
-    same names, when given, replace its fields.  Units: damping_ratio (1), speeds rad/s, torques
+    (``stop_time_s``, ``output_interval_s``: stopTime, stepSize).  ``setting_changes``: fields of
+    :class:`~gearfmu.common.settings.RunSettings` given as keywords (``damping_ratio=0.05``),
+    replacing its fields when not None.  Units: damping_ratio (1), speeds rad/s, torques
     N*m, times s, angles rad.  Automatic values are resolved on the tables as the native solver
     resolves them (:func:`gearfmu.dynamics.native.resolve_settings`): ``gear_torque_start_Nm``
     None means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``, ``max_step_s`` None the
@@ -186,136 +181,189 @@ def build_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = No
     docs/native.md "rk4_node") or "rk4_seg" (3, docs/model.md "rk4_seg"; FMU parameter ``integrator``).
     ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the tables' own range,
     "not verified"), checked at run time and recorded (docs/fmu.md "Verified envelope").
-    The FMU is written to a temporary name beside ``out_path`` and renamed
-    at the end, so a failed build never leaves a half-written FMU under the
-    final name.
-    """
-    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
-                                  damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
-                                  pinion_angle_start_rad=pinion_angle_start_rad,
-                                  pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
-                                  max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
-                                  damping_model=damping_model, integrator=integrator)
-    tstop, dt = s.stop_time_s, s.output_interval_s
-    spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, start_values(s))
-    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
-    meta_bytes, bin_bytes = tables.to_bytes()
-    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
-    identifier = f"gearfmu_{suffix}"       # module name and modelIdentifier
-    class_name = f"GearFmu_{suffix}"
-    guid = "{" + str(uuid.uuid4()) + "}"
-    cc = cc or find_c_compiler()
 
+    The steps: check the arguments and fix the interface and the identifier (:func:`_inputs`);
+    stage the resources -- the tables, the compiled kernel with its sources, the runtime record
+    (:func:`_stage_kernel`), the loader's configuration and sources (:func:`_stage_loader`), the
+    provenance (:func:`_provenance`) --; write the slave from its template (:func:`_slave_script`);
+    let pythonfmu pack them (:func:`_pythonfmu_build`); repack its FMU with the spec's model
+    description, the loader as the binary, the validation record and the documentation
+    (:func:`_repack`).  The FMU is written to a temporary name beside ``out_path`` and renamed
+    at the end, so a failed build never leaves a half-written FMU under the final name.
+    """
+    b, out_path = _inputs(tables, out_path, settings, model_name=model_name, scene_text=scene_text,
+                          spec_path=spec_path, envelope=envelope, setting_changes=setting_changes)
+    cc = cc or find_c_compiler()
     with tempfile.TemporaryDirectory(prefix="gearfmu_build_") as tmpd:
         tmp = Path(tmpd)
         stage = tmp / "stage"
         stage.mkdir()
-        write_tables(stage, meta_bytes, bin_bytes)
-        lib = compile_kernel(stage, cc=cc)
-        src_dir = stage / "kernel_src"
-        src_dir.mkdir()
-        for f in (*KERNEL_LIBRARY_SOURCES, *KERNEL_LIBRARY_HEADERS):
-            shutil.copy2(f, src_dir / f.name)
-        (src_dir / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} {' '.join(f.name for f in KERNEL_LIBRARY_SOURCES)} -lm\n",
-            encoding="utf-8")
-        sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
-        runtime = {
-            "format": "gearfmu-runtime", "version": 1, "model_identifier": identifier,
-            "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION,
-            "fmu_layer_abi_version": FMU_LAYER_ABI_VERSION, "slots": tables.slots,
-            "sha256": sha, "variables": runtime_variable_table(variables),
-            "envelope": runtime_envelope(env_rec),
-        }
-        (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
+        lib, sha, src_dir = _stage_kernel(stage, b, cc)
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-        shim = compile_pyshim(tmp / "shim", identifier, cc=cc)
-        if shim is not None:  # the loader's record of this build's Python, outside the FMU
-            record_build_python()
-        (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so", guid=guid,
-                                                         variables=variables), encoding="utf-8")
-        shim_src = stage / "pyshim_src"
-        shim_src.mkdir()
-        for f in (*PYSHIM_SOURCES, *PYSHIM_HEADERS):
-            shutil.copy2(f, shim_src / f.name)
-        (shim_src / "BUILD.txt").write_text(
-            f"{Path(cc).name} {' '.join(PYSHIM_CFLAGS)} -I. -I<FMI 2.0 headers> -o <modelIdentifier>.so "
-            f"{' '.join(f.name for f in PYSHIM_SOURCES)} -ldl -lpthread\n", encoding="utf-8")
-        files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json",
-                                     PYSHIM_CONFIG)]
-        scene_file = write_scene(stage, scene_text)
+        shim, shim_src = _stage_loader(tmp, stage, b, cc)
+        files = [stage / n for n in ("tables.json", "tables.bin", lib.name, "gearfmu_runtime.json", PYSHIM_CONFIG)]
+        scene_file = write_scene(stage, b.scene_text)
         if scene_file is not None:
             files.append(scene_file)
-        parameters = dict(record_parameters(s), stop_time_s=tstop, output_interval_s=dt)
-        if temp0 is not None:  # after the experiment times (the record's key order)
-            parameters["bulk_temperature_start_C"] = temp0
-        provenance = {
-            "gearfmu_version": __version__, "built_utc": now, "model_name": model_name,
-            "model_identifier": identifier, "guid": guid, "parameters": parameters,
-            "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(),
-            "tables_provenance": tables.provenance,
-            "kernel": {"file": lib.name, "sha256": sha[lib.name], "compiler": compiler_version(cc),
-                       "flags": list(CFLAGS),
-                       "sources_sha256": {f.name: sha256_file(f) for f in (*KERNEL_LIBRARY_SOURCES,
-                                                                           *KERNEL_LIBRARY_HEADERS)}},
-            "scene_sha256": scene_sha256(scene_text),
-            "python": sys.version.split()[0], "platform": platform.platform(),
-            "spec": str(Path(spec.path).name),
-        }
+        provenance = _provenance(b, now, lib.name, sha, cc)
         (stage / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
         files.append(stage / "provenance.json")
-
-        script_dir = tmp / "script"
-        script_dir.mkdir()
-        script = script_dir / f"{identifier}.py"
-        api = script_dir / f"{identifier}_kernel_api.py"
-        script.write_text(_slave_text(SLAVE_TEMPLATE.read_text(encoding="utf-8"), class_name, api.stem),
-                          encoding="utf-8")
-        shutil.copy2(KERNEL_API, api)
-        raw_fmu = tmp / "raw" / f"{identifier}.fmu"
+        script, api = _slave_script(tmp / "script", b.identifier)
+        raw_fmu = tmp / "raw" / f"{b.identifier}.fmu"
         raw_fmu.parent.mkdir()
         _pythonfmu_build(script, raw_fmu, [*files, api, src_dir, shim_src])
-
         record = validation_record(
-            tables, s, runtime="pythonfmu", model_identifier=identifier, temperature_start_C=temp0,
-            scene_text=scene_text, compiler=provenance["kernel"]["compiler"], envelope=env_rec)
-        record[ENVELOPE_FILE] = envelope_json(env_rec).encode("utf-8")
-
-        with zipfile.ZipFile(raw_fmu) as zin:
-            check_registered(zin.read("modelDescription.xml"), variables)
-            xml = model_description(spec, variables, 2, model_name=model_name, model_identifier=identifier,
-                                    guid=guid, stop_time_s=tstop, step_size_s=dt,
-                                    generation_tool=f"gearfmu {__version__}", generation_date=now,
-                                    version=__version__, description_note=envelope_note(env_rec))
-            plat = _platform_dir()
-            with fmu_zip(out_path) as zout:
-                zout.writestr("modelDescription.xml", xml)
-                for info in zin.infolist():
-                    n = info.filename
-                    if n == "modelDescription.xml":
-                        continue
-                    if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
-                        continue  # the kernel is compiled for this platform only
-                    if shim is not None and n == f"binaries/{plat}/{identifier}.so":  # behind the loader
-                        zout.writestr(f"binaries/{plat}/{identifier}.pythonfmu.so", zin.read(n))
-                        zout.write(shim, n)
-                        continue
-                    zout.writestr(info, zin.read(n))
-                for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
-                    zout.writestr(rel, data)
-                page = documentation_html(  # documentation/index.html and _main.html (gearfmu.fmu.fmudoc)
-                    model_name=model_name, model_identifier=identifier, fmi_version=2, runtime="pythonfmu",
-                    generation_tool=f"gearfmu {__version__}", variables=variables,
-                    description=ET.fromstring(xml).get("description", ""), tables=tables,
-                    parameters=record_parameters(s, temp0), envelope=env_rec, scene_text=scene_text,
-                    validation_record=json.loads(record[f"{VALIDATION_DIR}/record.json"]),
-                    platforms_text=f"binaries/{plat}: gearfmu's loader and pythonfmu's wrapper; the kernel "
-                                   "(resources/) compiled on the build machine (docs/fmu.md)",
-                    experiment={"start": 0.0, "stop": tstop, "step": dt})
-                for rel in DOC_FILES(2):
-                    zout.writestr(rel, page)
+            b.tables, b.settings, runtime="pythonfmu", model_identifier=b.identifier,
+            temperature_start_C=b.temperature_start_C, scene_text=b.scene_text,
+            compiler=provenance["kernel"]["compiler"], envelope=b.envelope)
+        record[ENVELOPE_FILE] = envelope_json(b.envelope).encode("utf-8")
+        _repack(raw_fmu, out_path, b, now=now, shim=shim, record=record)
     return out_path
+
+
+def _inputs(tables, out_path, settings, *, model_name, scene_text, spec_path, envelope, setting_changes):
+    """(:class:`~gearfmu.fmu.build_steps.BuildInputs`, the output path): the arguments checked
+    (:func:`~gearfmu.fmu.build_steps.check_arguments`), the spec's variables with the settings'
+    start values, the envelope record (None: the tables' own range), the tables' bytes, the
+    identifier ``gearfmu_<digest>_<random>`` and a new GUID."""
+    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
+                                  **setting_changes)
+    spec = load_spec(spec_path)
+    variables, temp0 = interface_variables(spec, tables, start_values(s))
+    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
+    meta_bytes, bin_bytes = tables.to_bytes()
+    return BuildInputs(tables=tables, settings=s, model_name=model_name, scene_text=scene_text, spec=spec,
+                       variables=variables, temperature_start_C=temp0, envelope=env_rec, meta_bytes=meta_bytes,
+                       bin_bytes=bin_bytes, identifier=new_identifier("gearfmu", meta_bytes, bin_bytes, model_name, s),
+                       guid=new_guid()), out_path
+
+
+def _class_name(identifier: str) -> str:
+    """The slave's class name: ``GearFmu_`` and the identifier's digest and random part."""
+    return "GearFmu_" + identifier[len("gearfmu_"):]
+
+
+def _stage_kernel(stage: Path, b: BuildInputs, cc: str):
+    """Into ``stage``: the tables, the compiled kernel (:func:`compile_kernel`), its sources with
+    the compile command (``kernel_src/``) and the runtime record ``gearfmu_runtime.json`` (kernel
+    name and ABI versions, slots, SHA-256 sums, variables, envelope).  Returns (the kernel's path,
+    the SHA-256 of tables.json, tables.bin and the kernel by name, the sources' folder)."""
+    write_tables(stage, b.meta_bytes, b.bin_bytes)
+    lib = compile_kernel(stage, cc=cc)
+    src_dir = stage / "kernel_src"
+    src_dir.mkdir()
+    for f in (*KERNEL_LIBRARY_SOURCES, *KERNEL_LIBRARY_HEADERS):
+        shutil.copy2(f, src_dir / f.name)
+    (src_dir / "BUILD.txt").write_text(
+        f"{Path(cc).name} {' '.join(CFLAGS)} -o {lib.name} {' '.join(f.name for f in KERNEL_LIBRARY_SOURCES)} -lm\n",
+        encoding="utf-8")
+    sha = {name: sha256_file(stage / name) for name in ("tables.json", "tables.bin", lib.name)}
+    runtime = {
+        "format": "gearfmu-runtime", "version": 1, "model_identifier": b.identifier,
+        "kernel_file": lib.name, "kernel_abi_version": KERNEL_ABI_VERSION,
+        "fmu_layer_abi_version": FMU_LAYER_ABI_VERSION, "slots": b.tables.slots,
+        "sha256": sha, "variables": runtime_variable_table(b.variables),
+        "envelope": runtime_envelope(b.envelope),
+    }
+    (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
+    return lib, sha, src_dir
+
+
+def _stage_loader(tmp: Path, stage: Path, b: BuildInputs, cc: str):
+    """The loader (:func:`compile_pyshim`, in ``tmp/shim``; None off Linux) with the record of this
+    build's Python (:func:`record_build_python`, outside the FMU); into ``stage`` its
+    configuration (:func:`pyshim_config`) and its sources with the compile command
+    (``pyshim_src/``).  Returns (the loader's path or None, the sources' folder)."""
+    shim = compile_pyshim(tmp / "shim", b.identifier, cc=cc)
+    if shim is not None:  # the loader's record of this build's Python, outside the FMU
+        record_build_python()
+    (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{b.identifier}.pythonfmu.so", guid=b.guid,
+                                                     variables=b.variables), encoding="utf-8")
+    shim_src = stage / "pyshim_src"
+    shim_src.mkdir()
+    for f in (*PYSHIM_SOURCES, *PYSHIM_HEADERS):
+        shutil.copy2(f, shim_src / f.name)
+    (shim_src / "BUILD.txt").write_text(
+        f"{Path(cc).name} {' '.join(PYSHIM_CFLAGS)} -I. -I<FMI 2.0 headers> -o <modelIdentifier>.so "
+        f"{' '.join(f.name for f in PYSHIM_SOURCES)} -ldl -lpthread\n", encoding="utf-8")
+    return shim, shim_src
+
+
+def _provenance(b: BuildInputs, now: str, kernel_file: str, sha: dict, cc: str) -> dict:
+    """``resources/provenance.json``: who built the FMU when, from which tables, settings (the
+    experiment times after the record's parameters, then the temperature start), scene, spec,
+    kernel (compiler, flags, SHA-256 of the library and of its sources) and Python."""
+    s = b.settings
+    parameters = dict(record_parameters(s), stop_time_s=s.stop_time_s, output_interval_s=s.output_interval_s)
+    if b.temperature_start_C is not None:  # after the experiment times (the record's key order)
+        parameters["bulk_temperature_start_C"] = b.temperature_start_C
+    return {
+        "gearfmu_version": __version__, "built_utc": now, "model_name": b.model_name,
+        "model_identifier": b.identifier, "guid": b.guid, "parameters": parameters,
+        "tables_sha256": hashlib.sha256(b.bin_bytes).hexdigest(),
+        "tables_provenance": b.tables.provenance,
+        "kernel": {"file": kernel_file, "sha256": sha[kernel_file], "compiler": compiler_version(cc),
+                   "flags": list(CFLAGS),
+                   "sources_sha256": {f.name: sha256_file(f) for f in (*KERNEL_LIBRARY_SOURCES,
+                                                                       *KERNEL_LIBRARY_HEADERS)}},
+        "scene_sha256": scene_sha256(b.scene_text),
+        "python": sys.version.split()[0], "platform": platform.platform(),
+        "spec": str(Path(b.spec.path).name),
+    }
+
+
+def _slave_script(script_dir: Path, identifier: str):
+    """Into ``script_dir``: the slave ``<identifier>.py`` (:func:`_slave_text`) and its copy of the
+    kernel's function table ``<identifier>_kernel_api.py``; returns their paths."""
+    script_dir.mkdir()
+    script = script_dir / f"{identifier}.py"
+    api = script_dir / f"{identifier}_kernel_api.py"
+    script.write_text(_slave_text(SLAVE_TEMPLATE.read_text(encoding="utf-8"), _class_name(identifier), api.stem),
+                      encoding="utf-8")
+    shutil.copy2(KERNEL_API, api)
+    return script, api
+
+
+def _repack(raw_fmu: Path, out_path: Path, b: BuildInputs, *, now: str, shim: Optional[Path], record: dict) -> None:
+    """Write the FMU at ``out_path`` from pythonfmu's ``raw_fmu``: the spec's model description
+    (checked against what the slave registers) in place of pythonfmu's, the binaries of this
+    platform only, the loader ``shim`` as ``<identifier>.so`` in front of pythonfmu's wrapper
+    (renamed ``<identifier>.pythonfmu.so``), the validation ``record`` and the envelope, the
+    documentation."""
+    s = b.settings
+    with zipfile.ZipFile(raw_fmu) as zin:
+        check_registered(zin.read("modelDescription.xml"), b.variables)
+        xml = model_description(b.spec, b.variables, 2, model_name=b.model_name, model_identifier=b.identifier,
+                                guid=b.guid, stop_time_s=s.stop_time_s, step_size_s=s.output_interval_s,
+                                generation_tool=f"gearfmu {__version__}", generation_date=now,
+                                version=__version__, description_note=envelope_note(b.envelope))
+        plat = _platform_dir()
+        with fmu_zip(out_path) as zout:
+            zout.writestr("modelDescription.xml", xml)
+            for info in zin.infolist():
+                n = info.filename
+                if n == "modelDescription.xml":
+                    continue
+                if n.startswith("binaries/") and not n.startswith(f"binaries/{plat}/"):
+                    continue  # the kernel is compiled for this platform only
+                if shim is not None and n == f"binaries/{plat}/{b.identifier}.so":  # behind the loader
+                    zout.writestr(f"binaries/{plat}/{b.identifier}.pythonfmu.so", zin.read(n))
+                    zout.write(shim, n)
+                    continue
+                zout.writestr(info, zin.read(n))
+            for rel, data in record.items():  # resources/validation/ (docs/standalone.md), envelope.json
+                zout.writestr(rel, data)
+            page = documentation_html(  # documentation/index.html and _main.html (gearfmu.fmu.fmudoc)
+                model_name=b.model_name, model_identifier=b.identifier, fmi_version=2, runtime="pythonfmu",
+                generation_tool=f"gearfmu {__version__}", variables=b.variables,
+                description=ET.fromstring(xml).get("description", ""), tables=b.tables,
+                parameters=record_parameters(s, b.temperature_start_C), envelope=b.envelope,
+                scene_text=b.scene_text, validation_record=json.loads(record[f"{VALIDATION_DIR}/record.json"]),
+                platforms_text=f"binaries/{plat}: gearfmu's loader and pythonfmu's wrapper; the kernel "
+                               "(resources/) compiled on the build machine (docs/fmu.md)",
+                experiment=b.experiment)
+            for rel in DOC_FILES(2):
+                zout.writestr(rel, page)
 
 
 def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:

@@ -53,11 +53,10 @@ import re
 import shutil
 import sys
 import tempfile
-import uuid
 import xml.etree.ElementTree as ET
-from dataclasses import replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import Dict, Optional, Sequence, Union
+from typing import Dict, Optional, Sequence
 
 import numpy as np
 
@@ -66,12 +65,13 @@ from ..common.settings import RunSettings
 from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
                                  FMU_INTERFACES, ME_NODE_EVENTS)
 from . import crossbuild
-from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
-                          KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
-                          FmuBuildError, check_arguments, check_model_description, compiler_version,
-                          find_c_compiler, fmi2_header_dir, fmi3_header_dir, fmi_header_dir, fmu_digest, fmu_zip,
-                          interface_variables, model_description, record_parameters, run_compiler, scene_sha256,
-                          start_values, variable_table_lines, write_scene, write_tables, zip_folder)
+from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,
+                          KERNEL_HEADERS, KERNEL_SOURCES, BuildInputs, FmuBuildError, check_arguments,
+                          check_model_description, compiler_version, find_c_compiler, fmi_header_dir, fmu_zip,
+                          interface_variables, model_description, new_guid, new_identifier, record_parameters,
+                          run_compiler, scene_sha256, start_values, variable_table_lines, write_scene, write_tables,
+                          zip_folder)
+from .build_steps import fmi2_header_dir, fmi3_header_dir  # noqa: F401 (imported from here too)
 from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
@@ -419,153 +419,239 @@ def write_documentation(root: Path, *, fmi_version: int, **kw) -> None:
 
 
 # --------------------------------------------------------------------- build
-def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None, *,
-                         model_name: str = "gearpair", scene_text: Optional[str] = None, spec_path=None,
-                         cc: Optional[str] = None, validation: bool = True,
-                         platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
-                         fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
-                         damping_ratio: Optional[float] = None, pinion_speed_start_rad_s: Optional[float] = None,
-                         pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
-                         max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
-                         stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
-                         pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None,
-                         interface: str = DEFAULT_FMU_INTERFACE, me_node_events: str = DEFAULT_ME_NODE_EVENTS) -> Path:
+@dataclass(frozen=True)
+class StandaloneOptions:
+    """What kind of standalone FMU a build makes, checked when made (:class:`FmuBuildError` naming
+    the field).
+
+    ``fmi_version``: 2 (FMI 2.0) or 3 (FMI 3.0: the same C glue behind the FMI 3.0 layer
+    fmi3_gear.c, ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3 platform
+    tuples, sources/buildDescription.xml; docs/standalone.md "FMI 3.0"); ``fmi3_outputs``: one of
+    :data:`~gearfmu.common.vocabulary.FMI3_OUTPUTS`, "scalar" (FMI 3 only) making those arrays
+    scalars ``pair_force_1 .. pair_force_P`` (:func:`scalar_names`) for hosts without array
+    support; ``interface``: one of :data:`~gearfmu.common.vocabulary.FMU_INTERFACES` -- "cs"
+    (Co-Simulation), "me" (Model Exchange) or "both" (one FMU usable both ways), default
+    :data:`~gearfmu.common.vocabulary.DEFAULT_FMU_INTERFACE`; ``me_node_events``: Model
+    Exchange's table-node events, one of :data:`~gearfmu.common.vocabulary.ME_NODE_EVENTS`
+    (default :data:`~gearfmu.common.vocabulary.DEFAULT_ME_NODE_EVENTS`; docs/standalone.md
+    "Model Exchange"); ``platforms``: keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (None: all;
+    checked by :meth:`platform_keys`); ``validation``: False skips the validation record (and
+    its native run)."""
+
+    fmi_version: int = 2
+    fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS
+    interface: str = DEFAULT_FMU_INTERFACE
+    me_node_events: str = DEFAULT_ME_NODE_EVENTS
+    platforms: Optional[Sequence[str]] = None
+    validation: bool = True
+
+    def __post_init__(self):
+        if self.interface not in FMU_INTERFACES:
+            raise FmuBuildError(f"interface: {self.interface!r} not one of {FMU_INTERFACES}")
+        if self.me_node_events not in ME_NODE_EVENTS:
+            raise FmuBuildError(f"me_node_events: {self.me_node_events!r} not one of {ME_NODE_EVENTS}")
+        if self.fmi_version not in FMI_VERSIONS:
+            raise FmuBuildError(f"fmi_version: {self.fmi_version!r} not one of {FMI_VERSIONS}")
+        if self.fmi3_outputs not in FMI3_OUTPUTS or (self.fmi3_outputs != DEFAULT_FMI3_OUTPUTS
+                                                     and self.fmi_version != 3):
+            raise FmuBuildError(f"fmi3_outputs: {self.fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other "
+                                f"than {DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
+
+    def platform_keys(self) -> tuple:
+        """The crossbuild keys of the binaries to build (None: :func:`gearfmu.fmu.crossbuild.parse_platforms`'s
+        default, all); :class:`FmuBuildError` for an unknown key or none."""
+        keys = crossbuild.parse_platforms(None) if self.platforms is None else tuple(self.platforms)
+        unknown = [k for k in keys if k not in crossbuild.TARGETS]
+        if unknown or not keys:
+            raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
+        return keys
+
+
+#: the keyword arguments of :func:`build_standalone_fmu` that are fields of :class:`StandaloneOptions`
+OPTION_FIELDS = tuple(f.name for f in fields(StandaloneOptions))
+
+
+def standalone_options(options: Optional[StandaloneOptions] = None, **changes) -> StandaloneOptions:
+    """``options`` (None: the defaults) with the fields of ``changes`` replaced, checked."""
+    if options is None:
+        options = StandaloneOptions()
+    elif not isinstance(options, StandaloneOptions):
+        raise FmuBuildError(f"options: expected StandaloneOptions, got {type(options).__name__}")
+    return replace(options, **changes) if changes else options
+
+
+def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None,
+                         options: Optional[StandaloneOptions] = None, *, model_name: str = "gearpair",
+                         scene_text: Optional[str] = None, spec_path=None, cc: Optional[str] = None,
+                         envelope: Optional[dict] = None, **changes) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same settings, arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu`
     (``settings``: the :class:`gearfmu.common.settings.RunSettings` of the FMU's start values and
-    DefaultExperiment, its fields replaced by the keyword arguments given; damping ratio 1, speeds
-    rad/s, torques N*m, times s, angles rad; ``integrator`` "rk4" (0), "rk4_kink" (1),
-    "rk4_node" (2, default) or "rk4_seg" (3), the FMU parameter ``integrator``); ``validation``
-    False skips the validation record (and its native run).  ``platforms``:
-    keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default: all); without the zig
-    compiler only the build machine's platform is compiled (with ``cc`` or the
-    host C compiler), and documentation/platforms.txt and the model description
-    say which platforms are missing.  ``cc`` given: the build machine's platform
-    is compiled with it.  ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the
-    tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
-    layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
-    platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``
-    "scalar" makes them scalars ``pair_force_1 .. pair_force_P`` (:func:`scalar_names`), for hosts
-    without array support.  ``interface``: "cs" (Co-Simulation), "me" (Model Exchange) or "both"
-    (default: one FMU usable both ways); ``me_node_events``: Model Exchange's table-node events,
-    "none" (default), "kinks" or "all" (docs/standalone.md "Model Exchange").  Written under a
-    temporary name beside ``out_path`` and renamed at the end.
+    DefaultExperiment; damping ratio 1, speeds rad/s, torques N*m, times s, angles rad;
+    ``integrator`` "rk4" (0), "rk4_kink" (1), "rk4_node" (2, default) or "rk4_seg" (3), the FMU
+    parameter ``integrator``).  ``options``: the kind of FMU, :class:`StandaloneOptions` (FMI
+    version, FMI 3 outputs, interfaces, Model Exchange's node events, platforms, validation
+    record).  ``changes``: fields of either given as keywords (``fmi_version=3``,
+    ``damping_ratio=0.05``) replace theirs (a run setting only when not None).  Without the zig
+    compiler only the build machine's platform is compiled (with ``cc`` or the host C compiler),
+    and documentation/platforms.txt and the model description say which platforms are missing.
+    ``cc`` given: the build machine's platform is compiled with it.  ``envelope``:
+    :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the tables' own range, "not verified").
+
+    The steps: check the options, the arguments and the platforms and fix the interface and the
+    identifier (:func:`_inputs`); in a folder laid out as the FMU, compile the binaries and write
+    the sources with their build recipes (:func:`_stage_binaries`), the resources the C layer
+    reads (:func:`_stage_resources`), the provenance (:func:`_provenance`), the validation record,
+    the model description (:func:`_model_description`) and the documentation; zip the folder.
+    Written under a temporary name beside ``out_path`` and renamed at the end.
     """
-    if interface not in FMU_INTERFACES:
-        raise FmuBuildError(f"interface: {interface!r} not one of {FMU_INTERFACES}")
-    if me_node_events not in ME_NODE_EVENTS:
-        raise FmuBuildError(f"me_node_events: {me_node_events!r} not one of {ME_NODE_EVENTS}")
-    if fmi_version not in FMI_VERSIONS:
-        raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
-    if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
-        raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
-                            f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
-    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
-                                  damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
-                                  pinion_angle_start_rad=pinion_angle_start_rad,
-                                  pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
-                                  max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
-                                  damping_model=damping_model, integrator=integrator)
-    tstop, dt = s.stop_time_s, s.output_interval_s
-    keys = crossbuild.parse_platforms(None) if platforms is None else tuple(platforms)
-    unknown = [k for k in keys if k not in crossbuild.TARGETS]
-    if unknown or not keys:
-        raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
-
-    spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, start_values(s), integrator_optional=True,
-                                           features=me_features(tables, interface, me_node_events))
-    if fmi3_outputs == "scalar":
-        variables = scalar_names(variables)
-    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
-    meta_bytes, bin_bytes = tables.to_bytes()
-    identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
-    guid = "{" + str(uuid.uuid4()) + "}"
-    cc_given = cc is not None
+    b, o, keys, out_path = _inputs(tables, out_path, settings, options, model_name=model_name,
+                                   scene_text=scene_text, spec_path=spec_path, envelope=envelope, changes=changes)
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    params = record_parameters(s, temp0)
-
+    params = record_parameters(b.settings, b.temperature_start_C)
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"
-        src = copy_sources(root / "sources", fmi_version)
-        host_cc = {}
-
-        def host_compile(out_lib):
-            host_cc["cc"] = cc or find_c_compiler()
-            return (compile_standalone(src, out_lib, cc=host_cc["cc"], fmi_version=fmi_version),
-                    compiler_version(host_cc["cc"]))
-
-        try:
-            binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier,
-                                                 cflags=STANDALONE_CFLAGS, sources=binary_sources(fmi_version),
-                                                 host_compile=host_compile, host_cc_first=cc_given,
-                                                 fmi_version=fmi_version, header_dir=fmi_header_dir(fmi_version))
-        except crossbuild.CrossBuildError as exc:
-            raise FmuBuildError(str(exc)) from None
-        for name, text in build_recipe_files(identifier, fmi_version).items():
-            (src / name).write_text(text, encoding="utf-8")
-        (root / "documentation").mkdir()
-        (root / "documentation" / "platforms.txt").write_text(platforms_text(binaries, fmi_version),
-                                                              encoding="utf-8")
+        src, binaries = _stage_binaries(root, b, o, keys, cc)
         built = {k: r for k, r in binaries.items() if "missing" not in r}
-        for r in built.values():
-            r["sha256"] = hashlib.sha256((root / "binaries" / r["folder"] / r["file"]).read_bytes()).hexdigest()
-        build_line = "; ".join(sorted({r["command"] for r in built.values()}))
-        res = root / "resources"
-        res.mkdir()
-        write_tables(res, meta_bytes, bin_bytes)
-        (res / CONFIG_FILE).write_text(config_text(tables, variables, guid=guid, model_identifier=identifier,
-                                                   meta_bytes=meta_bytes, bin_bytes=bin_bytes,
-                                                   envelope=runtime_envelope(env_rec), interface=interface,
-                                                   node_events=me_node_events,
-                                                   nominals=me_nominals(tables, s.pinion_speed_start_rad_s,
-                                                                        s.pinion_torque_start_Nm)),
-                                       encoding="utf-8")
-        (root / ENVELOPE_FILE).write_text(envelope_json(env_rec), encoding="utf-8")
-        write_scene(res, scene_text)
+        res = _stage_resources(root, b, o)
         compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
-        provenance = {
-            "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone", "fmi_version": fmi_version,
-            "model_name": model_name, "model_identifier": identifier, "guid": guid,
-            "parameters": dict(params, stop_time_s=tstop, output_interval_s=dt),
-            "tables_sha256": hashlib.sha256(bin_bytes).hexdigest(), "tables_provenance": tables.provenance,
-            "binary": {"compiler": compiler, "flags": list(STANDALONE_CFLAGS), "command": build_line,
-                       "platforms": binaries,
-                       "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
-                                          for p in sorted(src.iterdir())}},
-            "scene_sha256": scene_sha256(scene_text),
-            # the file the C layer reads at instantiation (gearfmu.fmu.integrity checks it before loading)
-            "config_sha256": hashlib.sha256((res / CONFIG_FILE).read_bytes()).hexdigest(),
-            "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(spec.path).name,
-        }
+        provenance = _provenance(b, o, now=now, params=params, binaries=binaries, compiler=compiler,
+                                 src=src, res=res)
         (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
-        if validation:
-            for rel, data in validation_record(tables, s, runtime="standalone", model_identifier=identifier,
-                                               temperature_start_C=temp0, scene_text=scene_text, compiler=compiler,
-                                               envelope=env_rec).items():
+        if o.validation:
+            for rel, data in validation_record(b.tables, b.settings, runtime="standalone",
+                                               model_identifier=b.identifier,
+                                               temperature_start_C=b.temperature_start_C, scene_text=b.scene_text,
+                                               compiler=compiler, envelope=b.envelope).items():
                 p = root / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_bytes(data)
-        md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid, stop_time_s=tstop,
-                       step_size_s=dt, generation_tool=f"gearfmu {__version__} (standalone runtime)",
-                       generation_date=now, version=__version__, description_note=envelope_note(env_rec),
-                       interfaces=INTERFACE_ELEMENTS[interface])
-        note = crossbuild.platform_summary(binaries)
-        if fmi_version == 3:
-            xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
-        else:
-            xml = standalone_model_description(model_description(spec, variables, 2, **md_args),
-                                               binary_sources(2), platforms_note=note)
-            check_model_description(xml, variables)
+        xml, generation_tool = _model_description(b, o, now=now, binaries=binaries)
         (root / "modelDescription.xml").write_bytes(xml)
-        write_documentation(root, fmi_version=fmi_version, model_name=model_name, model_identifier=identifier,
-                            runtime="standalone", generation_tool=md_args["generation_tool"], variables=variables,
-                            description=ET.fromstring(xml).get("description", ""), tables=tables,
-                            parameters=params, envelope=env_rec, scene_text=scene_text,
-                            platforms_text=platforms_text(binaries, fmi_version),
-                            experiment={"start": 0.0, "stop": tstop, "step": dt},
-                            interfaces=INTERFACE_ELEMENTS[interface])
+        write_documentation(root, fmi_version=o.fmi_version, model_name=b.model_name, model_identifier=b.identifier,
+                            runtime="standalone", generation_tool=generation_tool, variables=b.variables,
+                            description=ET.fromstring(xml).get("description", ""), tables=b.tables,
+                            parameters=params, envelope=b.envelope, scene_text=b.scene_text,
+                            platforms_text=platforms_text(binaries, o.fmi_version), experiment=b.experiment,
+                            interfaces=INTERFACE_ELEMENTS[o.interface])
         with fmu_zip(out_path) as zout:
             zip_folder(zout, root)
     return out_path
+
+
+def _inputs(tables, out_path, settings, options, *, model_name, scene_text, spec_path, envelope, changes):
+    """(:class:`~gearfmu.fmu.build_steps.BuildInputs`, the :class:`StandaloneOptions`, the platform
+    keys, the output path), checked in this order: the options, the shared arguments
+    (:func:`~gearfmu.fmu.build_steps.check_arguments`), the platforms.  The variables are the
+    spec's for these tables and interfaces (Model Exchange's features, :func:`me_features`;
+    FMI 3 "scalar" outputs renamed, :func:`scalar_names`); the identifier
+    ``gearfmu_sa_<digest>_<random>``."""
+    o = standalone_options(options, **{k: changes.pop(k) for k in OPTION_FIELDS if k in changes})
+    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
+                                  **changes)
+    keys = o.platform_keys()
+    spec = load_spec(spec_path)
+    variables, temp0 = interface_variables(spec, tables, start_values(s), integrator_optional=True,
+                                           features=me_features(tables, o.interface, o.me_node_events))
+    if o.fmi3_outputs == "scalar":
+        variables = scalar_names(variables)
+    env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
+    meta_bytes, bin_bytes = tables.to_bytes()
+    b = BuildInputs(tables=tables, settings=s, model_name=model_name, scene_text=scene_text, spec=spec,
+                    variables=variables, temperature_start_C=temp0, envelope=env_rec, meta_bytes=meta_bytes,
+                    bin_bytes=bin_bytes, identifier=new_identifier("gearfmu_sa", meta_bytes, bin_bytes, model_name, s),
+                    guid=new_guid())
+    return b, o, keys, out_path
+
+
+def _stage_binaries(root: Path, b: BuildInputs, o: StandaloneOptions, keys, cc: Optional[str]):
+    """Into the FMU folder ``root``: ``sources/`` (:func:`copy_sources`) with the build recipes
+    (:func:`build_recipe_files`), the binaries of the platforms ``keys``
+    (:func:`gearfmu.fmu.crossbuild.build_binaries`; the build machine's with ``cc`` when given,
+    else the host C compiler) and ``documentation/platforms.txt``.  Returns (the sources'
+    folder, the crossbuild report by platform key, with the SHA-256 of every binary built)."""
+    src = copy_sources(root / "sources", o.fmi_version)
+
+    def host_compile(out_lib):
+        host_cc = cc or find_c_compiler()
+        return (compile_standalone(src, out_lib, cc=host_cc, fmi_version=o.fmi_version), compiler_version(host_cc))
+
+    try:
+        binaries = crossbuild.build_binaries(keys, src, root / "binaries", b.identifier,
+                                             cflags=STANDALONE_CFLAGS, sources=binary_sources(o.fmi_version),
+                                             host_compile=host_compile, host_cc_first=cc is not None,
+                                             fmi_version=o.fmi_version, header_dir=fmi_header_dir(o.fmi_version))
+    except crossbuild.CrossBuildError as exc:
+        raise FmuBuildError(str(exc)) from None
+    for name, text in build_recipe_files(b.identifier, o.fmi_version).items():
+        (src / name).write_text(text, encoding="utf-8")
+    (root / "documentation").mkdir()
+    (root / "documentation" / "platforms.txt").write_text(platforms_text(binaries, o.fmi_version), encoding="utf-8")
+    for r in binaries.values():
+        if "missing" not in r:
+            r["sha256"] = hashlib.sha256((root / "binaries" / r["folder"] / r["file"]).read_bytes()).hexdigest()
+    return src, binaries
+
+
+def _stage_resources(root: Path, b: BuildInputs, o: StandaloneOptions) -> Path:
+    """Into the FMU folder ``root``: ``resources/`` with the tables, what the C layer reads at
+    instantiation (:func:`config_text`: the Model Exchange nominals at the start speed and
+    torque, :func:`me_nominals`) and the scene; the envelope record.  Returns ``resources/``."""
+    s = b.settings
+    res = root / "resources"
+    res.mkdir()
+    write_tables(res, b.meta_bytes, b.bin_bytes)
+    (res / CONFIG_FILE).write_text(config_text(b.tables, b.variables, guid=b.guid, model_identifier=b.identifier,
+                                               meta_bytes=b.meta_bytes, bin_bytes=b.bin_bytes,
+                                               envelope=runtime_envelope(b.envelope), interface=o.interface,
+                                               node_events=o.me_node_events,
+                                               nominals=me_nominals(b.tables, s.pinion_speed_start_rad_s,
+                                                                    s.pinion_torque_start_Nm)),
+                                   encoding="utf-8")
+    (root / ENVELOPE_FILE).write_text(envelope_json(b.envelope), encoding="utf-8")
+    write_scene(res, b.scene_text)
+    return res
+
+
+def _provenance(b: BuildInputs, o: StandaloneOptions, *, now: str, params: dict, binaries: dict,
+                compiler: Optional[str], src: Path, res: Path) -> dict:
+    """``resources/provenance.json``: who built the FMU when, for which FMI version, from which
+    tables, settings (``params``, then the experiment times), scene and spec; the binaries
+    (compilers, flags, commands, the crossbuild report, the SHA-256 of every source) and the
+    SHA-256 of the file the C layer reads (:mod:`gearfmu.fmu.integrity` checks it before loading)."""
+    s = b.settings
+    built = [r for r in binaries.values() if "missing" not in r]
+    return {
+        "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone", "fmi_version": o.fmi_version,
+        "model_name": b.model_name, "model_identifier": b.identifier, "guid": b.guid,
+        "parameters": dict(params, stop_time_s=s.stop_time_s, output_interval_s=s.output_interval_s),
+        "tables_sha256": hashlib.sha256(b.bin_bytes).hexdigest(), "tables_provenance": b.tables.provenance,
+        "binary": {"compiler": compiler, "flags": list(STANDALONE_CFLAGS),
+                   "command": "; ".join(sorted({r["command"] for r in built})),
+                   "platforms": binaries,
+                   "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                                      for p in sorted(src.iterdir())}},
+        "scene_sha256": scene_sha256(b.scene_text),
+        "config_sha256": hashlib.sha256((res / CONFIG_FILE).read_bytes()).hexdigest(),
+        "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(b.spec.path).name,
+    }
+
+
+def _model_description(b: BuildInputs, o: StandaloneOptions, *, now: str, binaries: dict):
+    """(modelDescription.xml, the generation tool): the spec's model description of FMI
+    ``o.fmi_version`` for ``o.interface``, with the platforms the FMU carries noted in its
+    description; FMI 2 turned into the standalone one (:func:`standalone_model_description`)."""
+    s = b.settings
+    md_args = dict(model_name=b.model_name, model_identifier=b.identifier, guid=b.guid, stop_time_s=s.stop_time_s,
+                   step_size_s=s.output_interval_s, generation_tool=f"gearfmu {__version__} (standalone runtime)",
+                   generation_date=now, version=__version__, description_note=envelope_note(b.envelope),
+                   interfaces=INTERFACE_ELEMENTS[o.interface])
+    note = crossbuild.platform_summary(binaries)
+    if o.fmi_version == 3:
+        xml = model_description(b.spec, b.variables, 3, platforms_note=note, **md_args)
+    else:
+        xml = standalone_model_description(model_description(b.spec, b.variables, 2, **md_args),
+                                           binary_sources(2), platforms_note=note)
+        check_model_description(xml, b.variables)
+    return xml, md_args["generation_tool"]
