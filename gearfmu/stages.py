@@ -345,15 +345,10 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
 
 
 def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] = None,
-                              me_node_events: Optional[str] = None, what: str = "fmu") -> dict:
+                              me_node_events: Optional[str] = None) -> dict:
     """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the
     default) and for ``me_node_events`` without Model Exchange (``interface`` None, the default, is
-    Co-Simulation for a gearbox).  ``what`` "ssp": the SSP's stage FMUs are Co-Simulation only.  Returns
-    the ``model_exchange`` mapping of :func:`build_drivetrain_fmu`."""
-    if what == "ssp" and (interface not in (None, "cs") or me_node_events is not None):
-        raise FmuBuildError(f"{'--interface' if interface not in (None, 'cs') else '--me-node-events'}: the stage "
-                            "FMUs of an SSP are Co-Simulation only (Model Exchange: gearfmu build DRIVETRAIN.toml "
-                            "--interface me; docs/gearbox.md 'Model Exchange')")
+    Co-Simulation for a gearbox).  Returns the ``model_exchange`` mapping of :func:`build_drivetrain_fmu`."""
     if runtime not in (None, "standalone"):
         raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
                             "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
