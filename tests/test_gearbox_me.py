@@ -15,6 +15,9 @@ References (none produced by the gearbox code under test):
   continuous states and every mesh's held contact mode.
 """
 import ctypes
+import subprocess
+import sys
+from pathlib import Path
 
 import fmpy
 import fmpy.validation
@@ -269,3 +272,30 @@ def test_fmu_state_restores_states_and_contact_modes(contact_loss, v):
     m.freeFMUState(state)
     m.terminate()
     m.freeInstance()
+
+
+def test_cli_builds_the_example_gearbox_as_model_exchange(tmp_path):
+    """gearfmu build DRIVETRAIN.toml --interface me --fmi-version 3 builds the example two-stage reducer
+    as an FMI 3.0 Model Exchange FMU (no Co-Simulation) that fmpy validates and its CVode runs;
+    --me-node-events without Model Exchange is refused in one line with status 2."""
+    repo = Path(__file__).resolve().parents[1]
+    example = repo / "examples" / "scenes" / "gearbox_two_stage.toml"
+    out = tmp_path / "gb_me.fmu"
+
+    def gearfmu(*args):
+        return subprocess.run([sys.executable, "-m", "gearfmu.cli", "build", str(example), *args], capture_output=True,
+                              text=True, timeout=900, cwd=repo)
+
+    p = gearfmu("-o", str(out), "--interface", "me", "--fmi-version", "3", "--platforms", "x86_64-linux", "-q")
+    assert p.returncode == 0, p.stderr
+    assert "Model Exchange" in p.stdout
+    assert fmpy.validation.validate_fmu(str(out)) == []
+    md = fmpy.read_model_description(str(out))
+    assert md.modelExchange is not None and md.coSimulation is None
+    res = fmpy.simulate_fmu(str(out), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
+                            stop_time=2e-3, output_interval=1e-5, output=["stage1.dte", "stage2.dte"],
+                            record_events=False, logger=quiet)
+    assert np.all(np.isfinite(res["stage1.dte"])) and np.all(np.isfinite(res["stage2.dte"]))
+    p = gearfmu("-o", str(tmp_path / "x.fmu"), "--me-node-events", "all")
+    assert p.returncode == 2 and "--me-node-events all: only with Model Exchange" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr
