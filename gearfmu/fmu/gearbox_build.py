@@ -1,4 +1,4 @@
-"""Build the gearbox FMU: one FMI 2.0 (or 3.0) Co-Simulation FMU in C for a whole gearbox.
+"""Build the gearbox FMU: one FMI 2.0 (or 3.0) Co-Simulation and/or Model Exchange FMU in C for a whole gearbox.
 
 The same FMI layers and plumbing as the pair's standalone FMU (``fmi2_gear.c`` / ``fmi3_gear.c``,
 ``fmi_common.c``, docs/standalone.md) over the gearbox model (``standalone/gearbox_model.c``) and
@@ -279,7 +279,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
                       stage_scene_texts: Optional[Dict[str, str]] = None, platforms: Optional[Sequence[str]] = None,
                       fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, validation: bool = True,
                       cc: Optional[str] = None, model_exchange: Optional[dict] = None) -> Path:
-    """Build the gearbox FMU of ``model`` at ``out_path`` (FMI ``fmi_version`` 2 or 3 Co-Simulation, the
+    """Build the gearbox FMU of ``model`` at ``out_path`` (FMI ``fmi_version`` 2 or 3, the
     standalone C runtime); return its path.
 
     ``settings``: the run's :class:`gearfmu.common.settings.GearboxRunSettings` (the FMU's start values
