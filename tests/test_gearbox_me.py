@@ -182,7 +182,7 @@ def test_linear_limit_in_pathsim(linear):
 
 def _me_instance(path, v):
     md = fmpy.read_model_description(str(path))
-    d = fmpy.extract(str(path))
+    d = fmpy.extract(str(path), unzipdir=str(path.parent / f"{path.stem}_unzipped"))   # removed with tmp_path
     cls = FMU3Model if v == 3 else FMU2Model
     m = cls(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier, instanceName="m")
     m.instantiate()
