@@ -169,7 +169,7 @@ def _fmu(path):
 
 def _build_drivetrain(args) -> int:
     """gearfmu build DRIVETRAIN.toml: the gearbox FMU (docs/gearbox.md "The gearbox FMU")."""
-    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
+    me = pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
     _, scene = _any_scene(args.scene)
     for given, option in ((args.tables, "--tables"), (args.tables_meta, "--tables-meta"),
                           (args.reference_results, "--reference-results")):
@@ -183,7 +183,7 @@ def _build_drivetrain(args) -> int:
             print(f"gearfmu: {note}", file=sys.stderr)
     res = pipeline.build_drivetrain_fmu(scene, out, progress=not args.quiet, runtime=args.runtime,
                                         platforms=platforms, fmi_version=args.fmi_version,
-                                        fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large)
+                                        fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large, model_exchange=me)
     m = res.model
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, gearbox of "
           f"{len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies, "

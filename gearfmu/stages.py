@@ -345,17 +345,19 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
 
 
 def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] = None,
-                              me_node_events: Optional[str] = None) -> None:
-    """A gearbox FMU has the standalone C runtime and Co-Simulation only: FmuBuildError for any other
-    ``runtime`` (None: the default), an ``interface`` other than "cs" or any ``me_node_events``."""
+                              me_node_events: Optional[str] = None) -> dict:
+    """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the
+    default) and for ``me_node_events`` without Model Exchange (``interface`` None, the default, is
+    Co-Simulation for a gearbox).  Returns the ``model_exchange`` mapping of :func:`build_drivetrain_fmu`."""
     if runtime not in (None, "standalone"):
         raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
                             "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
                             "--runtime standalone")
-    if interface not in (None, "cs") or me_node_events is not None:
-        raise FmuBuildError(f"{'--interface' if interface not in (None, 'cs') else '--me-node-events'}: a gearbox "
-                            "FMU offers Co-Simulation only (Model Exchange: the gear-pair FMU; docs/standalone.md "
+    if interface in (None, "cs") and me_node_events is not None:
+        raise FmuBuildError(f"--me-node-events {me_node_events}: only with Model Exchange (--interface me or both); "
+                            "a gearbox FMU is Co-Simulation unless --interface says otherwise (docs/gearbox.md "
                             "'Model Exchange')")
+    return {"interface": interface, "me_node_events": me_node_events}
 
 
 @dataclass
@@ -373,11 +375,12 @@ class DrivetrainBuild:
 def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
                          platforms: Optional[Sequence[str]] = None, fmi_version: int = 2,
                          fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, allow_large: bool = False,
-                         validation: bool = True) -> DrivetrainBuild:
+                         validation: bool = True, model_exchange: Optional[dict] = None) -> DrivetrainBuild:
     """Drivetrain scene -> every stage's tables -> the gearbox FMU at ``out_path`` (the standalone C
     runtime, FMI ``fmi_version`` 2 or 3).  ``runtime`` "pythonfmu" is refused (FmuBuildError): a
-    gearbox FMU is C only.  The stages' notes go to stderr with ``progress``."""
-    check_gearbox_fmu_runtime(runtime)
+    gearbox FMU is C only.  The stages' notes go to stderr with ``progress``.  ``model_exchange``: the
+    interfaces and node events (:func:`gearfmu.fmu.gearbox_build.build_gearbox_fmu`)."""
+    check_gearbox_fmu_runtime(runtime, *((model_exchange or {}).get(k) for k in ("interface", "me_node_events")))
     t0 = time.perf_counter()
     tables = stage_tables(scene, progress=progress, allow_large=allow_large)
     model = gearbox_model(scene, tables)
@@ -386,5 +389,5 @@ def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = F
     stage_texts = {s.name: s.scene.text for s in scene.stages if getattr(s.scene, "text", None)}
     path = build_gearbox_fmu(model, out_path, settings=settings, model_name=scene.model_name, scene_text=scene.text,
                              stage_scene_texts=stage_texts, platforms=platforms, fmi_version=fmi_version,
-                             fmi3_outputs=fmi3_outputs, validation=validation)
+                             fmi3_outputs=fmi3_outputs, validation=validation, model_exchange=model_exchange)
     return DrivetrainBuild(Path(path), model, settings, t1 - t0, time.perf_counter() - t1)

@@ -1,4 +1,4 @@
-"""Build the gearbox FMU: one FMI 2.0 (or 3.0) Co-Simulation FMU in C for a whole gearbox.
+"""Build the gearbox FMU: one FMI 2.0 (or 3.0) Co-Simulation and/or Model Exchange FMU in C for a whole gearbox.
 
 The same FMI layers and plumbing as the pair's standalone FMU (``fmi2_gear.c`` / ``fmi3_gear.c``,
 ``fmi_common.c``, docs/standalone.md) over the gearbox model (``standalone/gearbox_model.c``) and
@@ -29,6 +29,7 @@ import dataclasses
 import datetime
 import hashlib
 import json
+import math
 import platform
 import shutil
 import sys
@@ -38,9 +39,11 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
+import numpy as np
+
 from .. import __version__
 from ..common.settings import GearboxRunSettings, checked
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS
+from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS
 from ..gearbox.model import GearboxModel
 from ..gearbox.native import resolve_settings
 from . import crossbuild
@@ -52,11 +55,11 @@ from .gearbox_interface import apply_starts, gearbox_variables, load_gearbox_spe
 from .gearbox_validation import gearbox_validation_record
 from .modeldesc import SpecError
 from .fmudoc import DOC_FILES
-from .standalone_build import (FMI_VERSIONS, STANDALONE_CFLAGS, build_recipe_files, compile_standalone,
-                               platforms_text, scalar_names, standalone_model_description)
+from .standalone_build import (FMI_VERSIONS, INTERFACE_ELEMENTS, STANDALONE_CFLAGS, build_recipe_files,
+                               compile_standalone, platforms_text, scalar_names, standalone_model_description)
 
 __all__ = ["build_gearbox_fmu", "gearbox_settings", "fmu_parameters", "start_values", "variables_of_fmu",
-           "config_text", "EVENT_MAX_SLOTS", "GEARBOX_UNITS", "gearbox_file_sources", "copy_gearbox_sources", "CONFIG_FILE"]
+           "config_text", "me_nominals", "EVENT_MAX_SLOTS", "GEARBOX_UNITS", "gearbox_file_sources", "copy_gearbox_sources", "CONFIG_FILE"]
 
 HERE = Path(__file__).resolve().parent
 STANDALONE_DIR = HERE / "standalone"
@@ -154,13 +157,35 @@ def stage_folder(name: str) -> str:
     return name
 
 
-def config_text(model: GearboxModel, variables, stage_bytes, *, guid: str, model_identifier: str) -> str:
+def me_nominals(model: GearboxModel, settings: GearboxRunSettings) -> list:
+    """Nominal values of the Model Exchange states [psi, omega, u_1, du_1, ...] (rad, rad/s): psi 1 rad;
+    the start speed (at least 1 rad/s); every deviation the smallest stage scale over its larger base
+    radius (a stage's scale: the largest of its static deflection at the start torque, its backlash
+    and its meshing error range, at least 1e-9 m), every deviation rate that times the largest mesh
+    frequency sqrt(k_mean/m_e).  A host's absolute tolerance is its relative tolerance times these."""
+    t_ref = model.reference_torque_Nm(settings.motor_torque_start_Nm, settings.load_torque_start_Nm)
+    u, wn = math.inf, 0.0
+    for m, mesh in enumerate(model.meshes):
+        t = mesh.tables
+        g_p = float(model.g[model.mesh_bodies[m][0]])
+        e = np.asarray(t.e_m, float)
+        x = max(abs(t_ref / g_p) / (t.base_radius_pinion_m * t.k_mean_N_per_m),
+                float(np.max(np.abs(t.backlash_half_m))), float(np.max(e) - np.min(e)), 1e-9)
+        u = min(u, x / max(t.base_radius_pinion_m, t.base_radius_gear_m))
+        wn = max(wn, math.sqrt(t.k_mean_N_per_m / t.equivalent_mass_kg))
+    return [1.0, max(abs(settings.motor_speed_start_rad_s), 1.0)] + [u, u * wn] * (model.n_bodies - 1)
+
+
+def config_text(model: GearboxModel, variables, stage_bytes, *, guid: str, model_identifier: str,
+                interface: str = "cs", node_events: str = "none", nominals: Optional[Sequence[float]] = None) -> str:
     """The ``gearfmu_gearbox.txt`` gearbox_model.c reads (format gearfmu-gearbox, version 1): the bodies
     (1/I and the kinematic ratio as C99 hexadecimal floats, exact), every stage (its tables file, size,
     SHA-256, dimensions, byte offsets, scalars, bodies, whether it is on the power path, the value
     references of its damping parameters), the elastic shafts, the tree walked from the motor, the value
-    references the model drives, and the variable table.  ``stage_bytes``: (tables.json, tables.bin)
-    bytes of every stage."""
+    references the model drives, Model Exchange (``interface`` of :data:`FMU_INTERFACES`: the
+    ``interfaces`` line; with Model Exchange the ``me.*`` lines: ``node_events``, the number of event
+    indicators, the ``nominals`` of the states) and the variable table.  ``stage_bytes``: (tables.json,
+    tables.bin) bytes of every stage."""
     vr = {v.name: v.value_reference for v in variables}
     inv_i = [1.0 / float(x) for x in model.inertia_kgm2]   # as the numba kernels' bf = 1.0/I
     lines = [
@@ -205,6 +230,12 @@ def config_text(model: GearboxModel, variables, stage_bytes, *, guid: str, model
         lines.append(f"edge={0 if kind == 'shaft' else 1}|{e}|{up}|{down}")
     for key in ("motor_torque", "load_torque", "motor_speed_start", "motor_angle_start", "max_step", "integrator"):
         lines.append(f"vr.{key}={vr.get(key, -1)}")
+    elements = INTERFACE_ELEMENTS[interface]
+    lines.append("interfaces=" + ",".join(e for e in ("cs", "me") if e in elements))
+    if "me" in elements:   # docs/gearbox.md "Model Exchange"
+        lines.append(f"me.node_events={ME_NODE_EVENTS.index(node_events)}")
+        lines.append(f"me.event_indicators={sum(v.event_indicator for v in variables)}")
+        lines.append("me.nominals=" + "|".join(_hexf(v) for v in nominals))
     lines += variable_table_lines(variables)
     return "\n".join(lines) + "\n"
 
@@ -221,12 +252,34 @@ def _digest(model: GearboxModel, stage_bytes, model_name: str, s: GearboxRunSett
 
 
 # --------------------------------------------------------------------- build
+def model_exchange_options(model: GearboxModel, model_exchange: Optional[dict]) -> tuple:
+    """(interface, me_node_events) of :func:`build_gearbox_fmu`'s ``model_exchange`` mapping (None: {});
+    FmuBuildError naming the key for a value that is not offered, or a stage with more tooth-pair slots
+    than Model Exchange handles (:data:`EVENT_MAX_SLOTS`)."""
+    opts = dict(model_exchange or {})
+    unknown = sorted(set(opts) - {"interface", "me_node_events"})
+    if unknown:
+        raise FmuBuildError(f"model_exchange: unknown keys {unknown} (interface, me_node_events)")
+    interface = opts.get("interface") or "cs"
+    node_events = opts.get("me_node_events") or DEFAULT_ME_NODE_EVENTS
+    if interface not in FMU_INTERFACES:
+        raise FmuBuildError(f"interface: {interface!r} not one of {FMU_INTERFACES}")
+    if node_events not in ME_NODE_EVENTS:
+        raise FmuBuildError(f"me_node_events: {node_events!r} not one of {ME_NODE_EVENTS}")
+    if "me" in INTERFACE_ELEMENTS[interface]:
+        for m in model.meshes:
+            if m.tables.slots > EVENT_MAX_SLOTS:
+                raise FmuBuildError(f"interface {interface}: stage {m.name} has {m.tables.slots} tooth-pair slots; "
+                                    f"Model Exchange handles at most {EVENT_MAX_SLOTS}")
+    return interface, node_events
+
+
 def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[GearboxRunSettings] = None,
                       model_name: str = "gearbox", scene_text: Optional[str] = None,
                       stage_scene_texts: Optional[Dict[str, str]] = None, platforms: Optional[Sequence[str]] = None,
                       fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, validation: bool = True,
-                      cc: Optional[str] = None, spec_path=None) -> Path:
-    """Build the gearbox FMU of ``model`` at ``out_path`` (FMI ``fmi_version`` 2 or 3 Co-Simulation, the
+                      cc: Optional[str] = None, model_exchange: Optional[dict] = None) -> Path:
+    """Build the gearbox FMU of ``model`` at ``out_path`` (FMI ``fmi_version`` 2 or 3, the
     standalone C runtime); return its path.
 
     ``settings``: the run's :class:`gearfmu.common.settings.GearboxRunSettings` (the FMU's start values
@@ -236,12 +289,16 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
     zig the build machine's only, the FMU says what it lacks); ``fmi3_outputs`` "scalar": the per-slot
     outputs of an FMI 3 FMU as scalars ``stage1.pair_force_1`` ..; ``validation`` False: no validation
     record (no native run); ``cc``: the build machine's compiler.  Written under a temporary name
-    beside ``out_path`` and renamed at the end."""
+    beside ``out_path`` and renamed at the end.  ``model_exchange``: {"interface": "cs" (Co-Simulation, the
+    default), "me" (Model Exchange) or "both", "me_node_events": Model Exchange's table-node events, one
+    of :data:`gearfmu.common.vocabulary.ME_NODE_EVENTS`} (docs/gearbox.md "Model Exchange")."""
+    interface, me_node_events = model_exchange_options(model, model_exchange)
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
     if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
         raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
                             f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
+    me = "me" in INTERFACE_ELEMENTS[interface]
     settings = gearbox_settings(model, settings)
     if not isinstance(model_name, str) or not model_name.strip():
         raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
@@ -250,9 +307,11 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
     unknown = [k for k in keys if k not in crossbuild.TARGETS]
     if unknown or not keys:
         raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
-    spec = load_gearbox_spec(spec_path)
+    spec = load_gearbox_spec()
     try:
-        variables = apply_starts(gearbox_variables(spec, model), start_values(model, settings))
+        variables = apply_starts(gearbox_variables(spec, model, model_exchange=me,
+                                                   node_events=me_node_events != "none"),
+                                 start_values(model, settings))
     except SpecError as exc:
         raise FmuBuildError(str(exc)) from None
     if fmi3_outputs == "scalar":
@@ -299,8 +358,10 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
             (d / "tables.bin").write_bytes(bin_bytes)
             if mesh.name in stage_scene_texts:
                 (d / "scene.toml").write_text(stage_scene_texts[mesh.name], encoding="utf-8")
-        (res / CONFIG_FILE).write_text(config_text(model, variables, stage_bytes, guid=guid,
-                                                   model_identifier=identifier), encoding="utf-8")
+        (res / CONFIG_FILE).write_text(config_text(model, variables, stage_bytes, guid=guid, model_identifier=identifier,
+                                                   interface=interface, node_events=me_node_events,
+                                                   nominals=me_nominals(model, settings) if me else None),
+                                       encoding="utf-8")
         if scene_text is not None:
             (res / "scene.toml").write_text(scene_text, encoding="utf-8")
         for p in sorted(res.rglob("*")):
@@ -337,7 +398,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
         md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid,
                        stop_time_s=settings.stop_time_s, step_size_s=settings.output_interval_s,
                        generation_tool=f"gearfmu {__version__} (standalone runtime, gearbox)", generation_date=now,
-                       version=__version__)
+                       version=__version__, interfaces=INTERFACE_ELEMENTS[interface])
         note = crossbuild.platform_summary(binaries)
         if fmi_version == 3:
             xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
@@ -360,8 +421,11 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
 
 
 def variables_of_fmu(model: GearboxModel, settings: GearboxRunSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
-                     spec_path=None):
-    """The variables a gearbox FMU of ``model`` built with ``settings`` has (for hosts and tests)."""
-    variables = apply_starts(gearbox_variables(load_gearbox_spec(spec_path), model),
+                     spec_path=None, interface: str = "cs", me_node_events: str = DEFAULT_ME_NODE_EVENTS):
+    """The variables a gearbox FMU of ``model`` built with ``settings`` (and ``interface``,
+    ``me_node_events``) has (for hosts and tests)."""
+    variables = apply_starts(gearbox_variables(load_gearbox_spec(spec_path), model,
+                                               model_exchange="me" in INTERFACE_ELEMENTS[interface],
+                                               node_events=me_node_events != "none"),
                              start_values(model, gearbox_settings(model, settings)))
     return scalar_names(variables) if fmi3_outputs == "scalar" else variables

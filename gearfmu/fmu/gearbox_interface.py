@@ -18,12 +18,14 @@ The FMU's output names are the native gearbox solver's columns (gearfmu.gearbox.
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from dataclasses import replace
 from pathlib import Path
 from typing import Dict, List, Sequence
 
 from ..gearbox.model import GearboxModel
+from ..tables.zones import zone_cuts
 from .modeldesc import (BASE_UNITS, CAUSALITIES, INITIALS, TYPES, UNIT_SCALING, VARIABILITIES, Spec, SpecError,
                         Variable)
 
@@ -34,9 +36,11 @@ __all__ = ["GEARBOX_SPEC_FORMAT", "FEATURES", "DEFAULT_GEARBOX_SPEC_PATH", "load
 GEARBOX_SPEC_FORMAT = "gearfmu-gearbox-variables"
 SPEC_VERSIONS = (1,)
 #: what `per` repeats an entry for, and how the name is made from the item's name
-PER = {"part": "{item}_{name}", "stage": "{item}.{name}", "shaft": "{item}.{name}"}
-#: conditions an entry may name in ``requires``: the motor (load) end is a torque input
-FEATURES = ("motor_torque_input", "load_torque_input")
+PER = {"part": "{item}_{name}", "stage": "{item}.{name}", "shaft": "{item}.{name}", "body": "{item}_{name}"}
+#: conditions an entry may name in ``requires``: the motor (load) end is a torque input; Model Exchange
+#: (its states, derivatives and contact indicators; a stage's zone indicators, checked per stage; the
+#: table-node indicators)
+FEATURES = ("motor_torque_input", "load_torque_input", "model_exchange", "zone_events", "node_events")
 #: the gearbox kernel's output block of a mesh before its pair forces (gbkernel.h GB_OUT_PAIR_FORCE)
 MESH_SCALARS = 4
 
@@ -82,8 +86,10 @@ def load_gearbox_spec(path=None) -> Spec:
     for i, ent in enumerate(entries):
         where = f"{p}: variable #{i + 1} ({ent.get('name', '?')!r})"
         name = ent.get("name")
-        if not isinstance(name, str) or not name.isidentifier():
-            raise SpecError(f"{where}: name must be an identifier")
+        if not isinstance(name, str) or not (name.isidentifier() or _derivative_name(name)):
+            raise SpecError(f"{where}: name must be an identifier (or der(<identifier>) of a derivative)")
+        if "derivative_of" in ent and _derivative_name(name) != ent["derivative_of"]:
+            raise SpecError(f"{where}: derivative_of: a derivative is named der(<its state>)")
         if name in names:
             raise SpecError(f"{where}: name duplicated")
         names.add(name)
@@ -123,9 +129,27 @@ def load_gearbox_spec(path=None) -> Spec:
                 units=units, entries=entries)
 
 
-def features_of(model: GearboxModel) -> tuple:
-    """The spec features (:data:`FEATURES`) of a gearbox: which ends are torque inputs."""
-    return tuple(f for f, on in zip(FEATURES, (model.motor_torque_input, model.load_torque_input)) if on)
+def _derivative_name(name: str):
+    """The state of a derivative's name ``der(<state>)``, else None."""
+    m = re.fullmatch(r"der\(([A-Za-z_]\w*)\)", name)
+    return m.group(1) if m else None
+
+
+def features_of(model: GearboxModel, model_exchange: bool = False, node_events: bool = False) -> tuple:
+    """The spec features (:data:`FEATURES`) of a gearbox: which ends are torque inputs; with
+    ``model_exchange`` its states and indicators (``node_events``: the table-node indicators too;
+    the zone indicators are decided per stage, :func:`gearbox_variables`)."""
+    out = tuple(f for f, on in zip(FEATURES, (model.motor_torque_input, model.load_torque_input)) if on)
+    if model_exchange:
+        out += ("model_exchange", "zone_events") + (("node_events",) if node_events else ())
+    return out
+
+
+def me_stage_indicators(model: GearboxModel, node_events: bool) -> List[int]:
+    """The number of event indicators of every stage (gk_me_n_indicators): 3 P, P more when its tables
+    have contact-zone edges, 2 more with table-node events."""
+    return [3 * m.tables.slots + (m.tables.slots if zone_cuts(m.tables) is not None else 0) + (2 if node_events else 0)
+            for m in model.meshes]
 
 
 # ------------------------------------------------------------ output layout
@@ -165,20 +189,63 @@ def _blocks(entries):
     return out
 
 
-def gearbox_variables(spec: Spec, model: GearboxModel) -> List[Variable]:
+def _me_index(raw, slots: int, where: str) -> int:
+    """``me_state`` / ``me_indicator``: an integer, or "<n>P" / "<n>P+<k>" (n times the stage's slots, plus k)."""
+    if isinstance(raw, int) and not isinstance(raw, bool):
+        return raw
+    m = re.fullmatch(r"(\d*)P(?:\+(\d+))?", raw.replace(" ", "")) if isinstance(raw, str) else None
+    if m is None:
+        raise SpecError(f"{where}: {raw!r} must be an integer, '<n>P' or '<n>P+<k>'")
+    return int(m.group(1) or 1) * slots + int(m.group(2) or 0)
+
+
+def me_block(model: GearboxModel) -> int:
+    """Where the Model Exchange block starts in the output vector of gearbox_model.c: after the kernel's
+    outputs; then the 2 n states, their 2 n derivatives and the event indicators."""
+    return n_outputs(model)
+
+
+def _me_output_index(ent, per, k, item_body, model, node_events, slots, where) -> int:
+    """The absolute output index of a Model Exchange entry (item k of its ``per``)."""
+    n2 = 2 * model.n_bodies
+    if "me_state" in ent or "derivative_of" in ent:
+        rel = _me_index(ent.get("me_state", 0), 0, where)
+        pos = rel if per is None else 2 * item_body + rel
+        return me_block(model) + pos
+    ind = me_stage_indicators(model, node_events)
+    rel = _me_index(ent["me_indicator"], slots, where)
+    if ent.get("requires") == "node_events" and ind[k] - 2 - 3 * slots > 0:
+        rel += slots   # after the zone indicators of a stage that has them
+    return me_block(model) + 2 * n2 + sum(ind[:k]) + rel
+
+
+def gearbox_variables(spec: Spec, model: GearboxModel, *, model_exchange: bool = False,
+                      node_events: bool = False) -> List[Variable]:
     """The spec expanded for ``model`` (module docstring), numbered in order (value reference =
-    position), with every output's absolute index in the kernel's output vector."""
-    feats = features_of(model)
+    position), with every output's absolute index in the kernel's output vector; with
+    ``model_exchange`` the states, derivatives and event indicators too (``node_events``: the
+    table-node indicators), their indices in the Model Exchange block (:func:`me_block`)."""
+    feats = features_of(model, model_exchange, node_events)
     entries = [e for e in spec.entries if "requires" not in e or e["requires"] in feats]
     present = {e["name"] for e in entries}
     stages = [m.name for m in model.meshes]
-    items = {"part": list(model.parts), "stage": stages, "shaft": [s.name for s in model.shafts], None: [None]}
+    zones = [zone_cuts(m.tables) is not None for m in model.meshes]
+    bodies = [model.bodies[b][0] for b in range(1, model.n_bodies)]
+    items = {"part": list(model.parts), "stage": stages, "shaft": [s.name for s in model.shafts], "body": bodies,
+             None: [None]}
     per_of = {e["name"]: e.get("per") for e in entries}
     out: List[Variable] = []
     for per, ents in _blocks(entries):
         for k, item in enumerate(items[per]):
             for ent in ents:
+                if per == "stage" and ent.get("requires") == "zone_events" and not zones[k]:
+                    continue   # a stage whose tables have no contact-zone edges has no zone indicators
+                der = _derivative_name(ent["name"])
                 name = ent["name"] if per is None else PER[per].format(item=item, name=ent["name"])
+                derivative_of = ent.get("derivative_of")
+                if der is not None and per is not None:
+                    derivative_of = PER[per].format(item=item, name=der)
+                    name = f"der({derivative_of})"
                 slots = model.meshes[k].tables.slots if per == "stage" else 0
                 deps = None
                 if ent.get("initial_dependencies") is not None:
@@ -192,7 +259,13 @@ def gearbox_variables(spec: Spec, model: GearboxModel) -> List[Variable]:
                             deps.append(d)
                     deps = tuple(deps)
                 base = None
-                if "output_index" in ent:
+                if "me_state" in ent or "derivative_of" in ent or "me_indicator" in ent:
+                    base = _me_output_index(ent, per, k, k + 1, model, node_events, slots, f"{spec.path}: {name}")
+                    if "derivative_of" in ent:
+                        state = next(e for e in entries if e["name"] == ent["derivative_of"])
+                        base += 2 * model.n_bodies + _me_index(state["me_state"], 0, name) - \
+                            _me_index(ent.get("me_state", 0), 0, name)
+                elif "output_index" in ent:
                     rel = _relative_index(ent["output_index"], slots, f"{spec.path}: {name}")
                     base = (2 * model.part_body[item] if per == "part" else mesh_offset(model, k) if per == "stage"
                             else shaft_offset(model) + k) + rel
@@ -213,7 +286,8 @@ def gearbox_variables(spec: Spec, model: GearboxModel) -> List[Variable]:
                         variability=ent["variability"], initial=ent.get("initial"), unit=ent.get("unit"),
                         description=desc, start=start, min=ent.get("min"), max=ent.get("max"),
                         output_index=None if base is None else base + i,
-                        build_override=bool(ent.get("build_override", False)), initial_dependencies=deps))
+                        build_override=bool(ent.get("build_override", False)), initial_dependencies=deps,
+                        derivative_of=derivative_of, event_indicator=bool(ent.get("event_indicator", False))))
     return out
 
 

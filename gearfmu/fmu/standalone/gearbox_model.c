@@ -35,7 +35,7 @@
 #define GB_CONFIG_VERSION 1
 #define GB_MAX_LINE 4096
 #define GB_SNAPSHOT_MAGIC 0x47464742u /* "GFGB" */
-#define GB_SNAPSHOT_VERSION 1u
+#define GB_SNAPSHOT_VERSION 2u
 #define GB_NUM 40
 
 /* The FMU state block (flat, no pointers): header with the kernel state, then values, outputs. */
@@ -48,9 +48,10 @@ typedef struct {
     int32_t mode;
     int32_t initialized;
     uint32_t warned;
-    int32_t reserved;
+    int32_t dirty;
     double time;
     gb_state state;
+    gb_me me;
     /* followed by double values[n_vars], double out[n_out] */
 } gb_snap_header;
 
@@ -82,6 +83,9 @@ typedef struct {
     long e_up[GB_MAX_MESHES + GB_MAX_SHAFTS], e_down[GB_MAX_MESHES + GB_MAX_SHAFTS];
     long vr_motor_torque, vr_load_torque, vr_speed0, vr_angle0, vr_hmax, vr_integrator;
     long extra_outputs;   /* outputs past the kernel's, filled by a model around this one (stage_model.c) */
+    int offers, me_node_events, have_nominals;   /* interfaces=, me.* lines (Model Exchange) */
+    long me_indicators, me_n_nominals;
+    double me_nominal[GB_MAX_STATE];
     int have_format, have_guid, have_nvars, shafts_seen, edges_seen;
 } gb_config;
 
@@ -254,6 +258,34 @@ static const char *read_config(gf_inst *c, const char *text, gb_config *cfg, cha
         GB_L("vr.max_step", vr_hmax, 0, 100000)
         GB_L("vr.integrator", vr_integrator, 0, 100000)
         GB_L("extra_outputs", extra_outputs, 0, 64)
+        GB_L("me.event_indicators", me_indicators, 0, 1000000)
+        else if (strcmp(key, "interfaces") == 0) {
+            if (strcmp(val, "cs") == 0) cfg->offers = GF_COSIMULATION;
+            else if (strcmp(val, "me") == 0) cfg->offers = GF_MODEL_EXCHANGE;
+            else if (strcmp(val, "cs,me") == 0) cfg->offers = GF_COSIMULATION | GF_MODEL_EXCHANGE;
+            else {
+                snprintf(err, errcap, "interfaces: '%.40s' is not cs, me or cs,me", val);
+                return err;
+            }
+        } else if (strcmp(key, "me.node_events") == 0) {
+            long ne;
+            if (!gfr_parse_long(val, &ne) || ne < GK_ME_NODES_NONE || ne > GK_ME_NODES_ALL) {
+                snprintf(err, errcap, "me.node_events: bad value '%.40s'", val);
+                return err;
+            }
+            cfg->me_node_events = (int)ne;
+        } else if (strcmp(key, "me.nominals") == 0) {   /* one per state, '|'-separated */
+            char *f[GB_MAX_STATE];
+            int q, n = gfr_split_fields(val, f, GB_MAX_STATE);
+            for (q = 0; q < n; ++q)
+                if (!gfr_parse_double(f[q], &cfg->me_nominal[q]) || !(cfg->me_nominal[q] > 0.0) ||
+                    !isfinite(cfg->me_nominal[q])) {
+                    snprintf(err, errcap, "me.nominals: need finite numbers > 0");
+                    return err;
+                }
+            cfg->me_n_nominals = n;
+            cfg->have_nominals = 1;
+        }
         else if (strcmp(key, "body") == 0) {   /* index|1/I|g|name */
             char *f[4];
             long b;
@@ -404,8 +436,11 @@ static const char *load_stage(gf_inst *c, const char *res_dir, const gb_stage_cf
     if (s->mesh_period > 0.0) { /* contact-zone edges (docs/model.md "Contact-zone edges") */
         d->cuts[m] = (double *)calloc((size_t)(2 * P * N), sizeof(double));
         if (d->cuts[m] == NULL) return "out of memory";
-        if (gk_zone_cuts((int)P, (int)N, s->phi_period, s->mesh_period, s->eng_in, s->eng_out, d->cuts[m]) == GK_OK)
+        if (gk_zone_cuts((int)P, (int)N, s->phi_period, s->mesh_period, s->eng_in, s->eng_out, d->cuts[m]) == GK_OK) {
             gk_set_zone_cuts(d->pair[m], d->cuts[m]);
+            /* the zone edges: read by Model Exchange only (its zone indicators and in-zone flags) */
+            gk_set_zone_edges(d->pair[m], s->mesh_period, s->eng_in, s->eng_out);
+        }
     }
     gfr_copy_str(d->stage_name[m], sizeof d->stage_name[m], s->name);
     return NULL;
@@ -420,6 +455,7 @@ void gm_reset(gf_inst *c)
     c->data->initialized = 0;
     c->data->zeta_valid = 0;
     c->data->warned = 0;
+    memset(&c->data->me, 0, sizeof c->data->me);
     c->dirty = 1;
     c->time = 0.0;
     c->mode = GF_INSTANTIATED;
@@ -448,6 +484,40 @@ void gm_free(gf_inst *c)
         c->data = NULL;
     }
 }
+
+/* Model Exchange at instantiation: the state and indicator counts (the indicators the model
+ * description declares must be the kernel's), the nominals, the block of the outputs after the
+ * kernel's (the 2 n states, their 2 n derivatives, the indicators); NULL or a message */
+static const char *me_setup(gf_inst *c, const gb_config *cfg, char *err, size_t errcap)
+{
+    gm_data *d = c->data;
+    int q, n2 = 2 * d->gb->n, nz, m;
+    for (m = 0; m < d->n_stage; ++m)
+        if (d->pair[m]->P > GK_KINK_MAX_SLOTS) {
+            snprintf(err, errcap, "Model Exchange: stage %.60s has more than %d tooth-pair slots", d->stage_name[m],
+                     GK_KINK_MAX_SLOTS);
+            return err;
+        }
+    nz = gb_me_n_indicators(d->gb, cfg->me_node_events);
+    if (nz < 0 || (long)nz != cfg->me_indicators) {
+        snprintf(err, errcap, "Model Exchange: the tables give %d event indicators, the model description declares "
+                 "%ld", nz, cfg->me_indicators);
+        return err;
+    }
+    if (cfg->have_nominals && cfg->me_n_nominals != n2) {
+        snprintf(err, errcap, "me.nominals: %ld values for %d states", cfg->me_n_nominals, n2);
+        return err;
+    }
+    d->me_node_events = cfg->me_node_events;
+    for (q = 0; q < n2; ++q) d->me_nominal[q] = cfg->have_nominals ? cfg->me_nominal[q] : 1.0;
+    c->n_states = (size_t)n2;
+    c->n_indicators = (size_t)nz;
+    d->me_base = c->n_out;
+    c->n_out += 2 * n2 + nz;
+    return NULL;
+}
+
+static const gf_me_model GB_ME;
 
 const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap)
 {
@@ -533,14 +603,20 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         d->vr_hmax = (int)cfg->vr_hmax;
         d->vr_integrator = (int)cfg->vr_integrator;
         c->n_out = gb_n_outputs(d->gb) + (int)cfg->extra_outputs;
-        c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
-        if (c->out == NULL) e = "out of memory";
+        c->offers = cfg->offers ? cfg->offers : GF_COSIMULATION;
+        d->me_offered = (c->offers & GF_MODEL_EXCHANGE) != 0;
+        if (d->me_offered) e = me_setup(c, cfg, err, errcap);
+        if (e == NULL) {
+            c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
+            if (c->out == NULL) e = "out of memory";
+        }
     }
     for (i = 0; e == NULL && i < c->n_vars; ++i)
         if (c->vars[i].causality == GF_OUTPUT && (c->vars[i].out_index < 0 || c->vars[i].out_index >= c->n_out))
             e = "an output's kernel index is outside the output vector";
     free(cfg);
     if (e != NULL) return e;
+    if (d->me_offered) c->me = &GB_ME;
     gfr_sha_final_hex(&tag, hex);
     {
         char t16[17];
@@ -639,6 +715,25 @@ static void check_torque_axes(gf_inst *c, double t)
     }
 }
 
+/* An FMU that offers Model Exchange: the modes decided anew from the state (decide), its block of the
+ * outputs (states, derivatives, indicators with the modes held) and, with `outputs`, the kernel's
+ * outputs with the modes held; 1 on success */
+static int me_fill(gf_inst *c, int decide, int outputs)
+{
+    gm_data *d = c->data;
+    double Tm = val(c, d->vr_motor_torque), Tl = val(c, d->vr_load_torque), *blk;
+    int n2, st = GK_OK;
+    if (!d->me_offered) return 1;
+    n2 = 2 * d->gb->n;
+    blk = c->out + d->me_base;
+    if (decide) st = gb_me_init(d->gb, d->work, &d->me, d->state.y, Tm, Tl, d->me_node_events);
+    if (st == GK_OK && outputs) st = gb_me_outputs(d->gb, d->work, &d->me, d->state.y, Tm, Tl, c->out);
+    if (st == GK_OK) st = gb_me_derivatives(d->gb, d->work, &d->me, d->state.y, Tm, Tl, blk + n2);
+    if (st == GK_OK) st = gb_me_indicators(d->gb, d->work, &d->me, d->state.y, Tm, Tl, blk + 2 * n2);
+    if (st == GK_OK) memcpy(blk, d->state.y, sizeof(double) * (size_t)n2);
+    return st == GK_OK;
+}
+
 static int init_state(gf_inst *c)
 {
     static const char *const tail = "; cannot compute the initial state";
@@ -695,6 +790,11 @@ static int init_state(gf_inst *c)
         return 0;
     }
     check_torque_axes(c, c->time);
+    if (!me_fill(c, 1, 0)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "initial state: the contact modes cannot be decided (state or "
+               "torques not finite)");
+        return 0;
+    }
     d->initialized = 1;
     return 1;
 }
@@ -710,13 +810,16 @@ int gm_exit_init(gf_inst *c)
     return 1;
 }
 
+static int me_outputs(gf_inst *c, const char *fn);
+
 int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr)
 {
     size_t i;
     int want = 0;
-    if (c->mode != GF_INIT_MODE || !c->dirty) return 1;
-    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].causality == GF_OUTPUT;
+    if (!c->dirty || !(c->mode & (GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE))) return 1;
+    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].out_index >= 0;
     if (!want) return 1;
+    if (c->mode != GF_INIT_MODE) return me_outputs(c, fn) == GF_OK;
     if (!init_state(c)) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial outputs cannot be computed from the values set "
                "(reasons above)", fn);
@@ -753,9 +856,130 @@ int gm_do_step(gf_inst *c, double t, double H)
                : "refused by the kernel");
         return GF_DISCARD;
     }
+    me_fill(c, 1, 0);   /* an FMU that offers Model Exchange: its block of the outputs at the new state */
     c->time = c->time + H;
     return GF_OK;
 }
+
+/* --------------------------------------------------------- Model Exchange
+ * The model side of gf_model.h's gf_me_model (docs/gearbox.md "Model Exchange"): the state of the
+ * host's solver is the kernel's gb_state, every mesh's mode (gb_me) is held between events and decided
+ * anew in event mode (gb_me_update); c->dirty marks values, states or time set since the outputs were
+ * computed, and before an evaluation with new values the torques and damping ratios pass their checks. */
+static int me_inputs(gf_inst *c, const char *fn)
+{
+    static const char *const tail = "; not evaluated";
+    gm_data *d = c->data;
+    int bad = 0;
+    (void)fn;
+    if (!c->dirty) return GF_OK;
+    bad |= bad_value(c, d->vr_motor_torque, GF_DISCARD, tail);
+    bad |= bad_value(c, d->vr_load_torque, GF_DISCARD, tail);
+    if (bad || !apply_damping(c)) return GF_DISCARD;
+    check_torque_axes(c, c->time);
+    return GF_OK;
+}
+
+/* the kernel's status of an evaluation as the FMI layer's, logged */
+static int me_status(gf_inst *c, const char *fn, int st)
+{
+    char a[GB_NUM];
+    if (st == GK_OK) return GF_OK;
+    gf_log(c, GF_DISCARD, "logStatusDiscard", "%s: at t = %s s: %s; not evaluated", fn, num(c->time, a),
+           st == GK_ERR_NONFINITE ? "the continuous states are not finite"
+           : st == GK_ERR_INPUT ? "a torque is not finite" : "refused by the kernel");
+    return GF_DISCARD;
+}
+
+/* the outputs (with the modes held) at the current time, states and inputs */
+static int me_outputs(gf_inst *c, const char *fn)
+{
+    int st = me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    st = me_status(c, fn, me_fill(c, 0, 1) ? GK_OK : GK_ERR_NONFINITE);
+    if (st == GF_OK) c->dirty = 0;
+    return st;
+}
+
+/* in initialization mode, the initial state from the values set when they changed */
+static int me_initial(gf_inst *c, const char *fn)
+{
+    if (c->mode == GF_INIT_MODE && (c->dirty || !c->data->initialized)) {
+        if (!init_state(c)) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial state cannot be computed from the values "
+                   "set (reasons above)", fn);
+            return GF_ERROR_STATUS;
+        }
+        c->dirty = 0;
+    }
+    return GF_OK;
+}
+
+static int me_states(gf_inst *c, const char *fn, double x[])
+{
+    int st = me_initial(c, fn);
+    if (st != GF_OK) return st;
+    memcpy(x, c->data->state.y, sizeof(double) * c->n_states);
+    return GF_OK;
+}
+
+static int me_nominals(gf_inst *c, const char *fn, double x[])
+{
+    (void)fn;
+    memcpy(x, c->data->me_nominal, sizeof(double) * c->n_states);
+    return GF_OK;
+}
+
+static int me_set_states(gf_inst *c, const char *fn, const double x[])
+{
+    (void)fn;
+    memcpy(c->data->state.y, x, sizeof(double) * c->n_states);
+    c->dirty = 1;
+    return GF_OK;
+}
+
+static int me_derivatives(gf_inst *c, const char *fn, double dx[])
+{
+    gm_data *d = c->data;
+    int st = (c->mode == GF_INIT_MODE) ? me_initial(c, fn) : me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    return me_status(c, fn, gb_me_derivatives(d->gb, d->work, &d->me, d->state.y, val(c, d->vr_motor_torque),
+                                              val(c, d->vr_load_torque), dx));
+}
+
+static int me_indicators(gf_inst *c, const char *fn, double z[])
+{
+    gm_data *d = c->data;
+    int st = (c->mode == GF_INIT_MODE) ? me_initial(c, fn) : me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    return me_status(c, fn, gb_me_indicators(d->gb, d->work, &d->me, d->state.y, val(c, d->vr_motor_torque),
+                                             val(c, d->vr_load_torque), z));
+}
+
+static int me_event_update(gf_inst *c, const char *fn, int *again, int *values_changed)
+{
+    gm_data *d = c->data;
+    int st = me_inputs(c, fn), changed = 0;
+    *again = 0;
+    *values_changed = 0;
+    if (st != GF_OK) return st;
+    st = me_status(c, fn, gb_me_update(d->gb, d->work, &d->me, d->state.y, val(c, d->vr_motor_torque),
+                                       val(c, d->vr_load_torque), &changed));
+    if (st != GF_OK) return st;
+    c->dirty = 1;   /* the outputs follow the new modes */
+    return GF_OK;
+}
+
+static int me_completed_step(gf_inst *c, const char *fn, int *enter_event)
+{
+    (void)c;
+    (void)fn;
+    *enter_event = 0;
+    return GF_OK;
+}
+
+static const gf_me_model GB_ME = {me_states, me_nominals, me_set_states, me_derivatives, me_indicators,
+                                  me_event_update, me_completed_step};
 
 /* ------------------------------------------------------------ FMU state */
 size_t gm_snap_size(const gf_inst *c)
@@ -777,6 +1001,8 @@ void gm_snap_write(const gf_inst *c, unsigned char *p)
     h.warned = c->data->warned;
     h.time = c->time;
     h.state = c->data->state;
+    h.me = c->data->me;
+    h.dirty = c->dirty;
     memcpy(p, &h, sizeof h);
     memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
     memcpy(p + sizeof h + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
@@ -808,10 +1034,18 @@ int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has an invalid FMI state %d", fn, (int)h.mode);
         return 0;
     }
+    if (((h.mode & (GF_EVENT_MODE | GF_CONT_MODE)) != 0 && c->fmu_type != GF_MODEL_EXCHANGE) ||
+        (h.mode == GF_STEP_MODE && c->fmu_type == GF_MODEL_EXCHANGE)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state is of a %s instance, this one is %s", fn,
+               h.mode == GF_STEP_MODE ? "Co-Simulation" : "Model Exchange",
+               c->fmu_type == GF_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation");
+        return 0;
+    }
     c->mode = h.mode;
-    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
+    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE) || h.dirty != 0;
     c->time = h.time;
     d->state = h.state;
+    d->me = h.me;
     d->warned = h.warned;
     memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);

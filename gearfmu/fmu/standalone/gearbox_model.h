@@ -32,6 +32,12 @@ struct gm_data {
     double zeta_applied[GB_MAX_MESHES];   /* the damping ratio in each pair model */
     int zeta_valid;                       /* 1: zeta_applied is applied */
     uint32_t warned;                      /* bit m: stage m's torque-axis warning was given */
+    /* Model Exchange (gf_model.h gf_me_model): offered or not, the node events (GK_ME_NODES_*), every
+     * mesh's held mode, where its block starts in the outputs (states, derivatives, indicators) and the
+     * nominal values of the states */
+    int me_offered, me_node_events, me_base;
+    gb_me me;
+    double me_nominal[GB_MAX_STATE];
 };
 
 #endif /* GEARBOX_MODEL_H */
