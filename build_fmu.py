@@ -5,6 +5,8 @@
                                              # binaries for linux64, aarch64-linux, win64, darwin64)
     python build_fmu.py SCENE.toml -o OUT.fmu
     python build_fmu.py --runtime pythonfmu  # the Python runtime over the same C kernel
+    python build_fmu.py examples/scenes/gearbox_two_stage.toml   # a drivetrain scene: the gearbox FMU,
+                                             # against the native gearbox solver (docs/gearbox.md)
 
 The report: the FMU's runtime, FMI version and platforms (and any platform that
 could not be built, with the reason), fmpy validation problems, the largest and RMS difference per
@@ -28,11 +30,13 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true", help="print the report as JSON")
     args = ap.parse_args(argv)
 
-    from gearfmu.cli import print_report
+    from gearfmu import drivetrain
     from gearfmu.fmu.compare import validate_fmu_against_native
     from gearfmu.fmu.summary import read_summary
     from gearfmu.pipeline import build, gear_torque_for, load
 
+    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+        return _gearbox(args)
     try:
         if args.scene is not None and not Path(args.scene).exists():
             raise ValueError(f"SCENE: file not found: {args.scene}")
@@ -55,12 +59,43 @@ def main(argv=None) -> int:
                                       stop_time_s=scene.fmu.stop_time_s,
                                       comm_step_s=scene.fmu.output_interval_s)
     rep["scene"] = scene.name
+    return _report(rep, res, summary, args.json)
+
+
+def _gearbox(args) -> int:
+    """A drivetrain scene: its gearbox FMU against the native gearbox solver."""
+    from gearfmu import drivetrain
+    from gearfmu.fmu.gearbox_build import variables_of_fmu
+    from gearfmu.fmu.gearbox_compare import validate_gearbox_fmu
+    from gearfmu.fmu.summary import read_summary
+
+    try:
+        scene = drivetrain.load_drivetrain(args.scene)
+        out = Path(args.output or f"build/{scene.model_name}.fmu")
+        res = drivetrain.build_drivetrain_fmu(scene, out, progress=not args.json, runtime=args.runtime,
+                                              fmi_version=args.fmi_version)
+    except ValueError as exc:
+        print(f"build_fmu: {exc}", file=sys.stderr)
+        return 2
+    summary = read_summary(res.fmu_path)
+    if not args.json:
+        print(f"built {res.fmu_path}: tables {res.tables_wall_s:.2f} s, FMU packaging {res.build_wall_s:.2f} s")
+        print(summary.line())
+    rep = validate_gearbox_fmu(res.fmu_path, res.model, res.settings, variables_of_fmu(res.model, res.settings),
+                               scene_text=scene.text)
+    rep["scene"] = scene.name
+    return _report(rep, res, summary, args.json)
+
+
+def _report(rep, res, summary, as_json) -> int:
+    from gearfmu.cli import print_report
+
     rep["tables_wall_s"] = res.tables_wall_s
     rep["fmu_build_wall_s"] = res.build_wall_s
     rep["fmu_contents"] = {"summary": summary.line(), "runtime": summary.runtime, "fmi_version": summary.fmi_version,
                   "needs_execution_tool": summary.needs_execution_tool, "platforms": summary.platforms,
                   "not_built": summary.missing}
-    if args.json:
+    if as_json:
         print(json.dumps(rep, indent=1))
     else:
         print_report(rep)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark: the table cache (gearfmu.tables.table_cache) -- the second command on a scene.
+"""Benchmark: the table cache (gearfmu.assembly.table_cache) -- the second command on a scene.
 
 Runs, each in a fresh process and with an empty gearfmu cache folder at the start:
 ``gearfmu tables SCENE`` (computes the tables and keeps them), ``gearfmu tables SCENE`` again and

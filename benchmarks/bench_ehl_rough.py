@@ -50,7 +50,8 @@ WAVELENGTHS_B = (0.06, 0.08, 0.1, 0.15, 0.25, 0.4, 0.7)
 
 
 def _env(level):
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.scene.reader import load_scene
 
     sc = load_scene(None)
@@ -67,7 +68,7 @@ def _args(fenv, R, u, w):
 
 
 def section_solves(levels, slice_step, log):
-    from gearfmu.contact.models import _rough_profile, film_parameter
+    from gearfmu.contact.models import rough_profile, film_parameter
     from gearfmu.contact.rough_ehl import RoughFilmGrid
     from gearfmu.ehl.errors import EHLConvergenceError, FilmCollapseError
     from gearfmu.ehl.mesh_film import ROUGH_WARM_SETTINGS, contact_kinematics
@@ -93,7 +94,7 @@ def section_solves(levels, slice_step, log):
                 a = _args(fenv, float(R[k]), float(u[k]), w)
                 sm = solve_line_contact(*a)
                 for n in range(0, env.n_slices, slice_step):
-                    prof = _rough_profile(env, fenv, fl, float(s_nodes[k]), n, w, float(R[k]))
+                    prof = rough_profile(env, fenv, fl, float(s_nodes[k]), n, w, float(R[k]))
                     row["nodes"] += 1
                     row["full_film_nodes"] += lam >= 3.0
                     lams.append(lam)
@@ -203,7 +204,7 @@ def _spikes(a, prof, sm, n_cycles=24):
 
 
 def section_grid(levels, log):
-    from gearfmu.contact.models import _rough_profile, film_parameter
+    from gearfmu.contact.models import rough_profile, film_parameter
     from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
     from gearfmu.ehl.mesh_film import contact_kinematics
     from gearfmu.ehl.solver import solve_line_contact
@@ -215,7 +216,7 @@ def section_grid(levels, log):
         s = float(env.geom.s_pitch_m)
         w = _nominal_w(sc, env)
         R, u, _ = (float(np.ravel(v)[0]) for v in contact_kinematics(env.geom, np.array([s]), env.omega1_rad_s))
-        prof = _rough_profile(env, fenv, fl, s, 0, w, R)
+        prof = rough_profile(env, fenv, fl, s, 0, w, R)
         lam = float(film_parameter(env, np.array([s]), np.array([w]))[0])
         rows = []
         for n in GRIDS:

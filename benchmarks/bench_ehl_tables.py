@@ -46,8 +46,9 @@ def _scene(slices, model="rough_ehl"):
 
 
 def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"):
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.precompute import precompute_tables
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level, position_nodes=K,
                                                                         film_transient=transient),
@@ -67,7 +68,8 @@ def _tables(sc, level, K, ppm, torques, workers, progress=False, transient="off"
 
 def _cold_solve_time(sc, level, n=12):
     """Mean CPU time (s) of one cold rough solve (old path) at table positions, in-process."""
-    from gearfmu.contact.models import RoughnessSpec, _rough_profile, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec, rough_profile
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 
     env = environment_from_scene(sc, roughness=RoughnessSpec.from_level(level))
@@ -79,13 +81,14 @@ def _cold_solve_time(sc, level, n=12):
     c0 = time.process_time()
     for i in range(n):
         solve_slice_film(fenv, float(R[i]), float(u[i]), w,
-                         _rough_profile(env, fenv, fl, float(s[i]), i % env.n_slices, w, float(R[i])))
+                         rough_profile(env, fenv, fl, float(s[i]), i % env.n_slices, w, float(R[i])))
     return (time.process_time() - c0) / n
 
 
 def _film_error(level, K_list, slices=4, ppm=16):
     """Grid against direct rough solves at every table position (loads 0.5/0.8/1.2 x nominal)."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene, get_contact_model
+    from gearfmu.contact.models import RoughnessSpec, get_contact_model
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.gear.stiffness import slot_stiffness
 
     sc = _scene(slices)
@@ -259,8 +262,8 @@ def _model_row(model, a):
     """Mean TVMS per torque row of another contact model's tables (default scene, same options)."""
     import resource
 
-    from gearfmu.contact.models import environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.precompute import precompute_tables
 
     sc = _scene(a.slices, model)
     env = environment_from_scene(sc, max_workers=a.workers)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark: the cost estimate (gearfmu.tables.estimate) against the measured cost, per scene.
+"""Benchmark: the cost estimate (gearfmu.assembly.estimate) against the measured cost, per scene.
 
 For every example scene (examples/scenes/*.toml), the default scene and the scenes of
 benchmarks/scenes/ (a small rough-EHL pair, a large helical pair, an oil-temperature axis), one
@@ -54,7 +54,7 @@ def child(scene_path, out_dir: Path, time_only: bool = False) -> dict:
     """Measure one scene in this process (run as ``--child``; ``time_only``: the table build alone)."""
     from gearfmu.pipeline import compute_tables, load
     from gearfmu.stages import build_fmu_from_scene
-    from gearfmu.tables.estimate import estimate_build, work_counts
+    from gearfmu.scene.physics import estimate_build, work_counts
 
     scene = load(scene_path)
     est = estimate_build(scene)

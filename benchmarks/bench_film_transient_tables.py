@@ -61,8 +61,9 @@ def _failed_nodes(env, grid_row) -> list:
 
 
 def main(argv=None) -> int:
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.precompute import precompute_tables
     from gearfmu.scene.reader import load_scene
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -29,7 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from gearfmu.contact import fractal as fc  # noqa: E402
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene  # noqa: E402
+from gearfmu.contact.models import RoughnessSpec  # noqa: E402
+from gearfmu.scene.physics import environment_from_scene  # noqa: E402
 from gearfmu.ehl.mesh_film import contact_kinematics  # noqa: E402
 from gearfmu.gear.geometry import pair_geometry  # noqa: E402
 from gearfmu.gear.hertz import hertz_stiffness_N_per_m, reduced_modulus_Pa  # noqa: E402

@@ -29,7 +29,7 @@ from gearfmu.gear.gearpair import MeshModelOptions  # noqa: E402
 from gearfmu.gear.geometry import pair_geometry, transverse_equivalent  # noqa: E402
 from gearfmu.gear.stiffness import slot_stiffness  # noqa: E402
 from gearfmu.scene.reader import load_scene  # noqa: E402
-from gearfmu.tables.precompute import precompute_tables  # noqa: E402
+from gearfmu.assembly.precompute import precompute_tables  # noqa: E402
 
 TORQUES = (600.0, 1200.0)
 CASES = (("fractal_mixed", 8, 16), ("smooth_ehl", 4, 8))

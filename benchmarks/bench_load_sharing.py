@@ -26,7 +26,8 @@ sys.path.insert(0, str(ROOT))
 
 from gearfmu.contact.load_sharing import (LineContactState, asperity_parameters, load_sharing,  # noqa: E402
                                           wm_spectral_moments)
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene  # noqa: E402
+from gearfmu.contact.models import RoughnessSpec  # noqa: E402
+from gearfmu.scene.physics import environment_from_scene  # noqa: E402
 from gearfmu.contact.base import film_parameter  # noqa: E402
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film  # noqa: E402
 from gearfmu.gear.geometry import pair_geometry  # noqa: E402

@@ -6,9 +6,10 @@
 
 In each checkout (a fresh interpreter with the checkout first on ``sys.path``; the script
 checks that the ``gearfmu`` it imported is the checkout's) it computes, for every scene of
-``--scenes`` (``default``: the default scene; ``examples``: every ``examples/scenes/*.toml`` of
-checkout A; ``rough_ehl``: the default pair with ``contact_model = "rough_ehl"`` on a small grid,
-:data:`ROUGH_EHL_SCENE`; or scene file paths)
+``--scenes`` (``default``: the default scene; ``examples``: every gear-pair scene of
+``examples/scenes/*.toml`` of checkout A, drivetrain scenes left out; ``rough_ehl``: the default
+pair with ``contact_model = "rough_ehl"`` on a small grid, :data:`ROUGH_EHL_SCENE`; or scene file
+paths)
 
 * the scene's tables: every array of the MeshTables (built as written: a scene with
   ``[accuracy]`` is not planned);
@@ -140,6 +141,11 @@ def rough_ehl_scene(default_text: str) -> str:
     return text.replace('name = "seed000_table1"', 'name = "rough_ehl_small"', 1)
 
 
+def _is_drivetrain(path: Path) -> bool:
+    """A drivetrain scene (``[drivetrain]``: several stages, gearfmu.drivetrain), not a gear-pair scene."""
+    return any(line.strip() == "[drivetrain]" for line in path.read_text().splitlines())
+
+
 def scene_list(spec: str, checkout_a: Path, tmp: Path):
     """[(label, scene path or None)] of ``--scenes``."""
     out = []
@@ -147,7 +153,8 @@ def scene_list(spec: str, checkout_a: Path, tmp: Path):
         if item == "default":
             out.append(("default", None))
         elif item == "examples":
-            out += [(p.stem, str(p)) for p in sorted((checkout_a / "examples" / "scenes").glob("*.toml"))]
+            out += [(p.stem, str(p)) for p in sorted((checkout_a / "examples" / "scenes").glob("*.toml"))
+                    if not _is_drivetrain(p)]
         elif item == "rough_ehl":
             text = (checkout_a / "gearfmu" / "scene" / "data" / "default_scene.toml").read_text()
             path = tmp / "rough_ehl_small.toml"

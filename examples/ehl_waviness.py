@@ -94,7 +94,8 @@ def run(pairs, nablas, ppw, max_int, log=print) -> dict:
 def seed000_pitch_study(levels=(1, 2), slices=4, n_snap=8, log=print, intervals=256) -> dict:
     """See the module doc (--seed000)."""
     import numpy as np
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl import EHLError, solve_line_contact
     from gearfmu.ehl.film_stiffness import film_stiffness_N_per_m, slice_film_stiffness_N_per_m
     from gearfmu.ehl.transient import T_AVERAGE, flank_slice_case, solve_line_contact_transient

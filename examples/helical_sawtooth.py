@@ -32,7 +32,7 @@ def k_total(scene, geom, slices, ppm, partial):
 def static_te(scene, slices, ppm, partial):
     """Static TE of the loaded mesh (m) at the scene torque, through precompute with the rule chosen."""
     import gearfmu.gear.stiffness as stf
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     orig = stf.helical_slot_stiffness
     stf.helical_slot_stiffness = lambda *a, **k: orig(*a, **dict(k, partial_slices=partial))

@@ -18,7 +18,7 @@ section 3) under both time reductions, (b) k_of_means (the table's) and (a) mean
 JSON key "film_transient" (mean TVMS, build wall/CPU time, the correction's provenance).
 --direct adds (--only-direct: only) the TVMS evaluated directly, without tables, at the pitch point
 (single-tooth contact) and the middle of the double-tooth zone, 2000 N m, 2000 rpm, perfect gears
-(gearfmu.tables.direct_tvms: Hertz, smooth steady film, smooth transient, rough levels 1-2 steady
+(gearfmu.assembly.direct_tvms: Hertz, smooth steady film, smooth transient, rough levels 1-2 steady
 and transient with reduction (b); levels 3-4 transient under seed 000's full-film assumption:
 their screen Lambda = h_min/sigma is below 3, so they run with check_film_parameter=False, one call
 per position, flagged in the JSON key "full_film_assumption" with the screen's Lambda, the solved
@@ -56,8 +56,9 @@ SPEEDS = (1000.0, 2000.0, 4000.0)    # rpm (Fig. 14)
 
 
 def run(ppm: int, slices: int, out: Path, log=print, policies=(), transient_levels=()) -> dict:
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.precompute import precompute_tables
     from gearfmu.scene.reader import load_scene
 
     base = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
@@ -167,9 +168,10 @@ def run_direct(out: Path, slices: int = 2, n_nodes: int = 257, T_average: float 
                max_workers=None, log=print, torque_Nm: float = 2000.0) -> dict:
     """Seed 000 Figs. 12-13 read at the TVMS level, without tables: TVMS (N/m) of every model of
     DIRECT_CASES at the pitch point and the middle of the double-tooth zone
-    (gearfmu.tables.direct_tvms.direct_mesh_stiffness); writes direct_tvms.json and direct_tvms.png."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene, film_parameter
-    from gearfmu.tables.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
+    (gearfmu.assembly.direct_tvms.direct_mesh_stiffness); writes direct_tvms.json and direct_tvms.png."""
+    from gearfmu.contact.models import RoughnessSpec, film_parameter
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
                                          pair_positions_m)
     from gearfmu.ehl.mesh_film import contact_kinematics
     from gearfmu.gear.geometry import pair_geometry
@@ -250,8 +252,9 @@ def run_direct_speed_torque(out: Path, slices: int = 2, n_nodes: int = 257, T_av
     full-film assumption (check_film_parameter=False; the screen's Lambda is recorded); writes
     direct_tvms_speed_torque.json and direct_tvms_speed_torque.png.  A film that fails leaves
     that point null with the reason (tests/test_direct_tvms_speed_torque.py asserts the orderings)."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-    from gearfmu.tables.direct_tvms import DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.direct_tvms import DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness
     from gearfmu.gear.geometry import pair_geometry
     from gearfmu.scene.reader import load_scene
     from gearfmu.dynamics.sweeps import make_executor
@@ -349,7 +352,7 @@ def _direct_full_film(env, sc, s, torque_Nm, model, st, ex, log, name):
     check_film_parameter=False (seed 000's full-film assumption), so that a film that stalls at one
     position does not hide the other.  Returns (TVMS per position, None where the film failed;
     the flagged record)."""
-    from gearfmu.tables.direct_tvms import DirectTVMSError, direct_mesh_stiffness
+    from gearfmu.assembly.direct_tvms import DirectTVMSError, direct_mesh_stiffness
 
     k, rec = [], {"check_film_parameter": False,
                   "assumption": "seed 000 section 5: full film at every roughness level of its Table 2; the default "
@@ -417,7 +420,8 @@ def _figures(base, curves, out: Path, slices: int) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_slice_film
     from gearfmu.gear.geometry import pair_geometry
 

@@ -138,7 +138,8 @@ def fig8(out: Path) -> dict:
 def slicing(out: Path) -> dict:
     """Seed 000 Table 1 pitch point: K per unit width for several face slicings."""
     from gearfmu.gear.hertz import reduced_modulus_Pa
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.mesh_film import contact_kinematics
     from gearfmu.gear.geometry import pair_geometry
     from gearfmu.scene.reader import load_scene

@@ -288,7 +288,7 @@ def oil(out: Path, plt, use_solver: bool):
         if use_solver:  # the slice film of the tables' contact models at eta0(T) (docs/ehl_mesh.md)
             import dataclasses
 
-            from gearfmu.contact.models import environment_from_scene
+            from gearfmu.scene.physics import environment_from_scene
             from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 
             env = dataclasses.replace(environment_from_scene(sc, max_workers=1), eta0_Pas=float(e))

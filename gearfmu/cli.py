@@ -18,8 +18,9 @@
   gearfmu crosscheck FMU DIR [--model NAME] [--rel-tol X]
                                              any FMU against an FMI Cross-Check set (docs/fmu_import.md)
 
-A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): simulate runs the
-native gearbox solver on it, modes gives its modes.
+A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): build makes its gearbox
+FMU (standalone C runtime), validate compares that FMU with the native gearbox solver, simulate runs
+the native gearbox solver on it, modes gives its modes.
 
 SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -53,9 +54,11 @@ from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import drivetrain, pipeline
 from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
-from .tables import table_cache
+from .assembly import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
+from .fmu.gearbox_build import variables_of_fmu
+from .fmu.gearbox_compare import check_gearbox_fmu_matches, validate_gearbox_fmu
 from .fmu.summary import fmu_summary
 
 
@@ -161,7 +164,34 @@ def _fmu(path):
         raise CliError(f"--fmu: {exc}") from None
 
 
+def _build_drivetrain(args) -> int:
+    """gearfmu build DRIVETRAIN.toml: the gearbox FMU (docs/gearbox.md "The gearbox FMU")."""
+    drivetrain.check_fmu_runtime(args.runtime)
+    _, scene = _any_scene(args.scene)
+    for given, option in ((args.tables, "--tables"), (args.tables_meta, "--tables-meta"),
+                          (args.reference_results, "--reference-results")):
+        if given:
+            raise CliError(f"{option}: not offered for a drivetrain scene (its stages compute their own tables; "
+                           "the gearbox FMU carries its reference result in resources/validation/)")
+    out = _output_file(args.output or f"build/{scene.model_name}.fmu", "--output")
+    platforms = parse_platforms(args.platforms) if args.platforms is not None else None
+    if not args.quiet:
+        for note in scene.notes:
+            print(f"gearfmu: {note}", file=sys.stderr)
+    res = drivetrain.build_drivetrain_fmu(scene, out, progress=not args.quiet, runtime=args.runtime,
+                                          platforms=platforms, fmi_version=args.fmi_version,
+                                          fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large)
+    m = res.model
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, gearbox of "
+          f"{len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies, "
+          f"{res.settings.integrator_name}, max internal step {res.settings.max_step_s:.3g} s)")
+    print(fmu_summary(res.fmu_path))
+    return 0
+
+
 def cmd_build(args) -> int:
+    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+        return _build_drivetrain(args)
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
     tables = None
@@ -192,7 +222,7 @@ def cmd_build(args) -> int:
 
 
 def _from_cache(tables) -> str:
-    """' from the table cache' when the tables were read back (gearfmu.tables.table_cache)."""
+    """' from the table cache' when the tables were read back (gearfmu.assembly.table_cache)."""
     return " from the table cache" if "table_cache" in (tables.provenance or {}) else ""
 
 
@@ -439,7 +469,39 @@ def cmd_validate(args) -> int:
     return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
 
 
+def _validate_drivetrain(args) -> dict:
+    """gearfmu validate DRIVETRAIN.toml: its gearbox FMU (--fmu, else built) against the native gearbox solver."""
+    _, scene = _any_scene(args.scene)
+    fmu_path = None
+    if args.fmu:
+        fmu = _fmu(args.fmu)
+        check_gearbox_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
+        fmu_path = fmu.path
+        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        model = drivetrain.gearbox_model(scene, tables)
+        settings = drivetrain.fmu_settings(scene, model)
+    else:
+        res = drivetrain.build_drivetrain_fmu(scene, _output_file(f"build/{scene.model_name}.fmu", "validate"),
+                                              progress=not args.quiet, allow_large=args.allow_large)
+        fmu_path, model, settings = res.fmu_path, res.model, res.settings
+    variables = variables_of_fmu(model, settings, "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS)
+    rep = validate_gearbox_fmu(fmu_path, model, settings, variables, tolerance=args.tolerance, scene_text=scene.text,
+                               stop_time_s=args.stop_time, comm_step_s=args.output_interval)
+    rep["scene"] = scene.name
+    return rep
+
+
+def _scalar_fmi3(fmu_path) -> bool:
+    """An FMI 3 gearbox FMU built with scalar per-slot outputs (stage1.pair_force_1, ...)."""
+    import fmpy  # fmpy: only to read the FMU
+
+    md = fmpy.read_model_description(str(fmu_path))
+    return md.fmiVersion.startswith("3") and any(v.name.endswith(".pair_force_1") for v in md.modelVariables)
+
+
 def _validate(args) -> dict:
+    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+        return _validate_drivetrain(args)
     scene = _scene(args.scene)
     text = scene.text
     if args.fmu:
@@ -476,10 +538,11 @@ def print_report(rep: dict) -> None:
     print(f"fmpy validation problems: {len(probs)}" + "".join(f"\n  - {p}" for p in probs))
     print(f"{rep['samples']} samples, communication step {rep['comm_step_s']:.3g} s, "
           f"internal step <= {rep['max_step_s']:.3g} s, stop time {rep['stop_time_s']:.3g} s")
-    units = output_units(sum(1 for n in rep["outputs"] if n.startswith("pair_force[")))
-    print(f"{'output':<18}{'unit':<7}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
+    units = rep.get("units") or output_units(sum(1 for n in rep["outputs"] if n.startswith("pair_force[")))
+    w = max([18] + [len(n) + 2 for n in rep["outputs"]])
+    print(f"{'output':<{w}}{'unit':<7}{'max |FMU-native|':>18}{'RMS diff':>14}{'range':>14}{'max/range':>12}")
     for name, v in rep["outputs"].items():
-        print(f"{name:<18}{units.get(name, '?'):<7}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}"
+        print(f"{name:<{w}}{units.get(name, '?'):<7}{v['max_abs_diff']:>18.3e}{v['rms_diff']:>14.3e}"
               f"{v['range']:>14.4g}{v['rel_max_diff']:>12.2e}")
     print("differences and range in the output's unit; range = max - min of the native solver's output over "
           "the run (its largest |value| when it is constant); max/range = max |FMU-native| / range, the "
@@ -544,7 +607,7 @@ def _no_cache(parser) -> None:
 
 def _allow_large(parser) -> None:
     parser.add_argument("--allow-large", action="store_true",
-                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.tables.estimate)")
+                        help="compute even when the estimated tables/FMU/build time exceed the limits (gearfmu.assembly.estimate)")
 
 
 def cmd_bench(args) -> int:

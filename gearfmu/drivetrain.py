@@ -7,23 +7,32 @@ every stage (before computing any) and computes each stage's tables with
 :mod:`gearfmu.scene.drivetrain`); :func:`gearbox_model` builds the
 :class:`gearfmu.gearbox.model.GearboxModel`; :func:`pair_model` makes the two-body gearbox of a
 single pair scene (for ``gearfmu modes``); :func:`simulate_drivetrain` runs the native gearbox
-solver with the scene's settings; :func:`modes_report` gives the modes and the Campbell data.
+solver with the scene's settings; :func:`modes_report` gives the modes and the Campbell data;
+:func:`fmu_settings` and :func:`build_drivetrain_fmu` build the gearbox FMU of a drivetrain scene
+(gearfmu.fmu.gearbox_build; docs/gearbox.md "The gearbox FMU").
 """
 from __future__ import annotations
 
 import sys
-from typing import List, Optional, Tuple, Union
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import List, Optional, Sequence, Tuple, Union
 
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
-from .gearbox.native import GearboxResult, simulate as simulate_gearbox
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS
+from .fmu.build_steps import FmuBuildError
+from .fmu.gearbox_build import GearboxFmuSettings, build_gearbox_fmu, gearbox_settings
+from .gearbox.native import GearboxResult, choose_max_step_s, simulate as simulate_gearbox
 from .pipeline import compute_tables, load
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
-from .tables.estimate import BuildTooLargeError, check_build_cost
+from .assembly.estimate import BuildTooLargeError
+from .scene.physics import check_build_cost
 
 __all__ = ["load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model", "simulate_drivetrain", "modes_report",
-           "PAIR_MESH_NAME"]
+           "PAIR_MESH_NAME", "fmu_settings", "build_drivetrain_fmu", "DrivetrainBuild", "check_fmu_runtime"]
 
 #: the mesh name of a single pair scene seen as a gearbox (parts ``pair.pinion``, ``pair.gear``)
 PAIR_MESH_NAME = "pair"
@@ -46,7 +55,7 @@ def _flat(tables):
 
 def stage_tables(scene: DrivetrainScene, *, progress: bool = False, allow_large: bool = False) -> List:
     """Every stage's MeshTables (in stage order), each at its drivetrain operating point.  The
-    cost estimate of every stage is checked first (gearfmu.tables.estimate): a stage over the
+    cost estimate of every stage is checked first (gearfmu.assembly.estimate): a stage over the
     limits raises BuildTooLargeError naming the stage before any table is computed."""
     for s in scene.stages:
         try:
@@ -119,3 +128,60 @@ def modes_report(kind: str, scene, model: GearboxModel, *,
     top = 1.25 * w_max / RPM_TO_RAD_S if max_speed_rpm is None else float(max_speed_rpm)
     cb = campbell(model, res, top, operating_speed_rpm=w / RPM_TO_RAD_S)
     return res, cb
+
+
+def fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> GearboxFmuSettings:
+    """The start values and DefaultExperiment of a drivetrain scene's gearbox FMU: the scene's motor
+    torque and load torque (an end that is no torque input takes 0), motor speed, the integrator and
+    largest internal step (``"auto"``: :func:`gearfmu.gearbox.native.choose_max_step_s` at 1.5 x the
+    motor speed, as the native solver chooses it), the run's stop time and output interval."""
+    t_in = scene.motor.torque_Nm if scene.motor.torque_input else 0.0
+    t_out = scene.load_torque_Nm if scene.load.torque_input else 0.0
+    w0 = scene.motor.speed_rad_s
+    h = scene.max_step_s
+    if h is None:
+        h = choose_max_step_s(model, max(1.5 * abs(w0), 1.0),
+                              reference_torque_Nm=model.reference_torque_Nm(t_in, t_out))
+    return gearbox_settings(model, motor_torque_Nm=t_in, load_torque_Nm=t_out, motor_speed_start_rad_s=w0,
+                            max_step_s=h, integrator=scene.integrator, stop_time_s=scene.stop_time_s,
+                            output_interval_s=scene.output_interval_s)
+
+
+def check_fmu_runtime(runtime: Optional[str]) -> None:
+    """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the default)."""
+    if runtime not in (None, "standalone"):
+        raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
+                            "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
+                            "--runtime standalone")
+
+
+@dataclass
+class DrivetrainBuild:
+    """What :func:`build_drivetrain_fmu` built: the FMU, the gearbox model and the FMU's settings, the
+    wall times of the tables and of the FMU (s)."""
+
+    fmu_path: Path
+    model: GearboxModel
+    settings: GearboxFmuSettings
+    tables_wall_s: float
+    build_wall_s: float
+
+
+def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
+                         platforms: Optional[Sequence[str]] = None, fmi_version: int = 2,
+                         fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, allow_large: bool = False,
+                         validation: bool = True) -> DrivetrainBuild:
+    """Drivetrain scene -> every stage's tables -> the gearbox FMU at ``out_path`` (the standalone C
+    runtime, FMI ``fmi_version`` 2 or 3).  ``runtime`` "pythonfmu" is refused (FmuBuildError): a
+    gearbox FMU is C only.  The stages' notes go to stderr with ``progress``."""
+    check_fmu_runtime(runtime)
+    t0 = time.perf_counter()
+    tables = stage_tables(scene, progress=progress, allow_large=allow_large)
+    model = gearbox_model(scene, tables)
+    t1 = time.perf_counter()
+    settings = fmu_settings(scene, model)
+    stage_texts = {s.name: s.scene.text for s in scene.stages if getattr(s.scene, "text", None)}
+    path = build_gearbox_fmu(model, out_path, settings=settings, model_name=scene.model_name, scene_text=scene.text,
+                             stage_scene_texts=stage_texts, platforms=platforms, fmi_version=fmi_version,
+                             fmi3_outputs=fmi3_outputs, validation=validation)
+    return DrivetrainBuild(Path(path), model, settings, t1 - t0, time.perf_counter() - t1)

@@ -10,7 +10,7 @@ from typing import Optional
 
 from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
                      max_step_for, platform_kw, simulate_native)
-from .tables.estimate import check_build_cost
+from .scene.physics import check_build_cost
 
 __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for",
            "simulate_native"]

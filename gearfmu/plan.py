@@ -35,7 +35,7 @@ from .plan_report import Plan, format_report, verified_envelope_of
 from .plan_verify import (ERROR_DEFINITION, MEASURES, DriveCase, ProgressBar, Search, budget_use, drive_case,
                           limiting_measure, say)
 from .scene.envelope import PLAN_CHOICES, AccuracyTarget, VerifiedEnvelope, accuracy_of, envelope_of
-from .tables.estimate import estimate_build
+from .scene.physics import estimate_build
 
 __all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
            "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",

@@ -20,7 +20,7 @@ from .gear.meshing_errors import pair_table_mesh_count
 from .gear.stiffness import required_slots
 from .scene.envelope import AccuracyTarget, Envelope
 from .scene.reader import ThermalOptions
-from .tables.estimate import estimate_build
+from .scene.physics import estimate_build
 
 #: the integrator levels the planner measures, the last the full model's: rk4 (cheapest),
 #: rk4_seg (stops only at contact-zone edges, big kinks and contact events: cheaper than rk4_node

@@ -16,15 +16,15 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .contact.models import environment_from_scene
+from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .gear.gearpair import GearDeviations
 from .plan_choices import _step_absolute, _thermal_options, table_work
 from .plan_verify import MEASURES, run_errors, steady_phase
 from .tables.zones import mean_total_stiffness_N_per_m
 from .scene.envelope import AccuracyTarget, Envelope
-from .tables import table_cache
-from .tables.precompute import precompute_tables
+from .assembly import table_cache
+from .assembly.precompute import precompute_tables
 
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
 #: RK4 steps that one event of the native solver costs, by integrator (CHOICE, docs/plan.md "Cost model"):

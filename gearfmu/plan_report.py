@@ -12,7 +12,7 @@ import numpy as np
 from .plan_choices import Choice
 from .plan_verify import ERROR_DEFINITION, MEASURE_LABELS, MEASURES, budget_use, limiting_measure, target_of
 from .scene.envelope import AccuracyTarget, Envelope, VerifiedEnvelope
-from .tables.estimate import BuildEstimate
+from .assembly.estimate import BuildEstimate
 
 # ============================================================== the plan
 @dataclass

@@ -16,14 +16,14 @@ import numpy as np
 from . import __version__
 from .common.progress import notice
 from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
-from .contact.models import environment_from_scene
+from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .scene.envelope import fmu_envelope_record
 from .scene.reader import default_scene_path, load_scene
-from .tables.estimate import check_build_cost, estimate_build
-from .tables import precompute, table_cache
+from .scene.physics import check_build_cost, estimate_build
+from .assembly import precompute, table_cache
 
 
 def load(scene_path: Optional[str] = None):

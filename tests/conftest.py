@@ -16,7 +16,7 @@ import pytest
 
 # The suite computes every table afresh: a test that replaces or counts the table builder, or
 # that reads its progress, must not get tables that another test kept in gearfmu's table cache
-# (gearfmu.tables.table_cache).  Set here, so the command-line processes the tests start inherit
+# (gearfmu.assembly.table_cache).  Set here, so the command-line processes the tests start inherit
 # it; tests/test_table_cache.py turns the cache on in a folder of its own.
 os.environ["GEARFMU_NO_TABLE_CACHE"] = "1"
 

@@ -2,18 +2,23 @@
 
 The contracts live in pyproject.toml ``[tool.importlinter]``: the layers (each stage imports
 only the stages below it, every top-level module or package placed), no import cycles
-between sibling modules or packages, and the FMU runtime template importing nothing from
-gearfmu.  import-linter builds the import graph with grimp, which also sees imports inside
-functions.  The checks are shown to fail on a copy of the package with an upward import or
-a cycle written into it.
+between sibling modules or packages, the table format, the assembly and the physics never
+importing the scene, the table format never importing the physics, and the FMU runtime
+template importing nothing from gearfmu.  import-linter builds the import graph with grimp,
+which also sees imports inside functions.  The checks are shown to fail on a copy of the
+package with an upward import, a cycle or a forbidden import written into it.
 """
 from __future__ import annotations
 
 import ast
+import importlib.util
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
+
+import pytest
 
 from gearfmu.common import vocabulary
 from gearfmu.contact.models import CONTACT_MODELS as REGISTRY
@@ -51,7 +56,8 @@ def _copy(tmp_path: Path) -> Path:
 def test_import_contracts_hold():
     code, report = _lint(REPO)
     assert code == 0, report
-    assert "3 kept, 0 broken" in report, report
+    contracts = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+    assert f"{len(contracts)} kept, 0 broken" in report, report
 
 
 def test_contracts_fail_on_an_upward_import_and_on_a_cycle(tmp_path):
@@ -77,6 +83,50 @@ def test_contracts_fail_on_an_upward_import_and_on_a_cycle(tmp_path):
     assert "No import cycles between sibling modules or packages BROKEN" in report, report
     assert "Layers: every stage imports only the stages below it KEPT" in report, report
     assert "No cycles are allowed in gearfmu.gear." in report, report
+
+
+def test_contracts_fail_when_a_lower_layer_imports_the_scene_or_the_format_the_physics(tmp_path):
+    root = _copy(tmp_path)
+    offenders = {pkg: "from gearfmu.scene import options  # offender\n"
+                 for pkg in ("tables", "assembly", "contact", "gear", "ehl")}
+    for pkg, line in offenders.items():
+        (root / "gearfmu" / pkg / "_offender.py").write_text(line)
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The table format, the assembly and the physics never import the scene BROKEN" in report, report
+    for pkg in offenders:
+        assert f"gearfmu.{pkg}._offender -> gearfmu.scene.options" in report, report
+    for pkg in offenders:
+        (root / "gearfmu" / pkg / "_offender.py").unlink()
+
+    # the format importing the physics: allowed by the layers (tables sits above contact, gear
+    # and ehl), refused by its own contract
+    for pkg in ("contact", "gear", "ehl"):
+        (root / "gearfmu" / "tables" / f"_offender_{pkg}.py").write_text(f"from gearfmu.{pkg} import __doc__\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The table format never imports the physics BROKEN" in report, report
+    assert "Layers: every stage imports only the stages below it KEPT" in report, report
+    assert "The table format, the assembly and the physics never import the scene KEPT" in report, report
+    for pkg in ("contact", "gear", "ehl"):
+        assert f"gearfmu.tables._offender_{pkg} -> gearfmu.{pkg}" in report, report
+
+
+@pytest.mark.slow
+def test_following_a_scene_to_its_tables_goes_back_up_a_layer_at_most_ten_times():
+    """benchmarks/layer_walk.py's measurement (a call trace; its module doc) over the table
+    builder's paths (default, rough EHL, helical EHL with a temperature axis, oil-temperature
+    axis), from the scene through the cost guard to the tables: at most 10 moves back up a
+    layer, and none of them a lower layer reading the scene or the assembly reaching up."""
+    spec = importlib.util.spec_from_file_location("gearfmu_layer_walk", REPO / "benchmarks" / "layer_walk.py")
+    layer_walk = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(layer_walk)
+    out = layer_walk.walk(REPO, tables_only=True)
+    up = out["back_up"]
+    assert out["total"]["moves_back_up_a_layer"] == len(up) <= 10, up
+    assert not [u for u in up if u["from"].startswith("gearfmu.scene") or u["at"].startswith(("assembly/", "tables/"))
+                or u["from"].startswith(("assembly/", "tables/"))], up
+    assert out["total"]["files_entered"] > 10  # the trace followed the scene into the physics
 
 
 def test_contracts_fail_when_the_fmu_runtime_imports_the_package(tmp_path):

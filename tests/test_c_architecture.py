@@ -124,14 +124,15 @@ def test_a_call_back_from_the_model_into_the_plumbing_is_a_cycle(tmp_path):
     assert found and {"fmi_common.c", "gear_model.c"} <= set(found[0]), found
 
 
-@pytest.mark.parametrize("name", ["standalone/gear_model.c", "standalone/gear_model.h", "runtime/pyshim.c"])
+@pytest.mark.parametrize("name", ["standalone/gear_model.c", "standalone/gear_model.h", "runtime/pyshim.c",
+                                  "standalone/gearbox_model.c", "standalone/gearbox_model.h"])
 def test_the_model_includes_the_contract_not_the_plumbing(name):
-    """Both models of the contract: the gear model (standalone runtime) and the Python slave's
-    (pythonfmu runtime, docs/fmu.md "The binary")."""
+    """The models of the contract: the gear model (standalone runtime), the Python slave's
+    (pythonfmu runtime, docs/fmu.md "The binary") and the gearbox model (docs/gearbox.md)."""
     text = (FMU / name).read_text()
     includes = set(re.findall(r'#include "([^"]+)"', text))
     assert "fmi_common.h" not in includes
-    assert "gf_model.h" in includes or "gear_model.h" in includes
+    assert includes & {"gf_model.h", "gear_model.h", "gearbox_model.h"}
 
 
 def test_the_plumbing_reaches_the_model_through_the_contract_only():
@@ -154,3 +155,21 @@ def test_the_translation_unit_includes_every_c_file_once(v):
     text = (FMU / "standalone" / f"fmi{v}_all.c").read_text()
     assert re.findall(r'#include "(\w+\.c)"', text) == list(file_sources(v))
     assert "#define GF_API GF_UNIT_STATIC" in text and "#define GK_API GF_UNIT_STATIC" in text
+
+
+@pytest.mark.parametrize("v", [2, 3])
+def test_the_gearbox_unit_includes_every_c_file_once(v):
+    """fmi2_gearbox_all.c / fmi3_gearbox_all.c include the pair FMU's FMI layer and plumbing unchanged, the
+    gearbox model and kernel and the pair kernel's files, once each, in the order of
+    gearfmu.fmu.gearbox_build.gearbox_file_sources; not the gear model or its FMU layer."""
+    from gearfmu.fmu.gearbox_build import gearbox_file_sources
+
+    text = (FMU / "standalone" / f"fmi{v}_gearbox_all.c").read_text()
+    included = re.findall(r'#include "(\w+\.c)"', text)
+    assert included == list(gearbox_file_sources(v))
+    assert f"fmi{v}_gear.c" in included and "fmi_common.c" in included and "gb_kernel.c" in included
+    assert "gear_model.c" not in included and "gkfmu.c" not in included
+    assert "#define GF_API GF_UNIT_STATIC" in text and "#define GK_API GF_UNIT_STATIC" in text
+    edges = {(p.name, q.name) for p, qs in call_graph(C_FOLDERS).items() for q in qs}
+    assert {("gearbox_model.c", "gb_kernel.c"), ("gb_kernel.c", "gk_pair.h"), ("gearkernel.c", "gk_pair.h"),
+            ("gearbox_model.c", "gf_resources.c"), ("gear_model.c", "gf_resources.c")} <= edges

@@ -1,4 +1,4 @@
-"""Direct TVMS (gearfmu.tables.direct_tvms): seed 000 Figs. 12-13 at the mesh-stiffness level.
+"""Direct TVMS (gearfmu.assembly.direct_tvms): seed 000 Figs. 12-13 at the mesh-stiffness level.
 
 Reference of the ordering test: seed 000 (Zhao et al. 2022) section 5.1-5.2, Figs. 12-13 and their
 text -- the TVMS with Hertz contact is the lowest, the lubricated TVMS of rough flanks lies below
@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-from gearfmu.tables.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
+from gearfmu.contact.models import RoughnessSpec
+from gearfmu.scene.physics import environment_from_scene
+from gearfmu.assembly.direct_tvms import (DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness,
                                      pair_positions_m)
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene

@@ -1,4 +1,4 @@
-"""Direct TVMS (gearfmu.tables.direct_tvms): seed 000 Figs. 14-15 at THEIR roughness level 4.
+"""Direct TVMS (gearfmu.assembly.direct_tvms): seed 000 Figs. 14-15 at THEIR roughness level 4.
 
 Reference: seed 000 (Zhao et al. 2022) section 5.3 / Fig. 14 ("the higher the rotational speed, the
 smaller the OFS and TVMS"; "under high rotational speed conditions, a thicker oil film is more
@@ -26,8 +26,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene
-from gearfmu.tables.direct_tvms import TransientFilmSettings, direct_mesh_stiffness
+from gearfmu.contact.models import RoughnessSpec
+from gearfmu.scene.physics import environment_from_scene
+from gearfmu.assembly.direct_tvms import TransientFilmSettings, direct_mesh_stiffness
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene
 

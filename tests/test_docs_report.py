@@ -111,7 +111,18 @@ def _fixture(d: pathlib.Path):
                "example": {"scene": "gearbox_two_stage", "stages": 2, "bodies": 6, "integrator": "rk4_node",
                            "step_s": 2e-6, "stop_time_s": 0.1, "wall_per_simulated_s": 0.4,
                            "ns_per_internal_step": 600.0, "events": 4500}}
-    for name, data in (("gearbox", gearbox), ("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    pt = lambda h, c, e: {"factor": 1.0, "max_step_s": h, "cpu_s": c, "wall_s": c, "dte_rel_rms_err": e}
+    gearbox_fmu = {"scene": "gearbox_two_stage", "sim_s": 0.5, "comm_step_s": 1e-4, "repeat": 5, "goal": 1.3,
+                   "gearbox": {"max_step_s": 2e-6, "equals_native_solver": True,
+                               "default": pt(2e-6, 0.08, {"s1": 4e-8, "s2": 1e-9})},
+                   "stages": [{"stage": "s1", "default": pt(2e-6, 0.03, 8e-8), "at_gearbox_step": pt(2e-6, 0.03, 8e-8),
+                               "at_gearbox_accuracy": {"max_step_s": 1.5e-6, "cpu_s": 0.04}},
+                              {"stage": "s2", "default": pt(3e-6, 0.02, 5e-9), "at_gearbox_step": pt(2e-6, 0.03, 1e-9),
+                               "at_gearbox_accuracy": {"max_step_s": 2e-6, "cpu_s": 0.03}}],
+                   "gearbox_matching_pairs": {"max_step_s": 2.5e-6, "cpu_s": 0.065},
+                   "ratio_same_accuracy": 8 / 7, "ratio_matching_pairs": 1.3, "ratio_step_rule": 1.6,
+                   "ratio_same_step": 4 / 3}
+    for name, data in (("gearbox_fmu", gearbox_fmu), ("gearbox", gearbox), ("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners),
@@ -190,6 +201,14 @@ def test_report_from_saved_json(tmp_path):
     for where in (page, readme.read_text()):
         assert ("| native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error | rk4_node ≥ 500 × "
                 "(smallest over the cases torque_step; met judged on the default integrator rk4_node) | yes |") in where
+    # the gearbox FMU against its stages' pair FMUs: the fixture's costs per simulated second and ratios
+    assert "| gearbox FMU | 2.00e-06 | 0.16 | s1 4.00e-08, s2 1.00e-09 |" in page
+    assert "| pair FMU s2, the gearbox's accuracy | 2.00e-06 | 0.06 | 1.00e-09 (interpolated) |" in page
+    assert "| pair FMUs at the gearbox's accuracy per stage (the goal's) | 1.14 |" in page
+    for where in (page, readme.read_text()):
+        assert ("| gearbox FMU ≤ 1.3 × its stages' pair FMUs per simulated second (C host, same accuracy) | 1.14 × "
+                "(pair FMUs at the gearbox's accuracy per stage; 1.30 × with the gearbox at the pair FMUs' accuracy, "
+                "1.60 × at every FMU's default step; CPU time, gearbox_two_stage, C host) | yes |") in where
     # sources without JSON are named, not silently dropped; plots are written and linked
     assert "reach 44 × real time (fmpy's low-level loop, 2272 ns per step) and 55 × (raw ctypes pointers" in page
     assert "## Dynamic response against experiment: seed 003 Fig. 3\n\nNot run" in page

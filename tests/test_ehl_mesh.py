@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 
 from gearfmu.gear.hertz import reduced_modulus_Pa
-from gearfmu.contact.models import (CONTACT_MODELS, ContactModelError, RoughnessSpec, environment_from_scene,
-                                    get_contact_model, sliced_mesh_stiffness, tooth_compliances)
+from gearfmu.contact.models import (CONTACT_MODELS, ContactModelError, RoughnessSpec, get_contact_model,
+                                    sliced_mesh_stiffness, tooth_compliances)
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.ehl.fits import dowson_higginson_min_film
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
 from gearfmu.gear.geometry import pair_geometry
-from gearfmu.tables.precompute import precompute_tables
+from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import SceneError, load_scene
 from gearfmu.gear.stiffness import slot_stiffness
 

@@ -189,7 +189,8 @@ def test_T1_smooth_transient_stays_on_the_steady_solution(srr, scheme):
 # ------------------------------------------------------------------------- T2
 def _seed000_pitch():
     from pathlib import Path
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.gear.geometry import pair_geometry
     from gearfmu.scene.reader import load_scene
     sc = load_scene(Path(__file__).resolve().parents[1] / "examples" / "scenes" /
@@ -393,7 +394,8 @@ def test_seed000_fig13_film_stiffness_falls_with_the_roughness_level_at_the_pitc
     # discretisation error (256 vs 512) is 5.6e-6 / 9e-6 / 5.7e-4 -- the margins are
     # 150x and 60x larger, so the ordering is resolved (docs/ehl_transient.md 6.8).
     from pathlib import Path
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
     from gearfmu.ehl.transient import flank_slice_case, solve_line_contact_transient
     from gearfmu.gear.geometry import pair_geometry

@@ -1,4 +1,5 @@
-"""The cost estimate and the guard before expensive work (gearfmu.tables.estimate).
+"""The cost estimate and the guard before expensive work (gearfmu.assembly.estimate, read off a scene by
+gearfmu.scene.physics).
 
 A scene inside every documented key range (points_per_mesh = 100000, torque_points = 1000) asks
 for tables of several GB; it must be refused before anything is computed, with a message that
@@ -10,7 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from gearfmu.tables import estimate
+from gearfmu.assembly import estimate
+from gearfmu.scene import physics
 from gearfmu import pipeline
 from gearfmu.cli import main
 from gearfmu.scene.reader import default_scene_path
@@ -28,7 +30,7 @@ class _Computed(Exception):
 @pytest.fixture
 def no_precompute(monkeypatch):
     """Any table computation raises _Computed instead of running."""
-    import gearfmu.tables.precompute as pc
+    import gearfmu.assembly.precompute as pc
 
     def stub(*a, **k):
         raise _Computed()
@@ -45,7 +47,7 @@ def test_huge_scene_is_refused_before_computing(no_precompute):
     assert "tables.points_per_mesh" in msg and "tables.torque_points" in msg and "--allow-large" in msg
     assert "\n" not in msg
     # 1000 rows x 2 slots x 200000 angles of float64 k and e alone are 6.4 GB
-    est = estimate.estimate_build(scene)
+    est = physics.estimate_build(scene)
     assert est.table_bytes >= 8 * 2 * 1000 * 2 * 200000 and est.fmu_bytes > estimate.FMU_LIMIT_BYTES
 
 
@@ -70,7 +72,7 @@ def test_override_lets_it_through(tmp_path, no_precompute):
 def test_default_scene_is_not_refused_and_its_size_estimate_holds(tmp_path):
     """Estimated table bytes within a factor 1.25 of the saved default tables."""
     scene = pipeline.load(None)
-    est = estimate.check_build_cost(scene)
+    est = physics.check_build_cost(scene)
     assert est.build_s < estimate.BUILD_TIME_LIMIT_S
     tables = pipeline.compute_tables(scene)
     size = tables.save(tmp_path / "d.gtab").stat().st_size

@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, environment_from_scene, film_grid, rough_ehl_model
+from gearfmu.contact.models import RoughnessSpec, film_grid, rough_ehl_model
+from gearfmu.scene.physics import environment_from_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "examples" / "scenes" / "seed000_table1.toml"

@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec,
-                                    environment_from_scene, transient_node_correction,
+from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec, transient_node_correction,
                                     transient_slices)
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.scene.reader import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]

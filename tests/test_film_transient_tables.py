@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec, environment_from_scene,
-                                    rough_ehl_model, transient_node_film)
+from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessSpec, rough_ehl_model,
+                                    transient_node_film)
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.scene.reader import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -278,7 +278,7 @@ def _seed000_pitch():
 
 
 def _eta_alpha(sc):
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
 
     env = environment_from_scene(sc, max_workers=1)
     return env.eta0_Pas, env.alpha_Pa_inv
@@ -351,7 +351,8 @@ def test_film_parameter_one_definition():
     h_min of Dowson & Higginson (h_min/R = 2.65 U^0.70 G^0.54 W^-0.13, written out here) and both
     flanks' W-M sigma: the mixed model's Lambda equals the rough-EHL switch's
     (gearfmu.contact.models.film_parameter) at the seed 000 pitch point, levels 1-4."""
-    from gearfmu.contact.models import RoughnessSpec, environment_from_scene
+    from gearfmu.contact.models import RoughnessSpec
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.contact.models import film_parameter as switch_lambda
     from gearfmu.contact.roughness import wm_sigma_m
 

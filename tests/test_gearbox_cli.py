@@ -18,7 +18,7 @@ import pytest
 from gearfmu import drivetrain
 from gearfmu.cli import main
 from gearfmu.pipeline import compute_tables, load
-from gearfmu.tables.estimate import BuildTooLargeError
+from gearfmu.assembly.estimate import BuildTooLargeError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "gearbox_two_stage.toml"
@@ -102,7 +102,7 @@ def test_bad_drivetrain_input_is_one_line_and_status_2(tmp_path, capsys):
 
 
 def test_every_stage_estimate_is_checked_before_any_table(monkeypatch):
-    """A stage over the size limits (gearfmu.tables.estimate) stops the work before the first
+    """A stage over the size limits (gearfmu.assembly.estimate) stops the work before the first
     stage's tables are computed, naming the stage and the keys to change."""
     kind, scene = drivetrain.load_any(EXAMPLE)
     s2 = scene.stages[1]

@@ -10,7 +10,7 @@ References (none produced by gearfmu):
 * ISO 6336-1 method B c_gamma_alpha (ISO 6336-1:2019 clause 9), +-25 % as in docs/helical.md;
 * the spur pair of the same transverse section with the same contact model (the classical
   overlap smoothing, Niemann/Winter ch. 21) and, for beta -> 0, the spur path of the same model
-  (_ContactIteration without slice stagger) -- the limit the helical path must reach;
+  (ContactIteration without slice stagger) -- the limit the helical path must reach;
 * seed 000 Figs. 12 and 15 (film stiffer than Hertz, stiffer at higher load);
 * the scene's own lubricant and speed for the CLI provenance, and the library call for its tables.
 """
@@ -25,7 +25,7 @@ import pytest
 
 from gearfmu.gear.gearpair import MeshModelOptions
 from gearfmu.gear.geometry import pair_geometry, transverse_equivalent
-from gearfmu.tables.precompute import precompute_tables
+from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import load_scene
 from gearfmu.gear.stiffness import helical_slot_stiffness, slot_stiffness
 
@@ -72,19 +72,20 @@ def test_helical_contact_requests_with_hertz_reproduce_the_helical_slices():
     # must give helical_slot_stiffness's slices (the independent Hertz path) to round-off
     from gearfmu.contact.models import ContactEnvironment, get_contact_model
     from gearfmu.ehl.mesh_film import contact_kinematics
-    from gearfmu.tables.precompute import _HelicalContactView
+    from gearfmu.assembly.contact_rows import normal_section, normal_section_mesh_stiffness
 
     pair = helical()
     g = pair_geometry(pair)
     opts = MeshModelOptions(slices=6)
     ss = helical_slot_stiffness(pair, g, opts, None, 16)
     env = ContactEnvironment(pair=pair, geom=g, omega1_rad_s=100.0, n_slices=6, width_m=0.01)
-    view = _HelicalContactView(pair, g, env, ss, 1)
-    on = np.isfinite(view.s_req)
+    view = normal_section(pair, g, env, ss, 1)
+    on = np.isfinite(view.s_req_m)
     assert np.array_equal(on, np.isfinite(ss.s_slice_m))
     kc = np.zeros(on.shape)
-    kc[on] = get_contact_model("hertz").fn(view.env, view.s_req[on], np.nonzero(on)[1], np.ones(on.sum())).k_N_per_m
-    np.testing.assert_allclose(view.mesh_stiffness(kc, opts), ss.k_per_slice_N_per_m, rtol=1e-12, atol=0)
+    kc[on] = get_contact_model("hertz").fn(view.env, view.s_req_m[on], np.nonzero(on)[1], np.ones(on.sum())).k_N_per_m
+    np.testing.assert_allclose(normal_section_mesh_stiffness(view, kc, opts), ss.k_per_slice_N_per_m,
+                               rtol=1e-12, atol=0)
     # what the contact models see: R = rho_t/cos(beta_b), u = u_t cos(beta_b), slice length w/cos(beta_b)
     cb = math.cos(g.base_helix_angle_rad)
     s_t = ss.s_slice_m[on][:5]
@@ -158,7 +159,7 @@ def test_cli_tables_and_build_pass_the_contact_environment(tmp_path, capsys):
     import zipfile
 
     from gearfmu.cli import main
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.tables.mesh_tables import load_tables
 
     text = (SEED001.read_text().replace('contact_model = "hertz"', 'contact_model = "fractal_mixed"')

@@ -17,8 +17,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 from scipy.special import erfc
 
-from gearfmu.contact.models import (ContactModelError, RoughnessSpec, _smooth_film_k, environment_from_scene,
-                                    film_parameter, load_sharing_stiffness)
+from gearfmu.contact.models import (ContactModelError, RoughnessSpec, _smooth_film_k, film_parameter,
+                                    load_sharing_stiffness)
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.ehl.fits import moes_central_film
 from gearfmu.ehl.film_stiffness import film_stiffness_N_per_m
 from gearfmu.ehl.mesh_film import contact_kinematics
@@ -359,7 +360,7 @@ def test_level4_tables_lie_between_hertz_and_smooth():
     relieved (thicker) film plus the asperities, softer than the smooth film but far stiffer than
     Hertz -- and load_sharing < fractal_mixed (seed 001's K_n, docs/ehl_mesh.md, is above the film);
     the TVMS rises with torque as for the smooth film (seed 000 Fig. 15)."""
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     def mean_tvms(model, pol=None):
         opts = dataclasses.replace(SCENE.mesh, contact_model=model, slices=2)

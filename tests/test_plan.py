@@ -567,7 +567,7 @@ def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
     from pathlib import Path
 
     from gearfmu.plan import _thermal_options
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.assembly.precompute import precompute_tables
 
     text = ((Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed004_pair1.toml").read_text()
             .replace('contact_model = "hertz"', 'contact_model = "smooth_ehl"').replace("slices = 25", "slices = 1")

@@ -5,9 +5,9 @@ References:
   (no envelope torque range), every tooth alike and slots = ceil(contact ratio) -- so the
   thermal choice, the torque axis, the tooth-specific errors, extra slots and every lubricated
   contact model cannot matter over its envelope; the reasons are the scene's own facts.
-* The table builder itself (gearfmu.tables.precompute.precompute_tables) at the coarser
+* The table builder itself (gearfmu.assembly.precompute.precompute_tables) at the coarser
   resolution is the reference for tables the planner takes from a finer grid.
-* gearfmu.tables.estimate.estimate_build is the cost model the plan-time table budget uses.
+* gearfmu.assembly.estimate.estimate_build is the cost model the plan-time table budget uses.
 """
 import json
 import sys
@@ -23,8 +23,8 @@ from gearfmu.plan_choices import PLAN_TABLE_BUILD_S, _choices, _reference_points
 from gearfmu.plan_evaluator import _Evaluator
 from gearfmu.scene.envelope import accuracy_of, envelope_of
 from gearfmu.scene.reader import load_scene
-from gearfmu.tables.estimate import estimate_build
-from gearfmu.tables.precompute import precompute_tables
+from gearfmu.scene.physics import estimate_build
+from gearfmu.assembly.precompute import precompute_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 

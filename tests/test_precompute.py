@@ -1,4 +1,4 @@
-"""Tests of gearfmu.tables.precompute.precompute_tables on the seed 003 Table 1 gear pair
+"""Tests of gearfmu.assembly.precompute.precompute_tables on the seed 003 Table 1 gear pair
 (50/50 teeth, m = 3 mm, alpha = 20 deg, b = 20 mm, contact ratio 1.7547) with the
 real geometry and stiffness modules.  References: seed 003 Table 1 (contact ratio,
 inertia), seed 003 eq 15 evaluated by hand, the lcm hunting-tooth rule, springs in
@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 from gearfmu.gear import stiffness
 from gearfmu.gear.gearpair import GearDeviations, GearPairSpec, GearSpec, MeshModelOptions, ToothDeviation
 from gearfmu.gear.geometry import pair_geometry
-from gearfmu.tables.precompute import PrecomputeInputError, default_slots, disc_inertia_kgm2, precompute_tables
+from gearfmu.assembly.precompute import PrecomputeInputError, default_slots, disc_inertia_kgm2, precompute_tables
 from gearfmu.tables.mesh_tables import load_tables
 
 UM = 1e-6
@@ -183,7 +183,7 @@ def test_gear_only_pitch_deviation_period_and_offset():
 
 
 def test_load_iteration_reaches_the_fixed_point_of_a_power_law_contact():
-    """gearfmu.tables.load_iteration.iterate_load_sharing (the one load-sharing iteration of the
+    """gearfmu.assembly.load_iteration.iterate_load_sharing (the one load-sharing iteration of the
     table builder and the direct TVMS) on one pair of two crowned slices whose contact stiffness
     is a power law of the slice line load, k(w) = c (w / w0)^p.  Reference: the fixed point solved
     independently -- slice n carries F_n = k(F_n / b) (x - E_n) (seed 000 eq 16), so
@@ -193,7 +193,7 @@ def test_load_iteration_reaches_the_fixed_point_of_a_power_law_contact():
     are within that tolerance of the fixed point."""
     from scipy.optimize import brentq
 
-    from gearfmu.tables.load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, iterate_load_sharing,
+    from gearfmu.assembly.load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, iterate_load_sharing,
                                                slice_loads_N)
 
     c, w0, p, b, d, F = 2e9, 1e5, 0.2, 0.01, 0.5e-6, 5e3     # N/m, N/m, 1, m, m (crowning), N

@@ -17,13 +17,14 @@ import math
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import RoughnessSpec, _rough_profile, environment_from_scene, film_parameter
+from gearfmu.contact.models import RoughnessSpec, rough_profile, film_parameter
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.contact.rough_ehl import RoughFilmGrid
 from gearfmu.ehl.film_newton import _terms, jacobian
 from gearfmu.ehl.mesh_film import contact_kinematics, solve_node_films, solve_slice_film
 from gearfmu.ehl.solver import solve_line_contact
 from gearfmu.scene.reader import load_scene
-from gearfmu.tables.contact_rows import film_failure_kinds, film_failure_line
+from gearfmu.assembly.contact_rows import film_failure_kinds, film_failure_line
 
 W_NODE = 89577.25357541349     # N/m: the lowest rough load column of the default tables
 
@@ -39,7 +40,7 @@ def _node(env, k, slices):
     s = float(RoughFilmGrid(env, 9).s_nodes[k])
     fenv, fl = env.film_environment(), env.flanks()
     R, u, _ = (float(np.ravel(v)[0]) for v in contact_kinematics(env.geom, np.array([s]), env.omega1_rad_s))
-    profs = [_rough_profile(env, fenv, fl, s, n, W_NODE, R) for n in slices]
+    profs = [rough_profile(env, fenv, fl, s, n, W_NODE, R) for n in slices]
     lam = float(film_parameter(env, np.array([s]), np.array([W_NODE]))[0])
     return fenv, R, u, profs, lam
 

@@ -1,7 +1,7 @@
 """The two steady rough-film paths agree on the same slice (docs/ehl_mesh.md
 "Steady rough film: table path vs direct sampling").
 
-* Table path: ``contact_models._rough_profile`` (composite roughness resampled on 2801 points
+* Table path: ``contact_models.rough_profile`` (composite roughness resampled on 2801 points
   over [-5b, 2b]) solved by ``mesh_film.solve_node_films`` (smooth film first, rough film
   warm-started from it, the steady solver's 8 dX band filter) -- what ``RoughFilmGrid`` stores
   at a grid node; between nodes the grid interpolates the rough/smooth ratio linearly in s.
@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu.contact.models import (RoughnessSpec, _rough_profile, _smooth_film_k, environment_from_scene,
-                                    film_grid, rough_ehl_model)
+from gearfmu.contact.models import RoughnessSpec, rough_profile, _smooth_film_k, film_grid, rough_ehl_model
+from gearfmu.scene.physics import environment_from_scene
 from gearfmu.ehl.film_stiffness import slice_film_stiffness_N_per_m
 from gearfmu.ehl.mesh_film import contact_kinematics, involute_arc_length_m, solve_node_films
 from gearfmu.ehl.solver import solve_line_contact
@@ -62,7 +62,7 @@ def _table_node_ratio(env, s, w, slices, flip_sign=False):
     R, u, _ = (float(np.ravel(v)[0]) for v in contact_kinematics(env.geom, np.array([s]), env.omega1_rad_s))
     profs = []
     for j in slices:
-        x, z = _rough_profile(env, fenv, fl, s, j, w, R)
+        x, z = rough_profile(env, fenv, fl, s, j, w, R)
         if flip_sign:  # negative control: wm(x) = z1(a1 + x) + z2(a2 - x)
             a1 = float(involute_arc_length_m(env.geom.roll_length_at(1, s), env.geom.rb1_m))
             a2 = float(involute_arc_length_m(env.geom.roll_length_at(2, s), env.geom.rb2_m))

@@ -1,6 +1,6 @@
-"""The table cache (gearfmu.tables.table_cache): a scene's tables computed once, read back after.
+"""The table cache (gearfmu.assembly.table_cache): a scene's tables computed once, read back after.
 
-References: the table builder itself (gearfmu.tables.precompute.precompute_tables) -- a table
+References: the table builder itself (gearfmu.assembly.precompute.precompute_tables) -- a table
 read from the cache must equal a fresh computation bit for bit, and the number of its calls
 tells a hit from a miss; the scene text (the FMU's validation record names the scene by its
 SHA-256, gearfmu.fmu.compare.check_fmu_matches).  The key must follow exactly what changes the
@@ -20,7 +20,7 @@ from gearfmu import pipeline
 from gearfmu.cli import main
 from gearfmu.common.cache import CacheWarning
 from gearfmu.scene.reader import default_scene_path, load_scene
-from gearfmu.tables import precompute, table_cache
+from gearfmu.assembly import precompute, table_cache
 from gearfmu.tables.mesh_tables import load_tables
 
 DEFAULT = default_scene_path().read_text()
@@ -177,6 +177,22 @@ def test_a_code_or_version_change_computes_again(cache, stub_builder, monkeypatc
     monkeypatch.setattr(table_cache, "__version__", "0.0.0+other")
     pipeline.compute_tables(load_scene(DEFAULT))
     assert len(stub_builder) == 3
+
+
+def test_the_source_checksum_covers_every_package_the_table_builder_runs():
+    """The key's checksum (table_cache.PHYSICS_PARTS) covers the sources of every gearfmu package
+    the table builder and the argument types it is keyed on load: a code change in any of them
+    computes the tables again.  Reference: the modules a fresh interpreter has loaded after
+    importing the builder, the cache and the scene's physics options (sys.modules)."""
+    import subprocess
+    import sys
+    code = ("import sys, gearfmu.assembly.precompute, gearfmu.assembly.table_cache, gearfmu.scene.physics; "
+            "print(' '.join(sorted({m.split('.')[1] for m in sys.modules if m.startswith('gearfmu.')})))")
+    loaded = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+                 .stdout.split())
+    loaded -= {"scene"}  # the scene reads the arguments; their values are in the key (canonical)
+    assert {"assembly", "tables", "gear", "contact", "ehl", "common"} <= loaded
+    assert loaded <= set(table_cache.PHYSICS_PARTS), loaded - set(table_cache.PHYSICS_PARTS)
 
 
 def _corrupt(folder, how):

@@ -401,8 +401,8 @@ OIL_TEXT = ((REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()
 
 
 def _oil_tables(text):
-    from gearfmu.contact.models import environment_from_scene
-    from gearfmu.tables.precompute import precompute_tables
+    from gearfmu.scene.physics import environment_from_scene
+    from gearfmu.assembly.precompute import precompute_tables
 
     sc = load_scene(text)
     return sc, precompute_tables(sc.pair, sc.mesh, points_per_mesh=sc.tables.points_per_mesh,
@@ -429,7 +429,7 @@ def test_oil_axis_film_thickness_follows_dowson_higginson_and_moes(oil):
     within 3 %; h_min itself within 15 % of Dowson-Higginson (seed 000 test tolerance)."""
     import dataclasses
 
-    from gearfmu.contact.models import environment_from_scene
+    from gearfmu.scene.physics import environment_from_scene
     from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film, moes_parameters
     from gearfmu.ehl.mesh_film import contact_kinematics, solve_slice_film
     from gearfmu.gear.geometry import pair_geometry
@@ -557,7 +557,7 @@ def test_bulk_and_oil_axis_is_gears_and_oil_at_one_temperature(oil):
 
 def test_oil_axis_refused_without_a_lubricated_contact_model():
     """Hertz contact uses no lubricant: the scene reader and the table builder refuse an oil axis."""
-    from gearfmu.tables.precompute import PrecomputeInputError, precompute_tables
+    from gearfmu.assembly.precompute import PrecomputeInputError, precompute_tables
     from gearfmu.scene.reader import SceneError
 
     hertz = (REPO / "examples" / "scenes" / "seed004_pair1.toml").read_text()

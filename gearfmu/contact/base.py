@@ -49,7 +49,7 @@ FILM_TRANSIENT_SLICES = 4
 #: A B(<p_m>)/<h_m> (the table's CHOICE, seed 000's "central OFT" explanation) and (a)
 #: "mean_of_k" = <A B(p_m)/h_m>
 FILM_TRANSIENT_REDUCTIONS = ("k_of_means", "mean_of_k")
-#: start of the transient runs of ``film_transient = "film"`` (as gearfmu.tables.direct_tvms):
+#: start of the transient runs of ``film_transient = "film"`` (as gearfmu.assembly.direct_tvms):
 #: the steady frozen-roughness film, or -- where that solve stalls (most level 3-4 nodes) --
 #: the smooth film with the roughness ramped in over ramp_T = 1 b/u_s
 #: (:func:`gearfmu.ehl.transient.solve_line_contact_transient`); window: the solver's default,
@@ -171,6 +171,11 @@ class ContactEnvironment:
         return FilmEnvironment(E_prime_Pa=2.0 * reduced_modulus_Pa(self.pair), eta0_Pas=self.eta0_Pas,
                                alpha_Pa_inv=self.alpha_Pa_inv, rho0_kg_m3=self.rho0_kg_m3,
                                width_m=self.width_m, n_nodes=self.ehl_nodes)
+
+    def film_grid_summary(self) -> Optional[dict]:
+        """The summary of the rough film grid the contact model solved on this environment
+        (:meth:`gearfmu.contact.rough_ehl.RoughFilmGrid.summary`); None when there is none."""
+        return None if self._grid is None else self._grid.summary()
 
     def flanks(self):
         """The sampled flank roughness (made once, cached)."""

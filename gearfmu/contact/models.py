@@ -57,7 +57,6 @@ from ..common.progress import progress_bar
 from ..gear.hertz import hertz_stiffness_N_per_m, reduced_modulus_Pa
 from .fractal import slice_contact_stiffness, FractalMeshOptions, FullContactError
 from ..ehl.mesh_film import contact_kinematics, solve_films
-from ..gear.geometry import pair_geometry
 from ..gear.stiffness import tooth_compliance_m_per_N, combine_pairs
 # the interface and the rough-EHL model, importable from the registry's module as before
 from .base import (  # noqa: F401
@@ -66,7 +65,7 @@ from .base import (  # noqa: F401
                    FILM_TRANSIENT_START, RoughnessSpec, ContactEnvironment, ContactStiffness, ContactModel,
                    _check, _key, composite_sigma_m, film_parameter)
 from .rough_ehl import (  # noqa: F401
-                        _rough_profile, RoughFilmGrid, fill_stalled_ratio, transient_slices,
+                        rough_profile, RoughFilmGrid, fill_stalled_ratio, transient_slices,
                         _transient_node_chunk, transient_node_correction, transient_node_film, _mixed_or_nan,
                         _grid_key, film_grid, film_failure_stiffness, load_sharing_stiffness,
                         rough_ehl_model, _smooth_film_k)
@@ -175,27 +174,6 @@ def get_contact_model(name: str) -> ContactModel:
     except KeyError:
         raise ContactModelError(f"contact_model={name!r}: not available; known: "
                                 f"{', '.join(sorted(CONTACT_MODELS))}") from None
-
-
-def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
-    """A :class:`ContactEnvironment` from a scene (lubricant at its temperature,
-    the scene's pinion speed, slices and ``[roughness]``); ``kw`` overrides fields."""
-    geom = pair_geometry(scene.pair) if geom is None else geom
-    pair = scene.pair
-    ns = int(scene.mesh.slices)
-    lub = scene.lubricant
-    rough = scene.roughness  # the scene reader builds the RoughnessSpec
-    if rough is None and scene.mesh.contact_model == "rough_ehl":
-        rough = RoughnessSpec.from_level(1)
-    args = dict(pair=pair, geom=geom, omega1_rad_s=float(scene.operating.speed_rad_s), n_slices=ns,
-                width_m=min(pair.pinion.face_width_m, pair.gear.face_width_m) / ns,
-                eta0_Pas=None if lub is None else lub.dynamic_viscosity_Pas,
-                alpha_Pa_inv=None if lub is None else lub.pressure_viscosity_Pa_inv,
-                rho0_kg_m3=None if lub is None else lub.density_kg_m3, roughness=rough,
-                film_load_anchor_N_per_m=float(scene.operating.torque_Nm) / float(geom.rb1_m)
-                / min(pair.pinion.face_width_m, pair.gear.face_width_m))
-    args.update(kw)
-    return ContactEnvironment(**args)
 
 
 # ---------------------------------------------------------------- sliced TVMS with a contact model

@@ -30,7 +30,7 @@ from .base import (FILM_LOAD_NODE_RATIO, FILM_LOAD_NODES, FILM_TRANSIENT_REDUCTI
                    ContactStiffness, _check, _key, film_parameter)
 
 
-def _rough_profile(env, fenv, fl, s: float, slice_index: int, w: float, R: float):
+def rough_profile(env, fenv, fl, s: float, slice_index: int, w: float, R: float):
     """Composite roughness (x, wm(x)) of one slice at LOA position ``s`` for the load ``w``
     (sampled on [-5b, 2b], b the Hertz half-width; module doc of gearfmu.ehl.mesh_film)."""
     a1 = float(involute_arc_length_m(env.geom.roll_length_at(1, s), env.geom.rb1_m))
@@ -124,7 +124,7 @@ class RoughFilmGrid:
                 if j in rough_new and not film_mode:
                     for n0 in range(0, self.NS, per):
                         sl = list(range(n0, min(self.NS, n0 + per)))
-                        prof = [_rough_profile(env, fenv, fl, float(self.s_nodes[k]), n, wj, float(R[k])) for n in sl]
+                        prof = [rough_profile(env, fenv, fl, float(self.s_nodes[k]), n, wj, float(R[k])) for n in sl]
                         chunks.append([(float(R[k]), float(u[k]), wj, prof)])
                         counts.append(1 + len(sl))
                         where.append((j, k, sl))
@@ -194,7 +194,7 @@ class RoughFilmGrid:
                     kw = flank_slice_case(env, float(self.s_nodes[k]), wj, int(n))
                     if fenv.n_nodes is not None:
                         kw["n_nodes"] = int(fenv.n_nodes)
-                    if film_mode:     # as gearfmu.tables.direct_tvms: frozen start, smooth start + ramp if it stalls
+                    if film_mode:     # as gearfmu.assembly.direct_tvms: frozen start, smooth start + ramp if it stalls
                         kw["start"] = FILM_TRANSIENT_START
                     cases.append(kw)
                 chunks.append(cases)
@@ -705,7 +705,7 @@ def rough_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Con
         uniq = list(dict.fromkeys(keys))
         su = np.array([q[0] for q in uniq])
         R, u, _ = contact_kinematics(env.geom, su, env.omega1_rad_s)
-        reqs = [(float(R[i]), float(u[i]), q[2], _rough_profile(env, fenv, fl, q[0], q[1], q[2], float(R[i])))
+        reqs = [(float(R[i]), float(u[i]), q[2], rough_profile(env, fenv, fl, q[0], q[1], q[2], float(R[i])))
                 for i, q in enumerate(uniq)]
         outs = solve_films(fenv, reqs, executor=env.executor, max_workers=env.max_workers,
                            progress=env.progress, label="rough EHL films")

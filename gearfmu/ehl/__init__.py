@@ -24,7 +24,7 @@ polish            block-Newton polish of the pressure-spike region
 grids             grid choice: default grid, coarse-grid and refined retries
 roughness         roughness input: normalisation, band limit
 deformation       elastic deformation (seed 000 eq 4), FFT convolution
-lubricant         viscosity/density laws: Roelands, Dowson-Higginson, Tait, Walther
+lubricant         Lubricant; viscosity/density laws: Roelands, D-H, Tait, Walther
 film_stiffness    oil-film normal stiffness (seed 000 eq 8-10)
 fits              closed-form film-thickness fits
 errors            EHLInputError, EHLConvergenceError, FilmCollapseError

@@ -34,6 +34,8 @@ treats ``p < 0`` as an error.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -266,3 +268,34 @@ def walther_kinematic_viscosity_cSt(nu40_cSt: float, nu100_cSt: float, temperatu
     b = (y40 - y100) / (math.log10(t100) - math.log10(t40))
     a = y40 + b * math.log10(t40)
     return 10.0 ** (10.0 ** (a - b * math.log10(t))) - 0.7
+
+
+@dataclass(frozen=True)
+class Lubricant:
+    """Lubricant properties (SI); a scene's ``[lubricant]`` (:mod:`gearfmu.scene.sections`).
+
+    ``dynamic_viscosity_Pas`` is eta0, the ambient-pressure dynamic viscosity
+    at ``temperature_C`` (either given directly or from the kinematic
+    viscosities at 40 and 100 degC by the Walther / ASTM D341 law times
+    ``density_kg_m3``); ``pressure_viscosity_Pa_inv`` is the
+    pressure-viscosity coefficient alpha (1/Pa).  Kinematic viscosities are
+    kept (m^2/s) when given.
+    """
+
+    name: str
+    dynamic_viscosity_Pas: float
+    pressure_viscosity_Pa_inv: float
+    density_kg_m3: float
+    temperature_C: float
+    kinematic_viscosity_40C_m2_s: Optional[float] = None
+    kinematic_viscosity_100C_m2_s: Optional[float] = None
+
+    def kinematic_viscosity_m2_s(self, temperature_C: float) -> float:
+        """Kinematic viscosity (m^2/s) at ``temperature_C`` (degC): Walther /
+        ASTM D341 through the 40 and 100 degC values when given, otherwise
+        the constant eta0/rho (no temperature law known)."""
+        if self.kinematic_viscosity_40C_m2_s is None or self.kinematic_viscosity_100C_m2_s is None:
+            return self.dynamic_viscosity_Pas / self.density_kg_m3
+        return 1e-6 * walther_kinematic_viscosity_cSt(
+            self.kinematic_viscosity_40C_m2_s * 1e6, self.kinematic_viscosity_100C_m2_s * 1e6,
+            temperature_C)

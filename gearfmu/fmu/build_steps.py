@@ -40,8 +40,9 @@ KERNEL_DIR = HERE / "kernel"
 #: the event integrators, the contact-zone cuts, the temperature axis, the verified envelope
 KERNEL_SOURCES = tuple(KERNEL_DIR / n for n in ("gearkernel.c", "gk_model.c", "gk_stops.c", "gk_zones.c",
                                                  "gk_temperature.c", "gk_envelope.c"))
-#: the kernel's headers: the public contract (gearkernel.h), what its files share, the table lookup
-KERNEL_HEADERS = tuple(KERNEL_DIR / n for n in ("gearkernel.h", "gk_internal.h", "gk_lookup.h"))
+#: the kernel's headers: the public contract (gearkernel.h), what its files share, the table lookup, the
+#: pair model's per-mesh pieces (force law, guards, mode decisions, root finder)
+KERNEL_HEADERS = tuple(KERNEL_DIR / n for n in ("gearkernel.h", "gk_internal.h", "gk_lookup.h", "gk_pair.h"))
 #: the FMU behaviour over the kernel both runtimes call (input checks, steps, messages; docs/fmu.md)
 FMU_LAYER_SOURCE = KERNEL_DIR / "gkfmu.c"
 FMU_LAYER_HEADER = KERNEL_DIR / "gkfmu.h"

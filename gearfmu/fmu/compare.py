@@ -149,7 +149,8 @@ def _first_line(exc: BaseException) -> str:
 
 def _scene_name(text: Optional[str]) -> str:
     try:
-        return repr(str(tomllib.loads(text or "")["scene"]["name"]))
+        data = tomllib.loads(text or "")
+        return repr(str((data.get("scene") or data.get("drivetrain"))["name"]))   # a pair or a drivetrain scene
     except Exception:  # noqa: BLE001 - a scene without a readable name
         return "(unnamed)"
 

@@ -2,7 +2,8 @@
 
 A gearfmu FMU records the SHA-256 of most of its members at build time, in four places:
 ``resources/provenance.json`` (the tables, the scene, every binary, every source file; the
-standalone runtime: its configuration file; the pythonfmu runtime: the kernel library),
+standalone runtime: its configuration file; the pythonfmu runtime: the kernel library; a gearbox
+FMU: every stage's tables and scene, ``files_sha256``),
 ``resources/gearfmu_runtime.json`` (pythonfmu runtime: the files it loads), ``resources/validation/record.json`` (tables.bin, tables.json, the
 reference result, the scene) and ``resources/tables.json`` (tables.bin).
 :func:`integrity_problem` compares every recorded checksum with the member (a member altered or
@@ -59,6 +60,8 @@ def _recorded(docs: Dict[str, dict]) -> List[Tuple[str, str, str]]:
                 add(f"binaries/{r.get('folder')}/{r.get('file')}", r["sha256"], PROVENANCE)
         for name, sha in (_get(prov, "binary", "sources_sha256") or {}).items():
             add(f"sources/{name}", sha, PROVENANCE)
+        for name, sha in (prov.get("files_sha256") or {}).items():  # the gearbox FMU: every stage's tables
+            add(name, sha, PROVENANCE)
         kernel = prov.get("kernel")
         if isinstance(kernel, dict):
             add(f"resources/{kernel.get('file')}", kernel.get("sha256"), PROVENANCE)

@@ -427,7 +427,7 @@ class Variable3:
 def fmi3_variables(variables: Sequence[Variable]) -> List[Variable3]:
     """Group the expanded variables into FMI 3 variables: ``name[1] .. name[P]`` (consecutive value
     references, the per-slot entries of the spec) become one array ``name`` -- the same grouping the
-    C layer makes (gear_model.c mark_arrays)."""
+    C layer makes (gf_resources.c gfr_mark_arrays)."""
     out: List[Variable3] = []
     i = 0
     while i < len(variables):

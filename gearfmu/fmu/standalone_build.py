@@ -22,7 +22,7 @@ FMU layout (docs/standalone.md)::
                                          needsExecutionTool=false, FMU state supported, SourceFiles
     binaries/<folder>/<id>.<so|dll|dylib>  the C files for linux64, aarch64-linux, win64 and
                                          darwin64 (universal x86_64 + arm64), gearfmu.fmu.crossbuild
-    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch]
+    sources/                             fmi2_all.c fmi2_gear.c fmi_common.[ch] gf_model.h gear_model.[ch] gf_resources.[ch]
                                          gkfmu.[ch] gearkernel.[ch] gk_*.[ch]
                                          BUILD.txt
                                          CMakeLists.txt (FMI 3: fmi3_all.c, fmi3_gear.c, buildDescription.xml)
@@ -79,11 +79,12 @@ LAYER_SOURCE = HERE / "standalone" / "fmi2_gear.c"
 FMI3_LAYER_SOURCE = HERE / "standalone" / "fmi3_gear.c"
 #: the generic FMI plumbing and the gear model both FMI layers share, and the FMU behaviour over the
 #: kernel the pythonfmu runtime calls too (gkfmu.h)
-SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c", FMU_LAYER_SOURCE)
+SHARED_SOURCES = (HERE / "standalone" / "fmi_common.c", HERE / "standalone" / "gear_model.c",
+                  HERE / "standalone" / "gf_resources.c", FMU_LAYER_SOURCE)
 #: their headers: the model contract (gf_model.h, as the Reference-FMUs' model.h), the plumbing's API,
-#: the gear model's data, the FMU layer's API
+#: the gear model's data, the reading of the resources, the FMU layer's API
 SHARED_HEADERS = (HERE / "standalone" / "gf_model.h", HERE / "standalone" / "fmi_common.h",
-                  HERE / "standalone" / "gear_model.h", FMU_LAYER_HEADER)
+                  HERE / "standalone" / "gear_model.h", HERE / "standalone" / "gf_resources.h", FMU_LAYER_HEADER)
 #: the C files of the FMI 2 binary besides the kernel, in compile order
 LAYER_SOURCES = (LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
 FMI3_LAYER_SOURCES = (FMI3_LAYER_SOURCE.name, *(p.name for p in SHARED_SOURCES))
@@ -136,30 +137,35 @@ def copy_sources(dest_dir, fmi_version: int = 2) -> Path:
     return dest
 
 
-def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_version: int = 2) -> list:
+def compile_standalone(sources_dir, out_lib, *, cc: Optional[str] = None, fmi_version: int = 2,
+                       sources: Optional[Sequence[str]] = None) -> list:
     """Compile the FMU binary from ``sources_dir``; return the command used.
 
     ``<cc> -O2 -fPIC -shared -ffp-contract=off -std=c99 -fno-fast-math -fvisibility=hidden -I<src>
-    -I<FMI headers> -o <lib> fmi2_all.c -lm`` (:func:`binary_sources`; FMI 3: fmi3_all.c)
+    -I<FMI headers> -o <lib> fmi2_all.c -lm`` (:func:`binary_sources`; FMI 3: fmi3_all.c; ``sources``:
+    another unit, e.g. the gearbox FMU's)
     """
     cc = cc or find_c_compiler()
     src = Path(sources_dir)
     out_lib = Path(out_lib)
     out_lib.parent.mkdir(parents=True, exist_ok=True)
     cmd = [cc, *STANDALONE_CFLAGS, f"-I{src}", f"-I{fmi_header_dir(fmi_version)}", "-o", str(out_lib),
-           *(str(src / n) for n in binary_sources(fmi_version)), "-lm"]
+           *(str(src / n) for n in (sources or binary_sources(fmi_version))), "-lm"]
     run_compiler(cmd, "standalone binary", timeout=300)
     return cmd
 
 
-def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
+def build_recipe_files(identifier: str, fmi_version: int = 2, sources: Optional[Sequence[str]] = None
+                       ) -> Dict[str, str]:
     """``sources/`` build files: BUILD.txt (prose), buildflags.txt (key=value, what a tool
     reads) and CMakeLists.txt (``cmake -S sources -B b -DFMI_HEADERS_DIR=<dir> && cmake --build b``),
     all with the flags of :data:`STANDALONE_CFLAGS`; FMI 3 also buildDescription.xml
-    (:func:`build_description_xml`).  The FMI headers are the importer's (the standard's rule)."""
+    (:func:`build_description_xml`).  The FMI headers are the importer's (the standard's rule).
+    ``sources``: the unit to compile (default :func:`binary_sources`; the gearbox FMU's is another)."""
     flags = " ".join(STANDALONE_CFLAGS)
     v = 3 if fmi_version == 3 else 2
-    srcs = " ".join(binary_sources(fmi_version))
+    sources = tuple(sources or binary_sources(fmi_version))
+    srcs = " ".join(sources)
     headers = ", ".join(FMI3_HEADERS if v == 3 else FMI2_HEADERS)
     section = "FMI 3.0 section 2.5.1.3" if v == 3 else "FMI 2.0.5 section 2.3"
     prefix_section = "FMI 3.0 section 2.2.2" if v == 3 else "FMI 2.0.5 section 2.1.1"
@@ -219,7 +225,7 @@ def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
         "endif()\n")
     files = {"BUILD.txt": build_txt, BUILDFLAGS_FILE: "\n".join(kv) + "\n", "CMakeLists.txt": cmake}
     if fmi_version == 3:
-        files[BUILD_DESCRIPTION_FILE] = build_description_xml(identifier)
+        files[BUILD_DESCRIPTION_FILE] = build_description_xml(identifier, sources)
     return files
 
 
@@ -227,7 +233,7 @@ def build_recipe_files(identifier: str, fmi_version: int = 2) -> Dict[str, str]:
 BUILD_DESCRIPTION_FILE = "buildDescription.xml"
 
 
-def build_description_xml(identifier: str) -> str:
+def build_description_xml(identifier: str, sources: Optional[Sequence[str]] = None) -> str:
     """``sources/buildDescription.xml`` of an FMI 3 FMU (the standard's fmi3BuildDescription
     format): one C99 source file set (the FMI 3 layer, plumbing, model, kernel), include directory
     ``.``, the reproducibility flags of :data:`STANDALONE_CFLAGS` as ``compilerOptions``
@@ -237,12 +243,13 @@ def build_description_xml(identifier: str) -> str:
         "modelIdentifier": identifier,
         "description": "every platform: the same flags; no fused multiply-add (-ffp-contract=off) and no "
                        "fast-math, so every platform computes the same numbers (MSVC: /O2 /fp:strict). "
-                       "fmi3_all.c includes the other C files; every function in it but the fmi3* ones is "
+                       f"{(sources or binary_sources(3))[0]} includes the other C files; every function in it "
+                       "but the fmi3* ones is "
                        f"static. Static linking: define FMI3_FUNCTION_PREFIX={identifier}_ (FMI 3.0 section "
                        "2.2.2); a shared library leaves it undefined. The FMI headers are the importer's."})
     sfs = ET.SubElement(bc, "SourceFileSet", {"language": "C99", "compilerOptions": " ".join(
         f for f in STANDALONE_CFLAGS if f not in ("-shared",))})
-    for name in binary_sources(3):
+    for name in (sources or binary_sources(3)):
         ET.SubElement(sfs, "SourceFile", {"name": name})
     ET.SubElement(sfs, "IncludeDirectory", {"name": "."})
     ET.SubElement(bc, "Library", {"name": "m", "external": "true", "description": "C math library (-lm)"})
@@ -289,7 +296,7 @@ def platforms_text(report: Dict[str, dict], fmi_version: int = 2) -> str:
 def scalar_names(variables):
     """The variables with every per-slot element ``name[i]`` renamed ``name_i`` (the FMI 3 FMU with
     scalar outputs: no name ends in ``[1]``, so neither the model description
-    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gear_model.c mark_arrays) makes
+    (:func:`gearfmu.fmu.modeldesc.fmi3_variables`) nor the C layer (gf_resources.c gfr_mark_arrays) makes
     arrays of them).  Value references, order and everything else stay."""
     return [replace(v, name=re.sub(r"\[(\d+)\]$", r"_\1", v.name)) for v in variables]
 

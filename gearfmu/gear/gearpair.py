@@ -96,7 +96,7 @@ class GearSpec:
     tip_clearance_coefficient: float = 0.25
     hub_radius_m: Optional[float] = None  # radius of the gear-body bore / hub (Sainsot r_int)
     material: Material = Material()
-    inertia_kgm2: Optional[float] = None  # None: solid disc between hub and reference pitch radius (tables.precompute.disc_inertia_kgm2)
+    inertia_kgm2: Optional[float] = None  # None: solid disc between hub and reference pitch radius (assembly.precompute.disc_inertia_kgm2)
     deviations: GearDeviations = GearDeviations()
     # Helical gears (docs/helical.md): reference helix angle beta (rad, 0 = spur, [0, pi/4]);
     # with beta != 0, ``module_m``, ``pressure_angle_rad``, ``profile_shift``,

@@ -423,21 +423,34 @@ def _normal_roll_m(geom: PairGeometry, vgeom: PairGeometry, which: int, s_m: np.
     return np.sqrt(np.maximum(rho_v * rho_v - vv["rb"] ** 2, 0.0))
 
 
-def _helical_slice_components(pair: GearPairSpec, geom: PairGeometry, s_m: np.ndarray, width_m: float):
-    """(k_tooth, foundation compliance pinion, gear) of helical slices at transverse LOA positions s,
-    along the transverse line of action (see :func:`helical_slot_stiffness`)."""
+def helical_slice_compliances(pair: GearPairSpec, geom: PairGeometry, s_m: np.ndarray, width_m: float):
+    """(c_teeth, c_foundation_pinion, c_foundation_gear), m/N, of helical slices of face width
+    ``width_m`` at transverse LOA positions ``s_m`` (m from N1, finite), on the normal section:
+    the virtual spur gear of :func:`virtual_normal_section` at the point of the same height
+    above the reference circle, strip length w / cos(beta_b) (the slice's piece of the inclined
+    contact line); c_teeth = bending + shear + axial of both teeth (seed 000 eq 14-15), the
+    foundation compliances of each gear (Sainsot, eq 12).  Along the normal line of action;
+    :func:`helical_slot_stiffness` turns them to the transverse one."""
     vpair, vgeom = virtual_normal_section(pair, geom)
-    cbb = math.cos(geom.base_helix_angle_rad)
-    wn = width_m / cbb                                   # contact-line length of the slice
+    wn = width_m / math.cos(geom.base_helix_angle_rad)   # contact-line length of the slice
     u1 = _normal_roll_m(geom, vgeom, 1, s_m)
     u2 = _normal_roll_m(geom, vgeom, 2, s_m)
     cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
     cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
-    kh = hertz_stiffness_N_per_m(pair, wn)
     c_teeth = (cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"])
+    return c_teeth, cp["foundation"], cg["foundation"]
+
+
+def _helical_slice_components(pair: GearPairSpec, geom: PairGeometry, s_m: np.ndarray, width_m: float):
+    """(k_tooth, foundation compliance pinion, gear) of helical slices at transverse LOA positions s,
+    along the transverse line of action (see :func:`helical_slot_stiffness`)."""
+    cbb = math.cos(geom.base_helix_angle_rad)
+    wn = width_m / cbb                                   # contact-line length of the slice
+    c_teeth, cf_p, cf_g = helical_slice_compliances(pair, geom, s_m, width_m)
+    kh = hertz_stiffness_N_per_m(pair, wn)
     k_tooth_n = 1.0 / (1.0 / kh + c_teeth)
     t = cbb * cbb                                        # normal -> transverse: k_t = k_n cos^2(beta_b)
-    return k_tooth_n * t, cp["foundation"] / t, cg["foundation"] / t
+    return k_tooth_n * t, cf_p / t, cf_g / t
 
 
 def helical_slot_stiffness(pair: GearPairSpec, geom: PairGeometry, opts: MeshModelOptions,

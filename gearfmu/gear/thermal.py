@@ -81,7 +81,7 @@ pressure-viscosity coefficient alpha is kept at its scene value at every oil
 temperature (no alpha(T) law in the seeds or the scene; film thickness goes as
 alpha^0.54 in Dowson-Higginson, so a falling alpha would thin the hot film a
 little more).  The tables' oil temperature axis (``[thermal] axis_quantity =
-"oil"``, :func:`gearfmu.tables.precompute.oil_axis_eta0_Pas`) feeds eta0(T) of this law
+"oil"``, :func:`gearfmu.assembly.precompute.oil_axis_eta0_Pas`) feeds eta0(T) of this law
 into the lubricated contact model's ``ContactEnvironment`` and rebuilds the
 tables at every axis temperature (docs/thermal.md "Oil temperature axis").
 
@@ -98,11 +98,11 @@ from typing import Optional, Sequence, Tuple, Union
 import numpy as np
 
 from ..common.checks import finite_number
-from ..common.vocabulary import FLANK_LAWS
+from ..common.vocabulary import FLANK_LAWS, OIL_ALPHA_LAWS, THERMAL_AXIS_QUANTITIES
 from .gearpair import GearPairSpec, MeshModelOptions
 from .geometry import PairGeometry, pair_geometry
 from .stiffness import tooth_compliance_m_per_N, pair_stiffness_at_N_per_m, slot_stiffness
-from ..ehl.lubricant import walther_kinematic_viscosity_cSt
+from ..ehl.lubricant import Lubricant, walther_kinematic_viscosity_cSt
 
 
 
@@ -445,11 +445,53 @@ def oil_dynamic_viscosity_Pas(nu40_m2_s: float, nu100_m2_s: float, density_kg_m3
     return rho * oil_kinematic_viscosity_m2_s(nu40_m2_s, nu100_m2_s, temperature_C)
 
 
-# ================================================================ scene [thermal] -> physics
-def thermal_state_from_scene(options) -> ThermalState:
-    """:class:`ThermalState` of a scene's ``[thermal]`` section
-    (:class:`gearfmu.scene.reader.ThermalOptions`): a profile when its points are given,
-    else the uniform temperature, else the standard temperature."""
+# ================================================================ [thermal] options -> state
+@dataclass(frozen=True)
+class ThermalOptions:
+    """Thermal options of a pair's tables (seed 004; docs/thermal.md), degC: a scene's
+    ``[thermal]`` section (:mod:`gearfmu.scene.sections`).
+
+    ``pinion_temperature_C`` / ``gear_temperature_C``: uniform bulk temperature
+    (None = the standard temperature); ``*_profile_gamma`` / ``*_profile_C``:
+    a bulk temperature along the line of action over seed 004's normalised
+    coordinate Gamma_K (overrides the uniform value when given);
+    ``temperature_axis_C``: temperatures of the tables' temperature axis
+    (empty = no axis); ``flank_law``: free flank deformation law of
+    :func:`gearfmu.gear.thermal.free_flank_deformation_m`; ``axis_quantity``: what
+    the axis is (:data:`THERMAL_AXIS_QUANTITIES`): "bulk" the bulk temperature of
+    both gears (seed 004 stiffness, FMU input ``bulk_temperature``), "oil" the
+    oil temperature (eta0 of a lubricated contact model, input
+    ``oil_temperature``), "bulk_and_oil" both at one temperature (input
+    ``gearbox_temperature``); ``lubricant``: the scene's ``[lubricant]`` (its
+    viscosity-temperature law), attached by the scene reader when the axis
+    involves the oil.  Without an axis, ``pinion_temperature_C`` /
+    ``gear_temperature_C`` / the profiles change the tables (seed 004 eq 27-28
+    at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
+    temperatures and these keys must be absent; with an "oil" axis they give
+    the gears' state at every oil temperature (docs/thermal.md).
+    ``oil_alpha``: the pressure-viscosity coefficient along an oil axis:
+    "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T),
+    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`) or
+    "constant" (the ``[lubricant]`` value at every temperature).
+    """
+
+    standard_temperature_C: float = 30.0
+    pinion_temperature_C: Optional[float] = None
+    gear_temperature_C: Optional[float] = None
+    pinion_profile_gamma: Tuple[float, ...] = ()
+    pinion_profile_C: Tuple[float, ...] = ()
+    gear_profile_gamma: Tuple[float, ...] = ()
+    gear_profile_C: Tuple[float, ...] = ()
+    temperature_axis_C: Tuple[float, ...] = ()
+    flank_law: str = FLANK_LAWS[0]
+    axis_quantity: str = THERMAL_AXIS_QUANTITIES[0]
+    oil_alpha: str = OIL_ALPHA_LAWS[0]
+    lubricant: Optional[Lubricant] = None
+
+
+def thermal_state_from_scene(options: ThermalOptions) -> ThermalState:
+    """:class:`ThermalState` of thermal options (a scene's ``[thermal]`` section): a profile when
+    its points are given, else the uniform temperature, else the standard temperature."""
     t0 = float(options.standard_temperature_C)
 
     def one(role):

@@ -2,9 +2,12 @@
 
 :func:`gearfmu.scene.reader.load_scene` builds these from the TOML tables (the keys,
 units and ranges are in :mod:`gearfmu.scene.schema`, their documentation in
-``docs/scene.md``); the gear pair itself is :class:`gearfmu.gear.gearpair.GearPairSpec`
-and the ``[roughness]`` table is :class:`gearfmu.contact.base.RoughnessSpec`, the one
-dataclass the contact models take.
+``docs/scene.md``).  The sections the physics takes are the physics' own specs, defined
+where they are used and importable from here: the gear pair
+:class:`gearfmu.gear.gearpair.GearPairSpec`, the ``[roughness]`` table
+:class:`gearfmu.contact.base.RoughnessSpec`, the ``[lubricant]`` table
+:class:`gearfmu.ehl.lubricant.Lubricant` and the ``[thermal]`` table
+:class:`gearfmu.gear.thermal.ThermalOptions`.
 """
 from __future__ import annotations
 
@@ -13,11 +16,11 @@ import math
 from dataclasses import dataclass
 from typing import Any, List, Optional, Sequence, Tuple
 
-from ..common.vocabulary import (DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, DEFAULT_RUNTIME, FLANK_LAWS,
-                                 OIL_ALPHA_LAWS, THERMAL_AXIS_QUANTITIES)
+from ..common.vocabulary import DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, DEFAULT_RUNTIME
 from ..contact.base import RoughnessSpec
-from ..ehl.lubricant import walther_kinematic_viscosity_cSt
+from ..ehl.lubricant import Lubricant
 from ..gear.gearpair import GearPairSpec, MeshModelOptions
+from ..gear.thermal import ThermalOptions
 
 __all__ = ["SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions", "FmuOptions", "Lubricant",
            "ThermalOptions", "default_output_interval_s", "OUTPUT_SAMPLES_PER_MESH", "RPM_TO_RAD_S"]
@@ -126,79 +129,6 @@ class FmuOptions:
     stop_time_s: float = 0.05
     output_interval_s: float = 1e-4
     output_interval_auto: bool = False
-
-
-@dataclass(frozen=True)
-class Lubricant:
-    """Lubricant properties (SI).
-
-    ``dynamic_viscosity_Pas`` is eta0, the ambient-pressure dynamic viscosity
-    at ``temperature_C`` (either given directly or from the kinematic
-    viscosities at 40 and 100 degC by the Walther / ASTM D341 law times
-    ``density_kg_m3``); ``pressure_viscosity_Pa_inv`` is the
-    pressure-viscosity coefficient alpha (1/Pa).  Kinematic viscosities are
-    kept (m^2/s) when given.
-    """
-
-    name: str
-    dynamic_viscosity_Pas: float
-    pressure_viscosity_Pa_inv: float
-    density_kg_m3: float
-    temperature_C: float
-    kinematic_viscosity_40C_m2_s: Optional[float] = None
-    kinematic_viscosity_100C_m2_s: Optional[float] = None
-
-    def kinematic_viscosity_m2_s(self, temperature_C: float) -> float:
-        """Kinematic viscosity (m^2/s) at ``temperature_C`` (degC): Walther /
-        ASTM D341 through the 40 and 100 degC values when given, otherwise
-        the constant eta0/rho (no temperature law known)."""
-        if self.kinematic_viscosity_40C_m2_s is None or self.kinematic_viscosity_100C_m2_s is None:
-            return self.dynamic_viscosity_Pas / self.density_kg_m3
-        return 1e-6 * walther_kinematic_viscosity_cSt(
-            self.kinematic_viscosity_40C_m2_s * 1e6, self.kinematic_viscosity_100C_m2_s * 1e6,
-            temperature_C)
-
-
-@dataclass(frozen=True)
-class ThermalOptions:
-    """The ``[thermal]`` section (seed 004; docs/thermal.md), degC.
-
-    ``pinion_temperature_C`` / ``gear_temperature_C``: uniform bulk temperature
-    (None = the standard temperature); ``*_profile_gamma`` / ``*_profile_C``:
-    a bulk temperature along the line of action over seed 004's normalised
-    coordinate Gamma_K (overrides the uniform value when given);
-    ``temperature_axis_C``: temperatures of the tables' temperature axis
-    (empty = no axis); ``flank_law``: free flank deformation law of
-    :func:`gearfmu.gear.thermal.free_flank_deformation_m`; ``axis_quantity``: what
-    the axis is (:data:`THERMAL_AXIS_QUANTITIES`): "bulk" the bulk temperature of
-    both gears (seed 004 stiffness, FMU input ``bulk_temperature``), "oil" the
-    oil temperature (eta0 of a lubricated contact model, input
-    ``oil_temperature``), "bulk_and_oil" both at one temperature (input
-    ``gearbox_temperature``); ``lubricant``: the scene's ``[lubricant]`` (its
-    viscosity-temperature law), attached by the scene reader when the axis
-    involves the oil.  Without an axis, ``pinion_temperature_C`` /
-    ``gear_temperature_C`` / the profiles change the tables (seed 004 eq 27-28
-    at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
-    temperatures and these keys must be absent; with an "oil" axis they give
-    the gears' state at every oil temperature (docs/thermal.md).
-    ``oil_alpha``: the pressure-viscosity coefficient along an oil axis:
-    "roelands" (Roelands 1966, constant Z: alpha(T) from eta0(T),
-    :func:`gearfmu.ehl.lubricant.roelands_alpha_at_viscosity_Pa_inv`) or
-    "constant" (the ``[lubricant]`` value at every temperature).
-    """
-
-    standard_temperature_C: float = 30.0
-    pinion_temperature_C: Optional[float] = None
-    gear_temperature_C: Optional[float] = None
-    pinion_profile_gamma: Tuple[float, ...] = ()
-    pinion_profile_C: Tuple[float, ...] = ()
-    gear_profile_gamma: Tuple[float, ...] = ()
-    gear_profile_C: Tuple[float, ...] = ()
-    temperature_axis_C: Tuple[float, ...] = ()
-    flank_law: str = FLANK_LAWS[0]
-    axis_quantity: str = THERMAL_AXIS_QUANTITIES[0]
-    oil_alpha: str = OIL_ALPHA_LAWS[0]
-    lubricant: Optional["Lubricant"] = None
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from ..common.user_files import ArchiveError, archive_kind, read_archive
-from ..common.vocabulary import TEMPERATURE_INPUTS  # noqa: F401 (used here and by precompute)
+from ..common.vocabulary import TEMPERATURE_INPUTS
 
 FORMAT_NAME = "gearfmu-tables"
 FORMAT_VERSION = 1
@@ -481,15 +481,31 @@ class MeshTables:
                 raise TableError(f"{source}/tables.json: 'engagement' needs numbers 'in_rad' and 'out_rad'") from None
         return cls(**arrays, **kw, **extra, provenance=meta.get("provenance", {})).validate()
 
-    def save(self, path) -> Path:
-        """Write a ``.gtab`` file (zip of tables.json + tables.bin)."""
-        path = Path(path)
+    def to_gtab(self) -> bytes:
+        """The bytes of a ``.gtab`` file: an uncompressed zip of tables.json + tables.bin."""
         meta, binary = self.to_bytes()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(path.suffix + ".part")
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED) as zf:
+        buf = io.BytesIO()
+        with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_STORED) as zf:
             zf.writestr("tables.json", meta)
             zf.writestr("tables.bin", binary)
+        return buf.getvalue()
+
+    @classmethod
+    def from_gtab(cls, payload: bytes, source: str) -> "MeshTables":
+        """The tables of ``.gtab`` bytes (:meth:`to_gtab`); ``source`` names them in errors."""
+        try:
+            with zipfile.ZipFile(io.BytesIO(payload)) as zf:
+                return cls.from_bytes(zf.read("tables.json"), zf.read("tables.bin"), source)
+        except (zipfile.BadZipFile, KeyError) as exc:
+            raise TableError(f"{source}: not a gearfmu table file ({exc})") from None
+
+    def save(self, path) -> Path:
+        """Write a ``.gtab`` file (:meth:`to_gtab`)."""
+        path = Path(path)
+        payload = self.to_gtab()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(path.suffix + ".part")
+        tmp.write_bytes(payload)
         tmp.replace(path)  # never leave a half-written file under the final name
         return path
 

@@ -2,9 +2,12 @@
  * gk_internal.h -- what the files of the kernel share and nothing outside it sees
  * (the public contract is gearkernel.h):
  *
- *   gearkernel.c     the hot path: forces, RK4, the right-hand sides with the mode held
- *                    (rk4_kink, rk4_node, rk4_seg), the guards, the event-location loop,
- *                    gk_initialize, gk_outputs, gk_do_step;
+ *   gearkernel.c     the hot path: RK4, the right-hand sides with the mode held (rk4_kink,
+ *                    rk4_node, rk4_seg), the event-location loop, gk_initialize, gk_outputs,
+ *                    gk_do_step;
+ *   gk_pair.h        the per-mesh pieces the pair and the gearbox kernel (gb_kernel.c) share:
+ *                    the mesh force, the force law and guards with the mode held, the mode
+ *                    decisions, the root finder (inlined);
  *   gk_lookup.h      the table lookup (inlined into the hot path);
  *   gk_model.c       the model: gk_init and its setters (damping, integrator, zone cuts);
  *   gk_stops.c       where the event integrators stop: the node kink flags and the held
@@ -13,8 +16,9 @@
  *   gk_temperature.c the temperature axis;
  *   gk_envelope.c    the verified envelope.
  *
- * The calls between them run one way: gearkernel.c and gk_model.c / gk_temperature.c call
- * gk_stops.c, which calls gk_zones.c; gk_lookup.h and this header call nothing.  The internal
+ * The calls between them run one way: gearkernel.c calls gk_pair.h, which calls gk_lookup.h
+ * and gk_stops.c; gk_model.c / gk_temperature.c call gk_stops.c, which calls gk_zones.c;
+ * gk_lookup.h and this header call nothing.  The internal
  * functions are prefixed gki_.
  */
 #ifndef GK_INTERNAL_H

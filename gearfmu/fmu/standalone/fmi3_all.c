@@ -22,6 +22,7 @@
 #include "fmi3_gear.c"
 #include "fmi_common.c"
 #include "gear_model.c"
+#include "gf_resources.c"
 #include "gkfmu.c"
 #include "gearkernel.c"
 #include "gk_model.c"

@@ -56,7 +56,7 @@ static int hexval(int ch)
  * space character as %XX bytes of its UTF-8 encoding).  Accepts file:///path, file://localhost/path
  * and file:/path; on Windows also a drive letter (file:///C:/dir, file:///C%3A/dir, file:///C|/dir)
  * and a UNC host (file://server/share/dir -> //server/share/dir).  The path keeps its '/'; the model
- * opens it through the platform's wide-character API (gear_model.c open_read).  0 if the URI is
+ * opens it through the platform's wide-character API (gf_resources.c gfr_read_file).  0 if the URI is
  * not a file URI this platform can open, or the path does not fit. */
 int gf_uri_to_dir(const char *uri, char *out, size_t cap)
 {

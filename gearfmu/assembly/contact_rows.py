@@ -1,31 +1,34 @@
 """Torque rows of the tables with a load-dependent contact model: the slice stiffness of each row
 from the contact model's stiffness at that row's slice loads, iterated with the loaded mesh
-(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`; docs/ehl_mesh.md), for spur pairs and
+(:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`; docs/ehl_mesh.md), for spur pairs and
 slice by slice on the normal section of helical pairs (docs/helical.md).  Used by
-:func:`gearfmu.tables.precompute.precompute_tables`.  SI units.
+:func:`gearfmu.assembly.precompute.precompute_tables`.  SI units.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 import warnings
 
 import numpy as np
 
 from ..common.executors import make_executor
-from ..contact.models import composite_sigma_m, get_contact_model, tooth_compliances, sliced_mesh_stiffness
-from ..gear.stiffness import (slot_stiffness, _normal_roll_m, tooth_compliance_m_per_N, virtual_normal_section)
+from ..contact.models import (ContactEnvironment, composite_sigma_m, get_contact_model, tooth_compliances,
+                              sliced_mesh_stiffness)
+from ..gear.stiffness import helical_slice_compliances, slot_stiffness
 from .load_iteration import (LOAD_ITERATION_MAX, LOAD_ITERATION_TOL, UNLOADED_SLICE_LOAD_SHARE,
                              iterate_load_sharing, slice_loads_N)
 
 
 class PrecomputeInputError(ValueError):
     """Bad input to the table precomputation (names the field and the reason); raised here and by
-    :mod:`gearfmu.tables.precompute`, which exports it."""
+    :mod:`gearfmu.assembly.precompute`, which exports it."""
 
 
-def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
-    """(k total (P, N), k per slice (P, NS, N)) tiled over the table period."""
+def per_slice_stiffness(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(k total (P, N), k per slice (P, NS, N)), N/m, of a slot stiffness ``ss``
+    (:func:`gearfmu.gear.stiffness.slot_stiffness`) with ``slices`` face-width slices, tiled
+    ``reps`` times over the table period."""
     k = np.asarray(ss.k_N_per_m, dtype=float)
     k_tile = np.tile(k, (1, reps))
     ks = getattr(ss, "k_per_slice_N_per_m", None)
@@ -37,9 +40,11 @@ def _per_slice(ss, slices: int, reps: int) -> tuple[np.ndarray, np.ndarray]:
     return k_tile, k_slice
 
 
-class _ContactIteration:
+class ContactIteration:
     """Slice stiffness with a load-dependent contact model, iterated with the
-    loaded static mesh until the slice loads converge (docs/ehl_mesh.md)."""
+    loaded static mesh until the slice loads converge (docs/ehl_mesh.md).  A context manager:
+    one process pool for all passes and rows.  ``e`` (P, N): the pair error of the loaded mesh,
+    set again by the caller for a helical pair (its stiffness-weighted pair error)."""
 
     def __init__(self, pair, geom, opts, env, slots, points_per_mesh, reps, e_slot, E, nominal_F):
         self.model = get_contact_model(opts.contact_model)
@@ -47,12 +52,12 @@ class _ContactIteration:
         ss = slot_stiffness(pair, geom, opts, slots, points_per_mesh)
         self.s = np.tile(ss.s_m, (1, reps))                                  # (P, N)
         self.NS = int(opts.slices)
-        self.k_hertz = _per_slice(ss, self.NS, reps)[1]                      # (P, NS, N)
+        self.k_hertz = per_slice_stiffness(ss, self.NS, reps)[1]             # (P, NS, N)
         self.helical = None
         if getattr(geom, "helix_angle_rad", 0.0) != 0.0:  # per-slice normal-section requests (docs/helical.md)
-            self.helical = _HelicalContactView(pair, geom, env, ss, reps)
+            self.helical = normal_section(pair, geom, env, ss, reps)
             self.env = self.helical.env
-            self.s_req = self.helical.s_req                                  # (P, NS, N)
+            self.s_req = self.helical.s_req_m                                # (P, NS, N)
         else:
             ct, fp, fg = tooth_compliances(pair, geom, ss.s_m, ss.slice_width_m)
             self.ct, self.fp, self.fg = (np.tile(a, (1, reps)) for a in (ct, fp, fg))
@@ -93,7 +98,7 @@ class _ContactIteration:
 
     def k_slice(self, torque_Nm: float, rb1: float):
         """(P, NS, N) slice stiffness of the torque row ``torque_Nm`` (N m): the load-sharing
-        iteration (:func:`gearfmu.tables.load_iteration.iterate_load_sharing`) from the Hertz
+        iteration (:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`) from the Hertz
         slice loads, the films of the row's slice loads from the contact model."""
         F = torque_Nm / rb1
         F_eval = F if F > 0 else self.nominal_F
@@ -115,9 +120,9 @@ class _ContactIteration:
 
         def mesh_stiffness(kc):
             return (sliced_mesh_stiffness(self.ct, self.fp, self.fg, kc, self.opts) if self.helical is None
-                    else self.helical.mesh_stiffness(kc, self.opts))
+                    else normal_section_mesh_stiffness(self.helical, kc, self.opts))
 
-        width = self.width if self.helical is None else self.width * self.helical.frac[idx]
+        width = self.width if self.helical is None else self.width * self.helical.contact_fraction[idx]
         ls = iterate_load_sharing(slice_loads_N(self.k_hertz, self.e, self.E, F), self.e, self.E, F, idx, width,
                                   floor, solve, mesh_stiffness, what=f"{self.model.name} at torque {torque_Nm:g} N m")
         by_status = {}
@@ -129,14 +134,15 @@ class _ContactIteration:
         return ls.k_slice_N_per_m
 
 
-class _HelicalContactView:
-    """Contact-model requests of a helical pair, slice by slice (docs/helical.md,
-    "Load-dependent contact models").
+@dataclass(frozen=True)
+class NormalSection:
+    """Contact-model requests of a helical pair, slice by slice, as arrays (docs/helical.md,
+    "Load-dependent contact models"); made by :func:`normal_section`.
 
     Each slice is a thin spur gear of the transverse section whose stiffness is taken on the
     normal section (:func:`gearfmu.gear.stiffness.helical_slot_stiffness`).  The contact model sees
     the slice as a line contact of length w / cos(beta_b) (the slice's piece of the inclined
-    contact line) at the slice's own transverse LOA position ``s_slice_m`` and load:
+    contact line) at the slice's own transverse LOA position and load:
 
     * radius of curvature in the normal section rho_n = rho_t / cos(beta_b) (ISO 6336-2
       Z_H / Z_beta derivation; Niemann/Winter, Maschinenelemente II, ch. 21): the model's
@@ -150,68 +156,82 @@ class _HelicalContactView:
     * load per unit length of contact line w_n = (F_t / cos beta_b)/(w / cos beta_b) = F_t / w,
       the transverse slice load per face width unchanged (ISO 6336-2: F_bn/l_b);
     * the model's normal stiffness k_n (N/m per contact-line length w/cos(beta_b)) goes in
-      series with the normal-section tooth compliances of the slice (virtual spur gear,
-      :func:`gearfmu.gear.stiffness.virtual_normal_section`, same strip length) and the result is
-      turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz slice of
-      :func:`gearfmu.gear.stiffness.helical_slot_stiffness` (with the 'hertz' model this reproduces
-      that function's slice stiffness to round-off).
-    """
+      series with the normal-section tooth compliances of the slice
+      (:func:`gearfmu.gear.stiffness.helical_slice_compliances`, same strip length) and the
+      result is turned to the transverse line of action by cos^2(beta_b), exactly as the Hertz
+      slice of :func:`gearfmu.gear.stiffness.helical_slot_stiffness` (with the 'hertz' model this
+      reproduces that function's slice stiffness to round-off; :func:`normal_section_mesh_stiffness`).
 
-    def __init__(self, pair, geom, env, ss, reps):
-        if ss.s_slice_m is None:
-            raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
-        c = math.cos(geom.base_helix_angle_rad)
-        self.cos_beta_b = c
-        self.t = c * c
-        self.omega1_rad_s = float(env.omega1_rad_s)
-        self.width_transverse_m = float(env.width_m)
-        s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
-        self.geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
-                              s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
-        self.env = replace(env, geom=self.geom_n, omega1_rad_s=env.omega1_rad_s * c * c,
-                           width_m=env.width_m / c, _flanks=None)
-        self.s_req = np.tile(s_t / c, (1, 1, reps))                                  # (P, NS, N)
-        vpair, vgeom = virtual_normal_section(pair, geom)
-        wn = ss.slice_width_m / c
-        on = np.isfinite(s_t)
-        ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
-        if np.any(on):
-            u1 = _normal_roll_m(geom, vgeom, 1, s_t[on])
-            u2 = _normal_roll_m(geom, vgeom, 2, s_t[on])
-            cp = tooth_compliance_m_per_N(vpair.pinion, vgeom, 1, u1, wn)
-            cg = tooth_compliance_m_per_N(vpair.gear, vgeom, 2, vgeom.loa_length_m - u2, wn)
-            ct[on] = cp["bending"] + cp["shear"] + cp["axial"] + cg["bending"] + cg["shear"] + cg["axial"]
-            fp[on], fg[on] = cp["foundation"], cg["foundation"]
-        # a partly engaged slice (stiffness.helical_slot_stiffness) is a strip of f w: compliances / f,
-        # the model's contact stiffness x f, its load per unit length = slice load / (f w)
-        fr = getattr(ss, "slice_contact_fraction", None)
-        fr = np.ones(s_t.shape) if fr is None else np.where(on, np.asarray(fr, dtype=float), 1.0)
-        ct, fp, fg = ct / fr, fp / fr, fg / fr
-        self.frac = np.tile(fr, (1, 1, reps))
-        self.ct, self.fp, self.fg = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg))   # normal section, m/N
+    ``env``: the contact models' environment on the normal section; ``s_req_m`` (P, NS, N): the
+    request positions on its line of action (m from N1, NaN out of contact); ``c_teeth_m_per_N``,
+    ``cf_pinion_m_per_N``, ``cf_gear_m_per_N`` (P, NS, N): the slices' normal-section compliances,
+    divided by ``contact_fraction`` (P, NS, N), the engaged part f of each slice (a partly engaged
+    slice is a strip of f w, :func:`gearfmu.gear.stiffness.helical_slot_stiffness`);
+    ``cos_beta_b``; ``omega1_rad_s`` and ``width_transverse_m``: the transverse pinion speed and
+    slice width."""
 
-    def mesh_stiffness(self, kc_normal_N_per_m, opts) -> np.ndarray:
-        """(P, NS, N) transverse slice stiffness from the models' normal contact stiffness:
-        k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation per
-        :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
-        combine_pairs is homogeneous, so scaling after it equals scaling before)."""
-        kc = np.asarray(kc_normal_N_per_m, dtype=float)
-        P, NS, N = kc.shape
-        flat = (P, NS * N)
-        k = sliced_mesh_stiffness(self.ct.reshape(flat), self.fp.reshape(flat), self.fg.reshape(flat),
-                                  (kc * self.frac).reshape(P, 1, NS * N), opts)
-        return self.t * k.reshape(P, NS, N)
+    env: ContactEnvironment
+    s_req_m: np.ndarray
+    c_teeth_m_per_N: np.ndarray
+    cf_pinion_m_per_N: np.ndarray
+    cf_gear_m_per_N: np.ndarray
+    contact_fraction: np.ndarray
+    cos_beta_b: float
+    omega1_rad_s: float
+    width_transverse_m: float
 
-    def provenance(self) -> dict:
-        """The request mapping, for the tables' provenance ('contact')."""
-        return {"speed_rad_s": self.omega1_rad_s,
-                "helical_normal_section": {
-                    "base_helix_angle_rad": math.acos(self.cos_beta_b),
-                    "radius_of_curvature": "rho_t / cos(beta_b)",
-                    "entrainment_speed": "u_t cos(beta_b)",
-                    "load_per_contact_line_length": "F_t / w (slice face width w)",
-                    "contact_line_length_per_slice_m": self.width_transverse_m / self.cos_beta_b,
-                    "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
+
+def normal_section(pair, geom, env: ContactEnvironment, ss, reps: int) -> NormalSection:
+    """The :class:`NormalSection` of a helical pair: ``geom`` its geometry, ``env`` the contact
+    environment of the transverse section, ``ss`` its slot stiffness
+    (:func:`gearfmu.gear.stiffness.helical_slot_stiffness`: the slice positions and engaged parts),
+    tiled ``reps`` times over the table period."""
+    if ss.s_slice_m is None:
+        raise PrecomputeInputError("contact_model: helical slot stiffness without slice positions")
+    c = math.cos(geom.base_helix_angle_rad)
+    s_t = np.asarray(ss.s_slice_m, dtype=float)                                  # (P, NS, n)
+    geom_n = replace(geom, loa_length_m=geom.loa_length_m / c, s_start_m=geom.s_start_m / c,
+                     s_pitch_m=geom.s_pitch_m / c, s_end_m=geom.s_end_m / c)
+    env_n = replace(env, geom=geom_n, omega1_rad_s=env.omega1_rad_s * c * c, width_m=env.width_m / c, _flanks=None)
+    on = np.isfinite(s_t)
+    ct, fp, fg = (np.full(s_t.shape, np.nan) for _ in range(3))
+    if np.any(on):
+        ct[on], fp[on], fg[on] = helical_slice_compliances(pair, geom, s_t[on], ss.slice_width_m)
+    fr = getattr(ss, "slice_contact_fraction", None)
+    fr = np.ones(s_t.shape) if fr is None else np.where(on, np.asarray(fr, dtype=float), 1.0)
+    ct, fp, fg = ct / fr, fp / fr, fg / fr
+    ct, fp, fg, frac = (np.tile(a, (1, 1, reps)) for a in (ct, fp, fg, fr))      # normal section, m/N
+    return NormalSection(env=env_n, s_req_m=np.tile(s_t / c, (1, 1, reps)), c_teeth_m_per_N=ct,
+                         cf_pinion_m_per_N=fp, cf_gear_m_per_N=fg, contact_fraction=frac, cos_beta_b=c,
+                         omega1_rad_s=float(env.omega1_rad_s), width_transverse_m=float(env.width_m))
+
+
+def normal_section_mesh_stiffness(section: NormalSection, kc_normal_N_per_m, opts) -> np.ndarray:
+    """(P, NS, N) transverse slice stiffness (N/m) from the models' normal contact stiffness
+    ``kc_normal_N_per_m`` (P, NS, N): k_t = cos^2(beta_b) / (1/k_n + c_teeth,n), then the foundation
+    per :func:`gearfmu.gear.stiffness.combine_pairs` slice by slice (normal-section compliances;
+    combine_pairs is homogeneous, so scaling after it equals scaling before)."""
+    kc = np.asarray(kc_normal_N_per_m, dtype=float)
+    P, NS, N = kc.shape
+    flat = (P, NS * N)
+    k = sliced_mesh_stiffness(section.c_teeth_m_per_N.reshape(flat), section.cf_pinion_m_per_N.reshape(flat),
+                              section.cf_gear_m_per_N.reshape(flat),
+                              (kc * section.contact_fraction).reshape(P, 1, NS * N), opts)
+    c = section.cos_beta_b
+    return (c * c) * k.reshape(P, NS, N)
+
+
+def normal_section_provenance(section: NormalSection) -> dict:
+    """The request mapping of a :class:`NormalSection`, for the tables' provenance ('contact')."""
+    c = section.cos_beta_b
+    return {"speed_rad_s": section.omega1_rad_s,
+            "helical_normal_section": {
+                "base_helix_angle_rad": math.acos(c),
+                "radius_of_curvature": "rho_t / cos(beta_b)",
+                "entrainment_speed": "u_t cos(beta_b)",
+                "load_per_contact_line_length": "F_t / w (slice face width w)",
+                "contact_line_length_per_slice_m": section.width_transverse_m / c,
+                "stiffness_to_transverse": "k_t = k_n cos^2(beta_b)"}}
 
 
 def contact_provenance(ci, axis_note) -> dict:
@@ -235,8 +255,9 @@ def contact_provenance(ci, axis_note) -> dict:
                             "f_max_per_m": r.f_max_per_m, "on_failure": r.on_failure,
                             "full_film_parameter": r.full_film_parameter, "position_nodes": r.position_nodes,
                             "composite_sigma_m": composite_sigma_m(r)}
-        if getattr(env, "_grid", None) is not None:
-            out["film_grid"] = env._grid.summary()
+        grid = env.film_grid_summary()
+        if grid is not None:
+            out["film_grid"] = grid
         out["film_failures"] = len(fails)
         out["film_failures_by_status"] = {st: sum(1 for f in fails if f["status"] == st)
                                           for st in sorted({f["status"] for f in fails})}

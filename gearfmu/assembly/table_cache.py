@@ -1,6 +1,6 @@
 """The table cache: a scene's tooth-pair tables computed once, read back by every later command.
 
-:func:`cached_tables` wraps :func:`gearfmu.tables.precompute.precompute_tables` (the scene-level
+:func:`cached_tables` wraps :func:`gearfmu.assembly.precompute.precompute_tables` (the scene-level
 call of :func:`gearfmu.stages.compute_tables`, so ``gearfmu tables``, ``build``, ``simulate``,
 ``validate``, ``ssp`` and the FMUs of ``plan --fmu``).  The tables are kept in gearfmu's file
 cache (:mod:`gearfmu.common.cache`, folder :data:`TABLE_CACHE`) under a key made of exactly
@@ -35,13 +35,11 @@ import contextlib
 import contextvars
 import dataclasses
 import importlib.metadata
-import io
 import math
 import os
 import sys
 import time
 import warnings
-import zipfile
 from pathlib import Path
 from typing import Callable, Optional
 
@@ -51,7 +49,7 @@ from .. import __version__
 from ..common.cache import (CacheWarning, cache_dir, entry_digest, entry_path, load_entry, sources_sha256,
                             store_entry)
 from ..common.progress import notice
-from .mesh_tables import MeshTables, TableError
+from ..tables.mesh_tables import MeshTables, TableError
 
 __all__ = ["TABLE_CACHE", "NO_CACHE_ENV", "MAX_MB_ENV", "DEFAULT_MAX_MB", "PHYSICS_PARTS", "bypassed",
            "cache_enabled", "canonical", "table_key", "cached_tables"]
@@ -65,7 +63,7 @@ MAX_MB_ENV = "GEARFMU_TABLE_CACHE_MAX_MB"
 #: default largest size of the table cache folder, MB (the entries used longest ago go first)
 DEFAULT_MAX_MB = 2000.0
 #: gearfmu's sub-packages whose sources compute the tables (their checksum is part of the key)
-PHYSICS_PARTS = ("common", "contact", "ehl", "gear", "tables")
+PHYSICS_PARTS = ("assembly", "common", "contact", "ehl", "gear", "tables")
 #: packages whose versions are part of the key (the numbers depend on them)
 KEY_PACKAGES = ("numpy", "scipy", "numba")
 #: dataclass fields that never change a table (how the work is run, not what is computed)
@@ -140,23 +138,6 @@ def table_key(args: dict) -> Optional[dict]:
             "gearfmu_physics_sha256": sources_sha256(PHYSICS_PARTS)}
 
 
-def _gtab_bytes(tables: MeshTables) -> bytes:
-    meta, binary = tables.to_bytes()
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_STORED) as zf:
-        zf.writestr("tables.json", meta)
-        zf.writestr("tables.bin", binary)
-    return buf.getvalue()
-
-
-def _from_gtab(payload: bytes, source: str) -> MeshTables:
-    try:
-        with zipfile.ZipFile(io.BytesIO(payload)) as zf:
-            return MeshTables.from_bytes(zf.read("tables.json"), zf.read("tables.bin"), source)
-    except (zipfile.BadZipFile, KeyError) as exc:
-        raise TableError(f"{source}: not a gearfmu table file ({exc})") from None
-
-
 def _max_bytes() -> float:
     try:
         return float(os.environ.get(MAX_MB_ENV, DEFAULT_MAX_MB)) * 1e6
@@ -187,7 +168,7 @@ def _trim(folder: Path, keep: str) -> None:
 def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: dict, *, progress: bool = False,
                   use_cache: Optional[bool] = None) -> MeshTables:
     """``compute(**args, provenance=provenance, progress=progress)`` (e.g.
-    :func:`gearfmu.tables.precompute.precompute_tables`), or the same tables read from the cache
+    :func:`gearfmu.assembly.precompute.precompute_tables`), or the same tables read from the cache
     (module doc).  ``use_cache``: None follows :func:`cache_enabled`; False computes without the
     cache; True uses it even where the environment turns it off.  ``progress``: one line on
     stderr when the tables come from the cache."""
@@ -202,7 +183,7 @@ def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: di
     if hit is not None:
         meta, payload = hit
         try:
-            tables = _from_gtab(payload, str(folder / f"{digest}{_PAYLOAD}"))
+            tables = MeshTables.from_gtab(payload, str(folder / f"{digest}{_PAYLOAD}"))
         except TableError as exc:
             warnings.warn(f"gearfmu cache: ignoring the unusable entry {entry_path(folder, key)} ({exc}); "
                           "computing again", CacheWarning, stacklevel=2)
@@ -223,7 +204,7 @@ def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: di
     tables = compute(**args, provenance=provenance, progress=progress)
     wall = time.perf_counter() - t0
     try:
-        payload = _gtab_bytes(tables)
+        payload = tables.to_gtab()
     except (TypeError, ValueError):  # provenance that JSON cannot hold: keep the tables, skip the cache
         return tables
     created = tables.provenance.get("created_utc") if isinstance(tables.provenance, dict) else None

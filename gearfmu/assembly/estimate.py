@@ -1,11 +1,15 @@
-"""Cost estimate of a scene's tables and FMU before anything is computed, and the size guard.
+"""Cost model of a table build and its FMU, before anything is computed, and the size limits.
 
-:func:`estimate_build` reads only the scene and the pair geometry (no physics), so a scene
-that would take hours or gigabytes is refused before the first table row
-(:func:`check_build_cost`; override with ``allow_large=True`` in the Python API or
-``--allow-large`` on the command line).  docs/tables.md "Cost estimate" describes the model.
+:func:`estimate_cost` takes the arguments of the table builder
+(:func:`gearfmu.assembly.precompute.precompute_tables`: gear pair, mesh options, points per mesh,
+torque axis, nominal torque, slots, contact environment, thermal options) and the FMU's runtime and
+experiment, and computes nothing but the pair geometry, so that a build that would take hours or
+gigabytes is refused before the first table row (:func:`limits_exceeded`; the scene-level guard
+with the scene keys to change is :func:`gearfmu.scene.physics.check_build_cost`, overridden with
+``allow_large=True`` in the Python API or ``--allow-large`` on the command line).
+docs/tables.md "Cost estimate" describes the model.
 
-The model counts the work the table builder (:mod:`gearfmu.tables.precompute`) will do
+The model counts the work the table builder (:mod:`gearfmu.assembly.precompute`) will do
 (:func:`work_counts`) and prices each kind with a constant measured once on a reference machine
 (benchmarks/bench_estimate.py prints estimate against measurement for every example scene;
 the constants are model constants, fixed here, not measurements that follow the machine):
@@ -39,14 +43,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .precompute import LOAD_DEPENDENT_TORQUE_FACTORS
+from .precompute import DEFAULT_TORQUE_FACTORS, LOAD_DEPENDENT_TORQUE_FACTORS
 from ..contact.base import DEFAULT_FILM_POSITION_NODES
 from ..gear.geometry import pair_geometry
 from ..gear.meshing_errors import pair_lead_crowning_m, pair_table_mesh_count
 from ..gear.stiffness import required_slots
 from ..common.vocabulary import LUBRICATED_CONTACT_MODELS
 
-__all__ = ["BuildEstimate", "BuildTooLargeError", "estimate_build", "check_build_cost", "work_counts",
+__all__ = ["BuildEstimate", "BuildTooLargeError", "estimate_cost", "limits_exceeded", "work_counts",
            "FMU_LIMIT_BYTES", "BUILD_TIME_LIMIT_S"]
 
 #: refuse (without ``allow_large``) an FMU or a table file estimated above this size, bytes
@@ -127,26 +131,31 @@ def _workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def work_counts(scene) -> dict:
-    """The work of the scene's table build, counted from its keys and the pair geometry (the
-    module docstring): table shape, cells of each kind, contact requests, grid films, worker
-    processes."""
-    pair, mesh = scene.pair, scene.mesh
+def work_counts(pair, opts, *, points_per_mesh: int, torque_axis_Nm, nominal_torque_Nm: float,
+                slots=None, contact_env=None, thermal=None) -> dict:
+    """The work of a table build, counted from the table builder's arguments (those of
+    :func:`gearfmu.assembly.precompute.precompute_tables`) and the pair geometry (the module
+    docstring): table shape, cells of each kind, contact requests, grid films, worker processes.
+    ``torque_axis_Nm`` None: the builder's default axis (the nominal torque, with lead crowning
+    :data:`gearfmu.assembly.precompute.DEFAULT_TORQUE_FACTORS` x nominal)."""
     geom = pair_geometry(pair)
     helical = geom.helix_angle_rad != 0.0
-    slots = int(scene.tables.slots or required_slots(geom))
-    ppm = int(scene.tables.points_per_mesh)
+    slots = int(slots or required_slots(geom))
+    ppm = int(points_per_mesh)
     n_phi = pair_table_mesh_count(pair, slots) * ppm
-    ns = int(mesh.slices)
-    model = mesh.contact_model
+    ns = int(opts.slices)
+    model = opts.contact_model
     load_dependent = model in LUBRICATED_CONTACT_MODELS
-    nominal = float(scene.operating.torque_Nm)
-    torques = [float(t) for t in scene.operating.torque_axis_Nm()]
+    nominal = float(nominal_torque_Nm)
+    if torque_axis_Nm is None:
+        E = pair_lead_crowning_m(pair, ns)
+        torque_axis_Nm = [nominal * f for f in DEFAULT_TORQUE_FACTORS] if np.any(E != E[0]) else [nominal]
+    torques = [float(t) for t in torque_axis_Nm]
     if len(torques) < 2 and load_dependent:
         torques = [nominal * f for f in LOAD_DEPENDENT_TORQUE_FACTORS]
     nt = len(torques)
     rows = nt + (0 if any(t == nominal for t in torques) else 1)
-    th = getattr(scene, "thermal", None)
+    th = thermal
     axis = tuple(getattr(th, "temperature_axis_C", ()) or ())
     nk = max(1, len(axis))
     oil_axis = nk > 1 and getattr(th, "axis_quantity", "bulk") in ("oil", "bulk_and_oil")
@@ -167,7 +176,7 @@ def work_counts(scene) -> dict:
     if load_dependent:
         positions = float(geom.contact_ratio) * n_phi * columns
         if model == "rough_ehl":
-            rough = getattr(scene, "roughness", None)
+            rough = None if contact_env is None else contact_env.roughness
             k = int(getattr(rough, "position_nodes", DEFAULT_FILM_POSITION_NODES))
             if k > 0:
                 counts["grid_films"] = calls * k * GRID_LOAD_COLUMNS * (1 + ns)
@@ -181,7 +190,7 @@ def work_counts(scene) -> dict:
 
 
 def _non_standard(th) -> bool:
-    """A ``[thermal]`` state other than the standard one (without an axis)."""
+    """Thermal options with a state other than the standard one (without an axis)."""
     if th is None:
         return False
     t0 = th.standard_temperature_C
@@ -189,10 +198,15 @@ def _non_standard(th) -> bool:
     return any(t != t0 for t in temps) or bool(th.pinion_profile_C) or bool(th.gear_profile_C)
 
 
-def estimate_build(scene) -> BuildEstimate:
-    """Estimate table size (bytes), FMU size (bytes) and table build time (CPU s) of ``scene``
-    without computing anything but the pair geometry (:func:`work_counts`)."""
-    c = work_counts(scene)
+def estimate_cost(pair, opts, *, points_per_mesh: int, torque_axis_Nm, nominal_torque_Nm: float, slots=None,
+                  contact_env=None, thermal=None, runtime: str, stop_time_s: float,
+                  output_interval_s: float) -> BuildEstimate:
+    """Estimate table size (bytes), FMU size (bytes) and table build time (CPU s) of the tables of
+    ``precompute_tables(pair, opts, ...)`` (the arguments of :func:`work_counts`) in an FMU of
+    ``runtime`` ("standalone" or "pythonfmu") whose validation record covers ``stop_time_s`` (s) at
+    ``output_interval_s`` (s), without computing anything but the pair geometry."""
+    c = work_counts(pair, opts, points_per_mesh=points_per_mesh, torque_axis_Nm=torque_axis_Nm,
+                    nominal_torque_Nm=nominal_torque_Nm, slots=slots, contact_env=contact_env, thermal=thermal)
     slots, n_phi, nt, nk = c["slots"], c["n_phi"], c["torques"], c["temperatures"]
     cells = nt * nk * slots * n_phi
     table_bytes = 8.0 * (2 * cells + slots * n_phi + 2 * nt * nk * n_phi) + TABLE_HEADER_BYTES
@@ -201,9 +215,8 @@ def estimate_build(scene) -> BuildEstimate:
          + SECONDS_PER_THERMAL_CELL * c["thermal_cells"]
          + SECONDS_PER_SOLVE.get(c["contact_model"], 0.0) * c["contact_requests"]
          + SECONDS_PER_GRID_FILM * c["grid_films"] + SECONDS_PER_WORKER * c["workers"])
-    fmu = scene.fmu
-    runtime = fmu.runtime if fmu.runtime in FMU_OVERHEAD_BYTES else "standalone"
-    samples = int(round(float(fmu.stop_time_s) / float(fmu.output_interval_s))) + 1
+    runtime = runtime if runtime in FMU_OVERHEAD_BYTES else "standalone"
+    samples = int(round(float(stop_time_s) / float(output_interval_s))) + 1
     reference = REFERENCE_BYTES_PER_VALUE * samples * (9 + 2 * slots)
     in_fmu = table_bytes * (TABLE_DEFLATE_RATIO if runtime == "standalone" else 1.0)
     return BuildEstimate(n_phi=n_phi, slots=slots, torque_rows=nt, temperatures=nk, slices=c["slices"],
@@ -211,27 +224,12 @@ def estimate_build(scene) -> BuildEstimate:
                          fmu_bytes=in_fmu + reference + FMU_OVERHEAD_BYTES[runtime], build_s=t)
 
 
-def check_build_cost(scene, *, allow_large: bool = False) -> BuildEstimate:
-    """:func:`estimate_build`, raising :class:`BuildTooLargeError` (a one-line message with
-    the estimate and the scene keys to change) when the FMU would exceed
-    :data:`FMU_LIMIT_BYTES` or the build :data:`BUILD_TIME_LIMIT_S`, unless ``allow_large``."""
-    est = estimate_build(scene)
-    if allow_large:
-        return est
+def limits_exceeded(est: BuildEstimate) -> list:
+    """What of ``est`` exceeds :data:`FMU_LIMIT_BYTES` or :data:`BUILD_TIME_LIMIT_S`, one phrase
+    each (empty: within the limits)."""
     over = []
     if est.fmu_bytes > FMU_LIMIT_BYTES:
         over.append(f"FMU {_fmt_bytes(est.fmu_bytes)} > {_fmt_bytes(FMU_LIMIT_BYTES)}")
     if est.build_s > BUILD_TIME_LIMIT_S:
         over.append(f"table build {_fmt_time(est.build_s)} > {_fmt_time(BUILD_TIME_LIMIT_S)}")
-    if not over:
-        return est
-    keys = [f"tables.points_per_mesh ({scene.tables.points_per_mesh})"]
-    if est.torque_rows > 1:
-        keys.append(f"tables.torque_points ({scene.tables.torque_points})")
-    if est.temperatures > 1:
-        keys.append(f"thermal.temperature_axis_C ({est.temperatures} values)")
-    if est.build_s > BUILD_TIME_LIMIT_S:
-        keys.append(f"mesh.slices ({est.slices})")
-    raise BuildTooLargeError(
-        f"{', '.join(keys)}: the scene is too large to build ({'; '.join(over)}; {est.summary()}); "
-        "lower these keys, or pass --allow-large (allow_large=True in the Python API) to build anyway")
+    return over

@@ -20,10 +20,11 @@ from ..gear.gearpair import GearPairSpec, GearSpec, MeshModelOptions
 from ..gear.loaded_mesh import loaded_static_mesh
 from ..gear.meshing_errors import (comprehensive_error_m, pair_lead_crowning_m, pair_table_mesh_count,
                              slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m)
-from .contact_rows import PrecomputeInputError, _ContactIteration, _per_slice, contact_provenance
-from .contact_rows import _HelicalContactView  # noqa: F401 -- part of this module's namespace for its users
-from .mesh_tables import MeshTables, TEMPERATURE_INPUTS, stack_temperatures
-from .zones import mean_total_stiffness_N_per_m
+from .contact_rows import (ContactIteration, PrecomputeInputError, contact_provenance, normal_section_provenance,
+                           per_slice_stiffness)
+from ..common.vocabulary import TEMPERATURE_INPUTS
+from ..tables.mesh_tables import MeshTables, stack_temperatures
+from ..tables.zones import mean_total_stiffness_N_per_m
 from ..common.progress import progress_bar
 from ..contact.models import get_contact_model
 from ..ehl.lubricant import roelands_alpha_at_viscosity_Pa_inv
@@ -121,7 +122,7 @@ def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_pe
             k_tile = k_slice.sum(axis=1)
         else:
             ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
-            k_tile, k_slice = _per_slice(ss, NS, reps)
+            k_tile, k_slice = per_slice_stiffness(ss, NS, reps)
         lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
         if crowned:
             k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
@@ -157,7 +158,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     Load-dependent contact models (``opts.contact_model`` 'smooth_ehl',
     'rough_ehl', :mod:`gearfmu.contact.models`) need ``contact_env`` (a
     :class:`gearfmu.contact.models.ContactEnvironment`, e.g. from
-    :func:`gearfmu.contact.models.environment_from_scene`); every torque row
+    :func:`gearfmu.scene.physics.environment_from_scene`); every torque row
     then holds the slice stiffness with the contact stiffness at that row's
     slice loads, iterated with the loaded mesh (``LOAD_ITERATION_TOL``), and a
     torque axis of fewer than two values becomes ``LOAD_DEPENDENT_TORQUE_FACTORS``
@@ -216,7 +217,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
 
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
     if opts.contact_model != "hertz":
-        contact_it = _ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
+        contact_it = ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
                                        nominal_torque_Nm / rb1)
         contact_it.set_load_range(rows, rb1)
     ss_cache = None
@@ -228,7 +229,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
                                                                      float(nominal_torque_Nm))
         e_slot = stiffness_weighted_pair_error_m(
-            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), _per_slice(ss_w, NS, reps)[1])
+            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), per_slice_stiffness(ss_w, NS, reps)[1])
         if contact_it is not None:  # the load iteration uses the pair error of the helical pair
             contact_it.e = e_slot
     _step(bar, f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
@@ -260,7 +261,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     if contact_it is not None:
         prov["contact"] = contact_provenance(contact_it, axis_note)
         if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
-            prov["contact"].update(contact_it.helical.provenance())
+            prov["contact"].update(normal_section_provenance(contact_it.helical))
     tables = MeshTables(
         torque_Nm=np.ascontiguousarray(torques, dtype=float),
         k_N_per_m=k_arr,
@@ -296,7 +297,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
 
 def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
                    points_per_mesh, reps, progress, contact_env, nominal_torque_Nm) -> MeshTables:
-    """The ``[thermal]`` options (:class:`gearfmu.scene.reader.ThermalOptions`) applied to
+    """The ``[thermal]`` options (:class:`gearfmu.gear.thermal.ThermalOptions`) applied to
     single-temperature tables: a temperature axis whose meaning is
     ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
     "bulk_and_oil": :func:`_add_oil_temperature_axis`), else the gears' thermal
@@ -349,7 +350,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
         ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
-        k_tile, k_slice = _per_slice(ss, int(opts.slices), reps)
+        k_tile, k_slice = per_slice_stiffness(ss, int(opts.slices), reps)
         th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), states=states,
                                     standard_temperature_C=t0, slots=slots, n_per_mesh=points_per_mesh,
                                     law=law, geom=geom)
@@ -437,7 +438,7 @@ def oil_axis_eta0_Pas(lubricant, temperatures_C) -> np.ndarray:
     """eta0 (Pa s) at each oil temperature (degC) of an oil temperature axis: the
     lubricant's Walther / ASTM D341 law times its (constant) density,
     :func:`gearfmu.gear.thermal.oil_dynamic_viscosity_Pas`.  ``lubricant``: a
-    :class:`gearfmu.scene.reader.Lubricant` with both kinematic viscosities."""
+    :class:`gearfmu.ehl.lubricant.Lubricant` with both kinematic viscosities."""
     if lubricant is None:
         raise PrecomputeInputError("lubricant: an oil temperature axis needs the lubricant's viscosity-temperature "
                                    "law (thermal.lubricant, set by the scene reader from [lubricant])")

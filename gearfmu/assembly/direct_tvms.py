@@ -14,7 +14,7 @@ combined with the tooth and foundation compliances exactly as the tables combine
 (:func:`gearfmu.contact.models.tooth_compliances`, :func:`gearfmu.contact.models.sliced_mesh_stiffness`,
 :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`).  The load of each slice is iterated with the
 load-dependent contact stiffness by the table builder's iteration
-(:func:`gearfmu.tables.load_iteration.iterate_load_sharing`: start from the Hertz slice loads,
+(:func:`gearfmu.assembly.load_iteration.iterate_load_sharing`: start from the Hertz slice loads,
 load floor 0.5 F/b, a request is re-solved when its load moved by more than 1e-4 of itself,
 stop when no slice load changes by more than ``LOAD_ITERATION_TOL`` = 1e-3 of F/NS, at most
 ``LOAD_ITERATION_MAX`` passes).
@@ -77,8 +77,8 @@ import numpy as np
 
 from ..ehl.errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .load_iteration import UNLOADED_SLICE_LOAD_SHARE, iterate_load_sharing, slice_loads_N
-from ..contact.models import (film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m,
-                              _rough_profile)
+from ..contact.models import film_parameter, sliced_mesh_stiffness, tooth_compliances, composite_sigma_m
+from ..contact.rough_ehl import rough_profile
 from ..ehl.mesh_film import solve_node_films, solve_slice_film, contact_kinematics, map_chunks
 from ..ehl import transient as ehl_transient
 from ..ehl.transient import flank_slice_case
@@ -391,7 +391,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
                 kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
                 items.append(("transient", kw, float(st.T_average), st.reduction))
             elif model == "rough_steady":
-                prof = _rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
+                prof = rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
                 items.append(("steady", fenv, R, u, w_k, prof))
             else:
                 items.append(("steady", fenv, R, u, w_k, None))

@@ -2,8 +2,8 @@
 tooth pairs and face-width slices in contact when each slice's contact stiffness depends on
 that slice's own load (docs/ehl_mesh.md "Load sharing").
 
-One iteration, used by the table builder (:mod:`gearfmu.tables.precompute`) and the direct
-TVMS (:mod:`gearfmu.tables.direct_tvms`): from given slice loads, every slice in contact gets
+One iteration, used by the table builder (:mod:`gearfmu.assembly.precompute`) and the direct
+TVMS (:mod:`gearfmu.assembly.direct_tvms`): from given slice loads, every slice in contact gets
 its contact stiffness at its line load (at least a load floor), the slices are combined into
 the slice mesh stiffness, and the loaded static mesh (seed 000 eq 16,
 :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`) gives the next slice loads.  A request is

@@ -1,0 +1,20 @@
+"""Table assembly: the physics of a gear pair turned into tooth-pair tables (SI units).
+
+Takes specs and settings (gear-pair spec, mesh options, contact environment, thermal options;
+never a Scene: the scene layer, :mod:`gearfmu.scene.physics`, reads them off a scene), calls
+the physics (:mod:`gearfmu.gear`, :mod:`gearfmu.contact`, :mod:`gearfmu.ehl`) with arrays and
+writes the result in the table format of :mod:`gearfmu.tables`.  Imports those packages and
+:mod:`gearfmu.common`; nothing above them.
+
+==============  ============================================================
+Module          Contents
+==============  ============================================================
+precompute      precompute_tables: gear pair -> tables (torque and temperature rows)
+contact_rows    torque rows with a load-dependent contact model (EHL films, helical
+                normal section)
+load_iteration  the load-sharing iteration with a load-dependent contact stiffness
+direct_tvms     mesh stiffness evaluated directly at given positions (films)
+estimate        cost model of a table build and its FMU; the size limits
+table_cache     the table cache, keyed on precompute_tables' arguments
+==============  ============================================================
+"""
