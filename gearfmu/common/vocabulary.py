@@ -24,7 +24,7 @@ __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
            "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
            "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS", "FMI3_OUTPUTS",
-           "DEFAULT_FMI3_OUTPUTS"]
+           "DEFAULT_FMI3_OUTPUTS", "PLANETARY_PORTS", "PLANETARY_MODELS", "DEFAULT_PLANETARY_MODEL"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -73,6 +73,14 @@ DEFAULT_INTEGRATOR = "rk4_node"
 #: the integrators of the gearbox solver (gearfmu.gearbox.native, docs/gearbox.md "Integrators"), a
 #: subset of INTEGRATORS with the same codes; the default is DEFAULT_INTEGRATOR
 GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
+#: the ports of a planetary stage (parts ``<stage>.sun``, ``<stage>.carrier``, ``<stage>.ring``;
+#: docs/planetary.md): one of them is held, the other two join the drivetrain
+PLANETARY_PORTS = ("sun", "carrier", "ring")
+#: dynamic models of a planetary stage (docs/planetary.md "Model"): Lin & Parker's
+#: translational-rotational model or the purely torsional one
+PLANETARY_MODELS = ("translational", "torsional")
+#: the planetary model of a scene or stage that names none
+DEFAULT_PLANETARY_MODEL = "translational"
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: how an FMI 3 FMU carries the per-slot outputs (docs/standalone.md "FMI 3.0"): "array" (pair_force,
