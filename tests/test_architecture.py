@@ -3,7 +3,8 @@
 The contracts live in pyproject.toml ``[tool.importlinter]``: the layers (each stage imports
 only the stages below it, every top-level module or package placed), no import cycles
 between sibling modules or packages, the table format, the assembly and the physics never
-importing the scene, the table format never importing the physics, and the FMU runtime
+importing the scene, the table format never importing the physics, the solvers (dynamics,
+gearbox, planetary) reading tables only (no scene, assembly or physics), and the FMU runtime
 template importing nothing from gearfmu.  import-linter builds the import graph with grimp,
 which also sees imports inside functions.  The checks are shown to fail on a copy of the
 package with an upward import, a cycle or a forbidden import written into it.
@@ -110,6 +111,21 @@ def test_contracts_fail_when_a_lower_layer_imports_the_scene_or_the_format_the_p
     assert "The table format, the assembly and the physics never import the scene KEPT" in report, report
     for pkg in ("contact", "gear", "ehl"):
         assert f"gearfmu.tables._offender_{pkg} -> gearfmu.{pkg}" in report, report
+
+
+def test_contracts_fail_when_a_solver_imports_the_scene_the_assembly_or_the_physics(tmp_path):
+    root = _copy(tmp_path)
+    offenders = {"dynamics": "gearfmu.gear.phasing", "gearbox": "gearfmu.assembly.precompute",
+                 "planetary": "gearfmu.gear.planetary_set"}
+    for pkg, target in offenders.items():
+        (root / "gearfmu" / pkg / "_offender.py").write_text(f"import {target}  # offender\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The solvers read tables: they never import the scene, the assembly or the" in report, report
+    assert "physics BROKEN" in report, report
+    assert "Layers: every stage imports only the stages below it KEPT" in report, report
+    for pkg, target in offenders.items():
+        assert f"gearfmu.{pkg}._offender -> {target}" in report, report
 
 
 @pytest.mark.slow

@@ -6,8 +6,9 @@ import each other.
 
 A drivetrain is a set of named *parts* (``motor``, ``load``, ``<stage>.pinion``,
 ``<stage>.gear``) and *links* between two parts: ``rigid`` (the two parts become one body),
-``shaft`` (an elastic shaft) and ``mesh`` (a gear mesh, first part the pinion, the driving
-member).  The rules (docs/gearbox.md "Topology"):
+``shaft`` (an elastic shaft), ``mesh`` (a gear mesh, first part the pinion, the driving
+member) and ``planetary`` (a planetary stage between its two free ports, either of them
+upstream; docs/planetary.md).  The rules (docs/gearbox.md "Topology"):
 
 * the parts joined by rigid links form the *bodies*;
 * the bodies and the elastic links (shafts and meshes) form a tree: every body is reached from
@@ -28,7 +29,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 __all__ = ["LINK_KINDS", "Tree", "drivetrain_tree"]
 
 #: the kinds of link between two parts
-LINK_KINDS = ("rigid", "shaft", "mesh")
+LINK_KINDS = ("rigid", "shaft", "mesh", "planetary")
 
 
 @dataclass(frozen=True)
