@@ -230,3 +230,18 @@ def test_parker_phasing_rule_in_the_output_spectra(N, teeth):
     # a single mesh sees every harmonic
     h = harmonics("lp.sun_planet[1].dte")
     assert min(h[:4]) > 1e-3 * max(h)
+
+
+@pytest.mark.parametrize("model", ["translational", "torsional"])
+def test_the_static_state_with_backlash_presses_the_drive_flanks(model):
+    """Backlash (40 um on each flank) much larger than the mesh deflection, a floating sun: the initial
+    state still puts every mesh on its drive flank with the static load, T_s/(N r_s) on each sun mesh
+    (statics)."""
+    st = lp_stage(3, contact_ratio_sun=1.6, contact_ratio_ring=1.7, backlash_half_m=40e-6, model=model,
+                  bearing_N_per_m=dict(sun=0.0, ring=1e8, carrier=1e8, planet=1e8))
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier")
+    T = 100.0
+    r = simulate(m, **STATIC, motor_torque_Nm=T)
+    for n in (1, 2, 3):
+        assert r[f"lp.sun_planet[{n}].mesh_force"][0] == pytest.approx(T / 3 / st.base_radius_sun_m, rel=1e-9)
+        assert r[f"lp.sun_planet[{n}].dte"][0] > 40e-6 and r[f"lp.ring_planet[{n}].dte"][0] > 40e-6

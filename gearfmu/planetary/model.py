@@ -58,10 +58,10 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..common.checks import finite_number
-from ..common.topology import drivetrain_tree
+from ..common.topology import drivetrain_tree, planetary_sun_torque, willis_ratio
 from ..common.vocabulary import DAMPING_MODELS, PLANETARY_MODELS, PLANETARY_PORTS, current_spelling
 from ..dynamics.reference import _Rows
-from ..gearbox.model import GearboxModelError, Mesh, Shaft, mesh_damping
+from ..gearbox.model import GearboxModelError, Mesh, Shaft, _check_mesh, mesh_damping
 from ..tables.mesh_tables import MeshTables
 from ..tables.planetary import PlanetaryStage, shift_meshing_error
 from ..tables.zones import mean_total_stiffness_N_per_m
@@ -271,8 +271,10 @@ class PlanetaryModel:
         ``speed_rad_s``, q' = 0 and q solving sum of the static forces = 0 (the motor torque and the
         balancing load torque, springs, the meshes' static force laws at their table angles, the
         frames' centripetal terms at the start speed), by Newton's method on the piecewise-linear mesh
-        laws (an active-set iteration that ends on the exact piece).  Raises PlanetaryModelError naming
-        a mesh with no pair in contact."""
+        laws from the state with every pair in its contact zone on its drive flank (an active-set
+        iteration, to a residual of 1e-13 of the forces).  Raises
+        PlanetaryModelError naming a mesh with no pair in its contact zone, or when no equilibrium is
+        found."""
         n = self.n_dof
         T_in = float(reference_torque_Nm)
         f_ext = np.zeros(n)
@@ -280,7 +282,6 @@ class PlanetaryModel:
         f_ext[self.load_dof] -= T_in / self.load_ratio
         tq = self.mesh_torques_Nm(reference_torque_Nm)
         rows = [_Rows(t, float(tq[m])) for m, t in enumerate(self.mesh_tables)]
-        M, K_lin, _ = self.linearisation(reference_torque_Nm)
         Kspr = np.zeros((n, n))
         for s in range(len(self.spring_names)):
             r = self.spring_vector(s)
@@ -294,7 +295,6 @@ class PlanetaryModel:
             Kcen[ia, ia] += self.mass[ia] * W2       # the force m Omega^2 q grows with q: a negative stiffness
             Kcen[ib, ib] += self.mass[ib] * W2
         free = np.arange(1, n)
-        A = self.mesh_idx
         meshvec = [self.mesh_vector(m) for m in range(len(self.mesh_names))]
         anglevec = [self.vector(self.angle_idx[m], self.angle_coef[m]) for m in range(len(self.mesh_names))]
 
@@ -308,25 +308,39 @@ class PlanetaryModel:
             back = act & (d < -Bb)
             F = float(np.sum(Kk[drive] * (d[drive] - Bb[drive])) + np.sum(Kk[back] * (d[back] + Bb[back])))
             kt = float(np.sum(Kk[drive | back]))
-            return F, kt, float(np.sum(Kk[act]))
+            if not np.any(act):
+                raise PlanetaryModelError(f"meshes[{m}] ({self.mesh_names[m]}): no tooth pair in the contact "
+                                          f"zone at the start angle")
+            return F, kt, Kk, Ee, Bb
 
+        nm = len(self.mesh_names)
+        # start: every pair in its contact zone pressed on its drive flank (the static load's flank), the
+        # linear problem of that contact state; then Newton's method on the piecewise-linear laws, which
+        # ends when the contact state repeats (exact on its piece)
         q = np.zeros(n)
-        sol = np.linalg.lstsq((K_lin - Kcen)[np.ix_(free, free)], (f_ext + cen)[free], rcond=None)[0]
-        q[free] = sol
+        J = Kspr - Kcen
+        rhs = f_ext + cen
+        for m in range(nm):
+            _, _, Kk, Ee, Bb = mesh_law(m, q)
+            J = J + float(Kk.sum()) * np.outer(meshvec[m], meshvec[m])
+            rhs = rhs + float(np.sum(Kk * (Ee + Bb))) * meshvec[m]
+        q[free] = np.linalg.solve(J[np.ix_(free, free)], rhs[free])
         for it in range(iterations):
             R = f_ext + cen + Kcen @ q - Kspr @ q
             J = Kspr - Kcen
-            for m in range(len(self.mesh_names)):
-                F, kt, kall = mesh_law(m, q)
-                if kall == 0.0:
-                    raise PlanetaryModelError(f"meshes[{m}] ({self.mesh_names[m]}): no tooth pair in the contact "
-                                              f"zone at the start angle")
+            scale = abs(T_in)
+            for m in range(nm):
+                F, kt, Kk, _, _ = mesh_law(m, q)
                 R -= meshvec[m] * F
-                J = J + max(kt, 1e-6 * kall) * np.outer(meshvec[m], meshvec[m])
-            dq = np.linalg.solve(J[np.ix_(free, free)], R[free])
-            q[free] += dq
-            if np.max(np.abs(dq)) <= 1e-15 * max(1.0, float(np.max(np.abs(q)))):
+                scale += abs(F) * float(np.max(np.abs(meshvec[m])))
+                J = J + max(kt, 1e-6 * float(Kk.sum())) * np.outer(meshvec[m], meshvec[m])
+            if float(np.max(np.abs(R[free]))) <= 1e-13 * max(scale, 1e-300):
                 break
+            q[free] += np.linalg.solve(J[np.ix_(free, free)], R[free])
+        else:
+            raise PlanetaryModelError(f"static state: no equilibrium found in {iterations} Newton steps at the "
+                                      f"reference torque {T_in!r} N*m (largest residual "
+                                      f"{float(np.max(np.abs(R[free]))):.3g})")
         y = np.zeros(2 * n)
         y[0], y[1] = angle_rad, speed_rad_s
         y[2::2] = q[1:]
@@ -361,7 +375,6 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     elastic), further ``parts`` with their inertias (kg m^2), the motor and load parts and which ends
     are torque inputs.  The topology rules of gearfmu.common.topology apply; a planetary stage joins
     its two free ports."""
-    from ..gearbox.model import _check_mesh
     meshes = tuple(_check_mesh(i, m) for i, m in enumerate(meshes))
     planetaries = tuple(_check_stage(i, s) for i, s in enumerate(planetaries))
     if not meshes and not planetaries:
@@ -443,7 +456,7 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
             a, b = links[li][1], links[li][2]
             pu = (a if tree.body_of[a] == up else b).split(".")[-1]
             pd = (b if pu == a.split(".")[-1] else a).split(".")[-1]
-            g_body[down] = g_body[up] * _willis(st, pu, pd)
+            g_body[down] = g_body[up] * willis_ratio(st.held, pu, pd, st.base_radius_sun_m, st.base_radius_ring_m)
             up_port[st.name] = pu
         else:
             g_body[down] = g_body[up]
@@ -547,19 +560,6 @@ def _depth(tree, body: int) -> int:
     return d
 
 
-def _willis(st: PlanetaryStage, up: str, down: str) -> float:
-    """g_down / g_up of a stage with ``st.held`` grounded: r_s (g_s - g_c) + r_r (g_r - g_c) = 0."""
-    rs, rr = st.base_radius_sun_m, st.base_radius_ring_m
-    # g of (sun, carrier, ring) per unit g of the up port, the held one 0
-    if st.held == "ring":
-        rel = {"sun": 1.0, "carrier": rs / (rs + rr)}
-    elif st.held == "sun":
-        rel = {"ring": 1.0, "carrier": rr / (rs + rr)}
-    else:
-        rel = {"sun": 1.0, "ring": -rs / rr}
-    return rel[down] / rel[up]
-
-
 def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh_rows, frames) -> dict:
     """The DOFs, springs, meshes and frames of one planetary stage (module docstring); ``up`` the port
     nearer the motor."""
@@ -573,8 +573,7 @@ def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh
     # r_s : r_r : -(r_s + r_r); the upstream port takes T_ref/g_up.  The sun's torque per unit reference
     # torque sets the tables' sense: the flank its static load presses is the tables' drive flank
     # (x > 0); the tables run backwards when the sun is driven (docs/planetary.md "Mesh sense").
-    rho = {"sun": rs, "ring": rr, "carrier": -(rs + rr)}
-    t_sun = rs / (B.g[part_dof[st.port(up)]] * rho[up])
+    t_sun = planetary_sun_torque(up, 1.0 / B.g[part_dof[st.port(up)]], rs, rr)
     sig = _sign(t_sun)
     sig_p = -sig
     N = st.planets
