@@ -48,7 +48,8 @@ class LumpedPlanetary:
     mesh's follows, or is checked when given); tooth counts; the sun's base radius (m); planet angles
     (rad, None = equally spaced); contact ratios of the two meshes' rectangular-wave tables (1 =
     constant stiffness); half backlash (m); planet 1's ring-against-sun phase (mesh cycles); pin
-    position errors."""
+    position errors; table points per mesh period; the held member's torsional support in N m/rad
+    instead of ``support_N_per_m`` (when given)."""
 
     planets: int
     mass_kg: dict
@@ -70,6 +71,7 @@ class LumpedPlanetary:
     gamma_rs: float = 0.0
     planet_errors: Tuple[PlanetErrors, ...] = field(default=())
     points_per_mesh: int = 32
+    support_Nm_per_rad: Optional[float] = None
 
 
 def lumped_stage(name: str, p: LumpedPlanetary, *, held: str = "ring", model: str = "translational",
@@ -121,12 +123,15 @@ def lumped_stage(name: str, p: LumpedPlanetary, *, held: str = "ring", model: st
     if len(errs) != n:
         raise err(f"{w}.planet_errors: {len(errs)} entries for {n} planets")
     defl = tuple(position_error_deflections_m(e, a_s, a_r) for e in errs)
-    ku = finite_number(f"{w}.support_N_per_m", p.support_N_per_m, positive=True, error=err)
+    if p.support_Nm_per_rad is not None:
+        k_held = finite_number(f"{w}.support_Nm_per_rad", p.support_Nm_per_rad, positive=True, error=err)
+    else:
+        k_held = finite_number(f"{w}.support_N_per_m", p.support_N_per_m, positive=True, error=err) * radius[held] ** 2
     return PlanetaryStage(
         name=name, teeth_sun=zs, teeth_planet=zp, teeth_ring=zr, base_radius_sun_m=rs, base_radius_planet_m=rp,
         base_radius_ring_m=rr, carrier_radius_m=rc, pressure_angle_sun_rad=a_s, pressure_angle_ring_rad=a_r,
         planet_angles_rad=angles, sun_tables=(sun_t,) * n, ring_tables=(ring_t,) * n,
         mass_kg=dict(p.mass_kg), inertia_kgm2=inertia, bearing_N_per_m=dict(p.bearing_N_per_m),
-        support_Nm_per_rad=ku * radius[held] ** 2, held=held, model=model,
+        support_Nm_per_rad=k_held, held=held, model=model,
         ring_sun_phase_rad=ph.ring_offset_rad[0], position_deflections_m=defl, mesh_damping_ratio=mesh_damping_ratio,
         damping_model=damping_model, bearing_damping_ratio=bearing_damping_ratio)
