@@ -102,6 +102,8 @@ SOURCES = {
                    "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
+    "planetary": ([PY, "benchmarks/bench_planetary.py", "--repeat", "3"], None,
+                  "benchmarks/bench_planetary.py --repeat 3"),
     "gearbox_fmu": ([PY, "benchmarks/bench_gearbox_fmu.py", "--sim", "0.5"], None,
                     "benchmarks/bench_gearbox_fmu.py --sim 0.5"),
     "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
@@ -110,7 +112,7 @@ SOURCES = {
 }
 # sources that take several minutes: run only when named (--only) or with --all
 SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup", "plan_study",
-        "plan_scan", "tests", "gearbox", "silence"}
+        "plan_scan", "tests", "gearbox", "planetary", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -741,10 +743,9 @@ def sec_dynamics(pg: Page):
             + f"\n\nSource: `{SOURCES['hard_cases'][2]}` ({pg.cost('hard_cases')}).\n")
 
 
-def sec_gearbox(pg: Page):
-    if pg.missing("gearbox", "Gearboxes: the native gearbox solver against the scipy reference"):
-        return
-    d = pg.data["gearbox"]
+def _front_rows_and_plot(pg: Page, d: dict, png: str):
+    """The table rows (case, method, wall s at 1e-4 and 1e-6, speedup over DOP853) and the plot of
+    the wall-time-against-error fronts of bench_gearbox.py / bench_planetary.py."""
     body = []
     for f in d["fronts"]:
         for m, at in f["wall_at"].items():
@@ -767,7 +768,24 @@ def sec_gearbox(pg: Page):
         axes[0][0].legend(fontsize=7)
         return fig
 
-    img = pg.plot("validation_gearbox.png", draw)
+    return body, pg.plot(png, draw)
+
+
+def _front_summary(d: dict, what: str, reference: str) -> list:
+    sp = d.get("summary_min_speedup_vs_DOP853", {})
+    cells = ", ".join(f"{m} ≥ {v['1e-06']:.0f} × DOP853" for m, v in sp.items() if v.get("1e-06"))
+    errs = [r["dte_rel_rms_err"] for f in d["fronts"] for r in f["rows"]
+            if r["method"] == "rk4_node" and r["setting"] == "h=H/64"]
+    diff = (f"DTE RMS error of rk4_node at h=H/64: {sci(min(errs))} … {sci(max(errs))} of the range"
+            if errs else "n/a")
+    return [what, reference, diff, f"at 1e-6: {cells or 'n/a'}"]
+
+
+def sec_gearbox(pg: Page):
+    if pg.missing("gearbox", "Gearboxes: the native gearbox solver against the scipy reference"):
+        return
+    d = pg.data["gearbox"]
+    body, img = _front_rows_and_plot(pg, d, "validation_gearbox.png")
     ex = d.get("example", {})
     example = (f"\n\nThe example reducer `{ex['scene']}` ({ex['stages']} stages, {ex['bodies']} bodies, {ex['integrator']}, "
                f"internal step {sci(ex['step_s'])} s): {num(ex['wall_per_simulated_s'], 3)} s of wall time per simulated "
@@ -784,14 +802,34 @@ def sec_gearbox(pg: Page):
         "method's front) and the speedup over DOP853 there.\n\n"
         + table(["case", "method", "wall s at 1e-4", "wall s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
         + f"\n\n{img}{example}\n\nSource: `{SOURCES['gearbox'][2]}` ({pg.cost('gearbox')}).\n")
-    sp = d.get("summary_min_speedup_vs_DOP853", {})
-    cells = ", ".join(f"{m} ≥ {v['1e-06']:.0f} × DOP853" for m, v in sp.items() if v.get("1e-06"))
-    errs = [r["dte_rel_rms_err"] for f in d["fronts"] for r in f["rows"]
-            if r["method"] == "rk4_node" and r["setting"] == "h=H/64"]
-    diff = (f"DTE RMS error of rk4_node at h=H/64: {sci(min(errs))} … {sci(max(errs))} of the range"
-            if errs else "n/a")
-    pg.summary.append(["gearbox dynamics (two stages, shafts)", "event-located DOP853 (scipy), same equations",
-                       diff, f"at 1e-6: {cells or 'n/a'}"])
+    pg.summary.append(_front_summary(d, "gearbox dynamics (two stages, shafts)",
+                                     "event-located DOP853 (scipy), same equations"))
+
+
+def sec_planetary(pg: Page):
+    if pg.missing("planetary", "Planetary stages: the native planetary solver against the scipy reference"):
+        return
+    d = pg.data["planetary"]
+    body, img = _front_rows_and_plot(pg, d, "validation_planetary.png")
+    ex = d.get("example", {})
+    example = (f"\n\nThe example `{ex['scene']}` ({ex['meshes']} meshes, {ex['dofs']} degrees of freedom, "
+               f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['wall_per_simulated_s'], 3)} s of "
+               f"wall time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
+               f"({ex['events']} events in {ex['stop_time_s']:g} s).") if ex else ""
+    pg.parts.append(
+        "## Planetary stages\n\n"
+        "The native planetary solver (docs/planetary.md) on the hard cases of `gearfmu/planetary_cases.py` "
+        "(Lin & Parker's system: contact loss in every mesh of three planets with backlash at light load; four "
+        "planets on a floating sun with a pin position error; a carrier-driven stage followed by a parallel "
+        "stage), against its event-located scipy reference at rtol 1e-12 (`gearfmu/planetary/reference.py`).  "
+        "Every native integrator at 2 to 256 substeps per communication step and the same scipy reference at "
+        "looser tolerances (DOP853 at rtol 1e-4 to 1e-10, 16 to 64 steps per shortest natural period); wall time "
+        "of the whole call at relative RMS DTE errors 1e-4 and 1e-6 of the worst mesh (log-log interpolation "
+        "along each method's front) and the speedup over DOP853 there.\n\n"
+        + table(["case", "method", "wall s at 1e-4", "wall s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
+        + f"\n\n{img}{example}\n\nSource: `{SOURCES['planetary'][2]}` ({pg.cost('planetary')}).\n")
+    pg.summary.append(_front_summary(d, "planetary dynamics (Lin & Parker model, every mesh multi-pair)",
+                                     "event-located DOP853 (scipy), same equations"))
 
 
 def sec_gearbox_fmu(pg: Page):
@@ -1330,6 +1368,7 @@ def goal_rows(data: dict) -> list:
         ("numba native solver per step ≤ 1.3 × the C kernel", "kernels", _g_numba),
         ("rk4 integrators ≥ 300 × faster than DOP853 at 1e-6 relative DTE error", "integrators", _g_dop853),
         ("native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error", "gearbox", _g_gearbox),
+        ("native planetary solver ≥ 300 × the scipy reference at 1e-6 relative DTE error", "planetary", _g_gearbox),
         ("gearbox FMU ≤ 1.3 × its stages' pair FMUs per simulated second (C host, same accuracy)", "gearbox_fmu",
          _g_gearbox_fmu),
         ("FMU ≤ 3 × native per simulated second", "fmu_speed", _g_fmu_native),
@@ -1350,7 +1389,7 @@ def goals_table(data: dict) -> str:
 
 
 def sec_goals(pg: Page):
-    srcs = ["startup", "kernels", "integrators", "gearbox", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
+    srcs = ["startup", "kernels", "integrators", "gearbox", "planetary", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
             "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
@@ -1423,7 +1462,7 @@ def sec_costs(pg: Page):
 
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_moes", "sec_ehl_rough", "sec_load_sharing",
-            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_arms",
+            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_planetary", "sec_arms",
             "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs", "sec_goals")
 
 
