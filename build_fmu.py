@@ -30,12 +30,11 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true", help="print the report as JSON")
     args = ap.parse_args(argv)
 
-    from gearfmu import drivetrain
     from gearfmu.fmu.compare import validate_fmu_against_native
     from gearfmu.fmu.summary import read_summary
-    from gearfmu.pipeline import build, gear_torque_for, load
+    from gearfmu.pipeline import build, gear_torque_for, is_drivetrain_file, load
 
-    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+    if args.scene is not None and is_drivetrain_file(args.scene):
         return _gearbox(args)
     try:
         if args.scene is not None and not Path(args.scene).exists():
@@ -64,16 +63,17 @@ def main(argv=None) -> int:
 
 def _gearbox(args) -> int:
     """A drivetrain scene: its gearbox FMU against the native gearbox solver."""
-    from gearfmu import drivetrain
     from gearfmu.fmu.gearbox_build import variables_of_fmu
     from gearfmu.fmu.gearbox_compare import validate_gearbox_fmu
     from gearfmu.fmu.summary import read_summary
+    from gearfmu.pipeline import build_drivetrain_fmu
+    from gearfmu.scene.drivetrain import load_drivetrain
 
     try:
-        scene = drivetrain.load_drivetrain(args.scene)
+        scene = load_drivetrain(args.scene)
         out = Path(args.output or f"build/{scene.model_name}.fmu")
-        res = drivetrain.build_drivetrain_fmu(scene, out, progress=not args.json, runtime=args.runtime,
-                                              fmi_version=args.fmi_version)
+        res = build_drivetrain_fmu(scene, out, progress=not args.json, runtime=args.runtime,
+                                   fmi_version=args.fmi_version)
     except ValueError as exc:
         print(f"build_fmu: {exc}", file=sys.stderr)
         return 2

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmark: real-time factor of the standalone FMU against its error, per table resolution.
 
-For each points-per-mesh level (the planner's levels, gearfmu.plan_choices: 16 .. 256 by
+For each points-per-mesh level (the planner's levels, gearfmu.plan.choices: 16 .. 256 by
 default, and 512 .. 2048) the scene's tables are built at that resolution and packed into a standalone
 FMI 2.0 FMU (this machine's binary only).  Each (points per mesh, integrator, max_step)
 is then run over ``--sim`` simulated seconds at the communication step ``--comm``:
@@ -19,7 +19,7 @@ Both hosts read ``dte`` and ``mesh_force`` after every doStep.
 are compared with them bit for bit) are compared with a fine run: native rk4_kink on tables at
 ``--fine-ppm`` points per mesh (finer than every level) and max_step comm / ``--fine-substeps``.
 Two errors over all communication points: ``dte_rel_rms_err`` = RMS(dte - dte_fine) /
-RMS(dte_fine), the planner's measure (gearfmu.plan_evaluator.relative_rms; mesh_force the same
+RMS(dte_fine), the planner's measure (gearfmu.plan.relative_rms; mesh_force the same
 in ``mesh_force_rel_rms_err``), and ``dte_rel_ptp_err`` = RMS(dte - dte_fine) /
 peak-to-peak(dte_fine), the measure of bench_fmu.py's ``rtf`` block (stricter: the mean
 deflection is not in the denominator).  ``reference_check``: both errors of the fine run against
@@ -124,7 +124,7 @@ def table_front(scene, ppms, *, fine_ppm, comm_s, sim_s, fine_substeps, integrat
     each other."""
     from gearfmu.dynamics.native import simulate
     from gearfmu.pipeline import compute_tables, gear_torque_for
-    from gearfmu.plan_evaluator import relative_rms
+    from gearfmu.plan import relative_rms
 
     T1 = scene.operating.torque_Nm
 
@@ -195,7 +195,7 @@ def main(argv=None):
     from gearfmu.dynamics.native import simulate
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.pipeline import compute_tables, gear_torque_for, load
-    from gearfmu.plan_evaluator import relative_rms
+    from gearfmu.plan import relative_rms
 
     scene = load(args.scene)
     ppms = sorted(int(x) for x in args.ppm.split(","))

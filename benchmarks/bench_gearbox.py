@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from gearfmu.common.vocabulary import GEARBOX_INTEGRATORS
-from gearfmu.drivetrain import gearbox_model, load_any, simulate_drivetrain, stage_tables
+from gearfmu.pipeline import gearbox_model, load_any, simulate_drivetrain, stage_tables
 from gearfmu.gearbox.cases import GEARBOX_CASES, gearbox_case
 from gearfmu.gearbox.native import simulate
 from gearfmu.gearbox.reference import simulate_reference

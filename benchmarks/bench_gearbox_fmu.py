@@ -32,6 +32,7 @@ Ratios (gearbox cost / sum of the pair FMUs' costs):
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import subprocess
@@ -102,24 +103,24 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5, help="runs per setting (best CPU time)")
     args = ap.parse_args(argv)
 
-    from gearfmu import drivetrain
-    from gearfmu.common.vocabulary import INTEGRATORS
+    from gearfmu import pipeline
     from gearfmu.dynamics.native import choose_max_step_s as pair_max_step_s, simulate as simulate_pair
     from gearfmu.fmu.crossbuild import host_key
     from gearfmu.fmu.gearbox_build import build_gearbox_fmu
     from gearfmu.fmu.gearbox_validation import native_run
     from gearfmu.fmu.standalone_build import build_standalone_fmu
+    from gearfmu.scene.drivetrain import load_drivetrain
 
-    scene = drivetrain.load_drivetrain(args.scene)
-    model = drivetrain.gearbox_model(scene, drivetrain.stage_tables(scene))
-    s0 = drivetrain.fmu_settings(scene, model)
-    s = type(s0)(**{**vars(s0), "stop_time_s": args.sim})
+    scene = load_drivetrain(args.scene)
+    model = pipeline.gearbox_model(scene, pipeline.stage_tables(scene))
+    s0 = pipeline.gearbox_fmu_settings(scene, model)
+    s = dataclasses.replace(s0, stop_time_s=args.sim)
     comm, sim, h0 = s.output_interval_s, args.sim, s.max_step_s
     plat = (host_key(),)
-    t_ref = model.reference_torque_Nm(s.motor_torque_Nm, s.load_torque_Nm)
+    t_ref = model.reference_torque_Nm(s.motor_torque_start_Nm, s.load_torque_start_Nm)
     stages = [m.name for m in model.meshes]
     out = {"scene": scene.name, "sim_s": sim, "comm_step_s": comm, "repeat": args.repeat,
-           "integrator": s.integrator_name, "host": "benchmarks/fmu_rtf_host.c (C, FMI 2.0, dlopen)",
+           "integrator": s.integrator, "host": "benchmarks/fmu_rtf_host.c (C, FMI 2.0, dlopen)",
            "cost": "best process CPU time of the runs", "goal": GOAL}
     print(f"bench_gearbox_fmu: {scene.name}, {sim:g} s simulated at {comm:g} s, best of {args.repeat}",
           file=sys.stderr)
@@ -131,12 +132,12 @@ def main(argv=None) -> int:
                                validation=False)
         md = _unzip(gb, tmp / "gb")
         outs = [f"{m}.{q}" for m in stages for q in ("dte", "mesh_force")]
-        fine = native_run(model, type(s)(**{**vars(s), "max_step_s": h0 / 8}))
+        fine = native_run(model, dataclasses.replace(s, max_step_s=h0 / 8))
         nat = native_run(model, s)
         sweep = []
         for f in GEARBOX_FACTORS:
             cpu, wall, rows = _host(exe, tmp / "gb", md, sim_s=sim, comm_s=comm, repeat=args.repeat, outs=outs,
-                                    max_step_s=h0 * f, integrator=s.integrator)
+                                    max_step_s=h0 * f, integrator=s.integrator_code)
             sweep.append({"factor": f, "max_step_s": h0 * f, "cpu_s": cpu, "wall_s": wall,
                           "dte_rel_rms_err": {m: _err(rows[:, 2 * k], fine[f"{m}.dte"]) for k, m in enumerate(stages)}})
             if f == 1.0:
@@ -150,25 +151,25 @@ def main(argv=None) -> int:
         for k, m in enumerate(model.meshes):
             t = m.tables
             gp = float(model.g[model.mesh_bodies[k, 0]])
-            w = gp * s.motor_speed_rad_s
+            w = gp * s.motor_speed_start_rad_s
             t1 = t_ref / gp if m.name in model.on_path else 0.0
             t2 = t1 * t.base_radius_gear_m / t.base_radius_pinion_m
             own = pair_max_step_s(t, 1.5 * abs(w))
             pf = build_standalone_fmu(t, tmp / f"{m.name}.fmu", model_name=f"bench_{m.name}",
                                       damping_ratio=m.damping_ratio, pinion_speed_start_rad_s=w,
                                       pinion_torque_start_Nm=t1, gear_torque_start_Nm=t2, max_step_s=own,
-                                      damping_model=m.damping_model, integrator=s.integrator_name, stop_time_s=sim,
+                                      damping_model=m.damping_model, integrator=s.integrator, stop_time_s=sim,
                                       output_interval_s=comm, validation=False, platforms=plat)
             pmd = _unzip(pf, tmp / m.name)
             pfine = simulate_pair(t, stop_time_s=sim, comm_step_s=comm, max_step_s=min(own, h0) / 8,
                                   pinion_torque_Nm=t1, gear_torque_Nm=t2, pinion_speed_start_rad_s=w,
                                   damping_ratio=m.damping_ratio, damping_model=m.damping_model,
-                                  integrator=s.integrator_name)
+                                  integrator=s.integrator)
             psweep = []
             for f, h in [(f, own * f) for f in PAIR_FACTORS] + [(None, h0)]:
                 cpu, wall, rows = _host(exe, tmp / m.name, pmd, sim_s=sim, comm_s=comm, repeat=args.repeat,
                                         outs=["dte", "mesh_force"], max_step_s=h,
-                                        integrator=INTEGRATORS[s.integrator_name])
+                                        integrator=s.integrator_code)
                 psweep.append({"factor": f, "max_step_s": h, "cpu_s": cpu, "wall_s": wall,
                                "dte_rel_rms_err": _err(rows[:, 0], pfine.dte)})
             row = {"stage": m.name, "pinion_speed_rad_s": w, "pinion_torque_Nm": t1, "max_step_s": own,

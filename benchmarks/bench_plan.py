@@ -34,7 +34,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gearfmu.plan_verify import MEASURES  # noqa: E402  (the measure names only; plans run in fresh processes)
+from gearfmu.plan.verify import MEASURES  # noqa: E402  (the measure names only; plans run in fresh processes)
 #: the planner's time goal on the default scene (a warm numba cache), s of wall time
 DEFAULT_SCENE_GOAL_S = 60.0
 

@@ -12,7 +12,7 @@ built from the scene by ``gearfmu.pipeline.compute_tables``, each with its own i
 step) are run by the native solver at check points of this benchmark's own -- the operating
 point with a run three times the planner's (as the FMU confirmation's steady case) and a seeded
 random speed inside the band the one-point envelope's FMU accepts without a warning -- and every
-error measure of docs/plan.md "Error measure" (``gearfmu.plan_verify.run_errors``: RMS, DTE
+error measure of docs/plan.md "Error measure" (``gearfmu.plan.verify.run_errors``: RMS, DTE
 peak-to-peak and mean, mesh orders 1-3 of DTE and force) is compared with its target.
 
 A scene passes when its plan says "within target" and every measure at every check point is
@@ -41,7 +41,7 @@ sys.path.insert(0, str(ROOT))
 from gearfmu.dynamics.native import simulate  # noqa: E402
 from gearfmu.pipeline import compute_tables  # noqa: E402
 from gearfmu.plan import plan_scene, planned_scene  # noqa: E402
-from gearfmu.plan_verify import (MEASURES, POINT_SPEED_MARGIN_REL, budget_use, limiting_measure,  # noqa: E402
+from gearfmu.plan.verify import (MEASURES, POINT_SPEED_MARGIN_REL, budget_use, limiting_measure,  # noqa: E402
                                  run_errors, steady_phase)
 from gearfmu.scene.reader import SceneError, load_scene  # noqa: E402
 

@@ -1,8 +1,9 @@
 """Speed against error of the native planetary solver against the scipy reference (docs/planetary.md).
 
-Prints JSON (stdout); progress on stderr.  Per hard case of gearfmu.planetary_cases (contact loss
-in every mesh of a three-planet stage with backlash, four planets on a floating sun with a pin
-position error, a carrier-driven planetary stage followed by a parallel stage):
+Prints JSON (stdout); progress on stderr.  Per planetary hard case of gearfmu.bench (contact loss
+in every mesh of a three-planet stage with backlash after a sudden unloading, four planets on a
+floating sun with a pin position error, a carrier-driven planetary stage followed by a parallel
+stage):
 
 * the reference: gearfmu.planetary.reference (event-located solve_ivp DOP853) at rtol 1e-12 and
   128 steps per shortest natural period;
@@ -37,7 +38,7 @@ from gearfmu.common.vocabulary import GEARBOX_INTEGRATORS
 from gearfmu.drivetrain import drivetrain_model, load_any, simulate_drivetrain, stage_tables
 from gearfmu.planetary.native import simulate
 from gearfmu.planetary.reference import simulate_reference
-from gearfmu.planetary_cases import PLANETARY_CASES, planetary_case
+from gearfmu.bench import PLANETARY_CASES, planetary_case
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
@@ -106,8 +107,7 @@ def case_front(name, repeat, mesh_periods):
     ref = simulate_reference(model, rtol=1e-12, steps_per_period=128, **kw)
     ref_wall = time.perf_counter() - t0
     rows = []
-    t0_Nm = float(np.atleast_1d(kw["motor_torque_Nm"])[0])
-    simulate(model, **dict(kw, stop_time_s=H, max_step_s=H, motor_torque_Nm=t0_Nm))   # compile (or load) first
+    simulate(model, **dict(kw, stop_time_s=H, max_step_s=H))   # compile (or load) first
     for integ in GEARBOX_INTEGRATORS:
         for n in SUBSTEPS:
             wall, r = timed(lambda: simulate(model, max_step_s=H / n, integrator=integ, **kw), repeat)

@@ -12,7 +12,8 @@ pair with ``contact_model = "rough_ehl"`` on a small grid, :data:`ROUGH_EHL_SCEN
 paths)
 
 * the scene's tables: every array of the MeshTables (built as written: a scene with
-  ``[accuracy]`` is not planned);
+  ``[accuracy]`` is not planned); a drivetrain scene (``[drivetrain]``, docs/gearbox.md): every
+  stage's tables and the native gearbox run with each gearbox integrator (every output column);
 * the native solver on them with the scene's settings, once per integrator at the scene's
   internal step and once more for the event integrators at a coarse step (one internal step per
   output interval): every output array;
@@ -71,9 +72,37 @@ def put(prefix, obj):
         if isinstance(v, np.ndarray) and v.dtype != object:
             arrays[f"{prefix}.{k}"] = v
 
+def with_attr(attr, *names):
+    # the first importable module of names that defines attr (the module a name moved to)
+    for n in names:
+        try:
+            m = importlib.import_module(n)
+        except ImportError:
+            continue
+        if hasattr(m, attr):
+            return m
+    raise ImportError(f"{attr} in none of {names}")
+
+def drivetrain_arrays(label, path):
+    # a drivetrain scene: every stage's tables and the native gearbox run with each gearbox integrator
+    dt = with_attr("simulate_drivetrain", "gearfmu.drivetrain", "gearfmu.stages", "gearfmu.pipeline")
+    _, sc = dt.load_any(path)
+    tabs = dt.stage_tables(sc, allow_large=True)
+    for i, t in enumerate(tabs):
+        put(f"{label}.tables{i}", t)
+    model = dt.gearbox_model(sc, tabs)
+    vocabulary = importlib.import_module("gearfmu.common.vocabulary")
+    for integ in vocabulary.GEARBOX_INTEGRATORS:
+        r = dt.simulate_drivetrain(sc, model, integrator=integ)
+        put(f"{label}.gearbox_{integ}", {k: np.asarray(v[1]) for k, v in r.columns.items()})
+        arrays[f"{label}.gearbox_{integ}.time"] = np.asarray(r.time_s)
+
 host = crossbuild.host_key()
 for label, path in scenes:
     print(f"scene {label} ...", file=sys.stderr, flush=True)
+    if path is not None and with_attr("is_drivetrain_file", "gearfmu.scene.drivetrain").is_drivetrain_file(path):
+        drivetrain_arrays(label, path)
+        continue
     scene = pipeline.load(path)
     tables = pipeline.compute_tables(scene, allow_large=True)
     put(f"{label}.tables", tables)
@@ -142,7 +171,7 @@ def rough_ehl_scene(default_text: str) -> str:
 
 
 def _is_drivetrain(path: Path) -> bool:
-    """A drivetrain scene (``[drivetrain]``: several stages, gearfmu.drivetrain), not a gear-pair scene."""
+    """A drivetrain scene (``[drivetrain]``: several stages, gearfmu.stages), not a gear-pair scene."""
     return any(line.strip() == "[drivetrain]" for line in path.read_text().splitlines())
 
 

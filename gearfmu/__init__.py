@@ -9,21 +9,20 @@ Module / package     Contents
 ===================  ================================================================
 cli                  the ``gearfmu`` command line
 ssp, bench, plots    SSP packages; hard cases and benchmarks; PNG plots
-pipeline             the public entry points: load, compute_tables, build (with plan)
-plan                 fidelity planner ([accuracy]): the budget rule, revisions, estimate
-plan_fmu             the planned / full scenes and their confirmation through the FMUs
-plan_report,         the plan and its report;
-plan_evaluator       tables and native runs of configurations
-plan_verify,         the planner's envelope search and verification drives;
-plan_choices         the choices, their levels and what is skipped
-stages               the stages wired without the planner
-fmu/                 model description, FMU builders, runtime, C sources
+pipeline             the public entry points: load, compute_tables, build (the
+                     planner in front of the stages), the drivetrain's
+plan/                fidelity planner ([accuracy]): resolve, the budget rule, the
+                     envelope search, the report, the confirmation through FMUs
+stages               the stages of a pair or a drivetrain scene, without the
+                     planner: tables, run settings, FMU, native and gearbox runs
+fmu/                 model description, FMU builders, envelope record, runtime, C
+gearbox/             gearbox model, modes, native gearbox solver
 dynamics/            native solver, reference integrator, sweeps, harmonics
 tables/, scene/      tooth-pair tables and their precompute; the scene reader
 contact/             contact-model registry, fractal, load sharing, roughness
 gear/                gear pair: geometry, stiffness, errors, loaded mesh, thermal
 ehl/                 line-contact EHL numerics
-common/              option vocabulary, input checks, executors
+common/              option vocabulary, run settings, input checks, executors
 ===================  ================================================================
 """
 __version__ = "0.1.0"

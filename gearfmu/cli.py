@@ -51,8 +51,8 @@ from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
                           FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
 from .fmu.crosscheck import main as crosscheck_main, write_reference_results
-from . import drivetrain, pipeline
-from .pipeline import load, build, simulate_native, gear_torque_for, max_step_for
+from . import pipeline
+from .pipeline import load, build, simulate_native
 from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
 from .assembly import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
@@ -166,7 +166,7 @@ def _fmu(path):
 
 def _build_drivetrain(args) -> int:
     """gearfmu build DRIVETRAIN.toml: the gearbox FMU (docs/gearbox.md "The gearbox FMU")."""
-    drivetrain.check_fmu_runtime(args.runtime)
+    pipeline.check_gearbox_fmu_runtime(args.runtime)
     _, scene = _any_scene(args.scene)
     for given, option in ((args.tables, "--tables"), (args.tables_meta, "--tables-meta"),
                           (args.reference_results, "--reference-results")):
@@ -178,19 +178,19 @@ def _build_drivetrain(args) -> int:
     if not args.quiet:
         for note in scene.notes:
             print(f"gearfmu: {note}", file=sys.stderr)
-    res = drivetrain.build_drivetrain_fmu(scene, out, progress=not args.quiet, runtime=args.runtime,
-                                          platforms=platforms, fmi_version=args.fmi_version,
-                                          fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large)
+    res = pipeline.build_drivetrain_fmu(scene, out, progress=not args.quiet, runtime=args.runtime,
+                                        platforms=platforms, fmi_version=args.fmi_version,
+                                        fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large)
     m = res.model
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, gearbox of "
           f"{len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies, "
-          f"{res.settings.integrator_name}, max internal step {res.settings.max_step_s:.3g} s)")
+          f"{res.settings.integrator}, max internal step {res.settings.max_step_s:.3g} s)")
     print(fmu_summary(res.fmu_path))
     return 0
 
 
 def cmd_build(args) -> int:
-    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
         return _build_drivetrain(args)
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.fmu", "--output")
@@ -325,7 +325,7 @@ def _any_scene(path):
     with _reading("SCENE", path):
         if path is not None:
             _scene_file(path)
-        return drivetrain.load_any(path)
+        return pipeline.load_any(path)
 
 
 def _scene_file(path) -> Path:
@@ -341,11 +341,11 @@ def _gearbox(kind, scene, args):
     if kind == "drivetrain":
         for note in scene.notes:
             print(f"gearfmu: {note}", file=sys.stderr)
-        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        return drivetrain.drivetrain_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None),
-                                           progress=not args.quiet)
+        tables = pipeline.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        return pipeline.drivetrain_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None),
+                                         progress=not args.quiet)
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-    return drivetrain.pair_model(scene, tables)
+    return pipeline.pair_model(scene, tables)
 
 
 def _simulate_drivetrain(args, scene) -> int:
@@ -356,7 +356,7 @@ def _simulate_drivetrain(args, scene) -> int:
     out = _output_file(args.output or f"out/{scene.model_name}_native.csv", "--output")
     _output_file(out.with_suffix(".png"), "--output")
     model = _gearbox("drivetrain", scene, args)
-    res = drivetrain.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
+    res = pipeline.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
                                          progress=not args.quiet)
     res.to_csv(out)
     plot = plot_planetary_simulation if scene.planetaries else plot_gearbox_simulation
@@ -364,7 +364,7 @@ def _simulate_drivetrain(args, scene) -> int:
     if "diverged_at_step" in res.info:
         print(f"gearfmu: the state turned non-finite at step {res.info['diverged_at_step']}; the rows after it are "
               "NaN", file=sys.stderr)
-    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({drivetrain.describe_model(model)}; "
+    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({pipeline.describe_model(model)}; "
           f"{res.integrator}, step {res.step_s:.3g} s, {res.info['events']} events) in {res.wall_s:.3f} s -> "
           f"{out}, {png}")
     return 0
@@ -379,14 +379,14 @@ def cmd_modes(args) -> int:
     png = _output_file(out.with_suffix(".png"), "--output")
     with _logs_to_stderr(args.json):
         model = _gearbox(kind, scene, args)
-    res, cb = drivetrain.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
+    res, cb = pipeline.modes_report(kind, scene, model, max_speed_rpm=args.max_speed_rpm)
     report = {"scene": scene.name, "kind": kind, **res.to_dict(), "campbell": cb}
     out.write_text(json.dumps(report, indent=1), encoding="utf-8")
     plot_campbell(cb, png, title=f"{scene.name}: Campbell diagram (modes at {res.reference_torque_Nm:.4g} N*m)")
     if args.json:
         print(json.dumps(report, indent=1))
         return 0
-    print("\n".join(drivetrain.modes_lines(scene.name, model, res, cb)))
+    print("\n".join(pipeline.modes_lines(scene.name, model, res, cb)))
     print(f"wrote {out}, {png}")
     return 0
 
@@ -394,7 +394,7 @@ def cmd_modes(args) -> int:
 def cmd_simulate(args) -> int:
     from .plots import plot_simulation  # matplotlib: loaded only by the plotting commands
 
-    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
         return _simulate_drivetrain(args, _any_scene(args.scene)[1])
     scene = _scene(args.scene)
     stop = args.stop_time or scene.fmu.stop_time_s
@@ -465,12 +465,12 @@ def _validate_drivetrain(args) -> dict:
         fmu = _fmu(args.fmu)
         check_gearbox_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
         fmu_path = fmu.path
-        tables = drivetrain.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        model = drivetrain.gearbox_model(scene, tables)
-        settings = drivetrain.fmu_settings(scene, model)
+        tables = pipeline.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        model = pipeline.gearbox_model(scene, tables)
+        settings = pipeline.gearbox_fmu_settings(scene, model)
     else:
-        res = drivetrain.build_drivetrain_fmu(scene, _output_file(f"build/{scene.model_name}.fmu", "validate"),
-                                              progress=not args.quiet, allow_large=args.allow_large)
+        res = pipeline.build_drivetrain_fmu(scene, _output_file(f"build/{scene.model_name}.fmu", "validate"),
+                                            progress=not args.quiet, allow_large=args.allow_large)
         fmu_path, model, settings = res.fmu_path, res.model, res.settings
     variables = variables_of_fmu(model, settings, "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS)
     rep = validate_gearbox_fmu(fmu_path, model, settings, variables, tolerance=args.tolerance, scene_text=scene.text,
@@ -488,34 +488,30 @@ def _scalar_fmi3(fmu_path) -> bool:
 
 
 def _validate(args) -> dict:
-    if args.scene is not None and drivetrain.is_drivetrain_file(args.scene):
+    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
         return _validate_drivetrain(args)
+    from .plan import resolve  # the planner: loaded by the commands that build, not at startup
+
     scene = _scene(args.scene)
     text = scene.text
     if args.fmu:
         fmu = _fmu(args.fmu)
         check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
+    # the scene the FMU is built from: its plan's when it has [accuracy] (as `gearfmu build`)
+    scene, plan, verified = resolve(scene, progress=not args.quiet, allow_large=args.allow_large)
+    if args.fmu:
         fmu_path = fmu.path
-        if scene.accuracy is not None:  # build followed the scene's plan: so does the check
-            from .plan import plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, plan_scene(scene, progress=not args.quiet))
         tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
+        settings = pipeline.run_settings(scene, tables)
     else:
-        res = build(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"), progress=not args.quiet,
-                    allow_large=args.allow_large)
-        fmu_path, tables = res.fmu_path, res.tables
-        if res.plan is not None:  # the FMU's tables, step bound and integrator are the plan's
-            from .plan import planned_scene  # the planner: loaded only for scenes with [accuracy]
-            scene = planned_scene(scene, res.plan)
+        res = pipeline.build_fmu_from_scene(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"),
+                                            progress=not args.quiet, plan=plan, verified_envelope=verified,
+                                            allow_large=args.allow_large)
+        fmu_path, tables, settings = res.fmu_path, res.tables, res.settings
     stop = args.stop_time or scene.fmu.stop_time_s
     step = args.output_interval or scene.fmu.output_interval_s
-    t1 = scene.operating.torque_Nm
-    native_kwargs = dict(
-        max_step_s=max_step_for(scene, tables), pinion_torque_Nm=t1,
-        gear_torque_Nm=gear_torque_for(tables, t1), pinion_speed_start_rad_s=scene.operating.speed_rad_s,
-        damping_ratio=scene.fmu.damping_ratio, damping_model=scene.solver.damping_model)
-    rep = validate_fmu_against_native(fmu_path, tables, native_kwargs=native_kwargs, stop_time_s=stop,
-                                      comm_step_s=step, tolerance=args.tolerance, scene_text=text)
+    rep = validate_fmu_against_native(fmu_path, tables, settings, stop_time_s=stop, comm_step_s=step,
+                                      tolerance=args.tolerance, scene_text=text)
     rep["scene"] = scene.name
     return rep
 

@@ -1,19 +1,28 @@
-"""The main job on a scene: scene -> (plan) -> tables -> FMU, and the native run beside it.
+"""The public entry points of the main job on a scene: scene -> (plan) -> tables -> FMU, the native
+run beside it, and a drivetrain scene's gearbox (its native run and its gearbox FMU).
 
-The public entry points.  The stages themselves are wired in :mod:`gearfmu.stages`
-(re-exported here); :func:`build` adds the planner (:mod:`gearfmu.plan`) in front when
-the scene has an ``[accuracy]`` section.
+The stages themselves -- a pair scene's tables, run settings, FMU and native run, a drivetrain
+scene's stage tables, gearbox or planetary model, run, modes and gearbox FMU -- live in :mod:`gearfmu.stages` (re-exported
+here) and never plan.  This module puts the planner in front: :func:`build` builds what
+:func:`gearfmu.plan.resolve` says a scene needs (its fidelity plan when it has an
+``[accuracy]`` section, else the scene as written).
 """
 from __future__ import annotations
 
 from typing import Optional
 
-from .stages import (BuildResult, build_fmu_from_scene, compute_tables, fmu_builder, gear_torque_for, load,
-                     max_step_for, platform_kw, simulate_native)
-from .scene.physics import check_build_cost
+from .stages import (PAIR_MESH_NAME, BuildResult, DrivetrainBuild, build_drivetrain_fmu,  # noqa: F401
+                     build_fmu_from_scene, check_fmu_supported, check_gearbox_fmu_runtime, compute_tables,
+                     describe_model, drivetrain_model, fmu_builder, gear_torque_for, gearbox_fmu_settings,
+                     gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any, max_step_for,
+                     modes_lines, modes_report, pair_model, planetary_stages, platform_kw, run_settings,
+                     simulate_drivetrain, simulate_native, stage_tables)
 
-__all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for",
-           "simulate_native"]
+__all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for", "run_settings",
+           "simulate_native", "load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model",
+           "gearbox_run_settings", "simulate_drivetrain", "modes_report", "PAIR_MESH_NAME", "gearbox_fmu_settings",
+           "build_drivetrain_fmu", "DrivetrainBuild", "check_gearbox_fmu_runtime", "drivetrain_model",
+           "planetary_stages", "describe_model", "modes_lines", "check_fmu_supported"]
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
@@ -23,40 +32,25 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
     gearfmu.tables.table_import); the scene then only gives the FMU and operating settings.
-    A scene with ``[accuracy]`` is built as its fidelity plan says (gearfmu.plan; a plan that is
-    not within its target is refused with :class:`gearfmu.plan.PlanError`); without it, the scene
-    is built as written and ``estimate_accuracy`` adds a cheap estimate of its error against the
-    full-fidelity model over the envelope (``BuildResult.verified_envelope``).
+    Otherwise the scene is built as :func:`gearfmu.plan.resolve` says: a scene with
+    ``[accuracy]`` as its fidelity plan says (a plan that is not within its target is refused
+    with :class:`gearfmu.plan.PlanError`); without it, as written, and ``estimate_accuracy``
+    adds a cheap estimate of its error against the full-fidelity model over the envelope
+    (``BuildResult.verified_envelope``).
     ``platforms``: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys; None: all available).
     ``fmi3_outputs``: an FMI 3 FMU's per-slot outputs as arrays ("array") or scalars ("scalar",
     pair_force_1 .. for hosts without array support; docs/standalone.md "FMI 3.0").
-    ``allow_large``: build even when the estimate (gearfmu.tables.estimate) exceeds the limits.
-    The FMU records and checks its envelope (:func:`gearfmu.scene.envelope.fmu_envelope_record`: the verified
+    ``allow_large``: build even when the estimate (gearfmu.assembly.estimate) exceeds the limits.
+    The FMU records and checks its envelope (:func:`gearfmu.fmu.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or scene.fmu.runtime
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
     platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
-    if tables is None:  # refuse an oversized scene before planning or estimating anything
-        check_build_cost(scene, allow_large=allow_large)
-    plan = None
-    if tables is None and scene.accuracy is not None:  # follow the plan (docs/plan.md)
-        from .plan import PlanError, plan_scene, planned_scene  # the planner: loaded only for scenes with [accuracy]
-        plan = plan_scene(scene, progress=progress)
-        if not plan.within_target:
-            v = plan.verification
-            raise PlanError(f"accuracy: the fidelity plan of scene {scene.name!r} is not within its target over "
-                            f"the envelope ({v.get('refused') or 'worst: ' + str(v.get('worst'))}); "
-                            f"see `gearfmu plan`")
-        verified = plan.verified_envelope
-        scene = planned_scene(scene, plan)
-    elif tables is None and estimate_accuracy:
-        from .plan import estimate_as_written  # the planner: loaded only for the as-written estimate
-        try:
-            verified = estimate_as_written(scene, progress=progress)
-        except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing
-            verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
-    else:
-        verified = None
+    plan = verified = None
+    if tables is None:
+        from .plan import resolve  # the planner: loaded by a build, not by importing the command line
+        scene, plan, verified = resolve(scene, progress=progress, estimate_accuracy=estimate_accuracy,
+                                        allow_large=allow_large)
     return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
                                 verified_envelope=verified, platforms=platforms, allow_large=allow_large,
                                 fmi_version=fmi_version, fmi3_outputs=fmi3_outputs)

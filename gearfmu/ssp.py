@@ -358,9 +358,9 @@ def ssp_from_scene(scene, out_path, *, variants: Optional[Mapping[str, Mapping[s
         tin = res.tables.temperature_input or "bulk_temperature"
         with ticking(f"writing the SSP package {out_path} (every .ssd and .ssv checked against its SSP 1.0 schema)",
                      enabled=progress or None):
-            return build_ssp(res.fmu_path, out_path, variants or default_variants(scene.fmu.damping_ratio, trange,
+            return build_ssp(res.fmu_path, out_path, variants or default_variants(res.settings.damping_ratio, trange,
                                                                                    tin),
-                             stop_time_s=scene.fmu.stop_time_s, system_name=scene.fmu.model_name)
+                             stop_time_s=res.settings.stop_time_s, system_name=scene.fmu.model_name)
 
 
 def ssp_fmu_name(ssp_path) -> str:

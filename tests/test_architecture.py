@@ -3,11 +3,13 @@
 The contracts live in pyproject.toml ``[tool.importlinter]``: the layers (each stage imports
 only the stages below it, every top-level module or package placed), no import cycles
 between sibling modules or packages, the table format, the assembly and the physics never
-importing the scene, the table format never importing the physics, the solvers (dynamics,
-gearbox, planetary) reading tables only (no scene, assembly or physics), and the FMU runtime
-template importing nothing from gearfmu.  import-linter builds the import graph with grimp,
-which also sees imports inside functions.  The checks are shown to fail on a copy of the
-package with an upward import, a cycle or a forbidden import written into it.
+importing the scene, the table format never importing the physics, the FMU runtime template
+importing nothing from gearfmu, and the FMU and the solvers (dynamics, gearbox, planetary)
+importing neither the scene nor the physics packages (forbidden contracts: direct and indirect
+imports).
+import-linter builds the import graph with grimp, which also sees imports inside functions.
+Each check is shown to fail on a copy of the package with a violation (an upward import, a
+cycle or a forbidden import) written into it.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGE = REPO / "gearfmu"
 
 #: packages that may be imported inside a function (heavy and needed only by some calls);
-#: gearfmu.plots loads matplotlib, gearfmu.bench scipy.integrate; gearfmu.plan is needed only to plan;
+#: gearfmu.plots loads matplotlib, gearfmu.bench scipy.integrate; gearfmu.plan is loaded by the commands that build or plan;
 #: the scipy subpackages are needed only by the contact models and solvers that call them
 LAZY_OK = {"fmpy", "matplotlib", "distributed", "dask", "tqdm", "pythonfmu", "pyssp_standard", "libcosimpy",
            "plots", "gearfmu.plots", "bench", "plan", "xmlschema", "scipy.optimize", "scipy.special", "scipy.integrate",
@@ -113,21 +115,6 @@ def test_contracts_fail_when_a_lower_layer_imports_the_scene_or_the_format_the_p
         assert f"gearfmu.tables._offender_{pkg} -> gearfmu.{pkg}" in report, report
 
 
-def test_contracts_fail_when_a_solver_imports_the_scene_the_assembly_or_the_physics(tmp_path):
-    root = _copy(tmp_path)
-    offenders = {"dynamics": "gearfmu.gear.phasing", "gearbox": "gearfmu.assembly.precompute",
-                 "planetary": "gearfmu.gear.planetary_set"}
-    for pkg, target in offenders.items():
-        (root / "gearfmu" / pkg / "_offender.py").write_text(f"import {target}  # offender\n")
-    code, report = _lint(root)
-    assert code == 1, report
-    assert "The solvers read tables: they never import the scene, the assembly or the" in report, report
-    assert "physics BROKEN" in report, report
-    assert "Layers: every stage imports only the stages below it KEPT" in report, report
-    for pkg, target in offenders.items():
-        assert f"gearfmu.{pkg}._offender -> {target}" in report, report
-
-
 @pytest.mark.slow
 def test_following_a_scene_to_its_tables_goes_back_up_a_layer_at_most_ten_times():
     """benchmarks/layer_walk.py's measurement (a call trace; its module doc) over the table
@@ -152,6 +139,57 @@ def test_contracts_fail_when_the_fmu_runtime_imports_the_package(tmp_path):
     code, report = _lint(root)
     assert code == 1, report
     assert "The FMU runtime imports nothing from gearfmu BROKEN" in report, report
+
+
+SOLVERS = ("fmu", "dynamics", "gearbox", "planetary")
+
+
+def test_the_solvers_and_the_fmu_never_import_the_scene(tmp_path):
+    """Each of fmu, dynamics, gearbox and planetary made to read the scene: only the forbidden contract breaks
+    (the layers allow it: the scene is below them), naming each offending import."""
+    root = _copy(tmp_path)
+    for pkg in SOLVERS:
+        (root / "gearfmu" / pkg / "_offender.py").write_text("from gearfmu.scene import reader\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The FMU and the solvers never import the scene BROKEN" in report, report
+    assert "Layers: every stage imports only the stages below it KEPT" in report, report
+    for pkg in SOLVERS:
+        assert f"gearfmu.{pkg}._offender -> gearfmu.scene.reader" in report, report
+
+
+def test_the_solvers_and_the_fmu_never_import_the_physics(tmp_path):
+    """fmu, dynamics, gearbox and planetary made to import gear, contact, ehl and gear, one each, and the
+    dynamics the table assembly; and once indirectly (through a module of the tables that
+    imports the gear pair): the forbidden contract breaks, naming the imports, the layers hold."""
+    root = _copy(tmp_path)
+    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant", "gear.planetary_set")):
+        package, module = physics.split(".")
+        (root / "gearfmu" / pkg / "_offender.py").write_text(f"from gearfmu.{package} import {module}\n")
+    (root / "gearfmu" / "dynamics" / "_offender_assembly.py").write_text("from gearfmu.assembly import estimate\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The FMU and the solvers never import the physics packages BROKEN" in report, report
+    assert "Layers: every stage imports only the stages below it KEPT" in report, report
+    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant", "gear.planetary_set")):
+        assert f"gearfmu.{pkg}._offender -> gearfmu.{physics}" in report, report
+    assert "gearfmu.dynamics._offender_assembly -> gearfmu.assembly.estimate" in report, report
+    for pkg in SOLVERS:
+        (root / "gearfmu" / pkg / "_offender.py").unlink()
+    (root / "gearfmu" / "dynamics" / "_offender_assembly.py").unlink()
+    (root / "gearfmu" / "tables" / "_bridge.py").write_text("from gearfmu.gear import geometry\n")
+    (root / "gearfmu" / "dynamics" / "_offender.py").write_text("from gearfmu.tables import _bridge\n")
+    code, report = _lint(root)
+    assert code == 1, report
+    assert "The FMU and the solvers never import the physics packages BROKEN" in report, report
+    assert "gearfmu.dynamics._offender -> gearfmu.tables._bridge" in report, report
+
+
+def test_the_top_level_holds_at_most_eight_modules():
+    """The top level is the front ends and the entry points; everything else lives in a package."""
+    modules = sorted(p.stem for p in PACKAGE.glob("*.py") if p.stem != "__init__")
+    assert len(modules) <= 8, modules
+    assert modules == ["bench", "cli", "pipeline", "plots", "ssp", "stages"], modules
 
 
 def test_a_new_top_level_module_must_be_placed_in_a_layer(tmp_path):

@@ -16,7 +16,8 @@ import pytest
 from fmpy.fmi2 import FMU2Slave
 
 from gearfmu.fmu.crossbuild import host_key
-from gearfmu.scene.envelope import VerifiedEnvelope, fmu_envelope_record
+from gearfmu.fmu.envelope import fmu_envelope_record
+from gearfmu.scene.envelope import VerifiedEnvelope
 from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.fmu.standalone_build import build_standalone_fmu
 

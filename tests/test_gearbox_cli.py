@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu import drivetrain
+from gearfmu import pipeline, stages
 from gearfmu.cli import main
 from gearfmu.pipeline import compute_tables, load
 from gearfmu.assembly.estimate import BuildTooLargeError
@@ -104,14 +104,14 @@ def test_bad_drivetrain_input_is_one_line_and_status_2(tmp_path, capsys):
 def test_every_stage_estimate_is_checked_before_any_table(monkeypatch):
     """A stage over the size limits (gearfmu.assembly.estimate) stops the work before the first
     stage's tables are computed, naming the stage and the keys to change."""
-    kind, scene = drivetrain.load_any(EXAMPLE)
+    kind, scene = pipeline.load_any(EXAMPLE)
     s2 = scene.stages[1]
     huge = dataclasses.replace(s2.scene, tables=dataclasses.replace(s2.scene.tables, points_per_mesh=100000),
                                mesh=dataclasses.replace(s2.scene.mesh, slices=1000))
     scene = dataclasses.replace(scene, stages=(scene.stages[0], dataclasses.replace(s2, scene=huge)))
     computed = []
-    monkeypatch.setattr(drivetrain, "compute_tables", lambda sc, **kw: computed.append(sc.name))
+    monkeypatch.setattr(stages, "compute_tables", lambda sc, **kw: computed.append(sc.name))
     with pytest.raises(BuildTooLargeError, match=r"stage 'stage2' \(.*gearbox_stage2.toml\): "
                                                  r"tables.points_per_mesh \(100000\)"):
-        drivetrain.stage_tables(scene)
+        pipeline.stage_tables(scene)
     assert computed == []

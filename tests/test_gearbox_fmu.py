@@ -22,7 +22,6 @@ references its C code did not produce.
 """
 import hashlib
 import json
-import math
 import subprocess
 import sys
 import zipfile
@@ -45,7 +44,7 @@ from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.model import Mesh, build_gearbox
 from gearfmu.gearbox.native import choose_max_step_s
 
-from test_gearbox_modes import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, hand_matrices
+from test_gearbox_modes import K_IN, K_MID, K_OUT, S1, S2, hand_matrices
 from test_gearbox_native import c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
 from test_standalone import _slave, _status
 
@@ -59,9 +58,9 @@ HOST = ("x86_64-linux",)
 def _settings(model, *, torque, speed, angle=0.0, load=None, integrator="rk4_node", stop, H, hmax=None):
     if hmax is None:
         hmax = choose_max_step_s(model, max(1.5 * abs(speed), 1.0), reference_torque_Nm=torque)
-    return gearbox_settings(model, motor_torque_Nm=torque, load_torque_Nm=load, motor_speed_start_rad_s=speed,
-                            motor_angle_start_rad=angle, max_step_s=hmax, integrator=integrator, stop_time_s=stop,
-                            output_interval_s=H)
+    return gearbox_settings(model, motor_torque_start_Nm=torque, load_torque_start_Nm=load,
+                            motor_speed_start_rad_s=speed, motor_angle_start_rad=angle, max_step_s=hmax,
+                            integrator=integrator, stop_time_s=stop, output_interval_s=H)
 
 
 def _build(model, settings, path, **kw):
@@ -135,13 +134,14 @@ def _against_native(path, model, settings):
 @pytest.fixture(scope="module")
 def example(tmp_path_factory):
     """The example reducer's FMU, FMI 2 and FMI 3, five platforms, from the drivetrain scene."""
-    from gearfmu import drivetrain
+    from gearfmu import pipeline
+    from gearfmu.scene.drivetrain import load_drivetrain
 
     d = tmp_path_factory.mktemp("gbfmu")
-    scene = drivetrain.load_drivetrain(EXAMPLE)
+    scene = load_drivetrain(EXAMPLE)
     out = {"scene": scene, "dir": d}
     for v in (2, 3):
-        res = drivetrain.build_drivetrain_fmu(scene, d / f"example{v}.fmu", fmi_version=v)
+        res = pipeline.build_drivetrain_fmu(scene, d / f"example{v}.fmu", fmi_version=v)
         out[v] = res.fmu_path
         out["model"], out["settings"] = res.model, res.settings
     return out
@@ -260,7 +260,7 @@ def test_state_save_restore_and_bad_inputs(example, tmp_path):
     s.setFMUstate(s.deSerializeFMUstate(blob))
     s.setReal([var["motor_torque"]], [float("nan")])
     assert _status(s.fmi2DoStep, s.component, 10 * H, H, 1) == 2   # fmi2Discard
-    s.setReal([var["motor_torque"]], [example["settings"].motor_torque_Nm])
+    s.setReal([var["motor_torque"]], [example["settings"].motor_torque_start_Nm])
     assert _status(s.fmi2DoStep, s.component, 10 * H, -H, 1) == 2
     second = []
     for k in range(10, 20):
@@ -571,3 +571,26 @@ def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     scale = np.max(np.abs(want[1::2]))
     assert np.max(np.abs(dy[1::2] - want[1::2])) <= 1e-9 * scale, (dy, want)
     assert np.array_equal(dy[0::2], want[0::2])
+
+
+def test_the_builder_takes_the_gearbox_run_settings_and_names_a_bad_one(example):
+    """The gearbox FMU's settings are the native gearbox solver's GearboxRunSettings: what is left
+    automatic is resolved on the model (the balancing load torque T_motor/g_load, the native
+    solver's step rule at 1.5 x the start speed linearised at the start torques), and a bad value
+    raises FmuBuildError naming the field (the one check of gearfmu.common.settings)."""
+    from gearfmu.common.settings import GearboxRunSettings
+    from gearfmu.fmu.build_steps import FmuBuildError
+
+    model = example["model"]
+    s = gearbox_settings(model, GearboxRunSettings(motor_torque_start_Nm=143.0, motor_speed_start_rad_s=154.0,
+                                                   output_interval_s=1e-4))
+    assert s.load_torque_start_Nm == model.balancing_load_torque_Nm(143.0)
+    assert s.max_step_s == choose_max_step_s(model, 1.5 * 154.0,
+                                             reference_torque_Nm=model.reference_torque_Nm(143.0, s.load_torque_start_Nm))
+    assert gearbox_settings(model, s) == s
+    with pytest.raises(FmuBuildError, match=r"^integrator: 'rk4_seg' unknown for gearboxes"):
+        gearbox_settings(model, s, integrator="rk4_seg")
+    with pytest.raises(FmuBuildError, match=r"^stop_time_s: "):
+        gearbox_settings(model, s, stop_time_s=-1.0)
+    with pytest.raises(FmuBuildError, match=r"^settings: expected GearboxRunSettings, got object"):
+        build_gearbox_fmu(model, example["dir"] / "x.fmu", settings=object())

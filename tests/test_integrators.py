@@ -533,20 +533,24 @@ def test_rk4_node_matches_event_located_dop853_like_rk4_kink(name):
 def test_default_integrator_is_rk4_node_everywhere(tmp_path):
     """The default is rk4_node, the same in the native solver, the scene, both FMU builders
     and the FMU parameter start value of an FMU built with defaults (docs/native.md
-    "Integrators" justifies it); a scene may still choose 'rk4_kink' or 'rk4'."""
+    "Integrators" justifies it); a scene may still choose 'rk4_kink' or 'rk4'.  The solvers and
+    the builders take the run settings' default (their ``integrator`` None: RunSettings')."""
     import inspect
     import xml.etree.ElementTree as ET
     import zipfile
 
+    from gearfmu.common.settings import RunSettings
     from gearfmu.dynamics import native
     from gearfmu.scene.reader import default_scene_path, load_scene
     from gearfmu.fmu.standalone_build import build_standalone_fmu
 
-    assert DEFAULT_INTEGRATOR == native.DEFAULT_INTEGRATOR == "rk4_node"
-    assert inspect.signature(simulate).parameters["integrator"].default == "rk4_node"
-    assert inspect.signature(simulate_sdof).parameters["integrator"].default == "rk4_node"
-    assert inspect.signature(build_fmu).parameters["integrator"].default in (2, "rk4_node")
-    assert inspect.signature(build_standalone_fmu).parameters["integrator"].default in (2, "rk4_node")
+    assert DEFAULT_INTEGRATOR == native.DEFAULT_INTEGRATOR == RunSettings().integrator == "rk4_node"
+    for f in (simulate, simulate_sdof, build_fmu, build_standalone_fmu):
+        assert inspect.signature(f).parameters["integrator"].default is None, f
+    tb0 = hcr_case()[0]
+    run = dict(stop_time_s=1e-3, comm_step_s=1e-4, pinion_torque_Nm=1.0, damping_ratio=0.02)
+    assert simulate(tb0, pinion_speed_start_rad_s=10.0, **run).info["integrator"] == "rk4_node"
+    assert simulate_sdof(tb0, omega1_rad_s=10.0, **run).info["integrator"] == "rk4_node"
     assert load_scene(None).solver.integrator == "rk4_node"
     text = default_scene_path().read_text(encoding="utf-8")
     assert 'integrator = "rk4_node"' in text

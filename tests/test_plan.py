@@ -308,14 +308,14 @@ def test_planned_fmu_states_and_checks_its_verified_envelope(small, monkeypatch)
     the model description); driven inside the verified torque range [80, 200] N*m they log no
     warning, at 260 N*m exactly one envelope warning naming the input, its value and the range,
     and the steps stay fmi2OK (docs/fmu.md "Verified envelope")."""
-    import gearfmu.plan
+    import gearfmu.plan.planner
     from gearfmu.fmu.crossbuild import host_key
     from gearfmu.pipeline import build, gear_torque_for
 
     from test_envelope_fmu import _both, _record
 
     scene, plan, d = small
-    monkeypatch.setattr(gearfmu.plan, "plan_scene", lambda s, progress=False: plan)
+    monkeypatch.setattr(gearfmu.plan.planner, "plan_scene", lambda s, progress=False: plan)
     res = {"standalone": build(scene, d / "env_sa.fmu", runtime="standalone", platforms=[host_key()]),
            "pythonfmu": build(scene, d / "env_py.fmu", runtime="pythonfmu")}
     fmus = {k: r.fmu_path for k, r in res.items()}
@@ -484,7 +484,7 @@ def test_warm_up_through_fmus_thermal_dropped_compared_at_the_same_temperatures(
     import fmpy
 
     from gearfmu.plan import verify_fmus
-    from gearfmu.plan_verify import MEASURES
+    from gearfmu.plan.verify import MEASURES
 
     s = _warm_scene(tmp_path, 0.3)
     plan = plan_scene(s)
@@ -527,14 +527,14 @@ def test_contact_model_what_if_rows_follow_what_the_scene_states(tmp_path):
     "Choices and levels")."""
     from gearfmu.contact.models import CONTACT_MODELS
     from gearfmu.scene.envelope import accuracy_of
-    from gearfmu.plan import _choices, _what_if_contact
+    from gearfmu.plan.choices import choices_of, what_if_contact
 
     assert {"hertz", "smooth_ehl", "rough_ehl"} <= set(CONTACT_MODELS)
 
     def rows(text):
         s = _scene(tmp_path, text, "c.toml")
-        assert _choices(s, envelope_of(s), accuracy_of(s))["contact_model"].levels == [s.mesh.contact_model]
-        return {r["contact_model"]: r["skipped"] for r in _what_if_contact(s)}
+        assert choices_of(s, envelope_of(s), accuracy_of(s))["contact_model"].levels == [s.mesh.contact_model]
+        return {r["contact_model"]: r["skipped"] for r in what_if_contact(s)}
 
     assert rows(PLAIN) == {"smooth_ehl": "the scene has no [lubricant]", "rough_ehl": "the scene has no [lubricant]"}
     assert rows(PLAIN + LUBRICANT) == {"smooth_ehl": None, "rough_ehl": "the scene has no [roughness]"}
@@ -566,7 +566,7 @@ def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
     import dataclasses
     from pathlib import Path
 
-    from gearfmu.plan import _thermal_options
+    from gearfmu.plan.choices import thermal_options
     from gearfmu.assembly.precompute import precompute_tables
 
     text = ((Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed004_pair1.toml").read_text()
@@ -575,14 +575,14 @@ def test_oil_axis_under_a_hertz_plan_loses_its_oil_part():
             .replace("temperature_C = 60.0", "temperature_C = 40.0"))
     oil = load_scene(text + '\n[thermal]\naxis_quantity = "oil"\ntemperature_axis_C = [40.0, 80.0]\n')
     env = envelope_of(oil)
-    th = _thermal_options(oil, env, "smooth_ehl")
+    th = thermal_options(oil, env, "smooth_ehl")
     assert th.axis_quantity == "oil" and tuple(th.temperature_axis_C) == (40.0, 80.0)
-    th = _thermal_options(oil, env, "hertz")
+    th = thermal_options(oil, env, "hertz")
     assert len(th.temperature_axis_C) == 0 and th.axis_quantity == "bulk"
 
     both = load_scene(text + '\n[thermal]\naxis_quantity = "bulk_and_oil"\nstandard_temperature_C = 40.0\n'
                       'temperature_axis_C = [40.0, 80.0]\n')
-    th = _thermal_options(both, envelope_of(both), "hertz")
+    th = thermal_options(both, envelope_of(both), "hertz")
     assert th.axis_quantity == "bulk" and tuple(th.temperature_axis_C) == (40.0, 80.0)
     hz = dataclasses.replace(both.mesh, contact_model="hertz")
     kw = dict(points_per_mesh=8, nominal_torque_Nm=both.operating.torque_Nm)
@@ -601,8 +601,8 @@ def test_greedy_candidate_is_the_cheapest_fitting_level_not_the_first():
     # measured levels below the current one that fit the room left, the one of the lowest
     # estimated cost; a level over the room, an unmeasured one and one with an infinite
     # error are never taken.
-    from gearfmu.plan import _cheapest_fit
-    from gearfmu.plan_choices import Choice
+    from gearfmu.plan.choices import Choice
+    from gearfmu.plan.planner import cheapest_fit
     from gearfmu.scene.envelope import AccuracyTarget
 
     acc = AccuracyTarget()
@@ -611,9 +611,46 @@ def test_greedy_candidate_is_the_cheapest_fitting_level_not_the_first():
     c = Choice(name="integrator", levels=["rk4", "rk4_seg", "rk4_node", "rk4_kink"])
     c.measured = {0: m(0.9), 1: m(0.1), 2: m(0.2), 3: m(0.0)}
     cost = {0: 0.2, 1: 0.6, 2: 0.4, 3: 1.0}
-    assert _cheapest_fit(c, 3, 0.5, acc, cost.get) == (0.4, 2, pytest.approx(0.2))
-    assert _cheapest_fit(c, 2, 0.5, acc, cost.get) == (0.6, 1, pytest.approx(0.1))   # below level 2 only
-    assert _cheapest_fit(c, 3, 0.15, acc, cost.get) == (0.6, 1, pytest.approx(0.1))  # level 2 over the room
+    assert cheapest_fit(c, 3, 0.5, acc, cost.get) == (0.4, 2, pytest.approx(0.2))
+    assert cheapest_fit(c, 2, 0.5, acc, cost.get) == (0.6, 1, pytest.approx(0.1))   # below level 2 only
+    assert cheapest_fit(c, 3, 0.15, acc, cost.get) == (0.6, 1, pytest.approx(0.1))  # level 2 over the room
     c.measured = {0: m(math.inf), 1: m(0.1)}
-    assert _cheapest_fit(c, 3, 0.5, acc, cost.get)[1] == 1
-    assert _cheapest_fit(c, 1, 0.5, acc, cost.get) is None
+    assert cheapest_fit(c, 3, 0.5, acc, cost.get)[1] == 1
+    assert cheapest_fit(c, 1, 0.5, acc, cost.get) is None
+
+
+def test_resolve_is_what_a_build_builds(small, monkeypatch):
+    """gearfmu.plan.resolve, the one rule of `gearfmu build` and `gearfmu validate`: a scene with
+    [accuracy] -> its planned scene, the plan and the plan's verified envelope (a plan not within
+    its target refused); without it -> the scene as written, no plan, and the as-written estimate
+    only when asked (an estimate that fails is recorded with its reason); an oversized scene is
+    refused before anything is planned."""
+    import dataclasses
+
+    import gearfmu.plan.planner as planner
+    from gearfmu.plan import PlanError, resolve
+    from gearfmu.assembly.estimate import BuildTooLargeError
+
+    scene, plan, _ = small
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: plan)
+    built, got, verified = resolve(scene)
+    assert got is plan and verified == plan.verified_envelope and built == planned_scene(scene, plan)
+    assert built.accuracy is None
+    bad = dataclasses.replace(plan, verification=dict(plan.verification, within_target=False, refused="budget"))
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: bad)
+    with pytest.raises(PlanError, match=r"accuracy: the fidelity plan of scene .* \(budget\)"):
+        resolve(scene)
+    plain = dataclasses.replace(scene, accuracy=None)
+    assert resolve(plain) == (plain, None, None)
+
+    def fails(s, progress=False):
+        raise ValueError("no envelope point")
+    monkeypatch.setattr(planner, "estimate_as_written", fails)
+    assert resolve(plain, estimate_accuracy=True) == (
+        plain, None, {"kind": "as-written estimate", "error": "ValueError: no envelope point"})
+    huge = dataclasses.replace(plain, tables=dataclasses.replace(plain.tables, points_per_mesh=1_000_000),
+                               mesh=dataclasses.replace(plain.mesh, slices=1000))
+    monkeypatch.setattr(planner, "plan_scene", lambda s, progress=False: pytest.fail("planned an oversized scene"))
+    with pytest.raises(BuildTooLargeError):
+        resolve(dataclasses.replace(huge, accuracy=scene.accuracy))
+    assert resolve(huge, allow_large=True)[0] is huge

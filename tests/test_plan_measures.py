@@ -1,4 +1,4 @@
-"""The planner's error measures and its determinism (gearfmu.plan_verify, gearfmu.plan; docs/plan.md
+"""The planner's error measures and its determinism (gearfmu.plan.verify, gearfmu.plan; docs/plan.md
 "Error measure", "Cost model", "Verification").
 
 References:
@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from gearfmu.plan import plan_scene
-from gearfmu.plan_verify import (HARMONIC_FLOOR, MEASURES, POINT_SPEED_MARGIN_REL, budget_use, limiting_measure,
+from gearfmu.plan.verify import (HARMONIC_FLOOR, MEASURES, POINT_SPEED_MARGIN_REL, budget_use, limiting_measure,
                                  run_errors)
 from gearfmu.scene.reader import load_scene
 

@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import gearfmu.plan_verify as plan_verify
+import gearfmu.plan.verify as plan_verify
 from gearfmu.cli import main
 from gearfmu.plan import format_report, plan_scene
-from gearfmu.plan_choices import PLAN_TABLE_BUILD_S, _choices, _reference_points_per_mesh, skipped_choices
-from gearfmu.plan_evaluator import _Evaluator
+from gearfmu.plan.choices import PLAN_TABLE_BUILD_S, choices_of, reference_points_per_mesh, skipped_choices
+from gearfmu.plan.evaluator import Evaluator
 from gearfmu.scene.envelope import accuracy_of, envelope_of
 from gearfmu.scene.reader import load_scene
 from gearfmu.scene.physics import estimate_build
@@ -137,9 +137,9 @@ def test_coarser_points_per_mesh_taken_from_the_finer_grid_equal_a_build(hertz):
     8th angle); they equal the table builder's own tables at that resolution bit for bit."""
     _, scene = hertz
     env, acc = envelope_of(scene), accuracy_of(scene)
-    ch = _choices(scene, env, acc)
+    ch = choices_of(scene, env, acc)
     full = {n: c.full for n, c in ch.items()}
-    ev = _Evaluator(scene, env, acc, False)
+    ev = Evaluator(scene, env, acc, False)
     ev.tables(full)
     for ppm in (32, 64):
         cfg = dict(full, points_per_mesh=ppm)
@@ -160,12 +160,12 @@ def test_expensive_contact_reference_capped_and_listed():
     for p in (64, 128, 256):
         assert estimate_build(replace(scene, tables=replace(scene.tables, points_per_mesh=p))).build_s \
             > PLAN_TABLE_BUILD_S, p
-    ppm, why = _reference_points_per_mesh(scene)
+    ppm, why = reference_points_per_mesh(scene)
     assert ppm == 32 and "plan-time budget" in why
-    ch = _choices(scene, envelope_of(scene), accuracy_of(scene))
+    ch = choices_of(scene, envelope_of(scene), accuracy_of(scene))
     assert ch["points_per_mesh"].levels == [16, 32]
     rows = [r for r in skipped_choices(ch, []) if r["choice"] == "points_per_mesh"]
     assert rows == [{"choice": "points_per_mesh", "levels": [64, 128, 256], "reason": why}]
     # a Hertz scene keeps the 256-point reference
     hertz = load_scene(ROOT / "examples" / "scenes" / "seed003_table1.toml")
-    assert _reference_points_per_mesh(hertz) == (256, "")
+    assert reference_points_per_mesh(hertz) == (256, "")

@@ -214,15 +214,15 @@ def test_default_scene_full_reference_is_its_own_hertz_contact():
     """The default scene asks for Hertz contact: the full-fidelity model is Hertz; the film models are
     what-if rows, skipped (their film tables are the costly part) and never the reference."""
     from gearfmu.scene.envelope import accuracy_of, envelope_of
-    from gearfmu.plan import _choices
+    from gearfmu.plan.choices import choices_of
 
     s = load_scene(default_scene_path())
     assert s.mesh.contact_model == "hertz"
-    ch = _choices(s, envelope_of(s), accuracy_of(s))
+    ch = choices_of(s, envelope_of(s), accuracy_of(s))
     assert ch["contact_model"].full == "hertz" and ch["contact_model"].levels == ["hertz"]
-    from gearfmu.plan import _what_if_contact
+    from gearfmu.plan.choices import what_if_contact
 
-    rows = {r["contact_model"]: r for r in _what_if_contact(s)}
+    rows = {r["contact_model"]: r for r in what_if_contact(s)}
     assert set(rows) == {"smooth_ehl", "rough_ehl"}
     assert rows["rough_ehl"]["skipped"] == "the scene has no [roughness]"
 
@@ -257,7 +257,7 @@ def test_error_measure_closed_form():
     """The one error measure (docs/plan.md "Error measure") on hand-made signals: y = 1.1 sin against
     y_full = sin over whole periods has rms(diff)/rms(full) = 0.1 exactly and max|diff|/range(full)
     = 0.1 / 2 = 0.05; the DTE and the force are measured independently."""
-    from gearfmu.plan_verify import budget_use, run_errors
+    from gearfmu.plan.verify import budget_use, run_errors
 
     t = np.arange(1000) / 1000
     y = np.sin(2 * np.pi * t)
@@ -285,7 +285,7 @@ def test_failed_fmu_confirmation_is_not_within_target(seed003_plan):
 def test_build_refuses_a_plan_that_is_not_within_target(tmp_path, monkeypatch, capsys):
     """`gearfmu build` of a scene with [accuracy] follows its plan; a plan that is not within its
     target (here: refused, its search budget too small) is not built -- a one-line error, status 2."""
-    import gearfmu.plan as plan_mod
+    import gearfmu.plan.planner as plan_mod
     from gearfmu.pipeline import build
     from gearfmu.plan import PlanError
 
@@ -297,5 +297,14 @@ def test_build_refuses_a_plan_that_is_not_within_target(tmp_path, monkeypatch, c
     p = tmp_path / "s.toml"
     p.write_text(scene.text, encoding="utf-8")
     assert main(["build", str(p), "-o", str(tmp_path / "y.fmu"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "accuracy: the fidelity plan" in err
+    # `gearfmu validate --fmu` resolves the scene as build does (gearfmu.plan.resolve): an FMU of this
+    # scene's text (built as written, so that the scene check passes) is not validated against a
+    # refused plan
+    from gearfmu.stages import build_fmu_from_scene
+
+    fmu = build_fmu_from_scene(scene, tmp_path / "as_written.fmu").fmu_path
+    assert main(["validate", str(p), "--fmu", str(fmu), "-q"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "accuracy: the fidelity plan" in err

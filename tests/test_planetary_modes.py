@@ -23,7 +23,7 @@ import pytest
 from gearfmu.assembly.planetary_lumped import LumpedPlanetary, lumped_stage
 from gearfmu.planetary.model import build_drivetrain
 from gearfmu.planetary.modes import campbell, modes, multiplicities
-from gearfmu.planetary_cases import LIN_PARKER_1999, lp_model
+from gearfmu.bench import LIN_PARKER_1999, lp_model
 from lin_parker import PUBLISHED, RS, TEETH, hz, lin_parker_matrices, torsional_matrices
 
 

@@ -3,10 +3,10 @@
 * The event-located reference: gearfmu.planetary.reference.simulate_reference -- the same equations
   written again in plain Python over the pair reference's table pieces and force law, integrated by
   solve_ivp DOP853 at rtol 1e-10 with every table node and contact change of every mesh located as
-  an event (no numba code shared).  Hard cases of gearfmu.planetary_cases: contact loss in every
-  mesh of a three-planet stage with backlash at light load (sequential phases), four planets on a
-  floating sun with a pin position error, and a carrier-driven stage (its meshes run their tables
-  backwards) followed by a parallel stage.  The event-aware integrators meet it within 5e-5 of each
+  an event (no numba code shared).  Planetary hard cases of gearfmu.bench: contact loss in every
+  mesh of a three-planet stage with backlash after a sudden unloading (sequential phases), four
+  planets on a floating sun with a pin position error, and a carrier-driven stage (its meshes run
+  their tables backwards) followed by a parallel stage.  The event-aware integrators meet it within 5e-5 of each
   signal's range at the default step and within 5e-7 at a quarter of it (fourth order).
 * The gearbox solver (gearfmu.gearbox.native): a drivetrain of parallel stages only is the
   gearbox's model; both solvers agree to 1e-9.
@@ -43,7 +43,7 @@ from gearfmu.gearbox.native import simulate as simulate_gearbox
 from gearfmu.planetary.model import build_drivetrain
 from gearfmu.planetary.native import output_units, simulate
 from gearfmu.planetary.reference import simulate_reference
-from gearfmu.planetary_cases import lp_stage, planetary_case, run_kwargs
+from gearfmu.bench import lp_stage, planetary_case, run_kwargs
 from lin_parker import PUBLISHED, lin_parker_matrices, sun_mesh_vector
 
 _REF = {}

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gearfmu import drivetrain
+from gearfmu import pipeline
 from gearfmu.cli import main
 from gearfmu.planetary.native import simulate as simulate_planetary
 from gearfmu.scene.drivetrain import load_drivetrain
@@ -36,8 +36,8 @@ REDUCER = ROOT / "examples" / "scenes" / "planetary_reducer.toml"
 def test_lin_parker_example_scene_has_the_published_frequencies_and_structure():
     sc = load_drivetrain(LP)
     assert sc.planetaries[0].form == "lumped" and sc.total_ratio == pytest.approx(5.0, rel=1e-15)
-    model = drivetrain.drivetrain_model(sc, drivetrain.stage_tables(sc))
-    res, cb = drivetrain.modes_report("drivetrain", sc, model)
+    model = pipeline.drivetrain_model(sc, pipeline.stage_tables(sc))
+    res, cb = pipeline.modes_report("drivetrain", sc, model)
     got = np.array([m.frequency_Hz for m in res.modes])
     np.testing.assert_allclose(got, hz(*lin_parker_matrices(4)), rtol=1e-5, atol=1e-3)
     kinds = {}
@@ -57,8 +57,8 @@ def test_planetary_reducer_example():
     assert ps.form == "geometry" and ps.sun_torque_Nm == pytest.approx(195.0, rel=1e-12)
     assert ps.ratio == {"sun": 1.0, "carrier": pytest.approx(21 / 102, rel=1e-12), "ring": 0.0}
     assert any(n.startswith("ps: planetary stage (geometry, translational, 3 planets, ring held)") for n in sc.notes)
-    model = drivetrain.drivetrain_model(sc, drivetrain.stage_tables(sc))
-    r = drivetrain.simulate_drivetrain(sc, model, stop_time_s=2e-3)
+    model = pipeline.drivetrain_model(sc, pipeline.stage_tables(sc))
+    r = pipeline.simulate_drivetrain(sc, model, stop_time_s=2e-3)
     st = model.stages[0]
     rb_s = next(t for n, t in zip(model.mesh_names, model.mesh_tables) if n == "ps.sun_planet[1]").base_radius_pinion_m
     assert st["planets"] == 3 and np.all(np.isfinite(r["load_speed"]))

@@ -143,7 +143,7 @@ def test_flagged_points_are_explained_where_they_are_printed():
 
 # ---------------------------------------------------------------- plan report
 def _plan_dict():
-    from gearfmu.plan_verify import MEASURES
+    from gearfmu.plan.verify import MEASURES
 
     contrib = {"tvms_rel": 0.0, **{k: 0.0 for k in MEASURES}, "budget_use": 0.0, "limit": "dte_rel"}
     return {"scene": "fr", "target": {"dte_rel": 0.02, "mesh_force_rel": 0.02, "safety_factor": 1.0,

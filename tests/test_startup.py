@@ -21,7 +21,7 @@ import gearfmu.fmu.validation as validation
 from gearfmu.common.cache import CacheWarning, cache_dir
 from gearfmu.fmu.crossbuild import host_key
 from gearfmu.fmu.standalone_build import build_standalone_fmu
-from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
+from gearfmu.pipeline import compute_tables, load, run_settings
 from gearfmu.ssp import SspError, build_ssp, validate_ssp_dir
 
 RECORD = f"{validation.VALIDATION_DIR}/record.json"
@@ -44,12 +44,8 @@ def test_importing_the_cli_loads_no_planner_plots_or_heavy_scipy():
 def default_case():
     scene = load(None)
     tables = compute_tables(scene)
-    t1 = scene.operating.torque_Nm
-    params = {"damping_ratio": scene.fmu.damping_ratio, "pinion_speed_start_rad_s": scene.operating.speed_rad_s,
-              "pinion_angle_start_rad": 0.0, "pinion_torque_start_Nm": t1,
-              "gear_torque_start_Nm": gear_torque_for(tables, t1), "max_step_s": max_step_for(scene, tables),
-              "damping_model": 0, "integrator": 1}
-    return scene, tables, params
+    settings = dataclasses.replace(run_settings(scene, tables), integrator="rk4_kink")
+    return scene, tables, settings
 
 
 @pytest.fixture
@@ -64,19 +60,19 @@ def native_runs(monkeypatch):
     calls = []
     real = validation.simulate
 
-    def counted(tables, **kw):
-        calls.append(kw)
-        return real(tables, **kw)
+    def counted(tables, settings=None, **kw):
+        calls.append(dict(kw, settings=settings))
+        return real(tables, settings, **kw)
 
     monkeypatch.setattr(validation, "simulate", counted)
     return calls
 
 
 def _record(case, *, tables=None, stop_time_s=0.002, **changes):
-    scene, t, params = case
-    return validation.validation_record(tables if tables is not None else t, runtime="standalone",
-                                        model_identifier="gearfmu_sa_test", parameters={**params, **changes},
-                                        stop_time_s=stop_time_s, output_interval_s=scene.fmu.output_interval_s,
+    scene, t, settings = case
+    return validation.validation_record(tables if tables is not None else t,
+                                        dataclasses.replace(settings, stop_time_s=stop_time_s, **changes),
+                                        runtime="standalone", model_identifier="gearfmu_sa_test",
                                         scene_text=scene.text, compiler="test", envelope=None)
 
 
@@ -110,7 +106,7 @@ def test_a_cache_hit_runs_no_solver_and_gives_the_same_record(default_case, cach
 @pytest.mark.parametrize("change", ["tables", "damping_ratio", "max_step_s", "integrator", "stop_time_s",
                                     "gearfmu_version", "gearfmu_sources"])
 def test_any_change_in_the_key_runs_the_solver_again(default_case, cache, native_runs, monkeypatch, change):
-    scene, tables, params = default_case
+    scene, tables, settings = default_case
     base = _record(default_case)
     assert len(native_runs) == 1
     kw = {}
@@ -119,9 +115,9 @@ def test_any_change_in_the_key_runs_the_solver_again(default_case, cache, native
         k.flat[k.argmax()] *= 1.000001
         kw["tables"] = dataclasses.replace(tables, k_N_per_m=k)
     elif change == "damping_ratio":
-        kw["damping_ratio"] = params["damping_ratio"] * 1.5
+        kw["damping_ratio"] = settings.damping_ratio * 1.5
     elif change == "max_step_s":
-        kw["max_step_s"] = params["max_step_s"] / 2
+        kw["max_step_s"] = settings.max_step_s / 2
     elif change == "integrator":
         kw["integrator"] = 0
     elif change == "stop_time_s":
@@ -199,9 +195,9 @@ def test_an_unwritable_cache_costs_only_the_computation(default_case, tmp_path, 
 def test_the_ssp_schema_check_parses_each_schema_once_and_still_refuses_invalid_files(default_case, tmp_path):
     """Every .ssd and .ssv is still checked against its SSP 1.0 XSD when the parsed schema is
     reused: an attribute the XSD does not allow, in the last file of each kind, is refused."""
-    scene, tables, params = default_case
+    scene, tables, settings = default_case
     fmu = build_standalone_fmu(tables, tmp_path / "g.fmu", platforms=(host_key(),), validation=False,
-                               model_name="sspcheck", max_step_s=params["max_step_s"])
+                               model_name="sspcheck", max_step_s=settings.max_step_s)
     ssp = build_ssp(fmu, tmp_path / "g.ssp", {"nominal": {"damping_ratio": 0.05}, "soft": {"damping_ratio": 0.02}})
     d = tmp_path / "unpacked"
     with zipfile.ZipFile(ssp) as z:

@@ -335,8 +335,8 @@ def _write(path, text) -> str:
 def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
     """A second plan of the same scene reads the tables of its configurations from the cache; the
     cost it records for them stays the computation's time (the planner compares costs)."""
-    from gearfmu import plan_evaluator
-    from gearfmu.plan_choices import _choices
+    from gearfmu.plan import evaluator as plan_evaluator
+    from gearfmu.plan.choices import choices_of
     from gearfmu.scene.envelope import accuracy_of, envelope_of
 
     calls = []
@@ -349,9 +349,9 @@ def test_the_planner_reads_its_configurations_tables_back(cache, monkeypatch):
     monkeypatch.setattr(plan_evaluator, "precompute_tables", counted)
     scene = load_scene(DEFAULT)
     env, acc = envelope_of(scene), accuracy_of(scene)
-    full = {n: c.full for n, c in _choices(scene, env, acc).items()}
-    tb1, dt1 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
-    tb2, dt2 = plan_evaluator._Evaluator(scene, env, acc, False).tables(full)
+    full = {n: c.full for n, c in choices_of(scene, env, acc).items()}
+    tb1, dt1 = plan_evaluator.Evaluator(scene, env, acc, False).tables(full)
+    tb2, dt2 = plan_evaluator.Evaluator(scene, env, acc, False).tables(full)
     assert len(calls) == 1 and _same_arrays(tb1, tb2)
     assert dt2 == tb1.provenance["precompute"]["wall_s"] and "table_cache" in tb2.provenance
 
@@ -366,3 +366,20 @@ def test_a_build_from_kept_tables_reports_the_computation_time(cache, tmp_path):
     assert "table_cache" not in first.tables.provenance and "table_cache" in second.tables.provenance
     assert first.tables_compute_s == first.tables_wall_s
     assert second.tables_compute_s == first.tables.provenance["precompute"]["wall_s"]
+
+
+def test_an_fmu_from_kept_tables_holds_no_path_of_the_build_machine(cache, computed, tmp_path):
+    """An FMU is sent to other teams: no file in it may name a folder of the machine that built
+    it.  The second build reads its tables from the cache; neither the cache folder nor the build
+    folder may appear in any member of the FMU (before: the provenance note named the cache
+    folder)."""
+    scene = load_scene(DEFAULT)
+    pipeline.compute_tables(scene)
+    res = pipeline.build(scene, tmp_path / "kept.fmu")
+    assert len(computed) == 1, "the build computed the tables again instead of reading the cache"
+    machine_paths = {str(cache), str(cache.parent), str(tmp_path)}
+    with zipfile.ZipFile(res.fmu_path) as z:
+        for member in z.namelist():
+            data = z.read(member)
+            for p in machine_paths:
+                assert p.encode() not in data, f"{member} names the build machine's folder {p}"

@@ -195,7 +195,7 @@ def cached_tables(compute: Callable[..., MeshTables], args: dict, provenance: di
             prov["created_utc"] = meta["created_utc"]   # when the tables were computed
             prov["table_cache"] = {
                 "entry": digest, "read_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-                "note": f"read from gearfmu's table cache ({folder}); computed at created_utc in "
+                "note": f"read from gearfmu's table cache; computed at created_utc in "
                         f"{meta['wall_s']:.3g} s"}
             notice(f"tables read from the cache (computed {meta['created_utc']} in {meta['wall_s']:.3g} s; "
                    f"--no-cache computes them again)", enabled=progress or None)

@@ -5,7 +5,8 @@ The root is ``$GEARFMU_CACHE_DIR``, else ``$XDG_CACHE_HOME/gearfmu``, else
 objects, :mod:`gearfmu.fmu.crossbuild`; ``kernels``: the pythonfmu runtime's compiled kernel,
 :func:`gearfmu.fmu.pythonfmu_build.compile_kernel`; ``validation``: the native reference results of
 the validation record, :mod:`gearfmu.fmu.validation`; ``tables``: the tooth-pair tables of a scene,
-:mod:`gearfmu.assembly.table_cache`).
+:mod:`gearfmu.assembly.table_cache`; ``pythons``: where the Pythons that pythonfmu FMUs were built
+with are, read by those FMUs' loader, :func:`gearfmu.fmu.pythonfmu_build.record_build_python`).
 
 An entry is two plain files named by the SHA-256 of its key (a JSON-able dict): ``<digest>.json``
 (the key itself, the caller's metadata and the payload's SHA-256) and ``<digest><suffix>`` (the

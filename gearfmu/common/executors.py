@@ -19,7 +19,7 @@ import multiprocessing as mp
 import warnings
 import threading
 
-__all__ = ["SweepInputError", "make_executor", "cluster", "add_scheduler_option"]
+__all__ = ["SweepInputError", "make_executor", "cluster", "add_scheduler_option", "ManagedExecutor"]
 
 #: the Dask client of the innermost active :func:`cluster` block, or None
 _cluster_client = None
@@ -41,7 +41,7 @@ class _InProcessExecutor(Executor):
         return f
 
 
-class _ManagedExecutor:
+class ManagedExecutor:
     """Context manager owning an executor (and a Dask client when it made one)."""
 
     def __init__(self, executor, client=None, own=True):
@@ -74,19 +74,19 @@ def make_executor(*, scheduler: Optional[str] = None, max_workers: Optional[int]
       :func:`cluster` block the cluster's executor instead of that pool.
     """
     if client is not None:
-        return _ManagedExecutor(client.get_executor(pure=False), None, own=False)
+        return ManagedExecutor(client.get_executor(pure=False), None, own=False)
     if scheduler is not None:
         cl = _connect(scheduler)
-        return _ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
+        return ManagedExecutor(cl.get_executor(pure=False), cl, own=True)
     if _cluster_client is not None and (max_workers is None or int(max_workers) > 1):
         # inside cluster(): the cluster instead of a local pool (whatever this machine's CPU count)
-        return _ManagedExecutor(_cluster_client.get_executor(pure=False), None, own=False)
+        return ManagedExecutor(_cluster_client.get_executor(pure=False), None, own=False)
     n = (os.cpu_count() or 1) if max_workers is None else int(max_workers)
     method = _start_method() if n > 1 else None
     if method is None:
-        return _ManagedExecutor(_InProcessExecutor(), None, own=True)
+        return ManagedExecutor(_InProcessExecutor(), None, own=True)
 
-    return _ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context(method)), None, own=True)
+    return ManagedExecutor(ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context(method)), None, own=True)
 
 
 def _scheduler_address(value) -> str:

@@ -14,7 +14,8 @@ x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
 The compiled parts live in gearfmu.dynamics.model_rhs (table lookup, force
 laws, equilibrium), gearfmu.dynamics.integrators ('rk4', 'rk4_kink', 'rk4_node', 'rk4_seg') and
 gearfmu.dynamics.driver (the one loop over communication steps); this module
-checks the arguments, prepares the tables and inputs and wraps the results.
+checks the inputs (the settings are checked by :class:`gearfmu.common.settings.RunSettings`),
+prepares the tables and inputs and wraps the results.
 
 Public API
 ----------
@@ -23,6 +24,9 @@ Public API
   prescribed constant pinion speed.
 * :func:`dimensionless` -- seed 003 eq 7-9 rescaling of a result.
 * :func:`choose_max_step_s` -- default internal step.
+* :func:`resolve_settings` -- a run's :class:`gearfmu.common.settings.RunSettings` with its
+  automatic values (output interval, step bound, balancing gear torque) resolved on the tables,
+  the rule the FMU builders share.
 * :class:`SimResult` -- result arrays, ``to_csv``, ``wall_s``.
 
 Details and choices: docs/native.md.
@@ -38,10 +42,11 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS, current_spelling
+from ..common.checks import finite_number
+from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
+from ..common.vocabulary import DAMPING_MODELS, DEFAULT_INTEGRATOR, INTEGRATORS
 from ..tables.mesh_tables import MeshTables, TemperatureRangeError
 from ..tables.zones import zone_cuts
-from ..common.checks import finite_number
 from .driver import NO_CUTS, _warmup, compiling, driver_for
 from .integrators import KINK_MAX_SLOTS
 from .model_rhs import _equilibrium, _equilibrium_zoned
@@ -57,8 +62,12 @@ __all__ = [
     "simulate_sdof",
     "dimensionless",
     "choose_max_step_s",
+    "resolve_settings",
+    "integrator_code",
     "equilibrium_dte_m",
     "substeps",
+    "whole_steps",
+    "input_series",
     "write_columns_csv",
 ]
 
@@ -225,7 +234,7 @@ def _finite(name, value, *, positive=False, nonneg=False, error=None) -> float:
                          error=NativeInputError if error is None else error)
 
 
-def _n_steps(stop_time_s, comm_step_s, error=NativeInputError) -> int:
+def whole_steps(stop_time_s, comm_step_s, error=NativeInputError) -> int:
     """Number of communication steps in the run; ``error`` (naming stop_time_s)
     when the stop time is not a whole number of them."""
     n = stop_time_s / comm_step_s
@@ -237,7 +246,7 @@ def _n_steps(stop_time_s, comm_step_s, error=NativeInputError) -> int:
     return nr
 
 
-def _input_series(name, value: InputLike, n_steps: int, comm_step_s: float, error=NativeInputError) -> np.ndarray:
+def input_series(name, value: InputLike, n_steps: int, comm_step_s: float, error=NativeInputError) -> np.ndarray:
     """Input sampled at t_k = k*comm_step_s, k = 0..n_steps (the value held over step k);
     ``error`` naming ``name`` for a value of the wrong shape or not finite."""
     if isinstance(value, float) or type(value) is int:  # a number: one check, one fill
@@ -331,59 +340,66 @@ def _max_step_s(t: MeshTables, w: float, ppp: int) -> float:
     return period / ppp
 
 
-def _integrator_code(integrator, slots) -> int:
-    if integrator not in INTEGRATORS:
-        raise NativeInputError(f"integrator: {integrator!r} unknown; choose one of {sorted(INTEGRATORS)}")
+def integrator_code(integrator: str, slots: int, error=NativeInputError) -> int:
+    """The code of a (checked) integrator name on tables of ``slots`` slots: the event-locating
+    integrators handle at most :data:`KINK_MAX_SLOTS` slots (``error`` naming ``integrator``
+    otherwise; the FMU builders use this check too)."""
     if integrator != "rk4" and slots > KINK_MAX_SLOTS:
-        raise NativeInputError(f"integrator: {integrator!r} handles at most {KINK_MAX_SLOTS} slots, "
-                               f"the tables have {slots}")
+        raise error(f"integrator: {integrator!r} handles at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
     return INTEGRATORS[integrator]
 
 
-@dataclass(frozen=True)
-class RunArguments:
-    """The checked arguments that :func:`simulate`, :func:`simulate_sdof` and
-    gearfmu.dynamics.reference.simulate_reference share (SI units): ``speed_rad_s`` the start
-    (or prescribed) pinion speed; torques one value per communication step (n_steps + 1,
-    :func:`_input_series`); ``dte_start_m`` None = the solver's equilibrium start."""
+def resolve_settings(tables: MeshTables, settings: RunSettings, *,
+                     step_speed_rad_s: Optional[float] = None) -> RunSettings:
+    """``settings`` with its automatic values resolved on (checked) ``tables``: the output
+    interval (:meth:`RunSettings.output_interval_for` at the start speed and the pinion's teeth),
+    the step bound (:func:`choose_max_step_s`'s rule at ``step_speed_rad_s``, rad/s; None: 1.5 x
+    the start speed, at least 1 rad/s) and the gear's start torque (the static balance
+    T1 Rb2/Rb1, seed 003: F_m = T1/Rb1 = T2/Rb2).  The native solver and both FMU builders
+    resolve them by this one rule, so a run configured alike is the same run."""
+    s = settings
+    changes = {}
+    if s.output_interval_s is None:
+        changes["output_interval_s"] = s.output_interval_for(s.pinion_speed_start_rad_s, tables.teeth_pinion)
+    if s.max_step_s is None:
+        w = max(1.5 * abs(s.pinion_speed_start_rad_s), 1.0) if step_speed_rad_s is None else abs(step_speed_rad_s)
+        changes["max_step_s"] = _max_step_s(tables, w, 64)
+    if s.gear_torque_start_Nm is None:
+        changes["gear_torque_start_Nm"] = (s.pinion_torque_start_Nm * float(tables.base_radius_gear_m)
+                                           / float(tables.base_radius_pinion_m))
+    return dataclasses.replace(s, **changes) if changes else s
 
-    stop_time_s: float
-    comm_step_s: float
-    n_steps: int
-    damping_ratio: float
-    damping_model: str
-    speed_rad_s: float
-    pinion_torque_Nm: np.ndarray
-    gear_torque_Nm: np.ndarray
-    pinion_angle_start_rad: float
-    dte_start_m: Optional[float]
-    dte_rate_start_m_s: float
+
+def _settings(settings, error=NativeInputError, names=SOLVER_ARGUMENTS, **changes) -> RunSettings:
+    """The run's settings: ``settings`` (None: the :class:`RunSettings` defaults) with the
+    keyword arguments given (not None) in place of its fields, checked (``error`` naming the
+    argument, ``names``: field -> argument name)."""
+    return checked(settings, error, RunSettings, names, **changes)
 
 
-def run_arguments(tables: MeshTables, *, speed_name: str, speed_rad_s, stop_time_s, comm_step_s, pinion_torque_Nm,
-                  gear_torque_Nm, damping_ratio, damping_model, pinion_angle_start_rad, dte_start_m,
-                  dte_rate_start_m_s, error=NativeInputError) -> RunArguments:
-    """Check and convert the run arguments common to the solvers; ``error`` (default
-    NativeInputError) names the first bad one.  ``speed_name`` is the speed's argument name;
-    ``gear_torque_Nm`` None is the balancing load T2 = T1*Rb2/Rb1 (seed 003: F_m = T1/Rb1 =
-    T2/Rb2) on the radii of ``tables`` (already checked by the caller)."""
-    w = _finite(speed_name, speed_rad_s, error=error)
-    stop = _finite("stop_time_s", stop_time_s, positive=True, error=error)
-    H = _finite("comm_step_s", comm_step_s, positive=True, error=error)
-    zeta = _finite("damping_ratio", damping_ratio, nonneg=True, error=error)
-    damping_model = current_spelling("damping_model", damping_model)
-    if damping_model not in DAMPING_MODELS:
-        raise error(f"damping_model: {damping_model!r} unknown; choose one of {sorted(DAMPING_MODELS)}")
-    n_steps = _n_steps(stop, H, error=error)
-    t1s = _input_series("pinion_torque_Nm", pinion_torque_Nm, n_steps, H, error=error)
-    if gear_torque_Nm is None:
-        t2s = t1s * float(tables.base_radius_gear_m) / float(tables.base_radius_pinion_m)
+def run_inputs(tables: MeshTables, s: RunSettings, pinion_torque_Nm, gear_torque_Nm, error=NativeInputError):
+    """(number of communication steps, pinion torque, gear torque) of a run with resolved settings
+    ``s`` (:func:`resolve_settings`): the torques one value per communication step (n_steps + 1,
+    :func:`input_series`).  ``pinion_torque_Nm`` None: the start torque held; ``gear_torque_Nm``
+    None: the balancing load T2 = T1*Rb2/Rb1 of the pinion input given, else the settings' start
+    torque held.  ``error`` names the first bad one."""
+    n_steps = whole_steps(s.stop_time_s, s.output_interval_s, error=error)
+    H = s.output_interval_s
+    t1s = input_series("pinion_torque_Nm", s.pinion_torque_start_Nm if pinion_torque_Nm is None else pinion_torque_Nm,
+                       n_steps, H, error=error)
+    if gear_torque_Nm is not None:
+        t2s = input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H, error=error)
+    elif pinion_torque_Nm is None:
+        t2s = input_series("gear_torque_Nm", s.gear_torque_start_Nm, n_steps, H, error=error)
     else:
-        t2s = _input_series("gear_torque_Nm", gear_torque_Nm, n_steps, H, error=error)
-    th0 = _finite("pinion_angle_start_rad", pinion_angle_start_rad, error=error)
+        t2s = t1s * float(tables.base_radius_gear_m) / float(tables.base_radius_pinion_m)
+    return n_steps, t1s, t2s
+
+
+def start_state(dte_start_m, dte_rate_start_m_s, error=NativeInputError):
+    """(x0 or None, v0): the given start deflection (m; None: the quasi-static equilibrium) and rate (m/s)."""
     x0 = None if dte_start_m is None else _finite("dte_start_m", dte_start_m, error=error)
-    v0 = _finite("dte_rate_start_m_s", dte_rate_start_m_s, error=error)
-    return RunArguments(stop, H, n_steps, zeta, damping_model, w, t1s, t2s, th0, x0, v0)
+    return x0, _finite("dte_rate_start_m_s", dte_rate_start_m_s, error=error)
 
 
 def _equilibrium_x(t, arrays, theta1, t1):
@@ -459,48 +475,56 @@ def _integrate(t, arrays, icode, sdof, th0, w0, x0, v0, t1s, t2s, H, n_sub, h, c
                    done, dict(info, events=int(events.sum())))
 
 
-def _solve(t, a: RunArguments, icode, sdof, max_step_s, form, info) -> SimResult:
+def _solve(t, s: RunSettings, t1s, t2s, x0, v0, icode, sdof, form, info) -> SimResult:
     """The run of :func:`simulate` (``sdof`` False) or :func:`simulate_sdof` (True) on checked
-    tables ``t`` and arguments ``a`` (:func:`run_arguments`): substeps of at most ``max_step_s``,
-    damping, initial state, the compiled driver; ``info`` follows form and equivalent mass."""
-    H = a.comm_step_s
-    n_sub = substeps(H, _finite("max_step_s", max_step_s, positive=True))
+    tables ``t``, resolved settings ``s`` (:func:`resolve_settings`), the torque inputs (one
+    value per communication step, :func:`run_inputs`) and the start state (x0 None: the
+    equilibrium): substeps of at most ``s.max_step_s``, damping, initial state, the compiled
+    driver; ``info`` follows form and equivalent mass."""
+    H = s.output_interval_s
+    n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
-    c, me = _damping(t, a.damping_ratio)
+    c, me = _damping(t, s.damping_ratio)
     with compiling(icode):  # the first run after installing gearfmu compiles all of this: one line
         arrays = _arrays(t)
-        th0 = a.pinion_angle_start_rad
-        x0 = _initial_x(t, arrays, th0, a.pinion_torque_Nm[0], a.dte_start_m)
+        th0 = s.pinion_angle_start_rad
+        x0 = _initial_x(t, arrays, th0, t1s[0], x0)
         _warmup(icode)
-    return _integrate(t, arrays, icode, sdof, th0, a.speed_rad_s, x0, a.dte_rate_start_m_s, a.pinion_torque_Nm,
-                      a.gear_torque_Nm, H, n_sub, h, c, me, DAMPING_MODELS[a.damping_model], a.damping_model,
-                      {"form": form, "equivalent_mass_kg": me, **info})
+    return _integrate(t, arrays, icode, sdof, th0, s.pinion_speed_start_rad_s, x0, v0, t1s, t2s, H, n_sub, h, c, me,
+                      DAMPING_MODELS[s.damping_model], s.damping_model, {"form": form, "equivalent_mass_kg": me, **info})
 
 
 def simulate(
     tables: MeshTables,
+    settings: Optional[RunSettings] = None,
     *,
-    stop_time_s: float,
-    comm_step_s: float,
+    stop_time_s: Optional[float] = None,
+    comm_step_s: Optional[float] = None,
     max_step_s: Optional[float] = None,
-    pinion_torque_Nm: InputLike,
+    pinion_torque_Nm: Optional[InputLike] = None,
     gear_torque_Nm: Optional[InputLike] = None,
-    pinion_speed_start_rad_s: float,
-    damping_ratio: float,
-    damping_model: str = "elastobacklash",
-    pinion_angle_start_rad: float = 0.0,
+    pinion_speed_start_rad_s: Optional[float] = None,
+    damping_ratio: Optional[float] = None,
+    damping_model: Optional[str] = None,
+    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
-    integrator: str = DEFAULT_INTEGRATOR,
+    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[InputLike] = None,
 ) -> SimResult:
     """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
 
+    ``settings``: the run's :class:`gearfmu.common.settings.RunSettings` (None: its defaults);
+    the keyword arguments of the same meaning, when given, replace its fields: ``stop_time_s``,
+    ``comm_step_s`` (the communication step H = ``output_interval_s``; None: the default interval
+    at the start speed), ``max_step_s`` (None: :func:`choose_max_step_s` at 1.5 x the start speed,
+    at least 1 rad/s), ``pinion_speed_start_rad_s``, ``damping_ratio``, ``damping_model``,
+    ``pinion_angle_start_rad``, ``integrator``.
     Inputs (N*m) are a float, an array with one value per communication step
     (n or n+1 values; value k is held over [t_k, t_k+H)), or a callable of
-    time t_k (s).  ``gear_torque_Nm`` None means the balancing load
-    T2 = T1*Rb2/Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2).  ``max_step_s`` None
-    means :func:`choose_max_step_s` at 1.5 x the start speed (at least 1 rad/s).
+    time t_k (s); ``pinion_torque_Nm`` None: the settings' start torque held.
+    ``gear_torque_Nm`` None means the balancing load T2 = T1*Rb2/Rb1 of the pinion input
+    (seed 003: F_m = T1/Rb1 = T2/Rb2; without a pinion input: the settings' gear start torque).
     ``dte_start_m`` / ``dte_rate_start_m_s`` (m, m/s) start from a given state
     instead of the quasi-static equilibrium at rest relative motion, e.g. the
     last state of a previous run (continuation in a speed sweep).
@@ -518,6 +542,9 @@ def simulate(
     input ``bulk_temperature``, an input like the torques (None: the tables'
     ``default_temperature_C``); docs/model.md "Temperature axis".
     """
+    s = _settings(settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
+                  pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
+                  damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad, integrator=integrator)
     temperature_axis = isinstance(tables, MeshTables) and tables.has_temperature_axis
     if temperature_axis:
         t = _validated(tables)
@@ -525,40 +552,39 @@ def simulate(
         raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     else:
         t = _check_tables(tables)
-        icode = _integrator_code(integrator, t.slots)
-    a = run_arguments(t, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
-                      stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,
-                      gear_torque_Nm=gear_torque_Nm, damping_ratio=damping_ratio, damping_model=damping_model,
-                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
-                      dte_rate_start_m_s=dte_rate_start_m_s)
+        icode = integrator_code(s.integrator, t.slots)
+    s = resolve_settings(t, s)
+    n_steps, t1s, t2s = run_inputs(t, s, pinion_torque_Nm, gear_torque_Nm)
+    x0, v0 = start_state(dte_start_m, dte_rate_start_m_s)
     if temperature_axis:
-        return _simulate_temperature_axis(t, a, bulk_temperature_C, max_step_s, integrator)
-    if max_step_s is None:
-        max_step_s = _max_step_s(t, max(1.5 * abs(a.speed_rad_s), 1.0), 64)
-    return _solve(t, a, icode, False, max_step_s, "two-inertia (docs/model.md)", {"integrator": integrator})
+        return _simulate_temperature_axis(t, s, n_steps, t1s, t2s, x0, v0, bulk_temperature_C)
+    return _solve(t, s, t1s, t2s, x0, v0, icode, False, "two-inertia (docs/model.md)", {"integrator": s.integrator})
 
 
 def simulate_sdof(
     tables: MeshTables,
+    settings: Optional[RunSettings] = None,
     *,
-    omega1_rad_s: float,
-    stop_time_s: float,
-    comm_step_s: float,
+    omega1_rad_s: Optional[float] = None,
+    stop_time_s: Optional[float] = None,
+    comm_step_s: Optional[float] = None,
     max_step_s: Optional[float] = None,
-    pinion_torque_Nm: InputLike,
-    damping_ratio: float,
-    damping_model: str = "elastobacklash",
-    pinion_angle_start_rad: float = 0.0,
+    pinion_torque_Nm: Optional[InputLike] = None,
+    damping_ratio: Optional[float] = None,
+    damping_model: Optional[str] = None,
+    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
-    integrator: str = DEFAULT_INTEGRATOR,
+    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[float] = None,
 ) -> SimResult:
     """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
 
-    The pinion turns at the prescribed constant speed: theta1 = theta1_0 +
-    omega1*t; states [x (m), v (m/s)]; m_e dv/dt + F = F_m with F_m = T1/Rb1 and
-    F the same per-pair force sum as :func:`simulate` (de_j = slope*omega1).
+    The pinion turns at the prescribed constant speed ``omega1_rad_s`` (the settings'
+    ``pinion_speed_start_rad_s``): theta1 = theta1_0 + omega1*t; states [x (m), v (m/s)];
+    m_e dv/dt + F = F_m with F_m = T1/Rb1 and F the same per-pair force sum as
+    :func:`simulate` (de_j = slope*omega1).  Settings and keyword arguments as :func:`simulate`
+    (``max_step_s`` None: :func:`choose_max_step_s` at the speed, at least 1 rad/s).
     Same RK4 arithmetic and substeps; stage times t, t+h/2, t+h/2, t+h with
     t = k*H + i*h.  The gear outputs are the derived ones of docs/model.md.
     ``integrator`` 'rk4_kink' (and 'rk4_node', 'rk4_seg') integrates theta1 as a state with omega1' = 0
@@ -566,22 +592,24 @@ def simulate_sdof(
     ``bulk_temperature_C`` (degC, constant; tables with a temperature axis):
     the run uses ``tables.at_temperature`` (None: ``default_temperature_C``).
     """
+    s = _settings(settings, names=dict(SOLVER_ARGUMENTS, pinion_speed_start_rad_s="omega1_rad_s"),
+                  stop_time_s=stop_time_s, output_interval_s=comm_step_s, max_step_s=max_step_s,
+                  pinion_speed_start_rad_s=omega1_rad_s, damping_ratio=damping_ratio, damping_model=damping_model,
+                  pinion_angle_start_rad=pinion_angle_start_rad, integrator=integrator)
     if isinstance(tables, MeshTables) and tables.has_temperature_axis:
         tables = _at_temperature(tables, tables.default_temperature_C if bulk_temperature_C is None
                                  else bulk_temperature_C)
     elif bulk_temperature_C is not None:
         raise NativeInputError("bulk_temperature_C: the tables have no temperature axis")
     t = _check_tables(tables)
-    icode = _integrator_code(integrator, t.slots)
-    a = run_arguments(t, speed_name="omega1_rad_s", speed_rad_s=omega1_rad_s, stop_time_s=stop_time_s,
-                      comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm, gear_torque_Nm=None,
-                      damping_ratio=damping_ratio, damping_model=damping_model,
-                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
-                      dte_rate_start_m_s=dte_rate_start_m_s)
-    if max_step_s is None:
-        max_step_s = _max_step_s(t, max(abs(a.speed_rad_s), 1.0), 64)
-    return _solve(t, a, icode, True, max_step_s, "time-indexed SDOF (seed 003 eq 3-6)",
-                  {"omega1_rad_s": a.speed_rad_s, "integrator": integrator})
+    icode = integrator_code(s.integrator, t.slots)
+    w = s.pinion_speed_start_rad_s
+    s = resolve_settings(t, s, step_speed_rad_s=max(abs(w), 1.0))
+    # the gear torque: the balance of the pinion's (recorded; the prescribed speed makes it act on nothing)
+    _, t1s, t2s = run_inputs(t, s, s.pinion_torque_start_Nm if pinion_torque_Nm is None else pinion_torque_Nm, None)
+    x0, v0 = start_state(dte_start_m, dte_rate_start_m_s)
+    return _solve(t, s, t1s, t2s, x0, v0, icode, True, "time-indexed SDOF (seed 003 eq 3-6)",
+                  {"omega1_rad_s": w, "integrator": s.integrator})
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:
@@ -616,33 +644,32 @@ def _at_temperature(tables: MeshTables, temperature_C) -> MeshTables:
         raise NativeInputError(f"bulk_temperature_C: expected a number, got {temperature_C!r}") from None
 
 
-def _simulate_temperature_axis(t: MeshTables, a: RunArguments, bulk_temperature_C, max_step_s,
-                               integrator) -> SimResult:
-    """:func:`simulate` on tables ``t`` with a temperature axis (checked arguments ``a``).
-    The temperature is held over each communication step like the torques; every run of
-    steps with one temperature is simulated on ``t.at_temperature(T)`` (the node-wise blend of
-    docs/model.md "Temperature axis", the arithmetic of the C kernel), continuing
-    from the state [theta1, omega1, x, v] of the previous run -- the same
-    per-step computation as an FMU whose input changes at those steps."""
-    H, n_steps, t1s, t2s = a.comm_step_s, a.n_steps, a.pinion_torque_Nm, a.gear_torque_Nm
-    temps = _input_series("bulk_temperature_C", t.default_temperature_C if bulk_temperature_C is None
-                          else bulk_temperature_C, n_steps, H)
+def _simulate_temperature_axis(t: MeshTables, s: RunSettings, n_steps, t1s, t2s, x0, v0,
+                               bulk_temperature_C) -> SimResult:
+    """:func:`simulate` on tables ``t`` with a temperature axis (resolved settings ``s``, the
+    torque inputs and the start state).  The temperature is held over each communication step
+    like the torques; every run of steps with one temperature is simulated on
+    ``t.at_temperature(T)`` (the node-wise blend of docs/model.md "Temperature axis", the
+    arithmetic of the C kernel), continuing from the state [theta1, omega1, x, v] of the previous
+    run -- the same per-step computation as an FMU whose input changes at those steps.  The step
+    bound is the same for all runs (k_mean does not depend on temperature)."""
+    H = s.output_interval_s
+    temps = input_series("bulk_temperature_C", t.default_temperature_C if bulk_temperature_C is None
+                         else bulk_temperature_C, n_steps, H)
     slices = {}
     for T in np.unique(temps[:n_steps + 1]):
         slices[float(T)] = _at_temperature(t, T)
-    if max_step_s is None:  # k_mean does not depend on temperature: one step bound for all runs
-        max_step_s = choose_max_step_s(slices[float(temps[0])], max(1.5 * abs(a.speed_rad_s), 1.0))
     parts = []
-    th, om, x, v = a.pinion_angle_start_rad, a.speed_rad_s, a.dte_start_m, a.dte_rate_start_m_s
+    th, om, x, v = s.pinion_angle_start_rad, s.pinion_speed_start_rad_s, x0, v0
     i = 0
     while i < n_steps:
         j = i + 1
         while j < n_steps and temps[j] == temps[i]:
             j += 1
-        r = simulate(slices[float(temps[i])], stop_time_s=(j - i) * H, comm_step_s=H, max_step_s=max_step_s,
-                     pinion_torque_Nm=t1s[i:j], gear_torque_Nm=t2s[i:j], pinion_speed_start_rad_s=om,
-                     damping_ratio=a.damping_ratio, damping_model=a.damping_model, pinion_angle_start_rad=th,
-                     dte_start_m=x, dte_rate_start_m_s=v, integrator=integrator)
+        r = simulate(slices[float(temps[i])], dataclasses.replace(s, stop_time_s=(j - i) * H,
+                                                                  pinion_speed_start_rad_s=om,
+                                                                  pinion_angle_start_rad=th),
+                     pinion_torque_Nm=t1s[i:j], gear_torque_Nm=t2s[i:j], dte_start_m=x, dte_rate_start_m_s=v)
         parts.append((i, r))
         if "diverged_at_step" in r.info:
             break

@@ -51,14 +51,18 @@ Choices (not in the papers)
 Public API
 ----------
 ``simulate_reference(tables, *, stop_time_s, comm_step_s, pinion_torque_Nm, ...)``
-takes the arguments of :func:`gearfmu.dynamics.native.simulate` (without ``max_step_s``;
-checked by the same :func:`gearfmu.dynamics.native.run_arguments`)
+takes the settings and arguments of :func:`gearfmu.dynamics.native.simulate` (without
+``max_step_s``; checked by the same :class:`gearfmu.common.settings.RunSettings` and
+:func:`gearfmu.dynamics.native.run_inputs`)
 plus ``rtol``, ``atol_scale``, ``method`` (tables with a temperature axis: one constant
 ``bulk_temperature_C``, the slice ``tables.at_temperature`` gives), and returns a
 :class:`gearfmu.dynamics.native.SimResult` (same arrays at the communication instants, the
 derived outputs by the same rule;
 ``step_s`` is 0, ``substeps`` the number of segments, ``info`` counts segments,
-events and right-hand-side calls).
+events and right-hand-side calls).  The gearbox reference (:mod:`gearfmu.gearbox.reference`)
+takes its per-mesh pieces from here: :class:`TableRows` (the tables at one torque, kink nodes,
+zone lines), :class:`TableSegment` (one piece, its modes, right-hand side and events) and
+:func:`pair_forces` (the per-pair forces of a state).
 """
 from __future__ import annotations
 
@@ -72,9 +76,12 @@ from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
-from .native import InputLike, NativeInputError, _at_temperature, _finite, _result, run_arguments
+from ..common.settings import SOLVER_ARGUMENTS, RunSettings, checked
+from .native import (InputLike, NativeInputError, _at_temperature, _finite, _result, resolve_settings, run_inputs,
+                     start_state)
 
-__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes"]
+__all__ = ["ReferenceInputError", "simulate_reference", "equilibrium_dte_exact_m", "kink_nodes", "TableRows",
+           "TableSegment", "pair_forces"]
 
 KINK_REL_TOL = 1e-13
 
@@ -83,7 +90,7 @@ class ReferenceInputError(ValueError):
     """Bad argument to the reference integrator; the message names the argument."""
 
 
-class _Rows:
+class TableRows:
     """Tables at one pinion torque: K, E, B (P, N) on the phi grid, and the kink nodes."""
 
     def __init__(self, tables: MeshTables, t1: float):
@@ -280,7 +287,7 @@ def _pair_force(k, d, b, fd, model):
     return (fc + fd if k > 0.0 else 0.0), side
 
 
-def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
+def pair_forces(theta, omega, x, v, rows: TableRows, c, model):
     """Per-pair forces (N), contact states and stiffnesses at one state, by the
     literal formulas of docs/model.md (lookup, force law): used for outputs."""
     N, dphi = rows.N, rows.dphi
@@ -312,11 +319,11 @@ def _forces_model(theta, omega, x, v, rows: _Rows, c, model):
 
 
 # -------------------------------------------------------------- segments
-class _Segment:
+class TableSegment:
     """One table piece: linear k, e, b per active pair in theta (relative to the
     piece start), the mode of every active pair, the smooth RHS and the events."""
 
-    def __init__(self, rows: _Rows, piece, theta_base, T1, T2, par):
+    def __init__(self, rows: TableRows, piece, theta_base, T1, T2, par):
         self.rows, self.piece, self.theta_base = rows, piece, theta_base
         self.T1, self.T2 = T1, T2
         self.rb1, self.rb2, self.i1, self.i2, self.c, self.model = par
@@ -331,7 +338,7 @@ class _Segment:
         ia1 = (ia + 1) % rows.N
         pairs = []
         if piece is not None and rows.zones is not None:
-            ia = ia1 = None  # the lines of docs/model.md "Contact-zone edges" (_Rows.coeffs)
+            ia = ia1 = None  # the lines of docs/model.md "Contact-zone edges" (TableRows.coeffs)
             umid = 0.5 * (piece[0] + piece[1])
             for j in range(rows.P):
                 (ka, kb), (ea, eb), (ba, bb), base, inz = rows.coeffs(j, umid)
@@ -492,15 +499,16 @@ def _temperature_slice(tables: MeshTables, bulk_temperature_C) -> MeshTables:
 
 def simulate_reference(
     tables: MeshTables,
+    settings: Optional[RunSettings] = None,
     *,
-    stop_time_s: float,
-    comm_step_s: float,
-    pinion_torque_Nm: InputLike,
+    stop_time_s: Optional[float] = None,
+    comm_step_s: Optional[float] = None,
+    pinion_torque_Nm: Optional[InputLike] = None,
     gear_torque_Nm: Optional[InputLike] = None,
-    pinion_speed_start_rad_s: float,
-    damping_ratio: float,
-    damping_model: str = "elastobacklash",
-    pinion_angle_start_rad: float = 0.0,
+    pinion_speed_start_rad_s: Optional[float] = None,
+    damping_ratio: Optional[float] = None,
+    damping_model: Optional[str] = None,
+    pinion_angle_start_rad: Optional[float] = None,
     dte_start_m: Optional[float] = None,
     dte_rate_start_m_s: float = 0.0,
     rtol: float = 1e-10,
@@ -510,11 +518,12 @@ def simulate_reference(
     max_segments: int = 5_000_000,
     progress: bool = False,
     max_step_s: Optional[float] = None,
+    integrator: Optional[str] = None,
     bulk_temperature_C: Optional[float] = None,
 ):
     """Event-located solve_ivp reference of docs/model.md (two-inertia form).
 
-    Same arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
+    Same settings, arguments and input convention as :func:`gearfmu.dynamics.native.simulate`
     (torques in N*m held over each communication step; ``gear_torque_Nm``
     None = T1*Rb2/Rb1), plus ``rtol`` (solve_ivp rtol), ``atol_scale``
     (multiplies the per-state absolute tolerances rtol*scale, see module
@@ -522,25 +531,27 @@ def simulate_reference(
     ``steps_per_period`` (the largest step is the shortest natural period
     2 pi/sqrt(max k_total/m_e) over this number, so that no contact or clamp
     indicator crosses and returns inside one step unseen).
-    ``max_step_s`` is accepted and ignored (the reference chooses its steps).
+    ``max_step_s`` and ``integrator`` (and the settings' fields of the same names) are accepted
+    and ignored (the reference chooses its steps).
     ``bulk_temperature_C`` (degC, one constant value; tables with a temperature axis
     only): the run uses ``tables.at_temperature`` (None: ``default_temperature_C``),
     the slice :func:`gearfmu.dynamics.native.simulate` runs on at that temperature.
     Returns a :class:`gearfmu.dynamics.native.SimResult`; ``wall_s`` is the whole run.
     """
+    s = checked(settings, ReferenceInputError, RunSettings, SOLVER_ARGUMENTS, stop_time_s=stop_time_s,
+                output_interval_s=comm_step_s,
+                pinion_speed_start_rad_s=pinion_speed_start_rad_s, damping_ratio=damping_ratio,
+                damping_model=damping_model, pinion_angle_start_rad=pinion_angle_start_rad)
     if not isinstance(tables, MeshTables):
         raise ReferenceInputError(f"tables: expected MeshTables, got {type(tables).__name__}")
     tables = _temperature_slice(tables, bulk_temperature_C)
     tables.validate()
-    a = run_arguments(tables, speed_name="pinion_speed_start_rad_s", speed_rad_s=pinion_speed_start_rad_s,
-                      stop_time_s=stop_time_s, comm_step_s=comm_step_s, pinion_torque_Nm=pinion_torque_Nm,
-                      gear_torque_Nm=gear_torque_Nm, damping_ratio=damping_ratio, damping_model=damping_model,
-                      pinion_angle_start_rad=pinion_angle_start_rad, dte_start_m=dte_start_m,
-                      dte_rate_start_m_s=dte_rate_start_m_s, error=ReferenceInputError)
+    s = resolve_settings(tables, s)
+    n_steps, t1s, t2s = run_inputs(tables, s, pinion_torque_Nm, gear_torque_Nm, error=ReferenceInputError)
+    x_start, v0 = start_state(dte_start_m, dte_rate_start_m_s, error=ReferenceInputError)
     rtol = _finite("rtol", rtol, positive=True, error=ReferenceInputError)
-    H, n_steps, zeta, damping_model = a.comm_step_s, a.n_steps, a.damping_ratio, a.damping_model
-    w0, th0, v0 = a.speed_rad_s, a.pinion_angle_start_rad, a.dte_rate_start_m_s
-    t1s, t2s = a.pinion_torque_Nm, a.gear_torque_Nm
+    H, zeta, damping_model = s.output_interval_s, s.damping_ratio, s.damping_model
+    w0, th0 = s.pinion_speed_start_rad_s, s.pinion_angle_start_rad
     rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
     I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
     me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
@@ -554,11 +565,11 @@ def simulate_reference(
     def rows_for(t1):
         key = float(t1) if tables.n_torque > 1 else 0.0
         if key not in rows_cache:
-            rows_cache[key] = _Rows(tables, key)
+            rows_cache[key] = TableRows(tables, key)
         return rows_cache[key]
 
     r0 = rows_for(t1s[0])
-    if a.dte_start_m is None:
+    if x_start is None:
         Phi = r0.N * r0.dphi
         phim = th0 - Phi * math.floor(th0 / Phi)
         s = phim / r0.dphi
@@ -574,7 +585,7 @@ def simulate_reference(
         if not math.isfinite(x0):
             raise ReferenceInputError(f"pinion_angle_start_rad: no pair in contact at {th0!r}; give dte_start_m")
     else:
-        x0 = a.dte_start_m
+        x0 = x_start
 
     # absolute tolerances (module docstring)
     xs = max(abs(t1s).max() / rb1 / km, float(np.max(tables.backlash_half_m)),
@@ -602,7 +613,7 @@ def simulate_reference(
     stiff = np.full(n_steps + 1, np.nan)
 
     def out_row(i, y, rows):
-        F, st, kk = _forces_model(y[0], y[1], y[2], y[3], rows, c, damping_model)
+        F, st, kk = pair_forces(y[0], y[1], y[2], y[3], rows, c, damping_model)
         state[i] = y
         pair[i] = F
         force[i] = F.sum()
@@ -626,7 +637,7 @@ def simulate_reference(
         forced = None
         zero_len = 0
         while t < t_end:
-            seg = _Segment(rows, piece, theta, t1s[k], t2s[k], par)
+            seg = TableSegment(rows, piece, theta, t1s[k], t2s[k], par)
             y = np.array([0.0, y_rest[0], y_rest[1], y_rest[2]])
             # modes: indicators read a little ahead along the true field (choice, docstring)
             ya = y + delta * seg.deriv(y, seg.force_general(y))

@@ -44,7 +44,7 @@ from typing import List, Optional, Sequence
 import numpy as np
 from scipy.signal import find_peaks
 
-from ..common.executors import SweepInputError, _ManagedExecutor, make_executor
+from ..common.executors import SweepInputError, ManagedExecutor, make_executor
 from ..common.progress import progress_bar
 from ..common.vocabulary import DAMPING_MODELS, current_spelling
 from .harmonics import DEFAULT_BANDWIDTH_ORDERS, mesh_harmonics
@@ -390,7 +390,7 @@ def run_jobs(jobs: Sequence[SweepJob], *, executor=None, scheduler: Optional[str
     if not jobs:
         return []
     if executor is not None:
-        ctx = _ManagedExecutor(executor, None, own=False)
+        ctx = ManagedExecutor(executor, None, own=False)
     else:
         if max_workers is None and scheduler is None and client is None:
             max_workers = min(len(jobs), os.cpu_count() or 1)

@@ -59,7 +59,7 @@ from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError
 from .film_stiffness import slice_film_stiffness_N_per_m
 from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT
 from .solver import solve_line_contact
-from ..common.executors import make_executor, _ManagedExecutor
+from ..common.executors import make_executor, ManagedExecutor
 from ..common.jit import module_cache_is_cold
 from ..common.progress import notice, progress_bar, wait_refreshing
 
@@ -303,7 +303,7 @@ def map_chunks(worker, env, chunks: Sequence[list], counts: Sequence[int], *, ex
         nw = min(n_cpu if max_workers is None else int(max_workers), len(chunks))
         ctx = make_executor(max_workers=nw)
     else:
-        ctx = _ManagedExecutor(executor, None, own=False)
+        ctx = ManagedExecutor(executor, None, own=False)
     try:
         with ctx as ex:
             futs = {ex.submit(worker, env, c): i for i, c in enumerate(chunks)}

@@ -1,14 +1,16 @@
 """The build steps both FMU builders share (the pythonfmu runtime, :mod:`gearfmu.fmu.pythonfmu_build`,
 and the standalone C runtime, :mod:`gearfmu.fmu.standalone_build`).
 
-* the arguments: :func:`check_arguments` (numbers, names, the output path; one-line
-  :class:`FmuBuildError` naming the field);
+* the arguments: :func:`check_arguments` (the tables, the model name, the run settings --
+  :class:`gearfmu.common.settings.RunSettings`, resolved on the tables --, the output path;
+  one-line :class:`FmuBuildError` naming the field), :func:`start_values` and
+  :func:`record_parameters` of the settings;
 * the C side: the kernel's sources and flags (with the FMU layer over it, gkfmu.c, that both
   runtimes call), :func:`find_c_compiler`, :func:`run_compiler`;
 * the interface: :func:`interface_variables` (modeldescription/variables.toml expanded for
   these tables, start values applied, the temperature input), :func:`model_description`;
-* the resources: :func:`write_tables`, :func:`write_scene`, :func:`envelope_json`, the
-  validation record (:func:`gearfmu.fmu.validation.validation_record`);
+* the resources: :func:`write_tables`, :func:`write_scene`, the envelope record
+  (:mod:`gearfmu.fmu.envelope`), the validation record (:func:`gearfmu.fmu.validation.validation_record`);
 * the FMU file: :func:`fmu_digest` (the identifier's hash), :func:`fmu_zip` (written under a
   temporary name beside the target and renamed at the end), :func:`zip_folder`.
 """
@@ -16,18 +18,17 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import os
 import shutil
 import subprocess
 import uuid
 import zipfile
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Tuple
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS, current_spelling
-from ..scene.reader import default_output_interval_s
+from ..common.settings import RunSettings, checked
+from ..dynamics.native import integrator_code, resolve_settings
 from ..tables.mesh_tables import MeshTables
 from .runtime.kernel_api import FMU_LAYER_ABI_VERSION, KERNEL_ABI_VERSION  # noqa: F401 (the table's versions)
 from .modeldesc import (apply_start_values, check_model_description, check_model_description3, expand_variables,
@@ -51,8 +52,6 @@ KERNEL_LIBRARY_SOURCES = (*KERNEL_SOURCES, FMU_LAYER_SOURCE)
 KERNEL_LIBRARY_HEADERS = (*KERNEL_HEADERS, FMU_LAYER_HEADER)
 #: compile flags (no FMA contraction, so the kernel's arithmetic is the written one)
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-std=c99")
-#: gearkernel.h GK_KINK_MAX_SLOTS
-KINK_MAX_SLOTS = 32
 #: the FMI 2.0 standard headers the C layers are compiled against
 FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 #: the FMI 3.0 standard headers
@@ -128,50 +127,6 @@ def sha256_file(p: Path) -> str:
 
 
 # ----------------------------------------------------------------- arguments
-def _check_positive(name: str, value, allow_zero: bool = False) -> float:
-    v = _check_finite(name, value)
-    if v < 0 or (v == 0 and not allow_zero):
-        raise FmuBuildError(f"{name}: must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-    return v
-
-
-def _check_finite(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise FmuBuildError(f"{name}: expected a number, got {value!r}") from None
-    if not (v == v and abs(v) != float("inf")):
-        raise FmuBuildError(f"{name}: must be finite, got {value!r}")
-    return v
-
-
-def damping_model_code(damping_model) -> int:
-    """0/'elastobacklash' or 1/'contact_zone' (an older spelling too) -> the kernel code."""
-    if isinstance(damping_model, str):
-        damping_model = current_spelling("damping_model", damping_model)
-        if damping_model not in DAMPING_MODELS:
-            raise FmuBuildError(f"damping_model: {damping_model!r} not one of {sorted(DAMPING_MODELS)}")
-        return DAMPING_MODELS[damping_model]
-    if isinstance(damping_model, bool) or damping_model not in (0, 1):
-        raise FmuBuildError(f"damping_model: {damping_model!r} must be 0 (elastobacklash) or 1 (contact_zone)")
-    return int(damping_model)
-
-
-def integrator_code(integrator, slots: int) -> int:
-    """0/'rk4', 1/'rk4_kink', 2/'rk4_node' or 3/'rk4_seg' (gearfmu.common.vocabulary.INTEGRATORS) -> the kernel code."""
-    if isinstance(integrator, str):
-        if integrator not in INTEGRATORS:
-            raise FmuBuildError(f"integrator: {integrator!r} not one of {sorted(INTEGRATORS)}")
-        code = INTEGRATORS[integrator]
-    elif isinstance(integrator, bool) or integrator not in INTEGRATORS.values():
-        raise FmuBuildError(f"integrator: {integrator!r} must be 0 (rk4), 1 (rk4_kink), 2 (rk4_node) or 3 (rk4_seg)")
-    else:
-        code = int(integrator)
-    if code != 0 and slots > KINK_MAX_SLOTS:
-        raise FmuBuildError(f"integrator: rk4_kink/rk4_node/rk4_seg handle at most {KINK_MAX_SLOTS} slots, the tables have {slots}")
-    return code
-
-
 def check_output_arguments(out_path, scene_text) -> Path:
     """``out_path`` as a Path ending in .fmu and ``scene_text`` a str or None (FmuBuildError
     naming the field otherwise)."""
@@ -183,76 +138,45 @@ def check_output_arguments(out_path, scene_text) -> Path:
     return out_path
 
 
-def check_build_arguments(tables, *, model_name, damping_ratio, pinion_speed_start_rad_s,
-                          pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
-                          max_step_s, stop_time_s, output_interval_s, damping_model):
-    """Check the arguments both FMU builders share.
-
-    Returns (damping ratio, pinion speed rad/s, pinion angle rad, pinion torque N*m,
-    gear torque N*m, max step s, stop time s, output interval s, damping model code);
-    raises :class:`FmuBuildError` naming the field.  ``gear_torque_start_Nm`` None
-    means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``.
-    """
+def check_arguments(tables, out_path, settings: Optional[RunSettings], *, scene_text, model_name,
+                    **changes) -> Tuple[RunSettings, Path]:
+    """The arguments both FMU builders share, checked in this order: the tables, the model name,
+    the run settings (``settings``, None: the :class:`gearfmu.common.settings.RunSettings`
+    defaults, with the fields of ``changes`` given; the one check of every setting), the
+    integrator against the tables' slots, the output path and the scene text.  Returns (the
+    settings resolved on the tables -- default output interval, automatic step, balancing gear
+    torque: :func:`gearfmu.dynamics.native.resolve_settings`, the native solver's rule --, the
+    output path); raises :class:`FmuBuildError` naming the field."""
     if not isinstance(tables, MeshTables):
         raise FmuBuildError(f"tables: expected a MeshTables, got {type(tables).__name__}")
     tables.validate()
     if not isinstance(model_name, str) or not model_name.strip():
         raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
-    zeta = _check_positive("damping_ratio", damping_ratio, allow_zero=True)
-    w0 = _check_finite("pinion_speed_start_rad_s", pinion_speed_start_rad_s)
-    th0 = _check_finite("pinion_angle_start_rad", pinion_angle_start_rad)
-    T1 = _check_finite("pinion_torque_start_Nm", pinion_torque_start_Nm)
-    if gear_torque_start_Nm is None:
-        gear_torque_start_Nm = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
-    T2 = _check_finite("gear_torque_start_Nm", gear_torque_start_Nm)
-    hmax = _check_positive("max_step_s", max_step_s)
-    tstop = _check_positive("stop_time_s", stop_time_s)
-    if output_interval_s is None:  # the scene's rule (gearfmu.scene.reader.default_output_interval_s)
-        output_interval_s = min(default_output_interval_s(w0, tables.teeth_pinion), tstop)
-    dt = _check_positive("output_interval_s", output_interval_s)
-    return zeta, w0, th0, T1, T2, hmax, tstop, dt, damping_model_code(damping_model)
-
-
-@dataclass(frozen=True)
-class BuildArguments:
-    """The checked arguments of one FMU build (SI units; damping model and integrator as kernel codes)."""
-    damping_ratio: float
-    pinion_speed_start_rad_s: float
-    pinion_angle_start_rad: float
-    pinion_torque_start_Nm: float
-    gear_torque_start_Nm: float
-    max_step_s: float
-    stop_time_s: float
-    output_interval_s: float
-    damping_model: int
-    integrator: int
-    out_path: Path
-
-    def starts(self) -> dict:
-        """Start values of the interface variables (modeldescription/variables.toml names)."""
-        return {"pinion_torque": self.pinion_torque_start_Nm, "gear_torque": self.gear_torque_start_Nm,
-                "damping_ratio": self.damping_ratio, "pinion_speed_start": self.pinion_speed_start_rad_s,
-                "pinion_angle_start": self.pinion_angle_start_rad, "max_step": self.max_step_s,
-                "damping_model": self.damping_model, "integrator": self.integrator}
-
-    def parameters(self, temperature_start_C: Optional[float] = None) -> dict:
-        """The parameters the provenance and the validation record name (no experiment times)."""
-        p = {"damping_ratio": self.damping_ratio, "pinion_speed_start_rad_s": self.pinion_speed_start_rad_s,
-             "pinion_angle_start_rad": self.pinion_angle_start_rad,
-             "pinion_torque_start_Nm": self.pinion_torque_start_Nm,
-             "gear_torque_start_Nm": self.gear_torque_start_Nm, "max_step_s": self.max_step_s,
-             "damping_model": self.damping_model, "integrator": self.integrator}
-        if temperature_start_C is not None:
-            p["bulk_temperature_start_C"] = temperature_start_C
-        return p
-
-
-def check_arguments(tables, out_path, *, scene_text, integrator, **kw) -> BuildArguments:
-    """:func:`check_build_arguments`, the integrator code and :func:`check_output_arguments`, in that order."""
-    zeta, w0, th0, T1, T2, hmax, tstop, dt, dm = check_build_arguments(tables, **kw)
-    ig = integrator_code(integrator, tables.slots)
+    s = checked(settings, FmuBuildError, RunSettings, **changes)
+    integrator_code(s.integrator, tables.slots, error=FmuBuildError)
     out_path = check_output_arguments(out_path, scene_text)
-    return BuildArguments(zeta, w0, th0, T1, T2, hmax, tstop, dt, dm, ig, out_path)
+    return resolve_settings(tables, s), out_path
+
+
+def start_values(s: RunSettings) -> dict:
+    """Start values of the interface variables (modeldescription/variables.toml names) from resolved
+    settings (damping model and integrator as their codes)."""
+    return {"pinion_torque": s.pinion_torque_start_Nm, "gear_torque": s.gear_torque_start_Nm,
+            "damping_ratio": s.damping_ratio, "pinion_speed_start": s.pinion_speed_start_rad_s,
+            "pinion_angle_start": s.pinion_angle_start_rad, "max_step": s.max_step_s,
+            "damping_model": s.damping_model_code, "integrator": s.integrator_code}
+
+
+def record_parameters(s: RunSettings, temperature_start_C: Optional[float] = None) -> dict:
+    """The parameters the provenance and the validation record name (no experiment times; damping
+    model and integrator as their codes)."""
+    p = {"damping_ratio": s.damping_ratio, "pinion_speed_start_rad_s": s.pinion_speed_start_rad_s,
+         "pinion_angle_start_rad": s.pinion_angle_start_rad, "pinion_torque_start_Nm": s.pinion_torque_start_Nm,
+         "gear_torque_start_Nm": s.gear_torque_start_Nm, "max_step_s": s.max_step_s,
+         "damping_model": s.damping_model_code, "integrator": s.integrator_code}
+    if temperature_start_C is not None:
+        p["bulk_temperature_start_C"] = temperature_start_C
+    return p
 
 
 # ----------------------------------------------------------------- interface
@@ -321,10 +245,10 @@ def model_description(spec, variables, fmi_version: int, **md_args) -> bytes:
 
 
 # ----------------------------------------------------------------- resources
-def fmu_digest(meta_bytes: bytes, bin_bytes: bytes, model_name: str, a: BuildArguments) -> str:
-    """SHA-256 (hex) of the tables and the model's settings: the first 12 digits go into the identifier."""
-    key = (model_name, a.damping_ratio, a.pinion_speed_start_rad_s, a.pinion_angle_start_rad,
-           a.pinion_torque_start_Nm, a.gear_torque_start_Nm, a.max_step_s, a.damping_model, a.integrator)
+def fmu_digest(meta_bytes: bytes, bin_bytes: bytes, model_name: str, s: RunSettings) -> str:
+    """SHA-256 (hex) of the tables and the model's (resolved) settings: the first 12 digits go into the identifier."""
+    key = (model_name, s.damping_ratio, s.pinion_speed_start_rad_s, s.pinion_angle_start_rad,
+           s.pinion_torque_start_Nm, s.gear_torque_start_Nm, s.max_step_s, s.damping_model_code, s.integrator_code)
     return hashlib.sha256(meta_bytes + bin_bytes + repr(key).encode()).hexdigest()
 
 
@@ -345,11 +269,6 @@ def write_scene(res_dir: Path, scene_text: Optional[str]) -> Optional[Path]:
 
 def scene_sha256(scene_text: Optional[str]) -> Optional[str]:
     return None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest()
-
-
-def envelope_json(env_rec: dict) -> str:
-    """``resources/envelope.json`` (:func:`gearfmu.scene.envelope.fmu_envelope_record`)."""
-    return json.dumps(env_rec, indent=1)
 
 
 # ----------------------------------------------------------------- the file

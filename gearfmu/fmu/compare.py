@@ -26,6 +26,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 from ..common.user_files import ArchiveError, archive_kind, read_archive
 from ..common.progress import progress_bar, reporting_enabled, ticking
+from ..common.settings import RunSettings
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import simulate
 from .integrity import RECORDS, integrity_problem, platform_problem
@@ -309,19 +310,23 @@ def fmu_integrator(fmu_path, start_values=None):
     return {v: k for k, v in INTEGRATORS.items()}.get(code)
 
 
-def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_time_s: float,
-                                comm_step_s: float, start_values=None, tolerance: float = DEFAULT_TOLERANCE,
+def validate_fmu_against_native(fmu_path, tables, settings: Optional[RunSettings] = None, *,
+                                native_kwargs: Optional[dict] = None, stop_time_s: float, comm_step_s: float,
+                                start_values=None, tolerance: float = DEFAULT_TOLERANCE,
                                 scene_text: Optional[str] = None) -> dict:
     """The report of ``gearfmu validate``: fmpy validation problems, per-output
     differences (FMU minus native), wall time of each, and ``failed``: the outputs
     whose largest difference exceeds ``tolerance`` (1) of the native signal's range.
+    The native run: :func:`gearfmu.dynamics.native.simulate` with ``settings`` (the run settings
+    the FMU was built with, :class:`gearfmu.common.settings.RunSettings`) and ``native_kwargs``
+    (its keyword arguments, replacing fields), over ``stop_time_s`` in steps of ``comm_step_s``.
     Without ``integrator`` in ``native_kwargs`` the native run uses the FMU's own
     (:func:`fmu_integrator`).  Before anything runs, :func:`check_fmu_matches` refuses
     an FMU of another scene (``scene_text`` when given), other tables or another
     slot count / variable set (FmuMismatchError)."""
     from fmpy.validation import validate_fmu  # fmpy: heavy, only to validate an FMU
 
-
+    native_kwargs = dict(native_kwargs or {})
     if not (tolerance >= 0 and tolerance < float("inf")):
         raise FmuMismatchError(f"tolerance: must be finite and >= 0, got {tolerance!r}")
     check_fmu_matches(open_fmu(fmu_path), scene_text=scene_text, tables=tables)
@@ -330,15 +335,15 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
     if "integrator" not in native_kwargs:
         integ = fmu_integrator(fmu_path, start_values)
         if integ is not None:
-            native_kwargs = dict(native_kwargs, integrator=integ)
+            native_kwargs["integrator"] = integ
     names = output_names(tables.slots)
     fmu = run_fmu(fmu_path, stop_time_s=stop_time_s, comm_step_s=comm_step_s,
                   start_values=start_values, names=names)
-    simulate(tables, **dict(native_kwargs, stop_time_s=min(stop_time_s, 10 * comm_step_s),
-                            comm_step_s=comm_step_s))  # JIT warm-up, not timed
+    simulate(tables, settings, **dict(native_kwargs, stop_time_s=min(stop_time_s, 10 * comm_step_s),
+                                      comm_step_s=comm_step_s))  # JIT warm-up, not timed
     with ticking(f"native solver over {stop_time_s:g} s"):
         t0 = time.perf_counter()
-        nat = simulate(tables, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
+        nat = simulate(tables, settings, **dict(native_kwargs, stop_time_s=stop_time_s, comm_step_s=comm_step_s))
         native_wall = time.perf_counter() - t0
     per = diff_report(native_columns(nat, tables.slots), fmu.columns)
     return {
@@ -346,7 +351,7 @@ def validate_fmu_against_native(fmu_path, tables, *, native_kwargs: dict, stop_t
         "fmpy_problems": problems,
         "stop_time_s": stop_time_s,
         "comm_step_s": comm_step_s,
-        "max_step_s": native_kwargs.get("max_step_s"),
+        "max_step_s": native_kwargs.get("max_step_s", None if settings is None else settings.max_step_s),
         "samples": int(len(fmu.time_s)),
         "outputs": per,
         "max_abs_diff": {k: v["max_abs_diff"] for k, v in per.items()},

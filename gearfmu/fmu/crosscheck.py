@@ -44,7 +44,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.settings import RunSettings
 from ..dynamics.native import simulate
 from ..tables.mesh_tables import MeshTables
 
@@ -112,17 +112,16 @@ def write_reference_results(fmu_path, out_dir, *, model_name: Optional[str] = No
     if axis.size > 1 and not axis[0] <= T1b <= axis[-1]:  # stay inside the torque axis (no clamp)
         T1b = T1 * (1.0 - TORQUE_STEP)
     ramp_t, ramp_T = [0.0, 0.25 * stop, 0.75 * stop, stop], [T1, T1, T1b, T1b]  # the rows of _in.csv
-    kw = dict(stop_time_s=stop, comm_step_s=H, max_step_s=float(p["max_step_s"]),
-              pinion_torque_Nm=lambda t_s: float(np.interp(t_s, ramp_t, ramp_T)),
-              gear_torque_Nm=T2, pinion_speed_start_rad_s=float(p["pinion_speed_start_rad_s"]),
-              damping_ratio=float(p["damping_ratio"]),
-              damping_model={v: k for k, v in DAMPING_MODELS.items()}[int(p["damping_model"])],
-              pinion_angle_start_rad=float(p.get("pinion_angle_start_rad", 0.0)),
-              integrator={v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))])
+    # the FMU's settings as its record states them (damping model and integrator as their codes)
+    settings = RunSettings(stop_time_s=stop, output_interval_s=H, max_step_s=float(p["max_step_s"]),
+                           integrator=int(p.get("integrator", 0)), damping_ratio=float(p["damping_ratio"]),
+                           damping_model=int(p["damping_model"]),
+                           pinion_speed_start_rad_s=float(p["pinion_speed_start_rad_s"]),
+                           pinion_angle_start_rad=float(p.get("pinion_angle_start_rad", 0.0)),
+                           pinion_torque_start_Nm=T1, gear_torque_start_Nm=T2)
     temp = p.get("bulk_temperature_start_C")
-    if temp is not None:
-        kw["bulk_temperature_C"] = float(temp)
-    res = simulate(t, **kw)
+    res = simulate(t, settings, pinion_torque_Nm=lambda t_s: float(np.interp(t_s, ramp_t, ramp_T)), gear_torque_Nm=T2,
+                   bulk_temperature_C=None if temp is None else float(temp))
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

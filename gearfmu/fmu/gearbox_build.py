@@ -25,23 +25,24 @@ FMU layout::
 """
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import hashlib
 import json
-import math
 import platform
 import shutil
 import sys
 import tempfile
 import uuid
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
 from .. import __version__
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_INTEGRATOR, FMI3_OUTPUTS, GEARBOX_INTEGRATORS, INTEGRATORS
+from ..common.settings import GearboxRunSettings, checked
+from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS
 from ..gearbox.model import GearboxModel
+from ..gearbox.native import resolve_settings
 from . import crossbuild
 from .build_steps import (KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_model_description,
                           check_output_arguments, compiler_version, find_c_compiler, fmi_header_dir, fmu_zip,
@@ -54,8 +55,8 @@ from .fmudoc import DOC_FILES
 from .standalone_build import (FMI_VERSIONS, STANDALONE_CFLAGS, build_recipe_files, compile_standalone,
                                platforms_text, scalar_names, standalone_model_description)
 
-__all__ = ["GearboxFmuSettings", "build_gearbox_fmu", "gearbox_settings", "start_values", "variables_of_fmu",
-           "config_text", "GEARBOX_UNITS", "gearbox_file_sources", "copy_gearbox_sources", "CONFIG_FILE"]
+__all__ = ["build_gearbox_fmu", "gearbox_settings", "fmu_parameters", "start_values", "variables_of_fmu",
+           "config_text", "EVENT_MAX_SLOTS", "GEARBOX_UNITS", "gearbox_file_sources", "copy_gearbox_sources", "CONFIG_FILE"]
 
 HERE = Path(__file__).resolve().parent
 STANDALONE_DIR = HERE / "standalone"
@@ -91,78 +92,52 @@ def copy_gearbox_sources(dest_dir, fmi_version: int = 2) -> Path:
 
 
 # ----------------------------------------------------------------- arguments
-@dataclass(frozen=True)
-class GearboxFmuSettings:
-    """The checked start values and experiment of a gearbox FMU (SI): the torque inputs' start values
-    (N*m), the motor's start speed (rad/s) and angle (rad), the largest internal step (s), the
-    integrator's kernel code, the stop time and communication step of the DefaultExperiment (s)."""
-
-    motor_torque_Nm: float
-    load_torque_Nm: float
-    motor_speed_rad_s: float
-    motor_angle_rad: float
-    max_step_s: float
-    integrator: int
-    stop_time_s: float
-    output_interval_s: float
-
-    @property
-    def integrator_name(self) -> str:
-        return {v: k for k, v in INTEGRATORS.items()}[self.integrator]
-
-    def parameters(self, model: GearboxModel) -> dict:
-        """The parameters the provenance and the validation record name."""
-        return {"motor_torque_start_Nm": self.motor_torque_Nm, "load_torque_start_Nm": self.load_torque_Nm,
-                "motor_speed_start_rad_s": self.motor_speed_rad_s, "motor_angle_start_rad": self.motor_angle_rad,
-                "max_step_s": self.max_step_s, "integrator": self.integrator,
-                "stages": {m.name: {"damping_ratio": m.damping_ratio, "damping_model": m.damping_model}
-                           for m in model.meshes}}
+#: the most tooth-pair slots per stage the event-locating integrators of the C kernel handle
+EVENT_MAX_SLOTS = 32
 
 
-def _number(name, value, *, positive=False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise FmuBuildError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v) or (positive and not v > 0.0):
-        raise FmuBuildError(f"{name}: must be {'finite and > 0' if positive else 'finite'}, got {value!r}")
-    return v
-
-
-def gearbox_settings(model: GearboxModel, *, motor_torque_Nm, load_torque_Nm=None, motor_speed_start_rad_s,
-                     motor_angle_start_rad=0.0, max_step_s, integrator=DEFAULT_INTEGRATOR, stop_time_s,
-                     output_interval_s) -> GearboxFmuSettings:
-    """Check the start values and experiment of a gearbox FMU (FmuBuildError naming the argument);
-    ``load_torque_Nm`` None: the balancing load torque T_motor/g_load."""
+def gearbox_settings(model: GearboxModel, settings: Optional[GearboxRunSettings] = None,
+                     **changes) -> GearboxRunSettings:
+    """The run settings of a gearbox FMU: ``settings`` (:class:`gearfmu.common.settings.GearboxRunSettings`;
+    None: its defaults) with the fields given in ``changes`` (checked by its one rule; a bad value
+    raises FmuBuildError naming the field), every automatic value resolved on ``model``, since an
+    FMU's start values and DefaultExperiment are numbers: the load's start torque (None: the torque
+    T_motor/g_load that balances the motor's start torque), the output interval and the largest
+    internal step (:func:`gearfmu.gearbox.native.resolve_settings`; the step linearised at the start
+    torques).  An integrator other than rk4 handles at most :data:`EVENT_MAX_SLOTS` slots per stage."""
     if not isinstance(model, GearboxModel):
         raise FmuBuildError(f"model: expected gearfmu.gearbox.model.GearboxModel, got {type(model).__name__}")
-    t_in = _number("motor_torque_Nm", motor_torque_Nm)
-    t_out = model.balancing_load_torque_Nm(t_in) if load_torque_Nm is None else _number("load_torque_Nm",
-                                                                                        load_torque_Nm)
-    if integrator not in GEARBOX_INTEGRATORS:
-        raise FmuBuildError(f"integrator: {integrator!r} unknown for gearboxes; choose one of "
-                            f"{list(GEARBOX_INTEGRATORS)}")
-    code = INTEGRATORS[integrator]
-    if code != 0:
+    s = checked(settings, FmuBuildError, GearboxRunSettings, **changes)
+    if s.load_torque_start_Nm is None:
+        s = dataclasses.replace(s, load_torque_start_Nm=model.balancing_load_torque_Nm(s.motor_torque_start_Nm))
+    s = resolve_settings(model, s, reference_torque_Nm=model.reference_torque_Nm(s.motor_torque_start_Nm,
+                                                                                 s.load_torque_start_Nm))
+    if s.integrator != "rk4":
         for m in model.meshes:
-            if m.tables.slots > 32:
-                raise FmuBuildError(f"integrator: {integrator!r} handles at most 32 slots, stage {m.name!r} has "
-                                    f"{m.tables.slots}")
-    return GearboxFmuSettings(t_in, t_out, _number("motor_speed_start_rad_s", motor_speed_start_rad_s),
-                              _number("motor_angle_start_rad", motor_angle_start_rad),
-                              _number("max_step_s", max_step_s, positive=True), code,
-                              _number("stop_time_s", stop_time_s, positive=True),
-                              _number("output_interval_s", output_interval_s, positive=True))
+            if m.tables.slots > EVENT_MAX_SLOTS:
+                raise FmuBuildError(f"integrator: {s.integrator!r} handles at most {EVENT_MAX_SLOTS} slots, stage "
+                                    f"{m.name!r} has {m.tables.slots}")
+    return s
 
 
-def start_values(model: GearboxModel, s: GearboxFmuSettings) -> Dict[str, float]:
-    """The start value of every parameter and input of the interface (by its FMU name)."""
-    starts = {"motor_speed_start": s.motor_speed_rad_s, "motor_angle_start": s.motor_angle_rad,
-              "max_step": s.max_step_s, "integrator": s.integrator}
+def fmu_parameters(model: GearboxModel, s: GearboxRunSettings) -> dict:
+    """The parameters the provenance and the validation record name (the integrator by its code)."""
+    return {"motor_torque_start_Nm": s.motor_torque_start_Nm, "load_torque_start_Nm": s.load_torque_start_Nm,
+            "motor_speed_start_rad_s": s.motor_speed_start_rad_s, "motor_angle_start_rad": s.motor_angle_start_rad,
+            "max_step_s": s.max_step_s, "integrator": s.integrator_code,
+            "stages": {m.name: {"damping_ratio": m.damping_ratio, "damping_model": m.damping_model}
+                       for m in model.meshes}}
+
+
+def start_values(model: GearboxModel, s: GearboxRunSettings) -> Dict[str, float]:
+    """The start value of every parameter and input of the interface (by its FMU name; ``s``
+    resolved by :func:`gearbox_settings`)."""
+    starts = {"motor_speed_start": s.motor_speed_start_rad_s, "motor_angle_start": s.motor_angle_start_rad,
+              "max_step": s.max_step_s, "integrator": s.integrator_code}
     if model.motor_torque_input:
-        starts["motor_torque"] = s.motor_torque_Nm
+        starts["motor_torque"] = s.motor_torque_start_Nm
     if model.load_torque_input:
-        starts["load_torque"] = s.load_torque_Nm
+        starts["load_torque"] = s.load_torque_start_Nm
     for m in model.meshes:
         starts[stage_parameter(m.name, "damping_ratio")] = m.damping_ratio
         starts[stage_parameter(m.name, "damping_model")] = {"elastobacklash": 0, "contact_zone": 1}[m.damping_model]
@@ -234,7 +209,7 @@ def config_text(model: GearboxModel, variables, stage_bytes, *, guid: str, model
     return "\n".join(lines) + "\n"
 
 
-def _digest(model: GearboxModel, stage_bytes, model_name: str, s: GearboxFmuSettings) -> str:
+def _digest(model: GearboxModel, stage_bytes, model_name: str, s: GearboxRunSettings) -> str:
     h = hashlib.sha256()
     for meta, data in stage_bytes:
         h.update(meta)
@@ -246,17 +221,18 @@ def _digest(model: GearboxModel, stage_bytes, model_name: str, s: GearboxFmuSett
 
 
 # --------------------------------------------------------------------- build
-def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: GearboxFmuSettings, model_name: str = "gearbox",
-                      scene_text: Optional[str] = None, stage_scene_texts: Optional[Dict[str, str]] = None,
-                      platforms: Optional[Sequence[str]] = None, fmi_version: int = 2,
-                      fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, validation: bool = True, cc: Optional[str] = None,
-                      spec_path=None) -> Path:
+def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[GearboxRunSettings] = None,
+                      model_name: str = "gearbox", scene_text: Optional[str] = None,
+                      stage_scene_texts: Optional[Dict[str, str]] = None, platforms: Optional[Sequence[str]] = None,
+                      fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, validation: bool = True,
+                      cc: Optional[str] = None, spec_path=None) -> Path:
     """Build the gearbox FMU of ``model`` at ``out_path`` (FMI ``fmi_version`` 2 or 3 Co-Simulation, the
     standalone C runtime); return its path.
 
-    ``settings``: :func:`gearbox_settings` (start values and DefaultExperiment); ``scene_text`` the
-    drivetrain scene and ``stage_scene_texts`` every stage's pair scene (stage name -> TOML), carried
-    in resources/; ``platforms``: keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default all; without
+    ``settings``: the run's :class:`gearfmu.common.settings.GearboxRunSettings` (the FMU's start values
+    and DefaultExperiment; None: its defaults; automatic values resolved by :func:`gearbox_settings`);
+    ``scene_text`` the drivetrain scene and ``stage_scene_texts`` every stage's pair scene (stage
+    name -> TOML), carried in resources/; ``platforms``: keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default all; without
     zig the build machine's only, the FMU says what it lacks); ``fmi3_outputs`` "scalar": the per-slot
     outputs of an FMI 3 FMU as scalars ``stage1.pair_force_1`` ..; ``validation`` False: no validation
     record (no native run); ``cc``: the build machine's compiler.  Written under a temporary name
@@ -266,8 +242,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: GearboxFmuSett
     if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
         raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
                             f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
-    if not isinstance(settings, GearboxFmuSettings):
-        raise FmuBuildError("settings: expected gearfmu.fmu.gearbox_build.GearboxFmuSettings (gearbox_settings)")
+    settings = gearbox_settings(model, settings)
     if not isinstance(model_name, str) or not model_name.strip():
         raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
     out_path = check_output_arguments(out_path, scene_text)
@@ -286,7 +261,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: GearboxFmuSett
     identifier = f"gearfmu_gb_{_digest(model, stage_bytes, model_name, settings)[:12]}_{uuid.uuid4().hex[:8]}"
     guid = "{" + str(uuid.uuid4()) + "}"
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    params = settings.parameters(model)
+    params = fmu_parameters(model, settings)
     unit = GEARBOX_UNITS[fmi_version].name
     stage_scene_texts = dict(stage_scene_texts or {})
 
@@ -384,8 +359,9 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: GearboxFmuSett
     return out_path
 
 
-def variables_of_fmu(model: GearboxModel, settings: GearboxFmuSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
+def variables_of_fmu(model: GearboxModel, settings: GearboxRunSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
                      spec_path=None):
     """The variables a gearbox FMU of ``model`` built with ``settings`` has (for hosts and tests)."""
-    variables = apply_starts(gearbox_variables(load_gearbox_spec(spec_path), model), start_values(model, settings))
+    variables = apply_starts(gearbox_variables(load_gearbox_spec(spec_path), model),
+                             start_values(model, gearbox_settings(model, settings)))
     return scalar_names(variables) if fmi3_outputs == "scalar" else variables

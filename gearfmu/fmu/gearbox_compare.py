@@ -136,7 +136,7 @@ def validate_gearbox_fmu(fmu_path, model: GearboxModel, settings, variables, *, 
     :func:`gearfmu.fmu.compare.validate_fmu_against_native`, and ``units``): fmpy validation problems,
     per output the largest and RMS difference FMU - native and the native signal's range, the outputs
     beyond ``tolerance`` of their range in ``failed``, and the wall times.  ``settings``: the FMU's
-    start values (:class:`gearfmu.fmu.gearbox_build.GearboxFmuSettings`)."""
+    start values (:class:`gearfmu.common.settings.GearboxRunSettings`, resolved)."""
     from fmpy.validation import validate_fmu  # fmpy: heavy, only to validate an FMU
 
     if not (tolerance >= 0 and tolerance < float("inf")):

@@ -30,15 +30,13 @@ __all__ = ["native_run", "native_outputs_by_vr", "gearbox_validation_record", "r
 
 def native_run(model: GearboxModel, settings, *, stop_time_s: Optional[float] = None,
                comm_step_s: Optional[float] = None) -> GearboxResult:
-    """The native gearbox solver with an FMU's start values (``settings``:
-    :class:`gearfmu.fmu.gearbox_build.GearboxFmuSettings`): the same inputs held over each
+    """The native gearbox solver with an FMU's start values (``settings``: the FMU's
+    :class:`gearfmu.common.settings.GearboxRunSettings`, resolved by
+    :func:`gearfmu.fmu.gearbox_build.gearbox_settings`): the same inputs held over each
     communication step, the same internal step bound and integrator, the same start."""
-    return simulate_gearbox(
-        model, stop_time_s=settings.stop_time_s if stop_time_s is None else stop_time_s,
-        comm_step_s=settings.output_interval_s if comm_step_s is None else comm_step_s,
-        motor_torque_Nm=settings.motor_torque_Nm, load_torque_Nm=settings.load_torque_Nm,
-        motor_speed_start_rad_s=settings.motor_speed_rad_s, motor_angle_start_rad=settings.motor_angle_rad,
-        max_step_s=settings.max_step_s, integrator=settings.integrator_name)
+    return simulate_gearbox(model, settings, stop_time_s=stop_time_s, comm_step_s=comm_step_s,
+                            motor_torque_Nm=settings.motor_torque_start_Nm,
+                            load_torque_Nm=settings.load_torque_start_Nm)
 
 
 def native_outputs_by_vr(model: GearboxModel, variables: Sequence) -> Dict[int, str]:

@@ -22,10 +22,16 @@ FMU layout (docs/fmu.md)::
     resources/kernel_src/                the kernel's sources (gearkernel.c|h, gk_*.c|h, gkfmu.c|h) and
                                          the compile command
     resources/gearfmu_runtime.json       variables, kernel name, SHA-256 sums
-    resources/gearfmu_pyshim.txt         the Python the loader starts (recorded at build time)
+    resources/gearfmu_pyshim.txt         the Python version, the id of the build's Python record,
+                                         the wrapper's name, the variable table (no path)
     resources/pyshim_src/                the loader's source and its compile command
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
+
+The paths of the build's Python (its executable and shared library) are not in the FMU: they go
+to a record outside it, ``<gearfmu cache>/pythons/<id>.txt`` (:func:`record_build_python`), which
+the loader reads on this machine; elsewhere ``$GEARFMU_PYTHON`` names the Python to use
+(docs/fmu.md "The binary").
 """
 from __future__ import annotations
 
@@ -49,19 +55,19 @@ import sysconfig
 from .. import __version__
 from ..common.cache import cache_dir
 from ..common.progress import ticking
-from ..common.vocabulary import DEFAULT_INTEGRATOR
+from ..common.settings import RunSettings
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMU_LAYER_ABI_VERSION, FMU_LAYER_HEADER,  # noqa: F401
                           FMU_LAYER_SOURCE, KERNEL_ABI_VERSION, KERNEL_DIR, KERNEL_LIBRARY_HEADERS,
-                          KERNEL_LIBRARY_SOURCES, KINK_MAX_SLOTS, CompilerNotFoundError, FmuBuildError, check_arguments,
-                          check_build_arguments, check_output_arguments, compiler_version, envelope_json,
+                          KERNEL_LIBRARY_SOURCES, CompilerNotFoundError, FmuBuildError, check_arguments,
+                          check_output_arguments, compiler_version,
                           find_c_compiler, fmi2_header_dir, fmu_digest, fmu_zip, interface_variables,
-                          model_description, run_compiler, scene_sha256, sha256_file, temperature_input,
-                          variable_table_lines, write_scene, write_tables)
+                          model_description, record_parameters, run_compiler, scene_sha256, sha256_file,
+                          start_values, temperature_input, variable_table_lines, write_scene, write_tables)
 from .modeldesc import check_registered, load_spec, runtime_variable_table
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
 from .validation import VALIDATION_DIR, validation_record
-from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
+from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 
 HERE = Path(__file__).resolve().parent
 SLAVE_TEMPLATE = HERE / "runtime" / "gearfmu_slave.py"
@@ -75,6 +81,12 @@ PYSHIM_SOURCE = HERE / "runtime" / "pyshim.c"
 PYSHIM_SOURCES = (PYSHIM_SOURCE, HERE / "standalone" / "fmi2_gear.c", HERE / "standalone" / "fmi_common.c")
 PYSHIM_HEADERS = (HERE / "standalone" / "fmi_common.h", HERE / "standalone" / "gf_model.h")
 PYSHIM_CONFIG = "gearfmu_pyshim.txt"
+#: the folder of gearfmu's cache (:func:`gearfmu.common.cache.cache_dir`) holding the records of
+#: the Pythons pythonfmu FMUs were built with, and the first line of a record (pyshim.c reads both)
+PYTHON_RECORDS = "pythons"
+PYTHON_RECORD_FORMAT = "format=gearfmu-python-record 1"
+#: the environment variable naming the Python executable the loader starts instead (pyshim.c)
+PYTHON_OVERRIDE_VARIABLE = "GEARFMU_PYTHON"
 #: the binary's compile flags (docs/fmu.md "The binary"); it links no Python
 PYSHIM_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fvisibility=hidden")
 TEMPLATE_CLASS = "GearFmuSlave"
@@ -149,41 +161,47 @@ def _slave_text(template: str, class_name: str, kernel_api: str) -> str:
     return text
 
 
-def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", damping_ratio: float = 0.02,
-              pinion_speed_start_rad_s: float = 100.0, pinion_torque_start_Nm: float = 100.0,
-              gear_torque_start_Nm: Optional[float] = None, max_step_s: float = 1e-5,
-              damping_model: Union[int, str] = 0, stop_time_s: float = 0.1,
-              output_interval_s: Optional[float] = None, scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-              spec_path=None, cc: Optional[str] = None, integrator: Union[int, str] = DEFAULT_INTEGRATOR,
-              envelope: Optional[dict] = None) -> Path:
+def build_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None, *, model_name: str = "gearpair",
+              scene_text: Optional[str] = None, spec_path=None, cc: Optional[str] = None,
+              envelope: Optional[dict] = None,
+              damping_ratio: Optional[float] = None, pinion_speed_start_rad_s: Optional[float] = None,
+              pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
+              max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
+              stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
+              pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None) -> Path:
     """Build an FMI 2.0 CS FMU of the gear pair described by ``tables``; return its path.
 
-    Units: damping_ratio (1), speeds rad/s, torques N*m, times s, angles rad.
-    ``gear_torque_start_Nm`` None means the static balance
-    ``pinion_torque_start_Nm * Rb2/Rb1``.  ``damping_model``: 0 or
-    "elastobacklash", 1 or "contact_zone" (docs/model.md).  ``integrator``: 0 or
-    "rk4", 1 or "rk4_kink", 2 or "rk4_node" (default, :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`;
-    docs/model.md "Integration", docs/native.md "rk4_node"), 3 or "rk4_seg" (docs/model.md "rk4_seg"; FMU
-    parameter ``integrator``).  ``stop_time_s`` and
-    ``output_interval_s`` go to the DefaultExperiment (stopTime, stepSize); ``output_interval_s``
-    None = :func:`gearfmu.scene.reader.default_output_interval_s` at the start speed.
-    ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the tables' own range,
+    ``settings``: the run settings (:class:`gearfmu.common.settings.RunSettings`; None: its
+    defaults): the start values of the FMU's parameters and inputs and its DefaultExperiment
+    (``stop_time_s``, ``output_interval_s``: stopTime, stepSize).  The keyword arguments of the
+    same names, when given, replace its fields.  Units: damping_ratio (1), speeds rad/s, torques
+    N*m, times s, angles rad.  Automatic values are resolved on the tables as the native solver
+    resolves them (:func:`gearfmu.dynamics.native.resolve_settings`): ``gear_torque_start_Nm``
+    None means the static balance ``pinion_torque_start_Nm * Rb2/Rb1``, ``max_step_s`` None the
+    automatic step at 1.5 x the start speed, ``output_interval_s`` None
+    :func:`gearfmu.common.settings.default_output_interval_s` at the start speed.
+    ``damping_model``: "elastobacklash" (0) or "contact_zone" (1) (docs/model.md).
+    ``integrator``: "rk4" (0), "rk4_kink" (1), "rk4_node" (2, the default,
+    :data:`~gearfmu.common.vocabulary.DEFAULT_INTEGRATOR`; docs/model.md "Integration",
+    docs/native.md "rk4_node") or "rk4_seg" (3, docs/model.md "rk4_seg"; FMU parameter ``integrator``).
+    ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the tables' own range,
     "not verified"), checked at run time and recorded (docs/fmu.md "Verified envelope").
     The FMU is written to a temporary name beside ``out_path`` and renamed
     at the end, so a failed build never leaves a half-written FMU under the
     final name.
     """
-    a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
-                        damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
-                        pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
-                        gear_torque_start_Nm=gear_torque_start_Nm, max_step_s=max_step_s, stop_time_s=stop_time_s,
-                        output_interval_s=output_interval_s, damping_model=damping_model)
-    tstop, dt = a.stop_time_s, a.output_interval_s
+    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
+                                  damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
+                                  pinion_angle_start_rad=pinion_angle_start_rad,
+                                  pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+                                  max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+                                  damping_model=damping_model, integrator=integrator)
+    tstop, dt = s.stop_time_s, s.output_interval_s
     spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, a.starts())
+    variables, temp0 = interface_variables(spec, tables, start_values(s))
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
-    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
+    suffix = f"{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
     identifier = f"gearfmu_{suffix}"       # module name and modelIdentifier
     class_name = f"GearFmu_{suffix}"
     guid = "{" + str(uuid.uuid4()) + "}"
@@ -213,6 +231,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         (stage / "gearfmu_runtime.json").write_text(json.dumps(runtime, indent=1), encoding="utf-8")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
         shim = compile_pyshim(tmp / "shim", identifier, cc=cc)
+        if shim is not None:  # the loader's record of this build's Python, outside the FMU
+            record_build_python()
         (stage / PYSHIM_CONFIG).write_text(pyshim_config(f"{identifier}.pythonfmu.so", guid=guid,
                                                          variables=variables), encoding="utf-8")
         shim_src = stage / "pyshim_src"
@@ -227,7 +247,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         scene_file = write_scene(stage, scene_text)
         if scene_file is not None:
             files.append(scene_file)
-        parameters = dict(a.parameters(), stop_time_s=tstop, output_interval_s=dt)
+        parameters = dict(record_parameters(s), stop_time_s=tstop, output_interval_s=dt)
         if temp0 is not None:  # after the experiment times (the record's key order)
             parameters["bulk_temperature_start_C"] = temp0
         provenance = {
@@ -258,9 +278,8 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
         _pythonfmu_build(script, raw_fmu, [*files, api, src_dir, shim_src])
 
         record = validation_record(
-            tables, runtime="pythonfmu", model_identifier=identifier, stop_time_s=tstop, output_interval_s=dt,
-            parameters=a.parameters(temp0), scene_text=scene_text, compiler=provenance["kernel"]["compiler"],
-            envelope=env_rec)
+            tables, s, runtime="pythonfmu", model_identifier=identifier, temperature_start_C=temp0,
+            scene_text=scene_text, compiler=provenance["kernel"]["compiler"], envelope=env_rec)
         record[ENVELOPE_FILE] = envelope_json(env_rec).encode("utf-8")
 
         with zipfile.ZipFile(raw_fmu) as zin:
@@ -270,7 +289,7 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                                     generation_tool=f"gearfmu {__version__}", generation_date=now,
                                     version=__version__, description_note=envelope_note(env_rec))
             plat = _platform_dir()
-            with fmu_zip(a.out_path) as zout:
+            with fmu_zip(out_path) as zout:
                 zout.writestr("modelDescription.xml", xml)
                 for info in zin.infolist():
                     n = info.filename
@@ -289,14 +308,14 @@ def build_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair", dam
                     model_name=model_name, model_identifier=identifier, fmi_version=2, runtime="pythonfmu",
                     generation_tool=f"gearfmu {__version__}", variables=variables,
                     description=ET.fromstring(xml).get("description", ""), tables=tables,
-                    parameters=a.parameters(temp0), envelope=env_rec, scene_text=scene_text,
+                    parameters=record_parameters(s, temp0), envelope=env_rec, scene_text=scene_text,
                     validation_record=json.loads(record[f"{VALIDATION_DIR}/record.json"]),
                     platforms_text=f"binaries/{plat}: gearfmu's loader and pythonfmu's wrapper; the kernel "
                                    "(resources/) compiled on the build machine (docs/fmu.md)",
                     experiment={"start": 0.0, "stop": tstop, "step": dt})
                 for rel in DOC_FILES(2):
                     zout.writestr(rel, page)
-    return a.out_path
+    return out_path
 
 
 def compile_pyshim(dest_dir, identifier: str, *, cc: Optional[str] = None) -> Optional[Path]:
@@ -324,11 +343,9 @@ def python_environment() -> str:
     return f"{kind} {sys.version.split()[0]} with numpy {version('numpy')} and pythonfmu {version('pythonfmu')}"
 
 
-def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
-    """``resources/gearfmu_pyshim.txt``: the Python of this build (version, shared library,
-    executable, whose environment provides numpy, and a description of that environment without
-    a path), the wrapper's file name, the GUID and the variable table the FMI layer serves
-    (:func:`~gearfmu.fmu.build_steps.variable_table_lines`), one ``key=value`` a line."""
+def _libpython() -> tuple:
+    """(version "3.X", path of this Python's shared library or "" when it has none, the soname the
+    dynamic loader is asked for)."""
     ver = f"{sys.version_info.major}.{sys.version_info.minor}"
     soname = sysconfig.get_config_var("INSTSONAME") or f"libpython{ver}.so.1.0"
     libdir = sysconfig.get_config_var("LIBDIR") or ""
@@ -337,8 +354,65 @@ def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
         path = ""
     if not soname.endswith(".so") and ".so." not in soname:  # a static libpython: ask the loader by name
         soname = f"libpython{ver}.so.1.0"
-    return (f"python_version={ver}\nlibpython={path}\nlibpython_soname={soname}\n"
-            f"python_executable={sys.executable}\nwrapper={wrapper_name}\n"
+    return ver, path, soname
+
+
+def python_record() -> tuple:
+    """(id, text) of the record of this build's Python that the loader reads outside the FMU:
+    ``format=gearfmu-python-record 1``, then ``python_version``, ``python_executable``,
+    ``libpython`` (absolute paths; empty when there is no shared library) and ``environment``
+    (:func:`python_environment`), one ``key=value`` a line.  The id is the first 16 hex digits of
+    the SHA-256 of the version and the two paths: one record per Python environment, shared by
+    every FMU built in it, and a new one when the environment at a path changes its Python."""
+    ver, path, _ = _libpython()
+    rid = hashlib.sha256(f"{ver}\0{sys.executable}\0{path}".encode("utf-8", "surrogateescape")).hexdigest()[:16]
+    return rid, (f"{PYTHON_RECORD_FORMAT}\npython_version={ver}\npython_executable={sys.executable}\n"
+                 f"libpython={path}\nenvironment={python_environment()}\n")
+
+
+_UNWRITABLE_SAID = False
+
+
+def record_build_python() -> Optional[Path]:
+    """Write :func:`python_record` to ``<gearfmu cache>/pythons/<id>.txt`` (written beside, then
+    renamed: a reader sees the old record or the new one, never a part); return its path.  A
+    folder that cannot be written (or a Python without an executable's path) is no failure of the
+    build: None, and one line on stderr (once per process) saying that the FMU then runs in Python hosts, and in a C host with
+    ``$GEARFMU_PYTHON`` set."""
+    global _UNWRITABLE_SAID
+    rid, text = python_record()
+    path = cache_dir(PYTHON_RECORDS) / f"{rid}.txt"
+    part = path.with_name(f"{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.part")
+    try:
+        if not sys.executable or any(c in p for p in (sys.executable, _libpython()[1]) for c in "\r\n"):
+            raise OSError("this Python names no executable (sys.executable), or its path holds a line break")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part.write_bytes(text.encode("utf-8", "surrogateescape"))
+        os.replace(part, path)
+        return path
+    except OSError as exc:
+        if not _UNWRITABLE_SAID:
+            _UNWRITABLE_SAID = True
+            print(f"gearfmu: cannot write the record of this build's Python ({path}: "
+                  f"{exc.strerror or exc}); the pythonfmu FMU runs in Python hosts, and in a C host with "
+                  f"{PYTHON_OVERRIDE_VARIABLE} set to this Python's executable (docs/fmu.md)", file=sys.stderr)
+        return None
+    finally:
+        try:
+            part.unlink()
+        except OSError:
+            pass
+
+
+def pyshim_config(wrapper_name: str, *, guid: str, variables) -> str:
+    """``resources/gearfmu_pyshim.txt``: the Python version of this build, the soname of its shared
+    library, the id of its record (:func:`python_record`), a description of its environment, the
+    wrapper's file name, the GUID and the variable table the FMI layer serves
+    (:func:`~gearfmu.fmu.build_steps.variable_table_lines`), one ``key=value`` a line.  No path:
+    where the build's Python is lives in the record, outside the FMU."""
+    ver, _, soname = _libpython()
+    rid, _ = python_record()
+    return (f"python_version={ver}\nlibpython_soname={soname}\npython_record={rid}\nwrapper={wrapper_name}\n"
             f"environment={python_environment()}\nguid={guid}\n" + "\n".join(variable_table_lines(variables)) + "\n")
 
 

@@ -34,7 +34,7 @@ FMU layout (docs/standalone.md)::
     resources/provenance.json            who/what/when built this FMU
     resources/scene.toml                 the scene (when given)
     resources/validation/                the validation record (:func:`validation_record`)
-    resources/envelope.json              the verified envelope (gearfmu.scene.envelope.fmu_envelope_record)
+    resources/envelope.json              the verified envelope (gearfmu.fmu.envelope.fmu_envelope_record)
 
 :func:`validation_record` is shared with the pythonfmu builder
 (:func:`gearfmu.fmu.pythonfmu_build.build_fmu`): every FMU carries its scene, package and
@@ -59,16 +59,16 @@ from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
 from .. import __version__
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_INTEGRATOR, FMI3_OUTPUTS
+from ..common.settings import RunSettings
+from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS
 from . import crossbuild
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
                           KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
-                          FmuBuildError, check_arguments, check_model_description, compiler_version, envelope_json,
+                          FmuBuildError, check_arguments, check_model_description, compiler_version,
                           find_c_compiler, fmi2_header_dir, fmi3_header_dir, fmi_header_dir, fmu_digest, fmu_zip,
-                          interface_variables, model_description, run_compiler, scene_sha256, variable_table_lines,
-                          write_scene,
-                          write_tables, zip_folder)
-from ..scene.envelope import ENVELOPE_FILE, envelope_note, fmu_envelope_record, runtime_envelope
+                          interface_variables, model_description, record_parameters, run_compiler, scene_sha256,
+                          start_values, variable_table_lines, write_scene, write_tables, zip_folder)
+from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
 from .fmudoc import DOC_FILES, documentation_html
@@ -309,7 +309,7 @@ def _hexf(v) -> str:
 def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
                 meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None) -> str:
     """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md).
-    ``envelope``: :func:`gearfmu.scene.envelope.runtime_envelope` (``envelope.kind`` and
+    ``envelope``: :func:`gearfmu.fmu.envelope.runtime_envelope` (``envelope.kind`` and
     ``envelope.<quantity>=low|high`` lines; none: nothing is checked)."""
     meta = json.loads(meta_bytes.decode("utf-8"))
     sc = meta["scalars"]
@@ -377,27 +377,29 @@ def write_documentation(root: Path, *, fmi_version: int, **kw) -> None:
 
 
 # --------------------------------------------------------------------- build
-def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gearpair",
-                         damping_ratio: float = 0.02, pinion_speed_start_rad_s: float = 100.0,
-                         pinion_torque_start_Nm: float = 100.0, gear_torque_start_Nm: Optional[float] = None,
-                         max_step_s: float = 1e-5, damping_model: Union[int, str] = 0,
-                         stop_time_s: float = 0.1, output_interval_s: Optional[float] = None,
-                         scene_text: Optional[str] = None, pinion_angle_start_rad: float = 0.0,
-                         spec_path=None, cc: Optional[str] = None, validation: bool = True,
-                         integrator: Union[int, str] = DEFAULT_INTEGRATOR,
+def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSettings] = None, *,
+                         model_name: str = "gearpair", scene_text: Optional[str] = None, spec_path=None,
+                         cc: Optional[str] = None, validation: bool = True,
                          platforms: Optional[Sequence[str]] = None, envelope: Optional[dict] = None,
-                         fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> Path:
+                         fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
+                         damping_ratio: Optional[float] = None, pinion_speed_start_rad_s: Optional[float] = None,
+                         pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
+                         max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
+                         stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
+                         pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
-    Same arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu` (damping
-    ratio 1, speeds rad/s, torques N*m, times s, angles rad; ``integrator``
-    0/"rk4", 1/"rk4_kink", 2/"rk4_node" (default) or 3/"rk4_seg", the FMU parameter ``integrator``); ``validation``
+    Same settings, arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu`
+    (``settings``: the :class:`gearfmu.common.settings.RunSettings` of the FMU's start values and
+    DefaultExperiment, its fields replaced by the keyword arguments given; damping ratio 1, speeds
+    rad/s, torques N*m, times s, angles rad; ``integrator`` "rk4" (0), "rk4_kink" (1),
+    "rk4_node" (2, default) or "rk4_seg" (3), the FMU parameter ``integrator``); ``validation``
     False skips the validation record (and its native run).  ``platforms``:
     keys of :data:`gearfmu.fmu.crossbuild.TARGETS` (default: all); without the zig
     compiler only the build machine's platform is compiled (with ``cc`` or the
     host C compiler), and documentation/platforms.txt and the model description
     say which platforms are missing.  ``cc`` given: the build machine's platform
-    is compiled with it.  ``envelope``: :func:`gearfmu.scene.envelope.fmu_envelope_record` (None: the
+    is compiled with it.  ``envelope``: :func:`gearfmu.fmu.envelope.fmu_envelope_record` (None: the
     tables' own range, "not verified").  ``fmi_version`` 3: the same C glue behind the FMI 3.0
     layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
     platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``
@@ -409,28 +411,29 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
     if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
         raise FmuBuildError(f"fmi3_outputs: {fmi3_outputs!r} must be one of {FMI3_OUTPUTS}, and other than "
                             f"{DEFAULT_FMI3_OUTPUTS!r} only with fmi_version 3")
-    a = check_arguments(tables, out_path, scene_text=scene_text, integrator=integrator, model_name=model_name,
-                        damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
-                        pinion_angle_start_rad=pinion_angle_start_rad, pinion_torque_start_Nm=pinion_torque_start_Nm,
-                        gear_torque_start_Nm=gear_torque_start_Nm, max_step_s=max_step_s, stop_time_s=stop_time_s,
-                        output_interval_s=output_interval_s, damping_model=damping_model)
-    tstop, dt = a.stop_time_s, a.output_interval_s
+    s, out_path = check_arguments(tables, out_path, settings, scene_text=scene_text, model_name=model_name,
+                                  damping_ratio=damping_ratio, pinion_speed_start_rad_s=pinion_speed_start_rad_s,
+                                  pinion_angle_start_rad=pinion_angle_start_rad,
+                                  pinion_torque_start_Nm=pinion_torque_start_Nm, gear_torque_start_Nm=gear_torque_start_Nm,
+                                  max_step_s=max_step_s, stop_time_s=stop_time_s, output_interval_s=output_interval_s,
+                                  damping_model=damping_model, integrator=integrator)
+    tstop, dt = s.stop_time_s, s.output_interval_s
     keys = crossbuild.parse_platforms(None) if platforms is None else tuple(platforms)
     unknown = [k for k in keys if k not in crossbuild.TARGETS]
     if unknown or not keys:
         raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
 
     spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, a.starts(), integrator_optional=True)
+    variables, temp0 = interface_variables(spec, tables, start_values(s), integrator_optional=True)
     if fmi3_outputs == "scalar":
         variables = scalar_names(variables)
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
     meta_bytes, bin_bytes = tables.to_bytes()
-    identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, a)[:12]}_{uuid.uuid4().hex[:8]}"
+    identifier = f"gearfmu_sa_{fmu_digest(meta_bytes, bin_bytes, model_name, s)[:12]}_{uuid.uuid4().hex[:8]}"
     guid = "{" + str(uuid.uuid4()) + "}"
     cc_given = cc is not None
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    params = a.parameters(temp0)
+    params = record_parameters(s, temp0)
 
     with tempfile.TemporaryDirectory(prefix="gearfmu_sa_build_") as tmpd:
         root = Path(tmpd) / "fmu"
@@ -483,9 +486,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
         }
         (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
         if validation:
-            for rel, data in validation_record(tables, runtime="standalone", model_identifier=identifier,
-                                               parameters=params, stop_time_s=tstop, output_interval_s=dt,
-                                               scene_text=scene_text, compiler=compiler,
+            for rel, data in validation_record(tables, s, runtime="standalone", model_identifier=identifier,
+                                               temperature_start_C=temp0, scene_text=scene_text, compiler=compiler,
                                                envelope=env_rec).items():
                 p = root / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
@@ -507,6 +509,6 @@ def build_standalone_fmu(tables: MeshTables, out_path, *, model_name: str = "gea
                             parameters=params, envelope=env_rec, scene_text=scene_text,
                             platforms_text=platforms_text(binaries, fmi_version),
                             experiment={"start": 0.0, "stop": tstop, "step": dt})
-        with fmu_zip(a.out_path) as zout:
+        with fmu_zip(out_path) as zout:
             zip_folder(zout, root)
-    return a.out_path
+    return out_path

@@ -9,8 +9,8 @@ from __future__ import annotations
 import csv
 import datetime
 import hashlib
+import dataclasses
 import importlib.metadata
-import inspect
 import io
 import json
 import platform
@@ -20,9 +20,10 @@ from typing import Dict, Optional
 from .. import __version__
 from ..common.cache import cache_dir, load_entry, package_sources_sha256, sources_sha256, store_entry  # noqa: F401
 from ..common.progress import ticking
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.settings import RunSettings
 from ..dynamics.native import simulate
 from ..tables.mesh_tables import MeshTables
+from .build_steps import record_parameters
 from .compare import native_columns, output_names
 
 __all__ = ["validation_record", "VALIDATION_DIR", "RECORD_PACKAGES", "REFERENCE_CACHE"]
@@ -50,8 +51,8 @@ def _versions() -> Dict[str, Optional[str]]:
     return out
 
 
-def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str, parameters: dict,
-                      stop_time_s: float, output_interval_s: float, scene_text: Optional[str] = None,
+def validation_record(tables: MeshTables, settings: RunSettings, *, runtime: str, model_identifier: str,
+                      temperature_start_C: Optional[float] = None, scene_text: Optional[str] = None,
                       compiler: Optional[str] = None, envelope: Optional[dict] = None) -> Dict[str, bytes]:
     """The validation record every gearfmu FMU carries (both runtimes), as
     ``{path inside the FMU: bytes}`` under ``resources/validation/``.
@@ -60,31 +61,22 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
     compiler, parameters, table checksums -- tables.bin and every array --,
     the experiment, the reference file's SHA-256 and the agreement criterion),
     ``reference_result.csv`` (the native numba solver, :func:`gearfmu.dynamics.native.simulate`,
-    over the FMU's DefaultExperiment with the FMU's start values: communication
-    step = stepSize, same max_step, so the FMU reproduces it to round-off when
-    a master steps it at stepSize) and ``scene.toml`` when a scene was given;
-    ``envelope`` (:func:`gearfmu.scene.envelope.fmu_envelope_record`, the FMU's
-    ``resources/envelope.json``) goes into record.json as ``envelope``.
-    ``parameters`` keys: damping_ratio, pinion_speed_start_rad_s,
-    pinion_angle_start_rad, pinion_torque_start_Nm, gear_torque_start_Nm,
-    max_step_s, damping_model (0/1), optionally integrator (0/1).  The pattern follows the Modelica
+    over the FMU's DefaultExperiment with the FMU's start values: ``settings``, the build's
+    resolved :class:`gearfmu.common.settings.RunSettings` -- communication step = stepSize, same
+    max_step --, at the temperature input's start value ``temperature_start_C`` (degC) when the
+    tables have a temperature axis, so the FMU reproduces it to round-off when a master steps it at
+    stepSize) and ``scene.toml`` when a scene was given; ``envelope``
+    (:func:`gearfmu.fmu.envelope.fmu_envelope_record`, the FMU's ``resources/envelope.json``)
+    goes into record.json as ``envelope``.  ``parameters`` in record.json:
+    :func:`gearfmu.fmu.build_steps.record_parameters`.  The pattern follows the Modelica
     Reference-FMUs, which carry their reference result CSV inside the FMU.
     """
-    names_by_code = {v: k for k, v in DAMPING_MODELS.items()}
-    p = dict(parameters)
-    extra = {}
-    if int(p.get("integrator", 0)) != 0 or "integrator" in inspect.signature(simulate).parameters:
-        extra["integrator"] = {v: k for k, v in INTEGRATORS.items()}[int(p.get("integrator", 0))]
-    if p.get("bulk_temperature_start_C") is not None:
-        extra["bulk_temperature_C"] = float(p["bulk_temperature_start_C"])
-    sim_kw = dict(extra, stop_time_s=stop_time_s, comm_step_s=output_interval_s, max_step_s=p["max_step_s"],
-                  pinion_torque_Nm=p["pinion_torque_start_Nm"], gear_torque_Nm=p["gear_torque_start_Nm"],
-                  pinion_speed_start_rad_s=p["pinion_speed_start_rad_s"], damping_ratio=p["damping_ratio"],
-                  damping_model=names_by_code[int(p["damping_model"])],
-                  pinion_angle_start_rad=p.get("pinion_angle_start_rad", 0.0))
+    p = record_parameters(settings, temperature_start_C)
+    stop_time_s, output_interval_s = settings.stop_time_s, settings.output_interval_s
+    sim_kw = {} if temperature_start_C is None else {"bulk_temperature_C": float(temperature_start_C)}
     meta_bytes, bin_bytes = tables.to_bytes()
     meta = json.loads(meta_bytes.decode("utf-8"))
-    ref, ref_meta = _reference(tables, sim_kw, meta)
+    ref, ref_meta = _reference(tables, settings, sim_kw, meta)
     record = {
         "format": "gearfmu-validation-record", "version": 1,
         "runtime": runtime, "model_identifier": model_identifier,
@@ -115,20 +107,22 @@ def validation_record(tables: MeshTables, *, runtime: str, model_identifier: str
     return out
 
 
-def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
+def _reference(tables: MeshTables, settings: RunSettings, sim_kw: dict, tables_meta: dict):
     """(reference_result.csv bytes, {substeps, rows, native_wall_s}) of the native solver on
-    ``tables`` with ``sim_kw``.  Kept in gearfmu's file cache (:mod:`gearfmu.common.cache`, folder
-    :data:`REFERENCE_CACHE`) under the key: the tables' content checksum (every array's SHA-256,
-    shapes, scalars and axes: ``tables.json`` without its provenance, which the solver does not
-    read), every argument of the run, the gearfmu, Python and solver package versions, the
-    checksum of gearfmu's own source files (:func:`package_sources_sha256`) and the machine type.  A later build with the same key reads the file instead of running the solver
+    ``tables`` with ``settings`` and the keyword arguments ``sim_kw``.  Kept in gearfmu's file cache
+    (:mod:`gearfmu.common.cache`, folder :data:`REFERENCE_CACHE`) under the key: the tables' content
+    checksum (every array's SHA-256, shapes, scalars and axes: ``tables.json`` without its provenance,
+    which the solver does not read), every setting and argument of the run, the gearfmu, Python and
+    solver package versions, the checksum of gearfmu's own source files (:func:`package_sources_sha256`)
+    and the machine type.  A later build with the same key reads the file instead of running the solver
     (the same bytes: the solver is deterministic); any change in the key runs it again.
     ``native_wall_s`` is the wall time of the run that computed the file."""
     content = {k: v for k, v in tables_meta.items() if k != "provenance"}
     versions = _versions()
+    run = dict(dataclasses.asdict(settings), **sim_kw)
     key = {"what": "gearfmu native reference result",
            "tables_content_sha256": hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest(),
-           "simulate": {k: repr(v) for k, v in sorted(sim_kw.items())},
+           "simulate": {k: repr(v) for k, v in sorted(run.items())},
            "versions": {k: versions[k] for k in ("gearfmu", "python", *_SOLVER_PACKAGES)},
            "gearfmu_sources_sha256": _sources_sha256(),
            "machine": platform.machine()}
@@ -136,9 +130,9 @@ def _reference(tables: MeshTables, sim_kw: dict, tables_meta: dict):
     hit = load_entry(folder, key, ".csv", fields={"substeps": int, "rows": int, "native_wall_s": float})
     if hit is not None:
         return hit[1], hit[0]
-    with ticking(f"validation record: native reference run over {sim_kw['stop_time_s']:g} s "
+    with ticking(f"validation record: native reference run over {settings.stop_time_s:g} s "
                  "(kept for later builds)"):
-        res = simulate(tables, **sim_kw)
+        res = simulate(tables, settings, **sim_kw)
     cols = native_columns(res, tables.slots)
     names = output_names(tables.slots)
     buf = io.StringIO()

@@ -2,7 +2,7 @@
 
 Imports :mod:`gearfmu.dynamics` (the pair model's lookup and force law, per mesh),
 :mod:`gearfmu.tables` and :mod:`gearfmu.common`; never the scene (the orchestration,
-:mod:`gearfmu.drivetrain`, builds a model from a drivetrain scene).  docs/gearbox.md
+:mod:`gearfmu.stages`, builds a model from a drivetrain scene).  docs/gearbox.md
 describes the model, the integrators, the modes and what is verified.
 
 ===========  =========================================================

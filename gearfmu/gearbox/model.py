@@ -24,7 +24,7 @@ motor torque acts on body 0, the load torque resists on the load's body.  With `
 ``psi'' = a_0``, ``u_i'' = a_i - g_i a_0``.
 
 :func:`build_gearbox` checks and builds a :class:`GearboxModel`; the orchestration
-(:mod:`gearfmu.drivetrain`) builds one from a drivetrain scene and its stages' tables.
+(:mod:`gearfmu.stages`) builds one from a drivetrain scene and its stages' tables.
 """
 from __future__ import annotations
 

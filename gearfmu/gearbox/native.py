@@ -3,18 +3,21 @@
 One monolithic system: every mesh is the multi-pair model of its stage (per-pair stiffness,
 damping, meshing error, backlash; the pair model's lookup and force law, docs/model.md), the
 shafts couple the bodies, and the event-aware integrators stop at the events of every mesh.
-The compiled loop is :func:`gearfmu.gearbox.kernels.run`; this module checks the arguments,
+The compiled loop is :func:`gearfmu.gearbox.kernels.run`; this module checks the inputs (the
+settings are a :class:`gearfmu.common.settings.GearboxRunSettings`, checked where they are made),
 lays out the kernel data, and wraps the outputs.
 
 Public API
 ----------
 * :func:`simulate` -- run a :class:`gearfmu.gearbox.model.GearboxModel`.
-* :func:`choose_max_step_s` -- the default internal step.
+* :func:`choose_max_step_s` -- the default internal step; :func:`resolve_settings` -- a run's
+  automatic values (output interval, step bound) resolved on the model.
 * :class:`GearboxResult` -- output columns by name (``motor_speed``, ``s1.dte``,
   ``input_shaft.torque`` ...), ``to_csv``.
 """
 from __future__ import annotations
 
+import dataclasses
 import time as _time
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple
@@ -23,8 +26,9 @@ import numpy as np
 
 from ..common.checks import finite_number
 from ..common.progress import progress_bar
-from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS, INTEGRATORS
-from ..dynamics.native import (InputLike, _input_series, _n_steps, choose_max_step_s as pair_max_step_s, substeps,
+from ..common.settings import SOLVER_ARGUMENTS, GearboxRunSettings, checked, default_output_interval_s
+from ..common.vocabulary import INTEGRATORS
+from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
                                write_columns_csv)
 from ..tables.zones import zone_cuts
 from ._pair import KINK_MAX_SLOTS, _node_flags
@@ -33,8 +37,8 @@ from .kernels import F_C, F_DPHI, F_G, F_INV, F_RBP, F_RBQ, I_B, I_CUTS, I_E, I_
 from .model import GearboxModel
 from .modes import modes
 
-__all__ = ["GearboxInputError", "GearboxResult", "simulate", "choose_max_step_s", "output_units", "RunArguments",
-           "run_arguments", "columns"]
+__all__ = ["GearboxInputError", "GearboxResult", "simulate", "choose_max_step_s", "output_units", "resolve_settings",
+           "default_output_interval", "checked_settings", "run_inputs", "columns"]
 
 _NO_CUTS = np.full((2, 1, 1), -1.0)
 
@@ -169,9 +173,8 @@ class _KernelData:
 
 
 def _integrator_code(integrator, model) -> int:
-    if integrator not in GEARBOX_INTEGRATORS:
-        raise GearboxInputError(f"integrator: {integrator!r} unknown for gearboxes; choose one of "
-                                f"{list(GEARBOX_INTEGRATORS)}")
+    """The code of a (checked) gearbox integrator name; the event-locating integrators handle at most
+    KINK_MAX_SLOTS slots per mesh."""
     if integrator != "rk4":
         for i, m in enumerate(model.meshes):
             if m.tables.slots > KINK_MAX_SLOTS:
@@ -180,42 +183,52 @@ def _integrator_code(integrator, model) -> int:
     return INTEGRATORS[integrator]
 
 
-@dataclass(frozen=True)
-class RunArguments:
-    """The checked run arguments :func:`simulate` and gearfmu.gearbox.reference share (SI): the
-    inputs one value per communication step (n_steps + 1), the motor-side reference torque that
-    selects the torque rows (:meth:`GearboxModel.reference_torque_Nm` per step), the start speed
-    and angle, and a given initial state (None: the quasi-static one)."""
-
-    stop_time_s: float
-    comm_step_s: float
-    n_steps: int
-    motor_torque_Nm: np.ndarray
-    load_torque_Nm: np.ndarray
-    reference_torque_Nm: np.ndarray
-    speed_rad_s: float
-    angle_rad: float
-    initial_state: Optional[np.ndarray]
+def default_output_interval(model: GearboxModel, settings: GearboxRunSettings) -> float:
+    """The output interval of a run that gives none: the shortest over the meshes of
+    :func:`gearfmu.common.settings.default_output_interval_s` at the mesh pinion's speed (the
+    motor's start speed times its ratio) and teeth, at most the stop time (the rule of a
+    drivetrain scene's ``run.output_interval_s = "auto"``, docs/gearbox.md)."""
+    w = settings.motor_speed_start_rad_s
+    return min(min(default_output_interval_s(w * float(model.g[model.mesh_bodies[i, 0]]), m.tables.teeth_pinion)
+                   for i, m in enumerate(model.meshes)), settings.stop_time_s)
 
 
-def run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                  motor_angle_start_rad, initial_state, error=GearboxInputError) -> RunArguments:
-    """Check and convert the run arguments of the gearbox solvers (:func:`simulate` documents
-    them); ``error`` names the first bad one."""
+def resolve_settings(model: GearboxModel, settings: GearboxRunSettings,
+                     reference_torque_Nm: Optional[float] = None) -> GearboxRunSettings:
+    """``settings`` with its automatic values resolved on the model: the output interval
+    (:func:`default_output_interval`) and the step bound (:func:`choose_max_step_s` at 1.5 x the
+    motor's start speed, at least 1 rad/s, linearised at ``reference_torque_Nm``)."""
+    s = settings
+    if s.output_interval_s is None:
+        s = dataclasses.replace(s, output_interval_s=default_output_interval(model, s))
+    if s.max_step_s is None:
+        s = dataclasses.replace(s, max_step_s=choose_max_step_s(model, max(1.5 * abs(s.motor_speed_start_rad_s), 1.0),
+                                                                 reference_torque_Nm=reference_torque_Nm))
+    return s
+
+
+def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, initial_state, error=GearboxInputError):
+    """(n_steps, motor torque, load torque, reference torque, initial state or None) of a run with
+    checked settings ``s`` whose output interval is set: the inputs one value per communication step
+    (n_steps + 1; ``motor_torque_Nm`` None: the settings' start torque held; ``load_torque_Nm``
+    None: the balancing load T_motor/g_load of the motor input given, else the settings' start
+    torque held, else the balance), the motor-side reference torque that selects the torque rows
+    (:meth:`GearboxModel.reference_torque_Nm` per step) and a given initial state (None: the
+    quasi-static one).  ``error`` names the first bad one."""
     if not isinstance(model, GearboxModel):
         raise error(f"model: expected GearboxModel, got {type(model).__name__}")
-    H = finite_number("comm_step_s", comm_step_s, positive=True, error=error)
-    stop = finite_number("stop_time_s", stop_time_s, positive=True, error=error)
-    n_steps = _n_steps(stop, H, error=error)
-    w0 = finite_number("motor_speed_start_rad_s", motor_speed_start_rad_s, error=error)
-    angle = finite_number("motor_angle_start_rad", motor_angle_start_rad, error=error)
-    t_in = _input_series("motor_torque_Nm", motor_torque_Nm, n_steps, H, error=error)
+    H = s.output_interval_s
+    n_steps = whole_steps(s.stop_time_s, H, error=error)
+    t_in = input_series("motor_torque_Nm", s.motor_torque_start_Nm if motor_torque_Nm is None else motor_torque_Nm,
+                        n_steps, H, error=error)
+    if load_torque_Nm is None and motor_torque_Nm is None:
+        load_torque_Nm = s.load_torque_start_Nm
     if load_torque_Nm is None:
         if not model.motor_torque_input:
             raise error("load_torque_Nm: required when the motor is no torque input")
         t_out = t_in / model.load_ratio
     else:
-        t_out = _input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
+        t_out = input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
     if not model.motor_torque_input:
         t_in = np.zeros_like(t_in)
     if not model.load_torque_input:
@@ -226,34 +239,49 @@ def run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_
         y = np.array(initial_state, dtype=np.float64)
         if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
             raise error(f"initial_state: expected {model.n_state} finite values (psi, omega, u_i, du_i)")
-    return RunArguments(stop, H, n_steps, t_in, t_out, t_ref, w0, angle, y)
+    return n_steps, t_in, t_out, t_ref, y
 
 
-def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, motor_torque_Nm: InputLike,
-             load_torque_Nm: Optional[InputLike] = None, motor_speed_start_rad_s: float,
-             max_step_s: Optional[float] = None, integrator: str = DEFAULT_INTEGRATOR,
-             motor_angle_start_rad: float = 0.0, initial_state=None, progress: bool = False) -> GearboxResult:
+def checked_settings(model, settings, error=GearboxInputError, **changes) -> GearboxRunSettings:
+    """The run's checked settings (``settings`` with the changes given), the output interval set."""
+    s = checked(settings, error, GearboxRunSettings, SOLVER_ARGUMENTS, **changes)
+    if s.output_interval_s is None and isinstance(model, GearboxModel):
+        s = dataclasses.replace(s, output_interval_s=default_output_interval(model, s))
+    return s
+
+
+def simulate(model: GearboxModel, settings: Optional[GearboxRunSettings] = None, *,
+             stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
+             motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
+             motor_speed_start_rad_s: Optional[float] = None, max_step_s: Optional[float] = None,
+             integrator: Optional[str] = None, motor_angle_start_rad: Optional[float] = None, initial_state=None,
+             progress: bool = False) -> GearboxResult:
     """Run the gearbox model (docs/gearbox.md).
 
+    ``settings``: the run's :class:`gearfmu.common.settings.GearboxRunSettings` (None: its
+    defaults); the keyword arguments of the same meaning, when given, replace its fields:
+    ``stop_time_s``, ``comm_step_s`` (the communication step = ``output_interval_s``; None:
+    :func:`default_output_interval`), ``motor_speed_start_rad_s``, ``motor_angle_start_rad``,
+    ``max_step_s`` (None: :func:`choose_max_step_s` at 1.5 x the start speed), ``integrator``
+    ('rk4_node' (default), 'rk4_kink' or 'rk4', docs/gearbox.md "Integrators").
     Inputs (N*m): a number, an array of one value per communication step (n or n + 1 values;
-    value k is held over [t_k, t_k + H)) or a callable of t_k; ``load_torque_Nm`` None = the
-    balancing load torque T_motor/g_load.  An end that is no torque input
-    (``model.motor_torque_input`` / ``load_torque_input`` False) takes 0.  ``max_step_s`` None:
-    :func:`choose_max_step_s` at 1.5 x the start speed.  Initial state: ``initial_state`` (the
-    ``state`` of an earlier result) or the quasi-static equilibrium under the start torques at
-    the motor angle (:meth:`GearboxModel.static_state`).  ``integrator``: 'rk4_node' (default),
-    'rk4_kink' or 'rk4' (docs/gearbox.md "Integrators").  If the state turns non-finite the run
-    stops there; the remaining rows are NaN and ``info['diverged_at_step']`` says where.
-    ``progress``: a bar on stderr (the run goes in chunks of steps; results unchanged)."""
-    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                      motor_angle_start_rad, initial_state)
-    icode = _integrator_code(integrator, model)
-    H, n_steps, t_in, t_out, t_ref, w0 = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
-        a.reference_torque_Nm, a.speed_rad_s
-    if max_step_s is None:
-        max_step_s = choose_max_step_s(model, max(1.5 * abs(w0), 1.0), reference_torque_Nm=float(t_ref[0]))
-    h_max = finite_number("max_step_s", max_step_s, positive=True, error=GearboxInputError)
-    n_sub = substeps(H, h_max)
+    value k is held over [t_k, t_k + H)) or a callable of t_k; ``motor_torque_Nm`` None: the
+    settings' start torque held; ``load_torque_Nm`` None = the balancing load torque
+    T_motor/g_load (without a motor input: the settings' load start torque, when set).  An end
+    that is no torque input (``model.motor_torque_input`` / ``load_torque_input`` False) takes 0.
+    Initial state: ``initial_state`` (the ``state`` of an earlier result) or the quasi-static
+    equilibrium under the start torques at the motor angle (:meth:`GearboxModel.static_state`).
+    If the state turns non-finite the run stops there; the remaining rows are NaN and
+    ``info['diverged_at_step']`` says where.  ``progress``: a bar on stderr (the run goes in chunks
+    of steps; results unchanged)."""
+    s = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                         max_step_s=max_step_s, integrator=integrator, motor_speed_start_rad_s=motor_speed_start_rad_s,
+                         motor_angle_start_rad=motor_angle_start_rad)
+    n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state)
+    icode = _integrator_code(s.integrator, model)
+    s = resolve_settings(model, s, reference_torque_Nm=float(t_ref[0]))
+    H, w0 = s.output_interval_s, s.motor_speed_start_rad_s
+    n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
     kd = _KernelData(model)
     nm = len(model.meshes)
@@ -264,7 +292,7 @@ def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, mot
             it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], t_ref / model.g[model.mesh_bodies[m, 0]])
         else:
             it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], np.zeros(n_steps + 1))
-    y = model.static_state(float(t_ref[0]), w0, a.angle_rad) if a.initial_state is None else a.initial_state
+    y = model.static_state(float(t_ref[0]), w0, s.motor_angle_start_rad) if y_given is None else y_given
     y = np.ascontiguousarray(y, dtype=np.float64)
     n = model.n_bodies
     rows = n_steps + 1
@@ -293,7 +321,7 @@ def simulate(model: GearboxModel, *, stop_time_s: float, comm_step_s: float, mot
     if done < n_steps:
         info["diverged_at_step"] = int(done)
     cols = columns(model, kd.pair_off, out_body, out_mesh, out_pair, out_shaft, t_in, t_out)
-    return GearboxResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=integrator,
+    return GearboxResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=s.integrator,
                          wall_s=wall, state=y, info=info)
 
 

@@ -5,8 +5,8 @@ The equations of docs/gearbox.md "Model", written again in plain Python -- no nu
 scipy's ``solve_ivp`` (DOP853 by default, rtol 1e-10), so that no integrator setting of this
 project is tuned against it.  Every mesh is the pair model of docs/model.md on its stage's tables,
 represented by the pair reference's table pieces and per-pair force law
-(:mod:`gearfmu.dynamics.reference`: ``_Rows`` for the table pieces, kink nodes and contact-zone
-lines, ``_Segment`` for one piece's linear tables, the per-pair contact and damping modes, their
+(:mod:`gearfmu.dynamics.reference`: ``TableRows`` for the table pieces, kink nodes and contact-zone
+lines, ``TableSegment`` for one piece's linear tables, the per-pair contact and damping modes, their
 force and their switching indicators).
 
 Segments: inside one segment every mesh keeps its table piece (between two kink nodes of its
@@ -23,8 +23,8 @@ Initial state: the quasi-static equilibrium of :meth:`gearfmu.gearbox.model.Gear
 computed here with the exact leftmost root of each mesh's piecewise-linear static force
 (``equilibrium_dte_exact_m``) instead of the kernels' bisection.
 
-``simulate_reference(model, ...)`` takes the arguments of :func:`gearfmu.gearbox.native.simulate`
-(without ``max_step_s`` and ``integrator``) plus ``rtol``, ``method``, ``steps_per_period`` and
+``simulate_reference(model, settings, ...)`` takes the settings and arguments of
+:func:`gearfmu.gearbox.native.simulate` (without ``max_step_s`` and ``integrator``) plus ``rtol``, ``method``, ``steps_per_period`` and
 returns a :class:`gearfmu.gearbox.native.GearboxResult` with the same columns.
 """
 from __future__ import annotations
@@ -38,9 +38,10 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..dynamics.reference import _forces_model, _Rows, _Segment, equilibrium_dte_exact_m
+from ..dynamics.reference import TableRows, TableSegment, equilibrium_dte_exact_m, pair_forces
 from .model import GearboxModel
-from .native import GearboxInputError, GearboxResult, InputLike, columns, run_arguments
+from ..common.settings import GearboxRunSettings
+from .native import GearboxInputError, GearboxResult, InputLike, checked_settings, columns, run_inputs
 
 __all__ = ["simulate_reference"]
 
@@ -57,7 +58,7 @@ def _local(model: GearboxModel, m: int, y, psi_rel_index=True):
     return (gp * y[0] + up, gp * y[1] + dup, rb_p * up - rb_q * uq, rb_p * dup - rb_q * duq)
 
 
-def _lookup_values(rows: _Rows, theta: float):
+def _lookup_values(rows: TableRows, theta: float):
     """k, e, b of every slot at pinion angle theta by docs/model.md (plain, or the zone lines)."""
     s = theta / rows.dphi
     if rows.zones is not None:
@@ -72,23 +73,25 @@ def _lookup_values(rows: _Rows, theta: float):
     return lerp(rows.K), lerp(rows.E), lerp(rows.B)
 
 
-def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: float,
-                       motor_torque_Nm: InputLike, load_torque_Nm: Optional[InputLike] = None,
-                       motor_speed_start_rad_s: float, motor_angle_start_rad: float = 0.0, initial_state=None,
-                       rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
+def simulate_reference(model: GearboxModel, settings: Optional[GearboxRunSettings] = None, *,
+                       stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
+                       motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
+                       motor_speed_start_rad_s: Optional[float] = None, motor_angle_start_rad: Optional[float] = None,
+                       initial_state=None, rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
                        steps_per_period: float = 64.0, max_segments: int = 5_000_000,
                        progress: bool = False) -> GearboxResult:
-    """Event-located solve_ivp reference of the gearbox model (module docstring); arguments as
-    :func:`gearfmu.gearbox.native.simulate`, plus ``rtol`` (solve_ivp), ``atol_scale`` (times the
-    per-state absolute tolerances rtol*scale), ``method`` and ``steps_per_period`` (the largest step
-    is the shortest natural period of the linearisation with every mesh at its largest total
-    stiffness, over this number).  ``wall_s`` is the whole run."""
-    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                      motor_angle_start_rad, initial_state)
+    """Event-located solve_ivp reference of the gearbox model (module docstring); settings and
+    arguments as :func:`gearfmu.gearbox.native.simulate` (its step bound and integrator unused),
+    plus ``rtol`` (solve_ivp), ``atol_scale`` (times the per-state absolute tolerances rtol*scale),
+    ``method`` and ``steps_per_period`` (the largest step is the shortest natural period of the
+    linearisation with every mesh at its largest total stiffness, over this number).  ``wall_s`` is
+    the whole run."""
+    rs = checked_settings(model, settings, GearboxInputError, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                           motor_speed_start_rad_s=motor_speed_start_rad_s, motor_angle_start_rad=motor_angle_start_rad)
+    n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, rs, motor_torque_Nm, load_torque_Nm, initial_state)
     if not (rtol > 0 and math.isfinite(rtol)):
         raise GearboxInputError(f"rtol: must be a positive number, got {rtol!r}")
-    H, n_steps, t_in, t_out, t_ref = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
-        a.reference_torque_Nm
+    H = rs.output_interval_s
     n, nm = model.n_bodies, len(model.meshes)
     I, g = model.inertia_kgm2, model.g
     lb = model.load_body
@@ -102,13 +105,13 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
         tq = float(tr / g[model.mesh_bodies[m, 0]]) if on_path[m] else 0.0
         key = (m, tq if model.meshes[m].tables.n_torque > 1 else 0.0)
         if key not in cache:
-            cache[key] = _Rows(model.meshes[m].tables, key[1])
+            cache[key] = TableRows(model.meshes[m].tables, key[1])
         return cache[key]
 
     # ---- initial state: walk the tree, each mesh at its exact static root
-    if a.initial_state is None:
+    if y_given is None:
         y0 = np.zeros(2 * n)
-        y0[0], y0[1] = a.angle_rad, a.speed_rad_s
+        y0[0], y0[1] = rs.motor_angle_start_rad, rs.motor_speed_start_rad_s
         u = np.zeros(n)
         ts = model.shaft_static_torques_Nm(float(t_ref[0]))
         tm = model.stage_torques_Nm(float(t_ref[0]))
@@ -117,14 +120,14 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
                 u[down] = u[up] - ts[e] / model.shaft_k_Nm_per_rad[e]
                 continue
             p, q = model.mesh_bodies[e]
-            K, E, B = _lookup_values(rows_for(e, t_ref[0]), g[p] * a.angle_rad + u[p])
+            K, E, B = _lookup_values(rows_for(e, t_ref[0]), g[p] * rs.motor_angle_start_rad + u[p])
             x = equilibrium_dte_exact_m(K, E, B, tm[e] / model.mesh_rb_m[e, 0])
             if not math.isfinite(x):
                 raise GearboxInputError(f"motor_angle_start_rad: no pair of mesh {model.meshes[e].name!r} in contact")
             u[q] = (model.mesh_rb_m[e, 0] * u[p] - x) / model.mesh_rb_m[e, 1]
         y0[2::2] = u[1:]
     else:
-        y0 = a.initial_state.copy()
+        y0 = y_given.copy()
 
     # ---- scales: tolerances, largest step, the look-ahead of the mode choice
     kmax = [float(np.max(m.tables.k_N_per_m.sum(axis=1))) for m in model.meshes]
@@ -141,7 +144,7 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
     us = max(max(xs), float(np.max(np.abs(y0[2::2]))) if n > 1 else 0.0, 1e-12)
     psi_s = min(float(m.tables.mesh_period_rad) / g[model.mesh_bodies[i, 0]] for i, m in enumerate(model.meshes))
     scale = np.empty(2 * n)
-    scale[0], scale[1] = psi_s, max(abs(a.speed_rad_s), 1.0)
+    scale[0], scale[1] = psi_s, max(abs(rs.motor_speed_start_rad_s), 1.0)
     scale[2::2], scale[3::2] = us, us * w_max
     atol = rtol * atol_scale * scale
 
@@ -161,7 +164,7 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
         for m in range(nm):
             th, om, x, v = _local(model, m, y)
             th = g[model.mesh_bodies[m, 0]] * psi + (th - g[model.mesh_bodies[m, 0]] * y[0])
-            F, st, kk = _forces_model(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
+            F, st, kk = pair_forces(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
             out_pair[i, pair_off[m]:pair_off[m + 1]] = F
             out_mesh[i, 4 * m:4 * m + 4] = (x, v, F.sum(), kk[st != 0].sum())
         for s in range(len(model.shafts)):
@@ -214,7 +217,7 @@ def simulate_reference(model: GearboxModel, *, stop_time_s: float, comm_step_s: 
         forced = None
         zero_len = 0
         while t < t_end:
-            segs = [_Segment(rows[m], pieces[m], g[model.mesh_bodies[m, 0]] * psi, T1, T2, pars[m])
+            segs = [TableSegment(rows[m], pieces[m], g[model.mesh_bodies[m, 0]] * psi, T1, T2, pars[m])
                     for m in range(nm)]
             gen = [segs[m].force_general(_local(model, m, y)) for m in range(nm)]
             ya = y + delta * deriv(y, gen, T1, T2)

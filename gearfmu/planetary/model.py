@@ -60,7 +60,7 @@ import numpy as np
 from ..common.checks import finite_number
 from ..common.topology import drivetrain_tree, planetary_sun_torque, willis_ratio
 from ..common.vocabulary import DAMPING_MODELS, PLANETARY_MODELS, PLANETARY_PORTS, current_spelling
-from ..dynamics.reference import _Rows
+from ..dynamics.reference import TableRows
 from ..gearbox.model import GearboxModelError, Mesh, Shaft, _check_mesh, mesh_damping
 from ..tables.mesh_tables import MeshTables
 from ..tables.planetary import PlanetaryStage, shift_meshing_error
@@ -281,7 +281,7 @@ class PlanetaryModel:
         f_ext[0] += T_in
         f_ext[self.load_dof] -= T_in / self.load_ratio
         tq = self.mesh_torques_Nm(reference_torque_Nm)
-        rows = [_Rows(t, float(tq[m])) for m, t in enumerate(self.mesh_tables)]
+        rows = [TableRows(t, float(tq[m])) for m, t in enumerate(self.mesh_tables)]
         Kspr = np.zeros((n, n))
         for s in range(len(self.spring_names)):
             r = self.spring_vector(s)
@@ -347,7 +347,7 @@ class PlanetaryModel:
         return y
 
 
-def _lookup(rows: _Rows, theta: float):
+def _lookup(rows: TableRows, theta: float):
     """k, e, b of every slot at table angle theta (the reference's pieces: plain or zone lines)."""
     s = theta / rows.dphi
     K = np.empty(rows.P)

@@ -7,13 +7,14 @@ the DOFs, and the event-aware integrators stop at the events of every mesh.  The
 :func:`gearfmu.planetary.kernels.run`; this module checks the arguments, lays out the kernel data
 and wraps the outputs.
 
-Public API: :func:`simulate`, :func:`choose_max_step_s`, :class:`PlanetaryResult` (output columns
+Public API: :func:`simulate` (settings: :class:`gearfmu.common.settings.GearboxRunSettings`, as the
+gearbox solver's), :func:`choose_max_step_s`, :func:`resolve_settings`, :class:`PlanetaryResult` (output columns
 by name: ``sun_speed`` style part speeds ``<part>_speed``, ``<stage>.sun_planet[n].dte``,
 ``<stage>.load_sharing_factor[n]`` ...; ``to_csv``).
 """
 from __future__ import annotations
 
-import math
+import dataclasses
 import time as _time
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple
@@ -22,8 +23,9 @@ import numpy as np
 
 from ..common.checks import finite_number
 from ..common.progress import progress_bar
-from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS, INTEGRATORS
-from ..dynamics.native import (InputLike, _input_series, _n_steps, choose_max_step_s as pair_max_step_s, substeps,
+from ..common.settings import SOLVER_ARGUMENTS, GearboxRunSettings, checked, default_output_interval_s
+from ..common.vocabulary import INTEGRATORS
+from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
                                write_columns_csv)
 from ..gearbox._pair import KINK_MAX_SLOTS, _node_flags
 from ..tables.zones import zone_cuts
@@ -33,7 +35,7 @@ from .model import PlanetaryModel
 from .modes import modes
 
 __all__ = ["PlanetaryInputError", "PlanetaryResult", "simulate", "choose_max_step_s", "output_units",
-           "run_arguments", "columns", "PlanetaryRunArguments"]
+           "resolve_settings", "default_output_interval", "checked_settings", "run_inputs", "columns"]
 
 _NO_CUTS = np.full((2, 1, 1), -1.0)
 
@@ -186,8 +188,8 @@ class _KernelData:
 
 
 def _integrator_code(integrator, model) -> int:
-    if integrator not in GEARBOX_INTEGRATORS:
-        raise PlanetaryInputError(f"integrator: {integrator!r} unknown; choose one of {list(GEARBOX_INTEGRATORS)}")
+    """The code of a (checked) gearbox integrator name; the event-locating integrators handle at most
+    KINK_MAX_SLOTS slots per mesh."""
     if integrator != "rk4":
         for m, t in enumerate(model.mesh_tables):
             if t.slots > KINK_MAX_SLOTS:
@@ -196,38 +198,58 @@ def _integrator_code(integrator, model) -> int:
     return INTEGRATORS[integrator]
 
 
-@dataclass(frozen=True)
-class PlanetaryRunArguments:
-    """The checked run arguments :func:`simulate` and gearfmu.planetary.reference share (SI)."""
-
-    stop_time_s: float
-    comm_step_s: float
-    n_steps: int
-    motor_torque_Nm: np.ndarray
-    load_torque_Nm: np.ndarray
-    reference_torque_Nm: np.ndarray
-    speed_rad_s: float
-    angle_rad: float
-    initial_state: Optional[np.ndarray]
+def default_output_interval(model: PlanetaryModel, settings: GearboxRunSettings) -> float:
+    """The output interval of a run that gives none: the shortest over the meshes of
+    :func:`gearfmu.common.settings.default_output_interval_s` at the speed of the mesh's table angle
+    (the motor's start speed times its ratio) and its pinion's teeth, at most the stop time."""
+    w = settings.motor_speed_start_rad_s
+    return min(min(default_output_interval_s(w * abs(float(model.angle_ref[m])), t.teeth_pinion)
+                   for m, t in enumerate(model.mesh_tables)), settings.stop_time_s)
 
 
-def run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                  motor_angle_start_rad, initial_state, error=PlanetaryInputError) -> PlanetaryRunArguments:
-    """Check and convert the run arguments (:func:`simulate` documents them)."""
+def checked_settings(model, settings, error=PlanetaryInputError, **changes) -> GearboxRunSettings:
+    """The run's checked settings (``settings`` with the changes given), the output interval set."""
+    s = checked(settings, error, GearboxRunSettings, SOLVER_ARGUMENTS, **changes)
+    if s.output_interval_s is None and isinstance(model, PlanetaryModel):
+        s = dataclasses.replace(s, output_interval_s=default_output_interval(model, s))
+    return s
+
+
+def resolve_settings(model: PlanetaryModel, settings: GearboxRunSettings,
+                     reference_torque_Nm: Optional[float] = None) -> GearboxRunSettings:
+    """``settings`` with its automatic values resolved on the model: the output interval
+    (:func:`default_output_interval`) and the step bound (:func:`choose_max_step_s` at 1.5 x the
+    motor's start speed, at least 1 rad/s, linearised at ``reference_torque_Nm``)."""
+    s = settings
+    if s.output_interval_s is None:
+        s = dataclasses.replace(s, output_interval_s=default_output_interval(model, s))
+    if s.max_step_s is None:
+        s = dataclasses.replace(s, max_step_s=choose_max_step_s(model, max(1.5 * abs(s.motor_speed_start_rad_s), 1.0),
+                                                                 reference_torque_Nm=reference_torque_Nm or 0.0))
+    return s
+
+
+def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, initial_state,
+               error=PlanetaryInputError):
+    """(n_steps, motor torque, load torque, reference torque, initial state or None) of a run with
+    checked settings ``s`` whose output interval is set, by the rules of
+    :func:`gearfmu.gearbox.native.run_inputs` (``motor_torque_Nm`` None: the settings' start torque
+    held; ``load_torque_Nm`` None: the balancing load, else the settings' start torque; an end that is
+    no torque input takes 0)."""
     if not isinstance(model, PlanetaryModel):
         raise error(f"model: expected PlanetaryModel, got {type(model).__name__}")
-    H = finite_number("comm_step_s", comm_step_s, positive=True, error=error)
-    stop = finite_number("stop_time_s", stop_time_s, positive=True, error=error)
-    n_steps = _n_steps(stop, H, error=error)
-    w0 = finite_number("motor_speed_start_rad_s", motor_speed_start_rad_s, error=error)
-    angle = finite_number("motor_angle_start_rad", motor_angle_start_rad, error=error)
-    t_in = _input_series("motor_torque_Nm", motor_torque_Nm, n_steps, H, error=error)
+    H = s.output_interval_s
+    n_steps = whole_steps(s.stop_time_s, H, error=error)
+    t_in = input_series("motor_torque_Nm", s.motor_torque_start_Nm if motor_torque_Nm is None else motor_torque_Nm,
+                        n_steps, H, error=error)
+    if load_torque_Nm is None and motor_torque_Nm is None:
+        load_torque_Nm = s.load_torque_start_Nm
     if load_torque_Nm is None:
         if not model.motor_torque_input:
             raise error("load_torque_Nm: required when the motor is no torque input")
         t_out = t_in / model.load_ratio
     else:
-        t_out = _input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
+        t_out = input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
     if not model.motor_torque_input:
         t_in = np.zeros_like(t_in)
     if not model.load_torque_input:
@@ -238,28 +260,31 @@ def run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_
         y = np.array(initial_state, dtype=np.float64)
         if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
             raise error(f"initial_state: expected {model.n_state} finite values (psi, omega, q_i, q_i')")
-    return PlanetaryRunArguments(stop, H, n_steps, t_in, t_out, t_ref, w0, angle, y)
+    return n_steps, t_in, t_out, t_ref, y
 
 
-def simulate(model: PlanetaryModel, *, stop_time_s: float, comm_step_s: float, motor_torque_Nm: InputLike,
-             load_torque_Nm: Optional[InputLike] = None, motor_speed_start_rad_s: float,
-             max_step_s: Optional[float] = None, integrator: str = DEFAULT_INTEGRATOR,
-             motor_angle_start_rad: float = 0.0, initial_state=None, progress: bool = False) -> PlanetaryResult:
-    """Run the model (docs/planetary.md); arguments as gearfmu.gearbox.native.simulate: inputs a number,
-    an array of one value per communication step or a callable of t_k; ``load_torque_Nm`` None = the
-    balancing load torque; ``max_step_s`` None: :func:`choose_max_step_s` at 1.5 x the start speed;
-    initial state: ``initial_state`` or the quasi-static equilibrium
+def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = None, *,
+             stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
+             motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
+             motor_speed_start_rad_s: Optional[float] = None, max_step_s: Optional[float] = None,
+             integrator: Optional[str] = None, motor_angle_start_rad: Optional[float] = None, initial_state=None,
+             progress: bool = False) -> PlanetaryResult:
+    """Run the model (docs/planetary.md); settings and arguments as gearfmu.gearbox.native.simulate:
+    ``settings`` a :class:`gearfmu.common.settings.GearboxRunSettings` (None: its defaults), the keyword
+    arguments of the same meaning replace its fields; inputs a number, an array of one value per
+    communication step or a callable of t_k; ``load_torque_Nm`` None = the balancing load torque;
+    ``max_step_s`` None: :func:`choose_max_step_s` at 1.5 x the start speed; initial state:
+    ``initial_state`` or the quasi-static equilibrium
     (:meth:`gearfmu.planetary.model.PlanetaryModel.static_state`); ``integrator`` 'rk4_node' (default),
     'rk4_kink' or 'rk4'."""
-    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                      motor_angle_start_rad, initial_state)
-    icode = _integrator_code(integrator, model)
-    H, n_steps, t_in, t_out, t_ref, w0 = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
-        a.reference_torque_Nm, a.speed_rad_s
-    if max_step_s is None:
-        max_step_s = choose_max_step_s(model, max(1.5 * abs(w0), 1.0), reference_torque_Nm=float(t_ref[0]))
-    h_max = finite_number("max_step_s", max_step_s, positive=True, error=PlanetaryInputError)
-    n_sub = substeps(H, h_max)
+    s = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                         max_step_s=max_step_s, integrator=integrator, motor_speed_start_rad_s=motor_speed_start_rad_s,
+                         motor_angle_start_rad=motor_angle_start_rad)
+    n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state)
+    icode = _integrator_code(s.integrator, model)
+    s = resolve_settings(model, s, reference_torque_Nm=float(t_ref[0]))
+    H, w0 = s.output_interval_s, s.motor_speed_start_rad_s
+    n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
     kd = _KernelData(model)
     nm = len(model.mesh_names)
@@ -267,7 +292,7 @@ def simulate(model: PlanetaryModel, *, stop_time_s: float, comm_step_s: float, m
     wt_rows = np.zeros((n_steps + 1, nm))
     for m in range(nm):
         it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], np.abs(t_ref * model.mesh_torque_per_ref[m]))
-    y = model.static_state(float(t_ref[0]), w0, a.angle_rad) if a.initial_state is None else a.initial_state
+    y = model.static_state(float(t_ref[0]), w0, s.motor_angle_start_rad) if y_given is None else y_given
     y = np.ascontiguousarray(y, dtype=np.float64)
     n = model.n_dof
     rows = n_steps + 1
@@ -292,11 +317,12 @@ def simulate(model: PlanetaryModel, *, stop_time_s: float, comm_step_s: float, m
             bar.update(got)
             if got < k:
                 break
-    info = {"events": int(events.sum()), "completed_steps": int(done), "reference_torque_Nm": t_ref}
+    info = {"events": int(events.sum()), "completed_steps": int(done), "reference_torque_Nm": t_ref,
+            "settings": s}
     if done < n_steps:
         info["diverged_at_step"] = int(done)
     cols = columns(model, kd.pair_off, out_dof, out_mesh, out_pair, out_spring, t_in, t_out)
-    return PlanetaryResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=integrator,
+    return PlanetaryResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=s.integrator,
                            wall_s=wall, state=y, info=info)
 
 

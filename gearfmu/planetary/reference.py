@@ -3,7 +3,7 @@
 The equations of docs/planetary.md "Model", written again in plain Python -- no numba kernel of
 :mod:`gearfmu.planetary.kernels` or :mod:`gearfmu.dynamics` is called -- and integrated with scipy's
 ``solve_ivp`` (DOP853 by default, rtol 1e-10), every mesh the pair reference's table pieces and
-per-pair force law (:mod:`gearfmu.dynamics.reference`: ``_Rows``, ``_Segment``), as the gearbox
+per-pair force law (:mod:`gearfmu.dynamics.reference`: ``TableRows``, ``TableSegment``, ``pair_forces``), as the gearbox
 reference does (gearfmu.gearbox.reference, whose choices carry over: segments inside which every
 mesh keeps its table piece and pair modes, each ended by the first event of any mesh located as a
 terminal ``solve_ivp`` event; modes after a switch read a little ahead along the field; ``atol`` per
@@ -26,9 +26,11 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
-from ..dynamics.reference import _forces_model, _Rows, _Segment
+from ..common.settings import GearboxRunSettings
+from ..dynamics.native import InputLike
+from ..dynamics.reference import TableRows, TableSegment, pair_forces
 from .model import PlanetaryModel
-from .native import InputLike, PlanetaryInputError, PlanetaryResult, columns, run_arguments
+from .native import PlanetaryInputError, PlanetaryResult, checked_settings, columns, run_inputs
 
 __all__ = ["simulate_reference"]
 
@@ -64,22 +66,24 @@ def _local(mp: _Maps, m: int, y):
     return th, om, x, v
 
 
-def simulate_reference(model: PlanetaryModel, *, stop_time_s: float, comm_step_s: float,
-                       motor_torque_Nm: InputLike, load_torque_Nm: Optional[InputLike] = None,
-                       motor_speed_start_rad_s: float, motor_angle_start_rad: float = 0.0, initial_state=None,
-                       rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
+def simulate_reference(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = None, *,
+                       stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
+                       motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
+                       motor_speed_start_rad_s: Optional[float] = None, motor_angle_start_rad: Optional[float] = None,
+                       initial_state=None, rtol: float = 1e-10, atol_scale: float = 1.0, method: str = "DOP853",
                        steps_per_period: float = 64.0, max_segments: int = 5_000_000,
                        progress: bool = False) -> PlanetaryResult:
-    """Event-located solve_ivp reference (module docstring); arguments as
-    :func:`gearfmu.planetary.native.simulate`, plus ``rtol``, ``atol_scale``, ``method`` and
-    ``steps_per_period`` (the largest step: the shortest natural period of the linearisation with every
-    mesh at its largest total stiffness, over this number).  ``wall_s`` is the whole run."""
-    a = run_arguments(model, stop_time_s, comm_step_s, motor_torque_Nm, load_torque_Nm, motor_speed_start_rad_s,
-                      motor_angle_start_rad, initial_state)
+    """Event-located solve_ivp reference (module docstring); settings and arguments as
+    :func:`gearfmu.planetary.native.simulate` (its step bound and integrator unused), plus ``rtol``,
+    ``atol_scale``, ``method`` and ``steps_per_period`` (the largest step: the shortest natural period
+    of the linearisation with every mesh at its largest total stiffness, over this number).  ``wall_s``
+    is the whole run."""
+    rs = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
+                          motor_speed_start_rad_s=motor_speed_start_rad_s, motor_angle_start_rad=motor_angle_start_rad)
+    n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, rs, motor_torque_Nm, load_torque_Nm, initial_state)
     if not (rtol > 0 and math.isfinite(rtol)):
         raise PlanetaryInputError(f"rtol: must be a positive number, got {rtol!r}")
-    H, n_steps, t_in, t_out, t_ref = a.comm_step_s, a.n_steps, a.motor_torque_Nm, a.load_torque_Nm, \
-        a.reference_torque_Nm
+    H = rs.output_interval_s
     n, nm = model.n_dof, len(model.mesh_names)
     mass, g = model.mass, model.g
     lb = model.load_dof
@@ -94,11 +98,11 @@ def simulate_reference(model: PlanetaryModel, *, stop_time_s: float, comm_step_s
         tq = abs(float(tr) * float(model.mesh_torque_per_ref[m]))
         key = (m, tq if t.n_torque > 1 else 0.0)
         if key not in cache:
-            cache[key] = _Rows(t, key[1])
+            cache[key] = TableRows(t, key[1])
         return cache[key]
 
-    y0 = model.static_state(float(t_ref[0]), a.speed_rad_s, a.angle_rad) if a.initial_state is None \
-        else a.initial_state.copy()
+    y0 = model.static_state(float(t_ref[0]), rs.motor_speed_start_rad_s, rs.motor_angle_start_rad) \
+        if y_given is None else y_given.copy()
 
     # ---- scales: tolerances, largest step, the look-ahead of the mode choice
     kmax = [float(np.max(t.k_N_per_m.sum(axis=1))) for t in model.mesh_tables]
@@ -113,7 +117,7 @@ def simulate_reference(model: PlanetaryModel, *, stop_time_s: float, comm_step_s
     xscale = max(xs)
     scale = np.empty(2 * n)
     psi_s = min(float(t.mesh_period_rad) / max(abs(mp.aref[m]), 1e-12) for m, t in enumerate(model.mesh_tables))
-    scale[0], scale[1] = psi_s, max(abs(a.speed_rad_s), 1.0)
+    scale[0], scale[1] = psi_s, max(abs(rs.motor_speed_start_rad_s), 1.0)
     for d in range(1, n):
         if model.dof_kind[d] == "rot":
             r = min(abs(c) for m_ in range(nm) for dd, c in mp.x[m_] if dd == d) if any(
@@ -143,7 +147,7 @@ def simulate_reference(model: PlanetaryModel, *, stop_time_s: float, comm_step_s
         for m in range(nm):
             th, om, x, v = _local(mp, m, y)
             th = mp.aref[m] * psi + mp.phase[m] + (th - mp.aref[m] * y[0])
-            F, st, kk = _forces_model(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
+            F, st, kk = pair_forces(th, om, x, v, rows_for(m, tr), pars[m][4], pars[m][5])
             out_pair[i, pair_off[m]:pair_off[m + 1]] = F
             out_mesh[i, 4 * m:4 * m + 4] = (x, v, F.sum(), kk[st != 0].sum())
         out_spring[i] = spring_forces(y)
@@ -197,7 +201,7 @@ def simulate_reference(model: PlanetaryModel, *, stop_time_s: float, comm_step_s
         forced = None
         zero_len = 0
         while t < t_end:
-            segs = [_Segment(rows[m], pieces[m], mp.aref[m] * psi + mp.phase[m], T1, T2, pars[m]) for m in range(nm)]
+            segs = [TableSegment(rows[m], pieces[m], mp.aref[m] * psi + mp.phase[m], T1, T2, pars[m]) for m in range(nm)]
             gen = [segs[m].force_general(_local(mp, m, y)) for m in range(nm)]
             ya = y + delta * deriv(y, gen, T1, T2)
             modes = [segs[m].mode_from(_local(mp, m, ya), forced[1] if forced and forced[0] == m else None)

@@ -13,8 +13,7 @@ Module        Contents
 reader        load_scene, default_scene_path: parse, check and build a Scene
 options       Scene, SceneError and the SI option dataclasses (OperatingPoint,
               TableOptions, SolverOptions, FmuOptions; Lubricant and ThermalOptions
-              are the physics' own, gearfmu.ehl.lubricant and gearfmu.gear.thermal);
-              default_output_interval_s
+              are the physics' own, gearfmu.ehl.lubricant and gearfmu.gear.thermal)
 physics       what the physics takes from a scene: the contact environment, the
               table builder's arguments, the cost estimate and its guard
 schema        SCHEMA: every table and key (type, unit, default, range, SI scale)

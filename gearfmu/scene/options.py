@@ -12,10 +12,11 @@ where they are used and importable from here: the gear pair
 from __future__ import annotations
 
 import hashlib
-import math
 from dataclasses import dataclass
 from typing import Any, List, Optional, Sequence, Tuple
 
+from ..common.settings import OUTPUT_SAMPLES_PER_MESH, default_output_interval_s  # noqa: F401 (re-exported)
+from ..common.units import RPM_TO_RAD_S  # noqa: F401 (re-exported)
 from ..common.vocabulary import DEFAULT_DAMPING_MODEL, DEFAULT_INTEGRATOR, DEFAULT_RUNTIME
 from ..contact.base import RoughnessSpec
 from ..ehl.lubricant import Lubricant
@@ -24,9 +25,6 @@ from ..gear.thermal import ThermalOptions
 
 __all__ = ["SceneError", "Scene", "OperatingPoint", "TableOptions", "SolverOptions", "FmuOptions", "Lubricant",
            "ThermalOptions", "default_output_interval_s", "OUTPUT_SAMPLES_PER_MESH", "RPM_TO_RAD_S"]
-
-#: rev/min -> rad/s
-RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
 
 # ============================================================== errors
@@ -180,24 +178,3 @@ class Scene:
         """The tables' torque axis (N*m), see :meth:`OperatingPoint.torque_axis_Nm`."""
         return self.operating.torque_axis_Nm(self.tables.torque_points)
 
-
-# ============================================================== defaults that depend on the scene
-#: samples per mesh period of a defaulted output (communication) interval
-OUTPUT_SAMPLES_PER_MESH = 20
-
-
-def default_output_interval_s(pinion_speed_rad_s: float, pinion_teeth: int,
-                              samples_per_mesh: int = OUTPUT_SAMPLES_PER_MESH) -> float:
-    """The output (communication) interval, s, used wherever the user gives none.
-
-    At least ``samples_per_mesh`` samples per mesh period 2*pi / (z1 |omega1|) at the
-    pinion speed ``pinion_speed_rad_s`` (rad/s), rounded down to 1, 2 or 5 x 10^n s so
-    that the DefaultExperiment reads well (so 20 to 50 samples per mesh period).  A fixed
-    interval aliases the mesh frequency: 1e-4 s is 6 samples per mesh period at 1667 Hz.
-    A zero speed falls back to the mesh period at 1 rad/s.
-    """
-    w = abs(float(pinion_speed_rad_s)) or 1.0
-    h = 2.0 * math.pi / (int(pinion_teeth) * w) / int(samples_per_mesh)
-    e = math.floor(math.log10(h))
-    m = h / 10.0 ** e
-    return float(max(c for c in (1.0, 2.0, 5.0, 10.0) if c <= m * (1 + 1e-12)) * 10.0 ** e)

@@ -16,19 +16,28 @@
  * This library has no link-time dependency on Python; on the first fmi2Instantiate it
  *
  *  1. finds libpython: already in the process (dlsym(RTLD_DEFAULT,
- *     "Py_IsInitialized")), else the path recorded at build time in
- *     resources/gearfmu_pyshim.txt, else its soname through the loader; it is
- *     loaded RTLD_GLOBAL so that the wrapper's Python symbols resolve;
+ *     "Py_IsInitialized")), else that of the Python it chooses to start: the
+ *     executable $GEARFMU_PYTHON names (its library beside it, <prefix>/lib, or
+ *     for a virtual environment the lib folder of its pyvenv.cfg's home), else
+ *     the one recorded for this FMU's record id (resources/gearfmu_pyshim.txt:
+ *     python_record) in gearfmu's cache folder, <cache>/pythons/<id>.txt, written
+ *     when the FMU was built; else its soname through the loader.  The FMU holds
+ *     no path: the record lives on the machine that built it.  It is loaded
+ *     RTLD_GLOBAL so that the wrapper's Python symbols resolve;
  *  2. starts the interpreter if nobody has, under a process-wide lock shared
  *     by every gearfmu FMU in the process: flock() on a per-process lock file
  *     (each FMU's copy of this library opens the file itself; flock locks of
  *     separate open file descriptions conflict even within one process); the
  *     lock is taken even when the interpreter reports itself initialized, since
- *     that flag is set before site-packages is on sys.path;
+ *     that flag is set before site-packages is on sys.path; the program name is
+ *     the chosen executable, so the interpreter gets its environment (numpy);
  *  3. imports the modules the slave needs from outside the FMU (ctypes,
  *     numpy) and refuses to instantiate, with a message through the host's
- *     logger, if one is missing; when the Python environment the FMU was built
- *     with is gone, no interpreter is started and the message names that environment;
+ *     logger, if one is missing.  When the recorded environment is gone, or
+ *     libpython is not in the process and no Python is named (no record, no
+ *     $GEARFMU_PYTHON), nothing is loaded and no interpreter is started: the
+ *     message names the build's environment by its path-free description and
+ *     says what to do ($GEARFMU_PYTHON, or the standalone runtime);
  *  4. loads pythonfmu's wrapper, shipped beside this library under another
  *     name, and binds its functions;
  *  5. registers an exit handler that releases the wrapper's interpreter state
@@ -55,6 +64,7 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
+#include <pwd.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,6 +78,12 @@
 #include "gf_model.h"
 
 #define CONFIG_FILE "gearfmu_pyshim.txt"
+/* the records of the Pythons FMUs were built with, in gearfmu's cache folder, and their first line;
+ * the variable naming a Python to start instead (gearfmu/fmu/pythonfmu_build.py: PYTHON_RECORDS,
+ * PYTHON_RECORD_FORMAT, PYTHON_OVERRIDE_VARIABLE) */
+#define RECORD_DIR "pythons"
+#define RECORD_FORMAT "format=gearfmu-python-record 1"
+#define OVERRIDE_VARIABLE "GEARFMU_PYTHON"
 #define EXPORT __attribute__((visibility("default")))
 
 /* ---- the part of the Python C API used here (stable ABI, resolved with dlsym) ---- */
@@ -107,13 +123,22 @@ static int loaded = 0;
 static pthread_mutex_t load_mutex = PTHREAD_MUTEX_INITIALIZER;
 
 typedef struct {
-    char python_version[32], libpython[PATH_MAX], libpython_soname[128], python_executable[PATH_MAX],
-        wrapper[256], environment[256];
+    char python_version[32], libpython_soname[128], record_id[64], wrapper[256], environment[256];
 } shim_config;
 
+/* The Python the loader starts when the process has none: the one GEARFMU_PYTHON names, else the
+ * one recorded for this FMU's record id in gearfmu's cache (written when the FMU was built). */
+enum { PY_UNCHOSEN, PY_OVERRIDE, PY_RECORD };
+typedef struct {
+    int source;
+    char executable[PATH_MAX], libpython[PATH_MAX], record[PATH_MAX];
+} py_choice;
+
 /* where the interpreter of this process comes from (the words of the loader's messages) */
-enum { ENV_HOST, ENV_BUILT, ENV_GONE, ENV_UNKNOWN };
+enum { ENV_HOST, ENV_CHOSEN, ENV_UNKNOWN };
 static int env_origin = ENV_HOST;
+
+#define REMEDY "rebuild the FMU with --runtime standalone (no Python needed)"
 
 static void fail(char *err, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void fail(char *err, size_t n, const char *fmt, ...)
@@ -124,13 +149,14 @@ static void fail(char *err, size_t n, const char *fmt, ...)
     va_end(ap);
 }
 
+/* key=value lines; "" for a key that is absent */
 static int read_config(const char *path, shim_config *cfg, char *err, size_t n)
 {
     char line[PATH_MAX + 64];
     FILE *f = fopen(path, "r");
     memset(cfg, 0, sizeof *cfg);
     if (f == NULL) {
-        fail(err, n, "cannot read %s (%s); the FMU is incomplete, rebuild it", path, strerror(errno));
+        fail(err, n, "cannot read resources/" CONFIG_FILE " (%s); the FMU is incomplete, rebuild it", strerror(errno));
         return -1;
     }
     while (fgets(line, sizeof line, f) != NULL) {
@@ -139,46 +165,178 @@ static int read_config(const char *path, shim_config *cfg, char *err, size_t n)
         *eq++ = '\0';
         end = eq + strcspn(eq, "\r\n");
         *end = '\0';
-#define KEY(k)                                                                  \
-    if (strcmp(line, #k) == 0) snprintf(cfg->k, sizeof cfg->k, "%s", eq);
-        KEY(python_version) KEY(libpython) KEY(libpython_soname) KEY(python_executable) KEY(wrapper)
-        KEY(environment)
+#define KEY(k, name)                                                            \
+    if (strcmp(line, name) == 0) snprintf(cfg->k, sizeof cfg->k, "%s", eq);
+        KEY(python_version, "python_version") KEY(libpython_soname, "libpython_soname")
+        KEY(record_id, "python_record") KEY(wrapper, "wrapper") KEY(environment, "environment")
 #undef KEY
     }
     fclose(f);
-    if (cfg->wrapper[0] == '\0' || strchr(cfg->wrapper, '/') != NULL) {
-        fail(err, n, "%s: no valid 'wrapper' entry; the FMU is incomplete, rebuild it", path);
+    if (cfg->wrapper[0] == '\0' || strchr(cfg->wrapper, '/') != NULL || strlen(cfg->record_id) != 16 ||
+        strspn(cfg->record_id, "0123456789abcdef") != 16) {
+        fail(err, n, "resources/" CONFIG_FILE ": no valid 'wrapper' and 'python_record' entries; the FMU is "
+                     "incomplete, rebuild it");
         return -1;
     }
     return 0;
 }
 
-/* 1. libpython: already loaded, else the recorded path, else the soname.  *h is the
- * handle to resolve the Python API from (RTLD_DEFAULT, which is NULL on glibc, when the
- * process already has it). */
-static int find_libpython(const shim_config *cfg, void **h, char *err, size_t n)
+/* gearfmu's cache folder, the rule of gearfmu/common/cache.py: $GEARFMU_CACHE_DIR, else
+ * $XDG_CACHE_HOME/gearfmu, else <home>/.cache/gearfmu (home: $HOME, else the user database) */
+static int cache_root(char *out, size_t n)
 {
-    const char *e1 = "", *e2 = "";
-    char m1[512] = "", m2[512] = "";
+    const char *r = getenv("GEARFMU_CACHE_DIR");
+    struct passwd pw, *found = NULL;
+    char buf[4096];
+    if (r != NULL && r[0] != '\0') return snprintf(out, n, "%s", r) < (int)n ? 0 : -1;
+    r = getenv("XDG_CACHE_HOME");
+    if (r != NULL && r[0] != '\0') return snprintf(out, n, "%s/gearfmu", r) < (int)n ? 0 : -1;
+    r = getenv("HOME");
+    if (r == NULL || r[0] == '\0') {
+        if (getpwuid_r(getuid(), &pw, buf, sizeof buf, &found) != 0 || found == NULL || found->pw_dir == NULL) return -1;
+        r = found->pw_dir;
+    }
+    return snprintf(out, n, "%s/.cache/gearfmu", r) < (int)n ? 0 : -1;
+}
+
+static int is_executable_file(const char *path)
+{
+    struct stat st;
+    return path[0] != '\0' && stat(path, &st) == 0 && S_ISREG(st.st_mode) && access(path, X_OK) == 0;
+}
+
+/* the Python to start: 0 (pc filled), 1 nothing known (err says so), -1 refused (err says why) */
+static int choose_python(const shim_config *cfg, py_choice *pc, char *err, size_t n)
+{
+    const char *o = getenv(OVERRIDE_VARIABLE);
+    char root[PATH_MAX], line[PATH_MAX + 64];
+    FILE *f;
+    int first = 1, ok = 0;
+    memset(pc, 0, sizeof *pc);
+    if (o != NULL && o[0] != '\0') {
+        if (!is_executable_file(o) || snprintf(pc->executable, sizeof pc->executable, "%s", o) >= (int)sizeof pc->executable) {
+            fail(err, n, OVERRIDE_VARIABLE " names %.200s, which is not an executable file: set it to the executable of "
+                         "a Python %s with numpy (python -c \"import sys; print(sys.executable)\"), or " REMEDY,
+                 o, cfg->python_version);
+            return -1;
+        }
+        pc->source = PY_OVERRIDE;
+        return 0;
+    }
+    if (cache_root(root, sizeof root) != 0 ||
+        snprintf(pc->record, sizeof pc->record, "%s/" RECORD_DIR "/%s.txt", root, cfg->record_id) >= (int)sizeof pc->record) {
+        fail(err, n, "the Python this FMU was built with (%s) cannot be looked up: no home folder and no "
+                     "GEARFMU_CACHE_DIR; set " OVERRIDE_VARIABLE " to the executable of a Python %s with numpy, or " REMEDY,
+             cfg->environment, cfg->python_version);
+        return -1;
+    }
+    if ((f = fopen(pc->record, "r")) == NULL) {
+        int e = errno;
+        fail(err, n, "the Python this FMU was built with (%s) is not recorded on this machine (%.200s: %s); set "
+                     OVERRIDE_VARIABLE " to the executable of a Python %s with numpy, or " REMEDY,
+             cfg->environment, pc->record, strerror(e), cfg->python_version);
+        return e == ENOENT ? 1 : -1;
+    }
+    while (fgets(line, sizeof line, f) != NULL) {
+        char *eq;
+        line[strcspn(line, "\r\n")] = '\0';
+        if (first) {
+            ok = strcmp(line, RECORD_FORMAT) == 0;
+            first = 0;
+            if (!ok) break;
+            continue;
+        }
+        if ((eq = strchr(line, '=')) == NULL) continue;
+        *eq++ = '\0';
+        if (strcmp(line, "python_executable") == 0) snprintf(pc->executable, sizeof pc->executable, "%s", eq);
+        else if (strcmp(line, "libpython") == 0) snprintf(pc->libpython, sizeof pc->libpython, "%s", eq);
+    }
+    fclose(f);
+    if (!ok || pc->executable[0] == '\0') {
+        fail(err, n, "%.200s is not a record of a Python written by gearfmu (first line '" RECORD_FORMAT "', then "
+                     "python_executable=...); set " OVERRIDE_VARIABLE " to the executable of a Python %s with numpy, or "
+                     REMEDY, pc->record, cfg->python_version);
+        return -1;
+    }
+    if (!is_executable_file(pc->executable)) {
+        /* no other Python in its place: whichever the search would find may lack numpy, or even its
+         * own standard library, and a Python that cannot start aborts the process */
+        fail(err, n, "the Python environment this FMU was built with (%s) is gone: its interpreter is no longer "
+                     "where the FMU was built, and no other Python is started in its place; recreate that "
+                     "environment, set " OVERRIDE_VARIABLE " to the executable of a Python %s with numpy, or " REMEDY,
+             cfg->environment[0] ? cfg->environment : cfg->python_version, cfg->python_version);
+        return -1;
+    }
+    pc->source = PY_RECORD;
+    return 0;
+}
+
+/* dlopen(path) into *h; on failure the loader's reason is appended to why */
+static int try_open(const char *path, void **h, char *why, size_t n)
+{
+    const char *e;
+    size_t used = strlen(why);
+    if ((*h = dlopen(path, RTLD_NOW | RTLD_GLOBAL)) != NULL) return 1;
+    e = dlerror();
+    if (used + 1 < n) snprintf(why + used, n - used, "%s%.150s", used ? "; " : "", e ? e : path);
+    return 0;
+}
+
+/* 1. libpython: already loaded (the Python to start, if any, is chosen under the lock), else the
+ * chosen Python's: recorded, or beside the executable GEARFMU_PYTHON names (<prefix>/lib, and for
+ * a virtual environment the lib folder of its pyvenv.cfg's home), else its soname.  *h is the
+ * handle to resolve the Python API from (RTLD_DEFAULT, which is NULL on glibc, when the process
+ * already has it). */
+static int find_libpython(const shim_config *cfg, py_choice *pc, void **h, char *err, size_t n)
+{
+    char why[512] = "", dir[PATH_MAX], cand[PATH_MAX + 160], line[PATH_MAX + 16], *slash;
+    const char *where;
+    int k;
     *h = RTLD_DEFAULT;
+    pc->source = PY_UNCHOSEN;
     if (dlsym(RTLD_DEFAULT, "Py_IsInitialized") != NULL) return 0;
-    if (cfg->libpython[0] != '\0') {
-        if ((*h = dlopen(cfg->libpython, RTLD_NOW | RTLD_GLOBAL)) != NULL) return 0;
-        e1 = dlerror();
-        snprintf(m1, sizeof m1, "%s", e1 ? e1 : "?");
+    if (choose_python(cfg, pc, err, n) != 0) return -1;
+    if (pc->source == PY_RECORD) {
+        where = "at the path recorded at build time";
+        if (pc->libpython[0] != '\0' && try_open(pc->libpython, h, why, sizeof why)) return 0;
+    } else {
+        where = "beside " OVERRIDE_VARIABLE;
+        for (k = 0; k < 3; ++k) {
+            FILE *f;
+            if (k == 2) { /* the executable's real folder (a link into a Python installation) */
+                if (realpath(pc->executable, dir) == NULL) break;
+            } else {
+                snprintf(dir, sizeof dir, "%s", pc->executable);
+            }
+            if ((slash = strrchr(dir, '/')) == NULL) continue;
+            *slash = '\0';
+            if (k == 1) { /* a virtual environment: <venv>/pyvenv.cfg "home = <python's bin folder>" */
+                snprintf(cand, sizeof cand, "%s/../pyvenv.cfg", dir);
+                if ((f = fopen(cand, "r")) == NULL) continue;
+                dir[0] = '\0';
+                while (fgets(line, sizeof line, f) != NULL) {
+                    char *v = line + strspn(line, " \t");
+                    if (strncmp(v, "home", 4) != 0) continue;
+                    v += 4 + strspn(v + 4, " \t");
+                    if (*v != '=') continue;
+                    v += 1 + strspn(v + 1, " \t");
+                    v[strcspn(v, "\r\n")] = '\0';
+                    while (*v != '\0' && strchr(" \t", v[strlen(v) - 1]) != NULL) v[strlen(v) - 1] = '\0';
+                    snprintf(dir, sizeof dir, "%s", v);
+                }
+                fclose(f);
+                if (dir[0] == '\0') continue;
+            }
+            snprintf(cand, sizeof cand, "%s/../lib/%s", dir, cfg->libpython_soname);
+            if (access(cand, R_OK) == 0 && try_open(cand, h, why, sizeof why)) return 0;
+        }
     }
-    if (cfg->libpython_soname[0] != '\0') {
-        if ((*h = dlopen(cfg->libpython_soname, RTLD_NOW | RTLD_GLOBAL)) != NULL) return 0;
-        e2 = dlerror();
-        snprintf(m2, sizeof m2, "%s", e2 ? e2 : "?");
-    }
+    if (cfg->libpython_soname[0] != '\0' && try_open(cfg->libpython_soname, h, why, sizeof why)) return 0;
     fail(err, n,
-         "the pythonfmu runtime needs Python %s's shared library: it is not loaded in this process, "
-         "not at the path recorded at build time (%s) and not found by the dynamic loader (%s); "
-         "install Python %s with its shared library (or add its directory to LD_LIBRARY_PATH), "
-         "or rebuild the FMU with --runtime standalone (no Python needed)",
-         cfg->python_version, m1[0] ? m1 : "none recorded", m2[0] ? m2 : "no soname recorded",
-         cfg->python_version);
+         "the pythonfmu runtime needs Python %s's shared library: it is not loaded in this process, not found %s "
+         "nor by the dynamic loader (%s); install Python %s with its shared library (or add its directory to "
+         "LD_LIBRARY_PATH), or " REMEDY,
+         cfg->python_version, where, why[0] ? why : "nothing to load", cfg->python_version);
     return -1;
 }
 
@@ -227,7 +385,7 @@ static int process_lock(char *path, size_t n)
     return fd;
 }
 
-static int start_interpreter(const shim_config *cfg, char *err, size_t n)
+static int start_interpreter(const shim_config *cfg, py_choice *pc, char *err, size_t n)
 {
     char lock_path[PATH_MAX];
     int fd, ok;
@@ -243,26 +401,19 @@ static int start_interpreter(const shim_config *cfg, char *err, size_t n)
         return -1;
     }
     if (!py.IsInitialized()) {
-        /* the Python environment the FMU was built with (its site-packages hold numpy) */
-        env_origin = cfg->python_executable[0] == '\0' ? ENV_UNKNOWN
-                     : access(cfg->python_executable, X_OK) == 0 ? ENV_BUILT : ENV_GONE;
-        if (env_origin == ENV_GONE) {
-            /* no other Python in its place: whichever the search would find may lack numpy, or
-             * even its own standard library, and a Python that cannot start aborts the process
-             * (the lock file stays: a loader waiting on it may start the interpreter next) */
+        /* the Python environment to start (its site-packages hold numpy): chosen already when this
+         * loader loaded libpython, else now (libpython was in the process, Python not started) */
+        int rc = pc->source == PY_UNCHOSEN ? choose_python(cfg, pc, err, n) : 0;
+        if (rc < 0) {
+            /* the lock file stays: a loader waiting on it may start the interpreter next */
             flock(fd, LOCK_UN);
             close(fd);
-            fail(err, n,
-                 "the Python environment this FMU was built with (%s) is gone: its interpreter is no longer "
-                 "where the FMU was built, and no other Python is started in its place; recreate that "
-                 "environment where it was (or rebuild the FMU in another one), or rebuild the FMU with "
-                 "--runtime standalone (no Python needed)",
-                 cfg->environment[0] ? cfg->environment : cfg->python_version);
             return -1;
         }
-        if (py.SetProgramName != NULL && py.DecodeLocale != NULL && env_origin == ENV_BUILT) {
+        env_origin = rc == 0 ? ENV_CHOSEN : ENV_UNKNOWN; /* unknown: the library's own default Python */
+        if (py.SetProgramName != NULL && py.DecodeLocale != NULL && env_origin == ENV_CHOSEN) {
             static wchar_t *program = NULL; /* must outlive the interpreter */
-            if (program == NULL) program = py.DecodeLocale(cfg->python_executable, NULL);
+            if (program == NULL) program = py.DecodeLocale(pc->executable, NULL);
             if (program != NULL) py.SetProgramName(program);
         }
         py.InitializeEx(0); /* 0: no Python signal handlers in the host */
@@ -280,9 +431,10 @@ static int start_interpreter(const shim_config *cfg, char *err, size_t n)
 }
 
 /* 3. The modules the slave imports from outside the FMU.  When this loader started the
- * interpreter without the environment the FMU was built with (none is recorded), a failed
- * import says so: that is the cause, whatever module fails first. */
-static int check_modules(const shim_config *cfg, char *err, size_t n)
+ * interpreter without knowing which environment to start (libpython was in the process, and
+ * neither GEARFMU_PYTHON nor a record names a Python), a failed import says so: that is the
+ * cause, whatever module fails first. */
+static int check_modules(const shim_config *cfg, const py_choice *pc, char *err, size_t n)
 {
     static const char *const needed[] = {"ctypes", "numpy"};
     size_t i;
@@ -298,20 +450,24 @@ static int check_modules(const shim_config *cfg, char *err, size_t n)
             if (v != NULL) s = py.ObjectStr(v);
             if (s != NULL) why = py.UnicodeAsUTF8(s);
             const char *ver = py.GetVersion();
+            int vlen = (int)strcspn(ver, " ");
             if (env_origin == ENV_UNKNOWN)
                 fail(err, n,
-                     "the Python environment this FMU was built with (%s) is not found (the FMU records no "
-                     "interpreter): the Python %.*s started in its place cannot import '%s' (%s); run the FMU "
-                     "where Python %s with numpy is the default Python, or rebuild the FMU with --runtime "
-                     "standalone (no Python needed)",
-                     cfg->environment[0] ? cfg->environment : "not recorded", (int)strcspn(ver, " "), ver,
-                     needed[i], why ? why : "import failed", cfg->python_version);
+                     "the Python this FMU was built with (%s) is not recorded on this machine: the Python %.*s "
+                     "loaded in this process, started in its place, cannot import '%s' (%.120s); set "
+                     OVERRIDE_VARIABLE " to the executable of a Python %s with numpy, or " REMEDY,
+                     cfg->environment[0] ? cfg->environment : "not recorded", vlen, ver, needed[i],
+                     why ? why : "import failed", cfg->python_version);
+            else if (env_origin == ENV_CHOSEN && pc->source == PY_OVERRIDE)
+                fail(err, n,
+                     "the pythonfmu runtime needs the Python module '%s', which cannot be imported in the "
+                     "Python %.*s that " OVERRIDE_VARIABLE " names (%.120s): install it into that Python, or " REMEDY,
+                     needed[i], vlen, ver, why ? why : "import failed");
             else
                 fail(err, n,
                      "the pythonfmu runtime needs the Python module '%s', which cannot be imported in the "
-                     "Python %.*s running in this process (%s): install it into that Python, or "
-                     "rebuild the FMU with --runtime standalone (no Python needed)",
-                     needed[i], (int)strcspn(ver, " "), ver, why ? why : "import failed");
+                     "Python %.*s running in this process (%.120s): install it into that Python, or " REMEDY,
+                     needed[i], vlen, ver, why ? why : "import failed");
             if (s != NULL) py.DecRef(s);
             if (t != NULL) py.DecRef(t);
             if (v != NULL) py.DecRef(v);
@@ -336,6 +492,7 @@ static int load(char *err, size_t n)
     Dl_info info;
     char bindir[PATH_MAX], path[PATH_MAX + 300], *slash;
     shim_config cfg;
+    static py_choice pc; /* three paths: off the host thread's stack (load runs under load_mutex) */
     void *h, *lib;
     if (dladdr((void *)&load, &info) == 0 || info.dli_fname == NULL) {
         fail(err, n, "cannot locate the FMU's binary (dladdr failed)");
@@ -347,10 +504,10 @@ static int load(char *err, size_t n)
     else *slash = '\0';
     snprintf(path, sizeof path, "%s/../../resources/" CONFIG_FILE, bindir);
     if (read_config(path, &cfg, err, n) != 0) return -1;
-    if (find_libpython(&cfg, &h, err, n) != 0) return -1;
+    if (find_libpython(&cfg, &pc, &h, err, n) != 0) return -1;
     if (bind_python(h, err, n) != 0) return -1;
-    if (start_interpreter(&cfg, err, n) != 0) return -1;
-    if (check_modules(&cfg, err, n) != 0) return -1;
+    if (start_interpreter(&cfg, &pc, err, n) != 0) return -1;
+    if (check_modules(&cfg, &pc, err, n) != 0) return -1;
     snprintf(path, sizeof path, "%s/%s", bindir, cfg.wrapper);
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (lib == NULL) {

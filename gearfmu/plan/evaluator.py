@@ -1,9 +1,9 @@
 """Model evaluation for the planner: tables and native runs of configurations.
 
-A configuration is a dict choice -> level value (:mod:`gearfmu.plan_choices`).
-:class:`_Evaluator` builds and caches the tables of configurations and the native runs at
+A configuration is a dict choice -> level value (:mod:`gearfmu.plan.choices`).
+:class:`Evaluator` builds and caches the tables of configurations and the native runs at
 envelope points, and measures a configuration against the full one (TVMS and the error
-measures of :func:`gearfmu.plan_verify.run_errors`; costs: the deterministic table work, table
+measures of :func:`gearfmu.plan.verify.run_errors`; costs: the deterministic table work, table
 size and solver work per simulated second the budget rule ranks by, and the table build time and
 native time per simulated second, reported only).
 """
@@ -16,15 +16,16 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .scene.physics import environment_from_scene
-from .dynamics.native import choose_max_step_s, simulate
-from .gear.gearpair import GearDeviations
-from .plan_choices import _step_absolute, _thermal_options, table_work
-from .plan_verify import MEASURES, run_errors, steady_phase
-from .tables.zones import mean_total_stiffness_N_per_m
-from .scene.envelope import AccuracyTarget, Envelope
-from .assembly import table_cache
-from .assembly.precompute import precompute_tables
+from ..scene.physics import environment_from_scene
+from ..dynamics.native import choose_max_step_s, simulate
+from ..gear.gearpair import GearDeviations
+from .choices import step_absolute, thermal_options, table_work
+from .verify import MEASURES, run_errors, steady_phase
+from ..tables.zones import mean_total_stiffness_N_per_m
+from ..scene.envelope import AccuracyTarget, Envelope
+from ..stages import run_settings
+from ..assembly import table_cache
+from ..assembly.precompute import precompute_tables
 
 _REBUILD_BELOW_S = 5.0    # cost: tables that took less than this are rebuilt for a clean timing (CHOICE)
 #: RK4 steps that one event of the native solver costs, by integrator (CHOICE, docs/plan.md "Cost model"):
@@ -56,11 +57,13 @@ def relative_rms(y, y_ref) -> float:
 
 
 # ============================================================== model evaluation
-class _Evaluator:
+class Evaluator:
     """Builds tables and runs the native solver for configurations (dicts choice -> level value)."""
 
     def __init__(self, scene, env: Envelope, acc: AccuracyTarget, progress: bool):
         self.scene, self.env, self.acc, self.progress = scene, env, acc, progress
+        #: the scene's run settings (its damping); every run sets its own experiment, inputs and integration
+        self.settings = run_settings(scene)
         self._tables: Dict[tuple, tuple] = {}
         self._factors: Dict[tuple, object] = {}  # (table key, degC) -> tables at that temperature
         self._runs: Dict[tuple, dict] = {}
@@ -96,7 +99,7 @@ class _Evaluator:
         """(MeshTables, build wall time in s) of a configuration (cached).  Taken from the
         tables of a finer nesting grid when one is cached (:meth:`_from_finer`; its time is
         the finer build's time scaled by the angle count), else built or read from gearfmu's
-        table cache (:mod:`gearfmu.tables.table_cache`; the time is then that of the build that
+        table cache (:mod:`gearfmu.assembly.table_cache`; the time is then that of the build that
         computed them) (``progress``: the table builder's progress on stderr; None: the planner's)."""
         key = self.table_key(cfg)
         if not self.tables_ready(cfg):
@@ -160,14 +163,14 @@ class _Evaluator:
         return out.validate(), dt / s
 
     def table_args(self, cfg: dict) -> dict:
-        """Arguments of :func:`gearfmu.tables.precompute.precompute_tables` for a configuration."""
+        """Arguments of :func:`gearfmu.assembly.precompute.precompute_tables` for a configuration."""
         opts = replace(self.scene.mesh, contact_model=cfg["contact_model"], slices=int(cfg["slices"]))
         pair = self.pair(cfg["tooth_specific_errors"])
         kw = dict(pair=pair, opts=opts, points_per_mesh=int(cfg["points_per_mesh"]),
                   torque_axis_Nm=self.torque_axis(int(cfg["torque_points"])),
                   nominal_torque_Nm=self.env.nominal_torque_Nm, slots=int(cfg["slots"]))
         if cfg["thermal"]:  # the table builder's own temperature axis (docs/plan.md "Thermal estimate")
-            kw["thermal"] = _thermal_options(self.scene, self.env, cfg["contact_model"])
+            kw["thermal"] = thermal_options(self.scene, self.env, cfg["contact_model"])
         if cfg["contact_model"] != "hertz":  # lubricated models need their environment (contact_models)
 
             kw["contact_env"] = environment_from_scene(replace(self.scene, pair=pair, mesh=opts),
@@ -229,7 +232,7 @@ class _Evaluator:
 
     def step(self, cfg: dict) -> float:
         v = float(cfg["max_step"])
-        return v if _step_absolute(self.scene, self.acc) else v * self.h0
+        return v if step_absolute(self.scene, self.acc) else v * self.h0
 
     def run(self, cfg: dict, point) -> dict:
         """Native run at one envelope point: dte, mesh_force (arrays), wall_s and simulated time."""
@@ -241,10 +244,8 @@ class _Evaluator:
         self.native_runs += 1
         mesh_s = tb.mesh_period_rad / w
         n = int(self.acc.run_mesh_periods)
-        res = simulate(tb, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
-                       pinion_torque_Nm=T, pinion_speed_start_rad_s=w,
-                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
-                       integrator=cfg["integrator"])
+        res = simulate(tb, self.settings, stop_time_s=n * mesh_s, comm_step_s=mesh_s / 16, max_step_s=self.step(cfg),
+                       pinion_torque_Nm=T, pinion_speed_start_rad_s=w, integrator=cfg["integrator"])
         out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": n * mesh_s,
                "work": run_work(res, cfg["integrator"])}
         self._runs[key] = out
@@ -259,10 +260,9 @@ class _Evaluator:
         tb, _ = self.tables(cfg)
         temp = case.temperature_C if (tb.has_temperature_axis and case.temperature_C is not None) else None
         self.native_runs += 1
-        res = simulate(tb, stop_time_s=case.stop_time_s, comm_step_s=case.comm_step_s, max_step_s=self.step(cfg),
-                       pinion_torque_Nm=case.pinion_torque_Nm, gear_torque_Nm=case.gear_torque_Nm,
-                       pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
-                       damping_ratio=self.scene.fmu.damping_ratio, damping_model=self.scene.solver.damping_model,
+        res = simulate(tb, self.settings, stop_time_s=case.stop_time_s, comm_step_s=case.comm_step_s,
+                       max_step_s=self.step(cfg), pinion_torque_Nm=case.pinion_torque_Nm,
+                       gear_torque_Nm=case.gear_torque_Nm, pinion_speed_start_rad_s=case.pinion_speed_start_rad_s,
                        integrator=cfg["integrator"], bulk_temperature_C=temp)
         out = {"dte": res.dte, "mesh_force": res.mesh_force, "wall_s": res.wall_s, "sim_s": case.stop_time_s,
                "work": run_work(res, cfg["integrator"])}
@@ -271,7 +271,7 @@ class _Evaluator:
 
     def dynamic_error(self, cfg: dict, full: dict) -> dict:
         """Worst over the envelope points of every error measure of ``cfg`` against ``full``
-        (:func:`gearfmu.plan_verify.run_errors` on the steady window of each run); the native
+        (:func:`gearfmu.plan.verify.run_errors` on the steady window of each run); the native
         wall time per simulated second of ``cfg`` (reported) and its solver work per simulated
         second (:func:`run_work`, the deterministic cost the budget rule ranks by)."""
         worst: Dict[str, float] = {k: 0.0 for k in MEASURES}
@@ -299,7 +299,7 @@ class _Evaluator:
 
 
 
-def _h0(ev: "_Evaluator", full: dict, env: Envelope) -> float:
+def h0_of(ev: "Evaluator", full: dict, env: Envelope) -> float:
     """h0: :func:`gearfmu.dynamics.native.choose_max_step_s` of the full tables at the top envelope
     speed (the smallest over a temperature axis's nodes)."""
     tb_full, _ = ev.tables(full)
@@ -309,7 +309,7 @@ def _h0(ev: "_Evaluator", full: dict, env: Envelope) -> float:
     return choose_max_step_s(tb_full, w_top)
 
 
-def _cost_entry(ev: _Evaluator, cfg: dict) -> dict:
+def cost_entry(ev: Evaluator, cfg: dict) -> dict:
     """Fresh measurement of one configuration's costs (tables rebuilt, runs at every envelope point)."""
     tb, first_s = ev.tables(cfg)
     if first_s < _REBUILD_BELOW_S:  # cheap: rebuild for a timing free of first-call (compile, cache) costs

@@ -14,16 +14,16 @@ from typing import List, Optional
 
 import numpy as np
 
-from .common.vocabulary import TEMPERATURE_INPUTS
-from .fmu.summary import fmu_summary
-from .gear.gearpair import GearDeviations
-from .plan_choices import _thermal_options
-from .plan_report import Plan
-from .plan_verify import (MEASURES, DriveCase, budget_use, case_errors, constant, drive_case, limiting_measure, say,
+from ..common.vocabulary import TEMPERATURE_INPUTS
+from ..fmu.summary import fmu_summary
+from ..gear.gearpair import GearDeviations
+from .choices import thermal_options
+from .report import Plan
+from .verify import (MEASURES, DriveCase, budget_use, case_errors, constant, drive_case, limiting_measure, say,
                           speed_sweeps, target_of)
-from .stages import build_fmu_from_scene
+from ..stages import build_fmu_from_scene
 
-def _measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
+def measure_fmus(scene, plan: Plan, fmu_dir, progress, runtime=None) -> None:
     """Build the full and the chosen FMU and drive both through the verification
     cases (:func:`verify_fmus`); sizes, build times and errors go into the plan."""
     plan.fmu_verification = verify_fmus(scene, plan, fmu_dir=fmu_dir, progress=progress, runtime=runtime)
@@ -169,7 +169,7 @@ def verify_fmus(scene, plan: Plan, *, fmu_dir=None, progress: bool = False, case
     through the same cases (:func:`verification_cases`, or ``cases``) with
     :func:`run_fmu_drive` and returns, as JSON-ready data: per FMU its size, table build
     time, FMU build time and temperature input; per case every error measure of the planner
-    (:func:`gearfmu.plan_verify.case_errors`: a steady case on the whole mesh periods of its second
+    (:func:`gearfmu.plan.verify.case_errors`: a steady case on the whole mesh periods of its second
     half, a transient one by segments, the worst kept), the budget use, the limiting measure,
     the measures above their target and whether every one is within it, the FMUs' wall and CPU time per
     simulated second and their ratio, and how far the full FMU's pinion turned from the
@@ -260,7 +260,7 @@ def planned_scene(scene, plan: Plan, which: str = "chosen"):
         pair = replace(pair, pinion=uniform(pair.pinion), gear=uniform(pair.gear))
     # kept: the thermal options the planner measured (the builder's temperature axis); dropped: no
     # thermal correction and no temperature axis (so no temperature input)
-    thermal = _thermal_options(scene, env, cfg["contact_model"]) if cfg["thermal"] else None
+    thermal = thermal_options(scene, env, cfg["contact_model"]) if cfg["thermal"] else None
     return replace(scene, mesh=mesh, operating=op, tables=tables, solver=solver, pair=pair, thermal=thermal,
                    accuracy=None)
 

@@ -1,10 +1,10 @@
 """The planner's modelling choices and their levels (docs/plan.md "Choices and levels").
 
-:func:`_choices` lists, for a scene, its envelope and its accuracy target, every choice of
+:func:`choices_of` lists, for a scene, its envelope and its accuracy target, every choice of
 ``gearfmu.scene.envelope.PLAN_CHOICES`` with its levels (cheapest first, the last one the
 full-fidelity level); a choice the envelope cannot need gets one level and a reason
-(:func:`skipped_choices`).  :func:`_what_if_contact` lists the other contact models,
-:func:`_thermal_options` the ``[thermal]`` options of a kept thermal level.
+(:func:`skipped_choices`).  :func:`what_if_contact` lists the other contact models,
+:func:`thermal_options` the ``[thermal]`` options of a kept thermal level.
 """
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .common.vocabulary import INTEGRATORS, LUBRICATED_CONTACT_MODELS
-from .contact.models import CONTACT_MODELS, get_contact_model
-from .gear.geometry import pair_geometry
-from .gear.meshing_errors import pair_table_mesh_count
-from .gear.stiffness import required_slots
-from .scene.envelope import AccuracyTarget, Envelope
-from .scene.reader import ThermalOptions
-from .scene.physics import estimate_build
+from ..common.vocabulary import INTEGRATORS, LUBRICATED_CONTACT_MODELS
+from ..contact.models import CONTACT_MODELS, get_contact_model
+from ..gear.geometry import pair_geometry
+from ..gear.meshing_errors import pair_table_mesh_count
+from ..gear.stiffness import required_slots
+from ..scene.envelope import AccuracyTarget, Envelope
+from ..scene.reader import ThermalOptions
+from ..scene.physics import estimate_build
 
 #: the integrator levels the planner measures, the last the full model's: rk4 (cheapest),
 #: rk4_seg (stops only at contact-zone edges, big kinks and contact events: cheaper than rk4_node
@@ -28,7 +28,7 @@ from .scene.physics import estimate_build
 #: contact events and the table nodes where the tables bend, their crossings predicted), then
 #: rk4_kink (every table node and contact event located; at one step the most accurate, so the
 #: full-fidelity reference).  rk4_seg and rk4_node trade places in cost with the step, so the
-#: greedy rule compares the levels' measured costs (gearfmu.plan, not the order).
+#: greedy rule compares the levels' measured costs (gearfmu.plan.planner, not the order).
 PLAN_INTEGRATOR_LEVELS = ("rk4", "rk4_seg", "rk4_node", "rk4_kink")
 assert set(PLAN_INTEGRATOR_LEVELS) <= set(INTEGRATORS)
 #: choices whose levels are not in cost order at every step: all their levels are measured (a
@@ -41,7 +41,7 @@ _PPM_LEVELS = (16, 32, 64, 128, 256)
 _TORQUE_LEVELS = (1, 2, 3, 5, 9)
 _STEP_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
 _THERMAL_AXIS_POINTS = 3  # temperature axis of a kept thermal choice without a scene axis (CHOICE)
-#: plan-time budget of one reference table build, in s of gearfmu.tables.estimate's model (CHOICE):
+#: plan-time budget of one reference table build, in s of gearfmu.assembly.estimate's model (CHOICE):
 #: the full-fidelity points per mesh are the finest level whose estimate fits, never below the scene's
 PLAN_TABLE_BUILD_S = 60.0
 #: when the reference build is above PLAN_TABLE_BUILD_S: the table work (slices x angles x torque rows x
@@ -83,7 +83,7 @@ def _available_contact_models() -> Tuple[str, ...]:
     return tuple(n for n in CONTACT_MODELS if isinstance(n, str))
 
 
-def _p_min(scene) -> int:
+def min_slots(scene) -> int:
     return required_slots(pair_geometry(scene.pair))
 
 
@@ -100,11 +100,11 @@ def _scene_roughness(scene):
         return None
 
 
-def _scene_has_thermal(scene) -> bool:
+def scene_has_thermal(scene) -> bool:
     return scene.thermal is not None
 
 
-def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
+def choices_of(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     pin = set(acc.pin)
     ch: Dict[str, Choice] = {}
 
@@ -118,14 +118,14 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
         ch[name] = Choice(name, [value], pinned=name in pin, note=why, skipped="" if name in pin else why)
 
     # the full-fidelity reference keeps the scene's own contact model; the others are what-if rows
-    # (_what_if_contact), never a reduction of the scene
+    # (what_if_contact), never a reduction of the scene
     add("contact_model", [scene.mesh.contact_model], scene.mesh.contact_model,
         "the scene's own contact model (others: what-if rows)")
     if env.temperature_range_C is not None:
-        add("thermal", [False, True], _scene_has_thermal(scene))
+        add("thermal", [False, True], scene_has_thermal(scene))
     else:  # no temperature variation to plan for: the scene's [thermal] as written
-        skip("thermal", _scene_has_thermal(scene), "no temperature range in the envelope: as the scene says")
-    pmin = _p_min(scene)
+        skip("thermal", scene_has_thermal(scene), "no temperature range in the envelope: as the scene says")
+    pmin = min_slots(scene)
     full_slots = scene.tables.slots or pmin
     if _teeth_differ(scene, full_slots):
         add("tooth_specific_errors", [False, True], True)
@@ -134,7 +134,7 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
     ns = int(scene.mesh.slices)
     add("slices", sorted({n for n in (1, 2, 4, 8, 16, 32, 64, 128, 256, 512) if n < ns} | {ns}), ns)
     ppm = int(scene.tables.points_per_mesh)
-    full_ppm, capped = _reference_points_per_mesh(scene)
+    full_ppm, capped = reference_points_per_mesh(scene)
     add("points_per_mesh", sorted({p for p in _PPM_LEVELS if p < full_ppm} | {full_ppm}), ppm)
     if capped and "points_per_mesh" not in pin:
         ch["points_per_mesh"].note = capped
@@ -150,16 +150,16 @@ def _choices(scene, env: Envelope, acc: AccuracyTarget) -> Dict[str, Choice]:
         add("slots", [pmin, full_slots], full_slots)
     add("integrator", list(PLAN_INTEGRATOR_LEVELS), scene.solver.integrator)
     # levels: multiples of h0 (the automatic step at the top envelope speed); pinned: the scene's
-    # max_step_s in s, or 1 x h0 when the scene says "auto" (_step_absolute tells which)
+    # max_step_s in s, or 1 x h0 when the scene says "auto" (step_absolute tells which)
     add("max_step", list(_STEP_FACTORS), scene.solver.max_step_s if scene.solver.max_step_s else 1.0,
         "levels are multiples of h0")
     return ch
 
 
-def _reference_points_per_mesh(scene) -> Tuple[int, str]:
+def reference_points_per_mesh(scene) -> Tuple[int, str]:
     """(points per mesh of the full-fidelity reference, "" or why it is below 256).  The
     finest of the levels from the scene's own up to max(256, scene's) whose table build the
-    cost model of :func:`gearfmu.tables.estimate.estimate_build` puts within
+    cost model of :func:`gearfmu.scene.physics.estimate_build` puts within
     :data:`PLAN_TABLE_BUILD_S` (the scene's own when none does): the film and fractal contact
     models solve per angle and torque row, so their fine tables take minutes to hours."""
     ppm = int(scene.tables.points_per_mesh)
@@ -188,7 +188,7 @@ def table_work(cfg: dict) -> float:
 
 def reference_is_expensive(scene, full: dict) -> bool:
     """True when the full-fidelity reference tables are estimated above :data:`PLAN_TABLE_BUILD_S`
-    (:func:`gearfmu.tables.estimate.estimate_build`): then the per-choice levels get a table budget."""
+    (:func:`gearfmu.scene.physics.estimate_build`): then the per-choice levels get a table budget."""
     sc = replace(scene, mesh=replace(scene.mesh, slices=int(full["slices"])),
                  tables=replace(scene.tables, points_per_mesh=int(full["points_per_mesh"])))
     return estimate_build(sc).build_s > PLAN_TABLE_BUILD_S
@@ -215,7 +215,7 @@ def skipped_choices(choices: Dict[str, Choice], what_if_rows: List[dict]) -> Lis
     return rows
 
 
-def _what_if_contact(scene) -> List[dict]:
+def what_if_contact(scene) -> List[dict]:
     """The contact models other than the scene's: each a what-if row with the reason it is
     skipped (not offered, no ``[lubricant]``, no ``[roughness]``) or None when it can be
     measured (``plan_scene(..., what_if=True)``)."""
@@ -237,7 +237,7 @@ def _what_if_contact(scene) -> List[dict]:
     return rows
 
 
-def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
+def thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     """The ``[thermal]`` options of the kept thermal level: the scene's section (a
     default :class:`gearfmu.scene.reader.ThermalOptions` when it has none) whose temperature
     axis is the scene's ``temperature_axis_C`` or, when that is empty and the envelope
@@ -272,6 +272,6 @@ def _thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
     return th
 
 
-def _step_absolute(scene, acc: AccuracyTarget) -> bool:
+def step_absolute(scene, acc: AccuracyTarget) -> bool:
     """True when the max_step level is a step in s (pinned to the scene's max_step_s)."""
     return "max_step" in acc.pin and scene.solver.max_step_s is not None

@@ -1,22 +1,13 @@
-"""Fidelity planner: only what a scene needs (docs/plan.md).
+"""The planner's decisions (docs/plan.md): the budget rule, the revisions, the as-written
+estimate, and what a build builds.
 
-Given a scene, its operating envelope and its accuracy target
-(:mod:`gearfmu.scene.envelope`), :func:`plan_scene` estimates what every modelling choice
-contributes to the DTE and mesh force over the envelope, keeps what the target needs, drops
-the rest, verifies the combined choice by a worst-case search of the envelope and measures the
-cost of the chosen model against the full one.  The planner's parts:
-
-* :mod:`gearfmu.plan_choices` -- the choices and their levels (cheapest first, the last the
-  full-fidelity level), what is skipped and why, the what-if contact models;
-* :mod:`gearfmu.plan_evaluator` -- tables and native runs of configurations, the per-choice
-  measurements;
-* :mod:`gearfmu.plan_verify` -- the error measure, the envelope search, the progress display;
-* :mod:`gearfmu.plan_report` -- :class:`Plan`, its JSON and text report, the verified envelope;
-* :mod:`gearfmu.plan_fmu` -- the planned and full scenes and their confirmation through the FMUs.
-
-This module holds the budget rule (:func:`plan_scene`), the revision loop
-(:func:`_verify_and_revise`) and the as-written estimate of ``gearfmu build``
-(:func:`estimate_as_written`), and re-exports the public names of the parts.
+:func:`plan_scene` estimates what every modelling choice contributes to the DTE and mesh force
+over the scene's envelope (:mod:`gearfmu.scene.envelope`), keeps what the accuracy target
+needs, drops the rest, verifies the combined choice by a worst-case search of the envelope
+(:func:`verify_and_revise`) and measures the cost of the chosen model against the full one.
+:func:`estimate_as_written` is the cheap error estimate of a scene built as written.
+:func:`resolve` says what ``gearfmu build`` and ``gearfmu validate`` build for a scene: the
+planned scene when it asks for a plan, else the scene as written.
 """
 from __future__ import annotations
 
@@ -24,23 +15,19 @@ import math
 from dataclasses import replace
 from typing import Dict, List, Optional, Tuple
 
-from .dynamics.native import choose_max_step_s
-from .plan_choices import (CONTACT_ORDER, LEVELS_NOT_COST_ORDERED, PLAN_LEVEL_TABLE_WORK, Choice, PlanError,
-                           _choices, _p_min, _scene_has_thermal, _step_absolute, _thermal_options, _what_if_contact,
-                           reference_is_expensive, skipped_choices, table_work)
-from .plan_evaluator import _Evaluator, _cost_entry, _h0, relative_rms
-from .plan_fmu import (TEMPERATURE_INPUTS, _measure_fmus, full_scene, planned_scene, run_fmu_drive,
-                       verification_cases, verify_fmus)
-from .plan_report import Plan, format_report, verified_envelope_of
-from .plan_verify import (ERROR_DEFINITION, MEASURES, DriveCase, ProgressBar, Search, budget_use, drive_case,
-                          limiting_measure, say)
-from .scene.envelope import PLAN_CHOICES, AccuracyTarget, VerifiedEnvelope, accuracy_of, envelope_of
-from .scene.physics import estimate_build
+from ..dynamics.native import choose_max_step_s
+from ..scene.envelope import PLAN_CHOICES, AccuracyTarget, VerifiedEnvelope, accuracy_of, envelope_of
+from ..scene.physics import check_build_cost, estimate_build
+from .choices import (LEVELS_NOT_COST_ORDERED, PLAN_LEVEL_TABLE_WORK, Choice, PlanError, choices_of, min_slots,
+                      reference_is_expensive, scene_has_thermal, skipped_choices, step_absolute, table_work,
+                      thermal_options, what_if_contact)
+from .confirm import measure_fmus, planned_scene
+from .evaluator import Evaluator, cost_entry, h0_of
+from .report import Plan, verified_envelope_of
+from .verify import ERROR_DEFINITION, MEASURES, ProgressBar, Search, budget_use, limiting_measure, say
 
-__all__ = ["PlanError", "Plan", "plan_scene", "planned_scene", "full_scene", "format_report",
-           "relative_rms", "CONTACT_ORDER", "DriveCase", "drive_case", "verification_cases", "run_fmu_drive",
-           "verify_fmus", "TEMPERATURE_INPUTS", "estimate_as_written", "verified_envelope_of",
-           "DEFAULT_BUDGET_RUNS", "skipped_choices"]
+__all__ = ["plan_scene", "estimate_as_written", "resolve", "verify_and_revise", "cheapest_fit", "DEFAULT_BUDGET_RUNS",
+           "ESTIMATE_BUDGET_RUNS"]
 
 DEFAULT_BUDGET_RUNS = 2000  # native runs the envelope search and its revisions may take (CHOICE, docs/plan.md)
 #: a level whose budget use alone is at most this share of the safety factor meets the target with
@@ -73,7 +60,7 @@ def _est_cost(levels: Dict[str, int], choices: Dict[str, Choice], base: dict) ->
     return total
 
 
-def _cheapest_fit(c: Choice, below: int, room: float, acc: AccuracyTarget, cost_at) -> Optional[tuple]:
+def cheapest_fit(c: Choice, below: int, room: float, acc: AccuracyTarget, cost_at) -> Optional[tuple]:
     """The greedy rule's candidate of choice ``c``: of its measured levels below ``below`` whose
     budget use fits in ``room``, (estimated cost ``cost_at(i)``, level i, budget use) of the
     lowest cost, the lower level on a tie; None when none fits.  Mostly the first level that
@@ -92,7 +79,7 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
                budget_runs: Optional[int] = None, what_if: bool = False) -> Plan:
     """Plan the fidelity of a scene (docs/plan.md).
 
-    1. Levels of every choice (:func:`_choices`; pinned ones are fixed, choices the envelope
+    1. Levels of every choice (:func:`choices_of`; pinned ones are fixed, choices the envelope
        cannot need have one level and are listed in ``Plan.skipped``).
     2. Each non-full level is measured alone against the full model (all other
        choices full), cheapest first (:func:`_measure_levels`): TVMS, DTE and mesh-force
@@ -105,35 +92,35 @@ def plan_scene(scene, *, progress: bool = False, measure_fmu: bool = False,
        factor (by the triangle inequality the combined error is about at most
        the sum of the single-choice errors).
     4. Verification: the combined chosen model is searched over the envelope against the
-       full one and revised while a point is above the target (:func:`_verify_and_revise`).
+       full one and revised while a point is above the target (:func:`verify_and_revise`).
     5. Costs of the chosen and the full model: table build time, table size and
        time per simulated second, and with ``measure_fmu`` both FMUs built (in
        ``fmu_dir`` or a temporary directory; ``fmu_runtime``: "pythonfmu" or
        "standalone", None = the scene's) and driven through the verification
-       cases (:func:`verify_fmus`, stored in ``Plan.fmu_verification``).
+       cases (:func:`gearfmu.plan.confirm.verify_fmus`, stored in ``Plan.fmu_verification``).
     """
     budget_runs = DEFAULT_BUDGET_RUNS if budget_runs is None else int(budget_runs)
     if budget_runs < 1:
         raise PlanError(f"budget_runs: must be a positive number of native runs, got {budget_runs}")
     env, acc = envelope_of(scene), accuracy_of(scene)
     if env.temperature_range_C is not None:
-        _thermal_options(scene, env)  # the scene's temperature axis must cover the envelope (PlanError)
+        thermal_options(scene, env)  # the scene's temperature axis must cover the envelope (PlanError)
     log: List[str] = []
-    choices = _choices(scene, env, acc)
+    choices = choices_of(scene, env, acc)
     for name in PLAN_CHOICES:
         if name not in choices:
             raise PlanError(f"{name}: no levels (planner bug)")  # pragma: no cover
-    ev = _Evaluator(scene, env, acc, progress)
+    ev = Evaluator(scene, env, acc, progress)
     return _plan(scene, env, acc, choices, ev, log, progress=progress, measure_fmu=measure_fmu, fmu_dir=fmu_dir,
                  fmu_runtime=fmu_runtime, budget_runs=budget_runs, what_if=what_if)
 
 
-def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc: AccuracyTarget, base: dict,
+def _measure_levels(ev: Evaluator, choices: Dict[str, Choice], full: dict, acc: AccuracyTarget, base: dict,
                     progress: bool, log: List[str], work_budget: float = math.inf) -> None:
     """Step 2 of the budget rule: every non-full level measured alone against the full model,
     cheapest first.  A choice stops at the first level whose budget use is negligible
     (:data:`_NEGLIGIBLE_USE`; not the choices of ``LEVELS_NOT_COST_ORDERED``); a level whose tables are still to be built and would take the
-    table work of the levels (:func:`gearfmu.plan_choices.table_work`) above ``work_budget``
+    table work of the levels (:func:`gearfmu.plan.choices.table_work`) above ``work_budget``
     is not measured.  Both are recorded in ``Choice.skipped_levels``."""
     for c in choices.values():
         c.measured[len(c.levels) - 1] = dict(base)
@@ -174,12 +161,12 @@ def _measure_levels(ev: _Evaluator, choices: Dict[str, Choice], full: dict, acc:
                     break
 
 
-def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Evaluator, log: List[str], *,
+def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: Evaluator, log: List[str], *,
           progress: bool, measure_fmu: bool, fmu_dir, fmu_runtime, budget_runs: int, what_if: bool) -> Plan:
     """:func:`plan_scene` after its input checks (``ev``: its evaluator)."""
     full = {n: c.full for n, c in choices.items()}
     tb_full, _ = ev.tables(full, progress=progress)
-    ev.h0 = _h0(ev, full, env)
+    ev.h0 = h0_of(ev, full, env)
     npts = len(ev.points())
     say(progress, f"{npts} envelope points, full tables {tb_full.slots} slots x {tb_full.n_phi} angles x "
                   f"{tb_full.n_torque} torques, h0 = {ev.h0:.3g} s", log)
@@ -187,7 +174,7 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
     budget = PLAN_LEVEL_TABLE_WORK * table_work(full) if reference_is_expensive(scene, full) else math.inf
     _measure_levels(ev, choices, full, acc, base, progress, log, budget)
 
-    what_if_rows = _what_if_contact(scene)
+    what_if_rows = what_if_contact(scene)
     for r in what_if_rows:
         if r["skipped"] is None and not what_if:
             r["skipped"] = (f"not measured: the scene asks for {scene.mesh.contact_model} "
@@ -215,7 +202,7 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
         best = None
         cur_cost, total = cost_of(level), sum(use.values())
         for name, c in choices.items():
-            fit = _cheapest_fit(c, level[name], acc.safety_factor - (total - use[name]), acc,
+            fit = cheapest_fit(c, level[name], acc.safety_factor - (total - use[name]), acc,
                                 lambda i: cost_of(dict(level, **{name: i})))
             if fit is None:
                 continue
@@ -233,22 +220,22 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
                        f"total {sum(use.values()):.3f})", log)
 
     # ---------------------------------------------------------- verification
-    chosen, ver = _verify_and_revise(ev, choices, level, full, acc, budget_runs,
+    chosen, ver = verify_and_revise(ev, choices, level, full, acc, budget_runs,
                                      lambda msg: say(progress, msg, log), progress)
     ver["tvms_rel"] = ev.tvms_error(chosen, full)
     ver["points"] = ver["probes"]
 
     # ---------------------------------------------------------- costs
-    cost = {"full": _cost_entry(ev, full), "chosen": _cost_entry(ev, chosen)}
+    cost = {"full": cost_entry(ev, full), "chosen": cost_entry(ev, chosen)}
     plan = Plan(scene_name=scene.name, envelope=env, target=acc, choices=choices, full=full, chosen=chosen,
-                h0_s=ev.h0, step_absolute=_step_absolute(scene, acc), verification=ver, cost=cost, log=log,
+                h0_s=ev.h0, step_absolute=step_absolute(scene, acc), verification=ver, cost=cost, log=log,
                 what_if=what_if, skipped=skipped_choices(choices, what_if))
     plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
 
     plan.estimate = {"scene": estimate_build(scene).to_dict(),
                      **{w: estimate_build(planned_scene(scene, plan, w)).to_dict() for w in ("chosen", "full")}}
     if measure_fmu:
-        _measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
+        measure_fmus(scene, plan, fmu_dir, progress, fmu_runtime)
         plan.verified_envelope = verified_envelope_of(plan, kind="plan verification")
     g = {}
     for k in ("table_build_s", "table_bytes", "wall_per_sim_s", "fmu_bytes"):
@@ -259,10 +246,10 @@ def _plan(scene, env, acc: AccuracyTarget, choices: Dict[str, Choice], ev: _Eval
     return plan
 
 
-def _verify_and_revise(ev: _Evaluator, choices: Dict[str, Choice], level: Dict[str, int], full: dict,
+def verify_and_revise(ev: Evaluator, choices: Dict[str, Choice], level: Dict[str, int], full: dict,
                        acc: AccuracyTarget, budget_runs: int, say, progress: bool = False) -> Tuple[dict, dict]:
     """Verify the combined configuration of ``level`` over the envelope
-    (:class:`gearfmu.plan_verify.Search`); while the worst point found is above the
+    (:class:`gearfmu.plan.verify.Search`); while the worst point found is above the
     target, find the responsible choice (each reduced choice restored to full alone at
     that point: the one whose restoration lowers the error most), raise it to its
     cheapest level that brings that point within ``safety_factor`` x target (else to
@@ -333,7 +320,7 @@ _ESTIMATE_RUN_MESH_PERIODS = 20  # its run length in mesh periods (CHOICE: a che
 def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = ESTIMATE_BUDGET_RUNS) -> dict:
     """Cheap estimate of the error of a scene AS WRITTEN against its full-fidelity model
     (the planner's full levels, the scene's own contact model) over the scene's envelope:
-    one envelope search (:class:`gearfmu.plan_verify.Search`) with runs of
+    one envelope search (:class:`gearfmu.plan.verify.Search`) with runs of
     ``_ESTIMATE_RUN_MESH_PERIODS`` mesh periods and at most ``budget_runs`` native runs.
     Returns :class:`gearfmu.scene.envelope.VerifiedEnvelope` as a dict with kind
     "as-written estimate" and the default (or the scene's) target."""
@@ -341,15 +328,15 @@ def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = EST
     acc = replace(accuracy_of(scene), pin=(), run_mesh_periods=min(accuracy_of(scene).run_mesh_periods,
                                                                       _ESTIMATE_RUN_MESH_PERIODS))
     log: List[str] = []
-    choices = _choices(scene, env, acc)
+    choices = choices_of(scene, env, acc)
     full = {n: c.full for n, c in choices.items()}
-    ev = _Evaluator(scene, env, acc, progress)
-    ev.h0 = _h0(ev, full, env)
-    written = {"contact_model": scene.mesh.contact_model, "thermal": _scene_has_thermal(scene),
+    ev = Evaluator(scene, env, acc, progress)
+    ev.h0 = h0_of(ev, full, env)
+    written = {"contact_model": scene.mesh.contact_model, "thermal": scene_has_thermal(scene),
                "tooth_specific_errors": True, "slices": int(scene.mesh.slices),
                "points_per_mesh": int(scene.tables.points_per_mesh),
                "torque_points": int(scene.tables.torque_points) if full["torque_points"] > 1 else 1,
-               "slots": int(scene.tables.slots or _p_min(scene)), "integrator": scene.solver.integrator}
+               "slots": int(scene.tables.slots or min_slots(scene)), "integrator": scene.solver.integrator}
     if scene.solver.max_step_s is not None:
         step_s = float(scene.solver.max_step_s)
     else:
@@ -379,3 +366,33 @@ def estimate_as_written(scene, *, progress: bool = False, budget_runs: int = EST
     d["as_written"] = dict(written, max_step_s=step_s)
     return d
 
+
+
+def resolve(scene, *, progress: bool = False, estimate_accuracy: bool = False,
+            allow_large: bool = False) -> Tuple[object, Optional[Plan], Optional[dict]]:
+    """(the scene to build, its plan or None, its verified envelope or None): what ``gearfmu build``
+    builds for a scene and ``gearfmu validate`` checks (docs/plan.md).
+
+    An oversized scene is refused first (:func:`gearfmu.scene.physics.check_build_cost`,
+    ``BuildTooLargeError``, unless ``allow_large``).  A scene with ``[accuracy]`` is built as its
+    fidelity plan says (:func:`plan_scene`; :func:`planned_scene`, the plan's verified envelope);
+    a plan that is not within its target is refused with :class:`PlanError`.  Without it, the
+    scene is built as written, and ``estimate_accuracy`` adds the cheap estimate of its error
+    against the full-fidelity model over the envelope (:func:`estimate_as_written`; an estimate
+    that fails never stops a build: it says why it is missing)."""
+    check_build_cost(scene, allow_large=allow_large)
+    if scene.accuracy is not None:
+        plan = plan_scene(scene, progress=progress)
+        if not plan.within_target:
+            v = plan.verification
+            raise PlanError(f"accuracy: the fidelity plan of scene {scene.name!r} is not within its target over "
+                            f"the envelope ({v.get('refused') or 'worst: ' + str(v.get('worst'))}); "
+                            f"see `gearfmu plan`")
+        return planned_scene(scene, plan), plan, plan.verified_envelope
+    if not estimate_accuracy:
+        return scene, None, None
+    try:
+        verified = estimate_as_written(scene, progress=progress)
+    except (ValueError, ArithmeticError) as exc:  # the estimate never stops a build; it says why it is missing
+        verified = {"kind": "as-written estimate", "error": f"{type(exc).__name__}: {exc}"}
+    return scene, None, verified

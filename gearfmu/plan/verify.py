@@ -25,8 +25,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .common.progress import progress_bar
-from .dynamics.harmonics import mesh_order_amplitudes
+from ..common.progress import progress_bar
+from ..dynamics.harmonics import mesh_order_amplitudes
 
 __all__ = ["ERROR_DEFINITION", "MEASURES", "MEASURE_LABELS", "run_errors", "Probe", "Search", "budget_use",
            "limiting_measure", "target_of", "steady_phase", "drive_phase", "say", "ProgressBar", "DriveCase",
@@ -277,7 +277,7 @@ class Probe:
 class Search:
     """Adaptive worst-case search of one configuration against the full one.
 
-    ``ev``: the planner's evaluator (``gearfmu.plan_evaluator._Evaluator``: tables, cached native
+    ``ev``: the planner's evaluator (``gearfmu.plan.evaluator.Evaluator``: tables, cached native
     runs, ``native_runs`` counter); ``budget_runs``: the largest number of native runs
     (both configurations counted; cached runs are free) one :meth:`verify` may add."""
 

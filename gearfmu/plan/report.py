@@ -9,10 +9,10 @@ from typing import Dict, List
 
 import numpy as np
 
-from .plan_choices import Choice
-from .plan_verify import ERROR_DEFINITION, MEASURE_LABELS, MEASURES, budget_use, limiting_measure, target_of
-from .scene.envelope import AccuracyTarget, Envelope, VerifiedEnvelope
-from .assembly.estimate import BuildEstimate
+from .choices import Choice
+from .verify import ERROR_DEFINITION, MEASURE_LABELS, MEASURES, budget_use, limiting_measure, target_of
+from ..scene.envelope import AccuracyTarget, Envelope, VerifiedEnvelope
+from ..assembly.estimate import BuildEstimate
 
 # ============================================================== the plan
 @dataclass
@@ -35,7 +35,7 @@ class Plan:
     fmu_verification: dict = field(default_factory=dict)  # verify_fmus() when measured (plan --fmu)
     what_if: List[dict] = field(default_factory=list)  # other contact models: measured or skipped, never "full"
     verified_envelope: dict = field(default_factory=dict)  # gearfmu.scene.envelope.VerifiedEnvelope.to_dict()
-    skipped: List[dict] = field(default_factory=list)  # gearfmu.plan_choices.skipped_choices: not measured, and why
+    skipped: List[dict] = field(default_factory=list)  # gearfmu.plan.choices.skipped_choices: not measured, and why
 
     @property
     def within_target(self) -> bool:
@@ -43,7 +43,7 @@ class Plan:
         fv = self.fmu_verification or {}
         return bool(self.verification.get("within_target")) and (not fv.get("cases") or
                                                                  bool(fv.get("within_target")))
-    estimate: dict = field(default_factory=dict)  # gearfmu.tables.estimate of the scene as written / chosen / full
+    estimate: dict = field(default_factory=dict)  # gearfmu.assembly.estimate of the scene as written / chosen / full
 
     def max_step_s(self, which: str = "chosen") -> float:
         """Largest internal step (s) of the chosen or the full configuration."""
@@ -235,9 +235,9 @@ def format_report(plan: Plan) -> str:
                      ("fmu_bytes", "FMU size (bytes)"), ("wall_per_sim_s", "s per simulated s")):
         if k in cf and k in cc:
             lines.append(f"{label:<26}{_fmt(cf[k]):>14}{_fmt(cc[k]):>14}{_fmt(g.get(k, math.nan)):>13}")
-    if d.get("estimate"):  # gearfmu.tables.estimate (the model behind the build guard)
+    if d.get("estimate"):  # gearfmu.assembly.estimate (the model behind the build guard)
 
-        lines += ["", "estimate before computing (gearfmu.tables.estimate):"]
+        lines += ["", "estimate before computing (gearfmu.assembly.estimate):"]
         lines += [f"  {w:<7}{BuildEstimate(**e).summary()}" for w, e in d["estimate"].items()]
     fv = d.get("fmu_verification") or {}
     if fv.get("cases"):
