@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from gearfmu.common.vocabulary import GEARBOX_INTEGRATORS
-from gearfmu.drivetrain import drivetrain_model, load_any, simulate_drivetrain, stage_tables
+from gearfmu.pipeline import drivetrain_model, load_any, simulate_drivetrain, stage_tables
 from gearfmu.planetary.native import simulate
 from gearfmu.planetary.reference import simulate_reference
 from gearfmu.bench import PLANETARY_CASES, planetary_case
