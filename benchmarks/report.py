@@ -743,12 +743,13 @@ def sec_dynamics(pg: Page):
             + f"\n\nSource: `{SOURCES['hard_cases'][2]}` ({pg.cost('hard_cases')}).\n")
 
 
-def _front_rows_and_plot(pg: Page, d: dict, png: str):
-    """The table rows (case, method, wall s at 1e-4 and 1e-6, speedup over DOP853) and the plot of
-    the wall-time-against-error fronts of bench_gearbox.py / bench_planetary.py."""
+def _front_rows_and_plot(pg: Page, d: dict, png: str, clock: str = "wall"):
+    """The table rows (case, method, wall (or CPU) s at 1e-4 and 1e-6, speedup over DOP853) and the
+    plot of the time-against-error fronts of bench_gearbox.py / bench_planetary.py (``clock``
+    "wall" or "cpu": the rows' ``wall_s`` / ``cpu_s`` and the fronts' ``wall_at`` / ``cpu_at``)."""
     body = []
     for f in d["fronts"]:
-        for m, at in f["wall_at"].items():
+        for m, at in f[f"{clock}_at"].items():
             sp = f["speedup_vs_DOP853"].get(m, {})
             body.append([f["case"], m, sci(at.get("1e-04")), sci(at.get("1e-06")),
                          "" if m not in f["speedup_vs_DOP853"] else
@@ -760,11 +761,12 @@ def _front_rows_and_plot(pg: Page, d: dict, png: str):
             for m in dict.fromkeys(r["method"] for r in f["rows"]):
                 rs = [r for r in f["rows"] if r["method"] == m and 0 < r.get("dte_rel_rms_err", 0) < 1]
                 if rs:
-                    ax.loglog([r["dte_rel_rms_err"] for r in rs], [r["wall_s"] for r in rs], "o-", ms=3, label=m)
+                    ax.loglog([r["dte_rel_rms_err"] for r in rs], [r[f"{clock}_s"] for r in rs], "o-", ms=3,
+                              label=m)
             ax.set_title(f["case"], fontsize=9)
             ax.set_xlabel("DTE RMS error / DTE range")
             ax.grid(True, which="both", alpha=0.3)
-        axes[0][0].set_ylabel("wall time (s)")
+        axes[0][0].set_ylabel(f"{'CPU' if clock == 'cpu' else 'wall'} time (s)")
         axes[0][0].legend(fontsize=7)
         return fig
 
@@ -810,11 +812,11 @@ def sec_planetary(pg: Page):
     if pg.missing("planetary", "Planetary stages: the native planetary solver against the scipy reference"):
         return
     d = pg.data["planetary"]
-    body, img = _front_rows_and_plot(pg, d, "validation_planetary.png")
+    body, img = _front_rows_and_plot(pg, d, "validation_planetary.png", clock="cpu")
     ex = d.get("example", {})
     example = (f"\n\nThe example `{ex['scene']}` ({ex['meshes']} meshes, {ex['dofs']} degrees of freedom, "
-               f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['wall_per_simulated_s'], 3)} s of "
-               f"wall time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
+               f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['cpu_per_simulated_s'], 3)} s of "
+               f"CPU time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
                f"({ex['events']} events in {ex['stop_time_s']:g} s).") if ex else ""
     pg.parts.append(
         "## Planetary stages\n\n"
@@ -823,10 +825,11 @@ def sec_planetary(pg: Page):
         "unloading; four planets on a floating sun with a pin position error; a carrier-driven stage followed by "
         "a parallel stage), against its event-located scipy reference at rtol 1e-12 (`gearfmu/planetary/reference.py`).  "
         "Every native integrator at 2 to 256 substeps per communication step and the same scipy reference at "
-        "looser tolerances (DOP853 at rtol 1e-4 to 1e-10, 16 to 64 steps per shortest natural period); wall time "
-        "of the whole call at relative RMS DTE errors 1e-4 and 1e-6 of the worst mesh (log-log interpolation "
-        "along each method's front) and the speedup over DOP853 there.\n\n"
-        + table(["case", "method", "wall s at 1e-4", "wall s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
+        "looser tolerances (DOP853 at rtol 1e-4 to 1e-10, 16 to 64 steps per shortest natural period); CPU time "
+        "of the whole call (process time: the single-threaded solvers' cost, less sensitive to other load on "
+        "the machine than wall time) at relative RMS DTE errors 1e-4 and 1e-6 of the worst mesh (log-log "
+        "interpolation along each method's front) and the speedup over DOP853 there.\n\n"
+        + table(["case", "method", "CPU s at 1e-4", "CPU s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
         + f"\n\n{img}{example}\n\nSource: `{SOURCES['planetary'][2]}` ({pg.cost('planetary')}).\n")
     pg.summary.append(_front_summary(d, "planetary dynamics (Lin & Parker model, every mesh multi-pair)",
                                      "event-located DOP853 (scipy), same equations"))
