@@ -374,11 +374,51 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     (gearfmu.gearbox.model.Mesh), planetary stages, ``shafts`` (gearfmu.gearbox.model.Shaft, rigid or
     elastic), further ``parts`` with their inertias (kg m^2), the motor and load parts and which ends
     are torque inputs.  The topology rules of gearfmu.common.topology apply; a planetary stage joins
-    its two free ports."""
+    its two free ports.  Steps: the parts and their inertias (:func:`_parts`), the tree and the
+    kinematic ratios (:func:`_kinematics`), the DOFs and elements (:func:`_add_stage` per stage), the
+    check that every element's rigid deflection vanishes, the flat arrays of the model."""
     meshes = tuple(_check_mesh(i, m) for i, m in enumerate(meshes))
     planetaries = tuple(_check_stage(i, s) for i, s in enumerate(planetaries))
     if not meshes and not planetaries:
         raise PlanetaryModelError("meshes, planetaries: a drivetrain needs at least one stage")
+    if not (motor_torque_input or load_torque_input):
+        raise PlanetaryModelError("motor_torque_input, load_torque_input: at least one end must be a torque input")
+    inertia, held_parts = _parts(meshes, planetaries, shafts, parts, motor, load)
+    tree, I_body, g_body, up_port = _kinematics(meshes, planetaries, shafts, inertia, motor)
+    B = _Builder()
+    for b in range(len(tree.bodies)):
+        B.add("+".join(tree.bodies[b]), "rot", I_body[b], g_body[b])
+    part_dof = dict(tree.body_of)
+    for p, (i, I) in held_parts.items():
+        part_dof[p] = B.add(p, "rot", I, 0.0)
+    springs = _shaft_springs(shafts, tree, B, part_dof)   # (name, kind, [(dof, coef)], k, c, frame ratio)
+    mesh_rows: List[dict] = []
+    frames: List[tuple] = []
+    for m in meshes:
+        t = m.tables
+        p, q = part_dof[f"{m.name}.pinion"], part_dof[f"{m.name}.gear"]
+        c, me = mesh_damping(t, m.damping_ratio)
+        mesh_rows.append(dict(name=m.name, tables=t, x=[(p, float(t.base_radius_pinion_m)),
+                                                        (q, -float(t.base_radius_gear_m))],
+                              a=[(p, 1.0)], phase=0.0, c=c, me=me, model=m.damping_model, torque=1.0 / B.g[p]))
+    stage_info = [_add_stage(st, up_port[st.name], B, part_dof, springs, mesh_rows, frames) for st in planetaries]
+    _check_rigid_parts(B, springs, mesh_rows)
+    tq_ref = np.array([r["torque"] for r in mesh_rows])
+    # stages off the motor-load path carry no static torque
+    on = {tree.edges[e][0] for e in tree.path(0, tree.body_of[load])}
+    for mi in range(len(meshes)):
+        if mi not in on:
+            tq_ref[mi] = 0.0
+    for i, si in enumerate(stage_info):
+        if len(meshes) + i not in on:
+            tq_ref[si["meshes"]] = 0.0
+    return _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
+                   inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
+                   gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
+
+
+def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
+    """(part name -> inertia, held port name -> (stage index, inertia)), every name and end checked."""
     inertia: Dict[str, float] = {}
     for name, val in (parts or {}).items():
         inertia[str(name)] = finite_number(f"parts[{name!r}]", val, positive=True, error=PlanetaryModelError)
@@ -407,8 +447,6 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
             raise PlanetaryModelError(f"{what}: {end!r} is not a part; parts are {sorted(inertia)}")
     if motor == load:
         raise PlanetaryModelError(f"load: {load!r} is the motor's part too")
-    if not (motor_torque_input or load_torque_input):
-        raise PlanetaryModelError("motor_torque_input, load_torque_input: at least one end must be a torque input")
     for i, s in enumerate(shafts):
         if s.name in names:
             raise PlanetaryModelError(f"shafts[{i}].name: {s.name!r} is already a name in this drivetrain")
@@ -424,12 +462,18 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
             finite_number(f"shafts[{i}].stiffness_Nm_per_rad", s.stiffness_Nm_per_rad, positive=True,
                           error=PlanetaryModelError)
         finite_number(f"shafts[{i}].inertia_kgm2", s.inertia_kgm2, nonneg=True, error=PlanetaryModelError)
-    part_names = tuple(inertia)
+    return inertia, held_parts
+
+
+def _kinematics(meshes, planetaries, shafts, inertia, motor: str):
+    """(tree, inertia per body, kinematic ratio per body, stage name -> its port nearer the motor):
+    the drivetrain tree (gearfmu.common.topology), each shaft's inertia half to each end, the ratios
+    along the tree (a mesh by its base radii, a planetary stage by Willis' equation)."""
     nm_, npl = len(meshes), len(planetaries)
     links = [("mesh", f"{m.name}.pinion", f"{m.name}.gear") for m in meshes]
     links += [("planetary",) + tuple(s.port(p) for p in s.free_ports) for s in planetaries]
     links += [("rigid" if s.stiffness_Nm_per_rad is None else "shaft", s.a, s.b) for s in shafts]
-    tree = drivetrain_tree(part_names, links, motor)
+    tree = drivetrain_tree(tuple(inertia), links, motor)
     if tree.problems:
         li, part, reason = tree.problems[0]
         where = (f"meshes[{li}] ({meshes[li].name})" if li is not None and li < nm_
@@ -443,7 +487,6 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     for s in shafts:
         I_body[tree.body_of[s.a]] += 0.5 * s.inertia_kgm2
         I_body[tree.body_of[s.b]] += 0.5 * s.inertia_kgm2
-    # kinematic ratios along the tree
     g_body = np.ones(nb)
     up_port = {}
     for li, up, down in tree.edges:
@@ -454,25 +497,22 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
         elif kind == "planetary":
             st = planetaries[li - nm_]
             a, b = links[li][1], links[li][2]
-            pu = (a if tree.body_of[a] == up else b).split(".")[-1]
-            pd = (b if pu == a.split(".")[-1] else a).split(".")[-1]
+            pu, pd = ((a, b) if tree.body_of[a] == up else (b, a))
+            pu, pd = pu.split(".")[-1], pd.split(".")[-1]
             g_body[down] = g_body[up] * willis_ratio(st.held, pu, pd, st.base_radius_sun_m, st.base_radius_ring_m)
             up_port[st.name] = pu
         else:
             g_body[down] = g_body[up]
-    B = _Builder()
-    for b in range(nb):
-        B.add("+".join(tree.bodies[b]), "rot", I_body[b], g_body[b])
-    part_dof = dict(tree.body_of)
-    for p, (i, I) in held_parts.items():
-        part_dof[p] = B.add(p, "rot", I, 0.0)
-    springs: List[tuple] = []     # (name, kind, [(dof, coef)], k, c, frame ratio)
-    mesh_rows: List[dict] = []
-    frames: List[tuple] = []
-    stage_info = []
-    # shafts
-    elastic = [s for s in shafts if s.stiffness_Nm_per_rad is not None]
-    for s in elastic:
+    return tree, I_body, g_body, up_port
+
+
+def _shaft_springs(shafts, tree, B: "_Builder", part_dof) -> List[tuple]:
+    """The elastic shafts as springs (name, "shaft", [(upstream DOF, 1), (downstream DOF, -1)], k, c,
+    0); a damping ratio with the two-inertia reduced inertia of its end bodies."""
+    springs = []
+    for s in shafts:
+        if s.stiffness_Nm_per_rad is None:
+            continue
         a, b = part_dof[s.a], part_dof[s.b]
         up, down = (a, b) if _depth(tree, a) <= _depth(tree, b) else (b, a)
         k = float(s.stiffness_Nm_per_rad)
@@ -484,20 +524,12 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
         else:
             c = 0.0
         springs.append((s.name, "shaft", [(up, 1.0), (down, -1.0)], k, c, 0.0))
-    # parallel meshes
-    for m in meshes:
-        t = m.tables
-        p, q = part_dof[f"{m.name}.pinion"], part_dof[f"{m.name}.gear"]
-        c, me = mesh_damping(t, m.damping_ratio)
-        mesh_rows.append(dict(name=m.name, tables=t, x=[(p, float(t.base_radius_pinion_m)),
-                                                        (q, -float(t.base_radius_gear_m))],
-                              a=[(p, 1.0)], phase=0.0, c=c, me=me, model=m.damping_model, torque=1.0 / B.g[p]))
-    # planetary stages
-    for i, st in enumerate(planetaries):
-        stage_info.append(_add_stage(st, up_port[st.name], B, part_dof, springs, mesh_rows, frames))
-    n = len(B.names)
-    # rigid parts of every element cancel (checked; the translations of a stage are measured in the frame
-    # that turns with its carrier, so its elements' rotations count relative to that frame)
+    return springs
+
+
+def _check_rigid_parts(B: "_Builder", springs, mesh_rows) -> None:
+    """The rigid parts of every element cancel (the translations of a stage are measured in the frame
+    that turns with its carrier, so its elements' rotations count relative to that frame)."""
     g = np.array(B.g)
     checks = [(name, ent, gf) for name, kind, ent, k, c, gf in springs]
     checks += [(r["name"], r["x"], r.get("frame", 0.0)) for r in mesh_rows]
@@ -506,19 +538,12 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
         if abs(rigid) > 1e-9 * max(1.0, max(abs(cf * g[d]) for d, cf in ent)):
             raise PlanetaryModelError(f"{name}: its rigid deflection does not vanish ({rigid!r}); the kinematic ratios "
                                       "and the element's radii disagree")
-    load_dof = part_dof[load]
-    tq_ref = np.array([r["torque"] for r in mesh_rows])
-    # stages off the motor-load path carry no static torque
-    path = tree.path(0, tree.body_of[load])
-    on = {tree.edges[e][0] for e in path}
-    for mi, m in enumerate(meshes):
-        if mi not in on:
-            tq_ref[mi] = 0.0
-    for si, st in zip(stage_info, planetaries):
-        li = nm_ + planetaries.index(st)
-        if li not in on:
-            for k_ in si["meshes"]:
-                tq_ref[k_] = 0.0
+
+
+def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, motor, load, inputs, stages,
+            gearbox_meshes, parts) -> PlanetaryModel:
+    """The :class:`PlanetaryModel` of the built DOFs and elements, as flat arrays."""
+    g = np.array(B.g)
     ns = len(springs)
     spring_idx = -np.ones((ns, 4), dtype=np.int64)
     spring_coef = np.zeros((ns, 4))
@@ -547,9 +572,8 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
         mesh_me=np.array([r["me"] for r in mesh_rows]), mesh_damping_model=tuple(r["model"] for r in mesh_rows),
         mesh_torque_per_ref=tq_ref, frame_idx=np.array([f[:2] for f in frames], dtype=np.int64).reshape(-1, 2),
         frame_par=np.array([f[2:] for f in frames], dtype=float).reshape(-1, 2), motor=motor, load=load,
-        load_dof=load_dof, motor_torque_input=bool(motor_torque_input), load_torque_input=bool(load_torque_input),
-        stages=tuple(stage_info), gearbox_meshes=tuple(m.name for m in meshes),
-        parts=part_names + tuple(held_parts))
+        load_dof=part_dof[load], motor_torque_input=inputs[0], load_torque_input=inputs[1],
+        stages=stages, gearbox_meshes=gearbox_meshes, parts=parts)
 
 
 def _depth(tree, body: int) -> int:

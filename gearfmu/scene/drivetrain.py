@@ -528,19 +528,8 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     ratio = _ratios(tree, links, radii, {s.name: s for _, s in plans})
     t_motor, w_motor = motor["torque_Nm"], motor["speed_rpm"]
     notes = []
-    planetaries = []
-    mesh_speeds = []    # (pinion speed rad/s, pinion teeth) of every stage: the default output interval
-    for li, (path, st) in enumerate(plans, start=len(stage_scenes)):
-        edge = next(e for e in tree.edges if e[0] == li)
-        a, b = links[li][1], links[li][2]
-        up = (a if tree.body_of[a] == edge[1] else b).split(".")[1]
-        g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
-        t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
-        planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))
-        mesh_speeds.append((abs(g["sun"] - g["carrier"]) * w_motor, st.teeth[0]))
-        notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} held), sun "
-                     f"torque {abs(t_sun):.6g} N*m, sun mesh frequency "
-                     f"{st.teeth[0] * abs(g['sun'] - g['carrier']) * w_motor / (2 * math.pi):.6g} Hz")
+    planetaries, mesh_speeds = _planetary_operating_points(plans, len(stage_scenes), links, tree, ratio, t_motor,
+                                                          w_motor, notes)
     stages = []
     for path, nm, v, (sc, src, own) in stage_scenes:
         g = ratio[f"{nm}.pinion"]
@@ -579,6 +568,26 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
         stages=tuple(stages), shafts=tuple(specs), integrator=sol["integrator"], max_step_s=sol["max_step_s"],
         stop_time_s=run["stop_time_s"], output_interval_s=dt_out, output_interval_auto=dt_auto, ratio=ratio,
         notes=tuple(notes), planetaries=tuple(planetaries))
+
+
+def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_motor: float, w_motor: float,
+                                notes: list):
+    """(the planetary stages with their ports' kinematic ratios and the sun's static torque, the (sun
+    mesh speed rad/s, sun teeth) of each): the port nearer the motor takes T_motor/g of it; a note
+    per stage (its form, model, planets, held port, sun torque and mesh frequency)."""
+    planetaries, mesh_speeds = [], []
+    for li, (path, st) in enumerate(plans, start=first_link):
+        edge = next(e for e in tree.edges if e[0] == li)
+        a, b = links[li][1], links[li][2]
+        up = (a if tree.body_of[a] == edge[1] else b).split(".")[1]
+        g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
+        t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
+        planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))
+        mesh_speeds.append((abs(g["sun"] - g["carrier"]) * w_motor, st.teeth[0]))
+        notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} held), sun "
+                     f"torque {abs(t_sun):.6g} N*m, sun mesh frequency "
+                     f"{st.teeth[0] * abs(g['sun'] - g['carrier']) * w_motor / (2 * math.pi):.6g} Hz")
+    return planetaries, mesh_speeds
 
 
 def _part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:
