@@ -102,6 +102,8 @@ SOURCES = {
                    "examples/plan_study.py --json"),
     "tests": ([PY, "benchmarks/bench_tests.py"], None, "benchmarks/bench_tests.py"),
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
+    "planetary": ([PY, "benchmarks/bench_planetary.py", "--repeat", "3"], None,
+                  "benchmarks/bench_planetary.py --repeat 3"),
     "gearbox_fmu": ([PY, "benchmarks/bench_gearbox_fmu.py", "--sim", "0.5"], None,
                     "benchmarks/bench_gearbox_fmu.py --sim 0.5"),
     "me": ([PY, "benchmarks/bench_me.py"], None, "benchmarks/bench_me.py"),
@@ -112,7 +114,7 @@ SOURCES = {
 }
 # sources that take several minutes: run only when named (--only) or with --all
 SLOW = {"me", "trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup",
-        "plan_study", "plan_scan", "tests", "gearbox", "silence"}
+        "plan_study", "plan_scan", "tests", "gearbox", "planetary", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -743,13 +745,13 @@ def sec_dynamics(pg: Page):
             + f"\n\nSource: `{SOURCES['hard_cases'][2]}` ({pg.cost('hard_cases')}).\n")
 
 
-def sec_gearbox(pg: Page):
-    if pg.missing("gearbox", "Gearboxes: the native gearbox solver against the scipy reference"):
-        return
-    d = pg.data["gearbox"]
+def _front_rows_and_plot(pg: Page, d: dict, png: str, clock: str = "wall"):
+    """The table rows (case, method, wall (or CPU) s at 1e-4 and 1e-6, speedup over DOP853) and the
+    plot of the time-against-error fronts of bench_gearbox.py / bench_planetary.py (``clock``
+    "wall" or "cpu": the rows' ``wall_s`` / ``cpu_s`` and the fronts' ``wall_at`` / ``cpu_at``)."""
     body = []
     for f in d["fronts"]:
-        for m, at in f["wall_at"].items():
+        for m, at in f[f"{clock}_at"].items():
             sp = f["speedup_vs_DOP853"].get(m, {})
             body.append([f["case"], m, sci(at.get("1e-04")), sci(at.get("1e-06")),
                          "" if m not in f["speedup_vs_DOP853"] else
@@ -761,15 +763,33 @@ def sec_gearbox(pg: Page):
             for m in dict.fromkeys(r["method"] for r in f["rows"]):
                 rs = [r for r in f["rows"] if r["method"] == m and 0 < r.get("dte_rel_rms_err", 0) < 1]
                 if rs:
-                    ax.loglog([r["dte_rel_rms_err"] for r in rs], [r["wall_s"] for r in rs], "o-", ms=3, label=m)
+                    ax.loglog([r["dte_rel_rms_err"] for r in rs], [r[f"{clock}_s"] for r in rs], "o-", ms=3,
+                              label=m)
             ax.set_title(f["case"], fontsize=9)
             ax.set_xlabel("DTE RMS error / DTE range")
             ax.grid(True, which="both", alpha=0.3)
-        axes[0][0].set_ylabel("wall time (s)")
+        axes[0][0].set_ylabel(f"{'CPU' if clock == 'cpu' else 'wall'} time (s)")
         axes[0][0].legend(fontsize=7)
         return fig
 
-    img = pg.plot("validation_gearbox.png", draw)
+    return body, pg.plot(png, draw)
+
+
+def _front_summary(d: dict, what: str, reference: str) -> list:
+    sp = d.get("summary_min_speedup_vs_DOP853", {})
+    cells = ", ".join(f"{m} ≥ {v['1e-06']:.0f} × DOP853" for m, v in sp.items() if v.get("1e-06"))
+    errs = [r["dte_rel_rms_err"] for f in d["fronts"] for r in f["rows"]
+            if r["method"] == "rk4_node" and r["setting"] == "h=H/64"]
+    diff = (f"DTE RMS error of rk4_node at h=H/64: {sci(min(errs))} … {sci(max(errs))} of the range"
+            if errs else "n/a")
+    return [what, reference, diff, f"at 1e-6: {cells or 'n/a'}"]
+
+
+def sec_gearbox(pg: Page):
+    if pg.missing("gearbox", "Gearboxes: the native gearbox solver against the scipy reference"):
+        return
+    d = pg.data["gearbox"]
+    body, img = _front_rows_and_plot(pg, d, "validation_gearbox.png")
     ex = d.get("example", {})
     example = (f"\n\nThe example reducer `{ex['scene']}` ({ex['stages']} stages, {ex['bodies']} bodies, {ex['integrator']}, "
                f"internal step {sci(ex['step_s'])} s): {num(ex['wall_per_simulated_s'], 3)} s of wall time per simulated "
@@ -786,14 +806,35 @@ def sec_gearbox(pg: Page):
         "method's front) and the speedup over DOP853 there.\n\n"
         + table(["case", "method", "wall s at 1e-4", "wall s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
         + f"\n\n{img}{example}\n\nSource: `{SOURCES['gearbox'][2]}` ({pg.cost('gearbox')}).\n")
-    sp = d.get("summary_min_speedup_vs_DOP853", {})
-    cells = ", ".join(f"{m} ≥ {v['1e-06']:.0f} × DOP853" for m, v in sp.items() if v.get("1e-06"))
-    errs = [r["dte_rel_rms_err"] for f in d["fronts"] for r in f["rows"]
-            if r["method"] == "rk4_node" and r["setting"] == "h=H/64"]
-    diff = (f"DTE RMS error of rk4_node at h=H/64: {sci(min(errs))} … {sci(max(errs))} of the range"
-            if errs else "n/a")
-    pg.summary.append(["gearbox dynamics (two stages, shafts)", "event-located DOP853 (scipy), same equations",
-                       diff, f"at 1e-6: {cells or 'n/a'}"])
+    pg.summary.append(_front_summary(d, "gearbox dynamics (two stages, shafts)",
+                                     "event-located DOP853 (scipy), same equations"))
+
+
+def sec_planetary(pg: Page):
+    if pg.missing("planetary", "Planetary stages: the native planetary solver against the scipy reference"):
+        return
+    d = pg.data["planetary"]
+    body, img = _front_rows_and_plot(pg, d, "validation_planetary.png", clock="cpu")
+    ex = d.get("example", {})
+    example = (f"\n\nThe example `{ex['scene']}` ({ex['meshes']} meshes, {ex['dofs']} degrees of freedom, "
+               f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['cpu_per_simulated_s'], 3)} s of "
+               f"CPU time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
+               f"({ex['events']} events in {ex['stop_time_s']:g} s).") if ex else ""
+    pg.parts.append(
+        "## Planetary stages\n\n"
+        "The native planetary solver (docs/planetary.md) on the hard cases of `gearfmu/bench.py` "
+        "(Lin & Parker's system: contact loss in every mesh of three planets with backlash after a sudden "
+        "unloading; four planets on a floating sun with a pin position error; a carrier-driven stage followed by "
+        "a parallel stage), against its event-located scipy reference at rtol 1e-12 (`gearfmu/planetary/reference.py`).  "
+        "Every native integrator at 2 to 256 substeps per communication step and the same scipy reference at "
+        "looser tolerances (DOP853 at rtol 1e-4 to 1e-10, 16 to 64 steps per shortest natural period); CPU time "
+        "of the whole call (process time: the single-threaded solvers' cost, less sensitive to other load on "
+        "the machine than wall time) at relative RMS DTE errors 1e-4 and 1e-6 of the worst mesh (log-log "
+        "interpolation along each method's front) and the speedup over DOP853 there.\n\n"
+        + table(["case", "method", "CPU s at 1e-4", "CPU s at 1e-6", "× DOP853 at 1e-4 / 1e-6"], body)
+        + f"\n\n{img}{example}\n\nSource: `{SOURCES['planetary'][2]}` ({pg.cost('planetary')}).\n")
+    pg.summary.append(_front_summary(d, "planetary dynamics (Lin & Parker model, every mesh multi-pair)",
+                                     "event-located DOP853 (scipy), same equations"))
 
 
 def sec_me(pg: Page):
@@ -1446,6 +1487,7 @@ def goal_rows(data: dict) -> list:
         ("numba native solver per step ≤ 1.3 × the C kernel", "kernels", _g_numba),
         ("rk4 integrators ≥ 300 × faster than DOP853 at 1e-6 relative DTE error", "integrators", _g_dop853),
         ("native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error", "gearbox", _g_gearbox),
+        ("native planetary solver ≥ 300 × the scipy reference at 1e-6 relative DTE error", "planetary", _g_gearbox),
         ("gearbox FMU ≤ 1.3 × its stages' pair FMUs per simulated second (C host, same accuracy)", "gearbox_fmu",
          _g_gearbox_fmu),
         ("FMU ≤ 3 × native per simulated second", "fmu_speed", _g_fmu_native),
@@ -1466,7 +1508,7 @@ def goals_table(data: dict) -> str:
 
 
 def sec_goals(pg: Page):
-    srcs = ["startup", "kernels", "integrators", "gearbox", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
+    srcs = ["startup", "kernels", "integrators", "gearbox", "planetary", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
             "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
@@ -1539,8 +1581,8 @@ def sec_costs(pg: Page):
 
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_moes", "sec_ehl_rough", "sec_load_sharing",
-            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_composition",
-            "sec_me", "sec_arms",
+            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_planetary",
+            "sec_composition", "sec_me", "sec_arms",
             "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs", "sec_goals")
 
 

@@ -345,13 +345,14 @@ def _gearbox(kind, scene, args):
         for note in scene.notes:
             print(f"gearfmu: {note}", file=sys.stderr)
         tables = pipeline.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        return pipeline.gearbox_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None))
+        return pipeline.drivetrain_model(scene, tables, damping_ratio=getattr(args, "damping_ratio", None),
+                                         progress=not args.quiet)
     tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
     return pipeline.pair_model(scene, tables)
 
 
 def _simulate_drivetrain(args, scene) -> int:
-    from .plots import plot_gearbox_simulation  # matplotlib: loaded only by the plotting commands
+    from .plots import plot_gearbox_simulation, plot_planetary_simulation  # matplotlib: the plotting commands only
 
     if args.backend != "native" or args.fmu:
         raise CliError("--backend: a drivetrain scene runs with the native gearbox solver only (--backend native)")
@@ -361,11 +362,12 @@ def _simulate_drivetrain(args, scene) -> int:
     res = pipeline.simulate_drivetrain(scene, model, stop_time_s=args.stop_time, comm_step_s=args.output_interval,
                                          progress=not args.quiet)
     res.to_csv(out)
-    png = plot_gearbox_simulation(res, model, out.with_suffix(".png"), title=f"{scene.name} (native gearbox solver)")
+    plot = plot_planetary_simulation if scene.planetaries else plot_gearbox_simulation
+    png = plot(res, model, out.with_suffix(".png"), title=f"{scene.name} (native solver)")
     if "diverged_at_step" in res.info:
         print(f"gearfmu: the state turned non-finite at step {res.info['diverged_at_step']}; the rows after it are "
               "NaN", file=sys.stderr)
-    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({len(model.meshes)} stages, {model.n_bodies} bodies, "
+    print(f"simulated {res.time_s[-1]:.6g} s of {scene.name} ({pipeline.describe_model(model)}; "
           f"{res.integrator}, step {res.step_s:.3g} s, {res.info['events']} events) in {res.wall_s:.3f} s -> "
           f"{out}, {png}")
     return 0
@@ -387,21 +389,7 @@ def cmd_modes(args) -> int:
     if args.json:
         print(json.dumps(report, indent=1))
         return 0
-    print(f"{scene.name}: {model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s); "
-          f"linearised at the mean mesh stiffness, motor torque {res.reference_torque_Nm:.6g} N*m")
-    print(f"{'mode':>4} {'f [Hz]':>10} {'f_d [Hz]':>10} {'zeta':>8}  strain energy (largest shares)")
-    for m in res.modes:
-        if m.rigid:
-            print(f"{m.index:>4} {'rigid':>10}")
-            continue
-        top = sorted(m.energy.items(), key=lambda kv: -kv[1])[:3]
-        shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in top if v >= 0.005)
-        print(f"{m.index:>4} {m.frequency_Hz:>10.5g} {m.damped_frequency_Hz:>10.5g} {m.damping_ratio:>8.4f}  {shares}")
-    pts = cb["interferences"]
-    print(f"interferences of mesh and shaft orders with the modes, motor speed 0 .. {cb['speed_axis_rpm'][1]:.5g} rpm "
-          f"(operating {cb['operating_speed_rpm']:.5g} rpm): {len(pts)}")
-    for p in pts:
-        print(f"  {p['speed_rpm']:>9.5g} rpm  {p['order']} on mode {p['mode']} ({p['frequency_Hz']:.5g} Hz)")
+    print("\n".join(pipeline.modes_lines(scene.name, model, res, cb)))
     print(f"wrote {out}, {png}")
     return 0
 

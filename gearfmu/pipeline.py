@@ -2,7 +2,7 @@
 run beside it, and a drivetrain scene's gearbox (its native run and its gearbox FMU).
 
 The stages themselves -- a pair scene's tables, run settings, FMU and native run, a drivetrain
-scene's stage tables, gearbox model, run, modes and gearbox FMU -- live in :mod:`gearfmu.stages` (re-exported
+scene's stage tables, gearbox or planetary model, run, modes and gearbox FMU -- live in :mod:`gearfmu.stages` (re-exported
 here) and never plan.  This module puts the planner in front: :func:`build` builds what
 :func:`gearfmu.plan.resolve` says a scene needs (its fidelity plan when it has an
 ``[accuracy]`` section, else the scene as written).
@@ -12,15 +12,17 @@ from __future__ import annotations
 from typing import Optional
 
 from .stages import (PAIR_MESH_NAME, BuildResult, DrivetrainBuild, build_drivetrain_fmu,  # noqa: F401
-                     build_fmu_from_scene, check_gearbox_fmu_runtime, compute_tables, fmu_builder, gear_torque_for,
-                     gearbox_fmu_settings, gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any,
-                     max_step_for, modes_report, pair_model, platform_kw, run_settings, simulate_drivetrain,
-                     simulate_native, stage_tables)
+                     build_fmu_from_scene, check_fmu_supported, check_gearbox_fmu_runtime, compute_tables,
+                     describe_model, drivetrain_model, fmu_builder, gear_torque_for, gearbox_fmu_settings,
+                     gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any, max_step_for,
+                     modes_lines, modes_report, pair_model, planetary_stages, platform_kw, run_settings,
+                     simulate_drivetrain, simulate_native, stage_tables)
 
 __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for", "run_settings",
            "simulate_native", "load_any", "is_drivetrain_file", "stage_tables", "gearbox_model", "pair_model",
            "gearbox_run_settings", "simulate_drivetrain", "modes_report", "PAIR_MESH_NAME", "gearbox_fmu_settings",
-           "build_drivetrain_fmu", "DrivetrainBuild", "check_gearbox_fmu_runtime"]
+           "build_drivetrain_fmu", "DrivetrainBuild", "check_gearbox_fmu_runtime", "drivetrain_model",
+           "planetary_stages", "describe_model", "modes_lines", "check_fmu_supported"]
 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,

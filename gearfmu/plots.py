@@ -181,3 +181,37 @@ def plot_gearbox_simulation(result, model, path, *, title: str = "") -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
     return path
+
+
+def plot_planetary_simulation(result, model, path, *, title: str = "") -> Path:
+    """A run of a drivetrain with planetary stages (gearfmu.planetary.native.PlanetaryResult): the motor
+    and load speeds (the load referred to the motor by the total ratio), every mesh's DTE and force,
+    every planetary stage's planet load-sharing factors, against time."""
+    path = Path(path)
+    t = np.asarray(result.time_s) * 1e3
+    fig = Figure(figsize=(9, 11))
+    axes = fig.subplots(4, 1, sharex=True)
+    axes[0].plot(t, result[f"{model.motor}_speed"], lw=1, label=f"{model.motor}")
+    axes[0].plot(t, result[f"{model.load}_speed"] / model.load_ratio, lw=1, label=f"{model.load} x total ratio")
+    axes[0].set_ylabel("speed [rad/s]")
+    for name in model.mesh_names:
+        axes[1].plot(t, result[f"{name}.dte"] * 1e6, lw=0.8, label=name)
+        axes[2].plot(t, result[f"{name}.mesh_force"] / 1e3, lw=0.8, label=name)
+    axes[1].set_ylabel("DTE [um]")
+    axes[2].set_ylabel("mesh force [kN]")
+    for st in model.stages:
+        for n in range(st["planets"]):
+            axes[3].plot(t, result[f"{st['name']}.load_sharing_factor[{n + 1}]"], lw=1,
+                         label=f"{st['name']} planet {n + 1}")
+    axes[3].set_ylabel("load-sharing factor")
+    axes[3].set_xlabel("time [ms]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize=7, ncol=4)
+    if title:
+        axes[0].set_title(title)
+    fig.subplots_adjust(left=0.1, right=0.98, bottom=0.05, top=0.96, hspace=0.12)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    return path

@@ -10,16 +10,21 @@ a pair scene, :func:`stage_tables` computes every stage's tables at its operatin
 :func:`simulate_drivetrain` run it, :func:`modes_report` gives its modes and Campbell data
 (:func:`pair_model`: a pair scene as the two-body gearbox), :func:`gearbox_fmu_settings` and
 :func:`build_drivetrain_fmu` build its gearbox FMU (:mod:`gearfmu.fmu.gearbox_build`;
-docs/gearbox.md "The gearbox FMU").
+docs/gearbox.md "The gearbox FMU").  A drivetrain with ``[[planetary]]`` stages builds every
+planetary stage's tables (:func:`planetary_stages`: gearfmu.assembly.planetary from the geometry,
+gearfmu.assembly.planetary_lumped from published lumped parameters) and runs on the planetary solver
+(:func:`drivetrain_model`, gearfmu.planetary; docs/planetary.md); it has no FMU yet
+(:func:`check_fmu_supported`).
 
 The planner (:mod:`gearfmu.plan`) builds its planned scenes with these stages, so they never
 plan; :mod:`gearfmu.pipeline` puts the planner in front of them (``gearfmu build``).
 """
 from __future__ import annotations
 
+import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple, Union
 
@@ -39,6 +44,12 @@ from .fmu.envelope import fmu_envelope_record
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
 from .gearbox.native import GearboxResult, simulate as simulate_gearbox
+from .gear.phasing import parker_harmonic_excitation
+from .planetary import modes as planetary_modes
+from .planetary.model import PlanetaryModel, build_drivetrain as build_planetary_drivetrain
+from .planetary.native import simulate as simulate_planetary
+from .assembly.planetary import planetary_stage
+from .assembly.planetary_lumped import lumped_stage
 from .scene.drivetrain import DrivetrainScene, is_drivetrain_file, load_drivetrain
 from .scene.options import RPM_TO_RAD_S, Scene
 from .scene.reader import default_scene_path, load_scene
@@ -262,14 +273,64 @@ def stage_tables(scene: DrivetrainScene, *, progress: bool = False, allow_large:
     return out
 
 
+def planetary_stages(scene: DrivetrainScene, *, progress: bool = False) -> List:
+    """Every [[planetary]] stage of the scene as a gearfmu.tables.planetary.PlanetaryStage: its tables
+    at the sun torque the drivetrain's motor torque sets (geometry), or the published lumped parameters'."""
+    out = []
+    for p in scene.planetaries:
+        common = dict(mesh_damping_ratio=p.mesh_damping_ratio, damping_model=p.damping_model,
+                      bearing_damping_ratio=p.bearing_damping_ratio)
+        if p.form == "geometry":
+            if progress:
+                print(f"gearfmu: tables of planetary stage {p.name} (sun torque {p.sun_torque_Nm:.6g} N*m, "
+                      f"{p.planets} planets)", file=sys.stderr, flush=True)
+            st = planetary_stage(p.name, p.planetary_set, p.mechanics, points_per_mesh=p.points_per_mesh,
+                                 sun_torque_Nm=p.sun_torque_Nm, progress=progress)
+        else:
+            st = lumped_stage(p.name, p.lumped, held=p.held, model=p.model, **common)
+        out.append(replace(st, source=p.source))
+    return out
+
+
+def drivetrain_model(scene: DrivetrainScene, tables, *, damping_ratio: Optional[float] = None,
+                     progress: bool = False):
+    """The model of a drivetrain scene on its stages' tables: the GearboxModel (:func:`gearbox_model`)
+    or, with planetary stages, the gearfmu.planetary.model.PlanetaryModel; ``damping_ratio`` replaces
+    every mesh damping ratio."""
+    if not scene.planetaries:
+        return gearbox_model(scene, tables, damping_ratio=damping_ratio)
+    meshes = [Mesh(s.name, t, s.damping_ratio if damping_ratio is None else damping_ratio, s.damping_model)
+              for s, t in zip(scene.stages, tables)]
+    stages = planetary_stages(scene, progress=progress)
+    if damping_ratio is not None:
+        stages = [replace(st, mesh_damping_ratio=damping_ratio) for st in stages]
+    return build_planetary_drivetrain(meshes, stages, _shafts(scene),
+                                      {"motor": scene.motor.inertia_kgm2, "load": scene.load.inertia_kgm2},
+                                      motor_torque_input=scene.motor.torque_input,
+                                      load_torque_input=scene.load.torque_input)
+
+
+def _shafts(scene: DrivetrainScene) -> List[Shaft]:
+    return [Shaft(sh.name, sh.a, sh.b, sh.stiffness_Nm_per_rad, sh.damping_ratio, sh.damping_Nms_per_rad,
+                  sh.inertia_kgm2) for sh in scene.shafts]
+
+
+def check_fmu_supported(scene: DrivetrainScene) -> None:
+    """FmuBuildError for a drivetrain with planetary stages: they run on the native planetary solver
+    (``gearfmu simulate``, ``gearfmu modes``), not yet as an FMU."""
+    if scene.planetaries:
+        p = scene.planetaries[0]
+        raise FmuBuildError(f"planetary[0] ({p.name}): a drivetrain with planetary stages has no FMU yet; "
+                            "`gearfmu simulate` and `gearfmu modes` run it (docs/planetary.md)")
+
+
 def gearbox_model(scene: DrivetrainScene, tables, *, damping_ratio: Optional[float] = None) -> GearboxModel:
     """The GearboxModel of a drivetrain scene on its stages' tables (``tables`` in stage order);
     ``damping_ratio`` replaces every stage's mesh damping ratio."""
+    check_fmu_supported(scene)
     meshes = [Mesh(s.name, t, s.damping_ratio if damping_ratio is None else damping_ratio, s.damping_model)
               for s, t in zip(scene.stages, tables)]
-    shafts = [Shaft(sh.name, sh.a, sh.b, sh.stiffness_Nm_per_rad, sh.damping_ratio, sh.damping_Nms_per_rad,
-                    sh.inertia_kgm2) for sh in scene.shafts]
-    return build_gearbox(meshes, shafts, {"motor": scene.motor.inertia_kgm2, "load": scene.load.inertia_kgm2},
+    return build_gearbox(meshes, _shafts(scene), {"motor": scene.motor.inertia_kgm2, "load": scene.load.inertia_kgm2},
                          motor_torque_input=scene.motor.torque_input, load_torque_input=scene.load.torque_input)
 
 
@@ -295,11 +356,11 @@ def gearbox_run_settings(scene: DrivetrainScene) -> GearboxRunSettings:
                               load_torque_start_Nm=load if ld.torque_input else 0.0)
 
 
-def simulate_drivetrain(scene: DrivetrainScene, model: GearboxModel, *, stop_time_s: Optional[float] = None,
+def simulate_drivetrain(scene: DrivetrainScene, model, *, stop_time_s: Optional[float] = None,
                         comm_step_s: Optional[float] = None, max_step_s: Optional[float] = None,
                         motor_torque_Nm=None, load_torque_Nm=None, integrator: Optional[str] = None,
-                        progress: bool = False) -> GearboxResult:
-    """Run the native gearbox solver with the scene's settings (:func:`gearbox_run_settings`; each
+                        progress: bool = False):
+    """Run the native gearbox solver (the planetary solver for a drivetrain with planetary stages) with the scene's settings (:func:`gearbox_run_settings`; each
     overridable).  Without a load torque (argument or ``load.torque_Nm``) the load balances the
     motor torque at every step."""
     s = gearbox_run_settings(scene)
@@ -310,8 +371,9 @@ def simulate_drivetrain(scene: DrivetrainScene, model: GearboxModel, *, stop_tim
         inputs["load_torque_Nm"] = load_torque_Nm if scene.load.torque_input else 0.0
     elif motor_torque_Nm is not None:  # a motor input alone: the load as the scene says (None: its balance)
         inputs["load_torque_Nm"] = s.load_torque_start_Nm
-    return simulate_gearbox(model, s, stop_time_s=stop_time_s, comm_step_s=comm_step_s, max_step_s=max_step_s,
-                            integrator=integrator, progress=progress, **inputs)
+    run = simulate_planetary if isinstance(model, PlanetaryModel) else simulate_gearbox
+    return run(model, s, stop_time_s=stop_time_s, comm_step_s=comm_step_s, max_step_s=max_step_s,
+               integrator=integrator, progress=progress, **inputs)
 
 
 def modes_report(kind: str, scene, model: GearboxModel, *,
@@ -328,10 +390,74 @@ def modes_report(kind: str, scene, model: GearboxModel, *,
         w = scene.operating.speed_rad_s
         rng = scene.operating.speed_range_rad_s
         w_max = max([w] + (list(rng) if rng else []))
-    res = modes(model, t_ref)
     top = 1.25 * w_max / RPM_TO_RAD_S if max_speed_rpm is None else float(max_speed_rpm)
+    if isinstance(model, PlanetaryModel):
+        res = planetary_modes.modes(model, t_ref)
+        cb = planetary_modes.campbell(model, res, top, operating_speed_rpm=w / RPM_TO_RAD_S)
+        _phasing_rule(model, res, cb)
+        return res, cb
+    res = modes(model, t_ref)
     cb = campbell(model, res, top, operating_speed_rpm=w / RPM_TO_RAD_S)
     return res, cb
+
+
+def _phasing_rule(model: PlanetaryModel, res, cb: dict) -> None:
+    """Mark every interference of a planetary stage's mesh order with one of its modes by Parker's (2000)
+    rule for equally spaced planets (gearfmu.gear.phasing.parker_harmonic_excitation): ``"excited"``
+    true when the harmonic reaches the mode's type, false when the mesh phasing cancels it, None for
+    mixed modes or unequally spaced planets."""
+    for st in model.stages:
+        N = st["planets"]
+        equal = all(abs(a - 2.0 * math.pi * k / N) < 1e-9 for k, a in enumerate(st["planet_angles_rad"]))
+        for o in cb["orders"]:
+            if o["kind"] == "mesh" and o["name"].startswith(f"{st['name']} mesh ") and equal:
+                o["phasing"] = parker_harmonic_excitation(o["harmonic"], st["teeth"][0], N)
+        for p in cb["interferences"]:
+            if not p["order"].startswith(f"{st['name']} mesh "):
+                continue
+            h = int(p["order"].rsplit(" ", 1)[1].rstrip("x"))
+            kind = res.modes[p["mode"]].types.get(st["name"])
+            p["excited"] = (parker_harmonic_excitation(h, st["teeth"][0], N) == kind
+                            if equal and kind in ("rotational", "translational", "planet") else None)
+
+
+def describe_model(model) -> str:
+    """One line: what a gearbox or planetary drivetrain model holds."""
+    if isinstance(model, PlanetaryModel):
+        st = ", ".join(f"{s['name']} ({s['model']}, {s['planets']} planets, {s['held']} held)" for s in model.stages)
+        return (f"{model.n_dof} DOFs, {len(model.mesh_names)} meshes, {len(model.spring_names)} springs; planetary "
+                f"stage(s) {st}")
+    return f"{model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s)"
+
+
+def modes_lines(name: str, model, res, cb) -> List[str]:
+    """The text report of ``gearfmu modes``: the model, every mode (frequency, damped frequency, damping
+    ratio, the largest strain-energy shares; for planetary stages the mode type of each stage), the
+    mode structure of every planetary stage and the Campbell interferences."""
+    planetary = isinstance(model, PlanetaryModel)
+    out = [f"{name}: {describe_model(model)}; linearised at the mean mesh stiffness, motor torque "
+           f"{res.reference_torque_Nm:.6g} N*m", f"{'mode':>4} {'f [Hz]':>10} {'f_d [Hz]':>10} {'zeta':>8}  "
+           + ("type  " if planetary else "") + "strain energy (largest shares)"]
+    for m in res.modes:
+        if m.rigid:
+            out.append(f"{m.index:>4} {'rigid':>10}")
+            continue
+        top = sorted(m.energy.items(), key=lambda kv: -kv[1])[:3]
+        shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in top if v >= 0.005)
+        kind = (" ".join(f"{t}" if len(m.types) == 1 else f"{s}:{t}" for s, t in m.types.items()) + "  "
+                if planetary else "")
+        out.append(f"{m.index:>4} {m.frequency_Hz:>10.5g} {m.damped_frequency_Hz:>10.5g} {m.damping_ratio:>8.4f}  "
+                   f"{kind}{shares}")
+    for st in (model.stages if planetary else ()):
+        groups = planetary_modes.multiplicities(res, st["name"])
+        out.append(f"{st['name']}: " + ", ".join(f"{t} {f:.5g} Hz" + (f" x{k}" if k > 1 else "")
+                                                  for t, f, k in groups))
+    pts = cb["interferences"]
+    out.append(f"interferences of mesh and shaft orders with the modes, motor speed 0 .. {cb['speed_axis_rpm'][1]:.5g} "
+               f"rpm (operating {cb['operating_speed_rpm']:.5g} rpm): {len(pts)}")
+    out += [f"  {p['speed_rpm']:>9.5g} rpm  {p['order']} on mode {p['mode']} ({p['frequency_Hz']:.5g} Hz)"
+            + ("  (cancelled by the planets' mesh phasing)" if p.get("excited") is False else "") for p in pts]
+    return out
 
 
 def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> GearboxRunSettings:
@@ -340,6 +466,7 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
     balancing torque; 0 for an end that is no torque input) and the automatic values resolved by
     :func:`gearfmu.fmu.gearbox_build.gearbox_settings` (``"auto"`` step: the native solver's choice
     at 1.5 x the motor speed, linearised at the start torques)."""
+    check_fmu_supported(scene)
     return gearbox_settings(model, gearbox_run_settings(scene),
                             load_torque_start_Nm=scene.load_torque_Nm if scene.load.torque_input else 0.0)
 
@@ -381,6 +508,7 @@ def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = F
     gearbox FMU is C only.  The stages' notes go to stderr with ``progress``.  ``model_exchange``: the
     interfaces and node events (:func:`gearfmu.fmu.gearbox_build.build_gearbox_fmu`)."""
     check_gearbox_fmu_runtime(runtime, *((model_exchange or {}).get(k) for k in ("interface", "me_node_events")))
+    check_fmu_supported(scene)
     t0 = time.perf_counter()
     tables = stage_tables(scene, progress=progress, allow_large=allow_large)
     model = gearbox_model(scene, tables)

@@ -4,8 +4,9 @@ The contracts live in pyproject.toml ``[tool.importlinter]``: the layers (each s
 only the stages below it, every top-level module or package placed), no import cycles
 between sibling modules or packages, the table format, the assembly and the physics never
 importing the scene, the table format never importing the physics, the FMU runtime template
-importing nothing from gearfmu, and the FMU, the dynamics and the gearbox importing neither
-the scene nor the physics packages (forbidden contracts: direct and indirect imports).
+importing nothing from gearfmu, and the FMU and the solvers (dynamics, gearbox, planetary)
+importing neither the scene nor the physics packages (forbidden contracts: direct and indirect
+imports).
 import-linter builds the import graph with grimp, which also sees imports inside functions.
 Each check is shown to fail on a copy of the package with a violation (an upward import, a
 cycle or a forbidden import) written into it.
@@ -140,37 +141,37 @@ def test_contracts_fail_when_the_fmu_runtime_imports_the_package(tmp_path):
     assert "The FMU runtime imports nothing from gearfmu BROKEN" in report, report
 
 
-SOLVERS = ("fmu", "dynamics", "gearbox")
+SOLVERS = ("fmu", "dynamics", "gearbox", "planetary")
 
 
 def test_the_solvers_and_the_fmu_never_import_the_scene(tmp_path):
-    """Each of fmu, dynamics and gearbox made to read the scene: only the forbidden contract breaks
+    """Each of fmu, dynamics, gearbox and planetary made to read the scene: only the forbidden contract breaks
     (the layers allow it: the scene is below them), naming each offending import."""
     root = _copy(tmp_path)
     for pkg in SOLVERS:
         (root / "gearfmu" / pkg / "_offender.py").write_text("from gearfmu.scene import reader\n")
     code, report = _lint(root)
     assert code == 1, report
-    assert "The FMU, the dynamics and the gearbox never import the scene BROKEN" in report, report
+    assert "The FMU and the solvers never import the scene BROKEN" in report, report
     assert "Layers: every stage imports only the stages below it KEPT" in report, report
     for pkg in SOLVERS:
         assert f"gearfmu.{pkg}._offender -> gearfmu.scene.reader" in report, report
 
 
 def test_the_solvers_and_the_fmu_never_import_the_physics(tmp_path):
-    """fmu, dynamics and gearbox made to import gear, contact and ehl, one each, and the
+    """fmu, dynamics, gearbox and planetary made to import gear, contact, ehl and gear, one each, and the
     dynamics the table assembly; and once indirectly (through a module of the tables that
     imports the gear pair): the forbidden contract breaks, naming the imports, the layers hold."""
     root = _copy(tmp_path)
-    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant")):
+    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant", "gear.planetary_set")):
         package, module = physics.split(".")
         (root / "gearfmu" / pkg / "_offender.py").write_text(f"from gearfmu.{package} import {module}\n")
     (root / "gearfmu" / "dynamics" / "_offender_assembly.py").write_text("from gearfmu.assembly import estimate\n")
     code, report = _lint(root)
     assert code == 1, report
-    assert "The FMU, the dynamics and the gearbox never import the physics packages BROKEN" in report, report
+    assert "The FMU and the solvers never import the physics packages BROKEN" in report, report
     assert "Layers: every stage imports only the stages below it KEPT" in report, report
-    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant")):
+    for pkg, physics in zip(SOLVERS, ("gear.geometry", "contact.models", "ehl.lubricant", "gear.planetary_set")):
         assert f"gearfmu.{pkg}._offender -> gearfmu.{physics}" in report, report
     assert "gearfmu.dynamics._offender_assembly -> gearfmu.assembly.estimate" in report, report
     for pkg in SOLVERS:
@@ -180,7 +181,7 @@ def test_the_solvers_and_the_fmu_never_import_the_physics(tmp_path):
     (root / "gearfmu" / "dynamics" / "_offender.py").write_text("from gearfmu.tables import _bridge\n")
     code, report = _lint(root)
     assert code == 1, report
-    assert "The FMU, the dynamics and the gearbox never import the physics packages BROKEN" in report, report
+    assert "The FMU and the solvers never import the physics packages BROKEN" in report, report
     assert "gearfmu.dynamics._offender -> gearfmu.tables._bridge" in report, report
 
 

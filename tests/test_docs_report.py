@@ -111,6 +111,15 @@ def _fixture(d: pathlib.Path):
                "example": {"scene": "gearbox_two_stage", "stages": 2, "bodies": 6, "integrator": "rk4_node",
                            "step_s": 2e-6, "stop_time_s": 0.1, "wall_per_simulated_s": 0.4,
                            "ns_per_internal_step": 600.0, "events": 4500}}
+    pl_rows = [dict(r, cpu_s=r["wall_s"]) for r in gb_rows]
+    planetary = {"fronts": [{"case": "position_error", "rows": pl_rows,
+                             "cpu_at": {"rk4_node": {"1e-04": 0.02, "1e-06": 0.04},
+                                        "solve_ivp-DOP853": {"1e-04": 16.0, "1e-06": 18.0}},
+                             "speedup_vs_DOP853": {"rk4_node": {"1e-04": 800.0, "1e-06": 450.0}}}],
+                 "summary_min_speedup_vs_DOP853": {"rk4_node": {"1e-04": 800.0, "1e-06": 450.0}},
+                 "example": {"scene": "planetary_reducer", "meshes": 7, "dofs": 22, "integrator": "rk4_node",
+                             "step_s": 1.35e-6, "stop_time_s": 0.05, "cpu_per_simulated_s": 3.4,
+                             "ns_per_internal_step": 4300.0, "events": 11826}}
     pt = lambda h, c, e: {"factor": 1.0, "max_step_s": h, "cpu_s": c, "wall_s": c, "dte_rel_rms_err": e}
     gearbox_fmu = {"scene": "gearbox_two_stage", "sim_s": 0.5, "comm_step_s": 1e-4, "repeat": 5, "goal": 1.3,
                    "gearbox": {"max_step_s": 2e-6, "equals_native_solver": True,
@@ -122,7 +131,7 @@ def _fixture(d: pathlib.Path):
                    "gearbox_matching_pairs": {"max_step_s": 2.5e-6, "cpu_s": 0.065},
                    "ratio_same_accuracy": 8 / 7, "ratio_matching_pairs": 1.3, "ratio_step_rule": 1.6,
                    "ratio_same_step": 4 / 3}
-    for name, data in (("gearbox_fmu", gearbox_fmu), ("gearbox", gearbox), ("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
+    for name, data in (("gearbox_fmu", gearbox_fmu), ("gearbox", gearbox), ("planetary", planetary), ("helical_contact", helical_contact), ("seed003_statements", seed003), ("helical_sawtooth", sawtooth), ("seed004", seed004), ("accuracy", accuracy), ("fmu_speed", fmu_speed), ("ehl", ehl),
                        ("trends", trends), ("stiffness_iso", stiffness_iso), ("thermal", thermal),
                        ("load_sharing", load_sharing), ("fractal", fractal), ("kernels", kernels),
                        ("integrators", integrators), ("startup", startup), ("ehl_corners", ehl_corners),
@@ -201,6 +210,12 @@ def test_report_from_saved_json(tmp_path):
     for where in (page, readme.read_text()):
         assert ("| native gearbox solver ≥ 300 × the scipy reference at 1e-6 relative DTE error | rk4_node ≥ 500 × "
                 "(smallest over the cases torque_step; met judged on the default integrator rk4_node) | yes |") in where
+    # planetary stages: the fixture's wall times and speedups, the example's cost, the goal row
+    assert "| position_error | rk4_node | 2.00e-02 | 4.00e-02 | 800 × / 450 × |" in page
+    assert "3.4 s of CPU time per simulated second, 4300 ns per internal step (11826 events in 0.05 s)" in page
+    for where in (page, readme.read_text()):
+        assert ("| native planetary solver ≥ 300 × the scipy reference at 1e-6 relative DTE error | rk4_node ≥ 450 × "
+                "(smallest over the cases position_error; met judged on the default integrator rk4_node) | yes |") in where
     # the gearbox FMU against its stages' pair FMUs: the fixture's costs per simulated second and ratios
     assert "| gearbox FMU | 2.00e-06 | 0.16 | s1 4.00e-08, s2 1.00e-09 |" in page
     assert "| pair FMU s2, the gearbox's accuracy | 2.00e-06 | 0.06 | 1.00e-09 (interpolated) |" in page

@@ -130,7 +130,9 @@ def test_torque_outside_the_stage_torque_axis_is_a_warning():
     (lambda t: t.replace("rigid = true", "rigid = true\ndamping_ratio = 0.1"),
      [("shaft[2].damping_ratio", "a rigid shaft has no stiffness or damping (remove the key or rigid = true)")]),
     (lambda t: t + "[[planetary]]\nname = 'p'\n",
-     [("planetary", "planetary stages are not supported yet (parallel-axis [[stage]] only)")]),
+     [("planetary[0].planets", "missing (required)"), ("planetary[0].bearings", "missing table (required)"),
+      ("planetary[0]", "give either [planetary.gears] (the geometry) or [planetary.lumped] (published lumped "
+                       "parameters)")]),
 ])
 def test_every_problem_is_named_with_its_key_path(edit, problems):
     with pytest.raises(SceneError) as exc:

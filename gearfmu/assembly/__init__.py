@@ -16,5 +16,8 @@ load_iteration  the load-sharing iteration with a load-dependent contact stiffne
 direct_tvms     mesh stiffness evaluated directly at given positions (films)
 estimate        cost model of a table build and its FMU; the size limits
 table_cache     the table cache, keyed on precompute_tables' arguments
+planetary       a geometric planetary set -> its stage: every planet's sun-planet and
+                planet-ring tables, masses, inertias, phases, pin position errors
+planetary_lumped  a planetary stage from published lumped parameters (Lin & Parker style)
 ==============  ============================================================
 """

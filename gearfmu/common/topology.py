@@ -6,8 +6,9 @@ import each other.
 
 A drivetrain is a set of named *parts* (``motor``, ``load``, ``<stage>.pinion``,
 ``<stage>.gear``) and *links* between two parts: ``rigid`` (the two parts become one body),
-``shaft`` (an elastic shaft) and ``mesh`` (a gear mesh, first part the pinion, the driving
-member).  The rules (docs/gearbox.md "Topology"):
+``shaft`` (an elastic shaft), ``mesh`` (a gear mesh, first part the pinion, the driving
+member) and ``planetary`` (a planetary stage between its two free ports, either of them
+upstream; docs/planetary.md).  The rules (docs/gearbox.md "Topology"):
 
 * the parts joined by rigid links form the *bodies*;
 * the bodies and the elastic links (shafts and meshes) form a tree: every body is reached from
@@ -25,10 +26,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
-__all__ = ["LINK_KINDS", "Tree", "drivetrain_tree"]
+__all__ = ["LINK_KINDS", "Tree", "drivetrain_tree", "willis_ratio", "planetary_sun_torque"]
 
 #: the kinds of link between two parts
-LINK_KINDS = ("rigid", "shaft", "mesh")
+LINK_KINDS = ("rigid", "shaft", "mesh", "planetary")
 
 
 @dataclass(frozen=True)
@@ -152,3 +153,27 @@ def _find_d(parent: Dict[int, int], i: int) -> int:
         parent[i] = parent[parent[i]]
         i = parent[i]
     return i
+
+
+def willis_ratio(held: str, up: str, down: str, sun: float, ring: float) -> float:
+    """Speed of port ``down`` over speed of port ``up`` of a planetary stage whose port ``held`` stands
+    still (ports 'sun', 'carrier', 'ring'; every speed in the stage's one sense).  ``sun``, ``ring``:
+    the sun's and ring's tooth counts or base radii (one base pitch: the same ratio).  Willis' equation
+    z_s (w_s - w_c) + z_r (w_r - w_c) = 0 with the held port's w = 0."""
+    if held == "ring":
+        rel = {"sun": 1.0, "carrier": sun / (sun + ring)}
+    elif held == "sun":
+        rel = {"ring": 1.0, "carrier": ring / (sun + ring)}
+    else:
+        rel = {"sun": 1.0, "ring": -sun / ring}
+    return rel[down] / rel[up]
+
+
+def planetary_sun_torque(port: str, torque: float, sun: float, ring: float) -> float:
+    """The sun's external torque in steady state when port ``port`` takes the external torque
+    ``torque`` (N*m): the external torques on sun, ring and carrier stand in the ratio
+    z_s : z_r : -(z_s + z_r) (their sum and the planets' balance vanish).  ``sun``, ``ring`` as for
+    :func:`willis_ratio`."""
+    share = {"sun": sun, "ring": ring, "carrier": -(sun + ring)}
+    return torque * sun / share[port]
+

@@ -25,7 +25,8 @@ __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES
            "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
            "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS", "FMI3_OUTPUTS",
            "DEFAULT_FMI3_OUTPUTS", "FMU_INTERFACES", "DEFAULT_FMU_INTERFACE", "ME_NODE_EVENTS",
-           "DEFAULT_ME_NODE_EVENTS", "SSP_COUPLINGS", "DEFAULT_SSP_COUPLING"]
+           "DEFAULT_ME_NODE_EVENTS", "SSP_COUPLINGS", "DEFAULT_SSP_COUPLING", "PLANETARY_PORTS", "PLANETARY_MODELS",
+           "DEFAULT_PLANETARY_MODEL"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -74,6 +75,14 @@ DEFAULT_INTEGRATOR = "rk4_node"
 #: the integrators of the gearbox solver (gearfmu.gearbox.native, docs/gearbox.md "Integrators"), a
 #: subset of INTEGRATORS with the same codes; the default is DEFAULT_INTEGRATOR
 GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
+#: the ports of a planetary stage (parts ``<stage>.sun``, ``<stage>.carrier``, ``<stage>.ring``;
+#: docs/planetary.md): one of them is held, the other two join the drivetrain
+PLANETARY_PORTS = ("sun", "carrier", "ring")
+#: dynamic models of a planetary stage (docs/planetary.md "Model"): Lin & Parker's
+#: translational-rotational model or the purely torsional one
+PLANETARY_MODELS = ("translational", "torsional")
+#: the planetary model of a scene or stage that names none
+DEFAULT_PLANETARY_MODEL = "translational"
 #: how the stage FMUs of a gearbox SSP are coupled (docs/gearbox.md "The SSP of stage FMUs"):
 #: "flange" every elastic shaft inside the stage FMU of the light body it drives, the stage taking
 #: the speed of the body at the shaft's far end and returning the shaft's torque (the default);

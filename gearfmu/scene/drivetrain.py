@@ -40,10 +40,11 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as _toml  # type: ignore[no-redef]
 
-from ..common.topology import drivetrain_tree
+from ..common.topology import drivetrain_tree, planetary_sun_torque, willis_ratio
 from ..common.vocabulary import DEFAULT_INTEGRATOR, GEARBOX_INTEGRATORS
 from ..gear.geometry import pair_geometry
 from .options import RPM_TO_RAD_S, Scene, SceneError, default_output_interval_s
+from .planetary import PLANETARY_SCHEMA, PLANETARY_SUBTABLES, PlanetarySpec, read_planetary
 from .reader import load_scene
 from .schema import AUTO, REQUIRED, Key
 from .toml_writer import dumps_toml
@@ -136,12 +137,14 @@ DRIVETRAIN_SCHEMA: Dict[str, Tuple[Key, ...]] = {
         _f("output_interval_s", "s", AUTO, "output (communication) interval, or \"auto\" (at least 20 samples "
            "per mesh period of the fastest stage)", 0.0, 1e3, lo_open=True, kind="float_or_auto"),
     ),
+    **PLANETARY_SCHEMA,
 }
 
 #: sub-tables that may appear inside a drivetrain table (besides its keys)
 DRIVETRAIN_SUBTABLES = {
     "": ("drivetrain", "motor", "load", "stage", "shaft", "solver", "run", "planetary"),
     "stage": ("pair",),
+    **PLANETARY_SUBTABLES,
 }
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -238,15 +241,19 @@ class DrivetrainScene:
     output_interval_auto: bool
     ratio: Dict[str, float]
     notes: Tuple[str, ...] = ()
+    planetaries: Tuple[PlanetarySpec, ...] = ()
 
     @property
     def parts(self) -> Tuple[str, ...]:
-        return ("motor", "load") + tuple(p for s in self.stages for p in (s.pinion, s.gear))
+        return ("motor", "load") + tuple(p for s in self.stages for p in (s.pinion, s.gear)) + tuple(
+            s.port(p) for s in self.planetaries for p in s.free_ports)
 
     @property
     def links(self) -> Tuple[Tuple[str, str, str], ...]:
-        """``(kind, a, b)`` of every stage's mesh, then every shaft (in file order)."""
+        """``(kind, a, b)`` of every stage's mesh, every planetary stage's two free ports, then every
+        shaft (in file order)."""
         return tuple(("mesh", s.pinion, s.gear) for s in self.stages) + tuple(
+            ("planetary",) + tuple(s.port(p) for p in s.free_ports) for s in self.planetaries) + tuple(
             ("rigid" if s.rigid else "shaft", s.a, s.b) for s in self.shafts)
 
     @property
@@ -402,14 +409,22 @@ def _shaft(r: Reader, path: str, raw: Dict[str, Any], v: Dict[str, Any]) -> Opti
                      stiffness_from="rigid" if v["rigid"] else src)
 
 
-def _ratios(tree, links, radii) -> Dict[str, float]:
+def _ratios(tree, links, radii, planetaries=None) -> Dict[str, float]:
     """Speed / motor speed of every part from the tree's breadth-first edges: 1 for the motor's
     body, a shaft keeps it, a mesh multiplies it by Rb_pinion/Rb_gear (``radii``: stage pinion
-    name -> (Rb_p, Rb_g))."""
+    name -> (Rb_p, Rb_g)), a planetary stage by Willis' ratio of its two free ports
+    (``planetaries``: stage name -> PlanetarySpec)."""
     g = [1.0] * len(tree.bodies)
     for li, up, down in tree.edges:
         kind, a, b = links[li]
-        g[down] = g[up] * (radii[a][0] / radii[a][1]) if kind == "mesh" else g[up]
+        if kind == "mesh":
+            g[down] = g[up] * (radii[a][0] / radii[a][1])
+        elif kind == "planetary":
+            st = planetaries[a.split(".")[0]]
+            pu, pd = (a, b) if tree.body_of[a] == up else (b, a)
+            g[down] = g[up] * willis_ratio(st.held, pu.split(".")[1], pd.split(".")[1], *st.sun_ring)
+        else:
+            g[down] = g[up]
     return {p: g[i] for p, i in tree.body_of.items()}
 
 
@@ -421,13 +436,12 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     load = r.table(sub(data, "load"), "load", required=True)
     sol = r.table(sub(data, "solver"), "solver")
     run = r.table(sub(data, "run"), "run")
-    if sub(data, "planetary") is not None:
-        r.add("planetary", "planetary stages are not supported yet (parallel-axis [[stage]] only)")
     base = Path(source_path).parent if source_path else Path(".")
     stages_raw = _rows(r, data, "stage")
     shafts_raw = _rows(r, data, "shaft")
-    if not stages_raw and sub(data, "stage") is None:
-        r.add("stage", "missing: a drivetrain needs at least one [[stage]]")
+    plan_raw = _rows(r, data, "planetary")
+    if not stages_raw and sub(data, "stage") is None and not plan_raw and sub(data, "planetary") is None:
+        r.add("stage", "missing: a drivetrain needs at least one [[stage]] or [[planetary]]")
     if not load["torque_input"] and load["torque_Nm"] is not None and "torque_Nm" in (sub(data, "load") or {}):
         r.add("load.torque_Nm", "the load has no torque input (torque_input = false); remove torque_Nm")
     if motor["torque_input"] is False and not load["torque_input"]:
@@ -448,9 +462,25 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
             names[nm] = path
         got = _stage_scene(r, path, raw, v, base)
         stage_scenes.append((path, nm, v, got))
+    plans: List[Tuple[str, PlanetarySpec]] = []
+    plan_problem = False
+    for path, raw, v in plan_raw:
+        nm = _identifier(r, f"{path}.name", v["name"])
+        if nm is not None and (nm in ("motor", "load") or nm in names):
+            r.add(f"{path}.name", f"{nm!r} is already a name in this drivetrain")
+            nm = None
+        if nm is not None:
+            names[nm] = path
+        spec = read_planetary(r, path, raw, v) if nm is not None else None
+        if spec is None:
+            plan_problem = True     # its ports are unknown: the shafts' ends are not reported again
+        else:
+            plans.append((path, spec))
     parts = ["motor", "load"] + [f"{nm}.{role}" for _, nm, _, _ in stage_scenes if nm for role in ("pinion", "gear")]
+    parts += [s.port(p) for _, s in plans for p in s.free_ports]
+    held = {s.port(s.held): s.name for _, s in plans}
     # a stage without a valid name has no parts: its shafts' ends are not reported again
-    stage_name_problem = any(nm is None for _, nm, _, _ in stage_scenes)
+    stage_name_problem = any(nm is None for _, nm, _, _ in stage_scenes) or plan_problem
 
     # ---------------- shafts: names, ends, stiffness
     shaft_names: Dict[str, str] = {}
@@ -462,7 +492,10 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
         elif nm is not None:
             shaft_names[nm] = path
         for end in ("from", "to"):
-            if v[end] is not None and v[end] not in parts and not stage_name_problem:
+            if v[end] in held:
+                r.add(f"{path}.{end}", f"{v[end]!r} is the held port of planetary stage {held[v[end]]!r} (grounded "
+                                       "through its torsional support): no shaft may join it")
+            elif v[end] is not None and v[end] not in parts and not stage_name_problem:
                 r.add(f"{path}.{end}", f"{v[end]!r} is not a part; parts are {', '.join(parts)}")
         shafts.append((path, _shaft(r, path, raw, v)))
     if r.problems:
@@ -472,15 +505,16 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     specs = [s for _, s in shafts]
     # meshes first: a loop is then reported at the shaft that closes it
     links = [("mesh", f"{nm}.pinion", f"{nm}.gear") for _, nm, _, _ in stage_scenes]
+    links += [("planetary",) + tuple(s.port(p) for p in s.free_ports) for _, s in plans]
     links += [("rigid" if s.rigid else "shaft", s.a, s.b) for s in specs]
-    link_path = [p for p, _, _, _ in stage_scenes] + [p for p, _ in shafts]
+    link_path = [p for p, _, _, _ in stage_scenes] + [p for p, _ in plans] + [p for p, _ in shafts]
     tree = drivetrain_tree(parts, links, "motor")
     for li, part, reason in tree.problems:
         r.add(link_path[li] if li is not None else _part_key(part, names), reason)
     if not r.problems:
         path_edges = {tree.edges[e][0] for e in tree.path(tree.body_of["motor"], tree.body_of["load"])}
         for li, (kind, a, _) in enumerate(links):
-            if kind == "mesh" and li not in path_edges:
+            if kind in ("mesh", "planetary") and li not in path_edges:
                 r.add(link_path[li], f"stage {a.split('.')[0]!r} is not on the power path from the motor to the "
                                      "load (a stage that transmits no torque is not supported)")
     if r.problems:
@@ -491,9 +525,11 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     for path, nm, v, (sc, src, own) in stage_scenes:
         geo = pair_geometry(sc.pair)
         radii[f"{nm}.pinion"] = (float(geo.rb1_m), float(geo.rb2_m))
-    ratio = _ratios(tree, links, radii)
+    ratio = _ratios(tree, links, radii, {s.name: s for _, s in plans})
     t_motor, w_motor = motor["torque_Nm"], motor["speed_rpm"]
     notes = []
+    planetaries, mesh_speeds = _planetary_operating_points(plans, len(stage_scenes), links, tree, ratio, t_motor,
+                                                          w_motor, notes)
     stages = []
     for path, nm, v, (sc, src, own) in stage_scenes:
         g = ratio[f"{nm}.pinion"]
@@ -513,9 +549,9 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
                                damping_model=sc.solver.damping_model, base_radius_pinion_m=radii[f"{nm}.pinion"][0],
                                base_radius_gear_m=radii[f"{nm}.pinion"][1], ratio_pinion=g))
     dt_auto = run["output_interval_s"] is None
+    mesh_speeds += [(s.scene.operating.speed_rad_s, s.scene.pair.pinion.teeth) for s in stages]
     if dt_auto:
-        dt_out = min(default_output_interval_s(s.scene.operating.speed_rad_s, s.scene.pair.pinion.teeth)
-                     for s in stages)
+        dt_out = min(default_output_interval_s(w, z) for w, z in mesh_speeds)
         dt_out = min(dt_out, run["stop_time_s"])
     else:
         dt_out = run["output_interval_s"]
@@ -531,7 +567,27 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
         load=EndSpec("load", load["inertia_kgm2"], load["torque_Nm"], None, bool(load["torque_input"])),
         stages=tuple(stages), shafts=tuple(specs), integrator=sol["integrator"], max_step_s=sol["max_step_s"],
         stop_time_s=run["stop_time_s"], output_interval_s=dt_out, output_interval_auto=dt_auto, ratio=ratio,
-        notes=tuple(notes))
+        notes=tuple(notes), planetaries=tuple(planetaries))
+
+
+def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_motor: float, w_motor: float,
+                                notes: list):
+    """(the planetary stages with their ports' kinematic ratios and the sun's static torque, the (sun
+    mesh speed rad/s, sun teeth) of each): the port nearer the motor takes T_motor/g of it; a note
+    per stage (its form, model, planets, held port, sun torque and mesh frequency)."""
+    planetaries, mesh_speeds = [], []
+    for li, (path, st) in enumerate(plans, start=first_link):
+        edge = next(e for e in tree.edges if e[0] == li)
+        a, b = links[li][1], links[li][2]
+        up = (a if tree.body_of[a] == edge[1] else b).split(".")[1]
+        g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
+        t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
+        planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))
+        mesh_speeds.append((abs(g["sun"] - g["carrier"]) * w_motor, st.teeth[0]))
+        notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} held), sun "
+                     f"torque {abs(t_sun):.6g} N*m, sun mesh frequency "
+                     f"{st.teeth[0] * abs(g['sun'] - g['carrier']) * w_motor / (2 * math.pi):.6g} Hz")
+    return planetaries, mesh_speeds
 
 
 def _part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:

@@ -10,5 +10,6 @@ mesh_tables     MeshTables: the format (JSON + binary, .gtab), temperature axis
 zones           contact-zone edges, mean total stiffness
 table_import    tables from CSV files, and back
 synthetic       tables from textbook shapes (rectangular wave, ...)
+planetary       PlanetaryStage: a planetary stage's mesh tables and lumped parameters
 ==============  ============================================================
 """

@@ -1,0 +1,170 @@
+"""Speed against error of the native planetary solver against the scipy reference (docs/planetary.md).
+
+Prints JSON (stdout); progress on stderr.  Per planetary hard case of gearfmu.bench (contact loss
+in every mesh of a three-planet stage with backlash after a sudden unloading, four planets on a
+floating sun with a pin position error, a carrier-driven planetary stage followed by a parallel
+stage):
+
+* the reference: gearfmu.planetary.reference (event-located solve_ivp DOP853) at rtol 1e-12 and
+  128 steps per shortest natural period;
+* the native solver with 'rk4', 'rk4_kink' and 'rk4_node' at 2 .. 256 substeps per
+  communication step (the whole ``simulate`` call timed, best of ``--repeat``; ``loop_wall_s``
+  its compiled loop alone);
+* the same scipy reference with DOP853 at rtol 1e-4 .. 1e-10 and 16 .. 64 steps per shortest
+  natural period (its largest step), one run each (its time is long and steady);
+
+each row's error against the tight reference: the RMS over the communication instants of the
+difference of each mesh's DTE (and mesh force), relative to the reference's range, the worst
+mesh.  Every row has the call's wall time and its CPU time (``time.process_time``: the machine is
+shared, and the CPU time of these single-threaded solvers depends less on the other load); ``cpu_at``
+(and ``wall_at``) gives each method's CPU (wall) time at relative DTE errors 1e-4 and 1e-6 (log-log
+interpolation along its own front) and ``speedup_vs_DOP853`` DOP853's time over each native
+integrator's at those errors; ``summary`` the smallest speedup over the cases (the goal: the
+native planetary solver >= 300 x the scipy reference at 1e-6).  ``example``: the planetary +
+parallel reducer (examples/scenes/planetary_reducer.toml) at its default settings, wall and CPU
+time per simulated second and per internal step.
+
+Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b]
+"""
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gearfmu.common.vocabulary import GEARBOX_INTEGRATORS
+from gearfmu.pipeline import drivetrain_model, load_any, simulate_drivetrain, stage_tables
+from gearfmu.planetary.native import simulate
+from gearfmu.planetary.reference import simulate_reference
+from gearfmu.bench import PLANETARY_CASES, planetary_case
+
+ROOT = Path(__file__).resolve().parents[1]
+#: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
+TARGETS = {"1e-04": 1e-4, "1e-06": 1e-6}
+SUBSTEPS = (2, 4, 8, 16, 32, 64, 128, 256)
+#: (rtol, steps per shortest natural period) of the DOP853 rows (as benchmarks/bench_gearbox.py)
+DOP853_SETTINGS = ((1e-4, 16), (1e-6, 24), (1e-8, 32), (1e-10, 64))
+
+
+def say(msg):
+    print(f"bench_planetary: {msg}", file=sys.stderr, flush=True)
+
+
+def rel_errors(res, ref, model) -> dict:
+    """Worst mesh's RMS and max |res - ref| of the DTE and the mesh force over the communication
+    instants, relative to the reference's range (nan when res has NaN)."""
+    out = {}
+    for key, col in (("dte", "dte"), ("force", "mesh_force")):
+        rms, mx = [], []
+        for m in model.mesh_names:
+            a, b = res[f"{m}.{col}"], ref[f"{m}.{col}"]
+            d = a - b
+            rng = float(np.ptp(b)) or 1.0
+            rms.append(float(np.sqrt(np.mean(d ** 2)) / rng))
+            mx.append(float(np.max(np.abs(d)) / rng))
+        out[f"{key}_rel_rms_err"] = max(rms)
+        out[f"{key}_rel_max_err"] = max(mx)
+    return out
+
+
+def wall_at(rows, target, key="wall_s"):
+    """Wall time (s) at relative RMS DTE error ``target`` along the rows' own front (log-log
+    interpolation between the front's points around it; None when the front does not reach it)."""
+    pts = sorted((r[key], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
+    front, best = [], math.inf
+    for w, e in pts:
+        if e < best:
+            front.append((w, e))
+            best = e
+    for (w0, e0), (w1, e1) in zip(front, front[1:]):
+        if e1 <= target <= e0:
+            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
+    if front and front[0][1] <= target:
+        return front[0][0]
+    return None
+
+
+def timed(fn, repeat):
+    """(best wall time, best CPU time of ``repeat`` calls, the result of the call with the best CPU time)."""
+    best, best_cpu, res = math.inf, math.inf, None
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = fn()
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        best = min(best, wall)
+        if cpu < best_cpu:
+            best_cpu, res = cpu, r
+    return best, best_cpu, res
+
+
+def case_front(name, repeat, mesh_periods):
+    model, kw = planetary_case(name, mesh_periods=mesh_periods)
+    H = kw["comm_step_s"]
+    say(f"{name}: reference (rtol 1e-12) ...")
+    t0 = time.perf_counter()
+    ref = simulate_reference(model, rtol=1e-12, steps_per_period=128, **kw)
+    ref_wall = time.perf_counter() - t0
+    rows = []
+    simulate(model, **dict(kw, stop_time_s=H, max_step_s=H))   # compile (or load) first
+    for integ in GEARBOX_INTEGRATORS:
+        for n in SUBSTEPS:
+            wall, cpu, r = timed(lambda: simulate(model, max_step_s=H / n, integrator=integ, **kw), repeat)
+            rows.append(dict(method=integ, setting=f"h=H/{n}", step_s=H / n, wall_s=wall, cpu_s=cpu,
+                             loop_wall_s=r.wall_s,
+                             events=int(r.info["events"]), **rel_errors(r, ref, model)))
+        say(f"{name}: {integ} done")
+    for rt, spp in DOP853_SETTINGS:
+        say(f"{name}: DOP853 rtol {rt:g}, {spp} steps per period ...")
+        wall, cpu, r = timed(lambda: simulate_reference(model, rtol=rt, steps_per_period=spp, **kw), 1)
+        rows.append(dict(method="solve_ivp-DOP853", setting=f"rtol={rt:g}, {spp}/period", wall_s=wall, cpu_s=cpu,
+                         **rel_errors(r, ref, model)))
+    methods = list(GEARBOX_INTEGRATORS) + ["solve_ivp-DOP853"]
+    at = {m: {key: wall_at([r for r in rows if r["method"] == m], tg) for key, tg in TARGETS.items()} for m in methods}
+    cpu_at = {m: {key: wall_at([r for r in rows if r["method"] == m], tg, "cpu_s") for key, tg in TARGETS.items()}
+              for m in methods}
+    speedup = {m: {tg: (cpu_at["solve_ivp-DOP853"][tg] / cpu_at[m][tg]
+                        if cpu_at[m][tg] and cpu_at["solve_ivp-DOP853"][tg] else None) for tg in cpu_at[m]}
+               for m in GEARBOX_INTEGRATORS}
+    return {"case": name, "dofs": model.n_dof, "meshes": len(model.mesh_names), "comm_step_s": H,
+            "stop_time_s": kw["stop_time_s"], "reference": "event-located DOP853 rtol 1e-12, 128 steps per period "
+            "(gearfmu.planetary.reference)", "reference_wall_s": ref_wall, "reference_segments": ref.info["segments"],
+            "rows": rows, "wall_at": at, "cpu_at": cpu_at, "speedup_vs_DOP853": speedup,
+            "clock": "speedups from CPU time (time.process_time) of the whole call"}
+
+
+def example(repeat):
+    """The example reducer at its own settings: wall time per simulated second and per internal step."""
+    kind, scene = load_any(ROOT / "examples" / "scenes" / "planetary_reducer.toml")
+    model = drivetrain_model(scene, stage_tables(scene))
+    simulate_drivetrain(scene, model, stop_time_s=scene.output_interval_s)   # compile (or load)
+    wall, cpu, r = timed(lambda: simulate_drivetrain(scene, model), repeat)
+    steps = r.substeps * (len(r.time_s) - 1)
+    return {"scene": scene.name, "meshes": len(model.mesh_names), "dofs": model.n_dof, "integrator": r.integrator,
+            "step_s": r.step_s, "stop_time_s": scene.stop_time_s, "wall_s": wall, "cpu_s": cpu, "loop_wall_s": r.wall_s,
+            "wall_per_simulated_s": wall / scene.stop_time_s, "cpu_per_simulated_s": cpu / scene.stop_time_s, "ns_per_internal_step": 1e9 * r.wall_s / steps,
+            "events": int(r.info["events"])}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--mesh-periods", type=int, default=20, help="sun mesh periods of every case")
+    ap.add_argument("--cases", default=",".join(PLANETARY_CASES))
+    a = ap.parse_args(argv)
+    fronts = [case_front(c, a.repeat, a.mesh_periods) for c in a.cases.split(",")]
+    summary = {}
+    for integ in GEARBOX_INTEGRATORS:
+        for key in TARGETS:
+            vals = [f["speedup_vs_DOP853"][integ][key] for f in fronts]
+            summary.setdefault(integ, {})[key] = (None if any(v is None for v in vals) else min(vals))
+    out = {"fronts": fronts, "summary_min_speedup_vs_DOP853": summary, "example": example(a.repeat),
+           "goal": "native planetary solver >= 300 x the scipy reference (DOP853) at 1e-6 relative DTE error"}
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
