@@ -2,6 +2,11 @@
 
 Imports :mod:`gearfmu.ehl` (the Walther viscosity law) and :mod:`gearfmu.common`.
 
+Exports (loaded with their module on first use): the specs ``GearSpec``, ``GearPairSpec``,
+``GearDeviations``, ``ToothDeviation``, ``Material``, ``MeshModelOptions``; ``pair_geometry``,
+``PairGeometry``, ``GeometryError``; ``slot_stiffness``, ``mean_mesh_stiffness_N_per_m``;
+``hertz_stiffness_N_per_m``, ``reduced_modulus_Pa``; ``loaded_static_mesh``; ``ThermalOptions``.
+
 ================  =====================================================================
 Module            Contents
 ================  =====================================================================
@@ -15,3 +20,16 @@ loaded_mesh       loaded static mesh: load sharing among pairs and slices
 thermal           ThermalOptions; temperature stiffness, thermal deformation (seed 004)
 ================  =====================================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(("GearSpec", "GearPairSpec", "GearDeviations", "ToothDeviation", "Material",
+                     "MeshModelOptions"), "gearpair"),
+    "pair_geometry": "geometry", "PairGeometry": "geometry", "GeometryError": "geometry",
+    "slot_stiffness": "stiffness", "mean_mesh_stiffness_N_per_m": "stiffness",
+    "hertz_stiffness_N_per_m": "hertz", "reduced_modulus_Pa": "hertz",
+    "loaded_static_mesh": "loaded_mesh",
+    "ThermalOptions": "thermal",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
