@@ -79,7 +79,7 @@ common/              option vocabulary, run settings, input checks, executors
 ===================  ================================================================
 
 The subpackages and modules of this table are attributes of gearfmu too, loaded when first used
-(``gearfmu.plan.resolve``).
+(``gearfmu.plan.resolve``).  The terms, and which paper each seed label is: docs/glossary.md.
 """
 from .common.exports import lazy_exports
 

@@ -22,7 +22,7 @@ A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): buil
 FMU (standalone C runtime), validate compares that FMU with the native gearbox solver, simulate runs
 the native gearbox solver on it, modes gives its modes.
 
-SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
+SCENE defaults to the default scene (the Zhao et al. 2022 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
 bad input (an invalid scene, a missing, damaged or wrong kind of file, a bad
 option value, an output path that cannot be written).  GEARFMU_DEBUG=1 adds

@@ -13,9 +13,9 @@ Module        Contents
 models        the registry (hertz, smooth_ehl, rough_ehl, fractal_mixed), sliced TVMS
 base          ContactEnvironment, RoughnessSpec, ContactStiffness, film parameter
 rough_ehl     the rough-EHL model: film grid, failure policies, transient correction
-fractal       fractal mixed-lubrication stiffness (seed 001)
+fractal       fractal mixed-lubrication stiffness (Xu, Shi & Fan 2023)
 load_sharing  film-asperity load sharing in a rough EHL line contact
-roughness     Weierstrass-Mandelbrot flank roughness (seed 000 eq 1, Table 2)
+roughness     Weierstrass-Mandelbrot flank roughness (Zhao et al. 2022 eq 1, Table 2)
 ============  ===========================================================================
 """
 from ..common.exports import lazy_exports

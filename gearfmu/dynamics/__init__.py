@@ -25,7 +25,7 @@ subcell      table values and quasi-static TE with or without the
              sub-cell lookup at the contact-zone edges (measurement)
 reference    event-located reference integrator (tests and benchmarks)
 sweeps       steady-state sweeps through an executor
-harmonics    mesh-harmonic amplitudes of the DTE (seed 003 eq 10-11)
+harmonics    mesh-harmonic amplitudes of the DTE (Xu et al. 2022 eq 10-11)
 ===========  =========================================================
 """
 from ..common.exports import lazy_exports

@@ -17,7 +17,7 @@ foundation        fillet-foundation compliance (Sainsot, Velex & Duverger 2004)
 stiffness         tooth, foundation and tooth-pair mesh stiffness (TVMS)
 meshing_errors    per-tooth-pair meshing errors, lead crowning
 loaded_mesh       loaded static mesh: load sharing among pairs and slices
-thermal           ThermalOptions; temperature stiffness, thermal deformation (seed 004)
+thermal           ThermalOptions; temperature stiffness, thermal deformation (He & Yang 2023)
 ================  =====================================================================
 """
 from ..common.exports import lazy_exports
