@@ -107,10 +107,12 @@ SOURCES = {
     "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
     "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
     "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
+    "tests_quick": ([PY, "benchmarks/bench_tests.py", "-m", "not slow", "-n", "2"], None,
+                    'benchmarks/bench_tests.py -m "not slow" -n 2'),
 }
 # sources that take several minutes: run only when named (--only) or with --all
 SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup", "plan_study",
-        "plan_scan", "tests", "gearbox", "silence"}
+        "plan_scan", "tests", "tests_quick", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -1288,6 +1290,12 @@ def _g_tests(d):
     return f"{d['wall_s']:.0f} s ({d.get('summary', '')}){extra}", d["wall_s"] <= 300.0
 
 
+def _g_tests_quick(d):
+    extra = "" if d.get("exit_code") == 0 else f"; the subset did not pass: {d.get('summary', '?')}"
+    return (f"{d['wall_s']:.0f} s ({d.get('summary', '')}, {d.get('cpu_count', '?')} cores){extra}",
+            d["wall_s"] <= 60.0 and d.get("exit_code") == 0)
+
+
 def _g_gearbox(d):
     sp = d["summary_min_speedup_vs_DOP853"]
     cells = ", ".join(f"{m} " + ("n/a" if v.get("1e-06") is None else f"≥ {v['1e-06']:.0f} ×") for m, v in sp.items())
@@ -1338,6 +1346,7 @@ def goal_rows(data: dict) -> list:
         ("EHL film ≤ 5 ms per point at the default settings", "ehl_corners", _g_ehl_default),
         ("`gearfmu plan` of the default scene ≤ 60 s", "plan", _g_plan),
         ("test suite ≤ 5 min", "tests", _g_tests),
+        ("quick test subset (`pytest -m \"not slow\" -n 2`) ≤ 60 s", "tests_quick", _g_tests_quick),
         ("second command on a scene: table time < 5 % of the first (table cache)", "table_cache", _g_cache),
         ("cost estimate within 2 × of the measured table time and sizes", "estimate", _g_estimate),
         ("no command silent on stderr for more than 2 s", "silence", _g_silence),
@@ -1351,7 +1360,7 @@ def goals_table(data: dict) -> str:
 
 def sec_goals(pg: Page):
     srcs = ["startup", "kernels", "integrators", "gearbox", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
-            "table_cache", "estimate", "silence"]
+            "tests_quick", "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
         "Each goal beside the value measured by its benchmark (wall or CPU time of one run on the machine "

@@ -25,6 +25,9 @@ import pytest
 from gearfmu.common import vocabulary
 from gearfmu.contact.models import CONTACT_MODELS as REGISTRY
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = REPO / "gearfmu"
 

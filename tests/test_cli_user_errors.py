@@ -22,7 +22,10 @@ import pytest
 from gearfmu.cli import main, make_parser
 from gearfmu.fmu.compare import FmuFile, FmuMismatchError, check_fmu_matches, diff_report, open_fmu
 from gearfmu.pipeline import compute_tables, load
-from gearfmu.scene.reader import default_scene_path, load_scene
+from gearfmu.scene.reader import default_scene_path
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 REPO = Path(__file__).resolve().parents[1]
 SEED001 = REPO / "examples" / "scenes" / "seed001_table1.toml"
@@ -116,7 +119,7 @@ def test_validate_refuses_an_fmu_of_another_scene_before_running(csv_fmu, tmp_pa
     assert other != text
     (tmp_path / "other.toml").write_text(other, encoding="utf-8")
     rc, out, err = _cli("validate", tmp_path / "other.toml", "--fmu", fmu)
-    line = _one_line_error(rc, err, fmu.name, "'other_pair'", "'seed000_table1'")
+    _one_line_error(rc, err, fmu.name, "'other_pair'", "'seed000_table1'")
     assert "samples" not in out  # nothing simulated
 
 

@@ -24,6 +24,9 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu
 
 from test_fmu import make_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 H = 1e-4
 
 

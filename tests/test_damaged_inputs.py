@@ -27,6 +27,9 @@ from hypothesis import strategies as st
 
 from gearfmu.cli import main
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 TINY = """\
 [scene]
 name = "tiny"

@@ -18,6 +18,9 @@ from gearfmu.common.executors import make_executor, cluster
 from gearfmu.scene.reader import default_scene_path
 from gearfmu.tables.mesh_tables import load_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 #: a small lubricated scene: the default pair with smooth EHL, two slices, 8 points per mesh
 LUBRICATED = (default_scene_path().read_text()
               .replace('contact_model = "hertz"', 'contact_model = "smooth_ehl"')

@@ -20,6 +20,9 @@ from gearfmu.assembly.direct_tvms import (DirectTVMSError, TransientFilmSettings
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")   # 2000 N m, 2000 rpm
 GEOM = pair_geometry(SCENE.pair)

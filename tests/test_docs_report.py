@@ -9,6 +9,8 @@ import importlib.util
 import json
 import pathlib
 
+import pytest
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
@@ -131,6 +133,7 @@ def _fixture(d: pathlib.Path):
     (d / "runs.json").write_text(json.dumps({"seed004": {"ok": True, "wall_s": 4.0, "command": "x"}}))
 
 
+@pytest.mark.slow
 def test_report_from_saved_json(tmp_path):
     rep = _report()
     src = tmp_path / "json"

@@ -25,6 +25,9 @@ from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film
 from gearfmu.ehl.lubricant import (dowson_higginson_density_kg_m3, roelands_viscosity_Pas,
                                    roelands_z)
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 
 # --------------------------------------------------------------------------- kernel
 @pytest.mark.parametrize("n", [257, 1025, 4097])

@@ -21,6 +21,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 CHILD = textwrap.dedent("""
     import hashlib, sys

@@ -24,6 +24,9 @@ from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import SceneError, load_scene
 from gearfmu.gear.stiffness import slot_stiffness
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load_scene(ROOT / "examples" / "scenes" / "seed000_table1.toml")
 GEOM = pair_geometry(SCENE.pair)

@@ -34,6 +34,9 @@ import pytest
 from gearfmu.ehl import solve_line_contact
 from gearfmu.ehl.fits import martin_rigid_isoviscous, moes_central_film
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 BARUS = dict(viscosity="barus", compressible=False)
 

@@ -18,6 +18,9 @@ from gearfmu.ehl.grids import effective_alpha, refined_grid_intervals
 
 from test_ehl import _discrete_equations_check
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 
 def test_dense_solve_matches_lapack():
     # Reference: numpy.linalg.solve (LAPACK gesv) on a random nonsymmetric system

@@ -29,6 +29,9 @@ from gearfmu.ehl.mgkernels import _coef, _residual
 from gearfmu.ehl.multigrid import FlatMultigrid
 from gearfmu.ehl.solver import _flat_opts
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 
 def _flat_from_result(res, prm_from):
     """FlatMultigrid on the grid of ``res`` started from its converged pressure."""

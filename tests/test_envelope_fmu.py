@@ -25,6 +25,9 @@ from test_fmu import RB1, RB2, make_tables
 from test_standalone import _callbacks
 from test_temperature_axis import temp_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 H = 1e-4
 RPM = 30 / 3.141592653589793
 

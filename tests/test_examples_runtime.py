@@ -27,6 +27,9 @@ from gearfmu.scene.reader import default_scene_path, load_scene
 
 from test_fmu import make_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10

@@ -28,6 +28,9 @@ from gearfmu.contact.models import (ContactModelError, RoughFilmGrid, RoughnessS
 from gearfmu.scene.physics import environment_from_scene
 from gearfmu.scene.reader import SceneError, load_scene
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "examples" / "scenes" / "seed000_table1.toml"
 EHL_NODES = 129

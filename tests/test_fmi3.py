@@ -35,6 +35,9 @@ from gearfmu.ssp import build_ssp, validate_ssp_dir
 from test_platforms import AARCH64_SYSROOT, _macho_exports, need, qemu, wine, zig
 from test_standalone import _cases
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 FMI3_TUPLES = ("x86_64-linux", "aarch64-linux", "x86_64-windows", "x86_64-darwin", "aarch64-darwin")
 

@@ -22,6 +22,9 @@ from gearfmu.fmu.pythonfmu_build import FmuBuildError, build_fmu
 from gearfmu.fmu.modeldesc import SpecError, expand_variables, load_spec
 from gearfmu.tables.mesh_tables import MeshTables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 RB1, RB2 = 0.05, 0.075
 
 

@@ -24,6 +24,9 @@ from gearfmu.tables.mesh_tables import stack_temperatures
 from test_fmu import make_tables
 from test_standalone import _callbacks
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 H = 1e-4
 AXIS = (10.0, 30.0, 70.0)
 NAN, INF = float("nan"), float("inf")

@@ -22,13 +22,16 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
-from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
+from fmpy.fmi3 import FMU3Slave
 
 from gearfmu.fmu.fmudoc import build_machine_paths
 from gearfmu.fmu.standalone_build import build_standalone_fmu
 
 from test_fmu import make_tables
 from test_standalone import _callbacks
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 H = 1e-4
 SCENE = '# a scene with text to escape: <script>alert("x")</script> & "quotes"\n[fmu]\nmodel_name = "g"\n'

@@ -16,6 +16,9 @@ import pytest
 
 import fuzz_fmu
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 RUNTIMES = ("pythonfmu", "standalone")
 
 

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "gearbox_two_stage.toml"
 
 
+@pytest.mark.slow
 def test_modes_of_the_example_gearbox(tmp_path, capsys):
     out = tmp_path / "m.json"
     assert main(["modes", str(EXAMPLE), "-o", str(out), "-q"]) == 0
@@ -62,6 +63,7 @@ def test_modes_of_a_pair_scene_is_the_two_inertia_closed_form(tmp_path, capsys):
                                                             rel=1e-9)
 
 
+@pytest.mark.slow
 def test_simulate_the_example_gearbox(tmp_path, capsys):
     out = tmp_path / "run.csv"
     assert main(["simulate", str(EXAMPLE), "--stop-time", "0.01", "-o", str(out), "-q"]) == 0

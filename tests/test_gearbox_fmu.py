@@ -48,6 +48,9 @@ from test_gearbox_modes import K_IN, K_MID, K_OUT, S1, S2, hand_matrices
 from test_gearbox_native import c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
 from test_standalone import _slave, _status
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 EXAMPLE = REPO / "examples" / "scenes" / "gearbox_two_stage.toml"

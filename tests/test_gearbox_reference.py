@@ -22,6 +22,9 @@ from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.native import simulate
 from gearfmu.gearbox.reference import simulate_reference
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 SIGNALS = ("stage1.dte", "stage2.dte", "stage1.mesh_force", "stage2.mesh_force", "intermediate_shaft.torque",
            "load_speed")
 _REF = {}

@@ -20,6 +20,9 @@ from gearfmu.bench import hard_case, rel_errors, speed_for, tent_error, _kb
 from gearfmu.dynamics.native import simulate
 from gearfmu.dynamics.reference import simulate_reference
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 #: case -> (RK4 substeps per communication step, tolerance on the max relative error)
 STEPS = {
     "heavy_load": (256, 3e-5),              # measured 9.4e-6

@@ -26,10 +26,12 @@ import pytest
 from gearfmu.gear.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
 from gearfmu.gear.geometry import GeometryError, involute, pair_geometry, transverse_equivalent
 from gearfmu.gear.meshing_errors import slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m
-from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import SceneError, load_scene
 from gearfmu.gear.stiffness import (StiffnessError, helical_slot_stiffness, required_slots,
                                slice_lag_mesh_periods, slot_stiffness)
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED001 = ROOT / "examples" / "scenes" / "seed001_table1.toml"

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +29,9 @@ from gearfmu.scene.reader import load_scene
 from gearfmu.gear.stiffness import helical_slot_stiffness, slot_stiffness
 
 from test_helical import SEED001, helical, iso_c_gamma_alpha
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 
 # ------------------------------------------------------------------ load-dependent contact models per slice

@@ -23,6 +23,9 @@ import gearfmu.gear.stiffness as stf
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed001_table1.toml"
 
 

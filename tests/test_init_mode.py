@@ -38,6 +38,9 @@ from gearfmu.tables.synthetic import rectangular_wave_tables
 from test_fmu import make_tables
 from test_standalone import _callbacks  # fmpy logger proxy: formats the C layer's printf-style messages
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 RUNTIMES = ("standalone", "pythonfmu")
 H = 1e-4
 

@@ -29,6 +29,9 @@ from gearfmu.common.vocabulary import DEFAULT_INTEGRATOR, INTEGRATORS
 from gearfmu.dynamics.native import NativeInputError, choose_max_step_s, simulate, simulate_sdof
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ATOL = [1e-14, 1e-10, 1e-17, 1e-12]   # theta1 rad, omega1 rad/s, x m, v m/s
 
 

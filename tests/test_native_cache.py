@@ -18,6 +18,10 @@ import json
 import subprocess
 import sys
 import textwrap
+import pytest
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 CHILD = textwrap.dedent("""
     import json, gearfmu.dynamics.native as nat

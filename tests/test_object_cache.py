@@ -12,6 +12,9 @@ import pytest
 from gearfmu.fmu import crossbuild
 from gearfmu.fmu.standalone_build import STANDALONE_CFLAGS, binary_sources, copy_sources, fmi2_header_dir
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture
 def counted_compiles(monkeypatch, tmp_path):

@@ -19,6 +19,9 @@ import pytest
 from gearfmu.fmu.compare import output_names, run_fmu, validate_fmu_against_native
 from gearfmu.pipeline import build, gear_torque_for, load
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[1]
 
 

@@ -24,6 +24,9 @@ from gearfmu.scene.envelope import envelope_of
 from gearfmu.plan import format_report, full_scene, plan_scene, planned_scene, relative_rms
 from gearfmu.scene.reader import SceneError, load_scene
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 RPM = 2 * math.pi / 60
 
 SMALL = """

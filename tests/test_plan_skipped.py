@@ -26,6 +26,9 @@ from gearfmu.scene.reader import load_scene
 from gearfmu.scene.physics import estimate_build
 from gearfmu.assembly.precompute import precompute_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 
 HERTZ_ONE_TORQUE = """

@@ -21,8 +21,11 @@ import pytest
 from gearfmu.cli import main
 from gearfmu.dynamics.native import simulate
 from gearfmu.pipeline import compute_tables, max_step_for
-from gearfmu.plan import drive_case, format_report, full_scene, plan_scene, planned_scene
+from gearfmu.plan import drive_case, format_report, plan_scene, planned_scene
 from gearfmu.scene.reader import default_scene_path, dumps_toml, load_scene
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 SCENES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 RPM = math.pi / 30

@@ -38,6 +38,9 @@ from gearfmu.fmu.standalone_build import (STANDALONE_CFLAGS, build_standalone_fm
 
 from test_standalone import _cases, _max_rel
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 TOL = 1e-9  # of each output's range
 AARCH64_SYSROOT = Path("/usr/aarch64-linux-gnu")  # Debian libc6-arm64-cross

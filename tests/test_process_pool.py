@@ -8,7 +8,6 @@ hands back film solves), so "identical" is 1e-12 of the largest value of each ar
 """
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 
@@ -16,6 +15,10 @@ import numpy as np
 
 from gearfmu.scene.reader import default_scene_path
 from gearfmu.tables.mesh_tables import load_tables
+import pytest
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 #: the cheapest lubricated scene: the default pair with smooth EHL, one slice, 8 points per mesh
 SCENE = (default_scene_path().read_text()

@@ -21,6 +21,9 @@ from gearfmu.common import progress
 from gearfmu.common.jit import cache_is_cold
 from gearfmu.common.progress import notice, progress_bar, reporting, ticking
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 
 def _remaining_s(bar) -> float:
     d = bar.format_dict

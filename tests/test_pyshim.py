@@ -28,6 +28,9 @@ from gearfmu.fmu.pythonfmu_build import (PYSHIM_CONFIG, PYSHIM_SOURCE, PYTHON_OV
 from gearfmu.fmu.standalone_build import fmi2_header_dir
 from test_fmu import make_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 RUNS = 20
 REFUSED = "the pythonfmu runtime needs"

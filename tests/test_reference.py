@@ -43,7 +43,6 @@ def test_damped_oscillator_closed_form():
     err = np.max(np.abs(r.dte - x)) / x0
     assert err < 1e-9, err  # measured 2e-11
     # mesh force F = k x + c v with c = 2 zeta sqrt(k m_e)
-    v = np.gradient(x, ts)  # only to check the force law's sign and size, not tight
     assert np.max(np.abs(r.mesh_force - (k * r.dte + 2 * zeta * math.sqrt(k * ME) * r.dte_rate))) < 1e-6 * k * x0
 
 
@@ -91,6 +90,7 @@ def impacts():
     return tables, kw, simulate_reference(tables, **kw)
 
 
+@pytest.mark.slow
 def test_refining_the_tolerance_does_not_change_the_answer(impacts):
     """rtol 1e-10 -> 1e-12 and max step halved: the reference moves by less than 1e-8 of the
     DTE range on a case with impacts on both flanks and meshing errors (measured 4e-11)."""
@@ -102,6 +102,7 @@ def test_refining_the_tolerance_does_not_change_the_answer(impacts):
         assert np.max(np.abs(a - b)) / np.ptp(b) < 1e-8, name
 
 
+@pytest.mark.slow
 def test_radau_agrees_with_dop853(impacts):
     """A second scipy method (implicit Radau IIA) with the same event location."""
     tables, kw, r = impacts

@@ -17,6 +17,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pytest
 
 from gearfmu.dynamics.model_rhs import _seg_flags
 from gearfmu.dynamics.native import simulate
@@ -108,6 +109,7 @@ def _k_tent_case(amp):
     return case
 
 
+@pytest.mark.slow
 def test_rk4_seg_kink_threshold_flags_big_stiffness_kinks_only():
     """Stiffness tents (:func:`_k_tent_case`): amplitude 0.5 bends k at nodes 0, 8, 16 by 0.020,
     0.028, 0.020 of the sum of the three |values| (above SEG_KINK_TOL = 1e-2), amplitude 0.05 by

@@ -26,10 +26,13 @@ from hypothesis import strategies as st
 from gearfmu.fmu.compare import FmuMismatchError, open_fmu
 from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.scene.reader import default_scene_path, load_scene
-from gearfmu.tables.mesh_tables import MeshTables, TableError, load_tables
+from gearfmu.tables.mesh_tables import TableError, load_tables
 
 from test_fmu import make_tables
 from test_state import Inst
+
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
 
 H = 1e-4
 

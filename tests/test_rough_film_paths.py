@@ -31,6 +31,9 @@ from gearfmu.ehl.transient import flank_slice_case, solve_line_contact_transient
 from gearfmu.gear.geometry import pair_geometry
 from gearfmu.scene.reader import load_scene
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed000_table1.toml"
 N_NODES = 257
 TOL = 1e-4

@@ -30,6 +30,9 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu, fmi2_header_dir, 
 
 from test_fmu import make_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 H = 1e-4
 N = 40

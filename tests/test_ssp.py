@@ -32,6 +32,9 @@ from gearfmu.ssp import (COMPONENT, NS, SspError, build_ssp, check_variants, fmp
 
 from test_fmu import make_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10

@@ -39,6 +39,9 @@ from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
 from gearfmu.fmu.standalone_build import build_standalone_fmu, fmi2_header_dir
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 TOL = 1e-9  # of each signal's range
 

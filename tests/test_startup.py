@@ -32,6 +32,7 @@ NOT_AT_STARTUP = ("scipy.optimize", "scipy.integrate", "scipy.special", "scipy.i
                   "scipy.signal", "matplotlib", "gearfmu.plan", "gearfmu.bench", "gearfmu.plots")
 
 
+@pytest.mark.slow
 def test_importing_the_cli_loads_no_planner_plots_or_heavy_scipy():
     code = ("import json, sys, gearfmu.cli; "
             f"print(json.dumps([m for m in {NOT_AT_STARTUP!r} if m in sys.modules]))")
@@ -192,6 +193,7 @@ def test_an_unwritable_cache_costs_only_the_computation(default_case, tmp_path, 
     assert len(native_runs) == 2 and a[REFERENCE] == b[REFERENCE]
 
 
+@pytest.mark.slow
 def test_the_ssp_schema_check_parses_each_schema_once_and_still_refuses_invalid_files(default_case, tmp_path):
     """Every .ssd and .ssv is still checked against its SSP 1.0 XSD when the parsed schema is
     reused: an attribute the XSD does not allow, in the last file of each kind, is refused."""

@@ -19,6 +19,9 @@ from gearfmu.fmu.pythonfmu_build import build_fmu
 from test_fmu import make_tables
 from test_standalone import _callbacks
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 H = 1e-4
 OUTS = ["dte", "mesh_force", "pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "mesh_stiffness",
         "pair_force[1]", "pair_force[2]", "load_sharing[1]"]

@@ -280,7 +280,7 @@ def test_native_and_c_kernel_agree_bit_for_bit_with_zone_edges(clib, backward, t
     assert not np.array_equal(c0, c)
 
 
-@pytest.mark.parametrize("runtime", ["pythonfmu", "standalone"])
+@pytest.mark.parametrize("runtime", [pytest.param("pythonfmu", marks=pytest.mark.slow), "standalone"])
 def test_fmu_with_zone_edges_agrees_with_native(tmp_path, runtime):
     """Both FMU runtimes pass the tables' engagement angles to the kernel (gk_zone_cuts,
     gk_set_zone_cuts): run by fmpy, every output equals the native run's (which reads the

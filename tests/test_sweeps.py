@@ -29,6 +29,9 @@ from gearfmu.tables.synthetic import tables_from_arrays
 from gearfmu.dynamics.sweeps import (PointSettings, SweepInputError, SweepJob, find_jumps,
                             pinion_speed_for_omega_h, run_jobs, run_sweep)
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "seed003_table1.toml"
 
 

@@ -23,6 +23,9 @@ from gearfmu.scene.reader import default_scene_path, load_scene
 from gearfmu.assembly import precompute, table_cache
 from gearfmu.tables.mesh_tables import load_tables
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 DEFAULT = default_scene_path().read_text()
 ARRAYS = ("torque_Nm", "k_N_per_m", "e_m", "backlash_half_m", "e_comprehensive_m", "static_te_m")
 

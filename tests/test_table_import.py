@@ -117,6 +117,7 @@ def test_missing_scalar_is_named(tmp_path):
         load_tables_csv(p, tmp_path / "m.toml")
 
 
+@pytest.mark.slow
 def test_cli_build_from_csv_tables(tmp_path):
     """`gearfmu build --tables F.csv --tables-meta M.toml` builds an FMU from imported tables."""
     t = rectangular_wave_tables(2.5e8, points_per_mesh=16)

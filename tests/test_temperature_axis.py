@@ -44,6 +44,9 @@ from test_fmu import make_tables
 from test_standalone import _callbacks
 from test_state import Inst as _Inst
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 AXIS = (10.0, 30.0, 70.0)
 H = 1e-4
 N_STEPS = 80
