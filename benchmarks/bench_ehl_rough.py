@@ -164,27 +164,26 @@ def _history(a, prof, sm, level, k, n, w, lam):
 
 def _spikes(a, prof, sm, n_cycles=24):
     """After ``n_cycles`` cycles alone: the five nodes of largest scaled residual (X, P, eps/dX^2)."""
-    import gearfmu.ehl.iterate as it
+    import gearfmu.ehl.attempts as attempts
     from gearfmu.ehl.film_newton import _terms
     from gearfmu.ehl.mesh_film import ROUGH_WARM_SETTINGS
     from gearfmu.ehl.solver import solve_line_contact
 
     keep = []
-    orig = it._iterate_flat
+    orig = attempts.iterate_setting
 
     def spy(*args, **kw):
         res = orig(*args, **kw)
         keep.append(res[0])
         return res
-    it_solver = __import__("gearfmu.ehl.solver", fromlist=["_iterate_flat"])
-    it_solver._iterate_flat = spy
+    attempts.iterate_setting = spy
     try:
         solve_line_contact(*a, roughness_m=prof, initial=sm, newton_after_cycles=0, max_cycles=n_cycles,
                            **ROUGH_WARM_SETTINGS)
     except Exception:  # noqa: BLE001 -- the failing state is what is looked at
         pass
     finally:
-        it_solver._iterate_flat = orig
+        attempts.iterate_setting = orig
     if not keep:
         return None
     s = keep[0]

@@ -104,6 +104,8 @@ SOURCES = {
     "gearbox": ([PY, "benchmarks/bench_gearbox.py", "--repeat", "3"], None, "benchmarks/bench_gearbox.py --repeat 3"),
     "gearbox_fmu": ([PY, "benchmarks/bench_gearbox_fmu.py", "--sim", "0.5"], None,
                     "benchmarks/bench_gearbox_fmu.py --sim 0.5"),
+    "me": ([PY, "benchmarks/bench_me.py"], None, "benchmarks/bench_me.py"),
+    "composition": ([PY, "benchmarks/bench_composition.py"], None, "benchmarks/bench_composition.py"),
     "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
     "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
     "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
@@ -111,8 +113,8 @@ SOURCES = {
                     'benchmarks/bench_tests.py -m "not slow" -n 2'),
 }
 # sources that take several minutes: run only when named (--only) or with --all
-SLOW = {"trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup", "plan_study",
-        "plan_scan", "tests", "tests_quick", "gearbox", "silence"}
+SLOW = {"me", "trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup",
+        "plan_study", "plan_scan", "tests", "tests_quick", "gearbox", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -796,6 +798,15 @@ def sec_gearbox(pg: Page):
                        diff, f"at 1e-6: {cells or 'n/a'}"])
 
 
+def sec_me(pg: Page):
+    if pg.missing("me", "Model Exchange against the event-located reference"):
+        return
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from report_me import render as render_me  # the section's own module (report.py's size)
+
+    render_me(pg, table, SOURCES["me"][2])
+
+
 def sec_gearbox_fmu(pg: Page):
     if pg.missing("gearbox_fmu", "Gearbox FMU against its stages' pair FMUs"):
         return
@@ -839,6 +850,111 @@ def sec_gearbox_fmu(pg: Page):
     pg.summary.append(["gearbox FMU (two stages, shafts)", "native gearbox solver (numba), same steps",
                        "bit for bit" if g.get("equals_native_solver") else "differs",
                        f"{num(d['ratio_same_accuracy'], 3)} × its stages' pair FMUs at equal accuracy"])
+
+
+#: the forms of bench_composition, as the report names them
+COMPOSITION_FORMS = {"flange/fmpy": "SSP, flange coupling, fmpy", "flange/libcosim": "SSP, flange coupling, libcosim",
+                     "flange_linear/libcosim": "SSP, flange at the received speed, libcosim",
+                     "shaft/libcosim": "SSP, shaft FMUs, libcosim", "flange/libcosim-ecco": "SSP, flange, libcosim ECCO",
+                     "gearbox_fmu/fmpy": "gearbox FMU, fmpy", "gearbox_fmu/libcosim": "gearbox FMU, libcosim"}
+
+
+def _at(hit) -> str:
+    if hit is None:
+        return "not reached"
+    cost = f"{num(hit['wall_per_sim_s'], 3)} s/s, CPU {num(hit.get('cpu_per_sim_s'), 3)}"
+    if hit.get("step_s") is None:
+        tail = f"; diverged from {sci(hit['diverged_from_s'])} s" if hit.get("diverged_from_s") else ""
+        return f"below at {sci(hit['below_at_largest_step'])} s ({cost}{tail})"
+    return f"{sci(hit['step_s'])} s ({cost})"
+
+
+def sec_composition(pg: Page):
+    if pg.missing("composition", "Gearboxes: the SSP of stage FMUs against the monolithic gearbox"):
+        return
+    d = pg.data["composition"]
+    forms = [f for f in COMPOSITION_FORMS if f in d["forms"] and f != "flange/libcosim-ecco"]
+
+    def cell(r):
+        if r is None:
+            return ""
+        if r.get("diverged"):
+            return "diverged"
+        return f"{sci(r['dte_worst'])} / {sci(r['force_worst'])}"
+
+    rows = [[sci(h)] + [cell(next((r for r in d["forms"][f] if r["step_s"] == h), None)) for f in forms]
+            for h in d["steps_s"]]
+    ecco = [[sci(r.get("tolerance")), sci(r.get("mean_step_s")), cell(r), sci(r.get("energy_residual_worst")),
+             num(r.get("wall_per_sim_s"), 3), num(r.get("cpu_per_sim_s"), 3)]
+            for r in d["forms"].get("flange/libcosim-ecco", [])]
+    at = d.get("at_error", {})
+    targets = [("DTE 1 %", "dte_0.01"), ("DTE 0.1 %", "dte_0.001"), ("mesh force 1 %", "mesh_force_0.01"),
+               ("mesh force 0.1 %", "mesh_force_0.001")]
+    at_rows = [[COMPOSITION_FORMS[f]] + [_at(at.get(f, {}).get(k)) for _, k in targets]
+               for f in forms + ["flange/libcosim-ecco"] if f in d["forms"]]
+    res = [[sci(r["step_s"]), sci(r.get("energy_residual_worst"))] for r in d["forms"].get("flange/libcosim", [])
+           if not r.get("diverged")]
+
+    def draw(plt):
+        fig, axes = plt.subplots(1, 2, figsize=(10.5, 4.0))
+        for f in forms + ["flange/libcosim-ecco"]:
+            rs = sorted((r for r in d["forms"].get(f, []) if not r.get("diverged") and r["dte_worst"] > 0
+                         and r["force_worst"] > 0), key=lambda r: r["step_s"])   # 0: the same substeps as the reference
+            if not rs:
+                continue
+            line, = axes[0].loglog([r["step_s"] for r in rs], [r["dte_worst"] for r in rs], "o-", ms=3,
+                                   label=COMPOSITION_FORMS[f])
+            axes[0].loglog([r["step_s"] for r in rs], [r["force_worst"] for r in rs], "s--", ms=3,
+                           color=line.get_color())
+            axes[1].loglog([r["wall_per_sim_s"] for r in rs], [r["dte_worst"] for r in rs], "o-", ms=3,
+                           color=line.get_color())
+            axes[1].loglog([r["wall_per_sim_s"] for r in rs], [r["force_worst"] for r in rs], "s--", ms=3,
+                           color=line.get_color())
+        for ax in axes:
+            for y in (1e-2, 1e-3):
+                ax.axhline(y, color="grey", lw=0.6, ls=":")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.set_ylabel("RMS error / range (worse stage)")
+            ax.set_ylim(1e-9, 1.0)
+        axes[0].set_xlabel("communication step (s; ECCO: its mean step)")
+        axes[1].set_xlabel("wall time per simulated second (s)")
+        axes[0].set_title("o- DTE, s-- mesh force", fontsize=9)
+        axes[0].legend(fontsize=6)
+        return fig
+
+    img = pg.plot("validation_composition.png", draw)
+    mono = d.get("gearbox_fmu_at_scene_step") or {}
+    one = at.get("flange/libcosim", {})
+    mono_text = (f"The monolithic gearbox FMU in libcosim at the scene's communication step "
+                 f"{sci(d['scene_comm_step_s'])} s: {num(mono.get('wall_per_sim_s'), 3)} s per simulated second "
+                 f"(CPU {num(mono.get('cpu_per_sim_s'), 3)} s) at {sci(mono.get('dte_worst'))} DTE error.  "
+                 if mono else "")
+    pg.parts.append(
+        "## Gearboxes: the SSP of stage FMUs against the monolithic gearbox\n\n"
+        f"The example reducer `{d['scene']}` run {d['sim_s']:g} s from its quasi-static state (the meshing errors and "
+        "the mesh stiffness excite both stages) as an SSP of stage FMUs (`gearfmu ssp`, docs/gearbox.md \"The SSP of "
+        "stage FMUs\") in fmpy's SSP master and in libcosim, and as the monolithic gearbox FMU, against the native "
+        f"gearbox solver at a 1e-6 s communication step (every form integrates each stage with {d['integrator']} at "
+        f"the internal step {sci(d['max_step_s'])} s).  Error: RMS(x − x_native) / peak-to-peak(x_native) of the "
+        "worse stage's DTE and mesh force, at the run's communication points; cost per simulated second: "
+        f"wall and process CPU time, each the best of {d['repeat']} runs (the machine is shared: CPU time is the "
+        "steadier).  Couplings: *flange* (the default: every shaft inside the stage FMU of the "
+        "light body it drives, the flange on the parabola of the last two speeds received), *flange at the received "
+        "speed* (flange_order 1), *shaft FMUs* (the stages take torques, shaft FMUs integrate the exchanged speeds); "
+        "a diverged run stopped with an error or left the range.\n\n"
+        "Worse stage's DTE error / mesh-force error at each communication step:\n\n"
+        + table(["step s"] + [COMPOSITION_FORMS[f] for f in forms], rows)
+        + "\n\nWhere the error reaches 1 % and 0.1 % (log-log interpolation; cost there):\n\n"
+        + table(["form"] + [t for t, _ in targets], at_rows)
+        + "\n\nlibcosim's energy-conserving algorithm (ECCO) on the flange coupling, steps 1e-6 … 1e-4 s:\n\n"
+        + table(["tolerance", "mean step s", "DTE / mesh-force error", "energy residual", "wall s/s", "CPU s/s"], ecco)
+        + "\n\nEnergy residual at the bonds (libcosim ECCO's: Σ H |T_k ω_k+1 − ω_k T_k+1| over the energy through "
+        "the bond, worst bond), flange coupling in libcosim:\n\n" + table(["step s", "energy residual"], res)
+        + f"\n\n{img}\n\n{mono_text}Source: `{SOURCES['composition'][2]}` ({pg.cost('composition')}).\n")
+    pg.summary.append(["SSP of stage FMUs (flange coupling, libcosim)", "native gearbox solver",
+                       f"DTE 1 %: {_at(one.get('dte_0.01'))}; mesh force 1 %: {_at(one.get('mesh_force_0.01'))}",
+                       f"gearbox FMU {num(mono.get('wall_per_sim_s'), 3)} s/s (CPU {num(mono.get('cpu_per_sim_s'), 3)}) "
+                       f"at {sci(d['scene_comm_step_s'])} s"])
 
 
 def sec_arms(pg: Page):
@@ -1432,7 +1548,8 @@ def sec_costs(pg: Page):
 
 
 SECTIONS = ("sec_stiffness", "sec_thermal", "sec_ehl", "sec_ehl_moes", "sec_ehl_rough", "sec_load_sharing",
-            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_arms",
+            "sec_fractal", "sec_trends", "sec_dynamics", "sec_gearbox", "sec_gearbox_fmu", "sec_composition",
+            "sec_me", "sec_arms",
             "sec_seed003_statements", "sec_plan", "sec_fmu", "sec_costs", "sec_goals")
 
 

@@ -1,7 +1,7 @@
-"""The gearfmu command line: spur and helical gear pairs to FMI 2.0 Co-Simulation FMUs.
+"""The gearfmu command line: spur and helical gear pairs to FMI 2.0/3.0 Co-Simulation and Model Exchange FMUs.
 
   gearfmu build    [SCENE] [-o OUT.fmu] [--runtime standalone|pythonfmu] [--platforms LIST] [--fmi-version 2|3]
-                   [--fmi3-outputs array|scalar] [--reference-results DIR]
+                   [--fmi3-outputs array|scalar] [--interface both|cs|me] [--me-node-events E] [--reference-results DIR]
                                              scene -> tables -> FMU (DIR: its FMI Cross-Check set)
   gearfmu build    [SCENE] --tables T.csv [--tables-meta M.toml]           imported tables -> FMU
   gearfmu tables   [SCENE] [-o OUT.gtab]     compute, save (.gtab, .csv + .meta.toml) and plot tables
@@ -11,7 +11,8 @@
                                              an FMU against the native solver
   gearfmu bench accuracy [--case NAME] [--json] [--png P]   speed against error
   gearfmu ssp      [SCENE] [-o OUT.ssp] [--variant NAME:PARAM=VALUE] [--runtime R] [--platforms LIST]
-                   [--fmi-version 2|3]       SSP package with variants
+                   [--fmi-version 2|3] [--coupling flange|shaft] [--comm-step S]
+                                             SSP package with variants (a drivetrain scene: stage FMUs)
   gearfmu plan     [SCENE] [--json] [--fmu]  fidelity plan: what the scene needs (docs/plan.md)
   gearfmu modes    [SCENE] [-o OUT.json] [--json] [--max-speed-rpm N]
                                              natural frequencies, strain energy, Campbell diagram (PNG + JSON)
@@ -20,7 +21,7 @@
 
 A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): build makes its gearbox
 FMU (standalone C runtime), validate compares that FMU with the native gearbox solver, simulate runs
-the native gearbox solver on it, modes gives its modes.
+the native gearbox solver on it, modes gives its modes, ssp makes an SSP of stage FMUs.
 
 SCENE defaults to the default scene (the Zhao et al. 2022 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
@@ -38,6 +39,7 @@ import sys
 import tempfile
 import time
 import traceback
+import zipfile
 from pathlib import Path
 import contextlib
 
@@ -45,7 +47,8 @@ import numpy as np
 
 from .common.executors import add_scheduler_option, cluster
 from .common.progress import notice, reporting, ticking
-from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
+from .common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_SSP_COUPLING, FMI3_OUTPUTS, FMU_INTERFACES,
+                                ME_NODE_EVENTS, RUNTIMES, SSP_COUPLINGS)
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
 from .fmu.compare import (native_columns, output_names, output_units, run_fmu, FmuMismatchError, open_fmu,
@@ -53,7 +56,7 @@ from .fmu.compare import (native_columns, output_names, output_units, run_fmu, F
 from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import pipeline
 from .pipeline import load, build, simulate_native
-from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_scene
+from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_drivetrain, ssp_from_scene
 from .assembly import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
@@ -164,7 +167,7 @@ def _fmu(path):
 
 def _build_drivetrain(args) -> int:
     """gearfmu build DRIVETRAIN.toml: the gearbox FMU (docs/gearbox.md "The gearbox FMU")."""
-    pipeline.check_gearbox_fmu_runtime(args.runtime)
+    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
     _, scene = _any_scene(args.scene)
     for given, option in ((args.tables, "--tables"), (args.tables_meta, "--tables-meta"),
                           (args.reference_results, "--reference-results")):
@@ -200,9 +203,9 @@ def cmd_build(args) -> int:
     platforms = None
     if args.platforms is not None:
         platforms = parse_platforms(args.platforms)
-    res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables,
-                estimate_accuracy=not args.no_estimate, platforms=platforms, allow_large=args.allow_large,
-                fmi_version=args.fmi_version, fmi3_outputs=args.fmi3_outputs)
+    res = build(scene, out, progress=not args.quiet, runtime=args.runtime, tables=tables, platforms=platforms,
+                estimate_accuracy=not args.no_estimate, allow_large=args.allow_large, fmi_version=args.fmi_version,
+                fmi3_outputs=args.fmi3_outputs, interface=args.interface, me_node_events=args.me_node_events)
     cached = _from_cache(res.tables) if not args.tables else ""
     print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s{cached}, "
           f"FMU {res.build_wall_s:.2f} s, "
@@ -503,7 +506,31 @@ def print_report(rep: dict) -> None:
               else f"PASSED: every output within {tol:g} of its range")
 
 
+def _ssp_drivetrain(args) -> int:
+    """gearfmu ssp DRIVETRAIN.toml: an SSP of stage FMUs (docs/gearbox.md "The SSP of stage FMUs")."""
+    if args.variant:
+        raise CliError("--variant: for a gear-pair scene's SSP; a drivetrain scene's SSP holds one FMU per stage")
+    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
+    _, scene = _any_scene(args.scene)
+    out = _output_file(args.output or f"build/{scene.model_name}.ssp", "--output")
+    platforms = parse_platforms(args.platforms) if args.platforms is not None else None
+    path = ssp_from_drivetrain(scene, out, coupling=args.coupling, comm_step_s=args.comm_step,
+                               fmi_version=args.fmi_version, platforms=platforms, progress=not args.quiet,
+                               allow_large=args.allow_large)
+    with zipfile.ZipFile(path) as z:
+        fmus = sorted(n[10:-4] for n in z.namelist() if n.startswith("resources/") and n.endswith(".fmu"))
+    print(f"wrote {path}: {len(fmus)} FMUs ({', '.join(fmus)}), {args.coupling or DEFAULT_SSP_COUPLING} coupling, "
+          f"communication step {args.comm_step or scene.output_interval_s:g} s; OSP angular mechanical ports in "
+          "resources/*_OspModelDescription.xml and OspSystemStructure.xml")
+    return 0
+
+
 def cmd_ssp(args) -> int:
+    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
+        return _ssp_drivetrain(args)
+    for opt, val in (("--coupling", args.coupling), ("--comm-step", args.comm_step)):
+        if val is not None:
+            raise CliError(f"{opt}: only for a drivetrain scene (an SSP of stage FMUs, docs/gearbox.md)")
     scene = _scene(args.scene)
     out = _output_file(args.output or f"build/{scene.fmu.model_name}.ssp", "--output")
     variants = dict(parse_variant(v) for v in args.variant) if args.variant else None
@@ -578,6 +605,9 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--fmi3-outputs", choices=FMI3_OUTPUTS, default=DEFAULT_FMI3_OUTPUTS,
                    help="FMI 3 FMU: pair_force and load_sharing as arrays (default) or as scalars pair_force_1 .. "
                         "(for hosts without array support; docs/standalone.md 'FMI 3.0')")
+    b.add_argument("--interface", choices=FMU_INTERFACES, help="standalone runtime: the FMI interfaces: both "
+                   "(default; Co-Simulation and Model Exchange), cs or me (docs/standalone.md 'Model Exchange')")
+    b.add_argument("--me-node-events", choices=ME_NODE_EVENTS, help="Model Exchange's node events (docs/model.md)")
     b.add_argument("--reference-results", metavar="DIR",
                    help="also write the FMU's FMI Cross-Check set into DIR: <model>.fmu, _ref.csv, _in.csv, "
                         "_ref.opt (docs/fmu_import.md 'Reference results')")
@@ -651,7 +681,14 @@ def make_parser() -> argparse.ArgumentParser:
     x.add_argument("-o", "--output", help="SSP path (default build/<model_name>.ssp)")
     x.add_argument("--variant", action="append", metavar="NAME:PARAM=VALUE[,...]",
                    help="a named parameter set (repeat; default nominal/damping_low/damping_high)")
+    x.add_argument("--coupling", choices=SSP_COUPLINGS,
+                   help=f"drivetrain scene: how the stage FMUs are coupled (default {DEFAULT_SSP_COUPLING}; "
+                        "docs/gearbox.md 'The SSP of stage FMUs')")
+    x.add_argument("--comm-step", type=_positive("--comm-step"),
+                   help="drivetrain scene: the communication step the SSP is annotated with (s; default the "
+                        "scene's run.output_interval_s)")
     x.add_argument("-q", "--quiet", action="store_true")
+    _allow_large(x)
     _no_cache(x)
     x.set_defaults(func=cmd_ssp)
 

@@ -32,7 +32,8 @@ __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", 
 
 def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
           tables=None, estimate_accuracy: bool = False, platforms=None, allow_large: bool = False,
-          fmi_version: int = 2, fmi3_outputs: str = "array") -> BuildResult:
+          fmi_version: int = 2, fmi3_outputs: str = "array", interface: Optional[str] = None,
+          me_node_events: Optional[str] = None) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``.  ``runtime``: "standalone" (FMI layer in C,
     docs/standalone.md) or "pythonfmu"; None: the scene's ``fmu.runtime``.
     ``tables``: MeshTables to use instead of the scene's physics (e.g. imported from CSV,
@@ -46,11 +47,13 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
     ``fmi3_outputs``: an FMI 3 FMU's per-slot outputs as arrays ("array") or scalars ("scalar",
     pair_force_1 .. for hosts without array support; docs/standalone.md "FMI 3.0").
     ``allow_large``: build even when the estimate (gearfmu.assembly.estimate) exceeds the limits.
+    ``interface``, ``me_node_events``: a standalone FMU's interfaces ("cs", "me", "both") and Model
+    Exchange's node events (None: the builder's defaults; docs/standalone.md "Model Exchange").
     The FMU records and checks its envelope (:func:`gearfmu.fmu.envelope.fmu_envelope_record`: the verified
     envelope, else the tables' own range and the scene's speed range, "not verified"; docs/fmu.md)."""
     runtime = runtime or scene.fmu.runtime
     fmu_builder(runtime)  # an unknown runtime fails before anything is computed
-    platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
+    platform_kw(runtime, platforms, fmi_version, fmi3_outputs, interface, me_node_events)
     plan = verified = None
     if tables is None:
         from .plan import resolve  # the planner: loaded by a build, not by importing the command line
@@ -58,7 +61,8 @@ def build(scene, out_path, *, progress: bool = False, runtime: Optional[str] = N
                                         allow_large=allow_large)
     return build_fmu_from_scene(scene, out_path, progress=progress, runtime=runtime, tables=tables, plan=plan,
                                 verified_envelope=verified, platforms=platforms, allow_large=allow_large,
-                                fmi_version=fmi_version, fmi3_outputs=fmi3_outputs)
+                                fmi_version=fmi_version, fmi3_outputs=fmi3_outputs,
+                                model_exchange={"interface": interface, "me_node_events": me_node_events})
 
 
 def _opened(fmu) -> FmuFile:

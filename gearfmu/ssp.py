@@ -52,8 +52,12 @@ import zipfile
 from pathlib import Path
 from typing import Dict, Mapping, Optional
 
+from . import stages as st
 from .common.checks import finite_number
 from .common.progress import ticking
+from .common.vocabulary import DEFAULT_INTEGRATOR, DEFAULT_SSP_COUPLING
+from .fmu.composition import compose
+from .fmu.gearbox_ssp import write_composition
 from .pipeline import build
 
 NS = {
@@ -274,18 +278,24 @@ def build_ssp(fmu_path, out_path, variants: Mapping[str, Mapping[str, float]], *
         (stage / "SystemStructure.ssd").write_bytes(
             _ssd_xml(system_name, [ssv[n] for n in order], fmu_rel, md, units, stop_time_s, desc))
         validate_ssp_dir(stage)
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
-        try:
-            with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as z:
-                for f in sorted(stage.rglob("*")):
-                    if f.is_file():
-                        z.write(f, f.relative_to(stage).as_posix())
-            part.replace(out_path)
-        finally:
-            if part.exists():
-                part.unlink()
+        _zip_folder(stage, out_path)
     return out_path
+
+
+def _zip_folder(stage: Path, out_path: Path) -> None:
+    """Every file under ``stage`` into the archive ``out_path`` (written under a temporary name beside
+    it and renamed at the end: a failed write never leaves a half-written package)."""
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    part = out_path.with_name(out_path.name + f".part-{uuid.uuid4().hex[:8]}")
+    try:
+        with zipfile.ZipFile(part, "w", compression=zipfile.ZIP_DEFLATED) as z:
+            for f in sorted(stage.rglob("*")):
+                if f.is_file():
+                    z.write(f, f.relative_to(stage).as_posix())
+        part.replace(out_path)
+    finally:
+        if part.exists():
+            part.unlink()
 
 
 def fmpy_parameter_set(ssp_path, variant: str):
@@ -376,3 +386,49 @@ def ssp_fmu_bytes(ssp_path) -> bytes:
     """The FMU inside an SSP package, as bytes."""
     with zipfile.ZipFile(ssp_path) as z:
         return z.read(ssp_fmu_name(ssp_path))
+
+
+# ------------------------------------------------------------------ gearboxes
+def gearbox_ssp(comp, out_path, *, stop_time_s: float, comm_step_s: float, name: str = "gearbox",
+                description: str = "", fmi_version: int = 2, platforms=None, progress: bool = False) -> Path:
+    """The SSP of stage FMUs of the composition ``comp`` (:func:`gearfmu.fmu.composition.compose`: the
+    gearbox cut into its stage and element components for a coupling, with their start values) at
+    ``out_path``: one FMU per stage and per end body (and per shaft with the "shaft" coupling), joined at
+    the elastic shafts through OSP angular mechanical ports (docs/gearbox.md "The SSP of stage FMUs");
+    every .ssd checked against the SSP 1.0 schema before the archive is written.  ``stop_time_s`` and
+    ``comm_step_s`` (s): the run and the communication step the system is annotated with."""
+    out_path = Path(out_path)
+    if out_path.suffix != ".ssp":
+        raise SspError(f"out_path: must end in .ssp, got {str(out_path)!r}")
+    for key, v in (("stop_time_s", stop_time_s), ("comm_step_s", comm_step_s)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise SspError(f"{key}: must be finite and > 0, got {v!r}")
+    with tempfile.TemporaryDirectory(prefix="gearfmu_gbssp_") as tmpd:
+        stage = Path(tmpd)
+        with ticking(f"building {len(comp.components)} FMUs ({', '.join(c.name for c in comp.components)})",
+                     enabled=progress or None):
+            write_composition(comp, stage, stop_time_s=stop_time_s, step_size_s=comm_step_s, name=name,
+                              description=description or f"{name}: SSP of stage FMUs, {comp.coupling} coupling",
+                              fmi_version=fmi_version, platforms=platforms)
+        validate_ssp_dir(stage)
+        _zip_folder(stage, out_path)
+    return out_path
+
+
+def ssp_from_drivetrain(scene, out_path, *, coupling: Optional[str] = None, comm_step_s: Optional[float] = None,
+                        fmi_version: int = 2, platforms=None, progress: bool = False, allow_large: bool = False,
+                        model=None) -> Path:
+    """Drivetrain scene -> every stage's tables -> gearbox model -> the SSP of stage FMUs at ``out_path``
+    (:func:`gearbox_ssp` with the gearbox FMU's run settings of the scene: start values, integrator,
+    internal step and run; ``comm_step_s`` None: the scene's output interval; ``model``: the GearboxModel
+    when already built)."""
+    if model is None:
+        model = st.gearbox_model(scene, st.stage_tables(scene, progress=progress, allow_large=allow_large))
+    s = st.gearbox_fmu_settings(scene, model)
+    comp = compose(model, coupling=coupling or DEFAULT_SSP_COUPLING, motor_torque_Nm=s.motor_torque_start_Nm,
+                   load_torque_Nm=s.load_torque_start_Nm, motor_speed_rad_s=s.motor_speed_start_rad_s,
+                   max_step_s=s.max_step_s, integrator=s.integrator or DEFAULT_INTEGRATOR)
+    return gearbox_ssp(comp, out_path, stop_time_s=s.stop_time_s,
+                       comm_step_s=s.output_interval_s if comm_step_s is None else comm_step_s,
+                       name=scene.model_name, description=f"{scene.name}: SSP of stage FMUs",
+                       fmi_version=fmi_version, platforms=platforms, progress=progress)

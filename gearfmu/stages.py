@@ -28,7 +28,7 @@ import numpy as np
 from . import __version__
 from .common.progress import notice
 from .common.settings import GearboxRunSettings, RunSettings
-from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS, RUNTIMES
 from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.build_steps import FmuBuildError
@@ -148,17 +148,30 @@ def fmu_builder(runtime: str):
 
 
 def platform_kw(runtime: str, platforms, fmi_version: int = 2,
-                fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> dict:
+                fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, interface: Optional[str] = None,
+                me_node_events: Optional[str] = None) -> dict:
     """``platforms`` for the builder: binaries of a standalone FMU (gearfmu.fmu.crossbuild keys;
     None: all available); ``fmi_version`` 3: the standalone FMI 3.0 FMU, with ``fmi3_outputs``
-    "array" or "scalar" (:data:`gearfmu.common.vocabulary.FMI3_OUTPUTS`)."""
+    "array" or "scalar" (:data:`gearfmu.common.vocabulary.FMI3_OUTPUTS`); ``interface`` and
+    ``me_node_events`` (None: the builder's defaults): a standalone FMU's interfaces and Model
+    Exchange's node events (:data:`gearfmu.common.vocabulary.FMU_INTERFACES`, ``ME_NODE_EVENTS``)."""
+    me = {k: v for k, v in (("interface", interface), ("me_node_events", me_node_events)) if v is not None}
+    if interface is not None and interface not in FMU_INTERFACES:
+        raise ValueError(f"--interface: {interface!r} not one of {', '.join(FMU_INTERFACES)}")
+    if me_node_events is not None and me_node_events not in ME_NODE_EVENTS:
+        raise ValueError(f"--me-node-events: {me_node_events!r} not one of {', '.join(ME_NODE_EVENTS)}")
+    if runtime != "standalone" and me and interface != "cs":
+        raise ValueError("--interface/--me-node-events: the pythonfmu runtime offers Co-Simulation only; Model "
+                         "Exchange needs --runtime standalone")
+    if runtime != "standalone":
+        me = {}
     if fmi_version not in (2, 3) or (fmi_version == 3 and runtime != "standalone"):
         raise ValueError(f"--fmi-version: {fmi_version} needs 2, or 3 with the standalone runtime")
     if fmi3_outputs not in FMI3_OUTPUTS:
         raise ValueError(f"--fmi3-outputs: {fmi3_outputs!r} not one of {', '.join(FMI3_OUTPUTS)}")
     if fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3:
         raise ValueError(f"--fmi3-outputs: {fmi3_outputs} needs --fmi-version 3 (an FMI 2 FMU has scalars only)")
-    version = {"fmi_version": 3, "fmi3_outputs": fmi3_outputs} if fmi_version == 3 else {}
+    version = dict({"fmi_version": 3, "fmi3_outputs": fmi3_outputs} if fmi_version == 3 else {}, **me)
     if platforms is None:
         return version
     if runtime != "standalone":
@@ -169,18 +182,20 @@ def platform_kw(runtime: str, platforms, fmi_version: int = 2,
 
 def build_fmu_from_scene(scene, out_path, *, progress: bool = False, runtime: Optional[str] = None,
                          tables=None, plan=None, verified_envelope: Optional[dict] = None, platforms=None,
-                         allow_large: bool = False, fmi_version: int = 2,
-                         fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS) -> BuildResult:
+                         allow_large: bool = False, fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
+                         model_exchange: Optional[dict] = None) -> BuildResult:
     """Scene -> tables -> FMU at ``out_path``, the scene as it is (no planning: see
     :func:`gearfmu.pipeline.build`).  ``runtime``: "standalone" or "pythonfmu"; None: the
     scene's ``fmu.runtime``.  ``tables``: MeshTables to use instead of the scene's physics
     (e.g. imported from CSV, gearfmu.tables.table_import); the scene then only gives the FMU
     and operating settings.  ``plan``, ``verified_envelope``: kept in the result.
     ``platforms``: binaries of a standalone FMU.  ``allow_large``: build even when the
-    estimate (gearfmu.assembly.estimate) exceeds the limits."""
+    estimate (gearfmu.assembly.estimate) exceeds the limits.  ``model_exchange``: the
+    ``interface`` and ``me_node_events`` of a standalone FMU (:func:`platform_kw`; None or a
+    value None: the builder's defaults)."""
     runtime = runtime or scene.fmu.runtime
     builder = fmu_builder(runtime)
-    extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs)
+    extra = platform_kw(runtime, platforms, fmi_version, fmi3_outputs, **(model_exchange or {}))
     est = estimate_build(scene) if tables is None else None
     t0 = time.perf_counter()
     if tables is None:
@@ -329,12 +344,18 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
                             load_torque_start_Nm=scene.load_torque_Nm if scene.load.torque_input else 0.0)
 
 
-def check_gearbox_fmu_runtime(runtime: Optional[str]) -> None:
-    """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the default)."""
+def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] = None,
+                              me_node_events: Optional[str] = None) -> None:
+    """A gearbox FMU has the standalone C runtime and Co-Simulation only: FmuBuildError for any other
+    ``runtime`` (None: the default), an ``interface`` other than "cs" or any ``me_node_events``."""
     if runtime not in (None, "standalone"):
         raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
                             "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
                             "--runtime standalone")
+    if interface not in (None, "cs") or me_node_events is not None:
+        raise FmuBuildError(f"{'--interface' if interface not in (None, 'cs') else '--me-node-events'}: a gearbox "
+                            "FMU offers Co-Simulation only (Model Exchange: the gear-pair FMU; docs/standalone.md "
+                            "'Model Exchange')")
 
 
 @dataclass

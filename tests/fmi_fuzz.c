@@ -5,10 +5,13 @@
  *
  * usage: fmi_fuzz <unzipped FMU dir> <modelIdentifier> <guid> <n_vars> <first_seed> <sequences>
  *
- * Every sequence: fmi2Instantiate (sometimes with a wrong GUID), then 5..60
- * calls drawn from all fmi2 functions of Co-Simulation, in any order: the
+ * Every sequence: fmi2Instantiate (sometimes with a wrong GUID; a quarter of them for Model
+ * Exchange), then 5..60 calls drawn from all fmi2 functions of Co-Simulation and Model
+ * Exchange, in any order: the
  * first one is always a call the instantiated state forbids, then about a
- * third of the draws follow the legal order (so that deep states are reached),
+ * third of the draws follow the legal order of the instance's interface (so that deep states
+ * are reached; Model Exchange: event and continuous-time mode, states set, derivatives and
+ * event indicators read with right and wrong array lengths and NULL arrays),
  * with valid and invalid value references, NaN/inf/huge/negative values, bad
  * step sizes, NULL arrays, FMU states got/set/freed/serialized, serialized
  * states truncated or corrupted, then fmi2FreeFMUstate of what is held and
@@ -113,6 +116,16 @@ typedef struct {
     fmi2GetIntegerStatusTYPE *GetIntegerStatus;
     fmi2GetBooleanStatusTYPE *GetBooleanStatus;
     fmi2GetStringStatusTYPE *GetStringStatus;
+    fmi2EnterEventModeTYPE *EnterEventMode;
+    fmi2NewDiscreteStatesTYPE *NewDiscreteStates;
+    fmi2EnterContinuousTimeModeTYPE *EnterContinuousTimeMode;
+    fmi2CompletedIntegratorStepTYPE *CompletedIntegratorStep;
+    fmi2SetTimeTYPE *SetTime;
+    fmi2SetContinuousStatesTYPE *SetContinuousStates;
+    fmi2GetDerivativesTYPE *GetDerivatives;
+    fmi2GetEventIndicatorsTYPE *GetEventIndicators;
+    fmi2GetContinuousStatesTYPE *GetContinuousStates;
+    fmi2GetNominalsOfContinuousStatesTYPE *GetNominalsOfContinuousStates;
 } api;
 
 static long calls, refused, unlogged, bad_status, discards, errors, fatals, warnings;
@@ -181,6 +194,9 @@ int main(int argc, char **argv)
     LOAD(SerializeFMUstate) LOAD(DeSerializeFMUstate) LOAD(GetDirectionalDerivative)
     LOAD(SetRealInputDerivatives) LOAD(GetRealOutputDerivatives) LOAD(DoStep) LOAD(CancelStep)
     LOAD(GetStatus) LOAD(GetRealStatus) LOAD(GetIntegerStatus) LOAD(GetBooleanStatus) LOAD(GetStringStatus)
+    LOAD(EnterEventMode) LOAD(NewDiscreteStates) LOAD(EnterContinuousTimeMode) LOAD(CompletedIntegratorStep)
+    LOAD(SetTime) LOAD(SetContinuousStates) LOAD(GetDerivatives) LOAD(GetEventIndicators) LOAD(GetContinuousStates)
+    LOAD(GetNominalsOfContinuousStates)
     snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
 
     for (seq = 0; seq < n_seq; ++seq) {
@@ -189,13 +205,15 @@ int main(int argc, char **argv)
         unsigned char *ser = NULL;
         size_t ser_size = 0;
         double t = 0.0;
-        int len, k, legal = 0;
+        int len, k, legal = 0, me;
+        double x[4] = {0.0, 100.0, 1e-5, 0.0};
         long illegal_before = n_illegal_logged, before = n_logged;
         rng_state = 0x9E3779B97F4A7C15ull ^ ((uint64_t)(first_seed + seq) * 0xD1B54A32D192ED03ull);
         if (rng_state == 0) rng_state = 1;
         rnd();
-        c = f->Instantiate("fuzz", fmi2CoSimulation, rint_(50) == 0 ? "{wrong-guid}" : argv[3], uri, &cb, fmi2False,
-                           rint_(2) ? fmi2True : fmi2False);
+        me = rint_(4) == 0;
+        c = f->Instantiate("fuzz", me ? fmi2ModelExchange : fmi2CoSimulation, rint_(50) == 0 ? "{wrong-guid}" : argv[3],
+                           uri, &cb, fmi2False, rint_(2) ? fmi2True : fmi2False);
         if (c == NULL) {
             inst_null++;
             calls++;
@@ -211,10 +229,13 @@ int main(int argc, char **argv)
                 op = first[rint_(6)];
             } else if (rint_(3) == 0) { /* about a third of the draws: the next call of the legal order */
                 static const int order[] = {0, 1, 6, 2, 3, 8, 3, 8, 4};
-                op = order[legal % 9];
+                /* Model Exchange: initialization, event mode, continuous time (time, states, derivatives,
+                 * indicators, completed step), back to event mode and on, read, terminate */
+                static const int order_me[] = {0, 1, 6, 2, 28, 29, 30, 31, 32, 33, 34, 30, 31, 32, 35, 27, 28, 29, 8, 4};
+                op = me ? order_me[legal % 20] : order[legal % 9];
                 legal++;
             } else {
-                op = rint_(27);
+                op = rint_(38);
             }
             switch (op) {
             case 0: CALL(SetupExperiment, c, fmi2False, 0.0, rint_(4) ? 0.0 : nasty_real(), fmi2False, 0.0); break;
@@ -340,6 +361,56 @@ int main(int argc, char **argv)
                 fmi2ValueReference vr = 0;
                 if (rint_(2)) CALL(GetReal, c, NULL, 1, NULL);
                 else CALL(SetReal, c, &vr, 1, NULL);
+                break;
+            }
+            case 27: CALL(EnterEventMode, c); break;
+            case 28: {
+                fmi2EventInfo info;
+                if (rint_(20) == 0) CALL(NewDiscreteStates, c, NULL);
+                else CALL(NewDiscreteStates, c, &info);
+                break;
+            }
+            case 29: CALL(EnterContinuousTimeMode, c); break;
+            case 30: {
+                double tt = rint_(8) == 0 ? nasty_real() : t + 1e-5;
+                CALL(SetTime, c, tt);
+                if (isfinite(tt)) t = tt;
+                break;
+            }
+            case 31: { /* states near the last ones, sometimes nasty, a wrong count or NULL */
+                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
+                int i = rint_(4);
+                x[0] += 1e-3;
+                if (rint_(6) == 0) x[i] = nasty_real();
+                if (rint_(20) == 0) CALL(SetContinuousStates, c, NULL, n);
+                else CALL(SetContinuousStates, c, x, n);
+                break;
+            }
+            case 32: {
+                double dx[6];
+                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
+                if (rint_(20) == 0) CALL(GetDerivatives, c, NULL, n);
+                else CALL(GetDerivatives, c, dx, n);
+                break;
+            }
+            case 33: {
+                double z[64];
+                size_t n = (size_t)rint_(64);
+                if (rint_(20) == 0) CALL(GetEventIndicators, c, NULL, n);
+                else CALL(GetEventIndicators, c, z, n);
+                break;
+            }
+            case 34: {
+                fmi2Boolean ev = fmi2False, term = fmi2False;
+                if (rint_(20) == 0) CALL(CompletedIntegratorStep, c, fmi2True, NULL, &term);
+                else CALL(CompletedIntegratorStep, c, fmi2True, &ev, &term);
+                break;
+            }
+            case 35: {
+                double xs[6];
+                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
+                if (rint_(2)) CALL(GetContinuousStates, c, xs, n);
+                else CALL(GetNominalsOfContinuousStates, c, xs, n);
                 break;
             }
             default: { /* a pinion torque in range, to get past the input checks */

@@ -125,14 +125,17 @@ def test_a_call_back_from_the_model_into_the_plumbing_is_a_cycle(tmp_path):
 
 
 @pytest.mark.parametrize("name", ["standalone/gear_model.c", "standalone/gear_model.h", "runtime/pyshim.c",
-                                  "standalone/gearbox_model.c", "standalone/gearbox_model.h"])
+                                  "standalone/gearbox_model.c", "standalone/gearbox_model.h",
+                                  "standalone/stage_model.c", "standalone/stage_model.h",
+                                  "standalone/element_model.c", "standalone/element_model.h"])
 def test_the_model_includes_the_contract_not_the_plumbing(name):
     """The models of the contract: the gear model (standalone runtime), the Python slave's
-    (pythonfmu runtime, docs/fmu.md "The binary") and the gearbox model (docs/gearbox.md)."""
+    (pythonfmu runtime, docs/fmu.md "The binary"), the gearbox model (docs/gearbox.md), and the stage and
+    element models of an SSP of stage FMUs (docs/gearbox.md "The SSP of stage FMUs")."""
     text = (FMU / name).read_text()
     includes = set(re.findall(r'#include "([^"]+)"', text))
-    assert "fmi_common.h" not in includes
-    assert includes & {"gf_model.h", "gear_model.h", "gearbox_model.h"}
+    assert "fmi_common.h" not in includes and "fmi_common.c" not in includes
+    assert includes & {"gf_model.h", "gear_model.h", "gearbox_model.h", "stage_model.h", "element_model.h"}
 
 
 def test_the_plumbing_reaches_the_model_through_the_contract_only():
@@ -173,3 +176,25 @@ def test_the_gearbox_unit_includes_every_c_file_once(v):
     edges = {(p.name, q.name) for p, qs in call_graph(C_FOLDERS).items() for q in qs}
     assert {("gearbox_model.c", "gb_kernel.c"), ("gb_kernel.c", "gk_pair.h"), ("gearkernel.c", "gk_pair.h"),
             ("gearbox_model.c", "gf_resources.c"), ("gear_model.c", "gf_resources.c")} <= edges
+
+
+@pytest.mark.parametrize("v", [2, 3])
+def test_the_stage_and_element_units_include_every_c_file_once(v):
+    """fmi2/3_stage_all.c: the FMI layer, the plumbing, the stage model (which includes the gearbox model, the
+    one model it wraps), the reading of resources, the gearbox and pair kernel; fmi2/3_element_all.c: the FMI
+    layer, the plumbing, the element model, the reading of resources -- each once; the files each build copies
+    into sources/ are the ones they include."""
+    from gearfmu.fmu.element_build import ELEMENT_SOURCES, ELEMENT_UNITS
+    from gearfmu.fmu.gearbox_build import gearbox_file_sources
+    from gearfmu.fmu.stage_build import STAGE_UNITS
+
+    stage = re.findall(r'#include "(\w+\.c)"', STAGE_UNITS[v].read_text())
+    gearbox = list(gearbox_file_sources(v))
+    assert stage == [name if name != "gearbox_model.c" else "stage_model.c" for name in gearbox]
+    inner = re.findall(r'#include "(\w+\.c)"', (FMU / "standalone" / "stage_model.c").read_text())
+    assert inner == ["gearbox_model.c"]
+    element = re.findall(r'#include "(\w+\.c)"', ELEMENT_UNITS[v].read_text())
+    assert element == [f"fmi{v}_gear.c"] + [p.name for p in ELEMENT_SOURCES]
+    for unit in (STAGE_UNITS[v], ELEMENT_UNITS[v]):
+        text = unit.read_text()
+        assert "#define GF_API GF_UNIT_STATIC" in text

@@ -252,7 +252,7 @@ def test_spike_newton_jacobian_on_the_finest_grid_matches_finite_differences(M, 
     # residual f - L(P, H(P)) (forward differences at cavitated nodes) evaluated by the
     # cycle's own film/coefficient/residual kernels,
     # over the block of 2 x 6 + 1 nodes around the largest scaled residual (the width of
-    # solver.FAST_SETTING).  A wrong level (spacing or kernel of level 0) gives errors of
+    # attempts.FAST_SETTING).  A wrong level (spacing or kernel of level 0) gives errors of
     # order 1.
     A = L * math.sqrt(M / (2.0 * math.pi)) if z < 0 else 0.8 * L
     prm = EHLParams(lam=3.0 * math.pi ** 2 / (8.0 * M ** 2), A=A, z=z, php0=2.0, c1=0.3,

@@ -27,7 +27,7 @@ import pytest
 from gearfmu.ehl import solve_line_contact
 from gearfmu.ehl.mgkernels import _coef, _residual
 from gearfmu.ehl.multigrid import FlatMultigrid
-from gearfmu.ehl.solver import _flat_opts
+from gearfmu.ehl.iterate import flat_options
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -36,7 +36,7 @@ pytestmark = pytest.mark.slow
 def _flat_from_result(res, prm_from):
     """FlatMultigrid on the grid of ``res`` started from its converged pressure."""
     prm, n_levels, n_coarse = prm_from
-    opts = _flat_opts(res.residuals["settings"])
+    opts = flat_options(res.residuals["settings"])
     fm = FlatMultigrid(prm, n_levels, n_coarse, None, **opts)
     Hc = float(np.interp(0.0, res.X, res.H))
     fm.start(res.P, Hc)

@@ -460,7 +460,8 @@ def test_win64_under_wine_and_aarch64_under_qemu_equal_linux64(example, host_exe
 # --------------------------------------------------------------------- CLI
 def test_cli_build_validate_and_refusals(tmp_path):
     """gearfmu build DRIVETRAIN.toml says what it built (runtime, FMI version, platforms);
-    --runtime pythonfmu and --tables are refused with one line and status 2; gearfmu validate passes."""
+    --runtime pythonfmu, --tables and Model Exchange (--interface me, --me-node-events) are refused with one
+    line and status 2; gearfmu validate passes."""
     def gearfmu(*args):
         return subprocess.run([sys.executable, "-m", "gearfmu.cli", *args], capture_output=True, text=True,
                               timeout=900, cwd=REPO)
@@ -471,7 +472,9 @@ def test_cli_build_validate_and_refusals(tmp_path):
     assert "gearbox of 2 stages, 3 elastic shafts, 6 bodies" in p.stdout
     assert "runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64" in p.stdout
     for bad, words in ((["--runtime", "pythonfmu"], "built with the standalone C runtime only"),
-                       (["--tables", "x.csv"], "--tables: not offered for a drivetrain scene")):
+                       (["--tables", "x.csv"], "--tables: not offered for a drivetrain scene"),
+                       (["--interface", "me"], "--interface: a gearbox FMU offers Co-Simulation only"),
+                       (["--me-node-events", "all"], "--me-node-events: a gearbox FMU offers Co-Simulation only")):
         p = gearfmu("build", str(EXAMPLE), "-o", str(tmp_path / "x.fmu"), *bad)
         assert p.returncode == 2 and words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     p = gearfmu("validate", str(EXAMPLE), "--fmu", str(out), "--stop-time", "0.01", "-q")

@@ -156,10 +156,16 @@ def test_validate_fmu_and_interface(built):
             assert f in names, f
         # the FMI headers are the importer's (FMI 2.0.5 section 2.3)
         assert not [n for n in names if n.startswith("sources/fmi2") and n.endswith(".h")]
-        # same value references as the pythonfmu FMU built from the same spec
+        # same value references as the pythonfmu FMU built from the same spec; the standalone FMU offers
+        # Model Exchange too (the default), whose locals come after them (docs/standalone.md "Model Exchange")
         mp = fmpy.read_model_description(str(built[name]["py"]))
-        assert [(v.name, v.valueReference, v.causality) for v in md.modelVariables] == \
-               [(v.name, v.valueReference, v.causality) for v in mp.modelVariables]
+        common = [(v.name, v.valueReference, v.causality) for v in mp.modelVariables]
+        assert [(v.name, v.valueReference, v.causality) for v in md.modelVariables][:len(common)] == common
+        extra = md.modelVariables[len(common):]
+        assert extra and {v.causality for v in extra} == {"local"}
+        assert [v.name for v in extra if v.derivative is not None] == \
+            ["der(pinion_angle)", "der(pinion_speed)", "der(dte)", "der(dte_rate)"]
+        assert md.modelExchange.modelIdentifier == cs.modelIdentifier and mp.modelExchange is None
 
 
 def test_validation_record_in_both_runtimes(built, tmp_path):

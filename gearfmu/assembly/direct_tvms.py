@@ -41,7 +41,7 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
 * Meshing position = LOA position ``s_m`` (m from N1) of one contact; the other pairs in contact
   are at s + k p_b inside [s_A, s_E] (:func:`pair_positions_m`).
 * Errors: perfect gears by default (``e_pair_m`` = 0, no crowning), the case of seed 000
-  section 5; the table's per-pair meshing errors and crowning can be passed.
+  section 5; the table's per-pair meshing errors and crowning can be passed (:class:`PairLoading`).
 * Load iteration of the film models that need a film per slice (``rough_steady``,
   ``smooth_transient``, ``rough_transient``): the iteration starts from the slice loads
   converged with ``smooth_ehl`` (steady smooth films, cheap) instead of the Hertz loads --
@@ -266,12 +266,63 @@ def _key(x: float) -> float:
     return float(f"{x:.10g}")
 
 
+@dataclass(frozen=True)
+class PairLoading:
+    """How the pair is loaded in :func:`direct_mesh_stiffness` (SI; None: the default):
+    ``e_pair_m`` (P, N) meshing error per pair and position (default 0: perfect gears, seed 000
+    section 5), ``crowning_m`` (NS,) lead crowning per slice (default 0) -- the loaded static mesh
+    of seed 000 eq 16 -- and ``initial_loads_N`` (P, NS, N) slice loads to start the load iteration
+    from (default: the Hertz loads, or for the per-slice film models the loads converged with
+    ``smooth_ehl``)."""
+
+    e_pair_m: Optional[np.ndarray] = None
+    crowning_m: Optional[np.ndarray] = None
+    initial_loads_N: Optional[np.ndarray] = None
+
+
+@dataclass
+class _DirectPair:
+    """The pair at the requested positions (SI): contact position of each pair ``sp`` (P, N), the
+    errors ``e`` (P, N) and crowning ``E`` (NS,), the torque ``T`` and mesh force ``F`` = T/r_b1,
+    the slice width, the tooth and foundation compliances (seed 000 eq 11-15), the zone entries
+    in contact (mask (P, NS, N) and its index arrays) and the film environment (None: Hertz)."""
+
+    env: object
+    opts: object
+    model: str
+    st: TransientFilmSettings
+    sp: np.ndarray
+    e: np.ndarray
+    E: np.ndarray
+    T: float
+    width: float
+    compliances: tuple
+    zone: np.ndarray
+    fenv: object = None
+
+    @property
+    def F(self) -> float:
+        return self.T / float(self.env.geom.rb1_m)
+
+    @property
+    def idx(self):
+        return np.nonzero(self.zone)
+
+    def hertz_contact(self) -> np.ndarray:
+        """(P, NS, N) Hertz contact stiffness in the zone (Yang & Sun, pi E* w / 2), 0 outside."""
+        return np.where(self.zone, hertz_stiffness_N_per_m(self.env.pair, self.width), 0.0)
+
+    def mesh_stiffness(self, kc) -> np.ndarray:
+        """(P, NS, N) slice mesh stiffness from the contact stiffness ``kc`` (seed 000 eq 10-13)."""
+        ct, fp, fg = self.compliances
+        return sliced_mesh_stiffness(ct, fp, fg, kc, self.opts)
+
+
 # ------------------------------------------------------------------------------ main
-def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pair_m=None, crowning_m=None,
+def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, loading: Optional[PairLoading] = None,
                           transient: Optional[TransientFilmSettings] = None, executor=None,
                           max_workers: Optional[int] = None, progress: bool = False,
-                          check_film_parameter: bool = True, on_film_failure: str = "error",
-                          initial_loads_N=None) -> DirectTVMS:
+                          check_film_parameter: bool = True, on_film_failure: str = "error") -> DirectTVMS:
     """TVMS (N/m) of the pair at the meshing positions ``s_m`` (m from N1), evaluated directly
     (seed 000 eq 10-16 with the contact stiffness of ``model``; module doc).
 
@@ -280,13 +331,61 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     ``ehl_nodes`` set the steady films' grid, default ``transient.n_nodes``); ``opts``:
     :class:`gearfmu.gear.gearpair.MeshModelOptions` (foundation choices; ``opts.slices`` must equal
     ``env.n_slices``); ``torque_Nm`` (> 0): pinion torque, F = T/r_b1; ``model``: one of
-    :data:`DIRECT_MODELS`; ``e_pair_m`` (P, N) meshing error per pair (default 0), ``crowning_m``
-    (NS,) lead crowning per slice (default 0); ``transient``: :class:`TransientFilmSettings`;
+    :data:`DIRECT_MODELS`; ``loading``: :class:`PairLoading` (meshing errors, crowning, start
+    loads; default perfect gears from the Hertz loads); ``transient``: :class:`TransientFilmSettings`;
     ``executor`` / ``max_workers`` / ``progress``: as :func:`gearfmu.ehl.mesh_film.solve_films`;
-    ``initial_loads_N``: (P, NS, N) slice loads to start the iteration from (default: Hertz loads,
-    or for the per-slice film models the loads converged with ``smooth_ehl``)."""
+    ``check_film_parameter``, ``on_film_failure``: the film-parameter screen and what a failed
+    film does (module doc).
 
+    Steps: the pair at the positions (:func:`_direct_pair`: pairs in contact, compliances); Hertz
+    contact directly; otherwise the film-parameter screen of the rough models, the start loads
+    (:func:`_start_loads`), the load-sharing iteration with one film per distinct request
+    (:class:`_FilmRequests`, :func:`gearfmu.assembly.load_iteration.iterate_load_sharing`) and,
+    for the transient models, the minimum films of the runs (:func:`_transient_film_minima`)."""
     t_wall, c_parent = time.perf_counter(), time.process_time()
+    loading = loading or PairLoading()
+    dp = _direct_pair(env, opts, s_m, torque_Nm, model, loading, transient, on_film_failure)
+    P, NS, N = dp.zone.shape
+    lam = np.full((P, N), np.nan)
+    if model == "hertz":
+        kc_h = dp.hertz_contact()
+        k = dp.mesh_stiffness(kc_h)
+        loads = slice_loads_N(k, dp.e, dp.E, dp.F)
+        res = DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), dp.sp, k.sum(axis=(0, 1)), k.sum(axis=1), k,
+                         kc_h, loads / dp.width, lam, 1, 0.0, 0, [], 0.0, 0.0, dp.T)
+        res.cpu_s, res.wall_s = time.process_time() - c_parent, time.perf_counter() - t_wall
+        return res
+    face = dp.width * NS
+    if model in _ROUGH:
+        pos = dp.sp[np.isfinite(dp.sp)]
+        lam_f = film_parameter(env, pos, np.full(pos.shape, dp.F / face))
+        lam[np.isfinite(dp.sp)] = lam_f
+        if check_film_parameter:      # screen at the mean line load F/b first (before any solve)
+            _refuse_low_film(model, env, pos, lam_f, None)
+    run = dict(executor=executor, max_workers=max_workers, progress=progress)
+    loads, pre_cpu, pre_evaluations = _start_loads(dp, s_m, loading, run, on_film_failure)
+    films = _FilmRequests(dp, check_film_parameter, on_film_failure, run)
+    films.worker_cpu += pre_cpu
+    films.evaluations += pre_evaluations
+    ls = iterate_load_sharing(loads, dp.e, dp.E, dp.F, dp.idx, dp.width, UNLOADED_SLICE_LOAD_SHARE * dp.F / face,
+                              films.solve, dp.mesh_stiffness, what=f"direct TVMS {model}")
+    k, kc, loads, it, change = ls.k_slice_N_per_m, ls.k_contact_N_per_m, ls.loads_N, ls.passes, ls.load_change
+    wl = np.where(dp.zone, loads / dp.width, 0.0)
+    if model not in _ROUGH:
+        lam[:] = np.nan
+    hmin, hrun, hsig, sigma, runs = _transient_film_minima(dp, films)
+    worker_cpu = films.worker_cpu
+    return DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), dp.sp, k.sum(axis=(0, 1)), k.sum(axis=1), k, kc,
+                      wl, lam, it, change, films.evaluations, films.failures,
+                      cpu_s=time.process_time() - c_parent + worker_cpu, wall_s=time.perf_counter() - t_wall,
+                      torque_Nm=dp.T, worker_cpu_s=worker_cpu, h_min_m=hmin, h_min_run_m=hrun, h_min_over_sigma=hsig,
+                      sigma_composite_m=sigma, film_runs=runs)
+
+
+def _direct_pair(env, opts, s_m, torque_Nm, model: str, loading: PairLoading, transient, on_film_failure) -> _DirectPair:
+    """The inputs checked (DirectTVMSError naming the field) and the pair at the positions: the
+    pairs in contact (:func:`pair_positions_m`), the tooth and foundation compliances
+    (:func:`gearfmu.contact.models.tooth_compliances`), the film environment of a film model."""
     if model not in DIRECT_MODELS:
         raise DirectTVMSError(f"model={model!r}: must be one of {', '.join(DIRECT_MODELS)}")
     if on_film_failure not in DIRECT_FAILURE_POLICIES:
@@ -309,72 +408,82 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
     geom, pair = env.geom, env.pair
     sp = pair_positions_m(geom, s_m)                                    # (P, N)
     P, N = sp.shape
-    e = np.zeros((P, N)) if e_pair_m is None else np.asarray(e_pair_m, dtype=float)
-    E = np.zeros(NS) if crowning_m is None else np.asarray(crowning_m, dtype=float)
+    e = np.zeros((P, N)) if loading.e_pair_m is None else np.asarray(loading.e_pair_m, dtype=float)
+    E = np.zeros(NS) if loading.crowning_m is None else np.asarray(loading.crowning_m, dtype=float)
     if e.shape != (P, N) or not np.all(np.isfinite(e)):
         raise DirectTVMSError(f"e_pair_m: must be a finite array of shape {(P, N)} (m)")
     if E.shape != (NS,) or not np.all(np.isfinite(E)) or np.any(E < 0):
         raise DirectTVMSError(f"crowning_m: must be a finite array >= 0 of shape {(NS,)} (m)")
     width = float(env.width_m)
-    face = width * NS
-    F = T / float(geom.rb1_m)
-    floor = UNLOADED_SLICE_LOAD_SHARE * F / face
-    ct, fp, fg = tooth_compliances(pair, geom, sp, width)
-    kh = hertz_stiffness_N_per_m(pair, width)
+    compliances = tooth_compliances(pair, geom, sp, width)
     zone = np.broadcast_to(np.isfinite(sp)[:, None, :], (P, NS, N))
-    idx = np.nonzero(zone)
-    j, n, i = idx
-    kc_h = np.where(zone, kh, 0.0)
-    k = sliced_mesh_stiffness(ct, fp, fg, kc_h, opts)
     fenv = None
     if model != "hertz":
         fenv = env.film_environment()
         if fenv.n_nodes is None:
             fenv = dataclasses.replace(fenv, n_nodes=int(st.n_nodes))
-    worker_cpu = 0.0
-    evaluations = 0
-    failures: List[dict] = []
-    lam = np.full((P, N), np.nan)
+    return _DirectPair(env, opts, model, st, sp, e, E, T, width, compliances, zone, fenv)
 
-    if model == "hertz":
-        loads = slice_loads_N(k, e, E, F)
-        res = DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k,
-                         kc_h, loads / width, lam, 1, 0.0, 0, [], 0.0, 0.0, T)
-        res.cpu_s, res.wall_s = time.process_time() - c_parent, time.perf_counter() - t_wall
-        return res
 
-    if model in _ROUGH:
-        pos = sp[np.isfinite(sp)]
-        lam_f = film_parameter(env, pos, np.full(pos.shape, F / face))
-        lam[np.isfinite(sp)] = lam_f
-        if check_film_parameter:      # screen at the mean line load F/b first (before any solve)
-            _refuse_low_film(model, env, pos, lam_f, None)
-    if initial_loads_N is not None:
-        loads = np.asarray(initial_loads_N, dtype=float)
+def _start_loads(dp: _DirectPair, s_m, loading: PairLoading, run: dict, on_film_failure: str):
+    """Slice loads (P, NS, N) the load iteration starts from: the given ones; for the per-slice
+    film models the loads converged with ``smooth_ehl`` (steady smooth films, cheap: the same
+    fixed point from a better first guess, module doc); else the Hertz loads.  Returns (loads,
+    film CPU of other processes, film evaluations) of the smooth pre-solve."""
+    P, NS, N = dp.zone.shape
+    if loading.initial_loads_N is not None:
+        loads = np.asarray(loading.initial_loads_N, dtype=float)
         if loads.shape != (P, NS, N):
             raise DirectTVMSError(f"initial_loads_N: expected shape {(P, NS, N)}, got {loads.shape}")
-    elif model in ("rough_steady",) + _TRANSIENT:
-        pre = direct_mesh_stiffness(env, opts, s_m, T, "smooth_ehl", e_pair_m=e, crowning_m=E, transient=st,
-                                    executor=executor, max_workers=max_workers, progress=progress,
-                                    on_film_failure=on_film_failure)
-        worker_cpu += pre.worker_cpu_s
-        evaluations += pre.film_evaluations
-        loads = pre.w_N_per_m * width
-    else:
-        loads = slice_loads_N(k, e, E, F)
+        return loads, 0.0, 0
+    if dp.model in ("rough_steady",) + _TRANSIENT:
+        pre = direct_mesh_stiffness(dp.env, dp.opts, s_m, dp.T, "smooth_ehl", loading=PairLoading(dp.e, dp.E),
+                                    transient=dp.st, on_film_failure=on_film_failure, **run)
+        return pre.w_N_per_m * dp.width, pre.worker_cpu_s, pre.film_evaluations
+    return slice_loads_N(dp.mesh_stiffness(dp.hertz_contact()), dp.e, dp.E, dp.F), 0.0, 0
 
-    R_all, u_all, _ = contact_kinematics(geom, np.where(np.isfinite(sp), sp, float(geom.s_pitch_m)),
-                                         env.omega1_rad_s)
-    last_key = [None] * len(j)          # cache key of the film behind kc[j, n, i] (per zone entry)
-    cache = {}
-    smooth_cache = {}
 
-    def solve(w, redo, it):
-        nonlocal worker_cpu, evaluations
+class _FilmRequests:
+    """The film evaluations of the load iteration (:meth:`solve`, the ``solve`` of
+    :func:`gearfmu.assembly.load_iteration.iterate_load_sharing`): one per distinct (position,
+    slice for the rough films, load), kept for later passes; the rough models screen every
+    request's film parameter first; a failed film raises (``on_film_failure='error'``) or takes
+    the steady smooth film (``'smooth'``, recorded in ``failures``)."""
+
+    def __init__(self, dp: _DirectPair, check_film_parameter: bool, on_film_failure: str, run: dict):
+        self.dp, self.check, self.on_failure, self.run = dp, check_film_parameter, on_film_failure, run
+        geom = dp.env.geom
+        self.R_all, self.u_all, _ = contact_kinematics(
+            geom, np.where(np.isfinite(dp.sp), dp.sp, float(geom.s_pitch_m)), dp.env.omega1_rad_s)
+        self.zone = dp.idx
+        self.last_key = [None] * len(self.zone[0])   # cache key of the film behind kc[j, n, i] (per zone entry)
+        self.cache = {}
+        self.smooth_cache = {}
+        self.worker_cpu = 0.0
+        self.evaluations = 0
+        self.failures: List[dict] = []
+
+    def _item(self, s_k, sl, w_k, jj, ii):
+        """The work item of one request (:func:`_film_chunk`)."""
+        dp = self.dp
+        env, st, fenv = dp.env, dp.st, dp.fenv
+        R, u = float(self.R_all[jj, ii]), float(self.u_all[jj, ii])
+        if dp.model in _TRANSIENT:
+            kw = _transient_kwargs(env, float(dp.sp[jj, ii]), w_k, None if sl < 0 else sl, st)
+            return ("transient", kw, float(st.T_average), st.reduction)
+        if dp.model == "rough_steady":
+            prof = rough_profile(env, fenv, env.flanks(), float(dp.sp[jj, ii]), sl, w_k, R)
+            return ("steady", fenv, R, u, w_k, prof)
+        return ("steady", fenv, R, u, w_k, None)
+
+    def solve(self, w, redo, it):
+        """Contact stiffness (N/m) of the zone entries ``redo`` at the line loads ``w`` (pass ``it``)."""
+        dp, (j, n, i) = self.dp, self.zone
+        model, sp = dp.model, dp.sp
         ridx = np.nonzero(redo)[0]
-        if model in _ROUGH and check_film_parameter:
-            lam_r = film_parameter(env, sp[j[ridx], i[ridx]], w[ridx])
-            _refuse_low_film(model, env, sp[j[ridx], i[ridx]], lam_r, (j[ridx], n[ridx]))
+        if model in _ROUGH and self.check:
+            lam_r = film_parameter(dp.env, sp[j[ridx], i[ridx]], w[ridx])
+            _refuse_low_film(model, dp.env, sp[j[ridx], i[ridx]], lam_r, (j[ridx], n[ridx]))
         # one evaluation per distinct (position, slice for rough films, load)
         keys = []
         for q in ridx:
@@ -383,76 +492,65 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, e_pai
         uniq = {}
         for kk in keys:
             uniq.setdefault(kk[:3], kk)
-        todo = [kk for kk in uniq.values() if kk[:3] not in cache]
-        items = []
-        for (s_k, sl, w_k, jj, ii) in todo:
-            R, u = float(R_all[jj, ii]), float(u_all[jj, ii])
-            if model in _TRANSIENT:
-                kw = _transient_kwargs(env, float(sp[jj, ii]), w_k, None if sl < 0 else sl, st)
-                items.append(("transient", kw, float(st.T_average), st.reduction))
-            elif model == "rough_steady":
-                prof = rough_profile(env, fenv, env.flanks(), float(sp[jj, ii]), sl, w_k, R)
-                items.append(("steady", fenv, R, u, w_k, prof))
-            else:
-                items.append(("steady", fenv, R, u, w_k, None))
+        todo = [kk for kk in uniq.values() if kk[:3] not in self.cache]
+        items = [self._item(*kk) for kk in todo]
         if items:
             res_chunks = map_chunks(_film_chunk, None, [[x] for x in items], [1] * len(items),
-                                    executor=executor, max_workers=max_workers, progress=progress,
-                                    label=f"direct TVMS {model} pass {it}")
+                                    label=f"direct TVMS {model} pass {it}", **self.run)
             for kk, r in zip(todo, res_chunks):
                 r = r[0]
                 if r["pid"] != os.getpid():      # run in another process: its CPU is not ours
-                    worker_cpu += r["cpu_s"]
-                evaluations += 1
-                cache[kk[:3]] = r
+                    self.worker_cpu += r["cpu_s"]
+                self.evaluations += 1
+                self.cache[kk[:3]] = r
         vals = np.empty(len(ridx))
         for m, (q, kk) in enumerate(zip(ridx, keys)):
-            r = cache[kk[:3]]
-            last_key[q] = kk
-            if r["status"] == "ok":
-                vals[m] = r["k_N_per_m"]
-                continue
-            f = dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], status=r["status"],
-                     message=r["message"])
-            if on_film_failure == "error":
-                raise DirectTVMSError(f"{model}: film {r['status']} at s = {kk[0] * 1e3:.4f} mm (LOA from N1), "
-                                      f"pair {kk[3]}, slice {int(n[q])}, w = {kk[2]:.4g} N/m: {r['message']}")
-            sk = (kk[0], kk[2])
-            if sk not in smooth_cache:
-                o = _film_chunk(None, [("steady", fenv, float(R_all[kk[3], kk[4]]), float(u_all[kk[3], kk[4]]),
-                                        kk[2], None)])[0]
-                evaluations += 1
-                smooth_cache[sk] = o
-            vals[m] = smooth_cache[sk]["k_N_per_m"]
-            f["used"] = "smooth_ehl"
-            failures.append(f)
+            r = self.cache[kk[:3]]
+            self.last_key[q] = kk
+            vals[m] = r["k_N_per_m"] if r["status"] == "ok" else self._failed(q, kk, r)
         return vals, None
 
-    ls = iterate_load_sharing(loads, e, E, F, idx, width, floor, solve,
-                              lambda kc: sliced_mesh_stiffness(ct, fp, fg, kc, opts), what=f"direct TVMS {model}")
-    k, kc, loads, it, change = ls.k_slice_N_per_m, ls.k_contact_N_per_m, ls.loads_N, ls.passes, ls.load_change
-    wl = np.where(zone, loads / width, 0.0)
-    if model not in _ROUGH:
-        lam[:] = np.nan
-    hmin, hrun, hsig = (np.full((P, NS, N), np.nan) for _ in range(3))
+    def _failed(self, q, kk, r) -> float:
+        """A failed film: DirectTVMSError, or the steady smooth film's stiffness (recorded)."""
+        n = self.zone[1]
+        f = dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], status=r["status"],
+                 message=r["message"])
+        if self.on_failure == "error":
+            raise DirectTVMSError(f"{self.dp.model}: film {r['status']} at s = {kk[0] * 1e3:.4f} mm (LOA from N1), "
+                                  f"pair {kk[3]}, slice {int(n[q])}, w = {kk[2]:.4g} N/m: {r['message']}")
+        sk = (kk[0], kk[2])
+        if sk not in self.smooth_cache:
+            o = _film_chunk(None, [("steady", self.dp.fenv, float(self.R_all[kk[3], kk[4]]),
+                                    float(self.u_all[kk[3], kk[4]]), kk[2], None)])[0]
+            self.evaluations += 1
+            self.smooth_cache[sk] = o
+        f["used"] = "smooth_ehl"
+        self.failures.append(f)
+        return self.smooth_cache[sk]["k_N_per_m"]
+
+
+def _transient_film_minima(dp: _DirectPair, films: _FilmRequests):
+    """Of the transient models (NaN / empty otherwise), at the final slice loads: the minimum
+    film over the averaging window and over the whole run per zone entry, the window minimum
+    over the composite sigma (rough films) and one record per evaluated request.  Returns
+    (h_min_m, h_min_run_m, h_min_over_sigma, sigma, runs)."""
+    j, n, i = films.zone
+    hmin, hrun, hsig = (np.full(dp.zone.shape, np.nan) for _ in range(3))
     sigma = float("nan")
     runs: List[dict] = []
-    if model in _TRANSIENT:
-        if model in _ROUGH:
-            sigma = float(composite_sigma_m(env.roughness))
-        for q, kk in enumerate(last_key):
-            r = cache.get(kk[:3]) if kk is not None else None
-            if r is None or r["status"] != "ok":
-                continue
-            hmin[j[q], n[q], i[q]] = r["h_min_window_m"]
-            hrun[j[q], n[q], i[q]] = r["h_min_run_m"]
-            hsig[j[q], n[q], i[q]] = r["h_min_window_m"] / sigma
-            runs.append(dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], start=r["start"],
-                             ramp_T=r["ramp_T"], steps=r["steps"], rescued_steps=r["rescued"],
-                             h_min_m=r["h_min_window_m"], h_min_run_m=r["h_min_run_m"],
-                             h_min_over_sigma=r["h_min_window_m"] / sigma, h_central_ratio=r["h_central_ratio"]))
-    return DirectTVMS(model, np.atleast_1d(np.asarray(s_m, float)), sp, k.sum(axis=(0, 1)), k.sum(axis=1), k, kc,
-                      wl, lam, it, change, evaluations, failures,
-                      cpu_s=time.process_time() - c_parent + worker_cpu, wall_s=time.perf_counter() - t_wall,
-                      torque_Nm=T, worker_cpu_s=worker_cpu, h_min_m=hmin, h_min_run_m=hrun, h_min_over_sigma=hsig,
-                      sigma_composite_m=sigma, film_runs=runs)
+    if dp.model not in _TRANSIENT:
+        return hmin, hrun, hsig, sigma, runs
+    if dp.model in _ROUGH:
+        sigma = float(composite_sigma_m(dp.env.roughness))
+    for q, kk in enumerate(films.last_key):
+        r = films.cache.get(kk[:3]) if kk is not None else None
+        if r is None or r["status"] != "ok":
+            continue
+        hmin[j[q], n[q], i[q]] = r["h_min_window_m"]
+        hrun[j[q], n[q], i[q]] = r["h_min_run_m"]
+        hsig[j[q], n[q], i[q]] = r["h_min_window_m"] / sigma
+        runs.append(dict(s_m=kk[0], pair=kk[3], slice=int(n[q]), w_N_per_m=kk[2], start=r["start"],
+                         ramp_T=r["ramp_T"], steps=r["steps"], rescued_steps=r["rescued"],
+                         h_min_m=r["h_min_window_m"], h_min_run_m=r["h_min_run_m"],
+                         h_min_over_sigma=r["h_min_window_m"] / sigma, h_central_ratio=r["h_central_ratio"]))
+    return hmin, hrun, hsig, sigma, runs

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 import time
 from typing import Optional, Sequence
 
@@ -111,23 +111,69 @@ def _stiffness_depends_on_load() -> bool:
 LOAD_DEPENDENT_TORQUE_FACTORS = (0.5, 1.0, 1.5)
 
 
-def _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS, reps, e_slot, E,
-                  rb1, crowned, torques, nominal_torque_Nm, bar):
-    """Stiffness and error rows of the tables, one per torque of ``rows``."""
+@dataclass
+class _PairRows:
+    """What the torque rows of a pair's tables are computed from (SI): the pair, its model options
+    and geometry, the slot count P, the angle points per mesh period, the table's mesh periods
+    ``n_mesh``, the pair meshing errors ``e_slot`` (P, n) (stiffness-weighted over the slices of a
+    helical pair), the lead crowning per slice ``E`` (NS,) and the slot stiffness when it does not
+    depend on the load (``ss_cache``; None: computed per torque)."""
+
+    pair: GearPairSpec
+    opts: MeshModelOptions
+    geom: object
+    slots: int
+    points_per_mesh: int
+    n_mesh: int
+    e_slot: np.ndarray
+    E: np.ndarray
+    ss_cache: Optional[object] = None
+
+    @property
+    def reps(self) -> int:
+        """Table mesh periods per slot."""
+        return self.n_mesh // self.slots
+
+    @property
+    def slices(self) -> int:
+        return int(self.opts.slices)
+
+    @property
+    def crowned(self) -> bool:
+        """Lead crowning: the slices have different crowning (seed 000 eq 16)."""
+        return bool(np.any(self.E != self.E[0]))
+
+    @property
+    def rb1(self) -> float:
+        return float(self.geom.rb1_m)
+
+    def slot_stiffness(self, torque_Nm):
+        """The slot stiffness (:func:`gearfmu.gear.stiffness.slot_stiffness`) at a pinion torque
+        (N m; the load-independent one where kept)."""
+        if self.ss_cache is not None:
+            return self.ss_cache
+        return _slot_stiffness(self.pair, self.geom, self.opts, self.slots, self.points_per_mesh, torque_Nm)
+
+
+def _compute_rows(rows, contact_it, pr: _PairRows, torques, nominal_torque_Nm, bar):
+    """Stiffness and error rows of the tables, one per torque of ``rows`` (N m): the slice
+    stiffness (with a load-dependent contact model, the contact iteration's at the row's slice
+    loads) through the loaded static mesh (seed 000 eq 16); with lead crowning the row holds its
+    secant stiffness and effective error, else the plain stiffness and the meshing error.
+    Returns (k rows, e rows, static TE rows of ``torques``, k of the nominal torque)."""
     k_rows, e_rows, te_rows = [], [], []
     k_nominal = None
     for T in rows:
         if contact_it is not None:
-            k_slice = contact_it.k_slice(T, rb1)
+            k_slice = contact_it.k_slice(T, pr.rb1)
             k_tile = k_slice.sum(axis=1)
         else:
-            ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, T)
-            k_tile, k_slice = per_slice_stiffness(ss, NS, reps)
-        lm = loaded_static_mesh(k_slice, e_slot, E, T / rb1)
-        if crowned:
+            k_tile, k_slice = per_slice_stiffness(pr.slot_stiffness(T), pr.slices, pr.reps)
+        lm = loaded_static_mesh(k_slice, pr.e_slot, pr.E, T / pr.rb1)
+        if pr.crowned:
             k_row, e_row = lm.k_secant_N_per_m, lm.e_effective_m
         else:
-            k_row, e_row = k_tile, e_slot + E[0]
+            k_row, e_row = k_tile, pr.e_slot + pr.E[0]
         if T == nominal_torque_Nm:
             k_nominal = k_row
         if len(k_rows) < len(torques):
@@ -168,31 +214,68 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     and ``engagement_out_rad`` = eps x mesh period, so that both kernels put the stiffness
     steps at meshing-in and meshing-out exactly there (docs/model.md "Contact-zone edges").
     """
+    points_per_mesh = _checked_build_inputs(pair, opts, points_per_mesh)
+    t_start = time.perf_counter()
+    geom = pair_geometry(pair)
+    slots = _slot_count(geom, slots)
+    E = pair_lead_crowning_m(pair, int(opts.slices))
+    torques, load_dep_k, axis_note = _table_torques(opts, torque_axis_Nm, nominal_torque_Nm,
+                                                    bool(np.any(E != E[0])), contact_env)
+    nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
+    rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
+    # no time left: with a lubricated contact model the first rows build the film grid the later reuse
+    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step",
+                       eta=opts.contact_model == "hertz", leave=False)
+    pr, contact_it = _pair_rows(pair, opts, geom, slots, points_per_mesh, E, load_dep_k, contact_env,
+                                nominal_torque_Nm, rows)
+    _step(bar, f"errors + stiffness, {pr.n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
+    if contact_it is not None:
+        contact_it.__enter__()
+    try:
+        k_rows, e_rows, te_rows, k_nominal = _compute_rows(rows, contact_it, pr, torques, nominal_torque_Nm, bar)
+    finally:
+        if contact_it is not None:
+            contact_it.__exit__(None, None, None)
+    bar.close()
+    prov = _provenance(provenance, pr, load_dep_k, t_start, contact_it, axis_note)
+    tables = _mesh_tables(pr, torques, (k_rows, e_rows, te_rows), k_nominal, prov)
+    if thermal is not None:
+        # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
+        tables = _apply_thermal(tables, pr, thermal, progress=progress, contact_env=contact_env,
+                                nominal_torque_Nm=nominal_torque_Nm)
+    return tables.validate()
+
+
+def _checked_build_inputs(pair: GearPairSpec, opts: MeshModelOptions, points_per_mesh) -> int:
+    """The angle points per mesh period (an integer >= 4), the slices and the backlash checked."""
     if int(points_per_mesh) != points_per_mesh or points_per_mesh < 4:
         raise PrecomputeInputError(f"points_per_mesh: must be an integer >= 4, got {points_per_mesh!r}")
-    points_per_mesh = int(points_per_mesh)
     if int(opts.slices) != opts.slices or opts.slices < 1:
         raise PrecomputeInputError(f"slices: must be a positive integer, got {opts.slices!r}")
     if not math.isfinite(pair.backlash_m) or pair.backlash_m < 0:
         raise PrecomputeInputError(f"backlash_m: must be finite and >= 0, got {pair.backlash_m!r}")
-    t_start = time.perf_counter()
-    geom = pair_geometry(pair)
+    return int(points_per_mesh)
 
-    eps = float(geom.total_contact_ratio)  # spur: eps_alpha; helical: eps_gamma (docs/helical.md)
+
+def _slot_count(geom, slots) -> int:
+    """The slot count P: at least ceil(contact ratio) (:func:`gearfmu.gear.stiffness.required_slots`;
+    spur: eps_alpha, helical: eps_gamma, docs/helical.md), that by default."""
+    eps = float(geom.total_contact_ratio)
     p_min = required_slots(geom)
-    helical = geom.helix_angle_rad != 0.0
     if slots is None:
         slots = p_min
     if int(slots) != slots or slots < p_min:
         raise PrecomputeInputError(
             f"slots: must be an integer >= ceil(contact ratio {eps:.4f}) = {p_min}, got {slots!r}")
-    slots = int(slots)
-    NS = int(opts.slices)
-    E = pair_lead_crowning_m(pair, NS)
-    crowned = bool(np.any(E != E[0]))
+    return int(slots)
+
+
+def _table_torques(opts: MeshModelOptions, torque_axis_Nm, nominal_torque_Nm: float, crowned: bool, contact_env):
+    """(torque axis, stiffness depends on the load, note on an added axis): the axis of
+    :func:`_torque_axis`; a load-dependent contact model needs ``contact_env`` and at least two
+    torques (:data:`LOAD_DEPENDENT_TORQUE_FACTORS` x nominal otherwise)."""
     torques = _torque_axis(torque_axis_Nm, nominal_torque_Nm, crowned)
     load_dep_k = _stiffness_depends_on_load()
-    contact_it = None
     axis_note = None
     if opts.contact_model != "hertz":
         cm = get_contact_model(opts.contact_model)
@@ -205,53 +288,45 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
                 axis_note = (f"torque axis {list(LOAD_DEPENDENT_TORQUE_FACTORS)} x nominal added: "
                              f"contact model {opts.contact_model!r} is load-dependent")
             load_dep_k = True
+    return torques, load_dep_k, axis_note
+
+
+def _pair_rows(pair, opts, geom, slots, points_per_mesh, E, load_dep_k, contact_env, nominal_torque_Nm, rows):
+    """The :class:`_PairRows` of a build and its contact iteration (None with Hertz contact):
+    the meshing errors per pair (:mod:`gearfmu.gear.meshing_errors`), the contact iteration over
+    the load range of ``rows`` (a contact model other than Hertz), the load-independent slot
+    stiffness, and for a helical pair the stiffness-weighted pair error of its slices (they see
+    different roll positions; the contact iteration uses it too)."""
     n_mesh = pair_table_mesh_count(pair, slots)
     reps = n_mesh // slots
-    N = n_mesh * points_per_mesh
     rb1 = float(geom.rb1_m)
-    nominal_in_axis = bool(np.any(torques == nominal_torque_Nm))
-    rows = list(torques) + ([] if nominal_in_axis else [float(nominal_torque_Nm)])
-    # no time left: with a lubricated contact model the first rows build the film grid the later reuse
-    bar = progress_bar(desc="gearfmu tables", enabled=progress, total=1 + len(rows), unit="step",
-                       eta=opts.contact_model == "hertz", leave=False)
-
     e_slot = slot_errors_m(pair, geom, slots, n_mesh, points_per_mesh)
+    contact_it = None
     if opts.contact_model != "hertz":
         contact_it = ContactIteration(pair, geom, opts, contact_env, slots, points_per_mesh, reps, e_slot, E,
-                                       nominal_torque_Nm / rb1)
+                                      nominal_torque_Nm / rb1)
         contact_it.set_load_range(rows, rb1)
     ss_cache = None
-    if contact_it is not None:
-        pass
-    elif not load_dep_k:
+    if contact_it is None and not load_dep_k:
         ss_cache = _slot_stiffness(pair, geom, opts, slots, points_per_mesh, None)
-    if helical:  # slices see different roll positions: stiffness-weighted pair error
-        ss_w = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh,
-                                                                     float(nominal_torque_Nm))
-        e_slot = stiffness_weighted_pair_error_m(
-            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, NS), per_slice_stiffness(ss_w, NS, reps)[1])
-        if contact_it is not None:  # the load iteration uses the pair error of the helical pair
-            contact_it.e = e_slot
-    _step(bar, f"errors + stiffness, {n_mesh} mesh periods x {points_per_mesh} points, P={slots}")
-
-    if contact_it is not None:
-        contact_it.__enter__()
-    try:
-        _rows_loop = _compute_rows(rows, contact_it, ss_cache, pair, geom, opts, slots, points_per_mesh, NS,
-                                   reps, e_slot, E, rb1, crowned, torques, nominal_torque_Nm, bar)
-    finally:
+    pr = _PairRows(pair, opts, geom, slots, points_per_mesh, n_mesh, e_slot, E, ss_cache)
+    if geom.helix_angle_rad != 0.0:
+        ss_w = pr.slot_stiffness(float(nominal_torque_Nm))
+        pr.e_slot = stiffness_weighted_pair_error_m(
+            slot_slice_errors_m(pair, geom, slots, n_mesh, points_per_mesh, pr.slices),
+            per_slice_stiffness(ss_w, pr.slices, reps)[1])
         if contact_it is not None:
-            contact_it.__exit__(None, None, None)
-    k_rows, e_rows, te_rows, k_nominal = _rows_loop
-    bar.close()
+            contact_it.e = pr.e_slot
+    return pr, contact_it
 
-    k_arr = np.ascontiguousarray(np.stack(k_rows))
-    e_arr = np.ascontiguousarray(np.stack(e_rows))
-    e_comp = np.ascontiguousarray(comprehensive_error_m(e_arr, k_arr > 0))
+
+def _provenance(provenance, pr: _PairRows, load_dep_k: bool, t_start: float, contact_it, axis_note) -> dict:
+    """The tables' provenance: the caller's, the build's ("precompute") and the contact model's."""
+    opts, crowned = pr.opts, pr.crowned
     prov = dict(provenance or {})
     prov.setdefault("precompute", {
-        "slots": slots, "points_per_mesh": points_per_mesh, "table_mesh_periods": n_mesh,
-        "slices": NS, "lead_crowning_total_m": float(E.max()) if crowned else 0.0,
+        "slots": pr.slots, "points_per_mesh": pr.points_per_mesh, "table_mesh_periods": pr.n_mesh,
+        "slices": pr.slices, "lead_crowning_total_m": float(pr.E.max()) if crowned else 0.0,
         "contact_model": opts.contact_model, "foundation": bool(opts.foundation),
         "shared_foundation_correction": bool(opts.shared_foundation_correction),
         "torque_rows": "secant stiffness + effective error (seed 000 eq 16)" if crowned
@@ -262,14 +337,28 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         prov["contact"] = contact_provenance(contact_it, axis_note)
         if contact_it.helical is not None:  # the scene's speed, and the normal-section mapping
             prov["contact"].update(normal_section_provenance(contact_it.helical))
+    return prov
+
+
+def _mesh_tables(pr: _PairRows, torques, rows, k_nominal, prov: dict) -> MeshTables:
+    """The single-temperature MeshTables of the rows (k, e, static TE) with the exact engagement
+    of every pair, ``engagement_in_rad`` = 0 (point A) and ``engagement_out_rad`` = eps x mesh
+    period, and the mean TVMS of the lookup (exact at the contact-zone edges, docs/tables.md;
+    the damping) of the nominal torque's stiffness."""
+    pair, geom = pr.pair, pr.geom
+    k_rows, e_rows, te_rows = rows
+    eps = float(geom.total_contact_ratio)  # spur: eps_alpha; helical: eps_gamma (docs/helical.md)
+    k_arr = np.ascontiguousarray(np.stack(k_rows))
+    e_arr = np.ascontiguousarray(np.stack(e_rows))
+    e_comp = np.ascontiguousarray(comprehensive_error_m(e_arr, k_arr > 0))
     tables = MeshTables(
         torque_Nm=np.ascontiguousarray(torques, dtype=float),
         k_N_per_m=k_arr,
         e_m=e_arr,
-        backlash_half_m=np.full((slots, N), 0.5 * float(pair.backlash_m)),
-        phi_period_rad=n_mesh * float(geom.mesh_period_rad),
+        backlash_half_m=np.full((pr.slots, pr.n_mesh * pr.points_per_mesh), 0.5 * float(pair.backlash_m)),
+        phi_period_rad=pr.n_mesh * float(geom.mesh_period_rad),
         mesh_period_rad=float(geom.mesh_period_rad),
-        base_radius_pinion_m=rb1,
+        base_radius_pinion_m=pr.rb1,
         base_radius_gear_m=float(geom.rb2_m),
         inertia_pinion_kgm2=disc_inertia_kgm2(pair.pinion),
         inertia_gear_kgm2=disc_inertia_kgm2(pair.gear),
@@ -285,18 +374,11 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
         engagement_in_rad=0.0,
         engagement_out_rad=eps * float(geom.mesh_period_rad),
     )
-    # the mean TVMS of the lookup (exact at the contact-zone edges, docs/tables.md): the damping
-    tables = replace(tables, k_mean_N_per_m=mean_total_stiffness_N_per_m(tables, k_nominal))
-    if thermal is not None:
-        # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
-        tables = _apply_thermal(tables, pair, opts, geom, thermal, e_slot=e_slot, E=E, crowned=crowned,
-                                ss_cache=ss_cache, slots=slots, points_per_mesh=points_per_mesh, reps=reps,
-                                progress=progress, contact_env=contact_env, nominal_torque_Nm=nominal_torque_Nm)
-    return tables.validate()
+    return replace(tables, k_mean_N_per_m=mean_total_stiffness_N_per_m(tables, k_nominal))
 
 
-def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
-                   points_per_mesh, reps, progress, contact_env, nominal_torque_Nm) -> MeshTables:
+def _apply_thermal(tables: MeshTables, pr: _PairRows, thermal, *, progress, contact_env,
+                   nominal_torque_Nm) -> MeshTables:
     """The ``[thermal]`` options (:class:`gearfmu.gear.thermal.ThermalOptions`) applied to
     single-temperature tables: a temperature axis whose meaning is
     ``thermal.axis_quantity`` ("bulk": :func:`_add_temperature_axis`; "oil" /
@@ -304,21 +386,19 @@ def _apply_thermal(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, 
     state alone (:func:`_apply_thermal_state`; unchanged at the standard temperature)."""
     quantity = getattr(thermal, "axis_quantity", "bulk")
     has_axis = len(getattr(thermal, "temperature_axis_C", ()) or ()) > 0
-    kw = dict(e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
-              points_per_mesh=points_per_mesh, reps=reps, progress=progress)
     if has_axis and quantity in ("oil", "bulk_and_oil"):
-        return _add_oil_temperature_axis(tables, pair, opts, thermal, contact_env=contact_env, slots=slots,
-                                         points_per_mesh=points_per_mesh, nominal_torque_Nm=nominal_torque_Nm,
+        return _add_oil_temperature_axis(tables, pr.pair, pr.opts, thermal, contact_env=contact_env, slots=pr.slots,
+                                         points_per_mesh=pr.points_per_mesh, nominal_torque_Nm=nominal_torque_Nm,
                                          progress=progress)
     if has_axis:
         if quantity != "bulk":
             raise PrecomputeInputError(f"axis_quantity: must be one of ('bulk', 'oil', 'bulk_and_oil'), got {quantity!r}")
-        return _add_temperature_axis(tables, pair, opts, geom, thermal, **kw)
+        return _add_temperature_axis(tables, pr, thermal, progress=progress)
     state = thermal_state_from_scene(thermal)
     if _is_standard_state(state):
         return tables
-    return _apply_thermal_state(tables, pair, opts, geom, state, getattr(thermal, "flank_law", "radial_tangential"),
-                                **kw)
+    return _apply_thermal_state(tables, pr, state, getattr(thermal, "flank_law", "radial_tangential"),
+                                progress=progress)
 
 
 def _is_standard_state(state) -> bool:
@@ -327,8 +407,8 @@ def _is_standard_state(state) -> bool:
     return all(not hasattr(t, "at_gamma") and float(t) == t0 for t in (state.pinion, state.gear))
 
 
-def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_slot, E, crowned, ss_cache, slots,
-                  points_per_mesh, reps, progress=False, label="gearfmu temperature axis"):
+def _thermal_rows(tables: MeshTables, pr: _PairRows, states, law, t0, *, progress=False,
+                  label="gearfmu temperature axis"):
     """Per torque row T (N m, > 0) and thermal state (:class:`gearfmu.gear.thermal.ThermalState`):
     (k, e, static TE) arrays of shape (NT, NStates, P, n) / (NT, NStates, n).
 
@@ -345,15 +425,14 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
         raise PrecomputeInputError(
             f"torque_axis_Nm: a non-standard temperature needs torques > 0 (seed 004 stiffness is a secant "
             f"stiffness under load), got {torques.tolist()!r}")
-    rb1 = float(geom.rb1_m)
+    rb1, reps = pr.rb1, pr.reps
     bar = progress_bar(desc=label, enabled=progress, total=len(torques), unit="row")
     k4, e4, te4 = [], [], []
     for it, T in enumerate(torques):
-        ss = ss_cache if ss_cache is not None else _slot_stiffness(pair, geom, opts, slots, points_per_mesh, float(T))
-        k_tile, k_slice = per_slice_stiffness(ss, int(opts.slices), reps)
-        th = thermal_slot_stiffness(pair, opts, torque_Nm=float(T), states=states,
-                                    standard_temperature_C=t0, slots=slots, n_per_mesh=points_per_mesh,
-                                    law=law, geom=geom)
+        k_tile, k_slice = per_slice_stiffness(pr.slot_stiffness(float(T)), pr.slices, reps)
+        th = thermal_slot_stiffness(pr.pair, pr.opts, torque_Nm=float(T), states=states,
+                                    standard_temperature_C=t0, slots=pr.slots, n_per_mesh=pr.points_per_mesh,
+                                    law=law, geom=pr.geom)
         kstd = np.asarray(th.k_standard_N_per_m, dtype=float)
         if kstd.shape[-1] * reps != tables.n_phi or kstd.shape[0] != tables.slots:
             raise PrecomputeInputError(f"temperature axis: thermal grid {kstd.shape} does not tile the table "
@@ -362,8 +441,8 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
         for a in range(len(states)):
             kt = np.asarray(th.k_N_per_m[a], dtype=float)
             ratio = np.tile(np.where(kstd > 0, kt / np.where(kstd > 0, kstd, 1.0), 0.0), (1, reps))
-            lm = loaded_static_mesh(k_slice * ratio[:, None, :], e_slot, E, float(T) / rb1)
-            if crowned:
+            lm = loaded_static_mesh(k_slice * ratio[:, None, :], pr.e_slot, pr.E, float(T) / rb1)
+            if pr.crowned:
                 k_row.append(lm.k_secant_N_per_m)
                 e_row.append(lm.e_effective_m)
             else:
@@ -378,8 +457,7 @@ def _thermal_rows(tables: MeshTables, pair, opts, geom, states, law, t0, *, e_sl
     return np.ascontiguousarray(np.stack(k4)), np.ascontiguousarray(np.stack(e4)), np.stack(te4)
 
 
-def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_slot, E, crowned, ss_cache, slots,
-                          points_per_mesh, reps, progress=False) -> MeshTables:
+def _add_temperature_axis(tables: MeshTables, pr: _PairRows, thermal, *, progress=False) -> MeshTables:
     """Tables with the temperature axis ``thermal.temperature_axis_C`` (degC; uniform
     bulk temperature of both gears, the FMU input ``bulk_temperature``;
     docs/tables.md "Operating axes", docs/thermal.md): :func:`_thermal_rows` at
@@ -392,9 +470,7 @@ def _add_temperature_axis(tables: MeshTables, pair, opts, geom, thermal, *, e_sl
     axis = np.asarray(thermal.temperature_axis_C, dtype=float)
     t0 = float(thermal.standard_temperature_C)
     states = [ThermalState(float(t), float(t), t0) for t in axis]
-    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, states, thermal.flank_law, t0, e_slot=e_slot, E=E,
-                                     crowned=crowned, ss_cache=ss_cache, slots=slots,
-                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress)
+    k_arr, e_arr, te = _thermal_rows(tables, pr, states, thermal.flank_law, t0, progress=progress)
     e_comp = np.ascontiguousarray(np.stack([comprehensive_error_m(e_arr[:, a], k_arr[:, a] > 0)
                                             for a in range(axis.size)], axis=1))
     prov = dict(tables.provenance)
@@ -414,16 +490,13 @@ def _state_description(state) -> dict:
     return {"pinion_C": one(state.pinion), "gear_C": one(state.gear)}
 
 
-def _apply_thermal_state(tables: MeshTables, pair, opts, geom, state, law, *, e_slot, E, crowned, ss_cache, slots,
-                         points_per_mesh, reps, progress=False) -> MeshTables:
+def _apply_thermal_state(tables: MeshTables, pr: _PairRows, state, law, *, progress=False) -> MeshTables:
     """Single-temperature tables at a non-standard thermal state of the gears
     (``[thermal]`` pinion/gear temperatures or profiles without an axis): seed 004
     eq 27-28 at that state applied to every torque row by :func:`_thermal_rows`
     (docs/thermal.md "One temperature without an axis")."""
-    k_arr, e_arr, te = _thermal_rows(tables, pair, opts, geom, [state], law, float(state.standard_temperature_C),
-                                     e_slot=e_slot, E=E, crowned=crowned, ss_cache=ss_cache, slots=slots,
-                                     points_per_mesh=points_per_mesh, reps=reps, progress=progress,
-                                     label="gearfmu thermal state")
+    k_arr, e_arr, te = _thermal_rows(tables, pr, [state], law, float(state.standard_temperature_C),
+                                     progress=progress, label="gearfmu thermal state")
     k_arr, e_arr = np.ascontiguousarray(k_arr[:, 0]), np.ascontiguousarray(e_arr[:, 0])
     prov = dict(tables.provenance)
     prov["thermal"] = {"state": _state_description(state),

@@ -24,7 +24,8 @@ __all__ = ["CONTACT_MODELS", "LUBRICATED_CONTACT_MODELS", "FILM_FAILURE_POLICIES
            "THERMAL_AXIS_QUANTITIES", "FLANK_LAWS", "DAMPING_MODELS", "INTEGRATORS", "RUNTIMES",
            "DEFAULT_RUNTIME", "HELIX_HANDS", "OIL_ALPHA_LAWS", "DEPRECATED_SPELLINGS", "current_spelling",
            "DEFAULT_DAMPING_MODEL", "DEFAULT_INTEGRATOR", "TEMPERATURE_INPUTS", "GEARBOX_INTEGRATORS", "FMI3_OUTPUTS",
-           "DEFAULT_FMI3_OUTPUTS"]
+           "DEFAULT_FMI3_OUTPUTS", "FMU_INTERFACES", "DEFAULT_FMU_INTERFACE", "ME_NODE_EVENTS",
+           "DEFAULT_ME_NODE_EVENTS", "SSP_COUPLINGS", "DEFAULT_SSP_COUPLING"]
 
 #: contact models a scene may name (implemented by the registry of gearfmu.contact.models)
 CONTACT_MODELS = ("hertz", "smooth_ehl", "rough_ehl", "fractal_mixed")
@@ -73,6 +74,13 @@ DEFAULT_INTEGRATOR = "rk4_node"
 #: the integrators of the gearbox solver (gearfmu.gearbox.native, docs/gearbox.md "Integrators"), a
 #: subset of INTEGRATORS with the same codes; the default is DEFAULT_INTEGRATOR
 GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
+#: how the stage FMUs of a gearbox SSP are coupled (docs/gearbox.md "The SSP of stage FMUs"):
+#: "flange" every elastic shaft inside the stage FMU of the light body it drives, the stage taking
+#: the speed of the body at the shaft's far end and returning the shaft's torque (the default);
+#: "shaft" the stages take torques at their pinion and gear, shaft FMUs between them integrate the
+#: exchanged speeds and return the shaft torque
+SSP_COUPLINGS = ("flange", "shaft")
+DEFAULT_SSP_COUPLING = "flange"
 #: FMU runtimes (docs/fmu.md, docs/standalone.md)
 RUNTIMES = ("pythonfmu", "standalone")
 #: how an FMI 3 FMU carries the per-slot outputs (docs/standalone.md "FMI 3.0"): "array" (pair_force,
@@ -80,6 +88,17 @@ RUNTIMES = ("pythonfmu", "standalone")
 #: without array support)
 FMI3_OUTPUTS = ("array", "scalar")
 DEFAULT_FMI3_OUTPUTS = "array"
+#: the FMI interfaces a standalone FMU offers (docs/standalone.md "Model Exchange"): Co-Simulation,
+#: Model Exchange, or both in one FMU (the default: every standalone FMU is usable both ways; the
+#: pythonfmu runtime offers Co-Simulation only)
+FMU_INTERFACES = ("cs", "me", "both")
+DEFAULT_FMU_INTERFACE = "both"
+#: Model Exchange's table-node events (docs/model.md "Model Exchange"): none (the host's solver
+#: steps over every table node), the big kinks (the default: rk4_seg's stops, a few per mesh
+#: period; measured by benchmarks/bench_me.py, docs/validation.md) or every node where the tables
+#: bend (rk4_node's)
+ME_NODE_EVENTS = ("none", "kinks", "all")
+DEFAULT_ME_NODE_EVENTS = "kinks"
 #: the FMU runtime when a scene names none: the all-C one (no Python needed in the importing tool)
 DEFAULT_RUNTIME = "standalone"
 

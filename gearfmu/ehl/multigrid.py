@@ -37,12 +37,12 @@ class EHLParams:
 
 #: Speed path (docs/ehl.md; opt-in, pass as multigrid options:
 #: ``solve_line_contact(..., **SPEED_SETTING)``): the first relaxation setting of
-#: :data:`.solver.RELAXATION_SETTINGS` with F-cycles and the coarsest grid solved
+#: :data:`.attempts.RELAXATION_SETTINGS` with F-cycles and the coarsest grid solved
 #: by one Newton step (:func:`_coarse_newton`) instead of 10 point sweeps.
 #: Fewer and cheaper cycles than the default W-cycles (benchmarks/bench_ehl.py
 #: --speed), but without the fallback settings of the default path (passing
 #: options disables them); the default path tries similar cycles first
-#: (:data:`.solver.FAST_SETTING`, :data:`.solver.FAST_ROBUST_SETTING`, with an FMG start).
+#: (:data:`.attempts.FAST_SETTING`, :data:`.attempts.FAST_ROBUST_SETTING`, with an FMG start).
 SPEED_SETTING = dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.5, load_mode=1,
                      c_h0=0.1, stick=10.0, gamma="F", coarse_newton=1)
 

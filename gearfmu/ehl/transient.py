@@ -31,7 +31,7 @@ finest-grid right-hand side.  Each step: warm start from the previous step (P an
 extrapolated from the last two levels, P clipped at 0), W-cycles until the
 steady tolerances are met (load balance inside the cycles, so eq 7 holds per
 step), the settings of :data:`TRANSIENT_RELAXATION_SETTINGS` then those of
-:data:`.solver.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
+:data:`.attempts.RELAXATION_SETTINGS` if it stalls; a step that stalls on every
 setting is re-solved as 2, then 4 BDF2 sub-steps (roughness at the sub-step
 times; rough flanks stall on limit cycles / residual floors at asperity
 pressure spikes, docs/ehl_transient.md), and only if that fails too raises
@@ -62,17 +62,18 @@ from .errors import EHLConvergenceError, EHLInputError, FilmCollapseError, stall
 from .film_stiffness import film_stiffness_N_per_m
 from .lubricant import (B0_DEFAULT_PA, B0_PRIME_DEFAULT, DH_C1_PA, ROELANDS_LN_ETA_INF,
                         ROELANDS_P0_PA)
-from .mgcycle import OPT_DEFAULTS
 from .transient_inputs import (TransientLubricant, TransientNumerics, TransientOperating,
                                _transient_inputs)
 from .multigrid import EHLParams, FlatMultigrid
-from .solver import (FREEZE_BELOW_PRESSURE_CHANGE, FROZEN_STALL_WINDOW, RELAXATION_SETTINGS, STALL_WINDOW,
-                     LineContactResult, _flat_opts, solve_line_contact, solve_line_contact as _steady)
+from .attempts import RELAXATION_SETTINGS
+from .iterate import flat_options
+from .solver import LineContactResult, solve_line_contact, solve_line_contact as _steady
 from .mesh_film import contact_kinematics, involute_arc_length_m
+from .transient_steps import SUBSTEP_SPLITS, MovingSurfaces, StepSettings, TimeStepper
 
 #: Relaxation settings of the time steps, tried in this order (the one that
 #: converged last is tried first at the next step), then the steady
-#: :data:`.solver.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
+#: :data:`.attempts.RELAXATION_SETTINGS`.  At M = 20, L = 10, 256 intervals,
 #: waviness 0.1 H_c, lambda = 0.5 b (docs/ehl_transient.md):
 #: the steady default (dipole distribution ``dist=0``) diverges within 2-5
 #: steps once c_t > 0 (the time term sees the dipole's 1/r far field) and the
@@ -88,10 +89,6 @@ TRANSIENT_RELAXATION_SETTINGS = (
     dict(switch=0.3, nu1=2, nu2=1, omega_gs=0.6, omega_j=0.1, load_mode=1, c_h0=0.1,
          stick=10.0),
 )
-
-#: sub-step rescue of a step that stalled on every relaxation setting: the step
-#: is re-solved as this many BDF2 sub-steps, in turn (docs/ehl_transient.md)
-SUBSTEP_SPLITS = (2, 4)
 
 #: averaging window after the wash-out (dimensionless time, CHOICE of
 #: docs/ehl_transient.md: two contact widths at u_s)
@@ -352,84 +349,15 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     (default :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones).
     ``substep_rescue`` (default True): a step that stalls on every setting is
     re-solved as 2, then 4 BDF2 sub-steps with the roughness at the sub-step
-    times (:data:`SUBSTEP_SPLITS`, docs/ehl_transient.md; only stalled
+    times (:data:`.transient_steps.SUBSTEP_SPLITS`, docs/ehl_transient.md; only stalled
     steps, so converging runs are unchanged); the steps rescued are
     :attr:`TransientLineContactResult.rescued`; "always": every step is solved
     as sub-steps (a verification mode of the rescue path)."""
     t_wall0 = time.perf_counter()
     op, lub, num = _transient_inputs((operating, lubricant, numerics), fields)
-    R_m, E_Pa, w_N_per_m, u_m_s, M, L = op.R_m, op.E_Pa, op.w_N_per_m, op.u_m_s, op.M, op.L
-    srr, speed_ratios = op.srr, op.speed_ratios
-    eta0_Pas, alpha_Pa_inv, rho0_kg_m3 = lub.eta0_Pas, lub.alpha_Pa_inv, lub.rho0_kg_m3
-    compressible, viscosity, B0_Pa, B0_prime = (lub.compressible, lub.viscosity, lub.B0_Pa,
-                                                lub.B0_prime)
-    n_steps, dT, scheme, n_nodes, n_coarse = num.n_steps, num.dT, num.scheme, num.n_nodes, \
-        num.n_coarse
-    x_in, x_out, tol_pressure, tol_load, tol_residual = (num.x_in, num.x_out, num.tol_pressure,
-                                                         num.tol_load, num.tol_residual)
-    max_cycles_per_step, extrapolate, relaxation_settings = (
-        num.max_cycles_per_step, num.extrapolate, num.relaxation_settings)
-    start, ramp_T, steady_options, substep_rescue = (num.start, num.ramp_T, num.steady_options,
-                                                     num.substep_rescue)
-    model = _roughness_model(roughness)
-    if speed_ratios is not None:
-        if np.ndim(speed_ratios) != 1 or len(speed_ratios) != 2:
-            raise EHLInputError(f"speed_ratios={speed_ratios!r}: must be a pair (U1, U2)")
-        U1 = _finite("speed_ratios[0]", speed_ratios[0], 0.0)
-        U2 = _finite("speed_ratios[1]", speed_ratios[1], 0.0)
-    else:
-        srr = _finite("srr", srr)
-        if not -2.0 <= srr <= 2.0:
-            raise EHLInputError(f"srr={srr!r}: must be in [-2, 2] (both surfaces moving in +x)")
-        U1, U2 = 1.0 + 0.5 * srr, 1.0 - 0.5 * srr
-    if start not in ("frozen", "smooth", "auto"):
-        raise EHLInputError(f"start={start!r}: must be 'frozen', 'smooth' or 'auto'")
-    ramp_T = _finite("ramp_T", ramp_T, 0.0, True)
-    if scheme not in (None, "bdf1", "bdf2", "characteristic"):
-        raise EHLInputError(f"scheme={scheme!r}: must be 'bdf1', 'bdf2' or 'characteristic'")
-    width_m = _finite("width_m", width_m, 0.0, True)
-    mc = int(max_cycles_per_step)
-    if mc < 1:
-        raise EHLInputError(f"max_cycles_per_step={max_cycles_per_step!r}: must be >= 1")
-    if substep_rescue not in (True, False, "always"):
-        raise EHLInputError(f"substep_rescue={substep_rescue!r}: must be True, False or 'always'")
-    steady_kw = dict(steady_options or {})
-    for k in ("roughness_m", "M", "L", "n_nodes", "n_coarse", "x_in", "x_out", "compressible",
-              "viscosity"):
-        if k in steady_kw:
-            raise EHLInputError(f"steady_options: {k!r} is an argument of the transient solver")
-
-    def wm_m(x_m, t_s, u_s):
-        """Composite roughness (m) at positions x_m and time t_s."""
-        return (model.surface_height_m(1, x_m - U1 * u_s * t_s)
-                + model.surface_height_m(2, x_m - U2 * u_s * t_s))
-
-    # ---- steady frozen-roughness start (T = 0)
-    rough0 = None
-    if model is not None:
-        def rough0(x_m):
-            return wm_m(np.asarray(x_m, float), 0.0, 1.0)
-    def steady_solve(rough):
-        return solve_line_contact(R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv,
-                                  rho0_kg_m3, M=M, L=L, roughness_m=rough,
-                                  compressible=compressible, viscosity=viscosity,
-                                  n_nodes=n_nodes, n_coarse=n_coarse, x_in=x_in, x_out=x_out,
-                                  tol_pressure=tol_pressure, tol_load=tol_load,
-                                  tol_residual=tol_residual, roughness_min_wavelength_dX=0.0,
-                                  **steady_kw)
-
-    ramp = 0.0
-    if start == "smooth" and model is not None:
-        steady, ramp = steady_solve(None), ramp_T
-    else:
-        try:
-            steady = steady_solve(rough0)
-        except EHLConvergenceError:
-            if start != "auto" or model is None:
-                raise
-            steady, ramp = steady_solve(None), ramp_T
-    start_used = "smooth" if ramp > 0.0 else "frozen"
-    prm = dimensionless_params(steady, viscosity, compressible)
+    ch = _checked_inputs(op, lub, num, roughness, width_m)
+    steady, ramp = _steady_start(op, lub, num, ch)
+    prm = dimensionless_params(steady, lub.viscosity, lub.compressible)
     n_nodes = steady.X.size
     n_levels = steady.grid_levels
     n_coarse = (n_nodes - 1) // 2 ** (n_levels - 1)
@@ -437,229 +365,210 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     u_s = steady.inputs["u_m_s"]
     scale_H = R / b_m ** 2
     first = dict(steady.residuals["settings"])
-    solver = FlatMultigrid(prm, n_levels, n_coarse, None, **_flat_opts(first))
-    top = solver.top
-    dX = float(solver.dx[top])
-    dT = dX if dT is None else _finite("dT", dT, 0.0, True)
+    solver = FlatMultigrid(prm, n_levels, n_coarse, None, **flat_options(first))
+    dT, scheme, n_steps = _time_steps(num, ch.surfaces, float(solver.dx[solver.top]), ramp)
+    dt_s = dT * b_m / u_s
+    order = _settings_order(num.relaxation_settings)
+    stepper = TimeStepper(solver, ch.surfaces, b_m, u_s, scale_H, ramp, StepSettings(
+        order, ch.max_cycles, num.tol_pressure, num.tol_load, num.tol_residual, dT, scheme,
+        num.extrapolate, ch.substep_rescue))
+    stepper.set_time(0.0)
+    solver.start(steady.P, float(np.interp(0.0, steady.X, steady.H)))
+    rec = _Recorder(solver, n_steps, b_m, ph_Pa, scale_H, (dT, dt_s), 2.0 * b_m * ch.width_m,
+                    (float(lub.B0_Pa), float(lub.B0_prime)))
+    rec.record(0)
+    stepper.keep_level()
+    t_cpu0 = time.process_time()
+    for n in range(1, n_steps + 1):
+        ok, ncyc, h, m_used = stepper.step(n)
+        rec.cycles[n] += ncyc
+        rec.rescued[n] = m_used
+        if not ok:
+            raise _step_error(n, n_steps, stepper, h, (b_m, u_s))
+        rec.attempts[n] = stepper.cur
+        rec.record(n)
+        stepper.keep_level()
+    cpu = time.process_time() - t_cpu0
+    Tv = np.arange(n_steps + 1) * dT
+    Xt = rec.Xt
+    return TransientLineContactResult(
+        T=Tv, t_s=Tv * b_m / u_s, h_central_m=rec.out["hc"], h_min_m=rec.out["hmin"],
+        h_mean_m=rec.out["hm"], p_mean_Pa=rec.out["pm"], k_film_N_per_m=rec.out["k"], cycles=rec.cycles,
+        attempts=rec.attempts, dT=float(dT), dt_s=float(dt_s), scheme=scheme, U1=float(ch.surfaces.U1),
+        U2=float(ch.surfaces.U2), width_m=ch.width_m, x_m=Xt * b_m, X=Xt.copy(),
+        p_Pa=solver.level_P() * ph_Pa, h_m=solver.level_H() / scale_H, b_m=b_m, ph_Pa=ph_Pa,
+        M=steady.M, L=steady.L, steady=steady, cpu_time_s=cpu,
+        wall_time_s=time.perf_counter() - t_wall0,
+        settings=dict(order[stepper.cur]), B0_Pa=rec.Bc[0], B0_prime=rec.Bc[1],
+        start="smooth" if ramp > 0.0 else "frozen", ramp_T=float(ramp), rescued=rec.rescued)
+
+
+@dataclass(frozen=True)
+class _Checked:
+    """The checked inputs of a transient solve that are not passed on as given."""
+
+    surfaces: MovingSurfaces
+    start: str
+    ramp_T: float
+    width_m: float
+    max_cycles: int
+    substep_rescue: Union[bool, str]
+    steady_kw: dict
+
+
+def _checked_inputs(op: TransientOperating, lub: TransientLubricant, num: TransientNumerics, roughness,
+                    width_m) -> _Checked:
+    """The roughness model and the surface speeds U1 = 1 + srr/2, U2 = 1 - srr/2 (or the given
+    ``speed_ratios``), the start, the slice width, the cycle limit, the rescue and the steady
+    start's options, each checked (EHLInputError naming the field)."""
+    model = _roughness_model(roughness)
+    if op.speed_ratios is not None:
+        speed_ratios = op.speed_ratios
+        if np.ndim(speed_ratios) != 1 or len(speed_ratios) != 2:
+            raise EHLInputError(f"speed_ratios={speed_ratios!r}: must be a pair (U1, U2)")
+        U1 = _finite("speed_ratios[0]", speed_ratios[0], 0.0)
+        U2 = _finite("speed_ratios[1]", speed_ratios[1], 0.0)
+    else:
+        srr = _finite("srr", op.srr)
+        if not -2.0 <= srr <= 2.0:
+            raise EHLInputError(f"srr={srr!r}: must be in [-2, 2] (both surfaces moving in +x)")
+        U1, U2 = 1.0 + 0.5 * srr, 1.0 - 0.5 * srr
+    if num.start not in ("frozen", "smooth", "auto"):
+        raise EHLInputError(f"start={num.start!r}: must be 'frozen', 'smooth' or 'auto'")
+    ramp_T = _finite("ramp_T", num.ramp_T, 0.0, True)
+    if num.scheme not in (None, "bdf1", "bdf2", "characteristic"):
+        raise EHLInputError(f"scheme={num.scheme!r}: must be 'bdf1', 'bdf2' or 'characteristic'")
+    width_m = _finite("width_m", width_m, 0.0, True)
+    mc = int(num.max_cycles_per_step)
+    if mc < 1:
+        raise EHLInputError(f"max_cycles_per_step={num.max_cycles_per_step!r}: must be >= 1")
+    if num.substep_rescue not in (True, False, "always"):
+        raise EHLInputError(f"substep_rescue={num.substep_rescue!r}: must be True, False or 'always'")
+    steady_kw = dict(num.steady_options or {})
+    for k in ("roughness_m", "M", "L", "n_nodes", "n_coarse", "x_in", "x_out", "compressible",
+              "viscosity"):
+        if k in steady_kw:
+            raise EHLInputError(f"steady_options: {k!r} is an argument of the transient solver")
+    return _Checked(MovingSurfaces(model, U1, U2), num.start, ramp_T, width_m, mc, num.substep_rescue, steady_kw)
+
+
+def _steady_start(op: TransientOperating, lub: TransientLubricant, num: TransientNumerics, ch: _Checked):
+    """The state at T = 0 (docs/ehl_transient.md): the steady film with the roughness frozen in
+    place (start "frozen"), or the smooth steady film with the roughness then ramped in over
+    ``ramp_T`` ("smooth"; "auto": where the frozen steady solve stalls).  The steady solve has
+    no band filter (the transient roughness is not filtered either).  Returns (steady result,
+    ramp duration; 0 for the frozen start)."""
+    surfaces = ch.surfaces
+
+    def frozen(x_m):
+        return surfaces.height_m(np.asarray(x_m, float), 0.0, 1.0)
+    rough0 = frozen if surfaces.model is not None else None
+
+    def steady_solve(rough):
+        return solve_line_contact(op.R_m, op.E_Pa, op.w_N_per_m, op.u_m_s, lub.eta0_Pas, lub.alpha_Pa_inv,
+                                  lub.rho0_kg_m3, M=op.M, L=op.L, roughness_m=rough,
+                                  compressible=lub.compressible, viscosity=lub.viscosity,
+                                  n_nodes=num.n_nodes, n_coarse=num.n_coarse, x_in=num.x_in, x_out=num.x_out,
+                                  tol_pressure=num.tol_pressure, tol_load=num.tol_load,
+                                  tol_residual=num.tol_residual, roughness_min_wavelength_dX=0.0,
+                                  **ch.steady_kw)
+
+    if ch.start == "smooth" and surfaces.model is not None:
+        return steady_solve(None), ch.ramp_T
+    try:
+        return steady_solve(rough0), 0.0
+    except EHLConvergenceError:
+        if ch.start != "auto" or surfaces.model is None:
+            raise
+        return steady_solve(None), ch.ramp_T
+
+
+def _time_steps(num: TransientNumerics, surfaces: MovingSurfaces, dX: float, ramp: float):
+    """(dT, scheme, number of steps): dT = dX by default (Courant 1 on u_s); the scheme
+    "characteristic" where dT = dX (which it needs), else "bdf2"; by default the steps of
+    ramp + T_wash + :data:`T_AVERAGE`, T_wash = (x_out - x_in)/min(U1, U2)."""
+    dT = dX if num.dT is None else _finite("dT", num.dT, 0.0, True)
+    scheme = num.scheme
     if scheme is None:
         scheme = "characteristic" if abs(dT / dX - 1.0) <= 1e-9 else "bdf2"
     if scheme == "characteristic" and abs(dT / dX - 1.0) > 1e-9:
         raise EHLInputError(f"dT={dT!r}: scheme 'characteristic' needs dT = dX = {dX!r}")
-    dt_s = dT * b_m / u_s
-    T_wash = 0.0 if min(U1, U2) <= 0 else (x_out - x_in) / min(U1, U2)
+    U_min = min(surfaces.U1, surfaces.U2)
+    T_wash = 0.0 if U_min <= 0 else (num.x_out - num.x_in) / U_min
+    n_steps = num.n_steps
     if n_steps is None:
         n_steps = int(math.ceil((ramp + T_wash + T_AVERAGE) / dT))
     if int(n_steps) != n_steps or n_steps < 1:
         raise EHLInputError(f"n_steps={n_steps!r}: must be an integer >= 1")
-    n_steps = int(n_steps)
+    return dT, scheme, int(n_steps)
 
-    def set_base(T):
-        for l in range(n_levels):
-            Xl = solver.X[l]
-            amp = 1.0 if ramp <= 0.0 else min(1.0, T / ramp)
-            w = 0.0 if model is None or amp == 0.0 else \
-                amp * wm_m(Xl * b_m, T * b_m / u_s, u_s) * scale_H
-            solver.base[solver._sl(l)] = 0.5 * Xl ** 2 + w
 
-    set_base(0.0)
-    Hc0 = float(np.interp(0.0, steady.X, steady.H))
-    solver.start(steady.P, Hc0)
-    Xt = solver.X[top]
-    band = np.abs(Xt) <= 1.0
-    area = 2.0 * b_m * width_m
-    Bc = (float(B0_Pa), float(B0_prime))
+def _settings_order(relaxation_settings):
+    """The relaxation settings of the time steps in the order first tried: the given ones, or
+    :data:`TRANSIENT_RELAXATION_SETTINGS` then the steady ones not among them."""
+    if relaxation_settings is None:
+        order = [dict(s) for s in TRANSIENT_RELAXATION_SETTINGS]
+        order += [dict(s) for s in RELAXATION_SETTINGS if dict(s) not in order]
+        return order
+    order = [dict(s) for s in relaxation_settings]
+    if not order:
+        raise EHLInputError("relaxation_settings: need at least one settings dict")
+    return order
 
-    nT = n_steps + 1
-    out = {k: np.empty(nT) for k in ("hc", "hmin", "hm", "pm", "k")}
-    cycles = np.zeros(nT, dtype=np.int64)
-    attempts = np.zeros(nT, dtype=np.int64)
-    rescued = np.zeros(nT, dtype=np.int64)
 
-    def record(n):
-        H = solver.level_H()
-        P = solver.level_P()
-        h = H / scale_H
+class _Recorder:
+    """The outputs per time level on the Hertz band |x| <= b (module docstring): central and
+    minimum film, mean film and mean pressure, and the film stiffness k = A B(p_m)/h_m of seed
+    000 eq 8 of the slice area ``area`` (m^2) with the Tait constants ``Bc`` = (B0, B0')."""
+
+    def __init__(self, solver, n_steps, b_m, ph_Pa, scale_H, steps, area, Bc):
+        self.solver, self.b_m, self.ph_Pa, self.scale_H = solver, b_m, ph_Pa, scale_H
+        self.dT, self.dt_s = steps
+        self.area, self.Bc = area, Bc
+        self.Xt = solver.X[solver.top]
+        self.band = np.abs(self.Xt) <= 1.0
+        nT = n_steps + 1
+        self.out = {k: np.empty(nT) for k in ("hc", "hmin", "hm", "pm", "k")}
+        self.cycles = np.zeros(nT, dtype=np.int64)
+        self.attempts = np.zeros(nT, dtype=np.int64)
+        self.rescued = np.zeros(nT, dtype=np.int64)
+
+    def record(self, n: int) -> None:
+        """The outputs of time level ``n``; a film not finite or h <= 0 anywhere raises."""
+        H = self.solver.level_H()
+        P = self.solver.level_P()
+        h = H / self.scale_H
+        Xt, b_m, dT, out = self.Xt, self.b_m, self.dT, self.out
         if not np.all(np.isfinite(h)):
             raise EHLConvergenceError(f"transient step {n} (T = {n * dT:.4g}): film not finite",
                                       "pressure_change", float("nan"))
         imin = int(np.argmin(h))
         if h[imin] <= 0.0:
             raise FilmCollapseError(
-                f"film collapse at transient step {n} (T = {n * dT:.4g}, t = {n * dt_s:.4g} s): "
+                f"film collapse at transient step {n} (T = {n * dT:.4g}, t = {n * self.dt_s:.4g} s): "
                 f"h = {h[imin]:.3e} m <= 0 at x = {Xt[imin] * b_m:.4e} m; the full-film model "
                 "(seed 000) does not hold", x_m=float(Xt[imin] * b_m), h_min_m=float(h[imin]))
         out["hc"][n] = float(np.interp(0.0, Xt, h))
         out["hmin"][n] = float(h[imin])
-        out["hm"][n] = float(np.mean(h[band]))
-        out["pm"][n] = float(np.mean(P[band])) * ph_Pa
-        out["k"][n] = film_stiffness_N_per_m(area, out["hm"][n], out["pm"][n], *Bc)
+        out["hm"][n] = float(np.mean(h[self.band]))
+        out["pm"][n] = float(np.mean(P[self.band])) * self.ph_Pa
+        out["k"][n] = film_stiffness_N_per_m(self.area, out["hm"][n], out["pm"][n], *self.Bc)
 
-    record(0)
-    # settings: the steady start's first, then the others
-    if relaxation_settings is None:
-        order = [dict(s) for s in TRANSIENT_RELAXATION_SETTINGS]
-        order += [dict(s) for s in RELAXATION_SETTINGS if dict(s) not in order]
-    else:
-        order = [dict(s) for s in relaxation_settings]
-        if not order:
-            raise EHLInputError("relaxation_settings: need at least one settings dict")
-    cur = 0
 
-    def solve_step(ct, f_old, char, P_start, H0_start):
-        """One implicit time level: the relaxation settings in turn (the last
-        converged first), each with its frozen-switch continuation.  Returns
-        (converged, W-cycles, history of the last attempt)."""
-        nonlocal cur
-        ok = False
-        ncyc = 0
-        tried = [cur] + [k for k in range(len(order)) if k != cur]
-        for k in tried:
-            o = dict(OPT_DEFAULTS)
-            o.update(_flat_opts(order[k]))
-            solver.opts.clear()
-            solver.opts.update(o)
-            sl = solver._sl(top)
-            solver.P[sl] = P_start
-            solver.P[sl.start] = solver.P[sl.stop - 1] = 0.0
-            solver.tauH[:] = 0.0
-            solver.H0[top] = H0_start
-            solver.mode[:] = 0
-            solver.update_film(top)
-            solver.set_time_term(ct, f_old, characteristic=char)
-            ok, nc, h = solver.iterate(max_cycles=mc, min_cycles=1, tol_pressure=tol_pressure,
-                                       tol_load=tol_load, tol_residual=tol_residual,
-                                       stall_window=STALL_WINDOW)
-            ncyc += nc
-            dp = h["pressure_change"][-1] if h["pressure_change"] else float("nan")
-            if not ok and math.isfinite(dp) and dp < FREEZE_BELOW_PRESSURE_CHANGE:
-                solver.opts["freeze"] = 1
-                ok, nc, h2 = solver.iterate(max_cycles=mc, min_cycles=1,
-                                            tol_pressure=tol_pressure, tol_load=tol_load,
-                                            tol_residual=tol_residual,
-                                            stall_window=FROZEN_STALL_WINDOW)
-                solver.opts["freeze"] = 0
-                ncyc += nc
-                if h2["pressure_change"]:
-                    h = h2
-            if ok:
-                cur = k
-                break
-        return ok, ncyc, h
-
-    def rescue_step(n, T):
-        """Sub-step rescue of a stalled step (docs/ehl_transient.md): the
-        interval [T - dT, T] in m = 2, then 4 equal BDF2 sub-steps (steady
-        wedge + time derivative, roughness at each sub-step time; the first
-        sub-step variable-step BDF2 on the levels T - dT, T - 2 dT, omega =
-        1/m, or BDF1 at the first step), each solved by :func:`solve_step`.
-        Returns (converged, W-cycles, history, m)."""
-        total = 0
-        h = {"pressure_change": [], "load_balance": [], "reynolds_residual": []}
-        for m in SUBSTEP_SPLITS:
-            hs = dT / m
-            P_a, H0_a, r_a = P_hist[-1], H0_hist[-1], rH[-1]      # level T - dT
-            ok = False
-            for q in range(1, m + 1):
-                set_base(T - dT + q * hs)
-                if q == 1:
-                    if len(rH) >= 2:
-                        w = 1.0 / m
-                        ct = (1.0 + 2.0 * w) / (1.0 + w) / hs
-                        f_old = (-(1.0 + w) * rH[-1] + w * w / (1.0 + w) * rH[-2]) / hs
-                        P_s = np.clip(P_hist[-1] + w * (P_hist[-1] - P_hist[-2]), 0.0, None)
-                        H0_s = H0_hist[-1] + w * (H0_hist[-1] - H0_hist[-2])
-                    else:
-                        ct, f_old = 1.0 / hs, -rH[-1] / hs
-                        P_s, H0_s = P_hist[-1], H0_hist[-1]
-                    r_b, P_b, H0_b = None, None, None
-                else:
-                    ct = 1.5 / hs
-                    f_old = (-2.0 * r_a + 0.5 * r_b) / hs
-                    P_s = np.clip(2.0 * P_a - P_b, 0.0, None)
-                    H0_s = 2.0 * H0_a - H0_b
-                ok, nc, h = solve_step(ct, f_old, False, P_s, H0_s)
-                total += nc
-                if not ok:
-                    break
-                r_b, P_b, H0_b = r_a, P_a, H0_a
-                r_a, P_a, H0_a = solver.rho_H(), solver.level_P().copy(), float(solver.H0[top])
-            if ok:
-                return True, total, h, m
-        set_base(T)
-        return False, total, h, 0
-    P_hist = [solver.level_P().copy()]
-    H0_hist = [float(solver.H0[top])]
-    rH = [solver.rho_H()]
-    t_cpu0 = time.process_time()
-    for n in range(1, n_steps + 1):
-        T = n * dT
-        set_base(T)
-        bdf2 = scheme == "bdf2" and n >= 2
-        if scheme == "characteristic":
-            # old levels shifted one / two nodes upstream (Courant 1); node -1 of
-            # level n-2 by linear extrapolation (inlet, smooth film)
-            # (first step: the start state also stands for level -1, CHOICE -- a
-            # stationary start stays stationary, the scheme is second order from
-            # the first step; a first-order first step would differ from the
-            # steady second-order wedge and kick a smooth start)
-            r2 = rH[-2] if n >= 2 else rH[-1]
-            a1 = np.empty_like(rH[-1])
-            a1[1:] = rH[-1][:-1]
-            a1[0] = 0.0
-            a2 = np.empty_like(r2)
-            a2[2:] = r2[:-2]
-            a2[1] = 2.0 * r2[0] - r2[1]
-            a2[0] = 0.0
-            ct = 1.5 / dT
-            f_old = (-2.0 * a1 + 0.5 * a2) / dT
-        elif bdf2:
-            ct = 1.5 / dT
-            f_old = (-2.0 * rH[-1] + 0.5 * rH[-2]) / dT
-        else:
-            ct = 1.0 / dT
-            f_old = -rH[-1] / dT
-        if extrapolate and n >= 2:
-            P_start = np.clip(2.0 * P_hist[-1] - P_hist[-2], 0.0, None)
-            H0_start = 2.0 * H0_hist[-1] - H0_hist[-2]
-        else:
-            P_start, H0_start = P_hist[-1], H0_hist[-1]
-        if substep_rescue == "always":
-            ok, ncyc, h = False, 0, {}
-        else:
-            ok, ncyc, h = solve_step(ct, f_old, scheme == "characteristic", P_start, H0_start)
-        cycles[n] += ncyc
-        if not ok and substep_rescue:
-            ok, ncyc, h, m_used = rescue_step(n, T)
-            cycles[n] += ncyc
-            if ok:
-                rescued[n] = m_used
-        if not ok:
-            last, name, val, tol = stalled_residual(h, tol_pressure, tol_residual, tol_load)
-            raise EHLConvergenceError(
-                f"transient step {n} of {n_steps} (T = {T:.4g}, t = {T * b_m / u_s:.4g} s) did "
-                f"not converge on any of {len(order)} relaxation settings"
-                f"{' (nor as ' + '/'.join(map(str, SUBSTEP_SPLITS)) + ' BDF2 sub-steps)' if substep_rescue else ''}"
-                f": residual '{name}' "
-                f"stalled at {val:.3e} (tolerance {tol:.1e}); reynolds_residual="
-                f"{last['reynolds_residual']:.3e}", residual_name=name, value=val, history=h)
-        attempts[n] = cur
-        record(n)
-        P_hist = [P_hist[-1], solver.level_P().copy()]
-        H0_hist = [H0_hist[-1], float(solver.H0[top])]
-        rH = [rH[-1], solver.rho_H()]
-    cpu = time.process_time() - t_cpu0
-    Tv = np.arange(nT) * dT
-    res = TransientLineContactResult(
-        T=Tv, t_s=Tv * b_m / u_s, h_central_m=out["hc"], h_min_m=out["hmin"],
-        h_mean_m=out["hm"], p_mean_Pa=out["pm"], k_film_N_per_m=out["k"], cycles=cycles,
-        attempts=attempts, dT=float(dT), dt_s=float(dt_s), scheme=scheme, U1=float(U1),
-        U2=float(U2), width_m=width_m, x_m=Xt * b_m, X=Xt.copy(),
-        p_Pa=solver.level_P() * ph_Pa, h_m=solver.level_H() / scale_H, b_m=b_m, ph_Pa=ph_Pa,
-        M=steady.M, L=steady.L, steady=steady, cpu_time_s=cpu,
-        wall_time_s=time.perf_counter() - t_wall0,
-        settings=dict(order[cur]), B0_Pa=Bc[0], B0_prime=Bc[1], start=start_used,
-        ramp_T=float(ramp), rescued=rescued)
-    return res
+def _step_error(n: int, n_steps: int, stepper: TimeStepper, h, scales) -> EHLConvergenceError:
+    """The error of a step that converged on no setting (nor as sub-steps): the step, its time
+    and the residual that stalled; ``scales`` = (b (m), u_s (m/s))."""
+    st = stepper.steps
+    b_m, u_s = scales
+    T = n * st.dT
+    last, name, val, tol = stalled_residual(h, st.tol_pressure, st.tol_residual, st.tol_load)
+    return EHLConvergenceError(
+        f"transient step {n} of {n_steps} (T = {T:.4g}, t = {T * b_m / u_s:.4g} s) did "
+        f"not converge on any of {len(st.order)} relaxation settings"
+        f"{' (nor as ' + '/'.join(map(str, SUBSTEP_SPLITS)) + ' BDF2 sub-steps)' if st.substep_rescue else ''}"
+        f": residual '{name}' "
+        f"stalled at {val:.3e} (tolerance {tol:.1e}); reynolds_residual="
+        f"{last['reynolds_residual']:.3e}", residual_name=name, value=val, history=h)
 
 
 # --------------------------------------------------------------------------- amplitude reduction

@@ -34,6 +34,14 @@ gearbox_build       build_gearbox_fmu: one FMU for a whole gearbox, in C
 gearbox_validation  the gearbox FMU's validation record (native gearbox solver)
 gearbox_compare     a gearbox FMU against the native gearbox solver
 gearbox_doc         the gearbox FMU's documentation page
+composition         a gearbox cut into stage FMUs and torsional elements
+                    (an SSP of stage FMUs: components, links, power bonds)
+stage_build         build_stage_fmu: one stage with its shafts and flanges, in C
+element_build       build_element_fmu: a rigid body or an elastic shaft, in C
+gearbox_ssp         the files of an SSP of stage FMUs (system structure, OSP
+                    angular mechanical ports, libcosim's OspSystemStructure)
+ssp_engines         run such an SSP in fmpy and libcosim (fixed step, ECCO);
+                    the energy residual at its power bonds
 runtime/            the FMU-side Python (pythonfmu) and the C loader
 kernel/, standalone/ the C kernels and the FMI layers in C
 ==================  =========================================================

@@ -24,6 +24,7 @@ import subprocess
 import uuid
 import zipfile
 from dataclasses import replace
+from xml.sax.saxutils import escape as xml_escape
 from pathlib import Path
 from typing import Optional, Tuple
 
@@ -198,12 +199,14 @@ def temperature_input(variables, tables: MeshTables):
     return out, start
 
 
-def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_optional: bool = False):
+def interface_variables(spec, tables: MeshTables, starts: dict, *, integrator_optional: bool = False,
+                        features: tuple = ()):
     """The spec's variables for these tables with ``starts`` applied and the temperature input
     (:func:`temperature_input`); returns (variables, temperature start degC or None).
     ``integrator_optional``: a spec without an ``integrator`` parameter is accepted when the
-    integrator is rk4 (0), the one the runtime then uses."""
-    variables = expand_variables(spec, tables.slots, features_of(tables))
+    integrator is rk4 (0), the one the runtime then uses.  ``features``: spec features besides the
+    tables' own (Model Exchange's, gearfmu.fmu.modeldesc.ME_FEATURES)."""
+    variables = expand_variables(spec, tables.slots, features_of(tables) + tuple(features))
     if integrator_optional and not any(v.name == "integrator" for v in variables):
         if starts.get("integrator", 0) != 0:
             raise FmuBuildError("integrator: the interface spec has no 'integrator' parameter; only rk4 (0) is possible")
@@ -233,10 +236,22 @@ def variable_table_lines(variables) -> list:
     return lines
 
 
-def model_description(spec, variables, fmi_version: int, **md_args) -> bytes:
-    """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``."""
+def _with_platforms_note(xml: bytes, note: Optional[str]) -> bytes:
+    """``xml`` with `` [note]`` appended to the root element's description (which binaries it carries)."""
+    if not note:
+        return xml
+    start = xml.index(b"<fmiModelDescription")
+    a = xml.index(b' description="', start) + len(b' description="')
+    b = xml.index(b'"', a)
+    text = xml_escape(note, {'"': "&quot;"}).encode("utf-8")
+    return xml[:a] + (xml[a:b].rstrip() + b" [" + text + b"]").lstrip() + xml[b:]
+
+
+def model_description(spec, variables, fmi_version: int, platforms_note: Optional[str] = None, **md_args) -> bytes:
+    """The model description of FMI ``fmi_version`` (2 or 3) from the spec, checked against ``variables``;
+    FMI 3: ``platforms_note`` appended to the description."""
     if fmi_version == 3:
-        xml = model_description_xml3(spec, variables, **md_args)
+        xml = _with_platforms_note(model_description_xml3(spec, variables, **md_args), platforms_note)
         check_model_description3(xml, variables)
     else:
         xml = model_description_xml(spec, variables, **md_args)

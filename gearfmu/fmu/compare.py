@@ -185,8 +185,11 @@ def check_fmu_matches(fmu: FmuFile, *, scene_text: Optional[str] = None, scene_l
                 f"(sha256 {have[:12]}); it was built from other tables (e.g. build --tables) or another "
                 "version of gearfmu")
 
-    want = [v.name for v in expand_variables(load_spec(), tables.slots, features_of(tables))]
     have = fmu.variable_names
+    # Model Exchange's variables (docs/standalone.md "Model Exchange"), as far as the FMU has them
+    me = tuple(f for f, name in (("model_exchange", "dte_rate"), ("zone_events", "zone_indicator[1]"),
+                                 ("node_events", "segment_indicator_low")) if name in have)
+    want = [v.name for v in expand_variables(load_spec(), tables.slots, features_of(tables) + me)]
     if set(want) != set(have):
         fmu_slots = sum(1 for n in have if n.startswith("pair_force["))
         extra, missing = sorted(set(have) - set(want)), sorted(set(want) - set(have))

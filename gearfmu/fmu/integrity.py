@@ -115,10 +115,20 @@ def integrity_problem(archive, model_description) -> Optional[str]:
         if prov.get("guid") is not None and guid != prov.get("guid"):
             return (f"altered FMU: modelDescription.xml has guid {guid!r}, its provenance ({PROVENANCE}) "
                     f"{prov.get('guid')!r}")
-        ident = getattr(getattr(model_description, "coSimulation", None), "modelIdentifier", None)
+        ident = _identifier(model_description)
         if prov.get("model_identifier") is not None and ident != prov.get("model_identifier"):
             return (f"altered FMU: modelDescription.xml has modelIdentifier {ident!r}, its provenance "
                     f"({PROVENANCE}) {prov.get('model_identifier')!r}")
+    return None
+
+
+def _identifier(model_description) -> Optional[str]:
+    """The modelIdentifier of the FMU's Co-Simulation element, else of its Model Exchange one (the
+    standalone runtime uses one binary for both)."""
+    for kind in ("coSimulation", "modelExchange"):
+        ident = getattr(getattr(model_description, kind, None), "modelIdentifier", None)
+        if ident is not None:
+            return ident
     return None
 
 
@@ -130,7 +140,7 @@ def platform_problem(names, model_description) -> Optional[str]:
 
     fmi3 = str(getattr(model_description, "fmiVersion", "")).startswith("3")
     folder = fmpy.platform_tuple if fmi3 else fmpy.platform
-    ident = model_description.coSimulation.modelIdentifier
+    ident = _identifier(model_description)
     want = f"binaries/{folder}/{ident}{fmpy.sharedLibraryExtension}"
     if want in names:
         return None

@@ -25,6 +25,7 @@ Units: start values in the spec are SI in the unit the entry names.
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -59,7 +60,14 @@ UNIT_SCALING = ("factor", "offset")
 #: temperature axis (input oil_temperature), "gearbox_temperature_axis" a
 #: gears-and-oil axis (input gearbox_temperature) (docs/tables.md "Operating
 #: axes", docs/thermal.md)
-FEATURES = ("temperature_axis", "oil_temperature_axis", "gearbox_temperature_axis")
+FEATURES = ("temperature_axis", "oil_temperature_axis", "gearbox_temperature_axis",
+            "model_exchange", "zone_events", "node_events")
+#: the features of Model Exchange (the standalone runtime, docs/standalone.md "Model Exchange"):
+#: the states, derivatives and contact indicators; the zone indicators (tables with contact-zone
+#: edges); the segment indicators (node events asked for at build time)
+ME_FEATURES = ("model_exchange", "zone_events", "node_events")
+#: the interfaces an FMU may offer (modelDescription elements ModelExchange, CoSimulation)
+INTERFACES = ("me", "cs")
 #: FMU input selecting the temperature axis -> the feature that declares it
 TEMPERATURE_INPUT_FEATURES = {"bulk_temperature": "temperature_axis", "oil_temperature": "oil_temperature_axis",
                               "gearbox_temperature": "gearbox_temperature_axis"}
@@ -118,6 +126,10 @@ class Variable:
     build_override: bool = False
     #: names of the inputs/parameters its Initialization-Mode value depends on (None: not declared)
     initial_dependencies: Optional[Tuple[str, ...]] = None
+    #: Model Exchange: the state this variable is the derivative of (None: not a derivative)
+    derivative_of: Optional[str] = None
+    #: Model Exchange: an event indicator (FMI 3 ModelStructure/EventIndicator; FMI 2 counts them)
+    event_indicator: bool = False
 
 
 # ------------------------------------------------------------------ the spec
@@ -150,8 +162,13 @@ def load_spec(path=None) -> Spec:
     for i, ent in enumerate(entries):
         where = f"{p}: variable #{i + 1} ({ent.get('name', '?')!r})"
         name = ent.get("name")
-        if not isinstance(name, str) or not name.isidentifier():
-            raise SpecError(f"{where}: name must be an identifier")
+        if not isinstance(name, str) or not (name.isidentifier() or _derivative_name(name)):
+            raise SpecError(f"{where}: name must be an identifier (or der(<identifier>) of a derivative)")
+        if "derivative_of" in ent and _derivative_name(name) != ent["derivative_of"]:
+            raise SpecError(f"{where}: derivative_of: a derivative is named der(<its state>), "
+                            f"got derivative_of = {ent['derivative_of']!r}")
+        if not isinstance(ent.get("event_indicator", False), bool):
+            raise SpecError(f"{where}: event_indicator must be true or false")
         if name in names:
             raise SpecError(f"{where}: name duplicated")
         names.add(name)
@@ -176,6 +193,10 @@ def load_spec(path=None) -> Spec:
             raise SpecError(f"{where}: description must be a string")
         if "requires" in ent and ent["requires"] not in FEATURES:
             raise SpecError(f"{where}: requires {ent['requires']!r} not one of {FEATURES}")
+    for i, ent in enumerate(entries):
+        if "derivative_of" in ent and ent["derivative_of"] not in names:
+            raise SpecError(f"{p}: variable #{i + 1} ({ent['name']!r}): derivative_of {ent['derivative_of']!r} "
+                            "is not a variable of the spec")
     knowns = {e["name"] for e in entries if e["causality"] in ("input", "parameter")}
     for i, ent in enumerate(entries):
         if "initial_dependencies" not in ent:
@@ -194,13 +215,20 @@ def load_spec(path=None) -> Spec:
     return Spec(path=str(p), model=data.get("model", {}), default_experiment=de, units=units, entries=entries)
 
 
+def _derivative_name(name: str) -> Optional[str]:
+    """The state of a derivative's name ``der(<state>)``, else None."""
+    m = re.fullmatch(r"der\(([A-Za-z_]\w*)\)", name)
+    return m.group(1) if m else None
+
+
 def _output_index(raw, slots: int, slot: int, where: str) -> int:
-    if isinstance(raw, int):
+    m = re.fullmatch(r"(\d+)\+(\d*)P", raw.replace(" ", "")) if isinstance(raw, str) else None
+    if isinstance(raw, int) and not isinstance(raw, bool):
         base = raw
-    elif isinstance(raw, str) and raw.replace(" ", "").endswith("+P"):
-        base = int(raw.replace(" ", "")[:-2]) + slots
+    elif m:
+        base = int(m.group(1)) + int(m.group(2) or 1) * slots
     else:
-        raise SpecError(f"{where}: output_index {raw!r} must be an integer or '<n>+P'")
+        raise SpecError(f"{where}: output_index {raw!r} must be an integer or '<n>+P', '<n>+<k>P'")
     return base + slot
 
 
@@ -254,7 +282,8 @@ def expand_variables(spec: Spec, slots: int, features: Iterable[str] = ()) -> Li
                 variability=ent["variability"], initial=initial, unit=ent.get("unit"),
                 description=desc, start=start, min=ent.get("min"), max=ent.get("max"),
                 output_index=oi, build_override=bool(ent.get("build_override", False)),
-                initial_dependencies=deps,
+                initial_dependencies=deps, derivative_of=ent.get("derivative_of"),
+                event_indicator=bool(ent.get("event_indicator", False)),
             ))
     return out
 
@@ -343,20 +372,61 @@ def _units_logs_experiment(root, spec: Spec, units, stop_time_s, step_size_s, fm
         ET.SubElement(root, "DefaultExperiment", dea)
 
 
+def state_names(variables: Sequence[Variable]) -> List[str]:
+    """The continuous states (Model Exchange) in the order of the state vector: the variables the
+    derivatives name, in the order of the derivatives."""
+    return [v.derivative_of for v in variables if v.derivative_of is not None]
+
+
+def is_initial_unknown(v: Variable, states: Iterable[str]) -> bool:
+    """In ModelStructure/InitialUnknowns (FMI 2.0 section 2.2.8, FMI 3.0 section 2.4.8): the outputs
+    and the continuous states with initial approx/calculated, every state derivative, and the
+    calculated parameters."""
+    calculated = v.initial in ("approx", "calculated")
+    return ((v.causality == "output" and calculated) or v.causality == "calculatedParameter"
+            or (v.causality == "local" and calculated and (v.derivative_of is not None or v.name in states)))
+
+
+def _check_interfaces(interfaces: Sequence[str]) -> Tuple[str, ...]:
+    out = tuple(i for i in INTERFACES if i in interfaces)
+    if not out or len(out) != len(tuple(interfaces)):
+        raise ModelDescriptionError(f"interfaces: {tuple(interfaces)!r} must name one or both of {INTERFACES}")
+    return out
+
+
+def _interfaces_text(desc: str, interfaces: Sequence[str]) -> str:
+    """The spec's description with its "Co-Simulation" naming the interfaces the FMU offers."""
+    names = {("cs",): "Co-Simulation", ("me",): "Model Exchange", ("me", "cs"): "Co-Simulation and Model Exchange"}
+    return desc.replace("Co-Simulation", names[tuple(interfaces)])
+
+
+#: FMI 2.0 ModelExchange attributes of an FMU that offers it (the standalone runtime)
+_ME2 = {"needsExecutionTool": "false", "completedIntegratorStepNotNeeded": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false", "canNotUseMemoryManagementFunctions": "true",
+        "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true"}
+
+
 def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_name: str,
                           model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                           step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
                           generation_date: Optional[str] = None, version: Optional[str] = None,
-                          description_note: Optional[str] = None) -> bytes:
-    """The FMI 2.0 CS ``modelDescription.xml`` (UTF-8 bytes) for ``variables``;
-    ``description_note`` is appended to the spec's description (the verified envelope)."""
+                          description_note: Optional[str] = None, interfaces: Sequence[str] = ("cs",)) -> bytes:
+    """The FMI 2.0 ``modelDescription.xml`` (UTF-8 bytes) for ``variables``, with the elements of
+    ``interfaces`` ("me": ModelExchange, "cs": CoSimulation); ``description_note`` is appended to
+    the spec's description (the verified envelope)."""
+    interfaces = _check_interfaces(interfaces)
     attrib = {
         "fmiVersion": "2.0", "modelName": model_name, "guid": guid,
-        "description": _with_note(str(spec.model.get("description", "")), description_note),
+        "description": _with_note(_interfaces_text(str(spec.model.get("description", "")), interfaces),
+                                  description_note),
         "generationTool": generation_tool, "variableNamingConvention": "structured",
-        "numberOfEventIndicators": "0",
+        "numberOfEventIndicators": str(sum(v.event_indicator for v in variables)),
     }
     root = _root_element(spec, attrib, version, generation_date)
+    if "me" in interfaces:
+        ET.SubElement(root, "ModelExchange", dict(modelIdentifier=model_identifier, **_ME2))
+    if "cs" not in interfaces:
+        return _fmi2_rest(root, spec, variables, stop_time_s, step_size_s)
     ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": model_identifier,
         "needsExecutionTool": "true",  # the pythonfmu runtime needs a Python interpreter
@@ -368,7 +438,15 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         "canGetAndSetFMUstate": "true",
         "canSerializeFMUstate": "true",
     })
+    return _fmi2_rest(root, spec, variables, stop_time_s, step_size_s)
+
+
+def _fmi2_rest(root, spec: Spec, variables: Sequence[Variable], stop_time_s, step_size_s) -> bytes:
+    """The FMI 2.0 model description after its interface elements: units, log categories, default
+    experiment, ModelVariables and ModelStructure."""
     _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None}, stop_time_s, step_size_s)
+    index = {v.name: i + 1 for i, v in enumerate(variables)}
+    states = state_names(variables)
     mv = ET.SubElement(root, "ModelVariables")
     for i, v in enumerate(variables):
         if v.value_reference != i:
@@ -387,6 +465,8 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
             ta["max"] = _num(v.max, v.type)
         if v.start is not None:
             ta["start"] = _num(v.start, v.type)
+        if v.derivative_of is not None:
+            ta["derivative"] = str(index[v.derivative_of])
         ET.SubElement(sv, v.type, ta)
     ms = ET.SubElement(root, "ModelStructure")
     outs = [i + 1 for i, v in enumerate(variables) if v.causality == "output"]
@@ -394,9 +474,12 @@ def model_description_xml(spec: Spec, variables: Sequence[Variable], *, model_na
         oe = ET.SubElement(ms, "Outputs")
         for idx in outs:
             ET.SubElement(oe, "Unknown", {"index": str(idx)})
-    iu = [i + 1 for i, v in enumerate(variables)
-          if (v.causality == "output" and v.initial in ("approx", "calculated"))
-          or v.causality == "calculatedParameter"]
+    ders = [i + 1 for i, v in enumerate(variables) if v.derivative_of is not None]
+    if ders:  # in the order of the state vector (FMI 2.0 section 2.2.8)
+        de = ET.SubElement(ms, "Derivatives")
+        for idx in ders:
+            ET.SubElement(de, "Unknown", {"index": str(idx)})
+    iu = [i + 1 for i, v in enumerate(variables) if is_initial_unknown(v, states)]
     if iu:
         ie = ET.SubElement(ms, "InitialUnknowns")
         for idx in iu:
@@ -454,25 +537,28 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
                            model_identifier: str, guid: str, stop_time_s: Optional[float] = None,
                            step_size_s: Optional[float] = None, generation_tool: str = "gearfmu",
                            generation_date: Optional[str] = None, version: Optional[str] = None,
-                           description_note: Optional[str] = None,
-                           platforms_note: Optional[str] = None) -> bytes:
+                           description_note: Optional[str] = None, interfaces: Sequence[str] = ("cs",)) -> bytes:
     """The FMI 3.0 Co-Simulation ``modelDescription.xml`` of the standalone runtime (FMI 3.0
     standard section 2.4: ModelVariables 2.4.7 with arrays (``<Dimension start=P>``, the slot
     count fixed at build), ModelStructure 2.4.8 by value reference).  The same variables, names and
     value references as the FMI 2 FMU (:func:`model_description_xml`) except that the per-slot
     elements ``name[i]`` are the array ``name`` (:func:`fmi3_variables`), plus the independent
     variable ``time`` (:func:`fmi3_time_vr`)."""
-    desc = _with_note(str(spec.model.get("description", "")).replace("FMI 2.0", "FMI 3.0"), description_note)
-    if platforms_note:
-        desc = (desc.rstrip() + " [" + platforms_note + "]").lstrip()
+    interfaces = _check_interfaces(interfaces)
+    desc = _with_note(_interfaces_text(str(spec.model.get("description", "")).replace("FMI 2.0", "FMI 3.0"),
+                                       interfaces), description_note)
     attrib = {"fmiVersion": "3.0", "modelName": model_name, "instantiationToken": guid, "description": desc,
               "generationTool": generation_tool, "variableNamingConvention": "structured"}
     root = _root_element(spec, attrib, version, generation_date)
-    ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": model_identifier, "needsExecutionTool": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
-        "canSerializeFMUState": "true", "canHandleVariableCommunicationStepSize": "true",
-        "hasEventMode": "false", "providesIntermediateUpdate": "false"})
+    common = {"modelIdentifier": model_identifier, "needsExecutionTool": "false",
+              "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
+              "canSerializeFMUState": "true"}
+    if "me" in interfaces:
+        ET.SubElement(root, "ModelExchange", dict(common, needsCompletedIntegratorStep="true",
+                                                  providesEvaluateDiscreteStates="false"))
+    if "cs" in interfaces:
+        ET.SubElement(root, "CoSimulation", dict(common, canHandleVariableCommunicationStepSize="true",
+                                                 hasEventMode="false", providesIntermediateUpdate="false"))
     _units_logs_experiment(root, spec, {v.unit for v in variables if v.unit is not None} | {"s"}, stop_time_s,
                            step_size_s, fmi_version=3)
     mv = ET.SubElement(root, "ModelVariables")
@@ -497,20 +583,29 @@ def model_description_xml3(spec: Spec, variables: Sequence[Variable], *, model_n
             val = getattr(v, key)
             if val is not None:
                 va[key] = " ".join([_num(val, v.type)] * (v3.size or 1))
+        if v.derivative_of is not None:
+            va["derivative"] = str(vr_of[v.derivative_of])
         el = ET.SubElement(mv, FMI3_TYPES[v.type], va)
         if v3.size:
             ET.SubElement(el, "Dimension", {"start": str(v3.size)})
-    ms = ET.SubElement(root, "ModelStructure")
+    states = state_names(variables)
+    ms = ET.SubElement(root, "ModelStructure")  # Output, ContinuousStateDerivative, InitialUnknown, EventIndicator
     for v3 in vars3:
         if v3.first.causality == "output":
             ET.SubElement(ms, "Output", {"valueReference": str(v3.value_reference)})
     for v3 in vars3:
+        if v3.first.derivative_of is not None:
+            ET.SubElement(ms, "ContinuousStateDerivative", {"valueReference": str(v3.value_reference)})
+    for v3 in vars3:
         v = v3.first
-        if (v.causality == "output" and v.initial in ("approx", "calculated")) or v.causality == "calculatedParameter":
+        if is_initial_unknown(v, states):
             ua = {"valueReference": str(v3.value_reference)}
             if v.initial_dependencies is not None:
                 ua["dependencies"] = " ".join(str(r) for r in sorted({vr_of[n] for n in v.initial_dependencies}))
             ET.SubElement(ms, "InitialUnknown", ua)
+    for v3 in vars3:
+        if v3.first.event_indicator:
+            ET.SubElement(ms, "EventIndicator", {"valueReference": str(v3.value_reference)})
     ET.indent(root, space="  ")
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
@@ -597,9 +692,8 @@ def check_model_description(xml_bytes: bytes, variables: Sequence[Variable]) -> 
         problems.append(f"ModelStructure/Outputs {outs} != {want_outs}")
     iu_el = ms.find("InitialUnknowns")
     iu = [int(u.get("index")) for u in iu_el] if iu_el is not None else []
-    want_iu = [i + 1 for i, v in enumerate(variables)
-               if (v.causality == "output" and v.initial in ("approx", "calculated"))
-               or v.causality == "calculatedParameter"]
+    states = state_names(variables)
+    want_iu = [i + 1 for i, v in enumerate(variables) if is_initial_unknown(v, states)]
     if iu != want_iu:
         problems.append(f"ModelStructure/InitialUnknowns {iu} != {want_iu}")
     for u in (iu_el if iu_el is not None else []):

@@ -47,6 +47,7 @@ from __future__ import annotations
 import datetime
 import hashlib
 import json
+import math
 import platform
 import re
 import shutil
@@ -58,9 +59,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Union
 
+import numpy as np
+
 from .. import __version__
 from ..common.settings import RunSettings
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS
+from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
+                                 FMU_INTERFACES, ME_NODE_EVENTS)
 from . import crossbuild
 from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, FMU_LAYER_SOURCE,  # noqa: F401
                           KERNEL_HEADERS, KERNEL_SOURCES, CompilerNotFoundError,
@@ -71,6 +75,7 @@ from .build_steps import (CFLAGS, FMI2_HEADERS, FMI3_HEADERS, FMU_LAYER_HEADER, 
 from .envelope import ENVELOPE_FILE, envelope_json, envelope_note, fmu_envelope_record, runtime_envelope
 from .modeldesc import load_spec
 from ..tables.mesh_tables import MeshTables
+from ..tables.zones import zone_cuts
 from .fmudoc import DOC_FILES, documentation_html
 from .validation import VALIDATION_DIR, validation_record
 
@@ -306,11 +311,41 @@ def _hexf(v) -> str:
     return float(v).hex()
 
 
+#: the model description's elements of each ``interface`` value (gearfmu.common.vocabulary.FMU_INTERFACES)
+INTERFACE_ELEMENTS = {"cs": ("cs",), "me": ("me",), "both": ("me", "cs")}
+
+
+def me_features(tables: MeshTables, interface: str, node_events: str) -> tuple:
+    """The spec features (:data:`gearfmu.fmu.modeldesc.ME_FEATURES`) of an FMU offering ``interface``:
+    none without Model Exchange; else its states and contact indicators, the zone indicators when the
+    tables have contact-zone edges (the lookup's cuts, :func:`gearfmu.tables.zones.zone_cuts`) and the
+    segment indicators with ``node_events`` other than "none"."""
+    if "me" not in INTERFACE_ELEMENTS[interface]:
+        return ()
+    return (("model_exchange",) + (("zone_events",) if zone_cuts(tables) is not None else ())
+            + (("node_events",) if node_events != "none" else ()))
+
+
+def me_nominals(tables: MeshTables, pinion_speed_rad_s: float, pinion_torque_Nm: float) -> tuple:
+    """Nominal values of the Model Exchange states [theta1, omega1, x, v] (rad, rad/s, m, m/s), the
+    scales of the event-located reference (gearfmu.dynamics.reference): one mesh period; the start
+    speed (at least 1 rad/s); the largest of the static deflection, the backlash and the meshing
+    error range (at least 1e-9 m); that times omega_n = sqrt(k_mean/m_e).  A host's absolute
+    tolerance is its relative tolerance times these (fmpy's CVode)."""
+    e = np.asarray(tables.e_m, float)
+    x = max(abs(pinion_torque_Nm) / (tables.base_radius_pinion_m * tables.k_mean_N_per_m),
+            float(np.max(np.abs(tables.backlash_half_m))), float(np.max(e) - np.min(e)), 1e-9)
+    wn = math.sqrt(tables.k_mean_N_per_m / tables.equivalent_mass_kg)
+    return (float(tables.mesh_period_rad), max(abs(pinion_speed_rad_s), 1.0), x, x * wn)
+
+
 def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: str,
-                meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None) -> str:
+                meta_bytes: bytes, bin_bytes: bytes, envelope: Optional[dict] = None,
+                interface: str = "cs", node_events: str = "none", nominals: Optional[tuple] = None) -> str:
     """The ``gearfmu_standalone.txt`` the C layer reads (format version 1, docs/standalone.md).
     ``envelope``: :func:`gearfmu.fmu.envelope.runtime_envelope` (``envelope.kind`` and
-    ``envelope.<quantity>=low|high`` lines; none: nothing is checked)."""
+    ``envelope.<quantity>=low|high`` lines; none: nothing is checked).  ``interface``, ``node_events``,
+    ``nominals``: Model Exchange (``interfaces``, ``me.*`` lines; docs/standalone.md "Model Exchange")."""
     meta = json.loads(meta_bytes.decode("utf-8"))
     sc = meta["scalars"]
     lines = [
@@ -338,6 +373,12 @@ def config_text(tables: MeshTables, variables, *, guid: str, model_identifier: s
         for q in ("pinion_torque_Nm", "pinion_speed_rad_s", "temperature_C"):
             if envelope.get(q) is not None:
                 lines.append(f"envelope.{q}={_hexf(envelope[q][0])}|{_hexf(envelope[q][1])}")
+    elements = INTERFACE_ELEMENTS[interface]
+    lines.append("interfaces=" + ",".join(e for e in ("cs", "me") if e in elements))
+    if "me" in elements:  # docs/standalone.md "Model Exchange"
+        lines.append(f"me.node_events={ME_NODE_EVENTS.index(node_events)}")
+        lines.append(f"me.event_indicators={sum(v.event_indicator for v in variables)}")
+        lines.append("me.nominals=" + "|".join(_hexf(v) for v in nominals))
     lines += variable_table_lines(variables)
     return "\n".join(lines) + "\n"
 
@@ -349,17 +390,18 @@ def standalone_model_description(xml: bytes, source_files, platforms_note: Optio
     root = ET.fromstring(xml)
     if platforms_note:
         root.set("description", (root.get("description", "").rstrip() + " [" + platforms_note + "]").lstrip())
-    cs = root.find("CoSimulation")
-    if cs is None:
-        raise FmuBuildError("modelDescription.xml: no CoSimulation element")
-    cs.set("needsExecutionTool", "false")
-    cs.set("canGetAndSetFMUstate", "true")
-    cs.set("canSerializeFMUstate", "true")
-    for child in list(cs):
-        cs.remove(child)
-    sf = ET.SubElement(cs, "SourceFiles")
-    for name in source_files:
-        ET.SubElement(sf, "File", {"name": name})
+    elements = [el for el in (root.find("ModelExchange"), root.find("CoSimulation")) if el is not None]
+    if not elements:
+        raise FmuBuildError("modelDescription.xml: no ModelExchange or CoSimulation element")
+    for el in elements:
+        el.set("needsExecutionTool", "false")
+        el.set("canGetAndSetFMUstate", "true")
+        el.set("canSerializeFMUstate", "true")
+        for child in list(el):
+            el.remove(child)
+        sf = ET.SubElement(el, "SourceFiles")
+        for name in source_files:
+            ET.SubElement(sf, "File", {"name": name})
     ET.indent(root, space="  ")
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
@@ -386,7 +428,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
                          pinion_torque_start_Nm: Optional[float] = None, gear_torque_start_Nm: Optional[float] = None,
                          max_step_s: Optional[float] = None, damping_model: Union[int, str, None] = None,
                          stop_time_s: Optional[float] = None, output_interval_s: Optional[float] = None,
-                         pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None) -> Path:
+                         pinion_angle_start_rad: Optional[float] = None, integrator: Union[int, str, None] = None,
+                         interface: str = DEFAULT_FMU_INTERFACE, me_node_events: str = DEFAULT_ME_NODE_EVENTS) -> Path:
     """Build the standalone FMI 2.0 (``fmi_version`` 3: FMI 3.0) CS FMU of ``tables``; return its path.
 
     Same settings, arguments and units as :func:`gearfmu.fmu.pythonfmu_build.build_fmu`
@@ -404,8 +447,15 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
     layer (fmi3_gear.c), ``pair_force``/``load_sharing`` as arrays, binaries under the FMI 3
     platform tuples, sources/buildDescription.xml (docs/standalone.md "FMI 3.0"); ``fmi3_outputs``
     "scalar" makes them scalars ``pair_force_1 .. pair_force_P`` (:func:`scalar_names`), for hosts
-    without array support.  Written under a temporary name beside ``out_path`` and renamed at the end.
+    without array support.  ``interface``: "cs" (Co-Simulation), "me" (Model Exchange) or "both"
+    (default: one FMU usable both ways); ``me_node_events``: Model Exchange's table-node events,
+    "none" (default), "kinks" or "all" (docs/standalone.md "Model Exchange").  Written under a
+    temporary name beside ``out_path`` and renamed at the end.
     """
+    if interface not in FMU_INTERFACES:
+        raise FmuBuildError(f"interface: {interface!r} not one of {FMU_INTERFACES}")
+    if me_node_events not in ME_NODE_EVENTS:
+        raise FmuBuildError(f"me_node_events: {me_node_events!r} not one of {ME_NODE_EVENTS}")
     if fmi_version not in FMI_VERSIONS:
         raise FmuBuildError(f"fmi_version: {fmi_version!r} not one of {FMI_VERSIONS}")
     if fmi3_outputs not in FMI3_OUTPUTS or (fmi3_outputs != DEFAULT_FMI3_OUTPUTS and fmi_version != 3):
@@ -424,7 +474,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
         raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
 
     spec = load_spec(spec_path)
-    variables, temp0 = interface_variables(spec, tables, start_values(s), integrator_optional=True)
+    variables, temp0 = interface_variables(spec, tables, start_values(s), integrator_optional=True,
+                                           features=me_features(tables, interface, me_node_events))
     if fmi3_outputs == "scalar":
         variables = scalar_names(variables)
     env_rec = envelope if envelope is not None else fmu_envelope_record(tables)
@@ -466,7 +517,11 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
         write_tables(res, meta_bytes, bin_bytes)
         (res / CONFIG_FILE).write_text(config_text(tables, variables, guid=guid, model_identifier=identifier,
                                                    meta_bytes=meta_bytes, bin_bytes=bin_bytes,
-                                                   envelope=runtime_envelope(env_rec)), encoding="utf-8")
+                                                   envelope=runtime_envelope(env_rec), interface=interface,
+                                                   node_events=me_node_events,
+                                                   nominals=me_nominals(tables, s.pinion_speed_start_rad_s,
+                                                                        s.pinion_torque_start_Nm)),
+                                       encoding="utf-8")
         (root / ENVELOPE_FILE).write_text(envelope_json(env_rec), encoding="utf-8")
         write_scene(res, scene_text)
         compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
@@ -494,7 +549,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
                 p.write_bytes(data)
         md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid, stop_time_s=tstop,
                        step_size_s=dt, generation_tool=f"gearfmu {__version__} (standalone runtime)",
-                       generation_date=now, version=__version__, description_note=envelope_note(env_rec))
+                       generation_date=now, version=__version__, description_note=envelope_note(env_rec),
+                       interfaces=INTERFACE_ELEMENTS[interface])
         note = crossbuild.platform_summary(binaries)
         if fmi_version == 3:
             xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
@@ -508,7 +564,8 @@ def build_standalone_fmu(tables: MeshTables, out_path, settings: Optional[RunSet
                             description=ET.fromstring(xml).get("description", ""), tables=tables,
                             parameters=params, envelope=env_rec, scene_text=scene_text,
                             platforms_text=platforms_text(binaries, fmi_version),
-                            experiment={"start": 0.0, "stop": tstop, "step": dt})
+                            experiment={"start": 0.0, "stop": tstop, "step": dt},
+                            interfaces=INTERFACE_ELEMENTS[interface])
         with fmu_zip(out_path) as zout:
             zip_folder(zout, root)
     return out_path

@@ -28,8 +28,10 @@ class FmuSummary:
     """Runtime, FMI version, platforms carried and platforms not built (with the reason) of an FMU."""
 
     def __init__(self, runtime: str, fmi_version: str, needs_execution_tool: bool, platforms: List[str],
-                 missing: Dict[str, str], darwin_slices: Optional[List[str]] = None):
+                 missing: Dict[str, str], darwin_slices: Optional[List[str]] = None,
+                 interfaces: str = "Co-Simulation"):
         self.runtime = runtime
+        self.interfaces = interfaces
         self.fmi_version = fmi_version
         self.needs_execution_tool = needs_execution_tool
         self.platforms = platforms
@@ -53,7 +55,7 @@ class FmuSummary:
         if self.runtime == "pythonfmu":
             plats = [p + " (the kernel is compiled for the build machine only)" for p in plats]
         note = RUNTIME_NOTES.get(self.runtime, "")
-        text = (f"runtime {self.runtime}{f' ({note})' if note else ''}, FMI {self.fmi_version} Co-Simulation, "
+        text = (f"runtime {self.runtime}{f' ({note})' if note else ''}, FMI {self.fmi_version} {self.interfaces}, "
                 f"platforms: {', '.join(plats) or 'none'}")
         if self.missing:
             by: Dict[str, List[str]] = {}
@@ -77,6 +79,8 @@ def read_summary(fmu_path) -> FmuSummary:
                 prov = {}
     cs = root.find("CoSimulation")
     needs = (cs.get("needsExecutionTool", "false") if cs is not None else "false") == "true"
+    interfaces = " and ".join(n for tag, n in (("CoSimulation", "Co-Simulation"), ("ModelExchange", "Model Exchange"))
+                              if root.find(tag) is not None) or "no interface"
     runtime = prov.get("runtime") or ("pythonfmu" if "resources/gearfmu_runtime.json" in names else
                                       "standalone" if "resources/gearfmu_standalone.txt" in names else "unknown")
     folders: List[str] = []
@@ -90,7 +94,7 @@ def read_summary(fmu_path) -> FmuSummary:
     folders.sort(key=lambda f: (order.index(f) if f in order else len(order), f))
     missing = {k: r["missing"] for k, r in report.items() if isinstance(r, dict) and "missing" in r}
     slices = next((r["fat_slices"] for r in report.values() if isinstance(r, dict) and r.get("fat_slices")), None)
-    return FmuSummary(runtime, root.get("fmiVersion", "?"), needs, folders, missing, slices)
+    return FmuSummary(runtime, root.get("fmiVersion", "?"), needs, folders, missing, slices, interfaces)
 
 
 def fmu_summary(fmu_path) -> str:

@@ -27,6 +27,8 @@ error is a material deficit: the pair touches when x > e + b (seed 003 eq 6).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 from typing import Callable, Optional
 
 import numpy as np
@@ -42,6 +44,7 @@ __all__ = [
     "KB_TEETH",
     "KB_CONTACT_RATIO",
     "KB_BACKLASH_HALF_M",
+    "GearData",
     "tables_from_arrays",
     "rectangular_wave_tables",
     "comprehensive_error_m",
@@ -90,27 +93,64 @@ def comprehensive_error_m(k_N_per_m: np.ndarray, e_m: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(env), env, 0.0)
 
 
+@dataclass(frozen=True)
+class GearData:
+    """The gear pair's data that the per-slot arrays of :func:`tables_from_arrays` do not carry
+    (SI): base radii (m), rotary inertias (kg m^2) and teeth of pinion and gear (defaults: the
+    Kahraman & Blankenship gears of seed 003 Table 1), the contact ratio (None: the mean number
+    of slots with k > 0 over the grid, for a rectangular wave the contact ratio exactly) and the
+    exact meshing-in and meshing-out pinion angles (rad) of every pair from the start of its mesh
+    (both or neither; None: the lookup interpolates plainly across the zone edges, docs/tables.md
+    "Contact-zone edges")."""
+
+    base_radius_pinion_m: float = KB_BASE_RADIUS_M
+    base_radius_gear_m: float = KB_BASE_RADIUS_M
+    inertia_pinion_kgm2: float = KB_INERTIA_KGM2
+    inertia_gear_kgm2: float = KB_INERTIA_KGM2
+    teeth_pinion: int = KB_TEETH
+    teeth_gear: int = KB_TEETH
+    contact_ratio: Optional[float] = None
+    engagement_in_rad: Optional[float] = None
+    engagement_out_rad: Optional[float] = None
+
+
+_GEAR_FIELDS = tuple(f.name for f in dataclass_fields(GearData))
+
+
+def _gear_data(gear: Optional[GearData], positional, named: dict) -> GearData:
+    """``gear`` (None: the defaults) with the gear scalars given positionally (in the order of
+    :class:`GearData`, the first six) and by name applied."""
+    if gear is None:
+        gear = GearData()
+    elif not isinstance(gear, GearData):
+        raise SyntheticTableError(f"gear: must be a GearData, got {type(gear).__name__}")
+    if len(positional) > 6:
+        raise SyntheticTableError(f"tables_from_arrays: at most 11 positional arguments, got {5 + len(positional)}")
+    unknown = sorted(set(named) - set(_GEAR_FIELDS))
+    if unknown:
+        raise SyntheticTableError(f"{unknown[0]}: not an argument of tables_from_arrays")
+    given = dict(zip(_GEAR_FIELDS, positional))
+    twice = sorted(set(given) & set(named))
+    if twice:
+        raise SyntheticTableError(f"{twice[0]}: given twice (by position and by name)")
+    given.update(named)
+    return replace(gear, **given) if given else gear
+
+
 def tables_from_arrays(
     phi_period_rad: Optional[float] = None,
     mesh_period_rad: Optional[float] = None,
     k_N_per_m=None,
     e_m=None,
     backlash_half_m=0.0,
-    base_radius_pinion_m: float = KB_BASE_RADIUS_M,
-    base_radius_gear_m: float = KB_BASE_RADIUS_M,
-    inertia_pinion_kgm2: float = KB_INERTIA_KGM2,
-    inertia_gear_kgm2: float = KB_INERTIA_KGM2,
-    teeth_pinion: int = KB_TEETH,
-    teeth_gear: int = KB_TEETH,
-    *,
+    *gear_scalars,
+    gear: Optional[GearData] = None,
     torque_Nm=None,
-    contact_ratio: Optional[float] = None,
     k_mean_N_per_m: Optional[float] = None,
     e_comprehensive_m=None,
     static_te_m=None,
     provenance: Optional[dict] = None,
-    engagement_in_rad: Optional[float] = None,
-    engagement_out_rad: Optional[float] = None,
+    **gear_fields,
 ) -> MeshTables:
     """Build validated :class:`MeshTables` from raw per-slot arrays.
 
@@ -123,22 +163,78 @@ def tables_from_arrays(
         ``phi_i = i*phi_period_rad/n_phi``, periodic.
     e_m : meshing error (m), same shape as k (default zeros).
     backlash_half_m : half backlash b (m, seed 003 eq 6): scalar, (n_phi,) or (P, n_phi).
-    base_radius_*_m, inertia_*_kgm2, teeth_* : gear data.
+    gear : :class:`GearData` -- base radii, inertias, teeth, contact ratio, engagement angles.
+        Each of its fields may also be given by name (``teeth_pinion=23``,
+        ``engagement_in_rad=0.0``), and the first six, the gear scalars
+        base_radius_pinion_m, base_radius_gear_m, inertia_pinion_kgm2, inertia_gear_kgm2,
+        teeth_pinion, teeth_gear, by position after ``backlash_half_m``.
     torque_Nm : torque axis (N*m), shape (NT,), strictly ascending; required when
         k has 3 axes with NT > 1, default [0.0] otherwise.
-    contact_ratio : default = mean number of slots with k > 0 over the grid
-        (for a rectangular wave this is the contact ratio exactly).
     k_mean_N_per_m : mean mesh stiffness k_m of seed 003 eq 7 (N/m); default =
         mean of the total stiffness over the phi grid and all torque rows (the
         grid mean equals the mean of the periodic linear interpolant; with engagement
         angles the mean of the sub-cell lookup, gearfmu.tables.zones.mean_total_stiffness_N_per_m).
     e_comprehensive_m : (NT, n_phi) (m); default :func:`comprehensive_error_m`.
-    engagement_in_rad, engagement_out_rad : exact meshing-in and meshing-out pinion angles
-        (rad) of every pair from the start of its mesh (both or neither; default none: the
-        lookup interpolates plainly across the zone edges, docs/tables.md "Contact-zone edges").
+    static_te_m : (NT, n_phi) static transmission error (m), optional.
+    provenance : dict stored with the tables (default: names this function).
 
     Raises :class:`SyntheticTableError` / :class:`TableError` (ValueError) naming the field.
     """
+    g = _gear_data(gear, gear_scalars, gear_fields)
+    k, e, b, tq = _table_arrays(k_N_per_m, e_m, backlash_half_m, torque_Nm)
+    nt, p, nphi = k.shape
+    z1 = int(g.teeth_pinion)
+    z2 = int(g.teeth_gear)
+    if z1 != g.teeth_pinion or z1 < 1:
+        raise SyntheticTableError(f"teeth_pinion: must be a positive integer, got {g.teeth_pinion!r}")
+    if z2 != g.teeth_gear or z2 < 1:
+        raise SyntheticTableError(f"teeth_gear: must be a positive integer, got {g.teeth_gear!r}")
+    mp = 2.0 * math.pi / z1 if mesh_period_rad is None else _positive("mesh_period_rad", mesh_period_rad)
+    pp = p * mp if phi_period_rad is None else _positive("phi_period_rad", phi_period_rad)
+    if not np.all(np.isfinite(k)):
+        raise SyntheticTableError("k_N_per_m: contains NaN or infinite values")
+    if np.any(k < 0):
+        raise SyntheticTableError("k_N_per_m: negative stiffness")
+    ktot = k.sum(axis=1)
+    contact_ratio = g.contact_ratio
+    if contact_ratio is None:
+        contact_ratio = float((k > 0).sum(axis=1).mean())
+    km = float(ktot.mean()) if k_mean_N_per_m is None else _positive("k_mean_N_per_m", k_mean_N_per_m)
+    exact_mean = k_mean_N_per_m is None and g.engagement_in_rad is not None
+    if e_comprehensive_m is None:
+        ec = comprehensive_error_m(k, e)
+    else:
+        ec = np.array(e_comprehensive_m, dtype=float)
+        if ec.ndim == 1:
+            ec = ec[None, :]
+    st = None if static_te_m is None else np.atleast_2d(np.array(static_te_m, dtype=float))
+    t = MeshTables(
+        torque_Nm=tq, k_N_per_m=np.ascontiguousarray(k), e_m=np.ascontiguousarray(e),
+        backlash_half_m=np.ascontiguousarray(b),
+        phi_period_rad=float(pp), mesh_period_rad=float(mp),
+        base_radius_pinion_m=_positive("base_radius_pinion_m", g.base_radius_pinion_m),
+        base_radius_gear_m=_positive("base_radius_gear_m", g.base_radius_gear_m),
+        inertia_pinion_kgm2=_positive("inertia_pinion_kgm2", g.inertia_pinion_kgm2),
+        inertia_gear_kgm2=_positive("inertia_gear_kgm2", g.inertia_gear_kgm2),
+        teeth_pinion=z1, teeth_gear=z2,
+        contact_ratio=_positive("contact_ratio", contact_ratio),
+        k_mean_N_per_m=km,
+        e_comprehensive_m=np.ascontiguousarray(ec),
+        static_te_m=st,
+        provenance=dict(provenance or {"source": "gearfmu.tables.synthetic.tables_from_arrays"}),
+        engagement_in_rad=None if g.engagement_in_rad is None else float(g.engagement_in_rad),
+        engagement_out_rad=None if g.engagement_out_rad is None else float(g.engagement_out_rad),
+    )
+    t.validate()
+    if exact_mean:  # the mean of the sub-cell lookup over the rows (docs/tables.md "Contact-zone edges")
+        t.k_mean_N_per_m = float(np.mean([mean_total_stiffness_N_per_m(t, t.k_N_per_m[r]) for r in range(nt)]))
+    return t.validate()
+
+
+def _table_arrays(k_N_per_m, e_m, backlash_half_m, torque_Nm):
+    """(k (NT, P, n_phi), e of the same shape, b (P, n_phi), torque axis (NT,)) from the
+    arguments of :func:`tables_from_arrays` (e default zeros and repeated over the torque rows
+    when given for one; b broadcast from a scalar or (n_phi,); torque default [0.0])."""
     if k_N_per_m is None:
         raise SyntheticTableError("k_N_per_m: required")
     k = np.array(k_N_per_m, dtype=float)
@@ -174,51 +270,7 @@ def tables_from_arrays(
         tq = np.atleast_1d(np.array(torque_Nm, dtype=float))
         if tq.shape != (nt,):
             raise SyntheticTableError(f"torque_Nm: shape {tq.shape}, expected ({nt},)")
-    z1 = int(teeth_pinion)
-    z2 = int(teeth_gear)
-    if z1 != teeth_pinion or z1 < 1:
-        raise SyntheticTableError(f"teeth_pinion: must be a positive integer, got {teeth_pinion!r}")
-    if z2 != teeth_gear or z2 < 1:
-        raise SyntheticTableError(f"teeth_gear: must be a positive integer, got {teeth_gear!r}")
-    mp = 2.0 * math.pi / z1 if mesh_period_rad is None else _positive("mesh_period_rad", mesh_period_rad)
-    pp = p * mp if phi_period_rad is None else _positive("phi_period_rad", phi_period_rad)
-    if not np.all(np.isfinite(k)):
-        raise SyntheticTableError("k_N_per_m: contains NaN or infinite values")
-    if np.any(k < 0):
-        raise SyntheticTableError("k_N_per_m: negative stiffness")
-    ktot = k.sum(axis=1)
-    if contact_ratio is None:
-        contact_ratio = float((k > 0).sum(axis=1).mean())
-    km = float(ktot.mean()) if k_mean_N_per_m is None else _positive("k_mean_N_per_m", k_mean_N_per_m)
-    exact_mean = k_mean_N_per_m is None and engagement_in_rad is not None
-    if e_comprehensive_m is None:
-        ec = comprehensive_error_m(k, e)
-    else:
-        ec = np.array(e_comprehensive_m, dtype=float)
-        if ec.ndim == 1:
-            ec = ec[None, :]
-    st = None if static_te_m is None else np.atleast_2d(np.array(static_te_m, dtype=float))
-    t = MeshTables(
-        torque_Nm=tq, k_N_per_m=np.ascontiguousarray(k), e_m=np.ascontiguousarray(e),
-        backlash_half_m=np.ascontiguousarray(b),
-        phi_period_rad=float(pp), mesh_period_rad=float(mp),
-        base_radius_pinion_m=_positive("base_radius_pinion_m", base_radius_pinion_m),
-        base_radius_gear_m=_positive("base_radius_gear_m", base_radius_gear_m),
-        inertia_pinion_kgm2=_positive("inertia_pinion_kgm2", inertia_pinion_kgm2),
-        inertia_gear_kgm2=_positive("inertia_gear_kgm2", inertia_gear_kgm2),
-        teeth_pinion=z1, teeth_gear=z2,
-        contact_ratio=_positive("contact_ratio", contact_ratio),
-        k_mean_N_per_m=km,
-        e_comprehensive_m=np.ascontiguousarray(ec),
-        static_te_m=st,
-        provenance=dict(provenance or {"source": "gearfmu.tables.synthetic.tables_from_arrays"}),
-        engagement_in_rad=None if engagement_in_rad is None else float(engagement_in_rad),
-        engagement_out_rad=None if engagement_out_rad is None else float(engagement_out_rad),
-    )
-    t.validate()
-    if exact_mean:  # the mean of the sub-cell lookup over the rows (docs/tables.md "Contact-zone edges")
-        t.k_mean_N_per_m = float(np.mean([mean_total_stiffness_N_per_m(t, t.k_N_per_m[r]) for r in range(nt)]))
-    return t.validate()
+    return k, e, b, tq
 
 
 def rectangular_wave_tables(

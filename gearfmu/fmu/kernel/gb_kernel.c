@@ -24,12 +24,14 @@ struct gb_work {
     double y[GB_MAX_STATE], f0[GB_MAX_STATE], y1[GB_MAX_STATE], f1[GB_MAX_STATE], yt[GB_MAX_STATE];
     double tmp[GB_MAX_STATE], acc[GB_MAX_STATE], kk[GB_MAX_STATE];
     long events;
+    const gb_me *me;                /* Model Exchange: the modes held (gb_rhs with locked 2) */
 };
 
 int gb_abi_version(void) { return GB_ABI_VERSION; }
 int gb_sizeof_model(void) { return (int)sizeof(gb_model); }
 int gb_sizeof_work(void) { return (int)sizeof(gb_work); }
 long gb_events(const gb_work *w) { return w != NULL ? w->events : 0; }
+int gb_sizeof_me(void) { return (int)sizeof(gb_me); }
 
 /* ------------------------------------------------------------------ setup */
 int gb_init(gb_model *gb, int n, const double *inv_I, const double *g, int load_body, int motor_input,
@@ -168,7 +170,8 @@ static void select_rows(const gb_model *gb, gb_work *w, double T_motor, double T
 /* --------------------------------------------------------- right-hand side
  * dy at y (kernels._rhs): torques of the inputs, the shafts and the meshes on every body,
  * a_i = tau_i/I_i, psi'' = a_0, u_i'' = a_i - g_i a_0; `locked`: every mesh with its held mode
- * (the event integrators), else the plain lookup with the carried cell (rk4) */
+ * (1: the event integrators' gk_mode; 2: Model Exchange's gk_me, w->me), else the plain lookup with
+ * the carried cell (rk4) */
 GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *dy, double t_in, double t_out,
                       const int locked)
 {
@@ -198,7 +201,7 @@ GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *d
         /* the mesh's local state (mesh_local) */
         double th = me->g_p * y[0] + u[p], om = me->g_p * y[1] + du[p];
         double x = rb1 * u[p] - rb2 * u[q], v = rb1 * du[p] - rb2 * du[q];
-        if (locked) {   /* kernels._mesh_locked: the force loop of deriv_locked */
+        if (locked == 1) {   /* kernels._mesh_locked: the force loop of deriv_locked */
             const gk_mode *md = &w->md[m];
             int j;
             fm = 0.0;
@@ -208,6 +211,13 @@ GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *d
                 fm += pair_force_locked(kv, ev, es, bv, x, v, om, pm->c_Ns_per_m, pm->damping_model, md->reg[j],
                                         md->sub[j], md->kpos[j]);
             }
+        } else if (locked == 2) {
+            double loc[4];
+            loc[0] = th;
+            loc[1] = om;
+            loc[2] = x;
+            loc[3] = v;
+            fm = me_force(pm, &w->me->mesh[m], &w->tq[m], loc, NULL, NULL);
         } else {
             fm = mesh_force(pm, &w->tq[m], &w->ph[m], th, om, x, v, NULL, NULL);
         }
@@ -552,5 +562,156 @@ int gb_do_step(const gb_model *gb, gb_work *w, gb_state *s, double T_motor, doub
         if (!isfinite(w->y[q])) return GK_ERR_NONFINITE;
     copy_state(s->y, w->y, n2);
     if (out != NULL) return gb_outputs(gb, s, T_motor, T_load, out);
+    return GK_OK;
+}
+
+/* ---------------------------------------------------------- Model Exchange
+ * docs/model.md "Model Exchange", for every mesh: its mode (gk_me) held between the host's events and
+ * decided anew from the state at each (gk_pair.h's me_* pieces on the mesh's local state), the
+ * right-hand side gb_rhs with the modes held, the indicators of every mesh one after another. */
+static int gb_me_check(const gb_model *gb, const gb_work *w, const gb_me *me, const double *y)
+{
+    int i, m;
+    if (gb == NULL || w == NULL || me == NULL || y == NULL) return GK_ERR_MODEL;
+    for (m = 0; m < gb->n_mesh; ++m)
+        if (gb->mesh[m].pair->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+    for (i = 0; i < 2 * gb->n; ++i)
+        if (!isfinite(y[i])) return GK_ERR_NONFINITE;
+    return GK_OK;
+}
+
+/* the torque rows and the input torques of T_motor, T_load (as gb_derivatives) */
+static void gb_me_inputs(const gb_model *gb, gb_work *w, const gb_me *me, double T_motor, double T_load,
+                         double *t_in, double *t_out)
+{
+    *t_in = gb->motor_input ? T_motor : 0.0;
+    *t_out = gb->load_input ? T_load : 0.0;
+    select_rows(gb, w, T_motor, T_load);
+    w->me = me;
+}
+
+int gb_me_n_indicators(const gb_model *gb, int node_events)
+{
+    int m, n = 0;
+    if (gb == NULL) return 0;
+    for (m = 0; m < gb->n_mesh; ++m) n += me_n_indicators(gb->mesh[m].pair, node_events);
+    return n;
+}
+
+/* every mesh's mode from the state y */
+static void gb_me_decide(const gb_model *gb, gb_work *w, gb_me *me, const double *y)
+{
+    int m;
+    for (m = 0; m < gb->n_mesh; ++m) {
+        double loc[4];
+        mesh_local(&gb->mesh[m], y, loc);
+        me_decide(gb->mesh[m].pair, &me->mesh[m], &w->tq[m], loc);
+    }
+}
+
+/* The modes anew at an event: decided at the state, then again a moment ahead, y + delta f(y) with f
+ * in the modes decided first and delta the smallest of the meshes' me_ahead_time (as gk_me_update). */
+int gb_me_update(const gb_model *gb, gb_work *w, gb_me *me, const double *y, double T_motor, double T_load,
+                 int *changed)
+{
+    double t_in, t_out, delta = HUGE_VAL, *dy = w->kk, *ahead = w->tmp;
+    int i, m, finite = 1, diff = 0, n2, st = gb_me_check(gb, w, me, y);
+    gb_me old;
+    if (st != GK_OK) return st;
+    if (!isfinite(T_motor) || !isfinite(T_load)) return GK_ERR_INPUT;
+    n2 = 2 * gb->n;
+    old = *me;
+    gb_me_inputs(gb, w, me, T_motor, T_load, &t_in, &t_out);
+    gb_me_decide(gb, w, me, y);
+    gb_rhs(gb, w, y, dy, t_in, t_out, 2);
+    for (m = 0; m < gb->n_mesh; ++m) {
+        double d = me_ahead_time(gb->mesh[m].pair);
+        if (d < delta) delta = d;
+    }
+    for (i = 0; i < n2; ++i) {
+        ahead[i] = y[i] + delta * dy[i];
+        finite &= isfinite(ahead[i]) != 0;
+    }
+    if (finite) gb_me_decide(gb, w, me, ahead);
+    for (m = 0; m < gb->n_mesh; ++m) diff |= me_differs(gb->mesh[m].pair, &me->mesh[m], &old.mesh[m]);
+    if (changed != NULL) *changed = diff;
+    return GK_OK;
+}
+
+int gb_me_init(const gb_model *gb, gb_work *w, gb_me *me, const double *y, double T_motor, double T_load,
+               int node_events)
+{
+    int m;
+    if (gb == NULL || me == NULL) return GK_ERR_MODEL;
+    for (m = 0; m < GB_MAX_MESHES; ++m)
+        if (!me_clear(&me->mesh[m], node_events)) return GK_ERR_PARAM;
+    return gb_me_update(gb, w, me, y, T_motor, T_load, NULL);
+}
+
+int gb_me_derivatives(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor,
+                      double T_load, double *dy)
+{
+    double t_in, t_out;
+    int st = gb_me_check(gb, w, me, y);
+    if (st != GK_OK) return st;
+    if (dy == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T_motor) || !isfinite(T_load)) return GK_ERR_INPUT;
+    gb_me_inputs(gb, w, me, T_motor, T_load, &t_in, &t_out);
+    gb_rhs(gb, w, y, dy, t_in, t_out, 2);
+    return GK_OK;
+}
+
+int gb_me_indicators(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor,
+                     double T_load, double *z)
+{
+    double t_in, t_out, all[4 * GK_KINK_MAX_SLOTS + 2];
+    int m, n = 0, st = gb_me_check(gb, w, me, y);
+    if (st != GK_OK) return st;
+    if (z == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T_motor) || !isfinite(T_load)) return GK_ERR_INPUT;
+    gb_me_inputs(gb, w, me, T_motor, T_load, &t_in, &t_out);
+    for (m = 0; m < gb->n_mesh; ++m) {
+        const gk_model *pm = gb->mesh[m].pair;
+        double loc[4];
+        mesh_local(&gb->mesh[m], y, loc);
+        me_all_indicators(pm, &me->mesh[m], &w->tq[m], loc, all);
+        n += me_pack_indicators(pm, &me->mesh[m], all, z + n);
+    }
+    return GK_OK;
+}
+
+int gb_me_outputs(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor,
+                  double T_load, double *out)
+{
+    double t_in, t_out;
+    int i, m, o, st = gb_me_check(gb, w, me, y);
+    if (st != GK_OK) return st;
+    if (out == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T_motor) || !isfinite(T_load)) return GK_ERR_INPUT;
+    gb_me_inputs(gb, w, me, T_motor, T_load, &t_in, &t_out);
+    for (i = 0; i < gb->n; ++i) {
+        out[2 * i] = gb->g[i] * y[0] + body_u(y, 0, i);
+        out[2 * i + 1] = gb->g[i] * y[1] + body_u(y, 1, i);
+    }
+    o = 2 * gb->n;
+    for (m = 0; m < gb->n_mesh; ++m) {
+        const gk_model *pm = gb->mesh[m].pair;
+        double loc[4], F, km;
+        int j, P = pm->P;
+        mesh_local(&gb->mesh[m], y, loc);
+        F = me_force(pm, &me->mesh[m], &w->tq[m], loc, out + o + GB_OUT_PAIR_FORCE, &km);
+        out[o + GB_OUT_DTE] = loc[2];
+        out[o + GB_OUT_DTE_RATE] = loc[3];
+        out[o + GB_OUT_MESH_FORCE] = F;
+        out[o + GB_OUT_MESH_STIFFNESS] = km;
+        for (j = 0; j < P; ++j)
+            out[o + GB_OUT_PAIR_FORCE + P + j] = (F != 0.0) ? out[o + GB_OUT_PAIR_FORCE + j] / F : 0.0;
+        o += GB_OUT_PAIR_FORCE + 2 * P;
+    }
+    for (i = 0; i < gb->n_shaft; ++i) {
+        int a = gb->shaft_a[i], b = gb->shaft_b[i];
+        out[o + i] = gb->shaft_k[i] * (body_u(y, 0, a) - body_u(y, 0, b)) +
+                     gb->shaft_c[i] * (body_u(y, 1, a) - body_u(y, 1, b));
+    }
     return GK_OK;
 }

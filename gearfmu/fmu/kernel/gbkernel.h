@@ -24,7 +24,7 @@
 extern "C" {
 #endif
 
-#define GB_ABI_VERSION 1
+#define GB_ABI_VERSION 2  /* 2: Model Exchange (gb_me_*) */
 
 /* sizes of the fixed arrays (a gearbox beyond them is refused by gb_init / gb_add_*) */
 #define GB_MAX_BODIES 64
@@ -113,6 +113,30 @@ GK_API int gb_do_step(const gb_model *gb, gb_work *w, gb_state *s, double T_moto
 /* The outputs at state s (the torque rows of the inputs): gb_n_outputs values, laid out as
  * gb_output_offset says. */
 GK_API int gb_outputs(const gb_model *gb, const gb_state *s, double T_motor_Nm, double T_load_Nm, double *out);
+
+/* Model Exchange (docs/model.md "Model Exchange"; the pair's gk_me_* for every mesh): the host
+ * integrates y; every mesh's mode is held between events (gb_me) and decided anew from the state at
+ * each (gb_me_update: at the state and a moment ahead); the derivatives, indicators and outputs are
+ * those with the modes held.  The indicators: every mesh's gk_me_indicators one after another
+ * (gb_me_n_indicators of them).  GK_ERR_NONFINITE for a non-finite state, GK_ERR_INPUT for a
+ * non-finite torque, GK_ERR_PARAM for a bad node_events (GK_ME_NODES_*). */
+typedef struct gb_me {
+    gk_me mesh[GB_MAX_MESHES];
+} gb_me;
+
+GK_API int gb_sizeof_me(void);
+GK_API int gb_me_n_indicators(const gb_model *gb, int node_events);
+GK_API int gb_me_init(const gb_model *gb, gb_work *w, gb_me *me, const double *y, double T_motor_Nm,
+                      double T_load_Nm, int node_events);
+GK_API int gb_me_update(const gb_model *gb, gb_work *w, gb_me *me, const double *y, double T_motor_Nm,
+                        double T_load_Nm, int *changed);
+GK_API int gb_me_derivatives(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor_Nm,
+                             double T_load_Nm, double *dy);
+GK_API int gb_me_indicators(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor_Nm,
+                            double T_load_Nm, double *z);
+/* gb_outputs with the modes held (gb_n_outputs values) */
+GK_API int gb_me_outputs(const gb_model *gb, gb_work *w, const gb_me *me, const double *y, double T_motor_Nm,
+                         double T_load_Nm, double *out);
 
 /* Output layout: body i: [2i] angle (rad), [2i + 1] speed (rad/s); mesh m from gb_mesh_offset(m):
  * x (m), v (m/s), mesh force (N), stiffness in contact (N/m), P pair forces (N), P load sharings (1);

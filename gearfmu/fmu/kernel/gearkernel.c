@@ -694,3 +694,135 @@ int gk_do_step(const gk_model *m, gk_state *s, double T1_Nm, double T2_Nm,
     if (out != NULL) return gk_outputs(m, s, T1_Nm, out);
     return GK_OK;
 }
+
+/* ---------------------------------------------------------- Model Exchange
+ * docs/model.md "Model Exchange": the host integrates [theta1, omega1, x, v]; the per-mesh pieces
+ * (the mode held between events and decided anew at each, the force and the indicators with it
+ * held) are gk_pair.h's, shared with the gearbox kernel; here the pair's equations of motion. */
+
+static int me_check(const gk_model *m, const gk_me *me, const gk_state *s)
+{
+    if (m == NULL || me == NULL || s == NULL) return GK_ERR_MODEL;
+    if (m->P > GK_KINK_MAX_SLOTS) return GK_ERR_PARAM;
+    if (!isfinite(s->theta1_rad) || !isfinite(s->omega1_rad_s) || !isfinite(s->x_m) || !isfinite(s->v_m_s))
+        return GK_ERR_NONFINITE;
+    return GK_OK;
+}
+
+/* the state as the per-mesh pieces take it */
+GK_INLINE void me_y(const gk_state *s, double *y)
+{
+    y[0] = s->theta1_rad;
+    y[1] = s->omega1_rad_s;
+    y[2] = s->x_m;
+    y[3] = s->v_m_s;
+}
+
+int gk_me_n_indicators(const gk_model *m, int node_events)
+{
+    if (m == NULL) return 0;
+    return me_n_indicators(m, node_events);
+}
+
+static void me_rhs(const gk_model *m, const double *y, double F, double T1, double T2, double *dx)
+{
+    double Rb1 = m->Rb1_m, Rb2 = m->Rb2_m;
+    dx[0] = y[1];
+    dx[1] = (T1 - Rb1 * F) * m->inv_I1;
+    dx[2] = y[3];
+    dx[3] = Rb1 * (T1 - Rb1 * F) * m->inv_I1 - Rb2 * (Rb2 * F - T2) * m->inv_I2;
+}
+
+/* The mode anew at an event (docs/model.md "Model Exchange"): decided at the state, then again at the
+ * state a moment ahead, y + delta*f(y) with f in the mode decided first and delta = 1e-9 of the
+ * natural period 2 pi sqrt(m_e/k_mean) (the choice of gearfmu.dynamics.reference), so that a guard
+ * the host's root finder left at zero, or a hair short of it, takes the side it moves to. */
+int gk_me_update(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int *changed)
+{
+    gk_tq t;
+    gk_me old;
+    double y[4], dx[4], ahead[4], delta;
+    int q, st = me_check(m, me, s), finite = 1;
+    if (st != GK_OK) return st;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    old = *me;
+    me_y(s, y);
+    t = torque_bracket(m, T1_Nm);
+    me_decide(m, me, &t, y);
+    me_rhs(m, y, me_force(m, me, &t, y, NULL, NULL), T1_Nm, T2_Nm, dx);
+    delta = me_ahead_time(m);
+    for (q = 0; q < 4; ++q) {
+        ahead[q] = y[q] + delta * dx[q];
+        finite &= isfinite(ahead[q]) != 0;
+    }
+    if (finite) me_decide(m, me, &t, ahead);
+    if (changed != NULL) *changed = me_differs(m, me, &old);
+    return GK_OK;
+}
+
+int gk_me_init(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int node_events)
+{
+    if (me == NULL) return GK_ERR_MODEL;
+    if (!me_clear(me, node_events)) return GK_ERR_PARAM;
+    return gk_me_update(m, me, s, T1_Nm, T2_Nm, NULL);
+}
+
+int gk_me_derivatives(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
+                      double *dx)
+{
+    gk_tq t;
+    double y[4];
+    int st = me_check(m, me, s);
+    if (st != GK_OK) return st;
+    if (dx == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    me_y(s, y);
+    t = torque_bracket(m, T1_Nm);
+    me_rhs(m, y, me_force(m, me, &t, y, NULL, NULL), T1_Nm, T2_Nm, dx);
+    return GK_OK;
+}
+
+int gk_me_indicators(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double *z)
+{
+    gk_tq t;
+    double all[4 * GK_KINK_MAX_SLOTS + 2], y[4];
+    int st = me_check(m, me, s);
+    if (st != GK_OK) return st;
+    if (z == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm)) return GK_ERR_INPUT;
+    me_y(s, y);
+    t = torque_bracket(m, T1_Nm);
+    me_all_indicators(m, me, &t, y, all);
+    me_pack_indicators(m, me, all, z);
+    return GK_OK;
+}
+
+int gk_me_outputs(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, double *out,
+                  double *me_out)
+{
+    gk_tq t;
+    double F, km, y[4];
+    int j, P, st = me_check(m, me, s);
+    if (st != GK_OK) return st;
+    if (out == NULL) return GK_ERR_MODEL;
+    if (!isfinite(T1_Nm) || !isfinite(T2_Nm)) return GK_ERR_INPUT;
+    P = m->P;
+    me_y(s, y);
+    t = torque_bracket(m, T1_Nm);
+    F = me_force(m, me, &t, y, out + GK_OUT_PAIR_FORCE, &km);
+    out[GK_OUT_PINION_ANGLE] = s->theta1_rad;
+    out[GK_OUT_PINION_SPEED] = s->omega1_rad_s;
+    out[GK_OUT_GEAR_ANGLE] = (s->theta1_rad * m->Rb1_m - s->x_m) / m->Rb2_m;
+    out[GK_OUT_GEAR_SPEED] = (s->omega1_rad_s * m->Rb1_m - s->v_m_s) / m->Rb2_m;
+    out[GK_OUT_DTE] = s->x_m;
+    out[GK_OUT_MESH_FORCE] = F;
+    out[GK_OUT_MESH_STIFFNESS] = km;
+    for (j = 0; j < P; ++j)
+        out[GK_OUT_PAIR_FORCE + P + j] = (F != 0.0) ? out[GK_OUT_PAIR_FORCE + j] / F : 0.0;
+    if (me_out != NULL) {
+        me_out[GK_ME_OUT_V] = s->v_m_s;
+        me_rhs(m, y, F, T1_Nm, T2_Nm, me_out + GK_ME_OUT_DERIVATIVES);
+        me_all_indicators(m, me, &t, y, me_out + GK_ME_OUT_INDICATORS);
+    }
+    return GK_OK;
+}

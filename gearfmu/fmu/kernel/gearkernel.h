@@ -27,8 +27,9 @@ extern "C" {
 #define GK_API
 #endif
 
-#define GK_ABI_VERSION 5  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model;
-                             5: contact-zone cuts (gk_zone_cuts, gk_set_zone_cuts, gk_model.zone_cuts) */
+#define GK_ABI_VERSION 6  /* 3: verified envelope check (gk_envelope); 4: node kink flags in gk_model;
+                             5: contact-zone cuts (gk_zone_cuts, gk_set_zone_cuts, gk_model.zone_cuts);
+                             6: Model Exchange (gk_me_*, gk_set_zone_edges, gk_model.zone_*) */
 
 /* status codes */
 #define GK_OK 0
@@ -116,6 +117,10 @@ typedef struct gk_model {
     unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* bit 0 (rk4_node): the tables bend at node i; bit 1
                                                     (rk4_seg): the contact_zone flag can change there */
     const double *zone_cuts;        /* [2][P][n_phi] cuts of gk_zone_cuts (borrowed), NULL: plain lookup */
+    /* the contact zones themselves (gk_set_zone_edges; Model Exchange's zone indicators): pair n of
+     * slot (n mod n_mesh) mod P is in its zone for n*zone_ppm + zone_in <= s < n*zone_ppm + zone_out
+     * (s = theta1/dphi, the edges snapped to a node within GK_ZONE_SNAP); zone_n_mesh = 0: none */
+    double zone_n_mesh, zone_ppm, zone_in, zone_out;
 } gk_model;
 
 typedef struct gk_state {
@@ -153,6 +158,9 @@ GK_API int gk_init(gk_model *m, int P, int n_phi, int n_torque,
 GK_API int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad,
                  double in_rad, double out_rad, double *cuts);
 GK_API int gk_set_zone_cuts(gk_model *m, const double *cuts);
+/* The zones themselves for Model Exchange (after gk_init, beside gk_set_zone_cuts with the same
+ * angles): the meshes per period and the edges in node units; the same checks as gk_zone_cuts. */
+GK_API int gk_set_zone_edges(gk_model *m, double mesh_period_rad, double in_rad, double out_rad);
 
 /* Declare a temperature axis (call after gk_init): k and e are then laid out
  * [n_torque][n_temp][P][n_phi].  temperature_C (degC, borrowed) finite and
@@ -190,6 +198,57 @@ GK_API int gk_outputs(const gk_model *m, const gk_state *s, double T1_Nm, double
 
 /* Number of substeps gk_do_step takes for (H, h_max); 0 if invalid. */
 GK_API double gk_substeps(double H_s, double h_max_s);
+
+/* ------------------------------------------------------------------------
+ * Model Exchange (docs/model.md "Model Exchange"): the host's own solver integrates the state
+ * [theta1, omega1, x, v] of gk_state.  Between two events the *mode* is held: per pair its contact
+ * region, its elastobacklash branch and, with contact-zone edges, whether it is in its contact
+ * zone; with node events also the table segment between two flagged nodes.  The right-hand side
+ * with the mode held is smooth between the events except at the table nodes (the plain lookup in
+ * the cell of theta1: values continuous, kinks and steps of de/dphi there); the event indicators
+ * are >= 0 while the mode holds and the mode is decided anew from the state at every event. */
+#define GK_ME_NODES_NONE 0      /* no node events: the plain lookup in the cell of theta1 */
+#define GK_ME_NODES_KINKS 1     /* events at the nodes rk4_seg stops at (big kinks, GK_SEG_KINK_TOL) */
+#define GK_ME_NODES_ALL 2       /* events at every node where the tables bend (rk4_node's nodes) */
+/* the extra outputs of gk_me_outputs (gk_me_n_outputs(P) = 7 + 4P values after the gk_n_outputs(P)
+ * ones): v, the four derivatives, then every indicator in the order of gk_me_indicators with room
+ * for all of them: the three contact guards of every pair, the P zones, the segment's two ends
+ * (those the model does not have are 1.0) */
+#define GK_ME_OUT_V 0
+#define GK_ME_OUT_DERIVATIVES 1
+#define GK_ME_OUT_INDICATORS 5
+
+typedef struct gk_me {
+    int node_events;                 /* GK_ME_NODES_* */
+    int reg[GK_KINK_MAX_SLOTS];      /* contact region: 1 drive, -1 back, 0 separated */
+    int sub[GK_KINK_MAX_SLOTS];      /* elastobacklash branch: 0 two (2 fc), 1 sum (fc + fd), 2 zero */
+    int zin[GK_KINK_MAX_SLOTS];      /* 1: in the contact zone (contact-zone edges), else k = 0 */
+    double seg_lo, seg_hi;           /* node events: the held segment [lo, hi) in global node indices */
+} gk_me;
+
+GK_API int gk_sizeof_me(void);
+GK_API int gk_me_n_outputs(int P);
+/* The number of event indicators: 3 per pair (the contact guards), 1 per pair with contact-zone
+ * edges (gk_set_zone_edges), 2 with node events (the held segment's ends). */
+GK_API int gk_me_n_indicators(const gk_model *m, int node_events);
+/* The mode from the state (at the start and at every event; the inputs T1, T2): decided at the state
+ * and again a moment ahead, so that a guard at zero takes the side it moves to; *changed (may be
+ * NULL) = 1 when it differs from the mode held before.  GK_ERR_PARAM for more than
+ * GK_KINK_MAX_SLOTS slots or a bad node_events, GK_ERR_NONFINITE for a non-finite state. */
+GK_API int gk_me_init(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
+                      int node_events);
+GK_API int gk_me_update(const gk_model *m, gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm, int *changed);
+/* dx[4] = d/dt [theta1, omega1, x, v] with the mode held; GK_ERR_NONFINITE for a non-finite state */
+GK_API int gk_me_derivatives(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
+                             double *dx);
+/* z[gk_me_n_indicators] (m: guards of forces divided by k_mean, angles times Rb1): per pair the
+ * three contact guards (all pairs' first, then second, then third), per pair its zone, then the
+ * segment's lower and upper end; >= 0 while the mode holds, 1.0 for a guard the mode does not have */
+GK_API int gk_me_indicators(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double *z);
+/* the outputs of gk_outputs with the mode held (out, gk_n_outputs(P) values), then the extra ones
+ * (me_out, gk_me_n_outputs(P) values, may be NULL): v, the derivatives and the indicators (GK_ME_OUT_*) */
+GK_API int gk_me_outputs(const gk_model *m, const gk_me *me, const gk_state *s, double T1_Nm, double T2_Nm,
+                         double *out, double *me_out);
 
 /* ------------------------------------------------------------------------
  * Verified envelope (docs/fmu.md "Verified envelope"): the input ranges over

@@ -10,6 +10,8 @@ int gk_abi_version(void) { return GK_ABI_VERSION; }
 int gk_sizeof_model(void) { return (int)sizeof(gk_model); }
 int gk_sizeof_state(void) { return (int)sizeof(gk_state); }
 int gk_n_outputs(int P) { return GK_OUT_PAIR_FORCE + 2 * P; }
+int gk_sizeof_me(void) { return (int)sizeof(gk_me); }
+int gk_me_n_outputs(int P) { return GK_ME_OUT_INDICATORS + 4 * P + 2; }
 
 int gk_init(gk_model *m, int P, int n_phi, int n_torque,
             const double *torque_Nm, const double *k_N_per_m,
@@ -61,6 +63,8 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->temp_w = 0.0;
     m->temperature_now_C = 0.0;
     m->zone_cuts = NULL;
+    m->zone_n_mesh = 0.0;
+    m->zone_ppm = m->zone_in = m->zone_out = 0.0;
     gki_node_flags(m);
     return GK_OK;
 }

@@ -2,8 +2,10 @@
  * gk_pair.h -- the pair model's pieces that every mesh uses (docs/model.md "Per-pair force",
  * "Outputs", "rk4_kink"; docs/native.md "rk4_node"): the mesh force with the plain lookup, the
  * per-pair force law and guards with the mode held, the mode decisions, the Hermite point and the
- * root finder of the event location.  Included by the pair's hot path (gearkernel.c) and by the
- * gearbox kernel (gb_kernel.c), which applies them to every mesh with its own gk_model and gk_mode,
+ * root finder of the event location, and the same for Model Exchange (the mode held between a
+ * host's events, the force and the event indicators with it held).  Included by the pair's hot
+ * path (gearkernel.c) and by the gearbox kernel (gb_kernel.c), which applies them to every mesh
+ * with its own gk_model and gk_mode (gk_me for Model Exchange),
  * so that a stage is computed exactly as the pair is; the same arithmetic as
  * gearfmu/dynamics/model_rhs.py and integrators.py.  Calls only gk_lookup.h and gk_stops.c.
  */
@@ -312,6 +314,249 @@ GK_PAIR_FN double held_guard_root(const gk_model *m, const gk_tq *t, const gk_mo
         if (root_update(&r, s, guard_at(m, t, md, gi, yy))) break;
     }
     return r.b;
+}
+
+/* ---------------------------------------------------------- Model Exchange
+ * docs/model.md "Model Exchange": the host integrates the state; per mesh the mode (gk_me: per pair
+ * region, elastobacklash branch and contact-zone flag; with node events the table segment) is held
+ * between events and decided anew from the state at each event.  The lookup is the plain one in the
+ * cell of theta1 (with node events: clamped to the held segment, the end cells' lines extended),
+ * except that a pair out of its contact zone has k = 0 and a pair in it takes the in-zone line of
+ * a cell that holds one of its edges.  y is the mesh's own (theta_p, omega_p, x, v). */
+
+/* x on the nearest node when within GK_ZONE_SNAP cells (gk_zones.c zone_wrap, without the wrap) */
+GK_INLINE double me_snap(double x)
+{
+    double rn = floor(x + 0.5);
+    return (fabs(x - rn) <= GK_ZONE_SNAP) ? rn : x;
+}
+
+/* Signed distance (node units) from s to the nearest edge of slot j's contact zones: > 0 inside a
+ * zone, < 0 outside; *inside = 1 when in <= s < out for one of them.  Global pair n has the zone
+ * [q N + snap(mm ppm + in), q N + snap(mm ppm + out)), q = floor(n / n_mesh), mm = n - q n_mesh, and
+ * belongs to slot mm mod P (gk_zone_cuts); the pairs within 2P meshes of s are looked at. */
+GK_PAIR_FN double me_zone_distance(const gk_model *m, int j, double s, int *inside)
+{
+    double nm = m->zone_n_mesh, ppm = m->zone_ppm, best = -HUGE_VAL, n;
+    double n0 = floor((s - m->zone_out) / ppm) - 2.0 * m->P, n1 = floor((s - m->zone_in) / ppm) + 2.0 * m->P;
+    int k;
+    *inside = 0;
+    if (!(fabs(s) < GK_CELL_LIMIT)) {   /* beyond 2^52 cells (or NaN) the pairs cannot be told apart */
+        *inside = 1;
+        return 1.0;
+    }
+    for (n = n0, k = 0; n <= n1 && k < 64 * GK_KINK_MAX_SLOTS; n += 1.0, ++k) {
+        double q = floor(n / nm), mm = n - q * nm, in, out, g;
+        if ((long long)mm % m->P != j) continue;
+        in = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_in);
+        out = q * (double)m->n_phi + me_snap(mm * ppm + m->zone_out);
+        g = (s - in < out - s) ? s - in : out - s;
+        if (g > best) best = g;
+        if (in <= s && s < out) *inside = 1;
+    }
+    return (best == -HUGE_VAL) ? -(double)m->n_phi : best;
+}
+
+/* a node the held segment stops at (node events): rk4_seg's stops (GK_ME_NODES_KINKS) or rk4_node's */
+GK_INLINE int me_node_stop(const gk_model *m, double n, int node_events)
+{
+    if (m->n_phi > GK_NODE_FLAGS_MAX) return 1;
+    return (m->node_kink[gki_node_index(m->n_phi, n)] & (node_events == GK_ME_NODES_KINKS ? 2 : 1)) != 0;
+}
+
+/* the segment [lo, hi) of stops around s: lo the last stop at or below floor(s), hi the first above */
+GK_PAIR_FN void me_segment(const gk_model *m, gk_me *me, double s)
+{
+    double c = floor(s), q;
+    int k, N = m->n_phi;
+    me->seg_lo = c + 1.0 - N;
+    for (q = c, k = 0; k < N; ++k, q -= 1.0)
+        if (me_node_stop(m, q, me->node_events)) { me->seg_lo = q; break; }
+    me->seg_hi = c + N;
+    for (q = c + 1.0, k = 0; k < N; ++k, q += 1.0)
+        if (me_node_stop(m, q, me->node_events)) { me->seg_hi = q; break; }
+}
+
+/* the cell of theta1 = th (with node events clamped to the held segment) */
+GK_INLINE void me_cell(const gk_model *m, const gk_me *me, double th, gk_ph *c)
+{
+    double cc;
+    if (me->node_events == GK_ME_NODES_NONE) {
+        phi_cell(m, th, c);
+        return;
+    }
+    cc = floor(th * m->inv_dphi);
+    if (!(cc >= me->seg_lo)) cc = me->seg_lo;
+    if (cc > me->seg_hi - 1.0) cc = me->seg_hi - 1.0;
+    c->i0 = gki_node_index(m->n_phi, cc);
+    c->i1 = (c->i0 + 1 == m->n_phi) ? 0 : c->i0 + 1;
+    c->nd = GK_CELL_NONE;
+    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
+}
+
+/* k, e, de/dphi, b of pair j with its contact-zone flag held; 0 (and k = 0) when it is out of its zone */
+GK_INLINE int me_tables(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, double *kv,
+                        double *ev, double *es, double *bv)
+{
+    int sel = -1;
+    if (m->zone_n_mesh > 0.0 && !me->zin[j]) {
+        slot_tables(m, t, c, j, -1, kv, ev, es, bv);
+        *kv = 0.0;
+        return 0;
+    }
+    if (m->zone_cuts != NULL) {
+        size_t r = (size_t)j * m->n_phi + c->i0;
+        double lo = m->zone_cuts[r];
+        if (lo >= 0.0) sel = (c->w < 0.5 * (lo + m->zone_cuts[(size_t)m->P * m->n_phi + r])) ? 0 : 2;
+    }
+    slot_tables(m, t, c, j, sel, kv, ev, es, bv);
+    return 1;
+}
+
+/* contact_zone: the pair is damped (k > 0 in its zone; without zone edges at the middle of the cell) */
+GK_INLINE int me_kpos(const gk_model *m, const gk_tq *t, const gk_me *me, const gk_ph *c, int j, int active)
+{
+    gk_ph half;
+    double km, em, esm, bm;
+    if (m->damping_model != GK_DAMPING_CONTACT_ZONE || !active) return 0;
+    if (m->zone_n_mesh > 0.0) return me->zin[j];
+    half = *c;
+    half.w = 0.5;
+    slot_tables(m, t, &half, j, -1, &km, &em, &esm, &bm);
+    return km > 0.0;
+}
+
+/* guard q of pair j (pair_guard) in metres: the force guards of elastobacklash divided by k_mean */
+GK_INLINE double me_guard(int q, double kv, double ev, double es, double bv, const double *y, double c, int model,
+                          int reg, int sub, double inv_k)
+{
+    double g = pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], c, model, reg, sub);
+    if (q == 0 || reg == 0 || model != GK_DAMPING_ELASTOBACKLASH || (q == 2 && sub != 1)) return g;
+    return g * inv_k;
+}
+
+/* The number of event indicators: 3 per pair (the contact guards), 1 per pair with contact-zone edges,
+ * 2 with node events (the held segment's ends). */
+GK_INLINE int me_n_indicators(const gk_model *m, int node_events)
+{
+    return 3 * m->P + ((m->zone_n_mesh > 0.0) ? m->P : 0) + ((node_events != GK_ME_NODES_NONE) ? 2 : 0);
+}
+
+/* an empty mode with node_events (GK_ME_NODES_*); 0 for another value */
+GK_INLINE int me_clear(gk_me *me, int node_events)
+{
+    int j;
+    if (node_events != GK_ME_NODES_NONE && node_events != GK_ME_NODES_KINKS && node_events != GK_ME_NODES_ALL)
+        return 0;
+    me->node_events = node_events;
+    for (j = 0; j < GK_KINK_MAX_SLOTS; ++j) me->reg[j] = me->sub[j] = me->zin[j] = 0;
+    me->seg_lo = me->seg_hi = 0.0;
+    return 1;
+}
+
+/* 1 when mode a differs from mode b */
+GK_INLINE int me_differs(const gk_model *m, const gk_me *a, const gk_me *b)
+{
+    int j, diff = a->seg_lo != b->seg_lo || a->seg_hi != b->seg_hi;
+    for (j = 0; j < m->P; ++j) diff |= a->reg[j] != b->reg[j] || a->sub[j] != b->sub[j] || a->zin[j] != b->zin[j];
+    return diff;
+}
+
+/* the moment ahead of an event at which the mode is decided a second time: 1e-9 of the natural period
+ * 2 pi sqrt(m_e/k_mean) (the choice of gearfmu.dynamics.reference) */
+GK_INLINE double me_ahead_time(const gk_model *m)
+{
+    return 1e-9 * 6.283185307179586 * sqrt(m->m_e_kg / m->k_mean_N_per_m);
+}
+
+/* the mode from state y */
+GK_PAIR_FN void me_decide(const gk_model *m, gk_me *me, const gk_tq *t, const double *y)
+{
+    gk_ph c = GK_PH_NONE;
+    double sv = y[0] * m->inv_dphi;
+    int j;
+    if (me->node_events != GK_ME_NODES_NONE) me_segment(m, me, sv);
+    if (m->zone_n_mesh > 0.0)
+        for (j = 0; j < m->P; ++j) me_zone_distance(m, j, sv, &me->zin[j]);
+    me_cell(m, me, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv, d;
+        if (!me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv)) {
+            me->reg[j] = 0;
+            me->sub[j] = 0;
+            continue;
+        }
+        d = y[2] - ev;
+        me->reg[j] = (d > bv) ? 1 : (d < -bv) ? -1 : 0;
+        me->sub[j] = (m->damping_model == GK_DAMPING_ELASTOBACKLASH)
+                         ? decide_sub(me->reg[j], kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m)
+                         : 0;
+    }
+}
+
+/* the total force at y with the mode held; per pair (pf, may be NULL) and the stiffness of the pairs
+ * in contact (kmesh, may be NULL) */
+GK_PAIR_FN double me_force(const gk_model *m, const gk_me *me, const gk_tq *t, const double *y, double *pf,
+                           double *kmesh)
+{
+    gk_ph c = GK_PH_NONE;
+    double F = 0.0, ks = 0.0;
+    int j;
+    me_cell(m, me, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv, Fj = 0.0;
+        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv);
+        if (active) {
+            Fj = pair_force_locked(kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, me->reg[j],
+                                   me->sub[j], me_kpos(m, t, me, &c, j, active));
+            if (me->reg[j] != 0) ks += kv;
+        }
+        if (pf != NULL) pf[j] = Fj;
+        F += Fj;
+    }
+    if (kmesh != NULL) *kmesh = ks;
+    return F;
+}
+
+/* every indicator into z with room for all (3P guards, P zones, 2 segment ends; those the model does
+ * not have 1.0), in metres (guards of forces divided by k_mean, angles times Rb1) */
+GK_PAIR_FN void me_all_indicators(const gk_model *m, const gk_me *me, const gk_tq *t, const double *y, double *z)
+{
+    gk_ph c = GK_PH_NONE;
+    double sv = y[0] * m->inv_dphi, len = m->Rb1_m * m->dphi_rad, inv_k = 1.0 / m->k_mean_N_per_m;
+    int j, q, P = m->P;
+    me_cell(m, me, y[0], &c);
+    for (j = 0; j < P; ++j) {
+        double kv, ev, es, bv;
+        int active = me_tables(m, t, me, &c, j, &kv, &ev, &es, &bv), inside;
+        for (q = 0; q < 3; ++q)
+            z[q * P + j] = active ? me_guard(q, kv, ev, es, bv, y, m->c_Ns_per_m, m->damping_model, me->reg[j],
+                                             me->sub[j], inv_k)
+                                  : 1.0;
+        if (m->zone_n_mesh > 0.0) {
+            double g = me_zone_distance(m, j, sv, &inside) * len;
+            z[3 * P + j] = me->zin[j] ? g : -g;
+        } else {
+            z[3 * P + j] = 1.0;
+        }
+    }
+    z[4 * P] = (me->node_events != GK_ME_NODES_NONE) ? (sv - me->seg_lo) * len : 1.0;
+    z[4 * P + 1] = (me->node_events != GK_ME_NODES_NONE) ? (me->seg_hi - sv) * len : 1.0;
+}
+
+/* the indicators the mesh has (me_n_indicators of them, in gk_me_indicators' order) from all of
+ * me_all_indicators into z; their number */
+GK_INLINE int me_pack_indicators(const gk_model *m, const gk_me *me, const double *all, double *z)
+{
+    int j, n = 0, P = m->P;
+    for (j = 0; j < 3 * P; ++j) z[n++] = all[j];
+    if (m->zone_n_mesh > 0.0)
+        for (j = 0; j < P; ++j) z[n++] = all[3 * P + j];
+    if (me->node_events != GK_ME_NODES_NONE) {
+        z[n++] = all[4 * P];
+        z[n++] = all[4 * P + 1];
+    }
+    return n;
 }
 
 #endif /* GK_PAIR_H */

@@ -75,6 +75,23 @@ int gk_zone_cuts(int P, int n_phi, double phi_period_rad, double mesh_period_rad
     return GK_OK;
 }
 
+/* the zones of Model Exchange (gearkernel.h): the arithmetic of gk_zone_cuts before its marks */
+int gk_set_zone_edges(gk_model *m, double mesh_period_rad, double in_rad, double out_rad)
+{
+    double inv, nm;
+    if (m == NULL || !gki_finite_pos(mesh_period_rad)) return GK_ERR_MODEL;
+    if (!isfinite(in_rad) || !isfinite(out_rad)) return GK_ERR_PARAM;
+    inv = (double)m->n_phi / m->phi_period_rad;
+    if (!((out_rad - in_rad) * inv >= GK_ZONE_MIN_CELLS)) return GK_ERR_PARAM;
+    nm = floor(m->phi_period_rad / mesh_period_rad + 0.5);
+    if (!(nm >= 1.0 && nm <= 1e9)) return GK_ERR_MODEL;
+    m->zone_n_mesh = nm;
+    m->zone_ppm = (double)m->n_phi / nm;
+    m->zone_in = in_rad * inv;
+    m->zone_out = out_rad * inv;
+    return GK_OK;
+}
+
 /* contact-zone cuts of cell i0 over all slots (model_rhs._cut_above / _cut_below): the
  * smallest above f (at or above with incl) and below 1, 2.0 for none; the largest below f
  * (at or below with incl) and above 0, -1.0 for none */

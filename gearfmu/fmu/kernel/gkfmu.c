@@ -297,6 +297,27 @@ int gkf_do_step(gkf_fmu *f, gk_state *s, double t, double H, double *out)
     return 1;
 }
 
+int gkf_me_inputs(gkf_fmu *f, double t)
+{
+    static const char *const tail = "; not evaluated";
+    double T1 = f->value[GKF_PINION_TORQUE];
+    int bad = 0;
+    f->n_messages = 0;
+    bad |= bad_value(f, GKF_PINION_TORQUE, 1, t, GKF_DISCARD, tail);
+    bad |= bad_value(f, GKF_GEAR_TORQUE, 1, t, GKF_DISCARD, tail);
+    if (!bad) bad = apply_temperature(f, t, GKF_DISCARD, tail);
+    if (bad || apply_damping(f)) return 0;
+    check_torque_range(f, T1, t);
+    check_inputs_envelope(f, NULL, t, 0);
+    return 1;
+}
+
+void gkf_me_speed(gkf_fmu *f, const gk_state *s, double t)
+{
+    f->n_messages = 0;
+    check_envelope(f, GK_ENV_PINION_SPEED, "pinion_speed", s->omega1_rad_s, t);
+}
+
 int gkf_restore(gkf_fmu *f, int integrator, int zeta_valid, double zeta, int warned_range)
 {
     double ig;

@@ -23,7 +23,7 @@
 extern "C" {
 #endif
 
-#define GKF_ABI_VERSION 1
+#define GKF_ABI_VERSION 2  /* 2: Model Exchange (gkf_me_inputs, gkf_me_speed) */
 
 /* the variables this layer reads, by slot (docs/fmu.md "Variables") */
 #define GKF_DAMPING_RATIO 0
@@ -88,6 +88,15 @@ GK_API int gkf_initialize(gkf_fmu *f, gk_state *s, double t_s, double *out);
  * temperature, damping, gk_do_step (outputs into out), the warnings.  1 on success; 0 with
  * the reasons queued (GKF_DISCARD, GKF_ERROR for a damping ratio refused) and s unchanged. */
 GK_API int gkf_do_step(gkf_fmu *f, gk_state *s, double t_s, double H_s, double *out);
+
+/* Model Exchange (docs/model.md "Model Exchange"): before the host's solver evaluates the model with
+ * new values, the input checks of gkf_do_step (a bad torque or temperature: GKF_DISCARD, "...; not
+ * evaluated"), the temperature and damping applied and the torque-axis and envelope warnings.  1 on
+ * success; 0 with the reasons queued. */
+GK_API int gkf_me_inputs(gkf_fmu *f, double t_s);
+/* the envelope check of the pinion speed of state s at t_s (after an accepted integrator step and
+ * at events): its warning queued, nothing refused */
+GK_API void gkf_me_speed(gkf_fmu *f, const gk_state *s, double t_s);
 
 /* After an FMU state was restored (values handed over first): the integrator (when
  * `integrator` and declared), the damping ratio zeta applied when zeta_valid, and the

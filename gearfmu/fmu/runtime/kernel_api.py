@@ -22,9 +22,9 @@ INT, DOUBLE, PTR, TEXT, VOID = ctypes.c_int, ctypes.c_double, ctypes.c_void_p, c
 STATUS, FLAG, VALUE = "status", "flag", "value"
 
 #: the ABI versions the table declares (gearkernel.h GK_ABI_VERSION, gkfmu.h GKF_ABI_VERSION)
-KERNEL_ABI_VERSION = 5  # 2: temperature axis, 3: verified envelope check, 4: node kink flags,
-#                         5: contact-zone cuts from the tables' engagement angles
-FMU_LAYER_ABI_VERSION = 1
+KERNEL_ABI_VERSION = 6  # 2: temperature axis, 3: verified envelope check, 4: node kink flags,
+#                         5: contact-zone cuts from the tables' engagement angles, 6: Model Exchange
+FMU_LAYER_ABI_VERSION = 2  # 2: Model Exchange (gkf_me_inputs, gkf_me_speed)
 
 _D6 = (DOUBLE,) * 6
 #: (name, result type, argument types, what the result means), in the order of the headers
@@ -37,6 +37,7 @@ KERNEL_FUNCTIONS = (
     ("gk_init", INT, (PTR, INT, INT, INT, PTR, PTR, PTR, PTR) + _D6, STATUS),
     ("gk_zone_cuts", INT, (INT, INT, DOUBLE, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),
     ("gk_set_zone_cuts", INT, (PTR, PTR), STATUS),
+    ("gk_set_zone_edges", INT, (PTR, DOUBLE, DOUBLE, DOUBLE), STATUS),
     ("gk_set_temperature_axis", INT, (PTR, INT, PTR), STATUS),
     ("gk_set_temperature", INT, (PTR, DOUBLE), STATUS),
     ("gk_set_damping", INT, (PTR, DOUBLE, INT), STATUS),
@@ -45,6 +46,15 @@ KERNEL_FUNCTIONS = (
     ("gk_do_step", INT, (PTR, PTR, DOUBLE, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),
     ("gk_outputs", INT, (PTR, PTR, DOUBLE, PTR), STATUS),
     ("gk_substeps", DOUBLE, (DOUBLE, DOUBLE), VALUE),
+    # gearkernel.h: Model Exchange
+    ("gk_sizeof_me", INT, (), VALUE),
+    ("gk_me_n_outputs", INT, (INT,), VALUE),
+    ("gk_me_n_indicators", INT, (PTR, INT), VALUE),
+    ("gk_me_init", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, INT), STATUS),
+    ("gk_me_update", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("gk_me_derivatives", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("gk_me_indicators", INT, (PTR, PTR, PTR, DOUBLE, PTR), STATUS),
+    ("gk_me_outputs", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, PTR, PTR), STATUS),
     # gearkernel.h: the verified envelope
     ("gk_sizeof_envelope", INT, (), VALUE),
     ("gk_envelope_init", INT, (PTR, INT), STATUS),
@@ -61,6 +71,8 @@ KERNEL_FUNCTIONS = (
     ("gkf_reset", VOID, (PTR,), VALUE),
     ("gkf_initialize", INT, (PTR, PTR, DOUBLE, PTR), FLAG),
     ("gkf_do_step", INT, (PTR, PTR, DOUBLE, DOUBLE, PTR), FLAG),
+    ("gkf_me_inputs", INT, (PTR, DOUBLE), FLAG),
+    ("gkf_me_speed", VOID, (PTR, PTR, DOUBLE), VALUE),
     ("gkf_restore", INT, (PTR, INT, INT, DOUBLE, INT), STATUS),
     ("gkf_zeta_valid", INT, (PTR,), VALUE),
     ("gkf_zeta_applied", DOUBLE, (PTR,), VALUE),

@@ -753,6 +753,10 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     const char *e;
     gm_data *d;
     int ok, i;
+    c->offers = GF_COSIMULATION;   /* the Python slave steps itself: no Model Exchange (gf_model.h gf_me_model) */
+    if (c->fmu_type == GF_MODEL_EXCHANGE)
+        return "the pythonfmu runtime offers Co-Simulation only; for Model Exchange build the FMU with "
+               "--runtime standalone (docs/standalone.md \"Model Exchange\")";
     pthread_mutex_lock(&load_mutex);
     ok = loaded || load(err, errcap) == 0;
     if (ok) loaded = 1;

@@ -1,12 +1,12 @@
 /*
- * fmi2_gear.c -- FMI 2.0 Co-Simulation layer of the standalone gearfmu
- * runtime (docs/standalone.md): the fmi2* functions, their table of allowed
+ * fmi2_gear.c -- FMI 2.0 layer of the standalone gearfmu runtime (docs/standalone.md),
+ * Co-Simulation and Model Exchange: the fmi2* functions, their table of allowed
  * states, and the adapters to the shared plumbing (fmi_common.h) and the gear
  * model behind the contract gf_model.h, which the FMI 3.0 layer (fmi3_gear.c) uses too.
  *
  * Standard: Modelica Association, "Functional Mock-up Interface for Model
  * Exchange and Co-Simulation", version 2.0 (sections 2.1 common API,
- * 4.2 Co-Simulation API).  The FMI headers are the standard's own
+ * 3.2 Model Exchange API, 4.2 Co-Simulation API).  The FMI headers are the standard's own
  * (fmi2Functions.h, fmi2FunctionTypes.h, fmi2TypesPlatform.h), shipped
  * beside this file in the FMU's sources/.  The resources are found through
  * the file:// URI the host gives (fmuResourceLocation).
@@ -28,21 +28,26 @@ typedef enum {
     F_DeSerializeFMUstate, F_GetDirectionalDerivative,
     F_SetRealInputDerivatives, F_GetRealOutputDerivatives, F_DoStep, F_CancelStep,
     F_GetStatus, F_GetRealStatus, F_GetIntegerStatus, F_GetBooleanStatus, F_GetStringStatus,
+    F_EnterEventMode, F_NewDiscreteStates, F_EnterContinuousTimeMode, F_CompletedIntegratorStep, F_SetTime,
+    F_SetContinuousStates, F_GetDerivatives, F_GetEventIndicators, F_GetContinuousStates,
+    F_GetNominalsOfContinuousStates,
     F_COUNT
 } gf_fn;
 
 #define GF_STATUS (GF_STEP_MODE | GF_TERMINATED)
 
 /* Which fmi2 function may be called in which state: one table, checked at the
- * entry of every function (FMI 2.0 standard section 4.2.4, the table of
- * allowed calls for Co-Simulation; the same scheme as the Modelica
- * Reference-FMUs' fmi2Functions.c); 0: never (stepInProgress does not exist here). */
+ * entry of every function (FMI 2.0 standard sections 3.2.3 and 4.2.4, the tables of
+ * allowed calls for Model Exchange and Co-Simulation; the same scheme as the Modelica
+ * Reference-FMUs' fmi2Functions.c); 0: never (stepInProgress does not exist here).  A
+ * Co-Simulation instance never is in eventMode or continuousTimeMode, a Model Exchange
+ * instance never in stepComplete. */
 static const gf_call GF_CALLS[F_COUNT] = {
     {"fmi2SetDebugLogging", GF_ANY_STATE},
     {"fmi2SetupExperiment", GF_INSTANTIATED},
     {"fmi2EnterInitializationMode", GF_INSTANTIATED},
     {"fmi2ExitInitializationMode", GF_INIT_MODE},
-    {"fmi2Terminate", GF_STEP_MODE},
+    {"fmi2Terminate", GF_STEP_MODE | GF_EVENT_MODE | GF_CONT_MODE},
     {"fmi2Reset", GF_ANY_STATE},
     {"fmi2FreeInstance", GF_ANY_STATE},
     {"fmi2GetReal", GF_GETTERS},
@@ -69,6 +74,16 @@ static const gf_call GF_CALLS[F_COUNT] = {
     {"fmi2GetIntegerStatus", GF_STATUS},
     {"fmi2GetBooleanStatus", GF_STATUS},
     {"fmi2GetStringStatus", GF_STATUS},
+    {"fmi2EnterEventMode", GF_EVENT_MODE | GF_CONT_MODE},
+    {"fmi2NewDiscreteStates", GF_EVENT_MODE},
+    {"fmi2EnterContinuousTimeMode", GF_EVENT_MODE},
+    {"fmi2CompletedIntegratorStep", GF_CONT_MODE},
+    {"fmi2SetTime", GF_EVENT_MODE | GF_CONT_MODE},
+    {"fmi2SetContinuousStates", GF_CONT_MODE},
+    {"fmi2GetDerivatives", GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi2GetEventIndicators", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi2GetContinuousStates", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi2GetNominalsOfContinuousStates", GF_INSTANTIATED | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
 };
 
 #define GF_GUARD(comp, fn)                                                     \
@@ -109,13 +124,16 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
                functions ? (void (*)(void))functions->logger : NULL,
                "stepInProgress, which the synchronous fmi2DoStep never enters");
     if (c == NULL) return NULL;
-    if (fmuType != fmi2CoSimulation) return gf_instantiate_error(c, fn, "only Co-Simulation is supported");
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange)
+        return gf_instantiate_error(c, fn, "fmuType is neither fmi2ModelExchange nor fmi2CoSimulation");
+    c->fmu_type = fmuType == fmi2ModelExchange ? GF_MODEL_EXCHANGE : GF_COSIMULATION;
     if (!gf_uri_to_dir(fmuResourceLocation, dir, sizeof dir)) {
         snprintf(err, sizeof err, "fmuResourceLocation '%.500s' is not a file URI of this machine (file:///path, "
                  "file://localhost/path or file:/path, RFC 8089)", fmuResourceLocation ? fmuResourceLocation : "(null)");
         return gf_instantiate_error(c, fn, err);
     }
     e = gm_instantiate(c, dir, fmuGUID, err, sizeof err);
+    if (e == NULL) e = gf_offered(c);
     if (e != NULL) return gf_instantiate_error(c, fn, e);
     return (fmi2Component)c;
 }
@@ -152,7 +170,7 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
                "the instance is in state error (fmi2Reset or fmi2FreeInstance)");
         return fmi2Error;
     }
-    c->mode = GF_STEP_MODE;
+    c->mode = c->fmu_type == GF_MODEL_EXCHANGE ? GF_EVENT_MODE : GF_STEP_MODE;
     return fmi2OK;
 }
 
@@ -331,3 +349,96 @@ GF_STATUS_FN(fmi2GetRealStatus, F_GetRealStatus, fmi2Real, fmi2LastSuccessfulTim
 GF_STATUS_FN(fmi2GetIntegerStatus, F_GetIntegerStatus, fmi2Integer, (fmi2StatusKind)-1)
 GF_STATUS_FN(fmi2GetBooleanStatus, F_GetBooleanStatus, fmi2Boolean, fmi2Terminated)
 GF_STATUS_FN(fmi2GetStringStatus, F_GetStringStatus, fmi2String, (fmi2StatusKind)-1)
+
+/* ------------------------------------------------- FMI: Model Exchange */
+FMI2_Export fmi2Status fmi2EnterEventMode(fmi2Component comp)
+{
+    GF_GUARD(comp, F_EnterEventMode);
+    c->mode = GF_EVENT_MODE;
+    return fmi2OK;
+}
+
+/* the mode anew from the continuous states (gf_model.h event_update): one pass always suffices, the
+ * continuous states keep their values, no time event */
+FMI2_Export fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *eventInfo)
+{
+    int again, changed, st;
+    GF_GUARD(comp, F_NewDiscreteStates);
+    if (eventInfo == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi2NewDiscreteStates: fmi2EventInfo is NULL");
+        return fmi2Error;
+    }
+    st = gf_me_event_update(c, "fmi2NewDiscreteStates", &again, &changed);
+    eventInfo->newDiscreteStatesNeeded = again ? fmi2True : fmi2False;
+    eventInfo->terminateSimulation = fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    return (fmi2Status)st;
+}
+
+FMI2_Export fmi2Status fmi2EnterContinuousTimeMode(fmi2Component comp)
+{
+    GF_GUARD(comp, F_EnterContinuousTimeMode);
+    c->mode = GF_CONT_MODE;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                                   fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
+{
+    int ev, st;
+    GF_GUARD(comp, F_CompletedIntegratorStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (enterEventMode == NULL || terminateSimulation == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi2CompletedIntegratorStep: enterEventMode or "
+               "terminateSimulation is NULL");
+        return fmi2Error;
+    }
+    st = gf_me_completed_step(c, "fmi2CompletedIntegratorStep", &ev);
+    *enterEventMode = ev ? fmi2True : fmi2False;
+    *terminateSimulation = fmi2False;
+    return (fmi2Status)st;
+}
+
+FMI2_Export fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real time)
+{
+    GF_GUARD(comp, F_SetTime);
+    if (!isfinite(time)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi2SetTime: time = %.17g is not finite", time);
+        return fmi2Error;
+    }
+    c->time = time;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_t nx)
+{
+    GF_GUARD(comp, F_SetContinuousStates);
+    return (fmi2Status)gf_me_set_states(c, "fmi2SetContinuousStates", x, nx);
+}
+
+FMI2_Export fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t nx)
+{
+    GF_GUARD(comp, F_GetDerivatives);
+    return (fmi2Status)gf_me_derivatives(c, "fmi2GetDerivatives", derivatives, nx);
+}
+
+FMI2_Export fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real eventIndicators[], size_t ni)
+{
+    GF_GUARD(comp, F_GetEventIndicators);
+    return (fmi2Status)gf_me_indicators(c, "fmi2GetEventIndicators", eventIndicators, ni);
+}
+
+FMI2_Export fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx)
+{
+    GF_GUARD(comp, F_GetContinuousStates);
+    return (fmi2Status)gf_me_states(c, "fmi2GetContinuousStates", x, nx);
+}
+
+FMI2_Export fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x_nominal[], size_t nx)
+{
+    GF_GUARD(comp, F_GetNominalsOfContinuousStates);
+    return (fmi2Status)gf_me_nominals(c, "fmi2GetNominalsOfContinuousStates", x_nominal, nx);
+}

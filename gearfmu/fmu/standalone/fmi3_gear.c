@@ -1,12 +1,12 @@
 /*
- * fmi3_gear.c -- FMI 3.0 Co-Simulation layer of the standalone gearfmu
+ * fmi3_gear.c -- FMI 3.0 Co-Simulation and Model Exchange layer of the standalone gearfmu
  * runtime (docs/standalone.md "FMI 3.0"): the fmi3* functions and their table
  * of allowed states over the same plumbing (fmi_common.h) and gear model
  * (gf_model.h) as the FMI 2.0 layer (fmi2_gear.c), so both FMUs compute the
  * same numbers from the same calls.
  *
  * Standard: Modelica Association, "Functional Mock-up Interface Specification",
- * version 3.0 (sections 2.3 common API, 4 Co-Simulation).  The FMI headers are
+ * version 3.0 (sections 2.3 common API, 3 Model Exchange, 4 Co-Simulation).  The FMI headers are
  * the standard's own (fmi3Functions.h, fmi3FunctionTypes.h,
  * fmi3PlatformTypes.h), shipped beside this file in the FMU's sources/.
  *
@@ -15,8 +15,10 @@
  * load_sharing, addressed by the reference of element 1 (a get brings all P
  * values); the independent variable time has the reference n_vars.  Only
  * Float64 and Int32 variables exist; every other type's get/set is an error
- * unless it names no variable.  This FMU has no event mode, clocks, structural
- * parameters or intermediate updates: the functions of those are refused.
+ * unless it names no variable.  This FMU has no clocks, structural parameters or
+ * intermediate updates, and its Co-Simulation no event mode: the functions of those
+ * are refused.  Model Exchange (when the FMU offers it) has the event and
+ * continuous-time modes of FMI 3.0 section 3.2.
  */
 #include <math.h>
 
@@ -31,20 +33,24 @@ typedef enum {
     F_GetFMUState, F_SetFMUState, F_FreeFMUState, F_SerializedFMUStateSize, F_SerializeFMUState,
     F_DeserializeFMUState, F_GetDirectionalDerivative, F_GetAdjointDerivative,
     F_EnterConfigurationMode, F_ExitConfigurationMode, F_Clocks, F_EvaluateDiscreteStates,
-    F_UpdateDiscreteStates, F_ModelExchange, F_EnterStepMode, F_GetOutputDerivatives, F_DoStep,
+    F_UpdateDiscreteStates, F_EnterStepMode, F_GetOutputDerivatives, F_DoStep,
     F_ActivateModelPartition,
+    F_EnterContinuousTimeMode, F_CompletedIntegratorStep, F_SetTime, F_SetContinuousStates,
+    F_GetContinuousStateDerivatives, F_GetEventIndicators, F_GetContinuousStates, F_GetNominalsOfContinuousStates,
+    F_GetNumberOfEventIndicators, F_GetNumberOfContinuousStates,
     F_COUNT
 } gf_fn;
 
-/* Which fmi3 function may be called in which state (FMI 3.0 section 4.2, the
- * Co-Simulation state machine, with the states this FMU has: Instantiated,
- * InitializationMode, StepMode, Terminated and the error state); 0: never. */
+/* Which fmi3 function may be called in which state (FMI 3.0 sections 3.2 and 4.2, the
+ * Model Exchange and Co-Simulation state machines, with the states this FMU has: Instantiated,
+ * InitializationMode, EventMode and ContinuousTimeMode (Model Exchange), StepMode (Co-Simulation),
+ * Terminated and the error state; as the Modelica Reference-FMUs' masks); 0: never. */
 static const gf_call GF_CALLS[F_COUNT] = {
     {"fmi3SetDebugLogging", GF_ANY_STATE},
     {"fmi3EnterInitializationMode", GF_INSTANTIATED},
     {"fmi3ExitInitializationMode", GF_INIT_MODE},
-    {"fmi3EnterEventMode", 0},
-    {"fmi3Terminate", GF_STEP_MODE},
+    {"fmi3EnterEventMode", GF_EVENT_MODE | GF_CONT_MODE},
+    {"fmi3Terminate", GF_STEP_MODE | GF_EVENT_MODE | GF_CONT_MODE},
     {"fmi3Reset", GF_ANY_STATE},
     {"fmi3GetFloat64", GF_GETTERS},
     {"fmi3GetInt32", GF_GETTERS},
@@ -66,12 +72,21 @@ static const gf_call GF_CALLS[F_COUNT] = {
     {"fmi3ExitConfigurationMode", 0},
     {"fmi3 clock, interval and shift functions", 0},
     {"fmi3EvaluateDiscreteStates", 0},
-    {"fmi3UpdateDiscreteStates", 0},
-    {"fmi3 Model Exchange functions", 0},
+    {"fmi3UpdateDiscreteStates", GF_EVENT_MODE},
     {"fmi3EnterStepMode", 0},
     {"fmi3GetOutputDerivatives", GF_STEP_MODE | GF_TERMINATED | GF_ERROR},
     {"fmi3DoStep", GF_STEP_MODE},
     {"fmi3ActivateModelPartition", 0},
+    {"fmi3EnterContinuousTimeMode", GF_EVENT_MODE},
+    {"fmi3CompletedIntegratorStep", GF_CONT_MODE},
+    {"fmi3SetTime", GF_EVENT_MODE | GF_CONT_MODE},
+    {"fmi3SetContinuousStates", GF_CONT_MODE},
+    {"fmi3GetContinuousStateDerivatives", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi3GetEventIndicators", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi3GetContinuousStates", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi3GetNominalsOfContinuousStates", GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR},
+    {"fmi3GetNumberOfEventIndicators", GF_ANY_STATE},
+    {"fmi3GetNumberOfContinuousStates", GF_ANY_STATE},
 };
 
 #define GF_GUARD(inst, fn)                                                     \
@@ -99,8 +114,8 @@ FMI3_Export fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean lo
     return fmi3OK;
 }
 
-#define GF_NEVER_WHY "no state: this FMU is Co-Simulation only, without event mode, clocks, structural " \
-                     "parameters or intermediate updates"
+#define GF_NEVER_WHY "no state: this FMU has no clocks, structural parameters or intermediate updates, and " \
+                     "its Co-Simulation no event mode"
 
 static gf_inst *refuse(const char *fn, fmi3String instanceName, fmi3Boolean loggingOn,
                        fmi3InstanceEnvironment env, fmi3LogMessageCallback logMessage, const char *why)
@@ -109,14 +124,32 @@ static gf_inst *refuse(const char *fn, fmi3String instanceName, fmi3Boolean logg
     return c == NULL ? NULL : gf_instantiate_error(c, fn, why);
 }
 
+/* a new instance of type fmu_type: the model instantiated from resourcePath, the interface offered */
+static fmi3Instance instantiate(const char *fn, int fmu_type, fmi3String instanceName, fmi3String instantiationToken,
+                                fmi3String resourcePath, fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
+                                fmi3LogMessageCallback logMessage, const char *refusal)
+{
+    char err[700];
+    const char *e;
+    gf_inst *c = gf_new(3, instanceName, loggingOn, log_fmi3, env, (void (*)(void))logMessage, GF_NEVER_WHY);
+    if (c == NULL) return NULL;
+    c->fmu_type = fmu_type;
+    if (refusal != NULL) return gf_instantiate_error(c, fn, refusal);
+    if (resourcePath == NULL) return gf_instantiate_error(c, fn, "resourcePath is NULL");
+    e = gm_instantiate(c, resourcePath, instantiationToken, err, sizeof err);
+    if (e == NULL) e = gf_offered(c);
+    if (e != NULL) return gf_instantiate_error(c, fn, e);
+    return (fmi3Instance)c;
+}
+
 FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
                                                       fmi3String resourcePath, fmi3Boolean visible,
                                                       fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
                                                       fmi3LogMessageCallback logMessage)
 {
-    (void)instantiationToken; (void)resourcePath; (void)visible;
-    return refuse("fmi3InstantiateModelExchange", instanceName, loggingOn, env, logMessage,
-                  "only Co-Simulation is supported");
+    (void)visible;
+    return instantiate("fmi3InstantiateModelExchange", GF_MODEL_EXCHANGE, instanceName, instantiationToken,
+                       resourcePath, loggingOn, env, logMessage, NULL);
 }
 
 FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
@@ -137,20 +170,12 @@ FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
     const fmi3ValueReference requiredIntermediateVariables[], size_t nRequiredIntermediateVariables,
     fmi3InstanceEnvironment env, fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    static const char *const fn = "fmi3InstantiateCoSimulation";
-    char err[700];
-    const char *e;
-    gf_inst *c;
     (void)visible; (void)earlyReturnAllowed; (void)requiredIntermediateVariables; (void)intermediateUpdate;
-    c = gf_new(3, instanceName, loggingOn, log_fmi3, env, (void (*)(void))logMessage, GF_NEVER_WHY);
-    if (c == NULL) return NULL;
-    if (eventModeUsed) return gf_instantiate_error(c, fn, "eventModeUsed: this FMU has no event mode (hasEventMode=false)");
-    if (nRequiredIntermediateVariables > 0)
-        return gf_instantiate_error(c, fn, "requiredIntermediateVariables: this FMU provides no intermediate update");
-    if (resourcePath == NULL) return gf_instantiate_error(c, fn, "resourcePath is NULL");
-    e = gm_instantiate(c, resourcePath, instantiationToken, err, sizeof err);
-    if (e != NULL) return gf_instantiate_error(c, fn, e);
-    return (fmi3Instance)c;
+    return instantiate("fmi3InstantiateCoSimulation", GF_COSIMULATION, instanceName, instantiationToken, resourcePath,
+                       loggingOn, env, logMessage,
+                       eventModeUsed ? "eventModeUsed: this FMU has no event mode in Co-Simulation (hasEventMode=false)"
+                       : nRequiredIntermediateVariables > 0
+                       ? "requiredIntermediateVariables: this FMU provides no intermediate update" : NULL);
 }
 
 FMI3_Export void fmi3FreeInstance(fmi3Instance instance) { gf_free((gf_inst *)instance); }
@@ -180,11 +205,16 @@ FMI3_Export fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
                "the instance is in state error (fmi3Reset or fmi3FreeInstance)");
         return fmi3Error;
     }
-    c->mode = GF_STEP_MODE;
+    c->mode = c->fmu_type == GF_MODEL_EXCHANGE ? GF_EVENT_MODE : GF_STEP_MODE;
     return fmi3OK;
 }
 
-FMI3_Export fmi3Status fmi3EnterEventMode(fmi3Instance instance) { GF_NEVER(F_EnterEventMode); }
+FMI3_Export fmi3Status fmi3EnterEventMode(fmi3Instance instance)
+{
+    GF_GUARD(instance, F_EnterEventMode);
+    c->mode = GF_EVENT_MODE;
+    return fmi3OK;
+}
 
 FMI3_Export fmi3Status fmi3Terminate(fmi3Instance instance)
 {
@@ -430,54 +460,117 @@ FMI3_Export fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3Val
 
 FMI3_Export fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) { GF_NEVER(F_EvaluateDiscreteStates); }
 
+/* the mode anew from the continuous states (gf_model.h event_update): one pass always suffices, the
+ * continuous states keep their values, no time event */
 FMI3_Export fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
                                                 fmi3Boolean *terminateSimulation,
                                                 fmi3Boolean *nominalsOfContinuousStatesChanged,
                                                 fmi3Boolean *valuesOfContinuousStatesChanged,
                                                 fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime)
 {
-    (void)discreteStatesNeedUpdate; (void)terminateSimulation; (void)nominalsOfContinuousStatesChanged;
-    (void)valuesOfContinuousStatesChanged; (void)nextEventTimeDefined; (void)nextEventTime;
-    GF_NEVER(F_UpdateDiscreteStates);
+    int again, changed, st;
+    GF_GUARD(instance, F_UpdateDiscreteStates);
+    if (discreteStatesNeedUpdate == NULL || terminateSimulation == NULL || nominalsOfContinuousStatesChanged == NULL ||
+        valuesOfContinuousStatesChanged == NULL || nextEventTimeDefined == NULL || nextEventTime == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi3UpdateDiscreteStates: an output argument is NULL");
+        return fmi3Error;
+    }
+    st = gf_me_event_update(c, "fmi3UpdateDiscreteStates", &again, &changed);
+    *discreteStatesNeedUpdate = again ? fmi3True : fmi3False;
+    *terminateSimulation = fmi3False;
+    *nominalsOfContinuousStatesChanged = fmi3False;
+    *valuesOfContinuousStatesChanged = changed ? fmi3True : fmi3False;
+    *nextEventTimeDefined = fmi3False;
+    *nextEventTime = 0.0;
+    return (fmi3Status)st;
 }
 
-FMI3_Export fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { GF_NEVER(F_ModelExchange); }
+FMI3_Export fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
+{
+    GF_GUARD(instance, F_EnterContinuousTimeMode);
+    c->mode = GF_CONT_MODE;
+    return fmi3OK;
+}
 
 FMI3_Export fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
 {
-    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    GF_NEVER(F_ModelExchange);
+    int ev, st;
+    GF_GUARD(instance, F_CompletedIntegratorStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (enterEventMode == NULL || terminateSimulation == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi3CompletedIntegratorStep: enterEventMode or "
+               "terminateSimulation is NULL");
+        return fmi3Error;
+    }
+    st = gf_me_completed_step(c, "fmi3CompletedIntegratorStep", &ev);
+    *enterEventMode = ev ? fmi3True : fmi3False;
+    *terminateSimulation = fmi3False;
+    return (fmi3Status)st;
 }
 
 FMI3_Export fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
-    (void)time;
-    GF_NEVER(F_ModelExchange);
+    GF_GUARD(instance, F_SetTime);
+    if (!isfinite(time)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi3SetTime: time = %.17g is not finite", time);
+        return fmi3Error;
+    }
+    c->time = time;
+    return fmi3OK;
 }
 
-#define GF_ME_ARRAY(NAME, TYPE)                                                \
-    FMI3_Export fmi3Status NAME(fmi3Instance instance, TYPE x[], size_t n)     \
-    {                                                                          \
-        (void)x; (void)n;                                                      \
-        GF_NEVER(F_ModelExchange);                                             \
-    }
-GF_ME_ARRAY(fmi3SetContinuousStates, const fmi3Float64)
-GF_ME_ARRAY(fmi3GetContinuousStateDerivatives, fmi3Float64)
-GF_ME_ARRAY(fmi3GetEventIndicators, fmi3Float64)
-GF_ME_ARRAY(fmi3GetContinuousStates, fmi3Float64)
-GF_ME_ARRAY(fmi3GetNominalsOfContinuousStates, fmi3Float64)
+FMI3_Export fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t n)
+{
+    GF_GUARD(instance, F_SetContinuousStates);
+    return (fmi3Status)gf_me_set_states(c, "fmi3SetContinuousStates", x, n);
+}
 
+FMI3_Export fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t n)
+{
+    GF_GUARD(instance, F_GetContinuousStateDerivatives);
+    return (fmi3Status)gf_me_derivatives(c, "fmi3GetContinuousStateDerivatives", derivatives, n);
+}
+
+FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t n)
+{
+    GF_GUARD(instance, F_GetEventIndicators);
+    return (fmi3Status)gf_me_indicators(c, "fmi3GetEventIndicators", eventIndicators, n);
+}
+
+FMI3_Export fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t n)
+{
+    GF_GUARD(instance, F_GetContinuousStates);
+    return (fmi3Status)gf_me_states(c, "fmi3GetContinuousStates", x, n);
+}
+
+FMI3_Export fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t n)
+{
+    GF_GUARD(instance, F_GetNominalsOfContinuousStates);
+    return (fmi3Status)gf_me_nominals(c, "fmi3GetNominalsOfContinuousStates", x, n);
+}
+
+/* the counts of Model Exchange (0 for an FMU without it) */
 FMI3_Export fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {
-    (void)n;
-    GF_NEVER(F_ModelExchange);
+    GF_GUARD(instance, F_GetNumberOfEventIndicators);
+    if (n == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi3GetNumberOfEventIndicators: nEventIndicators is NULL");
+        return fmi3Error;
+    }
+    *n = c->me != NULL ? c->n_indicators : 0;
+    return fmi3OK;
 }
 
 FMI3_Export fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
 {
-    (void)n;
-    GF_NEVER(F_ModelExchange);
+    GF_GUARD(instance, F_GetNumberOfContinuousStates);
+    if (n == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "fmi3GetNumberOfContinuousStates: nContinuousStates is NULL");
+        return fmi3Error;
+    }
+    *n = c->me != NULL ? c->n_states : 0;
+    return fmi3OK;
 }
 
 FMI3_Export fmi3Status fmi3EnterStepMode(fmi3Instance instance) { GF_NEVER(F_EnterStepMode); }

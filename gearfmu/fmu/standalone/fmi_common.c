@@ -127,6 +127,8 @@ static const char *state_name(const gf_inst *c, int mode)
     case GF_STEP_MODE: return c->fmi_version == 3 ? "StepMode" : "stepComplete";
     case GF_TERMINATED: return c->fmi_version == 3 ? "Terminated" : "terminated";
     case GF_ERROR: return c->fmi_version == 3 ? "error" : "error";
+    case GF_EVENT_MODE: return c->fmi_version == 3 ? "EventMode" : "eventMode";
+    case GF_CONT_MODE: return c->fmi_version == 3 ? "ContinuousTimeMode" : "continuousTimeMode";
     default: return "unknown";
     }
 }
@@ -137,13 +139,13 @@ static const char *state_name(const gf_inst *c, int mode)
  * message naming the function and the state; the instance is left as it was. */
 int gf_allowed(gf_inst *c, const gf_call *call)
 {
-    char states[160];
+    char states[240];
     int bit;
     size_t n = 0;
     if (c == NULL) return 0; /* no instance: nothing to log to */
     if (c->mode & call->allowed) return 1;
     states[0] = '\0';
-    for (bit = GF_INSTANTIATED; bit <= GF_ERROR; bit <<= 1)
+    for (bit = GF_INSTANTIATED; bit <= GF_LAST_STATE; bit <<= 1)
         if (call->allowed & bit) n += (size_t)snprintf(states + n, sizeof states - n, "%s%s",
                                                        n ? ", " : "", state_name(c, bit));
     gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: illegal call sequence: not allowed in state %s (allowed in: %s)",
@@ -160,19 +162,25 @@ static int as_int(double x)
     return (x >= -2147483647.0 && x <= 2147483647.0) ? (int)x : -1;
 }
 
-/* the current value of variable i (an output: the model's output vector) */
+/* the current value of variable i (an output, or a local the model computes: the model's output vector) */
 static inline double value_of(const gf_inst *c, int i)
 {
     const gf_var *v = &c->vars[i];
-    return v->causality == GF_OUTPUT ? c->out[v->out_index] : c->values[i];
+    return v->out_index >= 0 ? c->out[v->out_index] : c->values[i];
 }
 
 /* 1 if variable i may be set now (inputs, tunable parameters, fixed parameters before the
- * initialization ends), else logs why */
+ * initialization ends; in Model Exchange's continuous-time mode continuous inputs only and tunable
+ * parameters in event mode, FMI 2.0 section 3.2.3, FMI 3.0 section 3.2.2), else logs why */
 static int settable(gf_inst *c, const char *fn, int i)
 {
     const gf_var *v = &c->vars[i];
-    if (v->causality == GF_INPUT) return 1;
+    if (v->causality == GF_INPUT && (c->mode != GF_CONT_MODE || v->variability == GF_CONTINUOUS)) return 1;
+    if (v->causality == GF_PARAMETER && v->variability == GF_TUNABLE && c->mode == GF_CONT_MODE) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %s is a tunable parameter: it can be set in event mode, "
+               "not in continuous-time mode", fn, v->name);
+        return 0;
+    }
     if (v->causality == GF_PARAMETER && v->variability == GF_TUNABLE) return 1;
     if (v->causality == GF_PARAMETER && v->variability == GF_FIXED &&
         (c->mode == GF_INSTANTIATED || c->mode == GF_INIT_MODE))
@@ -275,7 +283,7 @@ int gf_get_values(gf_inst *c, const char *fn, const unsigned int vr[], size_t nv
      * names a variable of the type asked for and the outputs are up to date; anything else
      * takes the checks below, which say what is wrong */
     if (!arrays && time_vr < 0 && vr != NULL && (want_integer || real != NULL) &&
-        !(c->mode == GF_INIT_MODE && c->dirty)) {
+        !(c->dirty && (c->mode & (GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE)))) {
         for (i = 0; i < nvr && vr[i] < (unsigned int)c->n_vars && c->vars[vr[i]].is_integer == want_integer; ++i) {}
         if (i == nvr) {
             for (i = 0; i < nvr; ++i) {
@@ -359,6 +367,82 @@ int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size_t nvr)
     if (nvr == 0) return GF_OK;
     gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: this FMU has no %s variables", fn, type);
     return GF_ERROR_STATUS;
+}
+
+/* ------------------------------------------------------- Model Exchange */
+const char *gf_offered(gf_inst *c)
+{
+    int offers = c->offers ? c->offers : GF_COSIMULATION;
+    if (c->fmu_type == GF_MODEL_EXCHANGE && (c->me == NULL || !(offers & GF_MODEL_EXCHANGE)))
+        return c->me_refusal ? c->me_refusal : "this FMU offers Co-Simulation only (no ModelExchange element in its "
+                                               "model description)";
+    if (c->fmu_type == GF_COSIMULATION && !(offers & GF_COSIMULATION))
+        return "this FMU offers Model Exchange only (no CoSimulation element in its model description)";
+    return NULL;
+}
+
+/* n values in x, the model's count want (what: the array's name) */
+static int me_array(gf_inst *c, const char *fn, const void *x, size_t n, size_t want, const char *what)
+{
+    if (c->me == NULL || c->fmu_type != GF_MODEL_EXCHANGE) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: this instance is not a Model Exchange instance", fn);
+        return 0;
+    }
+    if (n != want) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: %lu %s, this FMU has %lu", fn, (unsigned long)n, what,
+               (unsigned long)want);
+        return 0;
+    }
+    if (n > 0 && x == NULL) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the array of %s is NULL", fn, what);
+        return 0;
+    }
+    return 1;
+}
+
+int gf_me_states(gf_inst *c, const char *fn, double x[], size_t nx)
+{
+    if (!me_array(c, fn, x, nx, c->n_states, "continuous states")) return GF_ERROR_STATUS;
+    return nx ? c->me->states(c, fn, x) : GF_OK;
+}
+
+int gf_me_nominals(gf_inst *c, const char *fn, double x[], size_t nx)
+{
+    if (!me_array(c, fn, x, nx, c->n_states, "continuous states")) return GF_ERROR_STATUS;
+    return nx ? c->me->nominals(c, fn, x) : GF_OK;
+}
+
+int gf_me_set_states(gf_inst *c, const char *fn, const double x[], size_t nx)
+{
+    if (!me_array(c, fn, x, nx, c->n_states, "continuous states")) return GF_ERROR_STATUS;
+    return nx ? c->me->set_states(c, fn, x) : GF_OK;
+}
+
+int gf_me_derivatives(gf_inst *c, const char *fn, double dx[], size_t nx)
+{
+    if (!me_array(c, fn, dx, nx, c->n_states, "derivatives")) return GF_ERROR_STATUS;
+    return nx ? c->me->derivatives(c, fn, dx) : GF_OK;
+}
+
+int gf_me_indicators(gf_inst *c, const char *fn, double z[], size_t nz)
+{
+    if (!me_array(c, fn, z, nz, c->n_indicators, "event indicators")) return GF_ERROR_STATUS;
+    return nz ? c->me->indicators(c, fn, z) : GF_OK;
+}
+
+int gf_me_event_update(gf_inst *c, const char *fn, int *again, int *values_changed)
+{
+    *again = 0;
+    *values_changed = 0;
+    if (!me_array(c, fn, NULL, 0, 0, "values")) return GF_ERROR_STATUS;
+    return c->me->event_update(c, fn, again, values_changed);
+}
+
+int gf_me_completed_step(gf_inst *c, const char *fn, int *enter_event)
+{
+    *enter_event = 0;
+    if (!me_array(c, fn, NULL, 0, 0, "values")) return GF_ERROR_STATUS;
+    return c->me->completed_step(c, fn, enter_event);
 }
 
 /* ------------------------------------------------------------ FMU state */

@@ -13,8 +13,10 @@
 
 #include "gf_model.h"
 
-#define GF_GETTERS (GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR)
-#define GF_SETTERS (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE)
+#define GF_GETTERS (GF_INIT_MODE | GF_STEP_MODE | GF_EVENT_MODE | GF_CONT_MODE | GF_TERMINATED | GF_ERROR)
+/* a set in continuous-time mode reaches continuous inputs only, in event mode also tunable parameters
+ * (FMI 2.0 section 3.2.3, FMI 3.0 section 3.2.2; settable() in fmi_common.c) */
+#define GF_SETTERS (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE | GF_EVENT_MODE | GF_CONT_MODE)
 
 /* one call of an FMI function: its name and the mask of states it may be called in
  * (0: never; the layer's message says why) */
@@ -54,6 +56,19 @@ GF_API int gf_no_variables_of(gf_inst *c, const char *fn, const char *type, size
 /* 1 if t is the time the FMU has reached (to round-off; then it becomes the FMU's time), else logs
  * why, puts the instance into state error and returns 0 (the caller returns Error) */
 GF_API int gf_check_step_time(gf_inst *c, const char *fn, double t, double H);
+/* the interface asked for at instantiation is one this FMU offers (Model Exchange: the model
+ * provides gf_inst.me); else the reason, for gf_instantiate_error */
+GF_API const char *gf_offered(gf_inst *c);
+/* Model Exchange (gf_model.h gf_me_model): the size of the host's array checked against the model's
+ * (nx states or nz indicators), then the model's function; GF_OK or GF_ERROR_STATUS / GF_DISCARD
+ * with the reason logged */
+GF_API int gf_me_states(gf_inst *c, const char *fn, double x[], size_t nx);
+GF_API int gf_me_nominals(gf_inst *c, const char *fn, double x[], size_t nx);
+GF_API int gf_me_set_states(gf_inst *c, const char *fn, const double x[], size_t nx);
+GF_API int gf_me_derivatives(gf_inst *c, const char *fn, double dx[], size_t nx);
+GF_API int gf_me_indicators(gf_inst *c, const char *fn, double z[], size_t nz);
+GF_API int gf_me_event_update(gf_inst *c, const char *fn, int *again, int *values_changed);
+GF_API int gf_me_completed_step(gf_inst *c, const char *fn, int *enter_event);
 /* the FMU state box (one flat block of gm_snap_size bytes behind a size header) */
 GF_API int gf_get_state(gf_inst *c, const char *fn, void **state);
 GF_API int gf_set_state(gf_inst *c, const char *fn, void *state);

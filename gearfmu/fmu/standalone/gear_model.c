@@ -39,7 +39,7 @@
 #define GF_CONFIG_VERSION 1
 #define GF_MAX_LINE 4096
 #define GF_SNAPSHOT_MAGIC 0x47464d55u /* "GFMU" */
-#define GF_SNAPSHOT_VERSION 2u /* 2: mode is a GF_* state bit */
+#define GF_SNAPSHOT_VERSION 3u /* 2: mode is a GF_* state bit; 3: Model Exchange's mode and dirty flag */
 
 /* The FMU state block (flat, no pointers): header, kernel state, values, outputs. */
 typedef struct {
@@ -55,6 +55,9 @@ typedef struct {
     double time;
     double zeta_applied;
     gk_state state;
+    gk_me me;             /* Model Exchange: the mode held */
+    int32_t dirty;
+    int32_t pad;
     /* followed by double values[n_vars], double out[n_out] */
 } gf_snap_header;
 
@@ -68,6 +71,12 @@ typedef struct {
     double phi_period, Rb1, Rb2, I1, I2, k_mean;
     double mesh_period, eng_in, eng_out;  /* optional: contact-zone edges (all three or none) */
     int have_mask;
+    /* optional: the interfaces offered (interfaces=cs,me; default cs) and Model Exchange's settings
+     * (me.node_events, me.event_indicators: the count the model description declares, me.nominals) */
+    int offers, me_node_events;
+    long me_indicators;
+    double me_nominal[4];
+    int have_nominals;
     /* optional: the verified envelope (envelope.kind, envelope.<quantity>=lo|hi) */
     int env_kind, env_have[GK_ENV_N];
     double env_lo[GK_ENV_N], env_hi[GK_ENV_N];
@@ -176,6 +185,37 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
                 return err;
             }
         }
+        else if (strcmp(key, "interfaces") == 0) {
+            if (strcmp(val, "cs") == 0) cfg->offers = GF_COSIMULATION;
+            else if (strcmp(val, "me") == 0) cfg->offers = GF_MODEL_EXCHANGE;
+            else if (strcmp(val, "cs,me") == 0) cfg->offers = GF_COSIMULATION | GF_MODEL_EXCHANGE;
+            else {
+                snprintf(err, errcap, "interfaces: '%.40s' is not cs, me or cs,me", val);
+                return err;
+            }
+        } else if (strcmp(key, "me.node_events") == 0) {
+            long ne;
+            if (!gfr_parse_long(val, &ne) || ne < GK_ME_NODES_NONE || ne > GK_ME_NODES_ALL) {
+                snprintf(err, errcap, "me.node_events: bad value '%.40s'", val);
+                return err;
+            }
+            cfg->me_node_events = (int)ne;
+        } else if (strcmp(key, "me.event_indicators") == 0) {
+            if (!gfr_parse_long(val, &cfg->me_indicators) || cfg->me_indicators < 0) {
+                snprintf(err, errcap, "me.event_indicators: bad value '%.40s'", val);
+                return err;
+            }
+        } else if (strcmp(key, "me.nominals") == 0) {
+            char *f[4];
+            int q;
+            if (gfr_split_fields(val, f, 4) != 4) { snprintf(err, errcap, "me.nominals: need four numbers"); return err; }
+            for (q = 0; q < 4; ++q)
+                if (!gfr_parse_double(f[q], &cfg->me_nominal[q]) || !(cfg->me_nominal[q] > 0.0) || !isfinite(cfg->me_nominal[q])) {
+                    snprintf(err, errcap, "me.nominals: need four finite numbers > 0");
+                    return err;
+                }
+            cfg->have_nominals = 1;
+        }
         else if (strcmp(key, "envelope.kind") == 0) {
             long kind;
             if (!gfr_parse_long(val, &kind) || kind < GK_ENV_VERIFIED || kind > GK_ENV_NOT_VERIFIED) {
@@ -234,6 +274,20 @@ static void log_fmu_messages(gf_inst *c)
     }
 }
 
+/* the mode decided from the state and the outputs of Model Exchange after gk_n_outputs(P) ones
+ * (derivatives, indicators; a Co-Simulation instance of an FMU that offers Model Exchange has them
+ * too); 1 on success */
+static int me_fill(gf_inst *c, int decide)
+{
+    gm_data *d = c->data;
+    double T1 = c->values[d->vr_T1], T2 = c->values[d->vr_T2];
+    int st = GK_OK;
+    if (!d->me_offered) return 1;
+    if (decide) st = gk_me_init(d->model, &d->me, &d->state, T1, T2, d->me_node_events);
+    if (st == GK_OK) st = gk_me_outputs(d->model, &d->me, &d->state, T1, T2, d->scratch, c->out + d->me_base);
+    return st == GK_OK;
+}
+
 static int init_state(gf_inst *c)
 {
     int ok;
@@ -241,9 +295,136 @@ static int init_state(gf_inst *c)
     to_fmu_layer(c);
     ok = gkf_initialize(c->data->fmu, &c->data->state, c->time, c->out);
     log_fmu_messages(c);
+    if (ok && !me_fill(c, 1)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "the mode of the initial state cannot be decided (state or "
+               "gear_torque not finite)");
+        ok = 0;
+    }
     c->data->initialized = ok;
     return ok;
 }
+
+/* --------------------------------------------------------- Model Exchange
+ * The model side of gf_model.h's gf_me_model (docs/standalone.md "Model Exchange"): the state of the
+ * host's solver is the kernel's gk_state, the mode gk_me is held between events and decided anew in
+ * event mode (gk_me_update); c->dirty marks values, states or time set since the outputs were
+ * computed, and before an evaluation with new values the inputs pass gkfmu.c's checks. */
+static int me_inputs(gf_inst *c, const char *fn)
+{
+    int ok;
+    (void)fn;
+    if (!c->dirty) return GF_OK;
+    to_fmu_layer(c);
+    ok = gkf_me_inputs(c->data->fmu, c->time);
+    if (gkf_n_messages(c->data->fmu) > 0) log_fmu_messages(c);
+    return ok ? GF_OK : GF_DISCARD;
+}
+
+/* the kernel's status of an evaluation as the FMI layer's, logged */
+static int me_status(gf_inst *c, const char *fn, int st)
+{
+    if (st == GK_OK) return GF_OK;
+    gf_log(c, GF_DISCARD, "logStatusDiscard", "%s: at t = %.17g s: %s; not evaluated", fn, c->time,
+           st == GK_ERR_NONFINITE ? "the continuous states are not finite" : gkf_kernel_error(st));
+    return GF_DISCARD;
+}
+
+/* the outputs (with the mode held) at the current time, states and inputs */
+static int me_outputs(gf_inst *c, const char *fn)
+{
+    gm_data *d = c->data;
+    int st = me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    st = me_status(c, fn, gk_me_outputs(d->model, &d->me, &d->state, c->values[d->vr_T1], c->values[d->vr_T2],
+                                        c->out, c->out + d->me_base));
+    if (st == GF_OK) c->dirty = 0;
+    return st;
+}
+
+static int me_states(gf_inst *c, const char *fn, double x[])
+{
+    gm_data *d = c->data;
+    if (c->mode == GF_INIT_MODE && (c->dirty || !d->initialized)) {   /* the initial state from the values set */
+        if (!init_state(c)) {
+            gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial state cannot be computed from the values "
+                   "set (reasons above)", fn);
+            return GF_ERROR_STATUS;
+        }
+        c->dirty = 0;
+    }
+    x[0] = d->state.theta1_rad;
+    x[1] = d->state.omega1_rad_s;
+    x[2] = d->state.x_m;
+    x[3] = d->state.v_m_s;
+    return GF_OK;
+}
+
+static int me_nominals(gf_inst *c, const char *fn, double x[])
+{
+    int q;
+    (void)fn;
+    for (q = 0; q < 4; ++q) x[q] = c->data->me_nominal[q];
+    return GF_OK;
+}
+
+static int me_set_states(gf_inst *c, const char *fn, const double x[])
+{
+    gm_data *d = c->data;
+    (void)fn;
+    d->state.theta1_rad = x[0];
+    d->state.omega1_rad_s = x[1];
+    d->state.x_m = x[2];
+    d->state.v_m_s = x[3];
+    c->dirty = 1;
+    return GF_OK;
+}
+
+static int me_derivatives(gf_inst *c, const char *fn, double dx[])
+{
+    gm_data *d = c->data;
+    double x0[4];
+    int st = (c->mode == GF_INIT_MODE) ? me_states(c, fn, x0) : me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    return me_status(c, fn, gk_me_derivatives(d->model, &d->me, &d->state, c->values[d->vr_T1],
+                                              c->values[d->vr_T2], dx));
+}
+
+static int me_indicators(gf_inst *c, const char *fn, double z[])
+{
+    gm_data *d = c->data;
+    double x0[4];
+    int st = (c->mode == GF_INIT_MODE) ? me_states(c, fn, x0) : me_inputs(c, fn);
+    if (st != GF_OK) return st;
+    return me_status(c, fn, gk_me_indicators(d->model, &d->me, &d->state, c->values[d->vr_T1], z));
+}
+
+static int me_event_update(gf_inst *c, const char *fn, int *again, int *values_changed)
+{
+    gm_data *d = c->data;
+    int st = me_inputs(c, fn), changed = 0;
+    *again = 0;
+    *values_changed = 0;
+    if (st != GF_OK) return st;
+    st = me_status(c, fn, gk_me_update(d->model, &d->me, &d->state, c->values[d->vr_T1], c->values[d->vr_T2],
+                                       &changed));
+    if (st != GF_OK) return st;
+    gkf_me_speed(d->fmu, &d->state, c->time);
+    if (gkf_n_messages(d->fmu) > 0) log_fmu_messages(c);
+    c->dirty = 1;   /* the outputs follow the new mode */
+    return GF_OK;
+}
+
+static int me_completed_step(gf_inst *c, const char *fn, int *enter_event)
+{
+    (void)fn;
+    *enter_event = 0;
+    gkf_me_speed(c->data->fmu, &c->data->state, c->time);
+    if (gkf_n_messages(c->data->fmu) > 0) log_fmu_messages(c);
+    return GF_OK;
+}
+
+static const gf_me_model GM_ME = {me_states, me_nominals, me_set_states, me_derivatives, me_indicators,
+                                  me_event_update, me_completed_step};
 
 void gm_reset(gf_inst *c)
 {
@@ -255,6 +436,7 @@ void gm_reset(gf_inst *c)
     c->dirty = 1;
     gk_envelope_rearm(&c->data->env);
     gkf_reset(c->data->fmu);
+    memset(&c->data->me, 0, sizeof c->data->me);
     c->time = 0.0;
     c->mode = GF_INSTANTIATED;
 }
@@ -274,6 +456,7 @@ void gm_free(gf_inst *c)
         free(c->data->cuts);
         free(c->data->model);
         free(c->data->fmu);
+        free(c->data->scratch);
         free(c->data);
         c->data = NULL;
     }
@@ -345,8 +528,15 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         c->data->P = (int)P;
         c->data->model = (gk_model *)calloc(1, (size_t)gk_sizeof_model());
         c->n_out = gk_n_outputs(c->data->P);
+        c->data->me_base = c->n_out;
+        c->data->me_offered = (cfg.offers & GF_MODEL_EXCHANGE) != 0;
+        if (c->data->me_offered) {
+            if (P > GK_KINK_MAX_SLOTS) return "Model Exchange: more than 32 tooth-pair slots";
+            c->n_out += gk_me_n_outputs(c->data->P);
+        }
         c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
-        if (c->data->model == NULL || c->out == NULL) return "out of memory";
+        c->data->scratch = (double *)calloc((size_t)gk_n_outputs(c->data->P), sizeof(double));
+        if (c->data->model == NULL || c->out == NULL || c->data->scratch == NULL) return "out of memory";
         st = gk_init(c->data->model, c->data->P, (int)N, (int)NT, c->data->arr_torque, c->data->arr_k, c->data->arr_e, c->data->arr_b,
                      cfg.phi_period, cfg.Rb1, cfg.Rb2, cfg.I1, cfg.I2, cfg.k_mean);
         if (st != GK_OK) {
@@ -360,8 +550,10 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         if (cfg.mesh_period > 0.0) { /* contact-zone edges (docs/model.md "Contact-zone edges") */
             c->data->cuts = (double *)calloc((size_t)(2 * P * N), sizeof(double));
             if (c->data->cuts == NULL) return "out of memory";
-            if (gk_zone_cuts((int)P, (int)N, cfg.phi_period, cfg.mesh_period, cfg.eng_in, cfg.eng_out, c->data->cuts) == GK_OK)
+            if (gk_zone_cuts((int)P, (int)N, cfg.phi_period, cfg.mesh_period, cfg.eng_in, cfg.eng_out, c->data->cuts) == GK_OK) {
                 gk_set_zone_cuts(c->data->model, c->data->cuts);
+                gk_set_zone_edges(c->data->model, cfg.mesh_period, cfg.eng_in, cfg.eng_out);
+            }
         }
         gk_envelope_init(&c->data->env, cfg.env_kind);
         for (i = 0; i < GK_ENV_N; ++i)
@@ -396,8 +588,23 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         return "variable table lacks one of pinion_torque, gear_torque, damping_ratio, "
                "pinion_speed_start, pinion_angle_start, max_step, damping_model";
     for (i = 0; i < c->n_vars; ++i)
-        if (c->vars[i].causality == GF_OUTPUT && (c->vars[i].out_index < 0 || c->vars[i].out_index >= c->n_out))
+        if ((c->vars[i].causality == GF_OUTPUT && c->vars[i].out_index < 0) || c->vars[i].out_index >= c->n_out)
             return "an output's kernel index is outside the output vector";
+    /* Model Exchange (docs/standalone.md "Model Exchange") */
+    c->offers = cfg.offers ? cfg.offers : GF_COSIMULATION;
+    if (c->data->me_offered) {
+        int q;
+        c->data->me_node_events = cfg.me_node_events;
+        c->n_states = 4;
+        c->n_indicators = (size_t)gk_me_n_indicators(c->data->model, cfg.me_node_events);
+        if ((long)c->n_indicators != cfg.me_indicators) {
+            snprintf(err, errcap, "Model Exchange: the tables give %lu event indicators, the model description "
+                     "declares %ld", (unsigned long)c->n_indicators, cfg.me_indicators);
+            return err;
+        }
+        for (q = 0; q < 4; ++q) c->data->me_nominal[q] = cfg.have_nominals ? cfg.me_nominal[q] : 1.0;
+        c->me = &GM_ME;
+    }
     /* the variables gkfmu.c checks and drives, with their names and min/max */
     c->data->slot_vr[GKF_DAMPING_RATIO] = c->data->vr_zeta;
     c->data->slot_vr[GKF_PINION_SPEED_START] = c->data->vr_w0;
@@ -439,9 +646,10 @@ int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size
 {
     size_t i;
     int want = 0;
-    if (c->mode != GF_INIT_MODE || !c->dirty) return 1;
-    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].causality == GF_OUTPUT;
+    if (!c->dirty || !(c->mode & (GF_INIT_MODE | GF_EVENT_MODE | GF_CONT_MODE))) return 1;
+    for (i = 0; i < nvr && !want; ++i) want = (long)vr[i] < (long)c->n_vars && c->vars[vr[i]].out_index >= 0;
     if (!want) return 1;
+    if (c->mode != GF_INIT_MODE) return me_outputs(c, fn) == GF_OK;
     if (!init_state(c)) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the initial outputs cannot be computed from the values set "
                "(reasons above)", fn);
@@ -460,6 +668,7 @@ int gm_do_step(gf_inst *c, double t, double H)
     ok = gkf_do_step(c->data->fmu, &c->data->state, c->time, H, c->out);
     if (gkf_n_messages(c->data->fmu) > 0) log_fmu_messages(c);
     if (!ok) return GF_DISCARD;
+    me_fill(c, 1);   /* an FMU that offers Model Exchange: its derivatives and indicators as outputs */
     c->time = c->time + H;
     return GF_OK;
 }
@@ -486,6 +695,8 @@ void gm_snap_write(const gf_inst *c, unsigned char *p)
     h.time = c->time;
     h.zeta_applied = gkf_zeta_applied(c->data->fmu);
     h.state = c->data->state;
+    h.me = c->data->me;
+    h.dirty = c->dirty;
     memcpy(p, &h, sizeof h);
     memcpy(p + sizeof h, c->values, sizeof(double) * (size_t)c->n_vars);
     memcpy(p + sizeof h + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
@@ -517,11 +728,19 @@ int gm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *fn
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: state has an invalid FMI state %d", fn, (int)h.mode);
         return 0;
     }
+    if (((h.mode & (GF_EVENT_MODE | GF_CONT_MODE)) != 0 && c->fmu_type != GF_MODEL_EXCHANGE) ||
+        (h.mode == GF_STEP_MODE && c->fmu_type == GF_MODEL_EXCHANGE)) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state is of a %s instance, this one is %s", fn,
+               h.mode == GF_STEP_MODE ? "Co-Simulation" : "Model Exchange",
+               c->fmu_type == GF_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation");
+        return 0;
+    }
     c->mode = h.mode;
-    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE);
+    c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE) || h.dirty != 0;
     c->data->initialized = h.initialized;
     c->time = h.time;
     c->data->state = h.state;
+    c->data->me = h.me;
     memcpy(c->values, p + sizeof h, sizeof(double) * (size_t)c->n_vars);
     memcpy(c->out, p + sizeof h + sizeof(double) * (size_t)c->n_vars, sizeof(double) * (size_t)c->n_out);
     /* the kernel model's integrator and damping are derived from the restored values */

@@ -29,6 +29,13 @@ struct gm_data {
     gk_envelope env;      /* the verified envelope (docs/fmu.md "Verified envelope"), one warning per input */
     gkf_fmu *fmu;         /* the checks, steps and messages both runtimes share (gkfmu.h) */
     int slot_vr[GKF_N];   /* value reference of each GKF_* slot, -1 if none */
+    /* Model Exchange (docs/standalone.md "Model Exchange"): offered when the configuration names it;
+     * the mode the host's solver holds between events, the node events asked for at build time, the
+     * nominal values of the states; me_base: where the outputs of gk_me_outputs start in c->out */
+    int me_offered, me_node_events, me_base;
+    gk_me me;
+    double me_nominal[4];
+    double *scratch;      /* gk_n_outputs(P) values: the mode-held outputs a Co-Simulation step does not use */
 };
 
 #endif /* GEAR_MODEL_H */

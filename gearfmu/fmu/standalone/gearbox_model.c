@@ -81,6 +81,7 @@ typedef struct {
     long e_kind[GB_MAX_MESHES + GB_MAX_SHAFTS], e_index[GB_MAX_MESHES + GB_MAX_SHAFTS];
     long e_up[GB_MAX_MESHES + GB_MAX_SHAFTS], e_down[GB_MAX_MESHES + GB_MAX_SHAFTS];
     long vr_motor_torque, vr_load_torque, vr_speed0, vr_angle0, vr_hmax, vr_integrator;
+    long extra_outputs;   /* outputs past the kernel's, filled by a model around this one (stage_model.c) */
     int have_format, have_guid, have_nvars, shafts_seen, edges_seen;
 } gb_config;
 
@@ -252,6 +253,7 @@ static const char *read_config(gf_inst *c, const char *text, gb_config *cfg, cha
         GB_L("vr.motor_angle_start", vr_angle0, 0, 100000)
         GB_L("vr.max_step", vr_hmax, 0, 100000)
         GB_L("vr.integrator", vr_integrator, 0, 100000)
+        GB_L("extra_outputs", extra_outputs, 0, 64)
         else if (strcmp(key, "body") == 0) {   /* index|1/I|g|name */
             char *f[4];
             long b;
@@ -530,7 +532,7 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
         d->vr_angle0 = (int)cfg->vr_angle0;
         d->vr_hmax = (int)cfg->vr_hmax;
         d->vr_integrator = (int)cfg->vr_integrator;
-        c->n_out = gb_n_outputs(d->gb);
+        c->n_out = gb_n_outputs(d->gb) + (int)cfg->extra_outputs;
         c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
         if (c->out == NULL) e = "out of memory";
     }

@@ -43,14 +43,20 @@
 enum { GF_OK = 0, GF_WARNING = 1, GF_DISCARD = 2, GF_ERROR_STATUS = 3, GF_FATAL = 4 };
 enum { GF_PARAMETER = 0, GF_INPUT = 1, GF_OUTPUT = 2, GF_OTHER = 3 };
 enum { GF_FIXED = 0, GF_TUNABLE = 1, GF_CONTINUOUS = 2, GF_OTHER_VAR = 3 };
-/* The Co-Simulation states both FMI versions pass through here (FMI 2.0
- * section 4.2.4; FMI 3.0 section 4.2, with no configuration, event or
- * intermediate-update mode: this FMU has no structural parameters, no events,
- * no clocks), one bit each so that a set of states is a mask.  A discarded
- * doStep leaves the state unchanged (nothing was integrated), so the instance
- * stays in GF_STEP_MODE and may step again. */
-enum { GF_INSTANTIATED = 1, GF_INIT_MODE = 2, GF_STEP_MODE = 4, GF_TERMINATED = 8, GF_ERROR = 16 };
-#define GF_ANY_STATE (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR)
+/* The states both FMI versions pass through here, one bit each so that a set of states is a mask:
+ * Co-Simulation (FMI 2.0 section 4.2.4; FMI 3.0 section 4.2, with no configuration, event or
+ * intermediate-update mode: no structural parameters, no clocks, no events in a step) and Model
+ * Exchange (FMI 2.0 section 3.2.3, FMI 3.0 section 3.2: event mode and continuous-time mode).  A
+ * discarded doStep leaves the state unchanged (nothing was integrated), so the instance stays in
+ * GF_STEP_MODE and may step again.  An instance is of one interface (gf_inst.fmu_type), so a
+ * Co-Simulation instance never reaches the two Model Exchange modes and the other way round. */
+enum { GF_INSTANTIATED = 1, GF_INIT_MODE = 2, GF_STEP_MODE = 4, GF_TERMINATED = 8, GF_ERROR = 16,
+       GF_EVENT_MODE = 32, GF_CONT_MODE = 64 };
+#define GF_ANY_STATE (GF_INSTANTIATED | GF_INIT_MODE | GF_STEP_MODE | GF_TERMINATED | GF_ERROR | GF_EVENT_MODE | \
+                      GF_CONT_MODE)
+#define GF_LAST_STATE GF_CONT_MODE
+/* the interfaces (gf_inst.fmu_type, gf_inst.offers) */
+enum { GF_COSIMULATION = 1, GF_MODEL_EXCHANGE = 2 };
 
 /* one variable of the table (resources/gearfmu_standalone.txt) */
 typedef struct {
@@ -70,6 +76,31 @@ typedef void (*gf_log_fn)(gf_inst *c, int status, const char *category, const ch
 /* what the model keeps beside the variable table (gear_model.c) */
 typedef struct gm_data gm_data;
 
+/* What a model that offers Model Exchange provides (FMI 2.0 section 3.2, FMI 3.0 section 3.2), as a
+ * table of functions the model puts into the instance (gf_inst.me) at instantiation.  A model that
+ * does not offer it (the Python slave of the pythonfmu runtime; a model before it implements them)
+ * leaves gf_inst.me NULL, and the FMI layer refuses to instantiate it for Model Exchange with
+ * gf_inst.me_refusal (or a general reason).  The state vector, derivatives and indicators have
+ * gf_inst.n_states and gf_inst.n_indicators values; fn is the FMI function, for messages.
+ * Statuses: GF_OK, or GF_DISCARD / GF_ERROR_STATUS with the reason logged. */
+typedef struct gf_me_model {
+    /* the continuous states (in initialization mode: the initial ones from the values set) and
+     * their nominal values (> 0) */
+    int (*states)(gf_inst *c, const char *fn, double x[]);
+    int (*nominals)(gf_inst *c, const char *fn, double x[]);
+    /* new continuous states from the host (continuous-time mode); the outputs follow them */
+    int (*set_states)(gf_inst *c, const char *fn, const double x[]);
+    /* the derivatives and the event indicators at the time, states and inputs set, the mode held */
+    int (*derivatives)(gf_inst *c, const char *fn, double dx[]);
+    int (*indicators)(gf_inst *c, const char *fn, double z[]);
+    /* event mode: the discrete states (the mode) anew from the continuous ones; *again = 1 asks the
+     * host for another update (never, here), *values_changed = 1 when it changed the continuous states */
+    int (*event_update)(gf_inst *c, const char *fn, int *again, int *values_changed);
+    /* the host accepted an integrator step (fmi2CompletedIntegratorStep); *enter_event = 1 asks for
+     * an event */
+    int (*completed_step)(gf_inst *c, const char *fn, int *enter_event);
+} gf_me_model;
+
 struct gf_inst {
     /* set by the FMI layer (gf_new) */
     gf_log_fn log;
@@ -84,6 +115,15 @@ struct gf_inst {
     int mode;                  /* one GF_* state bit */
     int dirty;
     double time;
+    /* the interface the host instantiated (GF_COSIMULATION or GF_MODEL_EXCHANGE, set by the FMI
+     * layer before gm_instantiate) and the ones this FMU offers (a mask, set by the model; 0: only
+     * Co-Simulation) */
+    int fmu_type;
+    int offers;
+    /* Model Exchange (set by the model; me NULL: not offered, me_refusal says why if not NULL) */
+    const gf_me_model *me;
+    const char *me_refusal;
+    size_t n_states, n_indicators;
     /* the variable table and the outputs, filled by the model (gm_instantiate) */
     int n_vars;
     gf_var *vars;
@@ -118,7 +158,8 @@ GF_API void gm_free(gf_inst *c);
 GF_API void gm_reset(gf_inst *c);
 /* compute the initial state if the values changed since (logs why not); 1 on success */
 GF_API int gm_exit_init(gf_inst *c);
-/* in initialization mode, bring the outputs up to date when one of vr[] is an output (logs why not) */
+/* in initialization mode (and, for Model Exchange, in event and continuous-time mode) bring the
+ * outputs up to date when one of vr[] is an output and a value changed (logs why not) */
 GF_API int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size_t nvr);
 /* one communication step: GF_OK or GF_DISCARD (state unchanged, logged) */
 GF_API int gm_do_step(gf_inst *c, double t, double H);
