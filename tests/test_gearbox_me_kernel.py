@@ -26,6 +26,9 @@ from test_gearbox_fmu import _kernel_library
 from test_gearbox_modes import S1, S2, hand_matrices
 from test_gearbox_native import K_MID, c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 NODES_NONE, NODES_KINKS = 0, 1
 
 

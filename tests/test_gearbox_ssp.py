@@ -49,6 +49,9 @@ from gearfmu.ssp import gearbox_ssp
 from test_gearbox_modes import K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices, I_LOAD, I_MOTOR
 from test_gearbox_native import hand_damping, hand_damping_of_mid, linear_gearbox
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "gearbox_two_stage.toml"
 HOST = (host_key(),)

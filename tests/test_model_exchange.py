@@ -23,6 +23,9 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.stages import gear_torque_for
 from test_standalone import _callbacks, _status
 
+# the whole file is out of the quick subset (tests/README.md "Quick subset")
+pytestmark = pytest.mark.slow
+
 CASES = ("computed_default_scene", "double_sided_impacts")
 
 
