@@ -510,7 +510,7 @@ def _ssp_drivetrain(args) -> int:
     """gearfmu ssp DRIVETRAIN.toml: an SSP of stage FMUs (docs/gearbox.md "The SSP of stage FMUs")."""
     if args.variant:
         raise CliError("--variant: for a gear-pair scene's SSP; a drivetrain scene's SSP holds one FMU per stage")
-    pipeline.check_gearbox_fmu_runtime(args.runtime, args.interface, args.me_node_events)
+    pipeline.check_gearbox_fmu_runtime(args.runtime)
     _, scene = _any_scene(args.scene)
     out = _output_file(args.output or f"build/{scene.model_name}.ssp", "--output")
     platforms = parse_platforms(args.platforms) if args.platforms is not None else None
