@@ -16,10 +16,10 @@ with 'rk4_node' at the internal step where the native rk4_node front crosses 1e-
 fmpy's low-level FMU2Slave loop at a communication step of 1e-4 s for 0.1 s simulated
 (real-time factor = simulated / wall); its own error from an fmpy run on the case's grid.
 
-Case: the impact case of tests/test_integrators.py (rectangular-wave TVMS, errors,
+Case: the impact case of tests/unit/dynamics/test_integrators.py (rectangular-wave TVMS, errors,
 backlash, light load, impact start), 4 mesh periods, 8 communication steps per
 mesh period.  Reference: rk4_kink at h = H/3200 (its error there is ~1e-11 of
-the range, tests/test_integrators.py shows it agrees with an event-located
+the range, tests/unit/dynamics/test_integrators.py shows it agrees with an event-located
 solve_ivp to the reference's own 1e-9 level).  Errors: RMS and maximum of
 |dte - dte_ref| and |mesh_force - F_ref| over the communication points,
 relative to the reference's range.  Times: best of `--repeat` runs of the
@@ -242,7 +242,7 @@ def main():
     if args.fronts:
         extra["fronts"] = [case_front(name, args.repeat) for name in FRONT_CASES]
         extra["fmu_rtf"] = fmu_rtf(extra["fronts"][0], args.repeat, lib)
-    emit({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
+    emit({"case": "impact case of tests/unit/dynamics/test_integrators.py, 4 mesh periods, H = mesh period/8",
           "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
           "front": [(r["method"], r["setting"]) for r in front],
           "per_step": per_step, "event_cost": event_cost, **extra})

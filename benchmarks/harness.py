@@ -1,6 +1,6 @@
 """What the benchmarks share: timing, JSON output, the FMU hosts (fmpy loops, the C host, the C kernel
 through ctypes) and the per-step cost split.  Every benchmark imports shared code from here only,
-never from another benchmark (tests/test_benchmarks.py).
+never from another benchmark (tests/project/test_benchmarks.py).
 
 Timing: :func:`best_of` (the best of ``repeat`` runs: the machines are shared and noisy, the best run
 is the one nobody interrupted); JSON: :func:`emit` (one JSON object on stdout, progress goes to stderr).

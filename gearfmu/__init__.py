@@ -53,7 +53,7 @@ True
 
 Data flows one way: scene -> physics (geometry, stiffness, errors, loaded mesh, contact
 models, EHL) -> tables -> native solver / FMU (README "Architecture").  Layers, top to
-bottom; each imports only the layers below it (tests/test_architecture.py):
+bottom; each imports only the layers below it (tests/project/test_architecture.py):
 
 ===================  ================================================================
 Module / package     Contents

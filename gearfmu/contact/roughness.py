@@ -21,7 +21,7 @@ chosen here (documented in docs/ehl.md):
   no (unit, L_s) pair reproduces all four Ra values better than about
   +-3 % (the best fit is a unit of 1.58 mm), and with mm and integer n_min
   = 2 level 1 comes out 12 % low; L_s = 0.5 mm puts every level within
-  about +-9 % (tests/test_roughness.py measures it).
+  about +-9 % (tests/unit/contact/test_roughness.py measures it).
 * Ra is evaluated on the unfiltered profile (least-squares mean line) over
   ``SEED000_EVALUATION_LENGTH_M`` = 4 mm, the ISO 4288 evaluation length for
   0.1 um < Ra <= 2 um, sampled at 0.5 um, averaged over the face-width
