@@ -6,7 +6,7 @@ timed (CPU time of the process, best of ``--point-repeats`` solves so that numba
 compilation on first use is excluded) and its central
 film compared with Moes' (1992) fit as quoted by Venner & Lubrecht 2000
 (:func:`gearfmu.ehl.fits.moes_central_film`), the reference of
-tests/test_ehl.py.  Output: ``{"rows": [...], "worst": {...}, "summary": {...}}``,
+tests/unit/ehl/test_ehl.py.  Output: ``{"rows": [...], "worst": {...}, "summary": {...}}``,
 one flat row per point with ``M``, ``L``, ``cpu_s``, ``cycles``,
 ``n_intervals``, ``coarse_intervals``, ``attempt``, ``path`` ("fast",
 "corner_plan" or "settings", docs/ehl.md), ``fast_stage`` (the fast path's

@@ -46,7 +46,7 @@ REFERENCE_MAX_INTERVALS = 2048
 
 
 def random_grid(points: int, seed: int):
-    """The seeded random (M, L) grid of tests/test_ehl.py."""
+    """The seeded random (M, L) grid of tests/unit/ehl/test_ehl.py."""
     rng = np.random.default_rng(seed)
     Ms = 10 ** rng.uniform(math.log10(5.0), 3.0, points)
     Ls = rng.uniform(0.0, 20.0, points)

@@ -8,7 +8,7 @@ is then run over ``--sim`` simulated seconds at the communication step ``--comm`
 
 * through ``benchmarks/fmu_rtf_host.c`` (compiled here with the system ``cc``): a plain C
   FMI 2.0 host, dlopen of the FMU binary, doStep + getReal(dte) per communication step;
-* through fmpy's low-level API (the same calls, a Python loop; bench_fmu.FMPY_LOOPS): ``fmpy_*``
+* through fmpy's low-level API (the same calls, a Python loop; harness.FMPY_LOOPS): ``fmpy_*``
   FMU2Slave.doStep + fmi2GetReal on ctypes arrays built once, ``fmpy_raw_*`` the FMU's functions
   through fmpy's ctypes pointers with no fmpy wrapper.
 
@@ -33,7 +33,7 @@ best of N; run it under ``nice``); ``cpu`` the same on process CPU time (C host 
 through each host; ``smallest_error`` the run closest to the fine run.  ``dostep_overhead``:
 the C host's wall time per doStep beyond its internal steps (rk4 at max_step = comm, run at
 comm and at 10 x comm: the same internal steps, ten times fewer doStep calls).  ``python_floor``:
-each fmpy loop around two C functions that do nothing (benchmarks/fmi2_noop.c, bench_fmu.python_floor),
+each fmpy loop around two C functions that do nothing (benchmarks/fmi2_noop.c, harness.python_floor),
 the real-time factor no FMU can exceed through that loop on this machine.
 
 Prints one JSON object.  ``--table-front``: only the table error per points per mesh, with the
@@ -46,7 +46,6 @@ import argparse
 import json
 import math
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -55,42 +54,14 @@ from pathlib import Path
 
 import numpy as np
 
-INTEGRATOR_CODE = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}
-
-
-def compile_host(tmp: Path) -> Path:
-    """benchmarks/fmu_rtf_host.c compiled with the system cc against fmpy's FMI 2 headers."""
-    from gearfmu.fmu.build_steps import fmi2_header_dir
-
-    exe = tmp / "fmu_rtf_host"
-    src = Path(__file__).with_name("fmu_rtf_host.c")
-    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", f"-I{fmi2_header_dir()}", "-o", str(exe), str(src), "-ldl"],
-                   check=True)
-    return exe
-
-
-def host_run(exe, unz, md, vr, *, sim_s, comm_s, repeat, max_step_s, integrator, reals):
-    """(best wall s, best CPU s, rows of (dte, mesh_force)) of the C host."""
-    args = [str(exe), str(unz), md.coSimulation.modelIdentifier, md.guid, repr(sim_s), repr(comm_s), str(repeat),
-            f"{vr['dte']},{vr['mesh_force']}", str(vr["max_step"]), repr(max_step_s), str(vr["integrator"]),
-            str(INTEGRATOR_CODE[integrator])] + [f"{vr[k]}={v!r}" for k, v in reals.items()]
-    proc = subprocess.run(args, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"fmu_rtf_host exit {proc.returncode}: {proc.stderr.strip()}")
-    out = proc.stdout.splitlines()
-    head = json.loads(out[0])
-    return min(head["wall_s"]), min(head["cpu_s"]), np.array([[float(x) for x in r.split(",")] for r in out[1:]])
-
+from harness import FMPY_LOOPS, INTEGRATOR_CODE, compile_host, emit, fmu_loop, host_run, python_floor
 
 def fmpy_run(unz, md, vr, *, sim_s, comm_s, max_step_s, integrator, reals, loop="lean"):
     """(wall s, rows of (dte, mesh_force), CPU s of the loop's thread) of one fmpy loop
-    (bench_fmu.FMPY_LOOPS[loop]: by default FMU2Slave.doStep + fmi2GetReal on ctypes arrays built once)."""
-    sys.path.insert(0, str(Path(__file__).parent))
-    from bench_fmu import _fmu_loop
-
+    (harness.FMPY_LOOPS[loop]: by default FMU2Slave.doStep + fmi2GetReal on ctypes arrays built once)."""
     rows = []
     start = dict(reals, max_step=max_step_s, integrator=INTEGRATOR_CODE[integrator])
-    _, wall, _, _, cpu = _fmu_loop(None, str(unz), md, sim_s, comm_s, start, loop=loop, rows=rows)
+    _, wall, _, _, cpu = fmu_loop(None, str(unz), md, sim_s, comm_s, start, loop=loop, rows=rows)
     return wall, np.array(rows), cpu
 
 
@@ -183,15 +154,13 @@ def main(argv=None):
     if args.table_front:
         from gearfmu.pipeline import load
 
-        print(json.dumps({"table_front": table_front(
+        emit({"table_front": table_front(
             load(args.scene), sorted(int(x) for x in args.ppm.split(",")), fine_ppm=args.fine_ppm, comm_s=args.comm,
-            sim_s=args.sim, fine_substeps=args.fine_substeps)}, indent=1))
+            sim_s=args.sim, fine_substeps=args.fine_substeps)})
         return 0
 
     from fmpy import extract, read_model_description
 
-    sys.path.insert(0, str(Path(__file__).parent))
-    from bench_fmu import FMPY_LOOPS, python_floor
     from gearfmu.dynamics.native import simulate
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.pipeline import compute_tables, gear_torque_for, load
@@ -294,7 +263,7 @@ def main(argv=None):
         ok = [r for r in report["runs"] if np.isfinite(r[m]) and r[m] <= args.target]
         report["cheapest"][m] = {k: (max(ok, key=lambda r: r[k]) if ok else None) for k in keys}
     report["smallest_error"] = min(report["runs"], key=lambda r: r["dte_rel_rms_err"], default=None)
-    print(json.dumps(report, indent=1))
+    emit(report)
     return 0
 
 

@@ -14,7 +14,7 @@ roughness levels 1-4 of seed 000 Table 2, the ``fractal_mixed`` slice model
 * ``hertz_per_width``: the Hertz line-contact stiffness per width at the same point, for scale.
 
 No outside reference: the numbers describe our rebuild of seed 001; its checks against closed
-forms and quadrature are in tests/test_fractal_contact.py.
+forms and quadrature are in tests/unit/contact/test_fractal_contact.py.
 
     python benchmarks/bench_fractal.py
 """

@@ -33,9 +33,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
-import subprocess
 import sys
 import tempfile
 import zipfile
@@ -43,10 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from bench_fmu_rtf import compile_host  # noqa: E402  (the C host of bench_fmu_rtf)
+from harness import ROOT, compile_host, emit, host_run
 
 GOAL = 1.3
 GEARBOX_FACTORS = (0.8, 1.0, 1.15, 1.3, 1.5, 1.75)
@@ -63,18 +58,10 @@ def _unzip(fmu, d):
 
 
 def _host(exe, unz, md, *, sim_s, comm_s, repeat, outs, max_step_s, integrator):
-    """(best CPU s, best wall s, output rows) of fmu_rtf_host.c on the unzipped FMU."""
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    args = [str(exe), str(unz), md.coSimulation.modelIdentifier, md.guid, repr(sim_s), repr(comm_s), str(repeat),
-            ",".join(str(vr[n]) for n in outs), str(vr["max_step"]), repr(max_step_s), str(vr["integrator"]),
-            str(integrator)]
-    p = subprocess.run(args, capture_output=True, text=True, timeout=3600)
-    if p.returncode != 0:
-        raise RuntimeError(f"fmu_rtf_host exit {p.returncode}: {p.stderr.strip()[-2000:]}")
-    lines = p.stdout.splitlines()
-    head = json.loads(lines[0])
-    rows = np.array([[float(x) for x in ln.split(",")] for ln in lines[1:]])
-    return min(head["cpu_s"]), min(head["wall_s"]), rows
+    """(best CPU s, best wall s, output rows) of fmu_rtf_host.c on the unzipped FMU (harness.host_run)."""
+    wall, cpu, rows = host_run(exe, unz, md, sim_s=sim_s, comm_s=comm_s, repeat=repeat, outputs=outs,
+                               max_step_s=max_step_s, integrator=integrator, timeout=3600)
+    return cpu, wall, rows
 
 
 def _err(x, ref) -> float:
@@ -191,7 +178,7 @@ def main(argv=None) -> int:
     out["gearbox_matching_pairs"] = None if hit is None else {"max_step_s": hit[0], "cpu_s": hit[1]}
     out["ratio_matching_pairs"] = None if hit is None else hit[1] / sum(r["default"]["cpu_s"] for r in out["stages"])
     out["within_goal"] = out["ratio_same_accuracy"] is not None and out["ratio_same_accuracy"] <= GOAL
-    print(json.dumps(out, indent=1))
+    emit(out)
     return 0
 
 

@@ -7,7 +7,7 @@ seed 001 Table 1 scene, for each slice count NS the largest deviation of the tot
 continuous-face-width limit, with whole slices and with partly engaged slices (the default).  The
 limit is the partial-slice rule at 4 × the largest NS; ``limit_change_rel`` is its change from half
 that NS.  The reference of the comparison is the continuous face width itself (a closed-form engaged
-width, tests/test_helical_sawtooth.py); 1/(NS ε_α) is the expected size of a whole-slice step.
+width, tests/unit/gear/test_helical_sawtooth.py); 1/(NS ε_α) is the expected size of a whole-slice step.
 
     python benchmarks/bench_helical_sawtooth.py [--points-per-mesh 64] [--slices 15 30 60 120 240]
 """

@@ -16,10 +16,10 @@ with 'rk4_node' at the internal step where the native rk4_node front crosses 1e-
 fmpy's low-level FMU2Slave loop at a communication step of 1e-4 s for 0.1 s simulated
 (real-time factor = simulated / wall); its own error from an fmpy run on the case's grid.
 
-Case: the impact case of tests/test_integrators.py (rectangular-wave TVMS, errors,
+Case: the impact case of tests/unit/dynamics/test_integrators.py (rectangular-wave TVMS, errors,
 backlash, light load, impact start), 4 mesh periods, 8 communication steps per
 mesh period.  Reference: rk4_kink at h = H/3200 (its error there is ~1e-11 of
-the range, tests/test_integrators.py shows it agrees with an event-located
+the range, tests/unit/dynamics/test_integrators.py shows it agrees with an event-located
 solve_ivp to the reference's own 1e-9 level).  Errors: RMS and maximum of
 |dte - dte_ref| and |mesh_force - F_ref| over the communication points,
 relative to the reference's range.  Times: best of `--repeat` runs of the
@@ -32,7 +32,6 @@ rows of one integrator).
 Usage: python benchmarks/bench_integrators.py [--repeat 3] [--fronts-only]
 """
 import argparse
-import json
 import math
 import shutil
 import sys
@@ -42,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import best_of, c_runner, emit, step_costs
 from gearfmu.fmu.pythonfmu_build import compile_kernel
 from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.bench import _kb, _kw, hard_case, rel_errors, tent_error
@@ -56,26 +56,6 @@ def case():
                                  pair_error_m=lambda j, u: 4e-6 * (1 + j) * np.sin(np.pi * u))
     T1, w0, zeta, x0 = 5.0, 200.0, 0.03, -35e-6
     return tb, T1, T1 * tb.base_radius_gear_m / tb.base_radius_pinion_m, w0, zeta, x0
-
-
-def c_runner(tb, T1, T2, w0, zeta, x0, H, n, hmax, integrator, lib, damping_model=0):
-    k = np.ascontiguousarray(tb.k_N_per_m)
-    e = np.ascontiguousarray(tb.e_m)
-    b = np.ascontiguousarray(tb.backlash_half_m)
-    tq = np.ascontiguousarray(tb.torque_Nm, dtype=float)
-    m = np.zeros(lib.gk_sizeof_model() // 8 + 2)
-    out = np.zeros(lib.gk_n_outputs(tb.slots))
-    lib.gk_init(m.ctypes.data, tb.slots, tb.n_phi, len(tq), tq.ctypes.data, k.ctypes.data, e.ctypes.data,
-                b.ctypes.data, tb.phi_period_rad, tb.base_radius_pinion_m, tb.base_radius_gear_m,
-                tb.inertia_pinion_kgm2, tb.inertia_gear_kgm2, tb.k_mean_N_per_m)
-    lib.gk_set_damping(m.ctypes.data, zeta, damping_model)
-    lib.gk_set_integrator(m.ctypes.data, integrator)
-    s = np.array([0.0, w0, x0, 0.0])
-    pm, ps, po = m.ctypes.data, s.ctypes.data, out.ctypes.data
-    t0 = time.perf_counter()
-    for _ in range(n):
-        lib.gk_do_step(pm, ps, T1, T2, H, hmax, po)
-    return time.perf_counter() - t0, s.copy()
 
 
 def three_slot_case():
@@ -152,7 +132,6 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
     step where the native rk4_node rows cross 1e-4 relative RMS dte error; and that of the
     C kernel alone (gk_do_step through ctypes, same steps) to show what the FMI layer adds."""
     from fmpy import extract, read_model_description
-    from bench_fmu import step_costs
     from gearfmu.fmu.compare import run_fmu
     from gearfmu.fmu.standalone_build import build_standalone_fmu
 
@@ -169,7 +148,7 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
         md = read_model_description(str(path))
         unz = extract(str(path))
         hosts = step_costs(unz, md, sim_s=sim_s, comm_s=comm_s, max_step_s=h, integrator="rk4_node", reals={},
-                           repeat=repeat)  # C host, fmpy loops, per-step layer costs (bench_fmu.py)
+                           repeat=repeat)  # C host, fmpy loops, per-step layer costs (harness.step_costs)
         walls = [hosts["fmpy_lean_wall_s"]]
         print("fmu: error run on the case's grid ...", file=sys.stderr)
         ref = simulate_reference(tables, rtol=1e-12, steps_per_period=128, **kw)
@@ -180,8 +159,8 @@ def fmu_rtf(front, repeat, lib, comm_s=1e-4, sim_s=0.1):
     T1 = float(kw["pinion_torque_Nm"])
     T2 = T1 * tables.base_radius_gear_m / tables.base_radius_pinion_m
     x0 = float(simulate(tables, **dict(kw, stop_time_s=kw["comm_step_s"])).dte[0])
-    kwall = min(c_runner(tables, T1, T2, kw["pinion_speed_start_rad_s"], kw["damping_ratio"], x0, comm_s,
-                         int(round(sim_s / comm_s)), h, 2, lib)[0] for _ in range(repeat))
+    kwall = best_of(repeat, lambda: c_runner(tables, T1, T2, kw["pinion_speed_start_rad_s"], kw["damping_ratio"], x0,
+                                             comm_s, int(round(sim_s / comm_s)), h, 2, lib)[0])
     return {"kernel_wall_s": kwall, "kernel_real_time_factor": sim_s / kwall,
             "case": front["case"], "integrator": "rk4_node", "max_step_s": h, "comm_step_s": comm_s,
             "simulated_s": sim_s, "wall_s": min(walls), "real_time_factor": sim_s / min(walls),
@@ -197,7 +176,7 @@ def main():
     if args.fronts_only:
         lib = load_kernel(compile_kernel(tempfile.mkdtemp(prefix="bench_gk_")))
         fronts = [case_front(name, args.repeat) for name in FRONT_CASES]
-        print(json.dumps({"fronts": fronts, "fmu_rtf": fmu_rtf(fronts[0], args.repeat, lib)}, indent=1))
+        emit({"fronts": fronts, "fmu_rtf": fmu_rtf(fronts[0], args.repeat, lib)})
         return
     tb, T1, T2, w0, zeta, x0 = case()
     H = tb.mesh_period_rad / w0 / 8
@@ -241,7 +220,7 @@ def main():
     for integ, code in (("rk4", 0), ("rk4_kink", 1), ("rk4_node", 2)):
         div = 256
         _, wn = run(integ, div)
-        wc = min(c_runner(tb, T1, T2, w0, zeta, x0, H, n, H / div, code, lib)[0] for _ in range(args.repeat))
+        wc = best_of(args.repeat, lambda: c_runner(tb, T1, T2, w0, zeta, x0, H, n, H / div, code, lib)[0])
         steps = n * div
         per_step.append({"method": integ, "substeps": steps, "numba_ns_per_substep": wn / steps * 1e9,
                          "c_ns_per_substep": wc / steps * 1e9, "numba_over_c": wn / wc})
@@ -263,10 +242,10 @@ def main():
     if args.fronts:
         extra["fronts"] = [case_front(name, args.repeat) for name in FRONT_CASES]
         extra["fmu_rtf"] = fmu_rtf(extra["fronts"][0], args.repeat, lib)
-    print(json.dumps({"case": "impact case of tests/test_integrators.py, 4 mesh periods, H = mesh period/8",
-                      "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
-                      "front": [(r["method"], r["setting"]) for r in front],
-                      "per_step": per_step, "event_cost": event_cost, **extra}, indent=1))
+    emit({"case": "impact case of tests/unit/dynamics/test_integrators.py, 4 mesh periods, H = mesh period/8",
+          "reference": "rk4_kink h=H/3200", "simulated_s": sim_s, "rows": rows,
+          "front": [(r["method"], r["setting"]) for r in front],
+          "per_step": per_step, "event_cost": event_cost, **extra})
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ area ratio, the film and asperity springs of ``gearfmu.contact.load_sharing.load
 the EHL solver's smooth film stiffness as the film spring, and the Hertz stiffness for scale.
 
 No outside reference for the numbers themselves (JGP's own load-share curve was not available);
-the module's checks against closed forms and quadrature are in tests/test_load_sharing.py.
+the module's checks against closed forms and quadrature are in tests/unit/contact/test_load_sharing.py.
 
     python benchmarks/bench_load_sharing.py
 """

@@ -4,7 +4,8 @@
 Runs ``python -m pytest -q`` (the README's test command; pytest's own options from
 pyproject.toml) in a fresh process from the repository root and prints one JSON object:
 ``wall_s``, ``exit_code`` and ``summary`` (pytest's last line, e.g. "512 passed in 250.1s").
-Extra arguments are passed to pytest (e.g. a single test file to try this script quickly).
+Extra arguments are passed to pytest: ``-m "not slow" -n 2`` times the quick subset
+(tests/README.md), a single test file tries this script quickly.
 
     python benchmarks/bench_tests.py [PYTEST_ARGS ...]
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import subprocess
 import sys
 import time
@@ -29,7 +31,7 @@ def main(argv=None) -> int:
     lines = [ln.strip() for ln in proc.stdout.splitlines() if ln.strip()]
     summary = next((ln.strip("= ") for ln in reversed(lines) if " in " in ln and ("passed" in ln or "failed" in ln
                                                                                   or "error" in ln)), "")
-    print(json.dumps({"command": "python -m pytest -q " + " ".join(args), "wall_s": wall,
+    print(json.dumps({"command": shlex.join(["python", "-m", "pytest", "-q", *args]), "wall_s": wall,
                       "exit_code": proc.returncode, "summary": summary, "cpu_count": os.cpu_count()}, indent=1))
     return 0
 

@@ -111,10 +111,12 @@ SOURCES = {
     "table_cache": ([PY, "benchmarks/bench_cache.py"], None, "benchmarks/bench_cache.py"),
     "estimate": ([PY, "benchmarks/bench_estimate.py"], None, "benchmarks/bench_estimate.py"),
     "silence": ([PY, "benchmarks/bench_silence.py"], None, "benchmarks/bench_silence.py"),
+    "tests_quick": ([PY, "benchmarks/bench_tests.py", "-m", "not slow", "-n", "2"], None,
+                    'benchmarks/bench_tests.py -m "not slow" -n 2'),
 }
 # sources that take several minutes: run only when named (--only) or with --all
 SLOW = {"me", "trends", "ehl_corners", "ehl_rough", "ehl_moes", "ehl_rough_tables", "integrators", "startup",
-        "plan_study", "plan_scan", "tests", "gearbox", "planetary", "silence"}
+        "plan_study", "plan_scan", "tests", "tests_quick", "gearbox", "planetary", "silence"}
 
 
 # ------------------------------------------------------------------------------- running
@@ -319,7 +321,7 @@ def sec_helical_sawtooth(pg: Page):
         "Reference: the continuous face width (the limit of partly engaged slices at "
         f"NS = {d['limit_slices']}, which changes by {sci(d['limit_change_rel'], 1)} of the mean from half "
         "that slice count; the engaged width itself is checked against its closed form in "
-        "tests/test_helical_sawtooth.py).  Seed 001 Table 1 pair "
+        "tests/unit/gear/test_helical_sawtooth.py).  Seed 001 Table 1 pair "
         f"(ε_α {d['eps_alpha']:.4f}, ε_β {d['eps_beta']:.4f}), {d['points_per_mesh']} points per mesh: largest "
         "deviation of the total mesh stiffness (relative to its mean) and of the static transmission error "
         "(relative to its peak-to-peak, "
@@ -503,7 +505,7 @@ def sec_load_sharing(pg: Page):
         "## Film-asperity load sharing\n\n"
         "No outside reference for the numbers (Johnson, Greenwood & Poon's own load-share curve was not "
         "available; the module's checks against closed forms and quadrature are in "
-        "tests/test_load_sharing.py).  Seed 000 Table 1 pair at its pitch point, "
+        "tests/unit/contact/test_load_sharing.py).  Seed 000 Table 1 pair at its pitch point, "
         f"{d['torque_Nm']:g} N·m (w = {d['w_N_per_m'] / 1e3:.1f} kN/m), its oil at "
         f"{d.get('oil_temperature_C', math.nan):g} °C, a {d['width_m'] * 1e3:g} mm slice, roughness levels of "
         "seed 000 Table 2 (docs/load_sharing.md): film parameters on the Dowson-Higginson minimum film "
@@ -535,7 +537,7 @@ def sec_fractal(pg: Page):
     pg.parts.append(
         "## Fractal mixed-lubrication contact\n\n"
         "No outside reference for the numbers: they describe our rebuild of seed 001 (docs/fractal_contact.md; "
-        "its checks against closed forms and quadrature are in tests/test_fractal_contact.py).  Seed 000 "
+        "its checks against closed forms and quadrature are in tests/unit/contact/test_fractal_contact.py).  Seed 000 "
         f"Table 1 pair at its pitch point, {d['torque_Nm']:g} N·m (w = {d['w_N_per_m'] / 1e3:.1f} kN/m, "
         f"R = {d['R_m'] * 1e3:.2f} mm, u = {d['u_m_s']:.2f} m/s, b = {d['b_m'] * 1e3:.3f} mm), the "
         "`fractal_mixed` slice model, roughness levels of seed 000 Table 2, per unit face width (N/m²); "
@@ -1279,15 +1281,15 @@ def speed_table(d: dict) -> str:
 
 COVERED_BY_TESTS = [
     ("meshing errors and the loaded static mesh", "hand values of seed 003 eq 15 and of the pitch "
-     "closure, seed 000 eq 16, scipy's brentq on the load balance", "tests/test_meshing_errors.py, "
-     "tests/test_loaded_mesh.py"),
+     "closure, seed 000 eq 16, scipy's brentq on the load balance", "tests/unit/gear/test_meshing_errors.py, "
+     "tests/unit/gear/test_loaded_mesh.py"),
     ("contact models and roughness (fractal, load sharing, W-M)", "seed 001 Figs. 7-12 statements, "
      "quadrature of the asperity integrals, seed 000 Table 2 Ra, the W-M closed-form RMS",
-     "tests/test_fractal_contact.py, tests/test_load_sharing.py, tests/test_roughness.py"),
+     "tests/unit/contact/test_fractal_contact.py, tests/unit/contact/test_load_sharing.py, tests/unit/contact/test_roughness.py"),
     ("rough EHL in the mesh, transient films", "seed 000 Figs. 12-15 trends, Venner et al. waviness "
-     "reduction", "tests/test_ehl_mesh.py, tests/test_ehl_transient.py"),
+     "reduction", "tests/unit/contact/test_ehl_mesh.py, tests/unit/ehl/test_ehl_transient.py"),
     ("helical geometry and slicing", "hand formulas for ε_α, ε_β and the centre distance; the "
-     "continuous face-width limit", "tests/test_helical.py, tests/test_helical_sawtooth.py"),
+     "continuous face-width limit", "tests/unit/gear/test_helical.py, tests/unit/gear/test_helical_sawtooth.py"),
 ]
 
 
@@ -1445,6 +1447,12 @@ def _g_tests(d):
     return f"{d['wall_s']:.0f} s ({d.get('summary', '')}){extra}", d["wall_s"] <= 300.0
 
 
+def _g_tests_quick(d):
+    extra = "" if d.get("exit_code") == 0 else f"; the subset did not pass: {d.get('summary', '?')}"
+    return (f"{d['wall_s']:.0f} s ({d.get('summary', '')}, {d.get('cpu_count', '?')} cores){extra}",
+            d["wall_s"] <= 60.0 and d.get("exit_code") == 0)
+
+
 def _g_gearbox(d):
     sp = d["summary_min_speedup_vs_DOP853"]
     cells = ", ".join(f"{m} " + ("n/a" if v.get("1e-06") is None else f"≥ {v['1e-06']:.0f} ×") for m, v in sp.items())
@@ -1496,6 +1504,7 @@ def goal_rows(data: dict) -> list:
         ("EHL film ≤ 5 ms per point at the default settings", "ehl_corners", _g_ehl_default),
         ("`gearfmu plan` of the default scene ≤ 60 s", "plan", _g_plan),
         ("test suite ≤ 5 min", "tests", _g_tests),
+        ("quick test subset (`pytest -m \"not slow\" -n 2`) ≤ 60 s", "tests_quick", _g_tests_quick),
         ("second command on a scene: table time < 5 % of the first (table cache)", "table_cache", _g_cache),
         ("cost estimate within 2 × of the measured table time and sizes", "estimate", _g_estimate),
         ("no command silent on stderr for more than 2 s", "silence", _g_silence),
@@ -1509,7 +1518,7 @@ def goals_table(data: dict) -> str:
 
 def sec_goals(pg: Page):
     srcs = ["startup", "kernels", "integrators", "gearbox", "planetary", "gearbox_fmu", "fmu_speed", "fmu_rtf", "ehl_corners", "plan", "tests",
-            "table_cache", "estimate", "silence"]
+            "tests_quick", "table_cache", "estimate", "silence"]
     pg.parts.append(
         "## Speed goals\n\n"
         "Each goal beside the value measured by its benchmark (wall or CPU time of one run on the machine "

@@ -251,7 +251,7 @@ def run_direct_speed_torque(out: Path, slices: int = 2, n_nodes: int = 257, T_av
     SPEEDS (rpm) x 2000 N m (Fig. 14) and TORQUES (N m) x 2000 rpm (Fig. 15), level 4 under seed 000's
     full-film assumption (check_film_parameter=False; the screen's Lambda is recorded); writes
     direct_tvms_speed_torque.json and direct_tvms_speed_torque.png.  A film that fails leaves
-    that point null with the reason (tests/test_direct_tvms_speed_torque.py asserts the orderings)."""
+    that point null with the reason (tests/unit/assembly/test_direct_tvms_speed_torque.py asserts the orderings)."""
     from gearfmu.contact.models import RoughnessSpec
     from gearfmu.scene.physics import environment_from_scene
     from gearfmu.assembly.direct_tvms import DirectTVMSError, TransientFilmSettings, direct_mesh_stiffness

@@ -3,7 +3,7 @@
 ``hard_case(name)`` returns ``(tables, kwargs)`` for :func:`gearfmu.dynamics.native.simulate`
 (and :func:`gearfmu.dynamics.reference.simulate_reference`, which takes the same
 arguments): the hard cases of the dynamic model, built from textbook tables (the
-rectangular-wave TVMS of :mod:`gearfmu.tables.synthetic`, seed 003 Table 1 gear data)
+rectangular-wave TVMS of :mod:`gearfmu.tables.synthetic`, Xu et al. 2022 Table 1 gear data)
 and from a computed scene.  Inputs only -- no results are stored here.
 
 ``accuracy_benchmark()`` runs, on one case and in one process, every
@@ -15,7 +15,7 @@ error against the tight reference: ``gearfmu bench accuracy --json [--png P]``.
 
 The planetary cases (section "planetary stages" below): ``LIN_PARKER_1999`` (Lin & Parker's
 published example system), ``lp_stage`` / ``lp_model`` and ``planetary_case(name)`` -- the hard
-cases of the planetary solver's tests and benchmark (tests/test_planetary_*.py,
+cases of the planetary solver's tests and benchmark (tests/unit/planetary/test_planetary_*.py,
 benchmarks/bench_planetary.py).
 
 Errors are relative: RMS (or max) over the communication instants of
@@ -53,7 +53,7 @@ __all__ = ["HARD_CASES", "hard_case", "case_settings", "rel_errors", "accuracy_b
 
 
 def _kb(**kw):
-    """Rectangular-wave TVMS on the seed 003 Table 1 gears (50/50 teeth, eps 1.7547),
+    """Rectangular-wave TVMS on the Xu et al. 2022 Table 1 gears (50/50 teeth, eps 1.7547),
     every engaged pair 2.5e8 N/m (k_double = 2 k_single), half backlash 68 um."""
     args = dict(k_single_N_per_m=2.5e8, backlash_half_m=KB_BACKLASH_HALF_M)
     args.update(kw)
@@ -67,12 +67,12 @@ def tent_error(amplitude_m: float):
 
 
 def omega_n(tables) -> float:
-    """sqrt(k_mean/m_e) (rad/s), seed 003 eq 7."""
+    """sqrt(k_mean/m_e) (rad/s), Xu et al. 2022 eq 7."""
     return math.sqrt(tables.k_mean_N_per_m / tables.equivalent_mass_kg)
 
 
 def speed_for(tables, Omega_h: float) -> float:
-    """Pinion speed (rad/s) with mesh frequency Omega_h * omega_n (seed 003 eq 7)."""
+    """Pinion speed (rad/s) with mesh frequency Omega_h * omega_n (Xu et al. 2022 eq 7)."""
     return Omega_h * omega_n(tables) * tables.mesh_period_rad / (2.0 * math.pi)
 
 
@@ -127,7 +127,7 @@ def _torque_steps():
 
 
 def _computed():
-    """The default scene's computed tables (seed 000 Table 1 pair) at its operating point."""
+    """The default scene's computed tables (Zhao et al. 2022 Table 1 pair) at its operating point."""
     scene = load(None)
     t = compute_tables(scene)
     w1 = scene.operating.speed_rad_s
@@ -322,7 +322,7 @@ def main_accuracy(args) -> int:
 
 
 # ================================================================ planetary stages
-# The cases of the planetary tests and benchmark (tests/test_planetary_*.py,
+# The cases of the planetary tests and benchmark (tests/unit/planetary/test_planetary_*.py,
 # benchmarks/bench_planetary.py): inputs only.
 #
 # Cases of the planetary tests and benchmark: inputs only (no results here).

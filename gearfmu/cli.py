@@ -23,7 +23,7 @@ A SCENE with a top-level [drivetrain] table is a gearbox (docs/gearbox.md): buil
 FMU (standalone C runtime), validate compares that FMU with the native gearbox solver, simulate runs
 the native gearbox solver on it, modes gives its modes, ssp makes an SSP of stage FMUs.
 
-SCENE defaults to the default scene (the seed 000 Table 1 pair).  Every
+SCENE defaults to the default scene (the Zhao et al. 2022 Table 1 pair).  Every
 command exits with status 2 and a one-line message naming the problem on
 bad input (an invalid scene, a missing, damaged or wrong kind of file, a bad
 option value, an output path that cannot be written).  GEARFMU_DEBUG=1 adds
@@ -51,8 +51,8 @@ from .common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_SSP_COUPLING, FMI3
                                 ME_NODE_EVENTS, RUNTIMES, SSP_COUPLINGS)
 from .contact.base import FLAG_MEANINGS
 from .dynamics.native import write_columns_csv
-from .fmu.compare import (native_columns, output_names, output_units, run_fmu, validate_fmu_against_native,
-                          FmuMismatchError, open_fmu, check_fmu_matches, DEFAULT_TOLERANCE)
+from .fmu.compare import (native_columns, output_names, output_units, run_fmu, FmuMismatchError, open_fmu,
+                          DEFAULT_TOLERANCE)
 from .fmu.crosscheck import main as crosscheck_main, write_reference_results
 from . import pipeline
 from .pipeline import load, build, simulate_native
@@ -60,8 +60,6 @@ from .ssp import parse_variant, ssp_fmu_bytes, ssp_fmu_name, ssp_from_drivetrain
 from .assembly import table_cache
 from .tables.table_import import load_tables_file, REQUIRED, sidecar_path, tables_to_csv
 from .fmu.crossbuild import parse_platforms
-from .fmu.gearbox_build import variables_of_fmu
-from .fmu.gearbox_compare import check_gearbox_fmu_matches, validate_gearbox_fmu
 from .fmu.summary import fmu_summary
 
 
@@ -460,63 +458,17 @@ def cmd_validate(args) -> int:
     return 0 if not rep["fmpy_problems"] and not rep["failed"] else 1
 
 
-def _validate_drivetrain(args) -> dict:
-    """gearfmu validate DRIVETRAIN.toml: its gearbox FMU (--fmu, else built) against the native gearbox solver."""
-    _, scene = _any_scene(args.scene)
-    fmu_path = None
-    if args.fmu:
-        fmu = _fmu(args.fmu)
-        check_gearbox_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
-        fmu_path = fmu.path
-        tables = pipeline.stage_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        model = pipeline.gearbox_model(scene, tables)
-        settings = pipeline.gearbox_fmu_settings(scene, model)
-    else:
-        res = pipeline.build_drivetrain_fmu(scene, _output_file(f"build/{scene.model_name}.fmu", "validate"),
-                                            progress=not args.quiet, allow_large=args.allow_large)
-        fmu_path, model, settings = res.fmu_path, res.model, res.settings
-    variables = variables_of_fmu(model, settings, "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS)
-    rep = validate_gearbox_fmu(fmu_path, model, settings, variables, tolerance=args.tolerance, scene_text=scene.text,
-                               stop_time_s=args.stop_time, comm_step_s=args.output_interval)
-    rep["scene"] = scene.name
-    return rep
-
-
-def _scalar_fmi3(fmu_path) -> bool:
-    """An FMI 3 gearbox FMU built with scalar per-slot outputs (stage1.pair_force_1, ...)."""
-    import fmpy  # fmpy: only to read the FMU
-
-    md = fmpy.read_model_description(str(fmu_path))
-    return md.fmiVersion.startswith("3") and any(v.name.endswith(".pair_force_1") for v in md.modelVariables)
-
-
 def _validate(args) -> dict:
-    if args.scene is not None and pipeline.is_drivetrain_file(args.scene):
-        return _validate_drivetrain(args)
-    from .plan import resolve  # the planner: loaded by the commands that build, not at startup
-
-    scene = _scene(args.scene)
-    text = scene.text
-    if args.fmu:
-        fmu = _fmu(args.fmu)
-        check_fmu_matches(fmu, scene_text=text)  # before the tables are computed
-    # the scene the FMU is built from: its plan's when it has [accuracy] (as `gearfmu build`)
-    scene, plan, verified = resolve(scene, progress=not args.quiet, allow_large=args.allow_large)
-    if args.fmu:
-        fmu_path = fmu.path
-        tables = pipeline.compute_tables(scene, progress=not args.quiet, allow_large=args.allow_large)
-        settings = pipeline.run_settings(scene, tables)
-    else:
-        res = pipeline.build_fmu_from_scene(scene, _output_file(f"build/{scene.fmu.model_name}.fmu", "validate"),
-                                            progress=not args.quiet, plan=plan, verified_envelope=verified,
-                                            allow_large=args.allow_large)
-        fmu_path, tables, settings = res.fmu_path, res.tables, res.settings
-    stop = args.stop_time or scene.fmu.stop_time_s
-    step = args.output_interval or scene.fmu.output_interval_s
-    rep = validate_fmu_against_native(fmu_path, tables, settings, stop_time_s=stop, comm_step_s=step,
-                                      tolerance=args.tolerance, scene_text=text)
-    rep["scene"] = scene.name
-    return rep
+    """gearfmu validate: the FMU (--fmu, else built) against the native solver (:func:`gearfmu.pipeline.validate`;
+    a drivetrain scene: its gearbox FMU against the native gearbox solver, :func:`gearfmu.pipeline.validate_drivetrain`)."""
+    drivetrain = args.scene is not None and pipeline.is_drivetrain_file(args.scene)
+    scene = _any_scene(args.scene)[1] if drivetrain else _scene(args.scene)
+    fmu = _fmu(args.fmu) if args.fmu else None
+    name = scene.model_name if drivetrain else scene.fmu.model_name
+    out = None if fmu is not None else _output_file(f"build/{name}.fmu", "validate")
+    run = pipeline.validate_drivetrain if drivetrain else pipeline.validate
+    return run(scene, fmu, out_path=out, tolerance=args.tolerance, stop_time_s=args.stop_time,
+               comm_step_s=args.output_interval, progress=not args.quiet, allow_large=args.allow_large)
 
 
 def print_report(rep: dict) -> None:

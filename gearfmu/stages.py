@@ -65,7 +65,7 @@ def load(scene_path: Optional[str] = None):
 
 def gear_torque_for(tables, pinion_torque_Nm: float) -> float:
     """Load torque on the gear that balances a pinion torque in steady state,
-    T2 = T1 * Rb2 / Rb1 (seed 003: F_m = T1/Rb1 = T2/Rb2)."""
+    T2 = T1 * Rb2 / Rb1 (Xu et al. 2022: F_m = T1/Rb1 = T2/Rb2)."""
     return pinion_torque_Nm * tables.base_radius_gear_m / tables.base_radius_pinion_m
 
 

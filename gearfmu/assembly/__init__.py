@@ -6,6 +6,11 @@ the physics (:mod:`gearfmu.gear`, :mod:`gearfmu.contact`, :mod:`gearfmu.ehl`) wi
 writes the result in the table format of :mod:`gearfmu.tables`.  Imports those packages and
 :mod:`gearfmu.common`; nothing above them.
 
+Exports (loaded with their module on first use): ``precompute_tables``;
+``direct_mesh_stiffness``, ``TransientFilmSettings``; the cost model ``estimate_cost``,
+``BuildEstimate``, ``BuildTooLargeError``.  The table cache is used as its module
+(``gearfmu.assembly.table_cache``).
+
 ==============  ============================================================
 Module          Contents
 ==============  ============================================================
@@ -21,3 +26,12 @@ planetary       a geometric planetary set -> its stage: every planet's sun-plane
 planetary_lumped  a planetary stage from published lumped parameters (Lin & Parker style)
 ==============  ============================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    "precompute_tables": "precompute",
+    "direct_mesh_stiffness": "direct_tvms", "TransientFilmSettings": "direct_tvms",
+    **dict.fromkeys(("estimate_cost", "BuildEstimate", "BuildTooLargeError"), "estimate"),
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -34,7 +34,7 @@ Contact models (:data:`DIRECT_MODELS`):
   u1, u2, :func:`gearfmu.ehl.transient.flank_slice_case`), start 'auto', run through the wash-out
   and ``T_average`` more (b/u_s units); film stiffness by reduction (b) = seed 000 eq 8 on the
   window means A B(<p_m>)/<h_m> (default; (a) <A B(p_m)/h_m> selectable) -- the quantity of
-  tests/test_ehl_transient.py's Fig. 13 test and of the tables' transient correction.
+  tests/unit/ehl/test_ehl_transient.py's Fig. 13 test and of the tables' transient correction.
 
 CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
 

@@ -46,7 +46,7 @@ FILM_LOAD_NODES = 3
 #: docs/ehl_transient.md section 3: 4, spread evenly over the face; all when fewer)
 FILM_TRANSIENT_SLICES = 4
 #: time reductions of a transient run (docs/ehl_transient.md section 3): (b) "k_of_means" =
-#: A B(<p_m>)/<h_m> (the table's CHOICE, seed 000's "central OFT" explanation) and (a)
+#: A B(<p_m>)/<h_m> (the table's CHOICE, the "central OFT" explanation of Zhao et al. 2022) and (a)
 #: "mean_of_k" = <A B(p_m)/h_m>
 FILM_TRANSIENT_REDUCTIONS = ("k_of_means", "mean_of_k")
 #: start of the transient runs of ``film_transient = "film"`` (as gearfmu.assembly.direct_tvms):
@@ -59,7 +59,7 @@ FILM_TRANSIENT_START = "auto"
 
 @dataclass(frozen=True)
 class RoughnessSpec:
-    """W-M flank roughness (seed 000 eq 1).  ``D`` fractal dimension, ``G_m``
+    """W-M flank roughness (Zhao et al. 2022 eq 1).  ``D`` fractal dimension, ``G_m``
     characteristic scale (m; Table 2's G read in mm, docs/ehl.md), ``seed``
     of the random phases, ``f_max_per_m`` band limit (1/m), ``level`` the
     Table 2 level it came from (0 = custom), ``on_failure`` 'fractal_mixed' |
@@ -117,7 +117,7 @@ class RoughnessSpec:
         """Whether requests with Lambda < ``full_film_parameter`` go to the film-failure policy
         before any solve: ``film_parameter_screen`` when set, else True except for
         ``film_transient = 'film'`` (CHOICE, docs/ehl_mesh.md "Transient films in the tables":
-        seed 000 treats all four levels as full film, and the transient films exist at
+        Zhao et al. 2022 treat all four levels as full film, and the transient films exist at
         Lambda 2-3; a film that collapses (h <= 0) still goes to the policy)."""
         if self.film_parameter_screen is not None:
             return bool(self.film_parameter_screen)
@@ -125,7 +125,7 @@ class RoughnessSpec:
 
     @staticmethod
     def from_level(level: int, **kw) -> "RoughnessSpec":
-        """Seed 000 Table 2 level 1-4 (:data:`gearfmu.contact.roughness.SEED000_LEVELS`)."""
+        """Zhao et al. 2022 Table 2 level 1-4 (:data:`gearfmu.contact.roughness.SEED000_LEVELS`)."""
         if level not in SEED000_LEVELS:
             raise ContactModelError(f"level={level!r}: seed 000 Table 2 has levels 1-4")
         lv = SEED000_LEVELS[level]
@@ -249,7 +249,7 @@ def composite_sigma_m(spec: RoughnessSpec) -> float:
     """Composite RMS roughness sigma = sqrt(sigma1^2 + sigma2^2) (m) of the two flanks:
     both carry the W-M roughness of ``spec`` (same D, G), so sigma = sqrt(2) sigma_WM with
     sigma_WM the expected RMS height of the full W-M sum
-    (:func:`gearfmu.contact.roughness.wm_sigma_m`, the convention that reproduces seed 000
+    (:func:`gearfmu.contact.roughness.wm_sigma_m`, the convention that reproduces Zhao et al. 2022
     Table 2's Ra; CHOICE: the full band, not the band-limited profile the solver sees, since
     Lambda describes the real surfaces)."""
     return math.sqrt(2.0) * wm_sigma_m(spec.D, spec.G_m)

@@ -1,32 +1,32 @@
-"""Fractal mixed-lubrication normal contact stiffness (seed 001, Xu, Shi & Fan 2023).
+"""Fractal mixed-lubrication normal contact stiffness (Xu, Shi & Fan 2023).
 
 Rebuilt equations with their sources: docs/fractal_contact.md.  In short:
 
 * Asperity size distribution (Majumdar & Bhushan 1991, J. Tribol. 113, 1-11;
-  seed 001 eq 15 with the correction coefficient lambda_c as a factor):
+  Xu, Shi & Fan 2023 eq 15 with the correction coefficient lambda_c as a factor):
   n(a) = lambda_c (D/2) a_l^(D/2) a^-(D+2)/2, 0 < a <= a_l.
 * One asperity of size a (MB 1991): interference delta(a) = G^(D-1) a^((2-D)/2),
   tip radius R(a) = a^(D/2) / (pi G^(D-1)) so that a = pi R delta (Hertz);
-  elastic load (4/(3 sqrt pi)) E G^(D-1) a^((3-D)/2) (seed 001 below eq 7).
-* Yield onset at the mean pressure p_c = 1.1 k_mu Y (seed 001 above eq 10),
+  elastic load (4/(3 sqrt pi)) E G^(D-1) a^((3-D)/2) (Xu, Shi & Fan 2023 below eq 7).
+* Yield onset at the mean pressure p_c = 1.1 k_mu Y (Xu, Shi & Fan 2023 above eq 10),
   k_mu = 1 - 0.228 mu (mu <= 0.3); critical area
-  a_c = [4 E G^(D-1) / (3.3 sqrt(pi) k_mu Y)]^(2/(D-1))   (seed 001 eq 10),
+  a_c = [4 E G^(D-1) / (3.3 sqrt(pi) k_mu Y)]^(2/(D-1))   (Xu, Shi & Fan 2023 eq 10),
   omega = delta/delta_c = (a_c/a)^(D-1), a_epc = 6^(1/(1-D)) a_c,
-  a_pc = 110^(1/(1-D)) a_c (seed 001 below eq 13).
+  a_pc = 110^(1/(1-D)) a_c (Xu, Shi & Fan 2023 below eq 13).
 * Elastic / first / second elastic-plastic / fully plastic stages: Hertz for
   omega <= 1; Kogut & Etsion (2002, J. Appl. Mech. 69, 657-662) FE fits
   P/Pc = 1.03 w^1.425, A/Ac = 0.93 w^1.136 (1 < w <= 6) and
   P/Pc = 1.40 w^1.263, A/Ac = 0.94 w^1.146 (6 < w <= 110), Pc = p_c Ac,
   Ac = pi R delta_c; fully plastic A = 2 pi R delta, P = H A.  Asperity
   stiffness k = dP/d(delta) at fixed R; fully plastic asperities add no
-  stiffness (seed 001 eq 23 has no plastic term).
-* Lateral (shoulder-to-shoulder) contact, seed 001 eq 1-3 after Sepehri &
+  stiffness (Xu, Shi & Fan 2023 eq 23 has no plastic term).
+* Lateral (shoulder-to-shoulder) contact, Xu, Shi & Fan 2023 eq 1-3 after Sepehri &
   Farhang (2008): class i with s_i = 1 + r_a^2/R^2, cos(alpha_i) = s_i^-1/2,
   radius at the contact point R_y = R s^(3/2), interference along the contact
   normal delta_a = delta s^-1/2; normal load P_n = P_a cos(alpha) and normal
-  stiffness k_n = k_a cos^2(alpha) (seed 001 eq 24-25); class weights
-  A_i/A_r as in seed 001 section 3.3 (uniform or Gaussian, after Zhang et al. 2019).
-* Asperity interaction (seed 001 eq 4 after Ciavarella, Greenwood & Paggi
+  stiffness k_n = k_a cos^2(alpha) (Xu, Shi & Fan 2023 eq 24-25); class weights
+  A_i/A_r as in Xu, Shi & Fan 2023 section 3.3 (uniform or Gaussian, after Zhang et al. 2019).
+* Asperity interaction (Xu, Shi & Fan 2023 eq 4 after Ciavarella, Greenwood & Paggi
   2008): the pressure of the neighbouring asperities lowers the base of each
   asperity by delta_int = 2 p_nom r (1/sqrt(A*) - 1) / E (half-space under the
   nominal pressure over the annulus r < rho < r/sqrt(A*), A* = A_r/A_0).  It
@@ -34,8 +34,8 @@ Rebuilt equations with their sources: docs/fractal_contact.md.  In short:
   C_int = d delta_int/dP stiffness-weighted over the asperities (our choice,
   docs/fractal_contact.md).
 * Solid part K_s in parallel with the oil-film part
-  K_l = B(p) (A_0 - A_r) / h (seed 000 eq 8-9 on the non-contact area,
-  seed 001 eq 26 after Xue et al. 2022): K_n = K_s + K_l.
+  K_l = B(p) (A_0 - A_r) / h (Zhao et al. 2022 eq 8-9 on the non-contact area,
+  Xu, Shi & Fan 2023 eq 26 after Xue et al. 2022): K_n = K_s + K_l.
 * Contact-surface correction coefficient lambda_c for curved flanks: the
   seed's formula (eq 19) is dimensionally inconsistent as published; we
   rebuild it from its stated meaning and limits (contact_correction_coefficient).
@@ -82,7 +82,7 @@ __all__ = [
 #: Kogut & Etsion (2002) FE fits (load coefficient, load exponent, area coefficient, area exponent)
 KE_STAGE1 = (1.03, 1.425, 0.93, 1.136)   # 1 < omega <= 6
 KE_STAGE2 = (1.40, 1.263, 0.94, 1.146)   # 6 < omega <= 110
-#: H = K Y (Tabor; MB 1991 and seed 001 use K ~ 2.8)
+#: H = K Y (Tabor; MB 1991 and Xu, Shi & Fan 2023 use K ~ 2.8)
 K_HY_DEFAULT = 2.8
 _OMEGA_EP1 = 6.0
 _OMEGA_P = 110.0
@@ -170,9 +170,9 @@ class LateralContact:
 
 #: positive (peak-to-peak) contact only: the classical fractal model
 POSITIVE_CONTACT = LateralContact((1.0,), (1.0,))
-#: seed 001 section 3.3: s = 1.0 ... 1.9, A_i/A_r = 0.1 each
+#: Xu, Shi & Fan 2023 section 3.3: s = 1.0 ... 1.9, A_i/A_r = 0.1 each
 UNIFORM_LATERAL = LateralContact(tuple(1.0 + 0.1 * i for i in range(10)), (0.1,) * 10)
-#: seed 001 section 3.3: Gaussian weights (as printed; they sum to 1.0)
+#: Xu, Shi & Fan 2023 section 3.3: Gaussian weights (as printed; they sum to 1.0)
 GAUSSIAN_LATERAL = LateralContact(tuple(1.0 + 0.1 * i for i in range(10)),
                                   (0.2, 0.18, 0.16, 0.14, 0.1, 0.08, 0.06, 0.035, 0.025, 0.02))
 
@@ -193,7 +193,7 @@ class FractalOptions:
             raise FractalInputError("lateral: must be a LateralContact")
 
 
-#: seed 001 full model (lateral contact with Gaussian weights, interaction)
+#: Xu, Shi & Fan 2023 full model (lateral contact with Gaussian weights, interaction)
 SEED001_FULL = FractalOptions(lateral=GAUSSIAN_LATERAL, interaction=True)
 
 
@@ -226,7 +226,7 @@ def brinell_to_hardness_Pa(HB: float) -> float:
 
 
 def friction_factor(mu: float) -> float:
-    """Friction correction k_mu of the yield inception pressure (seed 001 above eq 10,
+    """Friction correction k_mu of the yield inception pressure (Xu, Shi & Fan 2023 above eq 10,
     after Liu et al. 2015 / Chang, Etsion & Bogy): 1 - 0.228 mu (mu <= 0.3),
     0.932 exp(-1.58 (mu - 0.3)) (0.3 < mu <= 0.9)."""
     mu = _pos("friction", mu, allow_zero=True)
@@ -238,7 +238,7 @@ def friction_factor(mu: float) -> float:
 
 
 def critical_area_m2(surface: FractalSurface, material: FractalMaterial) -> float:
-    """Critical (yield inception) size a_c (m^2) of positive contact, seed 001 eq 10:
+    """Critical (yield inception) size a_c (m^2) of positive contact, Xu, Shi & Fan 2023 eq 10:
     a_c = [4 E G^(D-1) / (3 sqrt(pi) p_c)]^(2/(D-1)), p_c = 1.1 k_mu Y."""
     D, G = surface.D, surface.G_m
     return (4.0 * material.E_Pa * G ** (D - 1.0)
@@ -247,7 +247,7 @@ def critical_area_m2(surface: FractalSurface, material: FractalMaterial) -> floa
 
 def stage_areas_m2(surface: FractalSurface, material: FractalMaterial, s: float = 1.0):
     """(a_c, a_epc, a_pc) (m^2) of the lateral class ``s``: omega_a = (a_c/a)^(D-1)/s^2
-    reaches 1, 6, 110 (s = 1: seed 001 below eq 13)."""
+    reaches 1, 6, 110 (s = 1: Xu, Shi & Fan 2023 below eq 13)."""
     D = surface.D
     ac = critical_area_m2(surface, material)
     return tuple(ac * (s * s * w) ** (-1.0 / (D - 1.0)) for w in (1.0, _OMEGA_EP1, _OMEGA_P))
@@ -258,7 +258,7 @@ def asperity_response(rho_m, w_m, E_Pa: float, p_c_Pa: float, H_Pa: float):
     returns (load N, contact area m^2, stiffness dP/dw N/m, stage 0..3).
 
     Stage 0 Hertz (omega <= 1), 1 and 2 Kogut & Etsion (2002) fits, 3 fully
-    plastic (A = 2 pi rho w, P = H A, stiffness 0 as in seed 001 eq 23).
+    plastic (A = 2 pi rho w, P = H A, stiffness 0 as in Xu, Shi & Fan 2023 eq 23).
     delta_c = beta rho with beta = (3 pi p_c / (4 E))^2 (Hertz mean pressure = p_c)."""
     rho = np.asarray(rho_m, float)
     w = np.asarray(w_m, float)
@@ -323,7 +323,7 @@ def _nodes(lo, hi, D):
 def solid_contact(surface: FractalSurface, material: FractalMaterial, a_l_m2: float, A0_m2: float,
                   options: FractalOptions = FractalOptions()) -> FractalContactResult:
     """Solid part of the contact for a largest asperity size ``a_l_m2`` (m^2) on the
-    nominal area ``A0_m2`` (m^2): load, real area and K_s (seed 001 eq 16-25)."""
+    nominal area ``A0_m2`` (m^2): load, real area and K_s (Xu, Shi & Fan 2023 eq 16-25)."""
     a_l = _pos("a_l_m2", a_l_m2)
     A0 = _pos("A0_m2", A0_m2)
     D, G, E = surface.D, surface.G_m, material.E_Pa
@@ -454,8 +454,8 @@ def solid_contact_extensive(surface: FractalSurface, material: FractalMaterial, 
 
 def oil_film_stiffness_N_per_m(A0_m2: float, real_area_m2: float, h_m: float, p_Pa: float = 0.0,
                                B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT) -> float:
-    """Oil-film part K_l = B(p) (A0 - A_r) / h (N/m): seed 000 eq 8-9 on the
-    lubricated (non-contact) area (seed 001 eq 26, after Xue et al. 2022)."""
+    """Oil-film part K_l = B(p) (A0 - A_r) / h (N/m): Zhao et al. 2022 eq 8-9 on the
+    lubricated (non-contact) area (Xu, Shi & Fan 2023 eq 26, after Xue et al. 2022)."""
     A0 = _pos("A0_m2", A0_m2)
     Ar = _pos("real_area_m2", real_area_m2, allow_zero=True)
     h = _pos("h_m", h_m)
@@ -478,7 +478,7 @@ def normal_contact_stiffness(surface: FractalSurface, material: FractalMaterial,
 
 def dimensionless(load_N: float, real_area_m2: float, stiffness_N_per_m: float, A0_m2: float,
                   E_Pa: float) -> Tuple[float, float, float]:
-    """(P*, A_r*, K*) = (P/(A0 E), A_r/A0, K/(E sqrt(A0))).  Seed 001 writes K/(E A0),
+    """(P*, A_r*, K*) = (P/(A0 E), A_r/A0, K/(E sqrt(A0))).  Xu, Shi & Fan 2023 write K/(E A0),
     which has the unit 1/m; sqrt(A0) makes it dimensionless (our choice)."""
     A0, E = _pos("A0_m2", A0_m2), _pos("E_Pa", E_Pa)
     return load_N / (A0 * E), real_area_m2 / A0, stiffness_N_per_m / (E * math.sqrt(A0))
@@ -505,7 +505,7 @@ def line_contact_gap_m(x_m, b_m: float, rho_m: float):
 
 def contact_correction_coefficient(rho_m: float, line_load_N_per_m: float, E_Pa: float,
                                    sigma_m: float, ell_m: float, n: int = 2001) -> float:
-    """Contact-surface correction coefficient lambda_c in (0, 1) (our rebuild of seed 001 eq 19).
+    """Contact-surface correction coefficient lambda_c in (0, 1) (our rebuild of Xu, Shi & Fan 2023 eq 19).
 
     The share of the flat-plane asperity population that curved flanks bring
     into reach: over the reference band |x| <= b + ell (Hertz half-width b
@@ -532,9 +532,9 @@ def contact_correction_coefficient(rho_m: float, line_load_N_per_m: float, E_Pa:
 #: Jacobson, *Fundamentals of Machine Elements*, lubrication regimes)
 FULL_FILM_LAMBDA = 3.0
 BOUNDARY_LAMBDA = 1.0
-#: hardness of case-hardened gear steel (about 650 HV = 6.4 GPa; our default, seed 001 gives none)
+#: hardness of case-hardened gear steel (about 650 HV = 6.4 GPa; our default, Xu, Shi & Fan 2023 give none)
 GEAR_STEEL_HARDNESS_PA = 6.4e9
-#: asperity friction coefficient of seed 001 Table 1
+#: asperity friction coefficient of Xu, Shi & Fan 2023 Table 1
 SEED001_ASPERITY_FRICTION = 0.12
 
 
@@ -592,7 +592,7 @@ def slice_contact_stiffness(D: float, G_m: float, rho_m: float, u_m_s: float, w_
     Nominal area A0 = 2b x width (Hertz band), nominal pressure p = w/(2b); the solid part
     from :func:`solid_contact_extensive` on L_s x L_s elements (L_s = ``mesh_options.L_s_m``,
     the W-M sample length) scaled by A0/L_s^2, so K_n per unit width does not depend on how
-    the face is sliced; the whole slice load on the asperities (seed 001 eq 24); lambda_c
+    the face is sliced; the whole slice load on the asperities (Xu, Shi & Fan 2023 eq 24); lambda_c
     from the curvature ``rho_m``, the line load and the composite roughness; the oil film of
     thickness h_c (Pan & Hamrock 1989 central film at entrainment speed ``u_m_s``) on the
     non-contact area.  Film parameter: :func:`film_parameter` with the Dowson & Higginson

@@ -35,7 +35,7 @@ after them.  Full derivation, sources and every CHOICE: docs/load_sharing.md.  S
   gamma1, h_c rises and p_a falls).
 * Stiffness (CHOICE): film and asperity springs in parallel at the shared separation,
   k = k_film + k_asp.  k_asp = -dw_asp/dh at fixed band = 2 b width 2 eta E* beta^1/2
-  sigma_s^1/2 F_1/2(d/sigma_s).  k_film is seed 000 eq 8-9 at the film's share:
+  sigma_s^1/2 F_1/2(d/sigma_s).  k_film is Zhao et al. 2022 eq 8-9 at the film's share:
   A B(p_f)/h with A = 2 b width, p_f = w_film/(2 b) and h the JGP film h_c; given the
   smooth film's stiffness k_smooth at the total load (e.g. from the EHL solver), the
   film spring is k_smooth x [B(p_f)/h_c] / [B(w/(2b))/h_c,smooth] so that the full-film
@@ -100,7 +100,7 @@ class SpectralMoments:
 def wm_spectral_moments(D: float, G_m: float, f_max_per_m: float = ASPERITY_F_MAX_PER_M,
                         L_s_m: float = SEED000_SAMPLE_LENGTH_M, gamma: float = SEED000_GAMMA,
                         flanks: int = 2) -> SpectralMoments:
-    """Analytic spectral moments of the W-M profile of seed 000 eq 1 (SI form of
+    """Analytic spectral moments of the W-M profile of Zhao et al. 2022 eq 1 (SI form of
     gearfmu.contact.roughness): lines f_n = gamma^n/L_s <= f_max with amplitude
     a_n = G^(D-1) f_n^(D-2); a line a cos(2 pi f x + phi) contributes a^2/2 (2 pi f)^k to
     m_k.  ``flanks`` independent flanks with the same (D, G) add their moments (the
@@ -295,7 +295,7 @@ class LoadShareResult:
     (flat to mean summit plane), ``b_m`` Hertz half-width, ``p_film_Pa`` = w_film/(2b),
     ``p_asp_Pa`` the GW nominal pressure, ``area_ratio`` A_r/A0; stiffnesses per slice
     (N/m): ``k_asp_N_per_m``, ``k_film_N_per_m``, ``k_N_per_m`` = their sum;
-    ``film_ratio`` = k_film / k_film,smooth (seed 000 eq 8 at the film's share over eq 8
+    ``film_ratio`` = k_film / k_film,smooth (Zhao et al. 2022 eq 8 at the film's share over eq 8
     at the total load); ``film_parameter`` Lambda = h_c,smooth / sigma (central film)."""
 
     gamma1: float
@@ -323,7 +323,7 @@ def load_sharing(st: LineContactState, asp: AsperityParameters, *, distribution:
     Solves w (1 - s) = 2 b p_asp(h_c(1/s) - y_s) for the film share s = 1/gamma1 in
     [``min_film_share``, 1] (brentq in ln s, rtol 1e-12); s = 1 when the asperities carry
     nothing at the smooth film (p_asp underflows).  ``k_smooth_N_per_m``: the smooth film's
-    stiffness at the total load (e.g. the EHL solver's seed 000 eq 8); None: the film spring
+    stiffness at the total load (e.g. the EHL solver's Zhao et al. 2022 eq 8); None: the film spring
     is eq 8 itself with the Moes film, A B(p_f)/h_c."""
     if distribution not in SUMMIT_DISTRIBUTIONS:
         raise LoadSharingInputError(f"distribution={distribution!r}: must be one of {', '.join(SUMMIT_DISTRIBUTIONS)}")

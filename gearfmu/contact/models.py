@@ -1,7 +1,7 @@
 """Contact-stiffness models of a tooth pair, selectable per scene (``[mesh] contact_model``).
 
 A contact model gives the contact stiffness k_l (N/m) of one face-width slice
-of one tooth pair at one meshing position -- the k_l of seed 000 eq 13,
+of one tooth pair at one meshing position -- the k_l of Zhao et al. 2022 eq 13,
 k_tooth^i = 1/(1/k_l + 1/k_tp + 1/k_tg).  Every model has the same signature
 
     model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> ContactStiffness
@@ -17,7 +17,7 @@ with flat arrays of equal length (one entry per request):
 width and the executor settings.  The result holds k (N/m per slice), the
 number of solves and a list of failures (position, slice, film parameter,
 reason).  Registry: :data:`CONTACT_MODELS`; :func:`register_contact_model`
-adds one (seed 001's 'fractal_mixed' plugs in here the same way).  The interface
+adds one (the 'fractal_mixed' model of Xu, Shi & Fan 2023 plugs in here the same way).  The interface
 (:class:`ContactEnvironment`, :class:`RoughnessSpec`, :class:`ContactStiffness`) is in
 :mod:`gearfmu.contact.base`, the rough-EHL model and its film grid in
 :mod:`gearfmu.contact.rough_ehl`; both are importable from here.
@@ -25,20 +25,20 @@ adds one (seed 001's 'fractal_mixed' plugs in here the same way).  The interface
 Models here:
 
 * ``hertz``: Yang & Sun's load-independent line-contact stiffness
-  (:func:`gearfmu.gear.hertz.hertz_stiffness_N_per_m`), seed 000's reference case.
-* ``smooth_ehl``: oil-film stiffness of seed 000 eq 8-9 from a smooth
-  line-contact EHL solve (seed 000 eq 2-7); slices with equal loads are
+  (:func:`gearfmu.gear.hertz.hertz_stiffness_N_per_m`), the reference case of Zhao et al. 2022.
+* ``smooth_ehl``: oil-film stiffness of Zhao et al. 2022 eq 8-9 from a smooth
+  line-contact EHL solve (Zhao et al. 2022 eq 2-7); slices with equal loads are
   identical, so one solve per distinct (position, load).
 * ``rough_ehl``: the same with the W-M fractal roughness of both flanks per
-  slice (seed 000 eq 1, 3; :mod:`gearfmu.ehl.mesh_film`).  Where the rough
+  slice (Zhao et al. 2022 eq 1, 3; :mod:`gearfmu.ehl.mesh_film`).  Where the rough
   film parameter Lambda = h_min/sigma (Dowson-Higginson h_min, composite W-M
   sigma; :func:`film_parameter`) lies below ``RoughnessSpec.full_film_parameter``
   (default 3, the full-film limit of Tallian 1967), or the rough film
   collapses (FilmCollapseError) or stalls (EHLConvergenceError), the policy
   ``RoughnessSpec.on_failure`` decides: ``"fractal_mixed"`` (default) uses
-  seed 001's mixed-lubrication stiffness K_n = K_s + K_l
+  the mixed-lubrication stiffness of Xu, Shi & Fan 2023 K_n = K_s + K_l
   (:mod:`gearfmu.contact.fractal`) there, ``"hertz"`` the Hertz stiffness
-  (seed 000 section 5.1: at high roughness the mesh stiffness approaches the
+  (Zhao et al. 2022 section 5.1: at high roughness the mesh stiffness approaches the
   Hertz value), ``"error"`` raises :class:`ContactModelError` naming the
   position, the slice and Lambda, ``"load_sharing"`` lets film and asperities
   share the load (Johnson, Greenwood & Poon 1972; :func:`load_sharing_stiffness`,
@@ -78,7 +78,7 @@ def hertz_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> Contact
 
 
 def smooth_ehl_model(env: ContactEnvironment, s_m, slice_index, w_N_per_m) -> ContactStiffness:
-    """Smooth-film stiffness (seed 000 eq 2-9) per request; one solve per distinct (s, w)."""
+    """Smooth-film stiffness (Zhao et al. 2022 eq 2-9) per request; one solve per distinct (s, w)."""
     s, n, w = _check(env, s_m, slice_index, w_N_per_m)
     fenv = env.film_environment()
     keys = [(_key(a), _key(b)) for a, b in zip(s, w)]
@@ -121,8 +121,8 @@ register_contact_model("rough_ehl", rough_ehl_model, load_dependent=True, needs_
 
 def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
     """Contact model 'fractal_mixed' (registry signature of this module):
-    K_n = K_s + K_l of seed 001 per (position, slice load) in place of Hertz.
-    Roughness from ``env.roughness`` (D, G_m; default seed 000 Table 2 level 1),
+    K_n = K_s + K_l of Xu, Shi & Fan 2023 per (position, slice load) in place of Hertz.
+    Roughness from ``env.roughness`` (D, G_m; default Zhao et al. 2022 Table 2 level 1),
     settings from ``env.fractal`` (a :class:`FractalMeshOptions`) when present.
     Requests whose film parameter lies in the full-film range are recorded in
     ``failures`` with status 'full_film' (the build reports them).  Requests whose
@@ -159,7 +159,7 @@ def fractal_mixed_model(env, s_m, slice_index, w_N_per_m):
 
 
 def _fractal_mixed(env, s_m, slice_index, w_N_per_m):
-    """Seed 001 K_n = K_s + K_l (:func:`fractal_mixed_model`)."""
+    """Xu, Shi & Fan 2023 K_n = K_s + K_l (:func:`fractal_mixed_model`)."""
     return fractal_mixed_model(env, s_m, slice_index, w_N_per_m)
 
 
@@ -180,7 +180,7 @@ def get_contact_model(name: str) -> ContactModel:
 def tooth_compliances(pair, geom, s_m, width_m: float):
     """(c_teeth, c_found_pinion, c_found_gear) in m/N for one slice of width
     ``width_m`` at LOA positions ``s_m`` (any shape, NaN = out of contact):
-    c_teeth = 1/k_tp + 1/k_tg (bending, shear, axial of both teeth, seed 000
+    c_teeth = 1/k_tp + 1/k_tg (bending, shear, axial of both teeth, Zhao et al. 2022
     eq 14-15) and the Sainsot foundation compliances (eq 12), from
     :func:`gearfmu.gear.stiffness.tooth_compliance_m_per_N`.  NaN entries give NaN."""
     s = np.asarray(s_m, dtype=float)
@@ -203,10 +203,10 @@ def sliced_mesh_stiffness(c_teeth_m_per_N, cf_pinion_m_per_N, cf_gear_m_per_N, k
     stiffness that differs per slice and position.
 
     ``c_*``: (P, N) compliances of one slice (:func:`tooth_compliances`; NaN out
-    of contact); ``k_contact_N_per_m``: (P, NS, N) the k_l of seed 000 eq 13
+    of contact); ``k_contact_N_per_m``: (P, NS, N) the k_l of Zhao et al. 2022 eq 13
     (the film stiffness in place of Hertz).  k_tooth^i = 1/(1/k_l + c_teeth)
     (eq 13), then the foundation per :func:`gearfmu.gear.stiffness.combine_pairs`
-    (independent per pair by default, or seed 000 eq 11), slice by slice."""
+    (independent per pair by default, or Zhao et al. 2022 eq 11), slice by slice."""
     kc = np.asarray(k_contact_N_per_m, dtype=float)
     ct = np.asarray(c_teeth_m_per_N, dtype=float)
     P, NS, N = kc.shape

@@ -1,6 +1,6 @@
 """The rough-EHL contact model (``rough_ehl``) and its film grid.
 
-W-M fractal roughness of both flanks per slice (seed 000 eq 1, 3; :mod:`gearfmu.ehl.mesh_film`).
+W-M fractal roughness of both flanks per slice (Zhao et al. 2022 eq 1, 3; :mod:`gearfmu.ehl.mesh_film`).
 Where the film parameter Lambda = h_min/sigma lies below ``RoughnessSpec.full_film_parameter``
 or the rough film collapses or stalls, ``RoughnessSpec.on_failure`` decides (fractal mixed
 lubrication, Hertz, error, film-asperity load sharing; see :mod:`gearfmu.contact.models`).
@@ -266,7 +266,7 @@ class RoughFilmGrid:
             self._fill_stalls(j)
 
     def ensure_mixed(self, env, js):
-        """Seed 001 K_n at the grid nodes of the columns ``js`` (in-process)."""
+        """Xu, Shi & Fan 2023 K_n at the grid nodes of the columns ``js`` (in-process)."""
         new = sorted(set(int(j) for j in js) - set(self.mixed))
         if not new:
             return
@@ -357,7 +357,7 @@ class RoughFilmGrid:
         return ks * r, st
 
     def mixed_k(self, env, s, w):
-        """Seed 001 K_n (N/m): log K_n cubic spline in s, linear in log w between the two
+        """Xu, Shi & Fan 2023 K_n (N/m): log K_n cubic spline in s, linear in log w between the two
         load nodes around w (NaN where a node has no solution)."""
         s = np.asarray(s, float)
         _, cols = self.columns_for(w, cubic=False)
@@ -496,7 +496,7 @@ def _transient_node_chunk(_env, cases):
     """Worker: one film-grid node's transient runs (keyword arguments of
     :func:`gearfmu.ehl.transient.solve_line_contact_transient`, one per slice).  Per run:
     status 'ok' | 'stall' | 'collapse', k_steady (the run's steady frozen-roughness start,
-    seed 000 eq 8 on |x| <= b) and the time reductions (a) and (b) of docs/ehl_transient.md
+    Zhao et al. 2022 eq 8 on |x| <= b) and the time reductions (a) and (b) of docs/ehl_transient.md
     section 3 over the default window (after the wash-out)."""
 
     t0 = time.process_time()
@@ -541,7 +541,7 @@ def transient_node_correction(cases) -> dict:
 def transient_node_film(cases, k_smooth_N_per_m: float) -> dict:
     """Film ratio of one grid node under ``film_transient = "film"`` from its transient runs
     (outputs of :func:`_transient_node_chunk`, start 'auto'): per time reduction (b)
-    k_of_means = A B(<p_m>)/<h_m> and (a) mean_of_k = <A B(p_m)/h_m> (seed 000 eq 8 on the
+    k_of_means = A B(<p_m>)/<h_m> and (a) mean_of_k = <A B(p_m)/h_m> (Zhao et al. 2022 eq 8 on the
     window after ramp + wash-out, docs/ehl_transient.md section 3), ratio = mean over the run
     slices of k_transient / ``k_smooth_N_per_m`` (the grid's steady smooth film at the same
     node, same EHL grid).  CHOICE: one ratio for every slice of the node (the time-averaged
@@ -563,13 +563,13 @@ def transient_node_film(cases, k_smooth_N_per_m: float) -> dict:
 
 
 #: film-thickness ratios (window mean over the steady start) reported with the correction:
-#: central film and mean film on |x| <= b (seed 000's explanation of Figs. 12-13 is a thicker
+#: central film and mean film on |x| <= b (the explanation of Figs. 12-13 in Zhao et al. 2022 is a thicker
 #: central film on rough surfaces)
 _FILM_RATIOS = ("h_central_ratio", "h_mean_ratio")
 
 
 def _mixed_or_nan(spec, R, u, w, env, Es, mo) -> float:
-    """Seed 001 K_n of one slice, NaN where the asperities cannot carry the load on the
+    """Xu, Shi & Fan 2023 K_n of one slice, NaN where the asperities cannot carry the load on the
     Hertz band (FractalInputError, or a real contact area A_r >= A0)."""
     try:
         r = slice_contact_stiffness(spec.D, spec.G_m, R, u, w, env.width_m, Es, env.eta0_Pas, env.alpha_Pa_inv, mo)
@@ -605,7 +605,7 @@ def film_grid(env: "ContactEnvironment") -> RoughFilmGrid:
 
 def film_failure_stiffness(env: "ContactEnvironment", s_m, slice_index, w_N_per_m) -> np.ndarray:
     """Contact stiffness (N/m) where the full film does not hold, per ``env.roughness.on_failure``:
-    'fractal_mixed' seed 001 K_n = K_s + K_l (on the film grid when ``position_nodes`` > 0,
+    'fractal_mixed' Xu, Shi & Fan 2023 K_n = K_s + K_l (on the film grid when ``position_nodes`` > 0,
     else :func:`gearfmu.contact.models.fractal_mixed_model` per request), 'hertz' the Yang &
     Sun Hertz stiffness.  ('error' is raised by the model before this is called.)"""
     s = np.asarray(s_m, float)
@@ -643,7 +643,7 @@ def load_sharing_stiffness(env: "ContactEnvironment", s_m, w_N_per_m) -> np.ndar
     (``on_failure = "load_sharing"``; :func:`gearfmu.contact.load_sharing.load_sharing`, Johnson,
     Greenwood & Poon 1972; docs/load_sharing.md): k = k_film + k_asp at the shared separation,
     the film spring being the smooth film's stiffness at the request (film grid when
-    ``position_nodes`` > 0, else a smooth solve) times the seed 000 eq 8 ratio at the film's
+    ``position_nodes`` > 0, else a smooth solve) times the Zhao et al. 2022 eq 8 ratio at the film's
     share of the load; where the smooth film failed, eq 8 with Moes' film alone.  Summit
     statistics from the W-M moments of both flanks (:func:`gearfmu.contact.load_sharing.wm_spectral_moments`).
     One evaluation per distinct (position, load): the slices share D, G and width."""

@@ -1,6 +1,6 @@
-"""Weierstrass-Mandelbrot (W-M) fractal flank roughness (seed 000 eq 1, Table 2).
+"""Weierstrass-Mandelbrot (W-M) fractal flank roughness (Zhao et al. 2022 eq 1, Table 2).
 
-Seed 000 eq 1 (Zhao et al. 2022) with a random phase per frequency:
+Zhao et al. 2022 eq 1 with a random phase per frequency:
 
     wm(x) = G^(D-1) * sum_n cos(2 pi gamma^n x + phi_n) / gamma^((2-D) n),
     1 < D < 2, gamma = 1.5, 0 <= phi_n <= 2 pi.
@@ -13,7 +13,7 @@ chosen here (documented in docs/ehl.md):
   with a random phase per term as in Yan & Komvopoulos 1998, J. Appl. Phys.
   84):  wm(x) = G^(D-1) * sum_{n=0}^{n_max} f_n^(D-2) cos(2 pi f_n x + phi_n),
   f_n = gamma^n / L_s, lengths in m.  With L_s = 1 length unit this is
-  exactly seed 000 eq 1.
+  exactly Zhao et al. 2022 eq 1.
 * Table 2's G is read in **mm** (G_SI = 1e-3 * G_table m, i.e. 1.669 nm to
   5.229 nm, the order of magnitude of the G values of Majumdar & Bhushan's
   measured surfaces) and the lowest frequency is f_0 = 1/L_s with
@@ -21,7 +21,7 @@ chosen here (documented in docs/ehl.md):
   no (unit, L_s) pair reproduces all four Ra values better than about
   +-3 % (the best fit is a unit of 1.58 mm), and with mm and integer n_min
   = 2 level 1 comes out 12 % low; L_s = 0.5 mm puts every level within
-  about +-9 % (tests/test_roughness.py measures it).
+  about +-9 % (tests/unit/contact/test_roughness.py measures it).
 * Ra is evaluated on the unfiltered profile (least-squares mean line) over
   ``SEED000_EVALUATION_LENGTH_M`` = 4 mm, the ISO 4288 evaluation length for
   0.1 um < Ra <= 2 um, sampled at 0.5 um, averaged over the face-width
@@ -43,7 +43,7 @@ import numpy as np
 
 from ..ehl.mesh_film import FlankRoughness, MeshFilmInputError, involute_arc_length_m
 
-#: W-M frequency ratio gamma of seed 000 eq 1.
+#: W-M frequency ratio gamma of Zhao et al. 2022 eq 1.
 SEED000_GAMMA = 1.5
 #: Lowest-frequency wavelength L_s of the convention above (m).
 SEED000_SAMPLE_LENGTH_M = 0.5e-3
@@ -55,7 +55,7 @@ SEED000_SAMPLING_M = 0.5e-6
 
 @dataclass(frozen=True)
 class RoughnessLevel:
-    """One roughness level of seed 000 Table 2 (Ra in m, D, G in m)."""
+    """One roughness level of Zhao et al. 2022 Table 2 (Ra in m, D, G in m)."""
 
     level: int
     Ra_m: float
@@ -63,7 +63,7 @@ class RoughnessLevel:
     G_m: float
 
 
-#: Seed 000 Table 2 with G converted by the convention above (table value in mm).
+#: Zhao et al. 2022 Table 2 with G converted by the convention above (table value in mm).
 #: (The table prints level 3's D as "1565"; read as 1.565.)
 SEED000_LEVELS: Dict[int, RoughnessLevel] = {
     1: RoughnessLevel(1, 0.107e-6, 1.692, 1.669e-6 * 1e-3),
@@ -101,7 +101,7 @@ def wm_frequencies_per_m(L_s_m: float = SEED000_SAMPLE_LENGTH_M, f_max_per_m: fl
 def wm_profile_m(x_m, D: float, G_m: float, phases_rad=None, *,
                  L_s_m: float = SEED000_SAMPLE_LENGTH_M, f_max_per_m: Optional[float] = None,
                  gamma: float = SEED000_GAMMA, rng=None) -> np.ndarray:
-    """W-M profile height (m) at positions ``x_m`` (m), seed 000 eq 1 (SI form).
+    """W-M profile height (m) at positions ``x_m`` (m), Zhao et al. 2022 eq 1 (SI form).
 
     ``phases_rad``: one phase per frequency (random uniform in [0, 2 pi) from
     ``rng`` -- a numpy Generator or an int seed -- when None).  ``f_max_per_m``
@@ -137,7 +137,7 @@ def flank_roughness_m(x_m, D: float, G_m: float, n_slices: int, seed: int, *,
                       gamma: float = SEED000_GAMMA) -> np.ndarray:
     """Roughness of one flank, shape (n_slices, len(x_m)), m.
 
-    Seed 000 section 2.2: the same (D, G) on every face-width slice but an
+    Zhao et al. 2022 section 2.2: the same (D, G) on every face-width slice but an
     independent random phase per frequency and per slice.  Reproducible: the
     phases of slice k come from ``numpy.random.SeedSequence(seed).spawn``.
     """
@@ -187,7 +187,7 @@ def wm_sigma_m(D: float, G_m: float, L_s_m: float = SEED000_SAMPLE_LENGTH_M,
 def level_Ra_m(level: int, n_slices: int = 44, seed: int = 0,
                evaluation_length_m: float = SEED000_EVALUATION_LENGTH_M,
                sampling_m: float = SEED000_SAMPLING_M) -> float:
-    """Mean Ra (m) over ``n_slices`` generated slices of a seed 000 Table 2 level."""
+    """Mean Ra (m) over ``n_slices`` generated slices of a Zhao et al. 2022 Table 2 level."""
     lv = SEED000_LEVELS[int(level)]
     x = np.arange(0.0, evaluation_length_m, sampling_m)
     z = flank_roughness_m(x, lv.D, lv.G_m, n_slices, seed)
@@ -299,9 +299,9 @@ def load_profile_csv(path, x_unit_m: float = 1.0, z_unit_m: float = 1.0
 def make_flank_roughness(geom, D: float, G_m: float, n_slices: int, seed: int, *,
                          f_max_per_m: float = 1e4, margin_m: float = 3e-3,
                          step_m: Optional[float] = None) -> FlankRoughness:
-    """W-M roughness of the active pinion and gear flanks (seed 000 eq 1, per slice).
+    """W-M roughness of the active pinion and gear flanks (Zhao et al. 2022 eq 1, per slice).
 
-    ``G_m`` in m (seed 000 Table 2 G read in mm: :data:`gearfmu.contact.roughness.SEED000_LEVELS`);
+    ``G_m`` in m (Zhao et al. 2022 Table 2 G read in mm: :data:`gearfmu.contact.roughness.SEED000_LEVELS`);
     the profiles cover the active flank arc length plus ``margin_m`` on both
     sides, sampled at ``step_m`` (default a tenth of the shortest wavelength)."""
     if int(n_slices) != n_slices or n_slices < 1:

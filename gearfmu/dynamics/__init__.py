@@ -2,6 +2,12 @@
 
 Imports :mod:`gearfmu.tables` and :mod:`gearfmu.common`.
 
+Exports (loaded with their module on first use): the native solver ``simulate``,
+``simulate_sdof``, ``SimResult``, ``NativeInputError``, ``choose_max_step_s``,
+``write_columns_csv``; the reference ``simulate_reference``, ``ReferenceInputError``; the sweeps
+``run_sweep``, ``run_jobs``, ``SweepJob``, ``PointSettings``, ``find_jumps``; the harmonics
+``mesh_harmonics``, ``MeshHarmonics``, ``autopower_one_sided``.
+
 ===========  =========================================================
 Module       Contents
 ===========  =========================================================
@@ -19,6 +25,17 @@ subcell      table values and quasi-static TE with or without the
              sub-cell lookup at the contact-zone edges (measurement)
 reference    event-located reference integrator (tests and benchmarks)
 sweeps       steady-state sweeps through an executor
-harmonics    mesh-harmonic amplitudes of the DTE (seed 003 eq 10-11)
+harmonics    mesh-harmonic amplitudes of the DTE (Xu et al. 2022 eq 10-11)
 ===========  =========================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(("simulate", "simulate_sdof", "SimResult", "NativeInputError", "choose_max_step_s",
+                     "write_columns_csv"), "native"),
+    "simulate_reference": "reference", "ReferenceInputError": "reference",
+    **dict.fromkeys(("run_sweep", "run_jobs", "SweepJob", "PointSettings", "find_jumps"), "sweeps"),
+    **dict.fromkeys(("mesh_harmonics", "MeshHarmonics", "autopower_one_sided"), "harmonics"),
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

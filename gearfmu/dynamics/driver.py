@@ -5,7 +5,7 @@ and advances the state over every communication step with the chosen
 integrator and form (compiled as two drivers, :func:`_run` and :func:`_run_seg`,
 so that a run compiles only what it runs; :func:`driver_for` picks one); the integrator (``icode``: 0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg',
 gearfmu.common.vocabulary.INTEGRATORS) and the form (``sdof``: two-inertia,
-seed 003 eq 1-2, or time-indexed SDOF, seed 003 eq 3-6) are the parts that
+Xu et al. 2022 eq 1-2, or time-indexed SDOF, Xu et al. 2022 eq 3-6) are the parts that
 vary; the inputs held over the step, the table row blend and the outputs are
 shared.  The per-step order of operations is that of gearkernel.c
 (docs/model.md 'Integration', 'Outputs'), so the two agree bit for bit.

@@ -1,6 +1,6 @@
-"""Mesh-harmonic amplitudes of the dynamic transmission error (seed 003 eq 10-11).
+"""Mesh-harmonic amplitudes of the dynamic transmission error (Xu et al. 2022 eq 10-11).
 
-Seed 003 (Xu et al. 2022, section 2.2), after Kahraman & Blankenship (1997,
+Xu et al. 2022 (section 2.2), after Kahraman & Blankenship (1997,
 1999; its references [14], [15]):
 
     A_rms = sqrt( sum_{r=1..3} A_r^2 )                                   (eq 10)
@@ -25,9 +25,9 @@ Choices (written here and in docs/seed003.md)
   RMS of the DTE band-passed around the first three mesh harmonics.
   ``normalization="amplitude"`` multiplies every A_r (and A_rms) by sqrt(2)
   (peak amplitude of a sinusoid), for comparison with amplitude spectra such
-  as seed 003 Figs. 10b-26b.
+  as Xu et al. 2022 Figs. 10b-26b.
 * **Bandwidth** BW = 2 shaft orders by default (the bins at r N - 1, r N,
-  r N + 1 for a record of whole revolutions): seed 003 does not give BW;
+  r N + 1 for a record of whole revolutions): Xu et al. 2022 do not give BW;
   Kahraman & Blankenship analyse the DTE in shaft orders with a narrow band
   around each mesh order to collect the mesh harmonic and its first shaft-order
   sidebands.  Any BW >= 0 may be given; bins whose order lies in
@@ -68,7 +68,7 @@ __all__ = [
 
 #: accepted values of ``normalization`` -> factor applied to the RMS amplitudes
 NORMALIZATIONS = {"rms": 1.0, "amplitude": math.sqrt(2.0)}
-#: default analysis bandwidth BW of seed 003 eq 11, in shaft orders (choice, see module doc)
+#: default analysis bandwidth BW of Xu et al. 2022 eq 11, in shaft orders (choice, see module doc)
 DEFAULT_BANDWIDTH_ORDERS = 2.0
 
 
@@ -122,7 +122,7 @@ def autopower_one_sided(signal) -> np.ndarray:
 def mesh_harmonics(signal, *, samples_per_revolution: float, teeth: int, harmonics: int = 3,
                    bandwidth_orders: float = DEFAULT_BANDWIDTH_ORDERS,
                    normalization: str = "rms") -> MeshHarmonics:
-    """A_r (seed 003 eq 11) and A_rms (eq 10) of a signal sampled uniformly in shaft angle.
+    """A_r (Xu et al. 2022 eq 11) and A_rms (eq 10) of a signal sampled uniformly in shaft angle.
 
     Parameters
     ----------
@@ -131,7 +131,7 @@ def mesh_harmonics(signal, *, samples_per_revolution: float, teeth: int, harmoni
     samples_per_revolution : samples per shaft revolution of the gear with
         ``teeth`` teeth (a float; at constant speed = revolution time / sample step).
     teeth : N of eq 11 (teeth of that gear); the r-th mesh order is r*N.
-    harmonics : how many mesh harmonics enter A_rms (seed 003: 3).
+    harmonics : how many mesh harmonics enter A_rms (Xu et al. 2022: 3).
     bandwidth_orders : BW of eq 11 in shaft orders (>= 0).
     normalization : ``"rms"`` (default, Kahraman & Blankenship's RMS
         amplitudes) or ``"amplitude"`` (x sqrt(2), peak amplitude of a sinusoid).

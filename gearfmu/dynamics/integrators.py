@@ -1,7 +1,7 @@
 """Integrators of the gear dynamic model (numba kernels, SI units; docs/model.md 'Integration').
 
 * :func:`_rk4_step` -- one classical RK4 step ('rk4'), two-inertia form
-  (seed 003 eq 1-2) or time-indexed SDOF (seed 003 eq 3-6).
+  (Xu et al. 2022 eq 1-2) or time-indexed SDOF (Xu et al. 2022 eq 3-6).
 * :func:`_kink_substep` -- one substep of 'rk4_kink': RK4 with the contact mode
   and the table cell held, stepping exactly to every table node and contact
   mode change located on the step's cubic Hermite interpolant; and of
@@ -52,7 +52,7 @@ def _rk4_step(tab, dyn, sdof, th0, t, th, om, x, v, h, nd, i0):
     """One classical RK4 step of length h (docs/model.md 'Integration').
 
     Two-inertia form (sdof False): state (theta1, omega1, x, v).  Time-indexed
-    SDOF (sdof True, seed 003 eq 3-6): theta1 = th0 + omega1*t_s prescribed at
+    SDOF (sdof True, Xu et al. 2022 eq 3-6): theta1 = th0 + omega1*t_s prescribed at
     the stage times t_s = t, t + h/2, t + h/2, t + h, omega1 constant, states
     (x, v) with m_e v' = F_m - F; theta1 and omega1 are returned unchanged.
     Stage s evaluates f at y + a_s*h*k_{s-1} (a = 0, 1/2, 1/2, 1; h/2 computed

@@ -3,7 +3,7 @@
 The table lookup, the per-pair force laws and the quasi-static equilibrium of
 docs/model.md, written operation by operation as gearfmu/fmu/kernel/gearkernel.c
 so that the numba solver and the C kernel agree bit for bit (no fastmath: it
-would reorder the arithmetic).  Model: seed 003 eq (1)-(6), P tooth-pair slots
+would reorder the arithmetic).  Model: Xu et al. 2022 eq (1)-(6), P tooth-pair slots
 with stiffness k_j (N/m), meshing error e_j (m), half backlash b_j (m) and
 damping c (N*s/m), indexed by the pinion angle theta1 (rad).
 

@@ -6,7 +6,7 @@ law, RK4 arithmetic order and initial-state bisection, so that the two
 independent implementations agree to round-off on the same tables, inputs and
 steps.  No fastmath (it would reorder the arithmetic).
 
-Model: seed 003 eq (1)-(6) (two-inertia torsional pair, P tooth-pair slots,
+Model: Xu et al. 2022 eq (1)-(6) (two-inertia torsional pair, P tooth-pair slots,
 per-pair stiffness k_j, damping c, meshing error e_j and half backlash b_j),
 indexed by the pinion angle; state y = [theta1 (rad), omega1 (rad/s),
 x (m), v (m/s)], x = theta1*Rb1 - theta2*Rb2 the dynamic transmission error.
@@ -20,9 +20,9 @@ prepares the tables and inputs and wraps the results.
 Public API
 ----------
 * :func:`simulate` -- the FMU model, outputs named as the FMU outputs.
-* :func:`simulate_sdof` -- time-indexed SDOF form (seed 003 eq 3-6) at a
+* :func:`simulate_sdof` -- time-indexed SDOF form (Xu et al. 2022 eq 3-6) at a
   prescribed constant pinion speed.
-* :func:`dimensionless` -- seed 003 eq 7-9 rescaling of a result.
+* :func:`dimensionless` -- Xu et al. 2022 eq 7-9 rescaling of a result.
 * :func:`choose_max_step_s` -- default internal step.
 * :func:`resolve_settings` -- a run's :class:`gearfmu.common.settings.RunSettings` with its
   automatic values (output interval, step bound, balancing gear torque) resolved on the tables,
@@ -163,7 +163,7 @@ def write_columns_csv(path, cols) -> None:
 
 @dataclass
 class DimensionlessResult:
-    """Seed 003 eq 7-9 quantities: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n,
+    """Xu et al. 2022 eq 7-9 quantities: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n,
     zeta, and the dimensionless load F_m/(k_m l) (all dimensionless)."""
 
     tau: np.ndarray
@@ -301,7 +301,7 @@ def _arrays(tables: MeshTables):
 
 def _damping(tables: MeshTables, damping_ratio) -> float:
     """c = 2*zeta*sqrt(k_mean*m_e), m_e = I1*I2/(I1*Rb2^2 + I2*Rb1^2) (docs/model.md,
-    seed 003 below eq 2), evaluated as I1*I2/(I1*Rb2*Rb2 + I2*Rb1*Rb1) left to right."""
+    Xu et al. 2022 below eq 2), evaluated as I1*I2/(I1*Rb2*Rb2 + I2*Rb1*Rb1) left to right."""
     i1, i2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
     r1, r2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
     # left to right, I1*Rb2*Rb2 = (I1*Rb2)*Rb2: the order of the C kernel (bitwise agreement)
@@ -326,7 +326,7 @@ def choose_max_step_s(tables: MeshTables, max_speed_rad_s: float, points_per_per
     """Default maximum internal step (s).
 
     h_max = min(2*pi/omega_n, mesh period at max speed) / points_per_period with
-    omega_n = sqrt(k_mean/m_e) (seed 003 eq 7) and the mesh period in time
+    omega_n = sqrt(k_mean/m_e) (Xu et al. 2022 eq 7) and the mesh period in time
     mesh_period_rad/|max_speed_rad_s|.  RK4's global error then scales as
     (omega_n h)^4: with 64 points per period the phase error of a free
     oscillation is about (2 pi/64)^5/120 = 8e-8 per step (docs/native.md).
@@ -362,7 +362,7 @@ def resolve_settings(tables: MeshTables, settings: RunSettings, *,
     interval (:meth:`RunSettings.output_interval_for` at the start speed and the pinion's teeth),
     the step bound (:func:`choose_max_step_s`'s rule at ``step_speed_rad_s``, rad/s; None: 1.5 x
     the start speed, at least 1 rad/s) and the gear's start torque (the static balance
-    T1 Rb2/Rb1, seed 003: F_m = T1/Rb1 = T2/Rb2).  The native solver and both FMU builders
+    T1 Rb2/Rb1, Xu et al. 2022: F_m = T1/Rb1 = T2/Rb2).  The native solver and both FMU builders
     resolve them by this one rule, so a run configured alike is the same run."""
     s = settings
     changes = {}
@@ -531,7 +531,7 @@ def simulate(
     bulk_temperature_C: Optional[InputLike] = None,
     **settings_fields,
 ) -> SimResult:
-    """Run the two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6).
+    """Run the two-inertia multi-pair model of docs/model.md (Xu et al. 2022 eq 1-6).
 
     ``settings``: the run's :class:`gearfmu.common.settings.RunSettings` (None: its defaults);
     the keyword arguments of the same meaning (:data:`SETTINGS_KEYWORDS`), when given and not
@@ -544,7 +544,7 @@ def simulate(
     (n or n+1 values; value k is held over [t_k, t_k+H)), or a callable of
     time t_k (s); ``pinion_torque_Nm`` None: the settings' start torque held.
     ``gear_torque_Nm`` None means the balancing load T2 = T1*Rb2/Rb1 of the pinion input
-    (seed 003: F_m = T1/Rb1 = T2/Rb2; without a pinion input: the settings' gear start torque).
+    (Xu et al. 2022: F_m = T1/Rb1 = T2/Rb2; without a pinion input: the settings' gear start torque).
     ``dte_start_m`` / ``dte_rate_start_m_s`` (m, m/s) start from a given state
     instead of the quasi-static equilibrium at rest relative motion, e.g. the
     last state of a previous run (continuation in a speed sweep).
@@ -591,7 +591,7 @@ def simulate_sdof(
     bulk_temperature_C: Optional[float] = None,
     **settings_fields,
 ) -> SimResult:
-    """Time-indexed SDOF form of seed 003 eq 3-6 (SI units).
+    """Time-indexed SDOF form of Xu et al. 2022 eq 3-6 (SI units).
 
     The pinion turns at the prescribed constant speed ``omega1_rad_s`` (the settings'
     ``pinion_speed_start_rad_s``): theta1 = theta1_0 + omega1*t; states [x (m), v (m/s)];
@@ -626,12 +626,12 @@ def simulate_sdof(
 
 
 def dimensionless(result: SimResult, tables: MeshTables, length_scale_m: float) -> DimensionlessResult:
-    """Seed 003 eq 7-9: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n.
+    """Xu et al. 2022 eq 7-9: q = x/l, tau = omega_n t, Omega_h = omega_mesh/omega_n.
 
     omega_n = sqrt(k_m/m_e) (rad/s) with k_m = tables.k_mean_N_per_m; the mesh
     frequency omega_mesh = 2*pi*omega1/mesh_period_rad (rad/s) uses the mean
     pinion speed of the result; q_rate = dq/dtau = v/(l omega_n); zeta is the
-    per-pair damping ratio c/(2 m_e omega_n) (seed 003 eq 8, zeta bar); load =
+    per-pair damping ratio c/(2 m_e omega_n) (Xu et al. 2022 eq 8, zeta bar); load =
     F_m/(k_m l) with F_m = T1/Rb1 of the first row.
     """
     t = _check_tables(tables)

@@ -2,7 +2,7 @@
 
 What it solves
 --------------
-The two-inertia multi-pair model of docs/model.md (seed 003 eq 1-6, the
+The two-inertia multi-pair model of docs/model.md (Xu et al. 2022 eq 1-6, the
 contract of the native solver and the FMU kernel), written here again in plain
 Python from that page -- it does not call :mod:`gearfmu.dynamics.native`'s kernel --
 and integrated with scipy's ``solve_ivp`` (DOP853 by default, rtol 1e-10) so
@@ -14,7 +14,7 @@ The right-hand side of docs/model.md is smooth only piecewise:
 
 * every tooth pair j switches between back flank, separated and drive flank
   where its deflection ``d_j = x - e_j`` crosses ``-b_j`` and ``+b_j``
-  (seed 003 eq 6, the dead-zone kinks);
+  (Xu et al. 2022 eq 6, the dead-zone kinks);
 * the ``elastobacklash`` damping law switches branch where the damping force
   ``fd`` crosses ``+fc`` and ``-fc`` (the clamp of docs/model.md);
 * the tables are piecewise-linear in the pinion angle: k, e, b have kinks at

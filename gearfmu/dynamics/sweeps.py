@@ -1,15 +1,15 @@
 """Steady-state sweeps of the dynamic model (speed, load, damping, deviations) through an executor.
 
 A *sweep job* (:class:`SweepJob`) is one sequence of operating points on one
-set of tables: dimensionless mesh frequencies Omega_h (seed 003 eq 7) at one
+set of tables: dimensionless mesh frequencies Omega_h (Xu et al. 2022 eq 7) at one
 pinion torque and damping ratio.  Each point runs the time-indexed SDOF form
-of seed 003 eq 3-6 (:func:`gearfmu.dynamics.native.simulate_sdof`, constant pinion
+of Xu et al. 2022 eq 3-6 (:func:`gearfmu.dynamics.native.simulate_sdof`, constant pinion
 speed), drops ``settle_meshes`` mesh periods of transient, records
 ``record_meshes`` more (rounded up to whole table periods), and reduces the
-record to the mesh-harmonic amplitudes A_r / A_rms of seed 003 eq 10-11
+record to the mesh-harmonic amplitudes A_r / A_rms of Xu et al. 2022 eq 10-11
 (:mod:`gearfmu.dynamics.harmonics`) of the dimensionless DTE q = x/l.
 
-* ``continuation=True`` (speed sweeps, seed 003 Fig. 3 and Figs. 30-32): each
+* ``continuation=True`` (speed sweeps, Xu et al. 2022 Fig. 3 and Figs. 30-32): each
   point starts from the final state (x, dx/dt, pinion angle) of the previous
   one, so an up-sweep and a down-sweep follow their branches through jumps.
   Such a job is sequential by nature.
@@ -26,10 +26,10 @@ Dask distributed cluster when a scheduler address is given (``scheduler=
 Jobs and results are dataclasses of numpy arrays; they cross processes in
 memory only (the executor's own transport).  Nothing is written to files here.
 
-Dimensionless form (seed 003 eq 7-9): omega_n = sqrt(k_m/m_e) with
+Dimensionless form (Xu et al. 2022 eq 7-9): omega_n = sqrt(k_m/m_e) with
 k_m = ``tables.k_mean_N_per_m``; Omega_h = omega_mesh/omega_n, so the pinion
 speed of a point is omega1 = Omega_h * omega_n * mesh_period_rad / (2 pi).
-q = x/l with the nominal length l = ``length_scale_m`` (default 1 um: seed 003
+q = x/l with the nominal length l = ``length_scale_m`` (default 1 um: Xu et al. 2022
 does not state l; with 1 um, q and A_rms read directly in micrometres).
 """
 from __future__ import annotations
@@ -67,7 +67,7 @@ __all__ = [
     "find_jumps",
 ]
 
-#: default nominal length l of seed 003 eq 7 (m): q = x/l in micrometres (choice, docs/seed003.md)
+#: default nominal length l of Xu et al. 2022 eq 7 (m): q = x/l in micrometres (choice, docs/seed003.md)
 DEFAULT_LENGTH_SCALE_M = 1e-6
 
 
@@ -81,9 +81,9 @@ class PointSettings:
         order is samples_per_mesh*z1/2 shaft orders).
     points_per_period : internal integrator steps (native default integrator) per min(natural period, mesh period)
         (:func:`gearfmu.dynamics.native.choose_max_step_s`).
-    length_scale_m : nominal length l of seed 003 eq 7 (m).
-    bandwidth_orders : BW of seed 003 eq 11 (shaft orders).
-    harmonics : mesh harmonics in A_rms (seed 003: 3).
+    length_scale_m : nominal length l of Xu et al. 2022 eq 7 (m).
+    bandwidth_orders : BW of Xu et al. 2022 eq 11 (shaft orders).
+    harmonics : mesh harmonics in A_rms (Xu et al. 2022: 3).
     keep_history : keep the recorded time histories in the result.
     """
 
@@ -116,9 +116,9 @@ class PointSettings:
 class SweepJob:
     """One sequence of operating points on one set of tables (SI units).
 
-    omega_h : dimensionless mesh frequencies Omega_h (seed 003 eq 7), in run order.
+    omega_h : dimensionless mesh frequencies Omega_h (Xu et al. 2022 eq 7), in run order.
     pinion_torque_Nm : T1 (N*m); the load is F_m = T1/Rb1.
-    damping_ratio : per-pair damping ratio zeta bar (seed 003 eq 8).
+    damping_ratio : per-pair damping ratio zeta bar (Xu et al. 2022 eq 8).
     damping_model : ``"contact_zone"`` (eq 8-9: constant damping on every pair in
         its contact zone, rho = 2 in the double zone) or ``"elastobacklash"``.
     continuation : start each point from the previous point's final state.
@@ -168,7 +168,7 @@ class PointHistory:
     """Recorded steady-state history of one point (SI unless said).
 
     time_s, theta1_rad (pinion angle), mesh_cycle (pinion angle / mesh period:
-    tau/tau_z of seed 003's figures, counted from the start of the run), dte_m,
+    tau/tau_z of the figures of Xu et al. 2022, counted from the start of the run), dte_m,
     q (= dte/l), pair_force_N (n, P) (eq 14: spring plus damping part),
     contact_force_N (n, P) (spring part k_j f(x - e_j) only), k_N_per_m and
     e_m (n, P) (pair tables at each sample), mesh_force_N (eq 13),
@@ -246,7 +246,7 @@ def _omega_n(tables: MeshTables) -> float:
 
 
 def pinion_speed_for_omega_h(tables: MeshTables, omega_h: float) -> float:
-    """Pinion speed (rad/s) at which the mesh frequency is Omega_h * omega_n (seed 003 eq 7):
+    """Pinion speed (rad/s) at which the mesh frequency is Omega_h * omega_n (Xu et al. 2022 eq 7):
     omega1 = Omega_h * sqrt(k_m/m_e) * mesh_period_rad / (2 pi)."""
     return float(omega_h) * _omega_n(tables) * tables.mesh_period_rad / (2.0 * math.pi)
 
@@ -407,7 +407,7 @@ def run_jobs(jobs: Sequence[SweepJob], *, executor=None, scheduler: Optional[str
 # --------------------------------------------------------------- jump finder
 def find_jumps(omega_h, curves: Sequence, *, jump_ratio: float = 1.25, min_prominence: float = 0.15,
                shoulder_prominence: float = 1.0, merge_within: float = 0.015) -> dict:
-    """Jumps, inflections, shoulders and peaks of A_rms(Omega_h) curves (seed 003 Fig. 3 reading).
+    """Jumps, inflections, shoulders and peaks of A_rms(Omega_h) curves (Xu et al. 2022 Fig. 3 reading).
 
     omega_h : ascending common grid; curves : A_rms arrays on it (e.g. the
     up- and the down-sweep, reordered to ascending Omega_h).  Everything is
@@ -417,7 +417,7 @@ def find_jumps(omega_h, curves: Sequence, *, jump_ratio: float = 1.25, min_promi
       ratio exceeds ``jump_ratio`` and is at least twice the steps on either
       side (a discontinuity, not a steep flank); located at the midpoint;
     * ``inflection``: a local minimum of L with prominence >= ``min_prominence``
-      -- seed 003's "inflection point", where A_rms turns from "decreases
+      -- the "inflection point" of Xu et al. 2022, where A_rms turns from "decreases
       sharply" to "increases slowly";
     * ``shoulder``: a local minimum of the slope dL/dOmega_h with prominence >=
       ``shoulder_prominence`` (per unit Omega_h) that is not an inflection: a

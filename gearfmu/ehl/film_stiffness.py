@@ -33,7 +33,7 @@ docs/ehl.md), so the defaults are the literature values of that kind:
 * B0' = 11, the typical Tait K0' of liquid lubricants (Bair, *High Pressure
   Rheology for Quantitative Elastohydrodynamics*, Elsevier 2007).
 
-Checked (tests/test_lubricant_laws.py): the equation of state whose tangent
+Checked (tests/unit/ehl/test_lubricant_laws.py): the equation of state whose tangent
 modulus eq 9 is (:func:`~gearfmu.ehl.lubricant.tait_density_ratio`) with
 these defaults stays within 1.7 % of the Dowson-Higginson density (seed 000
 eq 6, Dowson & Higginson 1966) from 0 to 2 GPa, and D-H's own ambient

@@ -26,7 +26,7 @@ from .polish import POLISH_BELOW_RESIDUAL, POLISH_EARLY_BELOW_RESIDUAL, _HIST_KE
 #: STALL_WINDOW cycles against all earlier ones (checked from 2 x
 #: STALL_WINDOW cycles on).  12: a window of 8 failed the high-M corner
 #: about 1/3 sooner but cut off slowly converging light-load films (M = 0.85,
-#: L = 16 of tests/test_helical_contact.py, 3x per ~10 cycles).
+#: L = 16 of tests/unit/contact/test_helical_contact.py, 3x per ~10 cycles).
 STALL_WINDOW = 12
 #: stall window of the frozen-switch continuation (slow but steady
 #: convergence, e.g. Barus M = 10, L = 20: 83 cycles; 8 stopped it early)

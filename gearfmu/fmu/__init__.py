@@ -5,6 +5,12 @@ Imports :mod:`gearfmu.gearbox` (the gearbox FMU), :mod:`gearfmu.tables`, :mod:`g
 settings); never the scene nor the physics packages (pyproject.toml's contracts).
 :mod:`gearfmu.fmu.runtime` imports nothing from gearfmu.
 
+Exports (loaded with their module on first use): the builders ``build_standalone_fmu``,
+``build_fmu`` (pythonfmu), ``build_gearbox_fmu``, ``FmuBuildError``; an FMU against the native
+solver ``validate_fmu_against_native``, ``validate_gearbox_fmu``, ``open_fmu``, ``run_fmu``,
+``FmuMismatchError``; ``fmu_summary``; ``fmu_envelope_record``; the FMI Cross-Check sets
+``write_reference_results``, ``check_reference_results``.
+
 ==================  =========================================================
 Module              Contents
 ==================  =========================================================
@@ -42,3 +48,16 @@ runtime/            the FMU-side Python (pythonfmu) and the C loader
 kernel/, standalone/ the C kernels and the FMI layers in C
 ==================  =========================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    "build_standalone_fmu": "standalone_build", "build_fmu": "pythonfmu_build",
+    "build_gearbox_fmu": "gearbox_build", "FmuBuildError": "build_steps",
+    **dict.fromkeys(("validate_fmu_against_native", "open_fmu", "run_fmu", "FmuMismatchError"), "compare"),
+    "validate_gearbox_fmu": "gearbox_compare",
+    "fmu_summary": "summary",
+    "fmu_envelope_record": "envelope",
+    "write_reference_results": "crosscheck", "check_reference_results": "crosscheck",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -81,7 +81,7 @@ def fmi2_header_dir() -> Path:
 
 def fmi3_header_dir() -> Path:
     """The FMI 3.0 standard's headers: fmpy's copy (``fmpy/c-code``), the standard's FMI 3.0.1
-    headers unmodified (tests/test_source_fmus.py checks their prefix macros)."""
+    headers unmodified (tests/fmu_hosts/test_source_fmus.py checks their prefix macros)."""
     import fmpy  # fmpy: only for its FMI 3 headers
 
     d = Path(fmpy.__file__).resolve().parent / "c-code"

@@ -2,7 +2,7 @@
 
 Sainsot P., Velex P., Duverger O., "Contribution of gear body to tooth
 deflections - a new bidimensional analytical formula", J. Mech. Des. 126
-(2004) 748-752; used as seed 000 eq (12):
+(2004) 748-752; used as Zhao et al. 2022 eq (12):
 
     1/k_f = cos^2(alpha_m)/(E W) * { L* (u_f/S_f)^2 + M* (u_f/S_f) + P* (1 + Q* tan^2(alpha_m)) }
 
@@ -20,7 +20,7 @@ with each coefficient X* = A/theta_f^2 + B h_f^2 + C h_f/theta_f + D/theta_f + E
   from the root circle on the centre line, not from the root chord; the two
   differ by r_f (1 - cos theta_f), about 0.5 % of r_f);
 * alpha_m: angle between the load and the normal to the tooth centre line
-  (the alpha_1 of the potential-energy integrals, beta in seed 000 eq 12/15);
+  (the alpha_1 of the potential-energy integrals, beta in Zhao et al. 2022 eq 12/15);
 * W: face width of the slice.  E: Young's modulus (plane stress, as in the seed).
 """
 from __future__ import annotations
@@ -54,7 +54,7 @@ def sainsot_coefficients(theta_f_rad: float, h_f: float) -> tuple:
 
 def sainsot_compliance_m_per_N(u_f_m, S_f_m: float, theta_f_rad: float, h_f: float,
                                alpha_m_rad, youngs_modulus_Pa: float, width_m: float):
-    """Fillet-foundation compliance 1/k_f (m/N) of one tooth (seed 000 eq 12, Sainsot 2004).
+    """Fillet-foundation compliance 1/k_f (m/N) of one tooth (Zhao et al. 2022 eq 12, Sainsot 2004).
 
     ``u_f_m`` and ``alpha_m_rad`` may be arrays (one value per load position).
     """

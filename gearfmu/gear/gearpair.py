@@ -10,12 +10,12 @@ Conventions
 * Gear 1 is the *pinion* (driving), gear 2 the *gear* (driven).
 * Angles in rad, lengths in m, moduli in Pa, densities in kg/m^3,
   torques in N*m, speeds in rad/s.
-* Deviations follow seed 003 eq (15): profile form deviation ``f_fa`` (m),
+* Deviations follow Xu et al. 2022 eq (15): profile form deviation ``f_fa`` (m),
   profile slope deviation ``f_Ha`` (m), ``f_r`` sine periods over the
   profile evaluation range.  A *positive* deviation is a material deficit
   along the flank normal, i.e. it opens the gap that the mesh must close:
   the pair comes into contact when the dynamic transmission error x exceeds
-  e + b (seed 003 eq 6).
+  e + b (Xu et al. 2022 eq 6).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ class Material:
 
 @dataclass(frozen=True)
 class ToothDeviation:
-    """Deviation of one tooth's active drive flank (seed 003 eq 15).
+    """Deviation of one tooth's active drive flank (Xu et al. 2022 eq 15).
 
     ``profile_form_m`` is f_fa, ``profile_slope_m`` is f_Ha, ``form_periods``
     is f_r.  ``pitch_m`` is the single pitch deviation of this tooth along the
@@ -59,7 +59,7 @@ class GearDeviations:
     ``default`` applies to every tooth; ``per_tooth`` maps a tooth index
     (0-based) to its own :class:`ToothDeviation`.  ``lead_crowning_m`` is the
     lead crowning amount C_b (material removed at both face ends relative to
-    the face centre, parabolic across the face; seed 000 eq 16's E_pc).
+    the face centre, parabolic across the face; Zhao et al. 2022 eq 16's E_pc).
     """
 
     default: ToothDeviation = ToothDeviation()
@@ -85,7 +85,7 @@ class GearDeviations:
 
 @dataclass(frozen=True)
 class GearSpec:
-    """One involute spur gear (seed 000 Table 1 / seed 004 Table 1 style)."""
+    """One involute spur gear (Zhao et al. 2022 Table 1 / He & Yang 2023 Table 1 style)."""
 
     teeth: int
     module_m: float
@@ -113,7 +113,7 @@ class GearPairSpec:
     """A pinion and a gear in mesh.
 
     ``backlash_m`` is the *total* circumferential-play measured along the
-    line of action; the dead zone of seed 003 eq (6) uses b = backlash/2.
+    line of action; the dead zone of Xu et al. 2022 eq (6) uses b = backlash/2.
     ``center_distance_m`` None means the zero-backlash operating centre
     distance from the profile shifts (inv alpha_w equation).
     """
@@ -131,6 +131,6 @@ class MeshModelOptions:
     contact_model: str = "hertz"  # "hertz" (this issue); later "smooth_ehl", "rough_ehl", "fractal_mixed"
     slices: int = 1
     foundation: bool = True  # Sainsot et al. (2004) fillet-foundation stiffness
-    # Ma et al. (2016) shared-foundation correction (seed 000 eq 11) with lambda = 1; off by default:
+    # Ma et al. (2016) shared-foundation correction (Zhao et al. 2022 eq 11) with lambda = 1; off by default:
     # docs/physics_stiffness.md, 'Why the correction is off by default'
     shared_foundation_correction: bool = False

@@ -28,7 +28,7 @@ and Applied Theory" ch. 10):
 * ra = r + m (ha* + x - k), k = max(0, (x1 + x2) - (a_w - a)/m) the *tip
   shortening* (ISO 21771 eq. 4.3.2 style "addendum reduction") that keeps the
   standard bottom clearance c* m at the operating centre distance.  CHOICE:
-  applied by default (``tip_shortening=True``); seed 004 Table 1 pair II
+  applied by default (``tip_shortening=True``); He & Yang 2023 Table 1 pair II
   reports tip radii 44.25 / 56.16 mm which are exactly r + m(ha*+x-k) with
   a_w = 91.5 mm (without shortening they would be 44.34 / 56.25 mm).
 * LOA: N1N2 = a_w sin(alpha_w); s_E = sqrt(ra1^2 - rb1^2);
@@ -180,7 +180,7 @@ class PairGeometry:
     def active_roll1_m(self) -> Tuple[float, float]:
         """(start, end) roll length (m) of the pinion's active profile (root -> tip).
 
-        Also the profile evaluation range s_o..s_f of seed 003 eq (15) for the
+        Also the profile evaluation range s_o..s_f of Xu et al. 2022 eq (15) for the
         pinion (CHOICE: evaluation range = active profile, start of active
         profile to tip).
         """
@@ -266,7 +266,7 @@ def undercut_limit_radius(z: int, module_m: float, alpha_rad: float, x: float,
     rack generation: the rack translates r*phi while the gear turns phi) and
     returns the largest radius at which it lies inside the involute tooth, so
     that a pair may be accepted when its active profile starts above the
-    undercut zone ("slight undercut", e.g. seed 004 pair II's gear, z = 24,
+    undercut zone ("slight undercut", e.g. He & Yang 2023 pair II's gear, z = 24,
     x = -0.5 < x_min = -0.404).
     """
     r = module_m * z / 2.0
@@ -320,7 +320,7 @@ def _operating(pair: GearPairSpec):
                 f"{a * math.cos(alpha):.6g} m")
         alpha_w = math.acos(c)
         # operating centre distance must not be below the zero-backlash one
-        # (tolerance 1e-3 m: published centre distances are rounded, e.g. seed 004
+        # (tolerance 1e-3 m: published centre distances are rounded, e.g. He & Yang 2023
         # pair II: 91.5 mm given, 91.50010 mm from the meshing equation)
         inv_w0 = float(involute(alpha)) + 2.0 * math.tan(alpha) * (p.profile_shift + g.profile_shift) / (z1 + z2)
         if inv_w0 > 0:

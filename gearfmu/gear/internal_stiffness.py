@@ -25,7 +25,7 @@ Ring tooth (a cantilever fixed at the root circle rf2, pointing inwards to the t
       1/k_a = int f_xi^2/(E A) dxi,   I = (2h)^3 w/12, A = 2 h w,
   by Gauss-Legendre quadrature in the roll parameter u (gearfmu.gear.stiffness.cantilever_compliance_m_per_N).
   The same construction applied to an external tooth gives the external compliances of
-  gearfmu.gear.stiffness (tests/test_internal_gear.py checks it).
+  gearfmu.gear.stiffness (tests/unit/gear/test_internal_gear.py checks it).
 
 Rim (CHOICE, after Chen & Shao's ring held at discrete supports): the rim below the tooth roots
 is a thin circular curved beam of centroid radius R = rf2 + t/2, section t x b (rim thickness t,
@@ -55,7 +55,7 @@ this project takes for an external gear without a given bore.  Sainsot et al. fi
 to external gear bodies; here it stands for the local deformation of the ring body at the tooth
 root, while the curved beam above carries the rim's bending between its supports.  Without this
 term the internal mesh comes out about 50 % stiffer than ISO 6336-1 method B for internal gears
-(z_n2 = infinity), with it within the +-25 % band of the external pairs (tests/test_internal_gear.py).
+(z_n2 = infinity), with it within the +-25 % band of the external pairs (tests/unit/gear/test_internal_gear.py).
 The two foundations combine per pair as the external pair's do (gearfmu.gear.stiffness.combine_pairs,
 ``opts.foundation`` and ``opts.shared_foundation_correction``).  Contact: the Yang & Sun Hertz
 stiffness (gearfmu.gear.hertz; it does not depend on the curvature, so the concave ring flank

@@ -1,5 +1,5 @@
 """Loaded static mesh: load sharing among tooth pairs and face-width slices
-(seed 000 eq 16), SI units.  See docs/physics_errors.md.
+(Zhao et al. 2022 eq 16), SI units.  See docs/physics_errors.md.
 
 Model
 -----
@@ -7,14 +7,14 @@ At one pinion angle the pairs j = 1..P in the contact zone are split into
 face-width slices n = 1..NS, each a linear spring k_jn (N/m) that closes when
 the static transmission error x_s (m, along the line of action) exceeds its
 gap g_jn = e_j + E_pc,n (e_j the pair's meshing error, E_pc,n the lead
-crowning of slice n, seed 000 eq 16).  The static balance is
+crowning of slice n, Zhao et al. 2022 eq 16).  The static balance is
 
     g(x_s) = sum_j sum_n k_jn * max(0, x_s - e_j - E_pc,n) = F,   F = T1 / rb1.
 
 g is continuous, piecewise linear and non-decreasing, so the root is found
 exactly by an active-set walk over the sorted gaps (a monotone bracketing root
 find that ends on the exact linear segment: x_s = (F + sum_active k g) /
-sum_active k).  This is the load balance of seed 000 eq 16 without its
+sum_active k).  This is the load balance of Zhao et al. 2022 eq 16 without its
 assumption that every slice is in contact.
 
 Per-pair stiffness for the dynamic model (docs/model.md)
@@ -25,7 +25,7 @@ pair, at each torque,
   * the effective error e_eff,j = e_j + min_n E_pc,n (the deflection at which
     the pair's first slice touches), torque-independent, and
   * the secant stiffness k_j = F_j / (x_s - e_eff,j) of its static load,
-which is seed 000 eq 16, K = F sum k_n / (F + sum k_n E_pc), for a single pair
+which is Zhao et al. 2022 eq 16, K = F sum k_n / (F + sum k_n E_pc), for a single pair
 with all slices in contact.  Then sum_j k_j max(0, x_s - e_eff,j) = F exactly:
 the tables reproduce the loaded static TE at every torque row.  A pair in the
 contact zone that carries no static load gets the secant stiffness at the
@@ -112,7 +112,7 @@ class LoadedMesh:
 
 
 def loaded_static_mesh(k_slice_N_per_m, e_pair_m, crowning_m, force_N: float) -> LoadedMesh:
-    """Load sharing among pairs and slices at one load (seed 000 eq 16).
+    """Load sharing among pairs and slices at one load (Zhao et al. 2022 eq 16).
 
     ``k_slice_N_per_m``: (P, NS, N) stiffness of slice n of the pair in slot j
     at angle i (0 outside the contact zone); ``e_pair_m``: (P, N) meshing error

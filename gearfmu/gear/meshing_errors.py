@@ -2,18 +2,18 @@
 
 Physics implemented here
 ------------------------
-* Profile deviation of one flank, seed 003 eq (15):
+* Profile deviation of one flank, Xu et al. 2022 eq (15):
   ``e_alpha(s) = f_fa/2 sin(2 pi f_r (s - s_o)/(s_f - s_o)) + f_Ha (s - s_o)/(s_f - s_o)``.
 * Per-tooth positions from single pitch deviations (ISO 1328-1 cumulative
   pitch deviation, closed over one revolution).
 * Per-pair meshing error ``e_pair = e_alpha,pinion + e_alpha,gear + p_pinion + p_gear``.
-* Comprehensive (envelope) error of the traditional model (seed 003 Fig. 5,
+* Comprehensive (envelope) error of the traditional model (Xu et al. 2022 Fig. 5,
   eq 12).
-* Lead crowning per face-width slice, seed 000 eq (16) ``E_pc``.
+* Lead crowning per face-width slice, Zhao et al. 2022 eq (16) ``E_pc``.
 
 Sign convention (gearfmu/gear/gearpair.py): a *positive* deviation is a material
 deficit along the flank normal; it opens the gap, so a pair is in contact when
-the transmission error x exceeds e + b (seed 003 eq 6).
+the transmission error x exceeds e + b (Xu et al. 2022 eq 6).
 
 Choices (also in docs/physics_errors.md)
 ----------------------------------------
@@ -53,7 +53,7 @@ class MeshingErrorInputError(ValueError):
 
 # --------------------------------------------------------------------------- eq 15
 def profile_deviation_m(s_m, dev: ToothDeviation, s_o_m: float, s_f_m: float) -> np.ndarray:
-    """Profile deviation e_alpha(s) of one flank (m), seed 003 eq (15).
+    """Profile deviation e_alpha(s) of one flank (m), Xu et al. 2022 eq (15).
 
     ``s_m``: involute roll length(s) (m) on this gear's base circle;
     ``s_o_m``/``s_f_m``: start (root end) and end (tip) of the profile
@@ -320,7 +320,7 @@ def slice_centres_m(face_width_m: float, slices: int) -> np.ndarray:
 
 
 def lead_crowning_m(crowning_m: float, face_width_m: float, slices: int) -> np.ndarray:
-    """E_pc of each slice (m), seed 000 eq (16): parabolic lead crowning,
+    """E_pc of each slice (m), Zhao et al. 2022 eq (16): parabolic lead crowning,
     E_pc(y) = C_b (2y/b)^2 at the slice centres (C_b at both face ends, 0 at the
     centre; positive = material removed = gap)."""
     if not math.isfinite(crowning_m) or crowning_m < 0:

@@ -2,12 +2,12 @@
 
 Helical pairs: staggered face-width slices, :func:`helical_slot_stiffness` (docs/helical.md).
 
-Seed 000 eq (11)-(15): potential-energy (Yang & Lin 1987; Tian 2004; Chen &
-Shao 2011; Sun, Ma et al. 2018 MMT 129 = seed 000 ref [46]) bending, shear and
+Zhao et al. 2022 eq (11)-(15): potential-energy (Yang & Lin 1987; Tian 2004; Chen &
+Shao 2011; Sun, Ma et al. 2018 MMT 129 = Zhao et al. 2022 ref [46]) bending, shear and
 axial-compression compliances of each tooth of a face-width slice, the
 fillet-foundation compliance of Sainsot et al. (2004) (:mod:`gearfmu.gear.foundation`),
 Hertz contact (:mod:`gearfmu.gear.hertz`), and the shared-foundation correction of
-Ma, Zeng, Feng, Pang & Wen (2016), MMT 98 (seed 000 eq 11).
+Ma, Zeng, Feng, Pang & Wen (2016), MMT 98 (Zhao et al. 2022 eq 11).
 
 Tooth model (per gear, a cantilever on the tooth centre line, x = distance
 from the gear centre along the centre line, h(x) = half tooth thickness):
@@ -27,7 +27,7 @@ from the gear centre along the centre line, h(x) = half tooth thickness):
   1/k_s = int 1.2 cos^2 a1 / (G A(x)) dx,                         A = 2 h w
   1/k_a = int sin^2 a1 / (E A(x)) dx,                             G = E/(2(1+nu))
 
-  integrated from the root to x_P by Gauss-Legendre quadrature (seed 000 eq 15,
+  integrated from the root to x_P by Gauss-Legendre quadrature (Zhao et al. 2022 eq 15,
   which writes the same integrals over the transition curve and the involute).
 
 Foundation: Sainsot's theta_f is the half angle of the tooth at the root circle
@@ -42,10 +42,10 @@ root would give theta_f = alpha_3, about 30 % smaller for a 20 deg standard toot
 which makes the Sainsot term 1.5-2 times softer.  h_f = r_f / r_int; CHOICE when
 ``GearSpec.hub_radius_m`` is None: r_int = r_f / 2 (h_f = 2).
 
-Mesh: per slice and pair i, k_tooth^i = 1/(1/k_h + 1/k_tp + 1/k_tg) (seed 000
+Mesh: per slice and pair i, k_tooth^i = 1/(1/k_h + 1/k_tp + 1/k_tg) (Zhao et al. 2022
 eq 13-14).  Without the shared-foundation correction each pair is
 k_i = 1/(1/k_tooth^i + 1/k_fp^i + 1/k_fg^i) (foundation of each tooth loaded by
-its own pair only).  With it (seed 000 eq 11, Ma et al. 2016)
+its own pair only).  With it (Zhao et al. 2022 eq 11, Ma et al. 2016)
 k_n = 1/(1/(lambda_p k_fp) + 1/k_tooth + 1/(lambda_g k_fg)),
 k_tooth = sum_i k_tooth^i.  CHOICES: (1) the foundation compliances 1/k_f of
 eq 11 are the load-weighted means of the per-pair values, weights
@@ -87,7 +87,7 @@ def cantilever_compliance_m_per_N(x_m, dx_weights_m, half_thickness_m, x_load_m,
                                   width_m: float) -> dict:
     """Bending, shear and axial compliances (m/N) of a cantilever under a unit load.
 
-    Quadrature form of seed 000 eq (15): the beam lies along x (m), its section
+    Quadrature form of Zhao et al. 2022 eq (15): the beam lies along x (m), its section
     at quadrature node x_k has half thickness h_k (m) and quadrature weight
     dx_k (m); the load (1 N) acts at (x_load, y_load) at angle alpha1 to the
     normal of the beam axis.  Arrays broadcast as (..., n_nodes) for the
@@ -136,8 +136,8 @@ def tooth_compliance_m_per_N(gear: GearSpec, geom: PairGeometry, which: int, s_m
     """Compliances (m/N) of ONE tooth of gear ``which`` (1 pinion, 2 gear).
 
     Unit normal load at LOA positions ``s_m`` (m from N1; array), slice width
-    ``width_m`` (m).  Returns arrays 'bending', 'shear', 'axial' (seed 000 eq 15)
-    and 'foundation' (Sainsot 2004, seed 000 eq 12), plus 'alpha1_rad'.
+    ``width_m`` (m).  Returns arrays 'bending', 'shear', 'axial' (Zhao et al. 2022 eq 15)
+    and 'foundation' (Sainsot 2004, Zhao et al. 2022 eq 12), plus 'alpha1_rad'.
     NaN entries of ``s_m`` give NaN compliances.
     """
     if which not in (1, 2):
@@ -254,7 +254,7 @@ def combine_pairs(k_tooth: np.ndarray, cf_p: np.ndarray, cf_g: np.ndarray, opts:
     """Per-pair mesh stiffness (N/m) from per-pair tooth stiffness and foundation compliances.
 
     Arrays are (pairs, n); entries with k_tooth = 0 (or NaN) are out of contact.
-    Implements seed 000 eq (11) with the split described in the module doc,
+    Implements Zhao et al. 2022 eq (11) with the split described in the module doc,
     or the traditional independent-pair sum when the correction is off.
     """
     kt = np.where(np.isfinite(k_tooth), k_tooth, 0.0)
@@ -428,7 +428,7 @@ def helical_slice_compliances(pair: GearPairSpec, geom: PairGeometry, s_m: np.nd
     ``width_m`` at transverse LOA positions ``s_m`` (m from N1, finite), on the normal section:
     the virtual spur gear of :func:`virtual_normal_section` at the point of the same height
     above the reference circle, strip length w / cos(beta_b) (the slice's piece of the inclined
-    contact line); c_teeth = bending + shear + axial of both teeth (seed 000 eq 14-15), the
+    contact line); c_teeth = bending + shear + axial of both teeth (Zhao et al. 2022 eq 14-15), the
     foundation compliances of each gear (Sainsot, eq 12).  Along the normal line of action;
     :func:`helical_slot_stiffness` turns them to the transverse one."""
     vpair, vgeom = virtual_normal_section(pair, geom)

@@ -1,8 +1,8 @@
-"""Temperature stiffness of a spur tooth pair (seed 004, He & Yang, Mechanika) and
+"""Temperature stiffness of a spur tooth pair (He & Yang 2023) and
 the oil-temperature viscosity law for the EHL film.  SI units; temperatures in degC
 (differences in K = degC).
 
-Seed 004 model (its section 3)
+He & Yang 2023 model (its section 3)
 ------------------------------
 A tooth pair in the *standard* state (temperature t0) carries the normal load
 F_n with the elastic deformation x = F_n/k along the line of action (k: pair
@@ -67,7 +67,7 @@ CHOICES where the seed leaves gaps (also in docs/thermal.md):
    T_1/r_b1 (the seed loads one pair with the whole F_n at every key point; so
    does :func:`key_point_stiffness`).
 5. *Temperature along the line of action* (seed Fig. 6): a bulk temperature per
-   gear as a function of seed 004's normalised coordinate
+   gear as a function of the normalised coordinate of He & Yang 2023
    Gamma_K = N1K/N1C - 1 (:class:`TemperatureProfile`); the flank deformation at a
    contact point uses the local temperature of each flank there.
 
@@ -87,7 +87,7 @@ tables at every axis temperature (docs/thermal.md "Oil temperature axis").
 
 Scene -> state (:func:`thermal_state_from_scene`): without an axis, a pinion /
 gear temperature or profile different from the standard temperature changes
-the tables at that one state (seed 004 eq 27-28, every torque row;
+the tables at that one state (He & Yang 2023 eq 27-28, every torque row;
 docs/thermal.md "One temperature without an axis").
 """
 from __future__ import annotations
@@ -125,7 +125,7 @@ def _temperature(name: str, t_C) -> np.ndarray:
 
 # ================================================================ temperature along the LOA
 def gamma_from_s(geom: PairGeometry, s_m) -> np.ndarray:
-    """Seed 004's normalised LOA coordinate Gamma_K = (N1K - N1C)/N1C (1) of the
+    """The normalised LOA coordinate of He & Yang 2023, Gamma_K = (N1K - N1C)/N1C (1) of the
     contact point at LOA position ``s_m`` (m from N1): -1 at N1, 0 at the pitch
     point C."""
     return np.asarray(s_m, dtype=float) / geom.s_pitch_m - 1.0
@@ -138,9 +138,9 @@ def s_from_gamma(geom: PairGeometry, gamma) -> np.ndarray:
 
 @dataclass(frozen=True)
 class TemperatureProfile:
-    """Bulk temperature of one gear's flank along the line of action (seed 004 Fig. 6b).
+    """Bulk temperature of one gear's flank along the line of action (He & Yang 2023 Fig. 6b).
 
-    ``gamma``: ascending seed 004 normalised coordinates Gamma_K (1);
+    ``gamma``: ascending He & Yang 2023 normalised coordinates Gamma_K (1);
     ``temperature_C``: temperatures there (degC).  Linear in between, constant
     beyond the ends.
     """
@@ -199,7 +199,7 @@ def free_flank_deformation_m(geom: PairGeometry, which: int, s_m, delta_T_K, alp
 
     Positive = the flank moves towards the mating flank (expansion).  ``law``:
     ``"radial_tangential"`` alpha dT (r_b tan a_K + h_K cos a_K) (reconstructed
-    seed 004 ref [27], see the module doc) or ``"homogeneous"`` alpha dT r_b tan a_K
+    He & Yang 2023 ref [27], see the module doc) or ``"homogeneous"`` alpha dT r_b tan a_K
     (uniform scaling about the gear centre).
     """
     if which not in (1, 2):
@@ -227,10 +227,10 @@ def free_flank_deformation_m(geom: PairGeometry, which: int, s_m, delta_T_K, alp
     return a * dT * length
 
 
-# ================================================================ seed 004 eq 5-28
+# ================================================================ He & Yang 2023 eq 5-28
 @dataclass(frozen=True)
 class TemperatureStiffness:
-    """Temperature stiffness of a tooth pair (seed 004 eq 27-28), N/m, and the
+    """Temperature stiffness of a tooth pair (He & Yang 2023 eq 27-28), N/m, and the
     thermal compliances added in series (m/N): ``k_N_per_m`` pair c_0,
     ``k1_N_per_m`` / ``k2_N_per_m`` pinion / gear single tooth c_i,
     ``compliance_m_per_N`` = 1/k_TS or 1/k_SS of the pair, ``compliance1_m_per_N``,
@@ -246,7 +246,7 @@ class TemperatureStiffness:
 
 def temperature_stiffness(k_N_per_m, k1_N_per_m, k2_N_per_m, free1_m, free2_m,
                           normal_load_N) -> TemperatureStiffness:
-    """Seed 004 eq (12)-(28): temperature stiffness of a pair and its teeth.
+    """He & Yang 2023 eq (12)-(28): temperature stiffness of a pair and its teeth.
 
     ``k_N_per_m``: standard pair stiffness k; ``k1_N_per_m``, ``k2_N_per_m``:
     standard single-tooth stiffness of pinion and gear; ``free1_m``,
@@ -317,7 +317,7 @@ class ThermalState:
 
 
 def key_points_m(geom: PairGeometry) -> dict:
-    """Seed 004's key points on the LOA (m from N1): meshing-in A, pitch C, meshing-out E."""
+    """The key points of He & Yang 2023 on the LOA (m from N1): meshing-in A, pitch C, meshing-out E."""
     return {"meshing-in": geom.s_start_m, "pitch": geom.s_pitch_m, "meshing-out": geom.s_end_m}
 
 
@@ -325,7 +325,7 @@ def key_point_stiffness(pair: GearPairSpec, state: ThermalState, normal_load_N: 
                         geom: Optional[PairGeometry] = None, *, law: str = "radial_tangential",
                         standard: Optional[Tuple] = None, hertz: bool = True) -> TemperatureStiffness:
     """Temperature stiffness of ONE tooth pair carrying the whole ``normal_load_N``
-    (N) at LOA positions ``s_m`` (seed 004 Tables 2-3 convention).
+    (N) at LOA positions ``s_m`` (He & Yang 2023 Tables 2-3 convention).
 
     ``standard``: optional (k, k1, k2) arrays (N/m) to use instead of our standard
     stiffness (to isolate the thermal model, e.g. the seed's own values); by
@@ -448,24 +448,24 @@ def oil_dynamic_viscosity_Pas(nu40_m2_s: float, nu100_m2_s: float, density_kg_m3
 # ================================================================ [thermal] options -> state
 @dataclass(frozen=True)
 class ThermalOptions:
-    """Thermal options of a pair's tables (seed 004; docs/thermal.md), degC: a scene's
+    """Thermal options of a pair's tables (He & Yang 2023; docs/thermal.md), degC: a scene's
     ``[thermal]`` section (:mod:`gearfmu.scene.sections`).
 
     ``pinion_temperature_C`` / ``gear_temperature_C``: uniform bulk temperature
     (None = the standard temperature); ``*_profile_gamma`` / ``*_profile_C``:
-    a bulk temperature along the line of action over seed 004's normalised
-    coordinate Gamma_K (overrides the uniform value when given);
+    a bulk temperature along the line of action over the normalised
+    coordinate Gamma_K of He & Yang 2023 (overrides the uniform value when given);
     ``temperature_axis_C``: temperatures of the tables' temperature axis
     (empty = no axis); ``flank_law``: free flank deformation law of
     :func:`gearfmu.gear.thermal.free_flank_deformation_m`; ``axis_quantity``: what
     the axis is (:data:`THERMAL_AXIS_QUANTITIES`): "bulk" the bulk temperature of
-    both gears (seed 004 stiffness, FMU input ``bulk_temperature``), "oil" the
+    both gears (He & Yang 2023 stiffness, FMU input ``bulk_temperature``), "oil" the
     oil temperature (eta0 of a lubricated contact model, input
     ``oil_temperature``), "bulk_and_oil" both at one temperature (input
     ``gearbox_temperature``); ``lubricant``: the scene's ``[lubricant]`` (its
     viscosity-temperature law), attached by the scene reader when the axis
     involves the oil.  Without an axis, ``pinion_temperature_C`` /
-    ``gear_temperature_C`` / the profiles change the tables (seed 004 eq 27-28
+    ``gear_temperature_C`` / the profiles change the tables (He & Yang 2023 eq 27-28
     at that state); with a "bulk" or "bulk_and_oil" axis the axis sets the gear
     temperatures and these keys must be absent; with an "oil" axis they give
     the gears' state at every oil temperature (docs/thermal.md).

@@ -5,6 +5,11 @@ Imports :mod:`gearfmu.dynamics` (the pair model's lookup and force law, per mesh
 :mod:`gearfmu.stages`, builds a model from a drivetrain scene).  docs/gearbox.md
 describes the model, the integrators, the modes and what is verified.
 
+Exports (loaded with their module on first use): ``GearboxModel``, ``Mesh``, ``Shaft``,
+``build_gearbox``, ``GearboxModelError``; the native gearbox solver ``simulate``,
+``GearboxResult``, ``GearboxInputError``; ``ModesResult``, ``campbell`` (the modes themselves:
+``gearfmu.gearbox.modes.modes``); the reference ``simulate_reference``.
+
 ===========  =========================================================
 Module       Contents
 ===========  =========================================================
@@ -24,3 +29,13 @@ _pair        the pair model's numba kernels used per mesh (the one place
              that names them)
 ===========  =========================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(("GearboxModel", "Mesh", "Shaft", "build_gearbox", "GearboxModelError"), "model"),
+    **dict.fromkeys(("simulate", "GearboxResult", "GearboxInputError"), "native"),
+    "ModesResult": "modes", "campbell": "modes",
+    "simulate_reference": "reference",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -4,7 +4,7 @@
 and :func:`gearfmu.gearbox.reference.simulate_reference` (which take the same arguments).  The
 gearbox is a two-stage reducer, motor - input shaft - stage 1 (23/67 teeth) - intermediate
 shaft - stage 2 (19/73) - output shaft - load, total ratio 11.2, on rectangular-wave mesh
-stiffness (gearfmu.tables.synthetic.rectangular_wave_tables: the textbook TVMS, seed 003 Fig. 2)
+stiffness (gearfmu.tables.synthetic.rectangular_wave_tables: the textbook TVMS, Xu et al. 2022 Fig. 2)
 with tent-shaped meshing errors and backlash:
 
 * ``contact_loss``: stage 1 with a large meshing error at a light load loses contact

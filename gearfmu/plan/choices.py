@@ -262,7 +262,7 @@ def thermal_options(scene, env: Envelope, contact_model: Optional[str] = None):
         return th
     lo, hi = rng
     if not len(th.temperature_axis_C):
-        if hi == lo:  # one temperature: the seed 004 state of both gears at it, no axis
+        if hi == lo:  # one temperature: the He & Yang 2023 state of both gears at it, no axis
             return replace(th, pinion_temperature_C=float(lo), gear_temperature_C=float(lo))
         return replace(th, temperature_axis_C=tuple(float(x) for x in np.linspace(lo, hi, _THERMAL_AXIS_POINTS)))
     ax = th.temperature_axis_C

@@ -580,7 +580,7 @@ def drive_case(name: str, tables, *, stop_time_s: float, comm_step_s: float, tor
     temperature are their values at the step's midpoint, and the gear (load) torque is
     the rigid-body inverse dynamics of the pinion-referred pair,
     T2 = (T1 - I_red * a) * Rb2 / Rb1 with I_red = I1 + I2 (Rb1/Rb2)^2 and
-    a = (w(t_i+1) - w(t_i)) / H (seed 003's two-inertia model with a rigid mesh), so a
+    a = (w(t_i+1) - w(t_i)) / H (the two-inertia model of Xu et al. 2022 with a rigid mesh), so a
     rigid pair under these held torques reaches w(t_i+1) exactly at every step end.
     """
     n = max(int(math.ceil(stop_time_s / comm_step_s - 1e-9)), 1)

@@ -25,7 +25,7 @@ __all__ = ["environment_from_scene", "table_arguments", "work_counts", "estimate
 def environment_from_scene(scene, geom=None, **kw) -> ContactEnvironment:
     """A :class:`gearfmu.contact.base.ContactEnvironment` from a scene (lubricant at its
     temperature, the scene's pinion speed, slices and ``[roughness]``; the rough-EHL model
-    without ``[roughness]`` gets seed 000's level 1); ``geom``: the pair geometry when already
+    without ``[roughness]`` gets level 1 of Zhao et al. 2022); ``geom``: the pair geometry when already
     computed; ``kw`` overrides fields."""
     geom = pair_geometry(scene.pair) if geom is None else geom
     pair = scene.pair

@@ -151,7 +151,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Scene
 
 def default_scene_path() -> Path:
     """Path of the package's default scene (``gearfmu/scene/data/default_scene.toml``:
-    the gear pair of seed 000 Table 1)."""
+    the gear pair of Zhao et al. 2022 Table 1)."""
     return Path(__file__).resolve().parent / "data" / "default_scene.toml"
 
 

@@ -251,7 +251,7 @@ SUBTABLES = {
     "deviations.gear": ("tooth",),
 }
 
-# [roughness]: W-M flank roughness of the rough-EHL contact model (seed 000 eq 1, Table 2;
+# [roughness]: W-M flank roughness of the rough-EHL contact model (Zhao et al. 2022 eq 1, Table 2;
 # gearfmu/contact/models.py, docs/ehl_mesh.md)
 SCHEMA["roughness"] = (
     _i("level", 1, "seed 000 Table 2 roughness level 1-4 (D and G from the table), or 0 = use "

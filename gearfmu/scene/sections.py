@@ -192,7 +192,7 @@ def thermal(r: Reader, data: Any) -> Optional[ThermalOptions]:
 
 def roughness(r: Reader, data: Any) -> Optional[RoughnessSpec]:
     """Read ``[roughness]`` into the contact models' :class:`RoughnessSpec` (None when absent
-    or invalid): level 1-4 takes D and G from seed 000 Table 2, level 0 the given ones."""
+    or invalid): level 1-4 takes D and G from Zhao et al. 2022 Table 2, level 0 the given ones."""
     got = r.section(data, "roughness")
     if got is None:
         return None

@@ -253,13 +253,13 @@ class MeshTables:
 
     @property
     def equivalent_mass_kg(self) -> float:
-        """m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2) (seed 003, below eq 2)."""
+        """m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2) (Xu et al. 2022, below eq 2)."""
         i1, i2 = self.inertia_pinion_kgm2, self.inertia_gear_kgm2
         r1, r2 = self.base_radius_pinion_m, self.base_radius_gear_m
         return i1 * i2 / (i1 * r2 ** 2 + i2 * r1 ** 2)
 
     def pair_damping_Ns_per_m(self, damping_ratio: float) -> float:
-        """Damping of one tooth pair, c = 2 zeta sqrt(k_m m_e) (seed 003 eq 7-9:
+        """Damping of one tooth pair, c = 2 zeta sqrt(k_m m_e) (Xu et al. 2022 eq 7-9:
         every pair has the same constant damping, zeta = c / (2 m_e omega_n),
         omega_n = sqrt(k_m / m_e))."""
         return 2.0 * damping_ratio * np.sqrt(self.k_mean_N_per_m * self.equivalent_mass_kg)
@@ -333,7 +333,7 @@ class MeshTables:
 
     # ------------------------------------------------------------ transforms
     def traditional(self) -> "MeshTables":
-        """The traditional single-pair model of seed 003 eq (12): one slot whose
+        """The traditional single-pair model of Xu et al. 2022 eq (12): one slot whose
         stiffness is the total TVMS and whose error is the comprehensive
         (envelope) meshing error."""
         if self.e_comprehensive_m is None:

@@ -7,7 +7,7 @@
  * own gk_model and gk_mode, mapped to its local state (theta_p, omega_p, x, v); the loops over
  * bodies, shafts and meshes are those of the numba gearbox solver (gearfmu/gearbox/kernels.py:
  * _rhs, _rk4, _gb_substep, _mesh_start, _mesh_cross, _write_row), operation by operation, so
- * that the two agree bit for bit (tests/test_gearbox_fmu.py).  Compiled with the pair kernel's
+ * that the two agree bit for bit (tests/fmu_hosts/test_gearbox_fmu.py).  Compiled with the pair kernel's
  * flags (no fused multiply-add, no fast-math).
  *
  * No globals, no allocation, no abort.

@@ -2,7 +2,7 @@
  * gearkernel.c -- C99 implementation of docs/model.md (the contract shared
  * with the numba native solver gearfmu/dynamics/native.py).
  *
- * Physics: seed 003 (Xu et al., Appl. Sci. 2022) eq 1-6: per tooth-pair slot j
+ * Physics: Xu et al. (Appl. Sci. 2022) eq 1-6: per tooth-pair slot j
  * the deflection d = x - e_j (eq 6), the piecewise-linear backlash force with
  * half backlash b_j, a viscous damping c = 2 zeta sqrt(k_mean m_e) (eq 7-9);
  * two inertias (eq 1-2) written in the pinion angle and the dynamic

@@ -3,7 +3,7 @@
  *
  * A two-inertia torsional spur gear pair indexed by the pinion angle, with P
  * tooth-pair slots whose stiffness k (N/m), meshing error e (m) and half
- * backlash b (m) come from the tables of gearfmu/tables/mesh_tables.py (seed 003 eq 1-6).
+ * backlash b (m) come from the tables of gearfmu/tables/mesh_tables.py (Xu et al. 2022 eq 1-6).
  *
  * Rules: no global or static mutable data (every bit of state lives in the
  * structs below, owned by the caller), no allocation anywhere, never abort:

@@ -50,7 +50,7 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->seg_gw = Rb1_m / I1_kgm2;
     m->seg_gv = Rb1_m * (Rb1_m / I1_kgm2) + Rb2_m * (Rb2_m / I2_kgm2);
     m->k_mean_N_per_m = k_mean_N_per_m;
-    /* m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2), seed 003 below eq 2 */
+    /* m_e = I1 I2 / (I1 Rb2^2 + I2 Rb1^2), Xu et al. 2022 below eq 2 */
     m->m_e_kg = I1_kgm2 * I2_kgm2 / (I1_kgm2 * Rb2_m * Rb2_m + I2_kgm2 * Rb1_m * Rb1_m);
     m->damping_ratio = 0.0;
     m->c_Ns_per_m = 0.0;

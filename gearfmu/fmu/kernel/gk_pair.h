@@ -33,7 +33,7 @@ GK_INLINE double mesh_force(const gk_model *m, const gk_tq *t, gk_ph *c, double 
         double k, e, es, b, d, fc, fd, Fj;
         int region;
         slot_tables(m, t, c, j, -1, &k, &e, &es, &b);
-        d = x - e;                             /* seed 003 eq 6 */
+        d = x - e;                             /* Xu et al. 2022 eq 6 */
         if (d > b) { fc = k * (d - b); region = 1; }
         else if (d < -b) { fc = k * (d + b); region = -1; }
         else { fc = 0.0; region = 0; }

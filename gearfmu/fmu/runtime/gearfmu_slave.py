@@ -47,7 +47,7 @@ TEMPERATURE_INPUT = "bulk_temperature"  # the input that selects a bulk temperat
 #: inputs that may select the temperature axis, by what the axis is (docs/thermal.md); the
 #: variable table holds exactly one of them when the tables have a temperature axis.  A copy of
 #: gearfmu.common.vocabulary.TEMPERATURE_INPUTS' values (this template imports nothing from
-#: gearfmu; tests/test_scene.py checks that the two agree)
+#: gearfmu; tests/unit/scene/test_scene.py checks that the two agree)
 TEMPERATURE_INPUT_NAMES = ("bulk_temperature", "oil_temperature", "gearbox_temperature")
 
 # Serialized FMU state (docs/robustness.md "FMU state"): a fixed little-endian

@@ -8,7 +8,7 @@ gives a loaded library every signature of the table, the way FMPy's ``fmi2.py`` 
 function once with its types; with ``check=True`` a :data:`STATUS` function that returns an
 error raises :class:`KernelError` with the kernel's own words for it (``gkf_kernel_error``).
 :func:`load_kernel` loads a library and binds it.  The pythonfmu runtime, the tests and the
-benchmarks all bind the kernel here; tests/test_kernel_api.py checks the table against the
+benchmarks all bind the kernel here; tests/unit/fmu/test_kernel_api.py checks the table against the
 headers.
 
 This module runs inside the pythonfmu FMU too (the builder copies it beside the slave under
