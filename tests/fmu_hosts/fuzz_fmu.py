@@ -59,9 +59,10 @@ NASTY_REALS = [float("nan"), float("inf"), -float("inf"), 1e308, -1e308, 1e-308,
 NASTY_STEPS = [0.0, -1e-4, float("nan"), float("inf"), -float("inf"), 1e6, 1e-300, 5e-324, 1e308]
 
 
-def build_fuzz_fmu(directory, runtime: str = "pythonfmu") -> Path:
+def build_fuzz_fmu(directory, runtime: str = "pythonfmu", interface: str = "both") -> Path:
     """A small FMU for fuzzing: synthetic rectangular-wave tables (P = 2),
-    torque axis [50, 150] N.m, max_step 1e-5 s; ``runtime`` "pythonfmu" or "standalone"."""
+    torque axis [50, 150] N.m, max_step 1e-5 s; ``runtime`` "pythonfmu" or "standalone";
+    ``interface``: the standalone FMU's FMI interfaces ("both", "cs" or "me"; pythonfmu: Co-Simulation)."""
     import numpy as np
 
     from gearfmu.tables.synthetic import rectangular_wave_tables
@@ -71,7 +72,7 @@ def build_fuzz_fmu(directory, runtime: str = "pythonfmu") -> Path:
 
         from gearfmu.fmu.standalone_build import build_standalone_fmu
 
-        build_fmu = partial(build_standalone_fmu, validation=False)
+        build_fmu = partial(build_standalone_fmu, validation=False, interface=interface)
     else:
         from gearfmu.fmu.pythonfmu_build import build_fmu
 

@@ -40,10 +40,14 @@ def test_fuzz_300_sequences_no_host_crash(fuzz_fmus, runtime):
     assert res["calls"] > 300 * 5
 
 
-def test_fuzz_both_runtimes_answer_every_call_alike(fuzz_fmus):
+def test_fuzz_both_runtimes_answer_every_call_alike(fuzz_fmus, tmp_path):
     """200 sequences without FMU-state calls, through fmpy: per sequence, the digest of every
-    call's status, messages (other than fmi2OK ones) and values read is the same for both."""
-    traces = {rt: fuzz_fmu.run_fuzz(fuzz_fmus[rt], 200, first_seed=4242, batch=100, jobs=2, trace=True)["traces"]
+    call's status, messages (other than fmi2OK ones) and values read is the same for both.  The
+    standalone FMU here offers Co-Simulation only, as the pythonfmu one does (Model Exchange adds
+    variables, so the drawn value references would differ)."""
+    fmus = {"pythonfmu": fuzz_fmus["pythonfmu"],
+            "standalone": fuzz_fmu.build_fuzz_fmu(tmp_path / "standalone_cs", "standalone", interface="cs")}
+    traces = {rt: fuzz_fmu.run_fuzz(fmus[rt], 200, first_seed=4242, batch=100, jobs=2, trace=True)["traces"]
               for rt in RUNTIMES}
     assert len(traces["pythonfmu"]) == 200
     differ = sorted(k for k, v in traces["pythonfmu"].items() if traces["standalone"].get(k) != v)

@@ -59,7 +59,10 @@ def fmus(tmp_path_factory):
     d = tmp_path_factory.mktemp("init")
     kw = dict(max_step_s=1e-5, pinion_torque_start_Nm=100.0, pinion_speed_start_rad_s=150.0, damping_ratio=0.05,
               stop_time_s=0.01, output_interval_s=H)
-    return {"standalone": build_standalone_fmu(_tables(), d / "sa.fmu", model_name="initSA", validation=False, **kw),
+    # Co-Simulation only: this module checks the Co-Simulation Initialization Mode and its InitialUnknowns
+    # (Model Exchange adds states and derivatives to them; tests/fmu_hosts/test_model_exchange.py)
+    return {"standalone": build_standalone_fmu(_tables(), d / "sa.fmu", model_name="initSA", validation=False,
+                                               interface="cs", **kw),
             "pythonfmu": build_fmu(_tables(), d / "py.fmu", model_name="initPY", **kw)}
 
 

@@ -99,7 +99,7 @@ def test_example_build_prints_runtime_fmi_version_and_platforms(tmp_path):
     assert (version, needs) == ("2.0", "false")
     assert folders == ["aarch64-darwin", "aarch64-linux", "darwin64", "linux64", "win64"]
     line = next(ln for ln in stdout.splitlines() if ln.startswith("runtime "))
-    assert line == f"runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, {FIVE}", line
+    assert line == f"runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation and Model Exchange, {FIVE}", line
 
 
 def test_ssp_takes_runtime_and_fmi_version(tmp_path):
@@ -119,7 +119,7 @@ def test_ssp_takes_runtime_and_fmi_version(tmp_path):
     with zipfile.ZipFile(tmp_path / "f3.ssp") as z:
         (tmp_path / "f3.fmu").write_bytes(z.read("resources/SmallPair.fmu"))
     assert _fmu_facts(tmp_path / "f3.fmu") == ("3.0", "false", ["x86_64-linux"])
-    assert stdout.rstrip().endswith("runtime standalone (all C, needs no Python), FMI 3.0 Co-Simulation, "
+    assert stdout.rstrip().endswith("runtime standalone (all C, needs no Python), FMI 3.0 Co-Simulation and Model Exchange, "
                                     "platforms: x86_64-linux")
 
     rc, _, stderr = _cli("ssp", scene, "-o", tmp_path / "bad.ssp", "--runtime", "pythonfmu", "--fmi-version", "3")
@@ -137,7 +137,7 @@ def test_summary_names_platforms_not_built_and_why(monkeypatch, tmp_path):
     s = read_summary(p)
     assert s.platforms == ["linux64"] and set(s.missing) == {"x86_64-windows"}
     line = fmu_summary(p)
-    assert line.startswith("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64; "
+    assert line.startswith("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation and Model Exchange, platforms: linux64; "
                            "NOT built: x86_64-windows (no cross compiler"), line
 
 

@@ -125,7 +125,7 @@ def test_build_fmu_script_reports(tmp_path):
     assert sorted(c["platforms"]) == ["aarch64-darwin", "aarch64-linux", "darwin64", "linux64", "win64"]
     r = _run([str(REPO / "build_fmu.py"), "-o", "y.fmu"], tmp_path)
     assert r.returncode == 0, r.stderr
-    assert ("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64, "
+    assert ("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation and Model Exchange, platforms: linux64, "
             "aarch64-linux, win64, darwin64 (x86_64 + arm64; arm64 also as aarch64-darwin)") in r.stdout.splitlines()
 
 
