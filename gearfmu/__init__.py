@@ -68,6 +68,7 @@ stages               the stages of a pair or a drivetrain scene, without the
                      planner: tables, run settings, FMU, native and gearbox runs
 fmu/                 model description, FMU builders, envelope record, runtime, C
 gearbox/             gearbox model, modes, native gearbox solver
+planetary/           planetary stages: Lin & Parker model, classified modes, solver
 dynamics/            native solver, reference integrator, sweeps, harmonics
 scene/               the scene reader; the physics options read off a scene
 assembly/            the physics of a pair turned into tables; the table cache
@@ -104,8 +105,8 @@ _ENTRY_POINTS = {
 }
 
 #: the modules and subpackages of the layer table above, attributes of gearfmu once used
-_SUBMODULES = ("cli", "ssp", "bench", "plots", "pipeline", "plan", "stages", "fmu", "gearbox", "dynamics",
-               "scene", "assembly", "tables", "contact", "gear", "ehl", "common")
+_SUBMODULES = ("cli", "ssp", "bench", "plots", "pipeline", "plan", "stages", "fmu", "gearbox", "planetary",
+               "dynamics", "scene", "assembly", "tables", "contact", "gear", "ehl", "common")
 
 __all__ = sorted(_ENTRY_POINTS)
 __getattr__, __dir__ = lazy_exports(__name__, _ENTRY_POINTS, _SUBMODULES)

@@ -296,7 +296,7 @@ def _kind(points) -> dict:
 def film_failure_kinds(fails, spec, grid_nodes_interpolated: int = 0) -> dict:
     """The (position, slice, torque) points without a rough film, by kind
     (docs/ehl_mesh.md): ``film_mixed_lubrication`` -- film parameter below the
-    full-film limit (status 'low_film_parameter'; expected: seed 000's full film
+    full-film limit (status 'low_film_parameter'; expected: Zhao et al. 2022's full film
     does not hold there) -- and ``film_solver_failures`` -- the rough film
     failed although the film parameter is in the full-film range (stall,
     collapse, smooth film failed: a defect of the solver), each with its count,

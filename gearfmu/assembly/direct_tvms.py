@@ -5,7 +5,7 @@ pair in contact and every face-width slice gets its own contact stiffness k_l fr
 model, solved at that pair's contact position and that slice's load, and the slices are
 combined with the tooth and foundation compliances exactly as the tables combine them:
 
-    k_tooth^i = 1 / (1/k_l + 1/k_tp + 1/k_tg)           (seed 000 eq 13; bending, shear,
+    k_tooth^i = 1 / (1/k_l + 1/k_tp + 1/k_tg)           (Zhao et al. 2022 eq 13; bending, shear,
                                                           axial of both teeth eq 14-15)
     foundation per pair (Sainsot; eq 12, or eq 11 with the shared-foundation correction)
     slice loads F_jn = k_jn max(0, x_s - e_j - E_n), sum F_jn = F = T1/r_b1   (eq 16)
@@ -21,18 +21,18 @@ stop when no slice load changes by more than ``LOAD_ITERATION_TOL`` = 1e-3 of F/
 
 Contact models (:data:`DIRECT_MODELS`):
 
-* ``hertz``: Yang & Sun line-contact stiffness pi E* w / 2 (load-independent; seed 000's
+* ``hertz``: Yang & Sun line-contact stiffness pi E* w / 2 (load-independent; Zhao et al. 2022's
   reference case in Fig. 12);
-* ``smooth_ehl``: steady smooth line-contact EHL (seed 000 eq 2-7), film stiffness seed 000
+* ``smooth_ehl``: steady smooth line-contact EHL (Zhao et al. 2022 eq 2-7), film stiffness Zhao et al. 2022
   eq 8-9 on the Hertz band (:func:`gearfmu.ehl.mesh_film.solve_slice_film`);
 * ``rough_steady``: the same with the slice's frozen W-M flank roughness at the contact
-  (seed 000 eq 1, 3; the steady rough film of the tables, sampled directly and solved as the
+  (Zhao et al. 2022 eq 1, 3; the steady rough film of the tables, sampled directly and solved as the
   film grid solves it, warm-started from the smooth film, :func:`gearfmu.ehl.mesh_film.solve_node_films`);
 * ``smooth_transient`` / ``rough_transient``: the transient solver
   (:func:`gearfmu.ehl.transient.solve_line_contact_transient`, option A of docs/ehl_transient.md:
   R, u_s, SRR and w frozen at the request, the roughness of each flank moving with that flank at
   u1, u2, :func:`gearfmu.ehl.transient.flank_slice_case`), start 'auto', run through the wash-out
-  and ``T_average`` more (b/u_s units); film stiffness by reduction (b) = seed 000 eq 8 on the
+  and ``T_average`` more (b/u_s units); film stiffness by reduction (b) = Zhao et al. 2022 eq 8 on the
   window means A B(<p_m>)/<h_m> (default; (a) <A B(p_m)/h_m> selectable) -- the quantity of
   tests/unit/ehl/test_ehl_transient.py's Fig. 13 test and of the tables' transient correction.
 
@@ -40,7 +40,7 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
 
 * Meshing position = LOA position ``s_m`` (m from N1) of one contact; the other pairs in contact
   are at s + k p_b inside [s_A, s_E] (:func:`pair_positions_m`).
-* Errors: perfect gears by default (``e_pair_m`` = 0, no crowning), the case of seed 000
+* Errors: perfect gears by default (``e_pair_m`` = 0, no crowning), the case of Zhao et al. 2022
   section 5; the table's per-pair meshing errors and crowning can be passed (:class:`PairLoading`).
 * Load iteration of the film models that need a film per slice (``rough_steady``,
   ``smooth_transient``, ``rough_transient``): the iteration starts from the slice loads
@@ -50,11 +50,11 @@ CHOICES (also in docs/ehl_mesh.md "Direct TVMS"):
   tolerance.
 * Film parameter: the rough models screen every request with Lambda = h_min/sigma
   (:func:`gearfmu.contact.models.film_parameter`); below ``RoughnessSpec.full_film_parameter``
-  (3) seed 000's full film does not exist and :class:`DirectTVMSError` is raised (names the
+  (3) Zhao et al. 2022's full film does not exist and :class:`DirectTVMSError` is raised (names the
   position, pair and Lambda) unless ``check_film_parameter=False``.  A film that fails
   (stall, collapse) raises too (``on_film_failure='error'``), or takes the steady smooth film
   (``'smooth'``; recorded in ``failures``).  The screen is a CHOICE, not a prediction of film
-  collapse: under seed 000's full-film assumption (``check_film_parameter=False``) the transient films
+  collapse: under Zhao et al. 2022's full-film assumption (``check_film_parameter=False``) the transient films
   of the Table 1 pair at levels 3-4 (screen Lambda 2.1-2.9) exist with h > 0 everywhere, window
   minimum down to 0.55 sigma (the roughness is flattened inside the contact; a Newtonian,
   isothermal, elastic model result) -- recorded per request in ``h_min_m`` / ``h_min_over_sigma`` /
@@ -269,9 +269,9 @@ def _key(x: float) -> float:
 @dataclass(frozen=True)
 class PairLoading:
     """How the pair is loaded in :func:`direct_mesh_stiffness` (SI; None: the default):
-    ``e_pair_m`` (P, N) meshing error per pair and position (default 0: perfect gears, seed 000
+    ``e_pair_m`` (P, N) meshing error per pair and position (default 0: perfect gears, Zhao et al. 2022
     section 5), ``crowning_m`` (NS,) lead crowning per slice (default 0) -- the loaded static mesh
-    of seed 000 eq 16 -- and ``initial_loads_N`` (P, NS, N) slice loads to start the load iteration
+    of Zhao et al. 2022 eq 16 -- and ``initial_loads_N`` (P, NS, N) slice loads to start the load iteration
     from (default: the Hertz loads, or for the per-slice film models the loads converged with
     ``smooth_ehl``)."""
 
@@ -284,7 +284,7 @@ class PairLoading:
 class _DirectPair:
     """The pair at the requested positions (SI): contact position of each pair ``sp`` (P, N), the
     errors ``e`` (P, N) and crowning ``E`` (NS,), the torque ``T`` and mesh force ``F`` = T/r_b1,
-    the slice width, the tooth and foundation compliances (seed 000 eq 11-15), the zone entries
+    the slice width, the tooth and foundation compliances (Zhao et al. 2022 eq 11-15), the zone entries
     in contact (mask (P, NS, N) and its index arrays) and the film environment (None: Hertz)."""
 
     env: object
@@ -313,7 +313,7 @@ class _DirectPair:
         return np.where(self.zone, hertz_stiffness_N_per_m(self.env.pair, self.width), 0.0)
 
     def mesh_stiffness(self, kc) -> np.ndarray:
-        """(P, NS, N) slice mesh stiffness from the contact stiffness ``kc`` (seed 000 eq 10-13)."""
+        """(P, NS, N) slice mesh stiffness from the contact stiffness ``kc`` (Zhao et al. 2022 eq 10-13)."""
         ct, fp, fg = self.compliances
         return sliced_mesh_stiffness(ct, fp, fg, kc, self.opts)
 
@@ -324,7 +324,7 @@ def direct_mesh_stiffness(env, opts, s_m, torque_Nm: float, model: str, *, loadi
                           max_workers: Optional[int] = None, progress: bool = False,
                           check_film_parameter: bool = True, on_film_failure: str = "error") -> DirectTVMS:
     """TVMS (N/m) of the pair at the meshing positions ``s_m`` (m from N1), evaluated directly
-    (seed 000 eq 10-16 with the contact stiffness of ``model``; module doc).
+    (Zhao et al. 2022 eq 10-16 with the contact stiffness of ``model``; module doc).
 
     ``env``: :class:`gearfmu.contact.models.ContactEnvironment` (pair, geometry, pinion speed,
     lubricant, ``n_slices`` and slice ``width_m``, ``roughness`` for the rough models; its

@@ -5,7 +5,7 @@ that slice's own load (docs/ehl_mesh.md "Load sharing").
 One iteration, used by the table builder (:mod:`gearfmu.assembly.precompute`) and the direct
 TVMS (:mod:`gearfmu.assembly.direct_tvms`): from given slice loads, every slice in contact gets
 its contact stiffness at its line load (at least a load floor), the slices are combined into
-the slice mesh stiffness, and the loaded static mesh (seed 000 eq 16,
+the slice mesh stiffness, and the loaded static mesh (Zhao et al. 2022 eq 16,
 :func:`gearfmu.gear.loaded_mesh.loaded_static_mesh`) gives the next slice loads.  A request is
 re-solved only when its line load moved by more than ``0.1 * LOAD_ITERATION_TOL`` of itself
 (a film is expensive); the iteration stops when no slice load changes by more than
@@ -32,7 +32,7 @@ UNLOADED_SLICE_LOAD_SHARE = 0.5
 
 
 def slice_loads_N(k_slice, e_pair, crowning, force_N):
-    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (seed 000 eq 16) of
+    """(P, NS, N) static slice loads F_jn = k_jn max(0, x_s - e_j - E_n) (Zhao et al. 2022 eq 16) of
     slice stiffness ``k_slice`` (P, NS, N; N/m), pair errors ``e_pair`` (P, N; m), lead
     crowning ``crowning`` (NS,; m) under the mesh force ``force_N`` (N)."""
     lm = loaded_static_mesh(k_slice, e_pair, crowning, force_N)
@@ -66,7 +66,7 @@ def iterate_load_sharing(loads_N: np.ndarray, e_pair_m: np.ndarray, crowning_m: 
     """Iterate the slice loads with a load-dependent contact stiffness (module doc).
 
     ``loads_N`` (P, NS, N): the starting slice loads (e.g. with the Hertz stiffness);
-    ``e_pair_m`` (P, N), ``crowning_m`` (NS,), ``force_N``: the loaded mesh (seed 000 eq 16);
+    ``e_pair_m`` (P, N), ``crowning_m`` (NS,), ``force_N``: the loaded mesh (Zhao et al. 2022 eq 16);
     ``zone``: the (j, n, i) index arrays of the (pair, slice, position) entries in contact;
     ``line_width_m``: the contact length a slice load is spread over (scalar, or one per zone
     entry); ``floor_N_per_m``: the smallest line load a film is solved at; ``solve``: see

@@ -7,7 +7,7 @@ Every planet has two meshes, each with its own :class:`gearfmu.tables.mesh_table
   foundation, slices), the sun torque share T_s/N as the nominal torque;
 * planet-ring (the planet the pinion): per-pair stiffness of gearfmu.gear.internal_stiffness (the
   internal tooth, the planet's and ring's root terms, the rim), per-pair meshing errors from the
-  planet's and ring's profile and pitch deviations (seed 003 eq 15, gearfmu.gear.meshing_errors: the
+  planet's and ring's profile and pitch deviations (Xu et al. 2022 eq 15, gearfmu.gear.meshing_errors: the
   ring's roll length along the line of action is s + N1N2, its active profile runs from its root end
   at s_E + N1N2 to its tip at s_A + N1N2), the ring mesh's backlash; Hertz contact, one slice,
   load-independent stiffness, one torque row (CHOICE: the load-dependent contact models and lead

@@ -3,7 +3,7 @@
 Chain: geometry (:func:`gearfmu.gear.geometry.pair_geometry`) -> per-slot sliced
 stiffness (:func:`gearfmu.gear.stiffness.slot_stiffness`) -> per-pair meshing
 errors (:mod:`gearfmu.gear.meshing_errors`) -> loaded static mesh with lead
-crowning (:mod:`gearfmu.gear.loaded_mesh`, seed 000 eq 16) -> tables.
+crowning (:mod:`gearfmu.gear.loaded_mesh`, Zhao et al. 2022 eq 16) -> tables.
 Choices are documented in docs/physics_errors.md.
 """
 from __future__ import annotations
@@ -49,7 +49,7 @@ def disc_inertia_kgm2(gear: GearSpec) -> float:
     """Rotary inertia (kg m^2) of a gear: ``gear.inertia_kgm2`` or, when None, a
     solid disc of the gear's material between the hub bore and the reference
     pitch radius r = m z / 2: I = rho pi b (r^4 - r_hub^4) / 2 (solid cylinder,
-    e.g. any statics/dynamics textbook).  For seed 003 Table 1 (z = 50,
+    e.g. any statics/dynamics textbook).  For Xu et al. 2022 Table 1 (z = 50,
     m = 3 mm, b = 20 mm, steel 7850 kg/m^3, no bore) this gives 0.00780 kg m^2
     against the table's 0.0074 kg m^2 (+5.5 %)."""
     if gear.inertia_kgm2 is not None:
@@ -140,7 +140,7 @@ class _PairRows:
 
     @property
     def crowned(self) -> bool:
-        """Lead crowning: the slices have different crowning (seed 000 eq 16)."""
+        """Lead crowning: the slices have different crowning (Zhao et al. 2022 eq 16)."""
         return bool(np.any(self.E != self.E[0]))
 
     @property
@@ -158,7 +158,7 @@ class _PairRows:
 def _compute_rows(rows, contact_it, pr: _PairRows, torques, nominal_torque_Nm, bar):
     """Stiffness and error rows of the tables, one per torque of ``rows`` (N m): the slice
     stiffness (with a load-dependent contact model, the contact iteration's at the row's slice
-    loads) through the loaded static mesh (seed 000 eq 16); with lead crowning the row holds its
+    loads) through the loaded static mesh (Zhao et al. 2022 eq 16); with lead crowning the row holds its
     secant stiffness and effective error, else the plain stiffness and the meshing error.
     Returns (k rows, e rows, static TE rows of ``torques``, k of the nominal torque)."""
     k_rows, e_rows, te_rows = [], [], []
@@ -240,7 +240,7 @@ def precompute_tables(pair: GearPairSpec, opts: MeshModelOptions, *, points_per_
     prov = _provenance(provenance, pr, load_dep_k, t_start, contact_it, axis_note)
     tables = _mesh_tables(pr, torques, (k_rows, e_rows, te_rows), k_nominal, prov)
     if thermal is not None:
-        # seed 004 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
+        # He & Yang 2023 temperature stiffness / oil temperature (docs/thermal.md, docs/tables.md "Operating axes")
         tables = _apply_thermal(tables, pr, thermal, progress=progress, contact_env=contact_env,
                                 nominal_torque_Nm=nominal_torque_Nm)
     return tables.validate()
@@ -412,7 +412,7 @@ def _thermal_rows(tables: MeshTables, pr: _PairRows, states, law, t0, *, progres
     """Per torque row T (N m, > 0) and thermal state (:class:`gearfmu.gear.thermal.ThermalState`):
     (k, e, static TE) arrays of shape (NT, NStates, P, n) / (NT, NStates, n).
 
-    The ratio r = k_T/k of :func:`gearfmu.gear.thermal.thermal_slot_stiffness` (seed 004
+    The ratio r = k_T/k of :func:`gearfmu.gear.thermal.thermal_slot_stiffness` (He & Yang 2023
     eq 5-28 at the state, load share of CHOICE 4), per slot and angle.  Without
     lead crowning the row's stiffness is r*k and its error unchanged; with
     crowning every slice stiffness is scaled by r (the thermal compliance is a
@@ -463,7 +463,7 @@ def _add_temperature_axis(tables: MeshTables, pr: _PairRows, thermal, *, progres
     docs/tables.md "Operating axes", docs/thermal.md): :func:`_thermal_rows` at
     the states (t, t) of the axis, standard temperature
     ``thermal.standard_temperature_C``, ``thermal.flank_law``.
-    Meshing errors and backlash do not depend on temperature (seed 004 models
+    Meshing errors and backlash do not depend on temperature (He & Yang 2023 models
     no thermal profile distortion); ``k_mean_N_per_m`` (the damping) stays the
     standard one.
     """
@@ -492,7 +492,7 @@ def _state_description(state) -> dict:
 
 def _apply_thermal_state(tables: MeshTables, pr: _PairRows, state, law, *, progress=False) -> MeshTables:
     """Single-temperature tables at a non-standard thermal state of the gears
-    (``[thermal]`` pinion/gear temperatures or profiles without an axis): seed 004
+    (``[thermal]`` pinion/gear temperatures or profiles without an axis): He & Yang 2023
     eq 27-28 at that state applied to every torque row by :func:`_thermal_rows`
     (docs/thermal.md "One temperature without an axis")."""
     k_arr, e_arr, te = _thermal_rows(tables, pr, [state], law, float(state.standard_temperature_C),
@@ -546,7 +546,7 @@ def _add_oil_temperature_axis(tables: MeshTables, pair, opts, thermal, *, contac
     alpha holding at the lubricant temperature), "constant" the scene's alpha at
     every t; the density is kept (CHOICE, docs/thermal.md).  The gears' state: for "oil" the ``[thermal]``
     pinion/gear temperatures or profiles (standard when absent) at every node;
-    for "bulk_and_oil" both gears uniformly at t (seed 004 eq 27-28).  The
+    for "bulk_and_oil" both gears uniformly at t (He & Yang 2023 eq 27-28).  The
     slice at the lubricant's own temperature is the scene's table bit for bit;
     ``k_mean_N_per_m`` (the damping) is the scene's (``tables``, built at the
     lubricant temperature); the FMU input starts at the lubricant temperature

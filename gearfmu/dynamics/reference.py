@@ -574,9 +574,9 @@ class _PairReference:
         self.tables, self.acc = tables, acc
         rb1, rb2 = float(tables.base_radius_pinion_m), float(tables.base_radius_gear_m)
         I1, I2 = float(tables.inertia_pinion_kgm2), float(tables.inertia_gear_kgm2)
-        self.me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # seed 003 below eq 2
+        self.me = I1 * I2 / (I1 * rb2 ** 2 + I2 * rb1 ** 2)  # Xu et al. 2022 below eq 2
         self.km = float(tables.k_mean_N_per_m)
-        self.c = 2.0 * s.damping_ratio * math.sqrt(self.km * self.me)  # docs/model.md, seed 003 eq 7-9
+        self.c = 2.0 * s.damping_ratio * math.sqrt(self.km * self.me)  # docs/model.md, Xu et al. 2022 eq 7-9
         self.wn = math.sqrt(self.km / self.me)
         self.model = s.damping_model
         self.par = (rb1, rb2, I1, I2, self.c, self.model)

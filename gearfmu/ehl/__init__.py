@@ -1,4 +1,4 @@
-"""Line-contact EHL (seed 000 eq 2-7): lubricant laws, deformation, multigrid solver.
+"""Line-contact EHL (Zhao et al. 2022 eq 2-7): lubricant laws, deformation, multigrid solver.
 
 Public API: :func:`solve_line_contact` with its :class:`LineContactSettings`,
 :class:`LineContactResult`, the transient
@@ -11,7 +11,7 @@ Self-contained numerics: imports nothing from gearfmu but :mod:`gearfmu.common`.
 ================  =================================================================
 Module            Contents
 ================  =================================================================
-solver            steady line-contact solver (seed 000 eq 2-7): inputs, settings, result
+solver            steady line-contact solver (Zhao et al. 2022 eq 2-7): inputs, settings, result
 attempts          the chain of attempts of a steady solve: fast path, corner plan,
                   settings per grid with polish, coupled Newton from stalled states
 transient         transient solver, roughness moving with the surfaces
@@ -29,9 +29,9 @@ film_newton       coupled Newton of the finest grid (pressure and H0; rough film
 polish            block-Newton polish of the pressure-spike region
 grids             grid choice: default grid, coarse-grid and refined retries
 roughness         roughness input: normalisation, band limit
-deformation       elastic deformation (seed 000 eq 4), FFT convolution
+deformation       elastic deformation (Zhao et al. 2022 eq 4), FFT convolution
 lubricant         Lubricant; viscosity/density laws: Roelands, D-H, Tait, Walther
-film_stiffness    oil-film normal stiffness (seed 000 eq 8-10)
+film_stiffness    oil-film normal stiffness (Zhao et al. 2022 eq 8-10)
 fits              closed-form film-thickness fits
 errors            EHLInputError, EHLConvergenceError, FilmCollapseError
 ================  =================================================================

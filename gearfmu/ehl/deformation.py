@@ -1,6 +1,6 @@
-"""Elastic deformation of a line contact (seed 000 eq 4), dimensionless form.
+"""Elastic deformation of a line contact (Zhao et al. 2022 eq 4), dimensionless form.
 
-Seed 000 eq 4 (the half-space line-contact solution, Johnson 1985 ch. 2):
+Zhao et al. 2022 eq 4 (the half-space line-contact solution, Johnson 1985 ch. 2):
 
     v(x) = -(2 / (pi E')) * integral p(x') ln (x - x')^2 dx'
          = -(4 / (pi E')) * integral p(x') ln|x - x'| dx'     (+ a constant)

@@ -42,7 +42,7 @@ class EHLConvergenceError(EHLError):
 
 class FilmCollapseError(EHLError):
     """The film thickness reached zero (h <= 0) somewhere: the full-film model
-    of seed 000 does not hold there.  ``x_m`` is the position, ``film_parameter``
+    of Zhao et al. 2022 does not hold there.  ``x_m`` is the position, ``film_parameter``
     lambda = h_min / sigma (composite RMS roughness); ``h_min_m`` the film."""
 
     def __init__(self, message: str, x_m: float = float("nan"),

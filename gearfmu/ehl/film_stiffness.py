@@ -1,6 +1,6 @@
-"""Oil-film (lubricant layer) normal stiffness, seed 000 eq 8-10.
+"""Oil-film (lubricant layer) normal stiffness, Zhao et al. 2022 eq 8-10.
 
-Spring model of a liquid layer (seed 000 ref [43]; Dwyer-Joyce, Reddyhoff &
+Spring model of a liquid layer (Zhao et al. 2022 ref [43]; Dwyer-Joyce, Reddyhoff &
 Zhu 2011, J. Tribol. 133, 031501): a layer of thickness h and bulk modulus B
 has a normal stiffness per unit area B/h, so a contact patch of area A has
 
@@ -15,7 +15,7 @@ B0 is the bulk modulus at ambient pressure and B0' its pressure derivative
 (dB/dp at p = 0 equals B0', which the tests check).  The slice stiffnesses
 add (eq 10): K_l = sum_n k_ln.
 
-Values of B0, B0' (a gap of seed 000: eq 9 refers the reader to its ref [44],
+Values of B0, B0' (a gap of Zhao et al. 2022: eq 9 refers the reader to its ref [44],
 a misnumbering -- [44] is Ma et al. 2016 on tip relief; the law is that of
 ref [43], Dwyer-Joyce, Reddyhoff & Zhu 2011).  What that paper says about
 them (its abstract, J. Tribol. 133 (3) 031501, and the White Rose eprint
@@ -35,12 +35,12 @@ docs/ehl.md), so the defaults are the literature values of that kind:
 
 Checked (tests/unit/ehl/test_lubricant_laws.py): the equation of state whose tangent
 modulus eq 9 is (:func:`~gearfmu.ehl.lubricant.tait_density_ratio`) with
-these defaults stays within 1.7 % of the Dowson-Higginson density (seed 000
+these defaults stays within 1.7 % of the Dowson-Higginson density (Zhao et al. 2022
 eq 6, Dowson & Higginson 1966) from 0 to 2 GPa, and D-H's own ambient
 modulus 0.59 GPa/0.34 = 1.74 GPa is 5 % below B0; B0' = 5 would leave that
 band.  Both remain parameters.
 
-Contact patch of one slice (a choice, seed 000 does not define A and h_l):
+Contact patch of one slice (a choice, Zhao et al. 2022 does not define A and h_l):
 A = 2 b * width (the Hertz contact band |x| <= b), p_m and h_l the means of
 p and h over |x| <= b.  ``method="local"`` instead sums springs in parallel,
 k = width * integral_{|x|<=b} B(p(x)) / h(x) dx.
@@ -59,7 +59,7 @@ from .lubricant import B0_DEFAULT_PA, B0_PRIME_DEFAULT, bulk_modulus_Pa  # noqa:
 def film_stiffness_N_per_m(area_m2: float, h_m: float, p_mean_Pa: float,
                            B0_Pa: float = B0_DEFAULT_PA,
                            B0_prime: float = B0_PRIME_DEFAULT) -> float:
-    """k_l = A B_l(p_m) / h_l (N/m), seed 000 eq 8."""
+    """k_l = A B_l(p_m) / h_l (N/m), Zhao et al. 2022 eq 8."""
     if not (math.isfinite(area_m2) and area_m2 > 0):
         raise EHLInputError(f"area_m2={area_m2!r}: must be finite and > 0")
     if not (math.isfinite(h_m) and h_m > 0):
@@ -90,7 +90,7 @@ def slice_film_stiffness_N_per_m(result, width_m: float, method: str = "seed",
 
 
 def total_film_stiffness_N_per_m(slice_stiffnesses_N_per_m) -> float:
-    """K_l = sum of the slice stiffnesses (N/m), seed 000 eq 10 (slices in parallel)."""
+    """K_l = sum of the slice stiffnesses (N/m), Zhao et al. 2022 eq 10 (slices in parallel)."""
     k = np.asarray(slice_stiffnesses_N_per_m, dtype=float)
     if k.ndim != 1 or k.size == 0 or not np.all(np.isfinite(k)) or np.any(k < 0):
         raise EHLInputError("slice_stiffnesses_N_per_m: need a non-empty 1-D array of finite values >= 0")

@@ -121,7 +121,7 @@ def coarse_retry_grids(n_int: int, n_coarse: int) -> List[int]:
 def effective_alpha(prm) -> float:
     """alpha_eff = d ln(eta)/dP at P = 1 (dimensionless, Hertzian pressure
     units): alpha p_h for Barus; A z (p_h/p0) (1 + p_h/p0)^(z-1) for Roelands
-    (seed 000 eq 5)."""
+    (Zhao et al. 2022 eq 5)."""
     if prm.z < 0.0:
         return float(prm.A)
     if prm.z > 0.0:

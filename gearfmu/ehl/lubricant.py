@@ -1,20 +1,20 @@
 """Lubricant property laws used by the line-contact EHL solver (SI units).
 
-* Roelands-type pressure-viscosity law, seed 000 eq 5 (Roelands 1966, in the
+* Roelands-type pressure-viscosity law, Zhao et al. 2022 eq 5 (Roelands 1966, in the
   form used by Venner & Lubrecht 2000, *Multilevel Methods in Lubrication*,
   Elsevier):
 
       eta(p) = eta0 * exp{ (ln(eta0) + 9.67) * [ -1 + (1 + p/p0)^z ] }
 
-  with p0 = 1.96e8 Pa (the "pressure coefficient" of seed 000) and the
+  with p0 = 1.96e8 Pa (the "pressure coefficient" of Zhao et al. 2022) and the
   viscosity-pressure index z chosen so that the initial slope
   d ln(eta)/dp at p = 0 equals the Barus pressure-viscosity coefficient
   alpha:  z = alpha * p0 / (ln(eta0) + 9.67)   (eta0 in Pa s).
-* Dowson-Higginson density, seed 000 eq 6 (Dowson & Higginson 1966):
+* Dowson-Higginson density, Zhao et al. 2022 eq 6 (Dowson & Higginson 1966):
 
       rho(p) = rho0 * (0.59e9 + 1.34 p) / (0.59e9 + p)
 
-* Bulk modulus of the lubricant against pressure, seed 000 eq 9 (tangent
+* Bulk modulus of the lubricant against pressure, Zhao et al. 2022 eq 9 (tangent
   modulus of the isothermal Tait equation; Dwyer-Joyce, Reddyhoff & Zhu 2011),
   :func:`bulk_modulus_Pa`, and the equation of state it is the tangent modulus
   of, :func:`tait_volume_ratio` / :func:`tait_density_ratio`; the choice of
@@ -41,11 +41,11 @@ import numpy as np
 
 from .errors import EHLInputError
 
-#: Roelands reference pressure p0 in Pa (seed 000 eq 5; Venner & Lubrecht 2000).
+#: Roelands reference pressure p0 in Pa (Zhao et al. 2022 eq 5; Venner & Lubrecht 2000).
 ROELANDS_P0_PA = 1.96e8
 #: Roelands constant ln(eta_inf) = -9.67 with eta in Pa s (Roelands 1966).
 ROELANDS_LN_ETA_INF = -9.67
-#: Dowson-Higginson constants (seed 000 eq 6), Pa and dimensionless.
+#: Dowson-Higginson constants (Zhao et al. 2022 eq 6), Pa and dimensionless.
 DH_C1_PA = 0.59e9
 DH_C2 = 1.34
 
@@ -78,7 +78,7 @@ def roelands_z(eta0_Pas: float, alpha_Pa_inv: float, p0_Pa: float = ROELANDS_P0_
 
 def roelands_viscosity_Pas(p_Pa, eta0_Pas: float, alpha_Pa_inv: float,
                            p0_Pa: float = ROELANDS_P0_PA):
-    """Viscosity in Pa s at gauge pressure ``p_Pa`` (Pa), seed 000 eq 5."""
+    """Viscosity in Pa s at gauge pressure ``p_Pa`` (Pa), Zhao et al. 2022 eq 5."""
     p = np.asarray(p_Pa, dtype=float)
     if np.any(p < 0.0) or not np.all(np.isfinite(p)):
         raise EHLInputError("p_Pa must be finite and >= 0")
@@ -88,7 +88,7 @@ def roelands_viscosity_Pas(p_Pa, eta0_Pas: float, alpha_Pa_inv: float,
 
 
 def dowson_higginson_density_kg_m3(p_Pa, rho0_kg_m3: float = 1.0):
-    """Density in kg/m^3 at gauge pressure ``p_Pa`` (Pa), seed 000 eq 6.
+    """Density in kg/m^3 at gauge pressure ``p_Pa`` (Pa), Zhao et al. 2022 eq 6.
 
     With the default ``rho0_kg_m3 = 1`` this is the density ratio rho/rho0
     (tends to 1.34 as p -> infinity).
@@ -119,14 +119,14 @@ def _tait_inputs(p_Pa, B0_Pa: float, B0_prime: float):
 
 
 def bulk_modulus_Pa(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
-    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), seed 000 eq 9."""
+    """Bulk modulus B_l (Pa) of the lubricant at pressure ``p_Pa`` (Pa), Zhao et al. 2022 eq 9."""
     p, a = _tait_inputs(p_Pa, B0_Pa, B0_prime)
     return (1.0 - np.log1p(p / B0_Pa * a) / a) * (B0_Pa + p * a)
 
 
 def tait_volume_ratio(p_Pa, B0_Pa: float = B0_DEFAULT_PA, B0_prime: float = B0_PRIME_DEFAULT):
     """V/V0 (dimensionless) at pressure ``p_Pa`` (Pa) of the isothermal Tait
-    equation of state whose tangent modulus -V dp/dV is seed 000 eq 9:
+    equation of state whose tangent modulus -V dp/dV is Zhao et al. 2022 eq 9:
 
         V/V0 = 1 - ln[1 + p (1 + B0')/B0] / (1 + B0')
 
@@ -179,7 +179,7 @@ def roelands_viscosity_pT_Pas(p_Pa, T_K, eta_ref_Pas: float, T_ref_K: float, Z: 
     (9.67 = 1.2 ln 10 + ln 1000; p0 = 2000 kgf/cm^2).  ``eta_ref_Pas`` is the
     viscosity at ambient pressure and ``T_ref_K``; Z (viscosity-pressure index)
     and S0 (viscosity-temperature index) are constants of the oil, independent of
-    T and p (Roelands).  At T = T_R this is seed 000 eq 5 with z = Z.
+    T and p (Roelands).  At T = T_R this is Zhao et al. 2022 eq 5 with z = Z.
     """
     p = np.asarray(p_Pa, dtype=float)
     if np.any(p < 0.0) or not np.all(np.isfinite(p)):

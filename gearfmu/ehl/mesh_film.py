@@ -1,6 +1,6 @@
 """The EHL oil film along the line of action: contact kinematics, flank
 roughness at the contact, and the film stiffness of each face-width slice of
-each tooth pair at each meshing position (seed 000 eq 3, 8-10), solved
+each tooth pair at each meshing position (Zhao et al. 2022 eq 3, 8-10), solved
 through a ``concurrent.futures``-style executor.  SI units throughout.
 
 Kinematics of an involute contact (textbook: e.g. Johnson, *Contact
@@ -19,10 +19,10 @@ along the LOA, omega rb, is equal for both and is the motion of the contact
 point itself).  With omega2 = omega1 z1/z2:
 
     u1 = omega1 s1,  u2 = omega1 (z1/z2) s2,
-    u_s = (u1 + u2)/2   (seed 000 eq 2's entrainment velocity),
+    u_s = (u1 + u2)/2   (Zhao et al. 2022 eq 2's entrainment velocity),
     sliding u1 - u2 = 0 at the pitch point, where u_s = omega1 r_w1 sin(alpha_w).
 
-Roughness at the contact (seed 000 eq 3's wm; a CHOICE where the seed is
+Roughness at the contact (Zhao et al. 2022 eq 3's wm; a CHOICE where the seed is
 silent): every flank carries, on each slice, its own W-M profile along the
 flank arc length a measured from the base circle, a = rho^2/(2 r_b) for roll
 length rho (arc length of an involute).  Relative to the moving contact point
@@ -37,11 +37,11 @@ periodic in the mesh period); slices and the two flanks are independent
 (``numpy.random.SeedSequence(seed)``: child 0 pinion, child 1 gear, each
 spawned per slice).  The roughness is band-limited to ``f_max_per_m`` (default
 1e4 1/m: wavelengths >= 100 um, about 14 grid spacings of the default 256
-interval EHL grid at the seed 000 operating point; finer roughness does not
+interval EHL grid at the Zhao et al. 2022 operating point; finer roughness does not
 converge, docs/ehl.md) -- the band limit keeps 63-77 % of the roughness
 variance of the Table 2 levels.
 
-Film stiffness per slice: seed 000 eq 8-9 with A = 2 b width and the means of
+Film stiffness per slice: Zhao et al. 2022 eq 8-9 with A = 2 b width and the means of
 p and h over the Hertz band (:func:`gearfmu.ehl.film_stiffness.slice_film_stiffness_N_per_m`,
 ``method="seed"``).
 """
@@ -129,7 +129,7 @@ class FilmEnvironment:
 
     ``E_prime_Pa`` = 2 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2); lubricant eta0 (Pa s)
     at the oil temperature, alpha (1/Pa), rho0 (kg/m^3); bulk-modulus law
-    B0 (Pa), B0' (seed 000 eq 9); ``n_nodes`` of the EHL grid (None: solver's
+    B0 (Pa), B0' (Zhao et al. 2022 eq 9); ``n_nodes`` of the EHL grid (None: solver's
     choice)."""
 
     E_prime_Pa: float
@@ -171,7 +171,7 @@ ROUGH_WARM_SETTINGS = dict(switch=0.3, nu1=2, nu2=3, omega_gs=0.6, omega_j=0.4)
 def solve_slice_film(env: FilmEnvironment, R_m: float, u_m_s: float, w_N_per_m: float,
                      roughness=None, return_result: bool = False, initial=None,
                      relaxation: Optional[Sequence[dict]] = None):
-    """Film of one slice: solve seed 000 eq 2-7 and eq 8-9 (see module doc).
+    """Film of one slice: solve Zhao et al. 2022 eq 2-7 and eq 8-9 (see module doc).
 
     ``roughness``: None (smooth) or an ``(x_m, z_m)`` composite profile.
     ``initial``: a LineContactResult to start from (warm start, e.g. the smooth

@@ -1,6 +1,6 @@
 """Compiled grid operators of the line-contact EHL multigrid solver (numba).
 
-Equations (seed 000 eq 2-7 in the Hertzian scaling of Venner & Lubrecht 2000,
+Equations (Zhao et al. 2022 eq 2-7 in the Hertzian scaling of Venner & Lubrecht 2000,
 *Multilevel Methods in Lubrication*, Elsevier; docs/ehl.md):
 
     d/dX( eps dP/dX ) - d(rho H)/dX = 0,   eps = rho H^3 / (eta lambda)    (Reynolds, eq 2)
@@ -28,7 +28,7 @@ Relaxation (Venner & Lubrecht 2000): point Newton, Gauss-Seidel where
 eps_i/dX^2 >= ``switch`` or next to cavitation, distributive Jacobi
 elsewhere.  Two distribution patterns: ``dist = 1`` the symmetric pattern of
 Venner & Lubrecht (P_i += d_i - (d_{i-1} + d_{i+1})/4; ``dist = 2`` with 1/2),
-``dist = 0`` the dipole of seed 000 (+d_i at i, -d_i at i-1).  The Jacobians
+``dist = 0`` the dipole of Zhao et al. 2022 (+d_i at i, -d_i at i-1).  The Jacobians
 include the deformation kernel and the density derivative of the wedge term;
 a trust region limits the change of ln(eps) per sweep to ``dmax``.  Coarse
 grid: FAS, injection of P, full weighting of the residual, the coarse film
@@ -145,7 +145,7 @@ def _reynolds_terms(P, H, rho, eps, i, sec, idX, ih2, ct, char):
 def _residual(l, P, H, f, rho, eps, out, iarr, dx, order2, ct=0.0, char=False):
     """out_i = f_i - L_i(P, H) (interior nodes; 0 at the ends).
 
-    ``ct`` > 0: transient operator (seed 000 eq 2 with d(rho H)/dT, BDF1/BDF2,
+    ``ct`` > 0: transient operator (Zhao et al. 2022 eq 2 with d(rho H)/dT, BDF1/BDF2,
     docs/ehl_transient.md): the implicit part ct (rho H)_i is added to the
     wedge term; the old time levels are in f (finest grid).  ct = 0 takes
     the steady code path unchanged (bitwise).  ``char``: characteristic

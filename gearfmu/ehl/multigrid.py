@@ -219,7 +219,7 @@ class FlatMultigrid:
     # -- transient term (docs/ehl_transient.md; default off) -------------------
     def rho_H(self, l=None) -> np.ndarray:
         """rho_i H_i on level l (finest by default; Dowson-Higginson rho of
-        the current P), the quantity whose time derivative seed 000 eq 2 keeps."""
+        the current P), the quantity whose time derivative Zhao et al. 2022 eq 2 keeps."""
         l = self.top if l is None else l
         rho, eps, dle, drho = self.work[0], self.work[1], self.work[2], self.work[3]
         _coef(l, self.P, self.H, rho, eps, dle, drho, self.iarr, self.prmv)

@@ -62,7 +62,7 @@ def _finest_terms(solver):
 def block_newton(solver, steps: int = 2, frac: float = 0.05, margin: int = 8,
                  max_block: int = POLISH_MAX_BLOCK):
     """Newton steps for the finest-grid pressure on the block of nodes with the
-    largest scaled Reynolds residual (seed 000 eq 2-6 discretised as in
+    largest scaled Reynolds residual (Zhao et al. 2022 eq 2-6 discretised as in
     :mod:`.multigrid`; H0 and all other nodes fixed).
 
     The block is the contiguous pressurised run of nodes around the largest

@@ -1,4 +1,4 @@
-"""Steady line-contact EHL solver, seed 000 eq 2-7 and Algorithm 1.
+"""Steady line-contact EHL solver, Zhao et al. 2022 eq 2-7 and Algorithm 1.
 
 Public entry point: :func:`solve_line_contact`.  See :mod:`.multigrid` for the
 equations and the numerical method, and docs/ehl.md for the choices made.
@@ -7,9 +7,9 @@ Definitions (SI; Moes 1992 / Venner & Lubrecht 2000 conventions):
 
 * ``R_m``: reduced radius of curvature, 1/R = 1/R1 + 1/R2.
 * ``E_Pa``: reduced modulus E' = 2 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2)
-  (the E' of Moes and Venner-Lubrecht and the E of seed 000 eq 4).
+  (the E' of Moes and Venner-Lubrecht and the E of Zhao et al. 2022 eq 4).
 * ``w_N_per_m``: load per unit length of contact.
-* ``u_m_s``: entrainment (mean) speed u_m = (u1 + u2)/2 (seed 000 eq 2's u_s).
+* ``u_m_s``: entrainment (mean) speed u_m = (u1 + u2)/2 (Zhao et al. 2022 eq 2's u_s).
 * Moes' parameters: W = w/(E'R), U = eta0 u_m/(E'R), G = alpha E',
   M = W (2U)^(-1/2), L = G (2U)^(1/4), H_Moes = (h/R)(2U)^(-1/2).
 * Hertz: b = R sqrt(8W/pi), p_h = E' sqrt(W/(2 pi)); Venner-Lubrecht
@@ -17,11 +17,11 @@ Definitions (SI; Moes 1992 / Venner & Lubrecht 2000 conventions):
   alpha-bar = alpha p_h = L sqrt(M/(2 pi)).
 
 Roughness: the steady equations are solved with the composite roughness
-frozen in place (d(rho h)/dt = 0 in seed 000 eq 2, i.e. a quasi-static
+frozen in place (d(rho h)/dt = 0 in Zhao et al. 2022 eq 2, i.e. a quasi-static
 snapshot of the rough film); the composite roughness is the sum of the
-profiles of both surfaces and enters seed 000 eq 3 with a positive sign (a
+profiles of both surfaces and enters Zhao et al. 2022 eq 3 with a positive sign (a
 positive height *opens* the gap).  Where the film collapses (h <= 0 at any
-node) the full-film model of seed 000 does not apply and
+node) the full-film model of Zhao et al. 2022 does not apply and
 :class:`~gearfmu.ehl.errors.FilmCollapseError` is raised with the position
 and the film parameter lambda = h_min / sigma (no asperity load sharing).
 """
@@ -74,9 +74,9 @@ class LineContactSettings:
     of the same name (``solve_line_contact(M=20, L=10, n_nodes=513)``), which overrides the value
     of the ``settings`` passed; a keyword that is not a field is a relaxation option (``relaxation``).
 
-    * Equations: ``viscosity`` "roelands" (seed 000 eq 5, default) or "barus" (exp(alpha p), the
+    * Equations: ``viscosity`` "roelands" (Zhao et al. 2022 eq 5, default) or "barus" (exp(alpha p), the
       law behind Moes' fit; used by the validation tests); ``compressible``: Dowson-Higginson
-      density (seed 000 eq 6, default on).
+      density (Zhao et al. 2022 eq 6, default on).
     * Grid: ``n_nodes`` = n_coarse * 2^k + 1 nodes on [``x_in``, ``x_out``] in units of the Hertz
       half-width b (None: chosen from the film, :func:`.grids.choose_grid`; so is ``n_coarse``, the
       coarsest grid's intervals).
@@ -250,7 +250,7 @@ def line_contact_problem(R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv, rh
     """The checked problem of :func:`solve_line_contact`: the dimensional inputs, or Moes' M and L
     on :data:`REFERENCE_CASE`; W = w/(E'R), U = eta0 u_m/(E'R), M = W (2U)^(-1/2),
     L = alpha E' (2U)^(1/4); Hertz b = R sqrt(8W/pi), p_h = E' sqrt(W/(2 pi)); the kernel's
-    lambda-bar = 3 pi^2/(8 M^2), Roelands A = ln eta0 + 9.67 and z = alpha p0/A (seed 000 eq 5)
+    lambda-bar = 3 pi^2/(8 M^2), Roelands A = ln eta0 + 9.67 and z = alpha p0/A (Zhao et al. 2022 eq 5)
     or Barus (flagged z < 0, A = alpha p_h), Dowson-Higginson c1/p_h (eq 6)."""
     dimensional = [R_m, E_Pa, w_N_per_m, u_m_s, eta0_Pas, alpha_Pa_inv]
     moes = M is not None or L is not None
@@ -318,7 +318,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
                        M: float = None, L: float = None, roughness_m: Roughness = None,
                        initial: Optional[LineContactResult] = None,
                        settings: Optional[LineContactSettings] = None, **fields) -> LineContactResult:
-    """Solve the steady isothermal line-contact EHL problem (seed 000 eq 2-7).
+    """Solve the steady isothermal line-contact EHL problem (Zhao et al. 2022 eq 2-7).
 
     Either the dimensional inputs ``R_m`` (m), ``E_Pa`` (reduced modulus E',
     Pa), ``w_N_per_m`` (N/m), ``u_m_s`` (mean entrainment speed, m/s),
@@ -326,7 +326,7 @@ def solve_line_contact(R_m: float = None, E_Pa: float = None, w_N_per_m: float =
     scales the density; the film does not depend on it) -- or Moes' ``M``
     and ``L`` (then the reference case :data:`REFERENCE_CASE` supplies the
     dimensional values).  ``roughness_m``: composite roughness (m) added to
-    the gap (seed 000 eq 3): a function of x (m), an ``(x_m, z_m)`` pair of
+    the gap (Zhao et al. 2022 eq 3): a function of x (m), an ``(x_m, z_m)`` pair of
     arrays, or a list of either (summed).  ``initial``: a :class:`LineContactResult`
     of a nearby problem (e.g. the neighbouring meshing position): its pressure P(x/b)
     and central film (converted to the new scaling) start the iteration and its

@@ -1,6 +1,6 @@
 """Transient line-contact EHL with roughness moving with the surfaces.
 
-Equations (seed 000 eq 2-3 keeping the squeeze term; docs/ehl_transient.md
+Equations (Zhao et al. 2022 eq 2-3 keeping the squeeze term; docs/ehl_transient.md
 section 1), Venner & Lubrecht 2000 scaling X = x/b, P = p/p_h, H = h R/b^2
 and **T = t u_s/b** (u_s the entrainment speed):
 
@@ -44,7 +44,7 @@ flank profiles' W-M band limit f_max = 1e4 1/m is 14 dX on the default
 (not mass conserving at internal cavities: risk R2 of the design note).
 
 Outputs per step on the Hertz band |x| <= b: central and minimum film, mean
-film and mean pressure, and the film stiffness k(t) = A B(p_m)/h_m of seed 000
+film and mean pressure, and the film stiffness k(t) = A B(p_m)/h_m of Zhao et al. 2022
 eq 8 (:func:`.film_stiffness.film_stiffness_N_per_m`, ``method="seed"``:
 A = 2 b width); the two time reductions of docs/ehl_transient.md
 are :meth:`TransientLineContactResult.film_stiffness_reductions`.
@@ -101,7 +101,7 @@ class HarmonicWaviness:
     """Harmonic waviness z(xi) = amplitude_m cos(2 pi xi / wavelength_m + phase_rad)
     on the surfaces listed in ``surfaces`` (1, 2 or both); xi (m) is the
     material coordinate of the surface (its position at t = 0).  A positive
-    height opens the gap (seed 000 eq 3 sign of :mod:`.solver`)."""
+    height opens the gap (Zhao et al. 2022 eq 3 sign of :mod:`.solver`)."""
 
     amplitude_m: float
     wavelength_m: float
@@ -130,7 +130,7 @@ class HarmonicWaviness:
 class FlankSliceRoughness:
     """The roughness of one face-width slice of a :class:`.mesh_film.FlankRoughness`
     at contact arc lengths ``a1_m``, ``a2_m`` (pinion / gear flank, m) at t = 0:
-    wm(x, t) = z1(a1 + u1 t - x) + z2(a2 - u2 t + x) (seed 000 eq 3,
+    wm(x, t) = z1(a1 + u1 t - x) + z2(a2 - u2 t + x) (Zhao et al. 2022 eq 3,
     ``FlankRoughness.composite_m`` with the flanks moving)."""
 
     flank: object
@@ -191,7 +191,7 @@ def dimensionless_params(res: LineContactResult, viscosity: str = "roelands",
                          compressible: bool = True) -> EHLParams:
     """The :class:`.multigrid.EHLParams` of a steady result (the formulas of
     :func:`.solver.solve_line_contact`: lambda-bar = 3 pi^2/(8 M^2), Roelands
-    A = ln eta0 + 9.67, z = alpha p0/A (seed 000 eq 5) or Barus, D-H c1, eq 6)."""
+    A = ln eta0 + 9.67, z = alpha p0/A (Zhao et al. 2022 eq 5) or Barus, D-H c1, eq 6)."""
     eta0, alpha = res.inputs["eta0_Pas"], res.inputs["alpha_Pa_inv"]
     A = math.log(eta0) - ROELANDS_LN_ETA_INF
     if viscosity == "roelands":
@@ -218,7 +218,7 @@ class TransientLineContactResult:
     h_min_m: np.ndarray            #: minimum film, m
     h_mean_m: np.ndarray           #: mean film on |x| <= b, m
     p_mean_Pa: np.ndarray          #: mean pressure on |x| <= b, Pa
-    k_film_N_per_m: np.ndarray     #: seed 000 eq 8 film stiffness of a width_m slice, N/m
+    k_film_N_per_m: np.ndarray     #: Zhao et al. 2022 eq 8 film stiffness of a width_m slice, N/m
     cycles: np.ndarray             #: W-cycles per step (0 at T = 0)
     attempts: np.ndarray           #: index of the relaxation setting that converged per step
     dT: float                      #: time step, dimensionless (b/u_s units)
@@ -241,7 +241,7 @@ class TransientLineContactResult:
     settings: Dict = field(default_factory=dict)   #: relaxation setting of the last step
     start: str = "frozen"              #: "frozen" or "smooth" (roughness ramped in)
     ramp_T: float = 0.0                #: ramp duration of the smooth start (dimensionless)
-    B0_Pa: float = B0_DEFAULT_PA       #: Tait B0 used for k, Pa (seed 000 eq 9)
+    B0_Pa: float = B0_DEFAULT_PA       #: Tait B0 used for k, Pa (Zhao et al. 2022 eq 9)
     B0_prime: float = B0_PRIME_DEFAULT  #: Tait B0' used for k
     #: per step: 0, or the number of BDF2 sub-steps that rescued a stalled step
     rescued: Optional[np.ndarray] = None
@@ -276,7 +276,7 @@ class TransientLineContactResult:
 
     def film_stiffness_reductions(self, T_start=None, T_end=None) -> Dict[str, float]:
         """docs/ehl_transient.md: (a) ``k_mean_of_k_N_per_m`` = <A B(p_m)/h_m>,
-        (b) ``k_of_means_N_per_m`` = A B(<p_m>)/<h_m> (seed 000 eq 8 on time means),
+        (b) ``k_of_means_N_per_m`` = A B(<p_m>)/<h_m> (Zhao et al. 2022 eq 8 on time means),
         plus the window means of h_m, p_m and h_central."""
         m = self.window(T_start, T_end)
         kb = film_stiffness_N_per_m(2.0 * self.b_m * self.width_m, float(self.h_mean_m[m].mean()),
@@ -310,7 +310,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
                                  numerics: Optional[TransientNumerics] = None, *,
                                  roughness: RoughnessInput = None, width_m: float = 1.0,
                                  **fields) -> TransientLineContactResult:
-    """Transient line-contact EHL (seed 000 eq 2-7 with d(rho h)/dt; module doc).
+    """Transient line-contact EHL (Zhao et al. 2022 eq 2-7 with d(rho h)/dt; module doc).
 
     Inputs in three groups, :class:`TransientOperating`, :class:`TransientLubricant`
     and :class:`TransientNumerics`; each of their fields may also be given as a
@@ -334,7 +334,7 @@ def solve_line_contact_transient(operating: Optional[TransientOperating] = None,
     shifted without numerical damping, docs/ehl_transient.md).  Per step: W-cycles until
     the relative pressure change < ``tol_pressure``, load error < ``tol_load``,
     scaled residual < ``tol_residual`` (the steady defaults).  ``width_m``,
-    ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (seed 000 eq 8-9).
+    ``B0_Pa``, ``B0_prime``: slice width and Tait constants of k (Zhao et al. 2022 eq 8-9).
     ``steady_options``: extra keyword arguments of the steady start solve.
     ``extrapolate``: linear extrapolation of P, H0 from the last two steps as
     the warm start (False: the last step's P, H0).

@@ -37,7 +37,7 @@ class TransientLubricant:
     """Lubricant of :func:`solve_line_contact_transient`: ``eta0_Pas`` (Pa s),
     ``alpha_Pa_inv`` (1/Pa), ``rho0_kg_m3`` (kg/m^3), Dowson-Higginson density
     (``compressible``), ``viscosity`` "roelands" or "barus", and the Tait
-    constants ``B0_Pa`` (Pa), ``B0_prime`` of the film stiffness (seed 000 eq 8-9)."""
+    constants ``B0_Pa`` (Pa), ``B0_prime`` of the film stiffness (Zhao et al. 2022 eq 8-9)."""
 
     eta0_Pas: Optional[float] = None
     alpha_Pa_inv: Optional[float] = None

@@ -1,7 +1,7 @@
 """Time levels of the transient line-contact solver (:func:`.transient.solve_line_contact_transient`).
 
 :class:`MovingSurfaces`: the composite roughness W(x, t) = z1(x - u1 t) + z2(x - u2 t) of two
-surfaces whose height patterns move with them (seed 000 eq 3; docs/ehl_transient.md section 1).
+surfaces whose height patterns move with them (Zhao et al. 2022 eq 3; docs/ehl_transient.md section 1).
 :class:`TimeStepper`: the time levels on one :class:`.multigrid.FlatMultigrid` -- the rigid gap
 X^2/2 + W at the level's time (ramped in for a smooth start), the time-derivative terms of the
 scheme (characteristic, BDF2, BDF1), the warm start extrapolated from the last levels, the
@@ -72,7 +72,7 @@ class TimeStepper:
         self.P_hist = self.H0_hist = self.rH = None
 
     def set_time(self, T: float) -> None:
-        """The rigid gap X^2/2 + W(X, T) of every level at the dimensionless time T (seed 000 eq 3)."""
+        """The rigid gap X^2/2 + W(X, T) of every level at the dimensionless time T (Zhao et al. 2022 eq 3)."""
         solver, model = self.solver, self.surfaces.model
         b_m, u_s, ramp = self.b_m, self.u_s, self.ramp
         for l in range(solver.n_levels):

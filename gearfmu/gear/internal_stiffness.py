@@ -1,6 +1,6 @@
 """Tooth-pair stiffness of the planet-ring (internal) mesh, with the ring rim's compliance (SI units).
 
-The potential-energy method of the external pair (:mod:`gearfmu.gear.stiffness`, seed 000 eq 15:
+The potential-energy method of the external pair (:mod:`gearfmu.gear.stiffness`, Zhao et al. 2022 eq 15:
 bending, shear and axial compression of each tooth as a cantilever of variable section, in series
 with the Hertz contact stiffness) applied to the internal tooth, with the ring's rim as a curved
 beam between its supports -- the model of Z. Chen, Y. Shao, *Mesh stiffness of an internal spur
@@ -20,7 +20,7 @@ Ring tooth (a cantilever fixed at the root circle rf2, pointing inwards to the t
   is h = rho sin psi;
 * the unit load acts at the contact point P along the flank normal pointing into the tooth (for
   an involute: along the line of action); with f_xi, f_eta its components along and across the
-  axis, the compliances are the integrals of seed 000 eq 15 written for any axis orientation
+  axis, the compliances are the integrals of Zhao et al. 2022 eq 15 written for any axis orientation
       1/k_b = int [f_eta (xi_P - xi) - eta_P f_xi]^2/(E I) dxi,  1/k_s = int 1.2 f_eta^2/(G A) dxi,
       1/k_a = int f_xi^2/(E A) dxi,   I = (2h)^3 w/12, A = 2 h w,
   by Gauss-Legendre quadrature in the roll parameter u (gearfmu.gear.stiffness.cantilever_compliance_m_per_N).

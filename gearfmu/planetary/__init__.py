@@ -8,6 +8,11 @@ pointer helpers), :mod:`gearfmu.dynamics`, :mod:`gearfmu.tables` and :mod:`gearf
 scene, the assembly or the physics.  docs/planetary.md describes the model, the integrators, the
 modes and what is verified.
 
+Exports (loaded with their module on first use): ``PlanetaryModel``, ``build_drivetrain``,
+``PlanetaryModelError``; the native solver ``simulate``, ``PlanetaryResult``,
+``PlanetaryInputError``; ``PlanetaryModes``, ``PlanetaryMode``, ``campbell`` (the modes
+themselves: ``gearfmu.planetary.modes.modes``); the reference ``simulate_reference``.
+
 ===========  =========================================================
 Module       Contents
 ===========  =========================================================
@@ -22,3 +27,13 @@ native       public API of the numba solver (simulate, PlanetaryResult)
 reference    event-located scipy reference of the same equations
 ===========  =========================================================
 """
+from ..common.exports import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(("PlanetaryModel", "build_drivetrain", "PlanetaryModelError"), "model"),
+    **dict.fromkeys(("simulate", "PlanetaryResult", "PlanetaryInputError"), "native"),
+    **dict.fromkeys(("PlanetaryModes", "PlanetaryMode", "campbell"), "modes"),
+    "simulate_reference": "reference",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

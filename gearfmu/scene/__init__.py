@@ -29,6 +29,8 @@ envelope      [envelope] and [accuracy]: operating envelope and accuracy target
 toml_writer   dumps_toml: a mapping written as TOML (scenes built in code)
 drivetrain    DrivetrainScene, load_drivetrain: gear-pair stages joined by shafts,
               motor and load
+planetary     [[planetary]] stages of a drivetrain scene: a geometric planetary set or
+              published lumped parameters, and the checks of an impossible set
 data/         default_scene.toml
 ============  ===================================================================
 """

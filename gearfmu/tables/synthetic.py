@@ -10,19 +10,19 @@ module, for tests, hard cases and imports from other tools:
 * :func:`rectangular_wave_tables` gives the classic rectangular-wave time
   varying mesh stiffness (TVMS): every tooth pair is engaged for
   ``contact_ratio`` mesh periods, the total stiffness alternates between the
-  double-contact level and the single-contact level (seed 003 section 2,
+  double-contact level and the single-contact level (Xu et al. 2022 section 2,
   Fig. 2: pairs j-1, j, j+1 with the meshing periods t_z and t_h; the
   rectangular-wave TVMS is the usual textbook idealisation, e.g. Kahraman &
-  Blankenship 1997, the reference [14] of seed 003).
+  Blankenship 1997, the reference [14] of Xu et al. 2022).
 
-Defaults of the gear data are the Kahraman & Blankenship test gears of seed 003
+Defaults of the gear data are the Kahraman & Blankenship test gears of Xu et al. 2022
 Table 1 (50/50 teeth, base diameter 140.95 mm, inertia 0.0074 kg*m^2 per gear,
 contact ratio 1.7547, backlash on the line of action 0.136 mm).
 
 Conventions (see gearfmu/tables/mesh_tables.py): slot ``n % P`` holds the pair that starts
 mesh number n at pinion angle n*mesh_period_rad (n counted from phi = 0); a
 slot whose pair is outside the contact zone has k = 0.  A positive meshing
-error is a material deficit: the pair touches when x > e + b (seed 003 eq 6).
+error is a material deficit: the pair touches when x > e + b (Xu et al. 2022 eq 6).
 """
 from __future__ import annotations
 
@@ -50,15 +50,15 @@ __all__ = [
     "comprehensive_error_m",
 ]
 
-#: Kahraman & Blankenship test gears, seed 003 Table 1 (base diameter 140.95 mm)
+#: Kahraman & Blankenship test gears, Xu et al. 2022 Table 1 (base diameter 140.95 mm)
 KB_BASE_RADIUS_M = 0.5 * 140.95e-3
-#: seed 003 Table 1, inertia of each gear (kg*m^2)
+#: Xu et al. 2022 Table 1, inertia of each gear (kg*m^2)
 KB_INERTIA_KGM2 = 0.0074
-#: seed 003 Table 1, teeth of pinion and gear
+#: Xu et al. 2022 Table 1, teeth of pinion and gear
 KB_TEETH = 50
-#: seed 003 Table 1, contact ratio
+#: Xu et al. 2022 Table 1, contact ratio
 KB_CONTACT_RATIO = 1.7547
-#: seed 003 Table 1, backlash on the line of action 0.136 mm; b = half of it (seed 003 eq 6)
+#: Xu et al. 2022 Table 1, backlash on the line of action 0.136 mm; b = half of it (Xu et al. 2022 eq 6)
 KB_BACKLASH_HALF_M = 0.5 * 0.136e-3
 
 
@@ -79,10 +79,10 @@ def _positive(name: str, value) -> float:
 def comprehensive_error_m(k_N_per_m: np.ndarray, e_m: np.ndarray) -> np.ndarray:
     """Comprehensive (envelope) meshing error of the traditional model, (NT, n_phi) in m.
 
-    Seed 003 (text around eq 15 and Fig. 5) builds the comprehensive error as the
+    Xu et al. 2022 (text around eq 15 and Fig. 5) builds the comprehensive error as the
     envelope of the single-pair errors in the multi-contact zones: the pair
     that governs is the one that touches first.  With this project's sign
-    convention (seed 003 eq 6: a pair touches when x > e + b, positive e =
+    convention (Xu et al. 2022 eq 6: a pair touches when x > e + b, positive e =
     material deficit) that is the *smallest* e among the pairs in the contact
     zone (k > 0).  Choice made here; where no slot has k > 0 the error is 0.
     """
@@ -97,7 +97,7 @@ def comprehensive_error_m(k_N_per_m: np.ndarray, e_m: np.ndarray) -> np.ndarray:
 class GearData:
     """The gear pair's data that the per-slot arrays of :func:`tables_from_arrays` do not carry
     (SI): base radii (m), rotary inertias (kg m^2) and teeth of pinion and gear (defaults: the
-    Kahraman & Blankenship gears of seed 003 Table 1), the contact ratio (None: the mean number
+    Kahraman & Blankenship gears of Xu et al. 2022 Table 1), the contact ratio (None: the mean number
     of slots with k > 0 over the grid, for a rectangular wave the contact ratio exactly) and the
     exact meshing-in and meshing-out pinion angles (rad) of every pair from the start of its mesh
     (both or neither; None: the lookup interpolates plainly across the zone edges, docs/tables.md
@@ -162,7 +162,7 @@ def tables_from_arrays(
     k_N_per_m : pair stiffness (N/m), shape (P, n_phi) or (NT, P, n_phi); grid
         ``phi_i = i*phi_period_rad/n_phi``, periodic.
     e_m : meshing error (m), same shape as k (default zeros).
-    backlash_half_m : half backlash b (m, seed 003 eq 6): scalar, (n_phi,) or (P, n_phi).
+    backlash_half_m : half backlash b (m, Xu et al. 2022 eq 6): scalar, (n_phi,) or (P, n_phi).
     gear : :class:`GearData` -- base radii, inertias, teeth, contact ratio, engagement angles.
         Each of its fields may also be given by name (``teeth_pinion=23``,
         ``engagement_in_rad=0.0``), and the first six, the gear scalars
@@ -170,7 +170,7 @@ def tables_from_arrays(
         teeth_pinion, teeth_gear, by position after ``backlash_half_m``.
     torque_Nm : torque axis (N*m), shape (NT,), strictly ascending; required when
         k has 3 axes with NT > 1, default [0.0] otherwise.
-    k_mean_N_per_m : mean mesh stiffness k_m of seed 003 eq 7 (N/m); default =
+    k_mean_N_per_m : mean mesh stiffness k_m of Xu et al. 2022 eq 7 (N/m); default =
         mean of the total stiffness over the phi grid and all torque rows (the
         grid mean equals the mean of the periodic linear interpolant; with engagement
         angles the mean of the sub-cell lookup, gearfmu.tables.zones.mean_total_stiffness_N_per_m).
@@ -293,7 +293,7 @@ def rectangular_wave_tables(
     pairs engaged the *total* stiffness is ``k_single_N_per_m`` for n = 1,
     ``k_double_N_per_m`` (default 2*k_single) for n = 2 and
     ``n*k_double/2`` for n >= 3; each engaged pair carries total/n, so the
-    total TVMS is the classic rectangular wave of seed 003 Fig. 2 / eq 4-5
+    total TVMS is the classic rectangular wave of Xu et al. 2022 Fig. 2 / eq 4-5
     (double zone t_h - t_z, single zone 2 t_z - t_h per mesh period).
 
     ``pair_error_m(slot, u)`` (optional) gives the meshing error (m) of the pair
@@ -315,7 +315,7 @@ def rectangular_wave_tables(
     (docs/model.md "Contact-zone edges").  Off by default (choice): a pair of the
     rectangular wave also steps *inside* its zone, wherever another pair enters or leaves
     (it carries total/count), and those steps stay one-cell ramps; the default keeps the
-    textbook trapezoid that the dynamics validation against seed 003 and the reference
+    textbook trapezoid that the dynamics validation against Xu et al. 2022 and the reference
     solvers of the tests are built on.
     """
     ks = _positive("k_single_N_per_m", k_single_N_per_m)

@@ -25,8 +25,7 @@ MAX_LINES = 150
 MAX_PARAMETERS = 12
 
 #: (file below gearfmu/, function) that break a rule today, in the dynamics and the FMU layer
-BEING_SPLIT = {
-}
+BEING_SPLIT: set = set()
 
 _JIT = re.compile(r"\b(njit|jit)\b")
 
