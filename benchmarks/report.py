@@ -897,7 +897,8 @@ def sec_gearbox_fmu(pg: Page):
 COMPOSITION_FORMS = {"flange/fmpy": "SSP, flange coupling, fmpy", "flange/libcosim": "SSP, flange coupling, libcosim",
                      "flange_linear/libcosim": "SSP, flange at the received speed, libcosim",
                      "shaft/libcosim": "SSP, shaft FMUs, libcosim", "flange/libcosim-ecco": "SSP, flange, libcosim ECCO",
-                     "gearbox_fmu/fmpy": "gearbox FMU, fmpy", "gearbox_fmu/libcosim": "gearbox FMU, libcosim"}
+                     "gearbox_fmu/fmpy": "gearbox FMU, fmpy", "gearbox_fmu/libcosim": "gearbox FMU, libcosim",
+                     "gearbox_fmu_me/fmpy-cvode": "gearbox FMU, Model Exchange, fmpy CVode rtol 1e-8"}
 
 
 def _at(hit) -> str:

@@ -75,7 +75,6 @@ from dataclasses import fields as dataclass_fields
 from typing import Optional
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ..common.progress import progress_bar
 from ..tables.mesh_tables import MeshTables
@@ -677,6 +676,8 @@ class _PairReference:
         ya = y + self.delta * seg.deriv(y, seg.force_general(y))
         modes = seg.mode_from(ya, forced)
         evs = seg.events(modes)
+        from scipy.integrate import solve_ivp  # scipy.integrate: heavy, only where the reference runs
+
         sol = solve_ivp(seg.rhs_factory(modes), (t, t_end), y, method=acc.method, rtol=acc.rtol, atol=self.atol,
                         events=[e for e, _ in evs] or None, max_step=self.seg_cap(seg, y_rest[0]),
                         first_step=None if not self.first_step else min(self.first_step, t_end - t))
