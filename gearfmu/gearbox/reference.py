@@ -353,7 +353,36 @@ class _Reference:
         self.psi += float(yn[0])
         yn[0] = 0.0
         self.y = yn
+        if sol.status == 1:
+            self._cross_together(rows, tag)
         return t_new, forced, sol.status == 1
+
+    def _cross_together(self, rows, tag) -> None:
+        """Every mesh standing on its piece end crosses with the located event
+        (:func:`cross_piece_ends`)."""
+        model = self.model
+        at = []
+        for mm in range(len(model.meshes)):
+            th, om, _, _ = _local(model, mm, self.y)
+            at.append(((model.g[model.mesh_bodies[mm, 0]] * self.psi + th) / rows[mm].dphi, om))
+        cross_piece_ends(self.pieces, rows, at, tag[0] if tag[1] == "node" else None)
+
+
+def cross_piece_ends(pieces, rows, at, located) -> None:
+    """Meshes whose table nodes coincide (two meshes on one pinion body with tables of one angle
+    grid, such as an accessory drive beside the power path; planets meshing in phase) reach their
+    piece ends together, and solve_ivp reports one event and finds none at the start of the next
+    segment: every mesh but ``located`` standing on the end of its piece (``pieces[m]`` = (lo, hi)
+    in node units; ``at[m]`` = (position in node units, angular speed)), moving out of it, crosses
+    to the next piece of its ``rows[m]``."""
+    for mm, (u, om) in enumerate(at):
+        if pieces[mm] is None or mm == located:
+            continue
+        lo, hi = pieces[mm]
+        if om > 0.0 and u >= hi - 1e-9:
+            pieces[mm] = (hi, rows[mm].next_kink(hi))
+        elif om < 0.0 and u <= lo + 1e-9:
+            pieces[mm] = (rows[mm].prev_kink(lo), lo)
 
 
 def _events(model: GearboxModel, segs, modes):

@@ -31,7 +31,7 @@ from ..common.progress import progress_bar
 from ..common.settings import GearboxRunSettings
 from ..dynamics.native import InputLike
 from ..dynamics.reference import TableRows, TableSegment, pair_forces
-from ..gearbox.reference import ReferenceAccuracy
+from ..gearbox.reference import ReferenceAccuracy, cross_piece_ends
 from .model import PlanetaryModel
 from .native import PlanetaryInputError, PlanetaryResult, checked_settings, columns, run_inputs
 
@@ -346,20 +346,14 @@ class _Reference:
         return t_new, forced, sol.status == 1
 
     def _cross_together(self, rows, tag) -> None:
-        """Meshes in phase reach their piece ends together; solve_ivp reports one event and finds none
-        at the start of the next segment: every mesh standing on the end of its piece, moving out of
-        it, crosses with the located one."""
+        """Planets meshing in phase reach their piece ends together: every mesh standing on its
+        piece end crosses with the located event (gearfmu.gearbox.reference.cross_piece_ends)."""
         mp = self.mp
+        at = []
         for mm in range(len(self.model.mesh_names)):
-            if self.pieces[mm] is None or (tag[1] == "node" and mm == tag[0]):
-                continue
             th, om, _, _ = _local(mp, mm, self.y)
-            u = (mp.aref[mm] * self.psi + mp.phase[mm] + th) / rows[mm].dphi
-            lo, hi = self.pieces[mm]
-            if om > 0.0 and u >= hi - 1e-9:
-                self.pieces[mm] = (hi, rows[mm].next_kink(hi))
-            elif om < 0.0 and u <= lo + 1e-9:
-                self.pieces[mm] = (rows[mm].prev_kink(lo), lo)
+            at.append(((mp.aref[mm] * self.psi + mp.phase[mm] + th) / rows[mm].dphi, om))
+        cross_piece_ends(self.pieces, rows, at, tag[0] if tag[1] == "node" else None)
 
 
 def _events(mp: _Maps, segs, modes):
