@@ -3,7 +3,8 @@
  * binary, many sequences in one process (tests/fmu_hosts/fuzz_fmu.py runs it in a child
  * process, so that a crash is counted as a crash).
  *
- * usage: fmi_fuzz <unzipped FMU dir> <modelIdentifier> <guid> <n_vars> <first_seed> <sequences>
+ * usage: fmi_fuzz <unzipped FMU dir> <modelIdentifier> <guid> <n_vars> <first_seed> <sequences> [<n_states>]
+ * (n_states: the Model Exchange state count the state vectors have, 4 when not given, at most FZ_MAX_STATES)
  *
  * Every sequence: fmi2Instantiate (sometimes with a wrong GUID; a quarter of them for Model
  * Exchange), then 5..60 calls drawn from all fmi2 functions of Co-Simulation and Model
@@ -159,6 +160,8 @@ static void account(const char *fn, int st, long logged_before)
         account(#fn, st_, before_);                                            \
     } while (0)
 
+#define FZ_MAX_STATES 256
+
 int main(int argc, char **argv)
 {
     char path[4096], uri[4200];
@@ -167,13 +170,19 @@ int main(int argc, char **argv)
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     int n_vars;
     long first_seed, n_seq, seq, inst_null = 0, seq_breaking = 0;
-    if (argc != 7) {
-        fprintf(stderr, "usage: fmi_fuzz <dir> <modelIdentifier> <guid> <n_vars> <first_seed> <sequences>\n");
+    int nx = 4;
+    if (argc != 7 && argc != 8) {
+        fprintf(stderr, "usage: fmi_fuzz <dir> <modelIdentifier> <guid> <n_vars> <first_seed> <sequences> [<n_states>]\n");
         return 2;
     }
     n_vars = atoi(argv[4]);
     first_seed = atol(argv[5]);
     n_seq = atol(argv[6]);
+    if (argc == 8) nx = atoi(argv[7]);
+    if (nx < 1 || nx > FZ_MAX_STATES) {
+        fprintf(stderr, "n_states: %d not in 1..%d\n", nx, FZ_MAX_STATES);
+        return 2;
+    }
     snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", argv[1], argv[2]);
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (lib == NULL) {
@@ -206,11 +215,13 @@ int main(int argc, char **argv)
         size_t ser_size = 0;
         double t = 0.0;
         int len, k, legal = 0, me;
-        double x[4] = {0.0, 100.0, 1e-5, 0.0};
+        double x[FZ_MAX_STATES];
         long illegal_before = n_illegal_logged, before = n_logged;
         rng_state = 0x9E3779B97F4A7C15ull ^ ((uint64_t)(first_seed + seq) * 0xD1B54A32D192ED03ull);
         if (rng_state == 0) rng_state = 1;
         rnd();
+        /* the motor angle and speed, then small deviations and rates */
+        for (k = 0; k < nx; ++k) x[k] = k == 1 ? 100.0 : (k % 2 == 0 && k > 0 ? 1e-5 : 0.0);
         me = rint_(4) == 0;
         c = f->Instantiate("fuzz", me ? fmi2ModelExchange : fmi2CoSimulation, rint_(50) == 0 ? "{wrong-guid}" : argv[3],
                            uri, &cb, fmi2False, rint_(2) ? fmi2True : fmi2False);
@@ -378,8 +389,8 @@ int main(int argc, char **argv)
                 break;
             }
             case 31: { /* states near the last ones, sometimes nasty, a wrong count or NULL */
-                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
-                int i = rint_(4);
+                size_t n = rint_(10) == 0 ? (size_t)rint_(nx + 3) : (size_t)nx;
+                int i = rint_(nx);
                 x[0] += 1e-3;
                 if (rint_(6) == 0) x[i] = nasty_real();
                 if (rint_(20) == 0) CALL(SetContinuousStates, c, NULL, n);
@@ -387,8 +398,8 @@ int main(int argc, char **argv)
                 break;
             }
             case 32: {
-                double dx[6];
-                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
+                double dx[FZ_MAX_STATES + 3];
+                size_t n = rint_(10) == 0 ? (size_t)rint_(nx + 3) : (size_t)nx;
                 if (rint_(20) == 0) CALL(GetDerivatives, c, NULL, n);
                 else CALL(GetDerivatives, c, dx, n);
                 break;
@@ -407,8 +418,8 @@ int main(int argc, char **argv)
                 break;
             }
             case 35: {
-                double xs[6];
-                size_t n = rint_(10) == 0 ? (size_t)rint_(6) : 4;
+                double xs[FZ_MAX_STATES + 3];
+                size_t n = rint_(10) == 0 ? (size_t)rint_(nx + 3) : (size_t)nx;
                 if (rint_(2)) CALL(GetContinuousStates, c, xs, n);
                 else CALL(GetNominalsOfContinuousStates, c, xs, n);
                 break;

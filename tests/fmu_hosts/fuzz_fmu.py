@@ -361,12 +361,14 @@ def run_c_fuzz(fmu_path, sequences: int, *, first_seed: int = 0, batch: int = 25
         md = fmpy.read_model_description(str(fmu_path))
         unzip = fmpy.extract(str(fmu_path), unzipdir=os.path.join(d, "fmu"))
         args = [str(exe), unzip, md.coSimulation.modelIdentifier, md.guid, str(len(md.modelVariables))]
+        n_states = len(md.derivatives)   # the Model Exchange state vectors have the FMU's own count
         pending = [(s, min(batch, first_seed + sequences - s)) for s in range(first_seed, first_seed + sequences, batch)]
         running = []
         while pending or running:
             while pending and len(running) < jobs:
                 s0, n = pending.pop(0)
-                p = subprocess.Popen(args + [str(s0), str(n)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                extra = [str(n_states)] if n_states else []
+                p = subprocess.Popen(args + [str(s0), str(n)] + extra, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                      text=True)
                 running.append((p, s0, n, time.time()))
             time.sleep(0.02)

@@ -306,8 +306,9 @@ def test_cli_builds_the_example_gearbox_as_model_exchange(tmp_path):
 def test_c_fuzz_of_the_model_exchange_gearbox_fmu(contact_loss):
     """tests/fmi_fuzz.c's random call sequences (a quarter of them on a Model Exchange instance) on the
     gearbox FMU that offers both interfaces: no host crash, every refusal logged, out-of-order calls
-    refused as such.  (The fuzzer's state vectors have the pair's 4 states, so on the gearbox's 12 its
-    Model Exchange calls with a state vector are refused for their count.)"""
+    refused as such.  The fuzzer's state vectors have the gearbox's own state count (from the model
+    description), so its Model Exchange calls reach the gearbox's derivatives, indicators and event
+    updates with near-start, nasty and wrongly counted states."""
     import fuzz_fmu
 
     res = fuzz_fmu.run_c_fuzz(contact_loss["fmu"][2], 400, first_seed=20261207, batch=200, jobs=2)
