@@ -1,5 +1,6 @@
-"""The planetary model against published numbers: Lin & Parker's natural frequencies and the closed
-form of planet load sharing under pin position errors.
+"""The planetary model against published numbers: the natural frequencies of Lin & Parker's and of
+Cooley & Parker's example systems, and the closed form of planet load sharing under pin position
+errors.
 
 References (neither produced by gearfmu):
 
@@ -17,6 +18,19 @@ References (neither produced by gearfmu):
   system, the same equations), agree to the rounding; they are checked at the stated larger bounds
   and are most likely misprints or transcription slips (the first two look like integers printed
   with a ".0").
+* Natural frequencies of a second published system: C. G. Cooley, R. G. Parker, *Vibration properties
+  of high-speed planetary gears with gyroscopic effects*, J. Vib. Acoust. 134 (2012), Table 1 (masses
+  3.0/7.64/12.0/1.86 kg and I/r^2 1.75/8.09/6.80/1.25 kg of sun/ring/carrier/planet; both meshes
+  100 N/um; bearings 20/100/50/10 N/um; torsional supports of sun, ring and carrier 20/100/100 N/um;
+  20 deg) and its Table 2 at zero carrier speed: frequencies over sqrt(k_p/m_p) to four significant
+  digits, for 3, 4 and 5 planets, read from the same transcription (``test_02``).  Every central
+  member sits on a torsional support (no rigid mode): the ring on the stage's support, sun and carrier
+  on shafts of k_u r^2 to bodies of 1e6 kg m^2 (ground to within 1e-9 of the frequencies).
+  Tolerance: half a unit of the last printed digit.  39 of the 42 values meet it; three rotational
+  ones miss it (4 planets: 1.046 and 2.013 against the model's 1.04550 and 2.01249, 3e-6 and 6e-6 past
+  the rounding edge; 5 planets: 1.281 against 1.28046, 4e-5 past it; at most 0.05 %) and are checked
+  at 6e-4.  The transcription's own implementation of the model (Rebouças's MATLAB code, written
+  independently of this one) prints the same 1.28046 (472.53 Hz against the published 472.73 Hz).
 * Load sharing: the translational analogy of H. Ligata, A. Kahraman, A. Singh, *A closed-form planet
   load sharing formulation for planetary gear sets using a translational analogy*, J. Mech. Des. 131
   (2009) 021007 (and A. Singh, *Load sharing behavior in epicyclic gears: physical explanation and
@@ -51,7 +65,9 @@ import pytest
 
 pytestmark = pytest.mark.slow  # builds or long runs: the full suite, not the quick subset
 
+from gearfmu.assembly.planetary_lumped import LumpedPlanetary, lumped_stage
 from gearfmu.bench import lp_model, lp_stage
+from gearfmu.gearbox.model import Shaft
 from gearfmu.gear.planetary_set import PlanetErrors
 from gearfmu.planetary.model import build_drivetrain
 from gearfmu.planetary.modes import modes, multiplicities
@@ -82,26 +98,67 @@ DISAGREE_HZ = {(4, 727.0): 0.3, (4, 1091.0): 0.2, (4, 1536.6): 0.1}
 def test_natural_frequencies_match_lin_and_parkers_published_table(N):
     groups = multiplicities(modes(lp_model(N), 50.0), "lp")
     pub = PUBLISHED_HZ[N]
+    missed = set()
     for kind, count in (("rotational", 1), ("translational", 2), ("planet", N - 3)):
         got = [(f, k) for t, f, k in groups if t == kind]
         assert [k for _, k in got] == [count] * len(pub[kind]), kind      # type and multiplicity per frequency
         for (f, _), f_pub in zip(got, pub[kind]):
-            tol = DISAGREE_HZ.get((N, f_pub), ROUNDING_HZ)
-            assert abs(f - f_pub) <= tol + 1e-9 * f_pub, (kind, f_pub, f)
+            assert abs(f - f_pub) <= DISAGREE_HZ.get((N, f_pub), ROUNDING_HZ), (kind, f_pub, f)
+            if abs(f - f_pub) > ROUNDING_HZ:
+                missed.add((N, f_pub))
     assert {t for t, _, _ in groups} <= {"rotational", "translational", "planet"}
+    assert missed == {key for key in DISAGREE_HZ if key[0] == N}         # the exceptions stay the exceptions
 
 
-def test_the_disagreeing_published_values_are_few_and_bounded():
-    """Only the three 4-planet values named in the module docstring miss the rounding, none by more
-    than 0.04 % (a test that the exceptions stay exceptions)."""
-    missed = []
-    for N, pub in PUBLISHED_HZ.items():
-        groups = multiplicities(modes(lp_model(N), 50.0), "lp")
-        for kind in pub:
-            got = [f for t, f, _ in groups if t == kind]
-            missed += [(N, p) for f, p in zip(got, pub[kind]) if abs(f - p) > ROUNDING_HZ + 1e-9 * p]
-            assert max((abs(f / p - 1.0) for f, p in zip(got, pub[kind])), default=0.0) <= 4e-4
-    assert sorted(missed) == sorted(DISAGREE_HZ)
+#: Cooley & Parker (2012) Table 2 at zero speed, omega/sqrt(k_p/m_p), as printed (module docstring)
+COOLEY_PARKER_2012 = {
+    3: dict(rotational="0.9296 1.090 1.358 1.931 5.566 7.741", translational="0.7432 1.018 1.265 1.487 4.976 6.282",
+            planet=""),
+    4: dict(rotational="0.9077 1.046 1.317 2.013 5.809 8.383", translational="0.7199 1.001 1.317 1.481 5.153 6.488",
+            planet="0.9617 4.320 5.672"),
+    5: dict(rotational="0.8802 1.019 1.281 2.090 6.030 8.986", translational="0.6992 0.9863 1.344 1.496 5.317 6.693",
+            planet="0.9617 4.320 5.672"),
+}
+
+
+def cooley_parker_model(N):
+    k_su, k_cu = 20e6, 100e6
+    p = LumpedPlanetary(
+        planets=N, mass_kg=dict(sun=3.0, ring=7.64, carrier=12.0, planet=1.86),
+        inertia_over_r2_kg=dict(sun=1.75, ring=8.09, carrier=6.80, planet=1.25),
+        mesh_stiffness_sun_N_per_m=100e6, mesh_stiffness_ring_N_per_m=100e6,
+        bearing_N_per_m=dict(sun=20e6, ring=100e6, carrier=50e6, planet=10e6), support_N_per_m=100e6,
+        pressure_angle_sun_rad=math.radians(20.0), teeth_sun=24, teeth_planet=36, teeth_ring=96,
+        base_radius_sun_m=0.05575 / 2)
+    st = lumped_stage("cp", p)
+    shafts = [Shaft("sun_support", "ground_s", "cp.sun", k_su * st.base_radius_sun_m ** 2),
+              Shaft("carrier_support", "cp.carrier", "ground_c", k_cu * st.carrier_radius_m ** 2)]
+    return build_drivetrain(planetaries=[st], shafts=shafts, parts={"ground_s": 1e6, "ground_c": 1e6},
+                            motor="ground_s", load="ground_c")
+
+
+#: the printed values the model misses by more than the rounding (module docstring): (planets, value)
+COOLEY_PARKER_DISAGREE = {(4, "1.046"), (4, "2.013"), (5, "1.281")}
+
+
+@pytest.mark.parametrize("N", [3, 4, 5])
+def test_natural_frequencies_match_cooley_and_parkers_published_table(N):
+    w0 = math.sqrt(10e6 / 1.86) / (2 * math.pi)          # sqrt(k_p/m_p), Hz
+    groups = [(t, f / w0, k) for t, f, k in multiplicities(modes(cooley_parker_model(N), 50.0), "cp")
+              if f / w0 > 0.01]                         # without the two grounds swinging against each other
+    missed = set()
+    for kind, count in (("rotational", 1), ("translational", 2), ("planet", N - 3)):
+        pub = COOLEY_PARKER_2012[N][kind].split()
+        got = [(f, k) for t, f, k in groups if t == kind]
+        assert [k for _, k in got] == [count] * len(pub), kind
+        for (f, _), text in zip(got, pub):
+            half_unit = 0.5 * 10.0 ** -len(text.split(".")[1])
+            tol = 6e-4 if (N, text) in COOLEY_PARKER_DISAGREE else half_unit
+            assert abs(f - float(text)) <= tol, (kind, text, f)
+            if abs(f - float(text)) > half_unit:
+                missed.add((N, text))
+    assert {t for t, _, _ in groups} <= {"rotational", "translational", "planet"}
+    assert missed == {key for key in COOLEY_PARKER_DISAGREE if key[0] == N}
 
 
 # ---------------------------------------------------------------- load sharing, closed form
