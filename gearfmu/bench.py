@@ -330,10 +330,12 @@ def main_accuracy(args) -> int:
 # * :data:`LIN_PARKER_1999` -- the example system of J. Lin, R. G. Parker, J. Vib. Acoust. 121 (1999)
 #   316-321, Table 1, entered as published (masses and I/r^2 in kg, mesh, bearing and torsional
 #   support stiffness in N/m, pressure angle 24.6 deg of both meshes; the sun and carrier have no
-#   torsional support).  The table gives no tooth counts or radii, which only set the kinematics and
-#   the mesh frequency here, not the frequencies: sun 24, planet 36, ring 96 teeth (z_r = z_s + 2 z_p
-#   keeps alpha_r = alpha_s; (z_s + z_r)/N an integer for N = 3, 4, 5) and a sun base radius of
-#   38.7 mm (CHOICE).
+#   torsional support).  The table gives no tooth counts; teeth and radii only set the kinematics
+#   and the mesh frequency here, not the frequencies: sun 24, planet 36, ring 96 teeth (z_r = z_s +
+#   2 z_p keeps alpha_r = alpha_s; (z_s + z_r)/N an integer for N = 3, 4, 5; CHOICE) and the sun base
+#   radius of the table's 77.4 mm base diameter (its planet and ring diameters, 100.3 and 275.0 mm, do
+#   not fit 24.6 deg on both meshes and are not used).  The model's frequencies are checked against
+#   the published ones (docs/planetary.md "Verification against published values").
 # * :func:`lp_stage`, :func:`lp_model`: that system as a stage and as a standalone drivetrain
 #   (motor on the sun, load on the carrier, the ring held by its published torsional support).
 # * :func:`planetary_case`: hard cases of the native solver against its reference (``contact_loss``:

@@ -22,7 +22,9 @@ PUBLISHED = dict(
     k_u=dict(s=0.0, r=1e9, c=0.0),                        # torsional support along u = r theta, N/m
     alpha_deg=24.6,                                       # both meshes
 )
-#: the kinematics the table does not give (they do not enter the frequencies): teeth, sun base radius
+#: the kinematics (they do not enter the frequencies): teeth (chosen; the table gives none) and the sun's base
+#: radius (half the 77.4 mm base diameter the table lists; its planet and ring diameters, 100.3 and 275.0 mm,
+#: do not fit 24.6 deg on both meshes and are not used)
 TEETH = (24, 36, 96)
 RS = 0.0387
 

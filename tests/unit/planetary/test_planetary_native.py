@@ -16,7 +16,7 @@
 * Load sharing: equal among ideal, equally spaced planets (the mean over whole mesh periods with
   time-varying stiffness, sequential phases); with a planet's pin position error, the published
   result for a floating sun (A. Kahraman, *Load sharing characteristics of planetary transmissions*,
-  Mech. Mach. Theory 29 (1994) 1151-1165; A. Ligata, A. Kahraman, A. Singh, *A closed-form planet load
+  Mech. Mach. Theory 29 (1994) 1151-1165; H. Ligata, A. Kahraman, A. Singh, *A closed-form planet load
   sharing formulation for planetary gear sets using a translational analogy*, J. Mech. Des. 131
   (2009) 021007): three planets share equally whatever the error (the floating sun's force balance
   leaves no other solution), four planets share in opposite pairs, L_1 = L_3, L_2 = L_4,
