@@ -272,7 +272,8 @@ class PlanetaryModel:
         balancing load torque, springs, the meshes' static force laws at their table angles, the
         frames' centripetal terms at the start speed), by Newton's method on the piecewise-linear mesh
         laws from the state with every pair in its contact zone on its drive flank (an active-set
-        iteration, to a residual of 1e-13 of the forces).  Raises
+        iteration, to a residual of 1e-13 of the largest term summed into it: the torques, the mesh
+        forces and the springs' k q).  Raises
         PlanetaryModelError naming a mesh with no pair in its contact zone, or when no equilibrium is
         found."""
         n = self.n_dof
@@ -328,7 +329,9 @@ class PlanetaryModel:
         for it in range(iterations):
             R = f_ext + cen + Kcen @ q - Kspr @ q
             J = Kspr - Kcen
-            scale = abs(T_in)
+            # the residual's round-off grows with the largest term summed into it, the springs' k q too
+            # (supports of 1e13 N/m and more: a rigid part written as a stiff spring)
+            scale = abs(T_in) + float(np.max(np.abs(Kspr) @ np.abs(q), initial=0.0))
             for m in range(nm):
                 F, kt, Kk, _, _ = mesh_law(m, q)
                 R -= meshvec[m] * F
