@@ -286,10 +286,12 @@ def _me_host(K, y0, T_in, T_out, times, rtol, node_events=0):
     return np.array(out), n_ev
 
 
-def test_me_host_over_the_kernel_matches_the_native_solver(lib):
+@pytest.mark.parametrize("node_events", [0, 2])
+def test_me_host_over_the_kernel_matches_the_native_solver(lib, node_events):
     """Lin & Parker's system with a planet position error at load (every mesh keeps contact): the host
-    over pl_me_* (DOP853, rtol 1e-10) against the native solver (rk4_node) at a step bound of a tenth of
-    its own: every output within 1e-6 of its range."""
+    over pl_me_* (DOP853, rtol 1e-10; without node events, and with an event at every node where the
+    tables bend) against the native solver (rk4_node) at a step bound of a tenth of its own: every
+    output within 1e-6 of its range."""
     model, kw = case("position_error")
     kw = dict(kw, stop_time_s=2 * kw["comm_step_s"] * 8)
     res = simulate(model, integrator="rk4_node", **kw)
@@ -301,7 +303,7 @@ def test_me_host_over_the_kernel_matches_the_native_solver(lib):
     for n in model.mesh_names:                  # contact kept: the mesh forces stay well above 0
         assert np.min(res[f"{n}.mesh_force"]) > 0.2 * np.mean(res[f"{n}.mesh_force"])
     y0 = model.static_state(T_in, kw["motor_speed_start_rad_s"], kw["motor_angle_start_rad"])
-    out, n_ev = _me_host(K, y0, T_in, T_out, res.time_s, 1e-10)
+    out, n_ev = _me_host(K, y0, T_in, T_out, res.time_s, 1e-10, node_events)
     assert n_ev > 0
     cols = kernel_columns(K, model)
     worst = {}
