@@ -138,6 +138,7 @@ class _KernelData:
         self.mf = np.zeros(nm * MF)
         self.pair_off = np.zeros(nm + 1, dtype=np.int64)
         self.rows = []
+        self.tables = []     # per mesh (k, e, b, contact-zone cuts or None): the arrays mi addresses
         for m, t in enumerate(model.mesh_tables):
             k = np.ascontiguousarray(t.k_N_per_m, dtype=np.float64)
             e = np.ascontiguousarray(t.e_m, dtype=np.float64)
@@ -149,6 +150,7 @@ class _KernelData:
             md = np.zeros(4 * t.slots + 2, dtype=np.int64)
             wk = np.zeros(WK)
             self.keep += [k, e, b, cuts, flags, md, wk]
+            self.tables.append((k, e, b, cuts if zoned else None))
             o, f = m * MI, m * MF
             xs = [(int(d), float(c)) for d, c in zip(model.mesh_idx[m], model.mesh_coef[m]) if d >= 0]
             ans = [(int(d), float(c)) for d, c in zip(model.angle_idx[m], model.angle_coef[m]) if d >= 0]

@@ -1,4 +1,5 @@
-"""The C functions of the kernel library, declared once (gearfmu/fmu/kernel: gearkernel.h, gkfmu.h).
+"""The C functions of the kernel library, declared once (gearfmu/fmu/kernel: gearkernel.h, gkfmu.h,
+and the planetary kernel's plkernel.h).
 
 :data:`KERNEL_FUNCTIONS` has one row per exported function: its name, result type, argument
 types (the C prototype of the header, pointers as ``void *``) and what its result means
@@ -83,6 +84,40 @@ KERNEL_FUNCTIONS = (
 )
 
 
+#: the planetary drivetrain kernel (plkernel.h; pl_kernel.c and pl_static.c compiled beside the kernel)
+PLANETARY_ABI_VERSION = 1
+PLANETARY_FUNCTIONS = (
+    ("pl_abi_version", INT, (), VALUE),
+    ("pl_sizeof_model", INT, (), VALUE),
+    ("pl_sizeof_work", INT, (), VALUE),
+    ("pl_sizeof_state", INT, (), VALUE),
+    ("pl_events", ctypes.c_long, (PTR,), VALUE),
+    ("pl_init", INT, (PTR, INT, PTR, PTR, INT, INT, INT), STATUS),
+    ("pl_add_spring", INT, (PTR, INT, PTR, PTR, DOUBLE, DOUBLE), STATUS),
+    ("pl_add_frame", INT, (PTR, INT, INT, DOUBLE, DOUBLE), STATUS),
+    ("pl_add_mesh", INT, (PTR, PTR, INT, PTR, PTR, INT, PTR, PTR, DOUBLE, DOUBLE, DOUBLE), STATUS),
+    ("pl_add_group", INT, (PTR, INT, PTR), STATUS),
+    ("pl_set_integrator", INT, (PTR, INT), STATUS),
+    ("pl_reference_torque", DOUBLE, (PTR, DOUBLE, DOUBLE), VALUE),
+    ("pl_mesh_torque", DOUBLE, (PTR, INT, DOUBLE), VALUE),
+    ("pl_initialize", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_derivatives", INT, (PTR, PTR, DOUBLE, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_do_step", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_outputs", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_sizeof_me", INT, (), VALUE),
+    ("pl_me_n_indicators", INT, (PTR, INT), VALUE),
+    ("pl_me_init", INT, (PTR, PTR, PTR, PTR, DOUBLE, DOUBLE, INT), STATUS),
+    ("pl_me_update", INT, (PTR, PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_me_derivatives", INT, (PTR, PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_me_indicators", INT, (PTR, PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_me_outputs", INT, (PTR, PTR, PTR, PTR, DOUBLE, DOUBLE, PTR), STATUS),
+    ("pl_mesh_offset", INT, (PTR, INT), VALUE),
+    ("pl_spring_offset", INT, (PTR,), VALUE),
+    ("pl_group_offset", INT, (PTR, INT), VALUE),
+    ("pl_n_outputs", INT, (PTR,), VALUE),
+)
+
+
 class KernelError(RuntimeError):
     """A kernel function of a checked binding returned an error status (``status``: the ``GK_*``
     code; ``words``: the kernel's own words for it)."""
@@ -100,11 +135,12 @@ def _status_check(lib, name):
     return check
 
 
-def bind(lib, *, check: bool = False):
+def bind(lib, *, check: bool = False, functions=KERNEL_FUNCTIONS):
     """Give the ctypes library ``lib`` (the kernel library) the signature of every function of
-    :data:`KERNEL_FUNCTIONS`; with ``check`` a :data:`STATUS` function raises
+    ``functions`` (:data:`KERNEL_FUNCTIONS`; a library with the planetary kernel also
+    :data:`PLANETARY_FUNCTIONS`); with ``check`` a :data:`STATUS` function raises
     :class:`KernelError` on an error status instead of returning it.  Returns ``lib``."""
-    for name, result, args, meaning in KERNEL_FUNCTIONS:
+    for name, result, args, meaning in functions:
         f = getattr(lib, name)
         f.restype = result
         f.argtypes = list(args)
@@ -113,6 +149,8 @@ def bind(lib, *, check: bool = False):
     return lib
 
 
-def load_kernel(path, *, check: bool = False):
-    """Load the kernel library at ``path`` (str or path-like) and :func:`bind` it."""
-    return bind(ctypes.CDLL(str(path)), check=check)
+def load_kernel(path, *, check: bool = False, planetary: bool = False):
+    """Load the kernel library at ``path`` (str or path-like) and :func:`bind` it (with ``planetary``
+    also the planetary kernel's functions)."""
+    functions = KERNEL_FUNCTIONS + PLANETARY_FUNCTIONS if planetary else KERNEL_FUNCTIONS
+    return bind(ctypes.CDLL(str(path)), check=check, functions=functions)

@@ -1,8 +1,8 @@
 """The kernel's C functions are declared once, in gearfmu/fmu/runtime/kernel_api.py.
 
 References (none produced by the table itself): the prototypes of the kernel's public headers
-gearkernel.h and gkfmu.h, read as text, and the compiled library's own answers (its ABI
-versions, its sizes, the words gkf_kernel_error gives for a status).
+gearkernel.h and gkfmu.h (and the planetary kernel's plkernel.h), read as text, and the compiled
+library's own answers (its ABI versions, its sizes, the words gkf_kernel_error gives for a status).
 """
 import ctypes
 import re
@@ -13,13 +13,14 @@ import pytest
 
 from gearfmu.fmu.pythonfmu_build import compile_kernel
 from gearfmu.fmu.runtime import kernel_api
-from gearfmu.fmu.runtime.kernel_api import KERNEL_FUNCTIONS, KernelError, load_kernel
+from gearfmu.fmu.runtime.kernel_api import KERNEL_FUNCTIONS, PLANETARY_FUNCTIONS, KernelError, load_kernel
 
 ROOT = Path(__file__).resolve().parents[3]
 KERNEL = ROOT / "gearfmu" / "fmu" / "kernel"
 
 #: C type of a prototype -> ctypes type of the table
-_C_TYPES = {"int": ctypes.c_int, "double": ctypes.c_double, "void": None, "const char *": ctypes.c_char_p}
+_C_TYPES = {"int": ctypes.c_int, "long": ctypes.c_long, "double": ctypes.c_double, "void": None,
+            "const char *": ctypes.c_char_p}
 
 
 def _ctype(decl: str):
@@ -34,14 +35,15 @@ def _ctype(decl: str):
     return _C_TYPES[base]
 
 
-def header_prototypes():
-    """{name: (result type, argument types)} of every function declared in gearkernel.h and gkfmu.h."""
+def header_prototypes(headers=("gearkernel.h", "gkfmu.h")):
+    """{name: (result type, argument types)} of every function declared in the headers (gearkernel.h
+    and gkfmu.h)."""
     out = {}
-    for h in ("gearkernel.h", "gkfmu.h"):
+    for h in headers:
         text = re.sub(r"/\*.*?\*/", " ", (KERNEL / h).read_text(), flags=re.S)
         text = "\n".join(ln for ln in text.splitlines() if not ln.lstrip().startswith("#"))
         text = re.sub(r"\bGK_API\s+", "", text)  # the storage class (gearkernel.h): empty in the library
-        for m in re.finditer(r"([A-Za-z_][\w \t\*]*?)\b(gkf?_\w+)\s*\(([^)]*)\)\s*;", text):
+        for m in re.finditer(r"([A-Za-z_][\w \t\*]*?)\b((?:gkf?|pl)_\w+)\s*\(([^)]*)\)\s*;", text):
             params = [p.strip() for p in m.group(3).split(",")]
             args = () if params == ["void"] else tuple(_ctype(re.sub(r"\w+$", "", p).strip() or p) for p in params)
             out[m.group(2)] = (_ctype(m.group(1).strip()), args)
@@ -56,6 +58,18 @@ def test_the_table_is_the_headers():
     assert set(table) == set(protos), (sorted(set(protos) - set(table)), sorted(set(table) - set(protos)))
     for name, (res, args) in protos.items():
         assert table[name] == (res, args), name
+
+
+def test_the_planetary_table_is_its_header():
+    protos = header_prototypes(("plkernel.h",))
+    assert len(protos) >= 25, sorted(protos)
+    table = {name: (res, args) for name, res, args, _ in PLANETARY_FUNCTIONS}
+    assert len(table) == len(PLANETARY_FUNCTIONS), "a function is declared twice"
+    assert set(table) == set(protos), (sorted(set(protos) - set(table)), sorted(set(table) - set(protos)))
+    for name, (res, args) in protos.items():
+        assert table[name] == (res, args), name
+    pl = re.search(r"#define PL_ABI_VERSION (\d+)", (KERNEL / "plkernel.h").read_text())
+    assert int(pl.group(1)) == kernel_api.PLANETARY_ABI_VERSION
 
 
 def test_the_abi_versions_are_the_headers():
@@ -99,7 +113,7 @@ def test_a_checked_binding_raises_with_the_kernels_words(lib_path):
 
 def test_no_other_file_declares_a_kernel_signature():
     # one table: no ctypes argtypes/restype of a gk_/gkf_ function anywhere else in the repository
-    pattern = re.compile(r"\bgkf?_\w+\.(argtypes|restype)\b")
+    pattern = re.compile(r"\b(gkf?|pl)_\w+\.(argtypes|restype)\b")
     found = []
     for p in (*ROOT.glob("gearfmu/**/*.py"), *ROOT.glob("tests/**/*.py"), *ROOT.glob("benchmarks/*.py"),
               *ROOT.glob("examples/**/*.py")):
