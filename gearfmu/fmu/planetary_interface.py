@@ -23,6 +23,7 @@ from ..planetary.native import output_units
 from ..tables.zones import zone_cuts
 from .gearbox_interface import DEFAULT_GEARBOX_SPEC_PATH, FEATURES, _relative_index, load_gearbox_spec
 from .modeldesc import Spec, SpecError, Variable
+from .planetary_kernel import damping_ratio_for
 
 __all__ = ["PLANETARY_SPEC_FORMAT", "DEFAULT_PLANETARY_SPEC_PATH", "load_planetary_spec", "planetary_variables",
            "damping_items", "mesh_offset", "spring_offset", "group_offset", "n_outputs", "me_indicator_counts"]
@@ -64,11 +65,6 @@ def n_outputs(model: PlanetaryModel) -> int:
     return group_offset(model, len(model.stages))
 
 
-def sun_meshes(model: PlanetaryModel, st: dict) -> List[int]:
-    """The mesh indices of a planetary stage's sun-planet meshes, planet 1 .. N (its load-sharing group)."""
-    return [model.mesh_names.index(f"{st['name']}.sun_planet[{n + 1}]") for n in range(st["planets"])]
-
-
 def damping_items(model: PlanetaryModel) -> List[Tuple[str, List[int], float, str]]:
     """(stage name, its mesh indices, damping ratio, damping law) of every stage: the parallel stages,
     then the planetary stages (every sun-planet and ring-planet mesh of the stage)."""
@@ -84,36 +80,20 @@ def damping_items(model: PlanetaryModel) -> List[Tuple[str, List[int], float, st
 
 
 def _stage_zeta(model: PlanetaryModel, name: str, meshes: List[int]) -> float:
-    """The one damping ratio that gives every mesh of a stage its damping exactly (SpecError if none)."""
-    for z in dict.fromkeys(damping_ratio(model, m) for m in meshes):
+    """The one damping ratio that gives every mesh of a stage its per-pair damping exactly in the pair
+    kernel's gk_set_damping (:func:`gearfmu.fmu.planetary_kernel.damping_ratio_for`); SpecError if none."""
+    for z in dict.fromkeys(damping_ratio_for(model.mesh_tables[m], model.mesh_c[m]) for m in meshes):
         if all(_c_of(model, m, z) == float(model.mesh_c[m]) for m in meshes):
             return z
     raise SpecError(f"stage {name}: its meshes' damping is not one damping ratio's")
 
 
-def _root(model: PlanetaryModel, m: int) -> float:
+def _c_of(model: PlanetaryModel, m: int, zeta: float) -> float:
+    """c = 2 zeta sqrt(k_mean m_e) as gk_set_damping evaluates it."""
     t = model.mesh_tables[m]
     i1, i2 = float(t.inertia_pinion_kgm2), float(t.inertia_gear_kgm2)
     r1, r2 = float(t.base_radius_pinion_m), float(t.base_radius_gear_m)
-    return math.sqrt(float(t.k_mean_N_per_m) * (i1 * i2 / (i1 * r2 * r2 + i2 * r1 * r1)))
-
-
-def _c_of(model: PlanetaryModel, m: int, zeta: float) -> float:
-    return 2.0 * zeta * _root(model, m)
-
-
-def damping_ratio(model: PlanetaryModel, m: int) -> float:
-    """The damping ratio zeta of mesh m, the one whose c = 2*zeta*sqrt(k_mean*m_e) (the pair kernel's
-    gk_set_damping, gearfmu.gearbox.model.mesh_damping) is the model's per-pair damping exactly."""
-    root = _root(model, m)
-    c = float(model.mesh_c[m])
-    z = c / (2.0 * root)
-    for _ in range(8):
-        got = 2.0 * z * root
-        if got == c:
-            return z
-        z = math.nextafter(z, math.inf if got < c else -math.inf)
-    raise SpecError(f"mesh {model.mesh_names[m]}: no damping ratio gives its damping {c!r} N*s/m exactly")
+    return 2.0 * zeta * math.sqrt(float(t.k_mean_N_per_m) * (i1 * i2 / (i1 * r2 * r2 + i2 * r1 * r1)))
 
 
 def me_indicator_counts(model: PlanetaryModel, node_events: bool) -> List[int]:
