@@ -35,7 +35,6 @@ import io
 import json
 import math
 import platform
-import re
 import shutil
 import uuid
 from pathlib import Path
@@ -57,7 +56,7 @@ from .gearbox_validation import record_files
 from .modeldesc import SpecError
 from .multimesh_build import FmuPackage, assemble_fmu, check_platforms, interface_options
 from .planetary_doc import planetary_documentation_html
-from .planetary_interface import damping_items, load_planetary_spec, planetary_variables
+from .planetary_interface import damping_items, load_planetary_spec, planetary_variables, tables_folders
 from .planetary_kernel import kernel_data
 from .standalone_build import FMI_VERSIONS, INTERFACE_ELEMENTS, scalar_names
 from .validation import REFERENCE_CACHE, _SOLVER_PACKAGES, _sources_sha256, _versions
@@ -145,19 +144,6 @@ def _hexf(v) -> str:
     return float(v).hex()
 
 
-def tables_folders(model: PlanetaryModel, mesh_bytes) -> List[str]:
-    """The resources/ folder of every mesh's tables: meshes with identical tables files (the sun-planet
-    meshes of a stage without planet position errors) share the folder of the first of them; a folder
-    is named after its first mesh (letters, digits, '.', '_')."""
-    first: Dict[str, str] = {}
-    out = []
-    for nm, (_, bin_bytes) in zip(model.mesh_names, mesh_bytes):
-        key = hashlib.sha256(bin_bytes).hexdigest()
-        first.setdefault(key, re.sub(r"[^A-Za-z0-9_.]", "_", nm.replace("]", "")))
-        out.append(first[key])
-    return out
-
-
 def me_nominals(model: PlanetaryModel, settings: GearboxRunSettings) -> list:
     """Nominal values of the Model Exchange states [psi, omega, q_1, q_1', ...]: psi 1 rad, omega the start
     speed (at least 1 rad/s); a translation the smallest mesh scale (the largest of its static deflection,
@@ -209,7 +195,7 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
     lines.append(f"frames={len(kd.frames)}")
     lines += [f"frame={f}|{a}|{b}|{_hexf(r0)}|{_hexf(ratio)}" for f, (a, b, r0, ratio) in enumerate(kd.frames)]
     stage_of = {m: nm for nm, ms, _, _ in damping_items(model) for m in ms}
-    folders = tables_folders(model, mesh_bytes)
+    folders = tables_folders(model)
     lines.append(f"meshes={len(kd.meshes)}")
     for m, md in enumerate(kd.meshes):
         t = md.tables
@@ -347,7 +333,7 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     params = fmu_parameters(model, settings)
     resources = {}
-    for folder, (meta_bytes, bin_bytes) in zip(tables_folders(model, mesh_bytes), mesh_bytes):
+    for folder, (meta_bytes, bin_bytes) in zip(tables_folders(model), mesh_bytes):
         resources.setdefault(f"{folder}/tables.json", meta_bytes)
         resources.setdefault(f"{folder}/tables.bin", bin_bytes)
     for nm, text in (stage_scene_texts or {}).items():
@@ -357,7 +343,7 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
                                          nominals=me_nominals(model, settings) if me else None).encode("utf-8")
     if scene_text is not None:
         resources["scene.toml"] = scene_text.encode("utf-8")
-    folders = tables_folders(model, mesh_bytes)
+    folders = tables_folders(model)
     provenance = {
         "parameters": dict(params, stop_time_s=settings.stop_time_s, output_interval_s=settings.output_interval_s),
         "meshes": {nm: {"tables": f"resources/{folders[m]}/tables.bin",
@@ -381,7 +367,7 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
         return planetary_documentation_html(
             model=model, model_name=model_name, model_identifier=identifier, fmi_version=fmi_version,
             generation_tool=tool, variables=variables, description=description, parameters=params,
-            scene_text=scene_text, validation_record=rec, platforms_text=plat_text, tables_folders=folders,
+            scene_text=scene_text, validation_record=rec, platforms_text=plat_text,
             experiment={"start": 0.0, "stop": settings.stop_time_s, "step": settings.output_interval_s})
 
     return assemble_fmu(FmuPackage(

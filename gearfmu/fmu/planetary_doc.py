@@ -12,6 +12,7 @@ from typing import List, Optional, Sequence
 from ..planetary.model import PlanetaryModel
 from .fmudoc import _e, _num
 from .gearbox_doc import doc_equations, doc_head, doc_tail, doc_variables
+from .planetary_interface import tables_folders
 
 __all__ = ["planetary_documentation_html", "PLANETARY_EQUATIONS"]
 
@@ -58,10 +59,11 @@ def _eq(name: str) -> Optional[str]:
 def planetary_documentation_html(*, model: PlanetaryModel, model_name: str, model_identifier: str, fmi_version: int,
                                  generation_tool: str, variables: Sequence, description: str, parameters: dict,
                                  scene_text: Optional[str], validation_record: Optional[dict], platforms_text: str,
-                                 experiment: dict, tables_folders: Sequence[str]) -> bytes:
+                                 experiment: dict) -> bytes:
     """The page (UTF-8 bytes) of a planetary FMU of ``model`` with ``variables`` (expanded)."""
     out: List[str] = []
     w = out.append
+    folders = tables_folders(model)
     doc_head(w, model_name=model_name, what="planetary", description=description, fmi_version=fmi_version,
              model_identifier=model_identifier, generation_tool=generation_tool, experiment=experiment,
              contents=[("variables", "Variables"), ("model", "Model"), ("drivetrain", "DOFs, meshes and springs"),
@@ -87,7 +89,7 @@ def planetary_documentation_html(*, model: PlanetaryModel, model_name: str, mode
         t = model.mesh_tables[m]
         w(f"<tr><td><code>{_e(nm)}</code></td><td>{t.slots}</td><td>{t.n_phi}</td>"
           f"<td>{_e(_num(float(model.mesh_torque_per_ref[m])))}</td><td>{_e(_num(float(model.mesh_c[m])))}, "
-          f"{_e(model.mesh_damping_model[m])}</td><td>resources/{_e(tables_folders[m])}/tables.bin</td></tr>")
+          f"{_e(model.mesh_damping_model[m])}</td><td>resources/{_e(folders[m])}/tables.bin</td></tr>")
     w("</table><h3>Springs</h3><table><tr><th>spring</th><th>kind</th><th>k</th><th>c</th></tr>")
     for s, nm in enumerate(model.spring_names):
         w(f"<tr><td><code>{_e(nm)}</code></td><td>{_e(model.spring_kind[s])}</td>"

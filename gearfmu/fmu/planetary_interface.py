@@ -15,7 +15,9 @@ FMU has them (gearfmu.fmu.gearbox_interface).
 """
 from __future__ import annotations
 
+import hashlib
 import math
+import re
 from typing import Dict, List, Tuple
 
 from ..planetary.model import PlanetaryModel
@@ -26,7 +28,7 @@ from .modeldesc import Spec, SpecError, Variable
 from .planetary_kernel import damping_ratio_for
 
 __all__ = ["PLANETARY_SPEC_FORMAT", "DEFAULT_PLANETARY_SPEC_PATH", "load_planetary_spec", "planetary_variables",
-           "damping_items", "mesh_offset", "spring_offset", "group_offset", "n_outputs", "me_indicator_counts"]
+           "damping_items", "tables_folders", "mesh_offset", "spring_offset", "group_offset", "n_outputs", "me_indicator_counts"]
 
 PLANETARY_SPEC_FORMAT = "gearfmu-planetary-variables"
 #: the item kinds an entry of the spec is repeated for
@@ -63,6 +65,19 @@ def group_offset(model: PlanetaryModel, g: int) -> int:
 def n_outputs(model: PlanetaryModel) -> int:
     """Length of the planetary kernel's output vector (plkernel.h pl_n_outputs)."""
     return group_offset(model, len(model.stages))
+
+
+def tables_folders(model: PlanetaryModel) -> List[str]:
+    """The resources/ folder of every mesh's tables: meshes with identical tables files (the sun-planet
+    meshes of a stage without planet position errors) share the folder of the first of them; a folder
+    is named after its first mesh (letters, digits, '.', '_')."""
+    first: Dict[str, str] = {}
+    out = []
+    for nm, t in zip(model.mesh_names, model.mesh_tables):
+        key = hashlib.sha256(t.to_bytes()[1]).hexdigest()
+        first.setdefault(key, re.sub(r"[^A-Za-z0-9_.]", "_", nm.replace("]", "")))
+        out.append(first[key])
+    return out
 
 
 def damping_items(model: PlanetaryModel) -> List[Tuple[str, List[int], float, str]]:
