@@ -24,7 +24,12 @@ native planetary solver >= 300 x the scipy reference at 1e-6).  ``example``: the
 parallel reducer (examples/scenes/planetary_reducer.toml) at its default settings, wall and CPU
 time per simulated second and per internal step.
 
-Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b]
+``fmu``: the planetary FMU of examples/scenes/planetary_stage.toml (three planets) in the C host
+benchmarks/fmu_rtf_host.c, its real-time factor (simulated seconds per CPU second) at the internal step
+that gives 1e-4 relative RMS DTE error against a fine native run (goal >= 10; :func:`fmu_rtf`).
+
+Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b] [--fmu-sim 0.05]
+[--fmu-only]
 """
 import argparse
 import json
@@ -149,12 +154,75 @@ def example(repeat):
             "events": int(r.info["events"])}
 
 
+FMU_FACTORS = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+FMU_TARGET = 1e-4
+
+
+def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node", "rk4")):
+    """The planetary FMU (``gearfmu build`` of the scene, this machine's binary) in the C host
+    benchmarks/fmu_rtf_host.c: ``sim_s`` simulated seconds at the scene's communication step, its
+    max_step swept over FMU_FACTORS x the default for each of ``integrators``; each run's error the worst mesh's RMS DTE difference
+    against a fine native run (rk4_node at an eighth of the default step) over its range; the CPU time and
+    real-time factor (simulated / CPU seconds) at the step where that error is FMU_TARGET (log-log
+    interpolation along the sweep; goal >= 10)."""
+    import dataclasses
+    import tempfile
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from harness import compile_host, host_run
+    from bench_gearbox_fmu import _unzip, at_error
+    from gearfmu.stages import build_planetary_drivetrain_fmu
+
+    kind, scene = load_any(ROOT / "examples" / "scenes" / f"{scene_name}.toml")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        res = build_planetary_drivetrain_fmu(scene, tmp / "p.fmu", platforms=("x86_64-linux",), validation=False,
+                                             model_exchange={"interface": "cs"})
+        model, s = res.model, res.settings
+        md = _unzip(res.fmu_path, tmp / "unz")
+        exe = compile_host(tmp)
+        outs = [f"{m}.dte" for m in model.mesh_names]
+        fine = simulate(model, dataclasses.replace(s, stop_time_s=sim_s, max_step_s=s.max_step_s / 8),
+                        motor_torque_Nm=s.motor_torque_start_Nm, load_torque_Nm=s.load_torque_start_Nm)
+        by_integrator = {}
+        for integ in integrators:
+            points = []
+            for f in FMU_FACTORS:
+                say(f"planetary FMU in the C host, {integ}, max_step {f:g} x default")
+                try:
+                    wall, cpu, rows = host_run(exe, tmp / "unz", md, sim_s=sim_s, comm_s=s.output_interval_s,
+                                               repeat=repeat, outputs=outs, max_step_s=f * s.max_step_s,
+                                               integrator=integ, timeout=3600)
+                except RuntimeError as exc:   # beyond the integrator's stability: the FMU discards the step
+                    points.append({"factor": f, "max_step_s": f * s.max_step_s, "failed": str(exc)[-300:]})
+                    continue
+                n = min(rows.shape[0], len(fine.time_s))
+                err = max(float(np.sqrt(np.mean((rows[:n, j] - fine[o][:n]) ** 2)) / np.ptp(fine[o][:n]))
+                          for j, o in enumerate(outs))
+                points.append({"factor": f, "max_step_s": f * s.max_step_s, "cpu_s": cpu, "wall_s": wall,
+                               "dte_rel_rms_err": err, "rtf_cpu": sim_s / cpu})
+            hit = at_error([p for p in points if "failed" not in p], lambda p: p["dte_rel_rms_err"], FMU_TARGET)
+            by_integrator[integ] = {
+                "sweep": points,
+                "at_target": None if hit is None else {"max_step_s": hit[0], "cpu_s": hit[1], "rtf_cpu": sim_s / hit[1]}}
+    return {"scene": scene.name, "planets": model.stages[0]["planets"], "dofs": model.n_dof,
+            "meshes": len(model.mesh_names), "integrator": s.integrator, "comm_step_s": s.output_interval_s,
+            "default_max_step_s": s.max_step_s, "sim_s": sim_s, "host": "benchmarks/fmu_rtf_host.c (C, FMI 2.0)",
+            "reference": "native planetary solver, rk4_node at default max_step / 8", "integrators": by_integrator,
+            "target_dte_rel_rms_err": FMU_TARGET, "goal": "the planetary FMU >= 10 x real time at 1e-4 relative DTE error"}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--mesh-periods", type=int, default=20, help="sun mesh periods of every case")
     ap.add_argument("--cases", default=",".join(PLANETARY_CASES))
+    ap.add_argument("--fmu-sim", type=float, default=0.05, help="simulated seconds of each planetary FMU run")
+    ap.add_argument("--fmu-only", action="store_true", help="only the planetary FMU's real-time factor")
     a = ap.parse_args(argv)
+    if a.fmu_only:
+        print(json.dumps({"fmu": fmu_rtf(a.repeat, a.fmu_sim)}, indent=1))
+        return
     fronts = [case_front(c, a.repeat, a.mesh_periods) for c in a.cases.split(",")]
     summary = {}
     for integ in GEARBOX_INTEGRATORS:
@@ -162,6 +230,7 @@ def main(argv=None):
             vals = [f["speedup_vs_DOP853"][integ][key] for f in fronts]
             summary.setdefault(integ, {})[key] = (None if any(v is None for v in vals) else min(vals))
     out = {"fronts": fronts, "summary_min_speedup_vs_DOP853": summary, "example": example(a.repeat),
+           "fmu": fmu_rtf(a.repeat, a.fmu_sim),
            "goal": "native planetary solver >= 300 x the scipy reference (DOP853) at 1e-6 relative DTE error"}
     print(json.dumps(out, indent=1))
 

@@ -822,6 +822,7 @@ def sec_planetary(pg: Page):
                f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['cpu_per_simulated_s'], 3)} s of "
                f"CPU time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
                f"({ex['events']} events in {ex['stop_time_s']:g} s).") if ex else ""
+    example += _planetary_fmu_line(d.get("fmu"))
     pg.parts.append(
         "## Planetary stages\n\n"
         "The native planetary solver (docs/planetary.md) on the hard cases of `gearfmu/bench.py` "
@@ -837,6 +838,21 @@ def sec_planetary(pg: Page):
         + f"\n\n{img}{example}\n\nSource: `{SOURCES['planetary'][2]}` ({pg.cost('planetary')}).\n")
     pg.summary.append(_front_summary(d, "planetary dynamics (Lin & Parker model, every mesh multi-pair)",
                                      "event-located DOP853 (scipy), same equations"))
+
+
+def _planetary_fmu_line(f) -> str:
+    """The planetary FMU's real-time factor in the C host at 1e-4 relative DTE error (bench_planetary.py ``fmu``)."""
+    if not f:
+        return ""
+    parts = []
+    for integ, v in f["integrators"].items():
+        at = v.get("at_target")
+        parts.append(f"{integ} {num(at['rtf_cpu'], 3)} x real time (max_step {sci(at['max_step_s'])} s)" if at
+                     else f"{integ} does not reach it in the sweep (its error at the smallest step "
+                          f"{sci(min(p['dte_rel_rms_err'] for p in v['sweep'] if 'dte_rel_rms_err' in p))})")
+    return (f"\n\nThe planetary FMU of `{f['scene']}` ({f['planets']} planets, {f['dofs']} degrees of freedom) in "
+            f"the C host `{f['host']}`, at the internal step that gives {sci(f['target_dte_rel_rms_err'])} relative RMS "
+            f"DTE error against {f['reference']}: " + "; ".join(parts) + " (simulated per CPU second; goal >= 10).")
 
 
 def sec_me(pg: Page):
