@@ -153,8 +153,8 @@ def validate_drivetrain(scene, fmu=None, *, out_path=None, tolerance: float = DE
         res = build_drivetrain_fmu(scene, out, progress=progress, allow_large=allow_large)
         fmu_path, model, settings = res.fmu_path, res.model, res.settings
     if planetary:
-        variables = planetary_variables_of_fmu(model, settings, "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS,
-                                               interface=_interface(fmu_path))
+        fmi3_outputs = "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS
+        variables = planetary_variables_of_fmu(model, settings, fmi3_outputs, interface=_interface(fmu_path))
         rep = validate_planetary_fmu(fmu_path, model, settings, variables, tolerance=tolerance, scene_text=scene.text,
                                      stop_time_s=stop_time_s, comm_step_s=comm_step_s)
         rep["scene"] = scene.name

@@ -21,6 +21,7 @@
  * kernel state (plain structs) with the variable values in one flat block.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -324,11 +325,10 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     c->data = d = (gm_data *)calloc(1, sizeof(gm_data));
     if (d == NULL) return "out of memory";
     d->core.k = &GB_KERNEL;
-    d->core.kd = d;
-    d->core.y = d->state.y;
-    d->core.kstate = &d->state;
+    d->core.y_offset = offsetof(gm_data, state) + offsetof(gb_state, y);
+    d->core.kstate_offset = offsetof(gm_data, state);
     d->core.kstate_bytes = sizeof d->state;
-    d->core.kme = &d->me;
+    d->core.kme_offset = offsetof(gm_data, me);
     d->core.kme_bytes = sizeof d->me;
     d->core.snap_magic = GB_SNAPSHOT_MAGIC;
     d->core.snap_version = GB_SNAPSHOT_VERSION;

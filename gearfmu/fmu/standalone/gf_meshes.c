@@ -34,6 +34,10 @@ typedef struct {
 } gfm_snap_header;
 
 static gfm_core *core_of(const gf_inst *c) { return (gfm_core *)(void *)c->data; }
+/* the model's data (handed to the kernel functions) and what lies at an offset into it */
+static void *kd_of(const gfm_core *d) { return (void *)(uintptr_t)d; }
+static void *at(const gfm_core *d, size_t offset) { return (void *)((char *)kd_of(d) + offset); }
+static double *y_of(const gfm_core *d) { return (double *)at(d, d->y_offset); }
 
 const char *gfm_num(double x, char buf[GFM_NUM])
 {
@@ -335,7 +339,7 @@ static const char *me_setup(gf_inst *c, gfm_core *core, const gfm_common_cfg *cc
                      core->name[m], GK_KINK_MAX_SLOTS);
             return err;
         }
-    nz = core->k->k_me_n_ind(core->kd, cc->me_node_events);
+    nz = core->k->k_me_n_ind(kd_of(core), cc->me_node_events);
     if (nz < 0 || (long)nz != cc->me_indicators) {
         snprintf(err, errcap, "Model Exchange: the tables give %d event indicators, the model description declares "
                  "%ld", nz, cc->me_indicators);
@@ -410,8 +414,8 @@ void gfm_reset(gf_inst *c, gfm_core *core)
     int i;
     for (i = 0; i < c->n_vars; ++i) c->values[i] = c->vars[i].has_start ? c->vars[i].start : 0.0;
     for (i = 0; i < c->n_out; ++i) c->out[i] = 0.0;
-    if (core->kstate != NULL) memset(core->kstate, 0, core->kstate_bytes);
-    if (core->kme != NULL) memset(core->kme, 0, core->kme_bytes);
+    memset(at(core, core->kstate_offset), 0, core->kstate_bytes);
+    if (core->kme_bytes) memset(at(core, core->kme_offset), 0, core->kme_bytes);
     core->initialized = 0;
     core->zeta_valid = 0;
     core->warned = 0;
@@ -484,11 +488,11 @@ static int apply_damping(gf_inst *c)
 static void check_torque_axes(gf_inst *c, double t)
 {
     gfm_core *d = core_of(c);
-    double t_ref = d->k->k_tref(d->kd, tm_of(c), tl_of(c));
+    double t_ref = d->k->k_tref(kd_of(d), tm_of(c), tl_of(c));
     int m;
     for (m = 0; m < d->n_mesh; ++m) {
         const gk_model *pm = d->pair[m];
-        double tq = d->k->k_mesh_torque(d->kd, m, t_ref);
+        double tq = d->k->k_mesh_torque(kd_of(d), m, t_ref);
         char a[GFM_NUM], b[GFM_NUM], e[GFM_NUM], f[GFM_NUM];
         if (pm->n_torque < 2) continue;
         if (tq < pm->torque_Nm[0] || tq > pm->torque_Nm[pm->n_torque - 1]) {
@@ -515,11 +519,11 @@ static int me_fill(gf_inst *c, int decide, int outputs)
     if (!d->me_offered) return 1;
     n2 = (int)d->n_state;
     blk = c->out + d->me_base;
-    if (decide) st = d->k->k_me_init(d->kd, Tm, Tl, d->me_node_events);
-    if (st == GK_OK && outputs) st = d->k->k_me_out(d->kd, Tm, Tl, c->out);
-    if (st == GK_OK) st = d->k->k_me_deriv(d->kd, Tm, Tl, blk + n2);
-    if (st == GK_OK) st = d->k->k_me_ind(d->kd, Tm, Tl, blk + 2 * n2);
-    if (st == GK_OK) memcpy(blk, d->y, sizeof(double) * (size_t)n2);
+    if (decide) st = d->k->k_me_init(kd_of(d), Tm, Tl, d->me_node_events);
+    if (st == GK_OK && outputs) st = d->k->k_me_out(kd_of(d), Tm, Tl, c->out);
+    if (st == GK_OK) st = d->k->k_me_deriv(kd_of(d), Tm, Tl, blk + n2);
+    if (st == GK_OK) st = d->k->k_me_ind(kd_of(d), Tm, Tl, blk + 2 * n2);
+    if (st == GK_OK) memcpy(blk, y_of(d), sizeof(double) * (size_t)n2);
     return st == GK_OK;
 }
 
@@ -559,7 +563,7 @@ int gfm_init_state(gf_inst *c)
         bad = 1;
     }
     if (bad) return 0;
-    st = d->k->k_integrator(d->kd, gfm_code_of(ig, 3));
+    st = d->k->k_integrator(kd_of(d), gfm_code_of(ig, 3));
     if (st != GK_OK) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: refused by the kernel (a %s has more than %d "
                "slots)%s", c->vars[d->vr_integrator].name, gfm_num(ig, a), d->k->mesh_word, GK_KINK_MAX_SLOTS, tail);
@@ -567,9 +571,9 @@ int gfm_init_state(gf_inst *c)
     }
     d->zeta_valid = 0;
     if (!apply_damping(c)) return 0;
-    t_ref = d->k->k_tref(d->kd, tm_of(c), tl_of(c));
-    st = d->k->k_initialize(d->kd, gfm_val(c, d->vr_angle0), gfm_val(c, d->vr_speed0), t_ref, &bad_mesh);
-    if (st == GK_OK) st = d->k->k_outputs(d->kd, tm_of(c), tl_of(c), c->out);
+    t_ref = d->k->k_tref(kd_of(d), tm_of(c), tl_of(c));
+    st = d->k->k_initialize(kd_of(d), gfm_val(c, d->vr_angle0), gfm_val(c, d->vr_speed0), t_ref, &bad_mesh);
+    if (st == GK_OK) st = d->k->k_outputs(kd_of(d), tm_of(c), tl_of(c), c->out);
     if (st != GK_OK) {
         if (st == GK_ERR_NOCONTACT && bad_mesh >= 0 && bad_mesh < d->n_mesh)
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "initial state: %s %s has no tooth pair in contact at its "
@@ -636,7 +640,7 @@ int gfm_do_step(gf_inst *c, double t, double H)
     }
     if (bad || !apply_damping(c)) return GF_DISCARD;
     check_torque_axes(c, c->time);
-    st = d->k->k_step(d->kd, tm_of(c), tl_of(c), H, gfm_val(c, d->vr_hmax), c->out);
+    st = d->k->k_step(kd_of(d), tm_of(c), tl_of(c), H, gfm_val(c, d->vr_hmax), c->out);
     if (st != GK_OK) {
         gf_log(c, GF_DISCARD, "logStatusDiscard", "step at t = %s s, H = %s s rejected: %s; state unchanged",
                gfm_num(c->time, a), gfm_num(H, b),
@@ -708,7 +712,7 @@ static int me_states(gf_inst *c, const char *fn, double x[])
 {
     int st = me_initial(c, fn);
     if (st != GF_OK) return st;
-    memcpy(x, core_of(c)->y, sizeof(double) * c->n_states);
+    memcpy(x, y_of(core_of(c)), sizeof(double) * c->n_states);
     return GF_OK;
 }
 
@@ -722,7 +726,7 @@ static int me_nominals(gf_inst *c, const char *fn, double x[])
 static int me_set_states(gf_inst *c, const char *fn, const double x[])
 {
     (void)fn;
-    memcpy(core_of(c)->y, x, sizeof(double) * c->n_states);
+    memcpy(y_of(core_of(c)), x, sizeof(double) * c->n_states);
     c->dirty = 1;
     return GF_OK;
 }
@@ -732,7 +736,7 @@ static int me_derivatives(gf_inst *c, const char *fn, double dx[])
     gfm_core *d = core_of(c);
     int st = (c->mode == GF_INIT_MODE) ? me_initial(c, fn) : me_inputs(c, fn);
     if (st != GF_OK) return st;
-    return me_status(c, fn, d->k->k_me_deriv(d->kd, tm_of(c), tl_of(c), dx));
+    return me_status(c, fn, d->k->k_me_deriv(kd_of(d), tm_of(c), tl_of(c), dx));
 }
 
 static int me_indicators(gf_inst *c, const char *fn, double z[])
@@ -740,7 +744,7 @@ static int me_indicators(gf_inst *c, const char *fn, double z[])
     gfm_core *d = core_of(c);
     int st = (c->mode == GF_INIT_MODE) ? me_initial(c, fn) : me_inputs(c, fn);
     if (st != GF_OK) return st;
-    return me_status(c, fn, d->k->k_me_ind(d->kd, tm_of(c), tl_of(c), z));
+    return me_status(c, fn, d->k->k_me_ind(kd_of(d), tm_of(c), tl_of(c), z));
 }
 
 static int me_event_update(gf_inst *c, const char *fn, int *again, int *values_changed)
@@ -750,7 +754,7 @@ static int me_event_update(gf_inst *c, const char *fn, int *again, int *values_c
     *again = 0;
     *values_changed = 0;
     if (st != GF_OK) return st;
-    st = me_status(c, fn, d->k->k_me_update(d->kd, tm_of(c), tl_of(c), &changed));
+    st = me_status(c, fn, d->k->k_me_update(kd_of(d), tm_of(c), tl_of(c), &changed));
     if (st != GF_OK) return st;
     c->dirty = 1;   /* the outputs follow the new modes */
     return GF_OK;
@@ -792,9 +796,9 @@ void gfm_snap_write(const gf_inst *c, unsigned char *p)
     h.dirty = c->dirty;
     memcpy(p, &h, sizeof h);
     p += sizeof h;
-    memcpy(p, d->kstate, d->kstate_bytes);
+    memcpy(p, at(d, d->kstate_offset), d->kstate_bytes);
     p += d->kstate_bytes;
-    if (d->kme_bytes) memcpy(p, d->kme, d->kme_bytes);
+    if (d->kme_bytes) memcpy(p, at(d, d->kme_offset), d->kme_bytes);
     p += d->kme_bytes;
     memcpy(p, c->values, sizeof(double) * (size_t)c->n_vars);
     memcpy(p + sizeof(double) * (size_t)c->n_vars, c->out, sizeof(double) * (size_t)c->n_out);
@@ -838,9 +842,9 @@ int gfm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *f
     c->dirty = (h.mode == GF_INSTANTIATED || h.mode == GF_INIT_MODE) || h.dirty != 0;
     c->time = h.time;
     p += sizeof h;
-    memcpy(d->kstate, p, d->kstate_bytes);
+    memcpy(at(d, d->kstate_offset), p, d->kstate_bytes);
     p += d->kstate_bytes;
-    if (d->kme_bytes) memcpy(d->kme, p, d->kme_bytes);
+    if (d->kme_bytes) memcpy(at(d, d->kme_offset), p, d->kme_bytes);
     p += d->kme_bytes;
     d->warned = h.warned;
     memcpy(c->values, p, sizeof(double) * (size_t)c->n_vars);
@@ -848,7 +852,7 @@ int gfm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *f
     d->initialized = h.initialized;
     d->zeta_valid = 0;
     if (d->initialized) {   /* the integrator and the damping are derived from the restored values */
-        if (d->k->k_integrator(d->kd, gfm_code_of(gfm_val(c, d->vr_integrator), 3)) != GK_OK || !apply_damping(c)) {
+        if (d->k->k_integrator(kd_of(d), gfm_code_of(gfm_val(c, d->vr_integrator), 3)) != GK_OK || !apply_damping(c)) {
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state's integrator or damping is refused", fn);
             return 0;
         }

@@ -15,8 +15,8 @@
  *   Exchange (gf_model.h gf_me_model) and the FMU state snapshot.
  *
  * A model keeps a gfm_core as the FIRST member of its gm_data, points it at its kernel through the
- * function table gfm_kernel (its kernel's functions over the model's own data) and its state, and
- * calls the gfm_* functions from its gm_* functions.  Nothing here calls back into a model file except
+ * function table gfm_kernel (its kernel's functions over the model's own data) and at its state (by
+ * offsets into its data), and calls the gfm_* functions from its gm_* functions.  Nothing here calls back into a model file except
  * through that table.
  */
 #ifndef GF_MESHES_H
@@ -82,11 +82,11 @@ typedef struct {
 
 /* what the shared behaviour keeps (the first member of a multi-mesh model's gm_data) */
 typedef struct gfm_core {
-    const gfm_kernel *k;
-    void *kd;                              /* the model's data, handed to the kernel functions */
-    double *y;                             /* the kernel state's vector (n_state values) */
+    const gfm_kernel *k;                   /* its functions take the model's data (gm_data, which starts here) */
+    /* where in the model's data (byte offsets from its start: the data may move, stage_model.c reallocates
+     * it) the kernel state's vector (n_state values), the kernel state and its Model Exchange modes are */
+    size_t y_offset, kstate_offset, kme_offset;
     size_t n_state;
-    void *kstate, *kme;                    /* the kernel state and its Model Exchange modes (snapshot) */
     size_t kstate_bytes, kme_bytes;
     uint32_t snap_magic, snap_version;
     int n_mesh;
