@@ -32,9 +32,11 @@ Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--
 [--fmu-only]
 """
 import argparse
+import dataclasses
 import json
 import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -45,6 +47,8 @@ from gearfmu.pipeline import drivetrain_model, load_any, simulate_drivetrain, st
 from gearfmu.planetary.native import simulate
 from gearfmu.planetary.reference import simulate_reference
 from gearfmu.bench import PLANETARY_CASES, planetary_case
+from gearfmu.stages import build_planetary_drivetrain_fmu
+from harness import at_error, compile_host, host_run, unzip_fmu
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
@@ -165,21 +169,13 @@ def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node"
     against a fine native run (rk4_node at an eighth of the default step) over its range; the CPU time and
     real-time factor (simulated / CPU seconds) at the step where that error is FMU_TARGET (log-log
     interpolation along the sweep; goal >= 10)."""
-    import dataclasses
-    import tempfile
-
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from harness import compile_host, host_run
-    from bench_gearbox_fmu import _unzip, at_error
-    from gearfmu.stages import build_planetary_drivetrain_fmu
-
     kind, scene = load_any(ROOT / "examples" / "scenes" / f"{scene_name}.toml")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         res = build_planetary_drivetrain_fmu(scene, tmp / "p.fmu", platforms=("x86_64-linux",), validation=False,
                                              model_exchange={"interface": "cs"})
         model, s = res.model, res.settings
-        md = _unzip(res.fmu_path, tmp / "unz")
+        md = unzip_fmu(res.fmu_path, tmp / "unz")
         exe = compile_host(tmp)
         outs = [f"{m}.dte" for m in model.mesh_names]
         fine = simulate(model, dataclasses.replace(s, stop_time_s=sim_s, max_step_s=s.max_step_s / 8),

@@ -13,6 +13,7 @@ then compared with the largest range of the outputs of its unit (``scale`` in th
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import time
 from pathlib import Path
 from typing import Optional
@@ -42,8 +43,6 @@ def check_planetary_fmu_matches(fmu: FmuFile, model: Optional[PlanetaryModel] = 
     """Refuse (FmuMismatchError, naming both) an FMU that is not a planetary FMU, was built from another
     drivetrain scene than ``scene_text``, carries other tables of a mesh than ``model``'s, or has other
     variables than ``variables``; checks only what is given.  Nothing is simulated."""
-    import hashlib
-
     rec = fmu.record or {}
     if rec and rec.get("model") != "planetary":
         raise FmuMismatchError(f"{fmu.path} is a {rec.get('model', 'gear-pair')} FMU, not a planetary FMU; "
