@@ -10,7 +10,8 @@ references its C code did not produce.
 * Kahraman (1994): equally spaced planets meshing in phase share the load equally; the FMU's
   load-sharing factors are 1 within 1e-6.
 * fmpy's validate_fmu; the FMI 3 build of the same drivetrain bit for bit; a second C host
-  (tests/fmu_hosts/fmi_host.c), its win64 build under Wine giving the linux64 binary's output file;
+  (tests/fmu_hosts/fmi_host.c), its win64 build under Wine and aarch64 build under qemu giving the
+  linux64 binary's output file; tests/fmu_hosts/fmi_fuzz.c's contract (no crash, every refusal logged);
   fmpy's CVode on the Model Exchange interface against the native solver; PathSim's own Model Exchange
   integration; hashlib's SHA-256 for the tables checksums.
 """
@@ -319,11 +320,12 @@ def _host_args(e, fmu_dir, n):
         [v.name for v in md.modelVariables if v.causality == "output"]
 
 
-def test_c_host_and_win64_under_wine(built, host_exe, tmp_path):
+def test_c_host_win64_under_wine_and_aarch64_under_qemu(built, host_exe, tmp_path):
     """tests/fmu_hosts/fmi_host.c (another FMI 2 host, in C, with its FMU-state check) runs the reducer's
     linux64 binary: its output file equals the native planetary solver within 1e-12 of each range; the
-    win64 DLL under Wine (a win64 build of the same host) writes the same file (SHA-256)."""
-    from test_platforms import _compile_host, _run_file, wine
+    win64 DLL under Wine and the aarch64-linux binary under qemu-aarch64 (builds of the same host) write
+    the same file (SHA-256)."""
+    from test_platforms import AARCH64_SYSROOT, _compile_host, _run_file, qemu, wine
 
     e = built[EXAMPLES[0]]
     d = tmp_path / "fmu"
@@ -345,6 +347,11 @@ def test_c_host_and_win64_under_wine(built, host_exe, tmp_path):
                    initial_state=np.array([y0[k][0] for k in st]))
     worst = max(_rel(nat[nm], data[:, i + 1]) for i, nm in enumerate(names))
     assert worst <= TOL
+    sha = lambda text: hashlib.sha256(text.encode()).hexdigest()
+    exe = _compile_host(tmp_path, "aarch64-linux-gnu")
+    rc, out, err = _run_file([qemu(), "-L", str(AARCH64_SYSROOT), str(exe), *args, "--state-check"], tmp_path, "qemu")
+    assert rc == 0, err[-2000:]
+    assert sha(out) == sha(ref)
     w = wine()
     exe = _compile_host(tmp_path, "x86_64-windows-gnu")
     env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
@@ -358,7 +365,7 @@ def test_c_host_and_win64_under_wine(built, host_exe, tmp_path):
             subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                            stderr=subprocess.DEVNULL, timeout=120)
     assert rc == 0, err[-2000:]
-    assert hashlib.sha256(out.encode()).hexdigest() == hashlib.sha256(ref.encode()).hexdigest()
+    assert sha(out) == sha(ref)
     with zipfile.ZipFile(e["fmu"][2]) as z:
         plats = {n.split("/")[1] for n in z.namelist() if n.startswith("binaries/") and n.count("/") == 2}
     assert plats == {"linux64", "aarch64-linux", "win64", "darwin64", "aarch64-darwin"}
@@ -449,3 +456,16 @@ def test_model_exchange_in_pathsim(built):
     errs = _me_errors(dict(zip(ME_NAMES, ys)), nat)
     print("PathSim against native:", errs)
     assert max(errs.values()) <= 1e-4, errs
+
+
+def test_c_fuzz_of_the_planetary_fmu(built):
+    """tests/fmu_hosts/fmi_fuzz.c's random call sequences (the checks of tests/fmu_hosts/test_fuzz.py) on the
+    planetary stage FMU: no host crash, every refusal logged, out-of-order calls refused as such."""
+    import fuzz_fmu
+
+    res = fuzz_fmu.run_c_fuzz(built[EXAMPLES[1]]["fmu"][2], 600, first_seed=20261207, batch=300, jobs=2)
+    assert res["sequences"] == 600 and res["host_crashes"] == 0, res["crashes"]
+    assert res["unlogged_refusals"] == 0, res["unlogged_examples"]
+    assert res["bad_status"] == 0 and res["fatals"] == 0
+    assert res["sequences_breaking_order"] == res["sequences"] - res["instantiate_refused"]
+    assert res["illegal_sequence_refusals"] > 600 and res["discards"] > 100
