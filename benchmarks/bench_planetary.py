@@ -22,14 +22,18 @@ interpolation along its own front) and ``speedup_vs_DOP853`` DOP853's time over 
 integrator's at those errors; ``summary`` the smallest speedup over the cases (the goal: the
 native planetary solver >= 300 x the scipy reference at 1e-6).  ``example``: the planetary +
 parallel reducer (examples/scenes/planetary_reducer.toml) at its default settings, wall and CPU
-time per simulated second and per internal step.
+time per simulated second and per internal step.  ``c_kernel``: the planetary kernel in C
+(gearfmu/fmu/kernel/plkernel.h, stepped by pl_do_step through ctypes as an FMU steps it) against the
+numba solver's compiled loop on the same run (every hard case and the example, 'rk4_node' and 'rk4'):
+the time per internal step of each, their ratio (numba over C) measured in the same run, and whether
+the C run's state equals the numba run's bit for bit.
 
 ``fmu``: the planetary FMU of examples/scenes/planetary_stage.toml (three planets) in the C host
 benchmarks/fmu_rtf_host.c, its real-time factor (simulated seconds per CPU second) at the internal step
 that gives 1e-4 relative RMS DTE error against a fine native run (goal >= 10; :func:`fmu_rtf`).
 
 Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b] [--fmu-sim 0.05]
-[--fmu-only]
+[--fmu-only] [--c-kernel-only]
 """
 import argparse
 import dataclasses
@@ -208,6 +212,48 @@ def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node"
             "target_dte_rel_rms_err": FMU_TARGET, "goal": "the planetary FMU >= 10 x real time at 1e-4 relative DTE error"}
 
 
+def c_kernel(repeat, mesh_periods, cases):
+    """The C kernel per internal step against the numba loop, on each case's run (module docstring)."""
+    from gearfmu.fmu.planetary_kernel import PlanetaryKernel, compile_planetary_kernel
+
+    lib = compile_planetary_kernel(tempfile.mkdtemp(prefix="bench_planetary_"))
+    runs = [(c, *planetary_case(c, mesh_periods=mesh_periods)) for c in cases]
+    kind, scene = load_any(ROOT / "examples" / "scenes" / "planetary_reducer.toml")
+    model = drivetrain_model(scene, stage_tables(scene))
+    s = simulate_drivetrain(scene, model, stop_time_s=scene.output_interval_s).info["settings"]
+    runs.append((scene.name, model, dict(stop_time_s=scene.stop_time_s, comm_step_s=s.output_interval_s,
+                                         motor_torque_Nm=s.motor_torque_start_Nm,
+                                         motor_speed_start_rad_s=s.motor_speed_start_rad_s)))
+    rows = []
+    for name, model, kw in runs:
+        for integ in ("rk4_node", "rk4"):
+            simulate(model, **dict(kw, stop_time_s=kw["comm_step_s"], integrator=integ))   # compile (or load)
+            loop = math.inf
+            for _ in range(repeat):
+                r = simulate(model, integrator=integ, **kw)
+                loop = min(loop, r.wall_s)
+            st = r.info["settings"]
+            t_in, t_out = r["motor_torque"], r["load_torque"]
+            y0 = model.static_state(float(r.info["reference_torque_Nm"][0]), st.motor_speed_start_rad_s,
+                                    st.motor_angle_start_rad)
+            K = PlanetaryKernel(lib, model, integ)
+            c_wall = math.inf
+            for _ in range(repeat):
+                K.set_state(y0)
+                t0 = time.perf_counter()
+                for k in range(len(t_in) - 1):
+                    K.step(t_in[k], t_out[k], st.output_interval_s, st.max_step_s)
+                c_wall = min(c_wall, time.perf_counter() - t0)
+            steps = r.substeps * (len(r.time_s) - 1)
+            rows.append({"run": name, "integrator": integ, "dofs": model.n_dof, "meshes": len(model.mesh_names),
+                         "internal_steps": steps, "numba_loop_wall_s": loop, "c_wall_s": c_wall,
+                         "numba_ns_per_step": 1e9 * loop / steps, "c_ns_per_step": 1e9 * c_wall / steps,
+                         "numba_over_c": loop / c_wall, "bit_for_bit": bool(np.array_equal(K.y, r.state))})
+            say(f"c_kernel: {name} {integ} done")
+    return {"rows": rows, "clock": "best wall time of --repeat runs; C through ctypes, one call per "
+            "communication step (the call's cost included); numba: its compiled loop (PlanetaryResult.wall_s)"}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -215,9 +261,13 @@ def main(argv=None):
     ap.add_argument("--cases", default=",".join(PLANETARY_CASES))
     ap.add_argument("--fmu-sim", type=float, default=0.05, help="simulated seconds of each planetary FMU run")
     ap.add_argument("--fmu-only", action="store_true", help="only the planetary FMU's real-time factor")
+    ap.add_argument("--c-kernel-only", action="store_true", help="only the C kernel against the numba loop")
     a = ap.parse_args(argv)
     if a.fmu_only:
         print(json.dumps({"fmu": fmu_rtf(a.repeat, a.fmu_sim)}, indent=1))
+        return
+    if a.c_kernel_only:
+        print(json.dumps({"c_kernel": c_kernel(a.repeat, a.mesh_periods, a.cases.split(","))}, indent=1))
         return
     fronts = [case_front(c, a.repeat, a.mesh_periods) for c in a.cases.split(",")]
     summary = {}
@@ -227,6 +277,7 @@ def main(argv=None):
             summary.setdefault(integ, {})[key] = (None if any(v is None for v in vals) else min(vals))
     out = {"fronts": fronts, "summary_min_speedup_vs_DOP853": summary, "example": example(a.repeat),
            "fmu": fmu_rtf(a.repeat, a.fmu_sim),
+           "c_kernel": c_kernel(a.repeat, a.mesh_periods, a.cases.split(",")),
            "goal": "native planetary solver >= 300 x the scipy reference (DOP853) at 1e-6 relative DTE error"}
     print(json.dumps(out, indent=1))
 

@@ -822,6 +822,15 @@ def sec_planetary(pg: Page):
                f"{ex['integrator']}, internal step {sci(ex['step_s'])} s): {num(ex['cpu_per_simulated_s'], 3)} s of "
                f"CPU time per simulated second, {ex['ns_per_internal_step']:.0f} ns per internal step "
                f"({ex['events']} events in {ex['stop_time_s']:g} s).") if ex else ""
+    ck = d.get("c_kernel", {}).get("rows", [])
+    if ck:
+        example += ("\n\nThe planetary kernel in C (`gearfmu/fmu/kernel/plkernel.h`, stepped by `pl_do_step` through "
+                    "ctypes, one call per communication step) against the numba solver's compiled loop on the same "
+                    "runs, time per internal step and their ratio from one run; *bit for bit*: the C run's final "
+                    "state equals the numba run's exactly.\n\n"
+                    + table(["run", "integrator", "numba ns/step", "C ns/step", "numba / C", "bit for bit"],
+                            [[r["run"], r["integrator"], f"{r['numba_ns_per_step']:.0f}", f"{r['c_ns_per_step']:.0f}",
+                              num(r["numba_over_c"], 3), "yes" if r["bit_for_bit"] else "**no**"] for r in ck]))
     example += _planetary_fmu_line(d.get("fmu"))
     pg.parts.append(
         "## Planetary stages\n\n"

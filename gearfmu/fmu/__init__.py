@@ -1,6 +1,7 @@
 """FMUs from tables: model description, one builder per runtime, runtime, C sources.
 
-Imports :mod:`gearfmu.gearbox` (the gearbox FMU), :mod:`gearfmu.planetary` (the planetary FMU), :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics`
+Imports :mod:`gearfmu.gearbox` (the gearbox FMU), :mod:`gearfmu.planetary` (the planetary kernel's
+data and the planetary FMU), :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics`
 (the run settings' automatic values and the validation record) and :mod:`gearfmu.common` (the run
 settings); never the scene nor the physics packages (pyproject.toml's contracts).
 :mod:`gearfmu.fmu.runtime` imports nothing from gearfmu.
@@ -37,7 +38,6 @@ gearbox_validation  the gearbox FMU's validation record (native gearbox solver)
 gearbox_compare     a gearbox FMU against the native gearbox solver
 gearbox_doc         the gearbox FMU's documentation page
 multimesh_build     the packaging the gearbox and planetary FMUs share
-planetary_kernel    the flat data of a planetary model for the C kernel
 planetary_interface a planetary FMU's variables from modeldescription/planetary.toml
 planetary_build     build_planetary_fmu: one FMU for a drivetrain with
                     planetary stages, in C
@@ -47,6 +47,8 @@ composition         a gearbox cut into stage FMUs and torsional elements
                     (an SSP of stage FMUs: components, links, power bonds)
 stage_build         build_stage_fmu: one stage with its shafts and flanges, in C
 element_build       build_element_fmu: a rigid body or an elastic shaft, in C
+planetary_kernel    the planetary drivetrain kernel in C from Python: a
+                    PlanetaryModel's flat data, the library, its ctypes model
 gearbox_ssp         the files of an SSP of stage FMUs (system structure, OSP
                     angular mechanical ports, libcosim's OspSystemStructure)
 ssp_engines         run such an SSP in fmpy and libcosim (fixed step, ECCO);

@@ -10,8 +10,9 @@ references its C code did not produce.
   example reducer examples/scenes/planetary_reducer.toml (a translational planetary stage with a
   floating sun and a parallel stage), Lin & Parker's (1999) four-planet system of
   examples/scenes/planetary_lin_parker.toml (translational), a torsional stage (Kahraman 1994's purely
-  torsional model), a stage with a planet position error (gearfmu.bench 'position_error') and a run
-  with contact loss (gearfmu.bench 'contact_loss': the torque drops, the backlash opens).
+  torsional model), a stage with a planet position error (gearfmu.bench 'position_error'), the same
+  stage driven by its load torque alone (the motor end no torque input) and a run with contact loss
+  (gearfmu.bench 'contact_loss': the torque drops, the backlash opens).
 * PlanetaryModel.static_state (numpy's LAPACK solve in Newton's method): pl_initialize within 1e-12 of
   the largest deviation of each kind (rotations, translations).
 * A mesh with no tooth pair in contact: static_state raises naming the mesh; pl_initialize returns
@@ -34,6 +35,7 @@ from gearfmu import stages
 from gearfmu.bench import lp_stage, planetary_case, run_kwargs
 from gearfmu.fmu.planetary_kernel import PlanetaryKernel, compile_planetary_kernel
 from gearfmu.fmu.runtime.kernel_api import load_kernel
+from gearfmu.gear.planetary_set import PlanetErrors
 from gearfmu.planetary.model import PlanetaryModelError, build_drivetrain
 from gearfmu.planetary.native import simulate
 from gearfmu.scene.drivetrain import load_drivetrain
@@ -73,6 +75,16 @@ def _torsional(stop_periods):
     return m, run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
 
 
+def _load_driven(stop_periods):
+    """The pin-error stage with the load torque the only input (the motor end free: T_ref = T_load g_load)."""
+    st = lp_stage(4, teeth_sun=21, teeth_planet=23, teeth_ring=67, contact_ratio_sun=1.6, contact_ratio_ring=1.7,
+                  planet_errors=(PlanetErrors(0.0, -20e-6),) + (PlanetErrors(),) * 3)
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier", motor_torque_input=False)
+    kw = run_kwargs(m, "lp.sun_planet[1]", 300.0, 0.0, stop_periods)
+    kw["load_torque_Nm"] = 60.0 / m.load_ratio
+    return m, kw
+
+
 def _bench(name):
     return lambda stop_periods: planetary_case(name, mesh_periods=stop_periods)
 
@@ -83,6 +95,7 @@ CASES = {
     "torsional": _torsional,
     "position_error": _bench("position_error"),
     "contact_loss": _bench("contact_loss"),
+    "load_driven": _load_driven,
 }
 _MODELS = {}
 
@@ -286,10 +299,12 @@ def _me_host(K, y0, T_in, T_out, times, rtol, node_events=0):
     return np.array(out), n_ev
 
 
-def test_me_host_over_the_kernel_matches_the_native_solver(lib):
+@pytest.mark.parametrize("node_events", [0, 2])
+def test_me_host_over_the_kernel_matches_the_native_solver(lib, node_events):
     """Lin & Parker's system with a planet position error at load (every mesh keeps contact): the host
-    over pl_me_* (DOP853, rtol 1e-10) against the native solver (rk4_node) at a step bound of a tenth of
-    its own: every output within 1e-6 of its range."""
+    over pl_me_* (DOP853, rtol 1e-10; without node events, and with an event at every node where the
+    tables bend) against the native solver (rk4_node) at a step bound of a tenth of its own: every
+    output within 1e-6 of its range."""
     model, kw = case("position_error")
     kw = dict(kw, stop_time_s=2 * kw["comm_step_s"] * 8)
     res = simulate(model, integrator="rk4_node", **kw)
@@ -301,7 +316,7 @@ def test_me_host_over_the_kernel_matches_the_native_solver(lib):
     for n in model.mesh_names:                  # contact kept: the mesh forces stay well above 0
         assert np.min(res[f"{n}.mesh_force"]) > 0.2 * np.mean(res[f"{n}.mesh_force"])
     y0 = model.static_state(T_in, kw["motor_speed_start_rad_s"], kw["motor_angle_start_rad"])
-    out, n_ev = _me_host(K, y0, T_in, T_out, res.time_s, 1e-10)
+    out, n_ev = _me_host(K, y0, T_in, T_out, res.time_s, 1e-10, node_events)
     assert n_ev > 0
     cols = kernel_columns(K, model)
     worst = {}
