@@ -225,6 +225,7 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
     for key in ("motor_torque", "load_torque", "motor_speed_start", "motor_angle_start", "max_step", "integrator"):
         lines.append(f"vr.{key}={vr.get(key, -1)}")
     elements = INTERFACE_ELEMENTS[interface]
+    lines.append("state_outputs=1")   # the kernel state as locals after the outputs, Model Exchange or not
     lines.append("interfaces=" + ",".join(e for e in ("cs", "me") if e in elements))
     if "me" in elements:
         lines.append(f"me.node_events={ME_NODE_EVENTS.index(node_events)}")

@@ -2,13 +2,12 @@
 drivetrain with planetary stages).
 
 The FMU is stepped at exactly the communication step H from t_k = k*H (the native solver's steps,
-:func:`gearfmu.fmu.gearbox_compare.step_fmu`) with its start values.  When the FMU offers Model
-Exchange its continuous states are locals, and the native solver
-(:func:`gearfmu.fmu.planetary_build.native_run`) starts from the FMU's initial state: the two agree to
-round-off (measured: bit for bit).  Without them the native solver starts from its own quasi-static
-state (numpy's solve, within 1e-12 of the C kernel's), and the round-off of the two starts grows in
-the lightly damped modes that are zero by symmetry (a floating sun's translations): every output is
-then compared with the largest range of the outputs of its unit (``scale`` in the report).
+:func:`gearfmu.fmu.gearbox_compare.step_fmu`) with its start values.  The FMU shows its kernel state
+as locals, and the native solver starts from the FMU's initial state: the two agree to round-off
+(measured: bit for bit).  An FMU without them (an older build) is run against the native solver from
+its own quasi-static state (numpy's solve, within 1e-12 of the C kernel's): the round-off of the two
+starts grows in the lightly damped modes that are zero by symmetry (a floating sun's translations), so
+every output is then compared with the largest range of the outputs of its unit (``scale``).
 """
 from __future__ import annotations
 

@@ -195,14 +195,13 @@ def planetary_variables(spec: Spec, model: PlanetaryModel, *, model_exchange: bo
                 out.append(_variable(len(out), f"{nm}.{e['name']}", e, desc=f"{e.get('description', '')} (stage {nm})"))
         else:
             out.append(_variable(len(out), e["name"], e))
-    if model_exchange:
-        out += _me_variables(model, len(out), node_events)
-    return out
+    return out + _me_variables(model, len(out), node_events, model_exchange)
 
 
-def _me_variables(model: PlanetaryModel, n0: int, node_events: bool) -> List[Variable]:
-    """The Model Exchange locals: states [psi, omega, q_i, q_i'], their derivatives and every mesh's
-    event indicators, at their positions in the block after the kernel's outputs (planetary_model.c)."""
+def _me_variables(model: PlanetaryModel, n0: int, node_events: bool, model_exchange: bool) -> List[Variable]:
+    """The kernel state [psi, omega, q_i, q_i'] as locals (every planetary FMU shows it: a validation
+    starts the native solver there) and, with ``model_exchange``, their derivatives and every mesh's event
+    indicators, at their positions in the block after the kernel's outputs (gf_meshes.c)."""
     n2 = 2 * model.n_dof
     base = n_outputs(model)
     real = {"type": "Real", "causality": "local", "variability": "continuous", "initial": "calculated"}
@@ -217,6 +216,8 @@ def _me_variables(model: PlanetaryModel, n0: int, node_events: bool) -> List[Var
     for k, (s, u) in enumerate(zip(states, units)):
         out.append(_variable(n0 + len(out), s, dict(real, unit=u), output_index=base + k,
                              desc="continuous state %d of the planetary kernel (plkernel.h pl_state)" % k))
+    if not model_exchange:
+        return out
     for k, (s, u) in enumerate(zip(states, units)):
         du = {"rad": "rad/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2"}[u]
         out.append(_variable(n0 + len(out), f"der({s})", dict(real, unit=du), output_index=base + n2 + k,

@@ -375,7 +375,8 @@ def test_c_host_win64_under_wine_and_aarch64_under_qemu(built, host_exe, tmp_pat
 def test_cli_builds_and_validates_a_planetary_drivetrain(tmp_path, capsys):
     """`gearfmu build` of the planetary stage scene makes one FMU (Co-Simulation and Model Exchange, the
     five platforms) and `gearfmu validate --fmu` finds it bit for bit with the native planetary solver
-    (started from the FMU's initial state); a corrupted --fmu is refused before anything runs."""
+    (started from the FMU's initial state), as it does its Co-Simulation-only and FMI 3 builds; an FMU of
+    another scene is refused before anything runs."""
     from gearfmu.cli import main
 
     out = tmp_path / "stage.fmu"
@@ -387,6 +388,15 @@ def test_cli_builds_and_validates_a_planetary_drivetrain(tmp_path, capsys):
     assert rep["start"] == "FMU initial state" and rep["bitwise"] and not rep["failed"] and not rep["fmpy_problems"]
     assert main(["validate", str(SCENES / "planetary_reducer.toml"), "--fmu", str(out), "-q"]) == 2
     assert "built from another drivetrain scene" in capsys.readouterr().err
+    # Co-Simulation alone and FMI 3: the kernel state is a local all the same, validate starts from it
+    for extra in (["--interface", "cs"], ["--fmi-version", "3"]):
+        other = tmp_path / f"stage{extra[-1]}.fmu"
+        assert main(["build", str(SCENES / "planetary_stage.toml"), "-o", str(other), "-q",
+                     "--platforms", "x86_64-linux", *extra]) == 0
+        capsys.readouterr()
+        assert main(["validate", str(SCENES / "planetary_stage.toml"), "--fmu", str(other), "--json", "-q"]) == 0
+        rep = json.loads(capsys.readouterr().out)
+        assert rep["start"] == "FMU initial state" and rep["bitwise"] and not rep["fmpy_problems"], extra
 
 
 # ------------------------------------------------------------ Model Exchange

@@ -89,6 +89,7 @@ int gfm_common_key(gf_inst *c, gfm_common_cfg *cc, const char *format, long vers
     GFM_L("vr.max_step", vr_hmax, 0, 100000)
     GFM_L("vr.integrator", vr_integrator, 0, 100000)
     GFM_L("extra_outputs", extra_outputs, 0, 64)
+    GFM_L("state_outputs", state_outputs, 0, 1)
     GFM_L("me.event_indicators", me_indicators, 0, 1000000)
 #undef GFM_L
     if (strcmp(key, "format") == 0) {
@@ -379,8 +380,15 @@ const char *gfm_bind(gf_inst *c, gfm_core *core, const gfm_common_cfg *cc, int n
     c->n_out = n_kernel_out + (int)cc->extra_outputs;
     c->offers = cc->offers ? cc->offers : GF_COSIMULATION;
     core->me_offered = (c->offers & GF_MODEL_EXCHANGE) != 0;
+    core->state_base = -1;
     if (core->me_offered) e = me_setup(c, core, cc, err, errcap);
     if (e != NULL) return e;
+    if (core->me_offered) {
+        core->state_base = core->me_base;   /* the Model Exchange block starts with the states */
+    } else if (cc->state_outputs) {
+        core->state_base = c->n_out;
+        c->n_out += (int)core->n_state;
+    }
     c->out = (double *)calloc((size_t)c->n_out, sizeof(double));
     if (c->out == NULL) return "out of memory";
     for (i = 0; i < c->n_vars; ++i)
@@ -510,13 +518,16 @@ static void check_torque_axes(gf_inst *c, double t)
 
 /* An FMU that offers Model Exchange: the modes decided anew from the state (decide), its block of the
  * outputs (states, derivatives, indicators with the modes held) and, with `outputs`, the kernel's
- * outputs with the modes held; 1 on success */
+ * outputs with the modes held; 1 on success.  Without Model Exchange: the state block, if any. */
 static int me_fill(gf_inst *c, int decide, int outputs)
 {
     gfm_core *d = core_of(c);
     double Tm = tm_of(c), Tl = tl_of(c), *blk;
     int n2, st = GK_OK;
-    if (!d->me_offered) return 1;
+    if (!d->me_offered) {   /* the state block alone, when the FMU shows its state */
+        if (d->state_base >= 0) memcpy(c->out + d->state_base, y_of(d), sizeof(double) * d->n_state);
+        return 1;
+    }
     n2 = (int)d->n_state;
     blk = c->out + d->me_base;
     if (decide) st = d->k->k_me_init(kd_of(d), Tm, Tl, d->me_node_events);

@@ -74,6 +74,7 @@ typedef struct {
     long motor_input, load_input;
     long vr_motor_torque, vr_load_torque, vr_speed0, vr_angle0, vr_hmax, vr_integrator;
     long extra_outputs;   /* outputs past the kernel's, filled by a model around this one (stage_model.c) */
+    long state_outputs;   /* 1: the kernel state follows the outputs (without Model Exchange too) */
     int offers, me_node_events, have_nominals;
     long me_indicators, me_n_nominals;
     double me_nominal[GFM_MAX_STATE];
@@ -105,6 +106,7 @@ typedef struct gfm_core {
     uint32_t warned;                       /* bit m: mesh m's torque-axis warning was given */
     int initialized;
     int me_offered, me_node_events, me_base;
+    int state_base;                        /* the kernel state in the outputs from here (-1: not there) */
     double me_nominal[GFM_MAX_STATE];
 } gfm_core;
 
