@@ -205,6 +205,13 @@ def test_fmpy_validates_and_the_interface(built):
     nat = native_run(e["model"], e["settings"], stop_time_s=e["settings"].output_interval_s)
     outs = {x.name for x in md.modelVariables if x.causality == "output"}
     assert outs == set(nat.names()) - {"motor_torque", "load_torque"}
+    # the documentation page: every variable, the equations, the meshes' shared tables, the record
+    with zipfile.ZipFile(e["fmu"][2]) as z:
+        page = z.read("documentation/index.html").decode()
+        assert z.read("documentation/_main.html").decode() == page
+    assert md.coSimulation.modelIdentifier in page and "<code>ps.sun_planet[2].dte</code>" in page
+    assert "Kahraman 1994" in page and "resources/ps.sun_planet_1/tables.bin" in page
+    assert "native planetary solver" in page and "fmi2_planetary_all.c" in page
 
 
 def test_fmi3_equals_fmi2_bit_for_bit(built):
