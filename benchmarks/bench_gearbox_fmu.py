@@ -41,20 +41,11 @@ from pathlib import Path
 
 import numpy as np
 
-from harness import ROOT, compile_host, emit, host_run
+from harness import ROOT, at_error, compile_host, emit, host_run, unzip_fmu as _unzip
 
 GOAL = 1.3
 GEARBOX_FACTORS = (0.8, 1.0, 1.15, 1.3, 1.5, 1.75)
 PAIR_FACTORS = (0.5, 0.65, 0.8, 1.0, 1.25, 1.6, 2.0)
-
-
-def _unzip(fmu, d):
-    import fmpy
-
-    d.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(d)
-    return fmpy.read_model_description(str(fmu))
 
 
 def _host(exe, unz, md, *, sim_s, comm_s, repeat, outs, max_step_s, integrator):
@@ -67,20 +58,6 @@ def _host(exe, unz, md, *, sim_s, comm_s, repeat, outs, max_step_s, integrator):
 def _err(x, ref) -> float:
     n = min(len(x), len(ref))
     return float(np.sqrt(np.mean((x[:n] - ref[:n]) ** 2)) / np.ptp(ref[:n]))
-
-
-def at_error(points, key, target):
-    """(step s, CPU s) where the error ``key(point)`` of a sweep reaches ``target``: log-log interpolation
-    between the two sweep points around it (error rising with the step); None outside the sweep."""
-    pts = sorted(points, key=lambda p: p["max_step_s"])
-    for a, b in zip(pts, pts[1:]):
-        ea, eb = key(a), key(b)
-        if ea <= target <= eb and eb > ea > 0:
-            t = (math.log(target) - math.log(ea)) / (math.log(eb) - math.log(ea))
-            h = math.exp(math.log(a["max_step_s"]) + t * (math.log(b["max_step_s"]) - math.log(a["max_step_s"])))
-            c = math.exp(math.log(a["cpu_s"]) + t * (math.log(b["cpu_s"]) - math.log(a["cpu_s"])))
-            return h, c
-    return None
 
 
 def main(argv=None) -> int:

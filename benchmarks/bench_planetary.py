@@ -28,12 +28,19 @@ numba solver's compiled loop on the same run (every hard case and the example, '
 the time per internal step of each, their ratio (numba over C) measured in the same run, and whether
 the C run's state equals the numba run's bit for bit.
 
-Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b] [--c-kernel-only]
+``fmu``: the planetary FMU of examples/scenes/planetary_stage.toml (three planets) in the C host
+benchmarks/fmu_rtf_host.c, its real-time factor (simulated seconds per CPU second) at the internal step
+that gives 1e-4 relative RMS DTE error against a fine native run (goal >= 10; :func:`fmu_rtf`).
+
+Usage: python benchmarks/bench_planetary.py [--repeat 3] [--mesh-periods 20] [--cases a,b] [--fmu-sim 0.05]
+[--fmu-only] [--c-kernel-only]
 """
 import argparse
+import dataclasses
 import json
 import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -44,6 +51,8 @@ from gearfmu.pipeline import drivetrain_model, load_any, simulate_drivetrain, st
 from gearfmu.planetary.native import simulate
 from gearfmu.planetary.reference import simulate_reference
 from gearfmu.bench import PLANETARY_CASES, planetary_case
+from gearfmu.stages import build_planetary_drivetrain_fmu
+from harness import at_error, compile_host, host_run, unzip_fmu
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
@@ -153,10 +162,58 @@ def example(repeat):
             "events": int(r.info["events"])}
 
 
+FMU_FACTORS = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+FMU_TARGET = 1e-4
+
+
+def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node", "rk4")):
+    """The planetary FMU (``gearfmu build`` of the scene, this machine's binary) in the C host
+    benchmarks/fmu_rtf_host.c: ``sim_s`` simulated seconds at the scene's communication step, its
+    max_step swept over FMU_FACTORS x the default for each of ``integrators``; each run's error the worst mesh's RMS DTE difference
+    against a fine native run (rk4_node at an eighth of the default step) over its range; the CPU time and
+    real-time factor (simulated / CPU seconds) at the step where that error is FMU_TARGET (log-log
+    interpolation along the sweep; goal >= 10)."""
+    kind, scene = load_any(ROOT / "examples" / "scenes" / f"{scene_name}.toml")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        res = build_planetary_drivetrain_fmu(scene, tmp / "p.fmu", platforms=("x86_64-linux",), validation=False,
+                                             model_exchange={"interface": "cs"})
+        model, s = res.model, res.settings
+        md = unzip_fmu(res.fmu_path, tmp / "unz")
+        exe = compile_host(tmp)
+        outs = [f"{m}.dte" for m in model.mesh_names]
+        fine = simulate(model, dataclasses.replace(s, stop_time_s=sim_s, max_step_s=s.max_step_s / 8),
+                        motor_torque_Nm=s.motor_torque_start_Nm, load_torque_Nm=s.load_torque_start_Nm)
+        by_integrator = {}
+        for integ in integrators:
+            points = []
+            for f in FMU_FACTORS:
+                say(f"planetary FMU in the C host, {integ}, max_step {f:g} x default")
+                try:
+                    wall, cpu, rows = host_run(exe, tmp / "unz", md, sim_s=sim_s, comm_s=s.output_interval_s,
+                                               repeat=repeat, outputs=outs, max_step_s=f * s.max_step_s,
+                                               integrator=integ, timeout=3600)
+                except RuntimeError as exc:   # beyond the integrator's stability: the FMU discards the step
+                    points.append({"factor": f, "max_step_s": f * s.max_step_s, "failed": str(exc)[-300:]})
+                    continue
+                n = min(rows.shape[0], len(fine.time_s))
+                err = max(float(np.sqrt(np.mean((rows[:n, j] - fine[o][:n]) ** 2)) / np.ptp(fine[o][:n]))
+                          for j, o in enumerate(outs))
+                points.append({"factor": f, "max_step_s": f * s.max_step_s, "cpu_s": cpu, "wall_s": wall,
+                               "dte_rel_rms_err": err, "rtf_cpu": sim_s / cpu})
+            hit = at_error([p for p in points if "failed" not in p], lambda p: p["dte_rel_rms_err"], FMU_TARGET)
+            by_integrator[integ] = {
+                "sweep": points,
+                "at_target": None if hit is None else {"max_step_s": hit[0], "cpu_s": hit[1], "rtf_cpu": sim_s / hit[1]}}
+    return {"scene": scene.name, "planets": model.stages[0]["planets"], "dofs": model.n_dof,
+            "meshes": len(model.mesh_names), "integrator": s.integrator, "comm_step_s": s.output_interval_s,
+            "default_max_step_s": s.max_step_s, "sim_s": sim_s, "host": "benchmarks/fmu_rtf_host.c (C, FMI 2.0)",
+            "reference": "native planetary solver, rk4_node at default max_step / 8", "integrators": by_integrator,
+            "target_dte_rel_rms_err": FMU_TARGET, "goal": "the planetary FMU >= 10 x real time at 1e-4 relative DTE error"}
+
+
 def c_kernel(repeat, mesh_periods, cases):
     """The C kernel per internal step against the numba loop, on each case's run (module docstring)."""
-    import tempfile
-
     from gearfmu.fmu.planetary_kernel import PlanetaryKernel, compile_planetary_kernel
 
     lib = compile_planetary_kernel(tempfile.mkdtemp(prefix="bench_planetary_"))
@@ -202,8 +259,13 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--mesh-periods", type=int, default=20, help="sun mesh periods of every case")
     ap.add_argument("--cases", default=",".join(PLANETARY_CASES))
+    ap.add_argument("--fmu-sim", type=float, default=0.05, help="simulated seconds of each planetary FMU run")
+    ap.add_argument("--fmu-only", action="store_true", help="only the planetary FMU's real-time factor")
     ap.add_argument("--c-kernel-only", action="store_true", help="only the C kernel against the numba loop")
     a = ap.parse_args(argv)
+    if a.fmu_only:
+        print(json.dumps({"fmu": fmu_rtf(a.repeat, a.fmu_sim)}, indent=1))
+        return
     if a.c_kernel_only:
         print(json.dumps({"c_kernel": c_kernel(a.repeat, a.mesh_periods, a.cases.split(","))}, indent=1))
         return
@@ -214,6 +276,7 @@ def main(argv=None):
             vals = [f["speedup_vs_DOP853"][integ][key] for f in fronts]
             summary.setdefault(integ, {})[key] = (None if any(v is None for v in vals) else min(vals))
     out = {"fronts": fronts, "summary_min_speedup_vs_DOP853": summary, "example": example(a.repeat),
+           "fmu": fmu_rtf(a.repeat, a.fmu_sim),
            "c_kernel": c_kernel(a.repeat, a.mesh_periods, a.cases.split(",")),
            "goal": "native planetary solver >= 300 x the scipy reference (DOP853) at 1e-6 relative DTE error"}
     print(json.dumps(out, indent=1))

@@ -29,6 +29,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -347,3 +348,26 @@ def step_costs(unzipdir, md, *, sim_s, comm_s, max_step_s, integrator, reals, re
         "per_step_ns": per_step,
     }
 
+
+def unzip_fmu(fmu, d):
+    """The FMU unzipped into folder d; its model description (fmpy)."""
+    import fmpy
+
+    d.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(d)
+    return fmpy.read_model_description(str(fmu))
+
+
+def at_error(points, key, target):
+    """(step s, CPU s) where the error ``key(point)`` of a sweep reaches ``target``: log-log interpolation
+    between the two sweep points around it (error rising with the step); None outside the sweep."""
+    pts = sorted(points, key=lambda p: p["max_step_s"])
+    for a, b in zip(pts, pts[1:]):
+        ea, eb = key(a), key(b)
+        if ea <= target <= eb and eb > ea > 0:
+            t = (math.log(target) - math.log(ea)) / (math.log(eb) - math.log(ea))
+            h = math.exp(math.log(a["max_step_s"]) + t * (math.log(b["max_step_s"]) - math.log(a["max_step_s"])))
+            c = math.exp(math.log(a["cpu_s"]) + t * (math.log(b["cpu_s"]) - math.log(a["cpu_s"])))
+            return h, c
+    return None

@@ -831,6 +831,7 @@ def sec_planetary(pg: Page):
                     + table(["run", "integrator", "numba ns/step", "C ns/step", "numba / C", "bit for bit"],
                             [[r["run"], r["integrator"], f"{r['numba_ns_per_step']:.0f}", f"{r['c_ns_per_step']:.0f}",
                               num(r["numba_over_c"], 3), "yes" if r["bit_for_bit"] else "**no**"] for r in ck]))
+    example += _planetary_fmu_line(d.get("fmu"))
     pg.parts.append(
         "## Planetary stages\n\n"
         "The native planetary solver (docs/planetary.md) on the hard cases of `gearfmu/bench.py` "
@@ -846,6 +847,21 @@ def sec_planetary(pg: Page):
         + f"\n\n{img}{example}\n\nSource: `{SOURCES['planetary'][2]}` ({pg.cost('planetary')}).\n")
     pg.summary.append(_front_summary(d, "planetary dynamics (Lin & Parker model, every mesh multi-pair)",
                                      "event-located DOP853 (scipy), same equations"))
+
+
+def _planetary_fmu_line(f) -> str:
+    """The planetary FMU's real-time factor in the C host at 1e-4 relative DTE error (bench_planetary.py ``fmu``)."""
+    if not f:
+        return ""
+    parts = []
+    for integ, v in f["integrators"].items():
+        at = v.get("at_target")
+        parts.append(f"{integ} {num(at['rtf_cpu'], 3)} x real time (max_step {sci(at['max_step_s'])} s)" if at
+                     else f"{integ} does not reach it in the sweep (its error at the smallest step "
+                          f"{sci(min(p['dte_rel_rms_err'] for p in v['sweep'] if 'dte_rel_rms_err' in p))})")
+    return (f"\n\nThe planetary FMU of `{f['scene']}` ({f['planets']} planets, {f['dofs']} degrees of freedom) in "
+            f"the C host `{f['host']}`, at the internal step that gives {sci(f['target_dte_rel_rms_err'])} relative RMS "
+            f"DTE error against {f['reference']}: " + "; ".join(parts) + " (simulated per CPU second; goal >= 10).")
 
 
 def sec_me(pg: Page):

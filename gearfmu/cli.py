@@ -183,8 +183,9 @@ def _build_drivetrain(args) -> int:
                                         platforms=platforms, fmi_version=args.fmi_version,
                                         fmi3_outputs=args.fmi3_outputs, allow_large=args.allow_large, model_exchange=me)
     m = res.model
-    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, gearbox of "
-          f"{len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies, "
+    what = (f"gearbox of {len(m.meshes)} stages, {len(m.shafts)} elastic shafts, {m.n_bodies} bodies"
+            if not scene.planetaries else f"planetary drivetrain of {pipeline.describe_model(m)}")
+    print(f"built {res.fmu_path} (tables {res.tables_wall_s:.2f} s, FMU {res.build_wall_s:.2f} s, {what}, "
           f"{res.settings.integrator}, max internal step {res.settings.max_step_s:.3g} s)")
     print(fmu_summary(res.fmu_path))
     return 0

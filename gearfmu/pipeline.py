@@ -17,12 +17,15 @@ from typing import Optional
 from .fmu.compare import DEFAULT_TOLERANCE, FmuFile, check_fmu_matches, open_fmu, validate_fmu_against_native
 from .fmu.gearbox_build import variables_of_fmu
 from .fmu.gearbox_compare import check_gearbox_fmu_matches, validate_gearbox_fmu
+from .fmu.planetary_build import variables_of_fmu as planetary_variables_of_fmu
+from .fmu.planetary_compare import check_planetary_fmu_matches, validate_planetary_fmu
 from .common.vocabulary import DEFAULT_FMI3_OUTPUTS
 from .stages import (PAIR_MESH_NAME, BuildResult, DrivetrainBuild, build_drivetrain_fmu,  # noqa: F401
                      build_fmu_from_scene, check_fmu_supported, check_gearbox_fmu_runtime, compute_tables,
                      describe_model, drivetrain_model, fmu_builder, gear_torque_for, gearbox_fmu_settings,
                      gearbox_model, gearbox_run_settings, is_drivetrain_file, load, load_any, max_step_for,
-                     modes_lines, modes_report, pair_model, planetary_stages, platform_kw, run_settings,
+                     modes_lines, modes_report, pair_model, planetary_fmu_settings, planetary_stages, platform_kw,
+                     run_settings,
                      simulate_drivetrain, simulate_native, stage_tables)
 
 __all__ = ["BuildResult", "build", "compute_tables", "gear_torque_for", "load", "max_step_for", "run_settings",
@@ -115,25 +118,47 @@ def _scalar_fmi3(fmu_path) -> bool:
     return md.fmiVersion.startswith("3") and any(v.name.endswith(".pair_force_1") for v in md.modelVariables)
 
 
+def _interface(fmu_path) -> str:
+    """The interfaces of an FMU: "cs", "me" or "both"."""
+    import fmpy  # fmpy: only to read the FMU
+
+    md = fmpy.read_model_description(str(fmu_path))
+    return {(True, True): "both", (True, False): "cs", (False, True): "me"}[(md.coSimulation is not None,
+                                                                             md.modelExchange is not None)]
+
+
 def validate_drivetrain(scene, fmu=None, *, out_path=None, tolerance: float = DEFAULT_TOLERANCE,
                         stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
                         progress: bool = False, allow_large: bool = False) -> dict:
     """``gearfmu validate`` of a drivetrain scene: its gearbox FMU against the native gearbox solver; the
     report of :func:`gearfmu.fmu.gearbox_compare.validate_gearbox_fmu` (the keys of :func:`validate`'s, and
-    ``units``) with ``scene``.  ``fmu``: the gearbox FMU to check (a path or an opened FmuFile; refused
+    ``units``) with ``scene``; a drivetrain with planetary stages: its planetary FMU against the native
+    planetary solver (:func:`gearfmu.fmu.planetary_compare.validate_planetary_fmu`).  ``fmu``: the gearbox FMU to check (a path or an opened FmuFile; refused
     before the tables are computed when it is not a gearbox FMU of this scene); None: built at ``out_path``
     (None: ``build/<model_name>.fmu``).  ``stop_time_s``, ``comm_step_s`` (s): None takes the scene's."""
+    planetary = bool(scene.planetaries)
     if fmu is not None:
         fmu = _opened(fmu)
-        check_gearbox_fmu_matches(fmu, scene_text=scene.text)  # before the tables are computed
+        (check_planetary_fmu_matches if planetary else check_gearbox_fmu_matches)(fmu, scene_text=scene.text)
         fmu_path = fmu.path
         tables = stage_tables(scene, progress=progress, allow_large=allow_large)
-        model = gearbox_model(scene, tables)
-        settings = gearbox_fmu_settings(scene, model)
+        if planetary:
+            model = drivetrain_model(scene, tables)
+            settings = planetary_fmu_settings(scene, model)
+        else:
+            model = gearbox_model(scene, tables)
+            settings = gearbox_fmu_settings(scene, model)
     else:
         out = Path(out_path) if out_path is not None else Path("build") / f"{scene.model_name}.fmu"
         res = build_drivetrain_fmu(scene, out, progress=progress, allow_large=allow_large)
         fmu_path, model, settings = res.fmu_path, res.model, res.settings
+    if planetary:
+        fmi3_outputs = "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS
+        variables = planetary_variables_of_fmu(model, settings, fmi3_outputs, interface=_interface(fmu_path))
+        rep = validate_planetary_fmu(fmu_path, model, settings, variables, tolerance=tolerance, scene_text=scene.text,
+                                     stop_time_s=stop_time_s, comm_step_s=comm_step_s)
+        rep["scene"] = scene.name
+        return rep
     variables = variables_of_fmu(model, settings, "scalar" if _scalar_fmi3(fmu_path) else DEFAULT_FMI3_OUTPUTS)
     rep = validate_gearbox_fmu(fmu_path, model, settings, variables, tolerance=tolerance, scene_text=scene.text,
                                stop_time_s=stop_time_s, comm_step_s=comm_step_s)

@@ -13,8 +13,9 @@ a pair scene, :func:`stage_tables` computes every stage's tables at its operatin
 docs/gearbox.md "The gearbox FMU").  A drivetrain with ``[[planetary]]`` stages builds every
 planetary stage's tables (:func:`planetary_stages`: gearfmu.assembly.planetary from the geometry,
 gearfmu.assembly.planetary_lumped from published lumped parameters) and runs on the planetary solver
-(:func:`drivetrain_model`, gearfmu.planetary; docs/planetary.md); it has no FMU yet
-(:func:`check_fmu_supported`).
+(:func:`drivetrain_model`, gearfmu.planetary; docs/planetary.md); :func:`build_drivetrain_fmu` makes it
+one planetary FMU (:func:`build_planetary_drivetrain_fmu`, :mod:`gearfmu.fmu.planetary_build`;
+docs/planetary.md "The planetary FMU"), never a gearbox of stages (:func:`check_fmu_supported`).
 
 The planner (:mod:`gearfmu.plan`) builds its planned scenes with these stages, so they never
 plan; :mod:`gearfmu.pipeline` puts the planner in front of them (``gearfmu build``).
@@ -38,6 +39,7 @@ from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.build_steps import FmuBuildError
 from .fmu.gearbox_build import build_gearbox_fmu, gearbox_settings
+from .fmu.planetary_build import build_planetary_fmu, planetary_settings
 from .fmu.pythonfmu_build import build_fmu
 from .fmu.standalone_build import build_standalone_fmu
 from .fmu.envelope import fmu_envelope_record
@@ -316,12 +318,13 @@ def _shafts(scene: DrivetrainScene) -> List[Shaft]:
 
 
 def check_fmu_supported(scene: DrivetrainScene) -> None:
-    """FmuBuildError for a drivetrain with planetary stages: they run on the native planetary solver
-    (``gearfmu simulate``, ``gearfmu modes``), not yet as an FMU."""
+    """FmuBuildError for a drivetrain with planetary stages where a gearbox model is asked for (a gearbox
+    FMU, an SSP of stage FMUs): such a drivetrain is one planetary model and builds as one planetary FMU
+    (:func:`build_drivetrain_fmu`; docs/planetary.md "The planetary FMU")."""
     if scene.planetaries:
         p = scene.planetaries[0]
-        raise FmuBuildError(f"planetary[0] ({p.name}): a drivetrain with planetary stages has no FMU yet; "
-                            "`gearfmu simulate` and `gearfmu modes` run it (docs/planetary.md)")
+        raise FmuBuildError(f"planetary[0] ({p.name}): a drivetrain with planetary stages is one system, not a "
+                            "gearbox of stages; `gearfmu build` makes its planetary FMU (docs/planetary.md)")
 
 
 def gearbox_model(scene: DrivetrainScene, tables, *, damping_ratio: Optional[float] = None) -> GearboxModel:
@@ -489,11 +492,11 @@ def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] =
 
 @dataclass
 class DrivetrainBuild:
-    """What :func:`build_drivetrain_fmu` built: the FMU, the gearbox model and the FMU's settings, the
-    wall times of the tables and of the FMU (s)."""
+    """What :func:`build_drivetrain_fmu` built: the FMU, the gearbox (or planetary) model and the FMU's
+    settings, the wall times of the tables and of the FMU (s)."""
 
     fmu_path: Path
-    model: GearboxModel
+    model: Union[GearboxModel, PlanetaryModel]
     settings: GearboxRunSettings
     tables_wall_s: float
     build_wall_s: float
@@ -504,9 +507,15 @@ def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = F
                          fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS, allow_large: bool = False,
                          validation: bool = True, model_exchange: Optional[dict] = None) -> DrivetrainBuild:
     """Drivetrain scene -> every stage's tables -> the gearbox FMU at ``out_path`` (the standalone C
-    runtime, FMI ``fmi_version`` 2 or 3).  ``runtime`` "pythonfmu" is refused (FmuBuildError): a
+    runtime, FMI ``fmi_version`` 2 or 3); a drivetrain with planetary stages: its planetary FMU
+    (:func:`build_planetary_drivetrain_fmu`).  ``runtime`` "pythonfmu" is refused (FmuBuildError): a
     gearbox FMU is C only.  The stages' notes go to stderr with ``progress``.  ``model_exchange``: the
     interfaces and node events (:func:`gearfmu.fmu.gearbox_build.build_gearbox_fmu`)."""
+    if scene.planetaries:
+        return build_planetary_drivetrain_fmu(scene, out_path, progress=progress, runtime=runtime, platforms=platforms,
+                                              fmi_version=fmi_version, fmi3_outputs=fmi3_outputs,
+                                              allow_large=allow_large, validation=validation,
+                                              model_exchange=model_exchange)
     check_gearbox_fmu_runtime(runtime, *((model_exchange or {}).get(k) for k in ("interface", "me_node_events")))
     check_fmu_supported(scene)
     t0 = time.perf_counter()
@@ -518,4 +527,34 @@ def build_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = F
     path = build_gearbox_fmu(model, out_path, settings=settings, model_name=scene.model_name, scene_text=scene.text,
                              stage_scene_texts=stage_texts, platforms=platforms, fmi_version=fmi_version,
                              fmi3_outputs=fmi3_outputs, validation=validation, model_exchange=model_exchange)
+    return DrivetrainBuild(Path(path), model, settings, t1 - t0, time.perf_counter() - t1)
+
+
+def planetary_fmu_settings(scene: DrivetrainScene, model: PlanetaryModel) -> GearboxRunSettings:
+    """The run settings of a drivetrain scene's planetary FMU, as :func:`gearbox_fmu_settings` for a
+    gearbox (:func:`gearfmu.fmu.planetary_build.planetary_settings`)."""
+    return planetary_settings(model, gearbox_run_settings(scene),
+                              load_torque_start_Nm=scene.load_torque_Nm if scene.load.torque_input else 0.0)
+
+
+def build_planetary_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress: bool = False,
+                                   runtime: Optional[str] = None, platforms: Optional[Sequence[str]] = None,
+                                   fmi_version: int = 2, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
+                                   allow_large: bool = False, validation: bool = True,
+                                   model_exchange: Optional[dict] = None) -> DrivetrainBuild:
+    """A drivetrain scene with planetary stages -> its tables -> the planetary FMU at ``out_path``
+    (docs/planetary.md "The planetary FMU"; :func:`gearfmu.fmu.planetary_build.build_planetary_fmu`):
+    Co-Simulation and Model Exchange unless ``model_exchange`` names the interface."""
+    me = dict(model_exchange or {})
+    me["interface"] = me.get("interface") or "both"
+    check_gearbox_fmu_runtime(runtime, me["interface"], me.get("me_node_events"))
+    t0 = time.perf_counter()
+    tables = stage_tables(scene, progress=progress, allow_large=allow_large)
+    model = drivetrain_model(scene, tables, progress=progress)
+    t1 = time.perf_counter()
+    settings = planetary_fmu_settings(scene, model)
+    stage_texts = {s.name: s.scene.text for s in scene.stages if getattr(s.scene, "text", None)}
+    path = build_planetary_fmu(model, out_path, settings=settings, model_name=scene.model_name, scene_text=scene.text,
+                               stage_scene_texts=stage_texts, platforms=platforms, fmi_version=fmi_version,
+                               fmi3_outputs=fmi3_outputs, validation=validation, model_exchange=me)
     return DrivetrainBuild(Path(path), model, settings, t1 - t0, time.perf_counter() - t1)

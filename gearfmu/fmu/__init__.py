@@ -1,13 +1,13 @@
 """FMUs from tables: model description, one builder per runtime, runtime, C sources.
 
 Imports :mod:`gearfmu.gearbox` (the gearbox FMU), :mod:`gearfmu.planetary` (the planetary kernel's
-data), :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics`
+data and the planetary FMU), :mod:`gearfmu.tables`, :mod:`gearfmu.dynamics`
 (the run settings' automatic values and the validation record) and :mod:`gearfmu.common` (the run
 settings); never the scene nor the physics packages (pyproject.toml's contracts).
 :mod:`gearfmu.fmu.runtime` imports nothing from gearfmu.
 
 Exports (loaded with their module on first use): the builders ``build_standalone_fmu``,
-``build_fmu`` (pythonfmu), ``build_gearbox_fmu``, ``FmuBuildError``; an FMU against the native
+``build_fmu`` (pythonfmu), ``build_gearbox_fmu``, ``build_planetary_fmu``, ``FmuBuildError``; an FMU against the native
 solver ``validate_fmu_against_native``, ``validate_gearbox_fmu``, ``open_fmu``, ``run_fmu``,
 ``FmuMismatchError``; ``fmu_summary``; ``fmu_envelope_record``; the FMI Cross-Check sets
 ``write_reference_results``, ``check_reference_results``.
@@ -37,6 +37,12 @@ gearbox_build       build_gearbox_fmu: one FMU for a whole gearbox, in C
 gearbox_validation  the gearbox FMU's validation record (native gearbox solver)
 gearbox_compare     a gearbox FMU against the native gearbox solver
 gearbox_doc         the gearbox FMU's documentation page
+multimesh_build     the packaging the gearbox and planetary FMUs share
+planetary_interface a planetary FMU's variables from modeldescription/planetary.toml
+planetary_build     build_planetary_fmu: one FMU for a drivetrain with
+                    planetary stages, in C
+planetary_doc       the planetary FMU's documentation page
+planetary_compare   a planetary FMU against the native planetary solver
 composition         a gearbox cut into stage FMUs and torsional elements
                     (an SSP of stage FMUs: components, links, power bonds)
 stage_build         build_stage_fmu: one stage with its shafts and flanges, in C
@@ -55,7 +61,7 @@ from ..common.exports import lazy_exports
 
 _EXPORTS = {
     "build_standalone_fmu": "standalone_build", "build_fmu": "pythonfmu_build",
-    "build_gearbox_fmu": "gearbox_build", "FmuBuildError": "build_steps",
+    "build_gearbox_fmu": "gearbox_build", "build_planetary_fmu": "planetary_build", "FmuBuildError": "build_steps",
     **dict.fromkeys(("validate_fmu_against_native", "open_fmu", "run_fmu", "FmuMismatchError"), "compare"),
     "validate_gearbox_fmu": "gearbox_compare",
     "fmu_summary": "summary",

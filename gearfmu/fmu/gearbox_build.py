@@ -30,33 +30,25 @@ import datetime
 import hashlib
 import json
 import math
-import platform
 import shutil
-import sys
-import tempfile
 import uuid
-import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from .. import __version__
 from ..common.settings import GearboxRunSettings, checked
 from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS
 from ..gearbox.model import GearboxModel
 from ..gearbox.native import resolve_settings
-from . import crossbuild
-from .build_steps import (KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_model_description,
-                          check_output_arguments, compiler_version, find_c_compiler, fmi_header_dir, fmu_zip,
-                          model_description, variable_table_lines, zip_folder)
+from .build_steps import (KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_output_arguments,
+                          variable_table_lines)
 from .gearbox_doc import gearbox_documentation_html
 from .gearbox_interface import apply_starts, gearbox_variables, load_gearbox_spec, stage_parameter
 from .gearbox_validation import gearbox_validation_record
 from .modeldesc import SpecError
-from .fmudoc import DOC_FILES
-from .standalone_build import (FMI_VERSIONS, INTERFACE_ELEMENTS, STANDALONE_CFLAGS, build_recipe_files,
-                               compile_standalone, platforms_text, scalar_names, standalone_model_description)
+from .multimesh_build import FmuPackage, assemble_fmu, check_platforms, interface_options
+from .standalone_build import FMI_VERSIONS, INTERFACE_ELEMENTS, scalar_names
 
 __all__ = ["build_gearbox_fmu", "gearbox_settings", "fmu_parameters", "start_values", "variables_of_fmu",
            "config_text", "me_nominals", "EVENT_MAX_SLOTS", "GEARBOX_UNITS", "gearbox_file_sources", "copy_gearbox_sources", "CONFIG_FILE"]
@@ -69,9 +61,9 @@ GEARBOX_UNITS = {2: STANDALONE_DIR / "fmi2_gearbox_all.c", 3: STANDALONE_DIR / "
 LAYERS = {2: STANDALONE_DIR / "fmi2_gear.c", 3: STANDALONE_DIR / "fmi3_gear.c"}
 #: the plumbing, the gearbox model, the reading of resources and the gearbox kernel, in compile order
 GEARBOX_SOURCES = (STANDALONE_DIR / "fmi_common.c", STANDALONE_DIR / "gearbox_model.c",
-                   STANDALONE_DIR / "gf_resources.c", KERNEL_DIR / "gb_kernel.c")
+                   STANDALONE_DIR / "gf_resources.c", STANDALONE_DIR / "gf_meshes.c", KERNEL_DIR / "gb_kernel.c")
 GEARBOX_HEADERS = (STANDALONE_DIR / "gf_model.h", STANDALONE_DIR / "fmi_common.h", STANDALONE_DIR / "gearbox_model.h",
-                   STANDALONE_DIR / "gf_resources.h", KERNEL_DIR / "gbkernel.h")
+                   STANDALONE_DIR / "gf_resources.h", STANDALONE_DIR / "gf_meshes.h", KERNEL_DIR / "gbkernel.h")
 CONFIG_FILE = "gearfmu_gearbox.txt"
 CONFIG_FORMAT = "gearfmu-gearbox"
 CONFIG_VERSION = 1
@@ -256,16 +248,7 @@ def model_exchange_options(model: GearboxModel, model_exchange: Optional[dict]) 
     """(interface, me_node_events) of :func:`build_gearbox_fmu`'s ``model_exchange`` mapping (None: {});
     FmuBuildError naming the key for a value that is not offered, or a stage with more tooth-pair slots
     than Model Exchange handles (:data:`EVENT_MAX_SLOTS`)."""
-    opts = dict(model_exchange or {})
-    unknown = sorted(set(opts) - {"interface", "me_node_events"})
-    if unknown:
-        raise FmuBuildError(f"model_exchange: unknown keys {unknown} (interface, me_node_events)")
-    interface = opts.get("interface") or "cs"
-    node_events = opts.get("me_node_events") or DEFAULT_ME_NODE_EVENTS
-    if interface not in FMU_INTERFACES:
-        raise FmuBuildError(f"interface: {interface!r} not one of {FMU_INTERFACES}")
-    if node_events not in ME_NODE_EVENTS:
-        raise FmuBuildError(f"me_node_events: {node_events!r} not one of {ME_NODE_EVENTS}")
+    interface, node_events = interface_options(model_exchange, FMU_INTERFACES, ME_NODE_EVENTS, DEFAULT_ME_NODE_EVENTS)
     if "me" in INTERFACE_ELEMENTS[interface]:
         for m in model.meshes:
             if m.tables.slots > EVENT_MAX_SLOTS:
@@ -303,10 +286,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
     if not isinstance(model_name, str) or not model_name.strip():
         raise FmuBuildError(f"model_name: must be a non-empty string, got {model_name!r}")
     out_path = check_output_arguments(out_path, scene_text)
-    keys = crossbuild.parse_platforms(None) if platforms is None else tuple(platforms)
-    unknown = [k for k in keys if k not in crossbuild.TARGETS]
-    if unknown or not keys:
-        raise FmuBuildError(f"platforms: unknown {unknown} (known: {', '.join(crossbuild.TARGETS)})")
+    keys = check_platforms(platforms)
     spec = load_gearbox_spec()
     try:
         variables = apply_starts(gearbox_variables(spec, model, model_exchange=me,
@@ -321,103 +301,43 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
     guid = "{" + str(uuid.uuid4()) + "}"
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     params = fmu_parameters(model, settings)
-    unit = GEARBOX_UNITS[fmi_version].name
     stage_scene_texts = dict(stage_scene_texts or {})
+    resources = {}
+    for mesh, (meta_bytes, bin_bytes) in zip(model.meshes, stage_bytes):
+        d = stage_folder(mesh.name)
+        resources[f"{d}/tables.json"] = meta_bytes
+        resources[f"{d}/tables.bin"] = bin_bytes
+        if mesh.name in stage_scene_texts:
+            resources[f"{d}/scene.toml"] = stage_scene_texts[mesh.name].encode("utf-8")
+    resources[CONFIG_FILE] = config_text(model, variables, stage_bytes, guid=guid, model_identifier=identifier,
+                                         interface=interface, node_events=me_node_events,
+                                         nominals=me_nominals(model, settings) if me else None).encode("utf-8")
+    if scene_text is not None:
+        resources["scene.toml"] = scene_text.encode("utf-8")
+    provenance = {
+        "parameters": dict(params, stop_time_s=settings.stop_time_s, output_interval_s=settings.output_interval_s),
+        "stages": {m.name: {"tables": f"resources/{stage_folder(m.name)}/tables.bin",
+                            "tables_sha256": hashlib.sha256(b).hexdigest(), "tables_provenance": m.tables.provenance}
+                   for m, (_, b) in zip(model.meshes, stage_bytes)},
+        "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest()}
 
-    with tempfile.TemporaryDirectory(prefix="gearfmu_gb_build_") as tmpd:
-        root = Path(tmpd) / "fmu"
-        src = copy_gearbox_sources(root / "sources", fmi_version)
+    def record(compiler):
+        return gearbox_validation_record(model, variables, settings, runtime="standalone", model_identifier=identifier,
+                                         parameters=params, scene_text=scene_text, compiler=compiler)
 
-        def host_compile(out_lib):
-            host = cc or find_c_compiler()
-            return compile_standalone(src, out_lib, cc=host, fmi_version=fmi_version, sources=(unit,)), \
-                compiler_version(host)
-
-        try:
-            binaries = crossbuild.build_binaries(keys, src, root / "binaries", identifier, cflags=STANDALONE_CFLAGS,
-                                                 sources=(unit,), host_compile=host_compile,
-                                                 host_cc_first=cc is not None, fmi_version=fmi_version,
-                                                 header_dir=fmi_header_dir(fmi_version))
-        except crossbuild.CrossBuildError as exc:
-            raise FmuBuildError(str(exc)) from None
-        for name, text in build_recipe_files(identifier, fmi_version, (unit,)).items():
-            (src / name).write_text(text, encoding="utf-8")
-        plat_text = platforms_text(binaries, fmi_version)
-        (root / "documentation").mkdir()
-        (root / "documentation" / "platforms.txt").write_text(plat_text, encoding="utf-8")
-        built = {k: r for k, r in binaries.items() if "missing" not in r}
-        for r in built.values():
-            r["sha256"] = hashlib.sha256((root / "binaries" / r["folder"] / r["file"]).read_bytes()).hexdigest()
-        res = root / "resources"
-        res.mkdir()
-        files = {}
-        for mesh, (meta_bytes, bin_bytes) in zip(model.meshes, stage_bytes):
-            d = res / stage_folder(mesh.name)
-            d.mkdir()
-            (d / "tables.json").write_bytes(meta_bytes)
-            (d / "tables.bin").write_bytes(bin_bytes)
-            if mesh.name in stage_scene_texts:
-                (d / "scene.toml").write_text(stage_scene_texts[mesh.name], encoding="utf-8")
-        (res / CONFIG_FILE).write_text(config_text(model, variables, stage_bytes, guid=guid, model_identifier=identifier,
-                                                   interface=interface, node_events=me_node_events,
-                                                   nominals=me_nominals(model, settings) if me else None),
-                                       encoding="utf-8")
-        if scene_text is not None:
-            (res / "scene.toml").write_text(scene_text, encoding="utf-8")
-        for p in sorted(res.rglob("*")):
-            if p.is_file():
-                files[p.relative_to(root).as_posix()] = hashlib.sha256(p.read_bytes()).hexdigest()
-        compiler = "; ".join(sorted({r["compiler"] for r in built.values()})) or None
-        provenance = {
-            "gearfmu_version": __version__, "built_utc": now, "runtime": "standalone", "model": "gearbox",
-            "fmi_version": fmi_version, "model_name": model_name, "model_identifier": identifier, "guid": guid,
-            "parameters": dict(params, stop_time_s=settings.stop_time_s,
-                               output_interval_s=settings.output_interval_s),
-            "stages": {m.name: {"tables": f"resources/{stage_folder(m.name)}/tables.bin",
-                                "tables_sha256": hashlib.sha256(b).hexdigest(), "tables_provenance":
-                                m.tables.provenance} for m, (_, b) in zip(model.meshes, stage_bytes)},
-            "files_sha256": files,
-            "binary": {"compiler": compiler, "flags": list(STANDALONE_CFLAGS),
-                       "command": "; ".join(sorted({r["command"] for r in built.values()})), "platforms": binaries,
-                       "sources_sha256": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
-                                          for p in sorted(src.iterdir())}},
-            "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
-            "python": sys.version.split()[0], "platform": platform.platform(), "spec": Path(spec.path).name,
-        }
-        (res / "provenance.json").write_text(json.dumps(provenance, indent=1, default=str), encoding="utf-8")
-        record = None
-        if validation:
-            rec_files = gearbox_validation_record(model, variables, settings, runtime="standalone",
-                                                  model_identifier=identifier, parameters=params,
-                                                  scene_text=scene_text, compiler=compiler)
-            for rel, data in rec_files.items():
-                p = root / rel
-                p.parent.mkdir(parents=True, exist_ok=True)
-                p.write_bytes(data)
-            record = json.loads(rec_files["resources/validation/record.json"])
-        md_args = dict(model_name=model_name, model_identifier=identifier, guid=guid,
-                       stop_time_s=settings.stop_time_s, step_size_s=settings.output_interval_s,
-                       generation_tool=f"gearfmu {__version__} (standalone runtime, gearbox)", generation_date=now,
-                       version=__version__, interfaces=INTERFACE_ELEMENTS[interface])
-        note = crossbuild.platform_summary(binaries)
-        if fmi_version == 3:
-            xml = model_description(spec, variables, 3, platforms_note=note, **md_args)
-        else:
-            xml = standalone_model_description(model_description(spec, variables, 2, **md_args), (unit,),
-                                               platforms_note=note)
-            check_model_description(xml, variables)
-        (root / "modelDescription.xml").write_bytes(xml)
-        page = gearbox_documentation_html(
+    def page(description, rec, plat_text, tool):
+        return gearbox_documentation_html(
             model=model, model_name=model_name, model_identifier=identifier, fmi_version=fmi_version,
-            generation_tool=md_args["generation_tool"], variables=variables,
-            description=ET.fromstring(xml).get("description", ""), parameters=params, scene_text=scene_text,
-            validation_record=record, platforms_text=plat_text,
+            generation_tool=tool, variables=variables, description=description, parameters=params,
+            scene_text=scene_text, validation_record=rec, platforms_text=plat_text,
             experiment={"start": 0.0, "stop": settings.stop_time_s, "step": settings.output_interval_s})
-        for rel in DOC_FILES(fmi_version):
-            (root / rel).write_bytes(page)
-        with fmu_zip(out_path) as zout:
-            zip_folder(zout, root)
-    return out_path
+
+    return assemble_fmu(FmuPackage(
+        kind="gearbox", out_path=out_path, fmi_version=fmi_version, unit=GEARBOX_UNITS[fmi_version],
+        copy_sources=lambda dest: copy_gearbox_sources(dest, fmi_version), platforms=keys, cc=cc,
+        identifier=identifier, guid=guid, now=now, spec=spec, variables=variables, model_name=model_name,
+        stop_time_s=settings.stop_time_s, step_size_s=settings.output_interval_s, interface=interface,
+        resources=resources, provenance=provenance, record=record if validation else None, page=page))
 
 
 def variables_of_fmu(model: GearboxModel, settings: GearboxRunSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,

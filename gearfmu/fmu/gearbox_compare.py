@@ -40,8 +40,8 @@ def step_fmu(fmu_path, names: Sequence[str], *, stop_time_s: float, comm_step_s:
     for n in names:
         if n in by_name:
             refs.append((by_name[n].valueReference, None))
-        elif fmi3 and n.endswith("]") and n.split("[", 1)[0] in by_name:
-            refs.append((by_name[n.split("[", 1)[0]].valueReference, int(n.rsplit("[", 1)[1][:-1]) - 1))
+        elif fmi3 and n.endswith("]") and n.rsplit("[", 1)[0] in by_name:
+            refs.append((by_name[n.rsplit("[", 1)[0]].valueReference, int(n.rsplit("[", 1)[1][:-1]) - 1))
         else:
             raise FmuMismatchError(f"{fmu_path}: no output {n!r}")
     n_steps = max(1, int(round(stop_time_s / comm_step_s)))

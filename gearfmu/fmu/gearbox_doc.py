@@ -14,7 +14,7 @@ from ..gearbox.model import GearboxModel
 from .fmudoc import _STYLE, _e, _num, _rows
 from .modeldesc import FMI3_TYPES, fmi3_variables
 
-__all__ = ["gearbox_documentation_html", "GEARBOX_EQUATIONS"]
+__all__ = ["gearbox_documentation_html", "GEARBOX_EQUATIONS", "doc_head", "doc_variables", "doc_equations", "doc_tail"]
 
 #: the equations of docs/gearbox.md "Model", by anchor: (title, lines)
 GEARBOX_EQUATIONS = {
@@ -58,19 +58,14 @@ def _eq(name: str) -> Optional[str]:
     return None
 
 
-def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_identifier: str, fmi_version: int,
-                               generation_tool: str, variables: Sequence, description: str, parameters: dict,
-                               scene_text: Optional[str], validation_record: Optional[dict], platforms_text: str,
-                               experiment: dict) -> bytes:
-    """The page (UTF-8 bytes) of a gearbox FMU of ``model`` with ``variables`` (expanded)."""
-    out: List[str] = []
-    w = out.append
+def doc_head(w, *, model_name: str, what: str, description: str, fmi_version: int, model_identifier: str,
+             generation_tool: str, experiment: dict, contents) -> None:
+    """The head of a multi-mesh FMU's page: title, description, contents (``contents``: (anchor, title)
+    pairs), the FMI version and interfaces, identifier, runtime, tool and default experiment."""
     w("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">")
-    w(f"<title>{_e(model_name)}: gearfmu gearbox FMU</title><style>{_STYLE}</style></head><body>")
+    w(f"<title>{_e(model_name)}: gearfmu {_e(what)} FMU</title><style>{_STYLE}</style></head><body>")
     w(f"<h1>{_e(model_name)}</h1><p>{_e(description)}</p>")
-    w("<p>Contents: <a href=\"#variables\">Variables</a> &middot; <a href=\"#model\">Model</a> &middot; "
-      "<a href=\"#gearbox\">Bodies, stages and shafts</a> &middot; <a href=\"#validation\">Validation record</a> "
-      "&middot; <a href=\"#scene\">Scene</a> &middot; <a href=\"#platforms\">Platforms and sources</a></p>")
+    w("<p>Contents: " + " &middot; ".join(f"<a href=\"#{a}\">{_e(t)}</a>" for a, t in contents) + "</p>")
     # the interfaces as the model description's text names them (gearfmu.fmu.modeldesc)
     kinds = next(k for k in ("Co-Simulation and Model Exchange", "Model Exchange", "Co-Simulation")
                  if k in description or k == "Co-Simulation")
@@ -79,6 +74,10 @@ def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_id
                          ("default experiment", f"start {_num(experiment.get('start'))} s, stop "
                                                 f"{_num(experiment.get('stop'))} s, step {_num(experiment.get('step'))} s")])
       + "</table>")
+
+
+def doc_variables(w, variables: Sequence, fmi_version: int, equations: dict, eq_of) -> None:
+    """The variables table, each linked to its equation (``eq_of(name)``: an anchor of ``equations``)."""
     w("<h2 id=\"variables\">Variables</h2><table><tr><th>name</th><th>value reference</th><th>causality</th>"
       "<th>variability</th><th>type</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>meaning</th>"
       "<th>equation</th></tr>")
@@ -89,8 +88,8 @@ def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_id
     else:
         rows = [(v.name, v.value_reference, v, v.description, v.type) for v in variables]
     for name, vr, v, meaning, typ in rows:
-        eq = _eq(v.name)
-        link = f"<a href=\"#{eq}\">{_e(GEARBOX_EQUATIONS[eq][0].split(' (')[0])}</a>" if eq else ""
+        eq = eq_of(v.name)
+        link = f"<a href=\"#{eq}\">{_e(equations[eq][0].split(' (')[0])}</a>" if eq else ""
         w(f"<tr><td><code>{_e(name)}</code></td><td>{vr}</td><td>{_e(v.causality)}</td><td>{_e(v.variability)}</td>"
           f"<td>{_e(typ)}</td><td>{_e(v.unit or '')}</td><td>{_e(_num(v.start))}</td><td>{_e(_num(v.min))}</td>"
           f"<td>{_e(_num(v.max))}</td><td>{_e(meaning)}</td><td>{link}</td></tr>")
@@ -99,17 +98,58 @@ def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_id
           "<td>Float64</td><td>s</td><td></td><td></td><td></td><td>Simulation time</td><td></td></tr>")
     w("</table>")
 
-    w("<h2 id=\"model\">Model</h2><p>Rigid bodies (rotors, gears, merged by rigid couplings) joined by elastic "
-      "shafts and gear meshes, one torsional system: every mesh is the multi-pair model of its stage (per-pair "
-      "stiffness, meshing error and backlash from the stage's tables over its pinion angle, the pair FMU's force "
-      "law), the state holds every body's deviation from its kinematic position.  The inputs are held over a "
-      "communication step; the state is integrated in C (gearfmu's docs/gearbox.md is the full model).</p>")
-    for anchor, (title, lines) in GEARBOX_EQUATIONS.items():
+
+def doc_equations(w, equations: dict, parameters: dict) -> None:
+    """The equations and this build's parameters."""
+    for anchor, (title, lines) in equations.items():
         w(f"<h3 id=\"{anchor}\">{_e(title)}</h3><pre>{_e(chr(10).join(lines))}</pre>")
     w("<h3>Parameters of this build</h3><table>" + _rows(sorted(
         (k, json.dumps(v, sort_keys=True) if isinstance(v, dict) else _num(v)) for k, v in parameters.items()))
       + "</table>")
 
+
+def doc_tail(w, *, solver_text: str, validation_record: Optional[dict], scene_text: Optional[str], scene_note: str,
+             platforms_text: str, fmi_version: int, unit_name: str, model_identifier: str, what: str) -> None:
+    """The validation record, the scene, the platforms and sources; the end of the page."""
+    w("<h2 id=\"validation\">Validation record</h2>")
+    if validation_record:
+        ref = validation_record.get("reference", {})
+        w(f"<p>The FMU carries <code>resources/validation/</code>: a reference result of {_e(solver_text)} over the "
+          "default experiment, with the versions and checksums of this build.</p><table>" + _rows([
+              ("reference file", "resources/validation/" + str(ref.get("file"))), ("solver", ref.get("solver")),
+              ("criterion", ref.get("criterion")), ("rows", ref.get("rows")),
+              ("versions", json.dumps(validation_record.get("versions"), sort_keys=True))]) + "</table>")
+    else:
+        w("<p>This FMU was built without a validation record.</p>")
+    w("<h2 id=\"scene\">Scene</h2>")
+    w(f"<pre>{_e(scene_text)}</pre><p>{scene_note}</p>" if scene_text else
+      f"<p>Built from a {_e(what)} in code, without a scene file.</p>")
+    w("<h2 id=\"platforms\">Platforms and sources</h2>" f"<pre>{_e(platforms_text)}</pre>")
+    w(f"<p>Source code: <code>sources/{_e(unit_name)}</code> is the one file to compile (it includes "
+      f"the others; every function but the fmi{fmi_version}* ones is static).  Static linking: define "
+      f"<code>FMI{fmi_version}_FUNCTION_PREFIX={_e(model_identifier)}_</code> and use the FMI standard's headers "
+      "(the importer's own; sources/BUILD.txt).</p>")
+    w("</body></html>\n")
+
+
+def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_identifier: str, fmi_version: int,
+                               generation_tool: str, variables: Sequence, description: str, parameters: dict,
+                               scene_text: Optional[str], validation_record: Optional[dict], platforms_text: str,
+                               experiment: dict) -> bytes:
+    """The page (UTF-8 bytes) of a gearbox FMU of ``model`` with ``variables`` (expanded)."""
+    out: List[str] = []
+    w = out.append
+    doc_head(w, model_name=model_name, what="gearbox", description=description, fmi_version=fmi_version,
+             model_identifier=model_identifier, generation_tool=generation_tool, experiment=experiment,
+             contents=[("variables", "Variables"), ("model", "Model"), ("gearbox", "Bodies, stages and shafts"),
+                       ("validation", "Validation record"), ("scene", "Scene"), ("platforms", "Platforms and sources")])
+    doc_variables(w, variables, fmi_version, GEARBOX_EQUATIONS, _eq)
+    w("<h2 id=\"model\">Model</h2><p>Rigid bodies (rotors, gears, merged by rigid couplings) joined by elastic "
+      "shafts and gear meshes, one torsional system: every mesh is the multi-pair model of its stage (per-pair "
+      "stiffness, meshing error and backlash from the stage's tables over its pinion angle, the pair FMU's force "
+      "law), the state holds every body's deviation from its kinematic position.  The inputs are held over a "
+      "communication step; the state is integrated in C (gearfmu's docs/gearbox.md is the full model).</p>")
+    doc_equations(w, GEARBOX_EQUATIONS, parameters)
     w("<h2 id=\"gearbox\">Bodies, stages and shafts</h2><h3>Bodies</h3><table><tr><th>body</th><th>parts</th>"
       "<th>inertia (kg*m^2)</th><th>kinematic ratio g (speed / motor speed)</th></tr>")
     for i in range(model.n_bodies):
@@ -144,24 +184,9 @@ def gearbox_documentation_html(*, model: GearboxModel, model_name: str, model_id
     else:
         w("<p>None (the stages' gears sit on the motor and load bodies, or rigid couplings join them).</p>")
 
-    w("<h2 id=\"validation\">Validation record</h2>")
-    if validation_record:
-        ref = validation_record.get("reference", {})
-        w("<p>The FMU carries <code>resources/validation/</code>: a reference result of gearfmu's native gearbox "
-          "solver (numba, independent of the C kernel) over the default experiment, with the versions and "
-          "checksums of this build.</p><table>" + _rows([
-              ("reference file", "resources/validation/" + str(ref.get("file"))), ("solver", ref.get("solver")),
-              ("criterion", ref.get("criterion")), ("rows", ref.get("rows")),
-              ("versions", json.dumps(validation_record.get("versions"), sort_keys=True))]) + "</table>")
-    else:
-        w("<p>This FMU was built without a validation record.</p>")
-    w("<h2 id=\"scene\">Scene</h2>")
-    w(f"<pre>{_e(scene_text)}</pre><p>Every stage's pair scene: <code>resources/&lt;stage&gt;/scene.toml</code>.</p>"
-      if scene_text else "<p>Built from a gearbox in code, without a scene file.</p>")
-    w("<h2 id=\"platforms\">Platforms and sources</h2>" f"<pre>{_e(platforms_text)}</pre>")
-    w(f"<p>Source code: <code>sources/fmi{fmi_version}_gearbox_all.c</code> is the one file to compile (it includes "
-      f"the others; every function but the fmi{fmi_version}* ones is static).  Static linking: define "
-      f"<code>FMI{fmi_version}_FUNCTION_PREFIX={_e(model_identifier)}_</code> and use the FMI standard's headers "
-      "(the importer's own; sources/BUILD.txt).</p>")
-    w("</body></html>\n")
+    doc_tail(w, solver_text="gearfmu's native gearbox solver (numba, independent of the C kernel)",
+             validation_record=validation_record, scene_text=scene_text,
+             scene_note="Every stage's pair scene: <code>resources/&lt;stage&gt;/scene.toml</code>.",
+             platforms_text=platforms_text, fmi_version=fmi_version, unit_name=f"fmi{fmi_version}_gearbox_all.c",
+             model_identifier=model_identifier, what="gearbox")
     return "".join(out).encode("utf-8")

@@ -57,9 +57,12 @@ def _default_spec_path() -> Path:
 DEFAULT_GEARBOX_SPEC_PATH = _default_spec_path()
 
 
-def load_gearbox_spec(path=None) -> Spec:
+def load_gearbox_spec(path=None, *, spec_format: str = GEARBOX_SPEC_FORMAT, per=None, features=FEATURES) -> Spec:
     """Read and check the gearbox spec (default ``modeldescription/gearbox.toml``); SpecError naming
-    the entry and field."""
+    the entry and field.  ``spec_format``, ``per`` (the item kinds an entry may be repeated for,
+    default :data:`PER`) and ``features``: another spec of the same form (the planetary FMU's,
+    :mod:`gearfmu.fmu.planetary_interface`)."""
+    per = PER if per is None else per
     p = Path(path) if path is not None else DEFAULT_GEARBOX_SPEC_PATH
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
@@ -67,8 +70,8 @@ def load_gearbox_spec(path=None) -> Spec:
         raise SpecError(f"{p}: gearbox interface spec not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"{p}: not valid TOML ({exc})") from None
-    if data.get("format") != GEARBOX_SPEC_FORMAT:
-        raise SpecError(f"{p}: format is {data.get('format')!r}, expected {GEARBOX_SPEC_FORMAT!r}")
+    if data.get("format") != spec_format:
+        raise SpecError(f"{p}: format is {data.get('format')!r}, expected {spec_format!r}")
     if data.get("version") not in SPEC_VERSIONS:
         raise SpecError(f"{p}: spec version {data.get('version')!r} unsupported (know {list(SPEC_VERSIONS)})")
     units = data.get("units", {})
@@ -98,9 +101,9 @@ def load_gearbox_spec(path=None) -> Spec:
                 raise SpecError(f"{where}: {key} {ent.get(key)!r} not in {allowed}")
         if ent.get("initial") is not None and ent["initial"] not in INITIALS:
             raise SpecError(f"{where}: initial {ent['initial']!r} not in {INITIALS}")
-        if ent.get("per") is not None and ent["per"] not in PER:
-            raise SpecError(f"{where}: per {ent['per']!r} not one of {sorted(PER)}")
-        if ent.get("per_slot") and ent.get("per") != "stage":
+        if ent.get("per") is not None and ent["per"] not in per:
+            raise SpecError(f"{where}: per {ent['per']!r} not one of {sorted(per)}")
+        if ent.get("per_slot") and ent.get("per") not in ("stage", "mesh"):
             raise SpecError(f"{where}: per_slot needs per = \"stage\" (the slots are a stage's)")
         unit = ent.get("unit")
         if unit is not None and unit not in units:
@@ -112,8 +115,8 @@ def load_gearbox_spec(path=None) -> Spec:
         if ent["causality"] == "output" and ("output_index" not in ent or ent.get("per") is None):
             raise SpecError(f"{where}: output_index and per: every output is a part's, stage's or shaft's and "
                             "needs its position in the item's block of the kernel's output vector")
-        if "requires" in ent and ent["requires"] not in FEATURES:
-            raise SpecError(f"{where}: requires {ent['requires']!r} not one of {FEATURES}")
+        if "requires" in ent and ent["requires"] not in features:
+            raise SpecError(f"{where}: requires {ent['requires']!r} not one of {features}")
     knowns = {e["name"] for e in entries if e["causality"] in ("input", "parameter")}
     for i, ent in enumerate(entries):
         deps = ent.get("initial_dependencies")

@@ -25,7 +25,7 @@ from ..gearbox.native import GearboxResult, simulate as simulate_gearbox
 from .gearbox_interface import gearbox_variables, load_gearbox_spec
 from .validation import REFERENCE_CACHE, VALIDATION_DIR, _SOLVER_PACKAGES, _sources_sha256, _versions
 
-__all__ = ["native_run", "native_outputs_by_vr", "gearbox_validation_record", "reference_csv"]
+__all__ = ["native_run", "native_outputs_by_vr", "gearbox_validation_record", "reference_csv", "record_files"]
 
 
 def native_run(model: GearboxModel, settings, *, stop_time_s: Optional[float] = None,
@@ -100,30 +100,42 @@ def gearbox_validation_record(model: GearboxModel, variables, settings, *, runti
                               compiler: Optional[str] = None) -> Dict[str, bytes]:
     """The validation record of a gearbox FMU as ``{path inside the FMU: bytes}`` (module docstring)."""
     ref, ref_meta = _reference(model, variables, settings)
+    return record_files("gearbox", {m.name: m.tables for m in model.meshes}, ref, ref_meta, settings,
+                        solver="gearfmu.gearbox.native.simulate (numba gearbox solver, docs/gearbox.md)",
+                        runtime=runtime, model_identifier=model_identifier, parameters=parameters,
+                        scene_text=scene_text, compiler=compiler)
+
+
+def record_files(kind: str, tables_by_name, ref: bytes, ref_meta: dict, settings, *, solver: str, runtime: str,
+                 model_identifier: str, parameters: dict, scene_text: Optional[str], compiler: Optional[str],
+                 criterion: Optional[str] = None) -> Dict[str, bytes]:
+    """The files of a multi-mesh FMU's validation record (``kind`` "gearbox" or "planetary"): record.json
+    with every mesh's table checksums (``tables_by_name``: name -> MeshTables), the reference result
+    ``ref`` of ``solver`` and scene.toml."""
     tables = {}
-    for m in model.meshes:
-        meta_bytes, bin_bytes = m.tables.to_bytes()
+    for name, t in tables_by_name.items():
+        meta_bytes, bin_bytes = t.to_bytes()
         meta = json.loads(meta_bytes.decode("utf-8"))
-        tables[m.name] = {"tables_bin_sha256": hashlib.sha256(bin_bytes).hexdigest(),
-                          "tables_json_sha256": hashlib.sha256(meta_bytes).hexdigest(),
-                          "arrays_sha256": {k: v["sha256"] for k, v in meta["arrays"].items()},
-                          "slots": m.tables.slots, "n_phi": m.tables.n_phi, "n_torque": m.tables.n_torque}
+        tables[name] = {"tables_bin_sha256": hashlib.sha256(bin_bytes).hexdigest(),
+                        "tables_json_sha256": hashlib.sha256(meta_bytes).hexdigest(),
+                        "arrays_sha256": {k: v["sha256"] for k, v in meta["arrays"].items()},
+                        "slots": t.slots, "n_phi": t.n_phi, "n_torque": t.n_torque}
     record = {
-        "format": "gearfmu-validation-record", "version": 1, "model": "gearbox",
+        "format": "gearfmu-validation-record", "version": 1, "model": kind,
         "runtime": runtime, "model_identifier": model_identifier,
         "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "versions": _versions(), "platform": platform.platform(), "machine": platform.machine(),
-        "compiler": compiler, "parameters": parameters, "stages": tables,
+        "compiler": compiler, "parameters": parameters, "stages" if kind == "gearbox" else "meshes": tables,
         "scene_sha256": None if scene_text is None else hashlib.sha256(scene_text.encode()).hexdigest(),
         "reference": {
             "file": "reference_result.csv", "sha256": hashlib.sha256(ref).hexdigest(),
-            "solver": "gearfmu.gearbox.native.simulate (numba gearbox solver, docs/gearbox.md)",
+            "solver": solver,
             "start_time_s": 0.0, "stop_time_s": settings.stop_time_s,
             "output_interval_s": settings.output_interval_s,
             "substeps_per_interval": ref_meta["substeps"], "rows": ref_meta["rows"],
-            "criterion": "every output within 1e-9 of its range in this file when a master steps the FMU "
-                         "with communication step = output_interval_s and the start values above "
-                         "(measured: bit for bit)",
+            "criterion": criterion or ("every output within 1e-9 of its range in this file when a master steps the FMU "
+                                       "with communication step = output_interval_s and the start values above "
+                                       "(measured: bit for bit)"),
             "native_wall_s": ref_meta["native_wall_s"],
         },
     }

@@ -127,7 +127,8 @@ def test_a_call_back_from_the_model_into_the_plumbing_is_a_cycle(tmp_path):
 @pytest.mark.parametrize("name", ["standalone/gear_model.c", "standalone/gear_model.h", "runtime/pyshim.c",
                                   "standalone/gearbox_model.c", "standalone/gearbox_model.h",
                                   "standalone/stage_model.c", "standalone/stage_model.h",
-                                  "standalone/element_model.c", "standalone/element_model.h"])
+                                  "standalone/element_model.c", "standalone/element_model.h",
+                                  "standalone/planetary_model.c", "standalone/planetary_model.h"])
 def test_the_model_includes_the_contract_not_the_plumbing(name):
     """The models of the contract: the gear model (standalone runtime), the Python slave's
     (pythonfmu runtime, docs/fmu.md "The binary"), the gearbox model (docs/gearbox.md), and the stage and
@@ -135,7 +136,8 @@ def test_the_model_includes_the_contract_not_the_plumbing(name):
     text = (FMU / name).read_text()
     includes = set(re.findall(r'#include "([^"]+)"', text))
     assert "fmi_common.h" not in includes and "fmi_common.c" not in includes
-    assert includes & {"gf_model.h", "gear_model.h", "gearbox_model.h", "stage_model.h", "element_model.h"}
+    assert includes & {"gf_model.h", "gear_model.h", "gearbox_model.h", "stage_model.h", "element_model.h",
+                       "planetary_model.h"}
 
 
 def test_the_plumbing_reaches_the_model_through_the_contract_only():
@@ -198,3 +200,21 @@ def test_the_stage_and_element_units_include_every_c_file_once(v):
     for unit in (STAGE_UNITS[v], ELEMENT_UNITS[v]):
         text = unit.read_text()
         assert "#define GF_API GF_UNIT_STATIC" in text
+
+
+@pytest.mark.parametrize("v", [2, 3])
+def test_the_planetary_unit_includes_every_c_file_once(v):
+    """fmi2_planetary_all.c / fmi3_planetary_all.c: the pair FMU's FMI layer and plumbing, the planetary model,
+    the reading of resources, the multi-mesh behaviour it shares with the gearbox model (gf_meshes.c), the
+    planetary and pair kernel files -- once each, in the order of
+    gearfmu.fmu.planetary_build.planetary_file_sources; the two multi-mesh models reach their kernels only
+    through gf_meshes.c's function table (no call from gf_meshes.c into a model file)."""
+    from gearfmu.fmu.planetary_build import planetary_file_sources
+
+    text = (FMU / "standalone" / f"fmi{v}_planetary_all.c").read_text()
+    assert re.findall(r'#include "(\w+\.c)"', text) == list(planetary_file_sources(v))
+    assert "#define GF_API GF_UNIT_STATIC" in text and "#define GK_API GF_UNIT_STATIC" in text
+    edges = {(p.name, q.name) for p, qs in call_graph(C_FOLDERS).items() for q in qs}
+    assert {("planetary_model.c", "pl_kernel.c"), ("planetary_model.c", "gf_meshes.c"),
+            ("gearbox_model.c", "gf_meshes.c"), ("gf_meshes.c", "gf_resources.c")} <= edges
+    assert not {e for e in edges if e[0] == "gf_meshes.c" and e[1] in ("planetary_model.c", "gearbox_model.c")}

@@ -18,6 +18,7 @@
 #include "fmi_common.c"
 #include "gearbox_model.c"
 #include "gf_resources.c"
+#include "gf_meshes.c"
 #include "gb_kernel.c"
 #include "gearkernel.c"
 #include "gk_model.c"

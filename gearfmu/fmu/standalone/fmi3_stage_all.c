@@ -19,6 +19,7 @@
 #include "fmi_common.c"
 #include "stage_model.c"
 #include "gf_resources.c"
+#include "gf_meshes.c"
 #include "gb_kernel.c"
 #include "gearkernel.c"
 #include "gk_model.c"

@@ -1,7 +1,7 @@
 /*
  * gearbox_model.h -- the data of the gearbox model (gearbox_model.c) beside the instance's
- * variable table: every stage's tables and pair model, the gearbox kernel's model, work and
- * state (../kernel/gbkernel.h) and the value references it drives.  The plumbing
+ * variable table: the multi-mesh core (gf_meshes.h) and the gearbox kernel's model, work and
+ * state (../kernel/gbkernel.h).  The plumbing
  * (fmi_common.c) does not include this header: it reaches the model through the contract of
  * gf_model.h only; tools that look inside an instance (benchmarks) do.
  */
@@ -12,32 +12,18 @@
 
 #include "gbkernel.h"
 #include "gearkernel.h"
+#include "gf_meshes.h"
 #include "gf_model.h"
 
-/* what the gearbox model keeps (gf_model.h gm_data) */
+/* what the gearbox model keeps (gf_model.h gm_data): the shared behaviour's core first (gf_meshes.h:
+ * the stages' tables and pair models, the value references, Model Exchange), then the gearbox
+ * kernel's model, work, state and Model Exchange modes */
 struct gm_data {
-    int n_stage;
-    unsigned char *blob[GB_MAX_MESHES];   /* each stage's tables.bin */
-    double *cuts[GB_MAX_MESHES];          /* its contact-zone cuts (gk_zone_cuts), NULL: none */
-    gk_model *pair[GB_MAX_MESHES];        /* its pair model */
-    char stage_name[GB_MAX_MESHES][GF_MAX_NAME];
+    gfm_core core;
     gb_model *gb;
     gb_work *work;
     gb_state state;
-    int initialized;
-    uint64_t tables_tag;                  /* first 8 bytes of the SHA-256 of the stages' checksums */
-    /* the value references it drives (-1: the FMU has no such variable) */
-    int vr_motor_torque, vr_load_torque, vr_speed0, vr_angle0, vr_hmax, vr_integrator;
-    int vr_zeta[GB_MAX_MESHES], vr_dm[GB_MAX_MESHES];
-    double zeta_applied[GB_MAX_MESHES];   /* the damping ratio in each pair model */
-    int zeta_valid;                       /* 1: zeta_applied is applied */
-    uint32_t warned;                      /* bit m: stage m's torque-axis warning was given */
-    /* Model Exchange (gf_model.h gf_me_model): offered or not, the node events (GK_ME_NODES_*), every
-     * mesh's held mode, where its block starts in the outputs (states, derivatives, indicators) and the
-     * nominal values of the states */
-    int me_offered, me_node_events, me_base;
     gb_me me;
-    double me_nominal[GB_MAX_STATE];
 };
 
 #endif /* GEARBOX_MODEL_H */

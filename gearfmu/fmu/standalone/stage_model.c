@@ -76,10 +76,10 @@ static const char *read_flanges(gf_inst *c, const char *text, char *err, size_t 
             line[n] = '\0';
             if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
             if (strncmp(line, "flange=", 7) == 0) {
-                int ok = fl->n < ST_MAX_FLANGES && parse_ints(line + 7, v, 4);
+                int ok = fl->n < ST_MAX_FLANGES && gfm_parse_ints(line + 7, v, 4);
                 if (ok) ok = v[0] >= 0 && v[0] < gb->n && v[1] >= 0 && v[1] < gb->n_shaft &&
                              (gb->shaft_a[v[1]] == v[0] || gb->shaft_b[v[1]] == v[0]) &&
-                             vr_ok(c, v[2], 0) && c->vars[v[2]].causality == GF_INPUT &&
+                             gfm_vr_ok(c, v[2], 0) && c->vars[v[2]].causality == GF_INPUT &&
                              v[3] >= gb_n_outputs(gb) && v[3] < c->n_out;
                 if (!ok) {
                     snprintf(err, errcap, "flange entry '%.80s': body|shaft|speed input|torque output index of "
@@ -92,20 +92,20 @@ static const char *read_flanges(gf_inst *c, const char *text, char *err, size_t 
                 fl->out_torque[fl->n] = (int)v[3];
                 fl->n++;
             } else if (strncmp(line, "port_torque=", 12) == 0) {
-                if (fl->n_port >= 2 || !parse_ints(line + 12, v, 1) || !vr_ok(c, v[0], 0) ||
+                if (fl->n_port >= 2 || !gfm_parse_ints(line + 12, v, 1) || !gfm_vr_ok(c, v[0], 0) ||
                     c->vars[v[0]].causality != GF_INPUT) {
                     snprintf(err, errcap, "port_torque entry '%.80s': a torque input (at most 2)", line + 12);
                     return err;
                 }
                 fl->vr_port[fl->n_port++] = (int)v[0];
             } else if (strncmp(line, "vr.flange_order=", 16) == 0) {
-                if (!parse_ints(line + 16, v, 1) || !vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
+                if (!gfm_parse_ints(line + 16, v, 1) || !gfm_vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
                     snprintf(err, errcap, "vr.flange_order: not a parameter");
                     return err;
                 }
                 fl->vr_order = (int)v[0];
             } else if (strncmp(line, "vr.first_step_start_values=", 27) == 0) {
-                if (!parse_ints(line + 27, v, 1) || !vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
+                if (!gfm_parse_ints(line + 27, v, 1) || !gfm_vr_ok(c, v[0], 0) || c->vars[v[0]].causality != GF_PARAMETER) {
                     snprintf(err, errcap, "vr.first_step_start_values: not a parameter");
                     return err;
                 }
@@ -219,7 +219,7 @@ int gm_refresh_outputs(gf_inst *c, const char *fn, const unsigned int vr[], size
 {
     int was_dirty = c->mode == GF_INIT_MODE && c->dirty;
     if (!gbm_refresh_outputs(c, fn, vr, nvr)) return 0;
-    if (was_dirty && !c->dirty && c->data->initialized) flanges_from_state(c);
+    if (was_dirty && !c->dirty && c->data->core.initialized) flanges_from_state(c);
     return 1;
 }
 
@@ -263,21 +263,21 @@ int gm_do_step(gf_inst *c, double t, double H)
     double held[2], hmax;
     long n_sub = 1, j;
     int k, st = GF_OK, bad = 0, first, quad;
-    if (!d->initialized) {
+    if (!d->core.initialized) {
         if (isfinite(t)) c->time = t;
-        if (!init_state(c)) return GF_DISCARD;
+        if (!gfm_init_state(c)) return GF_DISCARD;
         flanges_from_state(c);
     }
-    first = fl->h_prev == 0.0 && val(c, fl->vr_first_start) == 1.0;
+    first = fl->h_prev == 0.0 && gfm_val(c, fl->vr_first_start) == 1.0;
     for (k = 0; k < fl->n; ++k) {
-        bad |= bad_value(c, fl->vr_speed[k], GF_DISCARD, "; step rejected, state unchanged");
-        w[k] = first ? fl->omega[k] : val(c, fl->vr_speed[k]);
+        bad |= gfm_bad_value(c, fl->vr_speed[k], GF_DISCARD, "; step rejected, state unchanged");
+        w[k] = first ? fl->omega[k] : gfm_val(c, fl->vr_speed[k]);
     }
-    if (fl->n > 0) bad |= bad_value(c, fl->vr_order, GF_DISCARD, "; step rejected, state unchanged");
+    if (fl->n > 0) bad |= gfm_bad_value(c, fl->vr_order, GF_DISCARD, "; step rejected, state unchanged");
     if (bad) return GF_DISCARD;
     if (!(isfinite(H) && H > 0.0)) return gbm_do_step(c, t, H);   /* rejected there, with its message */
-    quad = fl->n > 0 && val(c, fl->vr_order) == 2.0 && fl->h_prev > 0.0;
-    hmax = val(c, d->vr_hmax);
+    quad = fl->n > 0 && gfm_val(c, fl->vr_order) == 2.0 && fl->h_prev > 0.0;
+    hmax = gfm_val(c, d->core.vr_hmax);
     if (quad && hmax > 0.0 && H / hmax < 1e8) n_sub = (long)ceil(H / hmax * (1.0 - 1e-12));
     if (n_sub < 1) n_sub = 1;
     s0 = d->state;

@@ -113,12 +113,14 @@ def test_gearfmu_simulate_of_a_planetary_scene(tmp_path, capsys):
     assert (tmp_path / "run.png").stat().st_size > 10_000
 
 
-def test_a_planetary_drivetrain_has_no_fmu_yet(tmp_path, capsys):
-    assert main(["build", str(LP), "-o", str(tmp_path / "x.fmu"), "-q"]) == 2
+def test_a_planetary_drivetrain_is_no_ssp_of_stage_fmus(tmp_path, capsys):
+    """A drivetrain with planetary stages is one system (its planetary FMU, tests/fmu_hosts/test_planetary_fmu.py),
+    not a gearbox of stages: `gearfmu ssp` refuses it with one line, exit status 2, nothing written."""
+    assert main(["ssp", str(LP), "-o", str(tmp_path / "x.ssp"), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == ("gearfmu: planetary[0] (lp): a drivetrain with planetary stages has no FMU yet; "
-                       "`gearfmu simulate` and `gearfmu modes` run it (docs/planetary.md)")
-    assert not (tmp_path / "x.fmu").exists()
+    assert err[-1] == ("gearfmu: planetary[0] (lp): a drivetrain with planetary stages is one system, not a "
+                       "gearbox of stages; `gearfmu build` makes its planetary FMU (docs/planetary.md)")
+    assert not (tmp_path / "x.ssp").exists()
 
 
 def _edit(text, old, new):
