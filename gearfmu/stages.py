@@ -34,7 +34,7 @@ import numpy as np
 from . import __version__
 from .common.progress import notice
 from .common.settings import GearboxRunSettings, RunSettings
-from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS, RUNTIMES
+from .common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS, RUNTIMES
 from .scene.physics import environment_from_scene
 from .dynamics.native import choose_max_step_s, simulate
 from .fmu.build_steps import FmuBuildError
@@ -477,16 +477,15 @@ def gearbox_fmu_settings(scene: DrivetrainScene, model: GearboxModel) -> Gearbox
 def check_gearbox_fmu_runtime(runtime: Optional[str], interface: Optional[str] = None,
                               me_node_events: Optional[str] = None) -> dict:
     """A gearbox FMU has the standalone C runtime only: FmuBuildError for any other ``runtime`` (None: the
-    default) and for ``me_node_events`` without Model Exchange (``interface`` None, the default, is
-    Co-Simulation for a gearbox).  Returns the ``model_exchange`` mapping of :func:`build_drivetrain_fmu`."""
+    default) and for ``me_node_events`` without Model Exchange (``interface`` "cs"; None, the default,
+    offers both interfaces).  Returns the ``model_exchange`` mapping of :func:`build_drivetrain_fmu`."""
     if runtime not in (None, "standalone"):
         raise FmuBuildError(f"--runtime {runtime}: a gearbox FMU (drivetrain scene) is built with the standalone "
                             "C runtime only (docs/gearbox.md \"The gearbox FMU\"); leave --runtime out or give "
                             "--runtime standalone")
-    if interface in (None, "cs") and me_node_events is not None:
-        raise FmuBuildError(f"--me-node-events {me_node_events}: only with Model Exchange (--interface me or both); "
-                            "a gearbox FMU is Co-Simulation unless --interface says otherwise (docs/gearbox.md "
-                            "'Model Exchange')")
+    if interface == "cs" and me_node_events is not None:
+        raise FmuBuildError(f"--me-node-events {me_node_events}: only with Model Exchange (--interface me or both, "
+                            "the default; docs/gearbox.md 'Model Exchange')")
     return {"interface": interface, "me_node_events": me_node_events}
 
 
@@ -546,7 +545,7 @@ def build_planetary_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress
     (docs/planetary.md "The planetary FMU"; :func:`gearfmu.fmu.planetary_build.build_planetary_fmu`):
     Co-Simulation and Model Exchange unless ``model_exchange`` names the interface."""
     me = dict(model_exchange or {})
-    me["interface"] = me.get("interface") or "both"
+    me["interface"] = me.get("interface") or DEFAULT_FMU_INTERFACE
     check_gearbox_fmu_runtime(runtime, me["interface"], me.get("me_node_events"))
     t0 = time.perf_counter()
     tables = stage_tables(scene, progress=progress, allow_large=allow_large)

@@ -38,7 +38,8 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 
 from ..common.settings import GearboxRunSettings, checked
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS
+from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
+                                  FMU_INTERFACES, ME_NODE_EVENTS)
 from ..gearbox.model import GearboxModel
 from ..gearbox.native import resolve_settings
 from .build_steps import (KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_output_arguments,
@@ -272,8 +273,8 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
     zig the build machine's only, the FMU says what it lacks); ``fmi3_outputs`` "scalar": the per-slot
     outputs of an FMI 3 FMU as scalars ``stage1.pair_force_1`` ..; ``validation`` False: no validation
     record (no native run); ``cc``: the build machine's compiler.  Written under a temporary name
-    beside ``out_path`` and renamed at the end.  ``model_exchange``: {"interface": "cs" (Co-Simulation, the
-    default), "me" (Model Exchange) or "both", "me_node_events": Model Exchange's table-node events, one
+    beside ``out_path`` and renamed at the end.  ``model_exchange``: {"interface": "both" (Co-Simulation and
+    Model Exchange, the default), "cs" (Co-Simulation) or "me" (Model Exchange), "me_node_events": Model Exchange's table-node events, one
     of :data:`gearfmu.common.vocabulary.ME_NODE_EVENTS`} (docs/gearbox.md "Model Exchange")."""
     interface, me_node_events = model_exchange_options(model, model_exchange)
     if fmi_version not in FMI_VERSIONS:
@@ -341,7 +342,7 @@ def build_gearbox_fmu(model: GearboxModel, out_path, *, settings: Optional[Gearb
 
 
 def variables_of_fmu(model: GearboxModel, settings: GearboxRunSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
-                     spec_path=None, interface: str = "cs", me_node_events: str = DEFAULT_ME_NODE_EVENTS):
+                     spec_path=None, interface: str = DEFAULT_FMU_INTERFACE, me_node_events: str = DEFAULT_ME_NODE_EVENTS):
     """The variables a gearbox FMU of ``model`` built with ``settings`` (and ``interface``,
     ``me_node_events``) has (for hosts and tests)."""
     variables = apply_starts(gearbox_variables(load_gearbox_spec(spec_path), model,

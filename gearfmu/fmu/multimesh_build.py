@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Callable, Dict, Optional, Sequence
 
 from .. import __version__
+from ..common.vocabulary import DEFAULT_FMU_INTERFACE
 from . import crossbuild
 from .build_steps import (FmuBuildError, check_model_description, compiler_version, find_c_compiler, fmi_header_dir,
                           fmu_zip, model_description, zip_folder)
@@ -83,7 +84,7 @@ def interface_options(model_exchange: Optional[dict], fmu_interfaces, node_event
     unknown = sorted(set(opts) - {"interface", "me_node_events"})
     if unknown:
         raise FmuBuildError(f"model_exchange: unknown keys {unknown} (interface, me_node_events)")
-    interface = opts.get("interface") or "cs"
+    interface = opts.get("interface") or DEFAULT_FMU_INTERFACE
     node_events = opts.get("me_node_events") or default_node_events
     if interface not in fmu_interfaces:
         raise FmuBuildError(f"interface: {interface!r} not one of {fmu_interfaces}")

@@ -45,7 +45,8 @@ import numpy as np
 from ..common.cache import cache_dir, load_entry, store_entry
 from ..common.progress import ticking
 from ..common.settings import GearboxRunSettings, checked
-from ..common.vocabulary import DEFAULT_FMI3_OUTPUTS, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS, FMU_INTERFACES, ME_NODE_EVENTS
+from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
+                                  FMU_INTERFACES, ME_NODE_EVENTS)
 from ..planetary.model import PlanetaryModel
 from ..planetary.native import resolve_settings, simulate as simulate_planetary
 from .build_steps import KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_output_arguments, \
@@ -381,7 +382,7 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
 
 
 def variables_of_fmu(model: PlanetaryModel, settings: GearboxRunSettings, fmi3_outputs: str = DEFAULT_FMI3_OUTPUTS,
-                     spec_path=None, interface: str = "cs", me_node_events: str = DEFAULT_ME_NODE_EVENTS):
+                     spec_path=None, interface: str = DEFAULT_FMU_INTERFACE, me_node_events: str = DEFAULT_ME_NODE_EVENTS):
     """The variables a planetary FMU of ``model`` built with ``settings`` (and ``interface``,
     ``me_node_events``) has (for hosts and tests)."""
     variables = apply_starts(planetary_variables(load_planetary_spec(spec_path), model,

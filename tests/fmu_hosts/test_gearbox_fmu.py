@@ -182,7 +182,7 @@ def test_fmi3_equals_fmi2_bit_for_bit(example):
     b = run_fmu(example[3], names, 0.01, s.output_interval_s)
     assert all(np.array_equal(a[n], b[n]) for n in names)
     md = fmpy.read_model_description(str(example[3]))
-    arrays = {v.name: int(v.shape[0]) for v in md.modelVariables if getattr(v, "shape", None)}
+    arrays = {v.name: int(v.shape[0]) for v in md.modelVariables if getattr(v, "shape", None) and v.causality == "output"}
     assert arrays == {"stage1.pair_force": 3, "stage1.load_sharing": 3, "stage2.pair_force": 3,
                       "stage2.load_sharing": 3}
 
@@ -459,9 +459,9 @@ def test_win64_under_wine_and_aarch64_under_qemu_equal_linux64(example, host_exe
 
 # --------------------------------------------------------------------- CLI
 def test_cli_build_validate_and_refusals(tmp_path):
-    """gearfmu build DRIVETRAIN.toml says what it built (runtime, FMI version, platforms);
-    --runtime pythonfmu, --tables and --me-node-events without Model Exchange are refused with one
-    line and status 2; gearfmu validate passes."""
+    """gearfmu build DRIVETRAIN.toml says what it built (runtime, FMI version, both interfaces by default
+    as the pair FMU, platforms); --runtime pythonfmu, --tables and --me-node-events with --interface cs
+    are refused with one line and status 2; gearfmu validate passes."""
     def gearfmu(*args):
         return subprocess.run([sys.executable, "-m", "gearfmu.cli", *args], capture_output=True, text=True,
                               timeout=900, cwd=REPO)
@@ -470,10 +470,12 @@ def test_cli_build_validate_and_refusals(tmp_path):
     p = gearfmu("build", str(EXAMPLE), "-o", str(out), "--platforms", "x86_64-linux", "-q")
     assert p.returncode == 0, p.stderr
     assert "gearbox of 2 stages, 3 elastic shafts, 6 bodies" in p.stdout
-    assert "runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation, platforms: linux64" in p.stdout
+    assert ("runtime standalone (all C, needs no Python), FMI 2.0 Co-Simulation and Model Exchange, platforms: "
+            "linux64") in p.stdout
     for bad, words in ((["--runtime", "pythonfmu"], "built with the standalone C runtime only"),
                        (["--tables", "x.csv"], "--tables: not offered for a drivetrain scene"),
-                       (["--me-node-events", "all"], "--me-node-events all: only with Model Exchange")):
+                       (["--interface", "cs", "--me-node-events", "all"],
+                        "--me-node-events all: only with Model Exchange")):
         p = gearfmu("build", str(EXAMPLE), "-o", str(tmp_path / "x.fmu"), *bad)
         assert p.returncode == 2 and words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     p = gearfmu("validate", str(EXAMPLE), "--fmu", str(out), "--stop-time", "0.01", "-q")

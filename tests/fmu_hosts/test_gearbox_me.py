@@ -298,7 +298,7 @@ def test_cli_builds_the_example_gearbox_as_model_exchange(tmp_path):
                             stop_time=2e-3, output_interval=1e-5, output=["stage1.dte", "stage2.dte"],
                             record_events=False, logger=quiet)
     assert np.all(np.isfinite(res["stage1.dte"])) and np.all(np.isfinite(res["stage2.dte"]))
-    p = gearfmu("-o", str(tmp_path / "x.fmu"), "--me-node-events", "all")
+    p = gearfmu("-o", str(tmp_path / "x.fmu"), "--interface", "cs", "--me-node-events", "all")
     assert p.returncode == 2 and "--me-node-events all: only with Model Exchange" in p.stderr
     assert len(p.stderr.strip().splitlines()) == 1, p.stderr
 
