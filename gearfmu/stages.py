@@ -45,7 +45,7 @@ from .fmu.standalone_build import build_standalone_fmu
 from .fmu.envelope import fmu_envelope_record
 from .gearbox.model import GearboxModel, Mesh, Shaft, build_gearbox
 from .gearbox.modes import ModesResult, campbell, modes
-from .gearbox.native import GearboxResult, simulate as simulate_gearbox
+from .gearbox.native import simulate as simulate_gearbox
 from .gear.phasing import parker_harmonic_excitation
 from .planetary import modes as planetary_modes
 from .planetary.model import PlanetaryModel, build_drivetrain as build_planetary_drivetrain
