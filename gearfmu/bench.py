@@ -416,7 +416,6 @@ def _position_error(mesh_periods):
 def two_stage_model():
     """Carrier-driven planetary stage (ring held, sun out) followed by a parallel stage."""
     st = lp_stage(3, teeth_sun=24, teeth_planet=36, teeth_ring=96, contact_ratio_sun=1.5, contact_ratio_ring=1.6)
-    rs = st.base_radius_sun_m
     par = rectangular_wave_tables(4e8, contact_ratio=1.6, points_per_mesh=32, teeth_pinion=23, teeth_gear=41,
                                   base_radius_pinion_m=0.03, base_radius_gear_m=0.03 * 41 / 23,
                                   inertia_pinion_kgm2=2e-4, inertia_gear_kgm2=2e-3)

@@ -105,7 +105,6 @@ def write_reference_results(fmu_path, out_dir, *, model_name: Optional[str] = No
     name = model_name or d.model_name
     p, t = d.parameters, d.tables
     stop, H = float(p["stop_time_s"]), float(p["output_interval_s"])
-    n = int(round(stop / H))
     T1, T2 = float(p["pinion_torque_start_Nm"]), float(p["gear_torque_start_Nm"])
     axis = np.asarray(t.torque_Nm, dtype=float)
     T1b = T1 * (1.0 + TORQUE_STEP)

@@ -19,7 +19,6 @@ at the power bonds, from the exchanged values (the residual libcosim's ECCO cont
 """
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 import time

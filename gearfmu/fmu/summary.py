@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path
 from typing import Dict, List, Optional
 
 __all__ = ["FmuSummary", "fmu_summary", "read_summary"]

@@ -120,7 +120,7 @@ def planetary_geometry(ps: PlanetarySet, *, where: str = "planetary") -> Planeta
     """Build and check the geometry of a planetary set (module docstring); ``where`` prefixes the
     field names in messages."""
     n = _check_count(ps.planets)
-    zs, zp, zr = int(ps.sun.teeth), int(ps.planet.teeth), int(ps.ring.teeth)
+    zs, zr = int(ps.sun.teeth), int(ps.ring.teeth)
     m = float(ps.sun.module_m)
     angles = equally_spaced_angles_rad(n) if ps.planet_angles_rad is None else tuple(float(a) for a in ps.planet_angles_rad)
     if len(angles) != n:
