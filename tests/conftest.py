@@ -105,26 +105,41 @@ def _is_parallel_controller(config) -> bool:
 
 def _warm_caches() -> None:
     """Fill gearfmu's compile caches before the workers start (tests/support/warm_caches.py): the
-    families side by side, each in its own process, with the gearfmu the tests import.  With warm
-    caches this takes a few seconds.  A family that fails is named on stderr and left to the tests
-    that need it."""
-    from support.warm_caches import FAMILIES
+    families side by side, each in its own process, with the gearfmu the tests import -- and, when
+    gearfmu is also installed as a copy (``pip install .``, as CI does), the numba families of that
+    copy too: the command-line runs, fresh processes and pools the tests start outside the
+    repository import it, and numba keeps one cache per copy.  With warm caches this takes a few
+    seconds.  A family that fails is named on stderr and left to the tests that need it."""
+    import tempfile
 
-    package = Path(importlib.util.find_spec("gearfmu").origin).parents[1]
+    from support.warm_caches import FAMILIES, NUMBA_FAMILIES
+
     here = Path(__file__).resolve().parent
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(package), str(here), os.environ.get("PYTHONPATH", "")]))
+    script = str(here / "support" / "warm_caches.py")
+    package = Path(importlib.util.find_spec("gearfmu").origin).resolve().parents[1]
+    path = [os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else []
+    runs = [(f, package, dict(os.environ, PYTHONPATH=os.pathsep.join([str(package), str(here), *path])))
+            for f in FAMILIES]
+    with tempfile.TemporaryDirectory() as cwd:  # the gearfmu a process started outside the repository imports
+        p = subprocess.run([sys.executable, "-c", "import importlib.util; print(importlib.util.find_spec('gearfmu').origin)"],
+                           cwd=cwd, capture_output=True, text=True)
+    installed = Path(p.stdout.strip()).resolve().parents[1] if p.returncode == 0 and p.stdout.strip() else package
+    if installed != package:
+        runs += [(f, installed, dict(os.environ, PYTHONPATH=os.pathsep.join([str(here), *path])))
+                 for f in NUMBA_FAMILIES]
     print(f"tests/conftest.py: filling the compile caches ({', '.join(FAMILIES)}) before the workers start",
           file=sys.stderr, flush=True)
     t0 = time.perf_counter()
-    procs = {f: subprocess.Popen([sys.executable, str(here / "support" / "warm_caches.py"), f], env=env,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-             for f in FAMILIES}
-    for family, p in procs.items():
-        _, err = p.communicate()
-        if p.returncode != 0:
-            last = (err.strip().splitlines() or ["(no message)"])[-1]
-            print(f"tests/conftest.py: warming the {family} cache failed (the tests compile it): {last}",
-                  file=sys.stderr, flush=True)
+    with tempfile.TemporaryDirectory() as cwd:  # outside the repository: a copy imports itself
+        procs = [(f, where, subprocess.Popen([sys.executable, script, f], env=env, cwd=cwd, stdout=subprocess.DEVNULL,
+                                             stderr=subprocess.PIPE, text=True))
+                 for f, where, env in runs]
+        for family, where, p in procs:
+            _, err = p.communicate()
+            if p.returncode != 0:
+                last = (err.strip().splitlines() or ["(no message)"])[-1]
+                print(f"tests/conftest.py: warming the {family} cache of {where} failed (the tests compile it): "
+                      f"{last}", file=sys.stderr, flush=True)
     print(f"tests/conftest.py: compile caches ready ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
 
 

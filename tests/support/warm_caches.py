@@ -15,12 +15,14 @@ import tempfile
 from pathlib import Path
 
 FAMILIES = ("native", "films", "objects")
+#: the families whose cache numba keeps next to the package's source (one per installed copy)
+NUMBA_FAMILIES = ("native", "films")
 
 
 def _native():
     import numpy as np
 
-    from gearfmu.bench import planetary_case, run_kwargs
+    from gearfmu.bench import planetary_case
     from gearfmu.common.vocabulary import GEARBOX_INTEGRATORS, INTEGRATORS
     from gearfmu.dynamics.native import simulate, simulate_sdof
     from gearfmu.dynamics.subcell import static_te_m, table_values
