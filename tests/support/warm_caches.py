@@ -15,8 +15,6 @@ import tempfile
 from pathlib import Path
 
 FAMILIES = ("native", "films", "objects")
-#: the families whose cache numba keeps next to the package's source (one per installed copy)
-NUMBA_FAMILIES = ("native", "films")
 
 
 def _native():
