@@ -9,11 +9,8 @@ rigid-body closed form w(t) = w0 + T1 t / (I1 + I2 (Rb1/Rb2)^2) with the gear to
 Both runtimes are driven the same way and must log the same messages.
 """
 import json
-import zipfile
 
-import fmpy
 import pytest
-from fmpy.fmi2 import FMU2Slave
 
 from gearfmu.fmu.crossbuild import host_key
 from gearfmu.fmu.envelope import fmu_envelope_record
@@ -22,13 +19,13 @@ from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.fmu.standalone_build import build_standalone_fmu
 
 from factories import RB1, RB2, make_tables
-from test_standalone import _callbacks
+from support.envelope_checks import H, both_runtimes_warn, record
+from support.fmpy_host import KEPT_CALLBACKS
 from factories import temp_tables
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
 
-H = 1e-4
 RPM = 30 / 3.141592653589793
 
 
@@ -52,46 +49,6 @@ def _build(tables, d, name, verified=None, **kw):
             "pythonfmu": build_fmu(tables, d / f"{name}_py.fmu", **kw)}
 
 
-def _drive(path, schedule):
-    """Step the FMU at H through ``schedule`` (dicts of inputs per step); return (warnings, statuses)."""
-    md = fmpy.read_model_description(str(path))
-    log = []
-    cb = _callbacks(log)
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="env")
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu.instantiate(callbacks=cb, loggingOn=True)
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
-    statuses = []
-    for i, inputs in enumerate(schedule):
-        fmu.setReal([vr[k] for k in inputs], list(inputs.values()))
-        statuses.append(fmu.fmi2DoStep(fmu.component, i * H, H, 1))  # the status (fmpy raises above warning)
-    fmu.terminate()
-    fmu.freeInstance()
-    return [m for st, m in log if st == 1], statuses
-
-
-def _both(fmus, schedule):
-    """Envelope warnings of both runtimes for one schedule; they must be the same messages
-    (the tables' own torque-axis warning, worded by each runtime, is not one of them)."""
-    got = {k: _drive(p, schedule) for k, p in fmus.items()}
-    env = {k: [w for w in g[0] if w.endswith("(one warning per input; resources/envelope.json)")]
-           for k, g in got.items()}
-    assert env["standalone"] == env["pythonfmu"], got
-    for _, statuses in got.values():
-        assert statuses == [0] * len(schedule)  # fmi2OK: the FMU keeps running
-    return env["standalone"]
-
-
-def _record(path):
-    with zipfile.ZipFile(path) as z:
-        env = json.loads(z.read("resources/envelope.json"))
-        rec = json.loads(z.read("resources/validation/record.json"))
-    return env, rec, fmpy.read_model_description(str(path)).description
-
-
 @pytest.fixture(scope="module")
 def single_row(tmp_path_factory):
     d = tmp_path_factory.mktemp("env1")
@@ -105,12 +62,12 @@ def test_single_row_fmu_without_record_warns_once_at_another_torque(single_row):
     and the record says "not verified".  Before, a one-row FMU never looked at the torque."""
     fmus = single_row["plain"]
     sched = [{"pinion_torque": T} for T in (100.0, 100.0, 120.0, 130.0, 100.0, 90.0, 125.0)]
-    warns = _both(fmus, sched)
+    warns = both_runtimes_warn(fmus, sched)
     assert len(warns) == 1, warns
     assert "pinion_torque = 120 N.m" in warns[0] and "[100, 100] N.m" in warns[0]
     assert "accuracy not verified" in warns[0]
     for p in fmus.values():
-        env, rec, desc = _record(p)
+        env, rec, desc = record(p)
         assert env["status"] == "not verified" and env["pinion_torque_range_Nm"] == [100.0, 100.0]
         assert env["pinion_speed_range_rad_s"] is None and env["verified_envelope"] is None
         assert rec["envelope"] == env
@@ -122,14 +79,14 @@ def test_verified_torque_envelope_inside_silent_outside_one_warning(single_row):
     the verified range, not with the row -- 140 N.m is silent, 160 N.m warns once (170 and 60
     after it do not warn again)."""
     fmus = single_row["verified"]
-    assert _both(fmus, [{"pinion_torque": T} for T in (100.0, 140.0, 80.0, 150.0)]) == []
-    warns = _both(fmus, [{"pinion_torque": T} for T in (100.0, 160.0, 170.0, 60.0, 100.0)])
+    assert both_runtimes_warn(fmus, [{"pinion_torque": T} for T in (100.0, 140.0, 80.0, 150.0)]) == []
+    warns = both_runtimes_warn(fmus, [{"pinion_torque": T} for T in (100.0, 160.0, 170.0, 60.0, 100.0)])
     assert len(warns) == 1, warns
     w = warns[0]
     assert w.startswith("pinion_torque = 160 N.m at t = 0.0001 s is outside the envelope over which this "
                         "FMU's accuracy was verified (fidelity plan): pinion torque [80, 150] N.m"), w
     for p in fmus.values():
-        env, rec, desc = _record(p)
+        env, rec, desc = record(p)
         assert env["status"] == "verified" and env["source"] == "plan verification"
         assert env["pinion_torque_range_Nm"] == [80.0, 150.0]
         assert env["pinion_speed_range_rad_s"] == pytest.approx([90.0, 110.0], rel=1e-12)
@@ -146,7 +103,7 @@ def test_speed_leaving_the_envelope_warns_once(single_row):
     fmus = single_row["verified"]
     a = 100.0 / (0.002 + 0.006 * (RB1 / RB2) ** 2)
     n_out = int(21.0 / a / H) + 1
-    warns = _both(fmus, [{"pinion_torque": 100.0, "gear_torque": 0.0}] * (n_out + 15))
+    warns = both_runtimes_warn(fmus, [{"pinion_torque": 100.0, "gear_torque": 0.0}] * (n_out + 15))
     assert len(warns) == 1, warns
     w = warns[0]
     assert w.startswith("pinion_speed = 12") and "[90, 110] rad/s" in w and "10 percent margin" in w, w
@@ -159,11 +116,11 @@ def test_temperature_input_leaving_the_envelope_warns_once(tmp_path):
     axis, so the step is taken) warns once, naming bulk_temperature."""
     tt, _ = temp_tables()
     fmus = _build(tt, tmp_path, "temp", _verified((50.0, 150.0), (90.0, 110.0), (20.0, 50.0)))
-    warns = _both(fmus, [{"bulk_temperature": T} for T in (30.0, 45.0, 60.0, 65.0, 40.0, 60.0)])
+    warns = both_runtimes_warn(fmus, [{"bulk_temperature": T} for T in (30.0, 45.0, 60.0, 65.0, 40.0, 60.0)])
     assert len(warns) == 1, warns
     assert warns[0].startswith("bulk_temperature = 60 degC at t = 0.0002 s is outside the envelope") and \
         "temperature [20, 50] degC" in warns[0], warns
-    env, _, _ = _record(fmus["standalone"])
+    env, _, _ = record(fmus["standalone"])
     assert env["temperature_range_C"] == [20.0, 50.0]
 
 
@@ -194,13 +151,12 @@ def test_validate_json_stays_json_when_the_fmu_warns(tmp_path, capsys):
 
     from gearfmu.cli import main
     from gearfmu.pipeline import compute_tables, load
-    from test_standalone import _KEPT_CALLBACKS
 
     # fmpy's default logger prints (what a fresh process does; earlier tests re-pointed its one slot)
     cb = fmi2CallbackFunctions()
     cb.logger = fmi2CallbackLoggerTYPE(printLogMessage)
     addLoggerProxy(byref(cb))
-    _KEPT_CALLBACKS.append(cb)
+    KEPT_CALLBACKS.append(cb)
     scene = load(None)
     t = compute_tables(scene)
     from gearfmu.pipeline import gear_torque_for, max_step_for

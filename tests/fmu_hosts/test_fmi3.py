@@ -32,8 +32,8 @@ import pytest
 from gearfmu.fmu.standalone_build import build_description_flags, build_standalone_fmu, fmi3_header_dir
 from gearfmu.ssp import build_ssp, validate_ssp_dir
 
-from test_platforms import AARCH64_SYSROOT, _macho_exports, need, qemu, wine, zig
-from test_standalone import _cases
+from support.cross_tools import AARCH64_SYSROOT, macho_exports, need, qemu, wine, zig
+from support.standalone_cases import cases
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -47,8 +47,8 @@ def built(tmp_path_factory):
     """Per case (default scene, impacts) one FMI 2 and one FMI 3 FMU from the same tables and
     settings; the impacts FMI 3 FMU carries every platform."""
     d = tmp_path_factory.mktemp("fmi3")
-    cases = _cases()
-    for name, c in cases.items():
+    out = cases()
+    for name, c in out.items():
         kw = dict(damping_ratio=c["zeta"], pinion_speed_start_rad_s=c["w0"], pinion_torque_start_Nm=c["T1"],
                   gear_torque_start_Nm=c["T2"], max_step_s=c["hmax"], damping_model=c["model"],
                   stop_time_s=c["n"] * c["H"], output_interval_s=c["H"], model_name=f"gear_{name}")
@@ -61,7 +61,7 @@ def built(tmp_path_factory):
         zipfile.ZipFile(c["fmi3"]).extractall(c["dir"])
         c["md"] = fmpy.read_model_description(str(c["fmi3"]))
         c["id"] = c["md"].coSimulation.modelIdentifier
-    return cases
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -282,7 +282,7 @@ def test_darwin_binaries_thin_per_tuple(built):
     assert len(fmi3) == 75 and {"fmi3DoStep", "fmi3InstantiateCoSimulation"} <= fmi3
     for t, cpu in (("x86_64-darwin", 0x01000007), ("aarch64-darwin", 0x0100000C)):
         data = (c["dir"] / "binaries" / t / f"{c['id']}.dylib").read_bytes()
-        cpu2, filetype, names, ident = _macho_exports(data)
+        cpu2, filetype, names, ident = macho_exports(data)
         assert cpu2 == cpu and filetype == 6 and ident == f"@rpath/{c['id']}.dylib"
         assert {"_" + f for f in fmi3} <= names
         assert not [n for n in names if n.startswith(("_gk_", "_gm_", "_gf_"))]

@@ -22,7 +22,7 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.tables.mesh_tables import stack_temperatures
 
 from factories import make_tables
-from test_standalone import _callbacks
+from support.fmpy_host import callbacks
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -76,7 +76,7 @@ def run_case(path, name, at_init, at_step, step_size=H):
     log = []
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-    fmu.instantiate(callbacks=_callbacks(log), loggingOn=True)
+    fmu.instantiate(callbacks=callbacks(log), loggingOn=True)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     _set(fmu, vr, at_init)
@@ -133,7 +133,7 @@ def test_both_runtimes_discard_a_parameter_outside_its_range_when_set(fmus, case
     log = []
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(fmus[runtime])),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="sa")
-    fmu.instantiate(callbacks=_callbacks(log), loggingOn=True)
+    fmu.instantiate(callbacks=callbacks(log), loggingOn=True)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     values = at_init or at_step

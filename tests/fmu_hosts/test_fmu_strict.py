@@ -28,7 +28,7 @@ from gearfmu.fmu.fmudoc import build_machine_paths
 from gearfmu.fmu.standalone_build import build_standalone_fmu
 
 from factories import make_tables
-from test_standalone import _callbacks
+from support.fmpy_host import callbacks
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -56,7 +56,7 @@ def fmus(tmp_path_factory):
 def _fmi2(c, log):
     fmu = FMU2Slave(guid=c["md"].guid, unzipDirectory=str(c["dir"]),
                     modelIdentifier=c["md"].coSimulation.modelIdentifier, instanceName="strict")
-    fmu.instantiate(callbacks=_callbacks(log), loggingOn=False)
+    fmu.instantiate(callbacks=callbacks(log), loggingOn=False)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     return fmu

@@ -44,9 +44,10 @@ from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.model import Mesh, build_gearbox
 from gearfmu.gearbox.native import choose_max_step_s
 
-from test_gearbox_modes import K_IN, K_MID, K_OUT, S1, S2, hand_matrices
-from test_gearbox_native import c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
-from test_standalone import _slave, _status
+from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine
+from support.fmpy_host import slave, status
+from support.gearbox_cases import (K_IN, K_MID, K_OUT, S1, S2, c_mesh, hand_damping, hand_damping_of_mid, hand_matrices,
+                                   kernel_library, linear_gearbox)
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -237,7 +238,7 @@ def test_tampered_stage_tables_refused(example, tmp_path):
             zout.writestr(item, data)
     with pytest.raises(FmuMismatchError, match="resources/stage2/tables.bin does not match"):
         open_fmu(bad)
-    sl, _, msgs = _slave(bad, tmp_path, "bad", instantiate=False)
+    sl, _, msgs = slave(bad, tmp_path, "bad", instantiate=False)
     with pytest.raises(Exception):
         sl.instantiate(loggingOn=True, callbacks=sl._test_callbacks)
     assert any("resources/stage2/tables.bin: SHA-256 checksum mismatch" in m for _, m in msgs), msgs
@@ -246,7 +247,7 @@ def test_tampered_stage_tables_refused(example, tmp_path):
 def test_state_save_restore_and_bad_inputs(example, tmp_path):
     """Saving the FMU state, stepping, restoring and stepping again gives the same outputs bit for bit; a
     NaN motor torque and a negative step are discarded with a message and leave the state unchanged."""
-    s, var, msgs = _slave(example[2], tmp_path)
+    s, var, msgs = slave(example[2], tmp_path)
     out = [var[n] for n in ("stage1.dte", "stage2.mesh_force", "load_speed", "intermediate_shaft.torque")]
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
@@ -262,9 +263,9 @@ def test_state_save_restore_and_bad_inputs(example, tmp_path):
         first.append(s.getReal(out))
     s.setFMUstate(s.deSerializeFMUstate(blob))
     s.setReal([var["motor_torque"]], [float("nan")])
-    assert _status(s.fmi2DoStep, s.component, 10 * H, H, 1) == 2   # fmi2Discard
+    assert status(s.fmi2DoStep, s.component, 10 * H, H, 1) == 2   # fmi2Discard
     s.setReal([var["motor_torque"]], [example["settings"].motor_torque_start_Nm])
-    assert _status(s.fmi2DoStep, s.component, 10 * H, -H, 1) == 2
+    assert status(s.fmi2DoStep, s.component, 10 * H, -H, 1) == 2
     second = []
     for k in range(10, 20):
         s.doStep(k * H, H)
@@ -401,9 +402,8 @@ def test_one_stage_without_shafts_equals_the_pair_fmu(case, tmp_path):
 # --------------------------------------------------------------- platforms
 @pytest.fixture(scope="module")
 def host_exe(tmp_path_factory):
-    from test_platforms import _compile_host
 
-    return _compile_host(tmp_path_factory.mktemp("gbhost"))
+    return compile_host(tmp_path_factory.mktemp("gbhost"))
 
 
 def _host_args(example, fmu_dir, n):
@@ -423,28 +423,27 @@ def _unzipped(example, tmp_path):
 def test_win64_under_wine_and_aarch64_under_qemu_equal_linux64(example, host_exe, tmp_path):
     """The example gearbox FMU's win64 DLL (under Wine, a win64 build of tests/fmu_hosts/fmi_host.c) and its
     aarch64-linux binary (under qemu-aarch64) give output files with the SHA-256 of the linux64 binary's."""
-    from test_platforms import AARCH64_SYSROOT, _compile_host, _run_file, qemu, wine
     import os
     import shutil
 
     d = _unzipped(example, tmp_path)
     args = _host_args(example, d, 200)
-    rc, ref, err = _run_file([str(host_exe), *args], tmp_path, "linux")
+    rc, ref, err = run_file([str(host_exe), *args], tmp_path, "linux")
     assert rc == 0, err
     assert len(ref.splitlines()) == 202
     sha = lambda text: hashlib.sha256(text.encode()).hexdigest()
     q = qemu()
-    exe = _compile_host(tmp_path, "aarch64-linux-gnu")
-    rc, out, err = _run_file([q, "-L", str(AARCH64_SYSROOT), str(exe), *args], tmp_path, "qemu")
+    exe = compile_host(tmp_path, "aarch64-linux-gnu")
+    rc, out, err = run_file([q, "-L", str(AARCH64_SYSROOT), str(exe), *args], tmp_path, "qemu")
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
     w = wine()
-    exe = _compile_host(tmp_path, "x86_64-windows-gnu")
+    exe = compile_host(tmp_path, "x86_64-windows-gnu")
     env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
                WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     wargs = _host_args(example, "Z:" + d.as_posix(), 200)
     try:
-        rc, out, err = _run_file([w, str(exe), *wargs], tmp_path, "wine", env=env)
+        rc, out, err = run_file([w, str(exe), *wargs], tmp_path, "wine", env=env)
     finally:
         server = shutil.which("wineserver")
         if server:
@@ -491,35 +490,12 @@ def test_cli_build_validate_and_refusals(tmp_path):
 
 
 # ------------------------------------------- the right-hand side of the kernel
-def _kernel_library(tmp):
-    """gb_kernel.c and the pair kernel's library (every function exported); the pair kernel's functions
-    bound by gearfmu.fmu.runtime.kernel_api (their one declaration), the gearbox kernel's here."""
-    import ctypes
-    import shutil
-
-    from gearfmu.fmu.build_steps import CFLAGS, KERNEL_DIR, KERNEL_LIBRARY_SOURCES
-    from gearfmu.fmu.runtime.kernel_api import load_kernel
-
-    lib = tmp / "libgb.so"
-    subprocess.run([shutil.which("gcc") or "cc", *CFLAGS, "-o", str(lib), str(KERNEL_DIR / "gb_kernel.c"),
-                    *map(str, KERNEL_LIBRARY_SOURCES), "-lm"], check=True, capture_output=True, text=True)
-    L = load_kernel(lib)
-    D, P, I = ctypes.c_double, ctypes.c_void_p, ctypes.c_int
-    for name, args in (("gb_sizeof_model", []), ("gb_sizeof_work", []), ("gb_init", [P, I, P, P, I, I, I]),
-                       ("gb_add_mesh", [P, P, I, I, I]), ("gb_add_shaft", [P, I, I, D, D, I]),
-                       ("gb_derivatives", [P, P, D, P, D, D, P]), ("gb_mesh_offset", [P, I]),
-                       ("gb_shaft_offset", [P]), ("gb_n_outputs", [P])):
-        getattr(L, name).restype = I
-        getattr(L, name).argtypes = args
-    return L
-
-
 def test_kernel_right_hand_side_in_the_linear_limit(tmp_path):
     """gb_derivatives(t, y) of the linear gearbox (constant mesh stiffness, no error, no backlash,
     contact_zone: F = k x + c v) at a state far from equilibrium equals the accelerations of the
     hand-assembled M, K, C (tests/unit/gearbox/test_gearbox_modes.py, tests/unit/gearbox/test_gearbox_native.py) mapped to the
     deviation state: psi'' = alpha_0, u_i'' = alpha_i - g_i alpha_0, to 1e-9 of the largest."""
-    L = _kernel_library(tmp_path)
+    L = kernel_library(tmp_path)
     model = linear_gearbox()
     keep = []
     pairs = []

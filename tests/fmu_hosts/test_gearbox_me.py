@@ -33,9 +33,8 @@ from gearfmu.fmu.gearbox_build import build_gearbox_fmu, gearbox_settings
 from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.native import simulate
 
-from test_gearbox_modes import S1, S2, hand_matrices
-from test_model_exchange import keep_fmpy_logger_alive
-from test_gearbox_native import K_MID, c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
+from support.fmpy_host import keep_fmpy_logger_alive
+from support.gearbox_cases import K_MID, S1, S2, c_mesh, hand_damping, hand_damping_of_mid, hand_matrices, linear_gearbox
 
 HOST = ["x86_64-linux"]
 QUANTITIES = ("dte", "mesh_force")

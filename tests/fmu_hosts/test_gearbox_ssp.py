@@ -46,8 +46,8 @@ from gearfmu.gearbox.model import Mesh, Shaft, build_gearbox
 from gearfmu.gearbox.native import choose_max_step_s
 from gearfmu.ssp import gearbox_ssp
 
-from test_gearbox_modes import K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices, I_LOAD, I_MOTOR
-from test_gearbox_native import hand_damping, hand_damping_of_mid, linear_gearbox
+from support.gearbox_cases import (I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_damping, hand_damping_of_mid,
+                                   hand_matrices, linear_gearbox)
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow

@@ -36,7 +36,7 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
 from factories import make_tables
-from test_standalone import _callbacks  # fmpy logger proxy: formats the C layer's printf-style messages
+from support.fmpy_host import callbacks  # fmpy logger proxy: formats the C layer's printf-style messages
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -72,7 +72,7 @@ class Inst:
     def __init__(self, path, name, logging_on=True):
         self.md = fmpy.read_model_description(str(path))
         self.log = []
-        self._cb = cb = _callbacks(self.log)
+        self._cb = cb = callbacks(self.log)
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=fmpy.extract(str(path)),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}

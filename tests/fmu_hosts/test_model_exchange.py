@@ -21,35 +21,12 @@ from gearfmu.bench import hard_case
 from gearfmu.dynamics.reference import simulate_reference
 from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.stages import gear_torque_for
-from test_standalone import _callbacks, _status
+from support.fmpy_host import callbacks, keep_fmpy_logger_alive, quiet, status
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
 
 CASES = ("computed_default_scene", "double_sided_impacts")
-
-
-def quiet(*args):
-    """fmpy's logger for runs whose messages are not under test."""
-
-
-_LIVE_CALLBACKS = []
-
-
-def keep_fmpy_logger_alive():
-    """fmpy (0.3.32) formats an FMU's messages in a native proxy that forwards them to the Python logger
-    registered last, process-wide; ``simulate_fmu(logger=...)`` registers its own and frees it when it
-    returns, so the next FMU on fmpy's default callbacks (PathSim's) that logs a message calls freed
-    memory and the host dies.  Registered here: a logger that lives as long as the process."""
-    from ctypes import byref
-
-    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-    from fmpy.logging import addLoggerProxy
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(quiet)
-    _LIVE_CALLBACKS.append(cb)
-    addLoggerProxy(byref(cb))
 
 
 def _case(name):
@@ -276,7 +253,7 @@ def test_call_order_inputs_and_fmu_state(cases, tmp_path):
     c = cases["double_sided_impacts"]
     md, m = _model(c["fmu2"], tmp_path)
     msgs = []
-    m._test_callbacks = _callbacks(msgs)
+    m._test_callbacks = callbacks(msgs)
     m.instantiate(callbacks=m._test_callbacks, loggingOn=True)
     n, nz = md.numberOfContinuousStates, md.numberOfEventIndicators
     x = (ctypes.c_double * n)()
@@ -288,12 +265,12 @@ def test_call_order_inputs_and_fmu_state(cases, tmp_path):
     x0 = np.array(x)
     m.exitInitializationMode()
     # event mode: states cannot be set, a tunable parameter can
-    assert _status(m.setContinuousStates, x, n) == 3
+    assert status(m.setContinuousStates, x, n) == 3
     assert "not allowed in state eventMode" in msgs[-1][1]
     m.setReal([_vr(md, "damping_ratio")], [c["kw"]["damping_ratio"]])
     m.newDiscreteStates()
     m.enterContinuousTimeMode()
-    assert _status(m.setReal, [_vr(md, "damping_ratio")], [0.1]) == 3
+    assert status(m.setReal, [_vr(md, "damping_ratio")], [0.1]) == 3
     assert "event mode, not in continuous-time mode" in msgs[-1][1]
     m.getContinuousStates(x, n)
     assert np.array_equal(x0, np.array(x))
@@ -348,7 +325,7 @@ def test_call_order_inputs_and_fmu_state(cases, tmp_path):
     assert np.array_equal(np.array(states), np.array(again))
     # a NaN input: fmi2Discard, the message names it
     m.setReal([_vr(md, "pinion_torque")], [float("nan")])
-    assert _status(m.getDerivatives, dx, n) == 2
+    assert status(m.getDerivatives, dx, n) == 2
     assert "pinion_torque = nan" in msgs[-1][1] and "not evaluated" in msgs[-1][1]
     m.terminate()
     m.freeInstance()
@@ -365,7 +342,7 @@ def test_refusals(cases, tmp_path):
         d = fmpy.extract(str(path), str(tmp_path / f"x{typ}"))
         lib = ctypes.CDLL(str(next((tmp_path / f"x{typ}" / "binaries" / "linux64").glob("*.so"))))
         msgs = []
-        cb = _callbacks(msgs)
+        cb = callbacks(msgs)
         lib.fmi2Instantiate.restype = ctypes.c_void_p
         lib.fmi2Instantiate.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p,
                                         ctypes.c_void_p, ctypes.c_int, ctypes.c_int]

@@ -36,43 +36,15 @@ from gearfmu.fmu.compare import output_names
 from gearfmu.fmu.standalone_build import (STANDALONE_CFLAGS, build_standalone_fmu, fmi2_header_dir,
                                       read_build_flags)
 
-from test_standalone import _cases, _max_rel
+from support.cross_tools import AARCH64_SYSROOT, compile_host, fat_slices, macho_exports, need, qemu, run_file, wine, zig
+from support.standalone_cases import cases, max_rel
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
 
 HERE = Path(__file__).resolve().parent
 TOL = 1e-9  # of each output's range
-AARCH64_SYSROOT = Path("/usr/aarch64-linux-gnu")  # Debian libc6-arm64-cross
 RUNS = 10
-
-
-def need(what, found, install):
-    """A missing tool fails the test, unless a developer (not CI) explicitly allows skipping."""
-    if found:
-        return found
-    msg = f"{what} not found: {install} (.ci/run installs it)"
-    if os.environ.get("GEARFMU_ALLOW_MISSING_CROSS_TOOLS") == "1" and not os.environ.get("CI"):
-        pytest.skip(msg)
-    pytest.fail(msg)
-
-
-def zig():
-    return need("zig C compiler", crossbuild.zig_command(), "pip install . (ziglang is a gearfmu dependency)")
-
-
-def wine():
-    return need("wine", shutil.which("wine") or shutil.which("wine64") or
-                (Path("/usr/lib/wine/wine64").is_file() and "/usr/lib/wine/wine64"),
-                "apt-get install wine wine64")
-
-
-def qemu():
-    q = need("qemu-aarch64", shutil.which("qemu-aarch64") or shutil.which("qemu-aarch64-static"),
-             "apt-get install qemu-user")
-    need("aarch64 glibc sysroot", (AARCH64_SYSROOT / "lib" / "ld-linux-aarch64.so.1").is_file() and AARCH64_SYSROOT,
-         "apt-get install libc6-arm64-cross")
-    return q
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +52,7 @@ def fmus(tmp_path_factory):
     zig()
     d = tmp_path_factory.mktemp("plat")
     out = {}
-    for name, c in _cases().items():
+    for name, c in cases().items():
         kw = dict(damping_ratio=c["zeta"], pinion_speed_start_rad_s=c["w0"], pinion_torque_start_Nm=c["T1"],
                   gear_torque_start_Nm=c["T2"], max_step_s=c["hmax"], damping_model=c["model"],
                   stop_time_s=c["n"] * c["H"], output_interval_s=c["H"], model_name=f"gear_{name}")
@@ -96,22 +68,6 @@ def fmus(tmp_path_factory):
         c["vrs"] = [vrs[n] for n in c["names"]]
         out[name] = c
     return out
-
-
-def _compile_host(tmp, target=None):
-    """tests/fmu_hosts/fmi_host.c for this machine (gcc) or for a zig target."""
-    src = str(HERE / "fmi_host.c")
-    if target is None:
-        exe = tmp / "fmi_host"
-        cmd = [shutil.which("gcc") or "cc", "-std=c99", "-O1", "-Wall", f"-I{fmi2_header_dir()}", "-o", str(exe),
-               src, "-ldl"]
-    else:
-        exe = tmp / ("fmi_host.exe" if "windows" in target else "fmi_host_" + target.split("-")[0])
-        cmd = [*zig(), "cc", "-target", target, "-std=c99", "-O1", "-Wall", f"-I{fmi2_header_dir()}",
-               "-o", str(exe), src] + (["-lshell32"] if "windows" in target else ["-ldl"])
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, timeout=1800)
-    assert p.returncode == 0, p.stderr
-    return exe
 
 
 def _parse(stdout, c):
@@ -130,7 +86,7 @@ def _host_args(c, fmu_dir):
 @pytest.fixture(scope="module")
 def native(fmus, tmp_path_factory):
     """Every case run natively (linux64 binary, gcc-built host): the reference of the emulated runs."""
-    exe = _compile_host(tmp_path_factory.mktemp("host"))
+    exe = compile_host(tmp_path_factory.mktemp("host"))
     out = {"exe": exe}
     for name, c in fmus.items():
         p = subprocess.run([str(exe), *_host_args(c, c["dir"])], capture_output=True, text=True, timeout=300)
@@ -162,7 +118,7 @@ def _agree_runs(fmus, native, cmd_for, tmp, env=None):
             assert rc == 0, (name, rc, err[-2000:])
             outs.add(out.replace("\r\n", "\n"))
         assert len(outs) == 1, f"{name}: the {RUNS} runs differ"
-        w = _max_rel(ref, _parse(outs.pop(), c), c["names"])
+        w = max_rel(ref, _parse(outs.pop(), c), c["names"])
         worst[name] = max(w.values())
         assert worst[name] <= TOL, (name, w)
     return worst
@@ -184,7 +140,7 @@ def test_every_platform_carried(fmus):
     fat = (d / "binaries/darwin64" / f"{ident}.dylib").read_bytes()
     assert fat[:4] == b"\xca\xfe\xba\xbe"
     # FMI 2.0.4+ section 2.3: Apple silicon under its FMI 3 tuple too -- the fat file's arm64 slice
-    arm = [(off, size) for cpu, _, off, size, _ in _fat_slices(fat) if cpu == 0x0100000C]
+    arm = [(off, size) for cpu, _, off, size, _ in fat_slices(fat) if cpu == 0x0100000C]
     assert (d / "binaries/aarch64-darwin" / f"{ident}.dylib").read_bytes() == fat[arm[0][0]:arm[0][0] + arm[0][1]]
     assert {"c-code", "darwin64", "linux64", "win64"} <= set(fmpy.supported_platforms(str(c["fmu"])))
     doc = (d / "documentation" / "platforms.txt").read_text()
@@ -200,7 +156,7 @@ def wine_run(tmp_path_factory):
     file names and arguments as UTF-8."""
     w = wine()
     tmp = tmp_path_factory.mktemp("wine")
-    exe = _compile_host(tmp, "x86_64-windows-gnu")
+    exe = compile_host(tmp, "x86_64-windows-gnu")
     env = dict(os.environ, WINEPREFIX=str(tmp / "wineprefix"), WINEDEBUG="-all",
                WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     server = shutil.which("wineserver") or next((str(p) for p in (Path("/usr/lib/wine/wineserver64"),
@@ -230,16 +186,6 @@ UNICODE_FOLDERS = ("dür mit space", "Zahnräder Prüfstand Ölkühlung Überset
                    "noch einmal dür mit space")
 
 
-def _run_file(cmd, tmp, name, env=None):
-    """Run cmd with its output in files (Wine's helper processes keep pipes open); (exit code,
-    stdout, stderr)."""
-    with open(tmp / f"{name}.out", "w+", encoding="utf-8") as fo, open(tmp / f"{name}.err", "w+") as fe:
-        rc = subprocess.Popen(cmd, stdout=fo, stderr=fe, stdin=subprocess.DEVNULL, env=env).wait(timeout=600)
-        fo.seek(0)
-        fe.seek(0)
-        return rc, fo.read().replace("\r\n", "\n"), fe.read()
-
-
 def test_win64_from_a_long_non_ascii_path_under_wine(fmus, native, wine_run, tmp_path):
     """Windows reads a char path in the ANSI code page, so a C runtime's fopen of the UTF-8 resource
     path fails under a folder named like 'dür mit space' (reference: the fopen/_wfopen contract of
@@ -261,7 +207,7 @@ def test_win64_from_a_long_non_ascii_path_under_wine(fmus, native, wine_run, tmp
     assert len(win_dir) > 200 and len(dll) > 260 and len(f"{win_dir}/resources/tables.bin") > 260
     sha = lambda text: hashlib.sha256(text.encode()).hexdigest()
     reference = sha(native["impacts"])
-    rc, out, err = _run_file([str(native["exe"]), *_host_args(c, deep)], tmp_path, "linux")
+    rc, out, err = run_file([str(native["exe"]), *_host_args(c, deep)], tmp_path, "linux")
     assert rc == 0, err
     assert sha(out) == reference  # linux64 reads the UTF-8 path as it is
 
@@ -273,7 +219,7 @@ def test_win64_from_a_long_non_ascii_path_under_wine(fmus, native, wine_run, tmp
     assert "%C3%BC" in quoted and "%c3%bc" in uris["escaped drive colon, lower-case hex"]
     for name, uri in uris.items():
         extra = [] if uri is None else [f"--resource-uri={uri}"]
-        rc, out, err = _run_file([w, str(exe), *_host_args(c, win_dir), *extra], tmp_path, f"wine{len(extra)}{name[:4]}",
+        rc, out, err = run_file([w, str(exe), *_host_args(c, win_dir), *extra], tmp_path, f"wine{len(extra)}{name[:4]}",
                                  env=env)
         assert rc == 0, (name, err[-2000:])
         assert sha(out) == reference, name
@@ -284,43 +230,13 @@ def test_aarch64_linux_binary_under_qemu(fmus, native, tmp_path):
     """The aarch64-linux binary, loaded by an aarch64 build of tests/fmu_hosts/fmi_host.c under qemu-aarch64
     (Debian's aarch64 glibc as sysroot), gives the native numbers (10 fresh processes per case)."""
     q = qemu()
-    exe = _compile_host(tmp_path, "aarch64-linux-gnu")
+    exe = compile_host(tmp_path, "aarch64-linux-gnu")
     worst = _agree_runs(fmus, native, lambda c: [q, "-L", str(AARCH64_SYSROOT), str(exe), *_host_args(c, c["dir"])],
                         tmp_path)
     print("aarch64-linux under qemu: max deviation from native (of range)", worst)
 
 
 # -------------------------------------------------------------------- macOS
-def _fat_slices(data):
-    """mach-o/fat.h: big-endian fat_header {magic 0xCAFEBABE, nfat_arch} + fat_arch {cputype, cpusubtype,
-    offset, size, align}."""
-    magic, n = struct.unpack_from(">II", data, 0)
-    assert magic == 0xCAFEBABE
-    return [struct.unpack_from(">iiIII", data, 8 + 20 * i) for i in range(n)]
-
-
-def _macho_exports(m):
-    """mach-o/loader.h + nlist.h: 64-bit header (magic 0xFEEDFACF, cputype, cpusubtype, filetype, ncmds,
-    sizeofcmds, flags, reserved), LC_SYMTAB (0x2) -> nlist_64 {n_strx, n_type, n_sect, n_desc, n_value};
-    exported = N_EXT (0x01) with type N_SECT (0x0e); LC_ID_DYLIB (0xd) -> the library's install name."""
-    magic, cpu, _, filetype, ncmds = struct.unpack_from("<IiiII", m, 0)
-    assert magic == 0xFEEDFACF
-    off, names, ident = 32, set(), None
-    for _ in range(ncmds):
-        cmd, size = struct.unpack_from("<II", m, off)
-        if cmd == 0xD:
-            name_at = off + struct.unpack_from("<I", m, off + 8)[0]
-            ident = m[name_at:m.index(b"\0", name_at)].decode()
-        if cmd == 0x2:
-            symoff, nsyms, stroff, _ = struct.unpack_from("<IIII", m, off + 8)
-            for i in range(nsyms):
-                strx, ntype = struct.unpack_from("<IB", m, symoff + 16 * i)
-                if ntype & 0x01 and ntype & 0x0E == 0x0E:
-                    names.add(m[stroff + strx:m.index(b"\0", stroff + strx)].decode())
-        off += size
-    return cpu, filetype, names, ident
-
-
 def test_darwin64_universal_binary(fmus):
     """Cannot run here: checked by format. darwin64 holds one fat file with an x86_64 (0x01000007) and
     an arm64 (0x0100000C) dylib (MH_DYLIB = 6), each at an offset aligned to 2**align, each exporting
@@ -337,9 +253,9 @@ def test_darwin64_universal_binary(fmus):
     fmi2 = decl(common) | decl(co_simulation)
     assert len(fmi2) == 34 and {"fmi2DoStep", "fmi2Instantiate", "fmi2GetBooleanStatus"} <= fmi2
     cpus = set()
-    for cpu, sub, offset, size, align in _fat_slices(data):
+    for cpu, sub, offset, size, align in fat_slices(data):
         assert offset % (1 << align) == 0 and offset + size <= len(data)
-        cpu2, filetype, names, ident = _macho_exports(data[offset:offset + size])
+        cpu2, filetype, names, ident = macho_exports(data[offset:offset + size])
         assert cpu2 == cpu and filetype == 6 and ident == f"@rpath/{c['id']}.dylib"
         assert {"_" + f for f in fmi2} <= names, sorted({"_" + f for f in fmi2} - names)
         assert not [n for n in names if n.startswith("_gk_")]

@@ -319,12 +319,12 @@ FATAL_HOST = textwrap.dedent("""
     import fmpy
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import FMU2Slave
-    sys.path.insert(0, sys.argv[3])
-    from test_standalone import _callbacks
+    sys.path.insert(0, sys.argv[3])  # tests/, for the support package
+    from support.fmpy_host import callbacks
     log = []
     md = fmpy.read_model_description(sys.argv[1] + "/modelDescription.xml")
     s = FMU2Slave(guid=md.guid, unzipDirectory=sys.argv[1], modelIdentifier=sys.argv[2], instanceName="fatal")
-    s.instantiate(callbacks=_callbacks(log), loggingOn=True)
+    s.instantiate(callbacks=callbacks(log), loggingOn=True)
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
@@ -361,7 +361,7 @@ def test_a_fatal_slave_is_never_called_again(two, tmp_path):
     slave.write_text(text.replace(head, head + "        raise RuntimeError('slave broken on purpose')\n"))
     script = tmp_path / "host.py"
     script.write_text(FATAL_HOST)
-    p = subprocess.run([sys.executable, str(script), str(d), two["a"]["id"], HERE], capture_output=True, text=True,
+    p = subprocess.run([sys.executable, str(script), str(d), two["a"]["id"], os.path.dirname(HERE)], capture_output=True, text=True,
                        timeout=300)
     assert p.returncode == 0 and "END" in p.stdout, (p.returncode, p.stdout[-600:], p.stderr[-600:])
     got = dict(line.split() for line in p.stdout.splitlines() if line.split()[0] in ("STEP", "AGAIN", "GET",

@@ -29,7 +29,7 @@ from gearfmu.scene.reader import default_scene_path, load_scene
 from gearfmu.tables.mesh_tables import TableError, load_tables
 
 from factories import make_tables
-from test_state import Inst
+from support.fmpy_host import Inst
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow

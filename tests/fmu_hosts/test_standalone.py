@@ -35,11 +35,13 @@ from fmpy.fmi2 import FMU2Slave
 from gearfmu.fmu.compare import native_columns, output_names
 from gearfmu.fmu.pythonfmu_build import build_fmu
 from gearfmu.dynamics.native import simulate
-from gearfmu.pipeline import compute_tables, gear_torque_for, load, max_step_for
 from gearfmu.fmu.build_steps import FmuBuildError
 from gearfmu.fmu.standalone_build import (StandaloneOptions, build_standalone_fmu, fmi2_header_dir,
                                            standalone_options)
 from gearfmu.tables.synthetic import rectangular_wave_tables
+
+from support.fmpy_host import slave, status
+from support.standalone_cases import cases, impact_tables, max_rel
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -48,33 +50,11 @@ HERE = Path(__file__).resolve().parent
 TOL = 1e-9  # of each signal's range
 
 
-def impact_tables():
-    """Rectangular-wave TVMS (seed 003 Fig. 2 form), 20 um half backlash,
-    10 um sinusoidal pair errors: at 10 N.m the pairs separate and hit the back flank."""
-    return rectangular_wave_tables(1e8, contact_ratio=1.6, backlash_half_m=20e-6,
-                                   pair_error_m=lambda j, u: 10e-6 * np.sin(np.pi * u) * (1 + 0.5 * j))
-
-
-def _cases():
-    scene = load(None)
-    t_def = compute_tables(scene)
-    T1 = scene.operating.torque_Nm
-    default = dict(tables=t_def, H=scene.fmu.output_interval_s, n=500, hmax=max_step_for(scene, t_def),
-                   T1=T1, T2=gear_torque_for(t_def, T1), w0=scene.operating.speed_rad_s,
-                   zeta=scene.fmu.damping_ratio, model=scene.solver.damping_model)
-    t_imp = impact_tables()
-    wn = np.sqrt(t_imp.k_mean_N_per_m / t_imp.equivalent_mass_kg)
-    w0 = wn * t_imp.mesh_period_rad / (2 * np.pi)  # mesh frequency = natural frequency
-    impacts = dict(tables=t_imp, H=1e-4, n=200, hmax=4.5e-6, T1=10.0, T2=gear_torque_for(t_imp, 10.0), w0=w0,
-                   zeta=0.02, model="elastobacklash")
-    return {"default": default, "impacts": impacts}
-
-
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     d = tmp_path_factory.mktemp("sa")
     out = {}
-    for name, c in _cases().items():
+    for name, c in cases().items():
         kw = dict(damping_ratio=c["zeta"], pinion_speed_start_rad_s=c["w0"], pinion_torque_start_Nm=c["T1"],
                   gear_torque_start_Nm=c["T2"], max_step_s=c["hmax"], damping_model=c["model"],
                   stop_time_s=c["n"] * c["H"], output_interval_s=c["H"], model_name=f"gear_{name}")
@@ -115,16 +95,6 @@ def _fmpy_cols(path, c, tmp, stop=None, H=None):
     s.freeInstance()
     a = np.array(rows)
     return {x: a[:, i] for i, x in enumerate(names)}
-
-
-def _max_rel(ref, other, names):
-    worst = {}
-    for n in names:
-        a, b = np.asarray(ref[n]), np.asarray(other[n])
-        assert a.shape == b.shape, n
-        rng = np.ptp(a) if np.ptp(a) > 0 else max(np.max(np.abs(a)), 1e-300)
-        worst[n] = float(np.max(np.abs(a - b)) / rng)
-    return worst
 
 
 def _unzip(fmu, dest):
@@ -188,7 +158,7 @@ def test_validation_record_in_both_runtimes(built, tmp_path):
         ref = {n: np.array([float(r[i]) for r in rows[1:]]) for i, n in enumerate(rows[0])}
         de = fmpy.read_model_description(str(c[key])).defaultExperiment
         got = _fmpy_cols(c[key], c, tmp_path / key, stop=float(de.stopTime), H=float(de.stepSize))
-        worst = _max_rel(ref, got, output_names(c["tables"].slots))
+        worst = max_rel(ref, got, output_names(c["tables"].slots))
         assert max(worst.values()) <= TOL, worst
 
 
@@ -199,9 +169,9 @@ def test_native_pythonfmu_standalone_agree(built, case, tmp_path):
     names = output_names(c["tables"].slots)
     sa = _fmpy_cols(c["sa"], c, tmp_path / "sa")
     py = _fmpy_cols(c["py"], c, tmp_path / "py")
-    w_sa = _max_rel(c["native"], sa, names)
-    w_py = _max_rel(c["native"], py, names)
-    w_pair = _max_rel(py, sa, names)
+    w_sa = max_rel(c["native"], sa, names)
+    w_py = max_rel(c["native"], py, names)
+    w_pair = max_rel(py, sa, names)
     print(case, "standalone vs native", max(w_sa.values()), "pythonfmu vs native", max(w_py.values()),
           "standalone vs pythonfmu", max(w_pair.values()))
     assert max(w_sa.values()) <= TOL, w_sa
@@ -245,7 +215,7 @@ def test_c_host_no_python(built, host, tmp_path):
         assert lines[-1] == "state-check ok"
         data = np.array([[float(x) for x in ln.split(",")] for ln in lines[1:-1]])
         got = {n: data[:, i + 1] for i, n in enumerate(names)}
-        worst = _max_rel(c["native"], got, names)
+        worst = max_rel(c["native"], got, names)
         assert max(worst.values()) <= TOL, worst
 
 
@@ -320,73 +290,16 @@ def test_libcosimpy_master(built, key):
     assert p.returncode == 0, p.stderr[-3000:]
     rows = np.array(json.loads(p.stdout.strip().splitlines()[-1]))
     got = {x: rows[:, i] for i, x in enumerate(names)}
-    worst = _max_rel(ref, got, names)
+    worst = max_rel(ref, got, names)
     assert max(worst.values()) <= TOL, worst
     assert np.any(ref["mesh_force"] == 0.0)  # contact loss within these steps
-
-
-# ----------------------------------------------------- FMI behaviour (fmpy)
-#: every callback struct _callbacks registered: fmpy's logger proxy keeps the last registered
-#: logger in one process-wide slot (s_logger in fmpy/logging), which fmpy's default callbacks
-#: (fmpy.simulate_fmu without a logger) also call -- a freed one there crashes the process the
-#: first time a later FMU logs anything (a warning, docs/fmu.md "Verified envelope").  The slot
-#: holds the logger registered last, so every instance's messages reach it: each set of callbacks
-#: carries its own componentEnvironment, by which the messages go to their list (_LOGS)
-_KEPT_CALLBACKS = []
-_LOGS = {}
-
-
-def _callbacks(msgs):
-    """fmpy callbacks whose logger appends (status, formatted message) to msgs (kept alive for the
-    whole process, see _KEPT_CALLBACKS)."""
-    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-    from fmpy.fmi1 import calloc, free
-    from fmpy.logging import addLoggerProxy
-    from ctypes import byref
-
-    def logger(env, inst, status, cat, msg):
-        if env in _LOGS:  # (another host's callbacks, e.g. fmpy.simulate_fmu's defaults, have none)
-            _LOGS[env].append((status, msg.decode() if isinstance(msg, bytes) else str(msg)))
-
-    key = len(_KEPT_CALLBACKS) + 1
-    _LOGS[key] = msgs
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    cb.componentEnvironment = key
-    addLoggerProxy(byref(cb))
-    _KEPT_CALLBACKS.append(cb)
-    return cb
-
-
-def _slave(path, tmp, name="s", instantiate=True):
-    md = fmpy.read_model_description(str(path))
-    d = fmpy.extract(str(path), unzipdir=str(tmp / name))
-    msgs = []
-    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
-                  instanceName=name)
-    s._test_callbacks = _callbacks(msgs)  # keep alive as long as the slave
-    if instantiate:
-        s.instantiate(loggingOn=True, callbacks=s._test_callbacks)
-    vrs = {v.name: v.valueReference for v in md.modelVariables}
-    return s, vrs, msgs
-
-
-def _status(call, *args):
-    from fmpy.fmi1 import FMICallException
-    try:
-        return call(*args)
-    except FMICallException as exc:
-        return exc.status
 
 
 def test_fmu_state_get_set_serialize(built, tmp_path):
     """Saving the state, stepping, restoring and stepping again gives the same
     outputs bit for bit; a serialized state restores into a fresh instance."""
     c = built["impacts"]
-    s, vrs, _ = _slave(c["sa"], tmp_path)
+    s, vrs, _ = slave(c["sa"], tmp_path)
     out = [vrs[n] for n in output_names(c["tables"].slots)]
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
@@ -407,7 +320,7 @@ def test_fmu_state_get_set_serialize(built, tmp_path):
         second.append(s.getReal(out))
     assert first == second
     s.freeFMUstate(st)
-    s2, _, _ = _slave(c["sa"], tmp_path, "s2")
+    s2, _, _ = slave(c["sa"], tmp_path, "s2")
     s2.setupExperiment(startTime=0.0)
     s2.enterInitializationMode()
     s2.exitInitializationMode()
@@ -423,7 +336,7 @@ def test_fmu_state_get_set_serialize(built, tmp_path):
         x.terminate()
         x.freeInstance()
     # a state of another FMU (different tables) is refused
-    o, _, _ = _slave(built["default"]["sa"], tmp_path, "other")
+    o, _, _ = slave(built["default"]["sa"], tmp_path, "other")
     with pytest.raises(Exception):
         o.deSerializeFMUstate(blob)
     o.freeInstance()
@@ -436,7 +349,7 @@ def test_bad_inputs_discard_state_unchanged(built, tmp_path):
     H = c["H"]
     results = []
     for disturb in (False, True):
-        s, vrs, msgs = _slave(c["sa"], tmp_path, f"b{disturb}")
+        s, vrs, msgs = slave(c["sa"], tmp_path, f"b{disturb}")
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         s.exitInitializationMode()
@@ -445,9 +358,9 @@ def test_bad_inputs_discard_state_unchanged(built, tmp_path):
         if disturb:
             for bad in (float("nan"), float("inf")):
                 s.setReal([vrs["pinion_torque"]], [bad])
-                assert _status(s.fmi2DoStep, s.component, 5 * H, H, 1) == 2  # fmi2Discard
+                assert status(s.fmi2DoStep, s.component, 5 * H, H, 1) == 2  # fmi2Discard
             s.setReal([vrs["pinion_torque"]], [c["T1"]])
-            assert _status(s.fmi2DoStep, s.component, 5 * H, -H, 1) == 2
+            assert status(s.fmi2DoStep, s.component, 5 * H, -H, 1) == 2
             text = " ".join(m for _, m in msgs)
             assert "pinion_torque = nan" in text and "not finite" in text and "must be finite and > 0" in text
         s.doStep(5 * H, H)
@@ -468,7 +381,7 @@ def test_getters_read_each_value_and_refuse_bad_references(built, tmp_path):
     from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
 
     c = built["impacts"]
-    s, vrs, msgs = _slave(c["sa"], tmp_path)
+    s, vrs, msgs = slave(c["sa"], tmp_path)
     names = ["mesh_force", "pinion_torque", "dte", "max_step", "pinion_speed", "dte"]
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
@@ -488,15 +401,15 @@ def test_getters_read_each_value_and_refuse_bad_references(built, tmp_path):
     for refs, words in bad:
         del msgs[:]
         arr, vals = (fmi2ValueReference * len(refs))(*refs), (fmi2Real * len(refs))()
-        assert _status(s.fmi2GetReal, s.component, arr, len(refs), vals) == 3
+        assert status(s.fmi2GetReal, s.component, arr, len(refs), vals) == 3
         assert any(words in m for _, m in msgs), (words, msgs)
     del msgs[:]
     arr, ints = (fmi2ValueReference * 1)(vrs["dte"]), (fmi2Integer * 1)()
-    assert _status(s.fmi2GetInteger, s.component, arr, 1, ints) == 3
+    assert status(s.fmi2GetInteger, s.component, arr, 1, ints) == 3
     assert any("fmi2GetInteger: dte is not of type Integer" in m for _, m in msgs), msgs
     del msgs[:]
-    assert _status(s.fmi2GetReal, s.component, arr, 1, cast(None, POINTER(c_double))) == 3
-    assert _status(s.fmi2GetReal, s.component, cast(None, POINTER(c_uint)), 1, (fmi2Real * 1)()) == 3
+    assert status(s.fmi2GetReal, s.component, arr, 1, cast(None, POINTER(c_double))) == 3
+    assert status(s.fmi2GetReal, s.component, cast(None, POINTER(c_uint)), 1, (fmi2Real * 1)()) == 3
     assert sum("vr[] or value[] is NULL with nvr = 1" in m for _, m in msgs) == 2, msgs
     s.terminate()
     s.freeInstance()
@@ -507,7 +420,7 @@ def test_tampered_tables_refused(built, tmp_path):
     from the recorded one (hashlib's at build time) and instantiation is
     refused with a message naming the file and the checksum."""
     c = built["impacts"]
-    s, _, msgs = _slave(c["sa"], tmp_path, "t", instantiate=False)
+    s, _, msgs = slave(c["sa"], tmp_path, "t", instantiate=False)
     p = Path(s.unzipDirectory) / "resources" / "tables.bin"
     raw = bytearray(p.read_bytes())
     raw[len(raw) // 2] ^= 0x01

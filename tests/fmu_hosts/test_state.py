@@ -12,19 +12,14 @@ import numpy as np
 import fmpy
 import pytest
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave
 
 from gearfmu.fmu.pythonfmu_build import build_fmu
 
 from factories import make_tables
-from test_standalone import _callbacks
+from support.fmpy_host import H, Inst
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
-
-H = 1e-4
-OUTS = ["dte", "mesh_force", "pinion_speed", "gear_speed", "pinion_angle", "gear_angle", "mesh_stiffness",
-        "pair_force[1]", "pair_force[2]", "load_sharing[1]"]
 
 
 @pytest.fixture(scope="module")
@@ -35,42 +30,6 @@ def fmus(tmp_path_factory):
                   pinion_torque_start_Nm=100.0, damping_ratio=0.03)
     b = build_fmu(make_tables(P=3, eps=2.4, b=0.0), d / "b.fmu", model_name="stateB", max_step_s=1e-5)
     return {"a": a, "b": b}
-
-
-class Inst:
-    """One FMU instance driven through fmpy's low-level API, recording log messages."""
-
-    def __init__(self, path, name):
-        self.md = fmpy.read_model_description(str(path))
-        self.log = []
-        self._cb = cb = _callbacks(self.log)  # formats the FMU's printf-style messages
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=fmpy.extract(str(path)),
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.fmu.instantiate(callbacks=cb, loggingOn=True)
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        self.fmu.exitInitializationMode()
-
-    def set(self, **kw):
-        self.fmu.setReal([self.vr[k] for k in kw], list(kw.values()))
-
-    def out(self):
-        names = [n for n in OUTS if n in self.vr]
-        return self.fmu.getReal([self.vr[n] for n in names])
-
-    def steps(self, i0, n, torque_schedule=None):
-        rows = []
-        for i in range(i0, i0 + n):
-            if torque_schedule is not None:
-                self.set(pinion_torque=torque_schedule(i))
-            self.fmu.doStep(currentCommunicationPoint=i * H, communicationStepSize=H)
-            rows.append(self.out())
-        return np.array(rows)
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def torque(i):

@@ -279,7 +279,7 @@ def test_validate_of_a_planned_scene_compares_like_with_like(tmp_path, monkeypat
     """A scene with [accuracy] builds its FMU from the plan (tables, step bound, integrator);
     validate runs the native solver with the same plan, so the two agree to round-off (the
     reference of the module docstring), within the default tolerance."""
-    from test_plan import SMALL
+    from support.plan_scenes import SMALL
 
     (tmp_path / "small.toml").write_text(SMALL, encoding="utf-8")
     monkeypatch.chdir(tmp_path)  # validate builds into build/ of the working folder

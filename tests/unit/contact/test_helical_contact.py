@@ -28,7 +28,7 @@ from gearfmu.assembly.precompute import precompute_tables
 from gearfmu.scene.reader import load_scene
 from gearfmu.gear.stiffness import helical_slot_stiffness, slot_stiffness
 
-from test_helical import SEED001, helical, iso_c_gamma_alpha
+from support.helical_cases import SEED001, helical, iso_c_gamma_alpha
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow

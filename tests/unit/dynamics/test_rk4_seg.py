@@ -6,7 +6,7 @@ References (none produced by gearfmu code):
 * the closed-form damped oscillator m_e x'' + 2c x' + K (x - e_bar) = F_m (two slots of constant
   stiffness k and constant errors e_j, K = 2k, e_bar = mean of the e_j; seed 003 eq 1-6 with
   kpos = 1, contact_zone);
-* the event-located DOP853 solution of tests/unit/dynamics/test_integrators.py (``reference``: scipy, restarted
+* the event-located DOP853 solution of tests/support/integrator_cases.py (``reference``: scipy, restarted
   at every table node and contact change, right-hand side written there in plain numpy);
 * rk4_kink at a small step on tables with contact-zone edges, which that module checks against the
   same DOP853 reference (the reference itself has no zone edges);
@@ -21,7 +21,8 @@ import pytest
 
 from gearfmu.dynamics.model_rhs import _seg_flags
 from gearfmu.dynamics.native import simulate
-from test_integrators import impact_case, reference, tent_case
+from support.integrator_cases import impact_case, order_fit, reference, tent_case
+from support.subcell_tables import dyn_tables
 
 
 def test_rk4_seg_constant_tables_closed_form_without_node_stops():
@@ -81,8 +82,6 @@ def test_rk4_seg_stops_at_big_kinks_fourth_order_to_reference():
     the event-located reference; measured 5.3e-6, 3.3e-7, 2.0e-8, 2.0e-9 at H/8 .. H/64, both
     damping laws (without the stops, the rule before SEG_KINK_TOL: 3.5e-6, 1.4e-6 at H/8, H/32).
     Asserted: <= 5e-8 at H/32, <= 5e-9 at H/64 and a fitted order > 3.5 over H/8 .. H/32."""
-    from test_integrators import order_fit
-
     tb = tent_case()[0]
     P, N = tb.slots, tb.n_phi
     flags = _seg_flags(tb.k_N_per_m, tb.e_m, tb.backlash_half_m, np.full((2, P, N), -1.0), False)
@@ -167,10 +166,7 @@ def test_rk4_seg_stops_where_a_contact_zone_edge_lies_on_a_node():
     with order > 3.5: measured 1.0e-3, 6.5e-5, 4.1e-6, 2.9e-7 at H/8 .. H/64, both damping laws
     (without the stops at the edge cells: first order, 5.6e-3 at H/32, and 1.0 of the range
     with contact_zone)."""
-    from test_integrators import order_fit
-    from test_subcell import _dyn_tables
-
-    t = _dyn_tables(False)
+    t = dyn_tables(False)
     w0, T1 = 300.0, 50.0
     T2 = T1 * t.base_radius_gear_m / t.base_radius_pinion_m
     H = t.mesh_period_rad / w0 / 8

@@ -21,37 +21,11 @@ from gearfmu.tables.mesh_tables import MeshTables, TableError, load_tables
 from gearfmu.tables.synthetic import rectangular_wave_tables, tables_from_arrays
 from gearfmu.tables.zones import PLAIN, zone_cuts
 
-Z1 = 25
-T = 2.0 * math.pi / Z1       # mesh period (rad)
-K0 = 4.0e8                   # N/m
-A_LIN = 0.5                  # K(eps) = 1.5 K(0): the two edges' ramps do not cancel
-C_PAR = 0.8
-E_AMP = 2.0e-6               # m, meshing error amplitude
-P = 2
+from support.integrator_cases import run_c
+from support.subcell_tables import (A_LIN, C_PAR, K0, P, T, Z1, dyn_tables, pair_error, pair_stiffness,
+                                    zone_tables)
+
 F_MESH = 2000.0              # N
-
-
-def _K(u, eps):
-    return K0 * (1.0 + A_LIN * u / eps + C_PAR * u * (eps - u) / eps ** 2)
-
-
-def _E(u, eps):
-    return E_AMP * math.cos(2.0 * math.pi * u / (1.3 * eps))  # nonzero at both edges: e jumps too
-
-
-def _tables(ppm, eps, *, engagement=True, error=False):
-    n = P * ppm
-    phi = np.arange(n) * (P * T) / n
-    k = np.zeros((P, n))
-    e = np.zeros((P, n))
-    for m in range(P):
-        u = ((phi - m * T) % (P * T)) / T
-        on = u < eps
-        k[m] = np.where(on, _K(u, eps), 0.0)
-        if error:
-            e[m] = np.where(on, [_E(x, eps) for x in u], 0.0)
-    kw = dict(engagement_in_rad=0.0, engagement_out_rad=eps * T) if engagement else {}
-    return tables_from_arrays(phi_period_rad=P * T, mesh_period_rad=T, k_N_per_m=k, e_m=e, teeth_pinion=Z1, **kw)
 
 
 def _mean_over_mesh(f, t, eps):
@@ -73,8 +47,8 @@ def _kbar_exact(eps):
 def _te_exact(eps, error):
     def x(u):
         pairs = [(u, 0)] + ([(u + 1.0, 1)] if u + 1.0 < eps else [])
-        ks = sum(_K(v, eps) for v, _ in pairs)
-        ke = sum(_K(v, eps) * (_E(v, eps) if error else 0.0) for v, _ in pairs)
+        ks = sum(pair_stiffness(v, eps) for v, _ in pairs)
+        ke = sum(pair_stiffness(v, eps) * (pair_error(v, eps) if error else 0.0) for v, _ in pairs)
         return (F_MESH + ke) / ks
     return quad(x, 0.0, eps - 1.0, limit=200)[0] + quad(x, eps - 1.0, 1.0, limit=200)[0]
 
@@ -97,7 +71,7 @@ def test_plain_lookup_error_is_first_order_and_is_the_edge_ramps():
     eps = 1.5
     errs = []
     for ppm in (16, 32, 64, 128):
-        t = _tables(ppm, eps)
+        t = zone_tables(ppm, eps)
         err = _kbar_model(t, eps, False) - _kbar_exact(eps)
         ramp = -A_LIN * K0 / (2.0 * ppm)
         assert err == pytest.approx(ramp, rel=4.0 / ppm)
@@ -108,12 +82,12 @@ def test_plain_lookup_error_is_first_order_and_is_the_edge_ramps():
 @pytest.mark.parametrize("eps", [1.5, 1.0 + 1.0 / math.sqrt(3.0)])
 def test_subcell_lookup_mean_stiffness_second_order(eps):
     """Edges on nodes (1.5) and off nodes (1 + 1/sqrt 3, irrational: never on a node)."""
-    errs = [abs(_kbar_model(_tables(ppm, eps), eps, True) / _kbar_exact(eps) - 1.0) for ppm in (16, 32, 64, 128)]
+    errs = [abs(_kbar_model(zone_tables(ppm, eps), eps, True) / _kbar_exact(eps) - 1.0) for ppm in (16, 32, 64, 128)]
     for a, b in zip(errs, errs[1:]):
         assert b < a / 3.0            # second order: a quarter per doubling (first order: a half)
     assert errs[-1] < 2e-5
     # and far better than the plain lookup at the same resolution
-    t = _tables(64, eps)
+    t = zone_tables(64, eps)
     plain = abs(_kbar_model(t, eps, False) / _kbar_exact(eps) - 1.0)
     assert errs[2] < plain / 10.0
 
@@ -123,10 +97,10 @@ def test_subcell_lookup_static_te_second_order_with_error_jump():
     too), edges off the nodes."""
     eps = 1.0 + 1.0 / math.sqrt(3.0)
     ref = _te_exact(eps, True)
-    errs = [abs(_te_model(_tables(ppm, eps, error=True), eps, True) / ref - 1.0) for ppm in (16, 32, 64, 128)]
+    errs = [abs(_te_model(zone_tables(ppm, eps, error=True), eps, True) / ref - 1.0) for ppm in (16, 32, 64, 128)]
     for a, b in zip(errs, errs[1:]):
         assert b < a / 3.0
-    plain = [abs(_te_model(_tables(ppm, eps, error=True), eps, False) / ref - 1.0) for ppm in (32, 128)]
+    plain = [abs(_te_model(zone_tables(ppm, eps, error=True), eps, False) / ref - 1.0) for ppm in (32, 128)]
     assert plain[1] > plain[0] / 8.0    # the plain lookup is not second order (1/16 per two doublings)
     assert errs[3] < plain[1] / 20.0
 
@@ -137,38 +111,38 @@ def test_k_mean_is_the_exact_mean_of_the_lookup():
     (modulated by where the edge falls in its cell) and far off at every level."""
     eps = 1.0 + 1.0 / math.sqrt(3.0)
     ref = _kbar_exact(eps)
-    errs = [abs(_tables(p, eps).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
+    errs = [abs(zone_tables(p, eps).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
     for a, b in zip(errs, errs[1:]):
         assert b < a / 3.0
-    grid = [abs(_tables(p, eps, engagement=False).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
+    grid = [abs(zone_tables(p, eps, engagement=False).k_mean_N_per_m / ref - 1.0) for p in (16, 32, 64, 128)]
     assert all(e < g / 20.0 for e, g in zip(errs, grid))
 
 
 def test_values_at_the_edges():
     """Just outside an edge k = 0; just inside it the closed form K within O(h^2)."""
     eps = 1.0 + 1.0 / math.sqrt(3.0)
-    t = _tables(32, eps)
+    t = zone_tables(32, eps)
     h = T / 32
     d = 1e-9
     k = table_values(t, [eps * T - d, eps * T + d, T - d, T + d, 2 * T - d])[0]
     # slot 0 leaves at eps T; slot 1's pair enters at T; slot 0's next pair enters at 2 T
-    assert k[0, 0] == pytest.approx(_K(eps, eps), rel=2 * (h / T) ** 2 * 10)
+    assert k[0, 0] == pytest.approx(pair_stiffness(eps, eps), rel=2 * (h / T) ** 2 * 10)
     assert k[1, 0] == 0.0
-    assert k[2, 1] == 0.0 and k[3, 1] == pytest.approx(_K(0.0, eps), rel=1e-6)
+    assert k[2, 1] == 0.0 and k[3, 1] == pytest.approx(pair_stiffness(0.0, eps), rel=1e-6)
     assert k[4, 0] == 0.0
     kp = table_values(t, [eps * T - d, T - d], zone_edges=False)[0]   # plain: the ramps
-    assert 0.0 < kp[0, 0] < _K(eps, eps) and kp[1, 1] > 0.0
+    assert 0.0 < kp[0, 0] < pair_stiffness(eps, eps) and kp[1, 1] > 0.0
 
 
 def test_zone_cuts_layout():
-    t = _tables(16, 1.5)   # exit at node 24 of slot 0 (period 32 nodes), entry at node 0
+    t = zone_tables(16, 1.5)   # exit at node 24 of slot 0 (period 32 nodes), entry at node 0
     cuts = zone_cuts(t)
     lo, hi = cuts
     assert lo[0, 31] == 0.0 and hi[0, 31] == 1.0     # the cell before the entry node: all outside
     assert lo[0, 23] == 1.0                         # the cell before the exit node: all inside
     assert lo[0, 24] == 0.0 and hi[0, 24] == 1.0     # the cell after it: all outside
     assert lo[0, 5] == PLAIN
-    assert zone_cuts(_tables(16, 1.5, engagement=False)) is None
+    assert zone_cuts(zone_tables(16, 1.5, engagement=False)) is None
 
 
 def test_engagement_round_trip_and_older_files(tmp_path):
@@ -179,7 +153,7 @@ def test_engagement_round_trip_and_older_files(tmp_path):
     assert back.engagement_in_rad == t.engagement_in_rad and back.engagement_out_rad == t.engagement_out_rad
     # without the angles (imported tables, files written before the field) the JSON has no
     # 'engagement' key and reads back as None: plain interpolation
-    plain = _tables(16, 1.5, engagement=False)
+    plain = zone_tables(16, 1.5, engagement=False)
     meta, binary = plain.to_bytes()
     assert b'"engagement"' not in meta
     assert MeshTables.from_bytes(meta, binary).engagement_in_rad is None
@@ -188,7 +162,7 @@ def test_engagement_round_trip_and_older_files(tmp_path):
 
 
 def test_engagement_checks():
-    t = _tables(16, 1.5, engagement=False)
+    t = zone_tables(16, 1.5, engagement=False)
     k = t.k_N_per_m.copy()
     with pytest.raises(TableError, match="k_N_per_m: slot 0 has k != 0 at node 20 "):
         tables_from_arrays(phi_period_rad=P * T, mesh_period_rad=T, k_N_per_m=k, teeth_pinion=Z1,
@@ -219,7 +193,7 @@ def _c_cuts(L, t):
 
 @pytest.mark.parametrize("ppm,eps", [(16, 1.5), (16, 1.0 + 1.0 / math.sqrt(3.0)), (7, 1.9), (64, 1.3)])
 def test_c_zone_cuts_equal_python(clib, ppm, eps):
-    t = _tables(ppm, eps)
+    t = zone_tables(ppm, eps)
     st, cuts = _c_cuts(clib, t)
     assert st == 0
     assert np.array_equal(cuts.reshape(2, t.slots, t.n_phi), zone_cuts(t))
@@ -233,21 +207,9 @@ def replace_engagement(t, a, b):
 
 
 def _run_c(L, t, T1, T2, w0, zeta, model, H, n, hmax, integrator, edges=True):
-    from test_integrators import run_c
-
     st, cuts = _c_cuts(L, t)
     assert st == 0 or not edges
     return run_c(L, t, T1, T2, w0, zeta, model, None, H, n, hmax, integrator, cuts=cuts if edges else None)
-
-
-def _dyn_tables(two_rows):
-    t = _tables(16, 1.0 + 1.0 / math.sqrt(3.0), error=True)
-    if two_rows:
-        import dataclasses
-        t = dataclasses.replace(t, torque_Nm=np.array([20.0, 80.0]),
-                                k_N_per_m=np.concatenate([t.k_N_per_m, 1.3 * t.k_N_per_m]),
-                                e_m=np.concatenate([t.e_m, 0.7 * t.e_m]), e_comprehensive_m=None, static_te_m=None)
-    return t.validate()
 
 
 @pytest.mark.parametrize("backward", [False, True])
@@ -260,7 +222,7 @@ def test_native_and_c_kernel_agree_bit_for_bit_with_zone_edges(clib, backward, t
     than two table periods, forwards and backwards, one and two torque rows, both damping laws)."""
     from gearfmu.dynamics.native import simulate
 
-    t = _dyn_tables(two_rows)
+    t = dyn_tables(two_rows)
     sg = -1.0 if backward else 1.0
     w0 = sg * 300.0
     T1 = sg * 50.0
@@ -293,7 +255,7 @@ def test_fmu_with_zone_edges_agrees_with_native(tmp_path, runtime):
     from gearfmu.fmu.pythonfmu_build import build_fmu
     from gearfmu.fmu.standalone_build import build_standalone_fmu
 
-    t = _dyn_tables(False)
+    t = dyn_tables(False)
     w0, T1 = 300.0, 50.0
     T2 = T1 * t.base_radius_gear_m / t.base_radius_pinion_m
     H = t.mesh_period_rad / w0 / 4

@@ -25,6 +25,8 @@ from gearfmu.ehl.fits import dowson_higginson_min_film, moes_central_film
 from gearfmu.ehl.lubricant import (dowson_higginson_density_kg_m3, roelands_viscosity_Pas,
                                    roelands_z)
 
+from support.ehl_checks import discrete_equations_check
+
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
 
@@ -151,7 +153,7 @@ def test_last_M_L_failures_converge_on_a_finer_coarsest_grid(M, L, viscosity, n_
     comp = viscosity == "roelands"
     r = solve_line_contact(M=M, L=L, viscosity=viscosity, compressible=comp)
     assert r.converged and (r.X.size - 1) // 2 ** (r.grid_levels - 1) == n_coarse
-    gap_spread, load_err, scaled = _discrete_equations_check(r, viscosity, compressible=comp)
+    gap_spread, load_err, scaled = discrete_equations_check(r, viscosity, compressible=comp)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     dev = r.H_central_moes / moes_central_film(M, L) - 1.0
     if comp:
@@ -174,7 +176,7 @@ def test_stalled_smooth_film_converges_by_the_coupled_newton(M, L):
     import pathlib
     r = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False)
     assert r.converged and r.residuals.get("coupled_newton_steps")
-    gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
+    gap_spread, load_err, scaled = discrete_equations_check(r, "barus", compressible=False)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     r2 = solve_line_contact(M=M, L=L, viscosity="barus", compressible=False, n_nodes=513)
     path = pathlib.Path(__file__).resolve().parents[3] / "benchmarks" / "ehl_reference.py"
@@ -388,48 +390,6 @@ def test_film_stiffness_limits_and_trend_with_load():
 
 
 # --------------------------------------------------------------------------- compiled solver
-def _discrete_equations_check(r, viscosity="roelands", compressible=True):
-    """Independent numpy re-evaluation of the discretised equations (docs/ehl.md):
-    film from P by a dense sum of the exact cell integrals of ln|x| (closed form
-    f(x) = x(ln|x| - 1)), load dX sum P = pi/2, and the Reynolds residual with
-    the second-order upstream wedge term, scaled by the point Jacobian."""
-    X, P, H = r.X, r.P, r.H
-    n, dX = X.size, X[1] - X[0]
-    def f(x):
-        ax = np.abs(x)
-        return np.where(ax > 0, x * (np.log(np.where(ax > 0, ax, 1.0)) - 1.0), 0.0)
-    t = np.arange(n)
-    K = f((t + 0.5) * dX) - f((t - 0.5) * dX)
-    V = -(K[np.abs(t[:, None] - t[None, :])] @ P) / np.pi
-    gap = H - 0.5 * X ** 2 - V                      # must be the constant H0
-    load_err = abs(dX * P.sum() - 0.5 * np.pi)
-    inp = r.inputs
-    p = P * r.ph_Pa
-    A = math.log(inp["eta0_Pas"]) + 9.67
-    z = inp["alpha_Pa_inv"] * 1.96e8 / A
-    if viscosity == "roelands":
-        eta = np.exp(A * ((1 + p / 1.96e8) ** z - 1))    # Roelands (seed 000 eq 5)
-    else:
-        eta = np.exp(inp["alpha_Pa_inv"] * p)            # Barus
-    if compressible:
-        rho = (0.59e9 + 1.34 * p) / (0.59e9 + p)         # Dowson-Higginson (eq 6)
-    else:
-        rho = np.ones_like(p)
-    lam = 3 * math.pi ** 2 / (8 * r.M ** 2)
-    eps = rho * H ** 3 / (eta * lam)
-    em, ep = 0.5 * (eps[:-2] + eps[1:-1]), 0.5 * (eps[1:-1] + eps[2:])
-    poi = (em * (P[:-2] - P[1:-1]) + ep * (P[2:] - P[1:-1])) / dX ** 2
-    rH = rho * H
-    wedge = np.empty(n - 2)
-    wedge[0] = (rH[1] - rH[0]) / dX
-    wedge[1:] = (1.5 * rH[2:-1] - 2 * rH[1:-2] + 0.5 * rH[:-3]) / dX
-    res = (poi - wedge)
-    J = -(em + ep) / dX ** 2 + rho[1:-1] * (K[0] - K[1]) / (math.pi * dX)
-    pos = P[1:-1] > 0
-    scaled = np.mean(np.abs(res[pos] / J[pos]))
-    return np.ptp(gap), load_err, scaled
-
-
 # Roelands + Dowson-Higginson (the model used for gears) over a grid of (M, L),
 # including the cases the previous driver could not solve (M = 1000, L = 10;
 # M = 7.5, L = 24.9 from the thermal teammate; seed 000's pitch point M = 6.1,
@@ -447,7 +407,7 @@ def test_roelands_compressible_converges_and_satisfies_discrete_equations(M, L):
     # solver's stopping tolerances are 1e-6 each).
     r = solve_line_contact(M=M, L=L)
     assert r.converged
-    gap_spread, load_err, scaled = _discrete_equations_check(r)
+    gap_spread, load_err, scaled = discrete_equations_check(r)
     assert gap_spread < 1e-9
     assert load_err < 1e-5
     assert scaled < 1e-5
@@ -531,7 +491,7 @@ def test_f_cycle_solution_satisfies_the_discrete_equations():
     # the F-cycle is a different iteration towards the same discrete solution.
     r = solve_line_contact(M=20.0, L=5.0, gamma="F", switch=0.3, nu1=2, nu2=1, omega_gs=0.6,
                            omega_j=0.5, load_mode=1, c_h0=0.1, stick=10.0)
-    gap_spread, load_err, scaled = _discrete_equations_check(r)
+    gap_spread, load_err, scaled = discrete_equations_check(r)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
 
 
@@ -546,7 +506,7 @@ def test_frozen_switch_result_satisfies_the_discrete_equations():
     r = solve_line_contact(M=10.0, L=15.0, viscosity="barus", compressible=False,
                            **RELAXATION_SETTINGS[1])
     assert "frozen_switch_from_cycle" in r.residuals
-    gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
+    gap_spread, load_err, scaled = discrete_equations_check(r, "barus", compressible=False)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
 
 
@@ -562,7 +522,7 @@ def test_fmg_start_solution_satisfies_the_discrete_equations_and_is_at_discretis
     kw = dict(M=20.0, L=5.0, viscosity="barus", compressible=False)
     r = solve_line_contact(n_nodes=1025, fmg_cycles=1, **kw)
     assert r.residuals["fmg_cycles_per_level"][1:] == [1, 1, 1]
-    gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
+    gap_spread, load_err, scaled = discrete_equations_check(r, "barus", compressible=False)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     h512 = solve_line_contact(n_nodes=513, **kw).H_central_moes
     # Richardson: error of the 1024-interval film = (H_1024 - H_512) / (2^2 - 1)
@@ -588,5 +548,5 @@ def test_high_M_piezoviscous_corner_converges(M, L, viscosity):
     comp = viscosity == "roelands"
     r = solve_line_contact(M=M, L=L, viscosity=viscosity, compressible=comp)
     assert r.converged
-    gap_spread, load_err, scaled = _discrete_equations_check(r, viscosity, compressible=comp)
+    gap_spread, load_err, scaled = discrete_equations_check(r, viscosity, compressible=comp)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5

@@ -16,7 +16,7 @@ from gearfmu.ehl.multigrid import EHLParams
 from gearfmu.ehl.coarse_newton import _lu_solve as _dense_solve
 from gearfmu.ehl.grids import effective_alpha, refined_grid_intervals
 
-from test_ehl import _discrete_equations_check
+from support.ehl_checks import discrete_equations_check
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -53,7 +53,7 @@ def test_corner_point_converges_with_the_newton_polish(viscosity, compressible):
     # it), so the test asks for convergence to the discrete equations, not for the route taken.
     r = solve_line_contact(M=500.0, L=15.0, viscosity=viscosity, compressible=compressible)
     assert r.converged
-    gap_spread, load_err, scaled = _discrete_equations_check(r, viscosity, compressible)
+    gap_spread, load_err, scaled = discrete_equations_check(r, viscosity, compressible)
     assert gap_spread < 1e-9
     assert load_err < 1e-5
     assert scaled < 1e-5
@@ -311,7 +311,7 @@ def test_speed_path_reaches_the_same_converged_film(M, L):
     assert fast.converged and ref.converged
     assert abs(fast.H_central_moes / ref.H_central_moes - 1.0) < 1e-6
     assert abs(fast.H_min_moes / ref.H_min_moes - 1.0) < 1e-6
-    gap_spread, load_err, scaled = _discrete_equations_check(fast, "roelands", True)
+    gap_spread, load_err, scaled = discrete_equations_check(fast, "roelands", True)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
 
 
@@ -349,7 +349,7 @@ def test_default_solve_takes_the_fast_path_to_the_discrete_solution(M):
     assert r.residuals.get("fast_path") == [1.0]
     assert "stopped_at_discretisation" in r.residuals
     assert r.residuals["settings"]["switch"] == 0.3 and "gamma" not in r.residuals["settings"]
-    gap_spread, load_err, scaled = _discrete_equations_check(r)
+    gap_spread, load_err, scaled = discrete_equations_check(r)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     assert abs(r.load_N_per_m / r.inputs["w_N_per_m"] - 1.0) < 1e-6
     tight = {n: solve_line_contact(M=M, L=10.0, n_nodes=n + 1, tol_pressure=1e-8,
@@ -379,7 +379,7 @@ def test_piezoviscous_corner_converges_on_the_first_pairs_of_its_plan(M, L):
         # coarsest-grid Newton), the second pair; without it the plan ran through three
         # failing pairs first
         assert r.residuals["corner_plan_pair"] == [0.0, 9.0]
-    gap_spread, load_err, scaled = _discrete_equations_check(r, "barus", compressible=False)
+    gap_spread, load_err, scaled = discrete_equations_check(r, "barus", compressible=False)
     assert gap_spread < 1e-9 and load_err < 1e-5 and scaled < 1e-5
     assert abs(r.H_central_moes / moes_central_film(M, L) - 1.0) < 0.06
 

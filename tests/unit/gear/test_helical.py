@@ -18,33 +18,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gearfmu.gear.gearpair import GearPairSpec, GearSpec, Material, MeshModelOptions
+from gearfmu.gear.gearpair import MeshModelOptions
 from gearfmu.gear.geometry import GeometryError, involute, pair_geometry, transverse_equivalent
 from gearfmu.gear.meshing_errors import slot_errors_m, slot_slice_errors_m, stiffness_weighted_pair_error_m
 from gearfmu.scene.reader import SceneError, load_scene
 from gearfmu.gear.stiffness import (StiffnessError, helical_slot_stiffness, required_slots,
                                slice_lag_mesh_periods, slot_stiffness)
 
+from support.helical_cases import SEED001, helical, iso_c_gamma_alpha
+
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
-
-ROOT = Path(__file__).resolve().parents[3]
-SEED001 = ROOT / "examples" / "scenes" / "seed001_table1.toml"
-STEEL = Material(206e9, 0.3)
-
-
-def helical(beta_deg=36.0, b_m=0.060, z=(33, 28), mn=0.005, x=(0.0, 0.0), alpha_deg=20.0):
-    beta = math.radians(beta_deg)
-    p = GearSpec(z[0], mn, math.radians(alpha_deg), b_m, profile_shift=x[0], material=STEEL,
-                 helix_angle_rad=beta, helix_hand="right")
-    g = GearSpec(z[1], mn, math.radians(alpha_deg), b_m, profile_shift=x[1], material=STEEL,
-                 helix_angle_rad=beta, helix_hand="left")
-    return GearPairSpec(p, g)
 
 
 # ------------------------------------------------------------------ geometry
@@ -114,15 +102,6 @@ def test_bad_helical_input_names_the_field():
 
 
 # ------------------------------------------------------------------ stiffness
-def iso_c_gamma_alpha(g, dedendum_coeff=1.25):
-    """ISO 6336-1 method B c_gamma_alpha in N/(mm um) for x = 0 (ISO 6336-1:2019 clause 9), virtual z_n."""
-    C = [0.04723, 0.15551, 0.25791]
-    zf = math.cos(g.base_helix_angle_rad) ** 2 * math.cos(g.helix_angle_rad)
-    q = C[0] + C[1] / (g.z1 / zf) + C[2] / (g.z2 / zf)
-    cp = 0.8 * 1.0 * (1.0 + 0.5 * (1.2 - dedendum_coeff)) / q * math.cos(g.helix_angle_rad)
-    return cp * (0.75 * g.contact_ratio + 0.25)
-
-
 @pytest.mark.parametrize("beta_deg", [20.0, 30.0, 36.0])
 def test_mean_mesh_stiffness_against_iso_6336(beta_deg):
     # ISO's c_gamma_alpha (mean transverse mesh stiffness per unit face width; c_gamma_beta = 0.85 c_gamma_alpha

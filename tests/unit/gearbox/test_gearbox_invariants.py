@@ -34,7 +34,7 @@ from gearfmu.gearbox.model import Mesh, Shaft, build_gearbox
 from gearfmu.gearbox.native import simulate
 from gearfmu.tables.synthetic import tables_from_arrays
 
-from test_gearbox_modes import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices
+from support.gearbox_cases import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices
 
 
 def test_free_vibration_in_each_mode_at_its_natural_frequency():

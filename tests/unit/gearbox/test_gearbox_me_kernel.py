@@ -22,9 +22,8 @@ from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.native import simulate
 from gearfmu.tables.zones import zone_cuts
 
-from test_gearbox_fmu import _kernel_library
-from test_gearbox_modes import S1, S2, hand_matrices
-from test_gearbox_native import K_MID, c_mesh, hand_damping, hand_damping_of_mid, linear_gearbox
+from support.gearbox_cases import (K_MID, S1, S2, c_mesh, hand_damping, hand_damping_of_mid, hand_matrices, kernel_library,
+                                   linear_gearbox)
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -152,7 +151,7 @@ def run_host(kg, y0, T_in, T_out, times, rtol):
 def test_me_derivatives_equal_the_plain_ones_where_the_mode_fits(tmp_path):
     """In the linear gearbox every mesh is always in contact: the derivatives with the modes held equal
     gb_derivatives (the plain lookup) bit for bit, and the indicators are >= 0 after gb_me_init."""
-    L = _kernel_library(tmp_path)
+    L = kernel_library(tmp_path)
     kg = KernelGearbox(L, linear_gearbox(), NODES_NONE)
     rng = np.random.default_rng(7)
     n = kg.model.n_bodies
@@ -173,7 +172,7 @@ def test_linear_limit_against_matrix_exponential(tmp_path):
     1000 N*m (as tests/unit/gearbox/test_gearbox_native.py): the host over gb_me_* (DOP853, rtol 1e-11) reproduces the
     matrix exponential to 1e-6 of the range (DTE of both stages, the intermediate shaft's torque, the
     stage-1 mesh force)."""
-    L = _kernel_library(tmp_path)
+    L = kernel_library(tmp_path)
     model = linear_gearbox()
     kg = KernelGearbox(L, model, NODES_KINKS)
     M, K = hand_matrices()
@@ -214,7 +213,7 @@ def test_contact_loss_against_the_native_gearbox_solver(tmp_path, node_events, r
     range.  The case has grazing contacts, where a tiny difference decides whether a pair touches: with
     node events the host's restarts move its steps, and at rtol 1e-10 one grazing contact near the end
     goes the other way (measured: 6e-2 from there on), at 1e-12 it does not."""
-    L = _kernel_library(tmp_path)
+    L = kernel_library(tmp_path)
     model, kw = gearbox_case("contact_loss", 30)
     kg = KernelGearbox(L, model, node_events)
     T_in = float(kw["motor_torque_Nm"])

@@ -19,20 +19,8 @@ import scipy.linalg
 
 from gearfmu.gearbox.model import GearboxModelError, Mesh, Shaft, build_gearbox
 from gearfmu.gearbox.modes import campbell, modes
-from gearfmu.tables.synthetic import tables_from_arrays
 
-
-def const_tables(k, z1, z2, rb1, rb2, i1, i2, n=16):
-    """Constant mesh stiffness k (one slot, no error, no backlash)."""
-    return tables_from_arrays(k_N_per_m=np.full((1, n), k), base_radius_pinion_m=rb1, base_radius_gear_m=rb2,
-                              inertia_pinion_kgm2=i1, inertia_gear_kgm2=i2, teeth_pinion=z1, teeth_gear=z2)
-
-
-# stage 1: 23/67 teeth, stage 2: 19/73 (an e-axle-like reducer, total 11.19)
-S1 = dict(k=4.0e8, z1=23, z2=67, rb1=0.0270, rb2=0.0270 * 67 / 23, i1=2.0e-4, i2=1.2e-2)
-S2 = dict(k=6.0e8, z1=19, z2=73, rb1=0.0312, rb2=0.0312 * 73 / 19, i1=8.0e-4, i2=8.0e-2)
-K_IN, K_MID, K_OUT = 4.0e4, 1.6e5, 5.0e5
-I_MOTOR, I_LOAD = 0.03, 2.0
+from support.gearbox_cases import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices
 
 
 def two_stage(mid_rigid=False, **shaft_kw):
@@ -41,25 +29,6 @@ def two_stage(mid_rigid=False, **shaft_kw):
               Shaft("output_shaft", "s2.gear", "load", K_OUT, **shaft_kw)]
     return build_gearbox([Mesh("s1", const_tables(**S1)), Mesh("s2", const_tables(**S2))], shafts,
                          {"motor": I_MOTOR, "load": I_LOAD})
-
-
-def hand_matrices():
-    """M, K of the chain [motor, p1, g1, p2, g2, load] in absolute angles, element by element."""
-    M = np.diag([I_MOTOR, S1["i1"], S1["i2"], S2["i1"], S2["i2"], I_LOAD])
-    K = np.zeros((6, 6))
-    # input shaft motor(0) - p1(1)
-    K[0, 0] += K_IN; K[1, 1] += K_IN; K[0, 1] -= K_IN; K[1, 0] -= K_IN
-    # mesh 1: x = rb1 th1 - rb2 th2 on p1(1), g1(2)
-    a, b, k = S1["rb1"], S1["rb2"], S1["k"]
-    K[1, 1] += k * a * a; K[2, 2] += k * b * b; K[1, 2] -= k * a * b; K[2, 1] -= k * a * b
-    # intermediate shaft g1(2) - p2(3)
-    K[2, 2] += K_MID; K[3, 3] += K_MID; K[2, 3] -= K_MID; K[3, 2] -= K_MID
-    # mesh 2 on p2(3), g2(4)
-    a, b, k = S2["rb1"], S2["rb2"], S2["k"]
-    K[3, 3] += k * a * a; K[4, 4] += k * b * b; K[3, 4] -= k * a * b; K[4, 3] -= k * a * b
-    # output shaft g2(4) - load(5)
-    K[4, 4] += K_OUT; K[5, 5] += K_OUT; K[4, 5] -= K_OUT; K[5, 4] -= K_OUT
-    return M, K
 
 
 def test_single_pair_closed_form():

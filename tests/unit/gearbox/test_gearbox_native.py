@@ -12,8 +12,6 @@
   shaft, g_p Rb_p = g_q Rb_q across a mesh), and every Runge-Kutta step keeps a linear
   invariant of the equations to round-off.
 """
-import math
-
 import numpy as np
 import pytest
 import scipy.linalg
@@ -24,34 +22,8 @@ from gearfmu.gearbox.model import Mesh, Shaft, build_gearbox
 from gearfmu.gearbox.native import GearboxInputError, simulate
 from gearfmu.tables.synthetic import rectangular_wave_tables
 
-from test_gearbox_modes import I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, const_tables, hand_matrices
-
-ZETA_MESH, ZETA_SHAFT = 0.05, 0.02
-
-
-def linear_gearbox():
-    meshes = [Mesh("s1", const_tables(**S1), ZETA_MESH, "contact_zone"),
-              Mesh("s2", const_tables(**S2), ZETA_MESH, "contact_zone")]
-    shafts = [Shaft("input_shaft", "motor", "s1.pinion", K_IN, ZETA_SHAFT),
-              Shaft("intermediate_shaft", "s1.gear", "s2.pinion", K_MID, ZETA_SHAFT),
-              Shaft("output_shaft", "s2.gear", "load", K_OUT, ZETA_SHAFT)]
-    return build_gearbox(meshes, shafts, {"motor": I_MOTOR, "load": I_LOAD})
-
-
-def hand_damping():
-    """C of the chain [motor, p1, g1, p2, g2, load]: shaft c = 2 zeta sqrt(k Ia Ib/(Ia + Ib)) of
-    its end inertias, mesh c = 2 zeta sqrt(k m_e), m_e = I1 I2/(I1 Rb2^2 + I2 Rb1^2), on x = Rb1 th1 - Rb2 th2."""
-    I = [I_MOTOR, S1["i1"], S1["i2"], S2["i1"], S2["i2"], I_LOAD]
-    C = np.zeros((6, 6))
-    for (a, b), k in (((0, 1), K_IN), ((2, 3), K_MID), ((4, 5), K_OUT)):
-        c = 2 * ZETA_SHAFT * math.sqrt(k * I[a] * I[b] / (I[a] + I[b]))
-        C[a, a] += c; C[b, b] += c; C[a, b] -= c; C[b, a] -= c
-    for (a, b), s in (((1, 2), S1), ((3, 4), S2)):
-        me = s["i1"] * s["i2"] / (s["i1"] * s["rb2"] ** 2 + s["i2"] * s["rb1"] ** 2)
-        c = 2 * ZETA_MESH * math.sqrt(s["k"] * me)
-        r = np.zeros(6); r[a] = s["rb1"]; r[b] = -s["rb2"]
-        C += c * np.outer(r, r)
-    return C
+from support.gearbox_cases import (I_LOAD, I_MOTOR, K_IN, K_MID, K_OUT, S1, S2, c_mesh, hand_damping,
+                                   hand_damping_of_mid, hand_matrices, linear_gearbox)
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "rk4_kink", "rk4_node"])
@@ -84,16 +56,6 @@ def test_linear_limit_forced_response_against_matrix_exponential(integrator):
                      (r["intermediate_shaft.torque"], K_MID * (Z[:, 2] - Z[:, 3]) + hand_damping_of_mid(Z)),
                      (r["s1.mesh_force"], S1["k"] * x1 + c_mesh(S1) * (S1["rb1"] * Z[:, 7] - S1["rb2"] * Z[:, 8]))):
         assert np.max(np.abs(got - ref)) <= 1e-6 * np.ptp(ref)
-
-
-def c_mesh(s):
-    me = s["i1"] * s["i2"] / (s["i1"] * s["rb2"] ** 2 + s["i2"] * s["rb1"] ** 2)
-    return 2 * ZETA_MESH * math.sqrt(s["k"] * me)
-
-
-def hand_damping_of_mid(Z):
-    c = 2 * ZETA_SHAFT * math.sqrt(K_MID * S1["i2"] * S2["i1"] / (S1["i2"] + S2["i1"]))
-    return c * (Z[:, 8] - Z[:, 9])
 
 
 @pytest.mark.parametrize("case", ["single_sided_impacts", "double_sided_impacts", "high_contact_ratio",

@@ -24,57 +24,13 @@ from gearfmu.scene.envelope import envelope_of
 from gearfmu.plan import format_report, full_scene, plan_scene, planned_scene, relative_rms
 from gearfmu.scene.reader import SceneError, load_scene
 
+from support.plan_scenes import SMALL
+
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
 
 RPM = 2 * math.pi / 60
 
-SMALL = """
-[scene]
-name = "plan_small"
-
-[gears]
-module_mm = 3.0
-face_width_mm = 20.0
-backlash_um = 100.0
-
-[gears.pinion]
-teeth = 20
-
-[gears.gear]
-teeth = 31
-
-[deviations.pinion]
-profile_form_um = 5.0
-lead_crowning_um = 8.0
-
-[[deviations.pinion.tooth]]
-index = 3
-profile_form_um = 12.0
-
-[mesh]
-slices = 8
-
-[operating]
-torque_Nm = 200.0
-speed_rpm = 1000.0
-
-[tables]
-points_per_mesh = 32
-
-[fmu]
-stop_time_s = 0.02
-output_interval_s = 1e-4
-
-[envelope]
-torque_range_Nm = [80.0, 200.0]
-speed_range_rpm = [1000.0, 2000.0]
-
-[accuracy]
-dte_rel_error = 0.05
-mesh_force_rel_error = 0.05
-run_mesh_periods = 12
-"""
 
 PLAIN = """
 [scene]
@@ -315,7 +271,7 @@ def test_planned_fmu_states_and_checks_its_verified_envelope(small, monkeypatch)
     from gearfmu.fmu.crossbuild import host_key
     from gearfmu.pipeline import build, gear_torque_for
 
-    from test_envelope_fmu import _both, _record
+    from support.envelope_checks import both_runtimes_warn, record
 
     scene, plan, d = small
     monkeypatch.setattr(gearfmu.plan.planner, "plan_scene", lambda s, progress=False: plan)
@@ -323,7 +279,7 @@ def test_planned_fmu_states_and_checks_its_verified_envelope(small, monkeypatch)
            "pythonfmu": build(scene, d / "env_py.fmu", runtime="pythonfmu")}
     fmus = {k: r.fmu_path for k, r in res.items()}
     for r in res.values():
-        env, rec, desc = _record(r.fmu_path)
+        env, rec, desc = record(r.fmu_path)
         assert env["status"] == "verified" and env["verified_envelope"] == r.verified_envelope == \
             json.loads(json.dumps(plan.verified_envelope))
         assert env["pinion_torque_range_Nm"] == [80.0, 200.0]
@@ -336,8 +292,8 @@ def test_planned_fmu_states_and_checks_its_verified_envelope(small, monkeypatch)
     def sched(T):
         return [{"pinion_torque": T, "gear_torque": gear_torque_for(tb, T)}] * 30
 
-    assert _both(fmus, sched(150.0)) == [] and _both(fmus, sched(200.0)) == []
-    warns = _both(fmus, sched(260.0))
+    assert both_runtimes_warn(fmus, sched(150.0)) == [] and both_runtimes_warn(fmus, sched(200.0)) == []
+    warns = both_runtimes_warn(fmus, sched(260.0))
     assert len(warns) == 1, warns
     assert warns[0].startswith("pinion_torque = 260 N.m at t = 0 s is outside the envelope over which this "
                                "FMU's accuracy was verified (fidelity plan): pinion torque [80, 200] N.m"), warns

@@ -41,8 +41,7 @@ from gearfmu.fmu.standalone_build import build_standalone_fmu
 from gearfmu.tables.mesh_tables import TableError, TemperatureRangeError, load_tables
 
 from factories import AXIS, make_tables, temp_tables
-from test_standalone import _callbacks
-from test_state import Inst as _Inst
+from support.fmpy_host import Inst as _Inst, callbacks
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
 pytestmark = pytest.mark.slow
@@ -53,13 +52,13 @@ REPO = Path(__file__).resolve().parents[3]
 
 
 class Inst(_Inst):
-    """test_state.Inst with a logger that formats the C runtime's printf-style messages."""
+    """support.fmpy_host.Inst with a logger that formats the C runtime's printf-style messages."""
 
     def __init__(self, path, name):
         from fmpy.fmi2 import FMU2Slave
         self.md = fmpy.read_model_description(str(path))
         self.log = []
-        self._cb = _callbacks(self.log)
+        self._cb = callbacks(self.log)
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=fmpy.extract(str(path)),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
