@@ -35,7 +35,8 @@ from gearfmu.fmu.planetary_build import build_planetary_fmu, native_run, planeta
 from gearfmu.planetary.native import simulate
 from gearfmu.scene.drivetrain import load_drivetrain
 
-from test_standalone import _slave, _status
+from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine
+from support.fmpy_host import keep_fmpy_logger_alive, quiet, slave, status
 
 pytestmark = pytest.mark.slow
 
@@ -258,7 +259,7 @@ def test_state_save_restore_bad_inputs_and_bad_parameters(built, tmp_path):
     each with the reason logged (no crash); a tampered tables file is refused at instantiation."""
     e = built[EXAMPLES[1]]
     path = e["fmu"][2]
-    s, var, msgs = _slave(path, tmp_path)
+    s, var, msgs = slave(path, tmp_path)
     out = [var[n] for n in ("ps.sun_planet[1].dte", "ps.ring_planet[2].mesh_force", "load_speed",
                             "ps.load_sharing_factor[1]")]
     s.setupExperiment(startTime=0.0)
@@ -274,7 +275,7 @@ def test_state_save_restore_bad_inputs_and_bad_parameters(built, tmp_path):
         first.append(s.getReal(out))
     s.setFMUstate(s.deSerializeFMUstate(blob))
     s.setReal([var["motor_torque"]], [float("nan")])
-    assert _status(s.fmi2DoStep, s.component, 10 * H, H, 1) == 2   # fmi2Discard
+    assert status(s.fmi2DoStep, s.component, 10 * H, H, 1) == 2   # fmi2Discard
     s.setReal([var["motor_torque"]], [e["settings"].motor_torque_start_Nm])
     second = []
     for k in range(10, 20):
@@ -286,16 +287,16 @@ def test_state_save_restore_bad_inputs_and_bad_parameters(built, tmp_path):
     s.freeInstance()
     for name, value, why in (("max_step", 0.0, "max_step = 0.0: must be > 0"),
                              ("integrator", 7, "integrator = 7.0: above its maximum 2.0")):
-        s, var, msgs = _slave(path, tmp_path, f"bad_{name}")
+        s, var, msgs = slave(path, tmp_path, f"bad_{name}")
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         if name == "integrator":
-            assert _status(s.fmi2SetInteger, s.component, (fmpy.fmi2.fmi2ValueReference * 1)(var[name]), 1,
+            assert status(s.fmi2SetInteger, s.component, (fmpy.fmi2.fmi2ValueReference * 1)(var[name]), 1,
                            (fmpy.fmi2.fmi2Integer * 1)(value)) in (2, 3)   # refused: above its max
             assert any("integrator" in m for _, m in msgs)
         else:
             s.setReal([var[name]], [value])
-            assert _status(s.fmi2ExitInitializationMode, s.component) == 3   # fmi2Error
+            assert status(s.fmi2ExitInitializationMode, s.component) == 3   # fmi2Error
             assert any(why in m for _, m in msgs), msgs
         s.freeInstance()
     bad = tmp_path / "bad.fmu"
@@ -305,7 +306,7 @@ def test_state_save_restore_bad_inputs_and_bad_parameters(built, tmp_path):
             if item.endswith("tables.bin") and "sun_planet" in item:
                 data = data[:100] + bytes([data[100] ^ 1]) + data[101:]
             zout.writestr(item, data)
-    sl, _, msgs = _slave(bad, tmp_path, "tampered", instantiate=False)
+    sl, _, msgs = slave(bad, tmp_path, "tampered", instantiate=False)
     with pytest.raises(Exception):
         sl.instantiate(loggingOn=True, callbacks=sl._test_callbacks)
     assert any("tables.bin: SHA-256 checksum mismatch" in m for _, m in msgs), msgs
@@ -314,9 +315,7 @@ def test_state_save_restore_bad_inputs_and_bad_parameters(built, tmp_path):
 # ------------------------------------------------------------------ other hosts
 @pytest.fixture(scope="module")
 def host_exe(tmp_path_factory):
-    from test_platforms import _compile_host
-
-    return _compile_host(tmp_path_factory.mktemp("plhost"))
+    return compile_host(tmp_path_factory.mktemp("plhost"))
 
 
 def _host_args(e, fmu_dir, n):
@@ -332,15 +331,13 @@ def test_c_host_win64_under_wine_and_aarch64_under_qemu(built, host_exe, tmp_pat
     linux64 binary: its output file equals the native planetary solver within 1e-12 of each range; the
     win64 DLL under Wine and the aarch64-linux binary under qemu-aarch64 (builds of the same host) write
     the same file (SHA-256)."""
-    from test_platforms import AARCH64_SYSROOT, _compile_host, _run_file, qemu, wine
-
     e = built[EXAMPLES[0]]
     d = tmp_path / "fmu"
     with zipfile.ZipFile(e["fmu"][2]) as z:
         z.extractall(d)
     n = 200
     args, names = _host_args(e, d, n)
-    rc, ref, err = _run_file([str(host_exe), *args, "--state-check"], tmp_path, "linux")
+    rc, ref, err = run_file([str(host_exe), *args, "--state-check"], tmp_path, "linux")
     assert rc == 0, err[-2000:]
     lines = ref.splitlines()
     assert lines[-1] == "state-check ok" and len(lines) == n + 3
@@ -355,17 +352,17 @@ def test_c_host_win64_under_wine_and_aarch64_under_qemu(built, host_exe, tmp_pat
     worst = max(_rel(nat[nm], data[:, i + 1]) for i, nm in enumerate(names))
     assert worst <= TOL
     sha = lambda text: hashlib.sha256(text.encode()).hexdigest()
-    exe = _compile_host(tmp_path, "aarch64-linux-gnu")
-    rc, out, err = _run_file([qemu(), "-L", str(AARCH64_SYSROOT), str(exe), *args, "--state-check"], tmp_path, "qemu")
+    exe = compile_host(tmp_path, "aarch64-linux-gnu")
+    rc, out, err = run_file([qemu(), "-L", str(AARCH64_SYSROOT), str(exe), *args, "--state-check"], tmp_path, "qemu")
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
     w = wine()
-    exe = _compile_host(tmp_path, "x86_64-windows-gnu")
+    exe = compile_host(tmp_path, "x86_64-windows-gnu")
     env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
                WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     wargs, _ = _host_args(e, "Z:" + d.as_posix(), n)
     try:
-        rc, out, err = _run_file([w, str(exe), *wargs, "--state-check"], tmp_path, "wine", env=env)
+        rc, out, err = run_file([w, str(exe), *wargs, "--state-check"], tmp_path, "wine", env=env)
     finally:
         server = shutil.which("wineserver")
         if server:
@@ -423,7 +420,6 @@ def test_model_exchange_in_fmpy_cvode(built, name):
     mesh force), ten times closer than at rtol 1e-6; the planets' load-sharing factors 1 within 1e-6."""
     import dataclasses
 
-    from test_model_exchange import quiet
 
     e = built[name]
     s = dataclasses.replace(e["settings"], stop_time_s=0.01)
@@ -453,7 +449,6 @@ def test_model_exchange_in_pathsim(built):
     from pathsim.solvers import RKDP54
     from pathsim_fmi import ModelExchangeFMU
 
-    from test_model_exchange import keep_fmpy_logger_alive
 
     e = built[EXAMPLES[1]]
     s = dataclasses.replace(e["settings"], stop_time_s=0.005)

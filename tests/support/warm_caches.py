@@ -2,7 +2,7 @@
 
 On a fresh clone (CI) numba's disk cache (``cache=True``: the native pair, gearbox and planetary
 solvers, one driver per integrator; the EHL film kernels) and the object cache of the cross-compiled
-C runtime (gearfmu.fmu.crossbuild: five platforms, FMI 2 and 3, the pair and gearbox kernels) are
+C runtime (gearfmu.fmu.crossbuild: five platforms, FMI 2 and 3, the pair, gearbox and planetary units) are
 empty.  Without this step every process that meets a cold cache compiles on its own: both test
 workers and the command-line, pool and fresh-process runs the tests start, several of them the same
 code at the same time.  Each family below runs a tiny problem through the code the tests use, in
@@ -67,18 +67,23 @@ def _films():
 
 
 def _objects():
+    from gearfmu.bench import planetary_case
     from gearfmu.fmu.gearbox_build import build_gearbox_fmu, gearbox_settings
+    from gearfmu.fmu.planetary_build import build_planetary_fmu, planetary_settings
     from gearfmu.fmu.standalone_build import build_standalone_fmu
     from gearfmu.gearbox.cases import gearbox_case
     from gearfmu.tables.synthetic import rectangular_wave_tables
 
     tb = rectangular_wave_tables(1e8, contact_ratio=1.6, points_per_mesh=16)
     model, _ = gearbox_case("contact_loss", mesh_periods=2)
+    planetary, _ = planetary_case("position_error", mesh_periods=2)
     with tempfile.TemporaryDirectory() as d:
         for v in (2, 3):
             build_standalone_fmu(tb, Path(d) / f"pair{v}.fmu", max_step_s=1e-5, fmi_version=v, validation=False)
             build_gearbox_fmu(model, Path(d) / f"gearbox{v}.fmu", fmi_version=v, validation=False,
                               settings=gearbox_settings(model, max_step_s=1e-5))
+            build_planetary_fmu(planetary, Path(d) / f"planetary{v}.fmu", fmi_version=v, validation=False,
+                                settings=planetary_settings(planetary, max_step_s=1e-5))
 
 
 def main(family: str) -> int:
