@@ -70,34 +70,13 @@ typedef struct {
 static const char *read_config(gf_inst *c, const char *text, char *guid, char *err, size_t errcap)
 {
     gm_data *d = c->data;
-    char line[EL_MAX_LINE];
+    char line[EL_MAX_LINE], *key, *val;
     const char *p = text;
-    int nvar_seen = 0, lineno = 0, have_format = 0, have_guid = 0, have_nvars = 0;
+    int nvar_seen = 0, lineno = 0, have_format = 0, have_guid = 0, have_nvars = 0, more;
     d->kind = -1;
     d->vr_inertia = d->vr_angle0 = d->vr_speed0 = d->vr_k = d->vr_c = d->vr_x0 = d->vr_speed_a = d->vr_speed_b = -1;
     d->vr_first_start = -1;
-    while (*p != '\0') {
-        size_t n = strcspn(p, "\n");
-        char *eq, *key, *val;
-        lineno++;
-        if (n >= sizeof line) {
-            snprintf(err, errcap, "line %d too long", lineno);
-            return err;
-        }
-        memcpy(line, p, n);
-        line[n] = '\0';
-        if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
-        p += n;
-        if (*p == '\n') p++;
-        if (line[0] == '\0' || line[0] == '#') continue;
-        eq = strchr(line, '=');
-        if (eq == NULL) {
-            snprintf(err, errcap, "line %d: no '='", lineno);
-            return err;
-        }
-        *eq = '\0';
-        key = line;
-        val = eq + 1;
+    while ((more = gfr_next_config_line(&p, line, sizeof line, &lineno, &key, &val, err, errcap)) > 0) {
 #define EL_VR(name, field)                                                                      \
     else if (strcmp(key, name) == 0) {                                                          \
         long v_;                                                                                \
@@ -173,6 +152,7 @@ static const char *read_config(gf_inst *c, const char *text, char *guid, char *e
         /* unknown keys are ignored (forward compatible) */
 #undef EL_VR
     }
+    if (more < 0) return err;
     if (!have_format || !have_guid || !have_nvars || d->kind < 0) {
         snprintf(err, errcap, "missing keys (format, guid, kind, n_vars)");
         return err;

@@ -92,33 +92,12 @@ enum {
 /* returns NULL on success, else a message (written into err) */
 static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, char *err, size_t errcap)
 {
-    char line[GF_MAX_LINE];
+    char line[GF_MAX_LINE], *key, *val;
     const char *p = text;
-    int nvar_seen = 0, lineno = 0;
+    int nvar_seen = 0, lineno = 0, more;
     memset(cfg, 0, sizeof *cfg);
     cfg->env_kind = GK_ENV_NOT_VERIFIED;
-    while (*p != '\0') {
-        size_t n = strcspn(p, "\n");
-        char *eq, *key, *val;
-        lineno++;
-        if (n >= sizeof line) {
-            snprintf(err, errcap, "line %d too long", lineno);
-            return err;
-        }
-        memcpy(line, p, n);
-        line[n] = '\0';
-        if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
-        p += n;
-        if (*p == '\n') p++;
-        if (line[0] == '\0' || line[0] == '#') continue;
-        eq = strchr(line, '=');
-        if (eq == NULL) {
-            snprintf(err, errcap, "line %d: no '='", lineno);
-            return err;
-        }
-        *eq = '\0';
-        key = line;
-        val = eq + 1;
+    while ((more = gfr_next_config_line(&p, line, sizeof line, &lineno, &key, &val, err, errcap)) > 0) {
 #define GF_D(name, field, bit)                                                                   \
     else if (strcmp(key, name) == 0) {                                                           \
         if (!gfr_parse_double(val, &cfg->field)) { snprintf(err, errcap, "%s: bad number", name); return err; } \
@@ -242,6 +221,7 @@ static const char *read_config(gf_inst *c, const char *text, gf_config *cfg, cha
 #undef GF_D
 #undef GF_L
     }
+    if (more < 0) return err;
     if ((cfg->have_mask & HAVE_ALL) != HAVE_ALL) {
         snprintf(err, errcap, "missing keys (mask 0x%x of 0x%x)", (unsigned)cfg->have_mask, (unsigned)HAVE_ALL);
         return err;

@@ -150,37 +150,18 @@ static const char *gearbox_key(gb_config *cfg, const char *key, char *val, int l
 /* returns NULL on success, else a message (written into err) */
 static const char *read_config(gf_inst *c, const char *text, gb_config *cfg, char *err, size_t errcap)
 {
-    char line[GB_MAX_LINE];
+    char line[GB_MAX_LINE], *key, *val;
     const char *p = text, *e;
-    int lineno = 0, i;
+    int lineno = 0, i, r;
     memset(cfg, 0, sizeof *cfg);
     cfg->cc.vr_motor_torque = cfg->cc.vr_load_torque = -1;
     cfg->cc.vr_speed0 = cfg->cc.vr_angle0 = cfg->cc.vr_hmax = cfg->cc.vr_integrator = -2;
-    while (*p != '\0') {
-        size_t n = strcspn(p, "\n");
-        char *eq;
-        int r;
-        lineno++;
-        if (n >= sizeof line) {
-            snprintf(err, errcap, "line %d too long", lineno);
-            return err;
-        }
-        memcpy(line, p, n);
-        line[n] = '\0';
-        if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
-        p += n;
-        if (*p == '\n') p++;
-        if (line[0] == '\0' || line[0] == '#') continue;
-        eq = strchr(line, '=');
-        if (eq == NULL) {
-            snprintf(err, errcap, "line %d: no '='", lineno);
-            return err;
-        }
-        *eq = '\0';
-        r = gfm_common_key(c, &cfg->cc, GB_CONFIG_FORMAT, GB_CONFIG_VERSION, line, eq + 1, err, errcap);
+    while ((r = gfr_next_config_line(&p, line, sizeof line, &lineno, &key, &val, err, errcap)) > 0) {
+        r = gfm_common_key(c, &cfg->cc, GB_CONFIG_FORMAT, GB_CONFIG_VERSION, key, val, err, errcap);
         if (r < 0) return err;
-        if (r == 0 && (e = gearbox_key(cfg, line, eq + 1, lineno, err, errcap)) != NULL) return e;
+        if (r == 0 && (e = gearbox_key(cfg, key, val, lineno, err, errcap)) != NULL) return e;
     }
+    if (r < 0) return err;
     if ((e = gfm_common_check(c, &cfg->cc, err, errcap)) != NULL) return e;
     if (cfg->n_body < 2 || cfg->n_stage < 1) {
         snprintf(err, errcap, "missing keys (bodies, stages)");

@@ -232,6 +232,36 @@ int gfr_parse_long(const char *s, long *v)
     return *end == '\0';
 }
 
+int gfr_next_config_line(const char **p, char *line, size_t cap, int *lineno, char **key, char **val, char *err,
+                         size_t errcap)
+{
+    while (**p != '\0') {
+        size_t n = strcspn(*p, "\n");
+        char *eq;
+        (*lineno)++;
+        if (n >= cap) {
+            snprintf(err, errcap, "line %d too long", *lineno);
+            return -1;
+        }
+        memcpy(line, *p, n);
+        line[n] = '\0';
+        if (n > 0 && line[n - 1] == '\r') line[n - 1] = '\0';
+        *p += n;
+        if (**p == '\n') (*p)++;
+        if (line[0] == '\0' || line[0] == '#') continue;
+        eq = strchr(line, '=');
+        if (eq == NULL) {
+            snprintf(err, errcap, "line %d: no '='", *lineno);
+            return -1;
+        }
+        *eq = '\0';
+        *key = line;
+        *val = eq + 1;
+        return 1;
+    }
+    return 0;
+}
+
 /* split s at '|' into at most nmax fields (in place) */
 int gfr_split_fields(char *s, char **fields, int nmax)
 {

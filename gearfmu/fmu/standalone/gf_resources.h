@@ -34,6 +34,11 @@ GF_API unsigned char *gfr_read_file(const char *path, size_t *size);
 /* the whole string s as a number (C99 hexadecimal floats read exactly); 1 on success */
 GF_API int gfr_parse_double(const char *s, double *v);
 GF_API int gfr_parse_long(const char *s, long *v);
+/* The next key=value line of a configuration text at *p (the line copied into line[cap], its CR
+ * dropped; blank and '#' lines skipped; *lineno counts every line): 1 with *key and *val pointing into
+ * line, 0 at the end of the text, -1 with the reason in err (a line too long, a line without '='). */
+GF_API int gfr_next_config_line(const char **p, char *line, size_t cap, int *lineno, char **key, char **val, char *err,
+                                size_t errcap);
 /* split s at '|' into at most nmax fields (in place); their number, -1 for more */
 GF_API int gfr_split_fields(char *s, char **fields, int nmax);
 /* one var= line's value into c->vars[*count] (value references in order from 0); 1 on success */
