@@ -199,19 +199,15 @@ void gm_free(gf_inst *c)
 const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, char *err, size_t errcap)
 {
     gm_data *d;
-    char path[4096], guid[GF_MAX_NAME];
+    char guid[GF_MAX_NAME];
     unsigned char *text;
     size_t size = 0;
     const char *e = NULL;
     int i;
     c->data = d = (gm_data *)calloc(1, sizeof(gm_data));
     if (d == NULL) return "out of memory";
-    if (!gfr_join_path(res_dir, EL_CONFIG_FILE, path, sizeof path)) return "resource location too long";
-    text = gfr_read_file(path, &size);
-    if (text == NULL) {
-        snprintf(err, errcap, "cannot read resources/%s (path %.500s)", EL_CONFIG_FILE, path);
-        return err;
-    }
+    text = gfr_read_resource(res_dir, EL_CONFIG_FILE, &size, err, errcap);
+    if (text == NULL) return err;
     {
         char e2[512];
         guid[0] = '\0';

@@ -454,12 +454,8 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     if (c->data == NULL) return "out of memory";
     c->data->vr_integrator = -1;
     c->data->vr_temp = -1;
-    if (!gfr_join_path(res_dir, GF_CONFIG_FILE, path, sizeof path)) return "resource location too long";
-    text = gfr_read_file(path, &size);
-    if (text == NULL) {
-        snprintf(err, errcap, "cannot read resources/%s (path %.500s)", GF_CONFIG_FILE, path);
-        return err;
-    }
+    text = gfr_read_resource(res_dir, GF_CONFIG_FILE, &size, err, errcap);
+    if (text == NULL) return err;
     {
         char e2[512];
         const char *e = read_config(c, (const char *)text, &cfg, e2, sizeof e2);

@@ -298,7 +298,6 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
 {
     gb_config *cfg;
     gm_data *d;
-    char path[4096];
     unsigned char *text;
     size_t size = 0;
     gf_sha256 tag;
@@ -313,12 +312,8 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     d->core.kme_bytes = sizeof d->me;
     d->core.snap_magic = GB_SNAPSHOT_MAGIC;
     d->core.snap_version = GB_SNAPSHOT_VERSION;
-    if (!gfr_join_path(res_dir, GB_CONFIG_FILE, path, sizeof path)) return "resource location too long";
-    text = gfr_read_file(path, &size);
-    if (text == NULL) {
-        snprintf(err, errcap, "cannot read resources/%s (path %.500s)", GB_CONFIG_FILE, path);
-        return err;
-    }
+    text = gfr_read_resource(res_dir, GB_CONFIG_FILE, &size, err, errcap);
+    if (text == NULL) return err;
     cfg = (gb_config *)calloc(1, sizeof(gb_config));
     if (cfg == NULL) {
         free(text);

@@ -232,6 +232,19 @@ int gfr_parse_long(const char *s, long *v)
     return *end == '\0';
 }
 
+unsigned char *gfr_read_resource(const char *res_dir, const char *name, size_t *size, char *err, size_t errcap)
+{
+    char path[4096];
+    unsigned char *text;
+    if (!gfr_join_path(res_dir, name, path, sizeof path)) {
+        snprintf(err, errcap, "resource location too long");
+        return NULL;
+    }
+    text = gfr_read_file(path, size);
+    if (text == NULL) snprintf(err, errcap, "cannot read resources/%s (path %.500s)", name, path);
+    return text;
+}
+
 int gfr_next_config_line(const char **p, char *line, size_t cap, int *lineno, char **key, char **val, char *err,
                          size_t errcap)
 {

@@ -31,6 +31,9 @@ GF_API int gfr_join_path(const char *dir, const char *fname, char *out, size_t c
 /* the whole file at the UTF-8 path (malloc'd, NUL after the last byte; *size its length), NULL if
  * it cannot be read */
 GF_API unsigned char *gfr_read_file(const char *path, size_t *size);
+/* the whole file resources/<name> under res_dir (as gfr_read_file); NULL with the reason in err (a
+ * location too long, a file that cannot be read, naming it) */
+GF_API unsigned char *gfr_read_resource(const char *res_dir, const char *name, size_t *size, char *err, size_t errcap);
 /* the whole string s as a number (C99 hexadecimal floats read exactly); 1 on success */
 GF_API int gfr_parse_double(const char *s, double *v);
 GF_API int gfr_parse_long(const char *s, long *v);

@@ -350,7 +350,6 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
 {
     pl_config *cfg;
     gm_data *d;
-    char path[4096];
     unsigned char *text;
     size_t size = 0;
     gf_sha256 tag;
@@ -365,12 +364,8 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     d->core.kme_bytes = sizeof d->me;
     d->core.snap_magic = PL_SNAPSHOT_MAGIC;
     d->core.snap_version = PL_SNAPSHOT_VERSION;
-    if (!gfr_join_path(res_dir, PL_CONFIG_FILE, path, sizeof path)) return "resource location too long";
-    text = gfr_read_file(path, &size);
-    if (text == NULL) {
-        snprintf(err, errcap, "cannot read resources/%s (path %.500s)", PL_CONFIG_FILE, path);
-        return err;
-    }
+    text = gfr_read_resource(res_dir, PL_CONFIG_FILE, &size, err, errcap);
+    if (text == NULL) return err;
     cfg = (pl_config *)calloc(1, sizeof(pl_config));
     if (cfg == NULL) {
         free(text);
