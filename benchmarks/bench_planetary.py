@@ -166,7 +166,7 @@ FMU_FACTORS = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
 FMU_TARGET = 1e-4
 
 
-def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node", "rk4")):
+def fmu_rtf(repeat, sim_s, scene_name="planetary_stage", integrators=("rk4_node", "rk4_seg", "rk4")):
     """The planetary FMU (``gearfmu build`` of the scene, this machine's binary) in the C host
     benchmarks/fmu_rtf_host.c: ``sim_s`` simulated seconds at the scene's communication step, its
     max_step swept over FMU_FACTORS x the default for each of ``integrators``; each run's error the worst mesh's RMS DTE difference

@@ -872,9 +872,16 @@ def _fmu_floor(f) -> str:
     if not pts:
         return ""
     big = max(pts, key=lambda p: p["factor"])
-    return (f"  At {num(big['factor'], 3)} x the default step (error {sci(big['dte_rel_rms_err'])}) it still runs "
-            f"{num(big['rtf_cpu'], 3)} x real time: the events (every table node and contact change of every mesh, "
-            "located one substep each) set the cost, not the step.")
+    text = (f"  At {num(big['factor'], 3)} x the default step (error {sci(big['dte_rel_rms_err'])}) {f['integrator']} "
+            f"still runs {num(big['rtf_cpu'], 3)} x real time: its events (every table node where the tables bend and "
+            "every contact change of every mesh, one substep each) set the cost, not the step.")
+    seg = [p for p in f["integrators"].get("rk4_seg", {}).get("sweep", []) if "rtf_cpu" in p]
+    if seg:
+        sb = max(seg, key=lambda p: p["factor"])
+        text += (f"  rk4_seg stops only at the contact-zone edges, the big kinks and the nodes where e bends: at the "
+                 f"same step it runs {num(sb['rtf_cpu'], 3)} x real time (error {sci(sb['dte_rel_rms_err'])}), bounded "
+                 "by the RK4 steps themselves.")
+    return text
 
 
 def sec_me(pg: Page):
@@ -1502,11 +1509,13 @@ def _g_gearbox(d):
 
 
 def _g_planetary_fmu(d):
+    """The fastest integrator of the sweep at the target error (the FMU's ``integrator`` parameter picks it)."""
     f = d["fmu"]
-    hit = f["integrators"].get(f["integrator"], {}).get("at_target")
-    if hit is None:
-        raise NotMeasured(f"{f['integrator']} does not reach {f['target_dte_rel_rms_err']:g} in the sweep")
-    return (f"{hit['rtf_cpu']:.1f} × ({f['integrator']}, {f['scene']}: {f['planets']} planets, {f['meshes']} meshes; "
+    hits = {k: v["at_target"] for k, v in f["integrators"].items() if v.get("at_target")}
+    if not hits:
+        raise NotMeasured(f"no integrator reaches {f['target_dte_rel_rms_err']:g} in the sweep")
+    integ, hit = max(hits.items(), key=lambda kv: kv[1]["rtf_cpu"])
+    return (f"{hit['rtf_cpu']:.1f} × ({integ}, {f['scene']}: {f['planets']} planets, {f['meshes']} meshes; "
             f"max_step {hit['max_step_s']:.3g} s; CPU time, C host)", hit["rtf_cpu"] >= 10.0)
 
 

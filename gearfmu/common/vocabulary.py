@@ -74,7 +74,7 @@ INTEGRATORS = {"rk4": 0, "rk4_kink": 1, "rk4_node": 2, "rk4_seg": 3}
 DEFAULT_INTEGRATOR = "rk4_node"
 #: the integrators of the gearbox solver (gearfmu.gearbox.native, docs/gearbox.md "Integrators"), a
 #: subset of INTEGRATORS with the same codes; the default is DEFAULT_INTEGRATOR
-GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
+GEARBOX_INTEGRATORS = ("rk4", "rk4_kink", "rk4_node", "rk4_seg")
 #: the ports of a planetary stage (parts ``<stage>.sun``, ``<stage>.carrier``, ``<stage>.ring``;
 #: docs/planetary.md): one of them is held, the other two join the drivetrain
 PLANETARY_PORTS = ("sun", "carrier", "ring")

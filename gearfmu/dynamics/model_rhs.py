@@ -476,7 +476,11 @@ def _pair_force_locked(kv, ev, es, bv, x, v, omega1, c, model, reg, sub, kpos):
 @njit(cache=True, error_model="numpy")
 def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
     """Guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds;
-    1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink')."""
+    1.0 when guard q does not exist for this mode (docs/model.md 'rk4_kink'), also the sub-mode
+    guards of an elastobacklash pair in contact with k = 0 in its sub-modes 'two' and 'zero', which
+    both give it no force (a sign change of its damping force is no event; the event integrators
+    stop where k turns positive and decide the sub-mode anew there).  gk_pair.h pair_guard (Model
+    Exchange's indicators keep those guards: pair_guard_me)."""
     d = x - ev
     if reg == 0:
         if q == 0:
@@ -489,6 +493,8 @@ def _pair_guard(q, kv, ev, es, bv, x, v, omega1, c, model, reg, sub):
             return d - bv
         return -(d + bv)
     if model != 0:
+        return 1.0
+    if kv == 0.0 and sub != 1:   # k = 0 (out of the contact zone): 'two' and 'zero' both carry no force
         return 1.0
     if reg == 1:
         fc = kv * (d - bv)

@@ -24,7 +24,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from ..common.vocabulary import DAMPING_MODELS, INTEGRATORS
+from ..common.vocabulary import DAMPING_MODELS, GEARBOX_INTEGRATORS, INTEGRATORS
 from ..planetary.kernels import (F_A0, F_AREF, F_C, F_PHI0, F_X0, I_A0, I_NA, I_NX, I_X0, MF, MI, SF, SI)
 from ..planetary.model import PlanetaryModel
 from ..planetary.native import _KernelData
@@ -204,7 +204,7 @@ class PlanetaryKernel:
 
     # ------------------------------------------------------------ Co-Simulation
     def set_integrator(self, integrator: str) -> None:
-        if integrator not in ("rk4", "rk4_kink", "rk4_node"):
+        if integrator not in GEARBOX_INTEGRATORS:
             raise FmuBuildError(f"integrator: {integrator!r} unknown for the planetary kernel")
         self.lib.pl_set_integrator(self.pl.ctypes.data, INTEGRATORS[integrator])
 

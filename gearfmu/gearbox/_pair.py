@@ -7,10 +7,11 @@ mesh's own ``tab`` tuple, mode pointer and work pointer.  They are imported here
 else in the gearbox package, so that a rename in gearfmu.dynamics is a one-line fix.
 """
 from ..dynamics.integrators import (  # noqa: F401  (re-exported to gearbox.kernels)
-    KINK_MAX_EVENTS, KINK_MAX_SLOTS, _guard_at, _guard_root, _mode_sync, _node_time, _pairs_hold, _seg_cross,
-    _seg_start, _switch_pair,
+    KINK_MAX_EVENTS, KINK_MAX_SLOTS, _guard_at, _guard_root, _held_tables, _mode_sync, _node_time, _pairs_hold,
+    _seg_cross, _seg_start, _switch_pair,
 )
 from ..dynamics.model_rhs import (  # noqa: F401  (re-exported to gearbox.kernels)
-    _CELL_NONE, _cell_nodes, _kvals, _kvals_sel, _mesh_force, _node_flags, _pair_force, _pair_force_locked,
-    _pair_guard, _phi_cell, _tab, _with_zones, _zone_sel,
+    NODE_KINK_TOL, _CELL_NONE, _cell_nodes, _kvals, _kvals_sel, _mesh_force, _node_flags, _pair_force,
+    _pair_force_locked, _pair_guard, _phi_cell, _seg_flags, _stop_flags, _tab, _with_zones, _zone_sel,
 )
+from ..dynamics.seg_rhs import _guard_seg, _seg_cell, _seg_sel  # noqa: F401  (re-exported to the multi-mesh kernels)

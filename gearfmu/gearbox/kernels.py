@@ -32,9 +32,10 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 from ._pair import (
-    KINK_MAX_EVENTS, _CELL_NONE, _cell_nodes, _guard_at, _guard_root, _kvals, _kvals_sel, _mesh_force, _mode_sync,
-    _node_time, _pair_force, _pair_force_locked, _pairs_hold, _phi_cell, _seg_cross, _seg_start,
-    _switch_pair, _tab, _with_zones, _zone_sel,
+    KINK_MAX_EVENTS, NODE_KINK_TOL, _CELL_NONE, _cell_nodes, _guard_at, _guard_root, _guard_seg, _held_tables, _kvals,
+    _kvals_sel, _mesh_force, _mode_sync, _node_flags, _node_time, _pair_force, _pair_force_locked, _pair_guard,
+    _pairs_hold, _phi_cell, _seg_cell, _seg_cross, _seg_flags, _seg_sel, _seg_start, _stop_flags, _switch_pair, _tab,
+    _with_zones, _zone_sel,
 )
 
 #: ints per mesh in ``mi`` and their slots
@@ -51,6 +52,27 @@ WK_ND = 22
 #: offsets (in units of the state length 2n) of the vectors in the work array W
 W_Y, W_F0, W_Y1, W_F1, W_TMP, W_ACC, W_KK, W_YT, W_TAU = range(9)
 W_VECTORS = 9
+#: the integrator code of 'rk4_seg' (gearfmu.common.vocabulary.INTEGRATORS)
+ICODE_SEG = 3
+#: how :func:`_rhs` reads the meshes: the plain lookup with the carried cell ('rk4'), the held mode
+#: ('rk4_kink', 'rk4_node'), the held mode with every evaluation in its own cell of the held segment
+#: ('rk4_seg'; gb_kernel.c and pl_kernel.c: the ``locked`` 0, 1 and 3 of their right-hand sides)
+LOOKUP_PLAIN = 0
+LOOKUP_HELD = 1
+LOOKUP_SEG = 3
+
+
+def stop_flags(k, e, b, cuts, zoned, icode):
+    """The stop flags (uint8 per table node) of one mesh for integrator code ``icode``: rk4_node's
+    (gearfmu.dynamics.model_rhs._node_flags), or for rk4_seg the pair's rk4_seg stops
+    (_seg_flags: big kinks, contact_zone-flag changes, cells with a contact-zone edge) and every node
+    where e bends at all (the NODE_KINK_TOL test on e alone): the multi-mesh kernels integrate the
+    true velocities, so the damping term c*(de/dphi)*omega, which jumps where e bends, is not stepped
+    over (docs/planetary.md "rk4_seg"; the arithmetic of gk_stops.c gki_node_flags, its bits 1 and 2)."""
+    if icode != ICODE_SEG:
+        return _node_flags(k, e, b)
+    e_bends = _stop_flags(np.ones_like(k), e, np.zeros_like(b), cuts, False, NODE_KINK_TOL)
+    return _seg_flags(k, e, b, cuts, zoned) | e_bends
 
 
 def _ptr_intrinsic(dtype):
@@ -136,12 +158,46 @@ def _mesh_locked(tab, md, th, om, x, v, nd, i0, i1):
     return f
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _mesh_seg(tab, md, wk, th, om, x, v):
+    """rk4_seg: the mesh force (N) with the mode held and the tables read in the cell of th clamped to
+    the held segment (gearfmu.dynamics.seg_rhs._seg_cell, _seg_sel; docs/gearbox.md "rk4_seg")."""
+    p = tab[8]
+    nd = wk[WK_ND]
+    lo = wk[16]
+    hi = wk[17]
+    cc, a0, a1, w = _seg_cell(tab, th, nd, md[4 * p], md[4 * p + 1], lo, hi)
+    f = 0.0
+    for j in range(p):
+        kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+        f += _pair_force_locked(kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j], md[2 * p + j])
+    return f
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _pairs_hold_seg(tab, md, wk, th, om, x, v):
+    """rk4_seg: True when no pair guard is negative at the mesh's state, the tables read as
+    :func:`_mesh_seg` (gearfmu.dynamics.integrators._pairs_hold in the cell of th)."""
+    p = tab[8]
+    nd = wk[WK_ND]
+    lo = wk[16]
+    hi = wk[17]
+    cc, a0, a1, w = _seg_cell(tab, th, nd, md[4 * p], md[4 * p + 1], lo, hi)
+    for j in range(p):
+        kv, ev, es, bv = _kvals_sel(tab, j, a0, a1, w, _seg_sel(tab, md, j, cc, a0, nd, lo, hi))
+        for q in range(3):
+            if _pair_guard(q, kv, ev, es, bv, x, v, om, tab[10], tab[11], md[j], md[p + j]) < 0.0:
+                return False
+    return True
+
+
 @njit(cache=True, error_model="numpy")
 def _rhs(gb, W, o, od, t_in, t_out, locked):
     """Derivative of the state at offset o of W into offset od (docs/gearbox.md "Model"):
     torques of the inputs, shafts and meshes on every body, a_i = tau_i/I_i, psi'' = a_0,
-    u_i'' = a_i - g_i a_0.  ``locked``: every mesh with its held mode (event-aware
-    integrators), else the plain lookup with the carried cell (rk4)."""
+    u_i'' = a_i - g_i a_0.  ``locked``: LOOKUP_HELD every mesh with its held mode (rk4_kink,
+    rk4_node), LOOKUP_SEG the held mode read in the cell of each evaluation (rk4_seg), LOOKUP_PLAIN
+    the plain lookup with the carried cell (rk4)."""
     mi, mf, bf, si, sf, n, nm, ns, lb, n2 = gb
     ot = W_TAU * n2
     for i in range(n):
@@ -158,7 +214,9 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
         th, om, x, v = _local(mi, mf, m, W, o)
         tab = _mtab(mi, mf, m)
         k = m * MI
-        if locked:
+        if locked == LOOKUP_SEG:
+            fm = _mesh_seg(tab, _i64p(mi[k + I_MD]), _f64p(mi[k + I_WK]), th, om, x, v)
+        elif locked == LOOKUP_HELD:
             md = _i64p(mi[k + I_MD])
             wk = _f64p(mi[k + I_WK])
             fm = _mesh_locked(tab, md, th, om, x, v, wk[WK_ND], md[4 * tab[8]], md[4 * tab[8] + 1])
@@ -244,23 +302,27 @@ def _mesh_cross(gb, W, m, up, node):
 
 
 @njit(cache=True, error_model="numpy")
-def _mesh_guards_hold(gb, W, o, m, seg):
-    """True when no pair guard of mesh m is negative at the state at offset o (and, with ``seg``,
-    neither of its segment guards)."""
+def _mesh_guards_hold(gb, W, o, m, segment, lk):
+    """True when no pair guard of mesh m is negative at the state at offset o (and, with ``segment``,
+    neither of its segment guards); the tables read as :func:`_rhs` with ``lk``."""
     mi, mf = gb[0], gb[1]
     tab = _mtab(mi, mf, m)
     md = _i64p(mi[m * MI + I_MD])
     wk = _f64p(mi[m * MI + I_WK])
     th, om, x, v = _local(mi, mf, m, W, o)
-    if seg and (th - wk[16] * tab[9] < 0.0 or wk[17] * tab[9] - th < 0.0):
+    if segment and (th - wk[16] * tab[9] < 0.0 or wk[17] * tab[9] - th < 0.0):
         return False
+    if lk == LOOKUP_SEG:
+        return _pairs_hold_seg(tab, md, wk, th, om, x, v)
     p = tab[8]
     return _pairs_hold(tab, md, th, om, x, v, wk[WK_ND], md[4 * p], md[4 * p + 1])
 
 
 @njit(cache=True, error_model="numpy")
-def _gb_substep(gb, W, h, node, t_in, t_out):
-    """One substep of length h of 'rk4_kink' (``node`` False) or 'rk4_node' (True) for the whole
+def _gb_substep(gb, W, h, node, lk, t_in, t_out):
+    """One substep of length h of 'rk4_kink' (``node`` False), 'rk4_node' (True) or 'rk4_seg' (True
+    and ``lk`` LOOKUP_SEG: every evaluation, guard and root search in the cell of its own angle
+    clamped to the held segment, docs/gearbox.md "rk4_seg") for the whole
     gearbox (docs/gearbox.md "Integrators"): the pair's rk4_kink / rk4_node substep
     (gearfmu.dynamics.integrators._kink_substep) with every mesh holding its own cell, segment
     and pair modes.  A step ends at the earliest predicted node crossing of any mesh (rk4_node),
@@ -269,6 +331,7 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
     number of events."""
     mi, mf, bf, si, sf, n, nm, ns, lb, n2 = gb
     oy, of0, oy1, of1, oyt = W_Y * n2, W_F0 * n2, W_Y1 * n2, W_F1 * n2, W_YT * n2
+    seg = lk == LOOKUP_SEG
     rem = h
     nev = 0
     while True:
@@ -284,7 +347,7 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
                     i0, i1 = _cell_nodes(cn, tab[7])
                     _hold(tab, md, wk, cn, i0, i1)
                     _zone_sel(tab, md, cn, i0, wk[16], wk[17])
-        _rhs(gb, W, oy, of0, t_in, t_out, True)
+        _rhs(gb, W, oy, of0, t_in, t_out, lk)
         if node and nev < KINK_MAX_EVENTS:
             best_tau = -1.0
             best_m = -1
@@ -297,10 +360,10 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
                     best_tau = tau
                     best_m = m
             if best_m >= 0:
-                _rk4(gb, W, oy, of0, best_tau, oyt, t_in, t_out, True)
+                _rk4(gb, W, oy, of0, best_tau, oyt, t_in, t_out, lk)
                 ok = True
                 for m in range(nm):
-                    if not _mesh_guards_hold(gb, W, oyt, m, m != best_m):
+                    if not _mesh_guards_hold(gb, W, oyt, m, m != best_m, lk):
                         ok = False
                         break
                 if ok:
@@ -313,7 +376,7 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
                     if not rem > 0.0:
                         break
                     continue
-        _rk4(gb, W, oy, of0, rem, oy1, t_in, t_out, True)
+        _rk4(gb, W, oy, of0, rem, oy1, t_in, t_out, lk)
         if nev >= KINK_MAX_EVENTS:
             for i in range(n2):
                 W[oy + i] = W[oy1 + i]
@@ -322,14 +385,14 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
             break
         any_neg = False
         for m in range(nm):
-            if not _mesh_guards_hold(gb, W, oy1, m, True):
+            if not _mesh_guards_hold(gb, W, oy1, m, True, lk):
                 any_neg = True
                 break
         if not any_neg:
             for i in range(n2):
                 W[oy + i] = W[oy1 + i]
             break
-        _rhs(gb, W, oy1, of1, t_in, t_out, True)
+        _rhs(gb, W, oy1, of1, t_in, t_out, lk)
         best = 2.0
         best_m = -1
         best_gi = -1
@@ -343,7 +406,10 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
             ta, tb, tc, td = _local(mi, mf, m, W, oy1)
             have = False
             for gi in range(2 + 3 * p):
-                g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
+                if seg:
+                    g = _guard_seg(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17], 0.0, 0.0)
+                else:
+                    g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
                 if g < 0.0:
                     if not have:  # the mesh's Hermite data: its local view of y, f0, y1, f1
                         wk[0], wk[1], wk[2], wk[3] = _local(mi, mf, m, W, oy)
@@ -351,7 +417,7 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
                         wk[8], wk[9], wk[10], wk[11] = ta, tb, tc, td
                         wk[12], wk[13], wk[14], wk[15] = _local(mi, mf, m, W, of1)
                         have = True
-                    s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
+                    s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1, seg, 0.0, 0.0)
                     if s < best:
                         best = s
                         best_m = m
@@ -366,7 +432,7 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
             rem = 0.0
         elif best > 0.0:
             tau = best * rem
-            _rk4(gb, W, oy, of0, tau, oyt, t_in, t_out, True)
+            _rk4(gb, W, oy, of0, tau, oyt, t_in, t_out, lk)
             for i in range(n2):
                 W[oy + i] = W[oyt + i]
             rem = rem - tau
@@ -383,8 +449,8 @@ def _gb_substep(gb, W, h, node, t_in, t_out):
             th, om, x, v = _local(mi, mf, best_m, W, oy)
             kv = ev = es = bv = 0.0
             if md[j] == 0 and tab[11] == 0:   # the sub-mode decision of a contact onset reads the tables
-                w = (th - wk[WK_ND] * tab[9]) * tab[12]
-                kv, ev, es, bv = _kvals_sel(tab, j, md[4 * p], md[4 * p + 1], w, md[3 * p + j])
+                kv, ev, es, bv = _held_tables(tab, md, j, th, wk[WK_ND], md[4 * p], md[4 * p + 1], wk[16], wk[17],
+                                              seg)
             _switch_pair(md, p, j, (best_gi - 2) - 3 * j, tab[11], kv, ev, es, bv, x, v, om, tab[10])
         if not rem > 0.0:
             break
@@ -431,7 +497,7 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
     row step0 + 1 + s of the outputs after step s (row 0 is written when step0 == 0).  Step s holds
     the motor torque t_in[s] and the load torque t_out[s] (N*m) and, per mesh m, the torque row
     it_rows[s, m] with weight wt_rows[s, m]; n_sub substeps of h (s).  ``icode``: 0 'rk4', 1
-    'rk4_kink', 2 'rk4_node'.  Returns the number of completed steps (fewer when the state turned
+    'rk4_kink', 2 'rk4_node', 3 'rk4_seg' (the meshes' flags those of rk4_seg).  Returns the number of completed steps (fewer when the state turned
     non-finite).  ``mi``, ``mf`` are the per-mesh data of the module docstring (their
     addresses of k, e, b, flags, cuts, mode and work arrays must stay valid: the caller owns
     them)."""
@@ -458,14 +524,16 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
             _write_row(gb, wp, 0, out_body, out_mesh, out_pair, pair_off, out_shaft)
         nev = 0
         if icode >= 1:
+            node = icode >= 2
+            lk = LOOKUP_SEG if icode == ICODE_SEG else LOOKUP_HELD
             for m in range(nm):
-                _mesh_start(gb, wp, m, icode == 2)
+                _mesh_start(gb, wp, m, node)
             for _ in range(n_sub):
-                nev += _gb_substep(gb, wp, h, icode == 2, t_in[r], t_out[r])
+                nev += _gb_substep(gb, wp, h, node, lk, t_in[r], t_out[r])
         else:
             for _ in range(n_sub):
-                _rhs(gb, wp, 0, W_F0 * n2, t_in[r], t_out[r], False)
-                _rk4(gb, wp, 0, W_F0 * n2, h, W_YT * n2, t_in[r], t_out[r], False)
+                _rhs(gb, wp, 0, W_F0 * n2, t_in[r], t_out[r], LOOKUP_PLAIN)
+                _rk4(gb, wp, 0, W_F0 * n2, h, W_YT * n2, t_in[r], t_out[r], LOOKUP_PLAIN)
                 for i in range(n2):
                     W[i] = W[W_YT * n2 + i]
         out_events[r + 1] = nev

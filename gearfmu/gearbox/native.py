@@ -31,9 +31,9 @@ from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
                                write_columns_csv)
 from ..tables.zones import zone_cuts
-from ._pair import KINK_MAX_SLOTS, _node_flags
+from ._pair import KINK_MAX_SLOTS
 from .kernels import F_C, F_DPHI, F_G, F_INV, F_RBP, F_RBQ, I_B, I_CUTS, I_E, I_FLAGS, I_K, I_MD, I_MODEL, I_N, \
-    I_NP, I_P, I_Q, I_ROWS2, I_WK, I_ZONED, MF, MI, WK, run
+    I_NP, I_P, I_Q, I_ROWS2, I_WK, I_ZONED, MF, MI, WK, run, stop_flags
 from .model import GearboxModel
 from .modes import modes
 
@@ -127,7 +127,7 @@ class _KernelData:
     """The flat per-mesh data of gearfmu.gearbox.kernels (its module docstring) and the arrays
     whose addresses it holds (kept alive here while a run uses them)."""
 
-    def __init__(self, model: GearboxModel):
+    def __init__(self, model: GearboxModel, icode: int = INTEGRATORS["rk4_node"]):
         nm = len(model.meshes)
         self.keep = []
         self.mi = np.zeros(nm * MI, dtype=np.int64)
@@ -142,7 +142,7 @@ class _KernelData:
             cuts = zone_cuts(t)
             zoned = cuts is not None
             cuts = np.ascontiguousarray(cuts) if zoned else _NO_CUTS
-            flags = _node_flags(k, e, b)
+            flags = stop_flags(k, e, b, cuts, zoned, icode)
             md = np.zeros(4 * t.slots + 2, dtype=np.int64)
             wk = np.zeros(WK)
             self.keep += [k, e, b, cuts, flags, md, wk]
@@ -283,7 +283,7 @@ def simulate(model: GearboxModel, settings: Optional[GearboxRunSettings] = None,
     H, w0 = s.output_interval_s, s.motor_speed_start_rad_s
     n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
-    kd = _KernelData(model)
+    kd = _KernelData(model, icode)
     nm = len(model.meshes)
     it_rows = np.zeros((n_steps + 1, nm), dtype=np.int64)
     wt_rows = np.zeros((n_steps + 1, nm))

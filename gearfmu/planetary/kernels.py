@@ -30,12 +30,13 @@ import numpy as np
 from numba import njit
 
 from ..gearbox._pair import (
-    KINK_MAX_EVENTS, _CELL_NONE, _cell_nodes, _guard_at, _guard_root, _kvals, _kvals_sel, _mesh_force, _mode_sync,
-    _node_time, _pair_force, _pairs_hold, _phi_cell, _seg_cross, _seg_start, _switch_pair, _tab, _with_zones,
-    _zone_sel,
+    KINK_MAX_EVENTS, _CELL_NONE, _cell_nodes, _guard_at, _guard_root, _guard_seg, _held_tables, _kvals, _mesh_force,
+    _mode_sync, _node_time, _pair_force, _pairs_hold, _phi_cell, _seg_cross, _seg_start, _switch_pair, _tab,
+    _with_zones, _zone_sel,
 )
-from ..gearbox.kernels import (W_ACC, W_F0, W_F1, W_KK, W_TAU, W_TMP, W_VECTORS, W_Y, W_Y1, W_YT, WK, WK_ND, _addr,
-                               _f64p, _hold, _i64p, _mesh_locked, _u8p)
+from ..gearbox.kernels import (ICODE_SEG, LOOKUP_HELD, LOOKUP_PLAIN, LOOKUP_SEG, W_ACC, W_F0, W_F1, W_KK, W_TAU, W_TMP, W_VECTORS,
+                               W_Y, W_Y1, W_YT, WK, WK_ND, _addr, _f64p, _hold, _i64p, _mesh_locked, _mesh_seg,
+                               _pairs_hold_seg, _u8p)
 
 #: ints per mesh in ``mi`` and their slots
 MI = 25
@@ -105,8 +106,9 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
     of the generalised momentum, psi'' = (T_in - sum_i>0 g_i Q_i - sum_frames g_f ((R0 + q_a) Q_b -
     q_b Q_a))/m_0 (the internal forces cancel exactly, also where the linearised translations of a
     turning stage carry moments); q_i'' = (Q_i + external)/m_i - g_i psi'' plus the inertial terms of
-    the rotating frames.  ``locked``: every mesh with its held mode (event-aware integrators), else
-    the plain lookup with the carried cell (rk4)."""
+    the rotating frames.  ``locked``: LOOKUP_HELD every mesh with its held mode (rk4_kink, rk4_node),
+    LOOKUP_SEG the held mode read in the cell of each evaluation (rk4_seg), LOOKUP_PLAIN the plain
+    lookup with the carried cell (rk4)."""
     mi, mf, bf, si, sf, fi, ff, n, nm, ns, nf, lb, n2 = gb
     ot = W_TAU * n2
     for i in range(n):
@@ -127,7 +129,9 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
         th, om, x, v = _local(mi, mf, m, W, o, 1.0)
         tab = _mtab(mi, mf, m)
         k = m * MI
-        if locked:
+        if locked == LOOKUP_SEG:
+            fm = _mesh_seg(tab, _i64p(mi[k + I_MD]), _f64p(mi[k + I_WK]), th, om, x, v)
+        elif locked == LOOKUP_HELD:
             md = _i64p(mi[k + I_MD])
             wk = _f64p(mi[k + I_WK])
             fm = _mesh_locked(tab, md, th, om, x, v, wk[WK_ND], md[4 * tab[8]], md[4 * tab[8] + 1])
@@ -227,28 +231,34 @@ def _mesh_cross(gb, W, m, up, node):
 
 
 @njit(cache=True, error_model="numpy")
-def _mesh_guards_hold(gb, W, o, m, seg):
-    """True when no pair guard of mesh m is negative at the state at offset o (with ``seg`` neither
-    of its segment guards)."""
+def _mesh_guards_hold(gb, W, o, m, segment, lk):
+    """True when no pair guard of mesh m is negative at the state at offset o (with ``segment``
+    neither of its segment guards); the tables read as :func:`_rhs` with ``lk``."""
     mi, mf = gb[0], gb[1]
     tab = _mtab(mi, mf, m)
     md = _i64p(mi[m * MI + I_MD])
     wk = _f64p(mi[m * MI + I_WK])
     th, om, x, v = _local(mi, mf, m, W, o, 1.0)
-    if seg and (th - wk[16] * tab[9] < 0.0 or wk[17] * tab[9] - th < 0.0):
+    if segment and (th - wk[16] * tab[9] < 0.0 or wk[17] * tab[9] - th < 0.0):
         return False
+    if lk == LOOKUP_SEG:
+        return _pairs_hold_seg(tab, md, wk, th, om, x, v)
     p = tab[8]
     return _pairs_hold(tab, md, th, om, x, v, wk[WK_ND], md[4 * p], md[4 * p + 1])
 
 
 @njit(cache=True, error_model="numpy")
-def _substep(gb, W, h, node, t_in, t_out):
-    """One substep of 'rk4_kink' (``node`` False) or 'rk4_node' (True): the gearbox's substep
-    (gearfmu.gearbox.kernels._gb_substep) over the generalised meshes.  Returns the number of events."""
+def _substep(gb, W, h, node, lk, t_in, t_out):
+    """One substep of 'rk4_kink' (``node`` False), 'rk4_node' (True) or 'rk4_seg' (True and ``lk``
+    LOOKUP_SEG): the gearbox's substep (gearfmu.gearbox.kernels._gb_substep) over the generalised
+    meshes.  rk4_seg runs as rk4_node between the stops of its flags (docs/planetary.md "rk4_seg"),
+    every evaluation, guard and root search reading the tables in the cell of its own angle clamped
+    to the held segment.  Returns the number of events."""
     mi, mf = gb[0], gb[1]
     nm = gb[8]
     n2 = gb[12]
     oy, of0, oy1, of1, oyt = W_Y * n2, W_F0 * n2, W_Y1 * n2, W_F1 * n2, W_YT * n2
+    seg = lk == LOOKUP_SEG
     rem = h
     nev = 0
     while True:
@@ -264,7 +274,7 @@ def _substep(gb, W, h, node, t_in, t_out):
                     i0, i1 = _cell_nodes(cn, tab[7])
                     _hold(tab, md, wk, cn, i0, i1)
                     _zone_sel(tab, md, cn, i0, wk[16], wk[17])
-        _rhs(gb, W, oy, of0, t_in, t_out, True)
+        _rhs(gb, W, oy, of0, t_in, t_out, lk)
         if node and nev < KINK_MAX_EVENTS:
             best_tau = -1.0
             best_m = -1
@@ -277,10 +287,10 @@ def _substep(gb, W, h, node, t_in, t_out):
                     best_tau = tau
                     best_m = m
             if best_m >= 0:
-                _rk4(gb, W, oy, of0, best_tau, oyt, t_in, t_out, True)
+                _rk4(gb, W, oy, of0, best_tau, oyt, t_in, t_out, lk)
                 ok = True
                 for m in range(nm):
-                    if not _mesh_guards_hold(gb, W, oyt, m, m != best_m):
+                    if not _mesh_guards_hold(gb, W, oyt, m, m != best_m, lk):
                         ok = False
                         break
                 if ok:
@@ -293,7 +303,7 @@ def _substep(gb, W, h, node, t_in, t_out):
                     if not rem > 0.0:
                         break
                     continue
-        _rk4(gb, W, oy, of0, rem, oy1, t_in, t_out, True)
+        _rk4(gb, W, oy, of0, rem, oy1, t_in, t_out, lk)
         if nev >= KINK_MAX_EVENTS:
             for i in range(n2):
                 W[oy + i] = W[oy1 + i]
@@ -302,14 +312,14 @@ def _substep(gb, W, h, node, t_in, t_out):
             break
         any_neg = False
         for m in range(nm):
-            if not _mesh_guards_hold(gb, W, oy1, m, True):
+            if not _mesh_guards_hold(gb, W, oy1, m, True, lk):
                 any_neg = True
                 break
         if not any_neg:
             for i in range(n2):
                 W[oy + i] = W[oy1 + i]
             break
-        _rhs(gb, W, oy1, of1, t_in, t_out, True)
+        _rhs(gb, W, oy1, of1, t_in, t_out, lk)
         best = 2.0
         best_m = -1
         best_gi = -1
@@ -323,7 +333,10 @@ def _substep(gb, W, h, node, t_in, t_out):
             ta, tb, tc, td = _local(mi, mf, m, W, oy1, 1.0)
             have = False
             for gi in range(2 + 3 * p):
-                g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
+                if seg:
+                    g = _guard_seg(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17], 0.0, 0.0)
+                else:
+                    g = _guard_at(tab, md, gi, ta, tb, tc, td, nd, i0, i1, wk[16], wk[17])
                 if g < 0.0:
                     if not have:  # the mesh's Hermite data: its local view of y, f0, y1, f1
                         wk[0], wk[1], wk[2], wk[3] = _local(mi, mf, m, W, oy, 1.0)
@@ -331,7 +344,7 @@ def _substep(gb, W, h, node, t_in, t_out):
                         wk[8], wk[9], wk[10], wk[11] = ta, tb, tc, td
                         wk[12], wk[13], wk[14], wk[15] = _local(mi, mf, m, W, of1, 0.0)
                         have = True
-                    s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1)
+                    s = _guard_root(tab, md, gi, g, wk, rem, nd, i0, i1, seg, 0.0, 0.0)
                     if s < best:
                         best = s
                         best_m = m
@@ -346,7 +359,7 @@ def _substep(gb, W, h, node, t_in, t_out):
             rem = 0.0
         elif best > 0.0:
             tau = best * rem
-            _rk4(gb, W, oy, of0, tau, oyt, t_in, t_out, True)
+            _rk4(gb, W, oy, of0, tau, oyt, t_in, t_out, lk)
             for i in range(n2):
                 W[oy + i] = W[oyt + i]
             rem = rem - tau
@@ -363,8 +376,8 @@ def _substep(gb, W, h, node, t_in, t_out):
             th, om, x, v = _local(mi, mf, best_m, W, oy, 1.0)
             kv = ev = es = bv = 0.0
             if md[j] == 0 and tab[11] == 0:   # the sub-mode decision of a contact onset reads the tables
-                w = (th - wk[WK_ND] * tab[9]) * tab[12]
-                kv, ev, es, bv = _kvals_sel(tab, j, md[4 * p], md[4 * p + 1], w, md[3 * p + j])
+                kv, ev, es, bv = _held_tables(tab, md, j, th, wk[WK_ND], md[4 * p], md[4 * p + 1], wk[16], wk[17],
+                                              seg)
             _switch_pair(md, p, j, (best_gi - 2) - 3 * j, tab[11], kv, ev, es, bv, x, v, om, tab[10])
         if not rem > 0.0:
             break
@@ -414,7 +427,7 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
     """Communication steps step0 .. step0 + n_steps - 1 from the state ``y`` (2n, updated in place),
     as gearfmu.gearbox.kernels.run: row step0 + 1 + s after step s; step s holds t_in[s], t_out[s] and
     per mesh the torque row it_rows[s, m] with weight wt_rows[s, m]; n_sub substeps of h.  ``icode``:
-    0 'rk4', 1 'rk4_kink', 2 'rk4_node'.  Returns the number of completed steps."""
+    0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg' (the meshes' flags those of rk4_seg).  Returns the number of completed steps."""
     nm = mi.shape[0] // MI
     ns = si.shape[0] // SI
     nf = fi.shape[0] // 2
@@ -439,14 +452,16 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
             _write_row(gb, wp, 0, out_dof, out_mesh, out_pair, pair_off, out_spring)
         nev = 0
         if icode >= 1:
+            node = icode >= 2
+            lk = LOOKUP_SEG if icode == ICODE_SEG else LOOKUP_HELD
             for m in range(nm):
-                _mesh_start(gb, wp, m, icode == 2)
+                _mesh_start(gb, wp, m, node)
             for _ in range(n_sub):
-                nev += _substep(gb, wp, h, icode == 2, t_in[r], t_out[r])
+                nev += _substep(gb, wp, h, node, lk, t_in[r], t_out[r])
         else:
             for _ in range(n_sub):
-                _rhs(gb, wp, 0, W_F0 * n2, t_in[r], t_out[r], False)
-                _rk4(gb, wp, 0, W_F0 * n2, h, W_YT * n2, t_in[r], t_out[r], False)
+                _rhs(gb, wp, 0, W_F0 * n2, t_in[r], t_out[r], LOOKUP_PLAIN)
+                _rk4(gb, wp, 0, W_F0 * n2, h, W_YT * n2, t_in[r], t_out[r], LOOKUP_PLAIN)
                 for i in range(n2):
                     W[i] = W[W_YT * n2 + i]
         out_events[r + 1] = nev

@@ -27,7 +27,8 @@ from ..common.settings import SOLVER_ARGUMENTS, GearboxRunSettings, checked, def
 from ..common.vocabulary import INTEGRATORS
 from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
                                write_columns_csv)
-from ..gearbox._pair import KINK_MAX_SLOTS, _node_flags
+from ..gearbox._pair import KINK_MAX_SLOTS
+from ..gearbox.kernels import stop_flags
 from ..tables.zones import zone_cuts
 from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K, I_MD,
                       I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, WK, run)
@@ -131,7 +132,7 @@ class _KernelData:
     """The flat data of gearfmu.planetary.kernels (its module docstring) and the arrays whose
     addresses it holds (kept alive here while a run uses them)."""
 
-    def __init__(self, model: PlanetaryModel):
+    def __init__(self, model: PlanetaryModel, icode: int = INTEGRATORS["rk4_node"]):
         nm = len(model.mesh_names)
         self.keep = []
         self.mi = np.zeros(nm * MI, dtype=np.int64)
@@ -146,7 +147,7 @@ class _KernelData:
             cuts = zone_cuts(t)
             zoned = cuts is not None
             cuts = np.ascontiguousarray(cuts) if zoned else _NO_CUTS
-            flags = _node_flags(k, e, b)
+            flags = stop_flags(k, e, b, cuts, zoned, icode)
             md = np.zeros(4 * t.slots + 2, dtype=np.int64)
             wk = np.zeros(WK)
             self.keep += [k, e, b, cuts, flags, md, wk]
@@ -288,7 +289,7 @@ def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = Non
     H, w0 = s.output_interval_s, s.motor_speed_start_rad_s
     n_sub = substeps(H, s.max_step_s)
     h = H / n_sub
-    kd = _KernelData(model)
+    kd = _KernelData(model, icode)
     nm = len(model.mesh_names)
     it_rows = np.zeros((n_steps + 1, nm), dtype=np.int64)
     wt_rows = np.zeros((n_steps + 1, nm))

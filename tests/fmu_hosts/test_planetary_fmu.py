@@ -5,7 +5,7 @@ references its C code did not produce.
   language, on the example reducer (planetary + parallel stage, examples/scenes/planetary_reducer.toml)
   and the planetary stage alone (examples/scenes/planetary_stage.toml): the FMU stepped at exactly the
   native communication step, the native solver started from the FMU's initial state, every output
-  within 1e-12 of its range (measured: bit for bit) for rk4_node and rk4; the FMU's initial state is
+  within 1e-12 of its range (measured: bit for bit) for rk4_node, rk4_seg and rk4; the FMU's initial state is
   the model's quasi-static state (numpy's solve) within 1e-12 of the deviations' scale.
 * Kahraman (1994): equally spaced planets meshing in phase share the load equally; the FMU's
   load-sharing factors are 1 within 1e-6.
@@ -151,7 +151,7 @@ def _against_native(e, integrator, stop=None):
 
 
 @pytest.mark.parametrize("name", EXAMPLES)
-@pytest.mark.parametrize("integrator", ["rk4_node", "rk4"])
+@pytest.mark.parametrize("integrator", ["rk4_node", "rk4_seg", "rk4"])
 def test_cs_equals_the_native_planetary_solver(built, name, integrator):
     worst, got, nat, _ = _against_native(built[name], integrator)
     print(name, integrator, "worst |FMU - native| / range", max(worst.values()))

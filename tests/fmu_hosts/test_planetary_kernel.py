@@ -6,7 +6,7 @@ references its C code did not produce.
   stepped by pl_do_step at the native communication step from the native initial state reproduces the
   native state after the run and every native output column (DOF coordinates and rates, every mesh's
   DTE, its rate, force, stiffness, pair forces and load sharings, every spring force, every planet's
-  load-sharing factor) BIT FOR BIT (np.array_equal), for 'rk4', 'rk4_kink' and 'rk4_node', on: the
+  load-sharing factor) BIT FOR BIT (np.array_equal), for 'rk4', 'rk4_kink', 'rk4_node' and 'rk4_seg', on: the
   example reducer examples/scenes/planetary_reducer.toml (a translational planetary stage with a
   floating sun and a parallel stage), Lin & Parker's (1999) four-planet system of
   examples/scenes/planetary_lin_parker.toml (translational), a torsional stage (Kahraman 1994's purely
@@ -46,7 +46,7 @@ pytestmark = pytest.mark.slow  # compiles the kernel and runs the native solver:
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "examples" / "scenes"
-INTEGRATORS = ("rk4", "rk4_kink", "rk4_node")
+INTEGRATORS = ("rk4", "rk4_kink", "rk4_node", "rk4_seg")
 GK_OK, GK_ERR_MODEL, GK_ERR_INPUT, GK_ERR_STEP, GK_ERR_NONFINITE, GK_ERR_NOCONTACT, GK_ERR_PARAM = range(7)
 
 
@@ -235,7 +235,7 @@ def test_bad_arguments_give_status_codes(lib):
     assert L.pl_add_mesh(P, K.pairs[0].ctypes.data, 7, dof.ctypes.data, cf.ctypes.data, 0, None, None, 1.0, 0.0,
                          1.0) == GK_ERR_MODEL
     assert L.pl_add_group(P, 2, np.array([0, 99], dtype=np.intc).ctypes.data) == GK_ERR_MODEL
-    assert L.pl_set_integrator(P, 3) == GK_ERR_PARAM and L.pl_set_integrator(None, 0) == GK_ERR_MODEL
+    assert L.pl_set_integrator(P, 4) == GK_ERR_PARAM and L.pl_set_integrator(None, 0) == GK_ERR_MODEL
     assert L.pl_n_outputs(P) == K.n_out        # the refusals left the model as it was
     assert L.pl_do_step(P, W, S, nan, 0.0, 1e-4, 1e-5, out.ctypes.data) == GK_ERR_INPUT
     assert L.pl_do_step(P, W, S, 60.0, inf, 1e-4, 1e-5, out.ctypes.data) == GK_ERR_INPUT

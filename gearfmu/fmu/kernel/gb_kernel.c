@@ -102,11 +102,11 @@ int gb_set_integrator(gb_model *gb, int integrator)
 {
     int m, st;
     if (gb == NULL) return GK_ERR_MODEL;
-    if (integrator != GB_INTEGRATOR_RK4 && integrator != GB_INTEGRATOR_RK4_KINK && integrator != GB_INTEGRATOR_RK4_NODE)
+    if (integrator != GB_INTEGRATOR_RK4 && integrator != GB_INTEGRATOR_RK4_KINK && integrator != GB_INTEGRATOR_RK4_NODE
+        && integrator != GB_INTEGRATOR_RK4_SEG)
         return GK_ERR_PARAM;
-    /* each pair model stops where its integrator does (gk_stops.c reads it) */
     for (m = 0; m < gb->n_mesh; ++m) {
-        st = gk_set_integrator(gb->mesh[m].pair, integrator);
+        st = multimesh_integrator(gb->mesh[m].pair, integrator);
         if (st != GK_OK) return st;
     }
     gb->integrator = integrator;
@@ -170,8 +170,9 @@ static void select_rows(const gb_model *gb, gb_work *w, double T_motor, double T
 /* --------------------------------------------------------- right-hand side
  * dy at y (kernels._rhs): torques of the inputs, the shafts and the meshes on every body,
  * a_i = tau_i/I_i, psi'' = a_0, u_i'' = a_i - g_i a_0; `locked`: every mesh with its held mode
- * (1: the event integrators' gk_mode; 2: Model Exchange's gk_me, w->me), else the plain lookup with
- * the carried cell (rk4) */
+ * (1: the event integrators' gk_mode; 2: Model Exchange's gk_me, w->me; 3: rk4_seg, the gk_mode held
+ * and the tables read in the cell of the evaluation's angle clamped to the held segment,
+ * kernels._mesh_seg), else the plain lookup with the carried cell (rk4) */
 GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *dy, double t_in, double t_out,
                       const int locked)
 {
@@ -201,7 +202,19 @@ GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *d
         /* the mesh's local state (mesh_local) */
         double th = me->g_p * y[0] + u[p], om = me->g_p * y[1] + du[p];
         double x = rb1 * u[p] - rb2 * u[q], v = rb1 * du[p] - rb2 * du[q];
-        if (locked == 1) {   /* kernels._mesh_locked: the force loop of deriv_locked */
+        if (locked == 3) {
+            const gk_mode *md = &w->md[m];
+            gk_ph c;
+            int j;
+            double cc = seg_cell(pm, md, th, &c);
+            fm = 0.0;
+            for (j = 0; j < pm->P; ++j) {
+                double kv, ev, es, bv;
+                slot_tables(pm, &w->tq[m], &c, j, seg_sel(pm, md, j, cc, &c), &kv, &ev, &es, &bv);
+                fm += pair_force_locked(kv, ev, es, bv, x, v, om, pm->c_Ns_per_m, pm->damping_model, md->reg[j],
+                                        md->sub[j], md->kpos[j]);
+            }
+        } else if (locked == 1) {   /* kernels._mesh_locked: the force loop of deriv_locked */
             const gk_mode *md = &w->md[m];
             int j;
             fm = 0.0;
@@ -279,15 +292,16 @@ static void mesh_cross(const gb_model *gb, gb_work *w, int m, const double *y, i
     mode_sync(pm, &w->tq[m], md, loc, 0);
 }
 
-/* 1 when no pair guard of mesh m is negative at v (with `seg`, neither of its segment guards;
- * kernels._mesh_guards_hold) */
-static int mesh_guards_hold(const gb_model *gb, gb_work *w, int m, const double *v, int seg)
+/* 1 when no pair guard of mesh m is negative at v (with `segment`, neither of its segment guards), the
+ * tables read as gb_rhs with `lk` (kernels._mesh_guards_hold, _pairs_hold_seg) */
+static int mesh_guards_hold(const gb_model *gb, gb_work *w, int m, const double *v, int segment, int lk)
 {
     const gk_model *pm = gb->mesh[m].pair;
     const gk_mode *md = &w->md[m];
     double loc[4];
     mesh_local(&gb->mesh[m], v, loc);
-    if (seg && (loc[0] - md->lo * pm->dphi_rad < 0.0 || md->hi * pm->dphi_rad - loc[0] < 0.0)) return 0;
+    if (segment && (loc[0] - md->lo * pm->dphi_rad < 0.0 || md->hi * pm->dphi_rad - loc[0] < 0.0)) return 0;
+    if (lk == 3) return pairs_hold_seg(pm, &w->tq[m], md, loc);
     return pairs_hold(pm, &w->tq[m], md, loc);
 }
 
@@ -298,21 +312,30 @@ static void copy_state(double *dst, const double *src, int n2)
 }
 
 /* ---------------------------------------------------------- event substep
- * One substep of length h of rk4_kink (node 0) or rk4_node (node 1) for the whole gearbox
+ * One substep of length h of rk4_kink (node 0), rk4_node (node 1) or rk4_seg (node 1, lk 3: the tables
+ * read in the cell of each evaluation, the guards and root searches too) for the whole gearbox
  * (docs/gearbox.md "Integrators"; kernels._gb_substep): the pair's substep with every mesh holding
  * its own cell, segment and pair modes.  A step ends at the earliest predicted node crossing of
  * any mesh (rk4_node) when no guard of any mesh is negative there; else the trial step's guards
  * of every mesh are located on the step's Hermite interpolant mapped to each mesh's local state,
  * and the earliest event wins (ties: lower mesh, then lower guard).  Returns the events. */
-static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, double t_in, double t_out)
+static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, const int lk, double t_in,
+                       double t_out)
 {
     double *y = w->y, *f0 = w->f0, *y1 = w->y1, *f1 = w->f1, *yt = w->yt;
     double rem = h;
     long nev = 0;
-    int n2 = 2 * gb->n, m;
+    int n2 = 2 * gb->n, m, seg = lk == 3;
     for (;;) {
         double best = 2.0;
         int best_m = -1, best_gi = -1, any_neg;
+        if (seg) {   /* the segments are fixed until the next pass */
+            for (m = 0; m < gb->n_mesh; ++m) {
+                gk_mode *md = &w->md[m];
+                md->cl = floor(md->lo);
+                md->ch = ceil(md->hi) - 1.0;
+            }
+        }
         if (node) {   /* the held cell follows theta_p inside the held segment */
             for (m = 0; m < gb->n_mesh; ++m) {
                 const gk_model *pm = gb->mesh[m].pair;
@@ -327,7 +350,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
                 }
             }
         }
-        gb_rhs(gb, w, y, f0, t_in, t_out, 1);
+        gb_rhs(gb, w, y, f0, t_in, t_out, lk);
         if (node && nev < GK_KINK_MAX_EVENTS) {   /* the earliest segment end ahead: one step to it */
             double best_tau = -1.0;
             best_m = -1;
@@ -345,9 +368,9 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
             }
             if (best_m >= 0) {
                 int ok = 1;
-                gb_rk4(gb, w, y, f0, best_tau, yt, t_in, t_out, 1);
+                gb_rk4(gb, w, y, f0, best_tau, yt, t_in, t_out, lk);
                 for (m = 0; m < gb->n_mesh; ++m)
-                    if (!mesh_guards_hold(gb, w, m, yt, m != best_m)) {
+                    if (!mesh_guards_hold(gb, w, m, yt, m != best_m, lk)) {
                         ok = 0;
                         break;
                     }
@@ -365,7 +388,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
                 }
             }
         }
-        gb_rk4(gb, w, y, f0, rem, y1, t_in, t_out, 1);
+        gb_rk4(gb, w, y, f0, rem, y1, t_in, t_out, lk);
         if (nev >= GK_KINK_MAX_EVENTS) {
             copy_state(y, y1, n2);
             for (m = 0; m < gb->n_mesh; ++m) mesh_start(gb, w, m, y, node);
@@ -373,7 +396,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
         }
         any_neg = 0;
         for (m = 0; m < gb->n_mesh; ++m)
-            if (!mesh_guards_hold(gb, w, m, y1, 1)) {
+            if (!mesh_guards_hold(gb, w, m, y1, 1, lk)) {
                 any_neg = 1;
                 break;
             }
@@ -381,7 +404,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
             copy_state(y, y1, n2);
             break;
         }
-        gb_rhs(gb, w, y1, f1, t_in, t_out, 1);
+        gb_rhs(gb, w, y1, f1, t_in, t_out, lk);
         best_m = -1;
         for (m = 0; m < gb->n_mesh; ++m) {
             const gk_model *pm = gb->mesh[m].pair;
@@ -390,7 +413,8 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
             int gi, have = 0, n_guard = 2 + 3 * pm->P;
             mesh_local(&gb->mesh[m], y1, l1);
             for (gi = 0; gi < n_guard; ++gi) {
-                double g = guard_at(pm, &w->tq[m], md, gi, l1), s;
+                double g = seg ? guard_seg(pm, &w->tq[m], md, gi, l1, 0.0, 0.0) : guard_at(pm, &w->tq[m], md, gi, l1);
+                double s;
                 if (!(g < 0.0)) continue;
                 if (!have) {   /* the mesh's Hermite data: its local view of y, f0, y1, f1 */
                     mesh_local(&gb->mesh[m], y, l0);
@@ -398,7 +422,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
                     mesh_local(&gb->mesh[m], f1, d1);
                     have = 1;
                 }
-                s = held_guard_root(pm, &w->tq[m], md, gi, g, l0, d0, l1, d1, rem);
+                s = guard_root(pm, &w->tq[m], md, gi, g, l0, d0, l1, d1, rem, seg, 0.0, 0.0);
                 if (s < best) {
                     best = s;
                     best_m = m;
@@ -415,7 +439,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
             rem = 0.0;
         } else if (best > 0.0) {
             double tau = best * rem;
-            gb_rk4(gb, w, y, f0, tau, yt, t_in, t_out, 1);
+            gb_rk4(gb, w, y, f0, tau, yt, t_in, t_out, lk);
             copy_state(y, yt, n2);
             rem = rem - tau;
         }
@@ -429,7 +453,7 @@ static long gb_substep(const gb_model *gb, gb_work *w, double h, int node, doubl
             double loc[4], kv = 0.0, ev = 0.0, es = 0.0, bv = 0.0;
             mesh_local(&gb->mesh[best_m], y, loc);
             if (md->reg[j] == 0 && pm->damping_model == GK_DAMPING_ELASTOBACKLASH)
-                locked_tables(pm, &w->tq[best_m], md, loc[0], j, &kv, &ev, &es, &bv);
+                held_tables(pm, &w->tq[best_m], md, j, loc[0], &kv, &ev, &es, &bv, seg);
             switch_pair(pm, md, j, (best_gi - 2) - 3 * j, kv, ev, es, bv, loc);
         }
         if (!(rem > 0.0)) break;
@@ -547,10 +571,13 @@ int gb_do_step(const gb_model *gb, gb_work *w, gb_state *s, double T_motor, doub
     select_rows(gb, w, t_in, t_out);
     copy_state(w->y, s->y, n2);
     w->events = 0;
-    if (gb->integrator == GB_INTEGRATOR_RK4_KINK || gb->integrator == GB_INTEGRATOR_RK4_NODE) {
+    if (gb->integrator == GB_INTEGRATOR_RK4_SEG) {
+        for (m = 0; m < gb->n_mesh; ++m) mesh_start(gb, w, m, w->y, 1);
+        for (i = 0; i < nsub; ++i) w->events += gb_substep(gb, w, h, 1, 3, t_in, t_out);
+    } else if (gb->integrator == GB_INTEGRATOR_RK4_KINK || gb->integrator == GB_INTEGRATOR_RK4_NODE) {
         int node = gb->integrator == GB_INTEGRATOR_RK4_NODE;
         for (m = 0; m < gb->n_mesh; ++m) mesh_start(gb, w, m, w->y, node);
-        for (i = 0; i < nsub; ++i) w->events += gb_substep(gb, w, h, node, t_in, t_out);
+        for (i = 0; i < nsub; ++i) w->events += gb_substep(gb, w, h, node, 1, t_in, t_out);
     } else {
         for (i = 0; i < nsub; ++i) {
             gb_rhs(gb, w, w->y, w->f0, t_in, t_out, 0);

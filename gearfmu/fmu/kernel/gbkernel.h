@@ -32,10 +32,12 @@ extern "C" {
 #define GB_MAX_SHAFTS 64
 #define GB_MAX_STATE (2 * GB_MAX_BODIES)
 
-/* integrators (docs/gearbox.md "Integrators"): the pair's codes; rk4_seg is not offered */
+/* integrators (docs/gearbox.md "Integrators"): the pair's codes; rk4_seg runs as rk4_node between its
+ * stops, every evaluation in the cell of its own angle, the true velocities integrated */
 #define GB_INTEGRATOR_RK4 GK_INTEGRATOR_RK4
 #define GB_INTEGRATOR_RK4_KINK GK_INTEGRATOR_RK4_KINK
 #define GB_INTEGRATOR_RK4_NODE GK_INTEGRATOR_RK4_NODE
+#define GB_INTEGRATOR_RK4_SEG GK_INTEGRATOR_RK4_SEG
 
 typedef struct gb_mesh {
     gk_model *pair;   /* the stage's pair model (borrowed; gk_init done, cuts and damping set) */

@@ -112,56 +112,6 @@ GK_INLINE void rk4_locked(const gk_model *m, const gk_tq *t, const gk_mode *md, 
  * v - g_v*C), C = c*sum e_j over the damped pairs.  Same arithmetic as _seg_substep and
  * friends in gearfmu/dynamics/integrators.py and model_rhs.py. */
 
-/* the cell of th clamped to the held segment (seg_rhs._seg_cell): its nodes and weight in
- * *c, its global index returned */
-GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
-{
-    int N = m->n_phi;
-    double cc = floor(th * m->inv_dphi);
-    if (!(cc > md->cl)) cc = md->cl;
-    if (cc > md->ch) cc = md->ch;
-    if (cc == md->nd) {
-        c->i0 = md->i0;
-        c->i1 = md->i1;
-    } else if (cc == md->nd + 1.0) {
-        c->i0 = md->i1;
-        c->i1 = (md->i1 == N - 1) ? 0 : md->i1 + 1;
-    } else if (cc == md->nd - 1.0) {
-        c->i1 = md->i0;
-        c->i0 = (md->i0 == 0) ? N - 1 : md->i0 - 1;
-    } else {
-        c->i0 = gki_node_index(N, cc);
-        c->i1 = (c->i0 + 1 == N) ? 0 : c->i0 + 1;
-    }
-    c->nd = GK_CELL_NONE;
-    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
-    return cc;
-}
-
-/* held side of pair j's contact-zone cut in cell c of the segment (seg_rhs._seg_sel) */
-GK_INLINE int seg_sel(const gk_model *m, const gk_mode *md, int j, double cc, const gk_ph *c)
-{
-    size_t r;
-    double clo, a, b, wm;
-    if (cc == md->nd || m->zone_cuts == NULL) return md->zsel[j];
-    r = (size_t)j * m->n_phi + c->i0;
-    clo = m->zone_cuts[r];
-    if (!(clo >= 0.0)) return -1;
-    a = (md->lo > cc) ? md->lo : cc;
-    b = (md->hi < cc + 1.0) ? md->hi : cc + 1.0;
-    wm = 0.5 * (a + b) - cc;
-    if (wm < clo) return 0;
-    if (wm >= m->zone_cuts[(size_t)m->P * m->n_phi + r]) return 2;
-    return 1;
-}
-
-/* the pair carries the viscous term in its held mode (seg_rhs._seg_damped) */
-GK_INLINE int seg_damped(const gk_model *m, const gk_mode *md, int j)
-{
-    if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) return md->reg[j] != 0 && md->sub[j] == 1;
-    return md->kpos[j] != 0;
-}
-
 /* C = c*sum e_j over the damped pairs at th (seg_rhs._seg_ce) */
 GK_INLINE double seg_ce(const gk_model *m, const gk_tq *t, const gk_mode *md, double th)
 {
@@ -255,63 +205,6 @@ GK_INLINE void rk4_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, dou
     axpy4(sum, 1.0, k, sum);
     h6 = h / 6.0;
     axpy4(y, h6, sum, yn);
-}
-
-/* guard gi at the shifted state y (seg_rhs._guard_seg): the values and operations of seg_ce,
- * then the guard of the pair, with one table lookup per pair for both */
-GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y,
-                           double gw, double gv)
-{
-    gk_ph c;
-    double cc, ea = 0.0, ce, kj = 0.0, ej = 0.0, sj = 0.0, bj = 0.0;
-    int j, jg, q;
-    if (gi == 0) return y[0] - md->lo * m->dphi_rad;
-    if (gi == 1) return md->hi * m->dphi_rad - y[0];
-    jg = (gi - 2) / 3;
-    q = (gi - 2) - 3 * jg;
-    cc = seg_cell(m, md, y[0], &c);
-    for (j = 0; j < m->P; ++j) {
-        int damped = seg_damped(m, md, j);
-        if (damped || j == jg) {
-            double kv, ev, es, bv;
-            slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
-            if (damped) ea += ev;
-            if (j == jg) {
-                kj = kv;
-                ej = ev;
-                sj = es;
-                bj = bv;
-            }
-        }
-    }
-    ce = m->c_Ns_per_m * ea;
-    return pair_guard(q, kj, ej, sj, bj, y[2], y[3] + gv * ce, y[1] + gw * ce, m->c_Ns_per_m, m->damping_model,
-                      md->reg[jg], md->sub[jg]);
-}
-
-/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of the step (Illinois;
- * integrators._guard_root): rk4_kink / rk4_node guard_at on the state, rk4_seg (seg) guard_seg
- * on the shifted state */
-static double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
-                         const double *y0, const double *f0, const double *y1, const double *f1, double tau,
-                         int seg, double gw, double gv)
-{
-    gk_root r;
-    double s, yy[4];
-    int it;
-    if (!seg) return held_guard_root(m, t, md, gi, g_end, y0, f0, y1, f1, tau);
-    r.ga = guard_seg(m, t, md, gi, y0, gw, gv);
-    if (!(r.ga > 0.0)) return 0.0;
-    r.a = 0.0;
-    r.b = 1.0;
-    r.gb = g_end;
-    r.side = 0;
-    for (it = 0; it < KINK_MAX_IT; ++it) {
-        s = root_next(&r);
-        hermite_point(s, y0, f0, y1, f1, tau, yy);
-        if (root_update(&r, s, guard_seg(m, t, md, gi, yy, gw, gv))) break;
-    }
-    return r.b;
 }
 
 /* the state (theta1, omega1, x, v) of the shifted state y, in place (integrators._seg_true) */
@@ -424,19 +317,6 @@ GK_INLINE double end_guard(const gk_model *m, const gk_tq *t, const gk_mode *md,
     j = (gi - 2) / 3;
     return pair_guard((gi - 2) - 3 * j, md->fkv[j], md->fev[j], md->fes[j], md->fbv[j], yt1[2], yt1[3], yt1[1],
                       m->c_Ns_per_m, m->damping_model, md->reg[j], md->sub[j]);
-}
-
-/* k, e, de/dphi, b of pair j at theta1 = th with the mode held (rk4_seg: in th's own cell of the segment) */
-GK_INLINE void held_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, int j, double th, double *kv,
-                           double *ev, double *es, double *bv, const int seg)
-{
-    if (seg) {
-        gk_ph c;
-        double cc = seg_cell(m, md, th, &c);
-        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), kv, ev, es, bv);
-    } else {
-        locked_tables(m, t, md, th, j, kv, ev, es, bv);
-    }
 }
 
 GK_INLINE void event_substep(const gk_model *m, const gk_tq *t, gk_mode *md, double T1, double T2, double *y,

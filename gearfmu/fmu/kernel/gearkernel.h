@@ -54,6 +54,10 @@ extern "C" {
 #define GK_INTEGRATOR_RK4_KINK 1
 #define GK_INTEGRATOR_RK4_NODE 2
 #define GK_INTEGRATOR_RK4_SEG 3
+/* the node_kink bits (gk_model.seg_stops) */
+#define GK_STOPS_NODE 1
+#define GK_STOPS_SEG 2
+#define GK_STOPS_E 4
 /* rk4_kink: most slots it accepts, and events located per substep before the
  * rest of the substep is taken without detection */
 #define GK_KINK_MAX_SLOTS 32
@@ -115,7 +119,12 @@ typedef struct gk_model {
     double temp_w;                  /* (T - axis[ia]) / (axis[ia+1] - axis[ia]) */
     double temperature_now_C;       /* the temperature selected last (degC) */
     unsigned char node_kink[GK_NODE_FLAGS_MAX];  /* bit 0 (rk4_node): the tables bend at node i; bit 1
-                                                    (rk4_seg): the contact_zone flag can change there */
+                                                    (rk4_seg): a big kink, the contact_zone flag can
+                                                    change or a zone edge is in a cell of the node;
+                                                    bit 2: e bends there */
+    int seg_stops;                  /* the node_kink bits that stop rk4_seg: GK_STOPS_SEG (gk_init);
+                                       the multi-mesh kernels add GK_STOPS_E (they integrate the true
+                                       velocities, so the damping term's jump where e bends is a stop) */
     const double *zone_cuts;        /* [2][P][n_phi] cuts of gk_zone_cuts (borrowed), NULL: plain lookup */
     /* the contact zones themselves (gk_set_zone_edges; Model Exchange's zone indicators): pair n of
      * slot (n mod n_mesh) mod P is in its zone for n*zone_ppm + zone_in <= s < n*zone_ppm + zone_out

@@ -56,6 +56,7 @@ int gk_init(gk_model *m, int P, int n_phi, int n_torque,
     m->c_Ns_per_m = 0.0;
     m->damping_model = GK_DAMPING_ELASTOBACKLASH;
     m->integrator = GK_INTEGRATOR_RK4;
+    m->seg_stops = GK_STOPS_SEG;
     m->n_temp = 1;
     m->temperature_C = NULL;
     m->temp_ia = 0;

@@ -97,7 +97,9 @@ GK_INLINE double pair_force_locked(double kv, double ev, double es, double bv, d
     return 0.0;
 }
 
-GK_INLINE double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
+/* guard q (0..2) of a pair in mode (reg, sub): >= 0 while the mode holds, 1.0 when the mode has no
+ * such guard (model_rhs._pair_guard without its k = 0 rule; Model Exchange's me_guard) */
+GK_INLINE double pair_guard_me(int q, double kv, double ev, double es, double bv, double x, double v,
                          double om, double c, int model, int reg, int sub)
 {
     double d = x - ev, fc, fd;
@@ -122,6 +124,18 @@ GK_INLINE double pair_guard(int q, double kv, double ev, double es, double bv, d
     if (sub == 0) return (q == 1) ? fc - fd : 1.0;
     if (sub == 1) return (q == 1) ? fd - fc : -(fc + fd);
     return (q == 1) ? fc + fd : 1.0;
+}
+
+/* pair_guard_me for the event integrators (rk4_kink, rk4_node, rk4_seg): an elastobacklash pair in
+ * contact with k = 0 (out of its contact zone) has no sub-mode guard in its sub-modes 'two' and
+ * 'zero', which both give it no force, so a sign change of its damping force is no event (where k
+ * turns positive they stop, and mode_sync decides the sub-mode anew; Model Exchange reads k in the
+ * cell of each evaluation without such a stop and keeps the guards) */
+GK_INLINE double pair_guard(int q, double kv, double ev, double es, double bv, double x, double v,
+                         double om, double c, int model, int reg, int sub)
+{
+    if (q != 0 && reg != 0 && model == GK_DAMPING_ELASTOBACKLASH && kv == 0.0 && sub != 1) return 1.0;
+    return pair_guard_me(q, kv, ev, es, bv, x, v, om, c, model, reg, sub);
 }
 
 GK_INLINE int decide_sub(int reg, double kv, double ev, double es, double bv, double x, double v,
@@ -316,6 +330,160 @@ GK_PAIR_FN double held_guard_root(const gk_model *m, const gk_tq *t, const gk_mo
     return r.b;
 }
 
+/* a mesh of the multi-mesh kernels (gb_kernel.c, pl_kernel.c) stops where their integrator does
+ * (gk_stops.c reads it); rk4_seg also where e bends (GK_STOPS_E): those kernels integrate the true
+ * velocities, and the damping term c*(de/dphi)*omega jumps there (gearbox/kernels.stop_flags) */
+GK_INLINE int multimesh_integrator(gk_model *pair, int integrator)
+{
+    if (gk_set_integrator(pair, integrator) != GK_OK) return GK_ERR_PARAM;
+    pair->seg_stops = GK_STOPS_SEG | GK_STOPS_E;
+    return GK_OK;
+}
+
+/* ---------------------------------------------------------- rk4_seg's lookup
+ * docs/model.md "rk4_seg": every evaluation reads the tables in the cell of its own theta1 clamped
+ * to the held segment [lo, hi) (md->cl, md->ch: its first and last cell, set at each pass of the
+ * substep); the guards and the root finder on that lookup.  gw, gv: the pair's shifted-velocity
+ * gains (the multi-mesh kernels integrate the true velocities: 0, 0). */
+
+/* the cell of th clamped to the held segment (seg_rhs._seg_cell): its nodes and weight in
+ * *c, its global index returned */
+GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
+{
+    int N = m->n_phi;
+    double cc = floor(th * m->inv_dphi);
+    if (!(cc > md->cl)) cc = md->cl;
+    if (cc > md->ch) cc = md->ch;
+    if (cc == md->nd) {
+        c->i0 = md->i0;
+        c->i1 = md->i1;
+    } else if (cc == md->nd + 1.0) {
+        c->i0 = md->i1;
+        c->i1 = (md->i1 == N - 1) ? 0 : md->i1 + 1;
+    } else if (cc == md->nd - 1.0) {
+        c->i1 = md->i0;
+        c->i0 = (md->i0 == 0) ? N - 1 : md->i0 - 1;
+    } else {
+        c->i0 = gki_node_index(N, cc);
+        c->i1 = (c->i0 + 1 == N) ? 0 : c->i0 + 1;
+    }
+    c->nd = GK_CELL_NONE;
+    c->w = (th - cc * m->dphi_rad) * m->inv_dphi;
+    return cc;
+}
+
+/* held side of pair j's contact-zone cut in cell c of the segment (seg_rhs._seg_sel) */
+GK_INLINE int seg_sel(const gk_model *m, const gk_mode *md, int j, double cc, const gk_ph *c)
+{
+    size_t r;
+    double clo, a, b, wm;
+    if (cc == md->nd || m->zone_cuts == NULL) return md->zsel[j];
+    r = (size_t)j * m->n_phi + c->i0;
+    clo = m->zone_cuts[r];
+    if (!(clo >= 0.0)) return -1;
+    a = (md->lo > cc) ? md->lo : cc;
+    b = (md->hi < cc + 1.0) ? md->hi : cc + 1.0;
+    wm = 0.5 * (a + b) - cc;
+    if (wm < clo) return 0;
+    if (wm >= m->zone_cuts[(size_t)m->P * m->n_phi + r]) return 2;
+    return 1;
+}
+
+/* the pair carries the viscous term in its held mode (seg_rhs._seg_damped) */
+GK_INLINE int seg_damped(const gk_model *m, const gk_mode *md, int j)
+{
+    if (m->damping_model == GK_DAMPING_ELASTOBACKLASH) return md->reg[j] != 0 && md->sub[j] == 1;
+    return md->kpos[j] != 0;
+}
+
+/* guard gi at the shifted state y (seg_rhs._guard_seg): the values and operations of seg_ce,
+ * then the guard of the pair, with one table lookup per pair for both */
+GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, const double *y,
+                           double gw, double gv)
+{
+    gk_ph c;
+    double cc, ea = 0.0, ce, kj = 0.0, ej = 0.0, sj = 0.0, bj = 0.0;
+    int j, jg, q;
+    if (gi == 0) return y[0] - md->lo * m->dphi_rad;
+    if (gi == 1) return md->hi * m->dphi_rad - y[0];
+    jg = (gi - 2) / 3;
+    q = (gi - 2) - 3 * jg;
+    cc = seg_cell(m, md, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        int damped = seg_damped(m, md, j);
+        if (damped || j == jg) {
+            double kv, ev, es, bv;
+            slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+            if (damped) ea += ev;
+            if (j == jg) {
+                kj = kv;
+                ej = ev;
+                sj = es;
+                bj = bv;
+            }
+        }
+    }
+    ce = m->c_Ns_per_m * ea;
+    return pair_guard(q, kj, ej, sj, bj, y[2], y[3] + gv * ce, y[1] + gw * ce, m->c_Ns_per_m, m->damping_model,
+                      md->reg[jg], md->sub[jg]);
+}
+
+/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of the step (Illinois;
+ * integrators._guard_root): rk4_kink / rk4_node guard_at on the state, rk4_seg (seg) guard_seg
+ * on the shifted state */
+GK_PAIR_FN double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
+                         const double *y0, const double *f0, const double *y1, const double *f1, double tau,
+                         int seg, double gw, double gv)
+{
+    gk_root r;
+    double s, yy[4];
+    int it;
+    if (!seg) return held_guard_root(m, t, md, gi, g_end, y0, f0, y1, f1, tau);
+    r.ga = guard_seg(m, t, md, gi, y0, gw, gv);
+    if (!(r.ga > 0.0)) return 0.0;
+    r.a = 0.0;
+    r.b = 1.0;
+    r.gb = g_end;
+    r.side = 0;
+    for (it = 0; it < KINK_MAX_IT; ++it) {
+        s = root_next(&r);
+        hermite_point(s, y0, f0, y1, f1, tau, yy);
+        if (root_update(&r, s, guard_seg(m, t, md, gi, yy, gw, gv))) break;
+    }
+    return r.b;
+}
+
+/* k, e, de/dphi, b of pair j at theta1 = th with the mode held (rk4_seg: in th's own cell of the segment) */
+GK_INLINE void held_tables(const gk_model *m, const gk_tq *t, const gk_mode *md, int j, double th, double *kv,
+                           double *ev, double *es, double *bv, const int seg)
+{
+    if (seg) {
+        gk_ph c;
+        double cc = seg_cell(m, md, th, &c);
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), kv, ev, es, bv);
+    } else {
+        locked_tables(m, t, md, th, j, kv, ev, es, bv);
+    }
+}
+
+/* rk4_seg of the multi-mesh kernels: 1 when no pair guard is negative at the mesh's state y, the tables
+ * read in the cell of y[0] clamped to the held segment (kernels._pairs_hold_seg) */
+GK_PAIR_FN int pairs_hold_seg(const gk_model *m, const gk_tq *t, const gk_mode *md, const double *y)
+{
+    gk_ph c;
+    int j, q;
+    double cc = seg_cell(m, md, y[0], &c);
+    for (j = 0; j < m->P; ++j) {
+        double kv, ev, es, bv;
+        slot_tables(m, t, &c, j, seg_sel(m, md, j, cc, &c), &kv, &ev, &es, &bv);
+        for (q = 0; q < 3; ++q)
+            if (pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], m->c_Ns_per_m, m->damping_model, md->reg[j],
+                           md->sub[j]) < 0.0)
+                return 0;
+    }
+    return 1;
+}
+
 /* ---------------------------------------------------------- Model Exchange
  * docs/model.md "Model Exchange": the host integrates the state; per mesh the mode (gk_me: per pair
  * region, elastobacklash branch and contact-zone flag; with node events the table segment) is held
@@ -430,7 +598,7 @@ GK_INLINE int me_kpos(const gk_model *m, const gk_tq *t, const gk_me *me, const 
 GK_INLINE double me_guard(int q, double kv, double ev, double es, double bv, const double *y, double c, int model,
                           int reg, int sub, double inv_k)
 {
-    double g = pair_guard(q, kv, ev, es, bv, y[2], y[3], y[1], c, model, reg, sub);
+    double g = pair_guard_me(q, kv, ev, es, bv, y[2], y[3], y[1], c, model, reg, sub);
     if (q == 0 || reg == 0 || model != GK_DAMPING_ELASTOBACKLASH || (q == 2 && sub != 1)) return g;
     return g * inv_k;
 }

@@ -27,7 +27,7 @@ void gki_node_flags(gk_model *m)
     int N = m->n_phi, P = m->P, rows = m->n_torque * m->n_temp, i, j, r;
     if (N > GK_NODE_FLAGS_MAX) return;   /* every node counts as flagged (node_flagged) */
     for (i = 0; i < N; ++i) {
-        int im = (i == 0) ? N - 1 : i - 1, ip = (i == N - 1) ? 0 : i + 1, bent = 0, zone = 0;
+        int im = (i == 0) ? N - 1 : i - 1, ip = (i == N - 1) ? 0 : i + 1, bent = 0, zone = 0, ebent = 0;
         for (j = 0; j < P; ++j) {
             const double *b = m->backlash_half_m + (size_t)j * N;
             int pos = 0, nonpos = 0;
@@ -37,7 +37,8 @@ void gki_node_flags(gk_model *m)
                 const double *k = m->k_N_per_m + ((size_t)r * P + j) * N;
                 const double *e = m->e_m + ((size_t)r * P + j) * N;
                 double ka = k[im], kb = k[i], kc = k[ip], ml, mr;
-                if (kinked(ka, kb, kc) || kinked(e[im], e[i], e[ip])) bent = 1;
+                if (kinked(e[im], e[i], e[ip])) ebent = 1;
+                if (kinked(ka, kb, kc) || ebent) bent = 1;
                 if (bent_tol(ka, kb, kc, GK_SEG_KINK_TOL) || bent_tol(e[im], e[i], e[ip], GK_SEG_KINK_TOL)) zone = 1;
                 ml = ka + 0.5 * (kb - ka);
                 mr = kb + 0.5 * (kc - kb);
@@ -52,13 +53,14 @@ void gki_node_flags(gk_model *m)
             if (m->zone_cuts != NULL && (m->zone_cuts[(size_t)j * N + im] >= 0.0 || m->zone_cuts[(size_t)j * N + i] >= 0.0))
                 zone = 1;   /* rk4_seg: a contact-zone edge in a cell of the node */
         }
-        m->node_kink[i] = (unsigned char)(bent | (zone << 1));
+        m->node_kink[i] = (unsigned char)(bent | (zone << 1) | (ebent << 2));
     }
 }
 
 /* stop flag of global node n (an integer value), node n mod N: rk4_node the kink flag;
  * rk4_seg the contact_zone-flag change, a big kink (GK_SEG_KINK_TOL) or a contact-zone edge
- * in one of the node's two cells (model_rhs._seg_flags) */
+ * in one of the node's two cells (model_rhs._seg_flags), in the multi-mesh kernels also a node
+ * where e bends (m->seg_stops; gearbox/kernels.stop_flags) */
 static int node_flagged(const gk_model *m, double n)
 {
     int N = m->n_phi, i0;
@@ -68,7 +70,7 @@ static int node_flagged(const gk_model *m, double n)
     i0 = (int)r;
     if (i0 < 0) i0 = 0;
     if (i0 >= N) i0 = N - 1;
-    return (m->node_kink[i0] & ((m->integrator == GK_INTEGRATOR_RK4_SEG) ? 2 : 1)) != 0;
+    return (m->node_kink[i0] & ((m->integrator == GK_INTEGRATOR_RK4_SEG) ? m->seg_stops : GK_STOPS_NODE)) != 0;
 }
 
 /* first stop above position n (global node units; model_rhs / integrators._seg_up): a
@@ -92,7 +94,7 @@ static double seg_up(const gk_model *m, double n, int node)
         /* every cell with a cut has both nodes flagged: the first flag comes first */
         int i = gki_node_index(m->n_phi, q);
         while (q < top) {
-            if ((m->node_kink[i] & 2) != 0) return q;
+            if ((m->node_kink[i] & m->seg_stops) != 0) return q;
             q += 1.0;
             if (++i == m->n_phi) i = 0;
         }
@@ -126,7 +128,7 @@ static double seg_down(const gk_model *m, double n, int node)
     if (m->integrator == GK_INTEGRATOR_RK4_SEG && m->n_phi <= GK_NODE_FLAGS_MAX) {
         int i = gki_node_index(m->n_phi, q);
         while (q > bottom) {
-            if ((m->node_kink[i] & 2) != 0) return q;
+            if ((m->node_kink[i] & m->seg_stops) != 0) return q;
             q -= 1.0;
             if (--i < 0) i = m->n_phi - 1;
         }

@@ -113,8 +113,7 @@ int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const do
     me->a_ref = a_ref;
     me->phase = phase_rad;
     me->torque_per_ref = torque_per_ref;
-    /* each pair model stops where the drivetrain's integrator does (gk_stops.c reads it) */
-    return gk_set_integrator(pair, pl->integrator) == GK_OK ? GK_OK : GK_ERR_PARAM;
+    return multimesh_integrator(pair, pl->integrator);
 }
 
 int pl_add_group(pl_model *pl, int count, const int *mesh)
@@ -135,10 +134,11 @@ int pl_set_integrator(pl_model *pl, int integrator)
 {
     int m, st;
     if (pl == NULL) return GK_ERR_MODEL;
-    if (integrator != PL_INTEGRATOR_RK4 && integrator != PL_INTEGRATOR_RK4_KINK && integrator != PL_INTEGRATOR_RK4_NODE)
+    if (integrator != PL_INTEGRATOR_RK4 && integrator != PL_INTEGRATOR_RK4_KINK && integrator != PL_INTEGRATOR_RK4_NODE
+        && integrator != PL_INTEGRATOR_RK4_SEG)
         return GK_ERR_PARAM;
     for (m = 0; m < pl->n_mesh; ++m) {
-        st = gk_set_integrator(pl->mesh[m].pair, integrator);
+        st = multimesh_integrator(pl->mesh[m].pair, integrator);
         if (st != GK_OK) return st;
     }
     pl->integrator = integrator;
@@ -199,7 +199,9 @@ static void plk_select_rows(const pl_model *pl, pl_work *w, double T_motor, doub
  * psi'' = (T_in - sum_i>0 g_i Q_i - sum_frames g_f ((R0 + q_a) Q_b - q_b Q_a))/m_0, the load torque on
  * its DOF after that sum; q_i'' = Q_i/m_i - g_i psi'' plus the inertial terms of the rotating frames
  * (Lin & Parker 1999).  `locked`: every mesh with its held mode (1: the event integrators' gk_mode;
- * 2: Model Exchange's gk_me, w->me), else the plain lookup with the carried cell (rk4). */
+ * 2: Model Exchange's gk_me, w->me; 3: rk4_seg, the gk_mode held and the tables read in the cell of
+ * the evaluation's angle clamped to the held segment, kernels._mesh_seg), else the plain lookup with
+ * the carried cell (rk4). */
 GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *dy, double t_in, double t_out,
                        const int locked)
 {
@@ -221,7 +223,18 @@ GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *
         const gk_model *pm = me->pair;
         double loc[4], fm;
         plk_mesh_local(me, y, 1.0, loc);
-        if (locked == 1) {   /* kernels._mesh_locked: the force loop of deriv_locked */
+        if (locked == 3) {
+            const gk_mode *md = &w->md[m];
+            gk_ph c;
+            double cc = seg_cell(pm, md, loc[0], &c);
+            fm = 0.0;
+            for (j = 0; j < pm->P; ++j) {
+                double kv, ev, es, bv;
+                slot_tables(pm, &w->tq[m], &c, j, seg_sel(pm, md, j, cc, &c), &kv, &ev, &es, &bv);
+                fm += pair_force_locked(kv, ev, es, bv, loc[2], loc[3], loc[1], pm->c_Ns_per_m, pm->damping_model,
+                                        md->reg[j], md->sub[j], md->kpos[j]);
+            }
+        } else if (locked == 1) {   /* kernels._mesh_locked: the force loop of deriv_locked */
             const gk_mode *md = &w->md[m];
             fm = 0.0;
             for (j = 0; j < pm->P; ++j) {
@@ -308,15 +321,16 @@ static void plk_mesh_cross(const pl_model *pl, pl_work *w, int m, const double *
     mode_sync(pm, &w->tq[m], md, loc, 0);
 }
 
-/* 1 when no pair guard of mesh m is negative at v (with `seg`, neither of its segment guards;
- * kernels._mesh_guards_hold) */
-static int plk_guards_hold(const pl_model *pl, pl_work *w, int m, const double *v, int seg)
+/* 1 when no pair guard of mesh m is negative at v (with `segment`, neither of its segment guards), the
+ * tables read as plk_rhs with `lk` (kernels._mesh_guards_hold, _pairs_hold_seg) */
+static int plk_guards_hold(const pl_model *pl, pl_work *w, int m, const double *v, int segment, int lk)
 {
     const gk_model *pm = pl->mesh[m].pair;
     const gk_mode *md = &w->md[m];
     double loc[4];
     plk_mesh_local(&pl->mesh[m], v, 1.0, loc);
-    if (seg && (loc[0] - md->lo * pm->dphi_rad < 0.0 || md->hi * pm->dphi_rad - loc[0] < 0.0)) return 0;
+    if (segment && (loc[0] - md->lo * pm->dphi_rad < 0.0 || md->hi * pm->dphi_rad - loc[0] < 0.0)) return 0;
+    if (lk == 3) return pairs_hold_seg(pm, &w->tq[m], md, loc);
     return pairs_hold(pm, &w->tq[m], md, loc);
 }
 
@@ -327,21 +341,30 @@ static void plk_copy(double *dst, const double *src, int n2)
 }
 
 /* ---------------------------------------------------------- event substep
- * One substep of length h of rk4_kink (node 0) or rk4_node (node 1) for the whole drivetrain
+ * One substep of length h of rk4_kink (node 0), rk4_node (node 1) or rk4_seg (node 1, lk 3: the
+ * tables read in the cell of each evaluation, the guards and root searches too) for the whole drivetrain
  * (kernels._substep, gb_kernel.c's gb_substep over the generalised meshes): every mesh holds its own
  * cell, segment and pair modes; a step ends at the earliest predicted node crossing of any mesh
  * (rk4_node) when no guard of any mesh is negative there; else the trial step's guards of every mesh
  * are located on the step's Hermite interpolant mapped to each mesh's local state, and the earliest
  * event wins (ties: lower mesh, then lower guard).  Returns the events. */
-static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, double t_in, double t_out)
+static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, const int lk, double t_in,
+                        double t_out)
 {
     double *y = w->y, *f0 = w->f0, *y1 = w->y1, *f1 = w->f1, *yt = w->yt;
     double rem = h;
     long nev = 0;
-    int n2 = 2 * pl->n, m;
+    int n2 = 2 * pl->n, m, seg = lk == 3;
     for (;;) {
         double best = 2.0;
         int best_m = -1, best_gi = -1, any_neg;
+        if (seg) {   /* the segments are fixed until the next pass */
+            for (m = 0; m < pl->n_mesh; ++m) {
+                gk_mode *md = &w->md[m];
+                md->cl = floor(md->lo);
+                md->ch = ceil(md->hi) - 1.0;
+            }
+        }
         if (node) {   /* the held cell follows theta inside the held segment */
             for (m = 0; m < pl->n_mesh; ++m) {
                 const gk_model *pm = pl->mesh[m].pair;
@@ -356,7 +379,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
                 }
             }
         }
-        plk_rhs(pl, w, y, f0, t_in, t_out, 1);
+        plk_rhs(pl, w, y, f0, t_in, t_out, lk);
         if (node && nev < GK_KINK_MAX_EVENTS) {   /* the earliest segment end ahead: one step to it */
             double best_tau = -1.0;
             best_m = -1;
@@ -374,9 +397,9 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
             }
             if (best_m >= 0) {
                 int ok = 1;
-                plk_rk4(pl, w, y, f0, best_tau, yt, t_in, t_out, 1);
+                plk_rk4(pl, w, y, f0, best_tau, yt, t_in, t_out, lk);
                 for (m = 0; m < pl->n_mesh; ++m)
-                    if (!plk_guards_hold(pl, w, m, yt, m != best_m)) {
+                    if (!plk_guards_hold(pl, w, m, yt, m != best_m, lk)) {
                         ok = 0;
                         break;
                     }
@@ -394,7 +417,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
                 }
             }
         }
-        plk_rk4(pl, w, y, f0, rem, y1, t_in, t_out, 1);
+        plk_rk4(pl, w, y, f0, rem, y1, t_in, t_out, lk);
         if (nev >= GK_KINK_MAX_EVENTS) {
             plk_copy(y, y1, n2);
             for (m = 0; m < pl->n_mesh; ++m) plk_mesh_start(pl, w, m, y, node);
@@ -402,7 +425,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
         }
         any_neg = 0;
         for (m = 0; m < pl->n_mesh; ++m)
-            if (!plk_guards_hold(pl, w, m, y1, 1)) {
+            if (!plk_guards_hold(pl, w, m, y1, 1, lk)) {
                 any_neg = 1;
                 break;
             }
@@ -410,7 +433,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
             plk_copy(y, y1, n2);
             break;
         }
-        plk_rhs(pl, w, y1, f1, t_in, t_out, 1);
+        plk_rhs(pl, w, y1, f1, t_in, t_out, lk);
         best_m = -1;
         for (m = 0; m < pl->n_mesh; ++m) {
             const gk_model *pm = pl->mesh[m].pair;
@@ -419,7 +442,8 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
             int gi, have = 0, n_guard = 2 + 3 * pm->P;
             plk_mesh_local(&pl->mesh[m], y1, 1.0, l1);
             for (gi = 0; gi < n_guard; ++gi) {
-                double g = guard_at(pm, &w->tq[m], md, gi, l1), s;
+                double g = seg ? guard_seg(pm, &w->tq[m], md, gi, l1, 0.0, 0.0) : guard_at(pm, &w->tq[m], md, gi, l1);
+                double s;
                 if (!(g < 0.0)) continue;
                 if (!have) {   /* the mesh's Hermite data: its local view of y, f0, y1, f1 */
                     plk_mesh_local(&pl->mesh[m], y, 1.0, l0);
@@ -427,7 +451,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
                     plk_mesh_local(&pl->mesh[m], f1, 0.0, d1);
                     have = 1;
                 }
-                s = held_guard_root(pm, &w->tq[m], md, gi, g, l0, d0, l1, d1, rem);
+                s = guard_root(pm, &w->tq[m], md, gi, g, l0, d0, l1, d1, rem, seg, 0.0, 0.0);
                 if (s < best) {
                     best = s;
                     best_m = m;
@@ -444,7 +468,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
             rem = 0.0;
         } else if (best > 0.0) {
             double tau = best * rem;
-            plk_rk4(pl, w, y, f0, tau, yt, t_in, t_out, 1);
+            plk_rk4(pl, w, y, f0, tau, yt, t_in, t_out, lk);
             plk_copy(y, yt, n2);
             rem = rem - tau;
         }
@@ -458,7 +482,7 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, doub
             double loc[4], kv = 0.0, ev = 0.0, es = 0.0, bv = 0.0;
             plk_mesh_local(&pl->mesh[best_m], y, 1.0, loc);
             if (md->reg[j] == 0 && pm->damping_model == GK_DAMPING_ELASTOBACKLASH)
-                locked_tables(pm, &w->tq[best_m], md, loc[0], j, &kv, &ev, &es, &bv);
+                held_tables(pm, &w->tq[best_m], md, j, loc[0], &kv, &ev, &es, &bv, seg);
             switch_pair(pm, md, j, (best_gi - 2) - 3 * j, kv, ev, es, bv, loc);
         }
         if (!(rem > 0.0)) break;
@@ -577,10 +601,13 @@ int pl_do_step(const pl_model *pl, pl_work *w, pl_state *s, double T_motor, doub
     plk_select_rows(pl, w, t_in, t_out);
     plk_copy(w->y, s->y, n2);
     w->events = 0;
-    if (pl->integrator == PL_INTEGRATOR_RK4_KINK || pl->integrator == PL_INTEGRATOR_RK4_NODE) {
+    if (pl->integrator == PL_INTEGRATOR_RK4_SEG) {
+        for (m = 0; m < pl->n_mesh; ++m) plk_mesh_start(pl, w, m, w->y, 1);
+        for (i = 0; i < nsub; ++i) w->events += plk_substep(pl, w, h, 1, 3, t_in, t_out);
+    } else if (pl->integrator == PL_INTEGRATOR_RK4_KINK || pl->integrator == PL_INTEGRATOR_RK4_NODE) {
         int node = pl->integrator == PL_INTEGRATOR_RK4_NODE;
         for (m = 0; m < pl->n_mesh; ++m) plk_mesh_start(pl, w, m, w->y, node);
-        for (i = 0; i < nsub; ++i) w->events += plk_substep(pl, w, h, node, t_in, t_out);
+        for (i = 0; i < nsub; ++i) w->events += plk_substep(pl, w, h, node, 1, t_in, t_out);
     } else {
         for (i = 0; i < nsub; ++i) {
             plk_rhs(pl, w, w->y, w->f0, t_in, t_out, 0);

@@ -41,10 +41,12 @@ extern "C" {
 #define PL_MESH_MAX_A 2      /* DOFs of a mesh's table-angle map */
 #define PL_SPRING_MAX 4      /* DOFs of a spring */
 
-/* integrators: the pair's codes; rk4_seg is not offered */
+/* integrators: the pair's codes; rk4_seg runs as rk4_node between its stops, every evaluation in the
+ * cell of its own angle, the true velocities integrated (docs/planetary.md "rk4_seg") */
 #define PL_INTEGRATOR_RK4 GK_INTEGRATOR_RK4
 #define PL_INTEGRATOR_RK4_KINK GK_INTEGRATOR_RK4_KINK
 #define PL_INTEGRATOR_RK4_NODE GK_INTEGRATOR_RK4_NODE
+#define PL_INTEGRATOR_RK4_SEG GK_INTEGRATOR_RK4_SEG
 
 /* static state (pl_initialize): Newton steps and residual (of the forces) */
 #define PL_STATIC_ITERATIONS 60

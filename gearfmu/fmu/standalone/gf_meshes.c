@@ -568,13 +568,14 @@ int gfm_init_state(gf_inst *c)
         bad = 1;
     }
     ig = gfm_val(c, d->vr_integrator);
-    if (!bad && gfm_code_of(ig, 3) < 0) {
-        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: must be 0 (rk4), 1 (rk4_kink) or 2 (rk4_node)%s",
+    if (!bad && gfm_code_of(ig, 4) < 0) {
+        gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: must be 0 (rk4), 1 (rk4_kink), 2 (rk4_node) or 3 "
+               "(rk4_seg)%s",
                c->vars[d->vr_integrator].name, gfm_num(ig, a), tail);
         bad = 1;
     }
     if (bad) return 0;
-    st = d->k->k_integrator(kd_of(d), gfm_code_of(ig, 3));
+    st = d->k->k_integrator(kd_of(d), gfm_code_of(ig, 4));
     if (st != GK_OK) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: refused by the kernel (a %s has more than %d "
                "slots)%s", c->vars[d->vr_integrator].name, gfm_num(ig, a), d->k->mesh_word, GK_KINK_MAX_SLOTS, tail);

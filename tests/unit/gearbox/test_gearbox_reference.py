@@ -15,7 +15,7 @@ mesh stiffness with tent errors and backlash):
   located one event and left the other mesh on a stale piece before it crossed every mesh standing
   on its piece end together: 0.75 to 0.99 of the range off).
 
-The event-aware integrators meet the reference within 1e-5 of each signal's range at the default
+The event-aware integrators (rk4_node, rk4_kink, rk4_seg) meet the reference within 1e-5 of each signal's range at the default
 step and converge at fourth order: within 5e-8 at a quarter of it.  Classical RK4 steps across the
 kinks of the force law and converges at about first order (within 1e-3 at a quarter step).
 """
@@ -48,7 +48,7 @@ def worst(res, ref):
 @pytest.mark.parametrize("case", ["contact_loss", "intermediate_shaft_resonance", "torque_step"])
 def test_native_against_reference(case):
     model, kw, ref = reference(case)
-    for integrator in ("rk4_node", "rk4_kink"):
+    for integrator in ("rk4_node", "rk4_kink", "rk4_seg"):
         r = simulate(model, **kw, integrator=integrator)
         assert worst(r, ref) <= 1e-5, integrator
         fine = simulate(model, **kw, integrator=integrator, max_step_s=r.step_s / 4)
