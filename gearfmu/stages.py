@@ -290,7 +290,7 @@ def planetary_stages(scene: DrivetrainScene, *, progress: bool = False) -> List:
                                  sun_torque_Nm=p.sun_torque_Nm, progress=progress)
         else:
             st = lumped_stage(p.name, p.lumped, held=p.held, model=p.model, **common)
-        out.append(replace(st, source=p.source))
+        out.append(replace(st, source=p.source, driven_speed_rad_s=p.driven_speed_rad_s))
     return out
 
 

@@ -410,11 +410,13 @@ def _write_row(gb, W, row, out_dof, out_mesh, out_pair, pair_off, out_spring):
 
 @njit(cache=True, error_model="numpy")
 def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi, mf, bf, si, sf, fi, ff, n, lb,
-        out_dof, out_mesh, out_pair, pair_off, out_spring, out_events):
+        out_dof, out_mesh, out_pair, pair_off, out_spring, out_events, drv_dof, drv_w):
     """Communication steps step0 .. step0 + n_steps - 1 from the state ``y`` (2n, updated in place),
     as gearfmu.gearbox.kernels.run: row step0 + 1 + s after step s; step s holds t_in[s], t_out[s] and
     per mesh the torque row it_rows[s, m] with weight wt_rows[s, m]; n_sub substeps of h.  ``icode``:
-    0 'rk4', 1 'rk4_kink', 2 'rk4_node'.  Returns the number of completed steps."""
+    0 'rk4', 1 'rk4_kink', 2 'rk4_node'.  ``drv_dof``: the drive DOFs of the driven members (infinite
+    inertia, g = 0), whose speed q' is set to drv_w[s, j] at the start of step s (docs/planetary.md
+    "Driven members").  Returns the number of completed steps."""
     nm = mi.shape[0] // MI
     ns = si.shape[0] // SI
     nf = fi.shape[0] // 2
@@ -435,6 +437,8 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
             mfp[m * MF + F_WT] = wt_rows[r, m]
             mip[m * MI + I_ND] = _CELL_NONE
             mip[m * MI + I_I0] = 0
+        for j in range(drv_dof.shape[0]):
+            W[2 * drv_dof[j] + 1] = drv_w[r, j]
         if r == 0:
             _write_row(gb, wp, 0, out_dof, out_mesh, out_pair, pair_off, out_spring)
         nev = 0

@@ -93,6 +93,8 @@ def _check_stage(i: int, s: PlanetaryStage) -> PlanetaryStage:
     if s.model == "translational" and not s.bearing_N_per_m.get("planet", 0.0) > 0.0:
         raise PlanetaryModelError(f"{w}.bearing_N_per_m[planet]: the planet bearings need a stiffness > 0")
     finite_number(f"{w}.support_Nm_per_rad", s.support_Nm_per_rad, positive=True, error=PlanetaryModelError)
+    if s.driven_speed_rad_s is not None:
+        finite_number(f"{w}.driven_speed_rad_s", s.driven_speed_rad_s, error=PlanetaryModelError)
     # geometric consistency the rigid-body motion needs
     rs, rp, rr, rc = s.base_radius_sun_m, s.base_radius_planet_m, s.base_radius_ring_m, s.carrier_radius_m
     if abs(rc * math.cos(s.pressure_angle_sun_rad) - (rs + rp)) > 1e-9 * rc:
@@ -175,6 +177,48 @@ class PlanetaryModel:
     stages: Tuple[dict, ...] = ()
     gearbox_meshes: Tuple[str, ...] = ()
     parts: Tuple[str, ...] = ()
+    #: the drives of the driven members (docs/planetary.md "Driven members"): per drive its port (part
+    #: name), its DOF (infinite inertia, g = 0), its stage, its default speed (rad/s) and ``mode``, the
+    #: rigid motion of every DOF per unit drive speed with the motor DOF at rest (rad/s per rad/s)
+    drives: Tuple[dict, ...] = ()
+
+    # ------------------------------------------------------------ drives
+    @property
+    def drive_dofs(self) -> Tuple[int, ...]:
+        return tuple(int(d["dof"]) for d in self.drives)
+
+    def drive_speeds(self, speeds_rad_s=None) -> np.ndarray:
+        """The drives' speeds (rad/s): ``speeds_rad_s`` (a sequence in drive order, or a dict port ->
+        speed for some) over the model's defaults."""
+        w = np.array([float(d["speed_rad_s"]) for d in self.drives], dtype=float)
+        if isinstance(speeds_rad_s, dict):
+            ports = [d["port"] for d in self.drives]
+            for k, v in speeds_rad_s.items():
+                if k not in ports:
+                    raise PlanetaryModelError(f"drive_speeds_rad_s[{k!r}]: not a driven member; driven are {ports}")
+                w[ports.index(k)] = finite_number(f"drive_speeds_rad_s[{k!r}]", v, error=PlanetaryModelError)
+        elif speeds_rad_s is not None:
+            v = np.asarray(speeds_rad_s, dtype=float).reshape(-1)
+            if v.shape != w.shape or not np.all(np.isfinite(v)):
+                raise PlanetaryModelError(f"drive_speeds_rad_s: expected {w.size} finite speeds (rad/s)")
+            w = v
+        return w
+
+    def kinematic_speeds(self, omega_rad_s: float, drive_speeds_rad_s=None) -> np.ndarray:
+        """Every DOF's rigid speed (rad/s, or m/s for a translation): g omega plus the drives' rigid
+        motions."""
+        v = self.g * float(omega_rad_s)
+        for d, w in zip(self.drives, self.drive_speeds(drive_speeds_rad_s)):
+            v = v + d["mode"] * w
+        return v
+
+    def table_speeds(self, omega_rad_s: float, drive_speeds_rad_s=None) -> np.ndarray:
+        """Every mesh's table-angle speed (rad/s) in the rigid motion."""
+        v = self.kinematic_speeds(omega_rad_s, drive_speeds_rad_s)
+        return np.array([self.angle_ref[m] * float(omega_rad_s) + sum(c * (v[i] - self.g[i] * float(omega_rad_s))
+                                                                         for i, c in zip(self.angle_idx[m],
+                                                                                         self.angle_coef[m]) if i >= 0)
+                         for m in range(len(self.mesh_names))])
 
     # ------------------------------------------------------------ sizes
     @property
@@ -266,7 +310,7 @@ class PlanetaryModel:
 
     # ------------------------------------------------------------ static state
     def static_state(self, reference_torque_Nm: float, speed_rad_s: float, angle_rad: float = 0.0,
-                     iterations: int = 60) -> np.ndarray:
+                     iterations: int = 60, drive_speeds_rad_s=None) -> np.ndarray:
         """The quasi-static equilibrium (docs/planetary.md "Initial state"): psi = ``angle_rad``, omega =
         ``speed_rad_s``, q' = 0 and q solving sum of the static forces = 0 (the motor torque and the
         balancing load torque, springs, the meshes' static force laws at their table angles, the
@@ -275,7 +319,9 @@ class PlanetaryModel:
         iteration, to a residual of 1e-13 of the largest term summed into it: the torques, the mesh
         forces and the springs' k q).  Raises
         PlanetaryModelError naming a mesh with no pair in its contact zone, or when no equilibrium is
-        found."""
+        found.  A drive DOF (a driven member's, infinite inertia) stays at q = 0, every DOF's q' is its
+        part of the drives' rigid motion at ``drive_speeds_rad_s`` (:meth:`drive_speeds`; None: the
+        model's)."""
         n = self.n_dof
         T_in = float(reference_torque_Nm)
         f_ext = np.zeros(n)
@@ -295,7 +341,7 @@ class PlanetaryModel:
             cen[ia] += self.mass[ia] * W2 * R0
             Kcen[ia, ia] += self.mass[ia] * W2       # the force m Omega^2 q grows with q: a negative stiffness
             Kcen[ib, ib] += self.mass[ib] * W2
-        free = np.arange(1, n)
+        free = np.array([i for i in range(1, n) if i not in self.drive_dofs], dtype=np.int64)
         meshvec = [self.mesh_vector(m) for m in range(len(self.mesh_names))]
         anglevec = [self.vector(self.angle_idx[m], self.angle_coef[m]) for m in range(len(self.mesh_names))]
 
@@ -347,6 +393,8 @@ class PlanetaryModel:
         y = np.zeros(2 * n)
         y[0], y[1] = angle_rad, speed_rad_s
         y[2::2] = q[1:]
+        for d, w in zip(self.drives, self.drive_speeds(drive_speeds_rad_s)):
+            y[3::2] += d["mode"][1:] * w
         return y
 
 
@@ -415,9 +463,52 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     for i, si in enumerate(stage_info):
         if len(meshes) + i not in on:
             tq_ref[si["meshes"]] = 0.0
+    drives = _drive_modes(planetaries, stage_info, B, springs, mesh_rows)
     return _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
                    inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
-                   gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
+                   gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts),
+                   drives=drives)
+
+
+def _drive_modes(planetaries, stage_info, B: "_Builder", springs, mesh_rows) -> List[dict]:
+    """The drives of the driven members: each drive's rigid motion (every DOF's speed per unit drive
+    speed with the motor DOF and the other drives at rest: the velocities that leave every spring and
+    mesh undeflected, by least squares on the elements' unit maps, checked exact to 1e-9).  The
+    translational model's frames turn with the carrier's kinematic speed g_c omega, so a drive may not
+    turn a translational stage's carrier."""
+    drives = [(i, st, si) for i, (st, si) in enumerate(zip(planetaries, stage_info)) if "drive" in si["dofs"]]
+    if not drives:
+        return []
+    n = len(B.names)
+    rows = [ent for _, _, ent, _, _, _ in springs] + [r["x"] for r in mesh_rows]
+    A = np.zeros((len(rows), n))
+    for k, ent in enumerate(rows):
+        for d, cf in ent:
+            A[k, d] += cf
+        A[k] /= max(float(np.linalg.norm(A[k])), 1e-300)
+    ddofs = [si["dofs"]["drive"] for _, _, si in drives]
+    free = [i for i in range(1, n) if i not in ddofs]
+    out = []
+    for i, st, si in drives:
+        w = f"planetary[{i}] ({st.name})"
+        d = si["dofs"]["drive"]
+        v = np.zeros(n)
+        v[d] = 1.0
+        sol, *_ = np.linalg.lstsq(A[:, free], -A[:, d], rcond=None)
+        v[free] = sol
+        if float(np.max(np.abs(A @ v))) > 1e-9:
+            raise PlanetaryModelError(f"{w}.driven_speed_rad_s: the drive of the {st.held} has no rigid motion in "
+                                      "this drivetrain (its elements would deflect)")
+        v[np.abs(v) <= 1e-13 * float(np.max(np.abs(v)))] = 0.0
+        for j, (st2, si2) in enumerate(zip(planetaries, stage_info)):
+            if st2.model == "translational" and v[si2["dofs"]["carrier"]] != 0.0:
+                raise PlanetaryModelError(
+                    f"{w}.driven_speed_rad_s: driving the {st.held} turns the carrier of the translational stage "
+                    f"{st2.name!r}, whose frame turns with the carrier's motor-driven speed only; give that stage "
+                    "model = 'torsional', or drive a member that leaves its carrier's speed alone")
+        out.append({"port": st.port(st.held), "dof": int(d), "stage": st.name, "speed_rad_s":
+                    float(st.driven_speed_rad_s), "mode": v})
+    return out
 
 
 def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
@@ -544,7 +635,7 @@ def _check_rigid_parts(B: "_Builder", springs, mesh_rows) -> None:
 
 
 def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, motor, load, inputs, stages,
-            gearbox_meshes, parts) -> PlanetaryModel:
+            gearbox_meshes, parts, drives=()) -> PlanetaryModel:
     """The :class:`PlanetaryModel` of the built DOFs and elements, as flat arrays."""
     g = np.array(B.g)
     ns = len(springs)
@@ -576,7 +667,7 @@ def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, moto
         mesh_torque_per_ref=tq_ref, frame_idx=np.array([f[:2] for f in frames], dtype=np.int64).reshape(-1, 2),
         frame_par=np.array([f[2:] for f in frames], dtype=float).reshape(-1, 2), motor=motor, load=load,
         load_dof=part_dof[load], motor_torque_input=inputs[0], load_torque_input=inputs[1],
-        stages=stages, gearbox_meshes=gearbox_meshes, parts=parts)
+        stages=stages, gearbox_meshes=gearbox_meshes, parts=parts, drives=tuple(drives))
 
 
 def _depth(tree, body: int) -> int:
@@ -607,10 +698,15 @@ def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh
     trans = st.model == "translational"
     zeta = st.bearing_damping_ratio
     dofs = {"sun": dS, "carrier": dC, "ring": dR, "planet": [], "planet_zeta": [], "planet_eta": []}
-    # held member's torsional support
+    # held member's torsional support (a driven member's: to its drive, a DOF of infinite inertia whose
+    # speed is prescribed; docs/planetary.md "Driven members")
     dH = part_dof[st.port(st.held)]
     kH = float(st.support_Nm_per_rad)
-    springs.append((f"{nm}.{st.held}_support", "support", [(dH, 1.0)], kH,
+    ends = [(dH, 1.0)]
+    if st.driven_speed_rad_s is not None:
+        dofs["drive"] = B.add(f"{nm}.{st.held}_drive", "rot", math.inf, 0.0)
+        ends.append((dofs["drive"], -1.0))
+    springs.append((f"{nm}.{st.held}_support", "support", ends, kH,
                     2.0 * zeta * math.sqrt(kH * B.mass[dH]), 0.0))
     if trans:
         for p in ("sun", "ring", "carrier"):
@@ -668,6 +764,7 @@ def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh
                               c=cr, me=mer, model=st.damping_model, torque=tq_sun * rp / rs, frame=gC))
     for k in mesh_ids:
         mesh_rows[k]["torque"] *= abs(t_sun)
-    return {"name": nm, "planets": N, "model": st.model, "held": st.held, "dofs": dofs, "meshes": mesh_ids,
+    return {"name": nm, "planets": N, "model": st.model, "held": st.held, "driven": st.driven_speed_rad_s is not None,
+            "dofs": dofs, "meshes": mesh_ids,
             "carrier_radius_m": rc, "sigma": sig, "teeth": (st.teeth_sun, st.teeth_planet, st.teeth_ring),
             "planet_angles_rad": tuple(st.planet_angles_rad), "g_planet": gP}
