@@ -76,6 +76,7 @@ class KernelData:
     frames: Tuple[Tuple[int, int, float, float], ...]                            # (a, b, R0, ratio)
     meshes: Tuple[MeshData, ...]
     groups: Tuple[Tuple[int, ...], ...]                                           # sun-planet meshes of a stage
+    drives: Tuple[Tuple[int, np.ndarray], ...] = ()                               # (drive DOF, rigid motion)
 
 
 def damping_ratio_for(tables, c_Ns_per_m: float) -> float:
@@ -128,7 +129,9 @@ def kernel_data(model: PlanetaryModel) -> KernelData:
     return KernelData(n_dof=n, inv_m=np.ascontiguousarray(kd.bf[:n]), g=np.ascontiguousarray(kd.bf[n:]),
                       load_dof=int(model.load_dof), motor_input=bool(model.motor_torque_input),
                       load_input=bool(model.load_torque_input), springs=tuple(springs), frames=frames,
-                      meshes=tuple(meshes), groups=groups)
+                      meshes=tuple(meshes), groups=groups,
+                      drives=tuple((int(d["dof"]), np.ascontiguousarray(d["mode"], dtype=np.float64))
+                                   for d in model.drives))
 
 
 def compile_planetary_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
@@ -198,6 +201,9 @@ class PlanetaryKernel:
         for grp in data.groups:
             gi = np.array(grp, dtype=np.intc)
             lib.pl_add_group(P, len(grp), gi.ctypes.data)
+        for dof, mode in data.drives:
+            self.keep.append(mode)
+            lib.pl_add_drive(P, dof, mode.ctypes.data)
         self.set_integrator(integrator)
         self.n_out = lib.pl_n_outputs(P)
         self.n = data.n_dof
@@ -216,12 +222,24 @@ class PlanetaryKernel:
     def set_state(self, y) -> None:
         self.state[:2 * self.n] = np.asarray(y, dtype=np.float64)
 
-    def initialize(self, T_ref_Nm: float, speed_rad_s: float, angle_rad: float = 0.0) -> np.ndarray:
-        """pl_initialize: the static state into the kernel's state; returns it."""
+    def initialize(self, T_ref_Nm: float, speed_rad_s: float, angle_rad: float = 0.0,
+                   drive_speeds_rad_s=None) -> np.ndarray:
+        """pl_initialize and, with driven members, pl_start_drives at ``drive_speeds_rad_s`` (None: the
+        model's): the static state into the kernel's state; returns it."""
         bad = ctypes.c_int(-1)
         self.lib.pl_initialize(self.pl.ctypes.data, self.work.ctypes.data, self.state.ctypes.data, angle_rad,
                                speed_rad_s, T_ref_Nm, ctypes.addressof(bad))
+        if self.data.drives:
+            w = np.ascontiguousarray(self.model.drive_speeds(drive_speeds_rad_s), dtype=np.float64)
+            self.lib.pl_start_drives(self.pl.ctypes.data, self.state.ctypes.data, w.ctypes.data)
         return self.y
+
+    def set_drive_speeds(self, speeds_rad_s) -> None:
+        """pl_set_drive_speeds: every drive's speed (rad/s, in drive order) into the state."""
+        w = np.ascontiguousarray(speeds_rad_s, dtype=np.float64).reshape(-1)
+        if w.size != len(self.data.drives):
+            raise FmuBuildError(f"speeds_rad_s: expected {len(self.data.drives)} drive speeds, got {w.size}")
+        self.lib.pl_set_drive_speeds(self.pl.ctypes.data, self.state.ctypes.data, w.ctypes.data if w.size else None)
 
     def step(self, T_motor_Nm: float, T_load_Nm: float, H_s: float, h_max_s: float) -> np.ndarray:
         """pl_do_step; returns the outputs after the step."""

@@ -327,6 +327,8 @@ def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = Non
                 break
     info = {"events": int(events.sum()), "completed_steps": int(done), "reference_torque_Nm": t_ref,
             "settings": s}
+    if model.drives:
+        info["drive_speeds_rad_s"] = drv_w   # (steps + 1, drives): the speed each drive held over each step
     if done < n_steps:
         info["diverged_at_step"] = int(done)
     cols = columns(model, kd.pair_off, out_dof, out_mesh, out_pair, out_spring, t_in, t_out)

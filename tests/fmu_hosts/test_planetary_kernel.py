@@ -96,6 +96,26 @@ def _stiff_supports(stop_periods):
     return m, run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
 
 
+def _driven(stop_periods):
+    """A superimposing stage: the sun on the motor, the ring driven through its support at a speed that
+    changes every communication step (-40 rad/s and a ramp), the carrier on the load (torsional model)."""
+    st = dataclasses.replace(lp_stage(3, model="torsional", teeth_sun=21, teeth_planet=23, teeth_ring=67,
+                                      contact_ratio_sun=1.6, contact_ratio_ring=1.7), driven_speed_rad_s=-40.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier")
+    kw = run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
+    kw["drive_speeds_rad_s"] = {"lp.ring": lambda t: -40.0 + 2e4 * t}
+    return m, kw
+
+
+def _driven_carrier(stop_periods):
+    """Translational: the motor on the carrier, the ring driven (the carrier's speed is the motor's
+    alone, so its frame is exact), the sun on the load."""
+    st = dataclasses.replace(lp_stage(3, teeth_sun=21, teeth_planet=23, teeth_ring=67, contact_ratio_sun=1.6,
+                                      contact_ratio_ring=1.7), driven_speed_rad_s=25.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.carrier", load="lp.sun")
+    return m, run_kwargs(m, "lp.sun_planet[1]", 100.0, 60.0, stop_periods)
+
+
 def _bench(name):
     return lambda stop_periods: planetary_case(name, mesh_periods=stop_periods)
 
@@ -107,6 +127,8 @@ CASES = {
     "position_error": _bench("position_error"),
     "contact_loss": _bench("contact_loss"),
     "load_driven": _load_driven,
+    "driven_ring": _driven,
+    "driven_ring_translational": _driven_carrier,
 }
 _MODELS = {}
 
@@ -147,11 +169,14 @@ def kernel_run(K, model, res):
     communication step and step bound.  The output rows (row 0: pl_outputs at the start)."""
     s = res.info["settings"]
     t_in, t_out = res["motor_torque"], res["load_torque"]
+    w = res.info.get("drive_speeds_rad_s", np.zeros((len(t_in), 0)))   # a driven member's prescribed speed
     y0 = model.static_state(float(res.info["reference_torque_Nm"][0]), s.motor_speed_start_rad_s,
-                            s.motor_angle_start_rad)
+                            s.motor_angle_start_rad, drive_speeds_rad_s=w[0] if model.drives else None)
     K.set_state(y0)
     rows = [K.outputs(t_in[0], t_out[0])]
     for k in range(len(t_in) - 1):
+        if model.drives:
+            K.set_drive_speeds(w[k])
         rows.append(K.step(t_in[k], t_out[k], s.output_interval_s, s.max_step_s))
     return np.array(rows)
 
@@ -184,7 +209,9 @@ def test_static_state_equals_the_model_s(lib, name):
                      kw["motor_speed_start_rad_s"], 0.013), (35.0, 0.0, 1.1), (-20.0, 50.0, -0.4)):
         want = model.static_state(T, w, a)
         got = K.initialize(T, w, a)
-        assert got[0] == a and got[1] == w and np.all(got[3::2] == 0.0)
+        # q' = 0 but for a driven member's drive: its rigid motion at the drive's speed (pl_start_drives)
+        assert got[0] == a and got[1] == w and np.array_equal(got[3::2], want[3::2])
+        assert np.all(got[3::2] == 0.0) or model.drives
         kind = np.array(model.dof_kind[1:])
         for k in ("rot", "trans"):
             sel = np.flatnonzero(kind == k)

@@ -124,6 +124,19 @@ static void pls_add_outer(const pl_model *pl, pl_work *w, int m, double s, doubl
         for (j = 0; j < n; ++j) J[i * n + j] += s * (w->vec[i] * w->vec[j]);
 }
 
+/* a drive DOF (1/m 0) is not solved for: its row and column of J the identity's, its residual 0, so that
+ * it stays at q = 0 (PlanetaryModel.static_state leaves it out) */
+static void pls_fix_drives(const pl_model *pl, double *J, double *r)
+{
+    int n = pl->n, i, j;
+    for (i = 1; i < n; ++i) {
+        if (pl->inv_m[i] != 0.0) continue;
+        for (j = 0; j < n; ++j) J[i * n + j] = J[j * n + i] = 0.0;
+        J[i * n + i] = 1.0;
+        r[i] = 0.0;
+    }
+}
+
 int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, double omega0, double T_ref,
                   int *bad_mesh)
 {
@@ -180,6 +193,7 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
         pls_add_outer(pl, w, m, ksum, J);
         for (i = 0; i < n; ++i) w->r[i] += keb * w->vec[i];
     }
+    pls_fix_drives(pl, J, w->r);
     if (!pls_solve(n, J, w->r, q)) return GK_ERR_NOCONTACT;
     for (it = 0;; ++it) {
         double scale, worst = 0.0, kq = 0.0;
@@ -209,6 +223,7 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
             kj = 1e-6 * ksum;
             pls_add_outer(pl, w, m, kt > kj ? kt : kj, J);
         }
+        pls_fix_drives(pl, J, w->r);
         for (i = 1; i < n; ++i)
             worst = isfinite(w->r[i]) ? (fabs(w->r[i]) > worst ? fabs(w->r[i]) : worst) : HUGE_VAL;
         if (worst <= PL_STATIC_TOL * (scale > 1e-300 ? scale : 1e-300)) break;

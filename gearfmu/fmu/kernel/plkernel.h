@@ -40,6 +40,7 @@ extern "C" {
 #define PL_MESH_MAX_X 6      /* DOFs of a mesh's transmission-error map */
 #define PL_MESH_MAX_A 2      /* DOFs of a mesh's table-angle map */
 #define PL_SPRING_MAX 4      /* DOFs of a spring */
+#define PL_MAX_DRIVES 4      /* drives of driven members (one per planetary stage) */
 
 /* integrators: the pair's codes; rk4_seg is not offered */
 #define PL_INTEGRATOR_RK4 GK_INTEGRATOR_RK4
@@ -92,6 +93,12 @@ typedef struct pl_model {
     pl_spring spring[PL_MAX_SPRINGS];
     pl_frame frame[PL_MAX_FRAMES];
     pl_group group[PL_MAX_GROUPS];
+    /* drives of driven members (docs/planetary.md "Driven members"): a DOF of infinite inertia
+     * (inv_m 0, g 0) whose speed q' is prescribed; its rigid motion, every DOF's speed per unit drive
+     * speed with the motor DOF at rest */
+    int n_drive;
+    int drive_dof[PL_MAX_DRIVES];
+    double drive_mode[PL_MAX_DRIVES][PL_MAX_DOF];
 } pl_model;
 
 typedef struct pl_state {
@@ -109,9 +116,10 @@ GK_API int pl_sizeof_state(void);
 /* the events located by the last pl_do_step (rk4_kink, rk4_node) */
 GK_API long pl_events(const pl_work *w);
 
-/* An empty drivetrain of n DOFs with 1/m (inv_m[n], finite > 0) and kinematic ratios g[n] (finite,
- * g[0] = 1; 0 for a translation), the load DOF (0 <= load_dof < n, g[load_dof] != 0) and which ends
- * are torque inputs; integrator rk4. */
+/* An empty drivetrain of n DOFs with 1/m (inv_m[n], finite > 0; or 0 with g 0 for the drive of a
+ * driven member, i >= 1, to be declared by pl_add_drive) and kinematic ratios g[n] (finite, g[0] = 1; 0
+ * for a translation), the load DOF (0 <= load_dof < n, g[load_dof] != 0) and which ends are torque
+ * inputs; integrator rk4. */
 GK_API int pl_init(pl_model *pl, int n_dof, const double *inv_m, const double *g, int load_dof, int motor_input,
                    int load_input);
 /* a spring over count (1..4) DOFs with coefficients coef, stiffness k > 0 and damping c >= 0 */
@@ -127,6 +135,15 @@ GK_API int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, c
 /* load-sharing factor group: L_j = count * F_j / sum_k F_k over the listed meshes (the stage's
  * sun-planet meshes; Kahraman 1994), NaN when the sum is 0 */
 GK_API int pl_add_group(pl_model *pl, int count, const int *mesh);
+/* the drive of a driven member: DOF dof (inv_m 0, g 0) and its rigid motion mode[n] (finite, mode[dof] =
+ * 1, mode[0] = 0) */
+GK_API int pl_add_drive(pl_model *pl, int dof, const double *mode);
+/* the drives' speeds (rad/s, one per drive, finite) into the state: q' of every drive DOF (the start of a
+ * communication step); GK_ERR_INPUT for a non-finite speed (state unchanged) */
+GK_API int pl_set_drive_speeds(const pl_model *pl, pl_state *s, const double *speed_rad_s);
+/* the drives' rigid motion at the start (after pl_initialize): q'_i = sum_j mode_j[i] speed_j for
+ * i >= 1; GK_ERR_INPUT for a non-finite speed (state unchanged) */
+GK_API int pl_start_drives(const pl_model *pl, pl_state *s, const double *speed_rad_s);
 /* PL_INTEGRATOR_*; GK_ERR_PARAM for another code or a mesh of more than GK_KINK_MAX_SLOTS slots */
 GK_API int pl_set_integrator(pl_model *pl, int integrator);
 
@@ -136,7 +153,7 @@ GK_API double pl_reference_torque(const pl_model *pl, double T_motor_Nm, double 
 GK_API double pl_mesh_torque(const pl_model *pl, int m, double T_ref_Nm);
 
 /* The quasi-static initial state (docs/planetary.md "Initial state"; PlanetaryModel.static_state):
- * psi = psi0, omega = omega0, q' = 0 and q balancing the static forces (the reference torque and the
+ * psi = psi0, omega = omega0, q' = 0 and q balancing (a drive DOF stays at q = 0) the static forces (the reference torque and the
  * balancing load, springs, the meshes' static laws at their table angles, the frames' centripetal
  * terms at omega0), Newton's method on the piecewise-linear mesh laws, dense Gaussian elimination with
  * partial pivoting.  GK_ERR_NOCONTACT (no equilibrium) with *bad_mesh = the mesh with no pair in its
