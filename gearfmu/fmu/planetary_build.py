@@ -137,6 +137,8 @@ def start_values(model: PlanetaryModel, s: GearboxRunSettings) -> Dict[str, floa
     for nm, _, z, law in damping_items(model):
         starts[f"{nm}.damping_ratio"] = z
         starts[f"{nm}.damping_model"] = DAMPING_CODES[law]
+    for d in model.drives:   # a driven member: the model's drive speed (the scene's driven_speed_rpm)
+        starts[f"{d['port']}_speed_input"] = d["speed_rad_s"]
     return starts
 
 
@@ -181,7 +183,8 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
         "# gearfmu planetary FMU configuration (written by gearfmu.fmu.planetary_build; read by planetary_model.c)",
         "# floats are C99 hexadecimal literals (exact); dof = index|1/m|g|name; spring = index|count|4 DOFs|4 coefs|k|c|"
         "name; frame = index|radial DOF|tangential DOF|R0|frame ratio; mesh.<i>.x = n|DOFs|coefs; mesh.<i>.angle = "
-        "n|DOFs|coefs|psi coefficient|phase; group = index|count|sun-planet meshes",
+        "n|DOFs|coefs|psi coefficient|phase; group = index|count|sun-planet meshes; drive = index|DOF|value "
+        "reference of its speed input|n|rigid motion of the n DOFs",
         f"format={CONFIG_FORMAT}", f"version={CONFIG_VERSION}", f"model_identifier={model_identifier}",
         f"guid={guid}", f"dofs={kd.n_dof}", f"load_dof={kd.load_dof}",
         f"motor_torque_input={int(kd.motor_input)}", f"load_torque_input={int(kd.load_input)}",
@@ -223,6 +226,9 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
                   f"{st}vr.damping_model={vr[f'{stage_of[m]}.damping_model']}"]
     lines.append(f"groups={len(kd.groups)}")
     lines += [f"group={g}|{len(ms)}|" + "|".join(str(m) for m in ms) for g, ms in enumerate(kd.groups)]
+    lines.append(f"drives={len(kd.drives)}")
+    lines += [f"drive={j}|{dof}|{vr[model.drives[j]['port'] + '_speed_input']}|{len(mode)}|"
+              + "|".join(_hexf(x) for x in mode) for j, (dof, mode) in enumerate(kd.drives)]
     for key in ("motor_torque", "load_torque", "motor_speed_start", "motor_angle_start", "max_step", "integrator"):
         lines.append(f"vr.{key}={vr.get(key, -1)}")
     elements = INTERFACE_ELEMENTS[interface]
@@ -308,6 +314,12 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
     (``stage_scene_texts``: the parallel stages' pair scenes)."""
     interface, me_node_events = interface_options(model_exchange, FMU_INTERFACES, ME_NODE_EVENTS,
                                                   DEFAULT_ME_NODE_EVENTS)
+    if model.drives:   # a driven member's speed is set per communication step: Co-Simulation only
+        if (model_exchange or {}).get("interface") not in (None, "cs"):
+            raise FmuBuildError(f"interface {interface}: a drivetrain with a driven member ({model.drives[0]['port']}) "
+                                "sets its drive's speed at every communication step, which Model Exchange has no "
+                                "place for; build it with interface cs")
+        interface = "cs"
     me = "me" in INTERFACE_ELEMENTS[interface]
     if me:
         for nm, t in zip(model.mesh_names, model.mesh_tables):
