@@ -27,7 +27,7 @@
 extern "C" {
 #endif
 
-#define PL_ABI_VERSION 1
+#define PL_ABI_VERSION 2
 
 /* sizes of the fixed arrays (a drivetrain beyond them is refused by pl_init / pl_add_*) */
 #define PL_MAX_DOF 96
