@@ -464,10 +464,10 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
         if len(meshes) + i not in on:
             tq_ref[si["meshes"]] = 0.0
     drives = _drive_modes(planetaries, stage_info, B, springs, mesh_rows)
-    return _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
-                   inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
-                   gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts),
-                   drives=drives)
+    model = _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
+                    inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
+                    gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
+    return replace(model, drives=tuple(drives)) if drives else model
 
 
 def _drive_modes(planetaries, stage_info, B: "_Builder", springs, mesh_rows) -> List[dict]:
@@ -635,7 +635,7 @@ def _check_rigid_parts(B: "_Builder", springs, mesh_rows) -> None:
 
 
 def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, motor, load, inputs, stages,
-            gearbox_meshes, parts, drives=()) -> PlanetaryModel:
+            gearbox_meshes, parts) -> PlanetaryModel:
     """The :class:`PlanetaryModel` of the built DOFs and elements, as flat arrays."""
     g = np.array(B.g)
     ns = len(springs)
@@ -667,7 +667,7 @@ def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, moto
         mesh_torque_per_ref=tq_ref, frame_idx=np.array([f[:2] for f in frames], dtype=np.int64).reshape(-1, 2),
         frame_par=np.array([f[2:] for f in frames], dtype=float).reshape(-1, 2), motor=motor, load=load,
         load_dof=part_dof[load], motor_torque_input=inputs[0], load_torque_input=inputs[1],
-        stages=stages, gearbox_meshes=gearbox_meshes, parts=parts, drives=tuple(drives))
+        stages=stages, gearbox_meshes=gearbox_meshes, parts=parts)
 
 
 def _depth(tree, body: int) -> int:

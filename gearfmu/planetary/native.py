@@ -267,25 +267,32 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
     return n_steps, t_in, t_out, t_ref, y
 
 
+#: the keyword arguments of :func:`simulate` that replace a field of its settings
+SETTING_ARGUMENTS = ("stop_time_s", "comm_step_s", "motor_speed_start_rad_s", "max_step_s", "integrator",
+                     "motor_angle_start_rad")
+
+
 def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = None, *,
-             stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
              motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
-             motor_speed_start_rad_s: Optional[float] = None, max_step_s: Optional[float] = None,
-             integrator: Optional[str] = None, motor_angle_start_rad: Optional[float] = None, initial_state=None,
-             drive_speeds_rad_s: Optional[Dict[str, InputLike]] = None, progress: bool = False) -> PlanetaryResult:
+             initial_state=None, drive_speeds_rad_s: Optional[Dict[str, InputLike]] = None, progress: bool = False,
+             **setting_changes) -> PlanetaryResult:
     """Run the model (docs/planetary.md); settings and arguments as gearfmu.gearbox.native.simulate:
     ``settings`` a :class:`gearfmu.common.settings.GearboxRunSettings` (None: its defaults), the keyword
-    arguments of the same meaning replace its fields; inputs a number, an array of one value per
-    communication step or a callable of t_k; ``load_torque_Nm`` None = the balancing load torque;
-    ``max_step_s`` None: :func:`choose_max_step_s` at 1.5 x the start speed; initial state:
-    ``initial_state`` or the quasi-static equilibrium
+    arguments of the same meaning (:data:`SETTING_ARGUMENTS`: ``stop_time_s``, ``comm_step_s``,
+    ``motor_speed_start_rad_s``, ``max_step_s``, ``integrator``, ``motor_angle_start_rad``) replace its
+    fields; inputs a number, an array of one value per communication step or a callable of t_k;
+    ``load_torque_Nm`` None = the balancing load torque; ``max_step_s`` None: :func:`choose_max_step_s`
+    at 1.5 x the start speed; initial state: ``initial_state`` or the quasi-static equilibrium
     (:meth:`gearfmu.planetary.model.PlanetaryModel.static_state`); ``integrator`` 'rk4_node' (default),
     'rk4_kink' or 'rk4'.  ``drive_speeds_rad_s``: per driven member (its port, e.g. ``"ps.ring"``) the
     speed of its drive (rad/s; a number, an array per communication step or a callable of t_k), set at
     the start of every step (None: the model's, docs/planetary.md "Driven members")."""
-    s = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
-                         max_step_s=max_step_s, integrator=integrator, motor_speed_start_rad_s=motor_speed_start_rad_s,
-                         motor_angle_start_rad=motor_angle_start_rad)
+    unknown = sorted(set(setting_changes) - set(SETTING_ARGUMENTS))
+    if unknown:
+        raise TypeError(f"simulate() got unexpected keyword arguments {unknown}")
+    ch = {k: setting_changes.get(k) for k in SETTING_ARGUMENTS}
+    ch["output_interval_s"] = ch.pop("comm_step_s")
+    s = checked_settings(model, settings, **ch)
     n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state)
     icode = _integrator_code(s.integrator, model)
     s = resolve_settings(model, s, reference_torque_Nm=float(t_ref[0]))

@@ -222,6 +222,35 @@ def test_static_state_equals_the_model_s(lib, name):
                 assert np.max(np.abs(qc - q)) <= tol * np.max(np.abs(q)), (name, k, T)
 
 
+def test_drive_arguments_give_status_codes(lib):
+    """The drives of driven members: 1/m = 0 only with g = 0 and not for the motor DOF; pl_add_drive's
+    refusals; a non-finite drive speed refused with the state unchanged."""
+    model, kw = case("driven_ring")
+    L = load_kernel(lib._name, planetary=True)    # unchecked: the codes themselves
+    K = PlanetaryKernel(lib, model, "rk4_node")
+    P, S = K.pl.ctypes.data, K.state.ctypes.data
+    y0 = K.initialize(60.0, 300.0)
+    scratch = np.zeros(L.pl_sizeof_model() // 8 + 1)
+    inv_m, g = np.array([1.0, 0.0, 1.0]), np.array([1.0, 0.5, 0.5])
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_ERR_MODEL  # g != 0
+    g[1] = 0.0
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_OK
+    inv_m[0], g[0] = 0.0, 1.0
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_ERR_MODEL  # motor
+    d = model.drive_dofs[0]
+    mode = np.array(model.drives[0]["mode"])
+    assert L.pl_add_drive(P, d, mode.ctypes.data) == GK_ERR_MODEL                 # declared already
+    assert L.pl_add_drive(P, model.part_dof["lp.sun"], mode.ctypes.data) == GK_ERR_MODEL   # 1/m > 0
+    assert L.pl_add_drive(P, 0, mode.ctypes.data) == GK_ERR_MODEL
+    assert L.pl_add_drive(P, d, None) == GK_ERR_MODEL
+    bad = np.array([float("nan")])
+    assert L.pl_set_drive_speeds(P, S, bad.ctypes.data) == GK_ERR_INPUT
+    assert L.pl_start_drives(P, S, bad.ctypes.data) == GK_ERR_INPUT
+    assert np.array_equal(K.y, y0)             # the refusals left the state unchanged
+    ok = np.array([-12.5])
+    assert L.pl_set_drive_speeds(P, S, ok.ctypes.data) == GK_OK and K.y[2 * d + 1] == -12.5
+
+
 def test_a_mesh_without_contact_is_named(lib):
     model, kw = case("position_error")
     m = model.mesh_names.index("lp.ring_planet[2]")
@@ -282,7 +311,7 @@ def test_bad_arguments_give_status_codes(lib):
     assert L.pl_me_init(P, W, ME, ybad.ctypes.data, 60.0, 0.0, 0) == GK_ERR_NONFINITE
     assert L.pl_me_derivatives(P, W, ME, y0.ctypes.data, nan, 0.0, dy.ctypes.data) == GK_ERR_INPUT
     assert L.pl_mesh_offset(P, 99) == -1 and L.pl_group_offset(None, 0) == -1 and L.pl_n_outputs(None) == 0
-    assert L.pl_abi_version() == 1 and L.pl_events(None) == 0
+    assert L.pl_abi_version() == 2 and L.pl_events(None) == 0
 
 
 # ---------------------------------------------------------------- Model Exchange
