@@ -427,7 +427,8 @@ def _phasing_rule(model: PlanetaryModel, res, cb: dict) -> None:
 def describe_model(model) -> str:
     """One line: what a gearbox or planetary drivetrain model holds."""
     if isinstance(model, PlanetaryModel):
-        st = ", ".join(f"{s['name']} ({s['model']}, {s['planets']} planets, {s['held']} held)" for s in model.stages)
+        st = ", ".join(f"{s['name']} ({s['model']}, {s['planets']} planets, {s['held']} "
+                       f"{'driven' if s.get('driven') else 'held'})" for s in model.stages)
         return (f"{model.n_dof} DOFs, {len(model.mesh_names)} meshes, {len(model.spring_names)} springs; planetary "
                 f"stage(s) {st}")
     return f"{model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s)"

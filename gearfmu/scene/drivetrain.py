@@ -589,12 +589,28 @@ def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_mo
         g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
         t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
         planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))
-        mesh_speeds.append((abs(g["sun"] - g["carrier"]) * w_motor, st.teeth[0]))
+        w_sun_mesh = (abs(g["sun"] - g["carrier"]) * w_motor if st.driven_speed_rad_s is None
+                      else abs(_sun_mesh_speed(st, up, g[up] * w_motor)))
+        mesh_speeds.append((w_sun_mesh, st.teeth[0]))
         how = "held" if st.driven_speed_rad_s is None else f"driven at {st.driven_speed_rad_s / RPM_TO_RAD_S:.6g} rpm"
         notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} {how}), sun "
                      f"torque {abs(t_sun):.6g} N*m, sun mesh frequency "
-                     f"{st.teeth[0] * abs(g['sun'] - g['carrier']) * w_motor / (2 * math.pi):.6g} Hz")
+                     f"{st.teeth[0] * w_sun_mesh / (2 * math.pi):.6g} Hz")
     return planetaries, mesh_speeds
+
+
+def _sun_mesh_speed(st, up: str, w_up: float) -> float:
+    """w_s - w_c (rad/s) of a stage whose port ``up`` turns at ``w_up`` and whose held port stands still
+    or turns at its drive's speed (Willis: z_s (w_s - w_c) + z_r (w_r - w_c) = 0)."""
+    zs, zr = st.sun_ring
+    w = {up: w_up, st.held: st.driven_speed_rad_s or 0.0}
+    if "carrier" in w:
+        other = "sun" if "ring" in w else "ring"
+        w[other] = w["carrier"] + (zr * (w["carrier"] - w["ring"]) / zs if other == "sun"
+                                   else zs * (w["carrier"] - w["sun"]) / zr)
+    else:
+        w["carrier"] = (zs * w["sun"] + zr * w["ring"]) / (zs + zr)
+    return w["sun"] - w["carrier"]
 
 
 def _part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:

@@ -28,6 +28,9 @@ def test_the_driven_ring_example():
     assert ps.held == "ring" and ps.driven_speed_rad_s == pytest.approx(-100.0 * RPM_TO_RAD_S, rel=1e-15)
     assert any(n.startswith("ps: planetary stage (geometry, torsional, 3 planets, ring driven at -100 rpm)")
                for n in sc.notes)
+    # the sun mesh frequency z_s |n_s - n_c| with the carrier's speed by Willis from the sun's and the ring's
+    n_c = (21 * 1470.0 + 81 * -100.0) / 102
+    assert any(f"sun mesh frequency {21 * (1470.0 - n_c) / 60:.6g} Hz" in n for n in sc.notes), sc.notes
     model = pipeline.drivetrain_model(sc, pipeline.stage_tables(sc))
     assert model.drives[0]["port"] == "ps.ring"
     r = pipeline.simulate_drivetrain(sc, model, stop_time_s=2e-3)
