@@ -28,6 +28,7 @@ from gearfmu.bench import lp_stage
 from gearfmu.planetary.model import PlanetaryModelError, build_drivetrain
 from gearfmu.planetary.modes import modes
 from gearfmu.planetary.native import PlanetaryInputError, simulate
+from gearfmu.planetary.reference import simulate_reference
 
 ZS, ZP, ZR = 24, 36, 96
 PORT_RATIO = {"sun": 1.0, "ring": ZR / ZS, "carrier": -(1.0 + ZR / ZS)}   # T_s : T_r : T_c
@@ -144,3 +145,9 @@ def test_run_inputs_of_the_drive_are_checked():
         simulate(m, drive_speeds_rad_s={"lp.ring": float("inf")}, **kw)
     with pytest.raises(PlanetaryModelError, match=r"drive_speeds_rad_s: expected 1 finite speeds"):
         m.static_state(50.0, 300.0, drive_speeds_rad_s=[1.0, 2.0])
+
+
+def test_the_reference_refuses_a_driven_member():
+    m = driven_model("ring", "sun", "carrier", -40.0)
+    with pytest.raises(PlanetaryInputError, match=r"^model: the reference does not take driven members \(lp\.ring\)"):
+        simulate_reference(m, **run_kw(m, 300.0, 50.0, 2))
