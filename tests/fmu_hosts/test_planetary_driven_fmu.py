@@ -9,6 +9,7 @@ code did not produce.
   with the same speed per step, gives every output within 1e-12 of its range (bit for bit).
 * Willis' equation (z_s (w_s - w_c) + z_r (w_r - w_c) = 0) for the FMU's initial speeds, and the
   driven ring at exactly the prescribed speed after every step.
+* fmpy's validate_fmu: no problems; Co-Simulation only, the input in rad/s starting at the scene's speed.
 * Bad input: a non-finite speed input discards the step with a message naming the input and leaves
   the state unchanged; asking for Model Exchange is refused at build time naming the driven member.
 """
@@ -109,6 +110,17 @@ def test_a_non_finite_speed_input_discards_the_step(built):
     assert fmu.getReal([vr["ps.ring_drive_speed"]])[0] == -5.0
     fmu.terminate()
     fmu.freeInstance()
+
+
+def test_the_built_fmu_is_valid_and_co_simulation_only(built):
+    import fmpy
+    import fmpy.validation
+    assert fmpy.validation.validate_fmu(str(built["fmu"])) == []
+    md = fmpy.read_model_description(str(built["fmu"]))
+    assert md.coSimulation is not None and md.modelExchange is None
+    v = {x.name: x for x in md.modelVariables}[INPUT]
+    assert v.causality == "input" and v.unit == "rad/s" and float(v.start) == pytest.approx(-100.0 * np.pi / 30.0,
+                                                                                          rel=1e-15)
 
 
 def test_model_exchange_is_refused_for_a_driven_member(built, tmp_path):
