@@ -151,3 +151,26 @@ def test_the_reference_refuses_a_driven_member():
     m = driven_model("ring", "sun", "carrier", -40.0)
     with pytest.raises(PlanetaryInputError, match=r"^model: the reference does not take driven members \(lp\.ring\)"):
         simulate_reference(m, **run_kw(m, 300.0, 50.0, 2))
+
+
+def test_two_driven_stages_in_series():
+    """Two stages (21/23/67, constant mesh stiffness), each ring driven, the first stage's carrier on the
+    second's sun through an elastic shaft: each drive's rigid motion moves the stages after it; the start
+    is the steady state, the torques the chained closed form T_s2 = (1 + z_r/z_s) T_s1, T_r = (z_r/z_s) T_s
+    of each stage, the speeds Willis' of each stage from its sun's and its drive's."""
+    from gearfmu.gearbox.model import Shaft
+    zs, zr = 21, 67
+    a, b = (dataclasses.replace(lp_stage(3, name=n, model="torsional", teeth_sun=zs, teeth_planet=23, teeth_ring=zr),
+                                driven_speed_rad_s=w) for n, w in (("a", -30.0), ("b", 10.0)))
+    m = build_drivetrain(planetaries=[a, b], shafts=[Shaft("s", "a.carrier", "b.sun", 1e5, 0.02)], motor="a.sun",
+                         load="b.carrier")
+    k = m.mesh_names.index("a.sun_planet[1]")
+    T = float(m.mesh_tables[k].mesh_period_rad) / abs(float(m.table_speeds(300.0)[k]))
+    r = simulate(m, stop_time_s=20 * T, comm_step_s=T / 8, motor_torque_Nm=50.0, motor_speed_start_rad_s=300.0)
+    t_sb = (1 + zr / zs) * 50.0
+    for name, want in (("s.force", t_sb), ("a.ring_support.force", -zr / zs * 50.0),
+                       ("b.ring_support.force", -zr / zs * t_sb)):
+        assert np.max(np.abs(r[name] - want)) <= 1e-8 * abs(want), name
+    for st, w_d in (("a", -30.0), ("b", 10.0)):
+        ws, wc = r[f"{st}.sun_speed"][0], r[f"{st}.carrier_speed"][0]
+        assert wc == pytest.approx((zs * ws + zr * w_d) / (zs + zr), rel=1e-13)
