@@ -544,11 +544,9 @@ def build_planetary_drivetrain_fmu(scene: DrivetrainScene, out_path, *, progress
                                    model_exchange: Optional[dict] = None) -> DrivetrainBuild:
     """A drivetrain scene with planetary stages -> its tables -> the planetary FMU at ``out_path``
     (docs/planetary.md "The planetary FMU"; :func:`gearfmu.fmu.planetary_build.build_planetary_fmu`):
-    Co-Simulation and Model Exchange unless ``model_exchange`` names the interface (a drivetrain with a
-    driven member: Co-Simulation; docs/planetary.md "Driven members")."""
+    Co-Simulation and Model Exchange unless ``model_exchange`` names the interface."""
     me = dict(model_exchange or {})
-    driven = any(p.driven_speed_rad_s is not None for p in scene.planetaries)
-    me["interface"] = me.get("interface") or ("cs" if driven else DEFAULT_FMU_INTERFACE)
+    me["interface"] = me.get("interface") or DEFAULT_FMU_INTERFACE
     check_gearbox_fmu_runtime(runtime, me["interface"], me.get("me_node_events"))
     t0 = time.perf_counter()
     tables = stage_tables(scene, progress=progress, allow_large=allow_large)

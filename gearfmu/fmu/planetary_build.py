@@ -244,12 +244,13 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
 
 # ------------------------------------------------------------- validation
 def native_run(model: PlanetaryModel, settings: GearboxRunSettings, *, stop_time_s: Optional[float] = None,
-               comm_step_s: Optional[float] = None):
+               comm_step_s: Optional[float] = None, drive_speeds_rad_s=None):
     """The native planetary solver with an FMU's start values (``settings`` resolved by
-    :func:`planetary_settings`): the inputs held, the same step bound, integrator and start."""
+    :func:`planetary_settings`): the inputs held, the same step bound, integrator and start;
+    ``drive_speeds_rad_s``: the driven members' speeds (None: the model's, the inputs' start values)."""
     return simulate_planetary(model, settings, stop_time_s=stop_time_s, comm_step_s=comm_step_s,
                               motor_torque_Nm=settings.motor_torque_start_Nm,
-                              load_torque_Nm=settings.load_torque_start_Nm)
+                              load_torque_Nm=settings.load_torque_start_Nm, drive_speeds_rad_s=drive_speeds_rad_s)
 
 
 def _reference(model: PlanetaryModel, variables, settings):
@@ -314,12 +315,6 @@ def build_planetary_fmu(model: PlanetaryModel, out_path, *, settings: Optional[G
     (``stage_scene_texts``: the parallel stages' pair scenes)."""
     interface, me_node_events = interface_options(model_exchange, FMU_INTERFACES, ME_NODE_EVENTS,
                                                   DEFAULT_ME_NODE_EVENTS)
-    if model.drives:   # a driven member's speed is set per communication step: Co-Simulation only
-        if (model_exchange or {}).get("interface") not in (None, "cs"):
-            raise FmuBuildError(f"interface {interface}: a drivetrain with a driven member ({model.drives[0]['port']}) "
-                                "sets its drive's speed at every communication step, which Model Exchange has no "
-                                "place for; build it with interface cs")
-        interface = "cs"
     me = "me" in INTERFACE_ELEMENTS[interface]
     if me:
         for nm, t in zip(model.mesh_names, model.mesh_tables):

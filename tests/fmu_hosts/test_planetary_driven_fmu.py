@@ -9,10 +9,16 @@ code did not produce.
   with the same speed per step, gives every output within 1e-12 of its range (bit for bit).
 * Willis' equation (z_s (w_s - w_c) + z_r (w_r - w_c) = 0) for the FMU's initial speeds, and the
   driven ring at exactly the prescribed speed after every step.
-* fmpy's validate_fmu: no problems; Co-Simulation only, the input in rad/s starting at the scene's speed.
-* Bad input: a non-finite speed input discards the step with a message naming the input and leaves
-  the state unchanged; asking for Model Exchange is refused at build time naming the driven member.
+* fmpy's validate_fmu: no problems; Co-Simulation and Model Exchange, the input in rad/s starting at
+  the scene's speed.
+* Model Exchange: fmpy's CVode (rtol 1e-8) with the drive's speed input set to another speed than the
+  scene's, then stepping to its opposite halfway, against the native solver with the same speeds over
+  0.01 s: within 1e-4 of each output's range (the tolerance of the held stage's Model Exchange test,
+  tests/fmu_hosts/test_planetary_fmu.py).
+* Bad input: a non-finite speed input discards the step (Co-Simulation) or the evaluation (Model
+  Exchange) with a message naming the input and leaves the state unchanged.
 """
+import ctypes
 import subprocess
 import sys
 from pathlib import Path
@@ -21,12 +27,11 @@ import numpy as np
 import pytest
 
 from gearfmu import stages
-from gearfmu.fmu.build_steps import FmuBuildError
-from gearfmu.fmu.planetary_build import build_planetary_fmu, planetary_settings, variables_of_fmu
+from gearfmu.fmu.planetary_build import native_run, planetary_settings, variables_of_fmu
 from gearfmu.planetary.native import simulate
 from gearfmu.scene.drivetrain import load_drivetrain
 
-from support.fmpy_host import slave, status
+from support.fmpy_host import quiet, slave, status
 
 pytestmark = pytest.mark.slow
 
@@ -112,18 +117,78 @@ def test_a_non_finite_speed_input_discards_the_step(built):
     fmu.freeInstance()
 
 
-def test_the_built_fmu_is_valid_and_co_simulation_only(built):
+def test_the_built_fmu_is_valid_and_offers_both_interfaces(built):
     import fmpy
     import fmpy.validation
     assert fmpy.validation.validate_fmu(str(built["fmu"])) == []
     md = fmpy.read_model_description(str(built["fmu"]))
-    assert md.coSimulation is not None and md.modelExchange is None
+    assert md.coSimulation is not None and md.modelExchange is not None
     v = {x.name: x for x in md.modelVariables}[INPUT]
     assert v.causality == "input" and v.unit == "rad/s" and float(v.start) == pytest.approx(-100.0 * np.pi / 30.0,
                                                                                           rel=1e-15)
 
 
-def test_model_exchange_is_refused_for_a_driven_member(built, tmp_path):
-    with pytest.raises(FmuBuildError, match=r"interface both: .*driven member \(ps\.ring\)"):
-        build_planetary_fmu(built["model"], tmp_path / "me.fmu", settings=built["settings"], platforms=("x86_64-linux",),
-                            model_exchange={"interface": "both"}, validation=False)
+ME_NAMES = ["ps.sun_planet[1].mesh_force", "ps.ring_planet[2].mesh_force", "ps.ring_support.force", "load_speed",
+            "ps.carrier_speed"]
+
+
+def test_model_exchange_in_fmpy_cvode_follows_the_speed_input(built):
+    import dataclasses
+
+    import fmpy
+    model, s = built["model"], dataclasses.replace(built["settings"], stop_time_s=0.01)
+    w = -5.0   # rad/s, not the scene's -100 rpm
+    nat = native_run(model, s, drive_speeds_rad_s={"ps.ring": w})
+    got = fmpy.simulate_fmu(str(built["fmu"]), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
+                            stop_time=s.stop_time_s, output_interval=s.output_interval_s, start_values={INPUT: w},
+                            output=ME_NAMES + ["ps.ring_drive_speed"], record_events=False, logger=quiet)
+    n = min(len(got), len(nat.time_s))
+    assert n == len(nat.time_s)
+    assert np.all(got["ps.ring_drive_speed"] == w)
+    errs = {k: float(np.max(np.abs(got[k][:n] - nat[k][:n])) / np.ptp(nat[k][:n])) for k in ME_NAMES}
+    print("CVode against native:", errs)
+    assert max(errs.values()) <= 1e-4, errs
+    # the input stepping from -5 to +5 rad/s halfway (a time event of fmpy's input): the drive follows it
+    t_step = 0.5 * s.stop_time_s
+    sig = np.array([(0.0, w), (t_step, w), (t_step, -w), (s.stop_time_s, -w)], dtype=[("time", float), (INPUT, float)])
+    got = fmpy.simulate_fmu(str(built["fmu"]), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
+                            stop_time=s.stop_time_s, output_interval=s.output_interval_s, start_values={INPUT: w},
+                            input=sig, output=ME_NAMES + ["ps.ring_drive_speed"], record_events=False, logger=quiet)
+    steps = np.arange(len(nat.time_s)) * s.output_interval_s
+    nat = native_run(model, s, drive_speeds_rad_s={"ps.ring": np.where(steps < t_step * (1 - 1e-12), w, -w)})
+    assert got["ps.ring_drive_speed"][-1] == -w
+    # the row at the step itself: fmpy samples after the event (the new speed in the support's damping), the
+    # native row is the end of the step before it (the old speed); every other row compares
+    rows = np.flatnonzero(np.abs(steps - t_step) > 0.5 * s.output_interval_s)
+    errs = {k: float(np.max(np.abs(got[k][rows] - nat[k][rows])) / np.ptp(nat[k])) for k in ME_NAMES}
+    print("CVode against native, input step:", errs)
+    assert max(errs.values()) <= 1e-4, errs
+
+
+def test_a_non_finite_speed_input_stops_a_model_exchange_evaluation(built):
+    from fmpy.fmi2 import FMU2Model, fmi2Discard
+    import fmpy
+    md = fmpy.read_model_description(str(built["fmu"]))
+    from support.fmpy_host import callbacks
+    msgs = []
+    d = fmpy.extract(str(built["fmu"]), unzipdir=str(built["dir"] / "me"))
+    fmu = FMU2Model(guid=md.guid, unzipDirectory=d, modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="me")
+    cb = callbacks(msgs)
+    fmu.instantiate(callbacks=cb, loggingOn=True)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.enterContinuousTimeMode()
+    nx = md.numberOfContinuousStates
+    x, dx = (ctypes.c_double * nx)(), (ctypes.c_double * nx)()
+    fmu.getContinuousStates(x, nx)
+    before = np.array(x[:])
+    fmu.setReal([vr[INPUT]], [float("inf")])
+    assert status(fmu.getDerivatives, dx, nx) == fmi2Discard
+    assert any(INPUT in m and "not finite" in m for _, m in msgs), msgs
+    fmu.getContinuousStates(x, nx)
+    assert np.array_equal(np.array(x[:]), before)
+    fmu.terminate()
+    fmu.freeInstance()

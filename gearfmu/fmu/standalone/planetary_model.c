@@ -21,7 +21,8 @@
  * kernel (../kernel/pl_kernel.c) through the function table PL_KERNEL below: a parameter outside its
  * range, a bad integrator or damping model, a mesh with no tooth pair in its contact zone or no static
  * equilibrium at the start: no initial state (Error, reasons logged); a driven member's speed input is
- * set into the state at the start of every communication step; a non-finite input, a bad
+ * set into the state at the start of every communication step (Model Exchange: at every evaluation);
+ * a non-finite input, a bad
  * communication step or a state turned non-finite: the step is discarded, the state unchanged; a mesh
  * torque outside its tables' torque axis: one warning per excursion.  Nothing here ever aborts.
  */
@@ -303,31 +304,45 @@ static int pmk_step(void *kd, double Tm, double Tl, double H, double hmax, doubl
         for (j = 0; j < d->pl->n_drive; ++j) d->state.y[2 * d->pl->drive_dof[j] + 1] = was[j];
     return st;
 }
+/* Model Exchange: a drive's rate state is its speed input at every evaluation (the host integrates the
+ * drive's angle with it; the rate's own derivative is 0); GK_ERR_INPUT (logged) for a non-finite one */
+static int me_drives(gm_data *d)
+{
+    double w[PL_MAX_DRIVES];
+    if (d->pl->n_drive == 0) return GK_OK;
+    if (!drive_speeds(d, w, GF_DISCARD, "; not evaluated")) return GK_ERR_INPUT;
+    return pl_set_drive_speeds(d->pl, &d->state, w);
+}
 static int pmk_me_n_ind(const void *kd, int node_events) { return pl_me_n_indicators(((const gm_data *)kd)->pl, node_events); }
 static int pmk_me_init(void *kd, double Tm, double Tl, int node_events)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_init(d->pl, d->work, &d->me, d->state.y, Tm, Tl, node_events);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_init(d->pl, d->work, &d->me, d->state.y, Tm, Tl, node_events);
 }
 static int pmk_me_update(void *kd, double Tm, double Tl, int *changed)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_update(d->pl, d->work, &d->me, d->state.y, Tm, Tl, changed);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_update(d->pl, d->work, &d->me, d->state.y, Tm, Tl, changed);
 }
 static int pmk_me_deriv(void *kd, double Tm, double Tl, double *dy)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_derivatives(d->pl, d->work, &d->me, d->state.y, Tm, Tl, dy);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_derivatives(d->pl, d->work, &d->me, d->state.y, Tm, Tl, dy);
 }
 static int pmk_me_ind(void *kd, double Tm, double Tl, double *z)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_indicators(d->pl, d->work, &d->me, d->state.y, Tm, Tl, z);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_indicators(d->pl, d->work, &d->me, d->state.y, Tm, Tl, z);
 }
 static int pmk_me_out(void *kd, double Tm, double Tl, double *out)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_outputs(d->pl, d->work, &d->me, d->state.y, Tm, Tl, out);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_outputs(d->pl, d->work, &d->me, d->state.y, Tm, Tl, out);
 }
 
 static const gfm_kernel PL_KERNEL = {"mesh", "docs/planetary.md", pmk_integrator, pmk_tref, pmk_mesh_torque, pmk_initialize,
