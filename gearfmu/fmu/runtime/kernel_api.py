@@ -85,7 +85,7 @@ KERNEL_FUNCTIONS = (
 
 
 #: the planetary drivetrain kernel (plkernel.h; pl_kernel.c and pl_static.c compiled beside the kernel)
-PLANETARY_ABI_VERSION = 1
+PLANETARY_ABI_VERSION = 2
 PLANETARY_FUNCTIONS = (
     ("pl_abi_version", INT, (), VALUE),
     ("pl_sizeof_model", INT, (), VALUE),
