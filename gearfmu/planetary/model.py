@@ -547,8 +547,8 @@ def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
         names.add(s.name)
         for end in (s.a, s.b):
             if end in held_parts:
-                raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is a held member (grounded through its "
-                                          "torsional support); no shaft may join it")
+                raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is a held member (grounded, or driven, "
+                                          "through its torsional support); no shaft may join it")
             if end not in inertia:
                 raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is not a part; parts are "
                                           f"{sorted(inertia)}")

@@ -479,6 +479,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     parts = ["motor", "load"] + [f"{nm}.{role}" for _, nm, _, _ in stage_scenes if nm for role in ("pinion", "gear")]
     parts += [s.port(p) for _, s in plans for p in s.free_ports]
     held = {s.port(s.held): s.name for _, s in plans}
+    driven = {s.port(s.held) for _, s in plans if s.driven_speed_rad_s is not None}
     # a stage without a valid name has no parts: its shafts' ends are not reported again
     stage_name_problem = any(nm is None for _, nm, _, _ in stage_scenes) or plan_problem
 
@@ -493,8 +494,10 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
             shaft_names[nm] = path
         for end in ("from", "to"):
             if v[end] in held:
-                r.add(f"{path}.{end}", f"{v[end]!r} is the held port of planetary stage {held[v[end]]!r} (grounded "
-                                       "through its torsional support): no shaft may join it")
+                how = "driven through its torsional support by its drive" if v[end] in driven else \
+                    "grounded through its torsional support"
+                r.add(f"{path}.{end}", f"{v[end]!r} is the held port of planetary stage {held[v[end]]!r} ({how}): no "
+                                       "shaft may join it")
             elif v[end] is not None and v[end] not in parts and not stage_name_problem:
                 r.add(f"{path}.{end}", f"{v[end]!r} is not a part; parts are {', '.join(parts)}")
         shafts.append((path, _shaft(r, path, raw, v)))

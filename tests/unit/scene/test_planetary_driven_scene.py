@@ -54,6 +54,8 @@ def test_gearfmu_simulate_of_the_driven_example(tmp_path, capsys):
      "motor-driven speed only"),
     ("driven_speed_rpm = -100.0", 'driven_speed_rpm = "fast"', "planetary[0].driven_speed_rpm", "number"),
     ("driven_speed_rpm = -100.0", "driven_speed_rpm = 2e6", "planetary[0].driven_speed_rpm", "1e+06"),
+    ('to = "ps.sun"', 'to = "ps.ring"', "shaft[0].to", "'ps.ring' is the held port of planetary stage 'ps' (driven "
+     "through its torsional support by its drive): no shaft may join it"),
 ])
 def test_bad_driven_rows_are_refused_with_their_key(old, new, key, reason):
     text = DRIVEN.read_text()
