@@ -66,7 +66,12 @@ from ..tables.mesh_tables import MeshTables
 from ..tables.planetary import PlanetaryStage, shift_meshing_error
 from ..tables.zones import mean_total_stiffness_N_per_m
 
-__all__ = ["PlanetaryModelError", "PlanetaryModel", "build_drivetrain"]
+__all__ = ["PlanetaryModelError", "PlanetaryModel", "build_drivetrain", "MESH_MAP_DOFS", "SPRING_DOFS"]
+
+#: most DOFs of a mesh's x map (a translational stage's mesh: 6, and the drive that turns its carrier)
+MESH_MAP_DOFS = 7
+#: most DOFs of a spring (a planet bearing's tangential spring: 4, and the drive that turns its carrier)
+SPRING_DOFS = 5
 
 class PlanetaryModelError(GearboxModelError):
     """Bad planetary drivetrain description; the message names the field."""
@@ -138,8 +143,8 @@ class _Builder:
 @dataclass(frozen=True)
 class PlanetaryModel:
     """A checked drivetrain with planetary stages (SI; module docstring).  Per DOF: name, kind ('rot'
-    or 'trans'), mass or inertia, kinematic ratio g.  Per spring: name, kind, up to 4 (DOF, coefficient)
-    entries, k, c, frame ratio.  Per mesh: name, tables, up to 6 (DOF, coefficient) entries of x, up to
+    or 'trans'), mass or inertia, kinematic ratio g.  Per spring: name, kind, up to SPRING_DOFS (DOF, coefficient)
+    entries, k, c, frame ratio.  Per mesh: name, tables, up to MESH_MAP_DOFS (DOF, coefficient) entries of x, up to
     2 of the table angle, its psi coefficient and phase, per-pair damping c and m_e, the static pinion
     torque per unit reference torque (table rows).  Inertial frames: (DOF a, DOF b, R0, frame ratio).
     ``part_dof``: part name -> its rotation DOF; ``stages``: the planetary stages with their DOFs."""
@@ -181,6 +186,17 @@ class PlanetaryModel:
     #: name), its DOF (infinite inertia, g = 0), its stage, its default speed (rad/s) and ``mode``, the
     #: rigid motion of every DOF per unit drive speed with the motor DOF at rest (rad/s per rad/s)
     drives: Tuple[dict, ...] = ()
+    #: per rotating frame the drive DOF that turns it too (-1: none) and its ratio h_c: the frame turns
+    #: at g_f omega + h_c q_d' (None: no frame is turned by a drive)
+    frame_drive: Optional[np.ndarray] = None
+    frame_drive_ratio: Optional[np.ndarray] = None
+
+    def frame_drives(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(drive DOF or -1, drive ratio) of every rotating frame."""
+        nf = self.frame_idx.shape[0]
+        if self.frame_drive is None:
+            return -np.ones(nf, dtype=np.int64), np.zeros(nf)
+        return self.frame_drive, self.frame_drive_ratio
 
     # ------------------------------------------------------------ drives
     @property
@@ -336,8 +352,12 @@ class PlanetaryModel:
         # centripetal terms of the frames at the start speed: force m Omega^2 (R0 + q_a) on q_a
         cen = np.zeros(n)
         Kcen = np.zeros((n, n))
-        for (ia, ib), (R0, gf) in zip(self.frame_idx, self.frame_par):
-            W2 = (gf * speed_rad_s) ** 2
+        wd = self.drive_speeds(drive_speeds_rad_s) if self.drives else np.zeros(0)
+        for (ia, ib), (R0, gf), fd, fh in zip(self.frame_idx, self.frame_par, *self.frame_drives()):
+            Om = gf * speed_rad_s
+            if fd >= 0:   # a drive turns the frame too
+                Om += fh * wd[self.drive_dofs.index(int(fd))]
+            W2 = Om ** 2
             cen[ia] += self.mass[ia] * W2 * R0
             Kcen[ia, ia] += self.mass[ia] * W2       # the force m Omega^2 q grows with q: a negative stiffness
             Kcen[ib, ib] += self.mass[ib] * W2
@@ -463,52 +483,101 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     for i, si in enumerate(stage_info):
         if len(meshes) + i not in on:
             tq_ref[si["meshes"]] = 0.0
-    drives = _drive_modes(planetaries, stage_info, B, springs, mesh_rows)
+    drives, frame_drive = _drive_modes(planetaries, stage_info, B, springs, mesh_rows, frames)
     model = _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
                     inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
                     gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
-    return replace(model, drives=tuple(drives)) if drives else model
-
-
-def _drive_modes(planetaries, stage_info, B: "_Builder", springs, mesh_rows) -> List[dict]:
-    """The drives of the driven members: each drive's rigid motion (every DOF's speed per unit drive
-    speed with the motor DOF and the other drives at rest: the velocities that leave every spring and
-    mesh undeflected, by least squares on the elements' unit maps, checked exact to 1e-9).  The
-    translational model's frames turn with the carrier's kinematic speed g_c omega, so a drive may not
-    turn a translational stage's carrier."""
-    drives = [(i, st, si) for i, (st, si) in enumerate(zip(planetaries, stage_info)) if "drive" in si["dofs"]]
     if not drives:
-        return []
+        return model
+    return replace(model, drives=tuple(drives), frame_drive=np.array([d for d, _ in frame_drive], dtype=np.int64),
+                   frame_drive_ratio=np.array([h for _, h in frame_drive], dtype=float))
+
+
+def _rigid_motion(A, free, d, n) -> np.ndarray:
+    """The velocities (every DOF) with DOF d at 1, DOF 0 and the DOFs not in ``free`` at 0, that leave the
+    elements (unit rows of A) undeflected: least squares, its residual returned in v's last use."""
+    v = np.zeros(n)
+    v[d] = 1.0
+    sol, *_ = np.linalg.lstsq(A[:, free], -A[:, d], rcond=None)
+    v[free] = sol
+    return v
+
+
+def _element_rows(B: "_Builder", springs, mesh_rows) -> np.ndarray:
     n = len(B.names)
     rows = [ent for _, _, ent, _, _, _ in springs] + [r["x"] for r in mesh_rows]
     A = np.zeros((len(rows), n))
     for k, ent in enumerate(rows):
-        for d, cf in ent:
-            A[k, d] += cf
+        for dof, cf in ent:
+            A[k, dof] += cf
         A[k] /= max(float(np.linalg.norm(A[k])), 1e-300)
+    return A
+
+
+def _drive_modes(planetaries, stage_info, B: "_Builder", springs, mesh_rows, frames):
+    """(the drives of the driven members, per frame (drive DOF or -1, its ratio)): each drive's rigid
+    motion (every DOF's speed per unit drive speed with the motor DOF and the other drives at rest: the
+    velocities that leave every spring and mesh undeflected, by least squares on the elements' unit maps,
+    checked exact to 1e-9).  A translational stage measures its translations and its elements' rotations
+    in the frame that turns with its carrier: a drive that turns the carrier (h_c != 0) turns the frame
+    too (at g_c omega + h_c q_d'), and every element of the stage that reads rotations takes the drive's
+    part off them (an entry -h_c sum(rotation coefficients) on the drive DOF), so that the rigid motion
+    leaves the translations at rest (docs/planetary.md "Driven members").  ``springs`` and ``mesh_rows``
+    are completed in place."""
+    drives = [(i, st, si) for i, (st, si) in enumerate(zip(planetaries, stage_info)) if "drive" in si["dofs"]]
+    frame_drive = [(-1, 0.0)] * len(frames)
+    if not drives:
+        return [], frame_drive
+    n = len(B.names)
     ddofs = [si["dofs"]["drive"] for _, _, si in drives]
     free = [i for i in range(1, n) if i not in ddofs]
+    A = _element_rows(B, springs, mesh_rows)
+    modes = [_rigid_motion(A, free, si["dofs"]["drive"], n) for _, _, si in drives]
+    for j2, (st2, si2) in enumerate(zip(planetaries, stage_info)):
+        if st2.model != "translational":
+            continue
+        dc = si2["dofs"]["carrier"]
+        turning = [(j, float(v[dc])) for j, v in enumerate(modes) if abs(float(v[dc])) > 1e-13 * float(np.max(np.abs(v)))]
+        if len(turning) > 1:
+            i, st, _ = drives[turning[1][0]]
+            raise PlanetaryModelError(f"planetary[{i}] ({st.name}).driven_speed_rad_s: the carrier of the translational "
+                                      f"stage {st2.name!r} is turned by two drives; its frame follows one")
+        if turning:
+            _frame_follows_drive(st2, si2, B, springs, mesh_rows, frames, frame_drive, ddofs[turning[0][0]],
+                                 turning[0][1])
+    A = _element_rows(B, springs, mesh_rows)
     out = []
     for i, st, si in drives:
-        w = f"planetary[{i}] ({st.name})"
         d = si["dofs"]["drive"]
-        v = np.zeros(n)
-        v[d] = 1.0
-        sol, *_ = np.linalg.lstsq(A[:, free], -A[:, d], rcond=None)
-        v[free] = sol
+        v = _rigid_motion(A, free, d, n)
         if float(np.max(np.abs(A @ v))) > 1e-9:
-            raise PlanetaryModelError(f"{w}.driven_speed_rad_s: the drive of the {st.held} has no rigid motion in "
-                                      "this drivetrain (its elements would deflect)")
+            raise PlanetaryModelError(f"planetary[{i}] ({st.name}).driven_speed_rad_s: the drive of the {st.held} has "
+                                      "no rigid motion in this drivetrain (its elements would deflect)")
         v[np.abs(v) <= 1e-13 * float(np.max(np.abs(v)))] = 0.0
-        for j, (st2, si2) in enumerate(zip(planetaries, stage_info)):
-            if st2.model == "translational" and v[si2["dofs"]["carrier"]] != 0.0:
-                raise PlanetaryModelError(
-                    f"{w}.driven_speed_rad_s: driving the {st.held} turns the carrier of the translational stage "
-                    f"{st2.name!r}, whose frame turns with the carrier's motor-driven speed only; give that stage "
-                    "model = 'torsional', or drive a member that leaves its carrier's speed alone")
+        v[si["dofs"][st.held]] = 1.0   # the member turns with its drive (exact; the solve rounds at 1e-15)
         out.append({"port": st.port(st.held), "dof": int(d), "stage": st.name, "speed_rad_s":
                     float(st.driven_speed_rad_s), "mode": v})
-    return out
+    return out, frame_drive
+
+
+def _frame_follows_drive(st, si, B: "_Builder", springs, mesh_rows, frames, frame_drive, d: int, hc: float) -> None:
+    """The frames of translational stage ``st`` turn with drive DOF d at ratio hc too; its elements that
+    read rotations in that frame get the entry -hc sum(rotation coefficients) on d."""
+    frame_dofs = set(si["dofs"]["planet_zeta"]) | set(si["dofs"]["planet_eta"])
+    for p in ("sun", "ring", "carrier"):
+        frame_dofs.update(si["dofs"].get(p + "_xy", ()))
+    for r, f in enumerate(frames):
+        if f[0] in frame_dofs:
+            frame_drive[r] = (d, hc)
+
+    def relative(ent):
+        rot = sum(cf for dof, cf in ent if B.kind[dof] == "rot")
+        return ent + [(d, -hc * rot)] if rot != 0.0 and any(dof in frame_dofs for dof, _ in ent) else ent
+
+    for k, (name, kind, ent, kk, c, gf) in enumerate(springs):
+        springs[k] = (name, kind, relative(list(ent)), kk, c, gf)
+    for m in si["meshes"]:
+        mesh_rows[m]["x"] = relative(list(mesh_rows[m]["x"]))
 
 
 def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
@@ -639,14 +708,14 @@ def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, moto
     """The :class:`PlanetaryModel` of the built DOFs and elements, as flat arrays."""
     g = np.array(B.g)
     ns = len(springs)
-    spring_idx = -np.ones((ns, 4), dtype=np.int64)
-    spring_coef = np.zeros((ns, 4))
+    spring_idx = -np.ones((ns, SPRING_DOFS), dtype=np.int64)
+    spring_coef = np.zeros((ns, SPRING_DOFS))
     for s_, (_, _, ent, _, _, _) in enumerate(springs):
         for j, (d, cf) in enumerate(ent):
             spring_idx[s_, j], spring_coef[s_, j] = d, cf
     nmesh = len(mesh_rows)
-    mesh_idx = -np.ones((nmesh, 6), dtype=np.int64)
-    mesh_coef = np.zeros((nmesh, 6))
+    mesh_idx = -np.ones((nmesh, MESH_MAP_DOFS), dtype=np.int64)
+    mesh_coef = np.zeros((nmesh, MESH_MAP_DOFS))
     angle_idx = -np.ones((nmesh, 2), dtype=np.int64)
     angle_coef = np.zeros((nmesh, 2))
     for m_, r in enumerate(mesh_rows):

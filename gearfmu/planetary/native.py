@@ -29,8 +29,8 @@ from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, 
                                write_columns_csv)
 from ..gearbox._pair import KINK_MAX_SLOTS, _node_flags
 from ..tables.zones import zone_cuts
-from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K, I_MD,
-                      I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, WK, run)
+from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, FF, FI, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K,
+                      I_MD, I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, SP, WK, run)
 from .model import PlanetaryModel
 from .modes import modes
 
@@ -184,9 +184,14 @@ class _KernelData:
             self.si[s * SI] = len(ent)
             for j, (d, c) in enumerate(ent):
                 self.si[s * SI + 1 + j], self.sf[s * SF + j] = d, c
-            self.sf[s * SF + 4], self.sf[s * SF + 5] = model.spring_k[s], model.spring_c[s]
-        self.fi = np.ascontiguousarray(model.frame_idx.reshape(-1), dtype=np.int64)
-        self.ff = np.ascontiguousarray(model.frame_par.reshape(-1), dtype=np.float64)
+            self.sf[s * SF + SP], self.sf[s * SF + SP + 1] = model.spring_k[s], model.spring_c[s]
+        nf = model.frame_idx.shape[0]
+        fd, fh = model.frame_drives()
+        self.fi = np.zeros(nf * FI, dtype=np.int64)
+        self.ff = np.zeros(nf * FF)
+        for r in range(nf):
+            self.fi[FI * r:FI * r + 3] = (model.frame_idx[r, 0], model.frame_idx[r, 1], fd[r])
+            self.ff[FF * r:FF * r + 3] = (model.frame_par[r, 0], model.frame_par[r, 1], fh[r])
         self.n = model.n_dof
 
 

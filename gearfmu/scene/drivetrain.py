@@ -532,9 +532,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     t_motor, w_motor = motor["torque_Nm"], motor["speed_rpm"]
     notes = []
     planetaries, mesh_speeds = _planetary_operating_points(plans, len(stage_scenes), links, tree, ratio, t_motor,
-                                                          w_motor, notes, r)
-    if r.problems:
-        raise SceneError(r.problems, source=source_path or "drivetrain")
+                                                          w_motor, notes)
     stages = []
     for path, nm, v, (sc, src, own) in stage_scenes:
         g = ratio[f"{nm}.pinion"]
@@ -576,7 +574,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
 
 
 def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_motor: float, w_motor: float,
-                                notes: list, r: Optional[Reader] = None):
+                                notes: list):
     """(the planetary stages with their ports' kinematic ratios and the sun's static torque, the (sun
     mesh speed rad/s, sun teeth) of each): the port nearer the motor takes T_motor/g of it; a note
     per stage (its form, model, planets, held port, sun torque and mesh frequency)."""
@@ -585,10 +583,6 @@ def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_mo
         edge = next(e for e in tree.edges if e[0] == li)
         a, b = links[li][1], links[li][2]
         up = (a if tree.body_of[a] == edge[1] else b).split(".")[1]
-        if r is not None and st.driven_speed_rad_s is not None and st.model == "translational" and up != "carrier":
-            r.add(f"{path}.driven_speed_rpm", f"driving the {st.held} turns the carrier, and the translational model's "
-                  "frame turns with the carrier's motor-driven speed only: give model = \"torsional\", or drive the "
-                  "stage from the motor side through its carrier")
         g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
         t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
         planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))

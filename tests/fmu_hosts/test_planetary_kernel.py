@@ -116,6 +116,17 @@ def _driven_carrier(stop_periods):
     return m, run_kwargs(m, "lp.sun_planet[1]", 100.0, 60.0, stop_periods)
 
 
+def _driven_translational(stop_periods):
+    """Translational superimposing stage: the sun on the motor, the ring driven (its speed changing every
+    step), the carrier on the load -- the drive turns the carrier, so its frame turns with the drive too."""
+    st = dataclasses.replace(lp_stage(3, teeth_sun=21, teeth_planet=23, teeth_ring=67, contact_ratio_sun=1.6,
+                                      contact_ratio_ring=1.7), driven_speed_rad_s=-40.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier")
+    kw = run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
+    kw["drive_speeds_rad_s"] = {"lp.ring": lambda t: -40.0 + 2e4 * t}
+    return m, kw
+
+
 def _bench(name):
     return lambda stop_periods: planetary_case(name, mesh_periods=stop_periods)
 
@@ -129,6 +140,7 @@ CASES = {
     "load_driven": _load_driven,
     "driven_ring": _driven,
     "driven_ring_translational": _driven_carrier,
+    "driven_ring_turning_frame": _driven_translational,
 }
 _MODELS = {}
 

@@ -122,6 +122,19 @@ int pl_add_frame(pl_model *pl, int dof_a, int dof_b, double R0_m, double frame_r
     f->b = dof_b;
     f->R0_m = R0_m;
     f->ratio = frame_ratio;
+    f->drive = -1;
+    f->drive_ratio = 0.0;
+    return GK_OK;
+}
+
+int pl_set_frame_drive(pl_model *pl, int frame, int drive_dof, double drive_ratio)
+{
+    int j, ok = 0;
+    if (pl == NULL || frame < 0 || frame >= pl->n_frame || !isfinite(drive_ratio)) return GK_ERR_MODEL;
+    for (j = 0; j < pl->n_drive; ++j) ok |= pl->drive_dof[j] == drive_dof;
+    if (!ok) return GK_ERR_MODEL;
+    pl->frame[frame].drive = drive_dof;
+    pl->frame[frame].drive_ratio = drive_ratio;
     return GK_OK;
 }
 
@@ -294,6 +307,7 @@ GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *
         const pl_frame *f = &pl->frame[s];
         int ia = f->a, ib = f->b;
         double R0 = f->R0_m, gfr = f->ratio, Om = gfr * y[1], Od = gfr * a0;
+        if (f->drive >= 0) Om += f->drive_ratio * y[2 * f->drive + 1];   /* a drive turns the frame too */
         double qa = y[2 * ia], qb = y[2 * ib], va = y[2 * ia + 1], vb = y[2 * ib + 1];
         dy[2 * ia + 1] += 2.0 * Om * vb + Od * qb + Om * Om * (R0 + qa);
         dy[2 * ib + 1] += -2.0 * Om * va - Od * (R0 + qa) + Om * Om * qb;

@@ -4,7 +4,7 @@
  * meshes and shafts, one system of generalised degrees of freedom.
  *
  * Every element is a sparse linear map of the DOFs (the flat data of gearfmu/planetary/kernels.py):
- * a spring couples up to 4 DOFs, a mesh's transmission error x is a map of up to 6 DOFs and its table
+ * a spring couples up to 5 DOFs, a mesh's transmission error x is a map of up to 7 DOFs and its table
  * angle a map of the reference angle psi and up to 2 DOFs, a rotating frame adds the inertial terms
  * of a planet's translations on a turning carrier.  Every mesh is a pair model of gearkernel.h
  * (gk_model: its tables, contact-zone cuts, node flags, damping and force law), looked up, loaded and
@@ -37,9 +37,9 @@ extern "C" {
 #define PL_MAX_FRAMES 48
 #define PL_MAX_GROUPS 4      /* load-sharing groups (one per planetary stage) */
 #define PL_MAX_GROUP 8       /* meshes per group (planets) */
-#define PL_MESH_MAX_X 6      /* DOFs of a mesh's transmission-error map */
+#define PL_MESH_MAX_X 7      /* DOFs of a mesh's transmission-error map */
 #define PL_MESH_MAX_A 2      /* DOFs of a mesh's table-angle map */
-#define PL_SPRING_MAX 4      /* DOFs of a spring */
+#define PL_SPRING_MAX 5      /* DOFs of a spring */
 #define PL_MAX_DRIVES 4      /* drives of driven members (one per planetary stage) */
 
 /* integrators: the pair's codes; rk4_seg is not offered */
@@ -74,6 +74,8 @@ typedef struct pl_frame {
     int a, b;                               /* the radial and tangential DOF of a body on a turning frame */
     double R0_m;                            /* its radius */
     double ratio;                           /* the frame's speed over omega */
+    int drive;                              /* the drive DOF that turns the frame too, or -1 */
+    double drive_ratio;                     /* the frame's speed over that drive's speed */
 } pl_frame;
 
 typedef struct pl_group {
@@ -122,12 +124,12 @@ GK_API long pl_events(const pl_work *w);
  * inputs; integrator rk4. */
 GK_API int pl_init(pl_model *pl, int n_dof, const double *inv_m, const double *g, int load_dof, int motor_input,
                    int load_input);
-/* a spring over count (1..4) DOFs with coefficients coef, stiffness k > 0 and damping c >= 0 */
+/* a spring over count (1..PL_SPRING_MAX) DOFs with coefficients coef, stiffness k > 0 and damping c >= 0 */
 GK_API int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, double k, double c);
 /* the inertial terms of a body whose DOFs a (radial) and b (tangential) ride on a frame turning at
  * frame_ratio * omega at radius R0 */
 GK_API int pl_add_frame(pl_model *pl, int dof_a, int dof_b, double R0_m, double frame_ratio);
-/* a mesh on the pair model `pair` (borrowed): x map (nx <= 6), table-angle map (na <= 2), the angle's
+/* a mesh on the pair model `pair` (borrowed): x map (nx <= PL_MESH_MAX_X), table-angle map (na <= 2), the angle's
  * psi coefficient and phase, the static pinion torque per reference torque */
 GK_API int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const double *x_coef, int na,
                        const int *a_dof, const double *a_coef, double a_ref, double phase_rad,
@@ -135,6 +137,9 @@ GK_API int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, c
 /* load-sharing factor group: L_j = count * F_j / sum_k F_k over the listed meshes (the stage's
  * sun-planet meshes; Kahraman 1994), NaN when the sum is 0 */
 GK_API int pl_add_group(pl_model *pl, int count, const int *mesh);
+/* frame `frame` turns with drive DOF drive_dof (declared by pl_add_drive) too: at ratio * omega +
+ * drive_ratio * q_drive' (a translational stage whose carrier a drive turns) */
+GK_API int pl_set_frame_drive(pl_model *pl, int frame, int drive_dof, double drive_ratio);
 /* the drive of a driven member: DOF dof (inv_m 0, g 0) and its rigid motion mode[n] (finite, mode[dof] =
  * 1, mode[0] = 0) */
 GK_API int pl_add_drive(pl_model *pl, int dof, const double *mode);
@@ -144,6 +149,10 @@ GK_API int pl_set_drive_speeds(const pl_model *pl, pl_state *s, const double *sp
 /* the drives' rigid motion at the start (after pl_initialize): q'_i = sum_j mode_j[i] speed_j for
  * i >= 1; GK_ERR_INPUT for a non-finite speed (state unchanged) */
 GK_API int pl_start_drives(const pl_model *pl, pl_state *s, const double *speed_rad_s);
+/* pl_initialize with the drives at speed_rad_s (one per drive; NULL: at rest): the frames' centripetal
+ * terms at their speed with the drives', then pl_start_drives */
+GK_API int pl_initialize_driven(const pl_model *pl, pl_work *w, pl_state *s, double psi0_rad, double omega0_rad_s,
+                                double T_ref_Nm, const double *speed_rad_s, int *bad_mesh);
 /* PL_INTEGRATOR_*; GK_ERR_PARAM for another code or a mesh of more than GK_KINK_MAX_SLOTS slots */
 GK_API int pl_set_integrator(pl_model *pl, int integrator);
 

@@ -101,6 +101,8 @@ PLANETARY_FUNCTIONS = (
     ("pl_add_drive", INT, (PTR, INT, PTR), STATUS),
     ("pl_set_drive_speeds", INT, (PTR, PTR, PTR), STATUS),
     ("pl_start_drives", INT, (PTR, PTR, PTR), STATUS),
+    ("pl_set_frame_drive", INT, (PTR, INT, INT, DOUBLE), STATUS),
+    ("pl_initialize_driven", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, PTR, PTR), STATUS),
     ("pl_reference_torque", DOUBLE, (PTR, DOUBLE, DOUBLE), VALUE),
     ("pl_mesh_torque", DOUBLE, (PTR, INT, DOUBLE), VALUE),
     ("pl_initialize", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),

@@ -59,8 +59,8 @@ typedef struct {
     pl_mesh_cfg ms[PL_MAX_MESHES];
     long sp_count[PL_MAX_SPRINGS], sp_dof[PL_MAX_SPRINGS][PL_SPRING_MAX];
     double sp_coef[PL_MAX_SPRINGS][PL_SPRING_MAX], sp_k[PL_MAX_SPRINGS], sp_c[PL_MAX_SPRINGS];
-    long fr_a[PL_MAX_FRAMES], fr_b[PL_MAX_FRAMES];
-    double fr_r0[PL_MAX_FRAMES], fr_ratio[PL_MAX_FRAMES];
+    long fr_a[PL_MAX_FRAMES], fr_b[PL_MAX_FRAMES], fr_drive[PL_MAX_FRAMES];
+    double fr_r0[PL_MAX_FRAMES], fr_ratio[PL_MAX_FRAMES], fr_drive_ratio[PL_MAX_FRAMES];
     long gr_count[PL_MAX_GROUPS], gr_mesh[PL_MAX_GROUPS][PL_MAX_GROUP];
     long n_drive, dr_dof[PL_MAX_DRIVES], dr_vr[PL_MAX_DRIVES];
     double dr_mode[PL_MAX_DRIVES][PL_MAX_DOF];
@@ -117,18 +117,22 @@ static const char *mesh_key(pl_config *cfg, const char *key, char *val, char *er
     return NULL;
 }
 
-/* a spring=index|count|dof_1..dof_4|coef_1..coef_4|k|c|name line */
+/* a spring=index|count|dof_1..dof_S|coef_1..coef_S|k|c|name line (S = PL_SPRING_MAX) */
+#define PL_SPRING_FIELDS (2 * PL_SPRING_MAX + 5)
 static int spring_line(pl_config *cfg, char *val)
 {
-    char *f[13];
+    char *f[PL_SPRING_FIELDS];
     long s, j;
-    if (gfr_split_fields(val, f, 13) != 13 || !gfr_parse_long(f[0], &s) || s != cfg->springs_seen ||
-        s >= cfg->n_spring || !gfr_parse_long(f[1], &cfg->sp_count[s]) || cfg->sp_count[s] < 1 ||
-        cfg->sp_count[s] > PL_SPRING_MAX || !gfr_parse_double(f[10], &cfg->sp_k[s]) ||
-        !gfr_parse_double(f[11], &cfg->sp_c[s]))
+    if (gfr_split_fields(val, f, PL_SPRING_FIELDS) != PL_SPRING_FIELDS || !gfr_parse_long(f[0], &s) ||
+        s != cfg->springs_seen || s >= cfg->n_spring || !gfr_parse_long(f[1], &cfg->sp_count[s]) ||
+        cfg->sp_count[s] < 1 || cfg->sp_count[s] > PL_SPRING_MAX ||
+        !gfr_parse_double(f[2 + 2 * PL_SPRING_MAX], &cfg->sp_k[s]) ||
+        !gfr_parse_double(f[3 + 2 * PL_SPRING_MAX], &cfg->sp_c[s]))
         return 0;
     for (j = 0; j < PL_SPRING_MAX; ++j)
-        if (!gfr_parse_long(f[2 + j], &cfg->sp_dof[s][j]) || !gfr_parse_double(f[6 + j], &cfg->sp_coef[s][j])) return 0;
+        if (!gfr_parse_long(f[2 + j], &cfg->sp_dof[s][j]) ||
+            !gfr_parse_double(f[2 + PL_SPRING_MAX + j], &cfg->sp_coef[s][j]))
+            return 0;
     cfg->springs_seen++;
     return 1;
 }
@@ -176,7 +180,16 @@ static const char *planetary_key(pl_config *cfg, const char *key, char *val, int
             snprintf(err, errcap, "line %d: bad frame entry (frames first, then 0, 1, ... in order)", lineno);
             return err;
         }
+        cfg->fr_drive[i] = -1;
         cfg->frames_seen++;
+    } else if (strcmp(key, "frame_drive") == 0) {   /* frame index|drive DOF|drive ratio (after its frame) */
+        char *f[3];
+        long i;
+        if (gfr_split_fields(val, f, 3) != 3 || !gfr_parse_long(f[0], &i) || i < 0 || i >= cfg->frames_seen ||
+            !gfr_parse_long(f[1], &cfg->fr_drive[i]) || !gfr_parse_double(f[2], &cfg->fr_drive_ratio[i])) {
+            snprintf(err, errcap, "line %d: bad frame_drive entry (after its frame)", lineno);
+            return err;
+        }
     } else if (strcmp(key, "group") == 0) {   /* index|count|mesh_1|..|mesh_count */
         char *f[PL_MAX_GROUP + 2];
         long i, n, j;
@@ -279,10 +292,8 @@ static int pmk_initialize(void *kd, double psi0, double w0, double t_ref, int *b
 {
     gm_data *d = (gm_data *)kd;
     double w[PL_MAX_DRIVES];
-    int st;
     if (!drive_speeds(d, w, GF_ERROR_STATUS, "; cannot compute the initial state")) return GK_ERR_INPUT;
-    st = pl_initialize(d->pl, d->work, &d->state, psi0, w0, t_ref, bad_mesh);
-    return st == GK_OK ? pl_start_drives(d->pl, &d->state, w) : st;
+    return pl_initialize_driven(d->pl, d->work, &d->state, psi0, w0, t_ref, d->pl->n_drive ? w : NULL, bad_mesh);
 }
 static int pmk_outputs(void *kd, double Tm, double Tl, double *out)
 {
@@ -415,6 +426,9 @@ static const char *build_kernel(gf_inst *c, const char *res_dir, const pl_config
         else
             d->drive_vr[i] = (int)cfg->dr_vr[i];
     }
+    for (i = 0; e == NULL && i < cfg->n_frame; ++i)
+        if (cfg->fr_drive[i] >= 0 && pl_set_frame_drive(d->pl, i, (int)cfg->fr_drive[i], cfg->fr_drive_ratio[i]) != GK_OK)
+            e = "a rotating frame's drive is refused by the kernel";
     return e;
 }
 
