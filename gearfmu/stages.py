@@ -290,7 +290,7 @@ def planetary_stages(scene: DrivetrainScene, *, progress: bool = False) -> List:
                                  sun_torque_Nm=p.sun_torque_Nm, progress=progress)
         else:
             st = lumped_stage(p.name, p.lumped, held=p.held, model=p.model, **common)
-        out.append(replace(st, source=p.source))
+        out.append(replace(st, source=p.source, driven_speed_rad_s=p.driven_speed_rad_s))
     return out
 
 
@@ -427,7 +427,8 @@ def _phasing_rule(model: PlanetaryModel, res, cb: dict) -> None:
 def describe_model(model) -> str:
     """One line: what a gearbox or planetary drivetrain model holds."""
     if isinstance(model, PlanetaryModel):
-        st = ", ".join(f"{s['name']} ({s['model']}, {s['planets']} planets, {s['held']} held)" for s in model.stages)
+        st = ", ".join(f"{s['name']} ({s['model']}, {s['planets']} planets, {s['held']} "
+                       f"{'driven' if s.get('driven') else 'held'})" for s in model.stages)
         return (f"{model.n_dof} DOFs, {len(model.mesh_names)} meshes, {len(model.spring_names)} springs; planetary "
                 f"stage(s) {st}")
     return f"{model.n_bodies} bodies, {len(model.meshes)} mesh(es), {len(model.shafts)} elastic shaft(s)"

@@ -47,7 +47,7 @@ from ..common.progress import ticking
 from ..common.settings import GearboxRunSettings, checked
 from ..common.vocabulary import (DEFAULT_FMI3_OUTPUTS, DEFAULT_FMU_INTERFACE, DEFAULT_ME_NODE_EVENTS, FMI3_OUTPUTS,
                                   FMU_INTERFACES, ME_NODE_EVENTS)
-from ..planetary.model import PlanetaryModel
+from ..planetary.model import SPRING_DOFS, PlanetaryModel
 from ..planetary.native import resolve_settings, simulate as simulate_planetary
 from .build_steps import KERNEL_DIR, KERNEL_HEADERS, KERNEL_SOURCES, FmuBuildError, check_output_arguments, \
     variable_table_lines
@@ -137,6 +137,8 @@ def start_values(model: PlanetaryModel, s: GearboxRunSettings) -> Dict[str, floa
     for nm, _, z, law in damping_items(model):
         starts[f"{nm}.damping_ratio"] = z
         starts[f"{nm}.damping_model"] = DAMPING_CODES[law]
+    for d in model.drives:   # a driven member: the model's drive speed (the scene's driven_speed_rpm)
+        starts[f"{d['port']}_speed_input"] = d["speed_rad_s"]
     return starts
 
 
@@ -179,9 +181,11 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
     kd = kernel_data(model)   # the numba solver's own arrays (gearfmu.fmu.planetary_kernel)
     lines = [
         "# gearfmu planetary FMU configuration (written by gearfmu.fmu.planetary_build; read by planetary_model.c)",
-        "# floats are C99 hexadecimal literals (exact); dof = index|1/m|g|name; spring = index|count|4 DOFs|4 coefs|k|c|"
-        "name; frame = index|radial DOF|tangential DOF|R0|frame ratio; mesh.<i>.x = n|DOFs|coefs; mesh.<i>.angle = "
-        "n|DOFs|coefs|psi coefficient|phase; group = index|count|sun-planet meshes",
+        f"# floats are C99 hexadecimal literals (exact); dof = index|1/m|g|name; spring = index|count|{SPRING_DOFS} DOFs|"
+        f"{SPRING_DOFS} coefs|k|c|name; frame = index|radial DOF|tangential DOF|R0|frame ratio; frame_drive = frame|"
+        "drive DOF|drive ratio; mesh.<i>.x = n|DOFs|coefs; mesh.<i>.angle = "
+        "n|DOFs|coefs|psi coefficient|phase; group = index|count|sun-planet meshes; drive = index|DOF|value "
+        "reference of its speed input|n|rigid motion of the n DOFs",
         f"format={CONFIG_FORMAT}", f"version={CONFIG_VERSION}", f"model_identifier={model_identifier}",
         f"guid={guid}", f"dofs={kd.n_dof}", f"load_dof={kd.load_dof}",
         f"motor_torque_input={int(kd.motor_input)}", f"load_torque_input={int(kd.load_input)}",
@@ -189,12 +193,13 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
     lines += [f"dof={i}|{_hexf(kd.inv_m[i])}|{_hexf(kd.g[i])}|{model.dof_names[i]}" for i in range(kd.n_dof)]
     lines.append(f"springs={len(kd.springs)}")
     for s, (dofs, coefs, k, c) in enumerate(kd.springs):
-        pad = 4 - len(dofs)
+        pad = SPRING_DOFS - len(dofs)
         lines.append(f"spring={s}|{len(dofs)}|" + "|".join(str(d) for d in (*dofs, *[-1] * pad)) + "|"
                      + "|".join(_hexf(x) for x in (*coefs, *[0.0] * pad)) + f"|{_hexf(k)}|{_hexf(c)}|"
                      + model.spring_names[s])
     lines.append(f"frames={len(kd.frames)}")
     lines += [f"frame={f}|{a}|{b}|{_hexf(r0)}|{_hexf(ratio)}" for f, (a, b, r0, ratio) in enumerate(kd.frames)]
+    lines += [f"frame_drive={f}|{d}|{_hexf(h)}" for f, d, h in kd.frame_drives]
     stage_of = {m: nm for nm, ms, _, _ in damping_items(model) for m in ms}
     folders = tables_folders(model)
     lines.append(f"meshes={len(kd.meshes)}")
@@ -223,6 +228,9 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
                   f"{st}vr.damping_model={vr[f'{stage_of[m]}.damping_model']}"]
     lines.append(f"groups={len(kd.groups)}")
     lines += [f"group={g}|{len(ms)}|" + "|".join(str(m) for m in ms) for g, ms in enumerate(kd.groups)]
+    lines.append(f"drives={len(kd.drives)}")
+    lines += [f"drive={j}|{dof}|{vr[model.drives[j]['port'] + '_speed_input']}|{len(mode)}|"
+              + "|".join(_hexf(x) for x in mode) for j, (dof, mode) in enumerate(kd.drives)]
     for key in ("motor_torque", "load_torque", "motor_speed_start", "motor_angle_start", "max_step", "integrator"):
         lines.append(f"vr.{key}={vr.get(key, -1)}")
     elements = INTERFACE_ELEMENTS[interface]
@@ -238,12 +246,13 @@ def config_text(model: PlanetaryModel, variables, mesh_bytes, *, guid: str, mode
 
 # ------------------------------------------------------------- validation
 def native_run(model: PlanetaryModel, settings: GearboxRunSettings, *, stop_time_s: Optional[float] = None,
-               comm_step_s: Optional[float] = None):
+               comm_step_s: Optional[float] = None, drive_speeds_rad_s=None):
     """The native planetary solver with an FMU's start values (``settings`` resolved by
-    :func:`planetary_settings`): the inputs held, the same step bound, integrator and start."""
+    :func:`planetary_settings`): the inputs held, the same step bound, integrator and start;
+    ``drive_speeds_rad_s``: the driven members' speeds (None: the model's, the inputs' start values)."""
     return simulate_planetary(model, settings, stop_time_s=stop_time_s, comm_step_s=comm_step_s,
                               motor_torque_Nm=settings.motor_torque_start_Nm,
-                              load_torque_Nm=settings.load_torque_start_Nm)
+                              load_torque_Nm=settings.load_torque_start_Nm, drive_speeds_rad_s=drive_speeds_rad_s)
 
 
 def _reference(model: PlanetaryModel, variables, settings):

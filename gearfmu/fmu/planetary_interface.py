@@ -33,7 +33,7 @@ __all__ = ["PLANETARY_SPEC_FORMAT", "DEFAULT_PLANETARY_SPEC_PATH", "load_planeta
 PLANETARY_SPEC_FORMAT = "gearfmu-planetary-variables"
 #: the item kinds an entry of the spec is repeated for
 PER = {"rotation": "{item}_{name}", "translation": "{item}_{name}", "mesh": "{item}.{name}",
-       "stage": "{item}.{name}", "spring": "{item}.{name}", "damping": "{item}.{name}"}
+       "stage": "{item}.{name}", "spring": "{item}.{name}", "damping": "{item}.{name}", "drive": "{item}_{name}"}
 #: the gearbox kernel's output block of a mesh before its pair forces (plkernel.h PL_OUT_PAIR_FORCE)
 MESH_SCALARS = 4
 DEFAULT_PLANETARY_SPEC_PATH = DEFAULT_GEARBOX_SPEC_PATH.with_name("planetary.toml")
@@ -166,7 +166,8 @@ def _variable(n: int, name: str, ent: dict, *, output_index=None, unit=None, des
 def planetary_variables(spec: Spec, model: PlanetaryModel, *, model_exchange: bool = False,
                         node_events: bool = False) -> List[Variable]:
     """The spec expanded for ``model`` (module docstring), numbered in order (value reference =
-    position): the torque inputs of the ends that are inputs, the outputs (the native solver's
+    position): the torque inputs of the ends that are inputs, the speed input of every driven member's
+    drive, the outputs (the native solver's
     columns), the parameters (the damping ones per stage), then with ``model_exchange`` the states,
     derivatives and event indicators (``node_events``: the table-node indicators too), their
     indices in the Model Exchange block after the kernel's outputs."""
@@ -174,7 +175,11 @@ def planetary_variables(spec: Spec, model: PlanetaryModel, *, model_exchange: bo
     feats = {"motor_torque_input": model.motor_torque_input, "load_torque_input": model.load_torque_input}
     out: List[Variable] = []
     for e in spec.entries:
-        if e["causality"] == "input" and feats.get(e.get("requires"), True):
+        if e["causality"] == "input" and e.get("per") == "drive":   # a driven member's speed input
+            for d in model.drives:
+                out.append(_variable(len(out), f"{d['port']}_{e['name']}", e,
+                                     desc=f"{e.get('description', '')} ({d['port']})"))
+        elif e["causality"] == "input" and feats.get(e.get("requires"), True):
             desc = e.get("description", "") + f" ({model.motor if e['name'] == 'motor_torque' else model.load})"
             out.append(_variable(len(out), e["name"], e, desc=desc))
     names = set()

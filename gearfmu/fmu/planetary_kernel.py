@@ -25,7 +25,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 from ..common.vocabulary import DAMPING_MODELS, GEARBOX_INTEGRATORS, INTEGRATORS
-from ..planetary.kernels import (F_A0, F_AREF, F_C, F_PHI0, F_X0, I_A0, I_NA, I_NX, I_X0, MF, MI, SF, SI)
+from ..planetary.kernels import (F_A0, F_AREF, F_C, F_PHI0, F_X0, FF, FI, I_A0, I_NA, I_NX, I_X0, MF, MI, SF, SI, SP)
 from ..planetary.model import PlanetaryModel
 from ..planetary.native import _KernelData
 from .build_steps import CFLAGS, KERNEL_DIR, KERNEL_LIBRARY_SOURCES, FmuBuildError, run_compiler
@@ -76,6 +76,8 @@ class KernelData:
     frames: Tuple[Tuple[int, int, float, float], ...]                            # (a, b, R0, ratio)
     meshes: Tuple[MeshData, ...]
     groups: Tuple[Tuple[int, ...], ...]                                           # sun-planet meshes of a stage
+    drives: Tuple[Tuple[int, np.ndarray], ...] = ()                               # (drive DOF, rigid motion)
+    frame_drives: Tuple[Tuple[int, int, float], ...] = ()                         # (frame, drive DOF, its ratio)
 
 
 def damping_ratio_for(tables, c_Ns_per_m: float) -> float:
@@ -118,17 +120,21 @@ def kernel_data(model: PlanetaryModel) -> KernelData:
     for s in range(len(model.spring_names)):
         cnt = int(kd.si[s * SI])
         springs.append((tuple(int(d) for d in kd.si[s * SI + 1:s * SI + 1 + cnt]),
-                        tuple(float(x) for x in kd.sf[s * SF:s * SF + cnt]), float(kd.sf[s * SF + 4]),
-                        float(kd.sf[s * SF + 5])))
-    frames = tuple((int(kd.fi[2 * r]), int(kd.fi[2 * r + 1]), float(kd.ff[2 * r]), float(kd.ff[2 * r + 1]))
-                   for r in range(kd.fi.shape[0] // 2))
+                        tuple(float(x) for x in kd.sf[s * SF:s * SF + cnt]), float(kd.sf[s * SF + SP]),
+                        float(kd.sf[s * SF + SP + 1])))
+    frames = tuple((int(kd.fi[FI * r]), int(kd.fi[FI * r + 1]), float(kd.ff[FF * r]), float(kd.ff[FF * r + 1]))
+                   for r in range(kd.fi.shape[0] // FI))
+    frame_drives = tuple((r, int(kd.fi[FI * r + 2]), float(kd.ff[FF * r + 2])) for r in range(kd.fi.shape[0] // FI)
+                         if kd.fi[FI * r + 2] >= 0)
     groups = tuple(tuple(model.mesh_names.index(f"{st['name']}.sun_planet[{n + 1}]") for n in range(st["planets"]))
                    for st in model.stages)
     n = kd.n
     return KernelData(n_dof=n, inv_m=np.ascontiguousarray(kd.bf[:n]), g=np.ascontiguousarray(kd.bf[n:]),
                       load_dof=int(model.load_dof), motor_input=bool(model.motor_torque_input),
                       load_input=bool(model.load_torque_input), springs=tuple(springs), frames=frames,
-                      meshes=tuple(meshes), groups=groups)
+                      meshes=tuple(meshes), groups=groups,
+                      drives=tuple((int(d["dof"]), np.ascontiguousarray(d["mode"], dtype=np.float64))
+                                   for d in model.drives), frame_drives=frame_drives)
 
 
 def compile_planetary_kernel(dest_dir, *, cc: Optional[str] = None) -> Path:
@@ -198,6 +204,11 @@ class PlanetaryKernel:
         for grp in data.groups:
             gi = np.array(grp, dtype=np.intc)
             lib.pl_add_group(P, len(grp), gi.ctypes.data)
+        for dof, mode in data.drives:
+            self.keep.append(mode)
+            lib.pl_add_drive(P, dof, mode.ctypes.data)
+        for r, dof, ratio in data.frame_drives:
+            lib.pl_set_frame_drive(P, r, dof, ratio)
         self.set_integrator(integrator)
         self.n_out = lib.pl_n_outputs(P)
         self.n = data.n_dof
@@ -216,12 +227,23 @@ class PlanetaryKernel:
     def set_state(self, y) -> None:
         self.state[:2 * self.n] = np.asarray(y, dtype=np.float64)
 
-    def initialize(self, T_ref_Nm: float, speed_rad_s: float, angle_rad: float = 0.0) -> np.ndarray:
-        """pl_initialize: the static state into the kernel's state; returns it."""
+    def initialize(self, T_ref_Nm: float, speed_rad_s: float, angle_rad: float = 0.0,
+                   drive_speeds_rad_s=None) -> np.ndarray:
+        """pl_initialize_driven with the drives at ``drive_speeds_rad_s`` (None: the model's): the static
+        state into the kernel's state; returns it."""
         bad = ctypes.c_int(-1)
-        self.lib.pl_initialize(self.pl.ctypes.data, self.work.ctypes.data, self.state.ctypes.data, angle_rad,
-                               speed_rad_s, T_ref_Nm, ctypes.addressof(bad))
+        w = np.ascontiguousarray(self.model.drive_speeds(drive_speeds_rad_s), dtype=np.float64)
+        self.lib.pl_initialize_driven(self.pl.ctypes.data, self.work.ctypes.data, self.state.ctypes.data, angle_rad,
+                                      speed_rad_s, T_ref_Nm, w.ctypes.data if self.data.drives else None,
+                                      ctypes.addressof(bad))
         return self.y
+
+    def set_drive_speeds(self, speeds_rad_s) -> None:
+        """pl_set_drive_speeds: every drive's speed (rad/s, in drive order) into the state."""
+        w = np.ascontiguousarray(speeds_rad_s, dtype=np.float64).reshape(-1)
+        if w.size != len(self.data.drives):
+            raise FmuBuildError(f"speeds_rad_s: expected {len(self.data.drives)} drive speeds, got {w.size}")
+        self.lib.pl_set_drive_speeds(self.pl.ctypes.data, self.state.ctypes.data, w.ctypes.data if w.size else None)
 
     def step(self, T_motor_Nm: float, T_load_Nm: float, H_s: float, h_max_s: float) -> np.ndarray:
         """pl_do_step; returns the outputs after the step."""

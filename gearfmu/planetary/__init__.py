@@ -19,6 +19,8 @@ Module       Contents
 model        PlanetaryModel, build_drivetrain: the DOFs (rotations;
              Lin & Parker translations in the carrier frame), springs,
              meshes, Willis kinematics, linearisation, static state
+drives       the drives of driven members: their rigid motion, a
+             translational frame that turns with a drive
 modes        modes classified as rotational, translational, planet or
              mixed; multiplicities; Campbell data
 kernels      numba kernels: right-hand side, 'rk4', the event-aware

@@ -4,16 +4,17 @@ The gearbox kernels (gearfmu.gearbox.kernels) generalised from torsional bodies 
 element is a sparse linear map of the DOFs.  The data is flat, C-like, so that a C kernel can hold
 the same arrays:
 
-* ``mi`` (int64, MI per mesh): the count and DOF indices of the mesh's x map (up to 6), of its
+* ``mi`` (int64, MI per mesh): the count and DOF indices of the mesh's x map (up to MX), of its
   table-angle map (up to 2), then as the gearbox: N, P, damping law, zoned, the data addresses of
   its k, e, b, node flags and contact-zone cuts, the torque row of the step, rows2, the addresses
   of its mode and work arrays, the cell carried by plain RK4;
-* ``mf`` (float64, MF per mesh): the x coefficients (6), the table-angle coefficients (2), the
+* ``mf`` (float64, MF per mesh): the x coefficients (MX), the table-angle coefficients (2), the
   angle's psi coefficient and phase, the cell width dphi and N/Phi, the per-pair damping c, the
   torque-row weight of the step;
-* ``bf`` (float64, 2n): 1/m_i, then g_i;  ``si`` (int64, 5 per spring: count, 4 DOF indices),
-  ``sf`` (float64, 6 per spring: 4 coefficients, k, c);  ``fi`` (int64, 2 per frame: the DOFs a, b),
-  ``ff`` (float64, 2 per frame: R0, frame ratio g_f).
+* ``bf`` (float64, 2n): 1/m_i, then g_i;  ``si`` (int64, SI per spring: count, SP DOF indices),
+  ``sf`` (float64, SF per spring: SP coefficients, k, c);  ``fi`` (int64, FI per frame: the DOFs a, b,
+  the drive DOF d that turns the frame or -1), ``ff`` (float64, FF per frame: R0, frame ratio g_f, its
+  drive ratio h_f: the frame turns at g_f omega + h_f q_d').
 
 A mesh's own state (theta, omega, x, v) -- the pair model's table angle and speed, DTE and its
 rate -- is the linear map of y (plus the phase for theta), so the pair kernels of
@@ -34,25 +35,30 @@ from ..gearbox._pair import (
     _mode_sync, _node_time, _pair_force, _pairs_hold, _phi_cell, _seg_cross, _seg_start, _switch_pair, _tab,
     _with_zones, _zone_sel,
 )
-from ..gearbox.kernels import (ICODE_SEG, LOOKUP_HELD, LOOKUP_PLAIN, LOOKUP_SEG, W_ACC, W_F0, W_F1, W_KK, W_TAU, W_TMP, W_VECTORS,
-                               W_Y, W_Y1, W_YT, WK, WK_ND, _addr, _f64p, _hold, _i64p, _mesh_locked, _mesh_seg,
-                               _pairs_hold_seg, _u8p)
+from .model import MESH_MAP_DOFS as MX, SPRING_DOFS as SP
+from ..gearbox.kernels import (ICODE_SEG, LOOKUP_HELD, LOOKUP_PLAIN, LOOKUP_SEG, W_ACC, W_F0, W_F1, W_KK, W_TAU, W_TMP,
+                               W_VECTORS, W_Y, W_Y1, W_YT, WK, WK_ND, _addr, _f64p, _hold, _i64p, _mesh_locked,
+                               _mesh_seg, _pairs_hold_seg, _u8p)
 
 #: ints per mesh in ``mi`` and their slots
-MI = 25
+MI = 26
 I_NX = 0
-I_X0 = 1                 # 6 DOF indices of the x map: 1..6
-I_NA = 7
-I_A0 = 8                 # 2 DOF indices of the angle map: 8, 9
-(I_N, I_NP, I_MODEL, I_ZONED, I_K, I_E, I_B, I_FLAGS, I_CUTS, I_IT, I_ROWS2, I_MD, I_WK, I_ND, I_I0) = range(10, 25)
+I_X0 = 1                 # 7 DOF indices of the x map: 1..7
+I_NA = 8
+I_A0 = 9                 # 2 DOF indices of the angle map: 9, 10
+(I_N, I_NP, I_MODEL, I_ZONED, I_K, I_E, I_B, I_FLAGS, I_CUTS, I_IT, I_ROWS2, I_MD, I_WK, I_ND, I_I0) = range(11, 26)
 #: floats per mesh in ``mf`` and their slots
-MF = 14
-F_X0 = 0                 # 6 coefficients of the x map: 0..5
-F_A0 = 6                 # 2 coefficients of the angle map: 6, 7
-F_AREF, F_PHI0, F_DPHI, F_INV, F_C, F_WT = range(8, 14)
-#: per spring: ints (count + 4 indices) and floats (4 coefficients, k, c)
-SI = 5
-SF = 6
+MF = 15
+F_X0 = 0                 # 7 coefficients of the x map: 0..6
+F_A0 = 7                 # 2 coefficients of the angle map: 7, 8
+F_AREF, F_PHI0, F_DPHI, F_INV, F_C, F_WT = range(9, 15)
+#: per spring: ints (count + SP indices) and floats (SP coefficients, k, c)
+SI = SP + 1
+SF = SP + 2
+#: per rotating frame: ints (its radial and tangential DOF, the drive DOF that turns it or -1) and floats
+#: (R0, its speed per omega, per drive speed)
+FI = 3
+FF = 3
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -122,7 +128,7 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
             c = sf[s * SF + j]
             v += c * _u(W, o, d)
             vd += c * _u(W, o + 1, d)
-        fs = sf[s * SF + 4] * v + sf[s * SF + 5] * vd
+        fs = sf[s * SF + SP] * v + sf[s * SF + SP + 1] * vd
         for j in range(cnt):
             W[ot + si[s * SI + 1 + j]] -= sf[s * SF + j] * fs
     for m in range(nm):
@@ -145,9 +151,9 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
     for i in range(1, n):
         sg += bf[n + i] * W[ot + i]
     for r in range(nf):
-        ia = fi[2 * r]
-        ib = fi[2 * r + 1]
-        sg += ff[2 * r + 1] * ((ff[2 * r] + W[o + 2 * ia]) * W[ot + ib] - W[o + 2 * ib] * W[ot + ia])
+        ia = fi[FI * r]
+        ib = fi[FI * r + 1]
+        sg += ff[FF * r + 1] * ((ff[FF * r] + W[o + 2 * ia]) * W[ot + ib] - W[o + 2 * ib] * W[ot + ia])
     ext0 = t_in
     if lb == 0:
         ext0 -= t_out
@@ -160,11 +166,13 @@ def _rhs(gb, W, o, od, t_in, t_out, locked):
         W[od + 2 * i] = W[o + 2 * i + 1]
         W[od + 2 * i + 1] = W[ot + i] * bf[i] - bf[n + i] * a0
     for r in range(nf):
-        ia = fi[2 * r]
-        ib = fi[2 * r + 1]
-        R0 = ff[2 * r]
-        gfr = ff[2 * r + 1]
+        ia = fi[FI * r]
+        ib = fi[FI * r + 1]
+        R0 = ff[FF * r]
+        gfr = ff[FF * r + 1]
         Om = gfr * W[o + 1]
+        if fi[FI * r + 2] >= 0:   # a drive turns the frame too (its speed constant over a step)
+            Om += ff[FF * r + 2] * W[o + 2 * fi[FI * r + 2] + 1]
         Od = gfr * a0
         qa = W[o + 2 * ia]
         qb = W[o + 2 * ib]
@@ -418,19 +426,21 @@ def _write_row(gb, W, row, out_dof, out_mesh, out_pair, pair_off, out_spring):
             d = si[s * SI + 1 + j]
             v += sf[s * SF + j] * _u(W, 0, d)
             vd += sf[s * SF + j] * _u(W, 1, d)
-        out_spring[row, s] = sf[s * SF + 4] * v + sf[s * SF + 5] * vd
+        out_spring[row, s] = sf[s * SF + SP] * v + sf[s * SF + SP + 1] * vd
 
 
 @njit(cache=True, error_model="numpy")
 def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi, mf, bf, si, sf, fi, ff, n, lb,
-        out_dof, out_mesh, out_pair, pair_off, out_spring, out_events):
+        out_dof, out_mesh, out_pair, pair_off, out_spring, out_events, drv_dof, drv_w):
     """Communication steps step0 .. step0 + n_steps - 1 from the state ``y`` (2n, updated in place),
     as gearfmu.gearbox.kernels.run: row step0 + 1 + s after step s; step s holds t_in[s], t_out[s] and
     per mesh the torque row it_rows[s, m] with weight wt_rows[s, m]; n_sub substeps of h.  ``icode``:
-    0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg' (the meshes' flags those of rk4_seg).  Returns the number of completed steps."""
+    0 'rk4', 1 'rk4_kink', 2 'rk4_node', 3 'rk4_seg' (the meshes' flags those of rk4_seg).  ``drv_dof``: the
+    drive DOFs of the driven members (infinite inertia, g = 0), whose speed q' is set to drv_w[s, j] at
+    the start of step s (docs/planetary.md "Driven members").  Returns the number of completed steps."""
     nm = mi.shape[0] // MI
     ns = si.shape[0] // SI
-    nf = fi.shape[0] // 2
+    nf = fi.shape[0] // FI
     n2 = 2 * n
     W = np.zeros(W_VECTORS * n2 + n)
     for i in range(n2):
@@ -448,6 +458,8 @@ def run(icode, y, t_in, t_out, it_rows, wt_rows, step0, n_steps, H, n_sub, h, mi
             mfp[m * MF + F_WT] = wt_rows[r, m]
             mip[m * MI + I_ND] = _CELL_NONE
             mip[m * MI + I_I0] = 0
+        for j in range(drv_dof.shape[0]):
+            W[2 * drv_dof[j] + 1] = drv_w[r, j]
         if r == 0:
             _write_row(gb, wp, 0, out_dof, out_mesh, out_pair, pair_off, out_spring)
         nev = 0

@@ -65,8 +65,14 @@ from ..gearbox.model import GearboxModelError, Mesh, Shaft, _check_mesh, mesh_da
 from ..tables.mesh_tables import MeshTables
 from ..tables.planetary import PlanetaryStage, shift_meshing_error
 from ..tables.zones import mean_total_stiffness_N_per_m
+from .drives import drive_modes
 
-__all__ = ["PlanetaryModelError", "PlanetaryModel", "build_drivetrain"]
+__all__ = ["PlanetaryModelError", "PlanetaryModel", "build_drivetrain", "MESH_MAP_DOFS", "SPRING_DOFS"]
+
+#: most DOFs of a mesh's x map (a translational stage's mesh: 6, and the drive that turns its carrier)
+MESH_MAP_DOFS = 7
+#: most DOFs of a spring (a planet bearing's tangential spring: 4, and the drive that turns its carrier)
+SPRING_DOFS = 5
 
 class PlanetaryModelError(GearboxModelError):
     """Bad planetary drivetrain description; the message names the field."""
@@ -93,6 +99,8 @@ def _check_stage(i: int, s: PlanetaryStage) -> PlanetaryStage:
     if s.model == "translational" and not s.bearing_N_per_m.get("planet", 0.0) > 0.0:
         raise PlanetaryModelError(f"{w}.bearing_N_per_m[planet]: the planet bearings need a stiffness > 0")
     finite_number(f"{w}.support_Nm_per_rad", s.support_Nm_per_rad, positive=True, error=PlanetaryModelError)
+    if s.driven_speed_rad_s is not None:
+        finite_number(f"{w}.driven_speed_rad_s", s.driven_speed_rad_s, error=PlanetaryModelError)
     # geometric consistency the rigid-body motion needs
     rs, rp, rr, rc = s.base_radius_sun_m, s.base_radius_planet_m, s.base_radius_ring_m, s.carrier_radius_m
     if abs(rc * math.cos(s.pressure_angle_sun_rad) - (rs + rp)) > 1e-9 * rc:
@@ -136,8 +144,8 @@ class _Builder:
 @dataclass(frozen=True)
 class PlanetaryModel:
     """A checked drivetrain with planetary stages (SI; module docstring).  Per DOF: name, kind ('rot'
-    or 'trans'), mass or inertia, kinematic ratio g.  Per spring: name, kind, up to 4 (DOF, coefficient)
-    entries, k, c, frame ratio.  Per mesh: name, tables, up to 6 (DOF, coefficient) entries of x, up to
+    or 'trans'), mass or inertia, kinematic ratio g.  Per spring: name, kind, up to SPRING_DOFS (DOF, coefficient)
+    entries, k, c, frame ratio.  Per mesh: name, tables, up to MESH_MAP_DOFS (DOF, coefficient) entries of x, up to
     2 of the table angle, its psi coefficient and phase, per-pair damping c and m_e, the static pinion
     torque per unit reference torque (table rows).  Inertial frames: (DOF a, DOF b, R0, frame ratio).
     ``part_dof``: part name -> its rotation DOF; ``stages``: the planetary stages with their DOFs."""
@@ -175,6 +183,59 @@ class PlanetaryModel:
     stages: Tuple[dict, ...] = ()
     gearbox_meshes: Tuple[str, ...] = ()
     parts: Tuple[str, ...] = ()
+    #: the drives of the driven members (docs/planetary.md "Driven members"): per drive its port (part
+    #: name), its DOF (infinite inertia, g = 0), its stage, its default speed (rad/s) and ``mode``, the
+    #: rigid motion of every DOF per unit drive speed with the motor DOF at rest (rad/s per rad/s)
+    drives: Tuple[dict, ...] = ()
+    #: per rotating frame the drive DOF that turns it too (-1: none) and its ratio h_c: the frame turns
+    #: at g_f omega + h_c q_d' (None: no frame is turned by a drive)
+    frame_drive: Optional[np.ndarray] = None
+    frame_drive_ratio: Optional[np.ndarray] = None
+
+    def frame_drives(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(drive DOF or -1, drive ratio) of every rotating frame."""
+        nf = self.frame_idx.shape[0]
+        if self.frame_drive is None:
+            return -np.ones(nf, dtype=np.int64), np.zeros(nf)
+        return self.frame_drive, self.frame_drive_ratio
+
+    # ------------------------------------------------------------ drives
+    @property
+    def drive_dofs(self) -> Tuple[int, ...]:
+        return tuple(int(d["dof"]) for d in self.drives)
+
+    def drive_speeds(self, speeds_rad_s=None) -> np.ndarray:
+        """The drives' speeds (rad/s): ``speeds_rad_s`` (a sequence in drive order, or a dict port ->
+        speed for some) over the model's defaults."""
+        w = np.array([float(d["speed_rad_s"]) for d in self.drives], dtype=float)
+        if isinstance(speeds_rad_s, dict):
+            ports = [d["port"] for d in self.drives]
+            for k, v in speeds_rad_s.items():
+                if k not in ports:
+                    raise PlanetaryModelError(f"drive_speeds_rad_s[{k!r}]: not a driven member; driven are {ports}")
+                w[ports.index(k)] = finite_number(f"drive_speeds_rad_s[{k!r}]", v, error=PlanetaryModelError)
+        elif speeds_rad_s is not None:
+            v = np.asarray(speeds_rad_s, dtype=float).reshape(-1)
+            if v.shape != w.shape or not np.all(np.isfinite(v)):
+                raise PlanetaryModelError(f"drive_speeds_rad_s: expected {w.size} finite speeds (rad/s)")
+            w = v
+        return w
+
+    def kinematic_speeds(self, omega_rad_s: float, drive_speeds_rad_s=None) -> np.ndarray:
+        """Every DOF's rigid speed (rad/s, or m/s for a translation): g omega plus the drives' rigid
+        motions."""
+        v = self.g * float(omega_rad_s)
+        for d, w in zip(self.drives, self.drive_speeds(drive_speeds_rad_s)):
+            v = v + d["mode"] * w
+        return v
+
+    def table_speeds(self, omega_rad_s: float, drive_speeds_rad_s=None) -> np.ndarray:
+        """Every mesh's table-angle speed (rad/s) in the rigid motion."""
+        v = self.kinematic_speeds(omega_rad_s, drive_speeds_rad_s)
+        return np.array([self.angle_ref[m] * float(omega_rad_s) + sum(c * (v[i] - self.g[i] * float(omega_rad_s))
+                                                                         for i, c in zip(self.angle_idx[m],
+                                                                                         self.angle_coef[m]) if i >= 0)
+                         for m in range(len(self.mesh_names))])
 
     # ------------------------------------------------------------ sizes
     @property
@@ -266,7 +327,7 @@ class PlanetaryModel:
 
     # ------------------------------------------------------------ static state
     def static_state(self, reference_torque_Nm: float, speed_rad_s: float, angle_rad: float = 0.0,
-                     iterations: int = 60) -> np.ndarray:
+                     iterations: int = 60, drive_speeds_rad_s=None) -> np.ndarray:
         """The quasi-static equilibrium (docs/planetary.md "Initial state"): psi = ``angle_rad``, omega =
         ``speed_rad_s``, q' = 0 and q solving sum of the static forces = 0 (the motor torque and the
         balancing load torque, springs, the meshes' static force laws at their table angles, the
@@ -275,7 +336,9 @@ class PlanetaryModel:
         iteration, to a residual of 1e-13 of the largest term summed into it: the torques, the mesh
         forces and the springs' k q).  Raises
         PlanetaryModelError naming a mesh with no pair in its contact zone, or when no equilibrium is
-        found."""
+        found.  A drive DOF (a driven member's, infinite inertia) stays at q = 0, every DOF's q' is its
+        part of the drives' rigid motion at ``drive_speeds_rad_s`` (:meth:`drive_speeds`; None: the
+        model's)."""
         n = self.n_dof
         T_in = float(reference_torque_Nm)
         f_ext = np.zeros(n)
@@ -290,12 +353,16 @@ class PlanetaryModel:
         # centripetal terms of the frames at the start speed: force m Omega^2 (R0 + q_a) on q_a
         cen = np.zeros(n)
         Kcen = np.zeros((n, n))
-        for (ia, ib), (R0, gf) in zip(self.frame_idx, self.frame_par):
-            W2 = (gf * speed_rad_s) ** 2
+        wd = self.drive_speeds(drive_speeds_rad_s) if self.drives else np.zeros(0)
+        for (ia, ib), (R0, gf), fd, fh in zip(self.frame_idx, self.frame_par, *self.frame_drives()):
+            Om = gf * speed_rad_s
+            if fd >= 0:   # a drive turns the frame too
+                Om += fh * wd[self.drive_dofs.index(int(fd))]
+            W2 = Om ** 2
             cen[ia] += self.mass[ia] * W2 * R0
             Kcen[ia, ia] += self.mass[ia] * W2       # the force m Omega^2 q grows with q: a negative stiffness
             Kcen[ib, ib] += self.mass[ib] * W2
-        free = np.arange(1, n)
+        free = np.array([i for i in range(1, n) if i not in self.drive_dofs], dtype=np.int64)
         meshvec = [self.mesh_vector(m) for m in range(len(self.mesh_names))]
         anglevec = [self.vector(self.angle_idx[m], self.angle_coef[m]) for m in range(len(self.mesh_names))]
 
@@ -347,6 +414,8 @@ class PlanetaryModel:
         y = np.zeros(2 * n)
         y[0], y[1] = angle_rad, speed_rad_s
         y[2::2] = q[1:]
+        for d, w in zip(self.drives, self.drive_speeds(drive_speeds_rad_s)):
+            y[3::2] += d["mode"][1:] * w
         return y
 
 
@@ -415,9 +484,15 @@ def build_drivetrain(meshes: Sequence[Mesh] = (), planetaries: Sequence[Planetar
     for i, si in enumerate(stage_info):
         if len(meshes) + i not in on:
             tq_ref[si["meshes"]] = 0.0
-    return _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
-                   inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
-                   gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
+    drives, frame_drive = drive_modes(planetaries, stage_info, B.names, B.kind, springs, mesh_rows, frames,
+                                      error=PlanetaryModelError)
+    model = _packed(B, part_dof, springs, mesh_rows, frames, tq_ref, motor=motor, load=load,
+                    inputs=(bool(motor_torque_input), bool(load_torque_input)), stages=tuple(stage_info),
+                    gearbox_meshes=tuple(m.name for m in meshes), parts=tuple(inertia) + tuple(held_parts))
+    if not drives:
+        return model
+    return replace(model, drives=tuple(drives), frame_drive=np.array([d for d, _ in frame_drive], dtype=np.int64),
+                   frame_drive_ratio=np.array([h for _, h in frame_drive], dtype=float))
 
 
 def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
@@ -456,8 +531,8 @@ def _parts(meshes, planetaries, shafts, parts, motor: str, load: str):
         names.add(s.name)
         for end in (s.a, s.b):
             if end in held_parts:
-                raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is a held member (grounded through its "
-                                          "torsional support); no shaft may join it")
+                raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is a held member (grounded, or driven, "
+                                          "through its torsional support); no shaft may join it")
             if end not in inertia:
                 raise PlanetaryModelError(f"shafts[{i}] ({s.name}): {end!r} is not a part; parts are "
                                           f"{sorted(inertia)}")
@@ -548,14 +623,14 @@ def _packed(B: "_Builder", part_dof, springs, mesh_rows, frames, tq_ref, *, moto
     """The :class:`PlanetaryModel` of the built DOFs and elements, as flat arrays."""
     g = np.array(B.g)
     ns = len(springs)
-    spring_idx = -np.ones((ns, 4), dtype=np.int64)
-    spring_coef = np.zeros((ns, 4))
+    spring_idx = -np.ones((ns, SPRING_DOFS), dtype=np.int64)
+    spring_coef = np.zeros((ns, SPRING_DOFS))
     for s_, (_, _, ent, _, _, _) in enumerate(springs):
         for j, (d, cf) in enumerate(ent):
             spring_idx[s_, j], spring_coef[s_, j] = d, cf
     nmesh = len(mesh_rows)
-    mesh_idx = -np.ones((nmesh, 6), dtype=np.int64)
-    mesh_coef = np.zeros((nmesh, 6))
+    mesh_idx = -np.ones((nmesh, MESH_MAP_DOFS), dtype=np.int64)
+    mesh_coef = np.zeros((nmesh, MESH_MAP_DOFS))
     angle_idx = -np.ones((nmesh, 2), dtype=np.int64)
     angle_coef = np.zeros((nmesh, 2))
     for m_, r in enumerate(mesh_rows):
@@ -607,10 +682,15 @@ def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh
     trans = st.model == "translational"
     zeta = st.bearing_damping_ratio
     dofs = {"sun": dS, "carrier": dC, "ring": dR, "planet": [], "planet_zeta": [], "planet_eta": []}
-    # held member's torsional support
+    # held member's torsional support (a driven member's: to its drive, a DOF of infinite inertia whose
+    # speed is prescribed; docs/planetary.md "Driven members")
     dH = part_dof[st.port(st.held)]
     kH = float(st.support_Nm_per_rad)
-    springs.append((f"{nm}.{st.held}_support", "support", [(dH, 1.0)], kH,
+    ends = [(dH, 1.0)]
+    if st.driven_speed_rad_s is not None:
+        dofs["drive"] = B.add(f"{nm}.{st.held}_drive", "rot", math.inf, 0.0)
+        ends.append((dofs["drive"], -1.0))
+    springs.append((f"{nm}.{st.held}_support", "support", ends, kH,
                     2.0 * zeta * math.sqrt(kH * B.mass[dH]), 0.0))
     if trans:
         for p in ("sun", "ring", "carrier"):
@@ -668,6 +748,7 @@ def _add_stage(st: PlanetaryStage, up: str, B: _Builder, part_dof, springs, mesh
                               c=cr, me=mer, model=st.damping_model, torque=tq_sun * rp / rs, frame=gC))
     for k in mesh_ids:
         mesh_rows[k]["torque"] *= abs(t_sun)
-    return {"name": nm, "planets": N, "model": st.model, "held": st.held, "dofs": dofs, "meshes": mesh_ids,
+    return {"name": nm, "planets": N, "model": st.model, "held": st.held, "driven": st.driven_speed_rad_s is not None,
+            "dofs": dofs, "meshes": mesh_ids,
             "carrier_radius_m": rc, "sigma": sig, "teeth": (st.teeth_sun, st.teeth_planet, st.teeth_ring),
             "planet_angles_rad": tuple(st.planet_angles_rad), "g_planet": gP}

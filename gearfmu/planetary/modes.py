@@ -106,14 +106,21 @@ def modes(model: PlanetaryModel, reference_torque_Nm: float, tol: float = 1e-9) 
     the torque rows and the mean stiffness), sorted by frequency; the rigid rotation is mode 0."""
     M, K, C = model.linearisation(reference_torque_Nm)
     kbar = model.mean_mesh_stiffness_N_per_m(reference_torque_Nm)
-    w2, phi = scipy.linalg.eigh(K, M)
+    # a driven member's drive (infinite inertia, prescribed speed) is ground for the modes: its DOF
+    # is left out and stands still in every shape
+    keep = np.array([i for i in range(M.shape[0]) if i not in model.drive_dofs], dtype=np.int64)
+    M, K, C = (X[np.ix_(keep, keep)] for X in (M, K, C))
+    w2, phi_k = scipy.linalg.eigh(K, M)
+    phi = np.zeros((model.n_dof, phi_k.shape[1]))
+    phi[keep] = phi_k
     n = M.shape[0]
     scale = max(float(np.max(np.abs(w2))), 1e-300)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / np.diag(M)[:, None], -C / np.diag(M)[:, None]]])
     lam = scipy.linalg.eigvals(A)
     upper = lam[lam.imag > 0.0]
     rot, trans, planets = _groups(model)
-    mvec = np.diag(M)
+    mvec = np.zeros(model.n_dof)
+    mvec[keep] = np.diag(M)
     out: List[PlanetaryMode] = []
     for i in range(n):
         v = phi[:, i]
@@ -144,7 +151,7 @@ def modes(model: PlanetaryModel, reference_torque_Nm: float, tol: float = 1e-9) 
             out.append(PlanetaryMode(i, 0.0, v, {}, kin, types, 0.0, 0.0, True))
             continue
         wi = math.sqrt(max(float(w2[i]), 0.0))
-        total = float(v @ K @ v)
+        total = float(v[keep] @ K @ v[keep])
         energy = {}
         for s, nm in enumerate(model.spring_names):
             r = model.spring_vector(s)

@@ -30,13 +30,13 @@ from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, 
 from ..gearbox._pair import KINK_MAX_SLOTS
 from ..gearbox.kernels import stop_flags
 from ..tables.zones import zone_cuts
-from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K, I_MD,
-                      I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, WK, run)
+from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, FF, FI, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K,
+                      I_MD, I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, SP, WK, run)
 from .model import PlanetaryModel
 from .modes import modes
 
 __all__ = ["PlanetaryInputError", "PlanetaryResult", "simulate", "choose_max_step_s", "output_units",
-           "resolve_settings", "default_output_interval", "checked_settings", "run_inputs", "columns"]
+           "resolve_settings", "default_output_interval", "checked_settings", "run_inputs", "columns", "drive_inputs"]
 
 _NO_CUTS = np.full((2, 1, 1), -1.0)
 
@@ -112,8 +112,9 @@ def choose_max_step_s(model: PlanetaryModel, motor_speed_rad_s: float, points_pe
     (gearfmu.dynamics.native.choose_max_step_s) and the period of the highest natural frequency of
     the linearisation over ``points_per_period``."""
     w = abs(finite_number("motor_speed_rad_s", motor_speed_rad_s, error=PlanetaryInputError))
-    h = min(pair_max_step_s(t, w * abs(float(model.angle_ref[m])), points_per_period)
-            for m, t in enumerate(model.mesh_tables))
+    ts = np.abs(model.table_speeds(w)) if model.drives else None   # the drives at their default speeds
+    h = min(pair_max_step_s(t, w * abs(float(model.angle_ref[m])) if ts is None else max(w * abs(float(
+        model.angle_ref[m])), float(ts[m])), points_per_period) for m, t in enumerate(model.mesh_tables))
     f_max = max(md.frequency_Hz for md in modes(model, reference_torque_Nm).modes)
     if f_max > 0.0:
         h = min(h, 1.0 / f_max / points_per_period)
@@ -184,9 +185,14 @@ class _KernelData:
             self.si[s * SI] = len(ent)
             for j, (d, c) in enumerate(ent):
                 self.si[s * SI + 1 + j], self.sf[s * SF + j] = d, c
-            self.sf[s * SF + 4], self.sf[s * SF + 5] = model.spring_k[s], model.spring_c[s]
-        self.fi = np.ascontiguousarray(model.frame_idx.reshape(-1), dtype=np.int64)
-        self.ff = np.ascontiguousarray(model.frame_par.reshape(-1), dtype=np.float64)
+            self.sf[s * SF + SP], self.sf[s * SF + SP + 1] = model.spring_k[s], model.spring_c[s]
+        nf = model.frame_idx.shape[0]
+        fd, fh = model.frame_drives()
+        self.fi = np.zeros(nf * FI, dtype=np.int64)
+        self.ff = np.zeros(nf * FF)
+        for r in range(nf):
+            self.fi[FI * r:FI * r + 3] = (model.frame_idx[r, 0], model.frame_idx[r, 1], fd[r])
+            self.ff[FF * r:FF * r + 3] = (model.frame_par[r, 0], model.frame_par[r, 1], fh[r])
         self.n = model.n_dof
 
 
@@ -206,7 +212,8 @@ def default_output_interval(model: PlanetaryModel, settings: GearboxRunSettings)
     :func:`gearfmu.common.settings.default_output_interval_s` at the speed of the mesh's table angle
     (the motor's start speed times its ratio) and its pinion's teeth, at most the stop time."""
     w = settings.motor_speed_start_rad_s
-    return min(min(default_output_interval_s(w * abs(float(model.angle_ref[m])), t.teeth_pinion)
+    ws = (np.abs(model.table_speeds(w)) if model.drives else np.abs(w * model.angle_ref.astype(float)))
+    return min(min(default_output_interval_s(float(ws[m]), t.teeth_pinion)
                    for m, t in enumerate(model.mesh_tables)), settings.stop_time_s)
 
 
@@ -266,23 +273,32 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
     return n_steps, t_in, t_out, t_ref, y
 
 
+#: the keyword arguments of :func:`simulate` that replace a field of its settings
+SETTING_ARGUMENTS = ("stop_time_s", "comm_step_s", "motor_speed_start_rad_s", "max_step_s", "integrator",
+                     "motor_angle_start_rad")
+
+
 def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = None, *,
-             stop_time_s: Optional[float] = None, comm_step_s: Optional[float] = None,
              motor_torque_Nm: Optional[InputLike] = None, load_torque_Nm: Optional[InputLike] = None,
-             motor_speed_start_rad_s: Optional[float] = None, max_step_s: Optional[float] = None,
-             integrator: Optional[str] = None, motor_angle_start_rad: Optional[float] = None, initial_state=None,
-             progress: bool = False) -> PlanetaryResult:
+             initial_state=None, drive_speeds_rad_s: Optional[Dict[str, InputLike]] = None, progress: bool = False,
+             **setting_changes) -> PlanetaryResult:
     """Run the model (docs/planetary.md); settings and arguments as gearfmu.gearbox.native.simulate:
     ``settings`` a :class:`gearfmu.common.settings.GearboxRunSettings` (None: its defaults), the keyword
-    arguments of the same meaning replace its fields; inputs a number, an array of one value per
-    communication step or a callable of t_k; ``load_torque_Nm`` None = the balancing load torque;
-    ``max_step_s`` None: :func:`choose_max_step_s` at 1.5 x the start speed; initial state:
-    ``initial_state`` or the quasi-static equilibrium
+    arguments of the same meaning (:data:`SETTING_ARGUMENTS`: ``stop_time_s``, ``comm_step_s``,
+    ``motor_speed_start_rad_s``, ``max_step_s``, ``integrator``, ``motor_angle_start_rad``) replace its
+    fields; inputs a number, an array of one value per communication step or a callable of t_k;
+    ``load_torque_Nm`` None = the balancing load torque; ``max_step_s`` None: :func:`choose_max_step_s`
+    at 1.5 x the start speed; initial state: ``initial_state`` or the quasi-static equilibrium
     (:meth:`gearfmu.planetary.model.PlanetaryModel.static_state`); ``integrator`` 'rk4_node' (default),
-    'rk4_kink' or 'rk4'."""
-    s = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
-                         max_step_s=max_step_s, integrator=integrator, motor_speed_start_rad_s=motor_speed_start_rad_s,
-                         motor_angle_start_rad=motor_angle_start_rad)
+    'rk4_kink' or 'rk4'.  ``drive_speeds_rad_s``: per driven member (its port, e.g. ``"ps.ring"``) the
+    speed of its drive (rad/s; a number, an array per communication step or a callable of t_k), set at
+    the start of every step (None: the model's, docs/planetary.md "Driven members")."""
+    unknown = sorted(set(setting_changes) - set(SETTING_ARGUMENTS))
+    if unknown:
+        raise TypeError(f"simulate() got unexpected keyword arguments {unknown}")
+    ch = {k: setting_changes.get(k) for k in SETTING_ARGUMENTS}
+    ch["output_interval_s"] = ch.pop("comm_step_s")
+    s = checked_settings(model, settings, **ch)
     n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state)
     icode = _integrator_code(s.integrator, model)
     s = resolve_settings(model, s, reference_torque_Nm=float(t_ref[0]))
@@ -295,7 +311,9 @@ def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = Non
     wt_rows = np.zeros((n_steps + 1, nm))
     for m in range(nm):
         it_rows[:, m], wt_rows[:, m] = _torque_rows(kd.rows[m], np.abs(t_ref * model.mesh_torque_per_ref[m]))
-    y = model.static_state(float(t_ref[0]), w0, s.motor_angle_start_rad) if y_given is None else y_given
+    drv_dof, drv_w = drive_inputs(model, drive_speeds_rad_s, n_steps, H)
+    y = (model.static_state(float(t_ref[0]), w0, s.motor_angle_start_rad, drive_speeds_rad_s=drv_w[0])
+         if y_given is None else y_given)
     y = np.ascontiguousarray(y, dtype=np.float64)
     n = model.n_dof
     rows = n_steps + 1
@@ -305,7 +323,7 @@ def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = Non
     out_spring = np.full((rows, len(model.spring_names)), np.nan)
     events = np.zeros(rows, dtype=np.int64)
     args = (H, n_sub, h, kd.mi, kd.mf, kd.bf, kd.si, kd.sf, kd.fi, kd.ff, n, int(model.load_dof), out_dof, out_mesh,
-            out_pair, kd.pair_off, out_spring, events)
+            out_pair, kd.pair_off, out_spring, events, drv_dof, drv_w)
     run(icode, y.copy(), t_in, t_out, it_rows, wt_rows, 0, 0, *args)   # compile (or load) before timing
     chunk = n_steps if not progress else max(1, n_steps // 100)
     wall = 0.0
@@ -322,11 +340,29 @@ def simulate(model: PlanetaryModel, settings: Optional[GearboxRunSettings] = Non
                 break
     info = {"events": int(events.sum()), "completed_steps": int(done), "reference_torque_Nm": t_ref,
             "settings": s}
+    if model.drives:
+        info["drive_speeds_rad_s"] = drv_w   # (steps + 1, drives): the speed each drive held over each step
     if done < n_steps:
         info["diverged_at_step"] = int(done)
     cols = columns(model, kd.pair_off, out_dof, out_mesh, out_pair, out_spring, t_in, t_out)
     return PlanetaryResult(time_s=np.arange(rows) * H, columns=cols, step_s=h, substeps=n_sub, integrator=s.integrator,
                            wall_s=wall, state=y, info=info)
+
+
+def drive_inputs(model: PlanetaryModel, drive_speeds_rad_s, n_steps: int, H: float, error=PlanetaryInputError):
+    """(drive DOFs, speeds (n_steps + 1, drives) in rad/s) of a run: per driven member the speed given
+    for its port (a number, an array per step or a callable of t_k), else the model's."""
+    dofs = np.array(model.drive_dofs, dtype=np.int64)
+    w = np.zeros((n_steps + 1, len(model.drives)))
+    given = dict(drive_speeds_rad_s or {})
+    ports = [d["port"] for d in model.drives]
+    for k in given:
+        if k not in ports:
+            raise error(f"drive_speeds_rad_s[{k!r}]: not a driven member; driven are {ports}")
+    for j, d in enumerate(model.drives):
+        v = given.get(d["port"], d["speed_rad_s"])
+        w[:, j] = input_series(f"drive_speeds_rad_s[{d['port']!r}]", v, n_steps, H, error=error)
+    return dofs, w
 
 
 def columns(model, pair_off, out_dof, out_mesh, out_pair, out_spring, t_in, t_out):

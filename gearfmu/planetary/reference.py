@@ -82,7 +82,11 @@ def simulate_reference(model: PlanetaryModel, settings: Optional[GearboxRunSetti
     of the linearisation with every mesh at its largest total stiffness, over this number --,
     ``max_segments``, may be given as a keyword instead).  Steps: the quasi-static initial state,
     the scales of the tolerances and steps (:meth:`_Reference.set_scales`), then per communication
-    step the segments between events (:meth:`_Reference.step`).  ``wall_s`` is the whole run."""
+    step the segments between events (:meth:`_Reference.step`).  ``wall_s`` is the whole run.  A model
+    with a driven member is refused (docs/planetary.md "Driven members")."""
+    if isinstance(model, PlanetaryModel) and model.drives:
+        raise PlanetaryInputError(f"model: the reference does not take driven members ({model.drives[0]['port']}); "
+                                  "gearfmu.planetary.native.simulate does")
     rs = checked_settings(model, settings, stop_time_s=stop_time_s, output_interval_s=comm_step_s,
                           motor_speed_start_rad_s=motor_speed_start_rad_s, motor_angle_start_rad=motor_angle_start_rad)
     n_steps, t_in, t_out, t_ref, y_given = run_inputs(model, rs, motor_torque_Nm, load_torque_Nm, initial_state)

@@ -479,6 +479,7 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
     parts = ["motor", "load"] + [f"{nm}.{role}" for _, nm, _, _ in stage_scenes if nm for role in ("pinion", "gear")]
     parts += [s.port(p) for _, s in plans for p in s.free_ports]
     held = {s.port(s.held): s.name for _, s in plans}
+    driven = {s.port(s.held) for _, s in plans if s.driven_speed_rad_s is not None}
     # a stage without a valid name has no parts: its shafts' ends are not reported again
     stage_name_problem = any(nm is None for _, nm, _, _ in stage_scenes) or plan_problem
 
@@ -493,8 +494,10 @@ def _build(data: Dict[str, Any], text: str, source_path: Optional[str]) -> Drive
             shaft_names[nm] = path
         for end in ("from", "to"):
             if v[end] in held:
-                r.add(f"{path}.{end}", f"{v[end]!r} is the held port of planetary stage {held[v[end]]!r} (grounded "
-                                       "through its torsional support): no shaft may join it")
+                how = "driven through its torsional support by its drive" if v[end] in driven else \
+                    "grounded through its torsional support"
+                r.add(f"{path}.{end}", f"{v[end]!r} is the held port of planetary stage {held[v[end]]!r} ({how}): no "
+                                       "shaft may join it")
             elif v[end] is not None and v[end] not in parts and not stage_name_problem:
                 r.add(f"{path}.{end}", f"{v[end]!r} is not a part; parts are {', '.join(parts)}")
         shafts.append((path, _shaft(r, path, raw, v)))
@@ -583,11 +586,28 @@ def _planetary_operating_points(plans, first_link: int, links, tree, ratio, t_mo
         g = {p: (ratio[st.port(p)] if p != st.held else 0.0) for p in ("sun", "carrier", "ring")}
         t_sun = planetary_sun_torque(up, t_motor / g[up], *st.sun_ring)
         planetaries.append(replace(st, ratio=g, sun_torque_Nm=abs(t_sun)))
-        mesh_speeds.append((abs(g["sun"] - g["carrier"]) * w_motor, st.teeth[0]))
-        notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} held), sun "
+        w_sun_mesh = (abs(g["sun"] - g["carrier"]) * w_motor if st.driven_speed_rad_s is None
+                      else abs(_sun_mesh_speed(st, up, g[up] * w_motor)))
+        mesh_speeds.append((w_sun_mesh, st.teeth[0]))
+        how = "held" if st.driven_speed_rad_s is None else f"driven at {st.driven_speed_rad_s / RPM_TO_RAD_S:.6g} rpm"
+        notes.append(f"{st.name}: planetary stage ({st.form}, {st.model}, {st.planets} planets, {st.held} {how}), sun "
                      f"torque {abs(t_sun):.6g} N*m, sun mesh frequency "
-                     f"{st.teeth[0] * abs(g['sun'] - g['carrier']) * w_motor / (2 * math.pi):.6g} Hz")
+                     f"{st.teeth[0] * w_sun_mesh / (2 * math.pi):.6g} Hz")
     return planetaries, mesh_speeds
+
+
+def _sun_mesh_speed(st, up: str, w_up: float) -> float:
+    """w_s - w_c (rad/s) of a stage whose port ``up`` turns at ``w_up`` and whose held port stands still
+    or turns at its drive's speed (Willis: z_s (w_s - w_c) + z_r (w_r - w_c) = 0)."""
+    zs, zr = st.sun_ring
+    w = {up: w_up, st.held: st.driven_speed_rad_s or 0.0}
+    if "carrier" in w:
+        other = "sun" if "ring" in w else "ring"
+        w[other] = w["carrier"] + (zr * (w["carrier"] - w["ring"]) / zs if other == "sun"
+                                   else zs * (w["carrier"] - w["sun"]) / zr)
+    else:
+        w["carrier"] = (zs * w["sun"] + zr * w["ring"]) / (zs + zr)
+    return w["sun"] - w["carrier"]
 
 
 def _part_key(part: Optional[str], stage_paths: Dict[str, str]) -> str:

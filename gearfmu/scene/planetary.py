@@ -2,8 +2,8 @@
 lumped parameters (docs/scene.md "[[planetary]]", docs/planetary.md).
 
 A row names the stage (its ports are the parts ``<name>.sun``, ``<name>.carrier`` and ``<name>.ring``;
-the ``held`` one is grounded through its torsional support, the other two join the drivetrain by
-shafts), the dynamic model, the number of planets and their angles, damping, pin position errors,
+the ``held`` one is grounded through its torsional support -- or, with ``driven_speed_rpm``, driven
+through it by a speed-controlled drive --, the other two join the drivetrain by shafts), the dynamic model, the number of planets and their angles, damping, pin position errors,
 and either
 
 * ``[planetary.gears]``: module, pressure angle, face width, tooth counts, profile shifts, carrier
@@ -27,6 +27,7 @@ from typing import Any, Dict, Optional, Tuple
 
 from ..assembly.planetary import StageMechanics
 from ..assembly.planetary_lumped import LumpedPlanetary, lumped_stage
+from ..common.units import RPM_TO_RAD_S
 from ..common.vocabulary import (DAMPING_MODELS, DEFAULT_DAMPING_MODEL, DEFAULT_PLANETARY_MODEL, PLANETARY_MODELS,
                                  PLANETARY_PORTS)
 from ..gear.gearpair import GearSpec
@@ -50,7 +51,10 @@ PLANETARY_SCHEMA: Dict[str, Tuple[Key, ...]] = {
         Key("name", "str", "-", REQUIRED, "stage name (letters, digits, _); its ports are the parts <name>.sun, "
             "<name>.carrier and <name>.ring, its outputs <name>.sun_planet[n].dte, ..."),
         Key("held", "enum", "-", "ring", "the port grounded through its torsional support (the other two join the "
-            "drivetrain)", choices=PLANETARY_PORTS),
+            "drivetrain); with driven_speed_rpm, the port driven through it", choices=PLANETARY_PORTS),
+        _f("driven_speed_rpm", "rpm", None, "none: the held port is grounded; given: its support's outer end turns at "
+           "this speed (a speed-controlled drive with the support's stiffness and damping; the FMU's input "
+           "<name>.<held>_speed_input)", -1e6, 1e6, scale=RPM_TO_RAD_S),
         Key("model", "enum", "-", DEFAULT_PLANETARY_MODEL, "dynamic model: Lin & Parker's translational-rotational "
             "model or the purely torsional one", choices=PLANETARY_MODELS),
         Key("planets", "int", "-", REQUIRED, "number of planets", 1, 32),
@@ -175,6 +179,7 @@ class PlanetarySpec:
     source: str
     ratio: Dict[str, float]
     sun_torque_Nm: float = 0.0
+    driven_speed_rad_s: Optional[float] = None
 
     @property
     def form(self) -> str:
@@ -297,7 +302,8 @@ def read_planetary(r: Reader, path: str, raw: Dict[str, Any], v: Dict[str, Any])
                               **common)
         teeth = (g["teeth_sun"], g["teeth_planet"], g["teeth_ring"])
         return PlanetarySpec(v["name"], v["held"], v["model"], n, teeth, ps, mech, None, points_per_mesh=
-                             v["points_per_mesh"], source=v["source"], ratio={}, **common)
+                             v["points_per_mesh"], source=v["source"], ratio={},
+                             driven_speed_rad_s=v["driven_speed_rpm"], **common)
     lp = r.table(sub(raw, "lumped"), f"{path}.lumped")
     if (v["support_Nm_per_rad"] is None) == (lp["support_N_per_m"] is None):
         r.add(f"{path}.lumped.support_N_per_m", "give the held port's torsional support once: lumped.support_N_per_m "
@@ -324,4 +330,4 @@ def read_planetary(r: Reader, path: str, raw: Dict[str, Any], v: Dict[str, Any])
         return None
     teeth = (lp["teeth_sun"], lp["teeth_planet"], lp["teeth_ring"])
     return PlanetarySpec(v["name"], v["held"], v["model"], n, teeth, None, None, p, points_per_mesh=v["points_per_mesh"],
-                         source=v["source"], ratio={}, **common)
+                         source=v["source"], ratio={}, driven_speed_rad_s=v["driven_speed_rpm"], **common)

@@ -9,7 +9,7 @@ solvers (:mod:`gearfmu.planetary`) check it and build their model from it, as a 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Dict, Tuple
+from typing import Dict, Optional, Tuple
 
 import numpy as np
 
@@ -36,7 +36,10 @@ class PlanetaryStage:
     planet bearings (N/m); torsional support of the held member (N m/rad); ``held``: the grounded
     port; ``model``: 'translational' or 'torsional' (gearfmu.common.vocabulary.PLANETARY_MODELS);
     mesh damping ratio and law; bearing damping ratio (c = 2 zeta sqrt(k m) of the supported
-    body).  ``source``: where the numbers come from (shown in reports)."""
+    body).  ``source``: where the numbers come from (shown in reports).  ``driven_speed_rad_s``: None
+    (the ``held`` port is grounded through its support), or the speed (rad/s) at which the support's
+    outer end turns: the ``held`` port is then *driven* by a speed-controlled drive through its support
+    (docs/planetary.md "Driven members")."""
 
     name: str
     teeth_sun: int
@@ -63,6 +66,7 @@ class PlanetaryStage:
     damping_model: str = DEFAULT_DAMPING_MODEL
     bearing_damping_ratio: float = 0.02
     source: str = ""
+    driven_speed_rad_s: Optional[float] = None
 
     @property
     def planets(self) -> int:

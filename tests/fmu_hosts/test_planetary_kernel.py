@@ -96,6 +96,37 @@ def _stiff_supports(stop_periods):
     return m, run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
 
 
+def _driven(stop_periods):
+    """A superimposing stage: the sun on the motor, the ring driven through its support at a speed that
+    changes every communication step (-40 rad/s and a ramp), the carrier on the load (torsional model)."""
+    st = dataclasses.replace(lp_stage(3, model="torsional", teeth_sun=21, teeth_planet=23, teeth_ring=67,
+                                      contact_ratio_sun=1.6, contact_ratio_ring=1.7), driven_speed_rad_s=-40.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier")
+    kw = run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
+    kw["drive_speeds_rad_s"] = {"lp.ring": lambda t: -40.0 + 2e4 * t}
+    return m, kw
+
+
+def _driven_carrier(stop_periods):
+    """Translational: the motor on the carrier, the ring driven (the carrier's speed is the motor's
+    alone, so its frame is exact), the sun on the load."""
+    st = dataclasses.replace(lp_stage(3, teeth_sun=21, teeth_planet=23, teeth_ring=67, contact_ratio_sun=1.6,
+                                      contact_ratio_ring=1.7), driven_speed_rad_s=25.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.carrier", load="lp.sun")
+    return m, run_kwargs(m, "lp.sun_planet[1]", 100.0, 60.0, stop_periods)
+
+
+def _driven_translational(stop_periods):
+    """Translational superimposing stage: the sun on the motor, the ring driven (its speed changing every
+    step), the carrier on the load -- the drive turns the carrier, so its frame turns with the drive too."""
+    st = dataclasses.replace(lp_stage(3, teeth_sun=21, teeth_planet=23, teeth_ring=67, contact_ratio_sun=1.6,
+                                      contact_ratio_ring=1.7), driven_speed_rad_s=-40.0)
+    m = build_drivetrain(planetaries=[st], motor="lp.sun", load="lp.carrier")
+    kw = run_kwargs(m, "lp.sun_planet[1]", 300.0, 60.0, stop_periods)
+    kw["drive_speeds_rad_s"] = {"lp.ring": lambda t: -40.0 + 2e4 * t}
+    return m, kw
+
+
 def _bench(name):
     return lambda stop_periods: planetary_case(name, mesh_periods=stop_periods)
 
@@ -107,6 +138,9 @@ CASES = {
     "position_error": _bench("position_error"),
     "contact_loss": _bench("contact_loss"),
     "load_driven": _load_driven,
+    "driven_ring": _driven,
+    "driven_ring_translational": _driven_carrier,
+    "driven_ring_turning_frame": _driven_translational,
 }
 _MODELS = {}
 
@@ -147,11 +181,14 @@ def kernel_run(K, model, res):
     communication step and step bound.  The output rows (row 0: pl_outputs at the start)."""
     s = res.info["settings"]
     t_in, t_out = res["motor_torque"], res["load_torque"]
+    w = res.info.get("drive_speeds_rad_s", np.zeros((len(t_in), 0)))   # a driven member's prescribed speed
     y0 = model.static_state(float(res.info["reference_torque_Nm"][0]), s.motor_speed_start_rad_s,
-                            s.motor_angle_start_rad)
+                            s.motor_angle_start_rad, drive_speeds_rad_s=w[0] if model.drives else None)
     K.set_state(y0)
     rows = [K.outputs(t_in[0], t_out[0])]
     for k in range(len(t_in) - 1):
+        if model.drives:
+            K.set_drive_speeds(w[k])
         rows.append(K.step(t_in[k], t_out[k], s.output_interval_s, s.max_step_s))
     return np.array(rows)
 
@@ -184,7 +221,9 @@ def test_static_state_equals_the_model_s(lib, name):
                      kw["motor_speed_start_rad_s"], 0.013), (35.0, 0.0, 1.1), (-20.0, 50.0, -0.4)):
         want = model.static_state(T, w, a)
         got = K.initialize(T, w, a)
-        assert got[0] == a and got[1] == w and np.all(got[3::2] == 0.0)
+        # q' = 0 but for a driven member's drive: its rigid motion at the drive's speed (pl_start_drives)
+        assert got[0] == a and got[1] == w and np.array_equal(got[3::2], want[3::2])
+        assert np.all(got[3::2] == 0.0) or model.drives
         kind = np.array(model.dof_kind[1:])
         for k in ("rot", "trans"):
             sel = np.flatnonzero(kind == k)
@@ -193,6 +232,35 @@ def test_static_state_equals_the_model_s(lib, name):
                 # the stiff supports are 2e4 times the meshes: the solve's round-off grows by that condition
                 tol = 1e-10 if name == "stiff_supports" else 1e-12
                 assert np.max(np.abs(qc - q)) <= tol * np.max(np.abs(q)), (name, k, T)
+
+
+def test_drive_arguments_give_status_codes(lib):
+    """The drives of driven members: 1/m = 0 only with g = 0 and not for the motor DOF; pl_add_drive's
+    refusals; a non-finite drive speed refused with the state unchanged."""
+    model, kw = case("driven_ring")
+    L = load_kernel(lib._name, planetary=True)    # unchecked: the codes themselves
+    K = PlanetaryKernel(lib, model, "rk4_node")
+    P, S = K.pl.ctypes.data, K.state.ctypes.data
+    y0 = K.initialize(60.0, 300.0)
+    scratch = np.zeros(L.pl_sizeof_model() // 8 + 1)
+    inv_m, g = np.array([1.0, 0.0, 1.0]), np.array([1.0, 0.5, 0.5])
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_ERR_MODEL  # g != 0
+    g[1] = 0.0
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_OK
+    inv_m[0], g[0] = 0.0, 1.0
+    assert L.pl_init(scratch.ctypes.data, 3, inv_m.ctypes.data, g.ctypes.data, 2, 1, 1) == GK_ERR_MODEL  # motor
+    d = model.drive_dofs[0]
+    mode = np.array(model.drives[0]["mode"])
+    assert L.pl_add_drive(P, d, mode.ctypes.data) == GK_ERR_MODEL                 # declared already
+    assert L.pl_add_drive(P, model.part_dof["lp.sun"], mode.ctypes.data) == GK_ERR_MODEL   # 1/m > 0
+    assert L.pl_add_drive(P, 0, mode.ctypes.data) == GK_ERR_MODEL
+    assert L.pl_add_drive(P, d, None) == GK_ERR_MODEL
+    bad = np.array([float("nan")])
+    assert L.pl_set_drive_speeds(P, S, bad.ctypes.data) == GK_ERR_INPUT
+    assert L.pl_start_drives(P, S, bad.ctypes.data) == GK_ERR_INPUT
+    assert np.array_equal(K.y, y0)             # the refusals left the state unchanged
+    ok = np.array([-12.5])
+    assert L.pl_set_drive_speeds(P, S, ok.ctypes.data) == GK_OK and K.y[2 * d + 1] == -12.5
 
 
 def test_a_mesh_without_contact_is_named(lib):
@@ -255,7 +323,7 @@ def test_bad_arguments_give_status_codes(lib):
     assert L.pl_me_init(P, W, ME, ybad.ctypes.data, 60.0, 0.0, 0) == GK_ERR_NONFINITE
     assert L.pl_me_derivatives(P, W, ME, y0.ctypes.data, nan, 0.0, dy.ctypes.data) == GK_ERR_INPUT
     assert L.pl_mesh_offset(P, 99) == -1 and L.pl_group_offset(None, 0) == -1 and L.pl_n_outputs(None) == 0
-    assert L.pl_abi_version() == 1 and L.pl_events(None) == 0
+    assert L.pl_abi_version() == 2 and L.pl_events(None) == 0
 
 
 # ---------------------------------------------------------------- Model Exchange

@@ -30,11 +30,12 @@ int pl_init(pl_model *pl, int n, const double *inv_m, const double *g, int load_
     int i;
     if (pl == NULL || inv_m == NULL || g == NULL || n < 2 || n > PL_MAX_DOF) return GK_ERR_MODEL;
     if (load_dof < 0 || load_dof >= n || g[0] != 1.0) return GK_ERR_MODEL;
-    for (i = 0; i < n; ++i)
-        if (!gki_finite_pos(inv_m[i]) || !isfinite(g[i])) return GK_ERR_MODEL;
+    for (i = 0; i < n; ++i)   /* 1/m 0: a drive (g 0, not the motor DOF) */
+        if (!(gki_finite_pos(inv_m[i]) || (inv_m[i] == 0.0 && g[i] == 0.0 && i > 0)) || !isfinite(g[i]))
+            return GK_ERR_MODEL;
     if (g[load_dof] == 0.0 || (!motor_input && !load_input)) return GK_ERR_MODEL;
     pl->n = n;
-    pl->n_mesh = pl->n_spring = pl->n_frame = pl->n_group = 0;
+    pl->n_mesh = pl->n_spring = pl->n_frame = pl->n_group = pl->n_drive = 0;
     pl->load_dof = load_dof;
     pl->motor_input = motor_input != 0;
     pl->load_input = load_input != 0;
@@ -43,6 +44,42 @@ int pl_init(pl_model *pl, int n, const double *inv_m, const double *g, int load_
         pl->inv_m[i] = inv_m[i];
         pl->g[i] = g[i];
     }
+    return GK_OK;
+}
+
+int pl_add_drive(pl_model *pl, int dof, const double *mode)
+{
+    int i, j;
+    if (pl == NULL || mode == NULL || pl->n_drive >= PL_MAX_DRIVES || dof < 1 || dof >= pl->n) return GK_ERR_MODEL;
+    if (pl->inv_m[dof] != 0.0 || pl->g[dof] != 0.0 || mode[dof] != 1.0 || mode[0] != 0.0) return GK_ERR_MODEL;
+    for (j = 0; j < pl->n_drive; ++j)
+        if (pl->drive_dof[j] == dof) return GK_ERR_MODEL;
+    for (i = 0; i < pl->n; ++i)
+        if (!isfinite(mode[i])) return GK_ERR_MODEL;
+    for (i = 0; i < pl->n; ++i) pl->drive_mode[pl->n_drive][i] = mode[i];
+    pl->drive_dof[pl->n_drive] = dof;
+    pl->n_drive++;
+    return GK_OK;
+}
+
+int pl_set_drive_speeds(const pl_model *pl, pl_state *s, const double *speed)
+{
+    int j;
+    if (pl == NULL || s == NULL || (speed == NULL && pl->n_drive > 0)) return GK_ERR_MODEL;
+    for (j = 0; j < pl->n_drive; ++j)
+        if (!isfinite(speed[j])) return GK_ERR_INPUT;
+    for (j = 0; j < pl->n_drive; ++j) s->y[2 * pl->drive_dof[j] + 1] = speed[j];
+    return GK_OK;
+}
+
+int pl_start_drives(const pl_model *pl, pl_state *s, const double *speed)
+{
+    int i, j;
+    if (pl == NULL || s == NULL || (speed == NULL && pl->n_drive > 0)) return GK_ERR_MODEL;
+    for (j = 0; j < pl->n_drive; ++j)
+        if (!isfinite(speed[j])) return GK_ERR_INPUT;
+    for (j = 0; j < pl->n_drive; ++j)   /* as PlanetaryModel.static_state: y[3::2] += mode[1:] * speed */
+        for (i = 1; i < pl->n; ++i) s->y[2 * i + 1] += pl->drive_mode[j][i] * speed[j];
     return GK_OK;
 }
 
@@ -85,6 +122,19 @@ int pl_add_frame(pl_model *pl, int dof_a, int dof_b, double R0_m, double frame_r
     f->b = dof_b;
     f->R0_m = R0_m;
     f->ratio = frame_ratio;
+    f->drive = -1;
+    f->drive_ratio = 0.0;
+    return GK_OK;
+}
+
+int pl_set_frame_drive(pl_model *pl, int frame, int drive_dof, double drive_ratio)
+{
+    int j, ok = 0;
+    if (pl == NULL || frame < 0 || frame >= pl->n_frame || !isfinite(drive_ratio)) return GK_ERR_MODEL;
+    for (j = 0; j < pl->n_drive; ++j) ok |= pl->drive_dof[j] == drive_dof;
+    if (!ok) return GK_ERR_MODEL;
+    pl->frame[frame].drive = drive_dof;
+    pl->frame[frame].drive_ratio = drive_ratio;
     return GK_OK;
 }
 
@@ -270,6 +320,7 @@ GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *
         const pl_frame *f = &pl->frame[s];
         int ia = f->a, ib = f->b;
         double R0 = f->R0_m, gfr = f->ratio, Om = gfr * y[1], Od = gfr * a0;
+        if (f->drive >= 0) Om += f->drive_ratio * y[2 * f->drive + 1];   /* a drive turns the frame too */
         double qa = y[2 * ia], qb = y[2 * ib], va = y[2 * ia + 1], vb = y[2 * ib + 1];
         dy[2 * ia + 1] += 2.0 * Om * vb + Od * qb + Om * Om * (R0 + qa);
         dy[2 * ib + 1] += -2.0 * Om * va - Od * (R0 + qa) + Om * Om * qb;

@@ -124,14 +124,35 @@ static void pls_add_outer(const pl_model *pl, pl_work *w, int m, double s, doubl
         for (j = 0; j < n; ++j) J[i * n + j] += s * (w->vec[i] * w->vec[j]);
 }
 
+/* a drive DOF (1/m 0) is not solved for: its row and column of J the identity's, its residual 0, so that
+ * it stays at q = 0 (PlanetaryModel.static_state leaves it out) */
+static void pls_fix_drives(const pl_model *pl, double *J, double *r)
+{
+    int n = pl->n, i, j;
+    for (i = 1; i < n; ++i) {
+        if (pl->inv_m[i] != 0.0) continue;
+        for (j = 0; j < n; ++j) J[i * n + j] = J[j * n + i] = 0.0;
+        J[i * n + i] = 1.0;
+        r[i] = 0.0;
+    }
+}
+
 int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, double omega0, double T_ref,
                   int *bad_mesh)
+{
+    return pl_initialize_driven(pl, w, s, psi0, omega0, T_ref, NULL, bad_mesh);
+}
+
+int pl_initialize_driven(const pl_model *pl, pl_work *w, pl_state *s, double psi0, double omega0, double T_ref,
+                         const double *speed, int *bad_mesh)
 {
     int n, i, j, m, it, nn;
     double *J, *Ks, *q;
     if (bad_mesh != NULL) *bad_mesh = -1;
     if (pl == NULL || w == NULL || s == NULL) return GK_ERR_MODEL;
     if (!isfinite(psi0) || !isfinite(omega0) || !isfinite(T_ref)) return GK_ERR_INPUT;
+    for (j = 0; speed != NULL && j < pl->n_drive; ++j)
+        if (!isfinite(speed[j])) return GK_ERR_INPUT;
     n = pl->n;
     nn = n * n;
     J = w->J;
@@ -160,7 +181,11 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
     /* the frames' centripetal force m Omega^2 (R0 + q_a) on q_a: its q part a negative stiffness */
     for (m = 0; m < pl->n_frame; ++m) {
         const pl_frame *f = &pl->frame[m];
-        double W = f->ratio * omega0, W2 = W * W;
+        double W = f->ratio * omega0, W2;
+        if (f->drive >= 0 && speed != NULL)   /* a drive turns the frame too (PlanetaryModel.static_state) */
+            for (j = 0; j < pl->n_drive; ++j)
+                if (pl->drive_dof[j] == f->drive) W += f->drive_ratio * speed[j];
+        W2 = W * W;
         w->cen[f->a] += (1.0 / pl->inv_m[f->a]) * W2 * f->R0_m;
         w->Kc[f->a] += (1.0 / pl->inv_m[f->a]) * W2;
         w->Kc[f->b] += (1.0 / pl->inv_m[f->b]) * W2;
@@ -180,6 +205,7 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
         pls_add_outer(pl, w, m, ksum, J);
         for (i = 0; i < n; ++i) w->r[i] += keb * w->vec[i];
     }
+    pls_fix_drives(pl, J, w->r);
     if (!pls_solve(n, J, w->r, q)) return GK_ERR_NOCONTACT;
     for (it = 0;; ++it) {
         double scale, worst = 0.0, kq = 0.0;
@@ -209,6 +235,7 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
             kj = 1e-6 * ksum;
             pls_add_outer(pl, w, m, kt > kj ? kt : kj, J);
         }
+        pls_fix_drives(pl, J, w->r);
         for (i = 1; i < n; ++i)
             worst = isfinite(w->r[i]) ? (fabs(w->r[i]) > worst ? fabs(w->r[i]) : worst) : HUGE_VAL;
         if (worst <= PL_STATIC_TOL * (scale > 1e-300 ? scale : 1e-300)) break;
@@ -223,5 +250,5 @@ int pl_initialize(const pl_model *pl, pl_work *w, pl_state *s, double psi0, doub
         s->y[2 * i] = q[i];
         s->y[2 * i + 1] = 0.0;
     }
-    return GK_OK;
+    return speed != NULL ? pl_start_drives(pl, s, speed) : GK_OK;
 }

@@ -4,7 +4,7 @@
  * meshes and shafts, one system of generalised degrees of freedom.
  *
  * Every element is a sparse linear map of the DOFs (the flat data of gearfmu/planetary/kernels.py):
- * a spring couples up to 4 DOFs, a mesh's transmission error x is a map of up to 6 DOFs and its table
+ * a spring couples up to 5 DOFs, a mesh's transmission error x is a map of up to 7 DOFs and its table
  * angle a map of the reference angle psi and up to 2 DOFs, a rotating frame adds the inertial terms
  * of a planet's translations on a turning carrier.  Every mesh is a pair model of gearkernel.h
  * (gk_model: its tables, contact-zone cuts, node flags, damping and force law), looked up, loaded and
@@ -27,7 +27,7 @@
 extern "C" {
 #endif
 
-#define PL_ABI_VERSION 1
+#define PL_ABI_VERSION 2
 
 /* sizes of the fixed arrays (a drivetrain beyond them is refused by pl_init / pl_add_*) */
 #define PL_MAX_DOF 96
@@ -37,9 +37,10 @@ extern "C" {
 #define PL_MAX_FRAMES 48
 #define PL_MAX_GROUPS 4      /* load-sharing groups (one per planetary stage) */
 #define PL_MAX_GROUP 8       /* meshes per group (planets) */
-#define PL_MESH_MAX_X 6      /* DOFs of a mesh's transmission-error map */
+#define PL_MESH_MAX_X 7      /* DOFs of a mesh's transmission-error map */
 #define PL_MESH_MAX_A 2      /* DOFs of a mesh's table-angle map */
-#define PL_SPRING_MAX 4      /* DOFs of a spring */
+#define PL_SPRING_MAX 5      /* DOFs of a spring */
+#define PL_MAX_DRIVES 4      /* drives of driven members (one per planetary stage) */
 
 /* integrators: the pair's codes; rk4_seg runs as rk4_node between its stops, every evaluation in the
  * cell of its own angle, the true velocities integrated (docs/planetary.md "rk4_seg") */
@@ -75,6 +76,8 @@ typedef struct pl_frame {
     int a, b;                               /* the radial and tangential DOF of a body on a turning frame */
     double R0_m;                            /* its radius */
     double ratio;                           /* the frame's speed over omega */
+    int drive;                              /* the drive DOF that turns the frame too, or -1 */
+    double drive_ratio;                     /* the frame's speed over that drive's speed */
 } pl_frame;
 
 typedef struct pl_group {
@@ -94,6 +97,12 @@ typedef struct pl_model {
     pl_spring spring[PL_MAX_SPRINGS];
     pl_frame frame[PL_MAX_FRAMES];
     pl_group group[PL_MAX_GROUPS];
+    /* drives of driven members (docs/planetary.md "Driven members"): a DOF of infinite inertia
+     * (inv_m 0, g 0) whose speed q' is prescribed; its rigid motion, every DOF's speed per unit drive
+     * speed with the motor DOF at rest */
+    int n_drive;
+    int drive_dof[PL_MAX_DRIVES];
+    double drive_mode[PL_MAX_DRIVES][PL_MAX_DOF];
 } pl_model;
 
 typedef struct pl_state {
@@ -111,17 +120,18 @@ GK_API int pl_sizeof_state(void);
 /* the events located by the last pl_do_step (rk4_kink, rk4_node) */
 GK_API long pl_events(const pl_work *w);
 
-/* An empty drivetrain of n DOFs with 1/m (inv_m[n], finite > 0) and kinematic ratios g[n] (finite,
- * g[0] = 1; 0 for a translation), the load DOF (0 <= load_dof < n, g[load_dof] != 0) and which ends
- * are torque inputs; integrator rk4. */
+/* An empty drivetrain of n DOFs with 1/m (inv_m[n], finite > 0; or 0 with g 0 for the drive of a
+ * driven member, i >= 1, to be declared by pl_add_drive) and kinematic ratios g[n] (finite, g[0] = 1; 0
+ * for a translation), the load DOF (0 <= load_dof < n, g[load_dof] != 0) and which ends are torque
+ * inputs; integrator rk4. */
 GK_API int pl_init(pl_model *pl, int n_dof, const double *inv_m, const double *g, int load_dof, int motor_input,
                    int load_input);
-/* a spring over count (1..4) DOFs with coefficients coef, stiffness k > 0 and damping c >= 0 */
+/* a spring over count (1..PL_SPRING_MAX) DOFs with coefficients coef, stiffness k > 0 and damping c >= 0 */
 GK_API int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, double k, double c);
 /* the inertial terms of a body whose DOFs a (radial) and b (tangential) ride on a frame turning at
  * frame_ratio * omega at radius R0 */
 GK_API int pl_add_frame(pl_model *pl, int dof_a, int dof_b, double R0_m, double frame_ratio);
-/* a mesh on the pair model `pair` (borrowed): x map (nx <= 6), table-angle map (na <= 2), the angle's
+/* a mesh on the pair model `pair` (borrowed): x map (nx <= PL_MESH_MAX_X), table-angle map (na <= 2), the angle's
  * psi coefficient and phase, the static pinion torque per reference torque */
 GK_API int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const double *x_coef, int na,
                        const int *a_dof, const double *a_coef, double a_ref, double phase_rad,
@@ -129,6 +139,22 @@ GK_API int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, c
 /* load-sharing factor group: L_j = count * F_j / sum_k F_k over the listed meshes (the stage's
  * sun-planet meshes; Kahraman 1994), NaN when the sum is 0 */
 GK_API int pl_add_group(pl_model *pl, int count, const int *mesh);
+/* frame `frame` turns with drive DOF drive_dof (declared by pl_add_drive) too: at ratio * omega +
+ * drive_ratio * q_drive' (a translational stage whose carrier a drive turns) */
+GK_API int pl_set_frame_drive(pl_model *pl, int frame, int drive_dof, double drive_ratio);
+/* the drive of a driven member: DOF dof (inv_m 0, g 0) and its rigid motion mode[n] (finite, mode[dof] =
+ * 1, mode[0] = 0) */
+GK_API int pl_add_drive(pl_model *pl, int dof, const double *mode);
+/* the drives' speeds (rad/s, one per drive, finite) into the state: q' of every drive DOF (the start of a
+ * communication step); GK_ERR_INPUT for a non-finite speed (state unchanged) */
+GK_API int pl_set_drive_speeds(const pl_model *pl, pl_state *s, const double *speed_rad_s);
+/* the drives' rigid motion at the start (after pl_initialize): q'_i = sum_j mode_j[i] speed_j for
+ * i >= 1; GK_ERR_INPUT for a non-finite speed (state unchanged) */
+GK_API int pl_start_drives(const pl_model *pl, pl_state *s, const double *speed_rad_s);
+/* pl_initialize with the drives at speed_rad_s (one per drive; NULL: at rest): the frames' centripetal
+ * terms at their speed with the drives', then pl_start_drives */
+GK_API int pl_initialize_driven(const pl_model *pl, pl_work *w, pl_state *s, double psi0_rad, double omega0_rad_s,
+                                double T_ref_Nm, const double *speed_rad_s, int *bad_mesh);
 /* PL_INTEGRATOR_*; GK_ERR_PARAM for another code or a mesh of more than GK_KINK_MAX_SLOTS slots */
 GK_API int pl_set_integrator(pl_model *pl, int integrator);
 
@@ -138,7 +164,7 @@ GK_API double pl_reference_torque(const pl_model *pl, double T_motor_Nm, double 
 GK_API double pl_mesh_torque(const pl_model *pl, int m, double T_ref_Nm);
 
 /* The quasi-static initial state (docs/planetary.md "Initial state"; PlanetaryModel.static_state):
- * psi = psi0, omega = omega0, q' = 0 and q balancing the static forces (the reference torque and the
+ * psi = psi0, omega = omega0, q' = 0 and q balancing (a drive DOF stays at q = 0) the static forces (the reference torque and the
  * balancing load, springs, the meshes' static laws at their table angles, the frames' centripetal
  * terms at omega0), Newton's method on the piecewise-linear mesh laws, dense Gaussian elimination with
  * partial pivoting.  GK_ERR_NOCONTACT (no equilibrium) with *bad_mesh = the mesh with no pair in its

@@ -85,7 +85,7 @@ KERNEL_FUNCTIONS = (
 
 
 #: the planetary drivetrain kernel (plkernel.h; pl_kernel.c and pl_static.c compiled beside the kernel)
-PLANETARY_ABI_VERSION = 1
+PLANETARY_ABI_VERSION = 2
 PLANETARY_FUNCTIONS = (
     ("pl_abi_version", INT, (), VALUE),
     ("pl_sizeof_model", INT, (), VALUE),
@@ -98,6 +98,11 @@ PLANETARY_FUNCTIONS = (
     ("pl_add_mesh", INT, (PTR, PTR, INT, PTR, PTR, INT, PTR, PTR, DOUBLE, DOUBLE, DOUBLE), STATUS),
     ("pl_add_group", INT, (PTR, INT, PTR), STATUS),
     ("pl_set_integrator", INT, (PTR, INT), STATUS),
+    ("pl_add_drive", INT, (PTR, INT, PTR), STATUS),
+    ("pl_set_drive_speeds", INT, (PTR, PTR, PTR), STATUS),
+    ("pl_start_drives", INT, (PTR, PTR, PTR), STATUS),
+    ("pl_set_frame_drive", INT, (PTR, INT, INT, DOUBLE), STATUS),
+    ("pl_initialize_driven", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, PTR, PTR), STATUS),
     ("pl_reference_torque", DOUBLE, (PTR, DOUBLE, DOUBLE), VALUE),
     ("pl_mesh_torque", DOUBLE, (PTR, INT, DOUBLE), VALUE),
     ("pl_initialize", INT, (PTR, PTR, PTR, DOUBLE, DOUBLE, DOUBLE, PTR), STATUS),

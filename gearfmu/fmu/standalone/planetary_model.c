@@ -11,15 +11,18 @@
  *       (shafts, bearings, supports: their DOF map, k, c), the rotating frames, the meshes (their
  *       tables file, size, SHA-256, dimensions, byte offsets and scalars as the gearbox's stages have
  *       them; the transmission-error and table-angle maps, the phase, the static torque per reference
- *       torque), the load-sharing groups, the value references the model drives and the variable
- *       table (var= lines, gf_resources.h);
+ *       torque), the load-sharing groups, the drives of driven members (their DOF, the value reference
+ *       of their speed input, their rigid motion), the value references the model drives and the
+ *       variable table (var= lines, gf_resources.h);
  *   <file>.bin  the tables of the meshes (the pair FMU's format, docs/tables.md; the sun-planet meshes
  *       of a stage with identical tables share one file); its SHA-256 must equal the recorded one.
  *
  * Behaviour: the multi-mesh models' (gf_meshes.c, shared with the gearbox model) over the planetary
  * kernel (../kernel/pl_kernel.c) through the function table PL_KERNEL below: a parameter outside its
  * range, a bad integrator or damping model, a mesh with no tooth pair in its contact zone or no static
- * equilibrium at the start: no initial state (Error, reasons logged); a non-finite input, a bad
+ * equilibrium at the start: no initial state (Error, reasons logged); a driven member's speed input is
+ * set into the state at the start of every communication step (Model Exchange: at every evaluation);
+ * a non-finite input, a bad
  * communication step or a state turned non-finite: the step is discarded, the state unchanged; a mesh
  * torque outside its tables' torque axis: one warning per excursion.  Nothing here ever aborts.
  */
@@ -56,10 +59,12 @@ typedef struct {
     pl_mesh_cfg ms[PL_MAX_MESHES];
     long sp_count[PL_MAX_SPRINGS], sp_dof[PL_MAX_SPRINGS][PL_SPRING_MAX];
     double sp_coef[PL_MAX_SPRINGS][PL_SPRING_MAX], sp_k[PL_MAX_SPRINGS], sp_c[PL_MAX_SPRINGS];
-    long fr_a[PL_MAX_FRAMES], fr_b[PL_MAX_FRAMES];
-    double fr_r0[PL_MAX_FRAMES], fr_ratio[PL_MAX_FRAMES];
+    long fr_a[PL_MAX_FRAMES], fr_b[PL_MAX_FRAMES], fr_drive[PL_MAX_FRAMES];
+    double fr_r0[PL_MAX_FRAMES], fr_ratio[PL_MAX_FRAMES], fr_drive_ratio[PL_MAX_FRAMES];
     long gr_count[PL_MAX_GROUPS], gr_mesh[PL_MAX_GROUPS][PL_MAX_GROUP];
-    int springs_seen, frames_seen, groups_seen;
+    long n_drive, dr_dof[PL_MAX_DRIVES], dr_vr[PL_MAX_DRIVES];
+    double dr_mode[PL_MAX_DRIVES][PL_MAX_DOF];
+    int springs_seen, frames_seen, groups_seen, drives_seen;
 } pl_config;
 
 /* ------------------------------------------------------------- config */
@@ -112,18 +117,22 @@ static const char *mesh_key(pl_config *cfg, const char *key, char *val, char *er
     return NULL;
 }
 
-/* a spring=index|count|dof_1..dof_4|coef_1..coef_4|k|c|name line */
+/* a spring=index|count|dof_1..dof_S|coef_1..coef_S|k|c|name line (S = PL_SPRING_MAX) */
+#define PL_SPRING_FIELDS (2 * PL_SPRING_MAX + 5)
 static int spring_line(pl_config *cfg, char *val)
 {
-    char *f[13];
+    char *f[PL_SPRING_FIELDS];
     long s, j;
-    if (gfr_split_fields(val, f, 13) != 13 || !gfr_parse_long(f[0], &s) || s != cfg->springs_seen ||
-        s >= cfg->n_spring || !gfr_parse_long(f[1], &cfg->sp_count[s]) || cfg->sp_count[s] < 1 ||
-        cfg->sp_count[s] > PL_SPRING_MAX || !gfr_parse_double(f[10], &cfg->sp_k[s]) ||
-        !gfr_parse_double(f[11], &cfg->sp_c[s]))
+    if (gfr_split_fields(val, f, PL_SPRING_FIELDS) != PL_SPRING_FIELDS || !gfr_parse_long(f[0], &s) ||
+        s != cfg->springs_seen || s >= cfg->n_spring || !gfr_parse_long(f[1], &cfg->sp_count[s]) ||
+        cfg->sp_count[s] < 1 || cfg->sp_count[s] > PL_SPRING_MAX ||
+        !gfr_parse_double(f[2 + 2 * PL_SPRING_MAX], &cfg->sp_k[s]) ||
+        !gfr_parse_double(f[3 + 2 * PL_SPRING_MAX], &cfg->sp_c[s]))
         return 0;
     for (j = 0; j < PL_SPRING_MAX; ++j)
-        if (!gfr_parse_long(f[2 + j], &cfg->sp_dof[s][j]) || !gfr_parse_double(f[6 + j], &cfg->sp_coef[s][j])) return 0;
+        if (!gfr_parse_long(f[2 + j], &cfg->sp_dof[s][j]) ||
+            !gfr_parse_double(f[2 + PL_SPRING_MAX + j], &cfg->sp_coef[s][j]))
+            return 0;
     cfg->springs_seen++;
     return 1;
 }
@@ -146,6 +155,7 @@ static const char *planetary_key(pl_config *cfg, const char *key, char *val, int
     PL_L("springs", n_spring, 0, PL_MAX_SPRINGS)
     PL_L("frames", n_frame, 0, PL_MAX_FRAMES)
     PL_L("groups", n_group, 0, PL_MAX_GROUPS)
+    PL_L("drives", n_drive, 0, PL_MAX_DRIVES)
 #undef PL_L
     else if (strcmp(key, "dof") == 0) {   /* index|1/m|g|name */
         char *f[4];
@@ -170,7 +180,16 @@ static const char *planetary_key(pl_config *cfg, const char *key, char *val, int
             snprintf(err, errcap, "line %d: bad frame entry (frames first, then 0, 1, ... in order)", lineno);
             return err;
         }
+        cfg->fr_drive[i] = -1;
         cfg->frames_seen++;
+    } else if (strcmp(key, "frame_drive") == 0) {   /* frame index|drive DOF|drive ratio (after its frame) */
+        char *f[3];
+        long i;
+        if (gfr_split_fields(val, f, 3) != 3 || !gfr_parse_long(f[0], &i) || i < 0 || i >= cfg->frames_seen ||
+            !gfr_parse_long(f[1], &cfg->fr_drive[i]) || !gfr_parse_double(f[2], &cfg->fr_drive_ratio[i])) {
+            snprintf(err, errcap, "line %d: bad frame_drive entry (after its frame)", lineno);
+            return err;
+        }
     } else if (strcmp(key, "group") == 0) {   /* index|count|mesh_1|..|mesh_count */
         char *f[PL_MAX_GROUP + 2];
         long i, n, j;
@@ -187,6 +206,22 @@ static const char *planetary_key(pl_config *cfg, const char *key, char *val, int
             }
         cfg->gr_count[i] = n;
         cfg->groups_seen++;
+    } else if (strcmp(key, "drive") == 0) {   /* index|dof|value reference of its speed input|n|mode_1..mode_n */
+        char *f[PL_MAX_DOF + 4];
+        long i, n, j;
+        int nf = gfr_split_fields(val, f, PL_MAX_DOF + 4);
+        if (nf < 4 || !gfr_parse_long(f[0], &i) || i != cfg->drives_seen || i >= cfg->n_drive ||
+            !gfr_parse_long(f[1], &cfg->dr_dof[i]) || !gfr_parse_long(f[2], &cfg->dr_vr[i]) ||
+            !gfr_parse_long(f[3], &n) || n != cfg->n_dof || nf != 4 + n) {
+            snprintf(err, errcap, "line %d: bad drive entry (dofs and drives first, then 0, 1, ... in order)", lineno);
+            return err;
+        }
+        for (j = 0; j < n; ++j)
+            if (!gfr_parse_double(f[4 + j], &cfg->dr_mode[i][j])) {
+                snprintf(err, errcap, "line %d: bad drive entry", lineno);
+                return err;
+            }
+        cfg->drives_seen++;
     } else if (strncmp(key, "mesh.", 5) == 0) {
         return mesh_key(cfg, key + 5, val, err, errcap);
     }
@@ -224,6 +259,10 @@ static const char *read_config(gf_inst *c, const char *text, pl_config *cfg, cha
             snprintf(err, errcap, "mesh.%d: missing keys (mask 0x%x of 0x%x)", i, cfg->ms[i].t.have, (unsigned)M_ALL);
             return err;
         }
+    if (cfg->drives_seen != cfg->n_drive) {
+        snprintf(err, errcap, "%d drive entries for %ld", cfg->drives_seen, cfg->n_drive);
+        return err;
+    }
     if (cfg->springs_seen != cfg->n_spring || cfg->frames_seen != cfg->n_frame || cfg->groups_seen != cfg->n_group) {
         snprintf(err, errcap, "%d spring, %d frame and %d group entries for %ld, %ld and %ld", cfg->springs_seen,
                  cfg->frames_seen, cfg->groups_seen, cfg->n_spring, cfg->n_frame, cfg->n_group);
@@ -239,46 +278,82 @@ static double pmk_tref(const void *kd, double Tm, double Tl)
     return pl_reference_torque(((const gm_data *)kd)->pl, Tm, Tl);
 }
 static double pmk_mesh_torque(const void *kd, int m, double t_ref) { return pl_mesh_torque(((const gm_data *)kd)->pl, m, t_ref); }
+/* the drives' speed inputs (rad/s) into w; 0 (reasons logged at `status`) when one is not finite */
+static int drive_speeds(gm_data *d, double *w, int status, const char *tail)
+{
+    int j, bad = 0;
+    for (j = 0; j < d->pl->n_drive; ++j) {
+        bad |= gfm_bad_value(d->inst, d->drive_vr[j], status, tail);
+        w[j] = gfm_val(d->inst, d->drive_vr[j]);
+    }
+    return !bad;
+}
 static int pmk_initialize(void *kd, double psi0, double w0, double t_ref, int *bad_mesh)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_initialize(d->pl, d->work, &d->state, psi0, w0, t_ref, bad_mesh);
+    double w[PL_MAX_DRIVES];
+    if (!drive_speeds(d, w, GF_ERROR_STATUS, "; cannot compute the initial state")) return GK_ERR_INPUT;
+    return pl_initialize_driven(d->pl, d->work, &d->state, psi0, w0, t_ref, d->pl->n_drive ? w : NULL, bad_mesh);
 }
 static int pmk_outputs(void *kd, double Tm, double Tl, double *out)
 {
     gm_data *d = (gm_data *)kd;
     return pl_outputs(d->pl, d->work, &d->state, Tm, Tl, out);
 }
+/* a communication step: the drives' speeds set at its start (docs/planetary.md "Driven members"); on an
+ * error the state as it was */
 static int pmk_step(void *kd, double Tm, double Tl, double H, double hmax, double *out)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_do_step(d->pl, d->work, &d->state, Tm, Tl, H, hmax, out);
+    double w[PL_MAX_DRIVES], was[PL_MAX_DRIVES];
+    int j, st;
+    if (!drive_speeds(d, w, GF_DISCARD, "; step rejected, state unchanged")) return GK_ERR_INPUT;
+    for (j = 0; j < d->pl->n_drive; ++j) was[j] = d->state.y[2 * d->pl->drive_dof[j] + 1];
+    st = pl_set_drive_speeds(d->pl, &d->state, w);
+    if (st == GK_OK) st = pl_do_step(d->pl, d->work, &d->state, Tm, Tl, H, hmax, out);
+    if (st != GK_OK)
+        for (j = 0; j < d->pl->n_drive; ++j) d->state.y[2 * d->pl->drive_dof[j] + 1] = was[j];
+    return st;
+}
+/* Model Exchange: a drive's rate state is its speed input at every evaluation (the host integrates the
+ * drive's angle with it; the rate's own derivative is 0); GK_ERR_INPUT (logged) for a non-finite one */
+static int me_drives(gm_data *d)
+{
+    double w[PL_MAX_DRIVES];
+    if (d->pl->n_drive == 0) return GK_OK;
+    if (!drive_speeds(d, w, GF_DISCARD, "; not evaluated")) return GK_ERR_INPUT;
+    return pl_set_drive_speeds(d->pl, &d->state, w);
 }
 static int pmk_me_n_ind(const void *kd, int node_events) { return pl_me_n_indicators(((const gm_data *)kd)->pl, node_events); }
 static int pmk_me_init(void *kd, double Tm, double Tl, int node_events)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_init(d->pl, d->work, &d->me, d->state.y, Tm, Tl, node_events);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_init(d->pl, d->work, &d->me, d->state.y, Tm, Tl, node_events);
 }
 static int pmk_me_update(void *kd, double Tm, double Tl, int *changed)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_update(d->pl, d->work, &d->me, d->state.y, Tm, Tl, changed);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_update(d->pl, d->work, &d->me, d->state.y, Tm, Tl, changed);
 }
 static int pmk_me_deriv(void *kd, double Tm, double Tl, double *dy)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_derivatives(d->pl, d->work, &d->me, d->state.y, Tm, Tl, dy);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_derivatives(d->pl, d->work, &d->me, d->state.y, Tm, Tl, dy);
 }
 static int pmk_me_ind(void *kd, double Tm, double Tl, double *z)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_indicators(d->pl, d->work, &d->me, d->state.y, Tm, Tl, z);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_indicators(d->pl, d->work, &d->me, d->state.y, Tm, Tl, z);
 }
 static int pmk_me_out(void *kd, double Tm, double Tl, double *out)
 {
     gm_data *d = (gm_data *)kd;
-    return pl_me_outputs(d->pl, d->work, &d->me, d->state.y, Tm, Tl, out);
+    int st = me_drives(d);
+    return st != GK_OK ? st : pl_me_outputs(d->pl, d->work, &d->me, d->state.y, Tm, Tl, out);
 }
 
 static const gfm_kernel PL_KERNEL = {"mesh", "docs/planetary.md", pmk_integrator, pmk_tref, pmk_mesh_torque, pmk_initialize,
@@ -343,6 +418,17 @@ static const char *build_kernel(gf_inst *c, const char *res_dir, const pl_config
         for (j = 0; j < cfg->gr_count[i]; ++j) ms[j] = (int)cfg->gr_mesh[i][j];
         if (pl_add_group(d->pl, (int)cfg->gr_count[i], ms) != GK_OK) e = "a load-sharing group is refused by the kernel";
     }
+    for (i = 0; e == NULL && i < cfg->n_drive; ++i) {
+        if (!gfm_vr_ok(c, cfg->dr_vr[i], 0) || c->vars[cfg->dr_vr[i]].causality != GF_INPUT)
+            e = "a drive's speed input is not an input of the variable table";
+        else if (pl_add_drive(d->pl, (int)cfg->dr_dof[i], cfg->dr_mode[i]) != GK_OK)
+            e = "a drive (its DOF: 1/m 0 and g 0; its rigid motion) is refused by the kernel";
+        else
+            d->drive_vr[i] = (int)cfg->dr_vr[i];
+    }
+    for (i = 0; e == NULL && i < cfg->n_frame; ++i)
+        if (cfg->fr_drive[i] >= 0 && pl_set_frame_drive(d->pl, i, (int)cfg->fr_drive[i], cfg->fr_drive_ratio[i]) != GK_OK)
+            e = "a rotating frame's drive is refused by the kernel";
     return e;
 }
 
@@ -357,6 +443,7 @@ const char *gm_instantiate(gf_inst *c, const char *res_dir, const char *token, c
     c->data = d = (gm_data *)calloc(1, sizeof(gm_data));
     if (d == NULL) return "out of memory";
     d->core.k = &PL_KERNEL;
+    d->inst = c;
     d->core.y_offset = offsetof(gm_data, state) + offsetof(pl_state, y);
     d->core.kstate_offset = offsetof(gm_data, state);
     d->core.kstate_bytes = sizeof d->state;

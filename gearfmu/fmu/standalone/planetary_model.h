@@ -20,6 +20,8 @@ struct gm_data {
     pl_work *work;
     pl_state state;
     pl_me me;
+    gf_inst *inst;                 /* the instance (its values: the drives' speed inputs) */
+    int drive_vr[PL_MAX_DRIVES];   /* value reference of every drive's speed input (rad/s) */
 };
 
 #endif /* PLANETARY_MODEL_H */
