@@ -307,29 +307,6 @@ GK_INLINE int root_update(gk_root *r, double s, double gs)
     return r->b - r->a <= KINK_TOL_S;
 }
 
-/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of a step of length tau from
- * (y0, f0) to (y1, f1), the mode held (rk4_kink, rk4_node; integrators._guard_root with seg False):
- * 0 when the guard is not > 0 at y0, else the end of the bracket where it is < 0 */
-GK_PAIR_FN double held_guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
-                                  const double *y0, const double *f0, const double *y1, const double *f1, double tau)
-{
-    gk_root r;
-    double s, yy[4];
-    int it;
-    r.ga = guard_at(m, t, md, gi, y0);
-    if (!(r.ga > 0.0)) return 0.0;
-    r.a = 0.0;
-    r.b = 1.0;
-    r.gb = g_end;
-    r.side = 0;
-    for (it = 0; it < KINK_MAX_IT; ++it) {
-        s = root_next(&r);
-        hermite_point(s, y0, f0, y1, f1, tau, yy);
-        if (root_update(&r, s, guard_at(m, t, md, gi, yy))) break;
-    }
-    return r.b;
-}
-
 /* a mesh of the multi-mesh kernels (gb_kernel.c, pl_kernel.c) stops where their integrator does
  * (gk_stops.c reads it); rk4_seg also where e bends (GK_STOPS_E): those kernels integrate the true
  * velocities, and the damping term c*(de/dphi)*omega jumps there (gearbox/kernels.stop_flags) */
@@ -428,18 +405,18 @@ GK_INLINE double guard_seg(const gk_model *m, const gk_tq *t, const gk_mode *md,
                       md->reg[jg], md->sub[jg]);
 }
 
-/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of the step (Illinois;
- * integrators._guard_root): rk4_kink / rk4_node guard_at on the state, rk4_seg (seg) guard_seg
- * on the shifted state */
+/* fraction s in [0, 1] of guard gi's zero on the Hermite interpolant of a step of length tau from
+ * (y0, f0) to (y1, f1), the mode held (Illinois; integrators._guard_root): rk4_kink / rk4_node guard_at
+ * on the state, rk4_seg (seg) guard_seg on the shifted state (gw, gv its gains; the multi-mesh kernels:
+ * 0, 0); 0 when the guard is not > 0 at y0, else the end of the bracket where it is < 0 */
 GK_PAIR_FN double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *md, int gi, double g_end,
-                         const double *y0, const double *f0, const double *y1, const double *f1, double tau,
-                         int seg, double gw, double gv)
+                             const double *y0, const double *f0, const double *y1, const double *f1, double tau,
+                             int seg, double gw, double gv)
 {
     gk_root r;
     double s, yy[4];
     int it;
-    if (!seg) return held_guard_root(m, t, md, gi, g_end, y0, f0, y1, f1, tau);
-    r.ga = guard_seg(m, t, md, gi, y0, gw, gv);
+    r.ga = seg ? guard_seg(m, t, md, gi, y0, gw, gv) : guard_at(m, t, md, gi, y0);
     if (!(r.ga > 0.0)) return 0.0;
     r.a = 0.0;
     r.b = 1.0;
@@ -448,7 +425,7 @@ GK_PAIR_FN double guard_root(const gk_model *m, const gk_tq *t, const gk_mode *m
     for (it = 0; it < KINK_MAX_IT; ++it) {
         s = root_next(&r);
         hermite_point(s, y0, f0, y1, f1, tau, yy);
-        if (root_update(&r, s, guard_seg(m, t, md, gi, yy, gw, gv))) break;
+        if (root_update(&r, s, seg ? guard_seg(m, t, md, gi, yy, gw, gv) : guard_at(m, t, md, gi, yy))) break;
     }
     return r.b;
 }
