@@ -83,9 +83,9 @@ def _u(W, o, i):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _local(mi, mf, m, W, o, off):
-    """The mesh's own (theta, omega, x, v) of the vector at offset o of W (a state with ``off`` 1.0,
-    or its derivative with ``off`` 0.0: the map is linear but for the phase)."""
+def _angle(mi, mf, m, W, o, off):
+    """The mesh's own (theta, omega) of the vector at offset o of W (a state with ``off`` 1.0, or its
+    derivative with ``off`` 0.0: the map is linear but for the phase)."""
     k = m * MI
     f = m * MF
     th = mf[f + F_AREF] * W[o] + off * mf[f + F_PHI0]
@@ -95,6 +95,16 @@ def _local(mi, mf, m, W, o, off):
         c = mf[f + F_A0 + j]
         th += c * _u(W, o, d)
         om += c * _u(W, o + 1, d)
+    return th, om
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _local(mi, mf, m, W, o, off):
+    """The mesh's own (theta, omega, x, v) of the vector at offset o of W: (theta, omega) of
+    :func:`_angle`, then the x map."""
+    k = m * MI
+    f = m * MF
+    th, om = _angle(mi, mf, m, W, o, off)
     x = 0.0
     v = 0.0
     for j in range(mi[k + I_NX]):
@@ -274,7 +284,7 @@ def _substep(gb, W, h, node, lk, t_in, t_out):
             for m in range(nm):
                 k = m * MI
                 wk = _f64p(mi[k + I_WK])
-                th, om, x, v = _local(mi, mf, m, W, oy, 1.0)
+                th, om = _angle(mi, mf, m, W, oy, 1.0)
                 cn = np.floor(th * mf[m * MF + F_INV])
                 if cn + 1.0 > wk[16] and cn < wk[17] and cn != wk[WK_ND]:
                     tab = _mtab(mi, mf, m)
@@ -288,8 +298,8 @@ def _substep(gb, W, h, node, lk, t_in, t_out):
             best_m = -1
             for m in range(nm):
                 wk = _f64p(mi[m * MI + I_WK])
-                th, om, x, v = _local(mi, mf, m, W, oy, 1.0)
-                fa, fb, fc, fd = _local(mi, mf, m, W, of0, 0.0)
+                th, om = _angle(mi, mf, m, W, oy, 1.0)
+                fa, fb = _angle(mi, mf, m, W, of0, 0.0)
                 tau = _node_time(th, om, fb, rem, wk[16], wk[17], mf[m * MF + F_DPHI])
                 if tau > 0.0 and (best_m < 0 or tau < best_tau):
                     best_tau = tau
@@ -302,7 +312,7 @@ def _substep(gb, W, h, node, lk, t_in, t_out):
                         ok = False
                         break
                 if ok:
-                    up = _local(mi, mf, best_m, W, oy, 1.0)[1] > 0.0
+                    up = _angle(mi, mf, best_m, W, oy, 1.0)[1] > 0.0
                     for i in range(n2):
                         W[oy + i] = W[oyt + i]
                     rem = rem - best_tau

@@ -36,11 +36,11 @@ GK_INLINE double plk_u(const double *v, int o, int i)
     return v[o + 2 * i];
 }
 
-/* mesh m's own (theta, omega, x, v) of the vector v, a state (off 1.0) or its derivative (off 0.0: the
- * map is linear but for the phase; kernels._local) */
-GK_INLINE void plk_mesh_local(const pl_mesh *me, const double *v, double off, double *loc)
+/* mesh m's own (theta, omega) of the vector v, a state (off 1.0) or its derivative (off 0.0: the map is
+ * linear but for the phase; kernels._angle) */
+GK_INLINE void plk_mesh_angle(const pl_mesh *me, const double *v, double off, double *th_out, double *om_out)
 {
-    double th = me->a_ref * v[0] + off * me->phase, om = me->a_ref * v[1], x = 0.0, xv = 0.0;
+    double th = me->a_ref * v[0] + off * me->phase, om = me->a_ref * v[1];
     int j;
     for (j = 0; j < me->na; ++j) {
         int d = me->a_dof[j];
@@ -48,14 +48,25 @@ GK_INLINE void plk_mesh_local(const pl_mesh *me, const double *v, double off, do
         th += c * plk_u(v, 0, d);
         om += c * plk_u(v, 1, d);
     }
-    for (j = 0; j < me->nx; ++j) {
-        int d = me->x_dof[j];
-        double c = me->x_coef[j];
-        x += c * plk_u(v, 0, d);
-        xv += c * plk_u(v, 1, d);
+    *th_out = th;
+    *om_out = om;
+}
+
+/* mesh m's own (theta, omega, x, v) of the vector v (kernels._local): (theta, omega) of plk_mesh_angle,
+ * (x, v) over the x map without its DOF-0 terms (xh_*).  Leaving those out is exact: each adds
+ * c * 0.0 = +-0 to a sum that starts at +0.0 and so is never -0.0, which leaves it unchanged (the
+ * springs' sums of plk_rhs alike; their forces on q_0, tau[0], are never read). */
+GK_INLINE void plk_mesh_local(const pl_mesh *me, const double *v, double off, double *loc)
+{
+    double x = 0.0, xv = 0.0;
+    int j;
+    plk_mesh_angle(me, v, off, &loc[0], &loc[1]);
+    for (j = 0; j < me->nxh; ++j) {
+        int d = me->xh_dof[j];
+        double c = me->xh_coef[j];
+        x += c * v[2 * d];
+        xv += c * v[2 * d + 1];
     }
-    loc[0] = th;
-    loc[1] = om;
     loc[2] = x;
     loc[3] = xv;
 }

@@ -102,10 +102,18 @@ int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, d
     if (!gki_finite_pos(k) || !isfinite(c) || c < 0.0) return GK_ERR_MODEL;
     s = &pl->spring[pl->n_spring++];
     s->count = count;
+    s->nh = 0;
     for (j = 0; j < PL_SPRING_MAX; ++j) {
         s->dof[j] = j < count ? dof[j] : 0;
         s->coef[j] = j < count ? coef[j] : 0.0;
+        s->hdof[j] = 0;
+        s->hcoef[j] = 0.0;
     }
+    for (j = 0; j < count; ++j)
+        if (dof[j] != 0) {
+            s->hdof[s->nh] = dof[j];
+            s->hcoef[s->nh++] = coef[j];
+        }
     s->k = k;
     s->c = c;
     return GK_OK;
@@ -152,10 +160,18 @@ int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const do
     me->pair = pair;
     me->nx = nx;
     me->na = na;
+    me->nxh = 0;
     for (j = 0; j < PL_MESH_MAX_X; ++j) {
         me->x_dof[j] = j < nx ? x_dof[j] : 0;
         me->x_coef[j] = j < nx ? x_coef[j] : 0.0;
+        me->xh_dof[j] = 0;
+        me->xh_coef[j] = 0.0;
     }
+    for (j = 0; j < nx; ++j)
+        if (x_dof[j] != 0) {
+            me->xh_dof[me->nxh] = x_dof[j];
+            me->xh_coef[me->nxh++] = x_coef[j];
+        }
     for (j = 0; j < PL_MESH_MAX_A; ++j) {
         me->a_dof[j] = j < na ? a_dof[j] : 0;
         me->a_coef[j] = j < na ? a_coef[j] : 0.0;
@@ -252,21 +268,21 @@ static void plk_select_rows(const pl_model *pl, pl_work *w, double T_motor, doub
  * 2: Model Exchange's gk_me, w->me; 3: rk4_seg, the gk_mode held and the tables read in the cell of
  * the evaluation's angle clamped to the held segment, kernels._mesh_seg), else the plain lookup with
  * the carried cell (rk4). */
-GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *dy, double t_in, double t_out,
-                       const int locked)
+GK_INLINE void plk_rhs_at(const pl_model *pl, pl_work *w, const double *y, double *dy, double t_in, double t_out,
+                          const int locked)
 {
     int n = pl->n, i, s, m, j, lb = pl->load_dof;
     double *tau = w->tau, sg, ext0, a0;
     for (i = 0; i < n; ++i) tau[i] = 0.0;
-    for (s = 0; s < pl->n_spring; ++s) {
+    for (s = 0; s < pl->n_spring; ++s) {   /* the DOF-0 terms left out (plkernel.h nh; plk_mesh_local) */
         const pl_spring *sp = &pl->spring[s];
         double v = 0.0, vd = 0.0, fs;
-        for (j = 0; j < sp->count; ++j) {
-            v += sp->coef[j] * plk_u(y, 0, sp->dof[j]);
-            vd += sp->coef[j] * plk_u(y, 1, sp->dof[j]);
+        for (j = 0; j < sp->nh; ++j) {
+            v += sp->hcoef[j] * y[2 * sp->hdof[j]];
+            vd += sp->hcoef[j] * y[2 * sp->hdof[j] + 1];
         }
         fs = sp->k * v + sp->c * vd;
-        for (j = 0; j < sp->count; ++j) tau[sp->dof[j]] -= sp->coef[j] * fs;
+        for (j = 0; j < sp->nh; ++j) tau[sp->hdof[j]] -= sp->hcoef[j] * fs;
     }
     for (m = 0; m < pl->n_mesh; ++m) {
         const pl_mesh *me = &pl->mesh[m];
@@ -298,7 +314,7 @@ GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *
         } else {
             fm = mesh_force(pm, &w->tq[m], &w->ph[m], loc[0], loc[1], loc[2], loc[3], NULL, NULL);
         }
-        for (j = 0; j < me->nx; ++j) tau[me->x_dof[j]] -= me->x_coef[j] * fm;
+        for (j = 0; j < me->nxh; ++j) tau[me->xh_dof[j]] -= me->xh_coef[j] * fm;
     }
     sg = 0.0;
     for (i = 1; i < n; ++i) sg += pl->g[i] * tau[i];
@@ -327,9 +343,22 @@ GK_INLINE void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *
     }
 }
 
+/* plk_rhs_at with each `locked` compiled once: one call to its copy (the event substep and RK4 call it
+ * from many places, and a copy inlined at each would not fit the instruction cache) */
+static void plk_rhs(const pl_model *pl, pl_work *w, const double *y, double *dy, double t_in, double t_out,
+                    int locked)
+{
+    switch (locked) {
+    case 3: plk_rhs_at(pl, w, y, dy, t_in, t_out, 3); break;
+    case 2: plk_rhs_at(pl, w, y, dy, t_in, t_out, 2); break;
+    case 1: plk_rhs_at(pl, w, y, dy, t_in, t_out, 1); break;
+    default: plk_rhs_at(pl, w, y, dy, t_in, t_out, 0); break;
+    }
+}
+
 /* one classical RK4 step of length h from y with its first stage f0 into out (kernels._rk4) */
-GK_INLINE void plk_rk4(const pl_model *pl, pl_work *w, const double *y, const double *f0, double h, double *out,
-                       double t_in, double t_out, const int locked)
+static void plk_rk4(const pl_model *pl, pl_work *w, const double *y, const double *f0, double h, double *out,
+                    double t_in, double t_out, int locked)
 {
     int i, n2 = 2 * pl->n;
     double h2 = h / 2.0, h6, *tmp = w->tmp, *acc = w->acc, *kk = w->kk;
@@ -420,9 +449,9 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, cons
             for (m = 0; m < pl->n_mesh; ++m) {
                 const gk_model *pm = pl->mesh[m].pair;
                 gk_mode *md = &w->md[m];
-                double loc[4], cn;
-                plk_mesh_local(&pl->mesh[m], y, 1.0, loc);
-                cn = floor(loc[0] * pm->inv_dphi);
+                double th, om, cn;
+                plk_mesh_angle(&pl->mesh[m], y, 1.0, &th, &om);
+                cn = floor(th * pm->inv_dphi);
                 if (cn + 1.0 > md->lo && cn < md->hi && cn != md->nd) {
                     md->nd = cn;
                     gki_cell_nodes(md, pm->n_phi);
@@ -437,10 +466,10 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, cons
             for (m = 0; m < pl->n_mesh; ++m) {
                 const gk_model *pm = pl->mesh[m].pair;
                 const gk_mode *md = &w->md[m];
-                double loc[4], dl[4], tau;
-                plk_mesh_local(&pl->mesh[m], y, 1.0, loc);
-                plk_mesh_local(&pl->mesh[m], f0, 0.0, dl);
-                tau = node_time(loc[0], loc[1], dl[1], rem, md->lo, md->hi, pm->dphi_rad);
+                double th, om, dth, dom, tau;
+                plk_mesh_angle(&pl->mesh[m], y, 1.0, &th, &om);
+                plk_mesh_angle(&pl->mesh[m], f0, 0.0, &dth, &dom);
+                tau = node_time(th, om, dom, rem, md->lo, md->hi, pm->dphi_rad);
                 if (tau > 0.0 && (best_m < 0 || tau < best_tau)) {
                     best_tau = tau;
                     best_m = m;
@@ -455,10 +484,10 @@ static long plk_substep(const pl_model *pl, pl_work *w, double h, int node, cons
                         break;
                     }
                 if (ok) {
-                    double loc[4];
+                    double th, om;
                     int up;
-                    plk_mesh_local(&pl->mesh[best_m], y, 1.0, loc);
-                    up = loc[1] > 0.0;
+                    plk_mesh_angle(&pl->mesh[best_m], y, 1.0, &th, &om);
+                    up = om > 0.0;
                     plk_copy(y, yt, n2);
                     rem = rem - best_tau;
                     nev += 1;

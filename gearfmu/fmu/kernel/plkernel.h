@@ -58,6 +58,9 @@ typedef struct pl_mesh {
     int nx;                                 /* x = sum_j x_coef[j] q[x_dof[j]] (m) */
     int x_dof[PL_MESH_MAX_X];
     double x_coef[PL_MESH_MAX_X];
+    int nxh;                                /* the x map without its DOF-0 terms (q_0 is 0): the loops of the step */
+    int xh_dof[PL_MESH_MAX_X];
+    double xh_coef[PL_MESH_MAX_X];
     int na;                                 /* theta = a_ref psi + sum_j a_coef[j] q[a_dof[j]] + phase (rad) */
     int a_dof[PL_MESH_MAX_A];
     double a_coef[PL_MESH_MAX_A];
@@ -69,6 +72,9 @@ typedef struct pl_spring {
     int count;                              /* DOFs: stretch r = sum_j coef[j] q[dof[j]] */
     int dof[PL_SPRING_MAX];
     double coef[PL_SPRING_MAX];
+    int nh;                                 /* the map without its DOF-0 terms (q_0 is 0): the loops of the step */
+    int hdof[PL_SPRING_MAX];
+    double hcoef[PL_SPRING_MAX];
     double k, c;                            /* N/m and N*s/m (N*m/rad and N*m*s/rad for rotations) */
 } pl_spring;
 
