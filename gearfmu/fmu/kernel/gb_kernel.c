@@ -173,8 +173,8 @@ static void select_rows(const gb_model *gb, gb_work *w, double T_motor, double T
  * (1: the event integrators' gk_mode; 2: Model Exchange's gk_me, w->me; 3: rk4_seg, the gk_mode held
  * and the tables read in the cell of the evaluation's angle clamped to the held segment,
  * kernels._mesh_seg), else the plain lookup with the carried cell (rk4) */
-GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *dy, double t_in, double t_out,
-                      const int locked)
+GK_INLINE void gb_rhs_at(const gb_model *gb, gb_work *w, const double *y, double *dy, double t_in, double t_out,
+                         const int locked)
 {
     int n = gb->n, i, s, m;
     double *tau = w->tau, *u = w->u, *du = w->du, a0;
@@ -246,10 +246,23 @@ GK_INLINE void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *d
     }
 }
 
+/* gb_rhs_at with each `locked` compiled once: one call to its copy (the event substep and RK4 call it
+ * from many places, and a copy inlined at each would not fit the instruction cache) */
+static void gb_rhs(const gb_model *gb, gb_work *w, const double *y, double *dy, double t_in, double t_out,
+                   int locked)
+{
+    switch (locked) {
+    case 3: gb_rhs_at(gb, w, y, dy, t_in, t_out, 3); break;
+    case 2: gb_rhs_at(gb, w, y, dy, t_in, t_out, 2); break;
+    case 1: gb_rhs_at(gb, w, y, dy, t_in, t_out, 1); break;
+    default: gb_rhs_at(gb, w, y, dy, t_in, t_out, 0); break;
+    }
+}
+
 /* one classical RK4 step of length h from y with its first stage f0 into out (kernels._rk4): stages at
  * y + (h/2) k1, y + (h/2) k2, y + h k3, acc = ((k1 + 2 k2) + 2 k3) + k4, y + (h/6) acc */
-GK_INLINE void gb_rk4(const gb_model *gb, gb_work *w, const double *y, const double *f0, double h, double *out,
-                      double t_in, double t_out, const int locked)
+static void gb_rk4(const gb_model *gb, gb_work *w, const double *y, const double *f0, double h, double *out,
+                   double t_in, double t_out, int locked)
 {
     int i, n2 = 2 * gb->n;
     double h2 = h / 2.0, h6, *tmp = w->tmp, *acc = w->acc, *kk = w->kk;
