@@ -244,11 +244,14 @@ def test_tampered_stage_tables_refused(example, tmp_path):
     assert any("resources/stage2/tables.bin: SHA-256 checksum mismatch" in m for _, m in msgs), msgs
 
 
-def test_state_save_restore_and_bad_inputs(example, tmp_path):
-    """Saving the FMU state, stepping, restoring and stepping again gives the same outputs bit for bit; a
-    NaN motor torque and a negative step are discarded with a message and leave the state unchanged."""
+@pytest.mark.parametrize("integrator", [2, 3])
+def test_state_save_restore_and_bad_inputs(example, tmp_path, integrator):
+    """Saving the FMU state, stepping, restoring and stepping again gives the same outputs bit for bit (with
+    rk4_node and with rk4_seg: the restore derives the integrator from the restored parameter); a NaN motor
+    torque and a negative step are discarded with a message and leave the state unchanged."""
     s, var, msgs = slave(example[2], tmp_path)
     out = [var[n] for n in ("stage1.dte", "stage2.mesh_force", "load_speed", "intermediate_shaft.torque")]
+    s.setInteger([var["integrator"]], [integrator])
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()

@@ -568,14 +568,14 @@ int gfm_init_state(gf_inst *c)
         bad = 1;
     }
     ig = gfm_val(c, d->vr_integrator);
-    if (!bad && gfm_code_of(ig, 4) < 0) {
+    if (!bad && gfm_code_of(ig, GFM_INTEGRATORS) < 0) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: must be 0 (rk4), 1 (rk4_kink), 2 (rk4_node) or 3 "
                "(rk4_seg)%s",
                c->vars[d->vr_integrator].name, gfm_num(ig, a), tail);
         bad = 1;
     }
     if (bad) return 0;
-    st = d->k->k_integrator(kd_of(d), gfm_code_of(ig, 4));
+    st = d->k->k_integrator(kd_of(d), gfm_code_of(ig, GFM_INTEGRATORS));
     if (st != GK_OK) {
         gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s = %s: refused by the kernel (a %s has more than %d "
                "slots)%s", c->vars[d->vr_integrator].name, gfm_num(ig, a), d->k->mesh_word, GK_KINK_MAX_SLOTS, tail);
@@ -864,7 +864,8 @@ int gfm_snap_read(gf_inst *c, const unsigned char *p, size_t size, const char *f
     d->initialized = h.initialized;
     d->zeta_valid = 0;
     if (d->initialized) {   /* the integrator and the damping are derived from the restored values */
-        if (d->k->k_integrator(kd_of(d), gfm_code_of(gfm_val(c, d->vr_integrator), 3)) != GK_OK || !apply_damping(c)) {
+        int ig = gfm_code_of(gfm_val(c, d->vr_integrator), GFM_INTEGRATORS);
+        if (d->k->k_integrator(kd_of(d), ig) != GK_OK || !apply_damping(c)) {
             gf_log(c, GF_ERROR_STATUS, "logStatusError", "%s: the state's integrator or damping is refused", fn);
             return 0;
         }

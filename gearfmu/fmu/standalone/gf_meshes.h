@@ -32,6 +32,8 @@
 #define GFM_MAX_MESHES 32
 #define GFM_NUM 40
 #define GFM_MAX_STATE 192
+/* the integrator parameter's codes 0 .. GFM_INTEGRATORS - 1 (rk4, rk4_kink, rk4_node, rk4_seg) */
+#define GFM_INTEGRATORS 4
 
 /* the kernel of a multi-mesh model, as the shared behaviour calls it (kd: the model's data) */
 typedef struct gfm_kernel {
