@@ -205,14 +205,15 @@ def test_linear_limit_against_matrix_exponential(tmp_path):
         assert np.max(np.abs(got - ref)) <= 1e-6 * np.ptp(ref), np.max(np.abs(got - ref)) / np.ptp(ref)
 
 
-@pytest.mark.parametrize("node_events,rtol", [(NODES_NONE, 1e-10), (NODES_KINKS, 1e-12)])
-def test_contact_loss_against_the_native_gearbox_solver(tmp_path, node_events, rtol):
+@pytest.mark.parametrize("node_events", [NODES_NONE, NODES_KINKS])
+def test_contact_loss_against_the_native_gearbox_solver(tmp_path, node_events):
     """Stage 1 loses contact and impacts while stage 2 carries load: the host over gb_me_* (DOP853, every
     contact change an event; with the big table kinks as events too) and the native gearbox solver
     (rk4_node at 1/64 of the communication step) agree on both stages' DTE and mesh force to 1e-4 of the
-    range.  The case has grazing contacts, where a tiny difference decides whether a pair touches: with
-    node events the host's restarts move its steps, and at rtol 1e-10 one grazing contact near the end
-    goes the other way (measured: 6e-2 from there on), at 1e-12 it does not."""
+    range.  The case has grazing contacts, where a tiny difference decides whether a pair touches: at rtol
+    1e-10 or 1e-11 one grazing contact near the end can go the other way (measured: 6e-2 to 1e-1 from there
+    on: with node events, and without them on another machine), at 1e-12 it
+    does not."""
     L = kernel_library(tmp_path)
     model, kw = gearbox_case("contact_loss", 30)
     kg = KernelGearbox(L, model, node_events)
@@ -223,7 +224,7 @@ def test_contact_loss_against_the_native_gearbox_solver(tmp_path, node_events, r
                    load_torque_Nm=T_out, motor_speed_start_rad_s=kw["motor_speed_start_rad_s"], initial_state=y0,
                    max_step_s=kw["comm_step_s"] / 64, integrator="rk4_node")
     times = np.asarray(nat.time_s)
-    out, n_ev = run_host(kg, y0, T_in, T_out, times, rtol)
+    out, n_ev = run_host(kg, y0, T_in, T_out, times, 1e-12)
     worst = {}
     for m, name in enumerate(mesh.name for mesh in model.meshes):
         o = L.gb_mesh_offset(kg.gb.ctypes.data, m)
