@@ -17,7 +17,6 @@ References (none produced by the code under test):
   description): the binary must reproduce the shipped one's results bit for bit;
 * pyssp-standard's SSP 1.0 XSD for the SSP package of an FMI 3 FMU.
 """
-import os
 import re
 import shutil
 import subprocess
@@ -32,7 +31,7 @@ import pytest
 from gearfmu.fmu.standalone_build import build_description_flags, build_standalone_fmu, fmi3_header_dir
 from gearfmu.ssp import build_ssp, validate_ssp_dir
 
-from support.cross_tools import AARCH64_SYSROOT, macho_exports, need, qemu, wine, zig
+from support.cross_tools import AARCH64_SYSROOT, macho_exports, need, qemu, wine_env, zig
 from support.standalone_cases import cases
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
@@ -252,22 +251,12 @@ def _equal(a, b):
 def test_x86_64_windows_under_wine_equals_native(built, host, tmp_path):
     """binaries/x86_64-windows, loaded with LoadLibrary by a Windows build of tests/fmu_hosts/fmi3_host.c under
     Wine: the native numbers (IEEE ==), exit code 0 (output to a file: Wine's helpers keep pipes open)."""
-    w = wine()
     c = built["impacts"]
     exe = _compile_host(tmp_path, "x86_64-windows-gnu")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
-               WINEDLLOVERRIDES="mscoree,mshtml=")
-    server = shutil.which("wineserver") or next((str(p) for p in (Path("/usr/lib/wine/wineserver64"),
-                                                                  Path("/usr/lib/wine/wineserver")) if p.is_file()), None)
     out = tmp_path / "wine.out"
-    try:
-        with open(out, "w") as fo:
-            rc = subprocess.run([w, str(exe), *_run_args(c, "Z:" + c["dir"].as_posix())], stdout=fo,
-                                stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, env=env, timeout=900).returncode
-    finally:
-        if server:
-            subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=120)
+    with wine_env(tmp_path) as (w, env), open(out, "w") as fo:
+        rc = subprocess.run([w, str(exe), *_run_args(c, "Z:" + c["dir"].as_posix())], stdout=fo,
+                            stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, env=env, timeout=900).returncode
     assert rc == 0
     assert _equal(out.read_text(), _native(c, host))
 

@@ -44,7 +44,7 @@ from gearfmu.gearbox.cases import gearbox_case
 from gearfmu.gearbox.model import Mesh, build_gearbox
 from gearfmu.gearbox.native import choose_max_step_s
 
-from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine
+from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine_env
 from support.fmpy_host import slave, status
 from support.gearbox_cases import (K_IN, K_MID, K_OUT, S1, S2, c_mesh, hand_damping, hand_damping_of_mid, hand_matrices,
                                    kernel_library, linear_gearbox)
@@ -426,8 +426,6 @@ def _unzipped(example, tmp_path):
 def test_win64_under_wine_and_aarch64_under_qemu_equal_linux64(example, host_exe, tmp_path):
     """The example gearbox FMU's win64 DLL (under Wine, a win64 build of tests/fmu_hosts/fmi_host.c) and its
     aarch64-linux binary (under qemu-aarch64) give output files with the SHA-256 of the linux64 binary's."""
-    import os
-    import shutil
 
     d = _unzipped(example, tmp_path)
     args = _host_args(example, d, 200)
@@ -440,18 +438,10 @@ def test_win64_under_wine_and_aarch64_under_qemu_equal_linux64(example, host_exe
     rc, out, err = run_file([q, "-L", str(AARCH64_SYSROOT), str(exe), *args], tmp_path, "qemu")
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
-    w = wine()
     exe = compile_host(tmp_path, "x86_64-windows-gnu")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
-               WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     wargs = _host_args(example, "Z:" + d.as_posix(), 200)
-    try:
+    with wine_env(tmp_path) as (w, env):
         rc, out, err = run_file([w, str(exe), *wargs], tmp_path, "wine", env=env)
-    finally:
-        server = shutil.which("wineserver")
-        if server:
-            subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=120)
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
     with zipfile.ZipFile(example[2]) as z:

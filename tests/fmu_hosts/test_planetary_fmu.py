@@ -17,9 +17,7 @@ references its C code did not produce.
 """
 import hashlib
 import json
-import os
 import shutil
-import subprocess
 import zipfile
 from pathlib import Path
 
@@ -35,7 +33,7 @@ from gearfmu.fmu.planetary_build import build_planetary_fmu, native_run, planeta
 from gearfmu.planetary.native import simulate
 from gearfmu.scene.drivetrain import load_drivetrain
 
-from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine
+from support.cross_tools import AARCH64_SYSROOT, compile_host, qemu, run_file, wine_env
 from support.fmpy_host import keep_fmpy_logger_alive, quiet, slave, status
 
 pytestmark = pytest.mark.slow
@@ -356,18 +354,10 @@ def test_c_host_win64_under_wine_and_aarch64_under_qemu(built, host_exe, tmp_pat
     rc, out, err = run_file([qemu(), "-L", str(AARCH64_SYSROOT), str(exe), *args, "--state-check"], tmp_path, "qemu")
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
-    w = wine()
     exe = compile_host(tmp_path, "x86_64-windows-gnu")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all",
-               WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
     wargs, _ = _host_args(e, "Z:" + d.as_posix(), n)
-    try:
+    with wine_env(tmp_path) as (w, env):
         rc, out, err = run_file([w, str(exe), *wargs, "--state-check"], tmp_path, "wine", env=env)
-    finally:
-        server = shutil.which("wineserver")
-        if server:
-            subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=120)
     assert rc == 0, err[-2000:]
     assert sha(out) == sha(ref)
     with zipfile.ZipFile(e["fmu"][2]) as z:

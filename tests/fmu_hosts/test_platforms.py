@@ -19,7 +19,6 @@ A missing tool (zig, wine, qemu-aarch64, the aarch64 sysroot, cmake) FAILS these
 tests (.ci/run installs them).  A developer without root may set
 GEARFMU_ALLOW_MISSING_CROSS_TOOLS=1 to skip instead; it is ignored when CI is set.
 """
-import os
 import re
 import shutil
 import struct
@@ -36,7 +35,7 @@ from gearfmu.fmu.compare import output_names
 from gearfmu.fmu.standalone_build import (STANDALONE_CFLAGS, build_standalone_fmu, fmi2_header_dir,
                                       read_build_flags)
 
-from support.cross_tools import AARCH64_SYSROOT, compile_host, fat_slices, macho_exports, need, qemu, run_file, wine, zig
+from support.cross_tools import AARCH64_SYSROOT, compile_host, fat_slices, macho_exports, need, qemu, run_file, wine_env, zig
 from support.standalone_cases import cases, max_rel
 
 # the whole file is out of the quick subset (tests/README.md "Quick subset")
@@ -152,22 +151,14 @@ def test_every_platform_carried(fmus):
 @pytest.fixture(scope="module")
 def wine_run(tmp_path_factory):
     """(wine, the win64 build of tests/fmu_hosts/fmi_host.c, the environment of one Wine prefix made for this
-    module; its processes are ended afterwards).  The UTF-8 locale makes Wine read the Unix side's
-    file names and arguments as UTF-8."""
-    w = wine()
+    module; cross_tools.wine_env ends its processes and removes it afterwards)."""
     tmp = tmp_path_factory.mktemp("wine")
     exe = compile_host(tmp, "x86_64-windows-gnu")
-    env = dict(os.environ, WINEPREFIX=str(tmp / "wineprefix"), WINEDEBUG="-all",
-               WINEDLLOVERRIDES="mscoree,mshtml=", LANG="C.UTF-8", LC_ALL="C.UTF-8")
-    server = shutil.which("wineserver") or next((str(p) for p in (Path("/usr/lib/wine/wineserver64"),
-                                                                  Path("/usr/lib/wine/wineserver")) if p.is_file()), None)
-    # create the prefix once, outside the timed processes
-    subprocess.run([w, "cmd", "/c", "exit"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL, timeout=600)
-    yield w, exe, env
-    if server:  # end this prefix's Wine processes (services started by the runs)
-        subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                       stderr=subprocess.DEVNULL, timeout=120)
+    with wine_env(tmp) as (w, env):
+        # create the prefix once, outside the timed processes
+        subprocess.run([w, "cmd", "/c", "exit"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, timeout=600)
+        yield w, exe, env
 
 
 def test_win64_binary_under_wine(fmus, native, wine_run, tmp_path):

@@ -6,6 +6,7 @@ separately from gearfmu's fat-file writer.
 A missing tool FAILS the test that needs it (.ci/run installs them), unless a developer (not CI)
 sets GEARFMU_ALLOW_MISSING_CROSS_TOOLS=1.
 """
+import contextlib
 import os
 import shutil
 import struct
@@ -40,6 +41,32 @@ def wine():
     return need("wine", shutil.which("wine") or shutil.which("wine64") or
                 (Path("/usr/lib/wine/wine64").is_file() and "/usr/lib/wine/wine64"),
                 "apt-get install wine wine64")
+
+
+def wineserver():
+    """The wineserver of the installed Wine (Debian keeps it out of PATH), or None."""
+    return shutil.which("wineserver") or next((str(p) for p in (Path("/usr/lib/wine/wineserver64"),
+                                                              Path("/usr/lib/wine/wineserver")) if p.is_file()), None)
+
+
+@contextlib.contextmanager
+def wine_env(tmp):
+    """(wine, environment) of a new Wine prefix in the folder ``tmp``; afterwards the prefix's Wine
+    processes (the services its runs started) are ended and the prefix removed.  A prefix holds
+    copies of Wine's DLLs, about 0.7 GB: kept, one per test, they alone filled a CI machine's disk.
+    The UTF-8 locale makes Wine read the Unix side's file names and arguments as UTF-8."""
+    w = wine()
+    prefix = Path(tmp) / "wineprefix"
+    env = dict(os.environ, WINEPREFIX=str(prefix), WINEDEBUG="-all", WINEDLLOVERRIDES="mscoree,mshtml=",
+               LANG="C.UTF-8", LC_ALL="C.UTF-8")
+    try:
+        yield w, env
+    finally:
+        server = wineserver()
+        if server:
+            subprocess.run([server, "-k"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, timeout=120)
+        shutil.rmtree(prefix, ignore_errors=True)
 
 
 def qemu():
