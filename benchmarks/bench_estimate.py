@@ -132,7 +132,7 @@ def main(argv=None) -> int:
                       "fmu_bytes": e["fmu_bytes"] / m["fmu_bytes"]}
         worst = max([worst] + [max(v, 1 / v) for v in r["ratio"].values()])
         out["scenes"][name] = r
-        print(f"  estimate/measured: " + ", ".join(f"{k} {v:.2f}" for k, v in r["ratio"].items())
+        print("  estimate/measured: " + ", ".join(f"{k} {v:.2f}" for k, v in r["ratio"].items())
               + f" (CPU {m['build_cpu_s']:.3g} s, wall {m['build_wall_s']:.3g} s)", file=sys.stderr, flush=True)
     out["worst_ratio"] = worst
     out["within_2x"] = worst <= GOAL and not any("error" in r for r in out["scenes"].values())

@@ -37,6 +37,7 @@ from gearfmu.pipeline import gearbox_model, load_any, simulate_drivetrain, stage
 from gearfmu.gearbox.cases import GEARBOX_CASES, gearbox_case
 from gearfmu.gearbox.native import simulate
 from gearfmu.gearbox.reference import simulate_reference
+from harness import front_at, worst_mesh_errors
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
@@ -49,41 +50,6 @@ DOP853_SETTINGS = ((1e-4, 16), (1e-6, 16), (1e-6, 24), (1e-6, 32), (1e-8, 32), (
 
 def say(msg):
     print(f"bench_gearbox: {msg}", file=sys.stderr, flush=True)
-
-
-def rel_errors(res, ref, model) -> dict:
-    """Worse stage's RMS and max |res - ref| of the DTE and the mesh force over the communication
-    instants, relative to the reference's range (nan when res has NaN)."""
-    out = {}
-    for key, col in (("dte", "dte"), ("force", "mesh_force")):
-        rms, mx = [], []
-        for m in model.meshes:
-            a, b = res[f"{m.name}.{col}"], ref[f"{m.name}.{col}"]
-            d = a - b
-            rng = float(np.ptp(b)) or 1.0
-            rms.append(float(np.sqrt(np.mean(d ** 2)) / rng))
-            mx.append(float(np.max(np.abs(d)) / rng))
-        out[f"{key}_rel_rms_err"] = max(rms)
-        out[f"{key}_rel_max_err"] = max(mx)
-    return out
-
-
-def wall_at(rows, target):
-    """Wall time (s) at relative RMS DTE error ``target`` along the rows' own front (log-log
-    interpolation between the front's points around it; None when the front does not reach it)."""
-    pts = sorted((r["wall_s"], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
-    front, best = [], math.inf
-    for w, e in pts:
-        if e < best:
-            front.append((w, e))
-            best = e
-    for (w0, e0), (w1, e1) in zip(front, front[1:]):
-        if e1 <= target <= e0:
-            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
-    if front and front[0][1] <= target:
-        return front[0][0]
-    return None
 
 
 def timed(fn, repeat):
@@ -100,6 +66,7 @@ def timed(fn, repeat):
 
 def case_front(name, repeat, mesh_periods):
     model, kw = gearbox_case(name, mesh_periods=mesh_periods)
+    mesh_names = [m.name for m in model.meshes]
     H = kw["comm_step_s"]
     say(f"{name}: reference (rtol 1e-12) ...")
     t0 = time.perf_counter()
@@ -112,15 +79,15 @@ def case_front(name, repeat, mesh_periods):
         for n in SUBSTEPS:
             wall, r = timed(lambda: simulate(model, max_step_s=H / n, integrator=integ, **kw), repeat)
             rows.append(dict(method=integ, setting=f"h=H/{n}", step_s=H / n, wall_s=wall, loop_wall_s=r.wall_s,
-                             events=int(r.info["events"]), **rel_errors(r, ref, model)))
+                             events=int(r.info["events"]), **worst_mesh_errors(r, ref, mesh_names)))
         say(f"{name}: {integ} done")
     for rt, spp in DOP853_SETTINGS:
         say(f"{name}: DOP853 rtol {rt:g}, {spp} steps per period ...")
         wall, r = timed(lambda: simulate_reference(model, rtol=rt, steps_per_period=spp, **kw), 1)
         rows.append(dict(method="solve_ivp-DOP853", setting=f"rtol={rt:g}, {spp}/period", wall_s=wall,
-                         **rel_errors(r, ref, model)))
+                         **worst_mesh_errors(r, ref, mesh_names)))
     methods = list(GEARBOX_INTEGRATORS) + ["solve_ivp-DOP853"]
-    at = {m: {key: wall_at([r for r in rows if r["method"] == m], tg) for key, tg in TARGETS.items()} for m in methods}
+    at = {m: {key: front_at([r for r in rows if r["method"] == m], tg) for key, tg in TARGETS.items()} for m in methods}
     speedup = {m: {tg: (at["solve_ivp-DOP853"][tg] / at[m][tg] if at[m][tg] and at["solve_ivp-DOP853"][tg]
                         else None) for tg in at[m]} for m in GEARBOX_INTEGRATORS}
     return {"case": name, "bodies": model.n_bodies, "meshes": len(model.meshes), "comm_step_s": H,

@@ -33,10 +33,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 import sys
 import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np

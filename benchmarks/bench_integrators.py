@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness import best_of, c_runner, emit, step_costs
+from harness import best_of, c_runner, emit, front_at, step_costs
 from gearfmu.fmu.pythonfmu_build import compile_kernel
 from gearfmu.fmu.runtime.kernel_api import load_kernel
 from gearfmu.bench import _kb, _kw, hard_case, rel_errors, tent_error
@@ -73,24 +73,6 @@ def _case(name):
     return three_slot_case() if name == "three_slot" else hard_case(name)
 
 
-def wall_at(rows, target):
-    """Wall time (s) at relative RMS dte error ``target`` on the rows' own front
-    (log-log interpolation between the front's points around it; None outside)."""
-    pts = sorted((r["wall_s"], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
-    front, best = [], math.inf
-    for w, e in pts:
-        if e < best:
-            front.append((w, e))
-            best = e
-    for (w0, e0), (w1, e1) in zip(front, front[1:]):
-        if e1 <= target <= e0:
-            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
-    if front and front[0][1] <= target:
-        return front[0][0]     # the cheapest row already beats the target
-    return None
-
-
 def case_front(name, repeat):
     """Rows of the speed-against-error front of one case (module docstring)."""
     tables, kw = _case(name)
@@ -117,7 +99,7 @@ def case_front(name, repeat):
             best = min(best, time.perf_counter() - t0)
         rows.append(dict(method="solve_ivp-DOP853", setting=f"rtol={rt:g}", wall_s=best, **rel_errors(r, ref)))
     methods = list(INTEGRATORS) + ["solve_ivp-DOP853"]
-    at = {m: {f"{tg:g}": wall_at([r for r in rows if r["method"] == m], tg) for tg in (1e-4, 1e-6)}
+    at = {m: {f"{tg:g}": front_at([r for r in rows if r["method"] == m], tg) for tg in (1e-4, 1e-6)}
           for m in methods}
     speedup = {m: {tg: (at["solve_ivp-DOP853"][tg] / at[m][tg]
                         if at[m][tg] and at["solve_ivp-DOP853"][tg] else None) for tg in at[m]}

@@ -52,7 +52,7 @@ from gearfmu.planetary.native import simulate
 from gearfmu.planetary.reference import simulate_reference
 from gearfmu.bench import PLANETARY_CASES, planetary_case
 from gearfmu.stages import build_planetary_drivetrain_fmu
-from harness import at_error, compile_host, host_run, unzip_fmu
+from harness import at_error, compile_host, front_at, host_run, unzip_fmu, worst_mesh_errors
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the relative RMS DTE errors at which the methods' wall times are compared (JSON key -> value)
@@ -64,41 +64,6 @@ DOP853_SETTINGS = ((1e-4, 16), (1e-6, 24), (1e-8, 32), (1e-10, 64))
 
 def say(msg):
     print(f"bench_planetary: {msg}", file=sys.stderr, flush=True)
-
-
-def rel_errors(res, ref, model) -> dict:
-    """Worst mesh's RMS and max |res - ref| of the DTE and the mesh force over the communication
-    instants, relative to the reference's range (nan when res has NaN)."""
-    out = {}
-    for key, col in (("dte", "dte"), ("force", "mesh_force")):
-        rms, mx = [], []
-        for m in model.mesh_names:
-            a, b = res[f"{m}.{col}"], ref[f"{m}.{col}"]
-            d = a - b
-            rng = float(np.ptp(b)) or 1.0
-            rms.append(float(np.sqrt(np.mean(d ** 2)) / rng))
-            mx.append(float(np.max(np.abs(d)) / rng))
-        out[f"{key}_rel_rms_err"] = max(rms)
-        out[f"{key}_rel_max_err"] = max(mx)
-    return out
-
-
-def wall_at(rows, target, key="wall_s"):
-    """Wall time (s) at relative RMS DTE error ``target`` along the rows' own front (log-log
-    interpolation between the front's points around it; None when the front does not reach it)."""
-    pts = sorted((r[key], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
-    front, best = [], math.inf
-    for w, e in pts:
-        if e < best:
-            front.append((w, e))
-            best = e
-    for (w0, e0), (w1, e1) in zip(front, front[1:]):
-        if e1 <= target <= e0:
-            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
-    if front and front[0][1] <= target:
-        return front[0][0]
-    return None
 
 
 def timed(fn, repeat):
@@ -128,16 +93,16 @@ def case_front(name, repeat, mesh_periods):
             wall, cpu, r = timed(lambda: simulate(model, max_step_s=H / n, integrator=integ, **kw), repeat)
             rows.append(dict(method=integ, setting=f"h=H/{n}", step_s=H / n, wall_s=wall, cpu_s=cpu,
                              loop_wall_s=r.wall_s,
-                             events=int(r.info["events"]), **rel_errors(r, ref, model)))
+                             events=int(r.info["events"]), **worst_mesh_errors(r, ref, model.mesh_names)))
         say(f"{name}: {integ} done")
     for rt, spp in DOP853_SETTINGS:
         say(f"{name}: DOP853 rtol {rt:g}, {spp} steps per period ...")
         wall, cpu, r = timed(lambda: simulate_reference(model, rtol=rt, steps_per_period=spp, **kw), 1)
         rows.append(dict(method="solve_ivp-DOP853", setting=f"rtol={rt:g}, {spp}/period", wall_s=wall, cpu_s=cpu,
-                         **rel_errors(r, ref, model)))
+                         **worst_mesh_errors(r, ref, model.mesh_names)))
     methods = list(GEARBOX_INTEGRATORS) + ["solve_ivp-DOP853"]
-    at = {m: {key: wall_at([r for r in rows if r["method"] == m], tg) for key, tg in TARGETS.items()} for m in methods}
-    cpu_at = {m: {key: wall_at([r for r in rows if r["method"] == m], tg, "cpu_s") for key, tg in TARGETS.items()}
+    at = {m: {key: front_at([r for r in rows if r["method"] == m], tg) for key, tg in TARGETS.items()} for m in methods}
+    cpu_at = {m: {key: front_at([r for r in rows if r["method"] == m], tg, "cpu_s") for key, tg in TARGETS.items()}
               for m in methods}
     speedup = {m: {tg: (cpu_at["solve_ivp-DOP853"][tg] / cpu_at[m][tg]
                         if cpu_at[m][tg] and cpu_at["solve_ivp-DOP853"][tg] else None) for tg in cpu_at[m]}

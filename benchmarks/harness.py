@@ -371,3 +371,40 @@ def at_error(points, key, target):
             c = math.exp(math.log(a["cpu_s"]) + t * (math.log(b["cpu_s"]) - math.log(a["cpu_s"])))
             return h, c
     return None
+
+
+def front_at(rows, target, key="wall_s"):
+    """The cost ``key`` (a row's wall_s or cpu_s) at relative RMS DTE error ``target`` along the rows' own
+    front, the rows that lower the error at a higher cost (log-log interpolation between the front's points
+    around it; the cheapest row's cost when it already beats the target; None when the front does not reach
+    it)."""
+    pts = sorted((r[key], r["dte_rel_rms_err"]) for r in rows if math.isfinite(r["dte_rel_rms_err"]))
+    front, best = [], math.inf
+    for w, e in pts:
+        if e < best:
+            front.append((w, e))
+            best = e
+    for (w0, e0), (w1, e1) in zip(front, front[1:]):
+        if e1 <= target <= e0:
+            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
+    if front and front[0][1] <= target:
+        return front[0][0]
+    return None
+
+
+def worst_mesh_errors(res, ref, mesh_names) -> dict:
+    """The worst mesh's RMS and max |res - ref| of the DTE and the mesh force over the communication
+    instants, relative to the reference's range (nan when res has NaN): ``dte_rel_rms_err``,
+    ``dte_rel_max_err``, ``force_rel_rms_err``, ``force_rel_max_err``."""
+    out = {}
+    for key, col in (("dte", "dte"), ("force", "mesh_force")):
+        rms, mx = [], []
+        for m in mesh_names:
+            d = res[f"{m}.{col}"] - ref[f"{m}.{col}"]
+            rng = float(np.ptp(ref[f"{m}.{col}"])) or 1.0
+            rms.append(float(np.sqrt(np.mean(d ** 2)) / rng))
+            mx.append(float(np.max(np.abs(d)) / rng))
+        out[f"{key}_rel_rms_err"] = max(rms)
+        out[f"{key}_rel_max_err"] = max(mx)
+    return out
