@@ -217,6 +217,13 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
     quasi-static one).  ``error`` names the first bad one."""
     if not isinstance(model, GearboxModel):
         raise error(f"model: expected GearboxModel, got {type(model).__name__}")
+    return drivetrain_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state, error, "psi, omega, u_i, du_i")
+
+
+def drivetrain_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, initial_state, error, state: str):
+    """:func:`run_inputs` of any drivetrain model with ``motor_torque_input``, ``load_torque_input``,
+    ``load_ratio`` and ``n_state`` (a gearbox, a planetary drivetrain); ``state`` names the state's
+    entries in the message on a bad initial state."""
     H = s.output_interval_s
     n_steps = whole_steps(s.stop_time_s, H, error=error)
     t_in = input_series("motor_torque_Nm", s.motor_torque_start_Nm if motor_torque_Nm is None else motor_torque_Nm,
@@ -238,7 +245,7 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
     if initial_state is not None:
         y = np.array(initial_state, dtype=np.float64)
         if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
-            raise error(f"initial_state: expected {model.n_state} finite values (psi, omega, u_i, du_i)")
+            raise error(f"initial_state: expected {model.n_state} finite values ({state})")
     return n_steps, t_in, t_out, t_ref, y
 
 

@@ -25,10 +25,10 @@ from ..common.checks import finite_number
 from ..common.progress import progress_bar
 from ..common.settings import SOLVER_ARGUMENTS, GearboxRunSettings, checked, default_output_interval_s
 from ..common.vocabulary import INTEGRATORS
-from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, whole_steps,
-                               write_columns_csv)
+from ..dynamics.native import (InputLike, choose_max_step_s as pair_max_step_s, input_series, substeps, write_columns_csv)
 from ..gearbox._pair import KINK_MAX_SLOTS
 from ..gearbox.kernels import stop_flags
+from ..gearbox.native import _NO_CUTS, _torque_rows, drivetrain_inputs
 from ..tables.zones import zone_cuts
 from .kernels import (F_A0, F_AREF, F_C, F_DPHI, F_INV, F_PHI0, F_X0, FF, FI, I_A0, I_B, I_CUTS, I_E, I_FLAGS, I_K,
                       I_MD, I_MODEL, I_N, I_NA, I_NP, I_NX, I_ROWS2, I_WK, I_X0, I_ZONED, MF, MI, SF, SI, SP, WK, run)
@@ -37,8 +37,6 @@ from .modes import modes
 
 __all__ = ["PlanetaryInputError", "PlanetaryResult", "simulate", "choose_max_step_s", "output_units",
            "resolve_settings", "default_output_interval", "checked_settings", "run_inputs", "columns", "drive_inputs"]
-
-_NO_CUTS = np.full((2, 1, 1), -1.0)
 
 
 class PlanetaryInputError(ValueError):
@@ -119,14 +117,6 @@ def choose_max_step_s(model: PlanetaryModel, motor_speed_rad_s: float, points_pe
     if f_max > 0.0:
         h = min(h, 1.0 / f_max / points_per_period)
     return h
-
-
-def _torque_rows(tq: np.ndarray, torque: np.ndarray):
-    if tq.size == 1:
-        return np.zeros(torque.shape, dtype=np.int64), np.zeros(torque.shape)
-    q = np.clip(torque, tq[0], tq[-1])
-    it = np.clip(np.searchsorted(tq, q, side="right") - 1, 0, tq.size - 2).astype(np.int64)
-    return it, (q - tq[it]) / (tq[it + 1] - tq[it])
 
 
 class _KernelData:
@@ -248,29 +238,7 @@ def run_inputs(model, s: GearboxRunSettings, motor_torque_Nm, load_torque_Nm, in
     no torque input takes 0)."""
     if not isinstance(model, PlanetaryModel):
         raise error(f"model: expected PlanetaryModel, got {type(model).__name__}")
-    H = s.output_interval_s
-    n_steps = whole_steps(s.stop_time_s, H, error=error)
-    t_in = input_series("motor_torque_Nm", s.motor_torque_start_Nm if motor_torque_Nm is None else motor_torque_Nm,
-                        n_steps, H, error=error)
-    if load_torque_Nm is None and motor_torque_Nm is None:
-        load_torque_Nm = s.load_torque_start_Nm
-    if load_torque_Nm is None:
-        if not model.motor_torque_input:
-            raise error("load_torque_Nm: required when the motor is no torque input")
-        t_out = t_in / model.load_ratio
-    else:
-        t_out = input_series("load_torque_Nm", load_torque_Nm, n_steps, H, error=error)
-    if not model.motor_torque_input:
-        t_in = np.zeros_like(t_in)
-    if not model.load_torque_input:
-        t_out = np.zeros_like(t_out)
-    t_ref = t_in if model.motor_torque_input else t_out * model.load_ratio
-    y = None
-    if initial_state is not None:
-        y = np.array(initial_state, dtype=np.float64)
-        if y.shape != (model.n_state,) or not np.all(np.isfinite(y)):
-            raise error(f"initial_state: expected {model.n_state} finite values (psi, omega, q_i, q_i')")
-    return n_steps, t_in, t_out, t_ref, y
+    return drivetrain_inputs(model, s, motor_torque_Nm, load_torque_Nm, initial_state, error, "psi, omega, q_i, q_i'")
 
 
 #: the keyword arguments of :func:`simulate` that replace a field of its settings
