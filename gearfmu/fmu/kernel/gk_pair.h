@@ -328,7 +328,9 @@ GK_INLINE int multimesh_integrator(gk_model *pair, int integrator)
 GK_INLINE double seg_cell(const gk_model *m, const gk_mode *md, double th, gk_ph *c)
 {
     int N = m->n_phi;
-    double cc = floor(th * m->inv_dphi);
+    double sc = th * m->inv_dphi, cc;
+    /* floor(sc), read off the held cell when sc lies in it (nd <= sc < nd + 1: the same value) */
+    cc = (sc >= md->nd && sc < md->nd + 1.0) ? md->nd : floor(sc);
     if (!(cc > md->cl)) cc = md->cl;
     if (cc > md->ch) cc = md->ch;
     if (cc == md->nd) {

@@ -42,11 +42,19 @@ GK_INLINE void plk_mesh_angle(const pl_mesh *me, const double *v, double off, do
 {
     double th = me->a_ref * v[0] + off * me->phase, om = me->a_ref * v[1];
     int j;
-    for (j = 0; j < me->na; ++j) {
-        int d = me->a_dof[j];
-        double c = me->a_coef[j];
-        th += c * plk_u(v, 0, d);
-        om += c * plk_u(v, 1, d);
+    if (me->a_has0) {   /* a DOF-0 term adds c * 0.0 (which can turn a -0.0 sum into +0.0) */
+        for (j = 0; j < me->na; ++j) {
+            int d = me->a_dof[j];
+            double c = me->a_coef[j];
+            th += c * plk_u(v, 0, d);
+            om += c * plk_u(v, 1, d);
+        }
+    } else {
+        for (j = 0; j < me->na; ++j) {
+            const double *q = v + me->a_off[j];
+            th += me->a_coef[j] * q[0];
+            om += me->a_coef[j] * q[1];
+        }
     }
     *th_out = th;
     *om_out = om;
@@ -62,10 +70,10 @@ GK_INLINE void plk_mesh_local(const pl_mesh *me, const double *v, double off, do
     int j;
     plk_mesh_angle(me, v, off, &loc[0], &loc[1]);
     for (j = 0; j < me->nxh; ++j) {
-        int d = me->xh_dof[j];
+        const double *q = v + me->xh_off[j];
         double c = me->xh_coef[j];
-        x += c * v[2 * d];
-        xv += c * v[2 * d + 1];
+        x += c * q[0];
+        xv += c * q[1];
     }
     loc[2] = x;
     loc[3] = xv;

@@ -40,9 +40,11 @@ int pl_init(pl_model *pl, int n, const double *inv_m, const double *g, int load_
     pl->motor_input = motor_input != 0;
     pl->load_input = load_input != 0;
     pl->integrator = PL_INTEGRATOR_RK4;
+    pl->n_g = 0;
     for (i = 0; i < n; ++i) {
         pl->inv_m[i] = inv_m[i];
         pl->g[i] = g[i];
+        if (i > 0 && g[i] != 0.0) pl->g_dof[pl->n_g++] = i;
     }
     return GK_OK;
 }
@@ -108,10 +110,12 @@ int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, d
         s->coef[j] = j < count ? coef[j] : 0.0;
         s->hdof[j] = 0;
         s->hcoef[j] = 0.0;
+        s->hoff[j] = 0;
     }
     for (j = 0; j < count; ++j)
         if (dof[j] != 0) {
             s->hdof[s->nh] = dof[j];
+            s->hoff[s->nh] = 2 * dof[j];
             s->hcoef[s->nh++] = coef[j];
         }
     s->k = k;
@@ -166,15 +170,20 @@ int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const do
         me->x_coef[j] = j < nx ? x_coef[j] : 0.0;
         me->xh_dof[j] = 0;
         me->xh_coef[j] = 0.0;
+        me->xh_off[j] = 0;
     }
     for (j = 0; j < nx; ++j)
         if (x_dof[j] != 0) {
             me->xh_dof[me->nxh] = x_dof[j];
+            me->xh_off[me->nxh] = 2 * x_dof[j];
             me->xh_coef[me->nxh++] = x_coef[j];
         }
+    me->a_has0 = 0;
     for (j = 0; j < PL_MESH_MAX_A; ++j) {
         me->a_dof[j] = j < na ? a_dof[j] : 0;
         me->a_coef[j] = j < na ? a_coef[j] : 0.0;
+        me->a_off[j] = 2 * me->a_dof[j];
+        if (j < na && a_dof[j] == 0) me->a_has0 = 1;
     }
     me->a_ref = a_ref;
     me->phase = phase_rad;
@@ -278,8 +287,9 @@ GK_INLINE void plk_rhs_at(const pl_model *pl, pl_work *w, const double *y, doubl
         const pl_spring *sp = &pl->spring[s];
         double v = 0.0, vd = 0.0, fs;
         for (j = 0; j < sp->nh; ++j) {
-            v += sp->hcoef[j] * y[2 * sp->hdof[j]];
-            vd += sp->hcoef[j] * y[2 * sp->hdof[j] + 1];
+            const double *q = y + sp->hoff[j];
+            v += sp->hcoef[j] * q[0];
+            vd += sp->hcoef[j] * q[1];
         }
         fs = sp->k * v + sp->c * vd;
         for (j = 0; j < sp->nh; ++j) tau[sp->hdof[j]] -= sp->hcoef[j] * fs;
@@ -316,8 +326,8 @@ GK_INLINE void plk_rhs_at(const pl_model *pl, pl_work *w, const double *y, doubl
         }
         for (j = 0; j < me->nxh; ++j) tau[me->xh_dof[j]] -= me->xh_coef[j] * fm;
     }
-    sg = 0.0;
-    for (i = 1; i < n; ++i) sg += pl->g[i] * tau[i];
+    sg = 0.0;   /* over the DOFs with g_i != 0: +-0 terms leave a sum that starts at +0.0 unchanged */
+    for (j = 0; j < pl->n_g; ++j) sg += pl->g[pl->g_dof[j]] * tau[pl->g_dof[j]];
     for (s = 0; s < pl->n_frame; ++s) {
         const pl_frame *f = &pl->frame[s];
         sg += f->ratio * ((f->R0_m + y[2 * f->a]) * tau[f->b] - y[2 * f->b] * tau[f->a]);

@@ -61,9 +61,12 @@ typedef struct pl_mesh {
     int nxh;                                /* the x map without its DOF-0 terms (q_0 is 0): the loops of the step */
     int xh_dof[PL_MESH_MAX_X];
     double xh_coef[PL_MESH_MAX_X];
+    int xh_off[PL_MESH_MAX_X];              /* 2 xh_dof[j]: the offset of q in a state vector */
     int na;                                 /* theta = a_ref psi + sum_j a_coef[j] q[a_dof[j]] + phase (rad) */
     int a_dof[PL_MESH_MAX_A];
     double a_coef[PL_MESH_MAX_A];
+    int a_off[PL_MESH_MAX_A];               /* 2 a_dof[j] */
+    int a_has0;                             /* 1 when the angle map names DOF 0 (its term reads 0, pl_internal.h) */
     double a_ref, phase;
     double torque_per_ref;                  /* static pinion torque of the tables' rows per reference torque */
 } pl_mesh;
@@ -75,6 +78,7 @@ typedef struct pl_spring {
     int nh;                                 /* the map without its DOF-0 terms (q_0 is 0): the loops of the step */
     int hdof[PL_SPRING_MAX];
     double hcoef[PL_SPRING_MAX];
+    int hoff[PL_SPRING_MAX];                /* 2 hdof[j]: the offset of q in a state vector */
     double k, c;                            /* N/m and N*s/m (N*m/rad and N*m*s/rad for rotations) */
 } pl_spring;
 
@@ -99,6 +103,8 @@ typedef struct pl_model {
     int integrator;                         /* PL_INTEGRATOR_* */
     double inv_m[PL_MAX_DOF];               /* 1/m_i (1/kg or 1/(kg*m^2)) */
     double g[PL_MAX_DOF];                   /* kinematic ratios, g[0] = 1 */
+    int n_g;                                /* the DOFs i >= 1 with g[i] != 0, in order: the terms of the */
+    int g_dof[PL_MAX_DOF];                  /* step's sum of g_i Q_i (a zero term leaves that sum unchanged) */
     pl_mesh mesh[PL_MAX_MESHES];
     pl_spring spring[PL_MAX_SPRINGS];
     pl_frame frame[PL_MAX_FRAMES];
