@@ -1,15 +1,18 @@
 """An independent numpy re-evaluation of the EHL line-contact solver's discretised equations
-(docs/ehl.md), shared by tests/unit/ehl/test_ehl.py and test_ehl_speedpath.py."""
+(docs/ehl.md), shared by tests/unit/ehl/test_ehl.py, test_ehl_speedpath.py and test_rough_film_convergence.py."""
 import math
 
 import numpy as np
 
 
-def discrete_equations_check(r, viscosity="roelands", compressible=True):
+def discrete_equations_check(r, viscosity="roelands", compressible=True, roughness=None):
     """Independent numpy re-evaluation of the discretised equations (docs/ehl.md):
     film from P by a dense sum of the exact cell integrals of ln|x| (closed form
     f(x) = x(ln|x| - 1)), load dX sum P = pi/2, and the Reynolds residual with
-    the second-order upstream wedge term, scaled by the point Jacobian."""
+    the second-order upstream wedge term, scaled by the point Jacobian.  ``roughness``:
+    the dimensionless roughness in the gap of a rough film (None: smooth).  Returns the
+    spread of the gap minus X^2/2, the deformation and the roughness (0 for a constant H0),
+    the load error and the mean scaled residual over pressurised nodes (units of p_h)."""
     X, P, H = r.X, r.P, r.H
     n, dX = X.size, X[1] - X[0]
     def f(x):
@@ -19,6 +22,8 @@ def discrete_equations_check(r, viscosity="roelands", compressible=True):
     K = f((t + 0.5) * dX) - f((t - 0.5) * dX)
     V = -(K[np.abs(t[:, None] - t[None, :])] @ P) / np.pi
     gap = H - 0.5 * X ** 2 - V                      # must be the constant H0
+    if roughness is not None:
+        gap = gap - roughness
     load_err = abs(dX * P.sum() - 0.5 * np.pi)
     inp = r.inputs
     p = P * r.ph_Pa
@@ -44,4 +49,4 @@ def discrete_equations_check(r, viscosity="roelands", compressible=True):
     J = -(em + ep) / dX ** 2 + rho[1:-1] * (K[0] - K[1]) / (math.pi * dX)
     pos = P[1:-1] > 0
     scaled = np.mean(np.abs(res[pos] / J[pos]))
-    return np.ptp(gap), load_err, scaled
+    return np.ptp(gap), load_err, float(scaled)

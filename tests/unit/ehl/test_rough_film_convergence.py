@@ -12,7 +12,6 @@ of the exact cell integrals of ln|x|, second-order upstream wedge term, Roelands
 Dowson-Higginson laws written out here), as tests/unit/ehl/test_ehl.py does for smooth films; and the
 coupled Newton's Jacobian against finite differences of the solver's own residual kernel.
 """
-import math
 
 import numpy as np
 import pytest
@@ -25,6 +24,8 @@ from gearfmu.ehl.mesh_film import contact_kinematics, solve_node_films, solve_sl
 from gearfmu.ehl.solver import solve_line_contact
 from gearfmu.scene.reader import load_scene
 from gearfmu.assembly.contact_rows import film_failure_kinds, film_failure_line
+
+from support.ehl_checks import discrete_equations_check
 
 W_NODE = 89577.25357541349     # N/m: the lowest rough load column of the default tables
 
@@ -46,37 +47,9 @@ def _node(env, k, slices):
 
 
 def _rough_equations_check(r):
-    """Independent numpy re-evaluation of the discrete equations of a rough film: the gap
-    minus X^2/2, the deformation and the roughness is one constant (H0), the load, and the
-    mean scaled Reynolds residual over pressurised nodes (units of p_h)."""
-    X, P, H = r.X, r.P, r.H
-    n, dX = X.size, X[1] - X[0]
-
-    def f(x):
-        ax = np.abs(x)
-        return np.where(ax > 0, x * (np.log(np.where(ax > 0, ax, 1.0)) - 1.0), 0.0)
-    t = np.arange(n)
-    K = f((t + 0.5) * dX) - f((t - 0.5) * dX)
-    V = -(K[np.abs(t[:, None] - t[None, :])] @ P) / np.pi
-    rough = r.roughness_m * r.inputs["R_m"] / r.b_m ** 2
-    gap = H - 0.5 * X ** 2 - V - rough
-    load_err = abs(dX * P.sum() - 0.5 * np.pi)
-    inp = r.inputs
-    p = P * r.ph_Pa
-    A = math.log(inp["eta0_Pas"]) + 9.67
-    z = inp["alpha_Pa_inv"] * 1.96e8 / A
-    eta = np.exp(A * ((1 + p / 1.96e8) ** z - 1))        # Roelands (seed 000 eq 5)
-    rho = (0.59e9 + 1.34 * p) / (0.59e9 + p)             # Dowson-Higginson (eq 6)
-    eps = rho * H ** 3 / (eta * 3 * math.pi ** 2 / (8 * r.M ** 2))
-    em, ep = 0.5 * (eps[:-2] + eps[1:-1]), 0.5 * (eps[1:-1] + eps[2:])
-    poi = (em * (P[:-2] - P[1:-1]) + ep * (P[2:] - P[1:-1])) / dX ** 2
-    rH = rho * H
-    wedge = np.empty(n - 2)
-    wedge[0] = (rH[1] - rH[0]) / dX
-    wedge[1:] = (1.5 * rH[2:-1] - 2 * rH[1:-2] + 0.5 * rH[:-3]) / dX
-    J = -(em + ep) / dX ** 2 + rho[1:-1] * (K[0] - K[1]) / (math.pi * dX)
-    pos = P[1:-1] > 0
-    return np.ptp(gap), load_err, float(np.mean(np.abs((poi - wedge)[pos] / J[pos])))
+    """support.ehl_checks.discrete_equations_check of a rough film (Roelands, compressible): the
+    roughness in the gap."""
+    return discrete_equations_check(r, roughness=r.roughness_m * r.inputs["R_m"] / r.b_m ** 2)
 
 
 @pytest.mark.parametrize("level,k,slices", [(2, 1, (0, 12, 28)), (3, 6, (8,))])
