@@ -95,6 +95,26 @@ static int plk_map_ok(const pl_model *pl, int count, const int *dof, const doubl
     return 1;
 }
 
+/* the map (count DOFs) without its DOF-0 terms, as the step reads it: DOF, coefficient and state offset
+ * 2 DOF of each kept term, the rest of the cap entries zero; returns the terms kept */
+static int plk_step_map(int count, const int *dof, const double *coef, int cap, int *hdof, double *hcoef,
+                        int *hoff)
+{
+    int j, nh = 0;
+    for (j = 0; j < cap; ++j) {
+        hdof[j] = 0;
+        hcoef[j] = 0.0;
+        hoff[j] = 0;
+    }
+    for (j = 0; j < count; ++j)
+        if (dof[j] != 0) {
+            hdof[nh] = dof[j];
+            hcoef[nh] = coef[j];
+            hoff[nh++] = 2 * dof[j];
+        }
+    return nh;
+}
+
 int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, double k, double c)
 {
     pl_spring *s;
@@ -104,20 +124,11 @@ int pl_add_spring(pl_model *pl, int count, const int *dof, const double *coef, d
     if (!gki_finite_pos(k) || !isfinite(c) || c < 0.0) return GK_ERR_MODEL;
     s = &pl->spring[pl->n_spring++];
     s->count = count;
-    s->nh = 0;
     for (j = 0; j < PL_SPRING_MAX; ++j) {
         s->dof[j] = j < count ? dof[j] : 0;
         s->coef[j] = j < count ? coef[j] : 0.0;
-        s->hdof[j] = 0;
-        s->hcoef[j] = 0.0;
-        s->hoff[j] = 0;
     }
-    for (j = 0; j < count; ++j)
-        if (dof[j] != 0) {
-            s->hdof[s->nh] = dof[j];
-            s->hoff[s->nh] = 2 * dof[j];
-            s->hcoef[s->nh++] = coef[j];
-        }
+    s->nh = plk_step_map(count, dof, coef, PL_SPRING_MAX, s->hdof, s->hcoef, s->hoff);
     s->k = k;
     s->c = c;
     return GK_OK;
@@ -164,20 +175,11 @@ int pl_add_mesh(pl_model *pl, gk_model *pair, int nx, const int *x_dof, const do
     me->pair = pair;
     me->nx = nx;
     me->na = na;
-    me->nxh = 0;
     for (j = 0; j < PL_MESH_MAX_X; ++j) {
         me->x_dof[j] = j < nx ? x_dof[j] : 0;
         me->x_coef[j] = j < nx ? x_coef[j] : 0.0;
-        me->xh_dof[j] = 0;
-        me->xh_coef[j] = 0.0;
-        me->xh_off[j] = 0;
     }
-    for (j = 0; j < nx; ++j)
-        if (x_dof[j] != 0) {
-            me->xh_dof[me->nxh] = x_dof[j];
-            me->xh_off[me->nxh] = 2 * x_dof[j];
-            me->xh_coef[me->nxh++] = x_coef[j];
-        }
+    me->nxh = plk_step_map(nx, x_dof, x_coef, PL_MESH_MAX_X, me->xh_dof, me->xh_coef, me->xh_off);
     me->a_has0 = 0;
     for (j = 0; j < PL_MESH_MAX_A; ++j) {
         me->a_dof[j] = j < na ? a_dof[j] : 0;
